@@ -1,0 +1,121 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "commands.hpp"
+
+#include <iostream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "metron/interpreter/session.hpp"
+#include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
+#include "metron/stdlib/fitting/point_file.hpp"
+
+namespace metron::cli {
+
+int run(const RunArgs& args) {
+  interpreter::RunOptions options;
+  options.program = args.program;
+  options.world_path = args.world;
+  options.seed = args.seed;
+  options.out_dir = args.out_dir;
+  std::size_t in_tol = 0, out_tol = 0, faults = 0;
+  options.on_event = [&](const runtime::RunEvent& e) {
+    std::string text;
+    if (const auto* f = std::get_if<runtime::FeatureReport>(&e)) text = runtime::format_feature_report(*f);
+    else if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) {
+      (t->in_tolerance ? in_tol : out_tol)++;
+      text = runtime::format_tolerance_result(*t);
+    } else if (const auto* x = std::get_if<runtime::TextReport>(&e)) text = x->text + "\n";
+    else if (const auto* f2 = std::get_if<runtime::FaultReport>(&e)) {
+      ++faults;
+      text = runtime::format_fault(*f2);
+    }
+    if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << text << std::flush;
+  };
+  const auto outcome = interpreter::run_program(options);
+  std::cerr << outcome.diagnostics;
+  const char* status = outcome.exit == interpreter::RunExit::Completed ? "completed"
+                       : outcome.exit == interpreter::RunExit::Faulted ? "stopped by a machine fault"
+                       : outcome.exit == interpreter::RunExit::BadInput ? "not started"
+                                                                        : "stopped by an error";
+  std::cout << fmt::format("\nrun {}: {} features, {} tolerances in, {} out, {} faults, {:.3f} s simulated\n", status,
+                           outcome.record.features.size(), in_tol, out_tol, faults, outcome.record.simulated_time_s);
+  if (!outcome.results_path.empty()) std::cout << "results: " << outcome.results_path << "\n";
+  return static_cast<int>(outcome.exit);
+}
+
+int check(const std::string& program) {
+  SourceManager sources;
+  DiagnosticSink sink;
+  interpreter::Compiler compiler(sources, sink);
+  const auto unit = compiler.compile_file(program);
+  for (const auto& d : sink.items()) std::cout << format_diagnostic(d, sources);
+  if (!unit && sink.items().empty()) std::cout << fmt::format("error: cannot read {}\n", program);
+  const std::size_t errors = sink.error_count();
+  const std::size_t warnings = sink.items().size() - errors;
+  std::cout << fmt::format("{}: {} error{}, {} warning{}\n", program, errors, errors == 1 ? "" : "s", warnings, warnings == 1 ? "" : "s");
+  return errors > 0 || !unit ? 1 : 0;
+}
+
+int compile(const std::string& program, bool emit_ir) {
+  SourceManager sources;
+  DiagnosticSink sink;
+  interpreter::Compiler compiler(sources, sink);
+  const auto unit = compiler.compile_file(program);
+  for (const auto& d : sink.items()) std::cerr << format_diagnostic(d, sources);
+  if (!unit || sink.has_errors()) {
+    if (!unit && sink.items().empty()) std::cerr << fmt::format("error: cannot read {}\n", program);
+    return 1;
+  }
+  if (emit_ir) std::cout << interpreter::ir::to_string(compiler.module(), sources);
+  return 0;
+}
+
+int fit(const FitArgs& args) {
+  const auto shape = fitting::shape_from_name(args.type);
+  if (!shape) {
+    std::cerr << fmt::format("error: unknown fit type '{}': expected point, line, plane, circle, sphere, cylinder or cone\n", args.type);
+    return 2;
+  }
+  auto points = fitting::read_point_file(args.file);
+  if (!points) {
+    std::cerr << fmt::format("{}:{}: error: {}\n", args.file, points.error().line, points.error().message);
+    return 1;
+  }
+  auto result = fitting::fit(*shape, *points);
+  if (!result) {
+    std::cerr << fmt::format("{}: error: cannot fit a {} to {} points: {}\n", args.file, args.type, points->size(),
+                             fitting::to_string(result.error()));
+    return 1;
+  }
+  const auto& r = *result;
+  if (args.format == "json") {
+    nlohmann::json j;
+    j["type"] = std::string(fitting::to_string(r.shape));
+    j["points"] = points->size();
+    j["position"] = {r.position.x(), r.position.y(), r.position.z()};
+    j["direction"] = {r.direction.x(), r.direction.y(), r.direction.z()};
+    if (r.shape == fitting::Shape::Circle || r.shape == fitting::Shape::Sphere || r.shape == fitting::Shape::Cylinder)
+      j["diameter_mm"] = r.diameter_mm;
+    if (r.shape == fitting::Shape::Cone) {
+      j["apex_angle_deg"] = r.apex_angle_deg;
+      j["cone_distance_mm"] = r.cone_distance_mm;
+    }
+    j["rms_mm"] = r.rms_mm;
+    j["form_mm"] = r.form_mm;
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << fmt::format("{} fit of {} points from {}\n", fitting::to_string(r.shape), points->size(), args.file);
+  std::cout << fmt::format("  position   {:.9f} {:.9f} {:.9f}\n", r.position.x(), r.position.y(), r.position.z());
+  if (r.shape != fitting::Shape::Point)
+    std::cout << fmt::format("  direction  {:.12f} {:.12f} {:.12f}\n", r.direction.x(), r.direction.y(), r.direction.z());
+  if (r.diameter_mm > 0) std::cout << fmt::format("  diameter   {:.9f}\n", r.diameter_mm);
+  if (r.shape == fitting::Shape::Cone)
+    std::cout << fmt::format("  apex angle {:.9f} deg\n  distance   {:.9f}\n", r.apex_angle_deg, r.cone_distance_mm);
+  std::cout << fmt::format("  rms        {:.9f}\n  form       {:.9f}\n", r.rms_mm, r.form_mm);
+  return 0;
+}
+
+}  // namespace metron::cli

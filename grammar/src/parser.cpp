@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// parse_program: one PEGTL parse per logical line; errors become diagnostics and the parser
+// moves on to the next line.
+#include "metron/grammar/parser.hpp"
+
+#include <algorithm>
+#include <array>
+#include <exception>
+#include <string_view>
+
+#include "detail/actions.hpp"
+#include "detail/builder.hpp"
+#include "detail/errors.hpp"
+#include "detail/rules.hpp"
+#include "metron/grammar/preprocess.hpp"
+
+namespace metron::grammar {
+namespace {
+
+namespace pegtl = tao::pegtl;
+
+// DMIS label prefixes (sorted for binary search).
+constexpr std::array<std::string_view, 62> label_prefixes = {
+    "A",  "CR", "CS", "CZ", "D",  "DA", "DAT", "DATT", "DI", "DID", "DME", "DR", "DS", "DV", "F",  "FA",
+    "FI", "FS", "G",  "GS", "K",  "KC", "KV",  "L",    "LI", "M",   "MA",  "MD", "ML", "OP", "P",  "PC",
+    "PL", "PN", "PR", "PS", "PV", "Q",  "QIS", "R",    "RM", "RT",  "S",   "SA", "SE", "SG", "SS", "ST",
+    "SW", "SX", "T",  "TA", "TL", "TP", "U",   "V",    "VA", "VF",  "VL",  "VR", "VS", "VW"};
+static_assert(std::is_sorted(label_prefixes.begin(), label_prefixes.end()));
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// Parses one logical line; returns false after reporting a syntax error.
+bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sink, Statement& out) {
+  detail::Builder b;
+  b.file = file;
+  b.line = &line;
+  b.base = line.text.data();
+  try {
+    pegtl::memory_input<pegtl::tracking_mode::lazy> in(line.text.data(), line.text.size(), "");
+    if (!pegtl::parse<rules::line, detail::action, detail::control>(in, b)) {
+      // Unreachable: `line` ends in must<>, which raises instead of failing.
+      sink.error("parse.internal", b.point(b.base), "statement could not be parsed");
+      return false;
+    }
+  } catch (const detail::SyntaxError& e) {
+    sink.error(e.code, e.span, e.message);
+    return false;
+  } catch (const std::exception& e) {
+    sink.error("parse.internal", b.point(b.base), std::string("internal parser error: ") + e.what());
+    return false;
+  }
+  // The statement runs from its first to its last non-blank byte, across continuation lines.
+  std::size_t first = 0, last = line.text.size();
+  while (first < last && is_blank(line.text[first])) ++first;
+  while (last > first && is_blank(line.text[last - 1])) --last;
+  b.stmt.span = b.span(b.base + first, b.base + last);
+  out = std::move(b.stmt);
+  return true;
+}
+
+}  // namespace
+
+bool is_label_prefix(std::string_view word) {
+  return std::binary_search(label_prefixes.begin(), label_prefixes.end(), word);
+}
+
+Program parse_program(const SourceManager& sources, std::uint32_t file, DiagnosticSink& sink) {
+  Program program;
+  program.file = file;
+  if (file == 0 || file > sources.size()) {
+    sink.error("parse.no-file", Span{}, "no source file with id " + std::to_string(file));
+    return program;
+  }
+  for (const LogicalLine& line : join_continuations(sources.file(file).text)) {
+    Statement stmt;
+    if (parse_line(line, file, sink, stmt)) program.statements.push_back(std::move(stmt));
+  }
+  return program;
+}
+
+}  // namespace metron::grammar

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Logical lines: `$` continuations joined, `$$` comments (and continued comments) removed.
+#include "metron/grammar/preprocess.hpp"
+
+namespace metron::grammar {
+namespace {
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+
+// Index of the last non-blank byte in [begin, end), or `end` when there is none.
+std::size_t last_non_blank(const std::string& s, std::size_t begin, std::size_t end) {
+  for (std::size_t i = end; i > begin; --i)
+    if (!is_blank(s[i - 1])) return i - 1;
+  return end;
+}
+
+// A comment `$$ ...` in [begin, end) continues onto the next line when it ends in a single `$`;
+// `$$$$$$` banners (the last `$` preceded by another `$`) do not.
+bool comment_continues(const std::string& s, std::size_t begin, std::size_t end) {
+  const std::size_t last = last_non_blank(s, begin, end);
+  return last != end && s[last] == '$' && last > begin && s[last - 1] != '$';
+}
+
+class Joiner {
+ public:
+  explicit Joiner(const std::string& source) : m_src(source) {}
+
+  std::vector<LogicalLine> run() {
+    // A UTF-8 byte order mark (written by some Windows editors) is not part of the first line.
+    std::size_t pos = m_src.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+    const std::size_t n = m_src.size();
+    while (pos < n) {
+      const std::size_t nl = m_src.find('\n', pos);
+      const std::size_t next = nl == std::string::npos ? n : nl + 1;
+      std::size_t end = nl == std::string::npos ? n : nl;
+      if (end > pos && m_src[end - 1] == '\r') --end;
+      line(pos, end);
+      pos = next;
+    }
+    flush();
+    return std::move(m_out);
+  }
+
+ private:
+  // One physical line [begin, end) without its line terminator.
+  void line(std::size_t begin, std::size_t end) {
+    if (m_comment_continues) {  // the previous line was a comment ending in a single `$`
+      m_comment_continues = comment_continues(m_src, begin, end);
+      return;
+    }
+    // Find where a `$$` comment starts; `$$` inside a quoted string is text. The string state
+    // carries over continuation lines because a continuation may split a string.
+    std::size_t code_end = end;
+    for (std::size_t i = begin; i < end; ++i) {
+      const char c = m_src[i];
+      if (m_in_string) {
+        if (c == '\'') {
+          if (i + 1 < end && m_src[i + 1] == '\'')
+            ++i;
+          else
+            m_in_string = false;
+        }
+      } else if (c == '\'') {
+        m_in_string = true;
+      } else if (c == '$' && i + 1 < end && m_src[i + 1] == '$') {
+        code_end = i;
+        break;
+      }
+    }
+    const std::size_t last = last_non_blank(m_src, begin, code_end);
+    if (last != code_end && m_src[last] == '$') {
+      // Continuation: drop the `$`, what follows it and the newline; the next line is appended.
+      append(begin, last);
+      return;
+    }
+    append(begin, code_end);
+    if (code_end != end) m_comment_continues = comment_continues(m_src, code_end, end);
+    flush();
+  }
+
+  void append(std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      m_cur.text.push_back(m_src[i]);
+      m_cur.physical.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+
+  void flush() {
+    const bool blank = last_non_blank(m_cur.text, 0, m_cur.text.size()) == m_cur.text.size();
+    if (!blank) {
+      m_cur.physical.push_back(m_cur.physical.back() + 1);
+      m_out.push_back(std::move(m_cur));
+    }
+    m_cur = LogicalLine{};
+    m_in_string = false;
+  }
+
+  const std::string& m_src;
+  std::vector<LogicalLine> m_out;
+  LogicalLine m_cur;
+  bool m_in_string = false;
+  bool m_comment_continues = false;
+};
+
+}  // namespace
+
+std::vector<LogicalLine> join_continuations(const std::string& source) { return Joiner(source).run(); }
+
+}  // namespace metron::grammar

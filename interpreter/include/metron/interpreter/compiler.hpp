@@ -1,0 +1,62 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "metron/grammar/ast.hpp"
+#include "metron/interpreter/ir/instruction.hpp"
+#include "metron/stdlib/diagnostic.hpp"
+#include "metron/stdlib/source.hpp"
+
+namespace metron::interpreter {
+
+/// What the compiler knows about the names a program defines (kept across REPL entries).
+struct SymbolTable {
+  struct FeatureInfo {
+    std::string type;   ///< DMIS type word (CIRCLE, PLANE ...)
+    Span span;
+  };
+  struct VariableInfo {
+    ValueType type = ValueType::Real;
+    int size = 0;       ///< array size, 0 for a scalar
+    Span span;
+  };
+  std::map<std::string, FeatureInfo> features;
+  std::map<std::string, std::string> tolerances;   ///< label -> kind word
+  std::set<std::string> datums, sensors, alignments, devices, saved;
+  std::map<std::string, VariableInfo> variables;   ///< globals
+  std::map<std::string, int> macros;               ///< name -> index in Module::macros
+  std::map<std::string, Span> skipped;             ///< labels defined by skipped vendor statements
+  std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
+};
+
+/// Compiles DMIS sources to IR: name resolution, type and semantic checks, lowering.
+class Compiler {
+ public:
+  Compiler(SourceManager& sources, DiagnosticSink& sink);
+
+  /// Parses and compiles a file as a new unit; returns its unit index, or nullopt when the file
+  /// cannot be read. Errors go to the sink (check sink.has_errors()).
+  std::optional<std::size_t> compile_file(const std::string& path, Span included_from = {});
+  /// Compiles text held in memory (the REPL) as a new unit with the current symbols.
+  std::size_t compile_text(const std::string& name, const std::string& text);
+
+  [[nodiscard]] const ir::Module& module() const { return m_module; }
+  [[nodiscard]] ir::Module& module() { return m_module; }
+  [[nodiscard]] const SymbolTable& symbols() const { return m_symbols; }
+  [[nodiscard]] SourceManager& sources() { return m_sources; }
+
+ private:
+  std::size_t compile_program(std::uint32_t file, const std::string& path);
+  SourceManager& m_sources;
+  DiagnosticSink& m_sink;
+  ir::Module m_module;
+  SymbolTable m_symbols;
+};
+
+}  // namespace metron::interpreter

@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metron/interpreter/ir/instruction.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/stdlib/diagnostic.hpp"
+#include "metron/stdlib/value.hpp"
+
+namespace metron::interpreter {
+
+/// Where execution is: a unit's code or a macro's code, and the next instruction.
+struct Frame {
+  enum class Kind { Unit, Macro } kind = Kind::Unit;
+  std::size_t index = 0;                 ///< unit or macro index in the module
+  std::size_t pc = 0;                    ///< next instruction
+  std::map<std::string, std::vector<Value>> locals;   ///< macro parameters and local variables
+  std::map<std::size_t, std::pair<double, double>> loops;  ///< DoInit pc -> (end, step)
+  Span call_site;                        ///< the CALL that entered this frame
+};
+
+/// How a step or a run ended.
+enum class ExecStatus {
+  Running,   ///< more to do
+  Finished,  ///< reached ENDFIL or the end of the main unit
+  Faulted,   ///< a machine fault stopped the program (results so far are kept)
+  Error,     ///< a run-time program error (reported to the sink)
+};
+
+/// The IR interpreter: variables, expressions, control flow, macros, called units; it drives the
+/// measurement runtime. Steppable one instruction at a time for the debugger.
+class Interpreter {
+ public:
+  Interpreter(const ir::Module& module, runtime::MeasurementRuntime& runtime, const SourceManager& sources,
+              DiagnosticSink& sink);
+
+  /// Starts (or restarts at) a unit: pushes its frame (the REPL runs each entry as a unit).
+  void start(std::size_t unit);
+  /// Executes one instruction.
+  ExecStatus step();
+  /// Runs until the program ends, faults or errs.
+  ExecStatus run();
+
+  /// The instruction that will execute next (nullptr when none).
+  [[nodiscard]] const ir::Instruction* current() const;
+  [[nodiscard]] const std::vector<Frame>& frames() const { return m_frames; }
+  [[nodiscard]] bool in_measurement() const { return m_block.has_value(); }
+  [[nodiscard]] const std::optional<runtime::MeasBlock>& pending_block() const { return m_block; }
+
+  /// Variables (debugger `print`/`set`); nullopt when not declared.
+  [[nodiscard]] std::optional<Value> variable(const std::string& name) const;
+  bool set_variable(const std::string& name, const Value& value);
+  [[nodiscard]] const std::map<std::string, std::vector<Value>>& globals() const { return m_globals; }
+  /// Evaluates an IR expression in the current context.
+  tl::expected<Value, std::string> evaluate(const ir::Expr& e);
+
+ private:
+  ExecStatus execute(const ir::Instruction& in, Frame& frame);
+  ExecStatus fail(Span span, std::string message);
+  ExecStatus from_runtime(const runtime::RuntimeError& e);
+  std::string label_name(const ir::LabelOperand& l) const;
+  tl::expected<double, std::string> number(const ir::Expr& e);
+  std::vector<Value>* find_variable(const std::string& name);
+  const std::vector<ir::Instruction>& code_of(const Frame& f) const;
+
+  const ir::Module& m_module;
+  runtime::MeasurementRuntime& m_runtime;
+  const SourceManager& m_sources;
+  DiagnosticSink& m_sink;
+  std::vector<Frame> m_frames;
+  std::map<std::string, std::vector<Value>> m_globals;
+  std::map<std::string, ValueType> m_types;
+  std::optional<runtime::MeasBlock> m_block;
+  Vec3 m_block_position = Vec3::Zero();
+  double m_length_mm = 1.0;   ///< UNITS: mm per program length unit
+  bool m_degrees = true;      ///< UNITS: ANGDEC (else ANGRAD)
+  bool m_finished = false;
+};
+
+}  // namespace metron::interpreter

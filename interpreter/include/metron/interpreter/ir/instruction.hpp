@@ -1,0 +1,102 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "metron/interpreter/ir/expr.hpp"
+#include "metron/stdlib/source.hpp"
+#include "metron/stdlib/span.hpp"
+
+namespace metron::interpreter::ir {
+
+/// One operand of an instruction: an expression, a minor word, or a label.
+struct Operand {
+  enum class Kind { Expr, Word, Label } kind = Kind::Expr;
+  ir::Expr expr;
+  std::string word;                ///< upper-case minor word
+  LabelOperand label;
+  Span span;
+};
+
+/// IR operations. Operand layouts are documented per operation in docs/ir.md; the compiler has
+/// already checked them, so the interpreter decodes by position.
+enum class Op {
+  Nop,          ///< a statement with no run-time effect (DMISMN, DISPLY, PRCOMP, skipped vendor statements); `name` = major word
+  End,          ///< ENDFIL: end of the program
+  Units,        ///< words: length unit, angle unit
+  Mode,         ///< words: AUTO | PROG MAN | MAN
+  Text,         ///< words: OPER|OUTFIL|...; expr: the text
+  FeatureDef,   ///< `name` = label; words: type, [side], CART|POL, [BND|UNBND]; exprs: the numbers
+  ToleranceDef, ///< `name` = label; words: kind, modifiers; exprs: values; labels: datums
+  SensorDef,    ///< `name` = label; words: PROBE, FIXED|INDEX, CART|POL; exprs: numbers
+  SensorSelect, ///< `name` = sensor label
+  ProbeSet,     ///< words: APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH; expr: distance
+  Feed,         ///< words: MESVEL|POSVEL|SCNVEL, MPM|MMPS|IPM|IPS|PCENT; expr: value
+  Accel,        ///< words: MESACL|POSACL, unit; expr: value
+  GoTo,         ///< words: [INCR]; exprs: x, y, z (inside a MEAS block: a block step)
+  MeasBegin,    ///< `name` = feature; words: type; expr: point count; `target` = index of MeasEnd
+  PtMeas,       ///< words: CART|POL; exprs: x,y,z[,i,j,k]
+  MeasEnd,      ///< ENDMES: runs the collected block on the machine
+  Output,       ///< labels: F/FA/T/TA in order
+  DatDef,       ///< labels: feature, DAT(x)
+  DatSet,       ///< `name` = D label; operands: MCS | (DAT label, words...)...
+  Trans,        ///< `name` = D label; operands: (axis word, expr | feature label)...
+  Rotate,       ///< `name` = D label; operands: axis word, expr angle | (feature label, axis word)
+  Save,         ///< labels: DA(x)
+  Recall,       ///< labels: D(x) / DA(x)
+  Construct,    ///< `name` = feature; words: type, method; labels: sources
+  Declare,      ///< words: scope, type; `names`: variables (with `count` = array size, 0 = scalar)
+  Assign,       ///< `name` = variable; exprs: [indices...,] value; `count` = number of indices
+  Jump,         ///< goto `target`
+  JumpIfFalse,  ///< expr: condition; goto `target` when false
+  DoInit,       ///< `name` = loop variable; exprs: start, end, step; `target` = index after ENDDO
+  DoNext,       ///< `name` = loop variable; `target` = first body instruction
+  CallMacro,    ///< `target` = macro index in the module; operands: arguments
+  Return,       ///< ENDMAC: return from the macro
+  CallUnit,     ///< `target` = unit index (CALL/EXTERN,DMIS,'file')
+  DeviceDef,    ///< `name` = DID label; words: STOR|TERM|...; expr: path
+  DeviceOpen,   ///< labels: DID; words: FDATA|DIRECT, format, access
+  DeviceClose,  ///< labels: DID
+  JumpLabel,    ///< `(name)`: a JUMPTO target (no effect)
+};
+
+/// Upper-case mnemonic of an operation (for --emit-ir).
+const char* to_string(Op op);
+
+/// One IR instruction; every instruction keeps the span of the statement it came from.
+struct Instruction {
+  Op op = Op::Nop;
+  Span span;
+  std::string name;
+  std::vector<Operand> operands;
+  std::vector<std::string> names;  ///< Declare: variable names
+  std::int64_t target = -1;
+  int count = 0;
+};
+
+/// A macro: M(name)=MACRO/params ... ENDMAC, compiled into its own code.
+struct Macro {
+  std::string name;
+  std::vector<std::string> params;  ///< upper-case parameter names
+  std::vector<Instruction> code;
+  Span span;
+};
+
+/// A compiled source file: the main program, a file called with CALL/EXTERN, or a REPL entry.
+struct Unit {
+  std::string path;
+  std::uint32_t file = 0;
+  std::vector<Instruction> code;
+};
+
+/// A compiled program: unit 0 is the main program; macros are global once defined.
+struct Module {
+  std::vector<Unit> units;
+  std::vector<Macro> macros;
+};
+
+/// Human-readable listing of the whole module (`metron compile --emit-ir`).
+std::string to_string(const Module& module, const SourceManager& sources);
+
+}  // namespace metron::interpreter::ir

@@ -1,0 +1,74 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "metron/interpreter/compiler.hpp"
+#include "metron/interpreter/interpreter.hpp"
+#include "metron/machine/machine.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/runtime/run_record.hpp"
+
+namespace metron::interpreter {
+
+/// What `metron run` needs.
+struct RunOptions {
+  std::string program;                       ///< path of the main program
+  std::optional<std::string> world_path;     ///< world JSON; empty = the embedded default world
+  std::optional<std::uint64_t> seed;         ///< empty = the world's seed
+  std::string out_dir = ".";                 ///< results.json and DMIS output files go here
+  std::function<void(const runtime::RunEvent&)> on_event;  ///< live report
+};
+
+/// Exit status of a run: 0 completed, 1 program error (compile or run time), 3 machine fault,
+/// 2 bad input (world, options).
+enum class RunExit { Completed = 0, ProgramError = 1, BadInput = 2, Faulted = 3 };
+
+/// The outcome of a run.
+struct RunOutcome {
+  RunExit exit = RunExit::Completed;
+  runtime::RunRecord record;
+  std::string diagnostics;                   ///< formatted diagnostics (compile and run time)
+  std::string results_path;                  ///< results.json written (empty if not written)
+};
+
+/// A loaded program with its machine, runtime and interpreter: what `run`, `debug` and the test
+/// runner share.
+class Session {
+ public:
+  /// Loads the world (or the default one) and builds the machine; errors name the file.
+  static tl::expected<std::unique_ptr<Session>, std::string> create(const std::optional<std::string>& world_path,
+                                                                    std::optional<std::uint64_t> seed);
+  /// Compiles the program as unit 0 and prepares to run it; false on compile errors.
+  bool load(const std::string& program);
+  /// Compiles REPL text as a new unit and runs it to completion in the current context.
+  ExecStatus execute_text(const std::string& text);
+
+  SourceManager& sources() { return m_sources; }
+  DiagnosticSink& sink() { return m_sink; }
+  Compiler& compiler() { return m_compiler; }
+  Interpreter& interpreter() { return *m_interpreter; }
+  runtime::MeasurementRuntime& runtime() { return *m_runtime; }
+  machine::Machine& machine() { return *m_machine; }
+  runtime::RunRecord& record() { return m_record; }
+  /// Formats and clears the diagnostics collected so far.
+  std::string take_diagnostics();
+
+ private:
+  Session() = default;
+  SourceManager m_sources;
+  DiagnosticSink m_sink;
+  Compiler m_compiler{m_sources, m_sink};
+  runtime::RunRecord m_record;
+  std::unique_ptr<machine::Machine> m_machine;
+  std::unique_ptr<runtime::MeasurementRuntime> m_runtime;
+  std::unique_ptr<Interpreter> m_interpreter;
+};
+
+/// `metron run`: compile, run on the machine, write results.json and DMIS outputs.
+RunOutcome run_program(const RunOptions& options);
+
+}  // namespace metron::interpreter

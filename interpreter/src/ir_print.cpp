@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <fmt/format.h>
+
+#include "metron/interpreter/ir/instruction.hpp"
+
+namespace metron::interpreter::ir {
+
+const char* to_string(Op op) {
+  switch (op) {
+    case Op::Nop: return "NOP";
+    case Op::End: return "END";
+    case Op::Units: return "UNITS";
+    case Op::Mode: return "MODE";
+    case Op::Text: return "TEXT";
+    case Op::FeatureDef: return "FEATURE_DEF";
+    case Op::ToleranceDef: return "TOLERANCE_DEF";
+    case Op::SensorDef: return "SENSOR_DEF";
+    case Op::SensorSelect: return "SENSOR_SELECT";
+    case Op::ProbeSet: return "PROBE_SET";
+    case Op::Feed: return "FEED";
+    case Op::Accel: return "ACCEL";
+    case Op::GoTo: return "GOTO";
+    case Op::MeasBegin: return "MEAS_BEGIN";
+    case Op::PtMeas: return "PTMEAS";
+    case Op::MeasEnd: return "MEAS_END";
+    case Op::Output: return "OUTPUT";
+    case Op::DatDef: return "DATDEF";
+    case Op::DatSet: return "DATSET";
+    case Op::Trans: return "TRANS";
+    case Op::Rotate: return "ROTATE";
+    case Op::Save: return "SAVE";
+    case Op::Recall: return "RECALL";
+    case Op::Construct: return "CONSTRUCT";
+    case Op::Declare: return "DECLARE";
+    case Op::Assign: return "ASSIGN";
+    case Op::Jump: return "JUMP";
+    case Op::JumpIfFalse: return "JUMP_IF_FALSE";
+    case Op::DoInit: return "DO_INIT";
+    case Op::DoNext: return "DO_NEXT";
+    case Op::CallMacro: return "CALL_MACRO";
+    case Op::Return: return "RETURN";
+    case Op::CallUnit: return "CALL_UNIT";
+    case Op::DeviceDef: return "DEVICE_DEF";
+    case Op::DeviceOpen: return "DEVICE_OPEN";
+    case Op::DeviceClose: return "DEVICE_CLOSE";
+    case Op::JumpLabel: return "LABEL";
+  }
+  return "?";
+}
+
+std::string to_string(const Expr& e) {
+  switch (e.op) {
+    case ExprOp::Constant:
+      if (e.value.type == ValueType::String) return "'" + e.value.text + "'";
+      return e.value.to_display();
+    case ExprOp::Variable: return e.name;
+    case ExprOp::Element: {
+      std::string s = e.name + "[";
+      for (std::size_t i = 0; i < e.args.size(); ++i) s += (i ? "," : "") + to_string(e.args[i]);
+      return s + "]";
+    }
+    case ExprOp::Call: {
+      std::string s = e.name + "(";
+      for (std::size_t i = 0; i < e.args.size(); ++i) s += (i ? "," : "") + to_string(e.args[i]);
+      return s + ")";
+    }
+    case ExprOp::Obtain: return fmt::format("OBTAIN({}({}),{})", e.label.prefix, e.label.name, to_string(e.args.at(0)));
+    case ExprOp::Unary: return e.name + to_string(e.args.at(0));
+    case ExprOp::Binary: return "(" + to_string(e.args.at(0)) + e.name + to_string(e.args.at(1)) + ")";
+  }
+  return "?";
+}
+
+namespace {
+
+std::string operand_text(const Operand& o) {
+  switch (o.kind) {
+    case Operand::Kind::Expr: return to_string(o.expr);
+    case Operand::Kind::Word: return o.word;
+    case Operand::Kind::Label: return o.label.prefix + "(" + (o.label.param ? "$" : "") + o.label.name + ")";
+  }
+  return "?";
+}
+
+void print_code(std::string& out, const std::vector<Instruction>& code, const SourceManager& sources) {
+  for (std::size_t pc = 0; pc < code.size(); ++pc) {
+    const Instruction& in = code[pc];
+    const Location loc = sources.locate(in.span);
+    std::string line = fmt::format("  {:4}  {:<14}", pc, to_string(in.op));
+    if (!in.name.empty()) line += " " + in.name;
+    for (std::size_t i = 0; i < in.names.size(); ++i) line += (i ? "," : " ") + in.names[i];
+    std::string ops;
+    for (std::size_t i = 0; i < in.operands.size(); ++i) ops += (i ? ", " : "") + operand_text(in.operands[i]);
+    if (!ops.empty()) line += " [" + ops + "]";
+    if (in.target >= 0) line += fmt::format(" -> {}", in.target);
+    out += fmt::format("{:<72} ; {}:{}:{}\n", line, loc.path, loc.line, loc.column);
+  }
+}
+
+}  // namespace
+
+std::string to_string(const Module& module, const SourceManager& sources) {
+  std::string out = "; metron IR (docs/ir.md)\n";
+  for (std::size_t u = 0; u < module.units.size(); ++u) {
+    out += fmt::format("unit {} {}\n", u, module.units[u].path);
+    print_code(out, module.units[u].code, sources);
+  }
+  for (std::size_t m = 0; m < module.macros.size(); ++m) {
+    std::string params;
+    for (std::size_t i = 0; i < module.macros[m].params.size(); ++i) params += (i ? "," : "") + module.macros[m].params[i];
+    out += fmt::format("macro {} M({})({})\n", m, module.macros[m].name, params);
+    print_code(out, module.macros[m].code, sources);
+  }
+  return out;
+}
+
+}  // namespace metron::interpreter::ir

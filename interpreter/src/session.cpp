@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/interpreter/session.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "metron/machine/virtual_cmm.hpp"
+#include "metron/machine/world.hpp"
+#include "metron/runtime/outputs.hpp"
+
+namespace metron::interpreter {
+
+tl::expected<std::unique_ptr<Session>, std::string> Session::create(const std::optional<std::string>& world_path,
+                                                                    std::optional<std::uint64_t> seed) {
+  machine::World world;
+  if (world_path) {
+    auto w = machine::load_world(*world_path);
+    if (!w) return tl::unexpected(w.error().message);
+    world = std::move(*w);
+  } else {
+    world = machine::default_world();
+  }
+  std::unique_ptr<Session> s(new Session());
+  const std::uint64_t run_seed = seed ? *seed : world.seed;
+  s->m_record.world = world_path ? *world_path : std::string("<default>");
+  s->m_record.seed = run_seed;
+  s->m_machine = machine::make_virtual_cmm(world, run_seed);
+  s->m_runtime = std::make_unique<runtime::MeasurementRuntime>(*s->m_machine, s->m_sources, s->m_record);
+  s->m_interpreter = std::make_unique<Interpreter>(s->m_compiler.module(), *s->m_runtime, s->m_sources, s->m_sink);
+  return s;
+}
+
+bool Session::load(const std::string& program) {
+  m_record.program = program;
+  auto unit = m_compiler.compile_file(program);
+  if (!unit) return false;
+  if (m_sink.has_errors()) return false;
+  m_interpreter->start(*unit);
+  return true;
+}
+
+ExecStatus Session::execute_text(const std::string& text) {
+  const std::size_t before = m_sink.error_count();
+  const std::size_t unit = m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text);
+  if (m_sink.error_count() > before) return ExecStatus::Error;
+  m_interpreter->start(unit);
+  const std::size_t depth = m_interpreter->frames().size();
+  for (;;) {
+    if (m_interpreter->frames().size() < depth) return ExecStatus::Finished;
+    const ExecStatus s = m_interpreter->step();
+    if (s != ExecStatus::Running) return s;
+  }
+}
+
+std::string Session::take_diagnostics() {
+  std::string out;
+  for (const auto& d : m_sink.items()) out += format_diagnostic(d, m_sources);
+  m_sink.clear();
+  return out;
+}
+
+RunOutcome run_program(const RunOptions& options) {
+  RunOutcome outcome;
+  auto session = Session::create(options.world_path, options.seed);
+  if (!session) {
+    outcome.exit = RunExit::BadInput;
+    outcome.diagnostics = "error: " + session.error() + "\n";
+    return outcome;
+  }
+  Session& s = **session;
+  std::error_code ec;
+  std::filesystem::create_directories(options.out_dir, ec);
+  if (ec) {
+    outcome.exit = RunExit::BadInput;
+    outcome.diagnostics = fmt::format("error: cannot create the output directory {}: {}\n", options.out_dir, ec.message());
+    return outcome;
+  }
+  s.runtime().set_output_directory(options.out_dir);
+  if (options.on_event) s.runtime().on_event(options.on_event);
+  const bool loaded = s.load(options.program);
+  ExecStatus status = ExecStatus::Error;
+  if (loaded) status = s.interpreter().run();
+  s.runtime().finish();
+  runtime::RunRecord& record = s.record();
+  for (const auto& d : s.sink().items()) record.diagnostics.push_back(format_diagnostic(d, s.sources()));
+  outcome.diagnostics = s.take_diagnostics();
+  switch (status) {
+    case ExecStatus::Finished:
+    case ExecStatus::Running: record.status = runtime::RunStatus::Completed; outcome.exit = RunExit::Completed; break;
+    case ExecStatus::Faulted: record.status = runtime::RunStatus::Faulted; outcome.exit = RunExit::Faulted; break;
+    case ExecStatus::Error: record.status = runtime::RunStatus::Error; outcome.exit = RunExit::ProgramError; break;
+  }
+  if (loaded || !record.events.empty()) {
+    outcome.results_path = (std::filesystem::path(options.out_dir) / "results.json").string();
+    std::ofstream out(outcome.results_path);
+    out << runtime::results_json(record).dump(2) << "\n";
+  }
+  outcome.record = record;
+  return outcome;
+}
+
+}  // namespace metron::interpreter

@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "metron/stdlib/geometry/vec.hpp"
+
+/// The design of a workpiece as a CSG tree of analytic primitives, in PART coordinates, and the
+/// deviations of the part as machined (docs/world.md). A primitive's solid is its material.
+namespace metron::machine::csg {
+
+/// Material on the side opposite to `normal`: { p : (p - point) . normal <= 0 }.
+struct HalfSpace {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();        ///< unit, outward (away from the material)
+};
+
+/// Material within diameter/2 of the axis; infinite, or capped from `point` to
+/// point + length * axis.
+struct Cylinder {
+  Vec3 point = Vec3::Zero();          ///< on the axis (the start of the capped cylinder)
+  Vec3 axis = Vec3::UnitZ();          ///< unit
+  double diameter_mm = 10;
+  std::optional<double> length_mm;    ///< capped when set
+};
+
+/// Material within diameter/2 of the centre.
+struct Sphere {
+  Vec3 centre = Vec3::Zero();
+  double diameter_mm = 10;
+};
+
+/// Infinite convex cone, material inside the nappe that opens along +axis from the apex.
+struct Cone {
+  Vec3 apex = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();          ///< unit, from the apex into the cone
+  double half_angle_deg = 45;         ///< in (0, 90)
+};
+
+/// A primitive with the name of the feature it belongs to (empty: unnamed).
+struct Primitive {
+  std::string name;
+  std::variant<HalfSpace, Cylinder, Sphere, Cone> shape;
+};
+
+/// A node of the tree: a primitive or a boolean operation on the children.
+struct Node {
+  enum class Op {
+    Primitive,     ///< a leaf: `primitive`
+    Union,         ///< material of any child
+    Intersection,  ///< material of every child
+    Difference,    ///< the first child minus all the others
+  };
+  Op op = Op::Primitive;
+  Primitive primitive;                ///< when op == Primitive
+  std::vector<Node> children;         ///< when op != Primitive (at least one)
+};
+
+/// Lobed form of a round primitive: amplitude * cos(lobes * (theta - phase)) along the normal,
+/// theta the azimuth about the primitive's local z axis (roundness = 2 * amplitude).
+struct Lobing {
+  int lobes = 3;
+  double amplitude_mm = 0;
+  double phase_deg = 0;
+};
+
+/// Waviness of a plane: amplitude * cos(2 pi u / wavelength - phase) along the normal,
+/// u the coordinate along the primitive's local x axis (flatness = 2 * amplitude).
+struct Waviness {
+  double amplitude_mm = 0;
+  double wavelength_mm = 10;
+  double phase_deg = 0;
+};
+
+/// How the machined primitive differs from its design (all zero: as designed).
+struct Deviation {
+  Vec3 offset_mm = Vec3::Zero();      ///< translation, in PART coordinates
+  Vec2 tilt_deg = Vec2::Zero();       ///< rotations about the local x then the local y axis, about the local origin
+  /// Size: diameter change for cylinders, spheres and cones; material added along the outward
+  /// normal for half-spaces.
+  double size_mm = 0;
+  std::optional<Lobing> lobing;       ///< cylinders, spheres, cones
+  std::optional<Waviness> waviness;   ///< half-spaces
+};
+
+/// Local frame of a primitive (part coordinates): origin at point/centre/apex, z along the
+/// axis or normal (the part's z for spheres), x = the part's x projected onto the plane normal
+/// to z (the part's y when z is within 25.8 degrees of x), y = z cross x.
+Frame local_frame(const Primitive& primitive);
+
+}  // namespace metron::machine::csg

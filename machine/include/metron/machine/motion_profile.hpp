@@ -1,0 +1,68 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <vector>
+
+namespace metron::machine {
+
+/// Limits of a 1-D motion along a path (all positive).
+struct MotionLimits {
+  double speed_mm_s = 300;            ///< maximum path speed
+  double acceleration_mm_s2 = 1000;   ///< maximum |acceleration|
+  double jerk_mm_s3 = 10000;          ///< maximum |jerk|
+};
+
+/// Kinematic state along the path.
+struct MotionState {
+  double position_mm = 0;
+  double speed_mm_s = 0;
+  double acceleration_mm_s2 = 0;
+};
+
+/// One phase of constant jerk.
+struct JerkPhase {
+  double duration_s = 0;
+  double jerk_mm_s3 = 0;
+};
+
+/// A 1-D jerk-limited motion: a start state followed by phases of constant jerk, so position,
+/// speed and acceleration are exact polynomials in time (no integration error). The acceleration
+/// mode is "constant rate" (SEEDS.md 3): the acceleration ramps at the jerk limit up to the
+/// acceleration limit, so the acceleration distance grows with the square of the feed.
+class MotionProfile {
+ public:
+  MotionProfile() = default;
+  MotionProfile(MotionState start, std::vector<JerkPhase> phases);
+
+  /// Time-optimal rest-to-rest move over `distance_mm` (>= 0): the symmetric 7-phase S-curve
+  /// (jerk up, constant acceleration, jerk down, cruise, and mirrored), with the peak speed
+  /// lowered when the distance is too short to reach `limits.speed_mm_s`.
+  static MotionProfile rest_to_rest(double distance_mm, const MotionLimits& limits);
+
+  /// Shortest jerk-limited stop from `from` (speed >= 0, |acceleration| <= limit).
+  static MotionProfile stop(const MotionState& from, const MotionLimits& limits);
+
+  [[nodiscard]] double duration_s() const { return m_duration_s; }
+  /// Position at the end (distance covered plus the start position).
+  [[nodiscard]] double end_position_mm() const { return m_end.position_mm; }
+  [[nodiscard]] const MotionState& start() const { return m_start; }
+  [[nodiscard]] const std::vector<JerkPhase>& phases() const { return m_phases; }
+
+  /// State at time t (clamped to [0, duration]); exact at the end.
+  [[nodiscard]] MotionState at(double t_s) const;
+  /// The first time the position reaches `position_mm` (the profiles here never move backward);
+  /// duration_s() if it never does.
+  [[nodiscard]] double time_at(double position_mm) const;
+
+ private:
+  MotionState m_start;
+  std::vector<JerkPhase> m_phases;
+  std::vector<double> m_phase_start_s;       // cumulative start time of each phase
+  std::vector<MotionState> m_phase_state;    // state at the start of each phase
+  MotionState m_end;
+  double m_duration_s = 0;
+};
+
+/// Duration of the rest-to-rest move (closed form, for planning and tests).
+double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits);
+
+}  // namespace metron::machine

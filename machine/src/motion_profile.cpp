@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/machine/motion_profile.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace metron::machine {
+namespace {
+
+MotionState advance(const MotionState& s, double jerk, double t) {
+  return {s.position_mm + s.speed_mm_s * t + s.acceleration_mm_s2 * t * t / 2 + jerk * t * t * t / 6,
+          s.speed_mm_s + s.acceleration_mm_s2 * t + jerk * t * t / 2,
+          s.acceleration_mm_s2 + jerk * t};
+}
+
+struct Ramp {
+  double jerk_time_s;   // each of the two jerk phases
+  double const_time_s;  // constant-acceleration phase
+  [[nodiscard]] double duration_s() const { return 2 * jerk_time_s + const_time_s; }
+};
+
+// Acceleration from rest to `speed` (and, mirrored, the deceleration back to rest).
+Ramp ramp_to(double speed, const MotionLimits& l) {
+  const double a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
+  if (speed * j >= a * a) return {a / j, speed / a - a / j};
+  return {std::sqrt(speed / j), 0.0};
+}
+
+// The peak speed of a rest-to-rest move: the limit, or lower for short moves.
+double peak_speed(double distance, const MotionLimits& l) {
+  const double v = l.speed_mm_s, a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
+  // The ramp is symmetric in time, so its distance is speed * duration / 2.
+  if (v * ramp_to(v, l).duration_s() <= distance) return v;
+  // Without a constant-acceleration phase: distance/2 = v^1.5 / sqrt(j).
+  const double v_jerk = std::cbrt(distance / 2 * std::sqrt(j) * distance / 2 * std::sqrt(j));
+  if (v_jerk * j < a * a) return v_jerk;
+  // With one: v^2/a + v*a/j = distance.
+  return a / 2 * (-a / j + std::sqrt(a * a / (j * j) + 4 * distance / a));
+}
+
+void check_limits(const MotionLimits& l) {
+  if (!(l.speed_mm_s > 0 && l.acceleration_mm_s2 > 0 && l.jerk_mm_s3 > 0))
+    throw std::invalid_argument("motion limits must be positive");
+}
+
+}  // namespace
+
+MotionProfile::MotionProfile(MotionState start, std::vector<JerkPhase> phases)
+    : m_start(start), m_end(start) {
+  for (const JerkPhase& p : phases) {
+    if (p.duration_s <= 0) continue;
+    m_phase_start_s.push_back(m_duration_s);
+    m_phase_state.push_back(m_end);
+    m_phases.push_back(p);
+    m_end = advance(m_end, p.jerk_mm_s3, p.duration_s);
+    m_duration_s += p.duration_s;
+  }
+}
+
+MotionProfile MotionProfile::rest_to_rest(double distance_mm, const MotionLimits& limits) {
+  check_limits(limits);
+  if (!(distance_mm > 0)) return {};
+  const double v = peak_speed(distance_mm, limits);
+  const Ramp r = ramp_to(v, limits);
+  const double cruise_s = std::max(0.0, (distance_mm - v * r.duration_s()) / v);
+  const double j = limits.jerk_mm_s3;
+  MotionProfile p({}, {{r.jerk_time_s, j}, {r.const_time_s, 0}, {r.jerk_time_s, -j}, {cruise_s, 0},
+                       {r.jerk_time_s, -j}, {r.const_time_s, 0}, {r.jerk_time_s, j}});
+  // The polynomials land on the target only to rounding; the controller ends exactly on it.
+  p.m_end = {distance_mm, 0, 0};
+  return p;
+}
+
+MotionProfile MotionProfile::stop(const MotionState& from, const MotionLimits& limits) {
+  check_limits(limits);
+  const double v0 = from.speed_mm_s, a0 = from.acceleration_mm_s2;
+  const double a = limits.acceleration_mm_s2, j = limits.jerk_mm_s3;
+  if (v0 <= 0) {
+    MotionProfile p(from, {});
+    p.m_end = {from.position_mm, 0, 0};
+    return p;
+  }
+  std::vector<JerkPhase> phases;
+  if (a0 < 0 && v0 < a0 * a0 / (2 * j)) {
+    // Already braking harder than needed: releasing the brake at the jerk limit reaches zero
+    // speed before zero acceleration; stop when the speed is zero.
+    const double t = (-a0 - std::sqrt(a0 * a0 - 2 * j * v0)) / j;
+    phases = {{t, j}};
+  } else {
+    // Jerk down to -peak, hold, jerk back to 0: v0 + (a0^2 - 2 peak^2)/(2j) - peak*hold = 0.
+    double peak = std::sqrt(j * v0 + a0 * a0 / 2);
+    double hold_s = 0;
+    if (peak > a) {
+      peak = a;
+      hold_s = (v0 + a0 * a0 / (2 * j) - a * a / j) / a;
+    }
+    phases = {{(a0 + peak) / j, -j}, {hold_s, 0}, {peak / j, j}};
+  }
+  MotionProfile p(from, phases);
+  p.m_end.speed_mm_s = 0;
+  p.m_end.acceleration_mm_s2 = 0;
+  return p;
+}
+
+MotionState MotionProfile::at(double t_s) const {
+  if (t_s >= m_duration_s) return m_end;
+  if (t_s <= 0 || m_phases.empty()) return m_start;
+  const auto it = std::upper_bound(m_phase_start_s.begin(), m_phase_start_s.end(), t_s);
+  const std::size_t i = static_cast<std::size_t>(it - m_phase_start_s.begin()) - 1;
+  return advance(m_phase_state[i], m_phases[i].jerk_mm_s3, t_s - m_phase_start_s[i]);
+}
+
+double MotionProfile::time_at(double position_mm) const {
+  if (position_mm <= m_start.position_mm) return 0;
+  if (position_mm >= m_end.position_mm) return m_duration_s;
+  double lo = 0, hi = m_duration_s;
+  // Position is non-decreasing in time, so bisection converges to the first crossing.
+  for (int i = 0; i < 200 && hi - lo > 1e-15; ++i) {
+    const double mid = (lo + hi) / 2;
+    (at(mid).position_mm < position_mm ? lo : hi) = mid;
+  }
+  return hi;
+}
+
+double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits) {
+  check_limits(limits);
+  if (!(distance_mm > 0)) return 0;
+  const double v = peak_speed(distance_mm, limits);
+  const Ramp r = ramp_to(v, limits);
+  return 2 * r.duration_s() + std::max(0.0, (distance_mm - v * r.duration_s()) / v);
+}
+
+}  // namespace metron::machine

@@ -1,0 +1,555 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/machine/world.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace metron::machine {
+namespace {
+
+using nlohmann::json;
+
+// Thrown inside the parser only; parse_world turns it into a WorldError.
+struct ParseError {
+  std::string pointer;
+  std::string message;
+};
+
+std::string pointer_token(std::string_view key) {  // RFC 6901 escaping
+  std::string out;
+  for (char c : key) {
+    if (c == '~') out += "~0";
+    else if (c == '/') out += "~1";
+    else out += c;
+  }
+  return out;
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+[[noreturn]] void fail(const std::string& pointer, std::string message) {
+  throw ParseError{pointer.empty() ? "/" : pointer, std::move(message)};
+}
+
+double number(const json& j, const std::string& ptr) {
+  if (!j.is_number()) fail(ptr, "expected a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) fail(ptr, "expected a finite number");
+  return v;
+}
+
+double positive(const json& j, const std::string& ptr) {
+  const double v = number(j, ptr);
+  if (!(v > 0)) fail(ptr, "expected a positive number");
+  return v;
+}
+
+double non_negative(const json& j, const std::string& ptr) {
+  const double v = number(j, ptr);
+  if (v < 0) fail(ptr, "expected a number >= 0");
+  return v;
+}
+
+Vec3 vec3(const json& j, const std::string& ptr) {
+  if (!j.is_array() || j.size() != 3) fail(ptr, "expected an array of 3 numbers");
+  return {number(j[0], ptr + "/0"), number(j[1], ptr + "/1"), number(j[2], ptr + "/2")};
+}
+
+Vec3 unit(const json& j, const std::string& ptr) {
+  const Vec3 v = vec3(j, ptr);
+  if (!(v.norm() > 1e-12)) fail(ptr, "expected a non-zero direction");
+  return v.normalized();
+}
+
+std::string string(const json& j, const std::string& ptr) {
+  if (!j.is_string()) fail(ptr, "expected a string");
+  return j.get<std::string>();
+}
+
+std::uint64_t seed(const json& j, const std::string& ptr) {
+  if (!j.is_number_unsigned()) fail(ptr, "expected a non-negative integer");
+  return j.get<std::uint64_t>();
+}
+
+int integer(const json& j, const std::string& ptr, int min) {
+  if (!j.is_number_integer()) fail(ptr, "expected an integer");
+  const auto v = j.get<std::int64_t>();
+  if (v < min || v > 1000000) fail(ptr, fmt::format("expected an integer >= {}", min));
+  return static_cast<int>(v);
+}
+
+// An object being read: remembers which keys the schema knows, so that finish() can report
+// every other key as unknown (typos must not be ignored silently).
+class Object {
+ public:
+  Object(const json& j, std::string pointer) : m_json(j), m_pointer(std::move(pointer)) {
+    if (!j.is_object()) fail(m_pointer, "expected an object");
+  }
+  [[nodiscard]] std::string at(std::string_view key) const {
+    return m_pointer + "/" + pointer_token(key);
+  }
+  [[nodiscard]] const std::string& pointer() const { return m_pointer; }
+  const json* find(const std::string& key) {
+    m_known.insert(key);
+    const auto it = m_json.find(key);
+    return it == m_json.end() ? nullptr : &*it;
+  }
+  const json& required(const std::string& key) {
+    const json* j = find(key);
+    if (!j) fail(m_pointer, fmt::format("missing key '{}'", key));
+    return *j;
+  }
+  template <class Read>
+  void read(const std::string& key, Read read_value) {
+    if (const json* j = find(key)) read_value(*j, at(key));
+  }
+  void finish() const {
+    for (const auto& item : m_json.items()) {
+      if (m_known.count(item.key())) continue;
+      std::string message = fmt::format("unknown key '{}'", item.key());
+      std::string best;
+      std::size_t best_distance = 3;
+      for (const std::string& k : m_known) {
+        const std::size_t d = edit_distance(item.key(), k);
+        if (d < best_distance) best_distance = d, best = k;
+      }
+      if (!best.empty()) message += fmt::format(" (did you mean '{}'?)", best);
+      fail(at(item.key()), message);
+    }
+  }
+
+ private:
+  const json& m_json;
+  std::string m_pointer;
+  std::set<std::string> m_known;
+};
+
+void set_number(Object& o, const std::string& key, double& out) {
+  o.read(key, [&](const json& j, const std::string& p) { out = number(j, p); });
+}
+void set_positive(Object& o, const std::string& key, double& out) {
+  o.read(key, [&](const json& j, const std::string& p) { out = positive(j, p); });
+}
+void set_non_negative(Object& o, const std::string& key, double& out) {
+  o.read(key, [&](const json& j, const std::string& p) { out = non_negative(j, p); });
+}
+void set_vec3(Object& o, const std::string& key, Vec3& out) {
+  o.read(key, [&](const json& j, const std::string& p) { out = vec3(j, p); });
+}
+void set_unit(Object& o, const std::string& key, Vec3& out) {
+  o.read(key, [&](const json& j, const std::string& p) { out = unit(j, p); });
+}
+
+MachineSpec parse_machine(const json& j, const std::string& ptr) {
+  MachineSpec m;
+  Object o(j, ptr);
+  o.read("travel_mm", [&](const json& tj, const std::string& tp) {
+    Object t(tj, tp);
+    const char* names[] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i) {
+      t.read(names[i], [&](const json& aj, const std::string& ap) {
+        if (!aj.is_array() || aj.size() != 2) fail(ap, "expected [min, max]");
+        const double lo = number(aj[0], ap + "/0"), hi = number(aj[1], ap + "/1");
+        if (!(lo < hi)) fail(ap, "expected min < max");
+        m.travel[i] = {lo, hi};
+      });
+    }
+    t.finish();
+  });
+  set_positive(o, "max_speed_mm_s", m.max_speed_mm_s);
+  set_positive(o, "max_acceleration_mm_s2", m.max_acceleration_mm_s2);
+  set_positive(o, "max_jerk_mm_s3", m.max_jerk_mm_s3);
+  set_positive(o, "dt_s", m.dt_s);
+  set_positive(o, "positioning_feed_mm_s", m.positioning_feed_mm_s);
+  set_positive(o, "measuring_feed_mm_s", m.measuring_feed_mm_s);
+  o.read("skip", [&](const json& sj, const std::string& sp) {
+    Object s(sj, sp);
+    const json* latched = s.find("latched");
+    const json* scanned = s.find("scanned");
+    if ((latched != nullptr) == (scanned != nullptr))
+      fail(sp, "expected exactly one of 'latched' or 'scanned'");
+    if (latched) {
+      m.skip.kind = SkipInput::Kind::Latched;
+      Object l(*latched, s.at("latched"));
+      set_non_negative(l, "latency_s", m.skip.latency_s);
+      l.finish();
+    } else {
+      m.skip.kind = SkipInput::Kind::Scanned;
+      Object c(*scanned, s.at("scanned"));
+      set_positive(c, "period_s", m.skip.period_s);
+      c.finish();
+    }
+    s.finish();
+  });
+  set_vec3(o, "home_mm", m.home_mm);
+  set_number(o, "table_z_mm", m.table_z_mm);
+  o.finish();
+  for (int i = 0; i < 3; ++i) {
+    if (m.home_mm[i] < m.travel[i].min_mm || m.home_mm[i] > m.travel[i].max_mm)
+      fail(o.at("home_mm"), "outside the axis travel");
+  }
+  if (m.positioning_feed_mm_s > m.max_speed_mm_s || m.measuring_feed_mm_s > m.max_speed_mm_s)
+    fail(ptr, "a default feed exceeds max_speed_mm_s");
+  return m;
+}
+
+ProbeSpec parse_probe(const json& j, const std::string& ptr) {
+  ProbeSpec p;
+  Object o(j, ptr);
+  set_number(o, "ball_radius_error_mm", p.ball_radius_error_mm);
+  o.read("pre_travel", [&](const json& tj, const std::string& tp) {
+    Object t(tj, tp);
+    set_non_negative(t, "horizontal_mm", p.pre_travel.horizontal_mm);
+    set_non_negative(t, "vertical_mm", p.pre_travel.vertical_mm);
+    t.read("lobes", [&](const json& lj, const std::string& lp) { p.pre_travel.lobes = integer(lj, lp, 0); });
+    set_non_negative(t, "lobe_amplitude_mm", p.pre_travel.lobe_amplitude_mm);
+    set_number(t, "lobe_phase_deg", p.pre_travel.lobe_phase_deg);
+    t.finish();
+  });
+  set_non_negative(o, "filter_delay_s", p.filter_delay_s);
+  set_non_negative(o, "transmission_delay_s", p.transmission_delay_s);
+  set_positive(o, "over_travel_mm", p.over_travel_mm);
+  set_non_negative(o, "repeatability_mm", p.repeatability_mm);
+  o.finish();
+  return p;
+}
+
+ReferenceSphereSpec parse_reference_sphere(const json& j, const std::string& ptr) {
+  ReferenceSphereSpec r;
+  Object o(j, ptr);
+  set_vec3(o, "nominal_centre_mm", r.nominal_centre_mm);
+  set_positive(o, "certified_diameter_mm", r.certified_diameter_mm);
+  r.true_centre_mm = r.nominal_centre_mm;
+  r.true_diameter_mm = r.certified_diameter_mm;
+  set_vec3(o, "true_centre_mm", r.true_centre_mm);
+  set_positive(o, "true_diameter_mm", r.true_diameter_mm);
+  o.read("post", [&](const json& pj, const std::string& pp) {
+    Object post(pj, pp);
+    set_positive(post, "diameter_mm", r.post_diameter_mm);
+    set_unit(post, "direction", r.post_direction);
+    set_positive(post, "length_mm", r.post_length_mm);
+    post.finish();
+    if (r.post_diameter_mm >= r.true_diameter_mm) fail(post.at("diameter_mm"), "the post must be thinner than the sphere");
+  });
+  o.finish();
+  return r;
+}
+
+csg::Node parse_node(const json& j, const std::string& ptr);
+
+csg::Node parse_boolean(Object& o, const std::string& key, csg::Node::Op op) {
+  const json& arr = o.required(key);
+  const std::string p = o.at(key);
+  if (!arr.is_array() || arr.empty()) fail(p, "expected a non-empty array of nodes");
+  csg::Node n;
+  n.op = op;
+  for (std::size_t i = 0; i < arr.size(); ++i) n.children.push_back(parse_node(arr[i], p + "/" + std::to_string(i)));
+  o.finish();
+  return n;
+}
+
+csg::Node parse_node(const json& j, const std::string& ptr) {
+  Object o(j, ptr);
+  static const std::pair<const char*, csg::Node::Op> ops[] = {
+      {"union", csg::Node::Op::Union},
+      {"intersection", csg::Node::Op::Intersection},
+      {"difference", csg::Node::Op::Difference}};
+  for (const auto& [key, op] : ops)
+    if (j.contains(key)) return parse_boolean(o, key, op);
+  if (!j.contains("type"))
+    fail(ptr, "expected a primitive ('type') or one of 'union', 'intersection', 'difference'");
+  const std::string type = string(o.required("type"), o.at("type"));
+  csg::Node n;
+  o.read("name", [&](const json& nj, const std::string& np) { n.primitive.name = string(nj, np); });
+  if (type == "half_space") {
+    csg::HalfSpace h;
+    h.point = vec3(o.required("point"), o.at("point"));
+    h.normal = unit(o.required("normal"), o.at("normal"));
+    n.primitive.shape = h;
+  } else if (type == "cylinder") {
+    csg::Cylinder c;
+    c.point = vec3(o.required("point"), o.at("point"));
+    c.axis = unit(o.required("axis"), o.at("axis"));
+    c.diameter_mm = positive(o.required("diameter_mm"), o.at("diameter_mm"));
+    o.read("length_mm", [&](const json& lj, const std::string& lp) { c.length_mm = positive(lj, lp); });
+    n.primitive.shape = c;
+  } else if (type == "sphere") {
+    csg::Sphere s;
+    s.centre = vec3(o.required("centre"), o.at("centre"));
+    s.diameter_mm = positive(o.required("diameter_mm"), o.at("diameter_mm"));
+    n.primitive.shape = s;
+  } else if (type == "cone") {
+    csg::Cone c;
+    c.apex = vec3(o.required("apex"), o.at("apex"));
+    c.axis = unit(o.required("axis"), o.at("axis"));
+    c.half_angle_deg = number(o.required("half_angle_deg"), o.at("half_angle_deg"));
+    if (!(c.half_angle_deg > 0 && c.half_angle_deg < 90)) fail(o.at("half_angle_deg"), "expected an angle in (0, 90) degrees");
+    n.primitive.shape = c;
+  } else {
+    fail(o.at("type"), fmt::format("unknown primitive type '{}' (expected half_space, cylinder, sphere or cone)", type));
+  }
+  o.finish();
+  return n;
+}
+
+void collect_names(const csg::Node& n, std::map<std::string, std::vector<const csg::Primitive*>>& out) {
+  if (n.op == csg::Node::Op::Primitive) {
+    if (!n.primitive.name.empty()) out[n.primitive.name].push_back(&n.primitive);
+    return;
+  }
+  for (const csg::Node& c : n.children) collect_names(c, out);
+}
+
+csg::Deviation parse_deviation(const json& j, const std::string& ptr, bool planar, bool round) {
+  csg::Deviation d;
+  Object o(j, ptr);
+  set_vec3(o, "offset_mm", d.offset_mm);
+  o.read("tilt_deg", [&](const json& tj, const std::string& tp) {
+    if (!tj.is_array() || tj.size() != 2) fail(tp, "expected an array of 2 numbers");
+    d.tilt_deg = {number(tj[0], tp + "/0"), number(tj[1], tp + "/1")};
+  });
+  set_number(o, "size_mm", d.size_mm);
+  if (round) set_number(o, "diameter_mm", d.size_mm);  // the same as size_mm, for readability
+  o.read("form", [&](const json& fj, const std::string& fp) {
+    Object f(fj, fp);
+    if (planar) {
+      csg::Waviness w;
+      set_number(f, "amplitude_mm", w.amplitude_mm);
+      set_positive(f, "wavelength_mm", w.wavelength_mm);
+      set_number(f, "phase_deg", w.phase_deg);
+      d.waviness = w;
+    } else {
+      csg::Lobing l;
+      f.read("lobes", [&](const json& lj, const std::string& lp) { l.lobes = integer(lj, lp, 1); });
+      set_number(f, "amplitude_mm", l.amplitude_mm);
+      set_number(f, "phase_deg", l.phase_deg);
+      d.lobing = l;
+    }
+    f.finish();
+  });
+  o.finish();
+  return d;
+}
+
+std::shared_ptr<const geometry::Mesh> load_cad_mesh(const std::string& path, const std::string& ptr) {
+  auto mesh = geometry::load_mesh(path);
+  if (!mesh) fail(ptr, mesh.error().message);
+  if (!mesh->is_closed()) fail(ptr, fmt::format("'{}' is not a closed (watertight) mesh, so it has no inside", path));
+  return std::make_shared<const geometry::Mesh>(std::move(*mesh));
+}
+
+PartSpec parse_part(const json& j, const std::string& ptr, const std::string& base_dir) {
+  PartSpec part;
+  Object o(j, ptr);
+  {
+    const json& dj = o.required("design");
+    const std::string dp = o.at("design");
+    if (dj.is_object() && dj.contains("cad")) {
+      Object d(dj, dp);
+      CadDesign cad;
+      std::filesystem::path p = string(d.required("cad"), d.at("cad"));
+      if (p.is_relative() && !base_dir.empty()) p = std::filesystem::path(base_dir) / p;
+      cad.path = p.lexically_normal().string();
+      d.finish();
+      cad.mesh = load_cad_mesh(cad.path, d.at("cad"));
+      part.design = std::move(cad);
+    } else {
+      part.design = parse_node(dj, dp);
+    }
+  }
+  o.read("pose", [&](const json& pj, const std::string& pp) {
+    Object pose(pj, pp);
+    set_vec3(pose, "translation_mm", part.pose.translation_mm);
+    set_vec3(pose, "rotation_deg", part.pose.rotation_deg);
+    pose.finish();
+  });
+  o.read("deviations", [&](const json& dj, const std::string& dp) {
+    Object devs(dj, dp);
+    const auto* tree = std::get_if<csg::Node>(&part.design);
+    if (!tree) {
+      if (!dj.empty()) fail(dp, "deviations by name need a CSG design; a CAD part takes 'bumps'");
+      return;
+    }
+    std::map<std::string, std::vector<const csg::Primitive*>> names;
+    collect_names(*tree, names);
+    for (const auto& item : dj.items()) {
+      const json* v = devs.find(item.key());
+      const auto it = names.find(item.key());
+      if (it == names.end()) fail(devs.at(item.key()), fmt::format("no primitive named '{}' in the design", item.key()));
+      bool planar = false, round = false;
+      for (const csg::Primitive* p : it->second)
+        (std::holds_alternative<csg::HalfSpace>(p->shape) ? planar : round) = true;
+      if (planar && round) fail(devs.at(item.key()), "the name is shared by planar and round primitives");
+      part.deviations[item.key()] = parse_deviation(*v, devs.at(item.key()), planar, round);
+    }
+    devs.finish();
+  });
+  o.read("bumps", [&](const json& bj, const std::string& bp) {
+    if (!bj.is_array()) fail(bp, "expected an array of bumps");
+    if (!std::holds_alternative<CadDesign>(part.design) && !bj.empty())
+      fail(bp, "bumps apply to CAD parts; a CSG part takes 'deviations'");
+    for (std::size_t i = 0; i < bj.size(); ++i) {
+      Object b(bj[i], bp + "/" + std::to_string(i));
+      Bump bump;
+      bump.centre_mm = vec3(b.required("centre_mm"), b.at("centre_mm"));
+      bump.amplitude_mm = number(b.required("amplitude_mm"), b.at("amplitude_mm"));
+      bump.sigma_mm = positive(b.required("sigma_mm"), b.at("sigma_mm"));
+      b.finish();
+      part.bumps.push_back(bump);
+    }
+  });
+  o.read("roughness", [&](const json& rj, const std::string& rp) {
+    Object r(rj, rp);
+    set_non_negative(r, "amplitude_mm", part.roughness.amplitude_mm);
+    set_positive(r, "correlation_mm", part.roughness.correlation_mm);
+    r.finish();
+  });
+  o.read("seed", [&](const json& sj, const std::string& sp) { part.seed = seed(sj, sp); });
+  o.finish();
+  return part;
+}
+
+World parse_world_or_throw(const json& j, const std::string& base_dir) {
+  World w;
+  Object o(j, "");
+  o.read("name", [&](const json& nj, const std::string& np) { w.name = string(nj, np); });
+  o.read("description", [&](const json& dj, const std::string& dp) { string(dj, dp); });
+  o.read("seed", [&](const json& sj, const std::string& sp) { w.seed = seed(sj, sp); });
+  o.read("machine", [&](const json& mj, const std::string& mp) { w.machine = parse_machine(mj, mp); });
+  o.read("probe", [&](const json& pj, const std::string& pp) { w.probe = parse_probe(pj, pp); });
+  o.read("reference_sphere", [&](const json& rj, const std::string& rp) {
+    w.reference_sphere = parse_reference_sphere(rj, rp);
+  });
+  o.read("part", [&](const json& pj, const std::string& pp) {
+    if (!pj.is_null()) w.part = parse_part(pj, pp, base_dir);
+  });
+  o.finish();
+  return w;
+}
+
+}  // namespace
+
+Frame Pose::part_to_machine() const {
+  const double k = std::numbers::pi / 180.0;
+  Frame f = Frame::Identity();
+  f.translate(translation_mm);
+  f.rotate(Eigen::AngleAxisd(rotation_deg.z() * k, Vec3::UnitZ()));
+  f.rotate(Eigen::AngleAxisd(rotation_deg.y() * k, Vec3::UnitY()));
+  f.rotate(Eigen::AngleAxisd(rotation_deg.x() * k, Vec3::UnitX()));
+  return f;
+}
+
+namespace {
+
+std::string read_text(const std::string& path, bool& ok) {
+  std::ifstream in(path, std::ios::binary);
+  ok = static_cast<bool>(in);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+tl::expected<json, WorldError> read_json(const std::string& path) {
+  bool ok = false;
+  const std::string text = read_text(path, ok);
+  if (!ok) return tl::unexpected(WorldError{fmt::format("{}: cannot read the file", path)});
+  try {
+    return json::parse(text, nullptr, true, /*ignore_comments=*/true);
+  } catch (const json::parse_error& e) {
+    // what() is "[json.exception.parse_error.101] parse error at line L, column C: ..."
+    std::string what = e.what();
+    if (const auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
+    return tl::unexpected(WorldError{fmt::format("{}: invalid JSON: {}", path, what)});
+  }
+}
+
+// A CAD path in a base world stays relative to the base file, not to the file extending it.
+void anchor_cad_path(json& j, const std::string& base_dir) {
+  if (base_dir.empty() || !j.is_object() || !j.contains("part") || !j["part"].is_object()) return;
+  json& part = j["part"];
+  if (!part.contains("design") || !part["design"].is_object() || !part["design"].contains("cad")) return;
+  json& cad = part["design"]["cad"];
+  if (cad.is_string() && std::filesystem::path(cad.get<std::string>()).is_relative())
+    cad = (std::filesystem::path(base_dir) / cad.get<std::string>()).lexically_normal().string();
+}
+
+// "extends": a base world ("default" for the embedded one, else a path relative to the file),
+// overridden by this file as an RFC 7386 merge patch; part.design replaces the base design whole.
+tl::expected<json, WorldError> resolve_extends(json j, const std::string& source, const std::string& base_dir,
+                                               int depth) {
+  if (!j.is_object() || !j.contains("extends")) return j;
+  const json& ext = j["extends"];
+  if (!ext.is_string()) return tl::unexpected(WorldError{fmt::format("{}: /extends: expected a string", source)});
+  if (depth > 8) return tl::unexpected(WorldError{fmt::format("{}: /extends: too deeply nested", source)});
+  const std::string name = ext.get<std::string>();
+  json base;
+  if (name == "default") {
+    base = json::parse(default_world_json(), nullptr, true, true);
+  } else {
+    std::filesystem::path p = name;
+    if (p.is_relative() && !base_dir.empty()) p = std::filesystem::path(base_dir) / p;
+    auto read = read_json(p.string());
+    if (!read) return tl::unexpected(read.error());
+    const std::string dir = p.parent_path().string();
+    auto resolved = resolve_extends(std::move(*read), p.string(), dir, depth + 1);
+    if (!resolved) return resolved;
+    base = std::move(*resolved);
+    anchor_cad_path(base, dir);
+  }
+  j.erase("extends");
+  if (j.contains("part") && j["part"].is_object() && j["part"].contains("design") && base.contains("part") &&
+      base["part"].is_object())
+    base["part"].erase("design");
+  base.merge_patch(j);
+  return base;
+}
+
+}  // namespace
+
+tl::expected<World, WorldError> parse_world(const nlohmann::json& json_in, const std::string& source_name,
+                                            const std::string& base_dir) {
+  auto j = resolve_extends(json_in, source_name, base_dir, 0);
+  if (!j) return tl::unexpected(j.error());
+  try {
+    World w = parse_world_or_throw(*j, base_dir);
+    w.source = source_name;
+    return w;
+  } catch (const ParseError& e) {
+    return tl::unexpected(WorldError{fmt::format("{}: {}: {}", source_name, e.pointer, e.message)});
+  }
+}
+
+tl::expected<World, WorldError> load_world(const std::string& path) {
+  auto j = read_json(path);
+  if (!j) return tl::unexpected(j.error());
+  return parse_world(*j, path, std::filesystem::path(path).parent_path().string());
+}
+
+World default_world() {
+  auto w = parse_world(json::parse(default_world_json(), nullptr, true, true), "<default>");
+  if (!w) throw std::logic_error("the embedded default world is invalid: " + w.error().message);
+  return *w;
+}
+
+}  // namespace metron::machine

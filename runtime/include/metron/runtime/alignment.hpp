@@ -1,0 +1,20 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <string>
+
+#include "metron/stdlib/geometry/vec.hpp"
+
+namespace metron::runtime {
+
+/// A part coordinate system: `part_to_machine` maps its coordinates to machine coordinates.
+struct Alignment {
+  std::string label = "MCS";         ///< the D()/DA() label, "MCS" for the machine system
+  Frame part_to_machine = Frame::Identity();
+
+  [[nodiscard]] Vec3 to_machine_point(const Vec3& p) const { return part_to_machine * p; }
+  [[nodiscard]] Vec3 to_machine_vector(const Vec3& v) const { return part_to_machine.linear() * v; }
+  [[nodiscard]] Vec3 to_part_point(const Vec3& p) const { return part_to_machine.inverse() * p; }
+  [[nodiscard]] Vec3 to_part_vector(const Vec3& v) const { return part_to_machine.linear().transpose() * v; }
+};
+
+}  // namespace metron::runtime

@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metron/stdlib/geometry/vec.hpp"
+#include "metron/stdlib/span.hpp"
+
+namespace metron::runtime {
+
+/// DMIS feature types metron measures and constructs.
+enum class FeatureType { Point, Plane, Line, Circle, Arc, Sphere, Cylinder, Cone };
+/// Material side of a feature of size: INNER (a bore) or OUTER (a boss); None for others.
+enum class Side { None, Inner, Outer };
+
+const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE
+const char* dmis_word(Side side);         ///< INNER, OUTER, or ""
+
+/// The geometry of a feature (nominal or actual), always in machine coordinates (MCS), mm.
+struct Geometry {
+  FeatureType type = FeatureType::Point;
+  Side side = Side::None;
+  Vec3 position = Vec3::Zero();   ///< point; a point on a plane/line; centre; a point on an axis (cone: apex)
+  Vec3 direction = Vec3::UnitZ(); ///< point/plane normal, line direction, circle/cylinder/cone axis
+  Vec3 normal2 = Vec3::UnitZ();   ///< line: the normal of the plane the line lies in (DMIS LINE ... ,i2,j2,k2)
+  double diameter_mm = 0;         ///< circle, arc, sphere, cylinder
+  double length_mm = 0;           ///< cylinder, cone, bounded line
+  double apex_angle_deg = 0;      ///< cone full apex angle
+  double start_angle_deg = 0;     ///< arc
+  double included_angle_deg = 0;  ///< arc
+  bool bounded = false;           ///< line BND vs UNBND
+};
+
+/// One probed point as the runtime keeps it.
+struct MeasuredPoint {
+  Vec3 centre_mm = Vec3::Zero();   ///< ball centre reported by the machine (MCS)
+  Vec3 normal = Vec3::UnitZ();     ///< probing (approach) direction, unit (MCS)
+  double ball_radius_mm = 0;       ///< effective radius used for compensation
+  double time_s = 0;               ///< simulated time of the trigger
+  Span origin;                     ///< the PTMEAS (or MEAS in AUTO mode) that took it
+  [[nodiscard]] Vec3 surface_mm() const { return centre_mm - ball_radius_mm * normal; }
+};
+
+/// Fit figures of an actual feature.
+struct FitFigures {
+  std::vector<double> residuals_mm;  ///< signed, one per point
+  double rms_mm = 0;
+  double form_mm = 0;                ///< flatness, straightness, roundness, sphericity, cylindricity ...
+};
+
+/// How an actual came to be.
+enum class ActualSource { Measured, Constructed };
+
+/// A feature of the program: its nominal, and its actual once measured or constructed.
+struct Feature {
+  std::string label;                 ///< the F()/FA() name
+  Geometry nominal;
+  std::optional<Geometry> actual;
+  ActualSource source = ActualSource::Measured;
+  std::vector<MeasuredPoint> points;
+  std::optional<FitFigures> fit;
+  Span defined_at;                   ///< the FEAT statement
+  Span measured_at;                  ///< the MEAS or CONST statement
+};
+
+}  // namespace metron::runtime

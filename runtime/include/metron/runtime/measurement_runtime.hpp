@@ -1,0 +1,201 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metron/machine/machine.hpp"
+#include "metron/runtime/alignment.hpp"
+#include "metron/runtime/alignment_ops.hpp"
+#include "metron/runtime/feature.hpp"
+#include "metron/runtime/run_record.hpp"
+#include "metron/runtime/runtime_error.hpp"
+#include "metron/runtime/tolerance.hpp"
+#include "metron/stdlib/source.hpp"
+
+namespace metron::runtime {
+
+/// DMIS MODE: who takes the points. metron's virtual operator takes PROG MAN points as given.
+enum class Mode { Auto, ProgMan, Man };
+
+/// SNSET distances (mm).
+struct ProbeSettings {
+  double approach_mm = 2.0;    ///< SNSET/APPRCH
+  double retract_mm = 2.0;     ///< SNSET/RETRCT
+  double search_mm = 5.0;      ///< SNSET/SEARCH
+  double clearance_mm = 10.0;  ///< SNSET/CLRSRF: clearance above the feature for AUTO moves
+  double depth_mm = 0.0;       ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
+};
+
+/// S(label)=SNSDEF/PROBE,...: a sensor as the program defines it.
+struct SensorDefinition {
+  std::string label;
+  double ball_diameter_mm = 4.0;
+  Vec3 direction = -Vec3::UnitZ();   ///< from the head to the ball (current frame)
+  double length_mm = 50.0;
+};
+
+/// A feature operand: F(x) (nominal) or FA(x) (actual).
+struct FeatureRef {
+  std::string label;
+  bool actual = true;
+};
+
+/// One step of a MEAS block, in current-frame coordinates (already in mm).
+struct MeasStep {
+  enum class Kind { GoTo, PtMeas } kind = Kind::PtMeas;
+  Vec3 point = Vec3::Zero();
+  std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
+  Span span;
+};
+
+/// MEAS/type,F(label),n ... ENDMES.
+struct MeasBlock {
+  std::string feature;
+  FeatureType type = FeatureType::Point;
+  int point_count = 0;
+  std::vector<MeasStep> steps;
+  Span span;                         ///< the MEAS statement
+};
+
+/// DATSET/... with datum labels.
+struct DatsetRequest {
+  struct Clause {
+    std::string datum;
+    std::optional<Axis> direction;
+    bool minus = false;
+    std::vector<Axis> origins;
+  };
+  bool mcs = false;                  ///< DATSET/MCS
+  std::vector<Clause> clauses;
+};
+
+/// TRANS/XORIG,v|FA(f),...
+struct TransRequest {
+  std::optional<double> value[3];
+  std::optional<FeatureRef> feature[3];
+};
+
+/// ROTATE/axis,angle or ROTATE/axis,FA(f),XDIR|YDIR|ZDIR
+struct RotateRequest {
+  Axis about = Axis::Z;
+  std::optional<double> angle_deg;
+  std::optional<FeatureRef> feature;
+  Axis align = Axis::X;
+};
+
+/// CONST/type,F(x),method,sources...
+enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection };
+
+/// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
+struct OutputItem {
+  enum class Kind { Feature, Tolerance } kind = Kind::Feature;
+  FeatureRef feature;
+  std::string tolerance;
+};
+
+/// The measurement runtime: feature store, alignments, tolerances, the scheduler that turns
+/// measurement blocks into machine commands, and the outputs. The interpreter calls it.
+class MeasurementRuntime {
+ public:
+  MeasurementRuntime(machine::Machine& machine, const SourceManager& sources, RunRecord& record);
+
+  /// Called for every OUTPUT result, text and fault as it happens (the live report).
+  void on_event(std::function<void(const RunEvent&)> callback) { m_on_event = std::move(callback); }
+  /// Where DMIS output files (DEVICE/STOR) are written: their base name in this directory.
+  void set_output_directory(std::string dir) { m_output_dir = std::move(dir); }
+
+  // Features and tolerances.
+  Result<void> define_feature(const std::string& label, const Geometry& nominal_current, Span span);
+  Result<void> define_tolerance(ToleranceSpec spec);
+  [[nodiscard]] const Feature* find_feature(const std::string& label) const;
+  [[nodiscard]] const ToleranceSpec* find_tolerance(const std::string& label) const;
+  [[nodiscard]] const std::map<std::string, Feature>& features() const { return m_features; }
+  /// A feature's nominal or actual in the current frame (for OBTAIN, the debugger).
+  Result<Geometry> feature_geometry(const FeatureRef& ref, Span span) const;
+
+  // Sensors, settings and motion.
+  Result<void> define_sensor(const SensorDefinition& sensor, Span span);
+  Result<void> select_sensor(const std::string& label, Span span);
+  ProbeSettings& probe_settings() { return m_probe; }
+  Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
+  Result<void> set_acceleration(double acceleration_mm_s2, Span span);
+  void set_mode(Mode mode) { m_mode = mode; }
+  [[nodiscard]] Mode mode() const { return m_mode; }
+  Result<void> go_to(const Vec3& point_current, Span span);
+  /// Current ball-centre position in the current frame.
+  [[nodiscard]] Vec3 position_current() const;
+  Result<void> measure(const MeasBlock& block);
+
+  // Alignments and datums.
+  [[nodiscard]] const Alignment& alignment() const { return m_alignment; }
+  Result<void> define_datum(const FeatureRef& feature, const std::string& datum, Span span);
+  Result<void> datset(const std::string& label, const DatsetRequest& request, Span span);
+  Result<void> trans(const std::string& label, const TransRequest& request, Span span);
+  Result<void> rotate(const std::string& label, const RotateRequest& request, Span span);
+  Result<void> save(const std::string& label, Span span);
+  Result<void> recall(const std::string& label, Span span);
+
+  // Constructions and outputs.
+  Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
+                         const std::vector<FeatureRef>& sources, Span span);
+  Result<void> output(const std::vector<OutputItem>& items, Span span);
+  Result<void> define_device(const std::string& label, const std::string& path, Span span);
+  Result<void> open_device(const std::string& label, Span span);
+  Result<void> close_device(const std::string& label, Span span);
+  void text(const std::string& kind, const std::string& text);
+
+  /// Records a machine fault with the statement that caused it (also emitted as an event).
+  void record_fault(const machine::Fault& fault, Span span);
+  /// Copies the feature store into the record (call at the end of a run).
+  void finish();
+  [[nodiscard]] machine::Machine& machine() { return m_machine; }
+
+ private:
+  struct Execution {
+    std::vector<machine::Response> responses;
+    std::optional<RuntimeError> error;
+    std::uint64_t first_tag = 0;
+  };
+  Execution execute_commands(std::vector<machine::Command> commands, const std::vector<Span>& spans);
+  Result<std::vector<machine::Response>> run_commands(std::vector<machine::Command> commands,
+                                                      const std::vector<Span>& spans);
+  Result<void> ensure_tool(Span span);
+  Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
+  Result<const Datum*> datum(const std::string& label, Span span) const;
+  void emit(RunEvent event);
+  void write_device_line(const std::string& line);
+  void set_alignment(const std::string& label, const Frame& frame);
+
+  machine::Machine& m_machine;
+  const SourceManager& m_sources;
+  RunRecord& m_record;
+  std::function<void(const RunEvent&)> m_on_event;
+  std::string m_output_dir = ".";
+
+  std::map<std::string, Feature> m_features;
+  std::vector<std::string> m_feature_order;
+  std::map<std::string, ToleranceSpec> m_tolerances;
+  std::map<std::string, Datum> m_datums;
+  std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
+  std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()
+  Alignment m_alignment;
+  std::map<std::string, SensorDefinition> m_sensors;
+  std::map<std::string, machine::ToolInfo> m_tools;  ///< defined on the machine
+  std::string m_active_sensor;
+  ProbeSettings m_probe;
+  Mode m_mode = Mode::Auto;
+  struct Device {
+    std::string path;
+    bool open = false;
+    std::shared_ptr<std::ofstream> stream;
+  };
+  std::map<std::string, Device> m_devices;
+  std::uint64_t m_next_tag = 1;
+};
+
+}  // namespace metron::runtime

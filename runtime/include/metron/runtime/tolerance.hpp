@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <optional>
+#include <tl/expected.hpp>
+#include <string>
+#include <vector>
+
+#include "metron/runtime/alignment.hpp"
+#include "metron/runtime/feature.hpp"
+#include "metron/stdlib/span.hpp"
+
+namespace metron::runtime {
+
+/// The DMIS tolerance kinds metron evaluates.
+enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, Strght, Perp, Parlel, Anglb, Profs };
+const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
+
+/// Distance direction for DISTB.
+enum class DistanceAxis { PointToPoint, XAxis, YAxis, ZAxis };
+/// Material condition modifier of POS.
+enum class MaterialCondition { Rfs, Mmc, Lmc };
+
+/// A tolerance definition T(label)=TOL/... (values already in mm / degrees).
+struct ToleranceSpec {
+  std::string label;
+  ToleranceKind kind = ToleranceKind::Diam;
+  double nominal = 0;            ///< DISTB nominal distance, ANGLB nominal angle
+  double lower = 0;              ///< lower deviation limit (DIAM, RAD, DISTB, ANGLB, PROFS)
+  double upper = 0;              ///< upper deviation limit
+  double zone = 0;               ///< tolerance zone (POS, form, PERP, PARLEL)
+  bool three_d = false;          ///< POS 3D (else 2D)
+  DistanceAxis axis = DistanceAxis::PointToPoint;
+  MaterialCondition condition = MaterialCondition::Rfs;
+  std::vector<std::string> datums;  ///< DAT() labels referenced
+  Span defined_at;
+};
+
+/// A datum: DATDEF/FA(x),DAT(A) binds datum A to the actual of feature x.
+struct Datum {
+  std::string label;
+  std::string feature;
+  Geometry geometry;             ///< the actual (MCS) at DATDEF time
+};
+
+/// The outcome of evaluating one tolerance on one or two features.
+struct ToleranceResult {
+  std::string label;
+  ToleranceKind kind = ToleranceKind::Diam;
+  std::vector<std::string> features;   ///< feature labels it was applied to
+  double value = 0;              ///< the measured quantity: deviation (DIAM, RAD, DISTB, ANGLB), zone used (POS, form ...)
+  double actual = 0;             ///< the actual size/distance/angle where meaningful (DIAM: actual diameter)
+  double nominal = 0;            ///< the nominal size/distance/angle where meaningful
+  double lower = 0;              ///< accepted range for `value`
+  double upper = 0;
+  bool in_tolerance = false;
+  std::string note;              ///< how it was evaluated when not obvious (e.g. "datum frame = current alignment")
+  bool three_d = false;          ///< POS: the spec's 3D zone (else 2D); the DMIS output line needs it
+};
+
+/// What an evaluation needs besides the spec and features.
+struct ToleranceContext {
+  const Alignment* alignment = nullptr;            ///< the current coordinate system (reporting frame)
+  std::vector<const Datum*> datums;                ///< resolved datums of spec.datums, same order
+};
+
+/// Evaluates `spec` on `features` (one feature, or two for DISTB). Returns an error message
+/// (lowercase) when the tolerance does not apply, e.g. "DIAM needs a feature of size, got PLANE".
+tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpec& spec,
+    const std::vector<const Feature*>& features, const ToleranceContext& context);
+
+}  // namespace metron::runtime

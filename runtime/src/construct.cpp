@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// CONST/...: features constructed from other features' actuals.
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "detail/fit_actual.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
+
+namespace metron::runtime {
+namespace {
+
+bool is_planar(const Geometry& g) { return g.type == FeatureType::Plane; }
+bool is_linear(const Geometry& g) {
+  return g.type == FeatureType::Line || g.type == FeatureType::Cylinder || g.type == FeatureType::Cone;
+}
+
+// Line of two planes: direction n1 x n2, the point on it closest to `near`.
+tl::expected<Geometry, std::string> plane_plane(const Geometry& a, const Geometry& b, const Vec3& near) {
+  const Vec3 d = a.direction.cross(b.direction);
+  if (d.norm() < 1e-9) return tl::unexpected(std::string("the planes are parallel: they do not intersect"));
+  // Solve n1.x = n1.p1, n2.x = n2.p2, d.x = d.near (the point on the line nearest `near`).
+  Mat3 m;
+  m.row(0) = a.direction;
+  m.row(1) = b.direction;
+  m.row(2) = d;
+  const Vec3 rhs(a.direction.dot(a.position), b.direction.dot(b.position), d.dot(near));
+  Geometry g;
+  g.type = FeatureType::Line;
+  g.position = m.colPivHouseholderQr().solve(rhs);
+  g.direction = d.normalized();
+  return g;
+}
+
+tl::expected<Vec3, std::string> line_plane(const Geometry& line, const Geometry& plane) {
+  const double den = line.direction.dot(plane.direction);
+  if (std::abs(den) < 1e-9) return tl::unexpected(std::string("the line is parallel to the plane: no intersection"));
+  const double t = (plane.position - line.position).dot(plane.direction) / den;
+  return Vec3(line.position + t * line.direction);
+}
+
+// Midpoint of the common perpendicular of two lines.
+tl::expected<Vec3, std::string> line_line(const Geometry& a, const Geometry& b) {
+  const Vec3 w = a.position - b.position;
+  const double aa = a.direction.dot(a.direction), bb = b.direction.dot(b.direction), ab = a.direction.dot(b.direction);
+  const double den = aa * bb - ab * ab;
+  if (std::abs(den) < 1e-12) return tl::unexpected(std::string("the lines are parallel: no intersection"));
+  const double s = (ab * b.direction.dot(w) - bb * a.direction.dot(w)) / den;
+  const double t = (aa * b.direction.dot(w) - ab * a.direction.dot(w)) / den;
+  return Vec3(0.5 * ((a.position + s * a.direction) + (b.position + t * b.direction)));
+}
+
+}  // namespace
+
+Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType type, ConstructMethod method,
+                                           const std::vector<FeatureRef>& sources, Span span) {
+  std::vector<Geometry> in;
+  for (const auto& s : sources) {
+    auto g = resolve(s, span);
+    if (!g) return tl::unexpected(g.error());
+    in.push_back(*g);
+  }
+  auto it = m_features.find(label);
+  if (it == m_features.end()) {
+    m_record.diagnostics.push_back(fmt::format("warning: CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
+  }
+  Geometry nominal;
+  if (it != m_features.end()) nominal = it->second.nominal;
+  nominal.type = type;
+  Geometry g = nominal;
+  std::optional<FitFigures> figures;
+  const auto fail = [&](const std::string& why) {
+    return program_error(span, fmt::format("cannot construct {} F({}): {}", dmis_word(type), label, why));
+  };
+
+  switch (method) {
+    case ConstructMethod::BestFit: {
+      std::vector<MeasuredPoint> pts;
+      if (sources.size() == 1) {
+        const Feature* f = find_feature(sources[0].label);
+        for (const auto& p : f->points) pts.push_back(p);
+      } else {
+        for (const auto& s : in) pts.push_back({s.position, nominal.direction, 0.0, 0.0, span});
+      }
+      auto fitted = fit_actual(nominal, pts);
+      if (!fitted) return fail(fitted.error());
+      g = fitted->first;
+      figures = fitted->second;
+      break;
+    }
+    case ConstructMethod::Intersection: {
+      if (in.size() != 2) return fail("INTOF needs two features");
+      const Geometry& a = in[0];
+      const Geometry& b = in[1];
+      if (type == FeatureType::Line) {
+        if (!is_planar(a) || !is_planar(b)) return fail("a line is the intersection of two planes");
+        auto l = plane_plane(a, b, it != m_features.end() ? nominal.position : a.position);
+        if (!l) return fail(l.error());
+        g.position = l->position;
+        g.direction = it != m_features.end() && l->direction.dot(nominal.direction) < 0 ? Vec3(-l->direction) : l->direction;
+        g.normal2 = a.direction;
+      } else if (type == FeatureType::Point) {
+        tl::expected<Vec3, std::string> p = tl::unexpected(std::string("a point is the intersection of a line and a plane, or of two lines"));
+        if (is_linear(a) && is_planar(b)) p = line_plane(a, b);
+        else if (is_planar(a) && is_linear(b)) p = line_plane(b, a);
+        else if (is_linear(a) && is_linear(b)) p = line_line(a, b);
+        if (!p) return fail(p.error());
+        g.position = *p;
+      } else {
+        return fail("INTOF constructs a LINE or a POINT");
+      }
+      break;
+    }
+    case ConstructMethod::Midpoint: {
+      if (in.size() != 2) return fail("MIDPT needs two features");
+      g.position = 0.5 * (in[0].position + in[1].position);
+      if (type == FeatureType::Plane) {
+        const Vec3 d2 = in[1].direction.dot(in[0].direction) < 0 ? Vec3(-in[1].direction) : in[1].direction;
+        g.direction = (in[0].direction + d2).normalized();
+      }
+      break;
+    }
+    case ConstructMethod::Projection: {
+      if (in.size() != 2) return fail("PROJPT needs a feature and a plane");
+      const Geometry& plane = in[1];
+      if (!is_planar(plane)) return fail("the second feature of a projection must be a plane");
+      const Vec3 n = plane.direction.normalized();
+      g.position = in[0].position - (in[0].position - plane.position).dot(n) * n;
+      if (type == FeatureType::Line) {
+        const Vec3 d = in[0].direction - in[0].direction.dot(n) * n;
+        if (d.norm() < 1e-9) return fail("the line is perpendicular to the plane");
+        g.direction = d.normalized();
+        g.normal2 = n;
+      } else {
+        g.direction = n;
+      }
+      if (type == FeatureType::Circle) g.diameter_mm = in[0].diameter_mm;
+      break;
+    }
+  }
+  if (it == m_features.end()) {
+    Feature f;
+    f.label = label;
+    f.nominal = g;
+    f.defined_at = span;
+    m_feature_order.push_back(label);
+    it = m_features.emplace(label, f).first;
+  }
+  it->second.actual = g;
+  it->second.source = ActualSource::Constructed;
+  it->second.fit = figures;
+  it->second.measured_at = span;
+  return {};
+}
+
+}  // namespace metron::runtime

@@ -1,0 +1,188 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/runtime/measurement_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace metron::runtime {
+namespace {
+
+constexpr double pi = 3.14159265358979323846;
+
+// Unit radial direction of `p` about the axis through `c` along `axis` (any when on the axis).
+Vec3 radial(const Vec3& p, const Vec3& c, const Vec3& axis) {
+  Vec3 d = p - c;
+  d -= d.dot(axis) * axis;
+  return d.norm() < 1e-12 ? any_perpendicular(axis) : Vec3(d.normalized());
+}
+
+// Appends a ring of probes around an axis; an OUTER ring walks around outside the material.
+void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis, double radius,
+          int count, bool inner, double approach_mm, double phase_rad) {
+  const Vec3 u = any_perpendicular(axis);
+  const Vec3 v = axis.cross(u);
+  for (int i = 0; i < count; ++i) {
+    const double a = phase_rad + 2.0 * pi * i / count;
+    const Vec3 dir = std::cos(a) * u + std::sin(a) * v;
+    if (!inner && i > 0) {
+      // Walk around the boss on a circle outside the approach distance (chords would cut it).
+      const double prev = phase_rad + 2.0 * pi * (i - 1) / count;
+      const int legs = std::max(2, static_cast<int>(std::ceil((a - prev) / (pi / 8))));
+      for (int k = 1; k < legs; ++k) {
+        const double b = prev + (a - prev) * k / legs;
+        const double r = (radius + approach_mm) / std::cos(pi / 16) + 0.5;
+        steps.push_back({PlannedStep::Kind::GoTo, centre + r * (std::cos(b) * u + std::sin(b) * v), {}});
+      }
+    }
+    const Vec3 surface = centre + radius * dir;
+    steps.push_back({PlannedStep::Kind::Probe, surface, inner ? Vec3(-dir) : dir});
+  }
+}
+
+}  // namespace
+
+int minimum_points(FeatureType type) {
+  switch (type) {
+    case FeatureType::Point: return 1;
+    case FeatureType::Line: return 2;
+    case FeatureType::Plane: return 3;
+    case FeatureType::Circle:
+    case FeatureType::Arc: return 3;
+    case FeatureType::Sphere: return 4;
+    case FeatureType::Cylinder: return 5;
+    case FeatureType::Cone: return 6;
+  }
+  return 1;
+}
+
+Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
+  const Vec3 axis = g.direction.normalized();
+  const double sign = g.side == Side::Inner ? -1.0 : 1.0;
+  switch (g.type) {
+    case FeatureType::Point:
+    case FeatureType::Plane: return axis;
+    case FeatureType::Line: return g.normal2.normalized();
+    case FeatureType::Circle:
+    case FeatureType::Arc:
+    case FeatureType::Cylinder: return sign * radial(point, g.position, axis);
+    case FeatureType::Sphere: {
+      const Vec3 d = point - g.position;
+      return sign * (d.norm() < 1e-12 ? Vec3::UnitZ() : Vec3(d.normalized()));
+    }
+    case FeatureType::Cone: {
+      // Surface normal of a cone with apex at position, axis opening along direction.
+      const double half = g.apex_angle_deg * pi / 360.0;
+      const Vec3 r = radial(point, g.position, axis);
+      return sign * (std::cos(half) * r - std::sin(half) * axis).normalized();
+    }
+  }
+  return axis;
+}
+
+std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const ProbeSettings& probe,
+                                          const Vec3& up, const Vec3& current_position) {
+  std::vector<PlannedStep> steps;
+  const Vec3 axis = g.direction.normalized();
+  const bool inner = g.side != Side::Outer;
+  const double r = g.diameter_mm / 2.0;
+  switch (g.type) {
+    case FeatureType::Point:
+      steps.push_back({PlannedStep::Kind::Probe, g.position, axis});
+      break;
+    case FeatureType::Plane: {
+      const int n = count > 0 ? count : 4;
+      const Vec3 u = any_perpendicular(axis);
+      const Vec3 v = axis.cross(u);
+      for (int i = 0; i < n; ++i) {
+        const double a = 2.0 * pi * i / n + pi / 4;
+        steps.push_back({PlannedStep::Kind::Probe, g.position + 5.0 * (std::cos(a) * u + std::sin(a) * v), axis});
+      }
+      break;
+    }
+    case FeatureType::Line: {
+      const int n = count > 0 ? count : 3;
+      const double len = g.length_mm > 0 ? g.length_mm : 20.0;
+      for (int i = 0; i < n; ++i) {
+        const double t = n == 1 ? 0.5 : static_cast<double>(i) / (n - 1);
+        steps.push_back({PlannedStep::Kind::Probe, g.position + (0.1 + 0.8 * t) * len * axis, g.normal2.normalized()});
+      }
+      break;
+    }
+    case FeatureType::Circle:
+    case FeatureType::Arc: {
+      // The circle lies DEPTH below its nominal centre, measured against the axis direction.
+      const Vec3 c = g.position - probe.depth_mm * (axis.dot(up) >= 0 ? up : Vec3(-up));
+      ring(steps, c, axis, r, count > 0 ? count : 4, inner, probe.approach_mm, 0.0);
+      break;
+    }
+    case FeatureType::Cylinder: {
+      const int n = count > 0 ? count : 8;
+      const double len = g.length_mm > 0 ? g.length_mm : 10.0;
+      const int first = n / 2;
+      ring(steps, g.position + 0.25 * len * axis, axis, r, first, inner, probe.approach_mm, 0.0);
+      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm, pi / std::max(1, n - first));
+      break;
+    }
+    case FeatureType::Sphere: {
+      const int n = count > 0 ? count : 9;
+      const double s = inner ? -1.0 : 1.0;
+      steps.push_back({PlannedStep::Kind::Probe, g.position + r * up, s * up});
+      const int rest = n - 1;
+      const Vec3 u = any_perpendicular(up);
+      const Vec3 v = up.cross(u);
+      for (int i = 0; i < rest; ++i) {
+        const double elev = (i % 2 == 0 ? 15.0 : 45.0) * pi / 180.0;
+        const double az = 2.0 * pi * i / rest;
+        const Vec3 d = std::cos(elev) * (std::cos(az) * u + std::sin(az) * v) + std::sin(elev) * up;
+        if (!inner) {
+          // Over the top, out beyond the equator, down to the approach height, then in.
+          const Vec3 horizontal = std::cos(az) * u + std::sin(az) * v;
+          const Vec3 approach = g.position + (r + probe.approach_mm) * d;
+          const Vec3 outside = g.position + (r + probe.approach_mm + 5.0) * horizontal;
+          const double high = r + probe.approach_mm + probe.clearance_mm;
+          steps.push_back({PlannedStep::Kind::GoTo, g.position + high * up, {}});
+          steps.push_back({PlannedStep::Kind::GoTo, outside + high * up, {}});
+          steps.push_back({PlannedStep::Kind::GoTo, outside + (approach - g.position).dot(up) * up, {}});
+        }
+        steps.push_back({PlannedStep::Kind::Probe, g.position + r * d, s * d});
+      }
+      break;
+    }
+    case FeatureType::Cone: {
+      const int n = count > 0 ? count : 8;
+      const double half = g.apex_angle_deg * pi / 360.0;
+      const double len = g.length_mm > 0 ? g.length_mm : 5.0;
+      for (int level = 0; level < 2; ++level) {
+        const double t = (level == 0 ? 0.4 : 0.8) * len;
+        const int m = level == 0 ? n / 2 : n - n / 2;
+        const Vec3 c = g.position + t * axis;
+        const double rr = t * std::tan(half);
+        const Vec3 u = any_perpendicular(axis);
+        const Vec3 v = axis.cross(u);
+        for (int i = 0; i < m; ++i) {
+          const double a = 2.0 * pi * i / m + level * pi / m;
+          const Vec3 p = c + rr * (std::cos(a) * u + std::sin(a) * v);
+          steps.push_back({PlannedStep::Kind::Probe, p, nominal_normal_at(g, p)});
+        }
+      }
+      break;
+    }
+  }
+  if (steps.empty()) return steps;
+  // Clearance: rise above the feature, move over the first approach point, then descend.
+  const auto approach_of = [&](const PlannedStep& s) { return s.point + probe.approach_mm * s.normal; };
+  double top = current_position.dot(up);
+  for (const auto& s : steps) top = std::max(top, (s.kind == PlannedStep::Kind::Probe ? approach_of(s) : s.point).dot(up));
+  const double clear = top + probe.clearance_mm;
+  const Vec3 first = steps.front().kind == PlannedStep::Kind::Probe ? approach_of(steps.front()) : steps.front().point;
+  std::vector<PlannedStep> out;
+  out.push_back({PlannedStep::Kind::GoTo, current_position + (clear - current_position.dot(up)) * up, {}});
+  out.push_back({PlannedStep::Kind::GoTo, first + (clear - first.dot(up)) * up, {}});
+  out.insert(out.end(), steps.begin(), steps.end());
+  const Vec3 last = steps.back().kind == PlannedStep::Kind::Probe ? approach_of(steps.back()) : steps.back().point;
+  out.push_back({PlannedStep::Kind::GoTo, last, {}});
+  out.push_back({PlannedStep::Kind::GoTo, last + (clear - last.dot(up)) * up, {}});
+  return out;
+}
+
+}  // namespace metron::runtime

@@ -1,0 +1,406 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The run's outputs: the human report, the DMIS output file lines and results.json
+// (schema in docs/results-json.md).
+#include "metron/runtime/outputs.hpp"
+
+#include <cmath>
+#include <optional>
+#include <string_view>
+
+#include <fmt/format.h>
+
+namespace metron::runtime {
+namespace {
+
+using nlohmann::json;
+
+// ---------------------------------------------------------------- which fields a type has
+
+bool has_direction(FeatureType type) { return type != FeatureType::Sphere; }
+bool has_side(FeatureType type) {
+  return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
+         type == FeatureType::Cylinder || type == FeatureType::Cone;
+}
+bool has_diameter(FeatureType type) {
+  return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
+         type == FeatureType::Cylinder;
+}
+bool has_length(const Geometry& g) {
+  return g.type == FeatureType::Cylinder || g.type == FeatureType::Cone ||
+         (g.type == FeatureType::Line && g.bounded);
+}
+
+/// DMIS needs INNER or OUTER on a feature of size; a missing side is written as OUTER.
+const char* side_word(const Geometry& g) { return g.side == Side::Inner ? "INNER" : "OUTER"; }
+
+// ---------------------------------------------------------------- human report
+
+enum class Unit { Millimetre, Cosine, Degree };
+
+std::string fixed(double v, Unit unit, bool sign) {
+  if (!std::isfinite(v)) return "-";
+  const int decimals = unit == Unit::Cosine ? 6 : 4;
+  std::string s = fmt::format("{:+.{}f}", v, decimals);
+  if (s.find_first_not_of("+-0.") == std::string::npos) s[0] = '+';  // no "-0.0000"
+  return sign || s[0] == '-' ? s : s.substr(1);
+}
+
+struct Row {
+  const char* name;
+  Unit unit;
+  double nominal;
+  double actual;  // NaN without an actual
+};
+
+std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
+  const double nan = std::nan("");
+  const auto act = [&](auto field) { return actual ? field(*actual) : nan; };
+  std::vector<Row> rows;
+  const char* axes[] = {"X", "Y", "Z"};
+  for (int i = 0; i < 3; ++i)
+    rows.push_back({axes[i], Unit::Millimetre, nominal.position[i],
+                    act([i](const Geometry& g) { return g.position[i]; })});
+  if (has_direction(nominal.type)) {
+    const char* cosines[] = {"I", "J", "K"};
+    for (int i = 0; i < 3; ++i)
+      rows.push_back({cosines[i], Unit::Cosine, nominal.direction[i],
+                      act([i](const Geometry& g) { return g.direction[i]; })});
+  }
+  if (has_diameter(nominal.type))
+    rows.push_back(
+        {"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
+  if (nominal.type == FeatureType::Arc) {
+    rows.push_back({"START", Unit::Degree, nominal.start_angle_deg,
+                    act([](const Geometry& g) { return g.start_angle_deg; })});
+    rows.push_back({"INCL", Unit::Degree, nominal.included_angle_deg,
+                    act([](const Geometry& g) { return g.included_angle_deg; })});
+  }
+  if (nominal.type == FeatureType::Cone)
+    rows.push_back({"ANGLE", Unit::Degree, nominal.apex_angle_deg,
+                    act([](const Geometry& g) { return g.apex_angle_deg; })});
+  if (has_length(nominal) && (nominal.type != FeatureType::Cone || nominal.length_mm > 0))
+    rows.push_back(
+        {"L", Unit::Millimetre, nominal.length_mm, act([](const Geometry& g) { return g.length_mm; })});
+  return rows;
+}
+
+std::string feature_heading(const FeatureReport& report) {
+  const Geometry& g = report.nominal;
+  std::string out = fmt::format("{}({})  {}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
+  if (has_side(g.type) && g.side != Side::None) out += fmt::format(" {}", dmis_word(g.side));
+  if (!report.actual)
+    out += "  not measured";
+  else if (report.source == ActualSource::Constructed)
+    out += "  constructed";
+  else
+    out += "  measured";
+  if (report.point_count > 0) out += fmt::format(", {} points", report.point_count);
+  out += fmt::format("  frame {}\n", report.frame);
+  return out;
+}
+
+std::string feature_list(const std::vector<std::string>& labels) {
+  std::string out;
+  for (std::size_t i = 0; i < labels.size(); ++i) out += fmt::format("{}FA({})", i ? "," : "", labels[i]);
+  return out;
+}
+
+bool is_deviation_kind(ToleranceKind kind) {
+  return kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::DistB ||
+         kind == ToleranceKind::Anglb;
+}
+
+std::string kind_words(const ToleranceResult& result) {
+  std::string out = dmis_word(result.kind);
+  if (result.kind == ToleranceKind::Pos) out += result.three_d ? " 3D" : " 2D";
+  return out;
+}
+
+// ---------------------------------------------------------------- DMIS output
+
+/// 5 decimals as in DMIS output files; never "-0.00000".
+std::string dmis_number(double v) {
+  std::string s = fmt::format("{:.5f}", v);
+  if (s.find_first_not_of("-0.") == std::string::npos && s[0] == '-') s.erase(0, 1);
+  return s;
+}
+
+/// DMIS output style (as the NIST reference output): ", " between fields; a statement longer
+/// than 80 columns continues with "  $" after the last fitting comma and two spaces of indent.
+std::string dmis_statement(const std::string& head, const std::vector<std::string>& fields) {
+  constexpr std::size_t k_width = 80;
+  std::string one_line = head;
+  for (const std::string& f : fields) one_line += ", " + f;
+  if (one_line.size() <= k_width) return one_line;
+  std::string out = head + ",  $";
+  std::string line = "  ";
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const bool last = i + 1 == fields.size();
+    const std::string piece = fields[i] + (last ? "" : ",");
+    // Room for this piece plus the continuation mark "  $" unless it is the last.
+    if (line.size() > 2 && line.size() + 1 + piece.size() + (last ? 0 : 3) > k_width) {
+      out += "\n" + line + "  $";
+      line = "  ";
+    }
+    line += (line.size() > 2 ? " " : "") + piece;
+  }
+  return out + "\n" + line;
+}
+
+// ---------------------------------------------------------------- JSON
+
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json vector(const Vec3& v) { return json::array({number(v.x()), number(v.y()), number(v.z())}); }
+
+json geometry_json(const Geometry& g) {
+  json j = {{"type", dmis_word(g.type)}};
+  if (has_side(g.type)) j["side"] = g.side == Side::None ? json(nullptr) : json(dmis_word(g.side));
+  j["position"] = vector(g.position);
+  if (has_direction(g.type)) j["direction"] = vector(g.direction);
+  if (g.type == FeatureType::Line) {
+    j["normal2"] = vector(g.normal2);
+    j["bounded"] = g.bounded;
+  }
+  if (has_diameter(g.type)) j["diameter_mm"] = number(g.diameter_mm);
+  if (has_length(g)) j["length_mm"] = number(g.length_mm);
+  if (g.type == FeatureType::Cone) j["apex_angle_deg"] = number(g.apex_angle_deg);
+  if (g.type == FeatureType::Arc) {
+    j["start_angle_deg"] = number(g.start_angle_deg);
+    j["included_angle_deg"] = number(g.included_angle_deg);
+  }
+  return j;
+}
+
+/// actual - nominal for every numeric field `geometry_json` writes for the nominal's type.
+json deviation_json(const Geometry& nominal, const Geometry& actual) {
+  json j = {{"position", vector(actual.position - nominal.position)}};
+  if (has_direction(nominal.type)) j["direction"] = vector(actual.direction - nominal.direction);
+  if (nominal.type == FeatureType::Line) j["normal2"] = vector(actual.normal2 - nominal.normal2);
+  if (has_diameter(nominal.type)) j["diameter_mm"] = number(actual.diameter_mm - nominal.diameter_mm);
+  if (has_length(nominal)) j["length_mm"] = number(actual.length_mm - nominal.length_mm);
+  if (nominal.type == FeatureType::Cone)
+    j["apex_angle_deg"] = number(actual.apex_angle_deg - nominal.apex_angle_deg);
+  if (nominal.type == FeatureType::Arc) {
+    j["start_angle_deg"] = number(actual.start_angle_deg - nominal.start_angle_deg);
+    j["included_angle_deg"] = number(actual.included_angle_deg - nominal.included_angle_deg);
+  }
+  return j;
+}
+
+const char* source_word(ActualSource source) {
+  return source == ActualSource::Constructed ? "constructed" : "measured";
+}
+
+json fit_number(const std::optional<FitFigures>& fit, double FitFigures::*field) {
+  return fit ? number((*fit).*field) : json(nullptr);
+}
+
+json feature_json(const Feature& f) {
+  json points = json::array();
+  const bool residuals = f.fit && f.fit->residuals_mm.size() == f.points.size();
+  for (std::size_t i = 0; i < f.points.size(); ++i) {
+    const MeasuredPoint& p = f.points[i];
+    points.push_back({{"centre_mm", vector(p.centre_mm)},
+                      {"surface_mm", vector(p.surface_mm())},
+                      {"approach", vector(p.normal)},
+                      {"ball_radius_mm", number(p.ball_radius_mm)},
+                      {"time_s", number(p.time_s)},
+                      {"residual_mm", residuals ? number(f.fit->residuals_mm[i]) : json(nullptr)}});
+  }
+  return {{"label", f.label},
+          {"type", dmis_word(f.nominal.type)},
+          {"side", f.nominal.side == Side::None ? json(nullptr) : json(dmis_word(f.nominal.side))},
+          {"source", source_word(f.source)},
+          {"nominal", geometry_json(f.nominal)},
+          {"actual", f.actual ? geometry_json(*f.actual) : json(nullptr)},
+          {"form_mm", fit_number(f.fit, &FitFigures::form_mm)},
+          {"rms_mm", fit_number(f.fit, &FitFigures::rms_mm)},
+          {"points", std::move(points)}};
+}
+
+json tolerance_json(const ToleranceResult& r) {
+  json j = {{"kind", "tolerance"},
+            {"label", r.label},
+            {"type", dmis_word(r.kind)},
+            {"features", r.features},
+            {"value", number(r.value)},
+            {"actual", number(r.actual)},
+            {"nominal", number(r.nominal)},
+            {"lower", number(r.lower)},
+            {"upper", number(r.upper)},
+            {"status", r.in_tolerance ? "IN" : "OUT"},
+            {"note", r.note}};
+  if (r.kind == ToleranceKind::Pos) j["three_d"] = r.three_d;
+  return j;
+}
+
+json event_json(const RunEvent& event) {
+  if (const auto* f = std::get_if<FeatureReport>(&event)) {
+    return {{"kind", "feature"},
+            {"label", f->label},
+            {"frame", f->frame},
+            {"type", dmis_word(f->nominal.type)},
+            {"source", source_word(f->source)},
+            {"point_count", f->point_count},
+            {"nominal", geometry_json(f->nominal)},
+            {"actual", f->actual ? geometry_json(*f->actual) : json(nullptr)},
+            {"deviation", f->actual ? deviation_json(f->nominal, *f->actual) : json(nullptr)},
+            {"form_mm", fit_number(f->fit, &FitFigures::form_mm)},
+            {"rms_mm", fit_number(f->fit, &FitFigures::rms_mm)}};
+  }
+  if (const auto* t = std::get_if<ToleranceResult>(&event)) return tolerance_json(*t);
+  if (const auto* text = std::get_if<TextReport>(&event)) return {{"kind", "text"}, {"text", text->text}};
+  const auto& fault = std::get<FaultReport>(event);
+  return {{"kind", "fault"},
+          {"fault", fault.kind},
+          {"message", fault.message},
+          {"file", fault.statement.file},
+          {"line", fault.statement.line},
+          {"column", fault.statement.column},
+          {"statement", fault.statement_text},
+          {"position_mm", vector(fault.position_mm)},
+          {"time_s", number(fault.time_s)}};
+}
+
+const char* status_word(RunStatus status) {
+  switch (status) {
+    case RunStatus::Completed: return "completed";
+    case RunStatus::Faulted: return "faulted";
+    case RunStatus::Error: return "error";
+  }
+  return "error";
+}
+
+}  // namespace
+
+std::string format_feature_report(const FeatureReport& report) {
+  const Geometry* actual = report.actual ? &*report.actual : nullptr;
+  std::string out = feature_heading(report);
+  if (actual)
+    out += fmt::format("{:8}{:>14}{:>14}{:>14}\n", "", "NOMINAL", "ACTUAL", "DEVIATION");
+  else
+    out += fmt::format("{:8}{:>14}\n", "", "NOMINAL");
+  for (const Row& row : report_rows(report.nominal, actual)) {
+    out += fmt::format("  {:6}{:>14}", row.name, fixed(row.nominal, row.unit, false));
+    if (actual)
+      out += fmt::format("{:>14}{:>14}", fixed(row.actual, row.unit, false),
+                         fixed(row.actual - row.nominal, row.unit, true));
+    out += "\n";
+  }
+  if (actual && report.fit) {
+    out += fmt::format("  {:6}{:>14}{:>14}\n", "RMS", "", fixed(report.fit->rms_mm, Unit::Millimetre, false));
+    out +=
+        fmt::format("  {:6}{:>14}{:>14}\n", "FORM", "", fixed(report.fit->form_mm, Unit::Millimetre, false));
+  }
+  return out;
+}
+
+std::string format_tolerance_result(const ToleranceResult& result) {
+  std::string out =
+      fmt::format("T({})  {}  {}  ", result.label, kind_words(result), feature_list(result.features));
+  const auto mm = [](double v, bool sign) { return fixed(v, Unit::Millimetre, sign); };
+  if (is_deviation_kind(result.kind)) {
+    // The nominal the deviation is taken from (DISTB: the tolerance's, not the features').
+    out += fmt::format("nominal {}  actual {}  ", mm(result.actual - result.value, false),
+                       mm(result.actual, false));
+  }
+  if (is_deviation_kind(result.kind) || result.kind == ToleranceKind::Profs)
+    out += fmt::format("dev {}  limits [{}, {}]", mm(result.value, true), mm(result.lower, true),
+                       mm(result.upper, true));
+  else
+    out += fmt::format("value {}  zone {}", mm(result.value, false), mm(result.upper, false));
+  out += result.in_tolerance ? "  IN\n" : "  OUT\n";
+  if (!result.note.empty()) out += "  note: " + result.note + "\n";
+  return out;
+}
+
+std::string format_fault(const FaultReport& fault) {
+  std::string out = "FAULT " + fault.kind;
+  if (!fault.statement.file.empty())
+    out += fmt::format(" at {}:{}:{}", fault.statement.file, fault.statement.line, fault.statement.column);
+  out += ": " + fault.message + "\n";
+  std::string_view text = fault.statement_text;
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.remove_suffix(1);
+  if (!text.empty()) out += fmt::format("  {}\n", text);
+  out += fmt::format("  machine at {}, {}, {} mm, t = {:.3f} s\n",
+                     fixed(fault.position_mm.x(), Unit::Millimetre, false),
+                     fixed(fault.position_mm.y(), Unit::Millimetre, false),
+                     fixed(fault.position_mm.z(), Unit::Millimetre, false), fault.time_s);
+  return out;
+}
+
+std::string dmis_feature_line(const FeatureReport& report) {
+  const Geometry& g = report.actual ? *report.actual : report.nominal;
+  std::string head =
+      fmt::format("{}({}) = FEAT/{}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
+  std::vector<std::string> fields;
+  const auto add = [&fields](const Vec3& v) {
+    for (int i = 0; i < 3; ++i) fields.push_back(dmis_number(v[i]));
+  };
+  if (g.type == FeatureType::Line) head += g.bounded ? ", BND" : ", UNBND";
+  if (has_side(g.type)) head += fmt::format(", {}", side_word(g));
+  head += ", CART";
+  add(g.position);
+  switch (g.type) {
+    case FeatureType::Point:
+    case FeatureType::Plane: add(g.direction); break;
+    case FeatureType::Line:
+      // BND: start and end point; UNBND: point and direction; then the normal of its plane.
+      add(g.bounded ? Vec3(g.position + g.length_mm * g.direction) : g.direction);
+      add(g.normal2);
+      break;
+    case FeatureType::Circle:
+      add(g.direction);
+      fields.push_back(dmis_number(g.diameter_mm));
+      break;
+    case FeatureType::Arc:
+      add(g.direction);
+      fields.push_back(dmis_number(0.5 * g.diameter_mm));
+      fields.push_back(dmis_number(g.start_angle_deg));
+      fields.push_back(dmis_number(g.included_angle_deg));
+      break;
+    case FeatureType::Sphere: fields.push_back(dmis_number(g.diameter_mm)); break;
+    case FeatureType::Cylinder:
+      add(g.direction);
+      fields.push_back(dmis_number(g.diameter_mm));
+      fields.push_back(dmis_number(g.length_mm));
+      break;
+    case FeatureType::Cone:
+      add(g.direction);
+      fields.push_back(dmis_number(g.apex_angle_deg));
+      break;
+  }
+  return dmis_statement(head, fields);
+}
+
+std::string dmis_tolerance_line(const ToleranceResult& result) {
+  std::vector<std::string> fields;
+  if (result.kind == ToleranceKind::Pos) fields.emplace_back(result.three_d ? "3D" : "2D");
+  fields.push_back(dmis_number(result.value));
+  fields.emplace_back(result.in_tolerance ? "INTOL" : "OUTOL");
+  const std::string head = fmt::format("TA({}) = TOL/{}", result.label, dmis_word(result.kind));
+  return dmis_statement(head, fields);
+}
+
+nlohmann::json results_json(const RunRecord& record) {
+  json features = json::array();
+  for (const Feature& f : record.features) features.push_back(feature_json(f));
+  json outputs = json::array();
+  json tolerances = json::array();
+  for (const RunEvent& e : record.events) {
+    outputs.push_back(event_json(e));
+    if (std::holds_alternative<ToleranceResult>(e)) tolerances.push_back(outputs.back());
+  }
+  return {{"schema", "metron.results/1"},
+          {"program", record.program},
+          {"world", record.world},
+          {"seed", record.seed},
+          {"status", status_word(record.status)},
+          {"simulated_time_s", number(record.simulated_time_s)},
+          {"diagnostics", record.diagnostics},
+          {"features", std::move(features)},
+          {"outputs", std::move(outputs)},
+          {"tolerances", std::move(tolerances)}};
+}
+
+}  // namespace metron::runtime

@@ -1,0 +1,584 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Tolerance evaluation. Every formula here is written out in docs/tolerances.md.
+#include "metron/runtime/tolerance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace metron::runtime {
+
+const char* dmis_word(ToleranceKind kind) {
+  switch (kind) {
+    case ToleranceKind::Diam: return "DIAM";
+    case ToleranceKind::Rad: return "RAD";
+    case ToleranceKind::DistB: return "DISTB";
+    case ToleranceKind::Pos: return "POS";
+    case ToleranceKind::Flat: return "FLAT";
+    case ToleranceKind::Cirlty: return "CIRLTY";
+    case ToleranceKind::Cylcty: return "CYLCTY";
+    case ToleranceKind::Sphcty: return "SPHCTY";
+    case ToleranceKind::Strght: return "STRGHT";
+    case ToleranceKind::Perp: return "PERP";
+    case ToleranceKind::Parlel: return "PARLEL";
+    case ToleranceKind::Anglb: return "ANGLB";
+    case ToleranceKind::Profs: return "PROFS";
+  }
+  return "DIAM";
+}
+
+namespace {
+
+using Error = tl::unexpected<std::string>;
+using Outcome = tl::expected<ToleranceResult, std::string>;
+using Types = std::initializer_list<FeatureType>;
+
+// A value equal to a limit up to floating-point rounding (50.01 - 50.0) is in tolerance;
+// 1 nm (or 1e-6 deg) is far below any CMM's resolution.
+constexpr double k_limit_slack = 1e-6;
+// Below this |cos| a direction counts as perpendicular to an axis (intersections undefined).
+constexpr double k_parallel_cos = 1e-9;
+constexpr double k_pi = 3.14159265358979323846;
+
+double to_deg(double rad) { return rad * 180.0 / k_pi; }
+
+/// Angle between two unit vectors in degrees, 0..180; atan2 keeps small angles accurate.
+double angle_deg(const Vec3& a, const Vec3& b) { return to_deg(std::atan2(a.cross(b).norm(), a.dot(b))); }
+
+const char* lowercase_name(FeatureType type) {
+  switch (type) {
+    case FeatureType::Point: return "point";
+    case FeatureType::Plane: return "plane";
+    case FeatureType::Line: return "line";
+    case FeatureType::Circle: return "circle";
+    case FeatureType::Arc: return "arc";
+    case FeatureType::Sphere: return "sphere";
+    case FeatureType::Cylinder: return "cylinder";
+    case FeatureType::Cone: return "cone";
+  }
+  return "point";
+}
+
+const char* article(const char* word) {
+  const char c = word[0];
+  const bool vowel = c == 'a' || c == 'e' || c == 'i' || c == 'o' || c == 'u' || c == 'A' || c == 'E' ||
+                     c == 'I' || c == 'O' || c == 'U';
+  return vowel ? "an" : "a";
+}
+
+bool is_one_of(FeatureType type, Types types) {
+  return std::find(types.begin(), types.end(), type) != types.end();
+}
+
+/// "a circle, arc, sphere or cylinder"
+std::string type_list(Types types) {
+  std::string out;
+  std::size_t i = 0;
+  for (const FeatureType t : types) {
+    if (i == 0)
+      out += std::string(article(lowercase_name(t))) + " ";
+    else
+      out += i + 1 == types.size() ? " or " : ", ";
+    out += lowercase_name(t);
+    ++i;
+  }
+  return out;
+}
+
+Error wrong_type(ToleranceKind kind, Types types, FeatureType got) {
+  return Error(fmt::format("{} applies to {}, not to {} {}", dmis_word(kind), type_list(types),
+                           article(dmis_word(got)), dmis_word(got)));
+}
+
+std::string join(const std::vector<std::string>& items, const char* separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
+  return out;
+}
+
+void add_note(ToleranceResult& result, const std::string& note) {
+  if (note.empty()) return;
+  if (!result.note.empty()) result.note += "; ";
+  result.note += note;
+}
+
+std::string alignment_label(const ToleranceContext& context) {
+  return context.alignment ? context.alignment->label : std::string("MCS");
+}
+
+/// Location tolerances with datums are evaluated in the current alignment: metron does not
+/// build a datum reference frame itself, the program's DATSET does.
+std::string datum_frame_note(const ToleranceSpec& spec, const ToleranceContext& context) {
+  if (spec.datums.empty()) return {};
+  return fmt::format(
+      "{} {}: evaluated in the current alignment {} (the program's DATSET is "
+      "expected to have established the datum frame)",
+      spec.datums.size() == 1 ? "datum" : "datums", join(spec.datums, ", "), alignment_label(context));
+}
+
+void set_limits(ToleranceResult& result, double lower, double upper) {
+  result.lower = lower;
+  result.upper = upper;
+  result.in_tolerance = result.value >= lower - k_limit_slack && result.value <= upper + k_limit_slack;
+}
+
+tl::expected<const Geometry*, std::string> actual_of(const Feature& feature) {
+  if (!feature.actual)
+    return Error(fmt::format("feature {} has no actual: measure or construct it first", feature.label));
+  return &*feature.actual;
+}
+
+tl::expected<Vec3, std::string> unit(const Vec3& v, const std::string& what) {
+  const double n = v.norm();
+  if (!(n > 1e-12) || !std::isfinite(n)) return Error(fmt::format("{} has no direction", what));
+  return Vec3(v / n);
+}
+
+bool has_axis(FeatureType type) {
+  return type == FeatureType::Line || type == FeatureType::Cylinder || type == FeatureType::Cone;
+}
+
+// ---------------------------------------------------------------- size
+
+Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
+                                    FeatureType::Cylinder};
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  const double scale = spec.kind == ToleranceKind::Rad ? 0.5 : 1.0;
+  result.actual = scale * (*actual)->diameter_mm;
+  result.nominal = scale * feature.nominal.diameter_mm;
+  result.value = result.actual - result.nominal;
+  set_limits(result, spec.lower, spec.upper);
+  return result;
+}
+
+// ---------------------------------------------------------------- DISTB
+
+const char* axis_word(DistanceAxis axis) {
+  switch (axis) {
+    case DistanceAxis::XAxis: return "XAXIS";
+    case DistanceAxis::YAxis: return "YAXIS";
+    case DistanceAxis::ZAxis: return "ZAXIS";
+    case DistanceAxis::PointToPoint: return "PT2PT";
+  }
+  return "PT2PT";
+}
+
+double distance_from_axis(const Vec3& point, const Geometry& line) {
+  const Vec3 a = line.direction.normalized();
+  const Vec3 v = point - line.position;
+  return (v - v.dot(a) * a).norm();
+}
+
+/// The DISTB distance between two geometries (both actual or both nominal), see docs/tolerances.md.
+tl::expected<double, std::string> distance_between(const Geometry& first, const Geometry& second,
+                                                   const std::string& first_label,
+                                                   const std::string& second_label, DistanceAxis axis,
+                                                   const Alignment& frame) {
+  const bool first_plane = first.type == FeatureType::Plane;
+  const bool second_plane = second.type == FeatureType::Plane;
+  if (axis == DistanceAxis::PointToPoint) {
+    if (first_plane) return std::abs(first.direction.normalized().dot(second.position - first.position));
+    if (second_plane) return std::abs(second.direction.normalized().dot(first.position - second.position));
+    const auto is_line = [](const Geometry& g) {
+      return g.type == FeatureType::Line || g.type == FeatureType::Cylinder;
+    };
+    if (is_line(first)) return distance_from_axis(second.position, first);
+    if (is_line(second)) return distance_from_axis(first.position, second);
+    return (second.position - first.position).norm();
+  }
+  const Vec3 part_axis = axis == DistanceAxis::XAxis   ? Vec3::UnitX()
+                         : axis == DistanceAxis::YAxis ? Vec3::UnitY()
+                                                       : Vec3::UnitZ();
+  const Vec3 e = frame.to_machine_vector(part_axis);
+  if (first_plane || second_plane) {
+    // From the other feature's position along e to the plane, so a plane that is not exactly
+    // normal to e still gives its distance at that position, not at its (arbitrary) centroid.
+    const Geometry& plane = first_plane ? first : second;
+    const Geometry& other = first_plane ? second : first;
+    const Vec3 n = plane.direction.normalized();
+    const double cos_e = n.dot(e);
+    if (std::abs(cos_e) < k_parallel_cos)
+      return Error(fmt::format("DISTB along {}: plane {} is parallel to that axis", axis_word(axis),
+                               first_plane ? first_label : second_label));
+    return std::abs(n.dot(plane.position - other.position) / cos_e);
+  }
+  return std::abs(e.dot(second.position - first.position));
+}
+
+Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Feature& second,
+                       const ToleranceContext& context, ToleranceResult result) {
+  const auto a = actual_of(first);
+  if (!a) return Error(a.error());
+  const auto b = actual_of(second);
+  if (!b) return Error(b.error());
+  const Alignment mcs;
+  const Alignment& frame = context.alignment ? *context.alignment : mcs;
+  const auto actual = distance_between(**a, **b, first.label, second.label, spec.axis, frame);
+  if (!actual) return Error(actual.error());
+  const auto nominal =
+      distance_between(first.nominal, second.nominal, first.label, second.label, spec.axis, frame);
+  result.actual = *actual;
+  result.nominal = nominal ? *nominal : std::numeric_limits<double>::quiet_NaN();
+  result.value = *actual - spec.nominal;
+  set_limits(result, spec.lower, spec.upper);
+  if (spec.axis != DistanceAxis::PointToPoint)
+    add_note(result, fmt::format("along {} of {}", axis_word(spec.axis), frame.label));
+  if (!nominal)
+    add_note(result, "no nominal distance from the feature nominals: " + nominal.error());
+  else if (std::abs(*nominal - spec.nominal) > 1e-4)
+    add_note(result, fmt::format("the feature nominals give {:.4f}, the tolerance nominal is {:.4f}",
+                                 *nominal, spec.nominal));
+  return result;
+}
+
+// ---------------------------------------------------------------- POS
+
+Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                     ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
+                                    FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
+                                    FeatureType::Line};
+  const Geometry& nominal = feature.nominal;
+  if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
+  const auto actual_or = actual_of(feature);
+  if (!actual_or) return Error(actual_or.error());
+  const Geometry& actual = **actual_or;
+
+  Vec3 deviation = actual.position - nominal.position;
+  if (!spec.three_d) {
+    const auto n = unit(nominal.direction, "the nominal of " + feature.label);
+    if (!n) return Error(n.error());
+    if (has_axis(nominal.type)) {
+      // The actual axis where it crosses the plane through the nominal position normal to the
+      // nominal axis: its offset there is the 2D position deviation.
+      const auto axis = unit(actual.direction, "the actual of " + feature.label);
+      if (!axis) return Error(axis.error());
+      const double cos_a = axis->dot(*n);
+      if (std::abs(cos_a) < k_parallel_cos)
+        return Error(
+            fmt::format("POS 2D of {}: the actual axis is perpendicular to the nominal axis", feature.label));
+      const Vec3 crossing = actual.position + (n->dot(nominal.position - actual.position) / cos_a) * *axis;
+      deviation = crossing - nominal.position;
+    }
+    deviation -= deviation.dot(*n) * *n;
+  }
+  result.value = 2.0 * deviation.norm();
+  result.actual = result.value;
+  result.nominal = 0;
+
+  double bonus_mm = 0;
+  if (spec.condition != MaterialCondition::Rfs) {
+    static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
+                                      FeatureType::Cylinder};
+    const char* modifier = spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC";
+    if (!is_one_of(nominal.type, k_sized))
+      return Error(fmt::format("{} applies to {}, not to {} {}", modifier, type_list(k_sized),
+                               article(dmis_word(nominal.type)), dmis_word(nominal.type)));
+    // The spec carries no size limits, so the MMC (and LMC) size is the nominal diameter.
+    // A hole grows away from MMC, a boss shrinks; a feature beyond that size earns no bonus.
+    const bool inner = nominal.side == Side::Inner;
+    const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
+    const double away_from_mmc = inner ? growth_mm : -growth_mm;
+    bonus_mm = std::max(0.0, spec.condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
+    add_note(result, fmt::format("{} bonus {:.4f}: actual diameter {:.4f} against the {} size, taken "
+                                 "as the nominal diameter {:.4f} (the tolerance has no size limits)",
+                                 modifier, bonus_mm, actual.diameter_mm, modifier, nominal.diameter_mm));
+    if (nominal.side == Side::None) add_note(result, "side unknown: treated as OUTER");
+  }
+  set_limits(result, 0, spec.zone + bonus_mm);
+  add_note(result, datum_frame_note(spec, context));
+  return result;
+}
+
+// ---------------------------------------------------------------- form
+
+Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
+  static constexpr Types k_flat = {FeatureType::Plane};
+  static constexpr Types k_round = {FeatureType::Circle, FeatureType::Arc};
+  static constexpr Types k_cylinder = {FeatureType::Cylinder};
+  static constexpr Types k_sphere = {FeatureType::Sphere};
+  static constexpr Types k_line = {FeatureType::Line};
+  const Types types = spec.kind == ToleranceKind::Cirlty   ? k_round
+                      : spec.kind == ToleranceKind::Cylcty ? k_cylinder
+                      : spec.kind == ToleranceKind::Sphcty ? k_sphere
+                      : spec.kind == ToleranceKind::Strght ? k_line
+                                                           : k_flat;
+  if (spec.kind == ToleranceKind::Strght && feature.nominal.type == FeatureType::Cylinder)
+    return Error("STRGHT applies to a line; the axis straightness of a CYLNDR is not available");
+  if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  if (!feature.fit)
+    return Error(
+        fmt::format("feature {} has no fit: {} needs the form of measured points, and it was "
+                    "constructed without any",
+                    feature.label, dmis_word(spec.kind)));
+  result.value = feature.fit->form_mm;
+  result.actual = result.value;
+  set_limits(result, 0, spec.zone);
+  return result;
+}
+
+// ---------------------------------------------------------------- datums and orientation
+
+struct Reference {
+  Vec3 direction;      ///< unit: plane normal or axis direction
+  bool plane = false;  ///< a plane (direction = normal), else an axis
+  std::string name;    ///< "datum A" or "F2", for notes
+};
+
+tl::expected<Reference, std::string> reference_of(const Geometry& g, const std::string& name,
+                                                  ToleranceKind kind) {
+  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line,   FeatureType::Cylinder,
+                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc};
+  if (!is_one_of(g.type, k_types))
+    return Error(fmt::format("{} is {} {}: it has no direction to measure {} against", name,
+                             article(dmis_word(g.type)), dmis_word(g.type), dmis_word(kind)));
+  const auto d = unit(g.direction, name);
+  if (!d) return Error(d.error());
+  return Reference{*d, g.type == FeatureType::Plane, name};
+}
+
+tl::expected<Reference, std::string> primary_datum(const ToleranceSpec& spec,
+                                                   const ToleranceContext& context) {
+  const char* word = dmis_word(spec.kind);
+  if (spec.datums.empty() && context.datums.empty())
+    return Error(fmt::format("{} needs a datum: TOL/{},...,DAT(A)", word, word));
+  const Datum* datum = context.datums.empty() ? nullptr : context.datums.front();
+  if (!datum) {
+    const std::string& label = spec.datums.front();
+    return Error(fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", label, label));
+  }
+  return reference_of(datum->geometry, "datum " + datum->label, spec.kind);
+}
+
+std::string secondary_datum_note(const ToleranceSpec& spec) {
+  if (spec.datums.size() < 2) return {};
+  return fmt::format("only the primary datum {} orients the zone", spec.datums.front());
+}
+
+/// The length of an axis for orientation zones: the actual length, else the extent of the
+/// measured points along the axis, else the nominal length.
+double axis_length_mm(const Feature& feature, const Geometry& actual, const Vec3& axis) {
+  if (actual.length_mm > 0) return actual.length_mm;
+  if (feature.points.size() >= 2) {
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    for (const MeasuredPoint& p : feature.points) {
+      const double h = p.surface_mm().dot(axis);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+    if (hi - lo > 0) return hi - lo;
+  }
+  return feature.nominal.length_mm;
+}
+
+Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
+                             const ToleranceContext& context, ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder};
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual_or = actual_of(feature);
+  if (!actual_or) return Error(actual_or.error());
+  const Geometry& actual = **actual_or;
+  const auto datum = primary_datum(spec, context);
+  if (!datum) return Error(datum.error());
+  const Vec3& d = datum->direction;
+  const auto own = unit(actual.direction, "the actual of " + feature.label);
+  if (!own) return Error(own.error());
+  const bool perp = spec.kind == ToleranceKind::Perp;
+
+  if (feature.nominal.type == FeatureType::Plane) {
+    if (feature.points.empty())
+      return Error(fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind),
+                               feature.label));
+    // Zone: two planes of the tolerated orientation; their normal is the reference direction
+    // itself, or the plane's normal made perpendicular to it.
+    Vec3 zone_normal = d;
+    if (perp == datum->plane) {
+      Vec3 m = *own - own->dot(d) * d;
+      if (m.norm() < 1e-9) m = feature.nominal.direction - feature.nominal.direction.dot(d) * d;
+      if (m.norm() < 1e-9)
+        return Error(
+            fmt::format("{} of {}: the plane is parallel to {}, so the zone orientation is "
+                        "undefined",
+                        dmis_word(spec.kind), feature.label, datum->name));
+      zone_normal = m.normalized();
+    }
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    for (const MeasuredPoint& p : feature.points) {
+      const double h = p.surface_mm().dot(zone_normal);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+    result.value = hi - lo;
+    add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label, angle_deg(*own, d),
+                                 datum->name, datum->plane ? "normal" : "axis"));
+  } else {
+    const double length_mm = axis_length_mm(feature, actual, *own);
+    if (!(length_mm > 0))
+      return Error(fmt::format("{} of {}: the axis has no length and no points to take it from",
+                               dmis_word(spec.kind), feature.label));
+    // The axis should run along d (PERP to a plane, PARLEL to an axis): a cylindrical zone whose
+    // diameter is the axis's sideways excursion; otherwise two planes normal to d.
+    const bool along = perp == datum->plane;
+    result.value = along ? length_mm * own->cross(d).norm() : length_mm * std::abs(own->dot(d));
+    add_note(result,
+             fmt::format("axis of {} at {:.4f} deg to {} ({}), over {:.4f} mm ({} zone)", feature.label,
+                         angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
+                         along ? "diametral" : "two-plane"));
+  }
+  result.actual = result.value;
+  set_limits(result, 0, spec.zone);
+  add_note(result, secondary_datum_note(spec));
+  return result;
+}
+
+Outcome evaluate_anglb(const ToleranceSpec& spec, const std::vector<const Feature*>& features,
+                       const ToleranceContext& context, ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line,   FeatureType::Cylinder,
+                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc};
+  const Feature& feature = *features.front();
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  const auto own = unit((*actual)->direction, "the actual of " + feature.label);
+  if (!own) return Error(own.error());
+
+  tl::expected<Reference, std::string> reference = Error("");
+  if (features.size() == 2) {
+    const Feature& other = *features[1];
+    if (!is_one_of(other.nominal.type, k_types)) return wrong_type(spec.kind, k_types, other.nominal.type);
+    const auto other_actual = actual_of(other);
+    if (!other_actual) return Error(other_actual.error());
+    reference = reference_of(**other_actual, other.label, spec.kind);
+  } else {
+    reference = primary_datum(spec, context);
+  }
+  if (!reference) return Error(reference.error());
+
+  // Lines and planes have no sense along their direction: fold to 0..90, and report the
+  // supplement when the nominal is obtuse so the two compare.
+  double angle = angle_deg(*own, reference->direction);
+  angle = std::min(angle, 180.0 - angle);
+  if (spec.nominal > 90.0) angle = 180.0 - angle;
+  result.actual = angle;
+  result.nominal = spec.nominal;
+  result.value = angle - spec.nominal;
+  set_limits(result, spec.lower, spec.upper);
+  add_note(result, fmt::format("angle between the {} of {} and the {} of {}",
+                               feature.nominal.type == FeatureType::Plane ? "normal" : "axis", feature.label,
+                               reference->plane ? "normal" : "axis", reference->name));
+  if (features.size() == 1) add_note(result, secondary_datum_note(spec));
+  return result;
+}
+
+// ---------------------------------------------------------------- PROFS
+
+/// Signed distance of a surface point from the nominal surface, + outside the material.
+double profile_deviation(const Geometry& nominal, const Vec3& s) {
+  const Vec3 n = nominal.direction.normalized();
+  const Vec3 v = s - nominal.position;
+  const double radius_mm = 0.5 * nominal.diameter_mm;
+  double outward = 0;  // + away from the centre/axis (for a plane: along its normal)
+  switch (nominal.type) {
+    case FeatureType::Plane: return n.dot(v);
+    case FeatureType::Sphere: outward = v.norm() - radius_mm; break;
+    case FeatureType::Circle:
+    case FeatureType::Arc:
+    case FeatureType::Cylinder: outward = (v - v.dot(n) * n).norm() - radius_mm; break;
+    case FeatureType::Cone: {
+      // Orthogonal distance to the nappe: rho cos(a/2) - h sin(a/2) (h along the axis from the apex).
+      const double half = 0.5 * nominal.apex_angle_deg * k_pi / 180.0;
+      const double h = v.dot(n);
+      const double rho = (v - h * n).norm();
+      outward = rho * std::cos(half) - std::abs(h) * std::sin(half);
+      break;
+    }
+    default: break;
+  }
+  // Outside the material of a bore is toward its axis.
+  return nominal.side == Side::Inner ? -outward : outward;
+}
+
+Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                       ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
+                                    FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone};
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  if (feature.points.empty())
+    return Error(fmt::format("PROFS of {} needs measured points: it has none", feature.label));
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -lo;
+  for (const MeasuredPoint& p : feature.points) {
+    const double dev = profile_deviation(feature.nominal, p.surface_mm());
+    lo = std::min(lo, dev);
+    hi = std::max(hi, dev);
+  }
+  result.value = std::abs(lo) > std::abs(hi) ? lo : hi;
+  result.actual = result.value;
+  result.lower = spec.lower;
+  result.upper = spec.upper;
+  result.in_tolerance = lo >= spec.lower - k_limit_slack && hi <= spec.upper + k_limit_slack;
+  add_note(result, fmt::format("deviations from the nominal surface: min {:+.4f}, max {:+.4f} over {} points",
+                               lo, hi, feature.points.size()));
+  if (feature.nominal.type != FeatureType::Plane && feature.nominal.side == Side::None)
+    add_note(result, "side unknown: treated as OUTER");
+  add_note(result, datum_frame_note(spec, context));
+  return result;
+}
+
+bool needs_two(ToleranceKind kind) { return kind == ToleranceKind::DistB; }
+
+}  // namespace
+
+tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpec& spec,
+                                                              const std::vector<const Feature*>& features,
+                                                              const ToleranceContext& context) {
+  for (const Feature* f : features)
+    if (!f) throw std::invalid_argument("evaluate_tolerance: null feature");
+  const char* word = dmis_word(spec.kind);
+  if (needs_two(spec.kind) && features.size() != 2)
+    return Error(fmt::format("{} needs two features, got {}", word, features.size()));
+  if (spec.kind == ToleranceKind::Anglb && (features.empty() || features.size() > 2))
+    return Error(fmt::format("{} applies to one feature and a datum, or to two features, got {}", word,
+                             features.size()));
+  if (!needs_two(spec.kind) && spec.kind != ToleranceKind::Anglb && features.size() != 1)
+    return Error(fmt::format("{} applies to one feature, got {}", word, features.size()));
+
+  ToleranceResult result;
+  result.label = spec.label;
+  result.kind = spec.kind;
+  result.three_d = spec.kind == ToleranceKind::Pos && spec.three_d;
+  for (const Feature* f : features) result.features.push_back(f->label);
+  const Feature& feature = *features.front();
+
+  switch (spec.kind) {
+    case ToleranceKind::Diam:
+    case ToleranceKind::Rad: return evaluate_size(spec, feature, std::move(result));
+    case ToleranceKind::DistB: return evaluate_distb(spec, feature, *features[1], context, std::move(result));
+    case ToleranceKind::Pos: return evaluate_pos(spec, feature, context, std::move(result));
+    case ToleranceKind::Flat:
+    case ToleranceKind::Cirlty:
+    case ToleranceKind::Cylcty:
+    case ToleranceKind::Sphcty:
+    case ToleranceKind::Strght: return evaluate_form(spec, feature, std::move(result));
+    case ToleranceKind::Perp:
+    case ToleranceKind::Parlel: return evaluate_orientation(spec, feature, context, std::move(result));
+    case ToleranceKind::Anglb: return evaluate_anglb(spec, features, context, std::move(result));
+    case ToleranceKind::Profs: return evaluate_profs(spec, feature, context, std::move(result));
+  }
+  return Error(fmt::format("{} is not evaluated", word));
+}
+
+}  // namespace metron::runtime

@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/stdlib/builtins.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace metron {
+namespace {
+
+constexpr double pi = 3.14159265358979323846;
+
+std::string upper(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
+const char* to_string(ValueType type) {
+  switch (type) {
+    case ValueType::Real: return "REAL";
+    case ValueType::Integer: return "INTGR";
+    case ValueType::Bool: return "BOOL";
+    case ValueType::String: return "CHAR";
+    case ValueType::Label: return "label";
+  }
+  return "?";
+}
+
+std::string Value::to_display() const {
+  switch (type) {
+    case ValueType::Real: return fmt::format("{:.10g}", number);
+    case ValueType::Integer: return fmt::format("{:.0f}", number);
+    case ValueType::Bool: return boolean ? ".TRUE." : ".FALSE.";
+    case ValueType::String: return text;
+    case ValueType::Label: return prefix + "(" + text + ")";
+  }
+  return {};
+}
+
+const std::vector<Builtin>& builtins() {
+  // DMIS 5 intrinsic functions (section 6.5), plus MN/MX aliases commonly used.
+  static const std::vector<Builtin> table = {
+      {"ABS", 1, 1, ValueType::Real, false},   {"SQRT", 1, 1, ValueType::Real, false},
+      {"SIN", 1, 1, ValueType::Real, false},   {"COS", 1, 1, ValueType::Real, false},
+      {"TAN", 1, 1, ValueType::Real, false},   {"ASIN", 1, 1, ValueType::Real, false},
+      {"ACOS", 1, 1, ValueType::Real, false},  {"ATAN", 1, 1, ValueType::Real, false},
+      {"ATAN2", 2, 2, ValueType::Real, false}, {"EXP", 1, 1, ValueType::Real, false},
+      {"LN", 1, 1, ValueType::Real, false},    {"LOG", 1, 1, ValueType::Real, false},
+      {"INT", 1, 1, ValueType::Integer, false}, {"NINT", 1, 1, ValueType::Integer, false},
+      {"MOD", 2, 2, ValueType::Real, false},   {"SIGN", 2, 2, ValueType::Real, false},
+      {"MN", 2, 16, ValueType::Real, false},   {"MX", 2, 16, ValueType::Real, false},
+      {"MIN", 2, 16, ValueType::Real, false},  {"MAX", 2, 16, ValueType::Real, false},
+      {"DTOR", 1, 1, ValueType::Real, false},  {"RTOD", 1, 1, ValueType::Real, false},
+      {"PI", 0, 0, ValueType::Real, false},    {"RL", 1, 1, ValueType::Real, true},
+      {"DBLE", 1, 1, ValueType::Real, false},  {"STR", 1, 2, ValueType::String, false},
+      {"LEN", 1, 1, ValueType::Integer, true}, {"SUBSTR", 2, 3, ValueType::String, true},
+      {"CONCAT", 1, 16, ValueType::String, true}, {"INDX", 2, 2, ValueType::Integer, true},
+      {"TRIM", 1, 1, ValueType::String, true}, {"UPC", 1, 1, ValueType::String, true},
+      {"LWC", 1, 1, ValueType::String, true},  {"CHR", 1, 1, ValueType::String, false},
+      {"ORD", 1, 1, ValueType::Integer, true},
+  };
+  return table;
+}
+
+const Builtin* find_builtin(std::string_view name) {
+  const auto& t = builtins();
+  auto it = std::find_if(t.begin(), t.end(), [&](const Builtin& b) { return b.name == name; });
+  return it == t.end() ? nullptr : &*it;
+}
+
+tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vector<Value>& args, bool degrees) {
+  const std::string name(fn.name);
+  const double to_rad = degrees ? pi / 180.0 : 1.0;
+  std::vector<double> x;
+  std::vector<std::string> s;
+  for (const auto& a : args) {
+    if (a.is_number()) {
+      x.push_back(a.number);
+      s.push_back(a.to_display());
+    } else if (a.type == ValueType::String || a.type == ValueType::Label) {
+      s.push_back(a.text);
+      x.push_back(0);
+      if (!fn.string_args && name != "STR")
+        return tl::unexpected(fmt::format("{} expects numbers, got the string '{}'", name, a.text));
+    } else {
+      return tl::unexpected(fmt::format("{} does not take a BOOL argument", name));
+    }
+  }
+  const auto real = [](double v) -> tl::expected<Value, std::string> {
+    if (!std::isfinite(v)) return tl::unexpected(std::string("the result is not a finite number"));
+    return Value::real(v);
+  };
+  if (name == "ABS") return real(std::abs(x[0]));
+  if (name == "SQRT") {
+    if (x[0] < 0) return tl::unexpected(std::string("SQRT of a negative number"));
+    return real(std::sqrt(x[0]));
+  }
+  if (name == "SIN") return real(std::sin(x[0] * to_rad));
+  if (name == "COS") return real(std::cos(x[0] * to_rad));
+  if (name == "TAN") return real(std::tan(x[0] * to_rad));
+  if (name == "ASIN" || name == "ACOS") {
+    if (std::abs(x[0]) > 1) return tl::unexpected(fmt::format("{} of a number outside [-1, 1]", name));
+    return real((name == "ASIN" ? std::asin(x[0]) : std::acos(x[0])) / to_rad);
+  }
+  if (name == "ATAN") return real(std::atan(x[0]) / to_rad);
+  if (name == "ATAN2") return real(std::atan2(x[0], x[1]) / to_rad);
+  if (name == "EXP") return real(std::exp(x[0]));
+  if (name == "LN" || name == "LOG") {
+    if (x[0] <= 0) return tl::unexpected(fmt::format("{} of a number that is not positive", name));
+    return real(name == "LN" ? std::log(x[0]) : std::log10(x[0]));
+  }
+  if (name == "INT") return Value::integer(std::trunc(x[0]));
+  if (name == "NINT") return Value::integer(std::round(x[0]));
+  if (name == "MOD") {
+    if (x[1] == 0) return tl::unexpected(std::string("MOD by zero"));
+    return real(std::fmod(x[0], x[1]));
+  }
+  if (name == "SIGN") return real(x[1] >= 0 ? std::abs(x[0]) : -std::abs(x[0]));
+  if (name == "MN" || name == "MIN") return real(*std::min_element(x.begin(), x.end()));
+  if (name == "MX" || name == "MAX") return real(*std::max_element(x.begin(), x.end()));
+  if (name == "DTOR") return real(x[0] * pi / 180.0);
+  if (name == "RTOD") return real(x[0] * 180.0 / pi);
+  if (name == "PI") return real(pi);
+  if (name == "DBLE") return real(x[0]);
+  if (name == "RL") {
+    try {
+      std::size_t used = 0;
+      const double v = std::stod(s[0], &used);
+      if (used == 0) throw std::invalid_argument("");
+      return real(v);
+    } catch (...) {
+      return tl::unexpected(fmt::format("RL cannot read a number from '{}'", s[0]));
+    }
+  }
+  if (name == "STR") {
+    if (args[0].type == ValueType::String) return Value::string(s[0]);
+    if (args.size() == 2) return Value::string(fmt::format("{:.{}f}", x[0], std::clamp(static_cast<int>(x[1]), 0, 15)));
+    return Value::string(args[0].to_display());
+  }
+  if (name == "LEN") return Value::integer(static_cast<double>(s[0].size()));
+  if (name == "SUBSTR") {
+    // SUBSTR(string, start[, end]) with 1-based inclusive positions.
+    const auto n = static_cast<long>(s[0].size());
+    const long b = std::clamp(static_cast<long>(args[1].number), 1L, n + 1);
+    const long e = args.size() > 2 ? std::clamp(static_cast<long>(args[2].number), b - 1, n) : n;
+    return Value::string(s[0].substr(static_cast<std::size_t>(b - 1), static_cast<std::size_t>(e - b + 1)));
+  }
+  if (name == "CONCAT") {
+    std::string out;
+    for (const auto& p : s) out += p;
+    return Value::string(out);
+  }
+  if (name == "INDX") {
+    const auto pos = s[0].find(s[1]);
+    return Value::integer(pos == std::string::npos ? 0.0 : static_cast<double>(pos + 1));
+  }
+  if (name == "TRIM") {
+    std::string t = s[0];
+    while (!t.empty() && t.back() == ' ') t.pop_back();
+    return Value::string(t);
+  }
+  if (name == "UPC") return Value::string(upper(s[0]));
+  if (name == "LWC") return Value::string(lower(s[0]));
+  if (name == "CHR") return Value::string(std::string(1, static_cast<char>(static_cast<int>(x[0]))));
+  if (name == "ORD") return Value::integer(s[0].empty() ? 0.0 : static_cast<unsigned char>(s[0][0]));
+  return tl::unexpected(fmt::format("intrinsic {} is not implemented", name));
+}
+
+}  // namespace metron

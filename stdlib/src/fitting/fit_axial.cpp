@@ -1,0 +1,266 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Cylinder and cone: several algebraic starts, each refined by Levenberg-Marquardt with Forbes'
+// re-linearisation about the current axis; the lowest sum of squares wins.
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+
+#include "geometry_fits.hpp"
+#include "levenberg_marquardt.hpp"
+
+namespace metron::fitting::detail {
+namespace {
+
+/// Rows u, v, a: rotates world vectors into the frame whose z axis is `axis`.
+Mat3 axis_frame(const Vec3& axis) {
+  const Vec3 u = any_perpendicular(axis);
+  Mat3 r;
+  r.row(0) = u.transpose();
+  r.row(1) = axis.cross(u).transpose();
+  r.row(2) = axis.transpose();
+  return r;
+}
+
+/// Local step of the axis (NPL DITC 140/89, sec. 3.2): the axis through (d0, d1, 0) along
+/// (d2, d3, 1) in the frame of the current axis. The new point is moved to the foot of the
+/// origin (the centroid), the NIST reference point; returns that axial shift.
+double step_axis(const Vec3& point, const Vec3& axis, const Eigen::VectorXd& delta, Vec3& new_point,
+                 Vec3& new_axis) {
+  const Mat3 rt = axis_frame(axis).transpose();
+  new_axis = (rt * Vec3(delta(2), delta(3), 1)).normalized();
+  new_point = point + rt * Vec3(delta(0), delta(1), 0);
+  const double shift = -new_point.dot(new_axis);
+  new_point += shift * new_axis;
+  return shift;
+}
+
+struct CylinderState {
+  Vec3 point;   ///< on the axis, foot of the centroid
+  Vec3 axis;    ///< unit
+  double radius = 0;
+};
+
+/// d_i = rho_i - r, rho_i the distance from the axis (Shakarji 1998, sec. 3.6).
+struct CylinderModel {
+  const std::vector<Vec3>& points;
+
+  void evaluate(const CylinderState& s, Eigen::VectorXd& r, Eigen::MatrixXd& jac) const {
+    const Mat3 rot = axis_frame(s.axis);
+    const auto n = static_cast<Eigen::Index>(points.size());
+    r.resize(n);
+    jac.resize(n, 5);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vec3 l = rot * (points[static_cast<std::size_t>(i)] - s.point);
+      const double rho = std::hypot(l.x(), l.y());
+      const double cx = rho > 0 ? l.x() / rho : 0;
+      const double cy = rho > 0 ? l.y() / rho : 0;
+      r(i) = rho - s.radius;
+      jac.row(i) << -cx, -cy, -cx * l.z(), -cy * l.z(), -1;
+    }
+  }
+  CylinderState step(const CylinderState& s, const Eigen::VectorXd& delta) const {
+    CylinderState t;
+    step_axis(s.point, s.axis, delta, t.point, t.axis);
+    t.radius = s.radius + delta(4);
+    return t;
+  }
+};
+
+struct ConeState {
+  Vec3 point;   ///< on the axis, foot of the centroid
+  Vec3 axis;    ///< unit
+  double half_angle = 0;  ///< psi, radius grows along +axis when positive
+  double distance = 0;    ///< s: orthogonal distance from `point` to the surface
+};
+
+/// d_i = rho_i cos(psi) - w_i sin(psi) - s, with w_i the axial coordinate from the point
+/// (Shakarji 1998, sec. 3.7; NPL DITC 140/89, sec. 3.4).
+struct ConeModel {
+  const std::vector<Vec3>& points;
+
+  void evaluate(const ConeState& s, Eigen::VectorXd& r, Eigen::MatrixXd& jac) const {
+    const Mat3 rot = axis_frame(s.axis);
+    const double c = std::cos(s.half_angle);
+    const double sn = std::sin(s.half_angle);
+    const auto n = static_cast<Eigen::Index>(points.size());
+    r.resize(n);
+    jac.resize(n, 6);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Vec3 l = rot * (points[static_cast<std::size_t>(i)] - s.point);
+      const double rho = std::hypot(l.x(), l.y());
+      const double cx = rho > 0 ? l.x() / rho : 0;
+      const double cy = rho > 0 ? l.y() / rho : 0;
+      const double w = l.z();
+      r(i) = rho * c - w * sn - s.distance;
+      jac.row(i) << -c * cx, -c * cy, -cx * w * c - sn * l.x(), -cy * w * c - sn * l.y(),
+          -rho * sn - w * c, -1;
+    }
+  }
+  ConeState step(const ConeState& s, const Eigen::VectorXd& delta) const {
+    ConeState t;
+    const double shift = step_axis(s.point, s.axis, delta, t.point, t.axis);
+    t.half_angle = s.half_angle + delta(4);
+    // Moving the point along the axis by `shift` changes its distance to the surface by shift*sin(psi).
+    t.distance = s.distance + delta(5) + shift * std::sin(t.half_angle);
+    return t;
+  }
+};
+
+/// Candidate axis directions, in order of preference: the hint, the three principal axes (long
+/// cylinders lie along the largest, short rings and flat cones along the smallest, partial
+/// patches may need the middle one; `smallest_first` for cones, which are mostly short: seats,
+/// countersinks, chamfers), and the distinct eigenvector of an algebraic quadric through the points.
+std::vector<Vec3> candidate_axes(const std::vector<Vec3>& q, const std::optional<Vec3>& hint,
+                                 bool smallest_first) {
+  std::vector<Vec3> axes;
+  auto add = [&axes](const Vec3& a) {
+    if (!(a.norm() > 0) || !a.allFinite()) return;
+    const Vec3 unit = a.normalized();
+    for (const Vec3& b : axes) {
+      if (std::abs(unit.dot(b)) > 1 - 1e-12) return;
+    }
+    axes.push_back(unit);
+  };
+  if (hint) add(*hint);
+  const PrincipalAxes pa = principal_axes(q);
+  for (int k = 0; k < 3; ++k) add(pa.axes.col(smallest_first ? 2 - k : k));
+  if (q.size() >= 10) {
+    // General quadric x'Ax + b'x + c = 0 by the smallest singular vector; for a cylinder or cone
+    // the axis is the eigenvector of A whose eigenvalue differs from the other two.
+    Eigen::MatrixXd m(static_cast<Eigen::Index>(q.size()), 10);
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const Vec3& p = q[i];
+      m.row(static_cast<Eigen::Index>(i)) << p.x() * p.x(), p.y() * p.y(), p.z() * p.z(), p.x() * p.y(),
+          p.x() * p.z(), p.y() * p.z(), p.x(), p.y(), p.z(), 1;
+    }
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeThinV);
+    const Eigen::VectorXd c = svd.matrixV().col(9);
+    Mat3 a;
+    a << c(0), c(3) / 2, c(4) / 2, c(3) / 2, c(1), c(5) / 2, c(4) / 2, c(5) / 2, c(2);
+    const Eigen::SelfAdjointEigenSolver<Mat3> eig(a);
+    const Vec3 ev = eig.eigenvalues();
+    add(eig.eigenvectors().col(ev(1) - ev(0) > ev(2) - ev(1) ? 0 : 2));
+  }
+  return axes;
+}
+
+/// Circle through the points projected along `axis` (Kasa's linear fit): a cylinder start.
+std::optional<CylinderState> cylinder_start(const std::vector<Vec3>& q, const Vec3& axis) {
+  const Mat3 rot = axis_frame(axis);
+  const auto n = static_cast<Eigen::Index>(q.size());
+  Eigen::MatrixXd a(n, 3);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vec3 l = rot * q[static_cast<std::size_t>(i)];
+    a.row(i) << 2 * l.x(), 2 * l.y(), 1;
+    b(i) = l.x() * l.x() + l.y() * l.y();
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr = a.colPivHouseholderQr();
+  if (qr.rank() < 3) return std::nullopt;
+  const Eigen::Vector3d x = qr.solve(b);
+  const double r2 = x(2) + x(0) * x(0) + x(1) * x(1);
+  if (!(r2 > 0) || !std::isfinite(r2)) return std::nullopt;
+  return CylinderState{rot.transpose() * Vec3(x(0), x(1), 0), axis, std::sqrt(r2)};
+}
+
+/// Linear fit of u^2 + v^2 = 2 u u0 + 2 v v0 + (R0^2 - u0^2 - v0^2) + 2 R0 t w + t^2 w^2, the
+/// cone (u - u0)^2 + (v - v0)^2 = (R0 + t w)^2 about a fixed axis direction (t = tan psi).
+std::optional<ConeState> cone_start(const std::vector<Vec3>& q, const Vec3& axis) {
+  const Mat3 rot = axis_frame(axis);
+  const auto n = static_cast<Eigen::Index>(q.size());
+  Eigen::MatrixXd a(n, 5);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vec3 l = rot * q[static_cast<std::size_t>(i)];
+    a.row(i) << 2 * l.x(), 2 * l.y(), 1, l.z(), l.z() * l.z();
+    b(i) = l.x() * l.x() + l.y() * l.y();
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr = a.colPivHouseholderQr();
+  if (qr.rank() < 5) return std::nullopt;
+  const Eigen::VectorXd x = qr.solve(b);
+  const double r2 = x(2) + x(0) * x(0) + x(1) * x(1);
+  if (!(r2 > 0) || !std::isfinite(r2)) return std::nullopt;
+  const double r0 = std::sqrt(r2);
+  const double psi = std::atan(x(3) / (2 * r0));
+  return ConeState{rot.transpose() * Vec3(x(0), x(1), 0), axis, psi, r0 * std::cos(psi)};
+}
+
+/// A runaway radius means the data is (nearly) flat or straight: no finite cylinder.
+bool plausible(const CylinderState& s) { return s.point.allFinite() && std::abs(s.radius) < 1e8; }
+bool plausible(const ConeState& s) {
+  return s.point.allFinite() && std::isfinite(s.distance) && std::abs(s.distance) < 1e8 &&
+         std::abs(s.half_angle) < std::numbers::pi / 2;
+}
+
+/// Runs every start, returns the converged state with the smallest sum of squares. Costs equal
+/// to within rounding go to the earlier start, so that when several shapes pass through the
+/// points exactly (as many points as parameters) the answer does not depend on rounding noise.
+template <class Model, class State>
+std::optional<std::pair<State, int>> best_of(const Model& model, const std::vector<State>& starts) {
+  std::optional<std::pair<State, int>> best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  const double noise = 1e-28 * static_cast<double>(model.points.size());
+  for (State s : starts) {
+    const LmOutcome out = levenberg_marquardt(model, s);
+    if (out.converged && plausible(s) && out.cost < best_cost * (1 - 1e-10) - noise) {
+      best_cost = out.cost;
+      best = std::pair{s, out.iterations};
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
+                                                         const std::optional<Vec3>& axis_hint) {
+  const NormalizedPoints np = normalize(points);
+  const PrincipalAxes pa = principal_axes(np.points);
+  if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
+  std::vector<CylinderState> starts;
+  for (const Vec3& axis : candidate_axes(np.points, axis_hint, false)) {
+    if (auto s = cylinder_start(np.points, axis)) starts.push_back(*s);
+  }
+  const auto best = best_of(CylinderModel{np.points}, starts);
+  if (!best) return tl::unexpected(FitFailure::NoConvergence);
+  const auto& [s, iterations] = *best;
+  Geometry g;
+  g.position = np.to_world(s.point);
+  g.direction = s.axis;
+  g.radius_mm = std::abs(s.radius) * np.scale;
+  g.iterations = iterations;
+  return g;
+}
+
+tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& points,
+                                                     const std::optional<Vec3>& axis_hint) {
+  const NormalizedPoints np = normalize(points);
+  const PrincipalAxes pa = principal_axes(np.points);
+  if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
+  std::vector<ConeState> starts;
+  for (const Vec3& axis : candidate_axes(np.points, axis_hint, true)) {
+    if (auto s = cone_start(np.points, axis)) starts.push_back(*s);
+    // A cylinder start as well: the linear cone fit is poor for nearly cylindrical cones.
+    if (auto c = cylinder_start(np.points, axis)) starts.push_back(ConeState{c->point, c->axis, 0, c->radius});
+  }
+  const auto best = best_of(ConeModel{np.points}, starts);
+  if (!best) return tl::unexpected(FitFailure::NoConvergence);
+  auto [s, iterations] = *best;
+  if (s.half_angle < 0) {
+    // Same cone: d = rho cos(psi) - w sin(psi) - s is unchanged by w -> -w, psi -> -psi.
+    s.axis = -s.axis;
+    s.half_angle = -s.half_angle;
+  }
+  Geometry g;
+  g.position = np.to_world(s.point);
+  g.direction = s.axis;
+  g.half_angle_rad = s.half_angle;
+  g.cone_distance_mm = s.distance * np.scale;
+  g.iterations = iterations;
+  return g;
+}
+
+}  // namespace metron::fitting::detail

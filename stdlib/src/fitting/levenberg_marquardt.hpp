@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Private: the Levenberg-Marquardt driver shared by the nonlinear fits.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Dense>
+
+namespace metron::fitting::detail {
+
+/// Result of one Levenberg-Marquardt run.
+struct LmOutcome {
+  bool converged = false;  ///< reached a minimum to the step tolerance (or to machine precision)
+  int iterations = 0;      ///< trial steps taken, accepted or not
+  double cost = std::numeric_limits<double>::infinity();  ///< sum of squared residuals at `state`
+};
+
+/// Minimises the sum of squared residuals of `model` starting from `state` (updated in place).
+///
+/// `Model` provides
+///   void evaluate(const State&, Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian) const;
+///   State step(const State&, const Eigen::VectorXd& delta) const;
+/// The Jacobian may be taken with respect to a local parametrisation that `step` applies and
+/// re-centres (Forbes' re-linearisation about the current estimate, NPL DITC 140/89 sec. 3), so
+/// the state never nears a parametrisation singularity.
+///
+/// Each step solves min |J d + r|^2 + lambda |D d|^2 by a pivoted QR of the stacked system,
+/// which avoids squaring the condition number as the normal equations would; D holds the largest
+/// column norms of J seen so far (J. J. More, "The Levenberg-Marquardt algorithm: implementation
+/// and theory", LNM 630, 1978).
+template <class Model, class State>
+LmOutcome levenberg_marquardt(const Model& model, State& state, int max_iterations = 500,
+                              double step_tolerance = 1e-13) {
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  model.evaluate(state, r, jac);
+  LmOutcome out;
+  if (!r.allFinite() || !jac.allFinite()) return out;
+  out.cost = r.squaredNorm();
+  const Eigen::Index n = jac.rows();
+  const Eigen::Index p = jac.cols();
+  Eigen::VectorXd col_scale = Eigen::VectorXd::Constant(p, std::numeric_limits<double>::min());
+  Eigen::MatrixXd stacked(n + p, p);
+  Eigen::VectorXd rhs(n + p);
+  Eigen::VectorXd r_trial;
+  Eigen::MatrixXd jac_trial;
+  double lambda = 1e-3;
+  for (out.iterations = 1; out.iterations <= max_iterations; ++out.iterations) {
+    col_scale = col_scale.cwiseMax(jac.colwise().norm().transpose());
+    stacked.topRows(n) = jac;
+    stacked.bottomRows(p) = (std::sqrt(lambda) * col_scale).asDiagonal();
+    rhs.head(n) = -r;
+    rhs.tail(p).setZero();
+    const Eigen::VectorXd delta = stacked.colPivHouseholderQr().solve(rhs);
+    State trial = model.step(state, delta);
+    model.evaluate(trial, r_trial, jac_trial);
+    const bool finite = r_trial.allFinite() && jac_trial.allFinite();
+    const double trial_cost = finite ? r_trial.squaredNorm() : std::numeric_limits<double>::infinity();
+    if (trial_cost < out.cost) {
+      state = std::move(trial);
+      out.cost = trial_cost;
+      r.swap(r_trial);
+      jac.swap(jac_trial);
+      lambda = std::max(lambda * 0.1, 1e-15);
+      if (delta.norm() <= step_tolerance) {
+        out.converged = true;
+        return out;
+      }
+    } else {
+      lambda *= 10;
+      if (lambda > 1e12) {
+        // No damping finds a descent. A minimum as far as floating point can tell when even the
+        // undamped Gauss-Newton step predicts a decrease below the rounding noise of the cost
+        // (each residual carries an absolute error of order eps on points of order one).
+        const Eigen::VectorXd gauss_newton = jac.colPivHouseholderQr().solve(-r);
+        const double predicted = (jac * gauss_newton).squaredNorm();
+        out.converged = predicted <= 1e-13 * r.lpNorm<1>() + 1e-30 * static_cast<double>(n);
+        return out;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace metron::fitting::detail

@@ -1,0 +1,631 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Tolerance evaluation against hand-computed answers (docs/tolerances.md gives the formulas).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "metron/runtime/tolerance.hpp"
+
+namespace metron::runtime {
+namespace {
+
+constexpr double k_pi = 3.14159265358979323846;
+constexpr double k_tight = 1e-9;
+
+Geometry plane(const Vec3& position, const Vec3& normal) {
+  Geometry g;
+  g.type = FeatureType::Plane;
+  g.position = position;
+  g.direction = normal.normalized();
+  return g;
+}
+
+Geometry round(FeatureType type, Side side, const Vec3& position, const Vec3& axis, double diameter_mm,
+               double length_mm = 0) {
+  Geometry g;
+  g.type = type;
+  g.side = side;
+  g.position = position;
+  g.direction = axis.normalized();
+  g.diameter_mm = diameter_mm;
+  g.length_mm = length_mm;
+  return g;
+}
+
+Geometry point(const Vec3& position, const Vec3& normal = Vec3::UnitZ()) {
+  Geometry g;
+  g.type = FeatureType::Point;
+  g.position = position;
+  g.direction = normal;
+  return g;
+}
+
+Geometry line(const Vec3& position, const Vec3& direction, double length_mm = 0) {
+  Geometry g;
+  g.type = FeatureType::Line;
+  g.position = position;
+  g.direction = direction.normalized();
+  g.length_mm = length_mm;
+  g.bounded = length_mm > 0;
+  return g;
+}
+
+Feature feature(const std::string& label, const Geometry& nominal, std::optional<Geometry> actual) {
+  Feature f;
+  f.label = label;
+  f.nominal = nominal;
+  f.actual = std::move(actual);
+  return f;
+}
+
+/// A probed point whose compensated surface point is exactly `surface` (ball radius 1 mm).
+MeasuredPoint probed(const Vec3& surface, const Vec3& approach) {
+  MeasuredPoint p;
+  p.ball_radius_mm = 1.0;
+  p.normal = approach.normalized();
+  p.centre_mm = surface + p.ball_radius_mm * p.normal;
+  return p;
+}
+
+ToleranceSpec spec(ToleranceKind kind) {
+  ToleranceSpec s;
+  s.label = "T1";
+  s.kind = kind;
+  return s;
+}
+
+Datum datum(const std::string& label, const Geometry& g) { return Datum{label, "D_" + label, g}; }
+
+tl::expected<ToleranceResult, std::string> evaluate(const ToleranceSpec& s, std::vector<const Feature*> fs,
+                                                    const ToleranceContext& context = {}) {
+  return evaluate_tolerance(s, fs, context);
+}
+
+// ------------------------------------------------------------------ size
+
+TEST(ToleranceSize, BoreOversizeIsInOrOutByItsLimits) {
+  const Feature bore =
+      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.0, 30),
+              round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.012, 30));
+  ToleranceSpec s = spec(ToleranceKind::Diam);
+  s.lower = -0.01;
+  s.upper = 0.02;
+  auto r = evaluate(s, {&bore});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.012, k_tight);
+  EXPECT_NEAR(r->actual, 20.012, k_tight);
+  EXPECT_NEAR(r->nominal, 20.0, k_tight);
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_EQ(r->features, std::vector<std::string>{"CYL1"});
+
+  s.upper = 0.01;
+  r = evaluate(s, {&bore});
+  ASSERT_TRUE(r);
+  EXPECT_FALSE(r->in_tolerance);
+  EXPECT_DOUBLE_EQ(r->lower, -0.01);
+  EXPECT_DOUBLE_EQ(r->upper, 0.01);
+}
+
+TEST(ToleranceSize, RadiusIsHalfTheDiameterDeviation) {
+  const Feature circle =
+      feature("C1", round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10.0),
+              round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 9.99));
+  ToleranceSpec s = spec(ToleranceKind::Rad);
+  s.lower = -0.004;
+  s.upper = 0.004;
+  const auto r = evaluate(s, {&circle});
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->value, -0.005, k_tight);
+  EXPECT_NEAR(r->actual, 4.995, k_tight);
+  EXPECT_FALSE(r->in_tolerance);
+}
+
+TEST(ToleranceSize, ValueOnTheLimitIsIn) {
+  // 50.01 - 50.0 is not exactly 0.01 in binary; the limit still holds.
+  const Feature c = feature("C", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 50.0),
+                            round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 50.01));
+  ToleranceSpec s = spec(ToleranceKind::Diam);
+  s.lower = -0.01;
+  s.upper = 0.01;
+  EXPECT_TRUE(evaluate(s, {&c})->in_tolerance);
+}
+
+TEST(ToleranceSize, WrongTypesAndMissingActual) {
+  const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  Geometry cone = round(FeatureType::Cone, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 0);
+  cone.apex_angle_deg = 60;
+  const Feature co = feature("CO1", cone, cone);
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Diam), {&pl}).error(),
+            "DIAM applies to a circle, arc, sphere or cylinder, not to a PLANE");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Diam), {&co}).error(),
+            "DIAM applies to a circle, arc, sphere or cylinder, not to a CONE");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Rad), {&pl}).error(),
+            "RAD applies to a circle, arc, sphere or cylinder, not to a PLANE");
+  const Feature unmeasured =
+      feature("F1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 5), {});
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Diam), {&unmeasured}).error(),
+            "feature F1 has no actual: measure or construct it first");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Diam), {&pl, &pl}).error(), "DIAM applies to one feature, got 2");
+}
+
+// ------------------------------------------------------------------ form
+
+TEST(ToleranceForm, FormValueAgainstTheZone) {
+  Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0.001}, Vec3::UnitZ()));
+  pl.fit = FitFigures{{}, 0.001, 0.004};
+  ToleranceSpec s = spec(ToleranceKind::Flat);
+  s.zone = 0.01;
+  auto r = evaluate(s, {&pl});
+  ASSERT_TRUE(r);
+  EXPECT_DOUBLE_EQ(r->value, 0.004);
+  EXPECT_DOUBLE_EQ(r->lower, 0.0);
+  EXPECT_DOUBLE_EQ(r->upper, 0.01);
+  EXPECT_TRUE(r->in_tolerance);
+  s.zone = 0.003;
+  EXPECT_FALSE(evaluate(s, {&pl})->in_tolerance);
+}
+
+TEST(ToleranceForm, EachFormAppliesToItsShape) {
+  const Geometry cyl = round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 20);
+  Feature c = feature("CYL1", cyl, cyl);
+  c.fit = FitFigures{{}, 0.001, 0.005};
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Flat), {&c}).error(), "FLAT applies to a plane, not to a CYLNDR");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Cirlty), {&c}).error(),
+            "CIRLTY applies to a circle or arc, not to a CYLNDR");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Sphcty), {&c}).error(),
+            "SPHCTY applies to a sphere, not to a CYLNDR");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Strght), {&c}).error(),
+            "STRGHT applies to a line; the axis straightness of a CYLNDR is not available");
+  ToleranceSpec s = spec(ToleranceKind::Cylcty);
+  s.zone = 0.004;
+  const auto r = evaluate(s, {&c});
+  ASSERT_TRUE(r);
+  EXPECT_DOUBLE_EQ(r->value, 0.005);
+  EXPECT_FALSE(r->in_tolerance);
+
+  const Geometry arc = round(FeatureType::Arc, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10);
+  Feature a = feature("ARC1", arc, arc);
+  a.fit = FitFigures{{}, 0.0, 0.002};
+  EXPECT_DOUBLE_EQ(evaluate(spec(ToleranceKind::Cirlty), {&a})->value, 0.002);
+  Feature l = feature("L1", line({0, 0, 0}, Vec3::UnitX(), 50), line({0, 0, 0}, Vec3::UnitX(), 50));
+  l.fit = FitFigures{{}, 0.0, 0.003};
+  EXPECT_DOUBLE_EQ(evaluate(spec(ToleranceKind::Strght), {&l})->value, 0.003);
+}
+
+TEST(ToleranceForm, ConstructedFeatureHasNoForm) {
+  const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  EXPECT_EQ(
+      evaluate(spec(ToleranceKind::Flat), {&pl}).error(),
+      "feature PL1 has no fit: FLAT needs the form of measured points, and it was constructed without any");
+}
+
+// ------------------------------------------------------------------ POS
+
+TEST(TolerancePosition, AxisOffsetGivesTwiceTheOffset) {
+  // The actual axis is offset 0.03 in X; its position lies at another height on the axis.
+  const Feature bore =
+      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 12, 30),
+              round(FeatureType::Cylinder, Side::Inner, {10.03, 20, 15}, Vec3::UnitZ(), 12, 30));
+  ToleranceSpec s = spec(ToleranceKind::Pos);
+  s.zone = 0.1;
+  auto r = evaluate(s, {&bore});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.06, k_tight);
+  EXPECT_DOUBLE_EQ(r->upper, 0.1);
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_FALSE(r->three_d);
+  s.zone = 0.05;
+  EXPECT_FALSE(evaluate(s, {&bore})->in_tolerance);
+  // 3D counts the 15 mm along the axis too.
+  s.three_d = true;
+  r = evaluate(s, {&bore});
+  EXPECT_NEAR(r->value, 2 * std::hypot(0.03, 15.0), 1e-9);
+  EXPECT_TRUE(r->three_d);
+}
+
+TEST(TolerancePosition, TiltedAxisIsComparedAtTheNominalHeight) {
+  // Through (10, 20, 10), tilted 0.001 in X per mm of Z: at z = 0 it passes x = 9.99.
+  const Feature bore =
+      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 12, 30),
+              round(FeatureType::Cylinder, Side::Inner, {10, 20, 10}, {0.001, 0, 1}, 12, 30));
+  ToleranceSpec s = spec(ToleranceKind::Pos);
+  s.zone = 0.1;
+  EXPECT_NEAR(evaluate(s, {&bore})->value, 0.02, 1e-9);
+}
+
+TEST(TolerancePosition, PointsAndSpheres) {
+  const Feature p = feature("P1", point({1, 2, 3}), point({1.003, 2.004, 3.5}));
+  ToleranceSpec s = spec(ToleranceKind::Pos);
+  s.zone = 0.02;
+  // 2D drops the offset along the nominal direction (Z).
+  EXPECT_NEAR(evaluate(s, {&p})->value, 0.01, k_tight);
+  s.three_d = true;
+  EXPECT_NEAR(evaluate(s, {&p})->value, 2 * std::sqrt(0.003 * 0.003 + 0.004 * 0.004 + 0.25), k_tight);
+
+  const Feature sph = feature("S1", round(FeatureType::Sphere, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 20),
+                              round(FeatureType::Sphere, Side::Outer, {0.03, 0, 0.5}, Vec3::UnitZ(), 20));
+  s.three_d = false;
+  EXPECT_NEAR(evaluate(s, {&sph})->value, 0.06, k_tight);
+}
+
+TEST(TolerancePosition, MaterialConditionBonus) {
+  const Geometry nominal = round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 20);
+  Geometry actual = round(FeatureType::Cylinder, Side::Inner, {0.03, 0, 0}, Vec3::UnitZ(), 10.02, 20);
+  Feature hole = feature("H1", nominal, actual);
+  ToleranceSpec s = spec(ToleranceKind::Pos);
+  s.zone = 0.05;
+  EXPECT_FALSE(evaluate(s, {&hole})->in_tolerance);  // RFS: 0.06 > 0.05
+  s.condition = MaterialCondition::Mmc;
+  auto r = evaluate(s, {&hole});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->upper, 0.07, k_tight);  // 0.05 + (10.02 - 10)
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_NE(r->note.find("MMC bonus 0.0200"), std::string::npos) << r->note;
+  // LMC: the hole grew toward LMC (the nominal), no bonus.
+  s.condition = MaterialCondition::Lmc;
+  EXPECT_NEAR(evaluate(s, {&hole})->upper, 0.05, k_tight);
+  // An undersize hole is beyond MMC: no bonus under MMC, 0.01 under LMC.
+  hole.actual->diameter_mm = 9.99;
+  EXPECT_NEAR(evaluate(s, {&hole})->upper, 0.06, k_tight);
+  s.condition = MaterialCondition::Mmc;
+  EXPECT_NEAR(evaluate(s, {&hole})->upper, 0.05, k_tight);
+  // A boss gains under MMC as it shrinks.
+  Geometry boss_nominal = nominal;
+  boss_nominal.side = Side::Outer;
+  Geometry boss_actual = actual;
+  boss_actual.side = Side::Outer;
+  boss_actual.diameter_mm = 9.98;
+  const Feature boss = feature("B1", boss_nominal, boss_actual);
+  EXPECT_NEAR(evaluate(s, {&boss})->upper, 0.07, k_tight);
+
+  const Feature p = feature("P1", point({0, 0, 0}), point({0, 0, 0}));
+  EXPECT_EQ(evaluate(s, {&p}).error(), "MMC applies to a circle, arc, sphere or cylinder, not to a POINT");
+}
+
+TEST(TolerancePosition, DatumsAreNotedAndPlanesRejected) {
+  const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
+                            round(FeatureType::Circle, Side::Inner, {0.01, 0, 0}, Vec3::UnitZ(), 10));
+  ToleranceSpec s = spec(ToleranceKind::Pos);
+  s.zone = 0.1;
+  s.datums = {"A", "B"};
+  Alignment part;
+  part.label = "PART";
+  ToleranceContext context;
+  context.alignment = &part;
+  const auto r = evaluate(s, {&c}, context);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->note,
+            "datums A, B: evaluated in the current alignment PART (the program's DATSET is expected "
+            "to have established the datum frame)");
+  const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  EXPECT_EQ(evaluate(s, {&pl}).error(),
+            "POS applies to a point, circle, arc, sphere, cylinder, cone or line, not to a PLANE");
+}
+
+// ------------------------------------------------------------------ DISTB
+
+/// A part frame rotated 30 deg about machine X and shifted: part Z is not machine Z.
+Alignment rotated_part() {
+  Alignment a;
+  a.label = "PART";
+  a.part_to_machine = Frame::Identity();
+  a.part_to_machine.translate(Vec3(100, 50, -20));
+  a.part_to_machine.rotate(Eigen::AngleAxisd(30.0 * k_pi / 180.0, Vec3::UnitX()));
+  return a;
+}
+
+TEST(ToleranceDistance, TwoPlanesAlongZOfARotatedAlignment) {
+  const Alignment part = rotated_part();
+  const auto pl = [&](const Vec3& p) {
+    return plane(part.to_machine_point(p), part.to_machine_vector(Vec3::UnitZ()));
+  };
+  // Positions (centroids) at different part XY: only the Z difference counts.
+  const Feature bottom = feature("PL1", pl({0, 0, 0}), pl({5, 3, 0}));
+  const Feature top = feature("PL2", pl({10, 10, 40}), pl({-7, 12, 40.015}));
+  ToleranceSpec s = spec(ToleranceKind::DistB);
+  s.axis = DistanceAxis::ZAxis;
+  s.nominal = 40;
+  s.lower = -0.01;
+  s.upper = 0.01;
+  ToleranceContext context;
+  context.alignment = &part;
+  auto r = evaluate(s, {&bottom, &top}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->actual, 40.015, 1e-9);
+  EXPECT_NEAR(r->nominal, 40.0, 1e-9);
+  EXPECT_NEAR(r->value, 0.015, 1e-9);
+  EXPECT_FALSE(r->in_tolerance);
+  EXPECT_EQ(r->note, "along ZAXIS of PART");
+
+  // Point to point between planes: along the first plane's normal, the same here.
+  s.axis = DistanceAxis::PointToPoint;
+  EXPECT_NEAR(evaluate(s, {&bottom, &top}, context)->actual, 40.015, 1e-9);
+  // Along machine Z (no alignment) the vertical line crosses the tilted planes 40.015 / cos 30 apart.
+  s.axis = DistanceAxis::ZAxis;
+  EXPECT_NEAR(evaluate(s, {&bottom, &top})->actual, 40.015 / std::cos(30.0 * k_pi / 180.0), 1e-9);
+  // Part X lies in both planes.
+  s.axis = DistanceAxis::XAxis;
+  EXPECT_EQ(evaluate(s, {&bottom, &top}, context).error(),
+            "DISTB along XAXIS: plane PL1 is parallel to that axis");
+}
+
+TEST(ToleranceDistance, PointsAxesAndCounts) {
+  const Alignment part = rotated_part();
+  ToleranceContext context;
+  context.alignment = &part;
+  const Feature a =
+      feature("A", point(part.to_machine_point({0, 0, 0})), point(part.to_machine_point({0, 0, 0})));
+  const Feature b =
+      feature("B", point(part.to_machine_point({3, 4, 0})), point(part.to_machine_point({3, 4.01, 0})));
+  ToleranceSpec s = spec(ToleranceKind::DistB);
+  s.nominal = 5;
+  s.lower = -0.1;
+  s.upper = 0.1;
+  auto r = evaluate(s, {&a, &b}, context);
+  EXPECT_NEAR(r->actual, std::hypot(3.0, 4.01), 1e-9);
+  EXPECT_NEAR(r->nominal, 5.0, 1e-9);
+  s.axis = DistanceAxis::YAxis;
+  s.nominal = 4;
+  r = evaluate(s, {&a, &b}, context);
+  EXPECT_NEAR(r->actual, 4.01, 1e-9);
+  EXPECT_NEAR(r->value, 0.01, 1e-9);
+
+  // A point and a cylinder: from the point to the axis.
+  const Feature cyl =
+      feature("CYL", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 5, 10),
+              round(FeatureType::Cylinder, Side::Inner, {0, 0, 7}, Vec3::UnitZ(), 5, 10));
+  const Feature p = feature("P", point({6, 8, 3}), point({6, 8, 3}));
+  s.axis = DistanceAxis::PointToPoint;
+  s.nominal = 10;
+  EXPECT_NEAR(evaluate(s, {&cyl, &p})->actual, 10.0, 1e-12);
+  EXPECT_NEAR(evaluate(s, {&p, &cyl})->actual, 10.0, 1e-12);
+
+  EXPECT_EQ(evaluate(s, {&a}).error(), "DISTB needs two features, got 1");
+  // A nominal that disagrees with the features' nominals is noted.
+  s.nominal = 9.5;
+  EXPECT_EQ(evaluate(s, {&cyl, &p})->note,
+            "the feature nominals give 10.0000, the tolerance nominal is 9.5000");
+}
+
+// ------------------------------------------------------------------ PERP / PARLEL
+
+constexpr double k_tilt = 0.001;  // tan of the tilt of the measured surfaces
+
+/// A wall x = 50 (normal +X) whose points lean by k_tilt: x = 50 + k_tilt z, for z in [0, 20].
+Feature leaning_wall() {
+  const double theta = std::atan(k_tilt);
+  Feature f = feature("WALL", plane({50, 15, 10}, Vec3::UnitX()),
+                      plane({50 + 10 * k_tilt, 15, 10}, {std::cos(theta), 0, -std::sin(theta)}));
+  for (double y : {0.0, 30.0})
+    for (double z : {0.0, 10.0, 20.0}) f.points.push_back(probed({50 + k_tilt * z, y, z}, Vec3::UnitX()));
+  return f;
+}
+
+/// A top face z = 10 (normal +Z) rising by 0.0002 per mm of X over x in [0, 100].
+Feature rising_top() {
+  const double slope = 0.0002;
+  Feature f = feature("TOP", plane({50, 15, 10}, Vec3::UnitZ()), plane({50, 15, 10.01}, Vec3(-slope, 0, 1)));
+  for (double x : {0.0, 50.0, 100.0})
+    for (double y : {0.0, 30.0}) f.points.push_back(probed({x, y, 10 + slope * x}, Vec3::UnitZ()));
+  return f;
+}
+
+TEST(ToleranceOrientation, PlaneToDatumPlane) {
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  ToleranceContext context;
+  context.datums = {&a};
+  ToleranceSpec s = spec(ToleranceKind::Perp);
+  s.zone = 0.03;
+  s.datums = {"A"};
+  const Feature wall = leaning_wall();
+  auto r = evaluate(s, {&wall}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 20 * k_tilt, 1e-12);  // the points span x in [50, 50.02]
+  EXPECT_TRUE(r->in_tolerance);
+
+  s.kind = ToleranceKind::Parlel;
+  s.zone = 0.01;
+  const Feature top = rising_top();
+  r = evaluate(s, {&top}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.02, 1e-12);  // z spans [10, 10.02]
+  EXPECT_FALSE(r->in_tolerance);
+}
+
+TEST(ToleranceOrientation, PlaneToDatumAxis) {
+  const Datum b = datum("B", round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10, 50));
+  ToleranceContext context;
+  context.datums = {&b};
+  ToleranceSpec s = spec(ToleranceKind::Perp);
+  s.zone = 0.05;
+  const Feature top = rising_top();
+  EXPECT_NEAR(evaluate(s, {&top}, context)->value, 0.02, 1e-12);
+  s.kind = ToleranceKind::Parlel;
+  const Feature wall = leaning_wall();
+  EXPECT_NEAR(evaluate(s, {&wall}, context)->value, 20 * k_tilt, 1e-12);
+}
+
+TEST(ToleranceOrientation, AxisToDatumPlaneAndAxis) {
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  ToleranceContext context;
+  context.datums = {&a};
+  ToleranceSpec s = spec(ToleranceKind::Perp);
+  s.zone = 0.05;
+  // A 50 mm bore tilted by atan(0.001) from Z: diametral zone 50 sin(theta).
+  const Vec3 tilted = Vec3(0.001, 0, 1).normalized();
+  const Feature bore =
+      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 50),
+              round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, tilted, 10, 50));
+  auto r = evaluate(s, {&bore}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 50 * 0.001 / std::sqrt(1 + 1e-6), 1e-12);
+  EXPECT_TRUE(r->in_tolerance);
+  // PARLEL of a horizontal line to the datum plane: its rise over its length.
+  const Vec3 rising = Vec3(1, 0, 0.0004).normalized();
+  const Feature l = feature("L1", line({0, 0, 5}, Vec3::UnitX(), 100), line({0, 0, 5}, rising, 100));
+  s.kind = ToleranceKind::Parlel;
+  EXPECT_NEAR(evaluate(s, {&l}, context)->value, 100 * 0.0004 / std::sqrt(1 + 1.6e-7), 1e-12);
+
+  // Against a datum axis: PARLEL is diametral, PERP is two planes normal to the datum axis.
+  const Datum b = datum("B", round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10, 50));
+  context.datums = {&b};
+  EXPECT_NEAR(evaluate(s, {&bore}, context)->value, 50 * 0.001 / std::sqrt(1 + 1e-6), 1e-12);
+  s.kind = ToleranceKind::Perp;
+  EXPECT_NEAR(evaluate(s, {&l}, context)->value, 100 * 0.0004 / std::sqrt(1 + 1.6e-7), 1e-12);
+}
+
+TEST(ToleranceOrientation, AxisLengthFromThePointsWhenUnknown) {
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  ToleranceContext context;
+  context.datums = {&a};
+  Feature bore = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 0),
+                         round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3(0.001, 0, 1), 10, 0));
+  for (double z : {2.0, 12.0, 32.0}) bore.points.push_back(probed({5, 0, z}, -Vec3::UnitX()));
+  ToleranceSpec s = spec(ToleranceKind::Perp);
+  s.zone = 0.05;
+  const Vec3 axis = Vec3(0.001, 0, 1).normalized();
+  const double extent = (Vec3(5, 0, 32) - Vec3(5, 0, 2)).dot(axis);
+  EXPECT_NEAR(evaluate(s, {&bore}, context)->value, extent * axis.cross(Vec3::UnitZ()).norm(), 1e-12);
+  bore.points.clear();
+  EXPECT_EQ(evaluate(s, {&bore}, context).error(),
+            "PERP of CYL1: the axis has no length and no points to take it from");
+}
+
+TEST(ToleranceOrientation, DatumErrors) {
+  const Feature wall = leaning_wall();
+  ToleranceSpec s = spec(ToleranceKind::Perp);
+  EXPECT_EQ(evaluate(s, {&wall}).error(), "PERP needs a datum: TOL/PERP,...,DAT(A)");
+  s.datums = {"A"};
+  EXPECT_EQ(evaluate(s, {&wall}).error(), "datum A is not defined: DATDEF/FA(feature),DAT(A) first");
+  ToleranceContext context;
+  context.datums = {nullptr};
+  EXPECT_EQ(evaluate(s, {&wall}, context).error(), "datum A is not defined: DATDEF/FA(feature),DAT(A) first");
+  const Datum p = datum("A", point({0, 0, 0}));
+  context.datums = {&p};
+  EXPECT_EQ(evaluate(s, {&wall}, context).error(),
+            "datum A is a POINT: it has no direction to measure PERP against");
+  const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
+                            round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
+  EXPECT_EQ(evaluate(s, {&c}, context).error(), "PERP applies to a plane, line or cylinder, not to a CIRCLE");
+}
+
+// ------------------------------------------------------------------ ANGLB
+
+TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
+  const double rad = 30.01 * k_pi / 180.0;
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  ToleranceContext context;
+  context.datums = {&a};
+  // A face whose normal is 30.01 deg from the datum normal (its sense does not matter).
+  const Feature face =
+      feature("F1", plane({0, 0, 0}, Vec3(std::sin(30 * k_pi / 180), 0, std::cos(30 * k_pi / 180))),
+              plane({0, 0, 0}, Vec3(-std::sin(rad), 0, -std::cos(rad))));
+  ToleranceSpec s = spec(ToleranceKind::Anglb);
+  s.nominal = 30;
+  s.lower = -0.02;
+  s.upper = 0.02;
+  s.datums = {"A"};
+  auto r = evaluate(s, {&face}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->actual, 30.01, 1e-9);
+  EXPECT_NEAR(r->nominal, 30.0, 1e-12);
+  EXPECT_NEAR(r->value, 0.01, 1e-9);
+  EXPECT_TRUE(r->in_tolerance);
+  // An obtuse nominal reads the supplement.
+  s.nominal = 150;
+  r = evaluate(s, {&face}, context);
+  EXPECT_NEAR(r->actual, 149.99, 1e-9);
+  EXPECT_NEAR(r->value, -0.01, 1e-9);
+
+  // Two lines 60 deg apart, the second given as the reference.
+  const Feature l1 = feature("L1", line({0, 0, 0}, Vec3::UnitX()), line({0, 0, 0}, Vec3::UnitX()));
+  const Feature l2 = feature("L2", line({0, 0, 0}, Vec3(0.5, std::sqrt(3) / 2, 0)),
+                             line({0, 0, 0}, Vec3(0.5, std::sqrt(3) / 2, 0)));
+  s.nominal = 60;
+  s.datums.clear();
+  r = evaluate(s, {&l1, &l2});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->actual, 60, 1e-9);
+  EXPECT_EQ(r->features, (std::vector<std::string>{"L1", "L2"}));
+  EXPECT_EQ(r->note, "angle between the axis of L1 and the axis of L2");
+  const Feature p = feature("P1", point({0, 0, 0}), point({0, 0, 0}));
+  EXPECT_EQ(evaluate(s, {&p}, context).error(),
+            "ANGLB applies to a plane, line, cylinder, cone, circle or arc, not to a POINT");
+}
+
+// ------------------------------------------------------------------ PROFS
+
+TEST(ToleranceProfile, PlanePointsAgainstTheNominal) {
+  Feature f = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  for (const double z : {0.01, -0.02, 0.005}) f.points.push_back(probed({z * 100, 3, z}, Vec3::UnitZ()));
+  ToleranceSpec s = spec(ToleranceKind::Profs);
+  s.lower = -0.03;
+  s.upper = 0.03;
+  auto r = evaluate(s, {&f});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, -0.02, 1e-12);
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_EQ(r->note, "deviations from the nominal surface: min -0.0200, max +0.0100 over 3 points");
+  s.lower = -0.01;
+  EXPECT_FALSE(evaluate(s, {&f})->in_tolerance);
+}
+
+TEST(ToleranceProfile, SignIsPositiveOutsideTheMaterial) {
+  ToleranceSpec s = spec(ToleranceKind::Profs);
+  s.lower = -0.05;
+  s.upper = 0.05;
+  // Surface points at radius 10.01 around the Z axis.
+  std::vector<MeasuredPoint> ring;
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * k_pi / 4;
+    const Vec3 radial(std::cos(a), std::sin(a), 0);
+    ring.push_back(probed(10.01 * radial + Vec3(0, 0, 2.0 * k), -radial));
+  }
+  // A bore 0.01 oversize: its wall lies inside the nominal material.
+  Feature bore = feature("B", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20, 20),
+                         round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.02, 20));
+  bore.points = ring;
+  EXPECT_NEAR(evaluate(s, {&bore})->value, -0.01, 1e-12);
+  // The same surface on a boss is 0.01 too big: outside the material.
+  Feature boss = bore;
+  boss.nominal.side = Side::Outer;
+  EXPECT_NEAR(evaluate(s, {&boss})->value, 0.01, 1e-12);
+  // A circle ignores the axial offsets.
+  Feature circle = bore;
+  circle.nominal.type = FeatureType::Circle;
+  EXPECT_NEAR(evaluate(s, {&circle})->value, -0.01, 1e-12);
+
+  // A sphere of radius 5, points 0.02 inside its surface.
+  Feature sphere = feature("S", round(FeatureType::Sphere, Side::Outer, {1, 2, 3}, Vec3::UnitZ(), 10),
+                           round(FeatureType::Sphere, Side::Outer, {1, 2, 3}, Vec3::UnitZ(), 9.96));
+  sphere.points.push_back(probed(Vec3(1, 2, 3) + 4.98 * Vec3(1, 1, 1).normalized(), Vec3(1, 1, 1)));
+  EXPECT_NEAR(evaluate(s, {&sphere})->value, -0.02, 1e-12);
+
+  // A 90 deg cone (half angle 45) with its apex at the origin: a point 0.01 outside its nappe.
+  Geometry cone = round(FeatureType::Cone, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 0);
+  cone.apex_angle_deg = 90;
+  Feature c = feature("CO", cone, cone);
+  c.points.push_back(probed({10 + 0.01 * std::sqrt(2.0), 0, 10}, Vec3(1, 0, -1)));
+  EXPECT_NEAR(evaluate(s, {&c})->value, 0.01, 1e-12);
+  c.nominal.side = Side::Inner;
+  EXPECT_NEAR(evaluate(s, {&c})->value, -0.01, 1e-12);
+}
+
+TEST(ToleranceProfile, Errors) {
+  const Feature l = feature("L1", line({0, 0, 0}, Vec3::UnitX()), line({0, 0, 0}, Vec3::UnitX()));
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&l}).error(),
+            "PROFS applies to a plane, circle, arc, sphere, cylinder or cone, not to a LINE");
+  const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&pl}).error(),
+            "PROFS of PL1 needs measured points: it has none");
+}
+
+TEST(ToleranceWords, DmisWords) {
+  EXPECT_STREQ(dmis_word(ToleranceKind::Cylcty), "CYLCTY");
+  EXPECT_STREQ(dmis_word(ToleranceKind::Parlel), "PARLEL");
+  EXPECT_STREQ(dmis_word(FeatureType::Cylinder), "CYLNDR");
+  EXPECT_STREQ(dmis_word(Side::None), "");
+}
+
+}  // namespace
+}  // namespace metron::runtime
