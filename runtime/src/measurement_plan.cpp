@@ -16,26 +16,28 @@ Vec3 radial(const Vec3& p, const Vec3& c, const Vec3& axis) {
   return d.norm() < 1e-12 ? any_perpendicular(axis) : Vec3(d.normalized());
 }
 
-// Appends a ring of probes around an axis; an OUTER ring walks around outside the material.
+// Appends a ring of probes around an axis. An OUTER ring walks around outside the material
+// (a straight chord between two approach points would cut through a boss); `last_angle` carries
+// the angle of the previous probe of the same feature so ring-to-ring moves walk around too.
 void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis, double radius,
-          int count, bool inner, double approach_mm, double phase_rad) {
+          int count, bool inner, double approach_mm, double phase_rad, std::optional<double>& last_angle) {
   const Vec3 u = any_perpendicular(axis);
   const Vec3 v = axis.cross(u);
+  const double walk_radius = (radius + approach_mm) / std::cos(pi / 16) + 0.5;
   for (int i = 0; i < count; ++i) {
     const double a = phase_rad + 2.0 * pi * i / count;
     const Vec3 dir = std::cos(a) * u + std::sin(a) * v;
-    if (!inner && i > 0) {
-      // Walk around the boss on a circle outside the approach distance (chords would cut it).
-      const double prev = phase_rad + 2.0 * pi * (i - 1) / count;
-      const int legs = std::max(2, static_cast<int>(std::ceil((a - prev) / (pi / 8))));
-      for (int k = 1; k < legs; ++k) {
+    if (!inner && last_angle) {
+      const double prev = *last_angle;
+      const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(a - prev) / (pi / 8))));
+      for (int k = 0; k <= legs; ++k) {
         const double b = prev + (a - prev) * k / legs;
-        const double r = (radius + approach_mm) / std::cos(pi / 16) + 0.5;
-        steps.push_back({PlannedStep::Kind::GoTo, centre + r * (std::cos(b) * u + std::sin(b) * v), {}});
+        steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), {}});
       }
     }
     const Vec3 surface = centre + radius * dir;
     steps.push_back({PlannedStep::Kind::Probe, surface, inner ? Vec3(-dir) : dir});
+    last_angle = a;
   }
 }
 
@@ -112,15 +114,17 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
     case FeatureType::Arc: {
       // The circle lies DEPTH below its nominal centre, measured against the axis direction.
       const Vec3 c = g.position - probe.depth_mm * (axis.dot(up) >= 0 ? up : Vec3(-up));
-      ring(steps, c, axis, r, count > 0 ? count : 4, inner, probe.approach_mm, 0.0);
+      std::optional<double> last;
+      ring(steps, c, axis, r, count > 0 ? count : 4, inner, probe.approach_mm, 0.0, last);
       break;
     }
     case FeatureType::Cylinder: {
       const int n = count > 0 ? count : 8;
       const double len = g.length_mm > 0 ? g.length_mm : 10.0;
       const int first = n / 2;
-      ring(steps, g.position + 0.25 * len * axis, axis, r, first, inner, probe.approach_mm, 0.0);
-      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm, pi / std::max(1, n - first));
+      std::optional<double> last;
+      ring(steps, g.position + 0.25 * len * axis, axis, r, first, inner, probe.approach_mm, 0.0, last);
+      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm, pi / std::max(1, n - first), last);
       break;
     }
     case FeatureType::Sphere: {

@@ -276,6 +276,15 @@ TEST(ParserExpr, CallsLabelsAndIndices) {
   EXPECT_EQ(expr_of("(((X)))"), "(paren (paren (paren X)))");
 }
 
+TEST(ParserExpr, BooleanConstantsAreWords) {
+  EXPECT_EQ(expr_of(".true."), ".TRUE.");
+  EXPECT_EQ(expr_of("B.EQ..FALSE. .OR. .NOT. .TRUE."), "(.OR. (.EQ. B .FALSE.) (.NOT. .TRUE.))");
+  const Statement s = one("V1=ASSIGN/.FALSE.");
+  ASSERT_EQ(s.params.size(), 1u);
+  EXPECT_EQ(s.params[0].kind, ExprKind::Word);
+  EXPECT_EQ(s.params[0].text, ".FALSE.");
+}
+
 TEST(ParserExpr, IfWithAndWithoutParentheses) {
   EXPECT_EQ(params_of(one("IF/(V1.EQ.1)")), "(paren (.EQ. V1 1))");
   EXPECT_EQ(params_of(one("IF/V1 .GT. 2.5")), "(.GT. V1 2.5)");

@@ -39,9 +39,9 @@ struct action<rules::number> {
   }
 };
 
-// word -> 3D | 2D   (a minor word that starts with a digit)
-template <>
-struct action<rules::digit_word> {
+// word -> 3D | 2D (a minor word that starts with a digit) | .TRUE. | .FALSE.
+template <typename Rule>
+struct literal_word {
   template <typename In>
   static void apply(const In& in, Builder& b) {
     Expr e;
@@ -51,6 +51,10 @@ struct action<rules::digit_word> {
     b.stack.push_back(std::move(e));
   }
 };
+template <>
+struct action<rules::digit_word> : literal_word<rules::digit_word> {};
+template <>
+struct action<rules::bool_lit> : literal_word<rules::bool_lit> {};
 
 // string -> 'text'   ('' inside = one quote)
 template <>

@@ -45,6 +45,9 @@ struct digit_word : seq<digits, sor<ident_first, one<'_'>>, star<ident_other>> {
 struct bad_number_suffix {};
 struct bad_number : seq<number_body, tao::pegtl::raise<bad_number_suffix>> {};
 
+// boolean constants -> .TRUE. | .FALSE.   (a Word with the dots kept)
+struct bool_lit : sor<dot_word<'T', 'R', 'U', 'E'>, dot_word<'F', 'A', 'L', 'S', 'E'>> {};
+
 // string -> ' { '' | any byte but ' } '
 struct string_open : one<'\''> {};
 struct string_char : sor<two<'\''>, not_one<'\''>> {};
@@ -69,7 +72,7 @@ struct if_label_prefix {
   }
 };
 
-// primary -> number | 3D | string | ( expr ) | label | call | index | word
+// primary -> number | 3D | .TRUE. | string | ( expr ) | label | call | index | word
 struct paren_open : one<'('> {};
 struct paren_inner;
 struct paren_close : one<')'> {};
@@ -94,7 +97,7 @@ struct index_tail : seq<index_open, ws, must<index_first>, star<ws, one<','>, ws
 struct word_tail : success {};
 struct ident_led : seq<ident_tok, ws, sor<label_tail, call_tail, index_tail, word_tail>> {};
 
-struct primary : sor<number, digit_word, string_lit, paren_expr, ident_led, bad_number> {};
+struct primary : sor<number, digit_word, bool_lit, string_lit, paren_expr, ident_led, bad_number> {};
 
 // Precedence, low to high: .OR. .AND. .NOT. comparisons + - * / unary-sign **
 struct unary;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Cylinder and cone: several algebraic starts, each refined by Levenberg-Marquardt with Forbes'
 // re-linearisation about the current axis; the lowest sum of squares wins.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -213,6 +214,52 @@ std::optional<std::pair<State, int>> best_of(const Model& model, const std::vect
   return best;
 }
 
+/// `count` directions spread evenly over a hemisphere (a Fibonacci lattice; R. Marques et al.,
+/// "Spherical Fibonacci point sets for illumination integrals", CGF 32(8), 2013).
+std::vector<Vec3> hemisphere_directions(int count) {
+  std::vector<Vec3> out;
+  out.reserve(static_cast<std::size_t>(count));
+  const double golden_angle = std::numbers::pi * (3 - std::sqrt(5.0));
+  for (int k = 0; k < count; ++k) {
+    const double z = (k + 0.5) / count;
+    const double r = std::sqrt(1 - z * z);
+    out.emplace_back(r * std::cos(golden_angle * k), r * std::sin(golden_angle * k), z);
+  }
+  return out;
+}
+
+/// Appends starts from a coarse search over axis directions: the algebraic start about each of
+/// 200 directions (about 10 degrees apart) is scored by its geometric sum of squares and the best
+/// few, at least 20 degrees apart, are kept. Partial arcs and short patches can have their
+/// minimum far from every principal axis; this finds its basin.
+template <class Model, class State, class MakeStart>
+void add_searched_starts(const Model& model, MakeStart make_start, std::vector<State>& starts) {
+  struct Scored {
+    double cost;
+    State state;
+  };
+  std::vector<Scored> scored;
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  for (const Vec3& axis : hemisphere_directions(200)) {
+    for (const State& s : make_start(axis)) {
+      model.evaluate(s, r, jac);
+      if (r.allFinite()) scored.push_back({r.squaredNorm(), s});
+    }
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) { return a.cost < b.cost; });
+  const double min_cos = std::cos(20 * std::numbers::pi / 180);
+  std::vector<Vec3> kept;
+  for (const Scored& c : scored) {
+    if (kept.size() == 3) break;
+    if (std::any_of(kept.begin(), kept.end(), [&](const Vec3& a) { return std::abs(a.dot(c.state.axis)) > min_cos; })) {
+      continue;
+    }
+    kept.push_back(c.state.axis);
+    starts.push_back(c.state);
+  }
+}
+
 }  // namespace
 
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
@@ -221,10 +268,17 @@ tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>
   const PrincipalAxes pa = principal_axes(np.points);
   if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
   std::vector<CylinderState> starts;
+  const CylinderModel model{np.points};
+  auto make_start = [&np](const Vec3& axis) {
+    std::vector<CylinderState> out;
+    if (auto s = cylinder_start(np.points, axis)) out.push_back(*s);
+    return out;
+  };
   for (const Vec3& axis : candidate_axes(np.points, axis_hint, false)) {
-    if (auto s = cylinder_start(np.points, axis)) starts.push_back(*s);
+    for (const CylinderState& s : make_start(axis)) starts.push_back(s);
   }
-  const auto best = best_of(CylinderModel{np.points}, starts);
+  add_searched_starts(model, make_start, starts);
+  const auto best = best_of(model, starts);
   if (!best) return tl::unexpected(FitFailure::NoConvergence);
   const auto& [s, iterations] = *best;
   Geometry g;
@@ -241,12 +295,19 @@ tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& po
   const PrincipalAxes pa = principal_axes(np.points);
   if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
   std::vector<ConeState> starts;
-  for (const Vec3& axis : candidate_axes(np.points, axis_hint, true)) {
-    if (auto s = cone_start(np.points, axis)) starts.push_back(*s);
+  const ConeModel model{np.points};
+  auto make_start = [&np](const Vec3& axis) {
+    std::vector<ConeState> out;
+    if (auto s = cone_start(np.points, axis)) out.push_back(*s);
     // A cylinder start as well: the linear cone fit is poor for nearly cylindrical cones.
-    if (auto c = cylinder_start(np.points, axis)) starts.push_back(ConeState{c->point, c->axis, 0, c->radius});
+    if (auto c = cylinder_start(np.points, axis)) out.push_back(ConeState{c->point, c->axis, 0, c->radius});
+    return out;
+  };
+  for (const Vec3& axis : candidate_axes(np.points, axis_hint, true)) {
+    for (const ConeState& s : make_start(axis)) starts.push_back(s);
   }
-  const auto best = best_of(ConeModel{np.points}, starts);
+  add_searched_starts(model, make_start, starts);
+  const auto best = best_of(model, starts);
   if (!best) return tl::unexpected(FitFailure::NoConvergence);
   auto [s, iterations] = *best;
   if (s.half_angle < 0) {

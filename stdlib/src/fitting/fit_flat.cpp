@@ -27,7 +27,7 @@ PrincipalAxes principal_axes(const std::vector<Vec3>& centred) {
   for (std::size_t i = 0; i < centred.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = centred[i].transpose();
   // Total least squares: the right singular vectors of the centred points are the directions
   // of largest to smallest spread (Shakarji 1998, sec. 3.1, 3.2).
-  const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(m, Eigen::ComputeThinV);
+  const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(m, Eigen::ComputeFullV);
   PrincipalAxes out;
   out.axes = svd.matrixV();
   out.rms_extent = svd.singularValues() / std::sqrt(static_cast<double>(centred.size()));

@@ -316,7 +316,7 @@ tl::expected<CadModel, MeshError> tessellate(const std::string& path, const Topo
   TopExp::MapShapes(shape, TopAbs_FACE, face_map);
   // Nodes on an edge shared by two faces come from the edge's one discretisation; the weld
   // tolerance only absorbs rounding in the location transform.
-  Welder welder(std::getenv("WELD") ? std::atof(std::getenv("WELD")) : 1e-6);
+  Welder welder(1e-9);
   std::vector<Mesh::Face> triangles;
   std::vector<CadFace> faces;
   faces.reserve(static_cast<std::size_t>(face_map.Extent()));
