@@ -111,6 +111,7 @@ class UnitCompiler {
     bool control = false;                // control flow inside a MEAS: counts are not static
     std::string feature, type;
   };
+  static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
   struct JumpScope {
     std::map<std::string, std::size_t> labels;
     std::vector<std::pair<std::size_t, std::pair<std::string, Span>>> pending;
@@ -432,7 +433,7 @@ class UnitCompiler {
     }
     const std::string& m = s.major;
     if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
-      static const std::set<std::string> allowed = {"GOTO", "PTMEAS", "RMEAS", "ENDMES", "SNSET", "FEDRAT", "TEXT",
+      static const std::set<std::string> allowed = {"GOTO", "PTMEAS", "RMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
                                                     "IF", "ELSE", "ENDIF", "DO", "ENDDO", "ASSIGN", "CALL", "DISPLY"};
       if (!allowed.count(m) && !s.variable) {
         error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
@@ -749,6 +750,11 @@ class UnitCompiler {
 
   // MEAS/type,F(l),n
   void meas(const grammar::Statement& s) {
+    // Open the block first, so that a bad MEAS does not also make its ENDMES an error.
+    Block placeholder{Block::Kind::Meas, s.span};
+    placeholder.start = invalid;
+    placeholder.control = true;
+    m_blocks.push_back(placeholder);
     if (!expect_params(s, 3, "the feature type, F(label) and the number of points")) return;
     if (!is_word(s.params[0]) || !feature_types.count(s.params[0].text))
       return error(s.params[0].span, "sema.bad-feature-type", "expected a feature type after MEAS/");
@@ -770,7 +776,7 @@ class UnitCompiler {
     in.operands.push_back(word_operand(s.params[0]));
     in.operands.push_back(expr_operand(std::move(*count)));
     b.start = emit(std::move(in));
-    m_blocks.push_back(b);
+    m_blocks.back() = b;
   }
 
   // ENDMES
@@ -779,6 +785,7 @@ class UnitCompiler {
       return error(s.major_span, "sema.unmatched", "ENDMES without a matching MEAS");
     Block b = m_blocks.back();
     m_blocks.pop_back();
+    if (b.start == invalid) return;
     if (!b.control && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
       error(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS", b.declared, b.ptmeas));
     static const std::map<std::string, int> minimum = {{"POINT", 1}, {"LINE", 2}, {"PLANE", 3}, {"CIRCLE", 3}, {"ARC", 3},
@@ -1227,6 +1234,9 @@ class UnitCompiler {
 
   // DO/V,start,end[,step]
   void do_(const grammar::Statement& s) {
+    Block placeholder{Block::Kind::Do, s.span};
+    placeholder.start = invalid;
+    m_blocks.push_back(placeholder);
     if (s.params.size() < 3 || s.params.size() > 4)
       return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.do", "DO expects a variable, a start, an end and optionally a step");
     const auto& v = s.params[0];
@@ -1243,13 +1253,14 @@ class UnitCompiler {
     Block b{Block::Kind::Do, s.span};
     b.start = emit(std::move(in));
     b.feature = v.text;
-    m_blocks.push_back(b);
+    m_blocks.back() = b;
   }
 
   void enddo(const grammar::Statement& s) {
     if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Do) return error(s.major_span, "sema.unmatched", "ENDDO without a matching DO");
     Block b = m_blocks.back();
     m_blocks.pop_back();
+    if (b.start == invalid) return;
     auto in = make(Op::DoNext, s, b.feature);
     in.target = static_cast<std::int64_t>(b.start + 1);
     const std::size_t next = emit(std::move(in));

@@ -160,8 +160,8 @@ TEST(Solid, DeviationsMoveResizeTiltAndShapePrimitives) {
     const CsgSolid s(design, pose, {{"TOP", d}});
     const Vec3 n = s.normal(o + Vec3(20, 20, 42));
     EXPECT_NEAR(n.y(), -std::sin(0.05 * std::numbers::pi / 180), 1e-9);
-    // The pivot (80, 50, 40) stays.
-    EXPECT_NEAR(s.signed_distance(o + Vec3(80, 50, 41)), 1, 1e-12);
+    // The pivot (80, 50, 40) stays: 1 mm above it is cos(tilt) from the tilted plane.
+    EXPECT_NEAR(s.signed_distance(o + Vec3(80, 50, 41)), std::cos(0.05 * std::numbers::pi / 180), 1e-12);
   }
   {
     csg::Deviation d;

@@ -1,0 +1,554 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+
+#include "metron/machine/virtual_cmm.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
+
+using namespace metron;
+using namespace metron::machine;
+
+namespace {
+
+const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds";
+const Vec3 part_origin(300, 200, 0);  // the block's corner in the machine (default pose)
+constexpr double deg = std::numbers::pi / 180;
+
+World world_file(const std::string& name) {
+  auto w = load_world(worlds_dir + "/" + name);
+  if (!w) throw std::runtime_error(w.error().message);
+  return *w;
+}
+
+World noiseless(World w) {
+  w.probe.repeatability_mm = 0;
+  return w;
+}
+
+// Drives a VirtualCmm one command at a time, the way a runtime would.
+class Cmm {
+ public:
+  explicit Cmm(const World& world, std::uint64_t seed = 1) : m_cmm(world, seed) {}
+
+  Response run(Command::Body body) {  // NOLINT
+    m_cmm.submit({++m_tag, std::move(body)});
+    auto r = m_cmm.execute();
+    EXPECT_EQ(r.size(), 1u);
+    return r.front();
+  }
+  void ok(Command::Body body) {
+    const Response r = run(std::move(body));
+    ASSERT_EQ(r.status, Response::Status::Done) << r.fault->message;
+  }
+  void tool(double diameter_mm, const std::string& name = "T1") {
+    ok(DefineTool{name, diameter_mm});
+    ok(SelectTool{name});
+  }
+  ToolInfo qualify() {
+    const Response r = run(QualifyTool{});
+    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
+    return r.tool.value_or(ToolInfo{});
+  }
+  void go(const Vec3& p) { ok(GoTo{p, std::nullopt}); }
+  Hit point(const Vec3& nominal, const Vec3& normal, double approach = 2, double search = 5,
+            std::optional<double> speed = std::nullopt) {
+    PtMeas m;
+    m.nominal_mm = nominal;
+    m.normal = normal.normalized();
+    m.approach_mm = approach;
+    m.search_mm = search;
+    m.speed_mm_s = speed;
+    const Response r = run(m);
+    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
+    return r.hit.value_or(Hit{});
+  }
+  VirtualCmm& machine() { return m_cmm; }
+
+ private:
+  VirtualCmm m_cmm;
+  std::uint64_t m_tag = 0;
+};
+
+using Command_Body = decltype(Command::body);
+
+std::vector<Vec3> centres(const std::vector<Hit>& hits) {
+  std::vector<Vec3> out;
+  for (const Hit& h : hits) out.push_back(h.centre_mm);
+  return out;
+}
+
+fitting::FitOptions compensated(const std::vector<Hit>& hits, bool inner) {
+  fitting::FitOptions o;
+  fitting::Compensation c;
+  c.ball_radius_mm = hits.front().ball_radius_mm;
+  for (const Hit& h : hits) c.approach.push_back(h.normal);
+  o.compensation = c;
+  o.inner = inner;
+  return o;
+}
+
+fitting::FitResult fit(fitting::Shape shape, const std::vector<Hit>& hits, fitting::FitOptions options) {
+  auto f = fitting::fit(shape, centres(hits), options);
+  if (!f) throw std::runtime_error("fit failed: " + fitting::to_string(f.error()));
+  return *f;
+}
+
+// TOP plane points (part x, y), away from the holes, the boss and the sphere.
+std::vector<Hit> probe_top(Cmm& cmm) {
+  std::vector<Hit> hits;
+  for (const Vec2& xy : {Vec2(10, 10), Vec2(150, 10), Vec2(150, 90), Vec2(10, 90), Vec2(100, 50), Vec2(60, 30)}) {
+    const Vec3 p = part_origin + Vec3(xy.x(), xy.y(), 40);
+    cmm.go(p + Vec3(0, 0, 20));
+    hits.push_back(cmm.point(p, Vec3::UnitZ()));
+  }
+  return hits;
+}
+
+// A circle of points on an axial (vertical) round feature, probed along the radius.
+std::vector<Hit> probe_round(Cmm& cmm, const Vec3& axis_point_machine, double radius_mm, double z_mm, int n,
+                             bool inner, double phase_deg = 0) {
+  std::vector<Hit> hits;
+  const Vec3 c(axis_point_machine.x(), axis_point_machine.y(), z_mm);
+  if (inner) {
+    cmm.go(c + Vec3(0, 0, 60 - z_mm + 10));
+    cmm.go(c);
+  }
+  for (int i = 0; i < n; ++i) {
+    const double a = (phase_deg + 360.0 * i / n) * deg;
+    const Vec3 radial(std::cos(a), std::sin(a), 0);
+    const Vec3 nominal = c + radius_mm * radial;
+    if (!inner) {
+      const Vec3 over = nominal + 6 * radial;
+      cmm.go(Vec3(over.x(), over.y(), 80));
+    }
+    hits.push_back(cmm.point(nominal, inner ? -radial : radial));
+  }
+  cmm.go(Vec3(c.x(), c.y(), 80));
+  return hits;
+}
+
+double rms_distance(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s / static_cast<double>(v.size()));
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Exactness: an ideal probe on a perfect part returns the design within 0.1 um.
+
+TEST(VirtualCmm, PerfectPartPlaneIsExact) {
+  Cmm cmm(world_file("perfect.json"));
+  cmm.tool(4);
+  const auto hits = probe_top(cmm);
+  for (const Hit& h : hits) EXPECT_NEAR(h.surface_mm().z(), 40, 1e-4);
+  const auto f = fit(fitting::Shape::Plane, hits, compensated(hits, false));
+  EXPECT_NEAR(f.position.z(), 40, 1e-4);
+  EXPECT_NEAR(f.direction.dot(Vec3::UnitZ()), 1, 1e-12);
+  EXPECT_LT(f.form_mm, 1e-4);
+  RecordProperty("top_plane_error_um", std::to_string((f.position.z() - 40) * 1000));
+}
+
+TEST(VirtualCmm, PerfectPartBoreIsExact) {
+  Cmm cmm(world_file("perfect.json"));
+  cmm.tool(4);
+  auto hits = probe_round(cmm, part_origin + Vec3(40, 50, 0), 10, 30, 8, true);
+  const auto upper = probe_round(cmm, part_origin + Vec3(40, 50, 0), 10, 20, 8, true, 22.5);
+  hits.insert(hits.end(), upper.begin(), upper.end());
+  auto options = compensated(hits, true);
+  options.direction_hint = Vec3::UnitZ();
+  const auto f = fit(fitting::Shape::Cylinder, hits, options);
+  EXPECT_NEAR(f.diameter_mm, 20, 1e-4);
+  EXPECT_NEAR(f.position.x(), 340, 1e-4);
+  EXPECT_NEAR(f.position.y(), 250, 1e-4);
+  EXPECT_NEAR(std::abs(f.direction.z()), 1, 1e-10);
+  EXPECT_LT(f.form_mm, 1e-4);
+  std::cout << "perfect BORE1: diameter error " << (f.diameter_mm - 20) * 1e3 << " um, axis error "
+            << std::hypot(f.position.x() - 340, f.position.y() - 250) * 1e3 << " um\n";
+}
+
+TEST(VirtualCmm, PerfectPartSphereIsExact) {
+  Cmm cmm(world_file("perfect.json"));
+  cmm.tool(4);
+  const Vec3 c = part_origin + Vec3(75, 75, 48);
+  std::vector<Hit> hits;
+  cmm.go(c + Vec3(0, 0, 30));
+  hits.push_back(cmm.point(c + Vec3(0, 0, 10), Vec3::UnitZ()));
+  for (double el : {0.0, 30.0, 60.0}) {
+    for (int i = 0; i < 6; ++i) {
+      const double az = (60.0 * i + el) * deg, e = el * deg;
+      const Vec3 d(std::cos(e) * std::cos(az), std::cos(e) * std::sin(az), std::sin(e));
+      const Vec3 over = c + 14 * d;
+      cmm.go(Vec3(over.x(), over.y(), c.z() + 30));
+      hits.push_back(cmm.point(c + 10 * d, d));
+    }
+  }
+  const auto f = fit(fitting::Shape::Sphere, hits, compensated(hits, false));
+  EXPECT_NEAR(f.diameter_mm, 20, 1e-4);
+  EXPECT_LT((f.position - c).norm(), 1e-4);
+  std::cout << "perfect SPHERE1: diameter error " << (f.diameter_mm - 20) * 1e3 << " um, centre error "
+            << (f.position - c).norm() * 1e3 << " um\n";
+}
+
+TEST(VirtualCmm, PerfectPartConeIsExact) {
+  Cmm cmm(world_file("perfect.json"));
+  cmm.tool(2);  // r = 1 fits in the countersink
+  const Vec3 apex = part_origin + Vec3(40, 20, 32);
+  const Vec3 air_side(0, 0, 1);
+  std::vector<Hit> hits;
+  cmm.go(apex + Vec3(0, 0, 40));
+  cmm.go(apex + Vec3(0, 0, 6.5));
+  for (double h : {3.0, 6.0}) {
+    for (int i = 0; i < 8; ++i) {
+      const double a = (45.0 * i + 10 * h) * deg;
+      const Vec3 radial(std::cos(a), std::sin(a), 0);
+      const Vec3 wall = apex + h * radial + h * air_side;  // half-angle 45: radius = height
+      const Vec3 normal = (-radial + air_side).normalized();
+      hits.push_back(cmm.point(wall, normal, 1, 1));
+    }
+  }
+  auto options = compensated(hits, true);
+  options.direction_hint = Vec3::UnitZ();
+  const auto f = fit(fitting::Shape::Cone, hits, options);
+  EXPECT_NEAR(f.apex_angle_deg, 90, 1e-5);
+  // The apex from the NIST convention: radius at `position` = distance / cos(half angle).
+  const double half = f.apex_angle_deg / 2 * deg;
+  const Vec3 fitted_apex = f.position - f.cone_distance_mm / std::cos(half) / std::tan(half) * f.direction;
+  EXPECT_LT((fitted_apex - apex).norm(), 1e-4) << fitted_apex.transpose();
+  EXPECT_LT(f.form_mm, 1e-4);
+  std::cout << "perfect CONE1: apex error " << (fitted_apex - apex).norm() * 1e3 << " um, angle error "
+            << (f.apex_angle_deg - 90) * 3600 << " arcsec\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Qualification and the probe's hidden parameters.
+
+TEST(VirtualCmm, QualificationFindsTheEffectiveRadius) {
+  // Analytic: the ball centre stops short by pre-travel + feed * (filter + transmission + latency).
+  const World w = noiseless(default_world());
+  const double expected = 2 - w.probe.pre_travel.horizontal_mm -
+                          w.machine.measuring_feed_mm_s *
+                              (w.probe.filter_delay_s + w.probe.transmission_delay_s + w.machine.skip.latency_s);
+  for (const char* file : {"default.json", "block_deviations.json"}) {
+    Cmm cmm(noiseless(world_file(file)));
+    cmm.tool(4);
+    const ToolInfo t = cmm.qualify();
+    EXPECT_TRUE(t.qualified);
+    EXPECT_NEAR(t.effective_radius_mm, expected, 0.0002) << file;
+    EXPECT_LT(t.qualification_form_mm, 0.0002);
+    EXPECT_EQ(cmm.machine().state().tool->effective_radius_mm, t.effective_radius_mm);
+    std::cout << file << ": effective radius " << t.effective_radius_mm << " mm, analytic " << expected
+              << " mm, difference " << (t.effective_radius_mm - expected) * 1e3 << " um, form "
+              << t.qualification_form_mm * 1e3 << " um, time " << cmm.machine().simulated_time_s() << " s\n";
+  }
+}
+
+TEST(VirtualCmm, QualificationAbsorbsBallRadiusError) {
+  World w = noiseless(default_world());
+  w.probe.ball_radius_error_mm = -0.003;
+  Cmm cmm(w);
+  cmm.tool(4);
+  const double expected = 2 - 0.003 - 0.010 - 3 * (0.004 + 4e-6);
+  EXPECT_NEAR(cmm.qualify().effective_radius_mm, expected, 0.0002);
+}
+
+TEST(VirtualCmm, BoreAfterQualificationHasItsTrueDiameter) {
+  // Pre-travel 10 um and 4 ms of delays: unqualified, the bore measures 2 x 22 um too large.
+  Cmm cmm(noiseless(default_world()));
+  cmm.tool(4);
+  auto raw = probe_round(cmm, part_origin + Vec3(40, 50, 0), 10, 30, 12, true);
+  auto options = compensated(raw, true);
+  options.direction_hint = Vec3::UnitZ();
+  options.circle_in_plane_of_hint = true;
+  const double raw_d = fit(fitting::Shape::Circle, raw, options).diameter_mm;
+  EXPECT_NEAR(raw_d, 20 + 2 * 0.022012, 0.0002);
+
+  cmm.qualify();
+  const auto hits = probe_round(cmm, part_origin + Vec3(40, 50, 0), 10, 30, 12, true);
+  options = compensated(hits, true);
+  options.direction_hint = Vec3::UnitZ();
+  options.circle_in_plane_of_hint = true;
+  const auto f = fit(fitting::Shape::Circle, hits, options);
+  EXPECT_NEAR(f.diameter_mm, 20, 0.0002);
+  std::cout << "BORE1 after qualification: " << f.diameter_mm << " mm (unqualified " << raw_d << " mm)\n";
+}
+
+TEST(VirtualCmm, HiddenDeviationsAreRecovered) {
+  Cmm cmm(noiseless(world_file("block_deviations.json")));
+  cmm.tool(4);
+  cmm.qualify();
+  // BORE1: +0.012 diameter, offset +0.03 in x.
+  const auto bore = probe_round(cmm, part_origin + Vec3(40, 50, 0), 10, 30, 12, true);
+  auto options = compensated(bore, true);
+  options.direction_hint = Vec3::UnitZ();
+  options.circle_in_plane_of_hint = true;
+  const auto b = fit(fitting::Shape::Circle, bore, options);
+  EXPECT_NEAR(b.diameter_mm, 20.012, 0.0005);
+  EXPECT_NEAR(b.position.x(), 340.03, 0.0005);
+  EXPECT_NEAR(b.position.y(), 250, 0.0005);
+  // TOP: tilted 0.05 degrees about x.
+  const auto top = probe_top(cmm);
+  const auto t = fit(fitting::Shape::Plane, top, compensated(top, false));
+  EXPECT_NEAR(t.direction.y(), -std::sin(0.05 * deg), 2e-6);
+  // BOSS1: 3 lobes of amplitude 5 um -> roundness 10 um.
+  const auto boss = probe_round(cmm, part_origin + Vec3(120, 70, 0), 12, 47, 36, false);
+  options = compensated(boss, false);
+  options.direction_hint = Vec3::UnitZ();
+  options.circle_in_plane_of_hint = true;
+  const auto o = fit(fitting::Shape::Circle, boss, options);
+  EXPECT_NEAR(o.form_mm, 0.010, 0.0005);
+  EXPECT_NEAR(o.diameter_mm, 24, 0.0005);
+  std::cout << "recovered: BORE1 d=" << b.diameter_mm << " x=" << b.position.x() << ", TOP tilt "
+            << std::asin(-t.direction.y()) / deg << " deg, BOSS1 roundness " << o.form_mm * 1e3 << " um\n";
+}
+
+TEST(VirtualCmm, LobedPreTravelShowsAfterQualification) {
+  // Qualification absorbs the mean pre-travel; the 3-lobe part remains as apparent roundness
+  // (2 x 3 um peak-to-valley on the bore).
+  Cmm cmm(noiseless(world_file("lobed_probe.json")));
+  cmm.tool(4);
+  cmm.qualify();
+  const auto hits = probe_round(cmm, part_origin + Vec3(40, 50, 0), 10, 30, 36, true);
+  auto options = compensated(hits, true);
+  options.direction_hint = Vec3::UnitZ();
+  options.circle_in_plane_of_hint = true;
+  const auto f = fit(fitting::Shape::Circle, hits, options);
+  EXPECT_NEAR(f.form_mm, 0.006, 0.0005);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Faults.
+
+TEST(VirtualCmm, GoToThroughTheBlockIsACollision) {
+  Cmm cmm(default_world());
+  cmm.tool(4);
+  cmm.go(part_origin + Vec3(80, 50, 100));
+  const Response r = cmm.run(GoTo{part_origin + Vec3(80, 50, 20), std::nullopt});
+  ASSERT_EQ(r.status, Response::Status::Fault);
+  EXPECT_EQ(r.fault->kind, FaultKind::Collision);
+  EXPECT_NEAR((r.fault->position_mm - (part_origin + Vec3(80, 50, 42))).norm(), 0, 1e-8);
+  EXPECT_NE(r.fault->message.find("with TOP"), std::string::npos) << r.fault->message;
+  EXPECT_EQ(cmm.machine().state().position_mm, r.fault->position_mm);
+  // Sideways into the LEFT face.
+  cmm.go(part_origin + Vec3(-20, 50, 100));
+  cmm.go(part_origin + Vec3(-20, 50, 20));
+  const Response side = cmm.run(GoTo{part_origin + Vec3(50, 50, 20), std::nullopt});
+  ASSERT_EQ(side.status, Response::Status::Fault);
+  EXPECT_NEAR(side.fault->position_mm.x(), 298, 1e-8);
+  // Moving away from a contact is allowed.
+  cmm.ok(GoTo{part_origin + Vec3(-20, 50, 20), std::nullopt});
+}
+
+TEST(VirtualCmm, TheReferencePostIsAnObstacle) {
+  Cmm cmm(default_world());
+  cmm.tool(4);
+  cmm.go(Vec3(900, 650, 100));
+  cmm.go(Vec3(900, 650, 50));
+  const Response r = cmm.run(GoTo{Vec3(900, 750, 50), std::nullopt});
+  ASSERT_EQ(r.status, Response::Status::Fault);
+  EXPECT_EQ(r.fault->kind, FaultKind::Collision);
+  EXPECT_NEAR(r.fault->position_mm.y(), 700 - 5 - 2, 1e-8);
+  EXPECT_NE(r.fault->message.find("REFERENCE_POST"), std::string::npos);
+}
+
+TEST(VirtualCmm, ProbingInAirIsNoContact) {
+  Cmm cmm(default_world());
+  cmm.tool(4);
+  PtMeas m;
+  m.nominal_mm = Vec3(600, 600, 100);
+  m.normal = Vec3::UnitZ();
+  m.search_mm = 5;
+  const Response r = cmm.run(m);
+  ASSERT_EQ(r.status, Response::Status::Fault);
+  EXPECT_EQ(r.fault->kind, FaultKind::NoContact);
+  EXPECT_NE(r.fault->message.find("5.000 mm"), std::string::npos) << r.fault->message;
+  EXPECT_NEAR(r.fault->position_mm.z(), 100 + 2 - 5, 1e-9);  // stopped at the end of the search
+}
+
+TEST(VirtualCmm, FastProbingOverTravels) {
+  World w = default_world();
+  w.probe.over_travel_mm = 0.2;
+  Cmm cmm(w);
+  cmm.tool(4);
+  const Vec3 p = part_origin + Vec3(20, 20, 40);
+  cmm.go(p + Vec3(0, 0, 40));
+  // At 3 mm/s the stop is ~0.08 mm past contact: fine.
+  cmm.point(p, Vec3::UnitZ());
+  PtMeas m;
+  m.nominal_mm = p;
+  m.normal = Vec3::UnitZ();
+  m.approach_mm = 20;
+  m.search_mm = 5;
+  m.speed_mm_s = 100;
+  const Response r = cmm.run(m);
+  ASSERT_EQ(r.status, Response::Status::Fault);
+  EXPECT_EQ(r.fault->kind, FaultKind::OverTravel);
+  EXPECT_EQ(r.fault->message.rfind("probe over-travel: stopped ", 0), 0u) << r.fault->message;
+  EXPECT_NE(r.fault->message.find("past contact, limit 0.200 mm"), std::string::npos) << r.fault->message;
+  std::cout << r.fault->message << "\n";
+}
+
+TEST(VirtualCmm, TargetsOutsideTheTravelAreRefusedBeforeMoving) {
+  Cmm cmm(default_world());
+  cmm.tool(4);
+  const Vec3 before = cmm.machine().state().position_mm;
+  const double t0 = cmm.machine().simulated_time_s();
+  const Response r = cmm.run(GoTo{Vec3(500, 500, 700), std::nullopt});
+  ASSERT_EQ(r.status, Response::Status::Fault);
+  EXPECT_EQ(r.fault->kind, FaultKind::AxisLimit);
+  EXPECT_NE(r.fault->message.find("z travel [-200, 600]"), std::string::npos) << r.fault->message;
+  EXPECT_EQ(cmm.machine().state().position_mm, before);
+  EXPECT_EQ(cmm.machine().simulated_time_s(), t0);
+  PtMeas m;
+  m.nominal_mm = Vec3(1099, 0, 100);
+  m.normal = Vec3::UnitX();
+  EXPECT_EQ(cmm.run(m).fault->kind, FaultKind::AxisLimit);
+}
+
+TEST(VirtualCmm, AFaultAbortsTheRestOfTheQueue) {
+  VirtualCmm cmm(default_world(), 1);
+  cmm.submit({1, DefineTool{"T1", 4}});
+  cmm.submit({2, SelectTool{"T1"}});
+  cmm.submit({3, GoTo{Vec3(0, 0, 5000), std::nullopt}});
+  cmm.submit({4, GoTo{Vec3(0, 0, 400), std::nullopt}});
+  cmm.submit({5, QualifyTool{}});
+  EXPECT_EQ(cmm.state().queued_commands, 5u);
+  EXPECT_EQ(cmm.queued().size(), 5u);
+  const auto r = cmm.execute();
+  ASSERT_EQ(r.size(), 5u);
+  EXPECT_EQ(r[1].status, Response::Status::Done);
+  EXPECT_EQ(r[2].fault->kind, FaultKind::AxisLimit);
+  EXPECT_EQ(r[3].fault->kind, FaultKind::Aborted);
+  EXPECT_EQ(r[4].tag, 5u);
+  EXPECT_EQ(r[4].fault->kind, FaultKind::Aborted);
+  EXPECT_EQ(cmm.state().queued_commands, 0u);
+  EXPECT_EQ(cmm.state().executed_commands, 3u);
+}
+
+TEST(VirtualCmm, ToolFaults) {
+  Cmm cmm(default_world());
+  PtMeas m;
+  m.nominal_mm = Vec3(600, 600, 100);
+  EXPECT_EQ(cmm.run(m).fault->kind, FaultKind::NoTool);
+  EXPECT_EQ(cmm.run(QualifyTool{}).fault->kind, FaultKind::NoTool);
+  EXPECT_EQ(cmm.run(SelectTool{"NOPE"}).fault->kind, FaultKind::UnknownTool);
+  EXPECT_EQ(cmm.run(DefineTool{"BAD", -1}).fault->kind, FaultKind::BadCommand);
+  cmm.tool(3);
+  m.normal = Vec3::Zero();
+  EXPECT_EQ(cmm.run(m).fault->kind, FaultKind::BadCommand);
+  const ToolInfo t = cmm.machine().state().tool.value();
+  EXPECT_EQ(t.nominal_radius_mm, 1.5);
+  EXPECT_EQ(t.effective_radius_mm, 1.5);
+  EXPECT_FALSE(t.qualified);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timing, skip input, determinism.
+
+TEST(VirtualCmm, MovesTakeWholeControllerCycles) {
+  Cmm cmm(default_world());
+  cmm.ok(SetFeeds{300, 0, 0});
+  cmm.go(Vec3(0, 0, 400));
+  const double t0 = cmm.machine().simulated_time_s();
+  std::vector<TraceSample> trace;
+  cmm.machine().set_trace([&](const TraceSample& s) { trace.push_back(s); });
+  cmm.go(Vec3(1000, 0, 400));
+  const double t_move = 1000.0 / 300 + 300.0 / 1000 + 1000.0 / 10000;  // jerk-limited, analytic
+  EXPECT_NEAR(cmm.machine().simulated_time_s() - t0, std::ceil(t_move / 0.001) * 0.001, 1e-9);
+  ASSERT_EQ(trace.size(), static_cast<std::size_t>(std::ceil(t_move / 0.001)));
+  double peak = 0;
+  for (const auto& s : trace) peak = std::max(peak, s.speed_mm_s);
+  EXPECT_NEAR(peak, 300, 1e-9);
+  EXPECT_EQ(trace.back().position_mm, Vec3(1000, 0, 400));
+  // Speeds are clamped to the machine's limit.
+  cmm.ok(SetFeeds{5000, 0, 0});
+  EXPECT_EQ(cmm.machine().state().positioning_feed_mm_s, 300);
+}
+
+TEST(VirtualCmm, ScannedSkipJittersLatchedDoesNot) {
+  const double feed = 10, period = 0.004;
+  const auto spread = [&](const World& w, double& sd) {
+    Cmm cmm(w, 42);
+    cmm.tool(4);
+    const Vec3 p = part_origin + Vec3(20, 20, 40);
+    cmm.go(p + Vec3(0, 0, 20));
+    std::vector<double> z;
+    for (int i = 0; i < 60; ++i) z.push_back(cmm.point(p, Vec3::UnitZ(), 2, 2, feed).centre_mm.z());
+    double mean = 0;
+    for (double v : z) mean += v / static_cast<double>(z.size());
+    double var = 0;
+    for (double v : z) var += (v - mean) * (v - mean) / static_cast<double>(z.size() - 1);
+    sd = std::sqrt(var);
+    return *std::max_element(z.begin(), z.end()) - *std::min_element(z.begin(), z.end());
+  };
+  double sd_scanned = 0, sd_latched = 0;
+  const double range_scanned = spread(noiseless(world_file("scanned_skip.json")), sd_scanned);
+  const double range_latched = spread(noiseless(default_world()), sd_latched);
+  // Latency uniform over one period: range -> feed * period, sd = feed * period / sqrt(12).
+  EXPECT_GT(range_scanned, 0.8 * feed * period);
+  EXPECT_LE(range_scanned, feed * period * (1 + 1e-9));
+  EXPECT_NEAR(sd_scanned, feed * period / std::sqrt(12.0), 0.25 * feed * period / std::sqrt(12.0));
+  EXPECT_LT(range_latched, 1e-9);
+  std::cout << "scanned 4 ms at 10 mm/s: range " << range_scanned * 1e3 << " um, sd " << sd_scanned * 1e3
+            << " um (expected " << feed * period / std::sqrt(12.0) * 1e3 << "); latched: range " << range_latched * 1e3
+            << " um\n";
+  double sd_noisy = 0;
+  spread(default_world(), sd_noisy);
+  EXPECT_NEAR(sd_noisy, 0.0002, 0.00006);  // the repeatability, 0.2 um
+}
+
+TEST(VirtualCmm, SameSeedSameHitsOtherSeedOtherNoise) {
+  const auto run = [](std::uint64_t seed) {
+    Cmm cmm(world_file("block_deviations.json"), seed);
+    cmm.tool(4);
+    cmm.qualify();
+    auto hits = probe_top(cmm);
+    return std::make_pair(hits, cmm.machine().state().tool->effective_radius_mm);
+  };
+  const auto a = run(7), b = run(7), c = run(8);
+  ASSERT_EQ(a.first.size(), b.first.size());
+  EXPECT_EQ(a.second, b.second);
+  bool any_different = a.second != c.second;
+  for (std::size_t i = 0; i < a.first.size(); ++i) {
+    EXPECT_EQ(a.first[i].centre_mm, b.first[i].centre_mm);  // bit-identical
+    EXPECT_EQ(a.first[i].time_s, b.first[i].time_s);
+    any_different = any_different || a.first[i].centre_mm != c.first[i].centre_mm;
+    EXPECT_LT((a.first[i].centre_mm - c.first[i].centre_mm).norm(), 0.005);
+  }
+  EXPECT_TRUE(any_different);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A CAD part.
+
+TEST(VirtualCmm, StepPartCanBeProbed) {
+  if (!std::filesystem::exists(std::string(METRON_SHARED_DATA) + "/nist-simple-part/ipp_simple.stp"))
+    GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
+  World w = world_file("nist_simple_part.json");
+  w.probe = world_file("perfect.json").probe;
+  w.machine.skip.latency_s = 0;
+  Cmm cmm(w);
+  cmm.tool(4);
+  // The NIST simple part: a 100 x 100 x 50 block with a diameter 50 blind bore at (50, 50).
+  const Vec3 o(300, 200, 0);
+  cmm.go(o + Vec3(10, 10, 80));
+  const Hit top = cmm.point(o + Vec3(10, 10, 50), Vec3::UnitZ());
+  EXPECT_NEAR(top.surface_mm().z(), 50, 1e-6);
+  const auto bore = probe_round(cmm, o + Vec3(50, 50, 0), 25, 40, 8, true);
+  auto options = compensated(bore, true);
+  options.direction_hint = Vec3::UnitZ();
+  options.circle_in_plane_of_hint = true;
+  const auto f = fit(fitting::Shape::Circle, bore, options);
+  // The tessellation's chord tolerance is 1 um.
+  EXPECT_NEAR(f.diameter_mm, 50, 0.002);
+  EXPECT_LT((f.position - (o + Vec3(50, 50, 40))).norm(), 0.002);
+  std::cout << "STEP simple part bore: " << f.diameter_mm << " mm at " << f.position.transpose() << "\n";
+  const Response r = cmm.run(GoTo{o + Vec3(50, 50, 10), std::nullopt});
+  EXPECT_EQ(r.status, Response::Status::Fault);  // the bore's bottom at z = 25
+  EXPECT_NEAR(r.fault->position_mm.z(), 27, 1e-6);
+}
