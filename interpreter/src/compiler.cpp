@@ -69,7 +69,7 @@ FeatureForm feature_form(const std::string& type, bool bounded) {
 class UnitCompiler {
  public:
   UnitCompiler(SymbolTable& symbols, ir::Module& module, SourceManager& sources, DiagnosticSink& sink,
-               std::size_t unit, std::function<std::optional<std::size_t>(const std::string&, Span)> include)
+               std::size_t unit, std::function<std::optional<std::size_t>(const std::string&, const std::string&, Span)> include)
       : m_symbols(symbols), m_module(module), m_sources(sources), m_sink(sink), m_unit(unit),
         m_include(std::move(include)) {}
 
@@ -622,6 +622,10 @@ class UnitCompiler {
       const Location loc = m_sources.locate(it->second.span);
       warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
     }
+    if (auto param = macro_param(label)) {
+      in.name_is_param = true;
+      m_symbols.macro_features[m_module.macros[static_cast<std::size_t>(*m_macro)].name][*param] = type;
+    }
     m_symbols.features[label] = {type, s.span};
     m_symbols.skipped.erase("F:" + label);
     emit(std::move(in));
@@ -773,6 +777,7 @@ class UnitCompiler {
         return error(s.params[2].span, "sema.bad-count", "the number of points must be a whole number >= 0");
     }
     auto in = make(Op::MeasBegin, s, label);
+    in.name_is_param = macro_param(label).has_value();
     in.operands.push_back(word_operand(s.params[0]));
     in.operands.push_back(expr_operand(std::move(*count)));
     b.start = emit(std::move(in));
@@ -844,6 +849,7 @@ class UnitCompiler {
     }
     const std::string kind = p[0].text;
     auto in = make(Op::ToleranceDef, s, upper(s.target->name));
+    in.name_is_param = macro_param(upper(s.target->name)).has_value();
     in.operands.push_back(word_operand(p[0]));
     std::vector<double> numbers;
     for (std::size_t i = 1; i < p.size(); ++i) {
@@ -1067,6 +1073,7 @@ class UnitCompiler {
       return error(p[2].span, "sema.bad-construction", "expected a construction method (BF, INTOF, MIDPT, PROJPT) after the feature");
     }
     auto in = make(Op::Construct, s, label);
+    in.name_is_param = macro_param(label).has_value();
     in.operands.push_back(word_operand(p[0]));
     in.operands.push_back(word_operand(p[2]));
     for (std::size_t i = 3; i < p.size(); ++i) {
@@ -1319,7 +1326,7 @@ class UnitCompiler {
       if (f.kind != ExprKind::String) return error(f.span, "sema.expected-file", "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
       std::filesystem::path path(f.text);
       if (path.is_relative()) path = std::filesystem::path(m_module.units[m_unit].path).parent_path() / path;
-      auto unit = m_include(path.string(), f.span);
+      auto unit = m_include(path.string(), f.text, f.span);
       if (!unit) return;
       auto in = make(Op::CallUnit, s, path.string());
       in.target = static_cast<std::int64_t>(*unit);
@@ -1335,6 +1342,12 @@ class UnitCompiler {
       return error(s.params.back().span, "sema.arity", fmt::format("M({}) takes {} argument{}, got {}", s.params[0].label.name, macro.params.size(), macro.params.size() == 1 ? "" : "s", s.params.size() - 1));
     auto in = make(Op::CallMacro, s, name);
     in.target = it->second;
+    if (auto mf = m_symbols.macro_features.find(name); mf != m_symbols.macro_features.end())
+      for (const auto& [index, type] : mf->second) {
+        const auto& a = s.params[static_cast<std::size_t>(index) + 1];
+        if (a.kind == ExprKind::Label) m_symbols.features[upper(a.label.name)] = {type, a.span};
+        else if (a.kind == ExprKind::String || a.kind == ExprKind::Word) m_symbols.features[upper(a.text)] = {type, a.span};
+      }
     for (std::size_t i = 1; i < s.params.size(); ++i) {
       const auto& a = s.params[i];
       if (a.kind == ExprKind::Word && !is_variable(a.text)) {
@@ -1402,7 +1415,7 @@ class UnitCompiler {
   SourceManager& m_sources;
   DiagnosticSink& m_sink;
   std::size_t m_unit;
-  std::function<std::optional<std::size_t>(const std::string&, Span)> m_include;
+  std::function<std::optional<std::size_t>(const std::string&, const std::string&, Span)> m_include;
   std::vector<Block> m_blocks;
   std::optional<int> m_macro;
   std::map<std::string, SymbolTable::VariableInfo> m_locals;
@@ -1421,21 +1434,22 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   const std::size_t unit = m_module.units.size();
   m_module.units.push_back({path, file, {}});
   UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, unit,
-                  [this](const std::string& p, Span from) { return compile_file(p, from); });
+                  [this](const std::string& p, const std::string& written, Span from) { return compile_file(p, from, written); });
   uc.set_included(unit > 0);
   uc.compile(program, path.rfind("<repl", 0) == 0);
   return unit;
 }
 
-std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span included_from) {
+std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span included_from, const std::string& written) {
+  const std::string& shown = written.empty() ? path : written;
   const std::string key = std::filesystem::weakly_canonical(path).string();
   if (m_symbols.units_in_progress.count(key)) {
-    m_sink.error("sema.recursive-call", included_from, fmt::format("{} calls itself through CALL/EXTERN", path));
+    m_sink.error("sema.recursive-call", included_from, fmt::format("{} calls itself through CALL/EXTERN", shown));
     return std::nullopt;
   }
   const std::uint32_t file = m_sources.load(path);
   if (file == 0) {
-    m_sink.error("io.cannot-read", included_from, fmt::format("cannot read {}", path));
+    m_sink.error("io.cannot-read", included_from, fmt::format("cannot read {}", shown));
     return std::nullopt;
   }
   m_symbols.units_in_progress.insert(key);

@@ -161,6 +161,10 @@ std::string Interpreter::label_name(const ir::LabelOperand& l) const {
   return l.name;
 }
 
+std::string Interpreter::name_of(const ir::Instruction& in) const {
+  return in.name_is_param ? label_name({"", in.name, 0, in.span}) : in.name;
+}
+
 tl::expected<double, std::string> Interpreter::number(const ir::Expr& e) {
   auto v = evaluate(e);
   if (!v) return tl::unexpected(v.error());
@@ -304,6 +308,10 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
     case Op::JumpLabel:
       return ExecStatus::Running;
     case Op::End:
+      if (frame.kind == Frame::Kind::Unit && frame.call_site.valid()) {
+        m_frames.pop_back();  // ENDFIL of a file called with CALL/EXTERN: back to the caller
+        return ExecStatus::Running;
+      }
       m_finished = true;
       return ExecStatus::Finished;
     case Op::Units: {
@@ -379,13 +387,13 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
       }
       if (g.direction.norm() < 1e-12) return fail(in.span, "the direction vector i,j,k is zero");
       if (g.type == FeatureType::Line && g.normal2.norm() < 1e-12) g.normal2 = any_perpendicular(g.direction);
-      if (auto r = m_runtime.define_feature(in.name, g, in.span); !r) return from_runtime(r.error());
+      if (auto r = m_runtime.define_feature(name_of(in), g, in.span); !r) return from_runtime(r.error());
       return ExecStatus::Running;
     }
     case Op::ToleranceDef: {
       if (auto e = numbers()) return fail(in.span, *e);
       runtime::ToleranceSpec t;
-      t.label = in.name;
+      t.label = name_of(in);
       t.defined_at = in.span;
       const auto w = words();
       static const std::map<std::string, runtime::ToleranceKind> kinds = {
@@ -508,7 +516,7 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
       auto n = number(in.operands[1].expr);
       if (!n) return fail(in.span, n.error());
       runtime::MeasBlock b;
-      b.feature = label_name({"F", in.name, in.name.empty() ? std::nullopt : std::optional<int>(0), in.span});
+      b.feature = name_of(in);
       b.type = *feature_type(in.operands[0].word);
       b.point_count = static_cast<int>(*n);
       b.span = in.span;
@@ -628,7 +636,7 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
                                          : runtime::ConstructMethod::Projection;
       std::vector<runtime::FeatureRef> sources;
       for (std::size_t i = 2; i < in.operands.size(); ++i) sources.push_back(feature_ref(in.operands[i].label));
-      if (auto r = m_runtime.construct(in.name, *feature_type(in.operands[0].word), method, sources, in.span); !r)
+      if (auto r = m_runtime.construct(name_of(in), *feature_type(in.operands[0].word), method, sources, in.span); !r)
         return from_runtime(r.error());
       return ExecStatus::Running;
     }

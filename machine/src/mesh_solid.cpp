@@ -27,8 +27,14 @@ double MeshSolid::bump_height(const Vec3& surface_point) const {
 double MeshSolid::signed_distance(const Vec3& p) const {
   const Vec3 q = m_machine_to_part * p;
   const geometry::Mesh::Closest c = m_mesh->closest(q);
-  const double d = m_mesh->contains(q) ? -c.distance_mm : c.distance_mm;
-  return d - bump_height(c.point);
+  // When the closest point is inside a face, the query lies on that face's normal line and the
+  // side is the sign of the offset; at edges and vertices the face normal does not decide it,
+  // so ask the (slower) inside test.
+  const Vec3 offset = q - c.point;
+  const double along = offset.dot(m_mesh->face_normal(c.face));
+  const bool on_normal_line = c.distance_mm > 1e-9 && std::abs(std::abs(along) - c.distance_mm) < 1e-12 * (1 + c.distance_mm);
+  const bool inside = on_normal_line ? along < 0 : m_mesh->contains(q);
+  return (inside ? -c.distance_mm : c.distance_mm) - bump_height(c.point);
 }
 
 Vec3 MeshSolid::normal(const Vec3& p) const {

@@ -36,11 +36,22 @@ class Simulation {
   // A stylus is screwed on: its true radius differs from the nominal by the world's error.
   void mount_stylus(double nominal_radius_mm) {
     m_ball_radius_mm = nominal_radius_mm + m_world.probe.ball_radius_error_mm;
+    m_free_radius_mm = -1;
   }
 
-  // The probe's trigger used as a collision switch on a positioning move from a to b: the
-  // fraction of the move at which the ball first touches, if it does.
-  [[nodiscard]] std::optional<double> sweep(const Vec3& a, const Vec3& b) const {
+  // The probe's trigger used as a collision switch on a move from a to b: the fraction of the
+  // move at which the ball first touches, if it does.
+  [[nodiscard]] std::optional<double> sweep(const Vec3& a, const Vec3& b) {
+    // A segment inside a ball of space known to be free cannot touch (the ball is convex); this
+    // saves the distance queries of most cycles of a long move, without changing any result.
+    if ((a - m_free_centre).norm() < m_free_radius_mm && (b - m_free_centre).norm() < m_free_radius_mm)
+      return std::nullopt;
+    const double gap = m_solid->signed_distance(a) - m_ball_radius_mm;
+    if (gap > 0) {
+      m_free_centre = a;
+      m_free_radius_mm = 0.999 * gap / std::max(1.0, m_solid->lipschitz());
+      if ((b - a).norm() < m_free_radius_mm) return std::nullopt;
+    }
     return first_ball_contact(*m_solid, a, b, m_ball_radius_mm);
   }
   [[nodiscard]] std::string feature_at(const Vec3& p) const { return m_solid->feature_at(p); }
@@ -93,6 +104,8 @@ class Simulation {
   std::unique_ptr<Solid> m_solid;
   Rng m_rng;
   double m_ball_radius_mm = 0;
+  Vec3 m_free_centre = Vec3::Zero();
+  double m_free_radius_mm = -1;  // none
   const MotionProfile* m_profile = nullptr;
   Vec3 m_probe_start = Vec3::Zero();
   Vec3 m_probe_dir = Vec3::UnitZ();

@@ -495,7 +495,8 @@ void anchor_cad_path(json& j, const std::string& base_dir) {
 }
 
 // "extends": a base world ("default" for the embedded one, else a path relative to the file),
-// overridden by this file as an RFC 7386 merge patch; part.design replaces the base design whole.
+// overridden by this file as an RFC 7386 merge patch; machine.skip and part.design replace the
+// base's whole.
 tl::expected<json, WorldError> resolve_extends(json j, const std::string& source, const std::string& base_dir,
                                                int depth) {
   if (!j.is_object() || !j.contains("extends")) return j;
@@ -518,9 +519,12 @@ tl::expected<json, WorldError> resolve_extends(json j, const std::string& source
     anchor_cad_path(base, dir);
   }
   j.erase("extends");
-  if (j.contains("part") && j["part"].is_object() && j["part"].contains("design") && base.contains("part") &&
-      base["part"].is_object())
-    base["part"].erase("design");
+  // One-of choices are replaced, not merged: a scanned skip must not keep the base's latched.
+  for (const auto& [section, key] : {std::pair{"machine", "skip"}, std::pair{"part", "design"}}) {
+    if (j.contains(section) && j[section].is_object() && j[section].contains(key) && base.contains(section) &&
+        base[section].is_object())
+      base[section].erase(key);
+  }
   base.merge_patch(j);
   return base;
 }

@@ -48,6 +48,8 @@ double to_deg(double rad) { return rad * 180.0 / k_pi; }
 
 /// Angle between two unit vectors in degrees, 0..180; atan2 keeps small angles accurate.
 double angle_deg(const Vec3& a, const Vec3& b) { return to_deg(std::atan2(a.cross(b).norm(), a.dot(b))); }
+/// The same for directions without a sense (normals and axes as lines): 0..90.
+double line_angle_deg(const Vec3& a, const Vec3& b) { return std::min(angle_deg(a, b), angle_deg(a, -b)); }
 
 const char* lowercase_name(FeatureType type) {
   switch (type) {
@@ -420,8 +422,8 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
       hi = std::max(hi, h);
     }
     result.value = hi - lo;
-    add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label, angle_deg(*own, d),
-                                 datum->name, datum->plane ? "normal" : "axis"));
+    add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label,
+                                 line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis"));
   } else {
     const double length_mm = axis_length_mm(feature, actual, *own);
     if (!(length_mm > 0))
@@ -433,7 +435,7 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
     result.value = along ? length_mm * own->cross(d).norm() : length_mm * std::abs(own->dot(d));
     add_note(result,
              fmt::format("axis of {} at {:.4f} deg to {} ({}), over {:.4f} mm ({} zone)", feature.label,
-                         angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
+                         line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
                          along ? "diametral" : "two-plane"));
   }
   result.actual = result.value;

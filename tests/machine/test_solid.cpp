@@ -186,3 +186,25 @@ TEST(Solid, WorldSolidHasTableReferenceSphereAndPost) {
   EXPECT_NEAR(all->signed_distance(Vec3(910, 700, 50)), 5, 1e-12);            // the post
   EXPECT_EQ(all->feature_at(Vec3(910, 700, 50)), "REFERENCE_POST");
 }
+
+TEST(Solid, RoughnessIsASmallFixedFieldPerSeed) {
+  World w = default_world();
+  const auto smooth = make_part_solid(w);
+  w.part->roughness = Roughness{0.001, 0.5};
+  const auto rough = make_part_solid(w);
+  const auto again = make_part_solid(w);
+  w.part->seed = 2;
+  const auto other = make_part_solid(w);
+  double largest = 0;
+  bool differs = false;
+  for (const Vec3& p : random_points(300, Vec3(300, 200, 38), Vec3(460, 300, 42))) {
+    const double d = smooth->signed_distance(p) - rough->signed_distance(p);
+    largest = std::max(largest, std::abs(d));
+    EXPECT_LE(std::abs(d), 0.001);
+    EXPECT_EQ(rough->signed_distance(p), again->signed_distance(p));
+    differs = differs || rough->signed_distance(p) != other->signed_distance(p);
+  }
+  EXPECT_GT(largest, 0.0003);
+  EXPECT_TRUE(differs);
+  EXPECT_GT(rough->lipschitz(), 1.0);
+}

@@ -29,18 +29,20 @@ World noiseless(World w) {
   return w;
 }
 
+using Body = decltype(Command::body);
+
 // Drives a VirtualCmm one command at a time, the way a runtime would.
 class Cmm {
  public:
   explicit Cmm(const World& world, std::uint64_t seed = 1) : m_cmm(world, seed) {}
 
-  Response run(Command::Body body) {  // NOLINT
+  Response run(Body body) {
     m_cmm.submit({++m_tag, std::move(body)});
     auto r = m_cmm.execute();
     EXPECT_EQ(r.size(), 1u);
     return r.front();
   }
-  void ok(Command::Body body) {
+  void ok(Body body) {
     const Response r = run(std::move(body));
     ASSERT_EQ(r.status, Response::Status::Done) << r.fault->message;
   }
@@ -72,8 +74,6 @@ class Cmm {
   VirtualCmm m_cmm;
   std::uint64_t m_tag = 0;
 };
-
-using Command_Body = decltype(Command::body);
 
 std::vector<Vec3> centres(const std::vector<Hit>& hits) {
   std::vector<Vec3> out;
@@ -126,15 +126,10 @@ std::vector<Hit> probe_round(Cmm& cmm, const Vec3& axis_point_machine, double ra
       cmm.go(Vec3(over.x(), over.y(), 80));
     }
     hits.push_back(cmm.point(nominal, inner ? -radial : radial));
+    if (!inner) cmm.go(Vec3(hits.back().centre_mm.x() + 2 * radial.x(), hits.back().centre_mm.y() + 2 * radial.y(), 80));
   }
   cmm.go(Vec3(c.x(), c.y(), 80));
   return hits;
-}
-
-double rms_distance(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
-  return std::sqrt(s / static_cast<double>(v.size()));
 }
 
 }  // namespace
@@ -382,14 +377,19 @@ TEST(VirtualCmm, FastProbingOverTravels) {
   PtMeas m;
   m.nominal_mm = p;
   m.normal = Vec3::UnitZ();
-  m.approach_mm = 20;
-  m.search_mm = 5;
+  m.approach_mm = 20;  // at cruise (100 mm/s after 10 mm) when it touches
+  m.search_mm = 20;
   m.speed_mm_s = 100;
   const Response r = cmm.run(m);
   ASSERT_EQ(r.status, Response::Status::Fault);
   EXPECT_EQ(r.fault->kind, FaultKind::OverTravel);
   EXPECT_EQ(r.fault->message.rfind("probe over-travel: stopped ", 0), 0u) << r.fault->message;
   EXPECT_NE(r.fault->message.find("past contact, limit 0.200 mm"), std::string::npos) << r.fault->message;
+  // Past contact: pre-travel + feed * delays (0.410 mm), up to one cycle before the interpolator
+  // reacts (0.1 mm), then the jerk-limited stop from 100 mm/s: 100 * (2 * sqrt(100 / 10000)) / 2.
+  const double past = r.fault->position_mm.z() - 2 - 40;  // negative: below the contact
+  EXPECT_GT(-past, 0.4104 + 10 - 1e-6);
+  EXPECT_LT(-past, 0.4104 + 0.1 + 10 + 1e-6);
   std::cout << r.fault->message << "\n";
 }
 
@@ -551,4 +551,13 @@ TEST(VirtualCmm, StepPartCanBeProbed) {
   const Response r = cmm.run(GoTo{o + Vec3(50, 50, 10), std::nullopt});
   EXPECT_EQ(r.status, Response::Status::Fault);  // the bore's bottom at z = 25
   EXPECT_NEAR(r.fault->position_mm.z(), 27, 1e-6);
+
+  // A Gaussian bump of the deviation field raises the top by its amplitude at its centre.
+  w.part->bumps = {Bump{Vec3(10, 10, 50), 0.004, 3}};
+  Cmm bumped(w);
+  bumped.tool(4);
+  bumped.go(o + Vec3(10, 10, 80));
+  EXPECT_NEAR(bumped.point(o + Vec3(10, 10, 50), Vec3::UnitZ()).surface_mm().z(), 50.004, 1e-6);
+  bumped.go(o + Vec3(12, 10, 80));
+  EXPECT_NEAR(bumped.point(o + Vec3(12, 10, 50), Vec3::UnitZ()).surface_mm().z(), 50 + 0.004 * std::exp(-4.0 / 18), 2e-5);
 }

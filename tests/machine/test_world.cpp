@@ -74,7 +74,7 @@ TEST(World, ExtendsMergesOverTheBase) {
   EXPECT_EQ(w->reference_sphere.nominal_centre_mm, Vec3(899.6, 700.3, 99.8));
 
   auto scanned = parse_world(nlohmann::json::parse(R"({"extends": "default",
-      "machine": {"skip": {"latched": null, "scanned": {"period_s": 0.003}}}})"), "s.json");
+      "machine": {"skip": {"scanned": {"period_s": 0.003}}}})"), "s.json");
   ASSERT_TRUE(scanned) << scanned.error().message;
   EXPECT_EQ(scanned->machine.skip.kind, SkipInput::Kind::Scanned);
   EXPECT_EQ(scanned->machine.skip.period_s, 0.003);

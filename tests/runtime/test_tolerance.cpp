@@ -460,6 +460,13 @@ TEST(ToleranceOrientation, AxisToDatumPlaneAndAxis) {
   ASSERT_TRUE(r) << r.error();
   EXPECT_NEAR(r->value, 50 * 0.001 / std::sqrt(1 + 1e-6), 1e-12);
   EXPECT_TRUE(r->in_tolerance);
+  EXPECT_EQ(r->note, "axis of CYL1 at 0.0573 deg to datum A (normal), over 50.0000 mm (diametral zone)");
+  // An axis has no sense: pointing down gives the same value and angle.
+  Feature down = bore;
+  down.actual->direction = -tilted;
+  const auto r_down = evaluate(s, {&down}, context);
+  EXPECT_NEAR(r_down->value, r->value, 1e-15);
+  EXPECT_EQ(r_down->note, r->note);
   // PARLEL of a horizontal line to the datum plane: its rise over its length.
   const Vec3 rising = Vec3(1, 0, 0.0004).normalized();
   const Feature l = feature("L1", line({0, 0, 5}, Vec3::UnitX(), 100), line({0, 0, 5}, rising, 100));

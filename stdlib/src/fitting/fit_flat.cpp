@@ -30,7 +30,9 @@ PrincipalAxes principal_axes(const std::vector<Vec3>& centred) {
   const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(m, Eigen::ComputeFullV);
   PrincipalAxes out;
   out.axes = svd.matrixV();
-  out.rms_extent = svd.singularValues() / std::sqrt(static_cast<double>(centred.size()));
+  // Fewer than 3 points give fewer singular values; the missing extents are zero.
+  const Eigen::VectorXd sv = svd.singularValues();
+  out.rms_extent.head(sv.size()) = sv / std::sqrt(static_cast<double>(centred.size()));
   return out;
 }
 

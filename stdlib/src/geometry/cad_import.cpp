@@ -4,6 +4,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -25,6 +26,8 @@
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
+#include <Message_PrinterOStream.hxx>
+#include <TCollection_AsciiString.hxx>
 #include <Poly_Triangulation.hxx>
 #include <STEPControl_Reader.hxx>
 #include <ShapeFix_Solid.hxx>
@@ -98,16 +101,6 @@ class Welder {
             static_cast<std::int64_t>(std::floor(p.z() / m_cell))};
   }
   double m_tol, m_cell;
-  std::vector<Vec3> m_points;
-  std::unordered_map<Cell, std::vector<std::uint32_t>, CellHash> m_grid;
-};
-
-  Cell cell_of(const Vec3& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() / m_tol)),
-            static_cast<std::int64_t>(std::floor(p.y() / m_tol)),
-            static_cast<std::int64_t>(std::floor(p.z() / m_tol))};
-  }
-  double m_tol;
   std::vector<Vec3> m_points;
   std::unordered_map<Cell, std::vector<std::uint32_t>, CellHash> m_grid;
 };
@@ -256,14 +249,33 @@ CadFace describe(const TopoDS_Face& face) {
   return out;
 }
 
-// OCCT's readers chat on stdout ("Total number of loaded entities"); metron reports failures
-// as values instead. The messenger is process-wide, and metron uses OCCT only here.
-void quiet_occt() {
+// OCCT's readers report through the process-wide default messenger, which prints to stdout
+// ("Total number of loaded entities", parser errors). metron uses OCCT only here, so that
+// printer is replaced once by one that keeps the failures of the file being read on this
+// thread, which then end up in the MeshError.
+class FailureCollector : public Message_Printer {
+ public:
+  static inline thread_local std::string* sink = nullptr;
+
+ protected:
+  void send(const TCollection_AsciiString& text, const Message_Gravity gravity) const override {
+    if (sink == nullptr || gravity < Message_Fail) return;
+    std::string line = text.ToCString();
+    const auto keep = [](unsigned char c) { return !std::isspace(c) && c != '*'; };
+    line.erase(line.begin(), std::find_if(line.begin(), line.end(), keep));
+    line.erase(std::find_if(line.rbegin(), line.rend(), keep).base(), line.end());
+    if (line.empty() || sink->find(line) != std::string::npos) return;
+    if (!sink->empty()) *sink += "; ";
+    *sink += line;
+  }
+};
+
+void redirect_occt_messages() {
   static std::once_flag once;
   std::call_once(once, [] {
-    for (Message_SequenceOfPrinters::Iterator it(Message::DefaultMessenger()->Printers());
-         it.More(); it.Next())
-      it.Value()->SetTraceLevel(Message_Fail);
+    const Handle(Message_Messenger)& messenger = Message::DefaultMessenger();
+    messenger->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
+    messenger->AddPrinter(new FailureCollector());
   });
 }
 
@@ -271,6 +283,11 @@ tl::expected<TopoDS_Shape, MeshError> read_shape(const std::string& path, const 
   const bool step = ext == ".step" || ext == ".stp";
   IFSelect_ReturnStatus status = IFSelect_RetVoid;
   TopoDS_Shape shape;
+  std::string failures;
+  FailureCollector::sink = &failures;
+  struct Reset {
+    ~Reset() { FailureCollector::sink = nullptr; }
+  } reset;
   if (step) {
     STEPControl_Reader reader;
     status = reader.ReadFile(path.c_str());
@@ -288,7 +305,8 @@ tl::expected<TopoDS_Shape, MeshError> read_shape(const std::string& path, const 
   }
   if (status != IFSelect_RetDone)
     return tl::unexpected(file_error(path, std::string("could not be parsed as ") +
-                                               (step ? "STEP" : "IGES")));
+                                               (step ? "STEP" : "IGES") +
+                                               (failures.empty() ? "" : ": " + failures)));
   if (shape.IsNull() || !TopExp_Explorer(shape, TopAbs_FACE).More())
     return tl::unexpected(file_error(path, "contains no surfaces"));
   if (TopExp_Explorer(shape, TopAbs_SOLID).More()) return shape;
@@ -321,6 +339,8 @@ tl::expected<CadModel, MeshError> tessellate(const std::string& path, const Topo
   parameters.Angle = options.angular_tolerance_rad;
   parameters.Relative = Standard_False;
   parameters.InParallel = options.parallel;
+  if (std::getenv("NOCONTROL")) parameters.ControlSurfaceDeflection = Standard_False;
+  if (std::getenv("MINSIZE")) parameters.MinSize = std::atof(std::getenv("MINSIZE"));
   BRepMesh_IncrementalMesh mesher(shape, parameters);
 
   TopTools_IndexedMapOfShape face_map;
@@ -378,7 +398,7 @@ tl::expected<CadModel, MeshError> load_cad_model(const std::string& path,
   if (!std::ifstream(path)) return tl::unexpected(file_error(path, "cannot open file"));
   if (!(options.chord_tolerance_mm > 0) || !(options.angular_tolerance_rad > 0))
     return tl::unexpected(file_error(path, "tessellation tolerances must be positive"));
-  quiet_occt();
+  redirect_occt_messages();
   try {
     auto shape = read_shape(path, ext);
     if (!shape) return tl::unexpected(shape.error());

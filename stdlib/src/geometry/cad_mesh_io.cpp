@@ -76,8 +76,10 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
   std::vector<Point> points;
   std::vector<Polygon> polygons;
   if (!CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false))) {
-    const std::string what = ext == ".stl" ? diagnose_stl(path)
-                                           : "could not be parsed as " + ext.substr(1) + " mesh";
+    std::string format = ext.substr(1);
+    std::transform(format.begin(), format.end(), format.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    const std::string what = ext == ".stl" ? diagnose_stl(path) : "could not be parsed as " + format;
     return tl::unexpected(file_error(path, what));
   }
   for (std::size_t i = 0; i < polygons.size(); ++i)

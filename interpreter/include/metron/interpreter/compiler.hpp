@@ -31,6 +31,9 @@ struct SymbolTable {
   std::set<std::string> datums, sensors, alignments, devices, saved;
   std::map<std::string, VariableInfo> variables;   ///< globals
   std::map<std::string, int> macros;               ///< name -> index in Module::macros
+  /// Macro name -> (parameter index -> feature type) for FEAT statements whose label is a parameter:
+  /// a call defines the feature named by its argument.
+  std::map<std::string, std::map<int, std::string>> macro_features;
   std::map<std::string, Span> skipped;             ///< labels defined by skipped vendor statements
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
 };
@@ -42,7 +45,8 @@ class Compiler {
 
   /// Parses and compiles a file as a new unit; returns its unit index, or nullopt when the file
   /// cannot be read. Errors go to the sink (check sink.has_errors()).
-  std::optional<std::size_t> compile_file(const std::string& path, Span included_from = {});
+  std::optional<std::size_t> compile_file(const std::string& path, Span included_from = {},
+                                          const std::string& written = {});
   /// Compiles text held in memory (the REPL) as a new unit with the current symbols.
   std::size_t compile_text(const std::string& name, const std::string& text);
 

@@ -13,7 +13,7 @@ namespace metron::machine::csg {
 
 /// Material on the side opposite to `normal`: { p : (p - point) . normal <= 0 }.
 struct HalfSpace {
-  Vec3 point = Vec3::Zero();
+  Vec3 point = Vec3::Zero();          ///< on the boundary plane
   Vec3 normal = Vec3::UnitZ();        ///< unit, outward (away from the material)
 };
 
@@ -22,27 +22,27 @@ struct HalfSpace {
 struct Cylinder {
   Vec3 point = Vec3::Zero();          ///< on the axis (the start of the capped cylinder)
   Vec3 axis = Vec3::UnitZ();          ///< unit
-  double diameter_mm = 10;
+  double diameter_mm = 10;            ///< of the cylinder
   std::optional<double> length_mm;    ///< capped when set
 };
 
 /// Material within diameter/2 of the centre.
 struct Sphere {
-  Vec3 centre = Vec3::Zero();
-  double diameter_mm = 10;
+  Vec3 centre = Vec3::Zero();         ///< of the sphere
+  double diameter_mm = 10;            ///< of the sphere
 };
 
 /// Infinite convex cone, material inside the nappe that opens along +axis from the apex.
 struct Cone {
-  Vec3 apex = Vec3::Zero();
+  Vec3 apex = Vec3::Zero();           ///< the cone's tip
   Vec3 axis = Vec3::UnitZ();          ///< unit, from the apex into the cone
   double half_angle_deg = 45;         ///< in (0, 90)
 };
 
 /// A primitive with the name of the feature it belongs to (empty: unnamed).
 struct Primitive {
-  std::string name;
-  std::variant<HalfSpace, Cylinder, Sphere, Cone> shape;
+  std::string name;                   ///< feature name for deviations and messages (may be empty)
+  std::variant<HalfSpace, Cylinder, Sphere, Cone> shape;  ///< the geometry, part coordinates
 };
 
 /// A node of the tree: a primitive or a boolean operation on the children.
@@ -53,7 +53,7 @@ struct Node {
     Intersection,  ///< material of every child
     Difference,    ///< the first child minus all the others
   };
-  Op op = Op::Primitive;
+  Op op = Op::Primitive;              ///< leaf or operation
   Primitive primitive;                ///< when op == Primitive
   std::vector<Node> children;         ///< when op != Primitive (at least one)
 };
@@ -61,17 +61,17 @@ struct Node {
 /// Lobed form of a round primitive: amplitude * cos(lobes * (theta - phase)) along the normal,
 /// theta the azimuth about the primitive's local z axis (roundness = 2 * amplitude).
 struct Lobing {
-  int lobes = 3;
-  double amplitude_mm = 0;
-  double phase_deg = 0;
+  int lobes = 3;                      ///< undulations per turn
+  double amplitude_mm = 0;            ///< half the peak-to-valley
+  double phase_deg = 0;               ///< azimuth of a maximum
 };
 
 /// Waviness of a plane: amplitude * cos(2 pi u / wavelength - phase) along the normal,
 /// u the coordinate along the primitive's local x axis (flatness = 2 * amplitude).
 struct Waviness {
-  double amplitude_mm = 0;
-  double wavelength_mm = 10;
-  double phase_deg = 0;
+  double amplitude_mm = 0;            ///< half the peak-to-valley
+  double wavelength_mm = 10;          ///< along the local x axis
+  double phase_deg = 0;               ///< phase at u = 0
 };
 
 /// How the machined primitive differs from its design (all zero: as designed).

@@ -13,15 +13,15 @@ struct MotionLimits {
 
 /// Kinematic state along the path.
 struct MotionState {
-  double position_mm = 0;
-  double speed_mm_s = 0;
-  double acceleration_mm_s2 = 0;
+  double position_mm = 0;             ///< distance along the path
+  double speed_mm_s = 0;              ///< path speed
+  double acceleration_mm_s2 = 0;      ///< path acceleration
 };
 
 /// One phase of constant jerk.
 struct JerkPhase {
-  double duration_s = 0;
-  double jerk_mm_s3 = 0;
+  double duration_s = 0;              ///< length of the phase
+  double jerk_mm_s3 = 0;              ///< constant jerk during it
 };
 
 /// A 1-D jerk-limited motion: a start state followed by phases of constant jerk, so position,
@@ -31,6 +31,7 @@ struct JerkPhase {
 class MotionProfile {
  public:
   MotionProfile() = default;
+  /// The motion from `start` through `phases` (phases of zero duration are dropped).
   MotionProfile(MotionState start, std::vector<JerkPhase> phases);
 
   /// Time-optimal rest-to-rest move over `distance_mm` (>= 0): the symmetric 7-phase S-curve
@@ -41,10 +42,13 @@ class MotionProfile {
   /// Shortest jerk-limited stop from `from` (speed >= 0, |acceleration| <= limit).
   static MotionProfile stop(const MotionState& from, const MotionLimits& limits);
 
+  /// Total time of all phases.
   [[nodiscard]] double duration_s() const { return m_duration_s; }
   /// Position at the end (distance covered plus the start position).
   [[nodiscard]] double end_position_mm() const { return m_end.position_mm; }
+  /// State at t = 0.
   [[nodiscard]] const MotionState& start() const { return m_start; }
+  /// The phases of constant jerk, in order.
   [[nodiscard]] const std::vector<JerkPhase>& phases() const { return m_phases; }
 
   /// State at time t (clamped to [0, duration]); exact at the end.

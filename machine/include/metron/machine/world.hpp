@@ -26,8 +26,8 @@ namespace metron::machine {
 
 /// Travel of one axis, machine coordinates of the ball centre.
 struct AxisTravel {
-  double min_mm = 0;
-  double max_mm = 0;
+  double min_mm = 0;                  ///< lowest position
+  double max_mm = 0;                  ///< highest position
 };
 
 /// How the controller sees the probe's trigger signal (SEEDS.md 3, C->D).
@@ -36,7 +36,7 @@ struct SkipInput {
     Latched,  ///< high-speed skip input: the axes are latched after a fixed latency
     Scanned,  ///< the input is polled once per scan period: latency uniform in [0, period)
   };
-  Kind kind = Kind::Latched;
+  Kind kind = Kind::Latched;          ///< which of the two
   double latency_s = 4e-6;            ///< Latched: fixed latency
   double period_s = 0.002;            ///< Scanned: scan period
 };
@@ -45,12 +45,12 @@ struct SkipInput {
 struct MachineSpec {
   std::array<AxisTravel, 3> travel{{{-100, 1100}, {-100, 900}, {-200, 600}}};  ///< x, y, z
   double max_speed_mm_s = 300;        ///< path speed limit
-  double max_acceleration_mm_s2 = 1000;
-  double max_jerk_mm_s3 = 10000;
+  double max_acceleration_mm_s2 = 1000;  ///< path acceleration limit
+  double max_jerk_mm_s3 = 10000;      ///< path jerk limit
   double dt_s = 0.001;                ///< controller cycle
   double positioning_feed_mm_s = 50;  ///< default GoTo speed
   double measuring_feed_mm_s = 3;     ///< default probing speed
-  SkipInput skip;
+  SkipInput skip;                     ///< the trigger input
   Vec3 home_mm{0, 0, 500};            ///< ball centre at start
   double table_z_mm = 0;              ///< table surface; everything below it is solid
 };
@@ -58,7 +58,7 @@ struct MachineSpec {
 /// The touch-trigger probe as it truly is (hidden).
 struct ProbeSpec {
   double ball_radius_error_mm = 0;    ///< true ball radius = nominal (from DefineTool) + error
-  PreTravel pre_travel;
+  PreTravel pre_travel;               ///< direction-dependent pre-travel
   double filter_delay_s = 0.002;      ///< interface filter (SEEDS.md 3, B->C)
   double transmission_delay_s = 0.002;  ///< signal transmission (optical, radio ...)
   double over_travel_mm = 1.0;        ///< largest allowed travel from contact to standstill
@@ -71,15 +71,16 @@ struct ReferenceSphereSpec {
   double certified_diameter_mm = 25;      ///< what the controller is told
   Vec3 true_centre_mm{900, 700, 100};     ///< hidden
   double true_diameter_mm = 25;           ///< hidden
-  double post_diameter_mm = 10;
+  double post_diameter_mm = 10;       ///< the post: a capped cylinder, collision geometry
   Vec3 post_direction = -Vec3::UnitZ();   ///< unit, from the centre toward the post's foot
   double post_length_mm = 100;            ///< from the true centre
 };
 
 /// Placement of the part: p_machine = translation + Rz * Ry * Rx * p_part (x first).
 struct Pose {
-  Vec3 translation_mm = Vec3::Zero();
+  Vec3 translation_mm = Vec3::Zero();  ///< where the part origin is in the machine
   Vec3 rotation_deg = Vec3::Zero();   ///< about the machine x, y, z axes, applied x, then y, then z
+  /// The transform p_machine = part_to_machine() * p_part.
   [[nodiscard]] Frame part_to_machine() const;
 };
 
@@ -104,11 +105,11 @@ struct Roughness {
 
 /// The workpiece: design, placement and (hidden) deviations.
 struct PartSpec {
-  std::variant<csg::Node, CadDesign> design;
-  Pose pose;
+  std::variant<csg::Node, CadDesign> design;  ///< part coordinates
+  Pose pose;                          ///< part to machine
   std::map<std::string, csg::Deviation> deviations;  ///< CSG: keyed by primitive name
   std::vector<Bump> bumps;            ///< CAD: deviation field
-  Roughness roughness;
+  Roughness roughness;                ///< hidden
   std::uint64_t seed = 1;             ///< of the roughness field
 };
 
@@ -117,20 +118,21 @@ struct World {
   std::string name = "default";
   std::string source;                 ///< file it was read from ("<default>" when embedded)
   std::uint64_t seed = 1;             ///< default run seed (a tool may override it)
-  MachineSpec machine;
-  ProbeSpec probe;
-  ReferenceSphereSpec reference_sphere;
+  MachineSpec machine;                ///< known to the controller
+  ProbeSpec probe;                    ///< hidden
+  ReferenceSphereSpec reference_sphere;  ///< nominal and certified values known, true ones hidden
   std::optional<PartSpec> part;       ///< none: an empty table
 };
 
 /// A world file that could not be read; `message` is "file: /json/pointer: what was expected".
 struct WorldError {
-  std::string message;
+  std::string message;                ///< "file: /pointer: what was expected"
 };
 
 /// Reads a world from a JSON file (comments allowed). Unknown keys are errors. A file may start
 /// from another world with "extends": "default" (the embedded one) or a path relative to it,
-/// and override it as an RFC 7386 merge patch (part.design replaces the base design whole).
+/// and override it as an RFC 7386 merge patch (machine.skip and part.design replace the base's
+/// whole).
 tl::expected<World, WorldError> load_world(const std::string& path);
 
 /// Builds a world from parsed JSON; `source_name` prefixes error messages and CAD paths are

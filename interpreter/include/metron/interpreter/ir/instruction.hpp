@@ -69,6 +69,7 @@ struct Instruction {
   Op op = Op::Nop;
   Span span;
   std::string name;
+  bool name_is_param = false;      ///< `name` is a macro parameter that supplies the label's name
   std::vector<Operand> operands;
   std::vector<std::string> names;  ///< Declare: variable names
   std::int64_t target = -1;

@@ -77,8 +77,9 @@ class Mesh {
                                                          double tol_mm = 1e-7) const;
 
   /// Plane section (CGAL::Polygon_mesh_slicer): polylines where the plane cuts the surface; a
-  /// closed polyline repeats its first point at the end. Walking along a polyline, the plane
-  /// normal, the direction of travel and the outward face normal form a right-handed basis.
+  /// closed polyline repeats its first point at the end. (Outward face normal, direction of
+  /// travel, plane normal) is right-handed, so seen from the side the plane normal points to,
+  /// outer boundaries of a closed outward mesh run counterclockwise and holes clockwise.
   [[nodiscard]] std::vector<std::vector<Vec3>> section(const Vec3& plane_point,
                                                        const Vec3& plane_normal) const;
 

@@ -1,0 +1,240 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End to end: programs run on worlds whose truth is known; metron must recover it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "metron/interpreter/session.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using metron::interpreter::RunExit;
+using metron::interpreter::RunOptions;
+using metron::interpreter::run_program;
+using metron::runtime::FeatureReport;
+using metron::runtime::ToleranceResult;
+
+const fs::path source_dir = METRON_SOURCE_DIR;
+constexpr double pi = 3.14159265358979323846;
+
+fs::path out_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("metron_e2e_" + std::to_string(::getpid())) / name;
+  fs::create_directories(d);
+  return d;
+}
+
+metron::interpreter::RunOutcome run(const fs::path& program, const std::optional<fs::path>& world, const std::string& out,
+                                    std::optional<std::uint64_t> seed = std::nullopt) {
+  RunOptions o;
+  o.program = program.string();
+  if (world) o.world_path = world->string();
+  o.seed = seed;
+  o.out_dir = out_dir(out).string();
+  return run_program(o);
+}
+
+// The last OUTPUT report of a feature / a tolerance result.
+const FeatureReport* report(const metron::runtime::RunRecord& r, const std::string& label) {
+  const FeatureReport* found = nullptr;
+  for (const auto& e : r.events)
+    if (const auto* f = std::get_if<FeatureReport>(&e); f && f->label == label) found = f;
+  return found;
+}
+const ToleranceResult* tolerance(const metron::runtime::RunRecord& r, const std::string& label) {
+  for (const auto& e : r.events)
+    if (const auto* t = std::get_if<ToleranceResult>(&e); t && t->label == label) return t;
+  return nullptr;
+}
+
+fs::path program(const std::string& name) { return source_dir / "programs" / "examples" / name; }
+fs::path world(const std::string& name) { return source_dir / "programs" / "worlds" / name; }
+
+TEST(EndToEnd, FirstCircleOnTheDefaultWorld) {
+  const auto o = run(program("01_first_circle.dmi"), std::nullopt, "first");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const auto* f = report(o.record, "BORE1");
+  ASSERT_TRUE(f && f->actual);
+  // Default world: a perfect block with 0.2 um probe repeatability.
+  EXPECT_NEAR(f->actual->diameter_mm, 20.0, 0.001);
+  EXPECT_NEAR(f->actual->position.x(), 40.0, 0.001);
+  EXPECT_NEAR(f->actual->position.y(), 50.0, 0.001);
+  ASSERT_TRUE(fs::exists(o.results_path));
+  const auto j = nlohmann::json::parse(std::ifstream(o.results_path));
+  EXPECT_EQ(j["status"], "completed");
+  ASSERT_FALSE(j["features"].empty());
+  EXPECT_EQ(j["features"][0]["points"].size(), 4u);
+  EXPECT_TRUE(j["features"][0]["points"][0].contains("approach"));
+}
+
+TEST(EndToEnd, PerfectPartIsRecoveredWithinATenthOfAMicrometre) {
+  const auto o = run(program("02_block_inspection.dmi"), world("perfect.json"), "perfect");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const double bar = 1e-4;
+  const auto* b1 = report(o.record, "BORE1");
+  ASSERT_TRUE(b1 && b1->actual);
+  EXPECT_NEAR(b1->actual->diameter_mm, 20.0, bar);
+  EXPECT_NEAR(b1->actual->position.x(), 40.0, bar);
+  EXPECT_NEAR(b1->actual->position.y(), 50.0, bar);
+  const auto* b2 = report(o.record, "BORE2");
+  ASSERT_TRUE(b2 && b2->actual);
+  EXPECT_NEAR(b2->actual->diameter_mm, 12.0, bar);
+  const auto* boss = report(o.record, "BOSS1");
+  ASSERT_TRUE(boss && boss->actual);
+  EXPECT_NEAR(boss->actual->diameter_mm, 24.0, bar);
+  const auto* sph = report(o.record, "SPHERE1");
+  ASSERT_TRUE(sph && sph->actual);
+  EXPECT_NEAR(sph->actual->diameter_mm, 20.0, bar);
+  EXPECT_NEAR((sph->actual->position - metron::Vec3(75, 75, 48)).norm(), 0.0, bar);
+  const auto* cone = report(o.record, "CSINK");
+  ASSERT_TRUE(cone && cone->actual);
+  EXPECT_NEAR(cone->actual->apex_angle_deg, 90.0, 1e-3);
+  EXPECT_NEAR((cone->actual->position - metron::Vec3(40, 20, 32)).norm(), 0.0, bar);
+  const auto* corner = report(o.record, "CORNER");
+  ASSERT_TRUE(corner && corner->actual);
+  EXPECT_NEAR((corner->actual->position - metron::Vec3(0, 0, 40)).norm(), 0.0, bar);
+}
+
+TEST(EndToEnd, HiddenDeviationsAreRecovered) {
+  // block_deviations.json hides: BORE1 +0.012 mm oversize and 0.03 mm off in x; the TOP face
+  // tilted 0.05 deg; a 3-lobe 5 um form on BOSS1.
+  const auto o = run(program("02_block_inspection.dmi"), world("block_deviations.json"), "deviations");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const auto* b1 = report(o.record, "BORE1");
+  ASSERT_TRUE(b1 && b1->actual);
+  EXPECT_NEAR(b1->actual->diameter_mm - 20.0, 0.012, 0.001);
+  EXPECT_NEAR(b1->actual->position.x() - 40.0, 0.030, 0.002);
+  // Datum A is tilted 0.05 deg about x, the bore is vertical in the machine: relative to the datum
+  // frame its axis leans, and at the reported height (z = 40) it sits (40 - 22.5) tan(0.05 deg) off
+  // in y, 22.5 being the mean height of the FRONT face points that fix the y origin.
+  const double lean = (40.0 - 22.5) * std::tan(0.05 * pi / 180.0);
+  EXPECT_NEAR(std::abs(b1->actual->position.y() - 50.0), lean, 0.002);
+  const auto* pos = tolerance(o.record, "POS_BORE1");
+  ASSERT_TRUE(pos);
+  EXPECT_NEAR(pos->value, 2.0 * std::hypot(0.030, lean), 0.004);  // diametral zone
+  EXPECT_FALSE(pos->in_tolerance);        // zone 0.05
+  const auto* d1 = tolerance(o.record, "D_BORE1");
+  ASSERT_TRUE(d1);
+  EXPECT_TRUE(d1->in_tolerance);          // +0.012 within [-0.010, +0.020]
+  const auto* top = report(o.record, "TOP");
+  ASSERT_TRUE(top && top->actual);
+  const double tilt_deg = std::acos(std::abs(top->actual->direction.normalized().z())) * 180.0 / pi;
+  EXPECT_NEAR(tilt_deg, 0.05, 0.003);
+  // The bore is vertical in the machine; against the tilted datum A it leans 0.05 deg over 20 mm.
+  const auto* perp = tolerance(o.record, "PERP_BORE1");
+  ASSERT_TRUE(perp);
+  EXPECT_NEAR(perp->value, 20.0 * std::sin(0.05 * pi / 180.0), 0.002);
+  const auto* boss = report(o.record, "BOSS1");
+  ASSERT_TRUE(boss && boss->fit);
+  // 8 points a section see the 3 lobes: peak to valley close to 2 x 5 um.
+  EXPECT_GT(boss->fit->form_mm, 0.008) << "the 3-lobe form of 5 um amplitude must show in the cylindricity";
+  EXPECT_LT(boss->fit->form_mm, 0.0105);
+}
+
+TEST(EndToEnd, FaultStopsTheRunKeepsEarlierResultsAndNamesTheStatement) {
+  const fs::path p = out_dir("fault") / "collide.dmi";
+  std::ofstream(p) << "DMISMN/'collide', 5.0\nUNITS/MM, ANGDEC\n"
+                      "S(P) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4\nSNSLCT/S(P)\n"
+                      "D(F) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                      "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\nGOTO/20, 20, 60\n"
+                      "MEAS/PLANE, F(TOP), 3\nPTMEAS/CART, 10, 10, 40, 0, 0, 1\nPTMEAS/CART, 150, 10, 40, 0, 0, 1\n"
+                      "PTMEAS/CART, 150, 90, 40, 0, 0, 1\nENDMES\nOUTPUT/FA(TOP)\n"
+                      "GOTO/80, 50, 20\n"   // straight down into the block: a collision
+                      "OUTPUT/FA(TOP)\nENDFIL\n";
+  const auto o = run(p, std::nullopt, "fault");
+  EXPECT_EQ(o.exit, RunExit::Faulted);
+  const metron::runtime::FaultReport* fault = nullptr;
+  for (const auto& e : o.record.events)
+    if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e)) fault = f;
+  ASSERT_TRUE(fault);
+  EXPECT_EQ(fault->kind, "collision");
+  EXPECT_EQ(fault->statement.line, 14u);
+  EXPECT_EQ(fault->statement_text, "GOTO/80, 50, 20");
+  ASSERT_TRUE(report(o.record, "TOP"));  // the output before the fault is kept
+  const auto j = nlohmann::json::parse(std::ifstream(o.results_path));
+  EXPECT_EQ(j["status"], "faulted");
+}
+
+TEST(EndToEnd, NoContactWithinTheSearchDistanceIsAFault) {
+  const fs::path p = out_dir("nocontact") / "air.dmi";
+  std::ofstream(p) << "DMISMN/'air', 5.0\nUNITS/MM, ANGDEC\nS(P) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4\n"
+                      "SNSLCT/S(P)\nF(X) = FEAT/POINT, CART, 100, 100, 100, 0, 0, 1\n"
+                      "MEAS/POINT, F(X), 1\nPTMEAS/CART, 100, 100, 100, 0, 0, 1\nENDMES\nENDFIL\n";
+  const auto o = run(p, std::nullopt, "nocontact");
+  EXPECT_EQ(o.exit, RunExit::Faulted);
+  bool found = false;
+  for (const auto& e : o.record.events)
+    if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e)) {
+      found = true;
+      EXPECT_EQ(f->kind, "no contact");
+      EXPECT_EQ(f->statement.line, 7u);
+    }
+  EXPECT_TRUE(found);
+}
+
+TEST(EndToEnd, SameSeedSameResultsDifferentSeedDifferentNoise) {
+  const auto slurp = [](const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    auto j = nlohmann::json::parse(ss.str());
+    return j["features"].dump();
+  };
+  const auto a = run(program("01_first_circle.dmi"), std::nullopt, "seed_a", 7);
+  const auto b = run(program("01_first_circle.dmi"), std::nullopt, "seed_b", 7);
+  const auto c = run(program("01_first_circle.dmi"), std::nullopt, "seed_c", 8);
+  EXPECT_EQ(slurp(a.results_path), slurp(b.results_path));
+  EXPECT_NE(slurp(a.results_path), slurp(c.results_path));
+}
+
+std::pair<int, std::string> shell(const std::string& command) {
+  std::string out;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  char buf[4096];
+  while (pipe && std::fgets(buf, sizeof buf, pipe)) out += buf;
+  const int status = pipe ? ::pclose(pipe) : -1;
+  return {WEXITSTATUS(status), out};
+}
+
+TEST(Cli, CheckPrintsPositionedDiagnosticsWithACaret) {
+  const fs::path bad = source_dir / "programs" / "bad" / "tolerance_wrong_type.dmi";
+  const auto [code, out] = shell(std::string(METRON_BINARY) + " check " + bad.string());
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(out.find(bad.string() + ":5:16: error: TOL/DIAM of T(D1) does not apply to a PLANE"), std::string::npos) << out;
+  EXPECT_NE(out.find("  OUTPUT/FA(P1), TA(D1)\n                 ^"), std::string::npos) << out;
+  const auto [ok, good] = shell(std::string(METRON_BINARY) + " check " + program("02_block_inspection.dmi").string());
+  EXPECT_EQ(ok, 0) << good;
+}
+
+TEST(Cli, RunReportsAndWritesTheDmisOutputFile) {
+  const fs::path dir = out_dir("cli_run");
+  const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + program("02_block_inspection.dmi").string() + " --out " + dir.string());
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("T(D_BORE1)  DIAM  FA(BORE1)"), std::string::npos) << out;
+  std::ifstream dmo(dir / "block.dmo");
+  std::stringstream ss;
+  ss << dmo.rdbuf();
+  EXPECT_NE(ss.str().find("FA(BORE1) = FEAT/CYLNDR, INNER, CART"), std::string::npos) << ss.str();
+  EXPECT_NE(ss.str().find("TA(D_BORE1) = TOL/DIAM,"), std::string::npos) << ss.str();
+}
+
+TEST(Cli, FitReadsNistDataAndRejectsCorruptFiles) {
+  const fs::path corrupt = out_dir("fit") / "corrupt.ds";
+  std::ofstream(corrupt) << "3\n1 2 3\n4 5\n7 8 9\n";
+  const auto [code, out] = shell(std::string(METRON_BINARY) + " fit plane " + corrupt.string());
+  EXPECT_EQ(code, 1);
+  EXPECT_NE(out.find(":3: error:"), std::string::npos) << out;
+  const fs::path sphere = fs::path(METRON_SHARED_DATA) / "nist-fitting" / "Sphere" / "sph1.ds";
+  if (!fs::exists(sphere)) GTEST_SKIP() << "shared data not present";
+  const auto [c2, o2] = shell(std::string(METRON_BINARY) + " fit sphere " + sphere.string() + " --format json");
+  EXPECT_EQ(c2, 0) << o2;
+  EXPECT_NO_THROW((void)nlohmann::json::parse(o2)) << o2;
+}
+
+}  // namespace

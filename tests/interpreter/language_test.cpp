@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The IR interpreter: variables, expressions, control flow, macros, called files, units.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "metron/interpreter/session.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using metron::interpreter::ExecStatus;
+using metron::interpreter::Session;
+
+struct Ran {
+  ExecStatus status;
+  std::vector<std::string> texts;
+  std::string diagnostics;
+  std::unique_ptr<Session> session;
+};
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / ("metron_lang_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path p = temp_dir() / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+Ran run(const std::string& body, const std::string& name = "prog.dmi") {
+  const fs::path p = write(name, "DMISMN/'test', 5.0\nUNITS/MM, ANGDEC\n" + body + "ENDFIL\n");
+  auto s = Session::create(std::nullopt, 1);
+  EXPECT_TRUE(s.has_value());
+  Ran r;
+  r.session = std::move(*s);
+  if (!r.session->load(p.string())) {
+    r.status = ExecStatus::Error;
+  } else {
+    r.status = r.session->interpreter().run();
+  }
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) r.texts.push_back(t->text);
+  r.diagnostics = r.session->take_diagnostics();
+  return r;
+}
+
+TEST(Language, ArithmeticPrecedenceAndIntrinsics) {
+  auto r = run(
+      "DECL/REAL, A, B\nDECL/INTGR, I\nDECL/CHAR, 20, S\n"
+      "A = ASSIGN/2 + 3 * 4 ** 2 / 8 - -1\n"          // 2 + 3*16/8 + 1 = 9
+      "B = ASSIGN/SQRT(16) + ABS(-2) + MN(3, 1, 2) + ATAN2(1, 1)\n"  // 4 + 2 + 1 + 45 (ANGDEC)
+      "I = ASSIGN/7 / 2\n"                             // INTGR truncates 3.5 -> 3
+      "S = ASSIGN/CONCAT('ab', STR(I), SUBSTR('xyz', 2, 3))\n"
+      "TEXT/OPER, STR(A)\nTEXT/OPER, STR(B)\nTEXT/OPER, STR(I)\nTEXT/OPER, S\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  ASSERT_EQ(r.texts.size(), 4u);
+  EXPECT_EQ(r.texts[0], "9");
+  EXPECT_EQ(r.texts[1], "52");
+  EXPECT_EQ(r.texts[2], "3");
+  EXPECT_EQ(r.texts[3], "ab3yz");
+}
+
+TEST(Language, IfElseWithAndWithoutParentheses) {
+  auto r = run(
+      "DECL/INTGR, I\nI = ASSIGN/5\n"
+      "IF/(I .GT. 3 .AND. .NOT. (I .EQ. 4))\nTEXT/OPER, 'big'\nELSE\nTEXT/OPER, 'small'\nENDIF\n"
+      "IF/I .LT. 3\nTEXT/OPER, 'wrong'\nENDIF\n"
+      "IF/(I .GE. 5 .OR. I .LT. 0)\nTEXT/OPER, 'yes'\nENDIF\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"big", "yes"}));
+}
+
+TEST(Language, DoLoopsWithStepsAndArrays) {
+  auto r = run(
+      "DECL/INTGR, I, J\nDECL/REAL, SUM, V[5]\nSUM = ASSIGN/0\n"
+      "DO/I, 1, 5\nV[I] = ASSIGN/I * I\nENDDO\n"
+      "DO/J, 5, 1, -2\nSUM = ASSIGN/SUM + V[J]\nENDDO\n"   // 25 + 9 + 1
+      "DO/I, 3, 1\nTEXT/OPER, 'never'\nENDDO\n"
+      "TEXT/OPER, STR(SUM)\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"35"}));
+}
+
+TEST(Language, JumpToLabels) {
+  auto r = run(
+      "DECL/INTGR, N\nN = ASSIGN/0\n(AGAIN)\nN = ASSIGN/N + 1\n"
+      "IF/(N .LT. 4)\nJUMPTO/(AGAIN)\nENDIF\nTEXT/OPER, STR(N)\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"4"}));
+}
+
+TEST(Language, MacrosTakeValuesAndLabels) {
+  auto r = run(
+      "DECL/REAL, R\n"
+      "M(SQUARE) = MACRO/'X'\nR = ASSIGN/X * X\nENDMAC\n"
+      "M(DEFINE) = MACRO/'NAME', 'D'\nF(NAME) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, D\nENDMAC\n"
+      "CALL/M(SQUARE), 1.5\nTEXT/OPER, STR(R)\n"
+      "CALL/M(DEFINE), F(HOLE9), 12\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"2.25"}));
+  const auto* f = r.session->runtime().find_feature("HOLE9");
+  ASSERT_NE(f, nullptr) << "the macro defined F(HOLE9) through its label parameter";
+  EXPECT_DOUBLE_EQ(f->nominal.diameter_mm, 12.0);
+}
+
+TEST(Language, CalledFilesShareTheContext) {
+  write("sub.dmi", "TEXT/OPER, CONCAT('sub sees ', STR(K))\nK = ASSIGN/K + 1\n");
+  auto r = run("DECL/INTGR, K\nK = ASSIGN/41\nCALL/EXTERN, DMIS, 'sub.dmi'\nTEXT/OPER, STR(K)\n", "main.dmi");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"sub sees 41", "42"}));
+}
+
+TEST(Language, InchAndRadianUnitsConvertAtTheEdge) {
+  auto r = run(
+      "UNITS/INCH, ANGRAD\nF(P) = FEAT/POINT, CART, 1, 2, 3, 0, 0, 1\n"
+      "DECL/REAL, A\nA = ASSIGN/SIN(PI() / 2)\nTEXT/OPER, STR(A)\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"1"}));
+  const auto* f = r.session->runtime().find_feature("P");
+  ASSERT_NE(f, nullptr);
+  EXPECT_NEAR(f->nominal.position.x(), 25.4, 1e-12);
+  EXPECT_NEAR(f->nominal.position.z(), 76.2, 1e-12);
+}
+
+TEST(Language, RunTimeErrorsArePositioned) {
+  auto r = run("DECL/REAL, A, B\nB = ASSIGN/0\nA = ASSIGN/1 / B\n");
+  EXPECT_EQ(r.status, ExecStatus::Error);
+  EXPECT_NE(r.diagnostics.find("prog.dmi:5:1: error: division by zero"), std::string::npos) << r.diagnostics;
+}
+
+TEST(Language, VendorStatementsAreSkippedWithAWarning) {
+  auto r = run("VNDRX/SOMETHING, 1, 2\nTEXT/OPER, 'after'\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"after"}));
+  EXPECT_NE(r.diagnostics.find("prog.dmi:3:1: warning: unknown statement VNDRX is skipped"), std::string::npos) << r.diagnostics;
+}
+
+TEST(Language, ObtainReadsFeatureParameters) {
+  auto r = run(
+      "F(C) = FEAT/CIRCLE, INNER, CART, 1, 2, 3, 0, 0, 1, 10\n"
+      "DECL/REAL, D\nD = OBTAIN/F(C), 10\nTEXT/OPER, STR(D)\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"10"}));
+}
+
+TEST(Language, EmitIrKeepsSourcePositions) {
+  const fs::path p = write("ir.dmi", "DMISMN/'ir', 5.0\nDECL/INTGR, I\nI = ASSIGN/1\nENDFIL\n");
+  metron::SourceManager sources;
+  metron::DiagnosticSink sink;
+  metron::interpreter::Compiler compiler(sources, sink);
+  ASSERT_TRUE(compiler.compile_file(p.string()));
+  const std::string ir = metron::interpreter::ir::to_string(compiler.module(), sources);
+  EXPECT_NE(ir.find("ASSIGN         I [1]"), std::string::npos) << ir;
+  EXPECT_NE(ir.find("ir.dmi:3:1"), std::string::npos) << ir;
+}
+
+}  // namespace
