@@ -4,7 +4,6 @@
 #include <array>
 #include <cctype>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -339,8 +338,6 @@ tl::expected<CadModel, MeshError> tessellate(const std::string& path, const Topo
   parameters.Angle = options.angular_tolerance_rad;
   parameters.Relative = Standard_False;
   parameters.InParallel = options.parallel;
-  if (std::getenv("NOCONTROL")) parameters.ControlSurfaceDeflection = Standard_False;
-  if (std::getenv("MINSIZE")) parameters.MinSize = std::atof(std::getenv("MINSIZE"));
   BRepMesh_IncrementalMesh mesher(shape, parameters);
 
   TopTools_IndexedMapOfShape face_map;
