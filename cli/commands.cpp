@@ -2,6 +2,9 @@
 #include "commands.hpp"
 
 #include <iostream>
+#include <memory>
+
+#include <CLI/CLI.hpp>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -12,6 +15,21 @@
 #include "metron/stdlib/fitting/point_file.hpp"
 
 namespace metron::cli {
+namespace {
+
+struct RunArgs {
+  std::string program;
+  std::optional<std::string> world;
+  std::optional<std::uint64_t> seed;
+  std::string out_dir = ".";
+  bool quiet = false;
+};
+
+struct FitArgs {
+  std::string type;
+  std::string file;
+  std::string format = "text";
+};
 
 int run(const RunArgs& args) {
   interpreter::RunOptions options;
@@ -116,6 +134,38 @@ int fit(const FitArgs& args) {
     std::cout << fmt::format("  apex angle {:.9f} deg\n  distance   {:.9f}\n", r.apex_angle_deg, r.cone_distance_mm);
   std::cout << fmt::format("  rms        {:.9f}\n  form       {:.9f}\n", r.rms_mm, r.form_mm);
   return 0;
+}
+
+}  // namespace
+
+void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
+  auto run_args = std::make_shared<RunArgs>();
+  auto* run_cmd = app.add_subcommand("run", "run an inspection program on the virtual CMM");
+  run_cmd->add_option("program", run_args->program, "the DMIS program")->required();
+  run_cmd->add_option("--world", run_args->world, "world description (JSON); default: the embedded default world");
+  run_cmd->add_option("--seed", run_args->seed, "random seed of the run (default: the world's)");
+  run_cmd->add_option("--out", run_args->out_dir, "directory for results.json and DMIS output files")->default_val(".");
+  run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
+  commands.push_back({run_cmd, [run_args] { return run(*run_args); }});
+
+  auto check_program = std::make_shared<std::string>();
+  auto* check_cmd = app.add_subcommand("check", "check a program and print diagnostics");
+  check_cmd->add_option("program", *check_program, "the DMIS program")->required();
+  commands.push_back({check_cmd, [check_program] { return check(*check_program); }});
+
+  auto compile_program = std::make_shared<std::string>();
+  auto emit_ir = std::make_shared<bool>(false);
+  auto* compile_cmd = app.add_subcommand("compile", "compile a program to IR");
+  compile_cmd->add_option("program", *compile_program, "the DMIS program")->required();
+  compile_cmd->add_flag("--emit-ir", *emit_ir, "print the IR");
+  commands.push_back({compile_cmd, [compile_program, emit_ir] { return compile(*compile_program, *emit_ir); }});
+
+  auto fit_args = std::make_shared<FitArgs>();
+  auto* fit_cmd = app.add_subcommand("fit", "least-squares fit of a point file (NIST .ds or CSV x,y,z)");
+  fit_cmd->add_option("type", fit_args->type, "point, line, plane, circle, sphere, cylinder or cone")->required();
+  fit_cmd->add_option("file", fit_args->file, "the point file")->required();
+  fit_cmd->add_option("--format", fit_args->format, "text or json")->default_val("text")->check(CLI::IsMember({"text", "json"}));
+  commands.push_back({fit_cmd, [fit_args] { return fit(*fit_args); }});
 }
 
 }  // namespace metron::cli

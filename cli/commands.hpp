@@ -1,28 +1,25 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-#include <cstdint>
-#include <optional>
-#include <string>
+#include <functional>
+#include <vector>
+
+namespace CLI {
+class App;
+}
 
 namespace metron::cli {
 
-struct RunArgs {
-  std::string program;
-  std::optional<std::string> world;
-  std::optional<std::uint64_t> seed;
-  std::string out_dir = ".";
-  bool quiet = false;
+/// A subcommand and what to do when it was given.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
 };
 
-struct FitArgs {
-  std::string type;
-  std::string file;
-  std::string format = "text";
-};
-
-int run(const RunArgs& args);
-int check(const std::string& program);
-int compile(const std::string& program, bool emit_ir);
-int fit(const FitArgs& args);
+/// run, check, compile, fit (commands.cpp).
+void add_run_commands(CLI::App& app, std::vector<Command>& commands);
+/// debug, repl (debug_command.cpp).
+void add_debug_commands(CLI::App& app, std::vector<Command>& commands);
+/// test (test_command.cpp).
+void add_test_command(CLI::App& app, std::vector<Command>& commands);
 
 }  // namespace metron::cli

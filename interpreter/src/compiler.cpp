@@ -97,6 +97,12 @@ class UnitCompiler {
       warn(st.back().span, "sema.no-endfil", "the program does not end with ENDFIL");
   }
   void set_included(bool v) { m_included = v; }
+  /// An expression parameter compiled in this unit's context (labels allowed: `print FA(x)`).
+  std::optional<ir::Expr> standalone_expression(const grammar::Expr& g) {
+    auto t = expression(g, true);
+    if (!t) return std::nullopt;
+    return std::move(t->e);
+  }
 
  private:
   struct Block {
@@ -1438,6 +1444,19 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   uc.set_included(unit > 0);
   uc.compile(program, path.rfind("<repl", 0) == 0);
   return unit;
+}
+
+std::optional<ir::Expr> Compiler::compile_expression(const std::string& text) {
+  const std::uint32_t file = m_sources.add("<expression>", "EXPR/" + text + "\n");
+  const grammar::Program program = grammar::parse_program(m_sources, file, m_sink);
+  if (program.statements.size() != 1 || program.statements[0].params.size() != 1) {
+    if (!m_sink.has_errors()) m_sink.error("repl.expression", Span{file, 5, 5}, "expected one expression");
+    return std::nullopt;
+  }
+  UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, 0, [](const std::string&, const std::string&, Span) {
+    return std::optional<std::size_t>();
+  });
+  return uc.standalone_expression(program.statements[0].params[0]);
 }
 
 std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span included_from, const std::string& written) {

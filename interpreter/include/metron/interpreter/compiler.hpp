@@ -50,6 +50,9 @@ class Compiler {
   /// Compiles text held in memory (the REPL) as a new unit with the current symbols.
   std::size_t compile_text(const std::string& name, const std::string& text);
 
+  /// Compiles one expression (the debugger's `print` and `set`) with the current symbols.
+  std::optional<ir::Expr> compile_expression(const std::string& text);
+
   [[nodiscard]] const ir::Module& module() const { return m_module; }
   [[nodiscard]] ir::Module& module() { return m_module; }
   [[nodiscard]] const SymbolTable& symbols() const { return m_symbols; }
