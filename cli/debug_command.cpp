@@ -342,14 +342,14 @@ class Repl {
       std::cout << "error: print what? (an expression, F(x), FA(x), T(x), TA(x) or D)\n";
       return true;
     }
-    if (upper(rest) == "D" || upper(rest) == "ALIGNMENT") return print_alignment();
+    if ((upper(rest) == "D" && !m_session.interpreter().variable("D")) || upper(rest) == "ALIGNMENT") return print_alignment();
     if (std::regex_match(rest, m, label)) {
       const std::string prefix = upper(m[1].str());
       const std::string name = upper(m[2].str());
       if (prefix == "F" || prefix == "FA") return print_feature(name, prefix == "FA");
       if (prefix == "T" || prefix == "TA") return print_tolerance(name);
     }
-    auto e = m_session.compiler().compile_expression(rest);
+    auto e = m_session.compiler().compile_expression(rest, runtime_names());
     if (!e) {
       print_diagnostics();
       return true;
@@ -454,7 +454,7 @@ class Repl {
       std::cout << fmt::format("error: variable {} is not declared\n", name);
       return true;
     }
-    auto e = m_session.compiler().compile_expression(expr);
+    auto e = m_session.compiler().compile_expression(expr, runtime_names());
     if (!e) {
       print_diagnostics();
       return true;
@@ -467,6 +467,14 @@ class Repl {
     m_session.interpreter().set_variable(name, *v);
     std::cout << name << " = " << m_session.interpreter().variable(name)->to_display() << "\n";
     return true;
+  }
+
+  // Macro parameters and locals of the innermost frames (the compiler does not see them).
+  std::set<std::string> runtime_names() const {
+    std::set<std::string> names;
+    for (const auto& f : m_session.interpreter().frames())
+      for (const auto& [name, value] : f.locals) names.insert(name);
+    return names;
   }
 
   interpreter::Session& m_session;

@@ -97,6 +97,7 @@ class UnitCompiler {
       warn(st.back().span, "sema.no-endfil", "the program does not end with ENDFIL");
   }
   void set_included(bool v) { m_included = v; }
+  void set_runtime_names(const std::set<std::string>& names) { m_runtime_names = names; }
   /// An expression parameter compiled in this unit's context (labels allowed: `print FA(x)`).
   std::optional<ir::Expr> standalone_expression(const grammar::Expr& g) {
     auto t = expression(g, true);
@@ -227,7 +228,7 @@ class UnitCompiler {
         }
         t.e.op = ir::ExprOp::Variable;
         t.e.name = g.text;
-        if (macro_param(g.text)) {
+        if (macro_param(g.text) || m_runtime_names.count(g.text)) {
           t.dynamic = true;
           return t;
         }
@@ -1429,6 +1430,7 @@ class UnitCompiler {
   bool m_ended = false;
   bool m_repl = false;
   bool m_included = false;
+  std::set<std::string> m_runtime_names;
 };
 
 }  // namespace
@@ -1446,7 +1448,7 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   return unit;
 }
 
-std::optional<ir::Expr> Compiler::compile_expression(const std::string& text) {
+std::optional<ir::Expr> Compiler::compile_expression(const std::string& text, const std::set<std::string>& runtime_names) {
   const std::uint32_t file = m_sources.add("<expression>", "EXPR/" + text + "\n");
   const grammar::Program program = grammar::parse_program(m_sources, file, m_sink);
   if (program.statements.size() != 1 || program.statements[0].params.size() != 1) {
@@ -1456,6 +1458,7 @@ std::optional<ir::Expr> Compiler::compile_expression(const std::string& text) {
   UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, 0, [](const std::string&, const std::string&, Span) {
     return std::optional<std::size_t>();
   });
+  uc.set_runtime_names(runtime_names);
   return uc.standalone_expression(program.statements[0].params[0]);
 }
 

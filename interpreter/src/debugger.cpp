@@ -136,7 +136,9 @@ std::vector<std::string> Debugger::where() const {
     const auto& code = it->kind == Frame::Kind::Unit ? module.units.at(it->index).code : module.macros.at(it->index).code;
     const std::string where_name = it->kind == Frame::Kind::Unit ? module.units.at(it->index).path
                                                                  : "M(" + module.macros.at(it->index).name + ")";
-    const Span span = it->pc < code.size() ? code[it->pc].span : (code.empty() ? Span{} : code.back().span);
+    // Outer frames have already moved past their CALL: show the call itself.
+    const std::size_t pc = it == frames.rbegin() || it->pc == 0 ? it->pc : it->pc - 1;
+    const Span span = pc < code.size() ? code[pc].span : (code.empty() ? Span{} : code.back().span);
     out.push_back(fmt::format("#{} {} at {}", out.size(), where_name, describe(span)));
   }
   return out;

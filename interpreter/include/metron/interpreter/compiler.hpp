@@ -51,7 +51,8 @@ class Compiler {
   std::size_t compile_text(const std::string& name, const std::string& text);
 
   /// Compiles one expression (the debugger's `print` and `set`) with the current symbols.
-  std::optional<ir::Expr> compile_expression(const std::string& text);
+  /// `runtime_names` are variables visible at run time only (macro parameters and locals).
+  std::optional<ir::Expr> compile_expression(const std::string& text, const std::set<std::string>& runtime_names = {});
 
   [[nodiscard]] const ir::Module& module() const { return m_module; }
   [[nodiscard]] ir::Module& module() { return m_module; }
