@@ -12,6 +12,7 @@
 #include <map>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <unistd.h>
 
@@ -251,13 +252,14 @@ TEST(Mesh, BallContactAgainstAFaceIsAnalytic) {
   // Never within r.
   EXPECT_FALSE(cube.first_ball_contact({1.3, -5, 0.5}, {1.3, 5, 0.5}, r));
   EXPECT_FALSE(cube.first_ball_contact({0.5, 0.5, 5}, {0.5, 0.5, 5}, r));
+  EXPECT_THROW((void)cube.first_ball_contact(a, b, 0), std::invalid_argument);
 }
 
 TEST(Mesh, BallContactOnSphere) {
   const double radius = 10, r = 2;
   const Mesh sphere = icosphere(radius, 4);
   const double sag = sagitta(sphere, radius);
-  const Vec3 a(30, 1, -2), b(-30, 1, -2);  // passes 1 mm beside... the axis, hits head on
+  const Vec3 a(30, 1, -2), b(-30, 1, -2);  // off-centre, so the contact is not at a vertex
   const auto s = sphere.first_ball_contact(a, b, r);
   ASSERT_TRUE(s);
   const Vec3 centre = a + *s * (b - a);
@@ -520,6 +522,38 @@ double to_axis(const Vec3& p, const Vec3& o, const Vec3& a) {
   return (d - d.dot(a) * a).norm();
 }
 
+// Distance from p to the analytic surface of a CAD face (0 for Kind::Other).
+double off_surface(const CadFace& f, const Vec3& p) {
+  const Vec3 q = p - f.origin;
+  const double h = q.dot(f.axis);
+  const Vec3 radial = q - h * f.axis;
+  switch (f.kind) {
+    case CadFace::Kind::Plane: return std::abs(h);
+    case CadFace::Kind::Cylinder: return std::abs(radial.norm() - f.radius_mm);
+    case CadFace::Kind::Sphere: return std::abs(q.norm() - f.radius_mm);
+    case CadFace::Kind::Torus:
+      return std::abs((q - f.radius_mm * radial.normalized()).norm() - f.minor_radius_mm);
+    case CadFace::Kind::Cone:
+      return std::abs(radial.norm() - (f.radius_mm + h * std::tan(f.semi_angle_rad))) *
+             std::cos(f.semi_angle_rad);
+    default: return 0;
+  }
+}
+
+// Largest distances of the face's triangle vertices and centroids from its analytic surface,
+// over all faces of the model: checks the face-to-triangle map, orientation-independent.
+std::pair<double, double> tessellation_error(const CadModel& model) {
+  double vertex = 0, centroid = 0;
+  const auto& v = model.mesh.vertices();
+  for (const CadFace& f : model.faces)
+    for (auto t : f.triangles) {
+      const auto& tri = model.mesh.faces()[t];
+      for (auto i : tri) vertex = std::max(vertex, off_surface(f, v[i]));
+      centroid = std::max(centroid, off_surface(f, (v[tri[0]] + v[tri[1]] + v[tri[2]]) / 3));
+    }
+  return {vertex, centroid};
+}
+
 // A DMIS PTMEAS nominal: surface point and the outward normal (approach along -normal).
 struct Touch {
   Vec3 point, normal;
@@ -622,7 +656,8 @@ TEST(CadSimplePart, StepIsInTheDmisProgramsCoordinates) {
   int holes = 0, bottoms = 0;
   for (const CadFace& f : model->faces) {
     if (f.kind == CadFace::Kind::Cylinder && std::abs(f.radius_mm - 25) < 1e-9 &&
-        std::abs(std::abs(f.axis.z()) - 1) < 1e-12 && to_axis({50, 50, 40}, f.origin, f.axis) < 1e-9) {
+        std::abs(std::abs(f.axis.z()) - 1) < 1e-12 &&
+        to_axis({50, 50, 40}, f.origin, f.axis) < 1e-9) {
       ++holes;
       EXPECT_TRUE(f.inner);
     }
@@ -632,6 +667,9 @@ TEST(CadSimplePart, StepIsInTheDmisProgramsCoordinates) {
   }
   EXPECT_GE(holes, 1);
   EXPECT_EQ(bottoms, 1);
+  const auto [vertex_error, chord_error] = tessellation_error(*model);
+  EXPECT_LT(vertex_error, 1e-9);
+  EXPECT_LE(chord_error, 0.001);
   const Touch circle[] = {touch(75, 50, 40, -1, 0, 0), touch(25, 50, 40, 1, 0, 0),
                           touch(50, 75, 40, 0, -1, 0), touch(50, 25, 40, 0, 1, 0)};
   for (const auto& t : circle) expect_on_surface(m, t, 0.001 + 1e-9, "A_CIRCLE");
@@ -758,6 +796,13 @@ TEST_F(DcxPart, LoadsClosedAtTheDefaultTessellation) {
     triangles += f.triangles.size();
   }
   EXPECT_EQ(triangles, mesh().face_count());
+  // Nodes on B-rep edges lie within the edge tolerance of the surfaces, and a few triangles
+  // along edges (the R 4.75 spheres') exceed the chord tolerance by up to ~2 um.
+  const auto [vertex_error, chord_error] = tessellation_error(*s_model);
+  std::printf("  distance to the analytic surfaces: vertices <= %.2g mm, centroids <= %.2g mm\n",
+              vertex_error, chord_error);
+  EXPECT_LT(vertex_error, 0.001);
+  EXPECT_LT(chord_error, 0.003);
 }
 
 TEST_F(DcxPart, CylindersOfTheCadModel) {

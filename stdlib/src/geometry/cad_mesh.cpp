@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
@@ -167,6 +168,8 @@ std::optional<Mesh::Hit> Mesh::ray_cast(const Vec3& origin, const Vec3& unit_dir
 
 std::optional<double> Mesh::first_ball_contact(const Vec3& a, const Vec3& b,
                                                double ball_radius_mm, double tol_mm) const {
+  // With r = 0 the clearance never goes negative, so there would be no crossing to bracket.
+  if (!(ball_radius_mm > 0)) throw std::invalid_argument("first_ball_contact: radius must be > 0");
   const Vec3 ab = b - a;
   const double length = ab.norm();
   const double r = ball_radius_mm;
@@ -202,8 +205,8 @@ std::vector<std::vector<Vec3>> Mesh::section(const Vec3& plane_point,
     m_impl->slicer = std::make_unique<Slicer>(m_impl->surface);
   });
   std::vector<std::vector<Point>> polylines;
-  const Kernel::Plane_3 plane(to_cgal(plane_point),
-                              Kernel::Vector_3(plane_normal.x(), plane_normal.y(), plane_normal.z()));
+  const Kernel::Plane_3 plane(
+      to_cgal(plane_point), Kernel::Vector_3(plane_normal.x(), plane_normal.y(), plane_normal.z()));
   (*m_impl->slicer)(plane, std::back_inserter(polylines));
   std::vector<std::vector<Vec3>> out;
   out.reserve(polylines.size());

@@ -79,7 +79,8 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
     std::string format = ext.substr(1);
     std::transform(format.begin(), format.end(), format.begin(),
                    [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-    const std::string what = ext == ".stl" ? diagnose_stl(path) : "could not be parsed as " + format;
+    const std::string what =
+        ext == ".stl" ? diagnose_stl(path) : "could not be parsed as " + format;
     return tl::unexpected(file_error(path, what));
   }
   for (std::size_t i = 0; i < polygons.size(); ++i)
@@ -97,7 +98,8 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
   if (polygons.empty()) return tl::unexpected(file_error(path, "every polygon is degenerate"));
   SurfaceMesh sm;
   PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
-  PMP::triangulate_faces(sm);
+  if (!PMP::triangulate_faces(sm))
+    return tl::unexpected(file_error(path, "has a polygon that cannot be triangulated"));
   if (CGAL::is_closed(sm) && !PMP::is_outward_oriented(sm)) PMP::reverse_face_orientations(sm);
 
   std::vector<Vec3> vertices;
@@ -112,7 +114,7 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
     Mesh::Face& out = faces.emplace_back();
     std::size_t k = 0;
     for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
-      out[k++] = static_cast<std::uint32_t>(v.idx());
+      if (k < 3) out[k++] = static_cast<std::uint32_t>(v.idx());
   }
   auto mesh = Mesh::from_triangles(std::move(vertices), std::move(faces));
   if (!mesh) return tl::unexpected(file_error(path, mesh.error().message));

@@ -26,7 +26,8 @@ struct MeshError {
 /// Copies are cheap and share the tree; const queries are safe from several threads.
 class Mesh {
  public:
-  using Face = std::array<std::uint32_t, 3>;  ///< vertex indices, counterclockwise seen from outside
+  /// Vertex indices of a triangle, counterclockwise seen from outside.
+  using Face = std::array<std::uint32_t, 3>;
 
   /// Builds the mesh and its tree. Fails on no faces, an index out of range, a repeated index
   /// in one face or a non-finite coordinate. Winding is kept as given; zero-area faces are kept
@@ -72,6 +73,7 @@ class Mesh {
   /// the work and can miss only grazing contacts shallower than r/2048. The first sample with
   /// distance <= r brackets the first crossing, which is bisected to tol_mm / 2. The returned s
   /// is the touching end of the bracket: the ball there touches or penetrates by at most tol_mm.
+  /// Throws std::invalid_argument unless ball_radius_mm > 0 (use ray_cast for a point).
   [[nodiscard]] std::optional<double> first_ball_contact(const Vec3& a, const Vec3& b,
                                                          double ball_radius_mm,
                                                          double tol_mm = 1e-7) const;
