@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <regex>
 #include <set>
@@ -53,16 +55,6 @@ std::optional<double> parse_number(std::string_view s) {
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
   return v;
-}
-
-// Half a unit of the last digit written: a value written as 20.01200 stands for [20.011995, 20.012005].
-double rounding_slack(const std::string& digits) {
-  const auto dot = digits.find('.');
-  if (dot == std::string::npos) return 0.5;
-  std::size_t decimals = 0;
-  for (std::size_t i = dot + 1; i < digits.size() && std::isdigit(static_cast<unsigned char>(digits[i])); ++i) ++decimals;
-  if (digits.find_first_of("eE") != std::string::npos) return 0;  // exponent notation: exact
-  return 0.5 * std::pow(10.0, -static_cast<double>(decimals));
 }
 
 std::string quote(const std::string& s) {
@@ -140,13 +132,15 @@ QuantityClass feature_class(const std::string& q) {
   return QuantityClass::Length;
 }
 
+// `line 25 (GOTO/80, 50, 20): collision with TOP at ...`: where and why a run faulted.
 std::string summarize_fault(const nlohmann::json& f) {
-  std::string s = fmt::format("{} at line {}", f.value("fault", "?"), f.value("line", 0));
+  const std::string kind = f.value("fault", "?");
+  std::string s = fmt::format("line {}", f.value("line", 0));
   const std::string statement = f.value("statement", "");
   if (!statement.empty()) s += fmt::format(" ({})", std::string(trim(statement)));
-  const std::string message = f.value("message", "");
-  if (!message.empty()) s += ": " + message;
-  return s;
+  std::string message = f.value("message", "");
+  if (message.find(kind) == std::string::npos) message = message.empty() ? kind : kind + ": " + message;
+  return s + ": " + message;
 }
 
 // The first `file:line:col: error: message` of a diagnostics text.
@@ -219,9 +213,10 @@ class ExpectedParser {
     if (head == "fault") return fault();
     if (head == "error") return error();
     if (head == "text") return text_line(line);
+    if (head == "file") return file_lines();
     if (head == "feature" || head == "tolerance") return quantity();
     return fmt::format("unknown line '{}': expected world, seed, default, skip, status, feature, tolerance, text, fault, "
-                       "error or a # comment", head);
+                       "error, file or a # comment", head);
   }
 
   ExpectedFile finish() {
@@ -306,6 +301,14 @@ class ExpectedParser {
     return add(make_entry("error", "", word(join(m_words, 1, 3)), QuantityClass::Exact));
   }
 
+  // file NAME lines N (a file the run wrote beside results.json, e.g. a DMIS output file)
+  std::optional<std::string> file_lines() {
+    const auto n = m_words.size();
+    if (n < 4 || m_words[n - 2] != "lines" || m_words[n - 1].find_first_not_of("0123456789") != std::string::npos)
+      return "expected 'file NAME lines N', e.g. 'file report.dmo lines 12'";
+    return add(make_entry("file " + join(m_words, 1, n - 2), "lines", word(m_words[n - 1]), QuantityClass::Exact));
+  }
+
   std::optional<std::string> text_line(std::string_view line) {
     auto s = unquote(trim(line.substr(4)));
     if (!s) return s.error() + " after 'text'";
@@ -348,6 +351,7 @@ class ExpectedParser {
         if (t == "+-" && next < m_words.size()) t = m_words[next++];
         else if (t.rfind("+-", 0) == 0) t = t.substr(2);
         else return fmt::format("expected '+-tolerance' or the end of the line after the value, got '{}'", t);
+        if (t.empty()) return "expected a tolerance (a number >= 0) after '+-'";
         const auto tol = parse_number(t);
         if (!tol || *tol < 0) return fmt::format("expected a tolerance (a number >= 0) after '+-', got '{}'", t);
         e.tolerance = *tol;
@@ -479,6 +483,20 @@ Observed observe_diagnostics(const std::string& diagnostics) {
   return o;
 }
 
+void observe_files(const fs::path& out_dir, Observed& observed) {
+  std::vector<std::pair<std::string, std::size_t>> files;
+  std::error_code ec;
+  for (fs::directory_iterator it(out_dir, ec), end; !ec && it != end; it.increment(ec)) {
+    if (!it->is_regular_file() || it->path().filename() == "results.json") continue;
+    std::ifstream in(it->path(), std::ios::binary);
+    const auto lines = static_cast<std::size_t>(std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
+    files.emplace_back(it->path().filename().string(), lines);
+  }
+  std::sort(files.begin(), files.end());  // directory order is not deterministic
+  for (const auto& [name, lines] : files)
+    observed.entries.push_back(make_entry("file " + name, "lines", word(std::to_string(lines)), QuantityClass::Exact));
+}
+
 std::vector<Difference> compare(const ExpectedFile& expected, const Observed& observed) {
   std::vector<Difference> out;
   std::map<std::string, const Entry*> got;
@@ -515,7 +533,7 @@ std::vector<Difference> compare(const ExpectedFile& expected, const Observed& ob
                          : g.cls == QuantityClass::Angle ? expected.defaults.angle_deg
                                                          : expected.defaults.length_mm;
       const double diff = g.value.number - e.value.number;
-      if (std::abs(diff) > tol + rounding_slack(e.value.text)) {
+      if (std::abs(diff) > tol) {
         const int d = decimals_of(g.cls);
         out.push_back({e.key(), fmt::format("expected {}, got {} (difference {}{}, tolerance +-{})", format_value(e.value),
                                             format_value(g.value), diff >= 0 ? "+" : "", format_number(diff, d), tol)});
@@ -558,7 +576,7 @@ tl::expected<std::vector<Case>, std::string> discover_cases(const std::vector<st
     expected.replace_extension(".expected");
     if (!fs::exists(expected)) return;
     const std::string name = program.lexically_normal().generic_string();
-    found.emplace(name, Case{name, program, expected});
+    found.emplace(name, Case{name, program.lexically_normal(), expected.lexically_normal()});
   };
   for (const auto& r : roots) {
     const fs::path root(r);
@@ -586,7 +604,7 @@ bool matches_filter(const std::string& name, const std::string& pattern) {
 std::string format_case_result(const CaseResult& r) {
   static const char* tags[] = {"PASS", "FAIL", "SKIP", "UPDATED"};
   std::string out = fmt::format("{}  {}", tags[static_cast<int>(r.verdict)], r.test.name);
-  if (r.verdict != Verdict::Skip) out += fmt::format("  {:.2f} s", r.wall_s);
+  if (r.wall_s > 0) out += fmt::format("  {:.2f} s", r.wall_s);  // 0: it never ran
   if (!r.reason.empty()) out += "  " + r.reason;
   out += "\n";
   for (const auto& d : r.details) out += "      " + d + "\n";

@@ -109,7 +109,7 @@ tl::expected<pid_t, std::string> spawn(const Case& c, const Prepared& p, const s
 // The one-line reason of a comparison failure: what the run did instead, else how many differ.
 std::string headline(const std::vector<Difference>& diffs, const Observed& observed) {
   if (!diffs.empty() && diffs.front().key == "status") {
-    if (observed.status == "faulted") return "faulted: " + observed.fault_summary;
+    if (observed.status == "faulted") return "faulted at " + observed.fault_summary;
     if (observed.status == "error") return "program error: " + observed.first_error;
     return "status: " + diffs.front().message;
   }
@@ -156,6 +156,7 @@ CaseResult evaluate(const Case& c, const Prepared& p, const ProcessEnd& end, con
     const auto j = nlohmann::json::parse(slurp(results, 256 << 20), nullptr, false);
     if (j.is_discarded() || !j.is_object()) return fail(c, "results.json is not valid JSON", {}, t);
     observed = observe_results(j);
+    observe_files(p.dir / "out", observed);
   } else if (end.code == 1) {
     observed = observe_diagnostics(err);   // a compile error: no results.json
   } else {
@@ -172,6 +173,7 @@ CaseResult evaluate(const Case& c, const Prepared& p, const ProcessEnd& end, con
     std::ofstream out(c.expected, std::ios::binary | std::ios::trunc);
     out << text;
     if (!out) return fail(c, fmt::format("cannot write {}", c.expected.string()), {}, t);
+    if (p.expected.entries.empty()) return {c, Verdict::Updated, t, "written from the results", {}};
     return {c, Verdict::Updated, t, diffs.empty() ? "rewritten, same results" : headline(diffs, observed), detail_lines(diffs)};
   }
   if (diffs.empty()) return {c, Verdict::Pass, t, "", {}};

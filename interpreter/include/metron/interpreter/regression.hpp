@@ -33,12 +33,12 @@ struct Value {
     String,  ///< a quoted string (TEXT output)
   } kind = Kind::Number;
   double number = 0;
-  std::string text;      ///< Word, String; for Number: the digits as written (for the rounding slack)
+  std::string text;      ///< Word, String; for Number: the digits as written or to be written
 };
 
 /// One line of results: `feature BORE1 diameter 20.01200 +-0.001`.
 struct Entry {
-  std::string subject;   ///< `feature BORE1`, `feature BORE1@2`, `tolerance T1`, `text@3`, `status`, `fault`, `error`
+  std::string subject;   ///< `feature BORE1`, `feature BORE1@2`, `tolerance T1`, `text 3`, `file x.dmo`, `status`, `fault`, `error`
   std::string quantity;  ///< `x`, `diameter`, `value`, ...; empty for status, fault, error and text
   Value value;
   std::optional<double> tolerance;  ///< expected files: this line's own tolerance (`+-t`)
@@ -83,7 +83,7 @@ std::string format_expected(const ExpectedFile& file);
 struct Observed {
   std::vector<Entry> entries;
   std::string status;                     ///< completed, faulted, error
-  std::string fault_summary;              ///< `collision at line 14 (GOTO/...): message`, when faulted
+  std::string fault_summary;              ///< `line 14 (GOTO/...): message`, when faulted
   std::string first_error;                ///< the first error diagnostic, when status is error
   std::uint64_t seed = 0;
 };
@@ -92,6 +92,8 @@ struct Observed {
 Observed observe_results(const nlohmann::json& results);
 /// A run that wrote no results.json (a compile error): status error from the diagnostics text.
 Observed observe_diagnostics(const std::string& diagnostics);
+/// Adds `file NAME lines N` for each file the run wrote in `out_dir` besides results.json.
+void observe_files(const std::filesystem::path& out_dir, Observed& observed);
 
 /// One difference between expected and observed.
 struct Difference {
@@ -134,7 +136,7 @@ enum class Verdict {
 struct CaseResult {
   Case test;
   Verdict verdict = Verdict::Pass;
-  double wall_s = 0;                      ///< wall-clock time of the child process
+  double wall_s = 0;                      ///< wall-clock time of the child process; 0 when none ran
   std::string reason;                     ///< one line: why it failed, was skipped or updated
   std::vector<std::string> details;       ///< one line each: the differences, stderr of a crash
 };
