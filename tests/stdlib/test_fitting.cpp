@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -479,6 +480,30 @@ TEST(FitCompensation, InnerAndOuterCones) {
   }
 }
 
+TEST(FitFailures, NearlyFlatDataHasNoCylinderConeOrSphere) {
+  // The least-squares cylinder, cone or sphere of flat data lies at infinite radius.
+  std::vector<Vec3> flat;
+  for (int i = 0; i < 7; ++i) {
+    for (int j = 0; j < 7; ++j) flat.emplace_back(3.0 * i, 2.0 * j + 0.3 * i, ((i * 7 + j) % 3 - 1) * 1e-4);
+  }
+  EXPECT_EQ(fit_cylinder(flat).error(), FitFailure::NoConvergence);
+  EXPECT_EQ(fit_sphere(flat).error(), FitFailure::NoConvergence);
+  for (Vec3& p : flat) p.z() = 0;
+  EXPECT_EQ(fit_cone(flat).error(), FitFailure::NoConvergence);
+}
+
+TEST(FitExact, CylinderAxisFollowsTheHintAndLongScansStayFast) {
+  const CylinderTruth truth{Vec3(5, 6, 7), Vec3(1, -1, 0.5).normalized(), 40};
+  const auto pts = cylinder_points(truth, 50, 200, 80, 360, Noise(0.001, 21));  // a 10000-point scan
+  FitOptions options;
+  options.direction_hint = Vec3(-1, 1, -0.4);
+  const auto r = fit_cylinder(pts, options);
+  ASSERT_TRUE(r);
+  EXPECT_LT(angle_between(r->direction, -truth.axis, false), 1e-4);
+  EXPECT_NEAR(r->diameter_mm, 80, 1e-3);
+  EXPECT_GT(r->iterations, 0);
+}
+
 // ---------------------------------------------------------------------------------------------
 // NIST Algorithm Testing System reference pairs
 
@@ -539,17 +564,42 @@ NistErrors compare_nist(Shape shape, const std::string& name, const FitResult& r
   return e;
 }
 
-void run_nist(Shape shape, const std::string& folder, const std::string& prefix) {
+/// The reference moved by `motion`: point and direction (the sizes do not change).
+std::vector<double> move_reference(Shape shape, std::vector<double> ref, const Frame& motion) {
+  const Vec3 point = motion * Vec3(ref.at(0), ref.at(1), ref.at(2));
+  for (int i = 0; i < 3; ++i) ref[static_cast<std::size_t>(i)] = point(i);
+  if (shape != Shape::Sphere) {
+    const Vec3 dir = motion.linear() * Vec3(ref.at(3), ref.at(4), ref.at(5));
+    for (int i = 0; i < 3; ++i) ref[static_cast<std::size_t>(3 + i)] = dir(i);
+  }
+  return ref;
+}
+
+/// Fits every set of `folder` and compares with the references. With `seed`, each set is first
+/// moved by a random rigid motion (up to 1 m away) and its points shuffled: the fit must not
+/// depend on where the part is or in which order the points came.
+void run_nist(Shape shape, const std::string& folder, const std::string& prefix, std::optional<unsigned> seed = {}) {
   if (!std::filesystem::is_directory(nist_dir / folder)) {
     GTEST_SKIP() << "NIST reference data not found at " << (nist_dir / folder).string()
                  << " (shared/data is not checked out next to the project)";
   }
+  std::mt19937 rng(seed.value_or(0));
+  std::uniform_real_distribution<double> unit(-1, 1);
   std::vector<NistErrors> all;
   for (int k = 1; k <= 30; ++k) {
     const std::string name = fmt::format("{}{}", prefix, k);
-    const auto pts = read_point_file((nist_dir / folder / (name + ".ds")).string());
+    auto pts = read_point_file((nist_dir / folder / (name + ".ds")).string());
     ASSERT_TRUE(pts) << name << ": " << pts.error().message;
-    const std::vector<double> ref = read_numbers(nist_dir / folder / (name + ".fit"));
+    std::vector<double> ref = read_numbers(nist_dir / folder / (name + ".fit"));
+    if (seed) {
+      Frame motion = Frame::Identity();
+      motion.linear() = Eigen::Quaterniond(Eigen::Vector4d(unit(rng), unit(rng), unit(rng), unit(rng)).normalized())
+                            .toRotationMatrix();
+      motion.translation() = 1000 * Vec3(unit(rng), unit(rng), unit(rng));
+      for (Vec3& p : *pts) p = motion * p;
+      std::shuffle(pts->begin(), pts->end(), rng);
+      ref = move_reference(shape, ref, motion);
+    }
     const auto r = fit(shape, *pts);
     if (!r) {
       all.push_back({name, to_string(r.error())});
@@ -586,6 +636,10 @@ TEST(FitNist, Planes) { run_nist(Shape::Plane, "Plane", "pla"); }
 TEST(FitNist, Spheres) { run_nist(Shape::Sphere, "Sphere", "sph"); }
 TEST(FitNist, Cylinders) { run_nist(Shape::Cylinder, "Cylinder", "cyl"); }
 TEST(FitNist, Cones) { run_nist(Shape::Cone, "Cone", "con"); }
+TEST(FitNistMoved, Planes) { run_nist(Shape::Plane, "Plane", "pla", 11); }
+TEST(FitNistMoved, Spheres) { run_nist(Shape::Sphere, "Sphere", "sph", 12); }
+TEST(FitNistMoved, Cylinders) { run_nist(Shape::Cylinder, "Cylinder", "cyl", 13); }
+TEST(FitNistMoved, Cones) { run_nist(Shape::Cone, "Cone", "con", 14); }
 
 }  // namespace
 }  // namespace metron::fitting

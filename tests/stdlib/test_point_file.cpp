@@ -48,10 +48,19 @@ TEST(PointFile, CsvWithHeaderAndBlankLines) {
   EXPECT_EQ((*pts)[1], Vec3(4, 5, 6));
 }
 
+TEST(PointFile, CountBeforeCsvRecords) {
+  const auto pts = parse_point_text("2\n1,2,3\n4,5,6\n");
+  ASSERT_TRUE(pts) << pts.error().message;
+  EXPECT_EQ(pts->size(), 2u);
+}
+
 TEST(PointFile, PlainXyzWithoutCount) {
-  const auto pts = parse_point_text("1 2 3\n4 5 6");
+  auto pts = parse_point_text("1 2 3\n4 5 6");
   ASSERT_TRUE(pts);
   EXPECT_EQ(pts->size(), 2u);
+  pts = parse_point_text("XYZ\n1 2 3\n");
+  ASSERT_TRUE(pts) << pts.error().message;
+  EXPECT_EQ(pts->size(), 1u);
 }
 
 TEST(PointFile, ErrorsNameTheRecord) {

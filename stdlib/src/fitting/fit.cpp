@@ -201,10 +201,15 @@ FitResult make_cone(const detail::Geometry& g, const Probe& probe, const FitOpti
   for (const Vec3& p : probe.surface_points) {
     const Vec3 d = p - r.position;
     const double w = d.dot(r.direction);
-    // Shakarji 1998, sec. 3.7: orthogonal distance to the cone.
+    // Orthogonal distance to the cone (Shakarji 1998, cones).
     r.residuals_mm.push_back(sign * ((d - w * r.direction).norm() * c - w * s - r.cone_distance_mm));
   }
   finish_statistics(r);
+  return r;
+}
+
+FitResult with_iterations(FitResult r, const detail::Geometry& g) {
+  r.iterations = g.iterations;
   return r;
 }
 
@@ -245,22 +250,22 @@ tl::expected<FitResult, FitFailure> fit(Shape shape, const std::vector<Vec3>& po
       case Shape::Point: return make_point(probe);
       case Shape::Line:
         return detail::fit_line_geometry(points).map(
-            [&](const detail::Geometry& g) { return make_line(g, points, probe, options); });
+            [&](const detail::Geometry& g) { return with_iterations(make_line(g, points, probe, options), g); });
       case Shape::Plane:
         return detail::fit_plane_geometry(points).map(
-            [&](const detail::Geometry& g) { return make_plane(g, probe, options); });
+            [&](const detail::Geometry& g) { return with_iterations(make_plane(g, probe, options), g); });
       case Shape::Circle:
         return detail::fit_circle_geometry(points, options.circle_in_plane_of_hint ? hint : std::nullopt)
-            .map([&](const detail::Geometry& g) { return make_circle(g, probe, options); });
+            .map([&](const detail::Geometry& g) { return with_iterations(make_circle(g, probe, options), g); });
       case Shape::Sphere:
         return detail::fit_sphere_geometry(points).map(
-            [&](const detail::Geometry& g) { return make_sphere(g, probe, options); });
+            [&](const detail::Geometry& g) { return with_iterations(make_sphere(g, probe, options), g); });
       case Shape::Cylinder:
         return detail::fit_cylinder_geometry(points, hint).map(
-            [&](const detail::Geometry& g) { return make_cylinder(g, probe, options); });
+            [&](const detail::Geometry& g) { return with_iterations(make_cylinder(g, probe, options), g); });
       case Shape::Cone:
         return detail::fit_cone_geometry(points, hint).map(
-            [&](const detail::Geometry& g) { return make_cone(g, probe, options); });
+            [&](const detail::Geometry& g) { return with_iterations(make_cone(g, probe, options), g); });
     }
     return tl::unexpected(FitFailure::Degenerate);
   }();

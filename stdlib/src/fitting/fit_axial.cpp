@@ -15,6 +15,16 @@
 namespace metron::fitting::detail {
 namespace {
 
+/// At most `count` of the points, evenly strided: enough to rank starting guesses, so the
+/// search costs the same for a 20000-point scan as for a 400-point one.
+std::vector<Vec3> subsample(const std::vector<Vec3>& q, std::size_t count) {
+  if (q.size() <= count) return q;
+  std::vector<Vec3> out;
+  out.reserve(count);
+  for (std::size_t k = 0; k < count; ++k) out.push_back(q[k * q.size() / count]);
+  return out;
+}
+
 /// Rows u, v, a: rotates world vectors into the frame whose z axis is `axis`.
 Mat3 axis_frame(const Vec3& axis) {
   const Vec3 u = any_perpendicular(axis);
@@ -25,7 +35,8 @@ Mat3 axis_frame(const Vec3& axis) {
   return r;
 }
 
-/// Local step of the axis (NPL DITC 140/89, sec. 3.2): the axis through (d0, d1, 0) along
+/// Local step of the axis (A. B. Forbes, "Least-squares best-fit geometric elements", NPL
+/// Report DITC 140/89, 1989): the axis through (d0, d1, 0) along
 /// (d2, d3, 1) in the frame of the current axis. The new point is moved to the foot of the
 /// origin (the centroid), the NIST reference point; returns that axial shift.
 double step_axis(const Vec3& point, const Vec3& axis, const Eigen::VectorXd& delta, Vec3& new_point,
@@ -44,7 +55,7 @@ struct CylinderState {
   double radius = 0;
 };
 
-/// d_i = rho_i - r, rho_i the distance from the axis (Shakarji 1998, sec. 3.6).
+/// d_i = rho_i - r, rho_i the distance from the axis (Shakarji 1998, cylinders).
 struct CylinderModel {
   const std::vector<Vec3>& points;
 
@@ -55,7 +66,7 @@ struct CylinderModel {
     jac.resize(n, 5);
     for (Eigen::Index i = 0; i < n; ++i) {
       const Vec3 l = rot * (points[static_cast<std::size_t>(i)] - s.point);
-      const double rho = std::hypot(l.x(), l.y());
+      const double rho = std::sqrt(l.x() * l.x() + l.y() * l.y());
       const double cx = rho > 0 ? l.x() / rho : 0;
       const double cy = rho > 0 ? l.y() / rho : 0;
       r(i) = rho - s.radius;
@@ -78,7 +89,7 @@ struct ConeState {
 };
 
 /// d_i = rho_i cos(psi) - w_i sin(psi) - s, with w_i the axial coordinate from the point
-/// (Shakarji 1998, sec. 3.7; NPL DITC 140/89, sec. 3.4).
+/// (Shakarji 1998, cones; Forbes, NPL DITC 140/89).
 struct ConeModel {
   const std::vector<Vec3>& points;
 
@@ -91,7 +102,7 @@ struct ConeModel {
     jac.resize(n, 6);
     for (Eigen::Index i = 0; i < n; ++i) {
       const Vec3 l = rot * (points[static_cast<std::size_t>(i)] - s.point);
-      const double rho = std::hypot(l.x(), l.y());
+      const double rho = std::sqrt(l.x() * l.x() + l.y() * l.y());
       const double cx = rho > 0 ? l.x() / rho : 0;
       const double cy = rho > 0 ? l.y() / rho : 0;
       const double w = l.z();
@@ -214,8 +225,9 @@ std::optional<std::pair<State, int>> best_of(const Model& model, const std::vect
   return best;
 }
 
-/// `count` directions spread evenly over a hemisphere (a Fibonacci lattice; R. Marques et al.,
-/// "Spherical Fibonacci point sets for illumination integrals", CGF 32(8), 2013).
+/// `count` directions spread evenly over a hemisphere (a Fibonacci lattice: A. Gonzalez,
+/// "Measurement of areas on a sphere using Fibonacci and latitude-longitude lattices",
+/// Math. Geosci. 42, 2010).
 std::vector<Vec3> hemisphere_directions(int count) {
   std::vector<Vec3> out;
   out.reserve(static_cast<std::size_t>(count));
@@ -260,6 +272,21 @@ void add_searched_starts(const Model& model, MakeStart make_start, std::vector<S
   }
 }
 
+/// Points used to rank starting guesses.
+constexpr std::size_t search_sample_size = 400;
+
+/// A plane is the limit of cylinders and cones whose radius grows without bound, so their least
+/// sum of squares is at most the plane's. A best fit worse than the plane means the minimum lies
+/// at infinity (nearly flat data) or was missed: either way there is no fit to report.
+template <class Model, class State>
+bool beaten_by_plane(const Model& model, const State& best, const PrincipalAxes& pa) {
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  model.evaluate(best, r, jac);
+  const double plane_cost = static_cast<double>(model.points.size()) * pa.rms_extent(2) * pa.rms_extent(2);
+  return r.squaredNorm() > plane_cost * (1 + 1e-9) + 1e-28 * static_cast<double>(model.points.size());
+}
+
 }  // namespace
 
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
@@ -267,19 +294,20 @@ tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>
   const NormalizedPoints np = normalize(points);
   const PrincipalAxes pa = principal_axes(np.points);
   if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
-  std::vector<CylinderState> starts;
-  const CylinderModel model{np.points};
-  auto make_start = [&np](const Vec3& axis) {
+  const std::vector<Vec3> sample = subsample(np.points, search_sample_size);
+  auto make_start = [](const std::vector<Vec3>& q, const Vec3& axis) {
     std::vector<CylinderState> out;
-    if (auto s = cylinder_start(np.points, axis)) out.push_back(*s);
+    if (auto s = cylinder_start(q, axis)) out.push_back(*s);
     return out;
   };
-  for (const Vec3& axis : candidate_axes(np.points, axis_hint, false)) {
-    for (const CylinderState& s : make_start(axis)) starts.push_back(s);
+  std::vector<CylinderState> starts;
+  for (const Vec3& axis : candidate_axes(sample, axis_hint, false)) {
+    for (const CylinderState& s : make_start(np.points, axis)) starts.push_back(s);
   }
-  add_searched_starts(model, make_start, starts);
+  add_searched_starts(CylinderModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
+  const CylinderModel model{np.points};
   const auto best = best_of(model, starts);
-  if (!best) return tl::unexpected(FitFailure::NoConvergence);
+  if (!best || beaten_by_plane(model, best->first, pa)) return tl::unexpected(FitFailure::NoConvergence);
   const auto& [s, iterations] = *best;
   Geometry g;
   g.position = np.to_world(s.point);
@@ -294,21 +322,22 @@ tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& po
   const NormalizedPoints np = normalize(points);
   const PrincipalAxes pa = principal_axes(np.points);
   if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
-  std::vector<ConeState> starts;
-  const ConeModel model{np.points};
-  auto make_start = [&np](const Vec3& axis) {
+  const std::vector<Vec3> sample = subsample(np.points, search_sample_size);
+  auto make_start = [](const std::vector<Vec3>& q, const Vec3& axis) {
     std::vector<ConeState> out;
-    if (auto s = cone_start(np.points, axis)) out.push_back(*s);
+    if (auto s = cone_start(q, axis)) out.push_back(*s);
     // A cylinder start as well: the linear cone fit is poor for nearly cylindrical cones.
-    if (auto c = cylinder_start(np.points, axis)) out.push_back(ConeState{c->point, c->axis, 0, c->radius});
+    if (auto c = cylinder_start(q, axis)) out.push_back(ConeState{c->point, c->axis, 0, c->radius});
     return out;
   };
-  for (const Vec3& axis : candidate_axes(np.points, axis_hint, true)) {
-    for (const ConeState& s : make_start(axis)) starts.push_back(s);
+  std::vector<ConeState> starts;
+  for (const Vec3& axis : candidate_axes(sample, axis_hint, true)) {
+    for (const ConeState& s : make_start(np.points, axis)) starts.push_back(s);
   }
-  add_searched_starts(model, make_start, starts);
+  add_searched_starts(ConeModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
+  const ConeModel model{np.points};
   const auto best = best_of(model, starts);
-  if (!best) return tl::unexpected(FitFailure::NoConvergence);
+  if (!best || beaten_by_plane(model, best->first, pa)) return tl::unexpected(FitFailure::NoConvergence);
   auto [s, iterations] = *best;
   if (s.half_angle < 0) {
     // Same cone: d = rho cos(psi) - w sin(psi) - s is unchanged by w -> -w, psi -> -psi.

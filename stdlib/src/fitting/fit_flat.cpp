@@ -26,7 +26,7 @@ PrincipalAxes principal_axes(const std::vector<Vec3>& centred) {
   Eigen::MatrixX3d m(static_cast<Eigen::Index>(centred.size()), 3);
   for (std::size_t i = 0; i < centred.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = centred[i].transpose();
   // Total least squares: the right singular vectors of the centred points are the directions
-  // of largest to smallest spread (Shakarji 1998, sec. 3.1, 3.2).
+  // of largest to smallest spread (Shakarji 1998, lines and planes).
   const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(m, Eigen::ComputeFullV);
   PrincipalAxes out;
   out.axes = svd.matrixV();

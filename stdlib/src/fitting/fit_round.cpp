@@ -2,6 +2,7 @@
 // Circle (in a plane) and sphere: algebraic start, then geometric Levenberg-Marquardt.
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 
 #include "geometry_fits.hpp"
@@ -20,7 +21,7 @@ struct RoundState {
   double radius = 0;
 };
 
-/// Residual d_i = |p_i - c| - r (Shakarji 1998, sec. 3.4 and 3.5).
+/// Residual d_i = |p_i - c| - r (Shakarji 1998, circles and spheres).
 template <int Dim>
 struct RoundModel {
   const std::vector<Point<Dim>>& points;
@@ -74,6 +75,14 @@ tl::expected<std::pair<RoundState<Dim>, int>, FitFailure> fit_round(const std::v
   const LmOutcome out = levenberg_marquardt(RoundModel<Dim>{points}, s);
   // A runaway radius means the data is (nearly) straight or flat: no finite circle or sphere.
   if (!out.converged || !std::isfinite(s.radius) || std::abs(s.radius) > 1e8) {
+    return tl::unexpected(FitFailure::NoConvergence);
+  }
+  // The line (plane) through the centred points is the limit of ever larger circles (spheres),
+  // so a best fit worse than it means the minimum lies at infinity.
+  Eigen::Matrix<double, Dim, Dim> scatter = Eigen::Matrix<double, Dim, Dim>::Zero();
+  for (const Point<Dim>& p : points) scatter += p * p.transpose();
+  const double flat_cost = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, Dim, Dim>>(scatter).eigenvalues()(0);
+  if (out.cost > flat_cost * (1 + 1e-9) + 1e-28 * static_cast<double>(points.size())) {
     return tl::unexpected(FitFailure::NoConvergence);
   }
   s.radius = std::abs(s.radius);

@@ -22,13 +22,14 @@ struct LmOutcome {
 ///   void evaluate(const State&, Eigen::VectorXd& residuals, Eigen::MatrixXd& jacobian) const;
 ///   State step(const State&, const Eigen::VectorXd& delta) const;
 /// The Jacobian may be taken with respect to a local parametrisation that `step` applies and
-/// re-centres (Forbes' re-linearisation about the current estimate, NPL DITC 140/89 sec. 3), so
+/// re-centres (Forbes' re-linearisation about the current estimate, A. B. Forbes, NPL Report DITC 140/89), so
 /// the state never nears a parametrisation singularity.
 ///
-/// Each step solves min |J d + r|^2 + lambda |D d|^2 by a pivoted QR of the stacked system,
-/// which avoids squaring the condition number as the normal equations would; D holds the largest
-/// column norms of J seen so far (J. J. More, "The Levenberg-Marquardt algorithm: implementation
-/// and theory", LNM 630, 1978).
+/// Each step solves min |J d + r|^2 + lambda |D d|^2. J = QR is factored once per accepted
+/// step; every trial lambda then solves the small stacked system [R; sqrt(lambda) D] d = [-Q'r; 0]
+/// by a pivoted QR, which avoids squaring the condition number as the normal equations would.
+/// D holds the largest column norms of J seen so far (J. J. More, "The Levenberg-Marquardt
+/// algorithm: implementation and theory", Lecture Notes in Mathematics 630, 1978).
 template <class Model, class State>
 LmOutcome levenberg_marquardt(const Model& model, State& state, int max_iterations = 500,
                               double step_tolerance = 1e-13) {
@@ -40,18 +41,26 @@ LmOutcome levenberg_marquardt(const Model& model, State& state, int max_iteratio
   out.cost = r.squaredNorm();
   const Eigen::Index n = jac.rows();
   const Eigen::Index p = jac.cols();
+  const Eigen::Index k = std::min(n, p);
   Eigen::VectorXd col_scale = Eigen::VectorXd::Constant(p, std::numeric_limits<double>::min());
-  Eigen::MatrixXd stacked(n + p, p);
-  Eigen::VectorXd rhs(n + p);
+  Eigen::MatrixXd r_factor(k, p);
+  Eigen::VectorXd qt_r(k);
+  Eigen::MatrixXd stacked(k + p, p);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k + p);
   Eigen::VectorXd r_trial;
   Eigen::MatrixXd jac_trial;
+  auto factor = [&] {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(jac);
+    r_factor = qr.matrixQR().topRows(k).template triangularView<Eigen::Upper>();
+    qt_r = (qr.householderQ().adjoint() * r).head(k);
+    col_scale = col_scale.cwiseMax(jac.colwise().norm().transpose());
+  };
+  factor();
   double lambda = 1e-3;
   for (out.iterations = 1; out.iterations <= max_iterations; ++out.iterations) {
-    col_scale = col_scale.cwiseMax(jac.colwise().norm().transpose());
-    stacked.topRows(n) = jac;
+    stacked.topRows(k) = r_factor;
     stacked.bottomRows(p) = (std::sqrt(lambda) * col_scale).asDiagonal();
-    rhs.head(n) = -r;
-    rhs.tail(p).setZero();
+    rhs.head(k) = -qt_r;
     const Eigen::VectorXd delta = stacked.colPivHouseholderQr().solve(rhs);
     State trial = model.step(state, delta);
     model.evaluate(trial, r_trial, jac_trial);
@@ -67,14 +76,15 @@ LmOutcome levenberg_marquardt(const Model& model, State& state, int max_iteratio
         out.converged = true;
         return out;
       }
+      factor();
     } else {
       lambda *= 10;
       if (lambda > 1e12) {
         // No damping finds a descent. A minimum as far as floating point can tell when even the
         // undamped Gauss-Newton step predicts a decrease below the rounding noise of the cost
         // (each residual carries an absolute error of order eps on points of order one).
-        const Eigen::VectorXd gauss_newton = jac.colPivHouseholderQr().solve(-r);
-        const double predicted = (jac * gauss_newton).squaredNorm();
+        const Eigen::VectorXd gauss_newton = r_factor.colPivHouseholderQr().solve(-qt_r);
+        const double predicted = (r_factor * gauss_newton).squaredNorm();
         out.converged = predicted <= 1e-13 * r.lpNorm<1>() + 1e-30 * static_cast<double>(n);
         return out;
       }

@@ -94,15 +94,17 @@ tl::expected<std::vector<Vec3>, PointFileError> parse_point_text(std::string_vie
   const bool csv = lines.front().second.find(',') != std::string_view::npos ||
                    (lines.size() > 1 && lines[1].second.find(',') != std::string_view::npos);
   const std::vector<std::string_view> head = split_fields(lines.front().second, csv);
-  if (!csv && head.size() == 1) {
+  if (head.size() == 1) {
     // NIST .ds: the point count alone on the first line.
     std::size_t n = 0;
     const std::string_view t = head.front();
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), n);
-    if (ec != std::errc() || end != t.data() + t.size()) {
-      return tl::unexpected(at_line(lines.front().first, fmt::format("expected a point count or 3 numbers, got '{}'", shorten(t))));
-    }
-    declared = n;
+    if (ec == std::errc() && end == t.data() + t.size()) {
+      declared = n;
+    } else if (parse_number(t)) {
+      return tl::unexpected(
+          at_line(lines.front().first, fmt::format("expected a point count or 3 numbers, got '{}'", shorten(t))));
+    }  // else a one-word header
     first = 1;
   } else if (std::none_of(head.begin(), head.end(), [](std::string_view f) { return parse_number(f).has_value(); })) {
     first = 1;  // a header line such as "x,y,z"
@@ -119,7 +121,8 @@ tl::expected<std::vector<Vec3>, PointFileError> parse_point_text(std::string_vie
     for (int c = 0; c < 3; ++c) {
       const std::optional<double> v = parse_number(fields[static_cast<std::size_t>(c)]);
       if (!v) {
-        return tl::unexpected(at_line(number, fmt::format("'{}' is not a number", shorten(fields[static_cast<std::size_t>(c)]))));
+        const std::string_view field = fields[static_cast<std::size_t>(c)];
+        return tl::unexpected(at_line(number, fmt::format("'{}' is not a number", shorten(field))));
       }
       if (!std::isfinite(*v)) {
         return tl::unexpected(at_line(number, fmt::format("coordinate {} is not finite", "xyz"[c])));

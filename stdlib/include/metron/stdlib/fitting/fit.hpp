@@ -20,7 +20,7 @@ namespace metron::fitting {
 enum class FitFailure {
   TooFewPoints,   ///< fewer points than the shape needs (point 1, line 2, plane 3, circle 3, sphere 4, cylinder 5, cone 6)
   Degenerate,     ///< the points do not determine the shape (coincident, collinear for a plane or circle, coplanar for a sphere) or a coordinate is not finite
-  NoConvergence,  ///< the iteration did not settle on a finite minimum (e.g. a cylinder or cone through nearly flat data, whose radius runs away)
+  NoConvergence,  ///< no finite least-squares shape: the iteration did not settle, or the best fit is worse than a plane (line), i.e. the minimum lies at infinite radius (a cylinder, cone, sphere or circle through nearly flat or straight data)
 };
 
 /// "too few points", "degenerate point set", "no convergence".
@@ -40,7 +40,7 @@ std::optional<Shape> shape_from_name(std::string_view name);
 /// cone distance + r / - r; planes, lines and points shifted by r against the approach direction).
 struct Compensation {
   double ball_radius_mm = 0;  ///< stylus ball radius
-  /// One per point: unit approach direction, pointing from the surface toward where the probe came
+  /// One per point: the approach direction, pointing from the surface toward where the probe came
   /// from (the nominal surface normal on the side of the material the probe was on).
   std::vector<Vec3> approach;
 };
@@ -65,8 +65,10 @@ struct FitResult {
   Vec3 position = Vec3::Zero();
   /// Unit. Line: direction, from the first toward the last point. Plane/circle: normal, the sign
   /// that agrees with the mean approach direction when given, else with `direction_hint`, else
-  /// with its largest component positive. Cylinder: axis, agreeing with the hint, else largest
-  /// component positive. Cone: axis from the apex toward the opening (NIST). Point: zero.
+  /// with its largest component positive (an approach or hint more than 60 degrees off the
+  /// normal's line, such as the radial approaches of a circle, is not used). Cylinder: axis,
+  /// agreeing with the hint, else largest component positive. Cone: axis from the apex toward
+  /// the opening (NIST). Point: zero.
   Vec3 direction = Vec3::Zero();
   double diameter_mm = 0;       ///< circle, sphere, cylinder (compensated)
   double apex_angle_deg = 0;    ///< cone: full apex angle
@@ -90,7 +92,8 @@ struct FitResult {
 };
 
 /// Fits `shape` to `points` by orthogonal distance least squares.
-/// @throws std::invalid_argument when the compensation does not give one approach per point.
+/// @throws std::invalid_argument when the compensation does not give one finite, non-zero approach
+///         per point (they need not be unit: they are normalised) or its ball radius is negative.
 tl::expected<FitResult, FitFailure> fit(Shape shape, const std::vector<Vec3>& points,
                                         const FitOptions& options = {});
 
