@@ -76,7 +76,7 @@ class UnitCompiler {
   void compile(const grammar::Program& program, bool repl) {
     m_repl = repl;
     const auto& st = program.statements;
-    if (!repl && !st.empty() && st.front().major != "DMISMN")
+    if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN")
       warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
     for (const auto& s : st) {
       if (m_ended) {
@@ -888,7 +888,7 @@ class UnitCompiler {
       return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", kind, need.second, need.first, need.first == 1 ? "" : "s", numbers.size()));
     if ((kind == "DIAM" || kind == "RAD" || kind == "PROFS") && numbers[0] > numbers[1])
       return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
-    if ((kind == "PERP" || kind == "PARLEL" || kind == "ANGLB") &&
+    if ((kind == "PERP" || kind == "PARLEL") &&
         std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
       return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", kind));
     if (kind == "POS" && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
@@ -896,6 +896,10 @@ class UnitCompiler {
     if (!std::isnan(numbers[0]) && need.second == std::string("the tolerance zone") && numbers[0] < 0)
       return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
     m_symbols.tolerances[upper(s.target->name)] = kind;
+    if (std::any_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
+      m_symbols.tolerance_datums.insert(upper(s.target->name));
+    else
+      m_symbols.tolerance_datums.erase(upper(s.target->name));
     emit(std::move(in));
   }
 
@@ -919,6 +923,8 @@ class UnitCompiler {
           const std::string& kind = it->second;
           if (kind == "DISTB" && types.size() != 2)
             return error(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
+          if (kind == "ANGLB" && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
+            return error(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
           for (const auto& type : types)
             if (!type.empty() && !tolerance_applies(kind, type))
               return error(p.span, "sema.tolerance-type", fmt::format("TOL/{} of T({}) does not apply to a {}", kind, p.label.name, type));
@@ -1469,6 +1475,9 @@ std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span 
     m_sink.error("sema.recursive-call", included_from, fmt::format("{} calls itself through CALL/EXTERN", shown));
     return std::nullopt;
   }
+  // A file called several times is compiled once: its definitions are not redefinitions.
+  if (auto done = m_symbols.compiled_units.find(key); done != m_symbols.compiled_units.end() && included_from.valid())
+    return done->second;
   const std::uint32_t file = m_sources.load(path);
   if (file == 0) {
     m_sink.error("io.cannot-read", included_from, fmt::format("cannot read {}", shown));
@@ -1477,6 +1486,7 @@ std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span 
   m_symbols.units_in_progress.insert(key);
   const std::size_t unit = compile_program(file, path);
   m_symbols.units_in_progress.erase(key);
+  if (included_from.valid()) m_symbols.compiled_units[key] = unit;
   return unit;
 }
 

@@ -118,6 +118,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       if (type == FeatureType::Plane) {
         const Vec3 d2 = in[1].direction.dot(in[0].direction) < 0 ? Vec3(-in[1].direction) : in[1].direction;
         g.direction = (in[0].direction + d2).normalized();
+        if (it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
       }
       break;
     }

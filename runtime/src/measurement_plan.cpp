@@ -41,6 +41,13 @@ void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis,
   }
 }
 
+// A line lies in the plane normal to its i2,j2,k2 (DMIS); the surface it is probed on is normal
+// to that plane's in-plane perpendicular: direction x i2,j2,k2 (e.g. x along, z up: the -y face).
+Vec3 line_surface_normal(const Geometry& g) {
+  const Vec3 n = g.direction.cross(g.normal2);
+  return n.norm() < 1e-12 ? any_perpendicular(g.direction) : Vec3(n.normalized());
+}
+
 }  // namespace
 
 int minimum_points(FeatureType type) {
@@ -63,7 +70,7 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
   switch (g.type) {
     case FeatureType::Point:
     case FeatureType::Plane: return axis;
-    case FeatureType::Line: return g.normal2.normalized();
+    case FeatureType::Line: return line_surface_normal(g);
     case FeatureType::Circle:
     case FeatureType::Arc:
     case FeatureType::Cylinder: return sign * radial(point, g.position, axis);
@@ -81,8 +88,11 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
   return axis;
 }
 
-std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const ProbeSettings& probe,
-                                          const Vec3& up, const Vec3& current_position) {
+std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const ProbeSettings& settings,
+                                          double ball_radius_mm, const Vec3& up, const Vec3& current_position) {
+  // Ball-centre stand-off: the machine's PtMeas starts its ball surface APPRCH off the surface.
+  ProbeSettings probe = settings;
+  probe.approach_mm += ball_radius_mm;
   std::vector<PlannedStep> steps;
   const Vec3 axis = g.direction.normalized();
   const bool inner = g.side != Side::Outer;
@@ -106,7 +116,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       const double len = g.length_mm > 0 ? g.length_mm : 20.0;
       for (int i = 0; i < n; ++i) {
         const double t = n == 1 ? 0.5 : static_cast<double>(i) / (n - 1);
-        steps.push_back({PlannedStep::Kind::Probe, g.position + (0.1 + 0.8 * t) * len * axis, g.normal2.normalized()});
+        steps.push_back({PlannedStep::Kind::Probe, g.position + (0.1 + 0.8 * t) * len * axis, line_surface_normal(g)});
       }
       break;
     }

@@ -48,8 +48,10 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
   fitting::FitOptions options;
   options.compensation = comp;
   options.inner = nominal.side != Side::Outer;
+  // A line's DMIS i2,j2,k2 is the normal of the plane the line lies in (the working plane).
   options.direction_hint = nominal.type == FeatureType::Line ? nominal.normal2 : nominal.direction;
   options.circle_in_plane_of_hint = nominal.type == FeatureType::Circle || nominal.type == FeatureType::Arc;
+  options.start_from_hint = true;  // a measured feature is fitted from its nominal
   auto fit = fitting::fit(fit_shape(nominal.type), centres, options);
   if (!fit)
     return tl::unexpected(fmt::format("cannot fit a {} to {} point{}: {}", dmis_word(nominal.type), points.size(),
@@ -312,7 +314,9 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     if (m_mode == Mode::Man)
       return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");
     const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
-    const auto plan = plan_auto_points(feature.nominal, block.point_count, m_probe, up, m_machine.state().position_mm);
+    const auto state = m_machine.state();
+    const double ball = state.tool ? state.tool->effective_radius_mm : 0.0;
+    const auto plan = plan_auto_points(feature.nominal, block.point_count, m_probe, ball, up, state.position_mm);
     if (plan.empty()) return program_error(block.span, "cannot plan automatic points for this feature");
     for (const auto& s : plan) {
       if (s.kind == PlannedStep::Kind::GoTo) {

@@ -534,8 +534,9 @@ TEST(VirtualCmm, StepPartCanBeProbed) {
   w.machine.skip.latency_s = 0;
   Cmm cmm(w);
   cmm.tool(4);
-  // The NIST simple part: a 100 x 100 x 50 block with a diameter 50 blind bore at (50, 50).
-  const Vec3 o(300, 200, 0);
+  // The NIST simple part: a 100 x 100 x 50 block with a diameter 50 blind bore at (50, 50),
+  // placed where its DMIS program expects it: model frame = machine frame.
+  const Vec3 o(0, 0, 0);
   cmm.go(o + Vec3(10, 10, 80));
   const Hit top = cmm.point(o + Vec3(10, 10, 50), Vec3::UnitZ());
   EXPECT_NEAR(top.surface_mm().z(), 50, 1e-6);

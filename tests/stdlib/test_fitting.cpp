@@ -643,3 +643,21 @@ TEST(FitNistMoved, Cones) { run_nist(Shape::Cone, "Cone", "con", 14); }
 
 }  // namespace
 }  // namespace metron::fitting
+
+// Two rings of four points at equal angles lie exactly on the nominal cylinder and on a diagonal
+// one; fitted from the nominal axis (as a measured feature is), the nominal one is returned.
+TEST(FitCylinder, StartFromHintKeepsADegeneratePatternOnTheNominal) {
+  std::vector<metron::Vec3> centres;
+  for (double z : {3.0, 11.0})
+    for (int k = 0; k < 4; ++k) {
+      const double a = k * 3.14159265358979323846 / 2;
+      centres.emplace_back(4.25 * std::cos(a), 4.25 * std::sin(a), z);
+    }
+  metron::fitting::FitOptions options;
+  options.direction_hint = metron::Vec3::UnitZ();
+  options.start_from_hint = true;
+  const auto r = metron::fitting::fit(metron::fitting::Shape::Cylinder, centres, options);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_NEAR(std::abs(r->direction.z()), 1.0, 1e-12);
+  EXPECT_NEAR(r->diameter_mm, 8.5, 1e-9);
+}

@@ -261,10 +261,10 @@ tl::expected<FitResult, FitFailure> fit(Shape shape, const std::vector<Vec3>& po
         return detail::fit_sphere_geometry(points).map(
             [&](const detail::Geometry& g) { return with_iterations(make_sphere(g, probe, options), g); });
       case Shape::Cylinder:
-        return detail::fit_cylinder_geometry(points, hint).map(
+        return detail::fit_cylinder_geometry(points, hint, options.start_from_hint).map(
             [&](const detail::Geometry& g) { return with_iterations(make_cylinder(g, probe, options), g); });
       case Shape::Cone:
-        return detail::fit_cone_geometry(points, hint).map(
+        return detail::fit_cone_geometry(points, hint, options.start_from_hint).map(
             [&](const detail::Geometry& g) { return with_iterations(make_cone(g, probe, options), g); });
     }
     return tl::unexpected(FitFailure::Degenerate);

@@ -290,7 +290,7 @@ bool beaten_by_plane(const Model& model, const State& best, const PrincipalAxes&
 }  // namespace
 
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
-                                                         const std::optional<Vec3>& axis_hint) {
+                                                         const std::optional<Vec3>& axis_hint, bool hint_only) {
   const NormalizedPoints np = normalize(points);
   const PrincipalAxes pa = principal_axes(np.points);
   if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
@@ -300,13 +300,17 @@ tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>
     if (auto s = cylinder_start(q, axis)) out.push_back(*s);
     return out;
   };
-  std::vector<CylinderState> starts;
-  for (const Vec3& axis : candidate_axes(sample, axis_hint, false)) {
-    for (const CylinderState& s : make_start(np.points, axis)) starts.push_back(s);
-  }
-  add_searched_starts(CylinderModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
   const CylinderModel model{np.points};
-  const auto best = best_of(model, starts);
+  std::optional<std::pair<CylinderState, int>> best;
+  if (hint_only && axis_hint) best = best_of(model, make_start(np.points, axis_hint->normalized()));
+  if (!best || beaten_by_plane(model, best->first, pa)) {
+    std::vector<CylinderState> starts;
+    for (const Vec3& axis : candidate_axes(sample, axis_hint, false)) {
+      for (const CylinderState& s : make_start(np.points, axis)) starts.push_back(s);
+    }
+    add_searched_starts(CylinderModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
+    best = best_of(model, starts);
+  }
   if (!best || beaten_by_plane(model, best->first, pa)) return tl::unexpected(FitFailure::NoConvergence);
   const auto& [s, iterations] = *best;
   Geometry g;
@@ -318,7 +322,7 @@ tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>
 }
 
 tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& points,
-                                                     const std::optional<Vec3>& axis_hint) {
+                                                     const std::optional<Vec3>& axis_hint, bool hint_only) {
   const NormalizedPoints np = normalize(points);
   const PrincipalAxes pa = principal_axes(np.points);
   if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
@@ -330,13 +334,17 @@ tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& po
     if (auto c = cylinder_start(q, axis)) out.push_back(ConeState{c->point, c->axis, 0, c->radius});
     return out;
   };
-  std::vector<ConeState> starts;
-  for (const Vec3& axis : candidate_axes(sample, axis_hint, true)) {
-    for (const ConeState& s : make_start(np.points, axis)) starts.push_back(s);
-  }
-  add_searched_starts(ConeModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
   const ConeModel model{np.points};
-  const auto best = best_of(model, starts);
+  std::optional<std::pair<ConeState, int>> best;
+  if (hint_only && axis_hint) best = best_of(model, make_start(np.points, axis_hint->normalized()));
+  if (!best || beaten_by_plane(model, best->first, pa)) {
+    std::vector<ConeState> starts;
+    for (const Vec3& axis : candidate_axes(sample, axis_hint, true)) {
+      for (const ConeState& s : make_start(np.points, axis)) starts.push_back(s);
+    }
+    add_searched_starts(ConeModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
+    best = best_of(model, starts);
+  }
   if (!best || beaten_by_plane(model, best->first, pa)) return tl::unexpected(FitFailure::NoConvergence);
   auto [s, iterations] = *best;
   if (s.half_angle < 0) {

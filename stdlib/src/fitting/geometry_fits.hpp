@@ -54,8 +54,10 @@ tl::expected<Geometry, FitFailure> fit_circle_geometry(const std::vector<Vec3>& 
                                                        const std::optional<Vec3>& plane_normal);
 tl::expected<Geometry, FitFailure> fit_sphere_geometry(const std::vector<Vec3>& points);
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
-                                                         const std::optional<Vec3>& axis_hint);
+                                                         const std::optional<Vec3>& axis_hint,
+                                                         bool hint_only = false);
 tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& points,
-                                                     const std::optional<Vec3>& axis_hint);
+                                                     const std::optional<Vec3>& axis_hint,
+                                                     bool hint_only = false);
 
 }  // namespace metron::fitting::detail

@@ -36,6 +36,8 @@ struct SymbolTable {
   std::map<std::string, std::map<int, std::string>> macro_features;
   std::map<std::string, Span> skipped;             ///< labels defined by skipped vendor statements
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
+  std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
+  std::set<std::string> tolerance_datums;          ///< tolerances defined with datum references
 };
 
 /// Compiles DMIS sources to IR: name resolution, type and semantic checks, lowering.

@@ -20,9 +20,10 @@ Vec3 nominal_normal_at(const Geometry& nominal, const Vec3& point);
 
 /// Points for a MEAS block with no PTMEAS (AUTO mode): `count` points (0 = a sensible default for
 /// the type) spread over the nominal feature (MCS), with clearance moves along `up` so that the
-/// probe does not cut through the part between points. Empty when the type cannot be planned.
+/// ball (radius `ball_radius_mm`, whose centre the GoTo steps position) does not cut through the
+/// part between points. Empty when the type cannot be planned.
 std::vector<PlannedStep> plan_auto_points(const Geometry& nominal, int count, const ProbeSettings& probe,
-                                          const Vec3& up, const Vec3& current_position);
+                                          double ball_radius_mm, const Vec3& up, const Vec3& current_position);
 
 /// Fewest points that determine a feature of this type.
 int minimum_points(FeatureType type);

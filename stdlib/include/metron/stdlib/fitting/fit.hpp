@@ -52,7 +52,12 @@ struct FitOptions {
   /// from); for a line, the normal of the plane the line was measured in.
   std::optional<Vec3> direction_hint;
   bool inner = true;  ///< circle/sphere/cylinder/cone: a hole (material outside); the side for compensation and residual signs
-  bool circle_in_plane_of_hint = false;  ///< circle: project onto the plane through the centroid normal to `direction_hint` instead of fitting a plane
+  bool circle_in_plane_of_hint = false;
+  /// Cylinder/cone: keep the minimum reached from `direction_hint` (the nominal axis) when that fit
+  /// converges, instead of the lowest of a global search. CMM software fits measured features
+  /// from their nominal; it also keeps degenerate patterns on the nominal (two rings of four
+  /// points at equal angles lie exactly on a diagonal cylinder too).
+  bool start_from_hint = false;  ///< circle: project onto the plane through the centroid normal to `direction_hint` instead of fitting a plane
 };
 
 /// A fitted feature. All lengths in mm, in the coordinates of the input points.
