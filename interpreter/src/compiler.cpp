@@ -107,7 +107,7 @@ class UnitCompiler {
 
  private:
   struct Block {
-    enum class Kind { Meas, If, Do, Macro } kind;
+    enum class Kind { Meas, If, Do, Macro } kind = Kind::Meas;
     Span span;
     std::size_t start = 0;
     std::vector<std::size_t> exits;      // jumps to patch to the end
@@ -119,6 +119,12 @@ class UnitCompiler {
     std::string feature, type;
   };
   static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
+  static Block block(Block::Kind kind, Span span) {
+    Block b;
+    b.kind = kind;
+    b.span = span;
+    return b;
+  }
   struct JumpScope {
     std::map<std::string, std::size_t> labels;
     std::vector<std::pair<std::size_t, std::pair<std::string, Span>>> pending;
@@ -762,7 +768,7 @@ class UnitCompiler {
   // MEAS/type,F(l),n
   void meas(const grammar::Statement& s) {
     // Open the block first, so that a bad MEAS does not also make its ENDMES an error.
-    Block placeholder{Block::Kind::Meas, s.span};
+    Block placeholder = block(Block::Kind::Meas, s.span);
     placeholder.start = invalid;
     placeholder.control = true;
     m_blocks.push_back(placeholder);
@@ -777,7 +783,9 @@ class UnitCompiler {
       return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is a {}", s.params[0].text, s.params[1].label.name, type));
     auto count = numeric(s.params[2], "the number of points");
     if (!count) return;
-    Block b{Block::Kind::Meas, s.span, 0, {}, {}, false, 0, 0, false, label, s.params[0].text};
+    Block b = block(Block::Kind::Meas, s.span);
+    b.feature = label;
+    b.type = s.params[0].text;
     if (count->op == ir::ExprOp::Constant) {
       b.declared = static_cast<int>(count->value.number);
       if (count->value.number < 0 || count->value.number != std::floor(count->value.number))
@@ -1220,7 +1228,7 @@ class UnitCompiler {
     if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.if", "IF expects one condition, e.g. IF/(V1.GT.0)");
     auto c = expression(s.params[0]);
     if (!c) {
-      m_blocks.push_back({Block::Kind::If, s.span});
+      m_blocks.push_back(block(Block::Kind::If, s.span));
       return;
     }
     if (!c->dynamic && c->e.type != ValueType::Bool)
@@ -1228,7 +1236,7 @@ class UnitCompiler {
     mark_control();
     auto in = make(Op::JumpIfFalse, s);
     in.operands.push_back(expr_operand(std::move(c->e)));
-    Block b{Block::Kind::If, s.span};
+    Block b = block(Block::Kind::If, s.span);
     b.branch = emit(std::move(in));
     m_blocks.push_back(b);
   }
@@ -1254,7 +1262,7 @@ class UnitCompiler {
 
   // DO/V,start,end[,step]
   void do_(const grammar::Statement& s) {
-    Block placeholder{Block::Kind::Do, s.span};
+    Block placeholder = block(Block::Kind::Do, s.span);
     placeholder.start = invalid;
     m_blocks.push_back(placeholder);
     if (s.params.size() < 3 || s.params.size() > 4)
@@ -1270,7 +1278,7 @@ class UnitCompiler {
       in.operands.push_back(expr_operand(std::move(*e)));
     }
     mark_control();
-    Block b{Block::Kind::Do, s.span};
+    Block b = block(Block::Kind::Do, s.span);
     b.start = emit(std::move(in));
     b.feature = v.text;
     m_blocks.back() = b;
@@ -1313,7 +1321,7 @@ class UnitCompiler {
     m_module.macros.push_back(std::move(m));
     m_macro = static_cast<int>(m_module.macros.size() - 1);
     m_symbols.macros[m_module.macros.back().name] = *m_macro;
-    m_blocks.push_back({Block::Kind::Macro, s.span});
+    m_blocks.push_back(block(Block::Kind::Macro, s.span));
   }
 
   void endmac(const grammar::Statement& s) {

@@ -32,7 +32,7 @@ void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis,
       const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(a - prev) / (pi / 8))));
       for (int k = 0; k <= legs; ++k) {
         const double b = prev + (a - prev) * k / legs;
-        steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), {}});
+        steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), Vec3::UnitZ()});
       }
     }
     const Vec3 surface = centre + radius * dir;
@@ -154,9 +154,9 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
           const Vec3 approach = g.position + (r + probe.approach_mm) * d;
           const Vec3 outside = g.position + (r + probe.approach_mm + 5.0) * horizontal;
           const double high = r + probe.approach_mm + probe.clearance_mm;
-          steps.push_back({PlannedStep::Kind::GoTo, g.position + high * up, {}});
-          steps.push_back({PlannedStep::Kind::GoTo, outside + high * up, {}});
-          steps.push_back({PlannedStep::Kind::GoTo, outside + (approach - g.position).dot(up) * up, {}});
+          steps.push_back({PlannedStep::Kind::GoTo, g.position + high * up, Vec3::UnitZ()});
+          steps.push_back({PlannedStep::Kind::GoTo, outside + high * up, Vec3::UnitZ()});
+          steps.push_back({PlannedStep::Kind::GoTo, outside + (approach - g.position).dot(up) * up, Vec3::UnitZ()});
         }
         steps.push_back({PlannedStep::Kind::Probe, g.position + r * d, s * d});
       }
@@ -190,12 +190,12 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
   const double clear = top + probe.clearance_mm;
   const Vec3 first = steps.front().kind == PlannedStep::Kind::Probe ? approach_of(steps.front()) : steps.front().point;
   std::vector<PlannedStep> out;
-  out.push_back({PlannedStep::Kind::GoTo, current_position + (clear - current_position.dot(up)) * up, {}});
-  out.push_back({PlannedStep::Kind::GoTo, first + (clear - first.dot(up)) * up, {}});
+  out.push_back({PlannedStep::Kind::GoTo, current_position + (clear - current_position.dot(up)) * up, Vec3::UnitZ()});
+  out.push_back({PlannedStep::Kind::GoTo, first + (clear - first.dot(up)) * up, Vec3::UnitZ()});
   out.insert(out.end(), steps.begin(), steps.end());
   const Vec3 last = steps.back().kind == PlannedStep::Kind::Probe ? approach_of(steps.back()) : steps.back().point;
-  out.push_back({PlannedStep::Kind::GoTo, last, {}});
-  out.push_back({PlannedStep::Kind::GoTo, last + (clear - last.dot(up)) * up, {}});
+  out.push_back({PlannedStep::Kind::GoTo, last, Vec3::UnitZ()});
+  out.push_back({PlannedStep::Kind::GoTo, last + (clear - last.dot(up)) * up, Vec3::UnitZ()});
   return out;
 }
 
