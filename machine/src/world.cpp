@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/world.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -352,11 +354,23 @@ csg::Deviation parse_deviation(const json& j, const std::string& ptr, bool plana
   return d;
 }
 
-std::shared_ptr<const geometry::Mesh> load_cad_mesh(const std::string& path, const std::string& ptr) {
-  auto mesh = geometry::load_mesh(path);
-  if (!mesh) fail(ptr, mesh.error().message);
-  if (!mesh->is_closed()) fail(ptr, fmt::format("'{}' is not a closed (watertight) mesh, so it has no inside", path));
-  return std::make_shared<const geometry::Mesh>(std::move(*mesh));
+// STEP and IGES keep their analytic faces for exact contact; other formats are plain meshes.
+void load_cad_design(CadDesign& cad, const std::string& ptr) {
+  std::string ext = std::filesystem::path(cad.path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".step" || ext == ".stp" || ext == ".iges" || ext == ".igs") {
+    const geometry::TessellationOptions options;
+    auto model = geometry::load_cad_model(cad.path, options);
+    if (!model) fail(ptr, model.error().message);
+    cad.mesh = std::make_shared<const geometry::Mesh>(std::move(model->mesh));
+    cad.faces = std::make_shared<const std::vector<geometry::CadFace>>(std::move(model->faces));
+    cad.chord_tolerance_mm = options.chord_tolerance_mm;
+  } else {
+    auto mesh = geometry::load_mesh(cad.path);
+    if (!mesh) fail(ptr, mesh.error().message);
+    cad.mesh = std::make_shared<const geometry::Mesh>(std::move(*mesh));
+  }
+  if (!cad.mesh->is_closed()) fail(ptr, fmt::format("'{}' is not a closed (watertight) mesh, so it has no inside", cad.path));
 }
 
 PartSpec parse_part(const json& j, const std::string& ptr, const std::string& base_dir) {
@@ -372,7 +386,7 @@ PartSpec parse_part(const json& j, const std::string& ptr, const std::string& ba
       if (p.is_relative() && !base_dir.empty()) p = std::filesystem::path(base_dir) / p;
       cad.path = p.lexically_normal().string();
       d.finish();
-      cad.mesh = load_cad_mesh(cad.path, d.at("cad"));
+      load_cad_design(cad, d.at("cad"));
       part.design = std::move(cad);
     } else {
       part.design = parse_node(dj, dp);

@@ -67,8 +67,10 @@ std::unique_ptr<Solid> make_part_solid(const World& world) {
   std::unique_ptr<Solid> solid;
   if (const auto* tree = std::get_if<csg::Node>(&part.design))
     solid = std::make_unique<CsgSolid>(*tree, pose, part.deviations);
+  else if (const auto& cad = std::get<CadDesign>(part.design); cad.faces)
+    solid = std::make_unique<MeshSolid>(cad.mesh, pose, part.bumps, *cad.faces, cad.chord_tolerance_mm);
   else
-    solid = std::make_unique<MeshSolid>(std::get<CadDesign>(part.design).mesh, pose, part.bumps);
+    solid = std::make_unique<MeshSolid>(cad.mesh, pose, part.bumps);
   if (part.roughness.amplitude_mm > 0)
     solid = std::make_unique<RoughSolid>(std::move(solid), part.roughness, part.seed);
   return solid;

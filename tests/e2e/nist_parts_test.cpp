@@ -37,12 +37,12 @@ TEST(NistParts, SimplePartProgramGivesTheNistOutput) {
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
   const auto* c = report(o.record, "A_CIRCLE");
   ASSERT_TRUE(c && c->actual);
-  // output.dms of the NIST suite: FA(A_CIRCLE) = FEAT/CIRCLE,INNER,CART,50,50,40,0,0,1,50. The STEP
-  // model is tessellated to 1 um chords, which bounds the agreement.
-  EXPECT_NEAR(c->actual->position.x(), 50.0, 0.002);
-  EXPECT_NEAR(c->actual->position.y(), 50.0, 0.002);
+  // output.dms of the NIST suite: FA(A_CIRCLE) = FEAT/CIRCLE,INNER,CART,50,50,40,0,0,1,50. Contact
+  // is exact on the STEP model's analytic faces; what remains is the default probe's 0.2 um noise.
+  EXPECT_NEAR(c->actual->position.x(), 50.0, 0.001);
+  EXPECT_NEAR(c->actual->position.y(), 50.0, 0.001);
   EXPECT_NEAR(c->actual->position.z(), 40.0, 1e-9);
-  EXPECT_NEAR(c->actual->diameter_mm, 50.0, 0.002);
+  EXPECT_NEAR(c->actual->diameter_mm, 50.0, 0.001);
 }
 
 TEST(NistParts, DcxProgramRunsToTheEndWithAlignmentAndBothCylinders) {
@@ -55,15 +55,15 @@ TEST(NistParts, DcxProgramRunsToTheEndWithAlignmentAndBothCylinders) {
   const auto* cyl1 = report(o.record, "CYL1");
   ASSERT_TRUE(cyl1 && cyl1->actual);
   EXPECT_EQ(cyl1->frame, "CALN1");
-  EXPECT_NEAR(cyl1->actual->diameter_mm, 31.0, 0.002);
-  EXPECT_NEAR(cyl1->actual->position.x(), 0.0, 0.002);
-  EXPECT_NEAR(cyl1->actual->position.y(), 0.0, 0.002);
+  EXPECT_NEAR(cyl1->actual->diameter_mm, 31.0, 0.001);
+  EXPECT_NEAR(cyl1->actual->position.x(), 0.0, 0.001);
+  EXPECT_NEAR(cyl1->actual->position.y(), 0.0, 0.001);
   EXPECT_GT(std::abs(cyl1->actual->direction.z()), 0.9999);
   const auto* cyl2 = report(o.record, "CYL2");
   ASSERT_TRUE(cyl2 && cyl2->actual);
-  EXPECT_NEAR(cyl2->actual->diameter_mm, 12.5, 0.002);
-  EXPECT_NEAR(cyl2->actual->position.x(), 0.0, 0.002);
-  EXPECT_NEAR(cyl2->actual->position.y(), 0.0, 0.002);
+  EXPECT_NEAR(cyl2->actual->diameter_mm, 12.5, 0.001);
+  EXPECT_NEAR(cyl2->actual->position.x(), 0.0, 0.001);
+  EXPECT_NEAR(cyl2->actual->position.y(), 0.0, 0.001);
   EXPECT_GT(std::abs(cyl2->actual->direction.z()), 0.9999);
   // The program opens DID(OUTFILE) as 'C:\imts.dmo': written as imts.dmo in the output directory.
   std::ifstream dmo(fs::path(o.results_path).parent_path() / "imts.dmo");

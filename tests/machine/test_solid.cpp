@@ -1,12 +1,16 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <numbers>
 #include <random>
 
 #include "metron/machine/contact.hpp"
 #include "metron/machine/csg_solid.hpp"
+#include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/world.hpp"
 #include "metron/machine/world_solid.hpp"
 
@@ -207,4 +211,109 @@ TEST(Solid, RoughnessIsASmallFixedFieldPerSeed) {
   EXPECT_GT(largest, 0.0003);
   EXPECT_TRUE(differs);
   EXPECT_GT(rough->lipschitz(), 1.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Exact contact on CAD faces (docs/world.md): the NIST simple part against its analytic truth.
+
+namespace {
+
+const std::string simple_part_step = std::string(METRON_SHARED_DATA) + "/nist-simple-part/ipp_simple.stp";
+
+// The simple part as designed: the block [0,100]^2 x [0,50] minus the bore of radius 25 about
+// (50, 50) from z = 25 up. Brute force over its seven trimmed faces: the exact signed distance,
+// and how much farther the second nearest face is (a margin that tells face interiors from edges).
+struct Truth {
+  double distance_mm;
+  double margin_mm;
+};
+Truth simple_part_truth(const Vec3& p) {
+  const double x = p.x(), y = p.y(), z = p.z(), rho = std::hypot(x - 50, y - 50);
+  const auto out = [](double v, double lo, double hi) { return std::max({0.0, lo - v, v - hi}); };
+  const double in_square = std::hypot(out(x, 0, 100), out(y, 0, 100));
+  std::vector<double> faces = {
+      std::hypot(in_square, z),                                     // bottom
+      std::hypot(x, out(y, 0, 100), out(z, 0, 50)),                 // x = 0
+      std::hypot(x - 100, out(y, 0, 100), out(z, 0, 50)),           // x = 100
+      std::hypot(y, out(x, 0, 100), out(z, 0, 50)),                 // y = 0
+      std::hypot(y - 100, out(x, 0, 100), out(z, 0, 50)),           // y = 100
+      std::hypot(in_square > 0 ? in_square : std::max(0.0, 25 - rho), z - 50),  // top, less the bore
+      std::hypot(rho - 25, out(z, 25, 50)),                         // bore wall
+      std::hypot(std::max(0.0, rho - 25), z - 25),                  // bore bottom
+  };
+  std::sort(faces.begin(), faces.end());
+  const bool inside = in_square == 0 && z > 0 && z < 50 && !(rho < 25 && z > 25);
+  return {inside ? -faces[0] : faces[0], faces[1] - faces[0]};
+}
+
+// Points near the part: around the bore, its rims and bottom, and over the block's faces.
+std::vector<Vec3> near_simple_part(int n) {
+  auto pts = random_points(n, Vec3(20, 20, 20), Vec3(80, 80, 56), 11);
+  for (const Vec3& p : random_points(n, Vec3(-4, -4, -4), Vec3(104, 104, 54), 12)) pts.push_back(p);
+  return pts;
+}
+
+}  // namespace
+
+TEST(Solid, StepFacesAreExactAndNeverFartherThanTheChordTolerance) {
+  if (!std::filesystem::exists(simple_part_step)) GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
+  const World w = *load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/nist_simple_part.json");
+  const auto& cad = std::get<CadDesign>(w.part->design);
+  ASSERT_TRUE(cad.faces);
+  const double chord = cad.chord_tolerance_mm;
+  EXPECT_EQ(chord, 0.001);
+  const MeshSolid exact(cad.mesh, Frame::Identity(), {}, *cad.faces, chord);
+  const MeshSolid mesh_only(cad.mesh, Frame::Identity());
+  EXPECT_EQ(exact.analytic_face_count(), cad.faces->size());  // planes and one cylinder
+  double worst_interior = 0, worst_over = 0, worst_under = 0, worst_mesh_interior = 0;
+  int interior = 0;
+  for (const Vec3& p : near_simple_part(4000)) {
+    const Truth t = simple_part_truth(p);
+    const double v = exact.signed_distance(p);
+    // Sphere tracing stays safe: never more than the chord tolerance above the truth.
+    ASSERT_LE(v - t.distance_mm, chord + 1e-12) << p.transpose();
+    // Below it only near edges, by at most the mesh's error plus the guard (1.5 chords).
+    ASSERT_GE(v - t.distance_mm, -2.5 * chord - 1e-6) << p.transpose();
+    worst_over = std::max(worst_over, v - t.distance_mm);
+    worst_under = std::min(worst_under, v - t.distance_mm);
+    if (t.margin_mm > 0.01 && std::abs(t.distance_mm) < 10) {  // the nearest face is clear
+      ++interior;
+      EXPECT_NEAR(v, t.distance_mm, 1e-9) << p.transpose();
+      worst_interior = std::max(worst_interior, std::abs(v - t.distance_mm));
+      worst_mesh_interior = std::max(worst_mesh_interior, std::abs(mesh_only.signed_distance(p) - t.distance_mm));
+    }
+  }
+  EXPECT_GT(interior, 4000);
+  std::printf("  simple part: %d face-interior points, error %.2g mm (mesh only %.2g mm); near edges %.2g to %.2g mm\n",
+              interior, worst_interior, worst_mesh_interior, worst_under, worst_over);
+  // Normals: the bore wall's is radial, toward the axis.
+  const Vec3 q(50 + 20 * std::cos(0.1), 50 + 20 * std::sin(0.1), 40);
+  EXPECT_NEAR((exact.normal(q) - Vec3(-std::cos(0.1), -std::sin(0.1), 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((exact.normal(Vec3(10, 10, 53)) - Vec3::UnitZ()).norm(), 0, 1e-12);
+}
+
+TEST(Solid, BallContactOnAStepPartIsSafe) {
+  if (!std::filesystem::exists(simple_part_step)) GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
+  const World w = *load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/nist_simple_part.json");
+  const auto part = make_part_solid(w);
+  const double r = 1.5, chord = 0.001;
+  // Random moves from the air toward the part: at the contact the true gap is within the chord
+  // tolerance of zero, and before it the ball never overlapped the true part by more than that.
+  const auto from = random_points(300, Vec3(-10, -10, 52), Vec3(110, 110, 70), 21);
+  const auto to = random_points(300, Vec3(10, 10, 0), Vec3(90, 90, 20), 22);  // in material
+  int contacts = 0;
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    const auto s = first_ball_contact(*part, from[i], to[i], r);
+    ASSERT_TRUE(s) << from[i].transpose() << " -> " << to[i].transpose();
+    ++contacts;
+    const Vec3 d = to[i] - from[i];
+    EXPECT_GE(simple_part_truth(from[i] + *s * d).distance_mm - r, -chord - 1e-9);
+    EXPECT_LE(simple_part_truth(from[i] + *s * d).distance_mm - r, 2.5 * chord + 1e-6);
+    for (int k = 0; k < 200; ++k) {
+      const double sk = *s * k / 200;
+      ASSERT_GE(simple_part_truth(from[i] + sk * d).distance_mm - r, -chord - 1e-9)
+          << from[i].transpose() << " -> " << to[i].transpose() << " at " << sk;
+    }
+  }
+  EXPECT_EQ(contacts, 300);
 }

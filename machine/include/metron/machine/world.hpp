@@ -15,6 +15,7 @@
 
 #include "metron/machine/csg.hpp"
 #include "metron/machine/pre_travel.hpp"
+#include "metron/stdlib/geometry/cad_import.hpp"
 #include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
 
@@ -95,6 +96,10 @@ struct Bump {
 struct CadDesign {
   std::string path;                   ///< resolved (relative to the world file in JSON)
   std::shared_ptr<const geometry::Mesh> mesh;  ///< part coordinates
+  /// STEP/IGES: the analytic surface of each B-rep face and its triangles in `mesh`; null for
+  /// plain meshes.
+  std::shared_ptr<const std::vector<geometry::CadFace>> faces;
+  double chord_tolerance_mm = 0;      ///< STEP/IGES: of the tessellation in `mesh`
 };
 
 /// Smooth random roughness of all part surfaces (a fixed surface, seeded by PartSpec::seed).
