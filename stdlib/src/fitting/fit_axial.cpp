@@ -287,6 +287,24 @@ bool beaten_by_plane(const Model& model, const State& best, const PrincipalAxes&
   return r.squaredNorm() > plane_cost * (1 + 1e-9) + 1e-28 * static_cast<double>(model.points.size());
 }
 
+/// The best start: from the hint alone when `hint_only` and that converges to something better
+/// than a plane (a measured feature fitted from its nominal), else the lowest of every candidate
+/// axis and a coarse search over directions.
+template <class Model, class MakeStart>
+auto search_best(const Model& model, const std::vector<Vec3>& sample, MakeStart make_start,
+                 const std::optional<Vec3>& axis_hint, bool hint_only, bool cone, const PrincipalAxes& pa) {
+  using State = typename decltype(make_start(sample, Vec3::UnitZ()))::value_type;
+  std::optional<std::pair<State, int>> best;
+  if (hint_only && axis_hint) best = best_of(model, make_start(model.points, axis_hint->normalized()));
+  if (best && !beaten_by_plane(model, best->first, pa)) return best;
+  std::vector<State> starts;
+  for (const Vec3& axis : candidate_axes(sample, axis_hint, cone)) {
+    for (const State& s : make_start(model.points, axis)) starts.push_back(s);
+  }
+  add_searched_starts(Model{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
+  return best_of(model, starts);
+}
+
 }  // namespace
 
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
@@ -301,16 +319,7 @@ tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>
     return out;
   };
   const CylinderModel model{np.points};
-  std::optional<std::pair<CylinderState, int>> best;
-  if (hint_only && axis_hint) best = best_of(model, make_start(np.points, axis_hint->normalized()));
-  if (!best || beaten_by_plane(model, best->first, pa)) {
-    std::vector<CylinderState> starts;
-    for (const Vec3& axis : candidate_axes(sample, axis_hint, false)) {
-      for (const CylinderState& s : make_start(np.points, axis)) starts.push_back(s);
-    }
-    add_searched_starts(CylinderModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
-    best = best_of(model, starts);
-  }
+  const auto best = search_best(model, sample, make_start, axis_hint, hint_only, false, pa);
   if (!best || beaten_by_plane(model, best->first, pa)) return tl::unexpected(FitFailure::NoConvergence);
   const auto& [s, iterations] = *best;
   Geometry g;
@@ -335,16 +344,7 @@ tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& po
     return out;
   };
   const ConeModel model{np.points};
-  std::optional<std::pair<ConeState, int>> best;
-  if (hint_only && axis_hint) best = best_of(model, make_start(np.points, axis_hint->normalized()));
-  if (!best || beaten_by_plane(model, best->first, pa)) {
-    std::vector<ConeState> starts;
-    for (const Vec3& axis : candidate_axes(sample, axis_hint, true)) {
-      for (const ConeState& s : make_start(np.points, axis)) starts.push_back(s);
-    }
-    add_searched_starts(ConeModel{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
-    best = best_of(model, starts);
-  }
+  const auto best = search_best(model, sample, make_start, axis_hint, hint_only, true, pa);
   if (!best || beaten_by_plane(model, best->first, pa)) return tl::unexpected(FitFailure::NoConvergence);
   auto [s, iterations] = *best;
   if (s.half_angle < 0) {
