@@ -84,8 +84,15 @@ RunOutcome run_program(const RunOptions& options) {
   if (loaded) status = s.interpreter().run();
   s.runtime().finish();
   runtime::RunRecord& record = s.record();
+  // Runtime warnings (collected in the record while running) are printed after the positioned ones.
+  const std::vector<std::string> runtime_warnings = record.diagnostics;
+  record.diagnostics.clear();
   for (const auto& d : s.sink().items()) record.diagnostics.push_back(format_diagnostic(d, s.sources()));
   outcome.diagnostics = s.take_diagnostics();
+  for (const auto& w : runtime_warnings) {
+    record.diagnostics.push_back(w);
+    outcome.diagnostics += w + "\n";
+  }
   switch (status) {
     case ExecStatus::Finished:
     case ExecStatus::Running: record.status = runtime::RunStatus::Completed; outcome.exit = RunExit::Completed; break;

@@ -63,7 +63,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
   }
   auto it = m_features.find(label);
   if (it == m_features.end()) {
-    m_record.diagnostics.push_back(fmt::format("warning: CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
+    warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
   }
   Geometry nominal;
   if (it != m_features.end()) nominal = it->second.nominal;

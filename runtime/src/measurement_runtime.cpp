@@ -119,6 +119,15 @@ MeasurementRuntime::MeasurementRuntime(machine::Machine& machine, const SourceMa
   m_alignments["MCS"] = m_alignment;
 }
 
+void MeasurementRuntime::warn(Span span, const std::string& message) {
+  if (!span.valid()) {
+    m_record.diagnostics.push_back("warning: " + message);
+    return;
+  }
+  const Location loc = m_sources.locate(span);
+  m_record.diagnostics.push_back(fmt::format("{}:{}:{}: warning: {}", loc.path, loc.line, loc.column, message));
+}
+
 void MeasurementRuntime::emit(RunEvent event) {
   if (m_on_event) m_on_event(event);
   m_record.events.push_back(std::move(event));
@@ -239,8 +248,7 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
 
 Result<void> MeasurementRuntime::ensure_tool(Span span) {
   if (!m_active_sensor.empty()) return {};
-  m_record.diagnostics.push_back(
-      fmt::format("warning: no sensor selected before the first measurement; using a 4 mm default probe"));
+  warn(span, "no sensor selected before the first measurement; using a 4 mm default probe");
   SensorDefinition def;
   def.label = "METRON_DEFAULT";
   if (auto r = define_sensor(def, span); !r) return r;
@@ -346,9 +354,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   feature.measured_at = block.span;
   feature.source = ActualSource::Measured;
   if (block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
-    const Location loc = m_sources.locate(block.span);
-    m_record.diagnostics.push_back(fmt::format("{}:{}:{}: warning: MEAS declared {} points but {} were measured",
-                                               loc.path, loc.line, loc.column, block.point_count, points.size()));
+    warn(block.span, fmt::format("MEAS declared {} points but {} were measured", block.point_count, points.size()));
   }
   auto fitted = fit_actual(feature.nominal, points);
   if (!fitted) return program_error(block.span, fitted.error());
@@ -462,7 +468,7 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
     report.point_count = f->points.size();
     report.source = f->source;
     if (item.feature.actual && !f->actual)
-      m_record.diagnostics.push_back(fmt::format("warning: OUTPUT of FA({}) before it was measured", f->label));
+      warn(span, fmt::format("OUTPUT of FA({}) before it was measured", f->label));
     write_device_line(dmis_feature_line(report));
     emit(report);
   }

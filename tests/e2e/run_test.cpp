@@ -234,7 +234,10 @@ TEST(Cli, FitReadsNistDataAndRejectsCorruptFiles) {
   if (!fs::exists(sphere)) GTEST_SKIP() << "shared data not present";
   const auto [c2, o2] = shell(std::string(METRON_BINARY) + " fit sphere " + sphere.string() + " --format json");
   EXPECT_EQ(c2, 0) << o2;
-  EXPECT_NO_THROW((void)nlohmann::json::parse(o2)) << o2;
+  EXPECT_NO_THROW({
+    const auto parsed = nlohmann::json::parse(o2);
+    EXPECT_TRUE(parsed.contains("diameter_mm"));
+  }) << o2;
 }
 
 }  // namespace

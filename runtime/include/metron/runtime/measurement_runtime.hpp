@@ -168,6 +168,7 @@ class MeasurementRuntime {
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);
+  void warn(Span span, const std::string& message);  ///< a positioned run-time warning in the record
   void write_device_line(const std::string& line);
   void set_alignment(const std::string& label, const Frame& frame);
 
