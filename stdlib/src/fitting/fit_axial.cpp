@@ -305,14 +305,29 @@ auto search_best(const Model& model, const std::vector<Vec3>& sample, MakeStart 
   return best_of(model, starts);
 }
 
+/// Centred and scaled points, their principal axes and the sample used to rank starts; a set
+/// without extent in two directions determines no axis.
+struct AxialInput {
+  NormalizedPoints np;
+  PrincipalAxes pa;
+  std::vector<Vec3> sample;
+};
+
+tl::expected<AxialInput, FitFailure> prepare_axial(const std::vector<Vec3>& points) {
+  NormalizedPoints np = normalize(points);
+  PrincipalAxes pa = principal_axes(np.points);
+  if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
+  std::vector<Vec3> sample = subsample(np.points, search_sample_size);
+  return AxialInput{std::move(np), std::move(pa), std::move(sample)};
+}
+
 }  // namespace
 
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
                                                          const std::optional<Vec3>& axis_hint, bool hint_only) {
-  const NormalizedPoints np = normalize(points);
-  const PrincipalAxes pa = principal_axes(np.points);
-  if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
-  const std::vector<Vec3> sample = subsample(np.points, search_sample_size);
+  const auto prepared = prepare_axial(points);
+  if (!prepared) return tl::unexpected(prepared.error());
+  const auto& [np, pa, sample] = *prepared;
   auto make_start = [](const std::vector<Vec3>& q, const Vec3& axis) {
     std::vector<CylinderState> out;
     if (auto s = cylinder_start(q, axis)) out.push_back(*s);
@@ -332,10 +347,9 @@ tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>
 
 tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& points,
                                                      const std::optional<Vec3>& axis_hint, bool hint_only) {
-  const NormalizedPoints np = normalize(points);
-  const PrincipalAxes pa = principal_axes(np.points);
-  if (!(pa.rms_extent(1) > degenerate_extent * pa.rms_extent(0))) return tl::unexpected(FitFailure::Degenerate);
-  const std::vector<Vec3> sample = subsample(np.points, search_sample_size);
+  const auto prepared = prepare_axial(points);
+  if (!prepared) return tl::unexpected(prepared.error());
+  const auto& [np, pa, sample] = *prepared;
   auto make_start = [](const std::vector<Vec3>& q, const Vec3& axis) {
     std::vector<ConeState> out;
     if (auto s = cone_start(q, axis)) out.push_back(*s);
