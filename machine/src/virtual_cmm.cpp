@@ -417,6 +417,8 @@ struct VirtualCmm::Impl {
         if (body.positioning_mm_s > 0) positioning_feed = std::min(body.positioning_mm_s, spec.max_speed_mm_s);
         if (body.measuring_mm_s > 0) measuring_feed = std::min(body.measuring_mm_s, spec.max_speed_mm_s);
         if (body.acceleration_mm_s2 > 0) acceleration = std::min(body.acceleration_mm_s2, spec.max_acceleration_mm_s2);
+      } else if constexpr (std::is_same_v<T, ScanPath>) {
+        fail({FaultKind::BadCommand, "this machine has no scanning probe", position, now()});
       }
     }, command.body);
     return response;

@@ -4,8 +4,10 @@
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "metron/machine/fault.hpp"
+#include "metron/stdlib/geometry/pcc.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
 
 namespace metron::machine {
@@ -55,10 +57,32 @@ struct SetFeeds {
   double acceleration_mm_s2 = 0;
 };
 
+/// The trajectory-correction term of the scanning control law V = Gf*Vf + Ge*Ve + Gc*Vc
+/// (SEEDS.md 1).
+enum class ScanLaw {
+  Vc1,        ///< conventional: toward the foot of the perpendicular on the path
+  Vc1Prime,   ///< comparative example: Vc1 without its component along the deflection
+  Vc2,        ///< the seed's law: the part of Vc1 orthogonal to both the deflection and the path
+};
+
+/// Active nominal scan with the scanning probe along a PCC path of ball-centre positions
+/// (the offset contour, SEEDS.md 1): approach the path start along `approach_normal` until the
+/// deflection reaches E0, follow the path under `law` every control cycle, retract at the end.
+struct ScanPath {
+  geometry::PccPath path;             ///< ball-centre path at the reference deflection
+  Vec3 approach_normal = Vec3::UnitZ();  ///< surface normal at the start (approach from here)
+  ScanLaw law = ScanLaw::Vc2;
+  std::optional<double> speed_mm_s;   ///< scan feed; default: the machine's scanning feed
+  std::optional<double> reference_deflection_mm;  ///< E0; default: the probe's
+  double sample_spacing_mm = 0.1;     ///< record a sample every this much path length (0: every cycle)
+  double approach_mm = 2.0;           ///< start distance before the surface
+  double retract_mm = 2.0;            ///< retract distance after the end
+};
+
 /// A command with the client's tag (the runtime uses it to find the originating statement).
 struct Command {
   std::uint64_t tag = 0;
-  std::variant<GoTo, PtMeas, DefineTool, SelectTool, QualifyTool, SetFeeds> body;
+  std::variant<GoTo, PtMeas, DefineTool, SelectTool, QualifyTool, SetFeeds, ScanPath> body;
 };
 
 /// A probed point as the controller reports it.
@@ -69,6 +93,19 @@ struct Hit {
   double time_s = 0;                  ///< simulated time of the trigger
   /// Surface point compensated along the probing normal (exact for planes; fitting redoes it).
   [[nodiscard]] Vec3 surface_mm() const { return centre_mm - ball_radius_mm * normal; }
+};
+
+/// One scanned sample as the controller reports it (encoders plus the probe's deflection).
+struct ScanSample {
+  double time_s = 0;                  ///< simulated time
+  Vec3 centre_mm = Vec3::Zero();      ///< ball centre: encoder position plus the deflection reading
+  Vec3 deflection_mm = Vec3::Zero();  ///< Ep, the stylus displacement; Ep/|Ep| estimates the surface normal
+  double path_s_mm = 0;               ///< arc length along the commanded path at the foot point
+  /// Surface point: the ball centre moved back along the deflection by the ball radius.
+  [[nodiscard]] Vec3 surface_mm(double ball_radius_mm) const {
+    const double n = deflection_mm.norm();
+    return n > 0 ? Vec3(centre_mm - ball_radius_mm * deflection_mm / n) : centre_mm;
+  }
 };
 
 /// Calibration state of a tool, known on the controller side.
@@ -87,6 +124,7 @@ struct Response {
   std::optional<Hit> hit;             ///< for PtMeas
   std::optional<ToolInfo> tool;       ///< for DefineTool, SelectTool, QualifyTool
   std::optional<Fault> fault;         ///< when status == Fault
+  std::vector<ScanSample> scan;       ///< for ScanPath: the samples up to the end or the fault
 };
 
 }  // namespace metron::machine
