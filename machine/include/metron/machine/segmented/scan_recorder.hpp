@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "metron/machine/segmented/path_interpolator.hpp"
+#include "metron/stdlib/geometry/vec.hpp"
+
+namespace metron::machine::segmented {
+
+/// What the controller knows about one control cycle while the probe scans.
+struct ScanCycle {
+  double t_s = 0;                      ///< simulated time at the end of the cycle
+  double dt_s = 0.001;                 ///< cycle length
+  std::size_t command_index = 0;       ///< the command the probe is in
+  PathState state;                     ///< arc length, speed, acceleration, jerk
+  double limit_mm_s = 0;               ///< the speed limit where the probe is
+  Vec3 position_mm = Vec3::Zero();     ///< commanded probe (ball-centre) position on the path
+  Vec3 acceleration_mm_s2 = Vec3::Zero();  ///< path acceleration a*T + v^2*kappa*N
+};
+
+/// Receives every scanning cycle; the scanning probe model plugs in here.
+class ScanRecorder {
+ public:
+  virtual ~ScanRecorder() = default;
+  /// One cycle in contact with the surface.
+  virtual void record(const ScanCycle& cycle) = 0;
+  /// The probe leaves (false) or regains (true) contact: retract and approach.
+  virtual void contact_changed(bool /*in_contact*/, double /*t_s*/) {}
+};
+
+/// A recorded measurement point.
+struct ScanPoint {
+  double t_s = 0;                      ///< simulated time
+  std::size_t command_index = 0;       ///< the command it belongs to
+  double s_mm = 0;                     ///< arc length along the path
+  Vec3 position_mm = Vec3::Zero();     ///< probe position
+  double speed_mm_s = 0;               ///< path speed
+  double deflection_error_mm = 0;      ///< |stylus deflection - reference|: the quality signal
+};
+
+/// Stand-in for the scanning probe's deflection (documented in docs/segmented-scanning.md): the
+/// stylus tip is a damped mass-spring, x'' + 2*zeta*w*x' + w^2*x = -a_path, so the deflection
+/// deviates from the reference in proportion to the path acceleration and rings after jerks.
+/// It records a point every cycle in which the probe advanced along the path (a probe at rest
+/// adds no new point: the point set stays strictly ordered, without duplicates).
+class StylusDeflectionRecorder : public ScanRecorder {
+ public:
+  /// Stylus dynamics.
+  struct Params {
+    double natural_frequency_hz = 60.0;  ///< w / (2 pi)
+    double damping_ratio = 0.1;          ///< zeta
+    int substeps = 8;                    ///< integration steps per cycle
+  };
+  StylusDeflectionRecorder() : StylusDeflectionRecorder(Params{}) {}
+  explicit StylusDeflectionRecorder(Params params) : m_params(params) {}
+
+  void record(const ScanCycle& cycle) override;
+  void contact_changed(bool in_contact, double t_s) override;
+
+  [[nodiscard]] const std::vector<ScanPoint>& points() const { return m_points; }
+
+ private:
+  Params m_params;
+  Vec3 m_x = Vec3::Zero(), m_v = Vec3::Zero();
+  bool m_have_last = false;
+  double m_last_s_mm = 0;
+  std::vector<ScanPoint> m_points;
+};
+
+/// Keeps every cycle (for limit checks in tests and profiles in the bench).
+class CycleLog : public ScanRecorder {
+ public:
+  void record(const ScanCycle& cycle) override { cycles.push_back(cycle); }
+  std::vector<ScanCycle> cycles;   ///< all recorded cycles in order
+};
+
+/// Forwards to several recorders.
+class RecorderTee : public ScanRecorder {
+ public:
+  RecorderTee(ScanRecorder& a, ScanRecorder& b) : m_a(a), m_b(b) {}
+  void record(const ScanCycle& c) override { m_a.record(c); m_b.record(c); }
+  void contact_changed(bool in, double t) override { m_a.contact_changed(in, t); m_b.contact_changed(in, t); }
+
+ private:
+  ScanRecorder& m_a;
+  ScanRecorder& m_b;
+};
+
+}  // namespace metron::machine::segmented

@@ -1,0 +1,181 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/machine/segmented/speed_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace metron::machine::segmented {
+namespace {
+constexpr double k_inf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+double ramp_time_s(double dv, const MotionLimits& l) {
+  const double a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
+  if (dv <= 0) return 0;
+  // Jerk phases up to the acceleration limit, then constant acceleration (SEEDS.md 3 "constant
+  // rate" mode); short ramps never reach the limit: T = 2*sqrt(dv/J).
+  if (dv * j >= a * a) return dv / a + a / j;
+  return 2 * std::sqrt(dv / j);
+}
+
+double ramp_distance_mm(double v0, double v1, const MotionLimits& l) {
+  return 0.5 * (v0 + v1) * ramp_time_s(std::abs(v1 - v0), l);
+}
+
+double reachable_speed_mm_s(double v0, double d, const MotionLimits& l) {
+  if (d <= 0) return v0;
+  const double a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
+  // Jerk-only ramp: (2 v0 + x) sqrt(x/J) = d; with y = sqrt(x): y^3 + 2 v0 y - d sqrt(J) = 0,
+  // a depressed cubic with one real root (Cardano), polished by one Newton step.
+  const double p = 2 * v0, q = d * std::sqrt(j);
+  const double r = std::sqrt(q * q / 4 + p * p * p / 27);
+  double y = std::cbrt(q / 2 + r) + std::cbrt(q / 2 - r);
+  y -= (y * y * y + p * y - q) / (3 * y * y + p);
+  double x = y * y;
+  if (x * j >= a * a) {
+    // With a constant-acceleration phase: (2 v0 + x)(x/A + A/J) = 2 d, a quadratic in x.
+    const double qa = 1 / a, qb = 2 * v0 / a + a / j, qc = 2 * v0 * a / j - 2 * d;
+    x = (-qb + std::sqrt(std::max(0.0, qb * qb - 4 * qa * qc))) / (2 * qa);
+  }
+  return v0 + std::max(0.0, x);
+}
+
+double piece_time_s(double len, double v_in, double v_out, double lim, const MotionLimits& l) {
+  if (len <= 0) return 0;
+  const double lo = std::max(v_in, v_out);
+  if (lim <= lo) return len / std::max(lim, 1e-9);
+  const double up = ramp_distance_mm(v_in, lim, l), down = ramp_distance_mm(lim, v_out, l);
+  if (up + down <= len) return ramp_time_s(lim - v_in, l) + ramp_time_s(lim - v_out, l) + (len - up - down) / lim;
+  if (ramp_distance_mm(v_in, lo, l) + ramp_distance_mm(lo, v_out, l) >= len) {
+    // The junction speeds are at the edge of what the piece allows: a single ramp.
+    return ramp_time_s(std::abs(v_out - v_in), l);
+  }
+  // The peak speed between lo and lim where ramp up + ramp down fill the piece (bisection).
+  double a = lo, b = lim;
+  for (int it = 0; it < 12; ++it) {
+    const double m = 0.5 * (a + b);
+    (ramp_distance_mm(v_in, m, l) + ramp_distance_mm(m, v_out, l) <= len ? a : b) = m;
+  }
+  const double vp = a;
+  const double rest = len - ramp_distance_mm(v_in, vp, l) - ramp_distance_mm(vp, v_out, l);
+  return ramp_time_s(vp - v_in, l) + ramp_time_s(vp - v_out, l) + std::max(0.0, rest) / vp;
+}
+
+void junction_passes(std::span<const LimitPiece> pieces, double start_speed, double end_speed,
+                     const MotionLimits& l, std::vector<double>& w) {
+  const std::size_t n = pieces.size();
+  w.assign(n + 1, 0.0);
+  if (n == 0) return;
+  w[0] = std::min(start_speed, pieces[0].limit_mm_s);
+  for (std::size_t k = 1; k < n; ++k)
+    w[k] = std::min({pieces[k - 1].limit_mm_s, pieces[k].limit_mm_s, pieces[k - 1].end_cap_mm_s});
+  w[n] = std::min({end_speed, pieces[n - 1].limit_mm_s, pieces[n - 1].end_cap_mm_s});
+  // Backward pass: each junction no faster than what still lets the next one be met.
+  for (std::size_t k = n; k-- > 0;) {
+    const double len = pieces[k].end_mm - pieces[k].start_mm;
+    w[k] = std::min(w[k], reachable_speed_mm_s(w[k + 1], len, l));
+  }
+  // Forward pass: no faster than what can be reached from the previous junction.
+  for (std::size_t k = 0; k < n; ++k) {
+    const double len = pieces[k].end_mm - pieces[k].start_mm;
+    w[k + 1] = std::min(w[k + 1], reachable_speed_mm_s(w[k], len, l));
+  }
+}
+
+double parameter_at_arc(const geometry::PccSegment& seg, double arc, double length) {
+  if (length <= 0 || seg.d_mm <= 0) return 0;
+  double u = std::clamp(arc / length, 0.0, 1.0) * seg.d_mm;
+  for (int it = 0; it < 3; ++it) {
+    const double speed = seg.derivative(u).norm();
+    if (speed <= 0) break;
+    u = std::clamp(u - (seg.arc_length(u) - arc) / speed, 0.0, seg.d_mm);
+  }
+  return u;
+}
+
+SegmentLimit segment_limit(const geometry::PccSegment& seg, const ScanLimits& limits,
+                           double path_speed_mm_s) {
+  SegmentLimit out;
+  out.length_mm = seg.length();
+  double kappa = 0;
+  for (int i = 0; i <= 4; ++i) kappa = std::max(kappa, seg.curvature(seg.d_mm * i / 4.0));
+  double v = limits.path.speed_mm_s;
+  // Centripetal acceleration v^2 * kappa <= a_n.
+  if (kappa > 0) v = std::min(v, std::sqrt(limits.normal_acceleration_mm_s2 / kappa));
+  if (path_speed_mm_s > 0) v = std::min(v, path_speed_mm_s);
+  out.limit_mm_s = v;
+  return out;
+}
+
+SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
+                       std::span<const double> path_speed, std::size_t command_index,
+                       double start_mm, PlanKind kind, const ScanLimits& limits,
+                       const LowSpeedRegion& low, bool last_command) {
+  if (!(low.speed_mm_s > 0) || !(low.length_mm >= 0))
+    throw std::invalid_argument("low-speed region needs a positive speed and a length >= 0");
+  SpeedPlan plan;
+  plan.kind = kind;
+  plan.command_index = command_index;
+  plan.start_mm = start_mm;
+  plan.pieces.reserve(segments.size() + 1);
+  double s = start_mm;
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const SegmentLimit sl =
+        segment_limit(segments[i], limits, i < path_speed.size() ? path_speed[i] : 0.0);
+    plan.pieces.push_back({s, s + sl.length_mm, sl.limit_mm_s, k_inf, segments[i], s, sl.length_mm, command_index});
+    s += sl.length_mm;
+  }
+  plan.end_mm = s;
+  plan.low_speed_from_mm = s;
+  const bool seed = kind == PlanKind::Individual || kind == PlanKind::Connection;
+  plan.start_speed_mm_s = kind == PlanKind::Connection ? low.speed_mm_s : 0.0;
+  if (seed) {
+    // SEEDS.md 2 step 3: the last L of the command at the low speed, reaching back over earlier
+    // segments when the last one is shorter than L; none when the whole command is shorter.
+    if (s - start_mm >= low.length_mm && low.length_mm > 0) {
+      const double from = s - low.length_mm;
+      plan.low_speed_from_mm = from;
+      std::vector<LimitPiece> split;
+      split.reserve(plan.pieces.size() + 1);
+      for (const LimitPiece& p : plan.pieces) {
+        if (p.end_mm <= from) {
+          split.push_back(p);
+        } else if (p.start_mm >= from) {
+          LimitPiece q = p;
+          q.limit_mm_s = std::min(p.limit_mm_s, low.speed_mm_s);
+          split.push_back(q);
+        } else {
+          LimitPiece a = p, b = p;
+          a.end_mm = from;
+          b.start_mm = from;
+          b.limit_mm_s = std::min(p.limit_mm_s, low.speed_mm_s);
+          split.push_back(a);
+          split.push_back(b);
+        }
+      }
+      plan.pieces = std::move(split);
+    }
+    plan.end_speed_mm_s = last_command ? 0.0 : low.speed_mm_s;
+  } else {
+    plan.end_speed_mm_s = 0.0;  // conventional: rest; look-ahead: stop within what is buffered
+  }
+  if (!plan.pieces.empty()) {
+    // The command end is a junction at no more than the planned end speed (seed: the low speed,
+    // also when the command is shorter than L; conventional: rest; look-ahead: free).
+    if (kind != PlanKind::LookAhead) plan.pieces.back().end_cap_mm_s = plan.end_speed_mm_s;
+  }
+  junction_passes(plan.pieces, plan.start_speed_mm_s, plan.end_speed_mm_s, limits.path, plan.junction_mm_s);
+  const std::size_t n = plan.pieces.size();
+  plan.time_to_end_s.assign(n + 1, 0.0);
+  for (std::size_t k = n; k-- > 0;) {
+    const LimitPiece& p = plan.pieces[k];
+    plan.time_to_end_s[k] = plan.time_to_end_s[k + 1] +
+        piece_time_s(p.end_mm - p.start_mm, plan.junction_mm_s[k], plan.junction_mm_s[k + 1],
+                     p.limit_mm_s, limits.path);
+  }
+  return plan;
+}
+
+}  // namespace metron::machine::segmented

@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+#include "metron/machine/fault.hpp"
+#include "metron/machine/segmented/measurement_command.hpp"
+#include "metron/machine/segmented/segmented_controller.hpp"
+#include "metron/stdlib/geometry/pcc.hpp"
+
+// Host side of segmented continuous scanning (SEEDS.md 2 steps 1-2): cut the path into
+// measurement commands and stream them into the controller's buffers as they free up.
+namespace metron::runtime {
+
+/// Segment counts of C1..Cn+1 for a path of `segments` (M) segments and buffers of `per_command`
+/// (P) segments. With M = P*n + m: m = 0 gives n commands of P; m >= P/4 a last command of m;
+/// 0 < m < P/4 (4m < P) the last two commands share P+m, (P+m)/2 each; when P+m is odd the
+/// earlier one gets the extra segment, so the last command (the one that ends at rest) is the
+/// shorter. A path shorter than one buffer is one command.
+std::vector<std::size_t> command_sizes(std::size_t segments, std::size_t per_command);
+
+/// The measurement commands of `path` split with command_sizes().
+std::vector<machine::segmented::MeasurementCommand> split_commands(const geometry::PccPath& path,
+                                                                   std::size_t per_command);
+
+/// Streams `commands` into `controller`: writes the next command whenever a buffer is writable
+/// (SB = 0), then advances the controller one cycle, until the path is scanned; a fault when a
+/// load is refused or the run exceeds `max_time_s` of simulated time.
+tl::expected<machine::segmented::SegmentedStats, machine::Fault> stream_commands(
+    const std::vector<machine::segmented::MeasurementCommand>& commands,
+    machine::segmented::SegmentedController& controller, double max_time_s);
+
+}  // namespace metron::runtime

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/runtime/scan_segmentation.hpp"
+
+#include <fmt/format.h>
+
+namespace metron::runtime {
+
+namespace seg = machine::segmented;
+
+std::vector<std::size_t> command_sizes(std::size_t M, std::size_t P) {
+  std::vector<std::size_t> sizes;
+  if (M == 0 || P == 0) return sizes;
+  const std::size_t n = M / P, m = M % P;
+  if (n == 0) return {m};
+  if (m == 0) return std::vector<std::size_t>(n, P);
+  if (4 * m < P) {
+    // SEEDS.md 2 step 1: m < P/4, so Cn and Cn+1 get (P+m)/2 each (averaging).
+    sizes.assign(n - 1, P);
+    sizes.push_back((P + m + 1) / 2);
+    sizes.push_back((P + m) / 2);
+    return sizes;
+  }
+  sizes.assign(n, P);
+  sizes.push_back(m);
+  return sizes;
+}
+
+std::vector<seg::MeasurementCommand> split_commands(const geometry::PccPath& path, std::size_t P) {
+  std::vector<seg::MeasurementCommand> out;
+  std::size_t first = 0;
+  const auto sizes = command_sizes(path.segments.size(), P);
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    seg::MeasurementCommand c;
+    c.index = i;
+    c.first_segment = first;
+    const auto b = path.segments.begin() + static_cast<std::ptrdiff_t>(first);
+    c.segments.assign(b, b + static_cast<std::ptrdiff_t>(sizes[i]));
+    if (path.speed_mm_s.size() == path.segments.size()) {
+      const auto v = path.speed_mm_s.begin() + static_cast<std::ptrdiff_t>(first);
+      c.speed_mm_s.assign(v, v + static_cast<std::ptrdiff_t>(sizes[i]));
+    }
+    c.last = i + 1 == sizes.size();
+    first += sizes[i];
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+tl::expected<seg::SegmentedStats, machine::Fault> stream_commands(const std::vector<seg::MeasurementCommand>& commands,
+                                                                  seg::SegmentedController& controller,
+                                                                  double max_time_s) {
+  std::size_t next = 0;
+  while (!controller.finished()) {
+    // The host writes into a buffer as soon as its status flag says writable.
+    while (next < commands.size() && controller.free_buffer() != 0) {
+      if (auto r = controller.load(commands[next]); !r) return tl::unexpected(r.error());
+      ++next;
+    }
+    controller.step();
+    if (controller.time_s() > max_time_s) {
+      return tl::unexpected(machine::Fault{machine::FaultKind::Aborted,
+                                           fmt::format("segmented scan not finished after {:.1f} s", max_time_s),
+                                           Vec3::Zero(), controller.time_s()});
+    }
+  }
+  return controller.stats();
+}
+
+}  // namespace metron::runtime
