@@ -153,6 +153,16 @@ TEST(SegmentedReference, StraightLineIsTheAnalyticRestToRestMove) {
   }
 }
 
+// The plan's schedule (used for tei and the connection judgement) predicts the executed time.
+TEST(SegmentedPlan, ScheduleMatchesTheExecutedTime) {
+  const ScanLimits limits{k_limits, 500};
+  for (const geometry::PccPath& path : {freeform_contour(300, 1.0), tight_meander(300, 0.5)}) {
+    const SpeedPlan plan = plan_command(path.segments, {}, 0, 0.0, PlanKind::LookAhead, limits, {}, true);
+    const ReferenceProfile ref = reference_profile(path, limits, 0.001);
+    EXPECT_NEAR(plan.duration_s(), ref.time_s, 0.03 * ref.time_s);
+  }
+}
+
 // Every executed cycle respects the speed (incl. curvature), acceleration and jerk limits,
 // checked against the recorded profile and, independently, the true curvature at each point.
 TEST(SegmentedReference, ProfileRespectsAllLimits) {

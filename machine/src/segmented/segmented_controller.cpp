@@ -26,6 +26,12 @@ double SegmentedController::planning_time_s(std::size_t segments) const {
          (m_config.planning_fixed_s + m_config.planning_s_per_segment * static_cast<double>(segments));
 }
 
+double SegmentedController::retract_time_s() const {
+  return rest_to_rest_time_s(m_config.retract_mm, m_config.positioning);
+}
+
+double SegmentedController::approach_time_s() const { return retract_time_s() + m_config.contact_settle_s; }
+
 int SegmentedController::free_buffer() const {
   // Commands alternate between the buffers: Ci goes to buffer (i mod 2) + 1.
   const std::size_t b = m_next_load % 2;
@@ -78,10 +84,9 @@ double SegmentedController::gap_before_s(std::size_t index) const {
   if (pb < 0 || !m_buffers[static_cast<std::size_t>(pb)].plan_ready) return 0;
   const Buffer& prev = m_buffers[static_cast<std::size_t>(pb)];
   if (prev.attached) return remaining_time_s(*prev.plan, m_interp.state().s_mm);
-  const double move = rest_to_rest_time_s(m_config.retract_mm, m_config.positioning);
-  double wait = move;
+  double wait = approach_time_s();
   if (m_phase == Phase::Approaching) wait = std::max(0.0, m_phase_end_s - m_t_s);
-  if (m_phase == Phase::Retracting) wait = std::max(0.0, m_phase_end_s - m_t_s) + move;
+  if (m_phase == Phase::Retracting) wait = std::max(0.0, m_phase_end_s - m_t_s) + approach_time_s();
   return wait + prev.plan->duration_s();
 }
 
@@ -118,13 +123,7 @@ void SegmentedController::attach(std::size_t b, bool from_rest) {
     // rest like an individual plan; only the schedule is redone (cheap, not charged as Tp).
     plan.kind = PlanKind::Individual;
     plan.start_speed_mm_s = 0;
-    junction_passes(plan.pieces, 0.0, plan.end_speed_mm_s, m_config.limits.path, plan.junction_mm_s);
-    for (std::size_t k = plan.pieces.size(); k-- > 0;) {
-      const LimitPiece& p = plan.pieces[k];
-      plan.time_to_end_s[k] = plan.time_to_end_s[k + 1] +
-          piece_time_s(p.end_mm - p.start_mm, plan.junction_mm_s[k], plan.junction_mm_s[k + 1], p.limit_mm_s,
-                       m_config.limits.path);
-    }
+    schedule_plan(plan, m_config.limits.path);
   }
   if (from_rest) m_interp.reset_state({plan.start_mm, 0, 0, 0});
   m_interp.trim();
@@ -208,13 +207,12 @@ void SegmentedController::step() {
     }
   }
   m_t_s += dt;
-  const double move_s = rest_to_rest_time_s(m_config.retract_mm, m_config.positioning);
   switch (m_phase) {
     case Phase::Retracted: {
       const int b = buffer_of(m_next_attach);
       if (b >= 0 && m_buffers[static_cast<std::size_t>(b)].plan_ready) {
         m_phase = Phase::Approaching;
-        m_phase_end_s = m_t_s + move_s;
+        m_phase_end_s = m_t_s + approach_time_s();
         m_approach_buffer = b;
       }
       break;
@@ -254,7 +252,7 @@ void SegmentedController::step() {
           if (m_config.mode != SegmentedMode::LookAhead) {
             // SEEDS.md 2 step 5: stop, retract, approach again when the next plan is ready.
             m_phase = Phase::Retracting;
-            m_phase_end_s = m_t_s + move_s;
+            m_phase_end_s = m_t_s + retract_time_s();
             ++m_stats.retracts;
             if (m_recorder != nullptr) m_recorder->contact_changed(false, m_t_s);
             if (!m_stats.boundaries.empty()) m_stats.boundaries.back().retracted = true;

@@ -42,45 +42,94 @@ double reachable_speed_mm_s(double v0, double d, const MotionLimits& l) {
   return v0 + std::max(0.0, x);
 }
 
-double piece_time_s(double len, double v_in, double v_out, double lim, const MotionLimits& l) {
-  if (len <= 0) return 0;
-  const double lo = std::max(v_in, v_out);
-  if (lim <= lo) return len / std::max(lim, 1e-9);
-  const double up = ramp_distance_mm(v_in, lim, l), down = ramp_distance_mm(lim, v_out, l);
-  if (up + down <= len) return ramp_time_s(lim - v_in, l) + ramp_time_s(lim - v_out, l) + (len - up - down) / lim;
-  if (ramp_distance_mm(v_in, lo, l) + ramp_distance_mm(lo, v_out, l) >= len) {
-    // The junction speeds are at the edge of what the piece allows: a single ramp.
-    return ramp_time_s(std::abs(v_out - v_in), l);
+double ongoing_speed_mm_s(double v0, double d, const MotionLimits& l) {
+  if (d <= 0) return v0;
+  const double A = l.acceleration_mm_s2, J = l.jerk_mm_s3;
+  const double t1 = A / J, d1 = v0 * t1 + J * t1 * t1 * t1 / 6;
+  if (d >= d1) {
+    // Jerk phase up to A, then constant acceleration: v^2 = v1^2 + 2 A (d - d1).
+    const double v1 = v0 + A * A / (2 * J);
+    return std::sqrt(v1 * v1 + 2 * A * (d - d1));
   }
-  // The peak speed between lo and lim where ramp up + ramp down fill the piece (bisection).
-  double a = lo, b = lim;
-  for (int it = 0; it < 12; ++it) {
-    const double m = 0.5 * (a + b);
-    (ramp_distance_mm(v_in, m, l) + ramp_distance_mm(m, v_out, l) <= len ? a : b) = m;
-  }
-  const double vp = a;
-  const double rest = len - ramp_distance_mm(v_in, vp, l) - ramp_distance_mm(vp, v_out, l);
-  return ramp_time_s(vp - v_in, l) + ramp_time_s(vp - v_out, l) + std::max(0.0, rest) / vp;
+  // Within the jerk phase: v0 t + J t^3 / 6 = d (Newton from the jerk-only guess, monotone).
+  double t = std::min(t1, std::cbrt(6 * d / J));
+  for (int it = 0; it < 6; ++it) t -= (v0 * t + J * t * t * t / 6 - d) / (v0 + J * t * t / 2);
+  return v0 + J * t * t / 2;
 }
 
 void junction_passes(std::span<const LimitPiece> pieces, double start_speed, double end_speed,
-                     const MotionLimits& l, std::vector<double>& w) {
+                     const MotionLimits& l, std::vector<double>& w, std::vector<double>* middle,
+                     bool ongoing) {
+  const auto reach = [&](double v0, double d) { return ongoing ? ongoing_speed_mm_s(v0, d, l) : reachable_speed_mm_s(v0, d, l); };
   const std::size_t n = pieces.size();
   w.assign(n + 1, 0.0);
+  if (middle != nullptr) middle->assign(n, 0.0);
   if (n == 0) return;
-  w[0] = std::min(start_speed, pieces[0].limit_mm_s);
+  std::vector<double> cap(n + 1), at(n + 1);
+  cap[0] = std::min(start_speed, pieces[0].limit_mm_s);
   for (std::size_t k = 1; k < n; ++k)
-    w[k] = std::min({pieces[k - 1].limit_mm_s, pieces[k].limit_mm_s, pieces[k - 1].end_cap_mm_s});
-  w[n] = std::min({end_speed, pieces[n - 1].limit_mm_s, pieces[n - 1].end_cap_mm_s});
-  // Backward pass: each junction no faster than what still lets the next one be met.
+    cap[k] = std::min({pieces[k - 1].limit_mm_s, pieces[k].limit_mm_s, pieces[k - 1].end_cap_mm_s});
+  cap[n] = std::min({end_speed, pieces[n - 1].limit_mm_s, pieces[n - 1].end_cap_mm_s});
+  for (std::size_t k = 0; k < n; ++k) at[k] = pieces[k].start_mm;
+  at[n] = pieces[n - 1].end_mm;
+  // Backward pass: a junction is no faster than the jerk-limited ramp down to the binding
+  // constraint ahead. The ramp is measured over the whole distance to that constraint (not
+  // restarted at every junction), so dense short segments do not cost speed: the binding
+  // ("active") constraint is carried along and replaced when a lower one comes up.
+  std::vector<std::size_t> back_active(n + 1), fwd_active(n + 1);
+  std::size_t active = n;
+  w[n] = cap[n];
+  back_active[n] = n;
   for (std::size_t k = n; k-- > 0;) {
-    const double len = pieces[k].end_mm - pieces[k].start_mm;
-    w[k] = std::min(w[k], reachable_speed_mm_s(w[k + 1], len, l));
+    const double r = reach(cap[active], at[active] - at[k]);
+    if (cap[k] <= r) {
+      active = k;
+      w[k] = cap[k];
+    } else {
+      w[k] = r;
+    }
+    back_active[k] = active;
   }
-  // Forward pass: no faster than what can be reached from the previous junction.
+  // Forward pass: no faster than the ramp up from the binding constraint behind.
+  active = 0;
+  fwd_active[0] = 0;
+  for (std::size_t k = 1; k <= n; ++k) {
+    const double r = reach(w[active], at[k] - at[active]);
+    if (w[k] <= r) {
+      active = k;
+    } else {
+      w[k] = r;
+    }
+    fwd_active[k] = active;
+  }
+  if (middle == nullptr) return;
   for (std::size_t k = 0; k < n; ++k) {
-    const double len = pieces[k].end_mm - pieces[k].start_mm;
-    w[k + 1] = std::min(w[k + 1], reachable_speed_mm_s(w[k], len, l));
+    const double mid = 0.5 * (at[k] + at[k + 1]);
+    const std::size_t b = back_active[k + 1], f = fwd_active[k];
+    (*middle)[k] = std::min({pieces[k].limit_mm_s, reach(cap[b], at[b] - mid),
+                             reach(w[f], mid - at[f])});
+  }
+}
+
+void schedule_plan(SpeedPlan& plan, const MotionLimits& l) {
+  // Two envelopes bracket what the interpolator does: ramps that end at zero acceleration at
+  // every measured point (too slow: it passes junctions while still accelerating) and ramps that
+  // never have to end (too fast: the change from accelerating to braking costs time). The
+  // schedule takes the mean of the two times; the plan's junction speeds are the first.
+  std::vector<double> mid_slow, w_fast, mid_fast;
+  junction_passes(plan.pieces, plan.start_speed_mm_s, plan.end_speed_mm_s, l, plan.junction_mm_s, &mid_slow);
+  junction_passes(plan.pieces, plan.start_speed_mm_s, plan.end_speed_mm_s, l, w_fast, &mid_fast, true);
+  const auto piece_time = [](double len, double v0, double vm, double v1) {
+    // Each half of the piece at its mean speed (exact for a symmetric ramp, close otherwise).
+    return 0.5 * len / std::max(0.5 * (v0 + vm), 1e-9) + 0.5 * len / std::max(0.5 * (vm + v1), 1e-9);
+  };
+  const std::size_t n = plan.pieces.size();
+  plan.time_to_end_s.assign(n + 1, 0.0);
+  for (std::size_t k = n; k-- > 0;) {
+    const double len = plan.pieces[k].end_mm - plan.pieces[k].start_mm;
+    const double slow = piece_time(len, plan.junction_mm_s[k], mid_slow[k], plan.junction_mm_s[k + 1]);
+    const double fast = piece_time(len, w_fast[k], mid_fast[k], w_fast[k + 1]);
+    plan.time_to_end_s[k] = plan.time_to_end_s[k + 1] + 0.5 * (slow + fast);
   }
 }
 
@@ -166,15 +215,7 @@ SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
     // also when the command is shorter than L; conventional: rest; look-ahead: free).
     if (kind != PlanKind::LookAhead) plan.pieces.back().end_cap_mm_s = plan.end_speed_mm_s;
   }
-  junction_passes(plan.pieces, plan.start_speed_mm_s, plan.end_speed_mm_s, limits.path, plan.junction_mm_s);
-  const std::size_t n = plan.pieces.size();
-  plan.time_to_end_s.assign(n + 1, 0.0);
-  for (std::size_t k = n; k-- > 0;) {
-    const LimitPiece& p = plan.pieces[k];
-    plan.time_to_end_s[k] = plan.time_to_end_s[k + 1] +
-        piece_time_s(p.end_mm - p.start_mm, plan.junction_mm_s[k], plan.junction_mm_s[k + 1],
-                     p.limit_mm_s, limits.path);
-  }
+  schedule_plan(plan, limits.path);
   return plan;
 }
 

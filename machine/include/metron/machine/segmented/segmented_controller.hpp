@@ -40,6 +40,7 @@ struct ControllerConfig {
   std::function<double(std::size_t)> planning_factor;
   double retract_mm = 2.0;                 ///< retract (and approach) distance off the surface
   MotionLimits positioning{50.0, 500.0, 5000.0};  ///< limits of retract and approach moves
+  double contact_settle_s = 0.3;           ///< after an approach: contact and settling at E0
 };
 
 /// What happened at the boundary between Ci and Ci+1.
@@ -91,6 +92,10 @@ class SegmentedController {
   [[nodiscard]] const ControllerConfig& config() const { return m_config; }
   /// Tp for a command of n segments (the judgement value: margin * net time).
   [[nodiscard]] double planning_time_s(std::size_t segments) const;
+  /// Duration of one retract move.
+  [[nodiscard]] double retract_time_s() const;
+  /// Duration of one approach (move plus contact settling).
+  [[nodiscard]] double approach_time_s() const;
 
  private:
   enum class Phase { Retracted, Approaching, Scanning, Retracting, Done };

@@ -91,17 +91,23 @@ double ramp_time_s(double dv_mm_s, const MotionLimits& limits);
 double ramp_distance_mm(double v0_mm_s, double v1_mm_s, const MotionLimits& limits);
 /// The highest v1 >= v0 with ramp_distance_mm(v0, v1) <= d (closed form: Cardano / quadratic).
 double reachable_speed_mm_s(double v0_mm_s, double d_mm, const MotionLimits& limits);
-/// Time to run `length_mm` from v_in to v_out under `limit` with zero acceleration at both ends
-/// (ramp up, cruise, ramp down; the peak lowered when the piece is short).
-double piece_time_s(double length_mm, double v_in_mm_s, double v_out_mm_s, double limit_mm_s,
-                    const MotionLimits& limits);
-
-/// Backward and forward passes over pieces (SEEDS.md 2 improved: jerk-limited junction speeds):
-/// fills `junction_mm_s` (size pieces+1) with the highest speeds that let every later constraint
-/// and `end_speed_mm_s` be met, starting from `start_speed_mm_s`, with zero acceleration at each
-/// junction (a conservative, cheap model used for the schedule).
+/// Backward and forward passes over pieces (jerk-limited junction speeds): fills `junction_mm_s`
+/// (size pieces+1) with the highest speeds that let every later limit and `end_speed_mm_s` be met
+/// and that can be reached from `start_speed_mm_s`; ramps are measured from the binding
+/// constraint, across junctions. `middle` (optional) gets the same envelope at each piece middle.
+/// With `ongoing`, ramps need not end at zero acceleration (ongoing_speed_mm_s): the envelope of
+/// what the interpolator can reach, used for the schedule.
 void junction_passes(std::span<const LimitPiece> pieces, double start_speed_mm_s,
                      double end_speed_mm_s, const MotionLimits& limits,
-                     std::vector<double>& junction_mm_s);
+                     std::vector<double>& junction_mm_s, std::vector<double>* middle = nullptr,
+                     bool ongoing = false);
+
+/// Speed after `d_mm` of the fastest acceleration from (v0, a = 0): jerk up to the acceleration
+/// limit, then constant acceleration (the ramp does not have to end; by time reversal also the
+/// speed `d_mm` before a point reached at v0 by the fastest deceleration).
+double ongoing_speed_mm_s(double v0_mm_s, double d_mm, const MotionLimits& limits);
+
+/// Fills the plan's junction speeds and schedule (time_to_end_s) from its pieces and end speeds.
+void schedule_plan(SpeedPlan& plan, const MotionLimits& limits);
 
 }  // namespace metron::machine::segmented
