@@ -35,7 +35,7 @@ const char* name(SegmentedMode m) {
 }
 
 double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
+  if (v.empty()) return std::nan("");  // printed as nan: no such points
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5))];
 }
@@ -74,8 +74,8 @@ Quality quality(const std::vector<ScanPoint>& pts, const std::vector<BoundaryEve
     }
   }
   if (pts.empty() || pts.front().s_mm > 1e-3 || std::abs(pts.back().s_mm - length) > 1e-6) q.continuous = false;
-  q.defl_near_mean_um = n_near ? sum_near / static_cast<double>(n_near) : 0;
-  q.defl_far_mean_um = n_far ? sum_far / static_cast<double>(n_far) : 0;
+  q.defl_near_mean_um = n_near ? sum_near / static_cast<double>(n_near) : std::nan("");
+  q.defl_far_mean_um = n_far ? sum_far / static_cast<double>(n_far) : std::nan("");
   q.gap_near_max_mm = gaps_near.empty() ? 0 : *std::max_element(gaps_near.begin(), gaps_near.end());
   q.gap_far_max_mm = gaps_far.empty() ? 0 : *std::max_element(gaps_far.begin(), gaps_far.end());
   q.gap_near_median_mm = quantile(gaps_near, 0.5);

@@ -186,25 +186,19 @@ SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
     if (s - start_mm >= low.length_mm && low.length_mm > 0) {
       const double from = s - low.length_mm;
       plan.low_speed_from_mm = from;
-      std::vector<LimitPiece> split;
-      split.reserve(plan.pieces.size() + 1);
-      for (const LimitPiece& p : plan.pieces) {
-        if (p.end_mm <= from) {
-          split.push_back(p);
-        } else if (p.start_mm >= from) {
-          LimitPiece q = p;
-          q.limit_mm_s = std::min(p.limit_mm_s, low.speed_mm_s);
-          split.push_back(q);
-        } else {
-          LimitPiece a = p, b = p;
-          a.end_mm = from;
-          b.start_mm = from;
-          b.limit_mm_s = std::min(p.limit_mm_s, low.speed_mm_s);
-          split.push_back(a);
-          split.push_back(b);
-        }
+      // In place from the back: the region covers only the last few pieces.
+      std::size_t k = plan.pieces.size();
+      while (k > 0 && plan.pieces[k - 1].start_mm >= from) {
+        --k;
+        plan.pieces[k].limit_mm_s = std::min(plan.pieces[k].limit_mm_s, low.speed_mm_s);
       }
-      plan.pieces = std::move(split);
+      if (k > 0 && plan.pieces[k - 1].end_mm > from) {
+        LimitPiece tail = plan.pieces[k - 1];
+        plan.pieces[k - 1].end_mm = from;
+        tail.start_mm = from;
+        tail.limit_mm_s = std::min(tail.limit_mm_s, low.speed_mm_s);
+        plan.pieces.insert(plan.pieces.begin() + static_cast<std::ptrdiff_t>(k), tail);
+      }
     }
     plan.end_speed_mm_s = last_command ? 0.0 : low.speed_mm_s;
   } else {
