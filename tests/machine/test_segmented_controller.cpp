@@ -155,6 +155,19 @@ TEST(SegmentedController, SeedConnectsEveryBoundaryWhenTpFits) {
   expect_continuous(r, test_path(), 100.0);
 }
 
+TEST(SegmentedController, SeedCommandsShorterThanTheRegionStillConnectAtTheLowSpeed) {
+  // 4 segments of 0.5 mm: each command (2 mm) is shorter than L = 3 mm, so no low-speed region,
+  // but every plan still ends at the low speed and the probe passes each boundary at it.
+  const geometry::PccPath path = tight_meander(40, 0.5);
+  const ScanRun r = run(path, base(SegmentedMode::Seed, 4));
+  EXPECT_EQ(r.stats.stops, 0u);
+  ASSERT_EQ(r.stats.boundaries.size(), 9u);
+  for (const auto& b : r.stats.boundaries) EXPECT_NEAR(b.speed_mm_s, 3.0, 6e-3) << b.next_command;
+  // Faster than running everything at the low speed: the middle of each command is not capped.
+  EXPECT_LT(r.stats.scan_time_s(), 0.8 * path.length() / 3.0);
+  expect_continuous(r, path, 100.0);
+}
+
 TEST(SegmentedController, ConnectionFlagDropsTpBeforeTheCommandEnd) {
   // LF falls when tei - t reaches Tp; in the low-speed region the gap time is exact, so the
   // falling edge comes Tp (= 1.3 * 2 ms * 40 = 0.104 s) before the boundary.
@@ -225,6 +238,27 @@ TEST(SegmentedController, LookAheadIsNearTheLimitAndKeepsSpeedAtJunctions) {
   const ScanRun conv = run(test_path(), base(SegmentedMode::Conventional, 40));
   EXPECT_GT(seed.stats.scan_time_s(), r.stats.scan_time_s() + 4.0);
   EXPECT_EQ(conv.stats.stops, 5u);
+}
+
+TEST(SegmentedController, LookAheadPacesToASlowPlannerInsteadOfStopping) {
+  // Tp = 1.3 * 20 ms * 40 = 1.04 s, longer than a command takes at full speed (~0.5 s).
+  ControllerConfig cfg = base(SegmentedMode::LookAhead, 40);
+  cfg.planning_s_per_segment = 0.02;
+  cfg.pace_to_planner = false;
+  const ScanRun stopping = run(test_path(), cfg);
+  EXPECT_GE(stopping.stats.stops, 3u);
+  cfg.pace_to_planner = true;
+  const ScanRun paced = run(test_path(), cfg);
+  EXPECT_EQ(paced.stats.stops, 0u);
+  EXPECT_EQ(paced.stats.retracts, 0u);
+  for (const auto& b : paced.stats.boundaries) EXPECT_GE(b.speed_mm_s, 3.0 - 1e-3) << b.next_command;
+  expect_continuous(paced, test_path(), 100.0);
+  double prev_a = 0;
+  for (const ScanCycle& c : paced.cycles) {
+    ASSERT_LE(c.state.v_mm_s, c.limit_mm_s + 1e-9);
+    ASSERT_LE(std::abs(c.state.a_mm_s2 - prev_a), 10.0 + 1e-6);
+    prev_a = c.state.a_mm_s2;
+  }
 }
 
 TEST(SegmentedController, LookAheadStopsInContactWhenThePlannerIsLate) {

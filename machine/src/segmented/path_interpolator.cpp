@@ -38,6 +38,12 @@ double brake_distance_mm(double v, double a, double vt, const MotionLimits& l) {
   return v * t + a * t * t / 2 + J * t * t * t / 6;
 }
 
+void PathInterpolator::set_speed_override(double v_mm_s) {
+  m_override_mm_s = v_mm_s;
+  // Reached as soon as a jerk-limited deceleration from the current state allows.
+  m_override_from_mm = m_state.s_mm + brake_distance_mm(m_state.v_mm_s, m_state.a_mm_s2, v_mm_s, m_check_limits);
+}
+
 void PathInterpolator::append(std::span<const LimitPiece> pieces) {
   for (const LimitPiece& p : pieces) {
     if (!m_pieces.empty() && std::abs(p.start_mm - m_pieces.back().end_mm) > 1e-6)
@@ -81,6 +87,12 @@ bool PathInterpolator::safe(const PathState& x) const {
   if (k == m_pieces.size()) return x.s_mm <= horizon_end_mm() + 1e-9 && x.v_mm_s <= k_eps && x.a_mm_s2 <= k_eps;
   const double peak = x.a_mm_s2 > 0 ? x.v_mm_s + x.a_mm_s2 * x.a_mm_s2 / (2 * J) : x.v_mm_s;
   if (peak > m_pieces[k].limit_mm_s * (1 + 1e-12) + k_eps) return false;
+  if (peak > m_override_mm_s) {
+    // The feed cap holds from m_override_from_mm on; before that, braking down to it must fit.
+    if (x.s_mm >= m_override_from_mm - k_eps) return false;
+    if (brake_distance_mm(x.v_mm_s, x.a_mm_s2, m_override_mm_s, m_check_limits) > m_override_from_mm - x.s_mm + k_eps)
+      return false;
+  }
   const double stop = brake_distance_mm(x.v_mm_s, x.a_mm_s2, 0.0, m_check_limits);
   // Every boundary within the stopping distance must be reachable at its speed cap; farther
   // boundaries can always be met by stopping.

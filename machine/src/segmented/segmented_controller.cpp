@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -112,6 +113,7 @@ void SegmentedController::start_planning(std::size_t b) {
   const double factor = m_config.planning_factor ? m_config.planning_factor(cmd.index) : 1.0;
   m_planning = static_cast<int>(b);
   m_plan_ready_s = m_t_s + net * factor;
+  m_plan_expected_s = m_t_s + planning_time_s(cmd.segments.size());
   ++m_next_plan;
 }
 
@@ -161,6 +163,20 @@ void SegmentedController::finish_one_command() {
   buf = Buffer{};
   ++m_done_commands;
   if (!last) m_exec_buffer ^= 1;
+}
+
+void SegmentedController::pace() {
+  // The controller knows when it expects its own plan (start + Tp), not when it will really be
+  // ready: reach the buffered end no earlier than that, at no less than the low speed.
+  double cap = std::numeric_limits<double>::infinity();
+  const int b = buffer_of(m_next_attach);
+  const bool pending = m_planning >= 0 && b == m_planning;
+  if (pending) {
+    const double left_s = m_plan_expected_s - m_t_s;
+    const double d = m_interp.horizon_end_mm() - m_interp.state().s_mm;
+    if (left_s > 0) cap = std::max(m_config.low.speed_mm_s, d / left_s);
+  }
+  m_interp.set_speed_override(cap);
 }
 
 void SegmentedController::record_cycle() {
@@ -235,6 +251,7 @@ void SegmentedController::step() {
         if (kind == PlanKind::LookAhead || (kind == PlanKind::Connection && !m_interp.at_rest_at_end()))
           attach(static_cast<std::size_t>(b), false);
       }
+      if (m_config.mode == SegmentedMode::LookAhead && m_config.pace_to_planner) pace();
       m_interp.step(dt);
       record_cycle();
       finish_completed_commands();

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstddef>
 #include <deque>
+#include <limits>
 #include <span>
 
 #include "metron/machine/segmented/speed_plan.hpp"
@@ -38,6 +39,9 @@ class PathInterpolator {
   void trim();
   /// Advances one cycle of `dt_s`.
   void step(double dt_s);
+  /// A feed cap on top of the piece limits (infinity: none), in force from where a jerk-limited
+  /// deceleration from the current state can reach it.
+  void set_speed_override(double v_mm_s);
   /// Sets the state (e.g. rest at the start after an approach).
   void reset_state(const PathState& state) { m_state = state; }
 
@@ -60,6 +64,8 @@ class PathInterpolator {
   MotionLimits m_check_limits;
   std::deque<LimitPiece> m_pieces;
   std::size_t m_current = 0;  // index in m_pieces of the piece containing s
+  double m_override_mm_s = std::numeric_limits<double>::infinity();
+  double m_override_from_mm = 0;
   PathState m_state;
 };
 

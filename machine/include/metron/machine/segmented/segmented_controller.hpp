@@ -41,6 +41,9 @@ struct ControllerConfig {
   double retract_mm = 2.0;                 ///< retract (and approach) distance off the surface
   MotionLimits positioning{50.0, 500.0, 5000.0};  ///< limits of retract and approach moves
   double contact_settle_s = 0.3;           ///< after an approach: contact and settling at E0
+  /// Look-ahead only: when the next plan is still being made, slow down so the buffered end is
+  /// reached when the plan is expected (start + Tp) instead of stopping there.
+  bool pace_to_planner = true;
 };
 
 /// What happened at the boundary between Ci and Ci+1.
@@ -115,6 +118,7 @@ class SegmentedController {
   [[nodiscard]] double gap_before_s(std::size_t index) const;
   [[nodiscard]] int buffer_of(std::size_t command_index) const;
   void record_cycle();
+  void pace();
 
   ControllerConfig m_config;
   ScanRecorder* m_recorder;
@@ -124,7 +128,8 @@ class SegmentedController {
   bool m_last_loaded = false;
   std::optional<std::size_t> m_last_index;
   int m_planning = -1;                        // buffer being planned
-  double m_plan_ready_s = 0;
+  double m_plan_ready_s = 0;                  // when the plan will be ready (simulated truth)
+  double m_plan_expected_s = 0;               // when the controller expects it: start + Tp
   double m_next_start_mm = 0;
   bool m_lf = false;
   Phase m_phase = Phase::Retracted;
