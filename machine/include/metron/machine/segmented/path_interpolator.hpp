@@ -45,6 +45,7 @@ class PathInterpolator {
   /// Sets the state (e.g. rest at the start after an approach).
   void reset_state(const PathState& state) { m_state = state; }
 
+  /// The state after the last cycle.
   [[nodiscard]] const PathState& state() const { return m_state; }
   /// Global arc length where the buffered pieces end.
   [[nodiscard]] double horizon_end_mm() const { return m_pieces.empty() ? m_state.s_mm : m_pieces.back().end_mm; }
@@ -54,6 +55,7 @@ class PathInterpolator {
   [[nodiscard]] const LimitPiece* current_piece() const;
   /// Speed limit that applies at the current position (infinity when nothing is buffered).
   [[nodiscard]] double limit_here_mm_s() const;
+  /// The motion limits.
   [[nodiscard]] const MotionLimits& limits() const { return m_limits; }
 
  private:

@@ -53,11 +53,13 @@ class StylusDeflectionRecorder : public ScanRecorder {
     int substeps = 8;                    ///< integration steps per cycle
   };
   StylusDeflectionRecorder() : StylusDeflectionRecorder(Params{}) {}
+  /// A recorder with the given stylus dynamics.
   explicit StylusDeflectionRecorder(Params params) : m_params(params) {}
 
   void record(const ScanCycle& cycle) override;
   void contact_changed(bool in_contact, double t_s) override;
 
+  /// The recorded points, in path order.
   [[nodiscard]] const std::vector<ScanPoint>& points() const { return m_points; }
 
  private:
@@ -78,6 +80,7 @@ class CycleLog : public ScanRecorder {
 /// Forwards to several recorders.
 class RecorderTee : public ScanRecorder {
  public:
+  /// Forwards to `a`, then `b`.
   RecorderTee(ScanRecorder& a, ScanRecorder& b) : m_a(a), m_b(b) {}
   void record(const ScanCycle& c) override { m_a.record(c); m_b.record(c); }
   void contact_changed(bool in, double t) override { m_a.contact_changed(in, t); m_b.contact_changed(in, t); }

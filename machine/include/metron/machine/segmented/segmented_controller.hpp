@@ -27,7 +27,7 @@ enum class SegmentedMode {
 
 /// Configuration of the simulated controller.
 struct ControllerConfig {
-  SegmentedMode mode = SegmentedMode::Seed;
+  SegmentedMode mode = SegmentedMode::Seed;  ///< boundary behaviour
   ScanLimits limits;                       ///< scanning motion limits
   LowSpeedRegion low;                      ///< the seed's low-speed region
   double dt_s = 0.001;                     ///< control cycle
@@ -73,6 +73,8 @@ struct SegmentedStats {
 /// The controller: load commands into free buffers, call step() every cycle.
 class SegmentedController {
  public:
+  /// A controller at rest before the path start; `recorder` (may be null) gets every scanning
+  /// cycle. Throws std::invalid_argument for a low speed outside 1-5 mm/s or a zero cycle/buffer.
   explicit SegmentedController(ControllerConfig config, ScanRecorder* recorder = nullptr);
 
   /// Buffer status SB(b) for b = 1, 2: 0 writable, 1 full.
@@ -89,9 +91,13 @@ class SegmentedController {
   void step();
   /// The path has been scanned to its end and the probe rests there.
   [[nodiscard]] bool finished() const { return m_phase == Phase::Done; }
+  /// Simulated time t.
   [[nodiscard]] double time_s() const { return m_t_s; }
+  /// Figures so far.
   [[nodiscard]] const SegmentedStats& stats() const { return m_stats; }
+  /// The interpolator's state (arc length along the whole path, speed, acceleration).
   [[nodiscard]] const PathState& path_state() const { return m_interp.state(); }
+  /// The configuration in use.
   [[nodiscard]] const ControllerConfig& config() const { return m_config; }
   /// Tp for a command of n segments (the judgement value: margin * net time).
   [[nodiscard]] double planning_time_s(std::size_t segments) const;

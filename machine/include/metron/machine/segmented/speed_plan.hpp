@@ -54,6 +54,7 @@ struct SpeedPlan {
   std::vector<LimitPiece> pieces;       ///< limits in path order (segments, split at the region)
   std::vector<double> junction_mm_s;    ///< planned speed at each piece boundary (pieces.size()+1)
   std::vector<double> time_to_end_s;    ///< planned time from each piece boundary to the end
+  /// Planned duration tei - tsi.
   [[nodiscard]] double duration_s() const { return time_to_end_s.empty() ? 0 : time_to_end_s.front(); }
 };
 
