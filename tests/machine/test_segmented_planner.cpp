@@ -163,6 +163,25 @@ TEST(SegmentedPlan, ScheduleMatchesTheExecutedTime) {
   }
 }
 
+// A speed-limit drop in the middle of a line: a chain of full S-ramps (0 -> 100, 100 -> 20 ending
+// where the slow zone starts, 20 -> 100 from where it ends, 100 -> 0) with cruises between has a
+// closed-form time. The optimum under pointwise limits is a little faster (it may cross the zone
+// ends still braking or already accelerating, dipping a^2/2J below 20 mm/s), so the reference
+// must land within 1 % below and 1.5 % above it.
+TEST(SegmentedReference, LimitDropMatchesTheClosedFormChainOfRamps) {
+  geometry::PccPath path;
+  path.segments = straight(100, 1.0);
+  for (int i = 0; i < 100; ++i) path.speed_mm_s.push_back(i >= 40 && i < 60 ? 20.0 : 100.0);
+  const ReferenceProfile ref = reference_profile(path, {k_limits, 500}, 0.001);
+  const double up = ramp_time_s(100, k_limits), drop = ramp_time_s(80, k_limits);
+  const double d_up = 50.0 * up, d_drop = 60.0 * drop;  // mean speed times duration
+  const double cruise = (40 - d_up - d_drop) / 100.0;
+  const double analytic = up + cruise + drop + 20.0 / 20.0 + drop + cruise + up;
+  EXPECT_NEAR(analytic, 2.1431, 1e-4);
+  EXPECT_GE(ref.time_s, analytic * 0.99);
+  EXPECT_LE(ref.time_s, analytic * 1.015);  // braking checks use 97 % of the jerk limit
+}
+
 // Every executed cycle respects the speed (incl. curvature), acceleration and jerk limits,
 // checked against the recorded profile and, independently, the true curvature at each point.
 TEST(SegmentedReference, ProfileRespectsAllLimits) {
