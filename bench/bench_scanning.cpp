@@ -47,8 +47,10 @@ struct Row {
   double reversals_per_mm = 0;  // sign changes of the high-passed |Ep| per mm of path
 };
 
-Row scan_ramp(ScanLaw law, double angle_deg, const Vec3& offset_mm, double roughness_mm, double cutoff_hz) {
+Row scan_ramp(ScanLaw law, double angle_deg, const Vec3& offset_mm, double roughness_mm, double cutoff_hz,
+              double gain_1_s = 0) {
   World world = default_world();
+  if (gain_1_s > 0) world.scanning.control.deflection_gain_1_s = world.scanning.control.trajectory_gain_1_s = gain_1_s;
   PartSpec part;
   part.design = scan_test::ramp_design(angle_deg);
   part.pose.translation_mm = part_origin + offset_mm;  // the part as machined sits off its design
@@ -127,6 +129,25 @@ void table() {
     }
 }
 
+// Why Vc1 does not ring at the default gains: along eu its term adds to Ve, so the normal loop's
+// gain is K + Kc(.eu) instead of K. Raising K = Kc shows where each law starts to ring.
+void gain_sweep() {
+  const double roughness_mm = 0.003, cutoff_hz = 25;
+  fmt::print("Gain sweep: K = Kc, 20 degree ramp, offset (-0.30, 0, 0.10), roughness {} mm; osc = RMS of |Ep| above {} Hz\n",
+             roughness_mm, cutoff_hz);
+  fmt::print("{:>6} | {:>16} {:>16} {:>16}\n", "K 1/s", "Vc1 osc/rms um", "Vc1' osc/rms um", "Vc2 osc/rms um");
+  for (double k : {20.0, 40.0, 60.0, 80.0, 100.0, 120.0, 140.0, 160.0}) {
+    fmt::print("{:>6.0f} |", k);
+    for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) {
+      const Row r = scan_ramp(law, 20, Vec3(-0.3, 0, 0.1), roughness_mm, cutoff_hz, k);
+      fmt::print(" {:>7.2f}/{:>6.1f}{}", 1000 * r.hf_rms_mm, 1000 * r.outcome.stats.rms_deflection_error_mm,
+                 r.outcome.completed ? " " : "*");
+    }
+    fmt::print("\n");
+  }
+  fmt::print("(* = not completed)\n\n");
+}
+
 // A UV sphere of radius R with `rings` x `sectors` quads (2 triangles each, fans at the poles).
 geometry::Mesh uv_sphere(double radius, int rings, int sectors) {
   std::vector<Vec3> v;
@@ -184,6 +205,7 @@ int main(int argc, char** argv) {
   const bool table_only = argc > 1 && std::strcmp(argv[1], "--table-only") == 0;
   const bool speed_only = argc > 1 && std::strcmp(argv[1], "--speed-only") == 0;
   if (!speed_only) table();
+  if (!speed_only) gain_sweep();
   if (!table_only) speed();
   return 0;
 }

@@ -90,7 +90,7 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   Vec3 v_prev = Vec3::Zero();
   Vec3 eu_last = n_app;
   double next_sample_s = 0, best_s = -1, progress_t = 0, settle_t = 0, retract_t = 0;
-  double lost_at_s = -1, lost_at_t = 0;
+  double lost_at_s = -1, lost_at_t = 0, retract_deflection_mm = 0;
   int settled_cycles = 0;
   constexpr double speed_tau_s = 0.02;
   double vf_smooth[2] = {0, 0};
@@ -224,14 +224,17 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       if (s >= length - 1e-3) {
         phase = Phase::Retract;
         retract_t = t;
+        retract_deflection_mm = e;
         out.completed = true;
       }
     }
     if (phase == Phase::Retract && !rec.scanning) {
-      // Back off along the last deflection direction, then stop.
+      // Back off along the last deflection direction until the ball is retract_mm off the
+      // surface (the deflection, then the distance), then stop.
       const double feed = ctl.approach_feed_mm_s;
-      if (t - retract_t < command.retract_mm / feed) v = feed * eu_last;
-      else if (servo.velocity_mm_s().norm() < 1e-3 || t - retract_t > command.retract_mm / feed + 0.5) phase = Phase::Done;
+      const double travel_s = (command.retract_mm + retract_deflection_mm) / feed;
+      if (t - retract_t < travel_s) v = feed * eu_last;
+      else if (servo.velocity_mm_s().norm() < 1e-3 || t - retract_t > travel_s + 0.5) phase = Phase::Done;
     }
 
     // The machine's limits on the command: path speed and acceleration.
