@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <functional>
 #include <numbers>
+#include <random>
 
 #include <nlohmann/json.hpp>
 
@@ -439,4 +440,35 @@ TEST(Scanning, OverRangeIsAFaultWithTheSamplesSoFar) {
   again.submit({2, SelectTool{"T1"}});
   again.submit({3, ramp_scan(0, ScanLaw::Vc2)});
   EXPECT_EQ(again.execute()[2].status, Response::Status::Done);
+}
+
+// The probe queries a local view of the world (Solid::local_view): it must give the same values
+// as the solid everywhere, near the centre (the fast path) and far from it (the fallback).
+TEST(Scanning, LocalViewsAnswerExactlyLikeTheirSolid) {
+  const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7); };
+  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 40, -20, 20, 40, 40));
+  CadDesign cad;
+  cad.path = "<test mesh>";
+  cad.mesh = mesh;
+  World w = world_with(cad, Vec3::Zero(), 0.002);
+  w.part->bumps = {Bump{Vec3(20, 0, height(20, 0)), 0.05, 2}};
+  const auto solid = make_world_solid(w);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int compared = 0;
+  for (int v = 0; v < 20; ++v) {
+    const double x = 20 + 18 * u(rng), y = 18 * u(rng);
+    const Vec3 centre = origin + Vec3(x, y, height(x, y) + 1.7 + 0.3 * u(rng));
+    const auto view = solid->local_view(centre, 2.8);
+    for (int k = 0; k < 50; ++k) {
+      const double spread = k < 40 ? 0.5 : 6.0;  // mostly near, some far (and inside the material)
+      const Vec3 p = centre + spread * Vec3(u(rng), u(rng), 2 * u(rng));
+      EXPECT_NEAR(view->signed_distance(p), solid->signed_distance(p), 1e-12) << p.transpose();
+      // With roughness the normal is a central difference of distances over 2e-6 mm, which
+      // turns their last-bit rounding differences (1e-15 mm) into ~1e-9.
+      EXPECT_LT((view->normal(p) - solid->normal(p)).norm(), 1e-7) << p.transpose();
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 1000);
 }

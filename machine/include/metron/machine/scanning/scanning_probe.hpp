@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <memory>
+
 #include "metron/machine/rng.hpp"
 #include "metron/machine/scanning/scanning_spec.hpp"
 #include "metron/machine/solid.hpp"
@@ -17,7 +19,7 @@ class ScanningProbe {
 
   /// The true deflection Ep for the head at `head_mm`: zero when the ball is free, else the
   /// displacement of the ball centre from the head, which points out of the material.
-  [[nodiscard]] Vec3 deflection(const Vec3& head_mm) const;
+  [[nodiscard]] Vec3 deflection(const Vec3& head_mm);
   /// One reading of the deflection sensor: the true deflection plus the sensor's noise.
   [[nodiscard]] Vec3 read(const Vec3& true_deflection_mm);
   /// The contact force for a deflection, N.
@@ -26,6 +28,8 @@ class ScanningProbe {
 
  private:
   const Solid& m_solid;
+  std::unique_ptr<Solid> m_view;     ///< m_solid's local view about m_view_centre
+  Vec3 m_view_centre = Vec3::Zero();
   double m_radius_mm;
   ScanningProbeSpec m_spec;
   Rng& m_rng;
