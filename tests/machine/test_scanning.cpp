@@ -472,3 +472,74 @@ TEST(Scanning, LocalViewsAnswerExactlyLikeTheirSolid) {
   }
   EXPECT_EQ(compared, 1000);
 }
+
+// The scanning worlds in programs/worlds behave as their descriptions say.
+namespace {
+
+World scan_world_file(const std::string& name) {
+  auto w = load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/" + name);
+  if (!w) throw std::runtime_error(w.error().message);
+  return *w;
+}
+
+}  // namespace
+
+TEST(ScanningWorlds, RampWorldsSeparateTheLaws) {
+  const World w30 = scan_world_file("scan_ramp_30.json");
+  const ScanRun stalled = scan(w30, ramp_scan(30, ScanLaw::Vc1Prime));
+  ASSERT_TRUE(stalled.out.fault);
+  EXPECT_EQ(stalled.out.fault->kind, FaultKind::Stalled);
+  EXPECT_TRUE(scan(w30, ramp_scan(30, ScanLaw::Vc2)).out.completed);
+  const World w45 = scan_world_file("scan_ramp_45.json");
+  EXPECT_TRUE(scan(w45, ramp_scan(45, ScanLaw::Vc1Prime)).out.completed);
+  EXPECT_TRUE(scan(w45, ramp_scan(45, ScanLaw::Vc2)).out.completed);
+}
+
+TEST(ScanningWorlds, LobedCircleAndFreeFormBumpWorlds) {
+  {
+    const World w = scan_world_file("scan_lobed_circle.json");
+    VirtualCmm cmm(w, 1);
+    ScanPath c;
+    c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), 25 + ball_r - 0.3, true), Vec3(200, 300, 0));
+    c.approach_normal = Vec3::UnitX();
+    cmm.submit({1, DefineTool{"T1", 2 * ball_r}});
+    cmm.submit({2, SelectTool{"T1"}});
+    cmm.submit({3, GoTo{scan_approach_point(c) + Vec3(0, 0, 40), std::nullopt}});  // clear of the boss top
+    cmm.submit({4, c});
+    const auto r = cmm.execute();
+    ASSERT_EQ(r[3].status, Response::Status::Done) << r[3].fault->message;
+    std::vector<Vec3> pts;
+    for (const ScanSample& s : r[3].scan) pts.push_back(s.surface_mm(ball_r));
+    fitting::FitOptions o;
+    o.inner = false;
+    o.direction_hint = Vec3::UnitZ();
+    const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+    ASSERT_TRUE(f);
+    EXPECT_NEAR(f->form_mm, 0.005, 0.001);
+    EXPECT_NEAR(f->position.x(), 200.15, 0.001);
+    EXPECT_NEAR(f->position.y(), 299.9, 0.001);
+  }
+  {
+    const World w = scan_world_file("scan_freeform_bump.json");
+    const auto height = [](double x) { return 20 + 1.5 * std::sin(x / 12); };  // at y = 0
+    ScanPath c;
+    // The mesh's y = 0 section is a polyline through its grid nodes (every 2 mm): the path follows
+    // it at r - E0 along each edge's normal, corners rounded (scan_test::profile_path_xz).
+    std::vector<Vec3> section;
+    for (double x = 4; x <= 56 + 1e-9; x += 2) section.emplace_back(x, 0, height(x));
+    c.path = placed(scan_test::profile_path_xz(section, ball_r - 0.3, 2.0), Vec3(100, 100, 0));
+    c.approach_normal = c.path.normals.front();
+    const ScanRun r = scan(w, c);
+    ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+    double peak = 0, at = 0;
+    for (const ScanSample& s : r.out.samples) {
+      const Vec3 p = s.surface_mm(ball_r) - Vec3(100, 100, 0);
+      // Deviation from the design polyline, vertical (the section is piecewise linear).
+      const double x0 = 2 * std::floor(p.x() / 2), z0 = height(x0), z1 = height(x0 + 2);
+      const double dev = (p.z() - (z0 + (z1 - z0) * (p.x() - x0) / 2)) * std::cos(std::atan((z1 - z0) / 2));
+      if (dev > peak) peak = dev, at = p.x();
+    }
+    EXPECT_NEAR(peak, 0.010, 0.001);
+    EXPECT_NEAR(at, 30, 0.5);
+  }
+}
