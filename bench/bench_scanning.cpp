@@ -140,12 +140,16 @@ void gain_sweep() {
     fmt::print("{:>6.0f} |", k);
     for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) {
       const Row r = scan_ramp(law, 20, Vec3(-0.3, 0, 0.1), roughness_mm, cutoff_hz, k);
-      fmt::print(" {:>7.2f}/{:>6.1f}{}", 1000 * r.hf_rms_mm, 1000 * r.outcome.stats.rms_deflection_error_mm,
-                 r.outcome.completed ? " " : "*");
+      const ScanStats& st = r.outcome.stats;
+      if (st.scan_cycles < 400)  // too short a scan for the high-pass figure
+        fmt::print(" {:>16}", r.outcome.fault ? to_string(r.outcome.fault->kind) : "-");
+      else
+        fmt::print(" {:>7.2f}/{:>6.1f}{}", 1000 * r.hf_rms_mm, 1000 * st.rms_deflection_error_mm,
+                   r.outcome.completed ? " " : "*");
     }
     fmt::print("\n");
   }
-  fmt::print("(* = not completed)\n\n");
+  fmt::print("(* = not completed; a fault name: it came within 0.4 s of scanning)\n\n");
 }
 
 // A UV sphere of radius R with `rings` x `sectors` quads (2 triangles each, fans at the poles).
