@@ -4,7 +4,7 @@
 //      offset from its design and rough: |Ep| - E0 (RMS, peak), oscillation, distance from the
 //      path, completion;
 //  (2) simulation speed of the 1 kHz scanning loop on a CAD mesh of >= 100k triangles.
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only].
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only].
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -177,6 +177,34 @@ geometry::Mesh uv_sphere(double radius, int rings, int sectors) {
   return *geometry::Mesh::from_triangles(std::move(v), std::move(f));
 }
 
+// The NIST DCX test part (STEP, tessellated at the default 1 um chord tolerance) with the table:
+// a 120 mm line on its flat top at z = -50 (y = 69), Vc2.
+void speed_on_step_part() {
+  const std::string file = std::string(METRON_SOURCE_DIR) + "/programs/worlds/nist_dcx_part.json";
+  auto world = load_world(file);
+  if (!world) {
+    fmt::print("DCX part not available: {}\n", world.error().message);
+    return;
+  }
+  const auto& cad = std::get<CadDesign>(world->part->design);
+  const auto solid = make_world_solid(*world);
+  (void)solid->local_view(Vec3(300, 69, -48), 1);  // builds the mesh's grid outside the timing
+  ScanPath cmd;
+  const double z = -50 + ball_radius_mm - 0.3;
+  cmd.path.segments.push_back(geometry::PccSegment::hermite({280, 69, z}, {400, 69, z}, Vec3::UnitX(), Vec3::UnitX()));
+  cmd.approach_normal = Vec3::UnitZ();
+  cmd.law = ScanLaw::Vc2;
+  ScanSetup setup{solid.get(), ball_radius_mm, world->machine, world->scanning, 3};
+  const auto t0 = std::chrono::steady_clock::now();
+  const ScanOutcome out = run_scan(cmd, setup, scan_approach_point(cmd), 0);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  fmt::print("Simulation speed on a STEP part: NIST DCX part ({} triangles, exact CAD faces) plus table, a 120 mm\n"
+             "line at 10 mm/s: {:.2f} s simulated in {:.3f} s wall = {:.0f}x real time ({:.2f} us per cycle); completed: {}{}\n",
+             cad.mesh->face_count(), out.end_time_s, wall, out.end_time_s / wall,
+             1e6 * wall / static_cast<double>(out.stats.cycles), out.completed ? "yes" : "no",
+             out.fault ? " (" + out.fault->message + ")" : "");
+}
+
 void speed() {
   const double radius = 30;
   auto mesh = std::make_shared<const geometry::Mesh>(uv_sphere(radius, 230, 230));
@@ -221,6 +249,23 @@ void speed() {
                1e6 * std::chrono::duration<double>(t3 - t2).count() / n_q,
                1e6 * std::chrono::duration<double>(t4 - t3).count() / n_q, sum > 0 ? "ok" : "?");
   }
+  {
+    // The controller's own cost: the same kind of scan on an analytic surface (CSG plane, table).
+    World plain = default_world();
+    plain.part.reset();
+    const auto table = make_world_solid(plain);
+    ScanPath line;
+    const double z = ball_radius_mm - 0.3;
+    line.path.segments.push_back(geometry::PccSegment::hermite({100, 100, z}, {300, 100, z}, Vec3::UnitX(), Vec3::UnitX()));
+    line.approach_normal = Vec3::UnitZ();
+    ScanSetup flat{table.get(), ball_radius_mm, plain.machine, plain.scanning, 3};
+    const auto t1 = std::chrono::steady_clock::now();
+    const ScanOutcome o = run_scan(line, flat, scan_approach_point(line), 0);
+    const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    fmt::print("  the controller alone (a 200 mm line on the table, an analytic plane): {:.0f}x real time ({:.2f} us per cycle)\n",
+               o.end_time_s / w, 1e6 * w / static_cast<double>(o.stats.cycles));
+  }
+  speed_on_step_part();
 }
 
 }  // namespace
@@ -228,6 +273,10 @@ void speed() {
 int main(int argc, char** argv) {
   const bool table_only = argc > 1 && std::strcmp(argv[1], "--table-only") == 0;
   const bool speed_only = argc > 1 && std::strcmp(argv[1], "--speed-only") == 0;
+  if (argc > 1 && std::strcmp(argv[1], "--step-only") == 0) {
+    speed_on_step_part();
+    return 0;
+  }
   if (!speed_only) table();
   if (!speed_only) gain_sweep();
   if (!table_only) speed();

@@ -163,18 +163,42 @@ std::optional<MeshSolid::Exact> MeshSolid::exact(const Surface& s, const Vec3& q
 
 // ---- local views ----------------------------------------------------------------------------
 
+// Triangles binned by their boxes on a hierarchy of uniform grids (each level's cells 8 times
+// the previous one's): a triangle sits on the first level where its box covers at most 4 cells
+// along each axis, so big faces of a CAD tessellation cost no more than small ones.
 struct MeshSolid::Grid {
-  double cell_mm = 1;
+  struct Entry {
+    std::uint32_t face;
+    Eigen::Vector3i lo;  ///< the first cell of its box: reported only from there (no repeats)
+  };
+  struct Level {
+    double cell_mm = 1;
+    std::unordered_map<std::uint64_t, std::vector<Entry>> cells;
+  };
   Vec3 origin = Vec3::Zero();
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
-  std::vector<std::uint32_t> large;  ///< triangles over too many cells: candidates everywhere
+  std::vector<Level> levels;
 
-  [[nodiscard]] Eigen::Vector3i cell(const Vec3& p) const {
-    return ((p - origin) / cell_mm).array().floor().cast<int>();
+  [[nodiscard]] Eigen::Vector3i cell(const Level& l, const Vec3& p) const {
+    return ((p - origin) / l.cell_mm).array().floor().cast<int>();
   }
   static std::uint64_t key(const Eigen::Vector3i& c) {
     const auto part = [](int v) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(v + (1 << 20)) & 0x1fffff); };
     return part(c.x()) | part(c.y()) << 21 | part(c.z()) << 42;
+  }
+  /// Every triangle whose box meets the box [lo, hi], once each.
+  template <class F>
+  void visit(const Vec3& lo, const Vec3& hi, F&& f) const {
+    for (const Level& l : levels) {
+      const Eigen::Vector3i a = cell(l, lo), b = cell(l, hi);
+      for (int x = a.x(); x <= b.x(); ++x)
+        for (int y = a.y(); y <= b.y(); ++y)
+          for (int z = a.z(); z <= b.z(); ++z) {
+            const auto it = l.cells.find(key({x, y, z}));
+            if (it == l.cells.end()) continue;
+            for (const Entry& e : it->second)
+              if (Eigen::Vector3i(x, y, z) == e.lo.cwiseMax(a)) f(e.face);
+          }
+    }
   }
 };
 
@@ -190,23 +214,27 @@ const MeshSolid::Grid& MeshSolid::grid() const {
       b.extend(v[t[1]]).extend(v[t[2]]);
       extent += b.sizes().maxCoeff();
     }
-    // About two triangles across a cell, but no more than ~1000 cells along the box.
-    g->cell_mm = std::max({2 * extent / static_cast<double>(std::max<std::size_t>(1, f.size())),
-                           box.sizes().maxCoeff() / 1000, 1e-3});
+    // The finest level: about two typical triangles across a cell; coarser levels up to the box.
+    double cell = std::max({2 * extent / static_cast<double>(std::max<std::size_t>(1, f.size())),
+                            box.sizes().maxCoeff() / 4000, 1e-3});
     g->origin = box.min();
+    do {
+      g->levels.push_back({cell, {}});
+      cell *= 8;
+    } while (g->levels.back().cell_mm < box.sizes().maxCoeff());
     for (std::uint32_t i = 0; i < f.size(); ++i) {
       if (m_mesh->face_normal(i).isZero()) continue;  // zero-area: never an answer
       Eigen::AlignedBox3d b(v[f[i][0]]);
       b.extend(v[f[i][1]]).extend(v[f[i][2]]);
-      const Eigen::Vector3i lo = g->cell(b.min()), hi = g->cell(b.max());
-      const Eigen::Vector3i span = hi - lo + Eigen::Vector3i::Ones();
-      if (static_cast<long>(span.x()) * span.y() * span.z() > 64) {
-        g->large.push_back(i);
-        continue;
+      for (std::size_t k = 0; k < g->levels.size(); ++k) {
+        Grid::Level& l = g->levels[k];
+        const Eigen::Vector3i lo = g->cell(l, b.min()), hi = g->cell(l, b.max());
+        if ((hi - lo).maxCoeff() > 3 && k + 1 < g->levels.size()) continue;
+        for (int x = lo.x(); x <= hi.x(); ++x)
+          for (int y = lo.y(); y <= hi.y(); ++y)
+            for (int z = lo.z(); z <= hi.z(); ++z) l.cells[Grid::key({x, y, z})].push_back({i, lo});
+        break;
       }
-      for (int x = lo.x(); x <= hi.x(); ++x)
-        for (int y = lo.y(); y <= hi.y(); ++y)
-          for (int z = lo.z(); z <= hi.z(); ++z) g->cells[Grid::key({x, y, z})].push_back(i);
     }
     m_grid = std::move(g);
   });
@@ -248,17 +276,9 @@ class MeshSolid::Local final : public Solid {
       : m_solid(solid), m_centre(solid.m_machine_to_part * centre_mm) {
     const geometry::Mesh& mesh = *solid.m_mesh;
     m_reach = radius_mm;
-    const Grid& g = solid.grid();
     const Vec3 r = Vec3::Constant(m_reach);
-    const Eigen::Vector3i lo = g.cell(m_centre - r), hi = g.cell(m_centre + r);
-    std::vector<std::uint32_t> ids = g.large;
-    std::vector<bool> seen(mesh.face_count(), false);  // a triangle spans several cells
-    for (int x = lo.x(); x <= hi.x(); ++x)
-      for (int y = lo.y(); y <= hi.y(); ++y)
-        for (int z = lo.z(); z <= hi.z(); ++z)
-          if (const auto it = g.cells.find(Grid::key({x, y, z})); it != g.cells.end())
-            for (std::uint32_t i : it->second)
-              if (!seen[i]) seen[i] = true, ids.push_back(i);
+    std::vector<std::uint32_t> ids;
+    solid.grid().visit(m_centre - r, m_centre + r, [&](std::uint32_t i) { ids.push_back(i); });
     const auto& v = mesh.vertices();
     for (std::uint32_t i : ids) {
       const auto& f = mesh.faces()[i];

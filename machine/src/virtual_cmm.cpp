@@ -137,6 +137,7 @@ struct VirtualCmm::Impl {
   std::optional<Hit> last_hit;
   std::size_t executed = 0;
   std::function<void(const TraceSample&)> trace;
+  std::unique_ptr<Solid> scan_solid;  // the world as the scanning probe touches it (simulation side)
 
   Impl(const World& world, std::uint64_t seed)
       : sim(world, seed),
@@ -426,8 +427,8 @@ struct VirtualCmm::Impl {
           return fail({FaultKind::BadCommand, bad, position, now()});
         if (auto ok = move_to(scan_approach_point(body), positioning_feed); !ok) return fail(ok.error());
         const World& world = sim.world();
-        const auto solid = make_world_solid(world);
-        const ScanSetup setup{solid.get(), tool->info.nominal_radius_mm + world.probe.ball_radius_error_mm, spec,
+        if (!scan_solid) scan_solid = make_world_solid(world);  // kept: a CAD part takes a while to build
+        const ScanSetup setup{scan_solid.get(), tool->info.nominal_radius_mm + world.probe.ball_radius_error_mm, spec,
                               world.scanning, static_cast<std::uint64_t>(sim.scan_phase() * 0x1.0p53)};
         ScanOutcome out = run_scan(body, setup, position, now(), [&](const ScanCycle& c) {
           emit(c.time_s + spec.dt_s, c.head_mm, c.velocity_mm_s.norm());

@@ -360,11 +360,14 @@ TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
                 std::sqrt(w.scanning.probe.reference_deflection_mm * path_r);
        }},
       {"machine", [](World& w) { w.machine.max_speed_mm_s = 20; }, [](const World&) { return 20.0; }},
+      {"segment", [](World&) {}, [](const World&) { return 15.0; }},  // the path generator's per-segment speed
   };
   for (const Case& k : cases) {
     World w = world_with(boss);
     k.setup(w);
-    const ScanRun r = scan(w, c);
+    ScanPath cmd = c;
+    if (std::string(k.name) == "segment") cmd.path.speed_mm_s.assign(cmd.path.segments.size(), 15.0);
+    const ScanRun r = scan(w, cmd);
     ASSERT_TRUE(r.out.completed) << k.name << ": " << r.out.fault->message;
     const double expected = k.expected(w);
     bool logged = false;
