@@ -9,6 +9,7 @@
 #include <functional>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -544,5 +545,28 @@ TEST(ScanningWorlds, LobedCircleAndFreeFormBumpWorlds) {
     }
     EXPECT_NEAR(peak, 0.010, 0.001);
     EXPECT_NEAR(at, 30, 0.5);
+  }
+}
+
+TEST(ScanningWorlds, OffsetAndRoughBlocksAreFollowed) {
+  // The default block's top (design z = 40) along y = 210, from the design.
+  ScanPath c;
+  const double z = 40 + ball_r - 0.3;
+  c.path.segments.push_back(geometry::PccSegment::hermite({310, 210, z}, {350, 210, z}, Vec3::UnitX(), Vec3::UnitX()));
+  c.approach_normal = Vec3::UnitZ();
+  for (const auto& [file, top_z, tolerance] : {std::tuple{"scan_offset_block.json", 40.2, 0.001},
+                                               std::tuple{"scan_rough_block.json", 40.0, 0.006}}) {
+    const ScanRun r = scan(scan_world_file(file), c);
+    ASSERT_TRUE(r.out.completed) << file << ": " << r.out.fault->message;
+    double lo = 1e9, hi = -1e9;
+    for (const ScanSample& s : r.out.samples) {
+      lo = std::min(lo, s.surface_mm(ball_r).z());
+      hi = std::max(hi, s.surface_mm(ball_r).z());
+    }
+    EXPECT_NEAR(lo, top_z, tolerance) << file;
+    EXPECT_NEAR(hi, top_z, tolerance) << file;
+    if (std::string(file) == "scan_rough_block.json") {
+      EXPECT_GT(hi - lo, 0.002);  // the roughness is seen (5 um amplitude)
+    }
   }
 }
