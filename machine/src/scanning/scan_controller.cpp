@@ -58,7 +58,8 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
     return out;
   }
   if (!(e0 < range)) {
-    fault_at(FaultKind::BadCommand, fmt::format("reference deflection {:.3f} mm is not below the probe's measuring range {:.3f} mm", e0, range),
+    fault_at(FaultKind::BadCommand,
+             fmt::format("reference deflection {:.3f} mm is not below the probe's measuring range {:.3f} mm", e0, range),
              start_mm, start_time_s);
     out.end_position_mm = start_mm;
     out.end_time_s = start_time_s;

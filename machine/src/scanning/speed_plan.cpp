@@ -58,10 +58,11 @@ SpeedPlan::SpeedPlan(const geometry::PccPath& path, const SpeedPlanLimits& l, do
   const std::size_t n = m_s.size();
   m_speed.front() = std::min(m_speed.front(), l.end_speed_mm_s);
   m_speed.back() = std::min(m_speed.back(), l.end_speed_mm_s);
+  const double a2 = 2 * l.acceleration_mm_s2;
   for (std::size_t i = 1; i < n; ++i)
-    m_speed[i] = std::min(m_speed[i], std::sqrt(m_speed[i - 1] * m_speed[i - 1] + 2 * l.acceleration_mm_s2 * (m_s[i] - m_s[i - 1])));
+    m_speed[i] = std::min(m_speed[i], std::sqrt(m_speed[i - 1] * m_speed[i - 1] + a2 * (m_s[i] - m_s[i - 1])));
   for (std::size_t i = n - 1; i-- > 0;)
-    m_speed[i] = std::min(m_speed[i], std::sqrt(m_speed[i + 1] * m_speed[i + 1] + 2 * l.acceleration_mm_s2 * (m_s[i + 1] - m_s[i])));
+    m_speed[i] = std::min(m_speed[i], std::sqrt(m_speed[i + 1] * m_speed[i + 1] + a2 * (m_s[i + 1] - m_s[i])));
   for (std::size_t i = 0; i < n; ++i) {
     const SpeedLimit w = m_speed[i] < m_limit[i] * (1 - 1e-9) ? SpeedLimit::Acceleration : why[i];
     if (m_spans.empty() || m_spans.back().limit != w) {
@@ -88,7 +89,8 @@ double SpeedPlan::limit_at(double s) const { return interpolate(m_limit, s); }
 std::vector<std::string> SpeedPlan::log() const {
   std::vector<std::string> out;
   for (const auto& s : m_spans)
-    out.push_back(fmt::format("{:.3f}-{:.3f} mm: {}, >= {:.3f} mm/s", s.from_mm, s.to_mm, to_string(s.limit), s.min_speed_mm_s));
+    out.push_back(
+        fmt::format("{:.3f}-{:.3f} mm: {}, >= {:.3f} mm/s", s.from_mm, s.to_mm, to_string(s.limit), s.min_speed_mm_s));
   return out;
 }
 
