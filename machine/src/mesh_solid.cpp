@@ -285,7 +285,7 @@ class MeshSolid::Local final : public Solid {
       Eigen::AlignedBox3d b(v[f[0]]);
       b.extend(v[f[1]]).extend(v[f[2]]);
       if (b.exteriorDistance(m_centre) > m_reach) continue;
-      Tri t{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, f, i};
+      Tri t{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i};
       t.centroid = (t.a + t.b + t.c) / 3;
       t.radius = std::max({(t.a - t.centroid).norm(), (t.b - t.centroid).norm(), (t.c - t.centroid).norm()});
       m_tris.push_back(t);
@@ -345,7 +345,8 @@ class MeshSolid::Local final : public Solid {
   struct Tri {
     Vec3 a, b, c;
     Vec3 centroid;
-    double radius;
+    double radius;       ///< of the bounding sphere (and circle) about the centroid
+    Vec3 normal;         ///< unit, of its plane
     geometry::Mesh::Face v;
     std::uint32_t face;
   };
@@ -365,8 +366,14 @@ class MeshSolid::Local final : public Solid {
     Vec3 point = closest_on_triangle(q, best->a, best->b, best->c);
     double best_d = (q - point).norm();
     for (const Tri& t : m_tris) {
-      const double reach = best_d + t.radius;
-      if ((q - t.centroid).squaredNorm() >= reach * reach) continue;
+      const Vec3 w = q - t.centroid;
+      const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+      if (dc2 >= reach * reach) continue;  // its bounding sphere
+      // Its plane, then the plane distance with the in-plane distance to its bounding circle.
+      const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+      if (h2 >= best2) continue;
+      const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+      if (e > 0 && h2 + e * e >= best2) continue;
       const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
       const double d = (q - p).norm();
       if (d < best_d) best_d = d, best = &t, point = p;
