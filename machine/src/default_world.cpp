@@ -31,6 +31,16 @@ std::string_view default_world_json() {
     "over_travel_mm": 1.0,
     "repeatability_mm": 0.0002
   },
+  "scanning": {
+    "probe": {"reference_deflection_mm": 0.3, "measuring_range_mm": 1.0, "stiffness_n_mm": 0.6,
+              "stylus_mass_g": 5, "noise_mm": 0.0001},
+    "servo": {"natural_frequency_hz": 20, "damping": 0.4, "command_delay_cycles": 1,
+              "max_acceleration_mm_s2": 3000},
+    "control": {"feed_mm_s": 10, "deflection_gain_1_s": 40, "trajectory_gain_1_s": 40,
+                "deflection_tolerance_mm": 0.1, "trajectory_tolerance_mm": 0.5,
+                "max_centripetal_mm_s2": 500, "approach_feed_mm_s": 2, "stall_time_s": 1.0,
+                "lost_contact_mm": 2.0}
+  },
   "reference_sphere": {
     "nominal_centre_mm": [900, 700, 100],
     "certified_diameter_mm": 25,

@@ -13,6 +13,7 @@ const char* to_string(FaultKind kind) {
     case FaultKind::UnknownTool: return "unknown tool";
     case FaultKind::BadCommand: return "bad command";
     case FaultKind::Aborted: return "aborted";
+    case FaultKind::Stalled: return "stalled";
   }
   return "unknown fault";
 }

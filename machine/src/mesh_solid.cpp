@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <limits>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace metron::machine {
 namespace {
@@ -159,8 +161,251 @@ std::optional<MeshSolid::Exact> MeshSolid::exact(const Surface& s, const Vec3& q
   return e;
 }
 
+// ---- local views ----------------------------------------------------------------------------
+
+// Triangles binned by their boxes on a hierarchy of uniform grids (each level's cells 8 times
+// the previous one's): a triangle sits on the first level where its box covers at most 4 cells
+// along each axis, so big faces of a CAD tessellation cost no more than small ones.
+struct MeshSolid::Grid {
+  struct Entry {
+    std::uint32_t face;
+    Eigen::Vector3i lo;  ///< the first cell of its box: reported only from there (no repeats)
+  };
+  struct Level {
+    double cell_mm = 1;
+    std::unordered_map<std::uint64_t, std::vector<Entry>> cells;
+  };
+  Vec3 origin = Vec3::Zero();
+  std::vector<Level> levels;
+
+  [[nodiscard]] Eigen::Vector3i cell(const Level& l, const Vec3& p) const {
+    return ((p - origin) / l.cell_mm).array().floor().cast<int>();
+  }
+  static std::uint64_t key(const Eigen::Vector3i& c) {
+    const auto part = [](int v) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(v + (1 << 20)) & 0x1fffff); };
+    return part(c.x()) | part(c.y()) << 21 | part(c.z()) << 42;
+  }
+  /// Every triangle whose box meets the box [lo, hi], once each.
+  template <class F>
+  void visit(const Vec3& lo, const Vec3& hi, F&& f) const {
+    for (const Level& l : levels) {
+      const Eigen::Vector3i a = cell(l, lo), b = cell(l, hi);
+      for (int x = a.x(); x <= b.x(); ++x)
+        for (int y = a.y(); y <= b.y(); ++y)
+          for (int z = a.z(); z <= b.z(); ++z) {
+            const auto it = l.cells.find(key({x, y, z}));
+            if (it == l.cells.end()) continue;
+            for (const Entry& e : it->second)
+              if (Eigen::Vector3i(x, y, z) == e.lo.cwiseMax(a)) f(e.face);
+          }
+    }
+  }
+};
+
+const MeshSolid::Grid& MeshSolid::grid() const {
+  std::call_once(*m_grid_once, [this] {
+    auto g = std::make_shared<Grid>();
+    const auto& v = m_mesh->vertices();
+    const auto& f = m_mesh->faces();
+    const Eigen::AlignedBox3d box = m_mesh->bounds();
+    double extent = 0;
+    for (const auto& t : f) {
+      Eigen::AlignedBox3d b(v[t[0]]);
+      b.extend(v[t[1]]).extend(v[t[2]]);
+      extent += b.sizes().maxCoeff();
+    }
+    // The finest level: about two typical triangles across a cell; coarser levels up to the box.
+    double cell = std::max({2 * extent / static_cast<double>(std::max<std::size_t>(1, f.size())),
+                            box.sizes().maxCoeff() / 4000, 1e-3});
+    g->origin = box.min();
+    do {
+      g->levels.push_back({cell, {}});
+      cell *= 8;
+    } while (g->levels.back().cell_mm < box.sizes().maxCoeff());
+    for (std::uint32_t i = 0; i < f.size(); ++i) {
+      if (m_mesh->face_normal(i).isZero()) continue;  // zero-area: never an answer
+      Eigen::AlignedBox3d b(v[f[i][0]]);
+      b.extend(v[f[i][1]]).extend(v[f[i][2]]);
+      for (std::size_t k = 0; k < g->levels.size(); ++k) {
+        Grid::Level& l = g->levels[k];
+        const Eigen::Vector3i lo = g->cell(l, b.min()), hi = g->cell(l, b.max());
+        if ((hi - lo).maxCoeff() > 3 && k + 1 < g->levels.size()) continue;
+        for (int x = lo.x(); x <= hi.x(); ++x)
+          for (int y = lo.y(); y <= hi.y(); ++y)
+            for (int z = lo.z(); z <= hi.z(); ++z) l.cells[Grid::key({x, y, z})].push_back({i, lo});
+        break;
+      }
+    }
+    m_grid = std::move(g);
+  });
+  return *m_grid;
+}
+
+namespace {
+
+// The point of triangle abc closest to p, by the Voronoi regions of its vertices, edges and face
+// (C. Ericson, "Real-Time Collision Detection", 2005, section 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+}  // namespace
+
+// The triangles that can be closest to a query near the centre. Exactness: every other
+// triangle's box misses the ball of radius `reach` about the centre, so a candidate closer to q
+// than reach - |q - centre| is the mesh's closest; otherwise the whole mesh is asked.
+class MeshSolid::Local final : public Solid {
+ public:
+  Local(const MeshSolid& solid, const Vec3& centre_mm, double radius_mm)
+      : m_solid(solid), m_centre(solid.m_machine_to_part * centre_mm) {
+    const geometry::Mesh& mesh = *solid.m_mesh;
+    m_reach = radius_mm;
+    const Vec3 r = Vec3::Constant(m_reach);
+    std::vector<std::uint32_t> ids;
+    solid.grid().visit(m_centre - r, m_centre + r, [&](std::uint32_t i) { ids.push_back(i); });
+    const auto& v = mesh.vertices();
+    for (std::uint32_t i : ids) {
+      const auto& f = mesh.faces()[i];
+      Eigen::AlignedBox3d b(v[f[0]]);
+      b.extend(v[f[1]]).extend(v[f[2]]);
+      if (b.exteriorDistance(m_centre) > m_reach) continue;
+      Tri t{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i};
+      t.centroid = (t.a + t.b + t.c) / 3;
+      t.radius = std::max({(t.a - t.centroid).norm(), (t.b - t.centroid).norm(), (t.c - t.centroid).norm()});
+      m_tris.push_back(t);
+    }
+  }
+
+  [[nodiscard]] double signed_distance(const Vec3& p) const override {
+    const Vec3 q = m_solid.m_machine_to_part * p;
+    const Contact c = m_solid.contact_from(q, closest(q), true, this);
+    return c.distance_mm - m_solid.bump_height(c.point);
+  }
+  [[nodiscard]] Vec3 normal(const Vec3& p) const override {
+    const Vec3 q = m_solid.m_machine_to_part * p;
+    return m_solid.m_part_to_machine.linear() * m_solid.contact_from(q, closest(q), false, this).normal;
+  }
+  [[nodiscard]] double lipschitz() const override { return m_solid.lipschitz(); }
+  [[nodiscard]] std::string feature_at(const Vec3& p) const override { return m_solid.feature_at(p); }
+
+  // Inside test at an edge or vertex by the angle-weighted pseudo-normal, exact for a closed
+  // mesh (J. A. Baerentzen, H. Aanaes, "Signed distance computation using the angle weighted
+  // pseudonormal", IEEE TVCG 11(3), 2005); the faces around the closest point are all local.
+  [[nodiscard]] bool inside(const Vec3& q, const geometry::Mesh::Closest& c) const {
+    const auto& mesh = *m_solid.m_mesh;
+    const auto& f = mesh.faces()[c.face];
+    const auto& v = mesh.vertices();
+    const double tol = 1e-9 * (1 + c.point.cwiseAbs().maxCoeff());
+    Vec3 pn = Vec3::Zero();
+    int vertex = -1;
+    for (int k = 0; k < 3; ++k)
+      if ((v[f[k]] - c.point).norm() <= tol) vertex = static_cast<int>(f[k]);
+    if (vertex >= 0) {
+      for (const Tri& t : m_tris)
+        for (int k = 0; k < 3; ++k)
+          if (static_cast<int>(t.v[k]) == vertex) {
+            const Vec3 e1 = (v[t.v[(k + 1) % 3]] - v[t.v[k]]).normalized(), e2 = (v[t.v[(k + 2) % 3]] - v[t.v[k]]).normalized();
+            pn += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * mesh.face_normal(t.face);
+          }
+    } else {
+      pn = mesh.face_normal(c.face);  // inside the face: its own side (rounding missed the normal line)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 a = v[f[k]], b = v[f[(k + 1) % 3]];
+        const double s = std::clamp((c.point - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+        if ((a + s * (b - a) - c.point).norm() > tol) continue;
+        pn = Vec3::Zero();
+        for (const Tri& t : m_tris) {
+          const auto has = [&](std::uint32_t x) { return t.v[0] == x || t.v[1] == x || t.v[2] == x; };
+          if (has(f[k]) && has(f[(k + 1) % 3])) pn += mesh.face_normal(t.face);
+        }
+        break;
+      }
+    }
+    if (pn.norm() < 1e-12) return mesh.contains(q);
+    return (q - c.point).dot(pn) < 0;
+  }
+
+ private:
+  struct Tri {
+    Vec3 a, b, c;
+    Vec3 centroid;
+    double radius;       ///< of the bounding sphere (and circle) about the centroid
+    Vec3 normal;         ///< unit, of its plane
+    geometry::Mesh::Face v;
+    std::uint32_t face;
+  };
+
+  [[nodiscard]] geometry::Mesh::Closest closest(const Vec3& q) const {
+    if (m_last && q == m_last_query) return *m_last;  // a distance and a normal at one point
+    m_last_query = q;
+    m_last = search(q);
+    return *m_last;
+  }
+
+  [[nodiscard]] geometry::Mesh::Closest search(const Vec3& q) const {
+    if (m_tris.empty()) return m_solid.m_mesh->closest(q);
+    // Start from the previous answer's triangle (the probe moves um per query): its distance
+    // prunes almost every other triangle by its bounding sphere, without a square root.
+    const Tri* best = &m_tris[std::min(m_hint, m_tris.size() - 1)];
+    Vec3 point = closest_on_triangle(q, best->a, best->b, best->c);
+    double best_d = (q - point).norm();
+    for (const Tri& t : m_tris) {
+      const Vec3 w = q - t.centroid;
+      const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+      if (dc2 >= reach * reach) continue;  // its bounding sphere
+      // Its plane, then the plane distance with the in-plane distance to its bounding circle.
+      const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+      if (h2 >= best2) continue;
+      const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+      if (e > 0 && h2 + e * e >= best2) continue;
+      const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
+      const double d = (q - p).norm();
+      if (d < best_d) best_d = d, best = &t, point = p;
+    }
+    m_hint = static_cast<std::size_t>(best - m_tris.data());
+    const double d = best_d;
+    if (d + (q - m_centre).norm() > m_reach) return m_solid.m_mesh->closest(q);
+    // The same normal as geometry::Mesh::closest gives.
+    geometry::Mesh::Closest c{point, m_solid.m_mesh->face_normal(best->face), d, best->face};
+    if (d > 0) {
+      const Vec3 u = (q - point) / d;
+      const double cos_angle = u.dot(c.normal);
+      if (std::abs(cos_angle) < 1 - 1e-9) c.normal = cos_angle < 0 ? Vec3(-u) : u;
+    }
+    return c;
+  }
+
+  const MeshSolid& m_solid;
+  Vec3 m_centre;       ///< part coordinates
+  double m_reach = 0;  ///< every triangle outside the candidates is farther than this from the centre
+  std::vector<Tri> m_tris;
+  mutable std::size_t m_hint = 0;              ///< index of the last answer's triangle
+  mutable Vec3 m_last_query = Vec3::Zero();
+  mutable std::optional<geometry::Mesh::Closest> m_last;
+};
+
 MeshSolid::Contact MeshSolid::contact(const Vec3& q, bool need_sign) const {
-  const geometry::Mesh::Closest c = m_mesh->closest(q);
+  return contact_from(q, m_mesh->closest(q), need_sign, nullptr);
+}
+
+MeshSolid::Contact MeshSolid::contact_from(const Vec3& q, const geometry::Mesh::Closest& c, bool need_sign,
+                                           const Local* local) const {
   // When the closest point is inside a triangle, the query lies on its normal line and the side
   // is the sign of the offset; at edges and vertices the face normal does not decide it.
   const double along = (q - c.point).dot(m_mesh->face_normal(c.face));
@@ -179,7 +424,7 @@ MeshSolid::Contact MeshSolid::contact(const Vec3& q, bool need_sign) const {
     }
   }
   double d = c.distance_mm;
-  if (need_sign && (on_normal_line ? along < 0 : m_mesh->contains(q))) d = -d;
+  if (need_sign && (on_normal_line ? along < 0 : local ? local->inside(q, c) : m_mesh->contains(q))) d = -d;
   return {d, c.normal, c.point};
 }
 
@@ -205,6 +450,10 @@ std::string MeshSolid::feature_at(const Vec3& p) const {
   if (!m_shape_of_triangle.empty() && m_shape_of_triangle[t] != 0)
     return "face " + std::to_string(m_shape_of_triangle[t]);
   return "face " + std::to_string(t);
+}
+
+std::unique_ptr<Solid> MeshSolid::local_view(const Vec3& centre_mm, double radius_mm) const {
+  return std::make_unique<Local>(*this, centre_mm, radius_mm);
 }
 
 }  // namespace metron::machine

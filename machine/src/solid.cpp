@@ -20,6 +20,27 @@ Vec3 Solid::normal(const Vec3& p) const {
   return n > 0 ? Vec3(g / n) : Vec3::UnitZ();
 }
 
+namespace {
+
+// The default local view: every query goes to the solid itself.
+class Forwarding final : public Solid {
+ public:
+  explicit Forwarding(const Solid& solid) : m_solid(solid) {}
+  [[nodiscard]] double signed_distance(const Vec3& p) const override { return m_solid.signed_distance(p); }
+  [[nodiscard]] Vec3 normal(const Vec3& p) const override { return m_solid.normal(p); }
+  [[nodiscard]] double lipschitz() const override { return m_solid.lipschitz(); }
+  [[nodiscard]] std::string feature_at(const Vec3& p) const override { return m_solid.feature_at(p); }
+
+ private:
+  const Solid& m_solid;
+};
+
+}  // namespace
+
+std::unique_ptr<Solid> Solid::local_view(const Vec3& /*centre_mm*/, double /*radius_mm*/) const {
+  return std::make_unique<Forwarding>(*this);
+}
+
 SolidUnion::SolidUnion(std::vector<std::unique_ptr<Solid>> solids) : m_solids(std::move(solids)) {
   std::erase(m_solids, nullptr);
   if (m_solids.empty()) throw std::invalid_argument("a solid union needs at least one solid");
@@ -50,5 +71,11 @@ double SolidUnion::lipschitz() const {
 }
 
 std::string SolidUnion::feature_at(const Vec3& p) const { return nearest(p).feature_at(p); }
+
+std::unique_ptr<Solid> SolidUnion::local_view(const Vec3& centre_mm, double radius_mm) const {
+  std::vector<std::unique_ptr<Solid>> views;
+  for (const auto& s : m_solids) views.push_back(s->local_view(centre_mm, radius_mm));
+  return std::make_unique<SolidUnion>(std::move(views));
+}
 
 }  // namespace metron::machine

@@ -12,6 +12,7 @@
 #include "metron/machine/contact.hpp"
 #include "metron/machine/motion_profile.hpp"
 #include "metron/machine/rng.hpp"
+#include "metron/machine/scanning/scan_controller.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 
@@ -136,6 +137,7 @@ struct VirtualCmm::Impl {
   std::optional<Hit> last_hit;
   std::size_t executed = 0;
   std::function<void(const TraceSample&)> trace;
+  std::unique_ptr<Solid> scan_solid;  // the world as the scanning probe touches it (simulation side)
 
   Impl(const World& world, std::uint64_t seed)
       : sim(world, seed),
@@ -418,7 +420,24 @@ struct VirtualCmm::Impl {
         if (body.measuring_mm_s > 0) measuring_feed = std::min(body.measuring_mm_s, spec.max_speed_mm_s);
         if (body.acceleration_mm_s2 > 0) acceleration = std::min(body.acceleration_mm_s2, spec.max_acceleration_mm_s2);
       } else if constexpr (std::is_same_v<T, ScanPath>) {
-        fail({FaultKind::BadCommand, "this machine has no scanning probe", position, now()});
+        // docs/scanning.md: position to the approach point, then the scanning controller.
+        const Tool* tool = active_tool();
+        if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
+        if (const std::string bad = validate_scan(body); !bad.empty())
+          return fail({FaultKind::BadCommand, bad, position, now()});
+        if (auto ok = move_to(scan_approach_point(body), positioning_feed); !ok) return fail(ok.error());
+        const World& world = sim.world();
+        if (!scan_solid) scan_solid = make_world_solid(world);  // kept: a CAD part takes a while to build
+        const ScanSetup setup{scan_solid.get(), tool->info.nominal_radius_mm + world.probe.ball_radius_error_mm, spec,
+                              world.scanning, static_cast<std::uint64_t>(sim.scan_phase() * 0x1.0p53)};
+        ScanOutcome out = run_scan(body, setup, position, now(), [&](const ScanCycle& c) {
+          emit(c.time_s + spec.dt_s, c.head_mm, c.velocity_mm_s.norm());
+        });
+        position = out.end_position_mm;
+        cycle += cycles_for(out.end_time_s - now());
+        response.scan = std::move(out.samples);
+        response.scan_log = std::move(out.log);
+        if (out.fault) fail(*out.fault);
       }
     }, command.body);
     return response;

@@ -458,6 +458,11 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
   o.read("part", [&](const json& pj, const std::string& pp) {
     if (!pj.is_null()) w.part = parse_part(pj, pp, base_dir);
   });
+  o.read("scanning", [&](const json& sj, const std::string& sp) {
+    auto spec = parse_scanning_spec(sj, sp);
+    if (!spec) fail(spec.error().pointer, spec.error().message);
+    w.scanning = *spec;
+  });
   o.finish();
   return w;
 }

@@ -31,8 +31,14 @@ class RoughSolid final : public Solid {
     return m_base->lipschitz() + std::sqrt(3.0) * 3.0 * m_roughness.amplitude_mm / m_roughness.correlation_mm;
   }
   [[nodiscard]] std::string feature_at(const Vec3& p) const override { return m_base->feature_at(p); }
+  [[nodiscard]] std::unique_ptr<Solid> local_view(const Vec3& centre_mm, double radius_mm) const override {
+    return std::unique_ptr<Solid>(new RoughSolid(m_base->local_view(centre_mm, radius_mm), m_roughness, m_seed, Seeded{}));
+  }
 
  private:
+  struct Seeded {};  // m_seed is already hashed
+  RoughSolid(std::unique_ptr<Solid> base, Roughness roughness, std::uint64_t hashed_seed, Seeded)
+      : m_base(std::move(base)), m_roughness(roughness), m_seed(hashed_seed) {}
   [[nodiscard]] double node(std::int64_t i, std::int64_t j, std::int64_t k) const {
     std::uint64_t h = splitmix64(m_seed ^ static_cast<std::uint64_t>(i));
     h = splitmix64(h ^ static_cast<std::uint64_t>(j));

@@ -125,6 +125,7 @@ struct Response {
   std::optional<ToolInfo> tool;       ///< for DefineTool, SelectTool, QualifyTool
   std::optional<Fault> fault;         ///< when status == Fault
   std::vector<ScanSample> scan;       ///< for ScanPath: the samples up to the end or the fault
+  std::vector<std::string> scan_log;  ///< for ScanPath: which speed limit bound where, and the scan's figures
 };
 
 }  // namespace metron::machine

@@ -16,6 +16,7 @@ enum class FaultKind {
   UnknownTool,     ///< a tool name the machine does not know
   BadCommand,      ///< a command with invalid parameters (zero direction, negative distance ...)
   Aborted,         ///< a queued command not executed because an earlier one faulted
+  Stalled,         ///< a scan made no progress along its path (e.g. a correction term opposing the path velocity)
 };
 
 const char* to_string(FaultKind kind);

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -38,8 +39,16 @@ class MeshSolid final : public Solid {
   /// tessellation nodes lie on the surface (interior nodes to 1e-6 mm, boundary nodes to 10
   /// chord tolerances).
   [[nodiscard]] std::size_t analytic_face_count() const { return m_surfaces.size(); }
+  /// The triangles within radius_mm of the centre, searched directly; a query whose closest
+  /// point cannot be proven to lie among them goes to the whole mesh (the answer is exact).
+  [[nodiscard]] std::unique_ptr<Solid> local_view(const Vec3& centre_mm, double radius_mm) const override;
 
  private:
+  class Local;
+  friend class Local;
+  /// Uniform grid of the triangles (part coordinates), built on the first local_view.
+  struct Grid;
+  [[nodiscard]] const Grid& grid() const;
   /// An analytic face in part coordinates, oriented outward.
   struct Surface {
     geometry::CadFace::Kind kind = geometry::CadFace::Kind::Plane;
@@ -66,6 +75,10 @@ class MeshSolid final : public Solid {
     Vec3 point;          ///< closest surface point, part coordinates
   };
   [[nodiscard]] Contact contact(const Vec3& q, bool need_sign) const;
+  /// contact() given the closest mesh point; `local` (may be null) decides the side at edges
+  /// and vertices instead of the whole mesh's inside test.
+  [[nodiscard]] Contact contact_from(const Vec3& q, const geometry::Mesh::Closest& c, bool need_sign,
+                                     const Local* local) const;
   [[nodiscard]] double bump_height(const Vec3& surface_point) const;
 
   std::shared_ptr<const geometry::Mesh> m_mesh;
@@ -77,6 +90,8 @@ class MeshSolid final : public Solid {
   std::vector<std::int32_t> m_surface_of_triangle;  ///< index into m_surfaces; -1: mesh only
   std::vector<std::uint32_t> m_shape_of_triangle;   ///< B-rep face (1-based); empty: no CAD faces
   double m_guard_mm = 0;  ///< largest accepted |exact - mesh| distance
+  std::shared_ptr<std::once_flag> m_grid_once = std::make_shared<std::once_flag>();
+  mutable std::shared_ptr<const Grid> m_grid;
 };
 
 }  // namespace metron::machine

@@ -22,6 +22,11 @@ class Solid {
   [[nodiscard]] virtual double lipschitz() const { return 1.0; }
   /// Name of the feature whose surface is nearest p (for messages); empty when unnamed.
   [[nodiscard]] virtual std::string feature_at(const Vec3& /*p*/) const { return {}; }
+  /// A view of this solid for many queries near `centre_mm`, as a scanning probe makes every
+  /// control cycle: the same values everywhere, cheaper for a query p whose nearest surface is
+  /// within radius_mm - |p - centre_mm| of p. It refers to this solid, which must outlive it,
+  /// and serves one thread. The default forwards every query.
+  [[nodiscard]] virtual std::unique_ptr<Solid> local_view(const Vec3& centre_mm, double radius_mm) const;
 };
 
 /// Several solids as one: the union of their material.
@@ -32,6 +37,8 @@ class SolidUnion final : public Solid {
   [[nodiscard]] Vec3 normal(const Vec3& p) const override;
   [[nodiscard]] double lipschitz() const override;
   [[nodiscard]] std::string feature_at(const Vec3& p) const override;
+  /// The union of the members' local views.
+  [[nodiscard]] std::unique_ptr<Solid> local_view(const Vec3& centre_mm, double radius_mm) const override;
 
  private:
   [[nodiscard]] const Solid& nearest(const Vec3& p) const;

@@ -15,6 +15,7 @@
 
 #include "metron/machine/csg.hpp"
 #include "metron/machine/pre_travel.hpp"
+#include "metron/machine/scanning/scanning_spec.hpp"
 #include "metron/stdlib/geometry/cad_import.hpp"
 #include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
@@ -127,6 +128,7 @@ struct World {
   ProbeSpec probe;                    ///< hidden
   ReferenceSphereSpec reference_sphere;  ///< nominal and certified values known, true ones hidden
   std::optional<PartSpec> part;       ///< none: an empty table
+  ScanningSpec scanning;              ///< scanning probe, servo dynamics and scan controller (docs/scanning.md)
 };
 
 /// A world file that could not be read; `message` is "file: /json/pointer: what was expected".

@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <memory>
+
+#include "metron/machine/rng.hpp"
+#include "metron/machine/scanning/scanning_spec.hpp"
+#include "metron/machine/solid.hpp"
+
+namespace metron::machine {
+
+/// The analogue probe in the simulated world: its stylus ball, of the true radius, rests at the
+/// head position (the undeflected ball centre, what the encoders measure) unless the actual
+/// surface pushes it out. Quasi-static: the stylus's own resonance is far above the servo's, so
+/// the ball sits where the surface holds it in every cycle.
+class ScanningProbe {
+ public:
+  /// `solid` is everything the ball can touch (must outlive the probe).
+  ScanningProbe(const Solid& solid, double true_ball_radius_mm, const ScanningProbeSpec& spec, Rng& rng);
+
+  /// The true deflection Ep for the head at `head_mm`: zero when the ball is free, else the
+  /// displacement of the ball centre from the head, which points out of the material.
+  [[nodiscard]] Vec3 deflection(const Vec3& head_mm);
+  /// One reading of the deflection sensor: the true deflection plus the sensor's noise.
+  [[nodiscard]] Vec3 read(const Vec3& true_deflection_mm);
+  /// The contact force for a deflection, N.
+  [[nodiscard]] double force_n(const Vec3& deflection_mm) const { return m_spec.stiffness_n_mm * deflection_mm.norm(); }
+  [[nodiscard]] const ScanningProbeSpec& spec() const { return m_spec; }
+
+ private:
+  const Solid& m_solid;
+  std::unique_ptr<Solid> m_view;     ///< m_solid's local view about m_view_centre
+  Vec3 m_view_centre = Vec3::Zero();
+  double m_radius_mm;
+  ScanningProbeSpec m_spec;
+  Rng& m_rng;
+};
+
+}  // namespace metron::machine

@@ -1,0 +1,64 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <string>
+
+#include <nlohmann/json_fwd.hpp>
+#include <tl/expected.hpp>
+
+/// The scanning side of a world (docs/scanning.md): the analogue probe as it truly is, the axis
+/// servo dynamics, and the scan controller's own configuration (gains, limits).
+namespace metron::machine {
+
+/// The scanning (analogue) probe. Stiffness, stylus mass and noise are hidden; the measuring
+/// range and the reference deflection are the controller's configuration.
+struct ScanningProbeSpec {
+  double reference_deflection_mm = 0.3;  ///< E0, the deflection held while scanning (SEEDS.md 1)
+  double measuring_range_mm = 1.0;    ///< |Ep| above this is an over-range fault
+  double stiffness_n_mm = 0.6;        ///< contact force per mm of deflection (hidden)
+  double stylus_mass_g = 5.0;         ///< effective moving mass of the stylus (hidden)
+  double noise_mm = 0.0001;           ///< 1-sigma noise of each deflection reading (hidden)
+};
+
+/// Axis servo dynamics (hidden): every axis's velocity follows the commanded velocity as a
+/// second-order system, with a command latency and an acceleration (force) limit.
+struct ServoSpec {
+  double natural_frequency_hz = 20;   ///< velocity-loop natural frequency
+  double damping = 0.4;               ///< velocity-loop damping ratio
+  int command_delay_cycles = 1;       ///< controller cycles from a command to the drives
+  double max_acceleration_mm_s2 = 3000;  ///< per-axis acceleration the drives can give
+};
+
+/// The scan controller's configuration (known to the controller): the law's gain constants, the
+/// gain functions' tolerances and the speed limits (docs/scanning.md).
+struct ScanControlSpec {
+  double feed_mm_s = 10;              ///< default scan speed
+  double deflection_gain_1_s = 40;    ///< K in Ve = K*(|Ep| - E0)*eu
+  double trajectory_gain_1_s = 40;    ///< Kc in Vc1 = Kc*(P - Pp)
+  double deflection_tolerance_mm = 0.1;  ///< Gf halves when | |Ep| - E0 | reaches this
+  double trajectory_tolerance_mm = 0.5;  ///< Gf halves when |P - Pp| reaches this
+  double max_centripetal_mm_s2 = 500; ///< curvature limit: v^2 * kappa <= this
+  double approach_feed_mm_s = 2;      ///< approach and retract speed
+  double stall_time_s = 1.0;          ///< no progress along the path for this long: stalled
+  double lost_contact_mm = 2.0;       ///< path length without contact before a fault
+};
+
+/// Everything the world says about scanning.
+struct ScanningSpec {
+  ScanningProbeSpec probe;            ///< the analogue probe
+  ServoSpec servo;                    ///< axis dynamics
+  ScanControlSpec control;            ///< the scan controller
+};
+
+/// A "scanning" record that could not be read: JSON pointer and what was expected.
+struct ScanningSpecError {
+  std::string pointer;                ///< e.g. "/scanning/probe/stiffness_n_mm"
+  std::string message;                ///< e.g. "expected a positive number"
+};
+
+/// Reads the world's "scanning" object at JSON pointer `pointer` on top of `base` (missing keys
+/// keep the base's values; unknown keys are errors).
+tl::expected<ScanningSpec, ScanningSpecError> parse_scanning_spec(const nlohmann::json& json,
+                                                                  const std::string& pointer,
+                                                                  ScanningSpec base = {});
+
+}  // namespace metron::machine

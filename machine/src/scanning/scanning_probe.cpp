@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/machine/scanning/scanning_probe.hpp"
+
+#include <cmath>
+
+namespace metron::machine {
+
+ScanningProbe::ScanningProbe(const Solid& solid, double true_ball_radius_mm, const ScanningProbeSpec& spec, Rng& rng)
+    : m_solid(solid), m_radius_mm(true_ball_radius_mm), m_spec(spec), m_rng(rng) {}
+
+Vec3 ScanningProbe::deflection(const Vec3& head_mm) {
+  // The head moves a few um per cycle: queries go to a local view of the solid (the same values,
+  // cheaper when the nearest surface is within the view's radius), renewed every 0.2 mm of
+  // travel. Its radius covers the ball centre (one ball radius from the surface, E0 from the
+  // head) over that travel, with room for deflection errors; beyond, the view asks the solid.
+  constexpr double renew_mm = 0.2;
+  const double view_radius_mm = m_radius_mm + m_spec.reference_deflection_mm + renew_mm + 0.3;
+  if (!m_view || (head_mm - m_view_centre).norm() > renew_mm) {
+    m_view = m_solid.local_view(head_mm, view_radius_mm);
+    m_view_centre = head_mm;
+  }
+  const Solid& solid = *m_view;
+  double d = solid.signed_distance(head_mm);
+  if (d >= m_radius_mm) return Vec3::Zero();
+  // The ball is pushed out along the surface normal until its centre is one radius from the
+  // actual surface: Newton steps on signed_distance(c) = r (one is exact on a plane).
+  Vec3 c = head_mm;
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 n = solid.normal(c);
+    c += (m_radius_mm - d) * n;
+    d = solid.signed_distance(c);
+    if (std::abs(d - m_radius_mm) < 1e-8) break;
+  }
+  return c - head_mm;
+}
+
+Vec3 ScanningProbe::read(const Vec3& true_deflection_mm) {
+  if (m_spec.noise_mm <= 0) return true_deflection_mm;
+  // Three normal draws always, so the draw order never depends on the contact state.
+  const Vec3 noise(m_rng.normal(), m_rng.normal(), m_rng.normal());
+  if (true_deflection_mm.isZero()) return true_deflection_mm;  // a free stylus reads zero (deadband)
+  return true_deflection_mm + m_spec.noise_mm * noise;
+}
+
+}  // namespace metron::machine

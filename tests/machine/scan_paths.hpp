@@ -1,0 +1,148 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// Simple scan paths and parts for the scanning tests and benchmark (the general path generator
+// from CAD lives in stdlib). Header-only: shared by tests/machine and bench/bench_scanning.cpp.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "metron/machine/csg.hpp"
+#include "metron/stdlib/geometry/pcc.hpp"
+
+namespace metron::scan_test {
+
+constexpr double deg = std::numbers::pi / 180;
+
+/// Left normal in the x-z plane of a direction along the path: (-tz, 0, tx).
+inline Vec3 left_normal_xz(const Vec3& t) { return Vec3(-t.z(), 0, t.x()).normalized(); }
+
+/// Appends straight hermite segments from a to b, each at most max_seg_mm long.
+inline void add_line(geometry::PccPath& path, const Vec3& a, const Vec3& b, double max_seg_mm, const Vec3& normal) {
+  const double len = (b - a).norm();
+  if (len < 1e-9) return;
+  const Vec3 u = (b - a) / len;
+  const int n = std::max(1, static_cast<int>(std::ceil(len / max_seg_mm)));
+  for (int i = 0; i < n; ++i) {
+    path.segments.push_back(geometry::PccSegment::hermite(a + (b - a) * i / n, a + (b - a) * (i + 1) / n, u, u));
+    path.normals.push_back(normal);
+  }
+}
+
+/// Appends a circular arc (centre c, from unit radial e0 through angle phi about axis w) as
+/// hermite segments of at most 10 degrees; `outward` picks the normal (+radial or -radial).
+inline void add_arc(geometry::PccPath& path, const Vec3& c, double radius, const Vec3& e0, const Vec3& w, double phi,
+                    double normal_sign) {
+  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(phi) / (10 * deg))));
+  const Vec3 e1 = w.cross(e0);
+  const auto radial = [&](double a) { return Vec3(std::cos(a) * e0 + std::sin(a) * e1); };
+  const auto tangent = [&](double a) { return Vec3((phi > 0 ? 1 : -1) * (-std::sin(a) * e0 + std::cos(a) * e1)); };
+  for (int i = 0; i < n; ++i) {
+    const double a0 = phi * i / n, a1 = phi * (i + 1) / n;
+    path.segments.push_back(geometry::PccSegment::hermite(c + radius * radial(a0), c + radius * radial(a1), tangent(a0),
+                                                          tangent(a1)));
+    path.normals.push_back(normal_sign * radial(a0));
+  }
+}
+
+/// The ball-centre path over a profile in the x-z plane (material on the right of the travel
+/// direction, i.e. below when travelling +x): the surface polyline offset by offset_mm along its
+/// left normal (SEEDS.md 1: contour offset by r - E0), corners rounded with fillet_mm arcs (a
+/// convex corner's offset is exactly such an arc when fillet_mm == offset_mm).
+inline geometry::PccPath profile_path_xz(const std::vector<Vec3>& surface, double offset_mm, double fillet_mm,
+                                         double max_seg_mm = 5) {
+  const std::size_t m = surface.size();
+  std::vector<Vec3> dir(m - 1), nrm(m - 1);
+  for (std::size_t i = 0; i + 1 < m; ++i) {
+    dir[i] = (surface[i + 1] - surface[i]).normalized();
+    nrm[i] = left_normal_xz(dir[i]);
+  }
+  // Offset polyline: the start and end moved along their edge's normal, inner corners where
+  // consecutive offset lines meet.
+  std::vector<Vec3> q(m);
+  q[0] = surface[0] + offset_mm * nrm[0];
+  q[m - 1] = surface[m - 1] + offset_mm * nrm[m - 2];
+  for (std::size_t i = 1; i + 1 < m; ++i) {
+    const Vec3 a = surface[i] + offset_mm * nrm[i - 1], b = surface[i] + offset_mm * nrm[i];
+    // a + s*dir[i-1] = b + t*dir[i] in x-z.
+    const double det = dir[i - 1].x() * (-dir[i].z()) - dir[i - 1].z() * (-dir[i].x());
+    if (std::abs(det) < 1e-12) {
+      q[i] = a;
+      continue;
+    }
+    const Vec3 d = b - a;
+    const double s = (d.x() * (-dir[i].z()) - d.z() * (-dir[i].x())) / det;
+    q[i] = a + s * dir[i - 1];
+  }
+  geometry::PccPath path;
+  Vec3 cursor = q[0];
+  for (std::size_t i = 1; i + 1 < m; ++i) {
+    const Vec3 din = dir[i - 1], dout = dir[i];
+    const double phi = std::acos(std::clamp(din.dot(dout), -1.0, 1.0));
+    if (phi < 1e-9) continue;
+    const double l = fillet_mm * std::tan(phi / 2);
+    const Vec3 a = q[i] - l * din;
+    add_line(path, cursor, a, max_seg_mm, nrm[i - 1]);
+    const Vec3 toward = (dout - dout.dot(din) * din).normalized();  // the side the path turns to
+    const Vec3 centre = a + fillet_mm * toward;
+    const Vec3 w = (-toward).cross(din).normalized();  // rotation axis: radial x tangent
+    // Normal along the arc: the left normal, +/- the radial direction.
+    const double sign = nrm[i - 1].dot(-toward) > 0 ? 1.0 : -1.0;
+    add_arc(path, centre, fillet_mm, -toward, w, phi, sign);
+    cursor = q[i] + l * dout;
+  }
+  add_line(path, cursor, q[m - 1], max_seg_mm, nrm[m - 2]);
+  path.normals.push_back(nrm[m - 2]);
+  return path;
+}
+
+/// A full circle of ball centres in the plane z = centre.z, counterclockwise from start_deg;
+/// normal +radial for a boss (outward), -radial for a bore.
+inline geometry::PccPath circle_path(const Vec3& centre, double radius, bool boss, double start_deg = 0,
+                                     double turn_deg = 360) {
+  geometry::PccPath path;
+  const Vec3 e0(std::cos(start_deg * deg), std::sin(start_deg * deg), 0);
+  add_arc(path, centre, radius, e0, Vec3::UnitZ(), turn_deg * deg, boss ? 1.0 : -1.0);
+  const double a = (start_deg + turn_deg) * deg;
+  path.normals.push_back((boss ? 1.0 : -1.0) * Vec3(std::cos(a), std::sin(a), 0));
+  return path;
+}
+
+/// The surface profile (y = 0 section) of the ramp part: flat at z = base from x = 0 to x0,
+/// a ramp of angle_deg rising `rise` mm, then a plateau; total length x_end.
+inline std::vector<Vec3> ramp_profile(double angle_deg, double x0 = 20, double rise = 5, double x_end = 60,
+                                      double base = 10) {
+  if (angle_deg <= 0) return {Vec3(0, 0, base), Vec3(x_end, 0, base)};
+  const double run = rise / std::tan(angle_deg * deg);
+  return {Vec3(0, 0, base), Vec3(x0, 0, base), Vec3(x0 + run, 0, base + rise), Vec3(x0 + run + x_end - x0, 0, base + rise)};
+}
+
+/// The ramp part as CSG (part coordinates): (below the flat or below the ramp) and below the
+/// plateau, within x in [-20, 200] and y in [-30, 30].
+inline machine::csg::Node ramp_design(double angle_deg, double x0 = 20, double rise = 5, double base = 10) {
+  using namespace machine::csg;
+  const auto half = [](const Vec3& p, const Vec3& n) {
+    Node leaf;
+    leaf.primitive = {"", HalfSpace{p, n.normalized()}};
+    return leaf;
+  };
+  Node top;
+  if (angle_deg <= 0) {
+    top = half(Vec3(0, 0, base), Vec3::UnitZ());
+  } else {
+    const double a = angle_deg * deg;
+    Node climb;
+    climb.op = Node::Op::Union;
+    climb.children = {half(Vec3(0, 0, base), Vec3::UnitZ()), half(Vec3(x0, 0, base), Vec3(-std::sin(a), 0, std::cos(a)))};
+    top.op = Node::Op::Intersection;
+    top.children = {climb, half(Vec3(0, 0, base + rise), Vec3::UnitZ())};
+  }
+  Node block;
+  block.op = Node::Op::Intersection;
+  block.children = {top, half(Vec3(-20, 0, 0), -Vec3::UnitX()), half(Vec3(200, 0, 0), Vec3::UnitX()),
+                    half(Vec3(0, -30, 0), -Vec3::UnitY()), half(Vec3(0, 30, 0), Vec3::UnitY()),
+                    half(Vec3(0, 0, 0), -Vec3::UnitZ())};
+  return block;
+}
+
+}  // namespace metron::scan_test

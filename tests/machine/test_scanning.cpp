@@ -1,0 +1,572 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Active nominal scanning (SEEDS.md 1, docs/scanning.md): the scanning probe, the three
+// trajectory-correction laws, accuracy against hidden form, speed limits, the VirtualCmm command.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <functional>
+#include <numbers>
+#include <random>
+#include <tuple>
+
+#include <nlohmann/json.hpp>
+
+#include "metron/machine/mesh_solid.hpp"
+#include "metron/machine/scanning/scan_controller.hpp"
+#include "metron/machine/virtual_cmm.hpp"
+#include "metron/machine/world_solid.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
+#include "scan_paths.hpp"
+
+using namespace metron;
+using namespace metron::machine;
+using scan_test::deg;
+
+namespace {
+
+constexpr double ball_r = 2;  // 4 mm stylus ball
+const Vec3 origin(100, 100, 0);  // design pose of the test parts
+
+World world_with(std::variant<csg::Node, CadDesign> design, const Vec3& offset = Vec3::Zero(), double roughness_mm = 0) {
+  World w = default_world();
+  PartSpec part;
+  part.design = std::move(design);
+  part.pose.translation_mm = origin + offset;
+  part.roughness = {roughness_mm, 0.5};
+  part.seed = 5;
+  w.part = part;
+  return w;
+}
+
+struct ScanRun {
+  ScanOutcome out;
+  std::vector<ScanCycle> cycles;  // scanning phase only
+};
+
+ScanRun scan(const World& world, ScanPath cmd, const Solid* solid = nullptr) {
+  const auto own = solid ? nullptr : make_world_solid(world);
+  ScanSetup setup{solid ? solid : own.get(), ball_r, world.machine, world.scanning, 9};
+  ScanRun r;
+  r.out = run_scan(cmd, setup, scan_approach_point(cmd), 0, [&](const ScanCycle& c) {
+    if (c.scanning) r.cycles.push_back(c);
+  });
+  return r;
+}
+
+// The design path moved to the design pose (what a path generator would hand the controller).
+geometry::PccPath placed(geometry::PccPath p, const Vec3& by = origin) {
+  for (auto& s : p.segments) s.k.col(0) += by;
+  return p;
+}
+
+ScanPath ramp_scan(double angle_deg, ScanLaw law) {
+  ScanPath c;
+  c.path = placed(scan_test::profile_path_xz(scan_test::ramp_profile(angle_deg), ball_r - 0.3, ball_r - 0.3));
+  c.approach_normal = Vec3::UnitZ();
+  c.law = law;
+  return c;
+}
+
+// Mean and standard deviation of |Ep| - E0 over the cycles with path_s in [from, to].
+std::pair<double, double> deflection_error(const ScanRun& r, double from_mm, double to_mm) {
+  double sum = 0, sq = 0;
+  int n = 0;
+  for (const ScanCycle& c : r.cycles) {
+    if (c.path_s_mm < from_mm || c.path_s_mm > to_mm) continue;
+    const double e = c.deflection_mm.norm() - 0.3;
+    sum += e, sq += e * e, ++n;
+  }
+  const double mean = sum / n;
+  return {mean, std::sqrt(std::max(0.0, sq / n - mean * mean))};
+}
+
+}  // namespace
+
+TEST(ScanningSpec, DefaultWorldHasAScanningProbeAndWorldsOverrideIt) {
+  const World d = default_world();
+  EXPECT_DOUBLE_EQ(d.scanning.probe.reference_deflection_mm, 0.3);
+  EXPECT_GT(d.scanning.probe.measuring_range_mm, d.scanning.probe.reference_deflection_mm);
+  using nlohmann::json;
+  auto w = parse_world(json::parse(R"({"extends": "default", "scanning": {"probe": {"measuring_range_mm": 0.8},
+                                       "servo": {"natural_frequency_hz": 30}}})"), "t.json");
+  ASSERT_TRUE(w) << w.error().message;
+  EXPECT_DOUBLE_EQ(w->scanning.probe.measuring_range_mm, 0.8);
+  EXPECT_DOUBLE_EQ(w->scanning.servo.natural_frequency_hz, 30);
+  EXPECT_DOUBLE_EQ(w->scanning.probe.reference_deflection_mm, 0.3);  // kept from the base
+  auto typo = parse_world(json::parse(R"({"scanning": {"probe": {"stifness_n_mm": 1}}})"), "t.json");
+  ASSERT_FALSE(typo);
+  EXPECT_NE(typo.error().message.find("t.json: /scanning/probe/stifness_n_mm: unknown key"), std::string::npos)
+      << typo.error().message;
+  auto bad = parse_world(json::parse(R"({"scanning": {"control": {"feed_mm_s": -1}}})"), "t.json");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("/scanning/control/feed_mm_s: expected a positive number"), std::string::npos);
+  auto e0 = parse_world(json::parse(R"({"scanning": {"probe": {"reference_deflection_mm": 1.5}}})"), "t.json");
+  ASSERT_FALSE(e0);
+  EXPECT_NE(e0.error().message.find("below the measuring range"), std::string::npos);
+}
+
+// A plane 50 um above its design: every law-independent part of the chain (probe model, sample
+// = encoders + deflection, compensation along Ep) must give the true surface.
+TEST(Scanning, PlaneSurfaceIsReturnedWithinTheProbeNoise) {
+  const World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, 0.05));
+  const ScanRun r = scan(w, ramp_scan(0, ScanLaw::Vc2));
+  ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+  ASSERT_GT(r.out.samples.size(), 550u);  // 60 mm every 0.1 mm
+  for (const ScanSample& s : r.out.samples) {
+    EXPECT_NEAR(s.surface_mm(ball_r).z(), 10.05, 0.001);
+    EXPECT_NEAR(s.deflection_mm.norm(), 0.3, 0.01);
+  }
+  // Vc2 leaves the normal direction to Ve: the probe sits on the actual surface, 50 um off the path.
+  EXPECT_NEAR(deflection_error(r, 10, 50).first, 0, 0.001);
+  EXPECT_NEAR(r.cycles[r.cycles.size() / 2].path_distance_mm, 0.05, 0.002);
+}
+
+// SEEDS.md 1: Vc1 has a component along eu that fights Ve. With the part dz above its design,
+// the head settles where K*(e - E0) = Kc*(dz - (e - E0)), i.e. e - E0 = dz*Kc/(K + Kc);
+// Vc1' and Vc2 have no component along eu and hold E0.
+TEST(Scanning, Vc1FightsTheDeflectionCorrectionAsItsEquilibriumPredicts) {
+  const double dz = 0.1;
+  const World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, dz));
+  const double k = w.scanning.control.deflection_gain_1_s, kc = w.scanning.control.trajectory_gain_1_s;
+  const ScanRun vc1 = scan(w, ramp_scan(0, ScanLaw::Vc1));
+  const ScanRun vc1p = scan(w, ramp_scan(0, ScanLaw::Vc1Prime));
+  const ScanRun vc2 = scan(w, ramp_scan(0, ScanLaw::Vc2));
+  ASSERT_TRUE(vc1.out.completed && vc1p.out.completed && vc2.out.completed);
+  EXPECT_NEAR(deflection_error(vc1, 20, 50).first, dz * kc / (k + kc), 0.002);
+  EXPECT_NEAR(deflection_error(vc1p, 20, 50).first, 0, 0.001);
+  EXPECT_NEAR(deflection_error(vc2, 20, 50).first, 0, 0.001);
+}
+
+// Per cycle: Vc1' is orthogonal to eu, Vc2 to eu and to Vf (SEEDS.md 1); on a ramp whose actual
+// foot comes before the design's, Vc1' points against Vf while Vc2 never does.
+TEST(Scanning, CorrectionTermsHaveTheDirectionsTheLawsDefine) {
+  const World w = world_with(scan_test::ramp_design(20), Vec3(-1, 0, 0));
+  for (ScanLaw law : {ScanLaw::Vc1Prime, ScanLaw::Vc2}) {
+    const ScanRun r = scan(w, ramp_scan(20, law));
+    double most_against = 0;
+    for (const ScanCycle& c : r.cycles) {
+      const double e = c.deflection_mm.norm();
+      if (e < 1e-6 || c.terms.vc.norm() < 1e-9) continue;
+      const Vec3 eu = c.deflection_mm / e;
+      EXPECT_LT(std::abs(c.terms.vc.dot(eu)), 1e-9 * (1 + c.terms.vc.norm()));
+      if (c.terms.vf.norm() > 1e-6) {
+        const double along = c.terms.vc.dot(c.terms.vf.normalized());
+        if (law == ScanLaw::Vc2) {
+          EXPECT_LT(std::abs(along), 1e-9 * (1 + c.terms.vc.norm()));
+        }
+        most_against = std::min(most_against, along);
+      }
+    }
+    if (law == ScanLaw::Vc1Prime) {
+      EXPECT_LT(most_against, -1.0) << "Vc1' should oppose Vf on the ramp, mm/s";
+    }
+  }
+}
+
+// SEEDS.md 1: Vc1' cannot climb when its component against Vf exceeds Vf. With the actual ramp
+// starting dx earlier than designed, the probe climbs the actual ramp while the path is still
+// flat; at height z above the path Vc1' = Kc*z*sin(theta) down the slope, against Vf*cos(theta)
+// up it; z reaches dx*tan(theta), so it stalls when Kc*dx*tan^2(theta) > Vf (the gain functions
+// only lower Gf further). Vc2 has no such component and climbs at every angle.
+TEST(Scanning, Vc1PrimeStallsOnSteepRampsWhereVc2Climbs) {
+  const double dx = 1.0;
+  const World d = default_world();
+  const double kc = d.scanning.control.trajectory_gain_1_s, vf = d.scanning.control.feed_mm_s;
+  for (double angle : {10.0, 45.0}) {
+    const bool predicted_stall = kc * dx * std::pow(std::tan(angle * deg), 2) > vf;
+    const World w = world_with(scan_test::ramp_design(angle), Vec3(-dx, 0, 0), 0.003);
+    const ScanRun p = scan(w, ramp_scan(angle, ScanLaw::Vc1Prime));
+    const ScanRun q = scan(w, ramp_scan(angle, ScanLaw::Vc2));
+    EXPECT_EQ(!p.out.completed, predicted_stall) << angle;
+    if (predicted_stall) {
+      ASSERT_TRUE(p.out.fault);
+      EXPECT_EQ(p.out.fault->kind, FaultKind::Stalled);
+      EXPECT_NEAR(p.out.stats.reached_mm, 20 - dx, 1.0);  // at the actual ramp's foot
+    }
+    EXPECT_TRUE(q.out.completed) << angle << (q.out.fault ? q.out.fault->message : "");
+  }
+}
+
+// Along eu the Vc1 law adds Kc to K, so its normal loop rings at gains where Vc2's is calm; with
+// Vc2 at K = 2*60 (the same normal loop gain as Vc1 at K = Kc = 60) it rings too.
+TEST(Scanning, Vc1RingsBecauseItsNormalLoopGainIsKPlusKc) {
+  World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, 0.05), 0.003);
+  w.scanning.control.deflection_gain_1_s = w.scanning.control.trajectory_gain_1_s = 60;
+  const double vc1 = deflection_error(scan(w, ramp_scan(0, ScanLaw::Vc1)), 15, 50).second;
+  const double vc2 = deflection_error(scan(w, ramp_scan(0, ScanLaw::Vc2)), 15, 50).second;
+  w.scanning.control.deflection_gain_1_s = 120;
+  const ScanRun fast = scan(w, ramp_scan(0, ScanLaw::Vc2));
+  const double vc2_fast = fast.cycles.size() > 100 ? deflection_error(fast, 15, 50).second : 1.0;
+  EXPECT_LT(vc2, 0.003);
+  EXPECT_GT(vc1, 5 * vc2);
+  EXPECT_GT(vc2_fast, 5 * vc2);
+  std::printf("[figures] std of |Ep| at K = Kc = 60: Vc1 %.4f mm, Vc2 %.4f mm; Vc2 at K = 120: %.4f mm\n", vc1, vc2, vc2_fast);
+}
+
+// Accuracy: a boss with a hidden 3-lobe form (5 um roundness) on a part offset from its design.
+TEST(Scanning, LobedCircleFormIsRecoveredWithin1um) {
+  const double amplitude = 0.0025, phase_deg = 20, d = 50;
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), d, 30.0}};
+  const Vec3 offset(0.15, -0.1, 0);
+  World w = world_with(boss, offset);
+  csg::Deviation dev;
+  dev.lobing = csg::Lobing{3, amplitude, phase_deg};
+  w.part->deviations["BOSS"] = dev;
+  ScanPath c;
+  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), d / 2 + ball_r - 0.3, true));
+  c.approach_normal = Vec3::UnitX();
+  c.law = ScanLaw::Vc2;
+  c.sample_spacing_mm = 0.2;
+  const ScanRun r = scan(w, c);
+  ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+  std::vector<Vec3> pts;
+  for (const ScanSample& s : r.out.samples) pts.push_back(s.surface_mm(ball_r));
+  fitting::FitOptions o;
+  o.inner = false;
+  o.direction_hint = Vec3::UnitZ();
+  const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+  ASSERT_TRUE(f);
+  EXPECT_NEAR(f->form_mm, 2 * amplitude, 0.001);
+  EXPECT_NEAR(f->diameter_mm, d, 0.001);
+  EXPECT_NEAR((f->position - (origin + offset)).head<2>().norm(), 0, 0.001);
+  // The third harmonic of the residuals: amplitude and phase of the hidden lobing.
+  std::complex<double> h3 = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Vec3 v = pts[i] - f->position;
+    h3 += f->residuals_mm[i] * std::exp(std::complex<double>(0, -3 * std::atan2(v.y(), v.x())));
+  }
+  h3 *= 2.0 / static_cast<double>(pts.size());
+  EXPECT_NEAR(std::abs(h3), amplitude, 0.0005);
+  EXPECT_NEAR(-std::arg(h3) / 3 / deg, phase_deg, 3);  // r = A cos(3(theta - phase))
+  std::printf("[figures] lobed circle: form %.5f mm (hidden 0.005), diameter %.5f, 3rd harmonic %.5f mm at %.2f deg\n",
+              f->form_mm, f->diameter_mm, std::abs(h3), -std::arg(h3) / 3 / deg);
+}
+
+namespace {
+
+// A closed mesh of the free-form block 0 <= z <= height(x, y) over [x0, x1] x [y0, y1].
+template <class F>
+geometry::Mesh heightfield_block(F height, double x0, double x1, double y0, double y1, int nx, int ny) {
+  std::vector<Vec3> v;
+  std::vector<geometry::Mesh::Face> f;
+  const auto at = [&](int i, int j, bool top) { return static_cast<std::uint32_t>((top ? 0 : (nx + 1) * (ny + 1)) + j * (nx + 1) + i); };
+  for (int top = 1; top >= 0; --top)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) {
+        const double x = x0 + (x1 - x0) * i / nx, y = y0 + (y1 - y0) * j / ny;
+        v.emplace_back(x, y, top ? height(x, y) : 0.0);
+      }
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      f.push_back({at(i, j, true), at(i + 1, j, true), at(i + 1, j + 1, true)});
+      f.push_back({at(i, j, true), at(i + 1, j + 1, true), at(i, j + 1, true)});
+      f.push_back({at(i, j, false), at(i + 1, j + 1, false), at(i + 1, j, false)});
+      f.push_back({at(i, j, false), at(i, j + 1, false), at(i + 1, j + 1, false)});
+    }
+  // Walls: each boundary edge of the top joined to the bottom, facing out.
+  const auto wall = [&](std::uint32_t a, std::uint32_t b, std::uint32_t a0, std::uint32_t b0) {
+    f.push_back({a, b0, a0});
+    f.push_back({a, b, b0});
+  };
+  for (int i = 0; i < nx; ++i) {
+    wall(at(i + 1, 0, true), at(i, 0, true), at(i + 1, 0, false), at(i, 0, false));          // y = y0
+    wall(at(i, ny, true), at(i + 1, ny, true), at(i, ny, false), at(i + 1, ny, false));      // y = y1
+  }
+  for (int j = 0; j < ny; ++j) {
+    wall(at(0, j, true), at(0, j + 1, true), at(0, j, false), at(0, j + 1, false));          // x = x0
+    wall(at(nx, j + 1, true), at(nx, j, true), at(nx, j + 1, false), at(nx, j, false));      // x = x1
+  }
+  auto m = geometry::Mesh::from_triangles(std::move(v), std::move(f));
+  if (!m) throw std::runtime_error(m.error().message);
+  return *m;
+}
+
+}  // namespace
+
+// Accuracy: a free-form surface with a hidden 10 um bump; the scan line crosses it.
+TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
+  const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 12) * std::cos(y / 15); };
+  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 60, -20, 20, 120, 80));
+  ASSERT_TRUE(mesh->is_closed());
+  const Bump bump{Vec3(30, 0, height(30, 0)), 0.010, 3};
+  CadDesign cad;
+  cad.path = "<test mesh>";
+  cad.mesh = mesh;
+  World w = world_with(cad);
+  w.part->bumps = {bump};
+  // Contour points on the design (the analytic surface it was tessellated from), offset by r - E0.
+  const auto point = [&](double x) {
+    const double hx = 1.5 * std::cos(x / 12) / 12;  // dz/dx at y = 0 (dz/dy = 0 there)
+    const Vec3 n = Vec3(-hx, 0, 1).normalized();
+    return std::pair<Vec3, Vec3>(Vec3(x, 0, height(x, 0)) + (ball_r - 0.3) * n, n);
+  };
+  ScanPath c;
+  for (double x = 5; x < 55 - 1e-9; x += 1) {
+    const auto [a, na] = point(x);
+    const auto [b, nb] = point(x + 1);
+    const Vec3 ta = (point(x + 1e-4).first - point(x - 1e-4).first).normalized();
+    const Vec3 tb = (point(x + 1 + 1e-4).first - point(x + 1 - 1e-4).first).normalized();
+    c.path.segments.push_back(geometry::PccSegment::hermite(a, b, ta, tb));
+    c.path.normals.push_back(na);
+  }
+  c.path.normals.push_back(point(55).second);
+  c.path = placed(c.path);
+  c.approach_normal = c.path.normals.front();
+  c.law = ScanLaw::Vc2;
+  c.sample_spacing_mm = 0.25;
+  const ScanRun r = scan(w, c);
+  ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+  Frame pose = Frame::Identity();
+  pose.translate(origin);
+  const MeshSolid design(mesh, pose);
+  double worst = 0, peak = 0;
+  for (const ScanSample& s : r.out.samples) {
+    const Vec3 p = s.surface_mm(ball_r);
+    const double measured = design.signed_distance(p);  // deviation from the design, + = material added
+    const Vec3 q = p - origin;
+    const double truth = bump.amplitude_mm * std::exp(-(q - bump.centre_mm).squaredNorm() / (2 * bump.sigma_mm * bump.sigma_mm));
+    worst = std::max(worst, std::abs(measured - truth));
+    peak = std::max(peak, measured);
+  }
+  EXPECT_LT(worst, 0.001);
+  EXPECT_NEAR(peak, bump.amplitude_mm, 0.001);
+  std::printf("[figures] bump: %zu samples, peak deviation %.5f mm (hidden 0.010), worst error %.5f mm\n",
+              r.out.samples.size(), peak, worst);
+}
+
+// Speed limits: each bound is logged where it binds, equals its formula, and the measured speed
+// along the path stays under it.
+TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
+  const double path_r = 5 + ball_r - 0.3;
+  ScanPath c;
+  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), path_r, true));
+  c.approach_normal = Vec3::UnitX();
+  c.speed_mm_s = 100;
+  struct Case {
+    const char* name;
+    std::function<void(World&)> setup;
+    std::function<double(const World&)> expected;
+  };
+  const Case cases[] = {
+      {"centripetal", [](World&) {},
+       [&](const World& w) { return std::sqrt(w.scanning.control.max_centripetal_mm_s2 * path_r); }},
+      {"probe dynamics", [](World& w) { w.scanning.probe.stylus_mass_g = 2000; },
+       [&](const World& w) {
+         return 1000 * std::sqrt(w.scanning.probe.stiffness_n_mm / w.scanning.probe.stylus_mass_g) *
+                std::sqrt(w.scanning.probe.reference_deflection_mm * path_r);
+       }},
+      {"machine", [](World& w) { w.machine.max_speed_mm_s = 20; }, [](const World&) { return 20.0; }},
+      {"segment", [](World&) {}, [](const World&) { return 15.0; }},  // the path generator's per-segment speed
+  };
+  for (const Case& k : cases) {
+    World w = world_with(boss);
+    k.setup(w);
+    ScanPath cmd = c;
+    if (std::string(k.name) == "segment") cmd.path.speed_mm_s.assign(cmd.path.segments.size(), 15.0);
+    const ScanRun r = scan(w, cmd);
+    ASSERT_TRUE(r.out.completed) << k.name << ": " << r.out.fault->message;
+    const double expected = k.expected(w);
+    bool logged = false;
+    for (const std::string& span : r.out.log)
+      if (span.find(std::string(": ") + k.name + ",") != std::string::npos) {
+        logged = true;
+        const double v = std::stod(span.substr(span.find(">= ") + 3));
+        EXPECT_NEAR(v, expected, 0.01 * expected) << span;
+      }
+    EXPECT_TRUE(logged) << k.name;
+    EXPECT_LE(r.out.stats.max_speed_ratio, 1.02) << k.name;
+    double fastest = 0;
+    for (const ScanCycle& cy : r.cycles) fastest = std::max(fastest, cy.tangential_speed_mm_s);
+    EXPECT_GT(fastest, 0.9 * expected) << k.name;  // the limit is what held the speed down
+    std::printf("[figures] %s limit %.3f mm/s, fastest measured %.3f mm/s, max ratio %.4f\n", k.name, expected, fastest,
+                r.out.stats.max_speed_ratio);
+  }
+}
+
+// The VirtualCmm answers ScanPath: positioning, scan, retract, samples and the speed log.
+TEST(Scanning, VirtualCmmScansTheDefaultBlockTop) {
+  VirtualCmm cmm(default_world(), 1);
+  ScanPath c;
+  // Default block: corner at (300, 200, 0), top at z = 40.
+  const double z = 40 + ball_r - 0.3;
+  c.path.segments.push_back(geometry::PccSegment::hermite({310, 210, z}, {350, 210, z}, Vec3::UnitX(), Vec3::UnitX()));
+  c.approach_normal = Vec3::UnitZ();
+  cmm.submit({1, c});
+  auto r = cmm.execute();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].status, Response::Status::Fault);
+  EXPECT_EQ(r[0].fault->kind, FaultKind::NoTool);
+  cmm.submit({2, DefineTool{"T1", 2 * ball_r}});
+  cmm.submit({3, SelectTool{"T1"}});
+  cmm.submit({4, c});
+  r = cmm.execute();
+  ASSERT_EQ(r.size(), 3u);
+  ASSERT_EQ(r[2].status, Response::Status::Done) << r[2].fault->message;
+  ASSERT_GT(r[2].scan.size(), 350u);
+  for (const ScanSample& s : r[2].scan) EXPECT_NEAR(s.surface_mm(ball_r).z(), 40, 0.001);
+  EXPECT_FALSE(r[2].scan_log.empty());
+  EXPECT_GT(cmm.simulated_time_s(), 4.0);                    // 40 mm at 10 mm/s, plus moves
+  EXPECT_NEAR(cmm.state().position_mm.z(), z + 0.3 + 2, 0.05);  // retracted 2 mm off the surface
+  EXPECT_NEAR(cmm.state().position_mm.x(), 350, 0.1);
+  ScanPath empty;
+  cmm.submit({5, empty});
+  r = cmm.execute();
+  EXPECT_EQ(r[0].fault->kind, FaultKind::BadCommand);
+}
+
+// Over-range: a deflection beyond the measuring range stops the scan with the samples so far.
+// Vc1 on a part 1 mm above its design settles at |Ep| - E0 = 1 mm * Kc/(K + Kc) = 0.5 mm
+// (see the equilibrium test), beyond a 0.6 mm range.
+TEST(Scanning, OverRangeIsAFaultWithTheSamplesSoFar) {
+  World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, 1.0));
+  w.scanning.probe.measuring_range_mm = 0.6;
+  VirtualCmm cmm(w, 1);
+  cmm.submit({1, DefineTool{"T1", 2 * ball_r}});
+  cmm.submit({2, SelectTool{"T1"}});
+  cmm.submit({3, ramp_scan(0, ScanLaw::Vc1)});
+  cmm.submit({4, ramp_scan(0, ScanLaw::Vc2)});
+  const auto r = cmm.execute();
+  ASSERT_EQ(r.size(), 4u);
+  ASSERT_EQ(r[2].status, Response::Status::Fault);
+  EXPECT_EQ(r[2].fault->kind, FaultKind::OverTravel);
+  EXPECT_NE(r[2].fault->message.find("over-range"), std::string::npos) << r[2].fault->message;
+  ASSERT_FALSE(r[2].scan.empty());
+  EXPECT_LT(r[2].scan.back().deflection_mm.norm(), 0.6);
+  EXPECT_EQ(r[3].fault->kind, FaultKind::Aborted);
+  // Vc2 on the same part holds E0 and completes.
+  VirtualCmm again(w, 1);
+  again.submit({1, DefineTool{"T1", 2 * ball_r}});
+  again.submit({2, SelectTool{"T1"}});
+  again.submit({3, ramp_scan(0, ScanLaw::Vc2)});
+  EXPECT_EQ(again.execute()[2].status, Response::Status::Done);
+}
+
+// The probe queries a local view of the world (Solid::local_view): it must give the same values
+// as the solid everywhere, near the centre (the fast path) and far from it (the fallback).
+TEST(Scanning, LocalViewsAnswerExactlyLikeTheirSolid) {
+  const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7); };
+  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 40, -20, 20, 40, 40));
+  CadDesign cad;
+  cad.path = "<test mesh>";
+  cad.mesh = mesh;
+  World w = world_with(cad, Vec3::Zero(), 0.002);
+  w.part->bumps = {Bump{Vec3(20, 0, height(20, 0)), 0.05, 2}};
+  const auto solid = make_world_solid(w);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int compared = 0;
+  for (int v = 0; v < 20; ++v) {
+    const double x = 20 + 18 * u(rng), y = 18 * u(rng);
+    const Vec3 centre = origin + Vec3(x, y, height(x, y) + 1.7 + 0.3 * u(rng));
+    const auto view = solid->local_view(centre, 2.8);
+    for (int k = 0; k < 50; ++k) {
+      const double spread = k < 40 ? 0.5 : 6.0;  // mostly near, some far (and inside the material)
+      const Vec3 p = centre + spread * Vec3(u(rng), u(rng), 2 * u(rng));
+      EXPECT_NEAR(view->signed_distance(p), solid->signed_distance(p), 1e-12) << p.transpose();
+      // With roughness the normal is a central difference of distances over 2e-6 mm, which
+      // turns their last-bit rounding differences (1e-15 mm) into ~1e-9.
+      EXPECT_LT((view->normal(p) - solid->normal(p)).norm(), 1e-7) << p.transpose();
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 1000);
+}
+
+// The scanning worlds in programs/worlds behave as their descriptions say.
+namespace {
+
+World scan_world_file(const std::string& name) {
+  auto w = load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/" + name);
+  if (!w) throw std::runtime_error(w.error().message);
+  return *w;
+}
+
+}  // namespace
+
+TEST(ScanningWorlds, RampWorldsSeparateTheLaws) {
+  const World w30 = scan_world_file("scan_ramp_30.json");
+  const ScanRun stalled = scan(w30, ramp_scan(30, ScanLaw::Vc1Prime));
+  ASSERT_TRUE(stalled.out.fault);
+  EXPECT_EQ(stalled.out.fault->kind, FaultKind::Stalled);
+  EXPECT_TRUE(scan(w30, ramp_scan(30, ScanLaw::Vc2)).out.completed);
+  const World w45 = scan_world_file("scan_ramp_45.json");
+  EXPECT_TRUE(scan(w45, ramp_scan(45, ScanLaw::Vc1Prime)).out.completed);
+  EXPECT_TRUE(scan(w45, ramp_scan(45, ScanLaw::Vc2)).out.completed);
+}
+
+TEST(ScanningWorlds, LobedCircleAndFreeFormBumpWorlds) {
+  {
+    const World w = scan_world_file("scan_lobed_circle.json");
+    VirtualCmm cmm(w, 1);
+    ScanPath c;
+    c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), 25 + ball_r - 0.3, true), Vec3(200, 300, 0));
+    c.approach_normal = Vec3::UnitX();
+    cmm.submit({1, DefineTool{"T1", 2 * ball_r}});
+    cmm.submit({2, SelectTool{"T1"}});
+    cmm.submit({3, GoTo{scan_approach_point(c) + Vec3(0, 0, 40), std::nullopt}});  // clear of the boss top
+    cmm.submit({4, c});
+    const auto r = cmm.execute();
+    ASSERT_EQ(r[3].status, Response::Status::Done) << r[3].fault->message;
+    std::vector<Vec3> pts;
+    for (const ScanSample& s : r[3].scan) pts.push_back(s.surface_mm(ball_r));
+    fitting::FitOptions o;
+    o.inner = false;
+    o.direction_hint = Vec3::UnitZ();
+    const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+    ASSERT_TRUE(f);
+    EXPECT_NEAR(f->form_mm, 0.005, 0.001);
+    EXPECT_NEAR(f->position.x(), 200.15, 0.001);
+    EXPECT_NEAR(f->position.y(), 299.9, 0.001);
+  }
+  {
+    const World w = scan_world_file("scan_freeform_bump.json");
+    const auto height = [](double x) { return 20 + 1.5 * std::sin(x / 12); };  // at y = 0
+    ScanPath c;
+    // The mesh's y = 0 section is a polyline through its grid nodes (every 2 mm): the path follows
+    // it at r - E0 along each edge's normal, corners rounded (scan_test::profile_path_xz).
+    std::vector<Vec3> section;
+    for (double x = 4; x <= 56 + 1e-9; x += 2) section.emplace_back(x, 0, height(x));
+    c.path = placed(scan_test::profile_path_xz(section, ball_r - 0.3, 2.0), Vec3(100, 100, 0));
+    c.approach_normal = c.path.normals.front();
+    const ScanRun r = scan(w, c);
+    ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+    double peak = 0, at = 0;
+    for (const ScanSample& s : r.out.samples) {
+      const Vec3 p = s.surface_mm(ball_r) - Vec3(100, 100, 0);
+      // Deviation from the design polyline, vertical (the section is piecewise linear).
+      const double x0 = 2 * std::floor(p.x() / 2), z0 = height(x0), z1 = height(x0 + 2);
+      const double dev = (p.z() - (z0 + (z1 - z0) * (p.x() - x0) / 2)) * std::cos(std::atan((z1 - z0) / 2));
+      if (dev > peak) peak = dev, at = p.x();
+    }
+    EXPECT_NEAR(peak, 0.010, 0.001);
+    EXPECT_NEAR(at, 30, 0.5);
+  }
+}
+
+TEST(ScanningWorlds, OffsetAndRoughBlocksAreFollowed) {
+  // The default block's top (design z = 40) along y = 210, from the design.
+  ScanPath c;
+  const double z = 40 + ball_r - 0.3;
+  c.path.segments.push_back(geometry::PccSegment::hermite({310, 210, z}, {350, 210, z}, Vec3::UnitX(), Vec3::UnitX()));
+  c.approach_normal = Vec3::UnitZ();
+  for (const auto& [file, top_z, tolerance] : {std::tuple{"scan_offset_block.json", 40.2, 0.001},
+                                               std::tuple{"scan_rough_block.json", 40.0, 0.006}}) {
+    const ScanRun r = scan(scan_world_file(file), c);
+    ASSERT_TRUE(r.out.completed) << file << ": " << r.out.fault->message;
+    double lo = 1e9, hi = -1e9;
+    for (const ScanSample& s : r.out.samples) {
+      lo = std::min(lo, s.surface_mm(ball_r).z());
+      hi = std::max(hi, s.surface_mm(ball_r).z());
+    }
+    EXPECT_NEAR(lo, top_z, tolerance) << file;
+    EXPECT_NEAR(hi, top_z, tolerance) << file;
+    if (std::string(file) == "scan_rough_block.json") {
+      EXPECT_GT(hi - lo, 0.002);  // the roughness is seen (5 um amplitude)
+    }
+  }
+}
