@@ -294,7 +294,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   std::vector<machine::Command> commands;
   std::vector<Span> spans;
   const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
-                                      [](const MeasStep& s) { return s.kind == MeasStep::Kind::PtMeas; });
+                                      [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
   const auto ptmeas = [&](const Vec3& nominal, const Vec3& normal, Span span) {
     machine::PtMeas p;
     p.nominal_mm = nominal;
@@ -311,6 +311,13 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       if (step.kind == MeasStep::Kind::GoTo) {
         commands.push_back({0, machine::GoTo{p, {}}});
         spans.push_back(step.span);
+      } else if (step.kind == MeasStep::Kind::Scan) {
+        auto path = m_paths.find(step.path);
+        if (path == m_paths.end()) return program_error(step.span, fmt::format("path P({}) is not defined", step.path));
+        auto scan = scan_command(path_contour(path->second, 0.05), step.span);
+        if (!scan) return tl::unexpected(scan.error());
+        commands.push_back({0, std::move(*scan)});
+        spans.push_back(step.span);
       } else {
         const Vec3 n = step.normal ? m_alignment.to_machine_vector(*step.normal) : nominal_normal_at(feature.nominal, p);
         if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
@@ -318,7 +325,16 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       }
     }
   }
-  if (!has_points) {
+  if (!has_points && m_scan.scan_mode && m_mode != Mode::Man) {
+    // SCNMOD/ON: scan the nominal feature instead of touching points.
+    const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
+    auto contour = nominal_contour(feature.nominal, m_machine.state().position_mm, m_probe.depth_mm, up, 0.05);
+    if (!contour) return program_error(block.span, contour.error());
+    auto scan = scan_command(*contour, block.span);
+    if (!scan) return tl::unexpected(scan.error());
+    commands.push_back({0, std::move(*scan)});
+    spans.push_back(block.span);
+  } else if (!has_points) {
     if (m_mode == Mode::Man)
       return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");
     const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
@@ -342,7 +358,17 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     if (r.hit) {
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
       points.push_back({r.hit->centre_mm, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
-                        i < spans.size() ? spans[i] : block.span});
+                        i < spans.size() ? spans[i] : block.span, false});
+    }
+  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu).
+  const auto tool = m_machine.state().tool;
+  for (const auto& r : execution.responses)
+    for (const auto& sample : r.scan) {
+      const double e = sample.deflection_mm.norm();
+      if (!(e > 0)) continue;  // not in contact
+      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->effective_radius_mm : 0.0,
+                        sample.time_s, i < spans.size() ? spans[i] : block.span, true});
     }
   if (execution.error) {
     // Keep every point obtained before the fault; the feature gets no actual.
@@ -353,7 +379,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   feature.points = points;
   feature.measured_at = block.span;
   feature.source = ActualSource::Measured;
-  if (block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
+  const bool scanned = std::any_of(points.begin(), points.end(), [](const MeasuredPoint& p) { return p.scanned; });
+  if (!scanned && block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
     warn(block.span, fmt::format("MEAS declared {} points but {} were measured", block.point_count, points.size()));
   }
   auto fitted = fit_actual(feature.nominal, points);

@@ -1,0 +1,289 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Scanning statements end to end (PATH, SCNMOD, SCNSET, FEDRAT/SCNVEL, PAMEAS) on a small fake
+// machine that answers ScanPath with samples on a known actual surface (nominal + form + offset),
+// so fitted actuals and form can be checked against that truth. The virtual CMM's scanning probe
+// is tested in tests/machine.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+
+#include <nlohmann/json.hpp>
+
+#include "metron/interpreter/compiler.hpp"
+#include "metron/interpreter/interpreter.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/geometry/scan_path.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace metron;
+using metron::interpreter::ExecStatus;
+constexpr double pi = std::numbers::pi;
+
+// The ball centre touching the actual surface when the probe rests at `q` on the commanded path
+// (the truth of the fake world).
+using Truth = std::function<Vec3(const Vec3& q)>;
+
+class FakeScanMachine : public machine::Machine {
+ public:
+  explicit FakeScanMachine(Truth truth) : m_truth(std::move(truth)) {}
+  void submit(machine::Command c) override { m_queue.push_back(std::move(c)); }
+  std::vector<machine::Response> execute() override {
+    std::vector<machine::Response> out;
+    for (auto& c : m_queue) {
+      machine::Response r;
+      r.tag = c.tag;
+      std::visit([&](auto& body) { answer(body, r); }, c.body);
+      out.push_back(std::move(r));
+    }
+    m_queue.clear();
+    return out;
+  }
+  [[nodiscard]] machine::MachineState state() const override {
+    machine::MachineState s;
+    s.position_mm = m_position;
+    s.time_s = m_time;
+    s.tool = m_tool;
+    s.measuring_feed_mm_s = 5;
+    s.positioning_feed_mm_s = 50;
+    return s;
+  }
+  [[nodiscard]] std::vector<machine::Command> queued() const override { return m_queue; }
+  std::vector<machine::ScanPath> scans;  ///< every ScanPath received
+
+ private:
+  void answer(const machine::DefineTool& d, machine::Response& r) {
+    m_tool = machine::ToolInfo{d.name, d.ball_diameter_mm / 2, d.ball_diameter_mm / 2, false, 0};
+    r.tool = m_tool;
+  }
+  void answer(const machine::SelectTool&, machine::Response& r) { r.tool = m_tool; }
+  void answer(const machine::QualifyTool&, machine::Response& r) {
+    m_tool->qualified = true;
+    r.tool = m_tool;
+  }
+  void answer(const machine::GoTo& g, machine::Response&) { m_position = g.target_mm; }
+  void answer(const machine::SetFeeds&, machine::Response&) {}
+  void answer(const machine::PtMeas& p, machine::Response& r) {
+    r.hit = machine::Hit{p.nominal_mm + m_tool->effective_radius_mm * p.normal, p.normal, m_tool->effective_radius_mm, m_time};
+  }
+  void answer(const machine::ScanPath& s, machine::Response& r) {
+    scans.push_back(s);
+    const double length = s.path.length();
+    const double speed = s.speed_mm_s.value_or(5);
+    for (double at = 0; at <= length + 1e-9; at += s.sample_spacing_mm) {
+      const auto p = geometry::point_at_length(s.path, at);
+      machine::ScanSample sample;
+      sample.centre_mm = m_truth(p.position);
+      sample.deflection_mm = sample.centre_mm - p.position;
+      sample.path_s_mm = at;
+      sample.time_s = m_time + at / speed;
+      r.scan.push_back(sample);
+    }
+    m_time += length / speed;
+    m_position = s.path.segments.back().end();
+  }
+
+  Truth m_truth;
+  std::vector<machine::Command> m_queue;
+  Vec3 m_position = Vec3(0, 0, 100);
+  double m_time = 0;
+  std::optional<machine::ToolInfo> m_tool;
+};
+
+struct Run {
+  ExecStatus status = ExecStatus::Error;
+  std::string diagnostics;
+  SourceManager sources;
+  DiagnosticSink sink;
+  runtime::RunRecord record;
+  std::unique_ptr<FakeScanMachine> machine;
+  std::unique_ptr<runtime::MeasurementRuntime> runtime;
+};
+
+std::unique_ptr<Run> run(const std::string& body, Truth truth) {
+  const fs::path dir = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "scan.dmi";
+  std::ofstream(file) << "DMISMN/'scan test', 5.0\nUNITS/MM, ANGDEC\n"
+                         "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+                      << body << "ENDFIL\n";
+  auto r = std::make_unique<Run>();
+  interpreter::Compiler compiler(r->sources, r->sink);
+  r->machine = std::make_unique<FakeScanMachine>(std::move(truth));
+  r->runtime = std::make_unique<runtime::MeasurementRuntime>(*r->machine, r->sources, r->record);
+  auto unit = compiler.compile_file(file.string());
+  if (unit && !r->sink.has_errors()) {
+    interpreter::Interpreter vm(compiler.module(), *r->runtime, r->sources, r->sink);
+    vm.start(*unit);
+    r->status = vm.run();
+  }
+  r->runtime->finish();
+  for (const auto& d : r->sink.items()) r->diagnostics += format_diagnostic(d, r->sources);
+  return r;
+}
+
+// Bore at c, nominal radius 10, actually shifted by o, with a 3-lobe form of amplitude A (radius
+// R + A cos 3 theta about the shifted centre, to first order).
+Truth lobed_bore(const Vec3& c, const Vec3& o, double amplitude_mm, double ball_radius_mm) {
+  return [=](const Vec3& q) {
+    Vec3 d = q - c;
+    d.z() = 0;
+    const Vec3 u = d.normalized();
+    const double theta = std::atan2(u.y(), u.x());
+    const double r_true = 10 + amplitude_mm * std::cos(3 * theta) + o.dot(u);
+    return Vec3(c + (r_true - ball_radius_mm) * u + Vec3(0, 0, q.z() - c.z()));
+  };
+}
+
+TEST(Scanning, ScnmodScansACircleByItsNominalAndFitsTheHiddenForm) {
+  const Vec3 c(340, 250, 30), o(0.02, -0.015, 0);
+  auto r = run("FEDRAT/SCNVEL, MMPS, 8\nSCNSET/DIST, 0.05, DEFLEC, 0.25, LAW, VC1P, CHORD, 0.0005\n"
+               "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+               "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+               "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n",
+               lobed_bore(c, o, 0.005, 2.0));
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  const auto& scan = r->machine->scans[0];
+  EXPECT_EQ(scan.law, machine::ScanLaw::Vc1Prime);
+  EXPECT_EQ(scan.speed_mm_s, 8.0);
+  EXPECT_EQ(scan.reference_deflection_mm, 0.25);
+  EXPECT_EQ(scan.sample_spacing_mm, 0.05);
+  // The path is the nominal bore offset by r - E0 = 1.75 toward the axis, within the chord tolerance.
+  for (const auto& seg : scan.path.segments)
+    for (int k = 0; k <= 10; ++k) {
+      Vec3 d = seg.point(seg.d_mm * k / 10) - c;
+      EXPECT_NEAR(d.z(), 0, 1e-9);
+      d.z() = 0;
+      EXPECT_NEAR(d.norm(), 10 - 1.75, 0.0005);
+    }
+  // Starts where the probe was nearest (it came down at the centre: any start is fine), approaches
+  // from the inside.
+  EXPECT_NEAR(scan.approach_normal.z(), 0, 1e-12);
+  const auto& f = r->runtime->features().at("B1");
+  ASSERT_TRUE(f.actual);
+  ASSERT_TRUE(f.fit);
+  EXPECT_GT(f.points.size(), 900u);  // 2 pi 8.25 / 0.05
+  EXPECT_TRUE(f.points.front().scanned);
+  EXPECT_NEAR(f.actual->position.x(), c.x() + o.x(), 1e-4);
+  EXPECT_NEAR(f.actual->position.y(), c.y() + o.y(), 1e-4);
+  EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-4);
+  EXPECT_NEAR(f.fit->form_mm, 0.010, 1e-4);  // roundness of a 3-lobe form: 2 A
+}
+
+// Independent expectations: peak-to-valley of least-squares residuals on a dense uniform grid.
+// Circle: algebraic (Kasa) fit in the plane, x^2 + y^2 + D x + E y + F = 0.
+double circle_form(const std::vector<Vec2>& p) {
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(p.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(p.size()));
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    a(k, 0) = p[i].x(), a(k, 1) = p[i].y(), a(k, 2) = 1;
+    b(k) = -p[i].squaredNorm();
+  }
+  const Eigen::Vector3d x = a.colPivHouseholderQr().solve(b);
+  const Vec2 centre(-x(0) / 2, -x(1) / 2);
+  const double radius = std::sqrt(centre.squaredNorm() - x(2));
+  double lo = 1e9, hi = -1e9;
+  for (const auto& q : p) {
+    lo = std::min(lo, (q - centre).norm() - radius);
+    hi = std::max(hi, (q - centre).norm() - radius);
+  }
+  return hi - lo;
+}
+// Line z(x): linear regression.
+double line_form(const std::vector<Vec2>& p) {
+  double sx = 0, sz = 0, sxx = 0, sxz = 0;
+  const double n = static_cast<double>(p.size());
+  for (const auto& q : p) sx += q.x(), sz += q.y(), sxx += q.x() * q.x(), sxz += q.x() * q.y();
+  const double slope = (n * sxz - sx * sz) / (n * sxx - sx * sx), icpt = (sz - slope * sx) / n;
+  double lo = 1e9, hi = -1e9;
+  for (const auto& q : p) {
+    lo = std::min(lo, q.y() - slope * q.x() - icpt);
+    hi = std::max(hi, q.y() - slope * q.x() - icpt);
+  }
+  return (hi - lo) / std::sqrt(1 + slope * slope);
+}
+
+TEST(Scanning, PameasScansAnArcPathAndALinePath) {
+  const Vec3 c(40, 50, 25);
+  // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.
+  const auto truth = [&](const Vec3& q) {
+    if (std::abs(q.z() - 25) < 1e-6) return lobed_bore(c, Vec3::Zero(), 0.003, 2.0)(q);
+    const double z = 40.003 + 0.002 * std::sin(2 * pi * q.x() / 7.5);
+    return Vec3(q.x(), q.y(), z + 2.0);
+  };
+  auto r = run("P(A1) = PATH/ARC, CART, 40, 50, 25, 0, 0, 1, 10, 0, 270, INNER\n"
+               "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\n"
+               "MEAS/CIRCLE, F(B2), 0\n  PAMEAS/P(A1)\nENDMES\n"
+               "P(L1) = PATH/LINE, CART, 5, 20, 40, 35, 20, 40, 0, 0, 1\n"
+               "F(E1) = FEAT/LINE, BND, CART, 5, 20, 40, 35, 20, 40, 0, 1, 0\n"
+               "MEAS/LINE, F(E1), 0\n  PAMEAS/P(L1)\nENDMES\n",
+               truth);
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 2u);
+  // The arc runs counterclockwise from angle 0 (+X) to 270 degrees, at the default E0 0.3 and law Vc2.
+  const auto& arc = r->machine->scans[0];
+  EXPECT_EQ(arc.law, machine::ScanLaw::Vc2);
+  EXPECT_LT((arc.path.segments.front().start() - Vec3(40 + 8.3, 50, 25)).norm(), 1e-9);
+  EXPECT_LT((arc.path.segments.back().end() - Vec3(40, 50 - 8.3, 25)).norm(), 1e-9);
+  EXPECT_GT(arc.approach_normal.dot(-Vec3::UnitX()), 1 - 1e-12);
+  const auto& b2 = r->runtime->features().at("B2");
+  ASSERT_TRUE(b2.actual && b2.fit);
+  EXPECT_NEAR(b2.actual->diameter_mm, 20, 1e-3);
+  std::vector<Vec2> arc_truth;
+  for (int i = 0; i <= 20000; ++i) {
+    const double t = 1.5 * pi * i / 20000;
+    arc_truth.push_back((10 + 0.003 * std::cos(3 * t)) * Vec2(std::cos(t), std::sin(t)));
+  }
+  EXPECT_NEAR(b2.fit->form_mm, circle_form(arc_truth), 1e-4);
+  // The line: one straight segment 1.7 above the face; fitted 3 um up; straightness of the sine
+  // about its least-squares line.
+  const auto& line = r->machine->scans[1];
+  ASSERT_EQ(line.path.segments.size(), 1u);
+  EXPECT_LT((line.path.segments[0].start() - Vec3(5, 20, 41.7)).norm(), 1e-9);
+  const auto& e1 = r->runtime->features().at("E1");
+  ASSERT_TRUE(e1.actual && e1.fit);
+  EXPECT_NEAR(e1.actual->position.z(), 40.003, 2e-4);
+  std::vector<Vec2> line_truth;
+  for (int i = 0; i <= 20000; ++i) {
+    const double x = 5 + 30.0 * i / 20000;
+    line_truth.push_back(Vec2(x, 0.002 * std::sin(2 * pi * x / 7.5)));
+  }
+  EXPECT_NEAR(e1.fit->form_mm, line_form(line_truth), 1e-4);
+  std::printf("270-degree arc form %.5f mm (expected %.5f), line straightness %.5f mm (expected %.5f)\n",
+              b2.fit->form_mm, circle_form(arc_truth), e1.fit->form_mm, line_form(line_truth));
+  // Scanned points are in results.json, marked as scanned.
+  const auto j = runtime::results_json(r->record);
+  bool found = false;
+  for (const auto& f : j["features"])
+    if (f["label"] == "E1") {
+      found = true;
+      EXPECT_GT(f["points"].size(), 250u);
+      EXPECT_EQ(f["points"][0]["scanned"], true);
+    }
+  EXPECT_TRUE(found);
+}
+
+TEST(Scanning, RunTimeErrorsArePositioned) {
+  // A bore smaller than the ball: the offset path folds over.
+  auto r = run("F(S1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 3\nSCNMOD/ON\nMEAS/CIRCLE, F(S1), 0\nENDMES\n",
+               [](const Vec3& q) { return q; });
+  EXPECT_EQ(r->status, ExecStatus::Error);
+  EXPECT_NE(r->diagnostics.find("scan.dmi:7:1: error: cannot make a scan path: the offset path folds over"), std::string::npos)
+      << r->diagnostics;
+  // A sphere is scanned along a path, not by its nominal.
+  auto s = run("F(S2) = FEAT/SPHERE, OUTER, CART, 0, 0, 0, 20\nSCNMOD/ON\nMEAS/SPHERE, F(S2), 0\nENDMES\n",
+               [](const Vec3& q) { return q; });
+  EXPECT_EQ(s->status, ExecStatus::Error);
+  EXPECT_NE(s->diagnostics.find("scan a SPHERE along a PATH with PAMEAS"), std::string::npos) << s->diagnostics;
+}
+
+}  // namespace
