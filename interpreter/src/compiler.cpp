@@ -856,9 +856,10 @@ class UnitCompiler {
   // P(l)=PATH/HELICAL,CART,x,y,z,i,j,k,rad,ang1,ang2,pitch[,INNER|OUTER]
   void path(const grammar::Statement& s) {
     if (!require_target(s, {"P"}, "P(label)=PATH/...")) return;
-    if (!expect_params(s, 1, "the path type (LINE, ARC, HELICAL)")) return;
+    if (!expect_params(s, 1, "the path type (LINE, ARC, HELICAL, SECTION)")) return;
     const auto& p = s.params;
     const std::string name = upper(s.target->name);
+    if (is_word(p[0], "SECTION")) return path_section(s);
     static const std::set<std::string> kinds = {"LINE", "ARC", "HELICAL"};
     if (!is_word(p[0]) || !kinds.count(p[0].text)) {
       if (is_word(p[0])) {
@@ -903,6 +904,33 @@ class UnitCompiler {
     if (kind == "LINE" && v[0] == v[3] && v[1] == v[4] && v[2] == v[5]) return error(p[5].span, "sema.bad-path", "the line's end points are the same");
     m_symbols.paths.insert(name);
     m_symbols.skipped.erase("P:" + name);
+    emit(std::move(in));
+  }
+
+  // P(l)=PATH/SECTION,'file',x,y,z,i,j,k,xs,ys,zs   (metron: a plane section of a CAD model)
+  void path_section(const grammar::Statement& s) {
+    const auto& p = s.params;
+    if (p.size() < 2 || p[1].kind != ExprKind::String)
+      return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-file", "expected the CAD file name as a string after PATH/SECTION, e.g. 'part.stl'");
+    std::filesystem::path file(p[1].text);
+    if (file.is_relative()) file = std::filesystem::path(m_module.units[m_unit].path).parent_path() / file;
+    if (!std::filesystem::exists(file)) return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
+    const std::size_t n = p.size() - 2;
+    if (n != 9)
+      return error(p.back().span, "sema.path-arity", fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near xs,ys,zs), got {}", n));
+    auto in = make(Op::PathDef, s, upper(s.target->name));
+    in.operands.push_back(word_operand(p[0]));
+    in.names.push_back(file.string());
+    std::vector<double> v;
+    for (std::size_t i = 2; i < p.size(); ++i) {
+      auto e = numeric(p[i], "a path parameter");
+      if (!e) return;
+      v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
+      in.operands.push_back(expr_operand(std::move(*e)));
+    }
+    if (v[3] == 0 && v[4] == 0 && v[5] == 0) return error(p[5].span, "sema.zero-vector", "the plane normal i,j,k is zero");
+    m_symbols.paths.insert(upper(s.target->name));
+    m_symbols.skipped.erase("P:" + upper(s.target->name));
     emit(std::move(in));
   }
 

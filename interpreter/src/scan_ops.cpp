@@ -27,7 +27,13 @@ ExecStatus Interpreter::execute_scan(const ir::Instruction& in) {
       runtime::PathDefinition p;
       p.label = name_of(in);
       const Vec3 a(nums[0], nums[1], nums[2]);
-      if (words[0] == "LINE") {
+      if (words[0] == "SECTION") {
+        p.kind = runtime::PathDefinition::Kind::Section;
+        p.model_path = in.names.at(0);
+        p.point = a * len;
+        p.direction = Vec3(nums[3], nums[4], nums[5]);
+        p.point2 = Vec3(nums[6], nums[7], nums[8]) * len;
+      } else if (words[0] == "LINE") {
         p.kind = runtime::PathDefinition::Kind::Line;
         p.point = a * len;
         p.point2 = Vec3(nums[3], nums[4], nums[5]) * len;

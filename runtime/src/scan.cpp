@@ -16,6 +16,7 @@ constexpr double pi = 3.14159265358979323846;
 }  // namespace
 
 geometry::Contour path_contour(const PathDefinition& path, double step_mm) {
+  if (path.section) return *path.section;
   if (path.kind == PathDefinition::Kind::Line) return geometry::line_contour(path.point, path.point2, path.direction, step_mm);
   geometry::ArcSpec arc;
   arc.centre = path.point;
@@ -85,11 +86,25 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
   path.reference = m_alignment.to_machine_vector(path.reference);
   if (path.direction.norm() < 1e-12) return program_error(span, "the PATH direction i,j,k is a zero vector");
   path.direction.normalize();
+  if (path.kind == PathDefinition::Kind::Section) {
+    // The model is in part coordinates: place it with the current alignment, then cut it.
+    auto it = m_models.find(path.model_path);
+    if (it == m_models.end()) {
+      auto mesh = geometry::load_mesh(path.model_path);
+      if (!mesh) return program_error(span, "cannot load the CAD model: " + mesh.error().message);
+      it = m_models.emplace(path.model_path, std::move(*mesh)).first;
+    }
+    const geometry::Mesh placed = it->second.transformed(m_alignment.part_to_machine);
+    auto contour = geometry::nearest_contour(geometry::mesh_section_contours(placed, path.point, path.direction, 0.05), path.point2);
+    if (!contour) return program_error(span, "the PATH/SECTION plane does not cut the CAD model");
+    path.section = std::move(*contour);
+  }
   if (path.kind == PathDefinition::Kind::Line && (path.point2 - path.point).norm() < 1e-9)
     return program_error(span, "PATH/LINE needs two different end points");
-  if (path.kind != PathDefinition::Kind::Line && !(path.radius_mm > 0))
+  const bool round = path.kind == PathDefinition::Kind::Arc || path.kind == PathDefinition::Kind::Helical;
+  if (round && !(path.radius_mm > 0))
     return program_error(span, "the PATH radius must be positive");
-  if (path.kind != PathDefinition::Kind::Line && path.end_deg == path.start_deg)
+  if (round && path.end_deg == path.start_deg)
     return program_error(span, "the PATH start and end angles are equal");
   path.span = span;
   m_paths[path.label] = path;

@@ -18,6 +18,7 @@
 #include "metron/interpreter/interpreter.hpp"
 #include "metron/runtime/measurement_runtime.hpp"
 #include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/geometry/scan_path.hpp"
 
 namespace {
@@ -270,6 +271,66 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
       EXPECT_EQ(f["points"][0]["scanned"], true);
     }
   EXPECT_TRUE(found);
+}
+
+TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
+  // A boss of radius 10 about part (40, 50), as a 256-facet STL in part coordinates; the part
+  // frame is shifted to machine (300, 200, 0). Truth: radius 10 + 4 um cos 3 theta.
+  const double rb = 2.0;
+  const Vec3 c(340, 250, 15);
+  std::vector<Vec3> v;
+  std::vector<geometry::Mesh::Face> faces;
+  const int n = 256;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * pi * i / n;
+    v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 0);
+    v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 30);
+  }
+  v.emplace_back(40, 50, 0);
+  v.emplace_back(40, 50, 30);
+  const auto bottom = static_cast<std::uint32_t>(2 * n);
+  for (int i = 0; i < n; ++i) {
+    const auto a0 = static_cast<std::uint32_t>(2 * i), a1 = a0 + 1;
+    const auto b0 = static_cast<std::uint32_t>(2 * ((i + 1) % n)), b1 = b0 + 1;
+    faces.push_back({a0, b0, b1});
+    faces.push_back({a0, b1, a1});
+    faces.push_back({bottom, b0, a0});
+    faces.push_back({bottom + 1, a1, b1});
+  }
+  auto mesh = geometry::Mesh::from_triangles(v, faces);
+  ASSERT_TRUE(mesh);
+  const fs::path stl = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid())) / "boss.stl";
+  fs::create_directories(stl.parent_path());
+  ASSERT_TRUE(geometry::save_mesh(*mesh, stl.string()));
+  const auto truth = [&](const Vec3& q) {
+    Vec3 d = q - c;
+    d.z() = 0;
+    const Vec3 u = d.normalized();
+    const double r_true = 10 + 0.004 * std::cos(3 * std::atan2(u.y(), u.x()));
+    return Vec3(c + (r_true + rb) * u + Vec3(0, 0, q.z() - c.z()));
+  };
+  auto r = run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+               "P(S1) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15\n"
+               "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 40, 50, 15, 0, 0, 1, 20\n"
+               "MEAS/CIRCLE, F(BOSS), 0\n  PAMEAS/P(S1)\nENDMES\n",
+               truth);
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  const auto& scan = r->machine->scans[0];
+  // Starts nearest the hint (part (40, 70) = machine (340, 270)), runs counterclockwise, 1.7 outside.
+  EXPECT_LT((scan.path.segments.front().start() - Vec3(340, 261.7, 15)).norm(), 0.05);
+  EXPECT_LT(scan.path.segments.front().tangent(0).x(), -0.99);
+  const double sagitta = 10 * (1 - std::cos(pi / n));
+  for (const auto& seg : scan.path.segments) {
+    Vec3 d = seg.point(seg.d_mm / 2) - c;
+    d.z() = 0;
+    EXPECT_NEAR(d.norm(), 11.7, 0.001 + sagitta);
+  }
+  const auto& f = r->runtime->features().at("BOSS");
+  ASSERT_TRUE(f.actual && f.fit);
+  EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-4);
+  EXPECT_NEAR(f.actual->position.x(), 340, 1e-4);
+  EXPECT_NEAR(f.fit->form_mm, 0.008, 1e-4);
 }
 
 TEST(Scanning, RunTimeErrorsArePositioned) {

@@ -138,6 +138,8 @@ std::optional<Contour> nearest_contour(const std::vector<Contour>& contours, con
     std::rotate(out.points.begin(), out.points.begin() + static_cast<std::ptrdiff_t>(at), out.points.end());
     out.points.push_back(out.points.front());
   }
+  if (!out.closed && (out.points.back().position - near).norm() < (out.points.front().position - near).norm())
+    std::reverse(out.points.begin(), out.points.end());
   return out;
 }
 

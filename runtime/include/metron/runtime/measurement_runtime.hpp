@@ -201,6 +201,7 @@ class MeasurementRuntime {
   ProbeSettings m_probe;
   ScanSettings m_scan;
   std::map<std::string, PathDefinition> m_paths;
+  std::map<std::string, geometry::Mesh> m_models;  ///< CAD models loaded by PATH/SECTION, by path
   Mode m_mode = Mode::Auto;
   struct Device {
     std::string path;

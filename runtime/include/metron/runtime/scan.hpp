@@ -32,22 +32,25 @@ struct PathDefinition {
     Line,     ///< PATH/LINE: start, end, surface normal
     Arc,      ///< PATH/ARC: centre, axis, radius, start and end angle, INNER|OUTER
     Helical,  ///< PATH/HELICAL: as ARC plus the pitch per turn
+    Section,  ///< PATH/SECTION (metron): a plane section of a CAD model
   };
   std::string label;
   Kind kind = Kind::Line;
-  Vec3 point = Vec3::Zero();        ///< line start; arc/helix centre
-  Vec3 point2 = Vec3::Zero();       ///< line end
-  Vec3 direction = Vec3::UnitZ();   ///< line: surface normal; arc/helix: axis
+  Vec3 point = Vec3::Zero();        ///< line start; arc/helix centre; section: a point on the plane
+  Vec3 point2 = Vec3::Zero();       ///< line end; section: near the start of the scan
+  Vec3 direction = Vec3::UnitZ();   ///< line: surface normal; arc/helix: axis; section: plane normal
   Vec3 reference = Vec3::UnitX();   ///< arc/helix: direction of angle 0
   double radius_mm = 0;
   double start_deg = 0;
   double end_deg = 360;             ///< counterclockwise about the axis; end < start runs clockwise
   double pitch_mm = 0;              ///< helix advance per turn along the axis
   bool inner = true;                ///< arc/helix on a bore (normals toward the axis)
+  std::string model_path;           ///< section: the CAD file (STL, OFF, OBJ, PLY, STEP, IGES)
+  std::optional<geometry::Contour> section;  ///< section: the contour, cut when the path is defined
   Span span;                        ///< the PATH statement
 };
 
-/// The design contour of a PATH, sampled every `step_mm`.
+/// The design contour of a PATH, sampled every `step_mm` (a section keeps its own sampling).
 geometry::Contour path_contour(const PathDefinition& path, double step_mm);
 
 /// The design contour a scan of a nominal feature follows (SCNMOD/ON): a circle or arc all

@@ -62,7 +62,8 @@ std::vector<Contour> mesh_section_contours(const Mesh& mesh, const Vec3& plane_p
                                            double step_mm = 0.05);
 
 /// The contour among `contours` that passes nearest to `near` (nullopt if there are none). A
-/// closed contour is rotated to start at its point nearest to `near`.
+/// closed contour is rotated to start at its point nearest to `near`; an open one is reversed
+/// when its last point is nearer to `near` than its first.
 std::optional<Contour> nearest_contour(const std::vector<Contour>& contours, const Vec3& near);
 
 /// The contour run backwards (scan in the opposite direction).
