@@ -328,7 +328,10 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (!has_points && m_scan.scan_mode && m_mode != Mode::Man) {
     // SCNMOD/ON: scan the nominal feature instead of touching points.
     const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
-    auto contour = nominal_contour(feature.nominal, m_machine.state().position_mm, m_probe.depth_mm, up, 0.05);
+    // Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
+    const bool along_x = std::abs(m_alignment.to_part_vector(feature.nominal.direction).normalized().x()) >= 0.99;
+    const Vec3 reference = m_alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
+    auto contour = nominal_contour(feature.nominal, m_machine.state().position_mm, m_probe.depth_mm, up, reference, 0.05);
     if (!contour) return program_error(block.span, contour.error());
     auto scan = scan_command(*contour, block.span);
     if (!scan) return tl::unexpected(scan.error());

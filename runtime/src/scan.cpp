@@ -31,7 +31,7 @@ geometry::Contour path_contour(const PathDefinition& path, double step_mm) {
 }
 
 tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, const Vec3& start_near, double depth_mm,
-                                                             const Vec3& up, double step_mm) {
+                                                             const Vec3& up, const Vec3& arc_reference, double step_mm) {
   const Vec3 axis = g.direction.normalized();
   switch (g.type) {
     case FeatureType::Circle:
@@ -43,7 +43,7 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, 
       arc.radius_mm = g.diameter_mm / 2;
       arc.inner = g.side != Side::Outer;
       if (g.type == FeatureType::Arc) {
-        arc.reference = any_perpendicular(axis);
+        arc.reference = arc_reference;
         arc.start_deg = g.start_angle_deg;
         arc.sweep_deg = g.included_angle_deg;
       } else {

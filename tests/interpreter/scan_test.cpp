@@ -333,6 +333,31 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
   EXPECT_NEAR(f.fit->form_mm, 0.008, 1e-4);
 }
 
+TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
+  // Part frame rotated 90 degrees about Z: part +X is machine +Y, so angle 90 is machine -X.
+  const Vec3 c(100, 100, 10);
+  auto r = run("D(T) = TRANS/XORIG, 100, YORIG, 100, ZORIG, 10\nD(R) = ROTATE/ZAXIS, 90\n"
+               "F(A1) = FEAT/ARC, OUTER, CART, 0, 0, 0, 0, 0, 1, 10, 90, 180\n"
+               "SCNMOD/ON\nMEAS/ARC, F(A1), 0\nENDMES\n",
+               [&](const Vec3& q) {
+                 Vec3 d = q - c;
+                 d.z() = 0;
+                 return Vec3(c + 12.0 * d.normalized() + Vec3(0, 0, q.z() - c.z()));
+               });
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  ASSERT_LT((r->runtime->features().at("A1").nominal.position - c).norm(), 1e-9);
+  const auto& path = r->machine->scans[0].path;
+  const Vec3 start = path.segments.front().start(), end = path.segments.back().end();
+  ASSERT_LT(std::abs(start.z() - 10), 1e-9) << start.transpose();
+  EXPECT_LT((start - (c + Vec3(-11.7, 0, 0))).norm(), 1e-6) << start.transpose();
+  EXPECT_LT((end - (c + Vec3(11.7, 0, 0))).norm(), 1e-6) << end.transpose();
+  EXPECT_LT((path.segments.front().point(1.0) - c).y(), 0);  // counterclockwise: from -X through -Y
+  const auto& f = r->runtime->features().at("A1");
+  ASSERT_TRUE(f.actual);
+  EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-6);
+}
+
 TEST(Scanning, RunTimeErrorsArePositioned) {
   // A bore smaller than the ball: the offset path folds over.
   auto r = run("F(S1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 3\nSCNMOD/ON\nMEAS/CIRCLE, F(S1), 0\nENDMES\n",

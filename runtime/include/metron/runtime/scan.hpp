@@ -56,8 +56,10 @@ geometry::Contour path_contour(const PathDefinition& path, double step_mm);
 /// The design contour a scan of a nominal feature follows (SCNMOD/ON): a circle or arc all
 /// round, a bounded line along its length, a plane on a circle of 5 mm radius about its
 /// position. `start_near` picks where a closed circle starts (the current probe position);
-/// `depth_mm`/`up` place a circle like the touch planner does. Error for types not scanned.
+/// `depth_mm`/`up` place a circle like the touch planner does; an arc's angles count from
+/// `arc_reference` projected on its plane. Error for types not scanned.
 tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& nominal, const Vec3& start_near,
-                                                             double depth_mm, const Vec3& up, double step_mm);
+                                                             double depth_mm, const Vec3& up, const Vec3& arc_reference,
+                                                             double step_mm);
 
 }  // namespace metron::runtime
