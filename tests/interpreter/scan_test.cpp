@@ -358,6 +358,26 @@ TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
   EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-6);
 }
 
+TEST(Scanning, CompileErrorsAndWarningsArePositioned) {
+  const auto identity = [](const Vec3& q) { return q; };
+  const auto diag = [&](const std::string& body) { return run(body, identity)->diagnostics; };
+  // Lines 1-4 are the prologue of run(): the statement under test is on line 5.
+  EXPECT_NE(diag("PAMEAS/P(X)\n").find("scan.dmi:5:1: error: PAMEAS outside a MEAS block"), std::string::npos);
+  EXPECT_NE(diag("SCNMOD/MAYBE\n").find("scan.dmi:5:8: error: expected ON or OFF after SCNMOD/"), std::string::npos);
+  EXPECT_NE(diag("SCNSET/CHORD, 0\n").find("scan.dmi:5:15: error: the SCNSET/CHORD value must be positive"), std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/LINE, CART, 1, 2, 3, 1, 2, 3, 0, 0, 1\n").find("scan.dmi:5:34: error: the line's end points are the same"),
+            std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/ARC, CART, 0, 0, 0, 0, 0, 0, 5, 0, 90\n").find("scan.dmi:5:33: error: the path vector i,j,k is zero"),
+            std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/SECTION, 'nowhere.stl', 0, 0, 0, 0, 0, 1, 0, 0, 0\n").find("scan.dmi:5:22: error: CAD file 'nowhere.stl' not found"),
+            std::string::npos);
+  // An unsupported PATH type is skipped with a warning; using it is an error naming the skip.
+  const auto d = diag("P(C) = PATH/CURVE, PTDATA\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n"
+                      "MEAS/CIRCLE, F(B), 0\n  PAMEAS/P(C)\nENDMES\n");
+  EXPECT_NE(d.find("scan.dmi:5:13: warning: PATH/CURVE is not supported; P(C) is skipped"), std::string::npos) << d;
+  EXPECT_NE(d.find("scan.dmi:8:10: error: path P(C) was defined by a skipped statement"), std::string::npos) << d;
+}
+
 TEST(Scanning, RunTimeErrorsArePositioned) {
   // A bore smaller than the ball: the offset path folds over.
   auto r = run("F(S1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 3\nSCNMOD/ON\nMEAS/CIRCLE, F(S1), 0\nENDMES\n",
