@@ -363,14 +363,15 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       points.push_back({r.hit->centre_mm, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
                         i < spans.size() ? spans[i] : block.span, false});
     }
-  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu).
+  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
+  // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
   const auto tool = m_machine.state().tool;
   for (const auto& r : execution.responses)
     for (const auto& sample : r.scan) {
       const double e = sample.deflection_mm.norm();
       if (!(e > 0)) continue;  // not in contact
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
-      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->effective_radius_mm : 0.0,
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->nominal_radius_mm : 0.0,
                         sample.time_s, i < spans.size() ? spans[i] : block.span, true});
     }
   if (execution.error) {

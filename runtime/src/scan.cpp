@@ -114,7 +114,9 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
 Result<machine::ScanPath> MeasurementRuntime::scan_command(const geometry::Contour& contour, Span span) {
   const auto state = m_machine.state();
   geometry::ScanPathOptions o;
-  o.ball_radius_mm = state.tool ? state.tool->effective_radius_mm : 2.0;
+  // The nominal ball radius: a scanning probe reads its deflection, so the touch-trigger
+  // effective radius (which absorbs pre-travel and trigger delays) does not apply.
+  o.ball_radius_mm = state.tool ? state.tool->nominal_radius_mm : 2.0;
   o.reference_deflection_mm = m_scan.reference_deflection_mm;
   o.chord_tolerance_mm = m_scan.chord_tolerance_mm;
   o.centripetal_accel_mm_s2 = m_scan.centripetal_accel_mm_s2;
