@@ -358,6 +358,42 @@ TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
   EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-6);
 }
 
+TEST(Scanning, HelicalPathIntoACylinder) {
+  // Two turns of pitch 5 down a bore whose actual is a 3-lobe (A = 4 um) cylinder shifted by o.
+  const Vec3 c(40, 50, 0), o(-0.01, 0.02, 0);
+  auto r = run("P(H) = PATH/HELICAL, CART, 40, 50, 20, 0, 0, -1, 10, 0, 720, 5, INNER\n"
+               "F(C) = FEAT/CYLNDR, INNER, CART, 40, 50, 0, 0, 0, 1, 20, 25\n"
+               "MEAS/CYLNDR, F(C), 0\n  PAMEAS/P(H)\nENDMES\n",
+               lobed_bore(c, o, 0.004, 2.0));
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  const auto& path = r->machine->scans.at(0).path;
+  EXPECT_NEAR(path.segments.front().start().z(), 20, 1e-9);
+  EXPECT_NEAR(path.segments.back().end().z(), 10, 1e-9);  // the axis points down: it advances down
+  const auto& f = r->runtime->features().at("C");
+  ASSERT_TRUE(f.actual && f.fit);
+  // On a helix the lobes correlate with an axis tilt (z and the angle advance together), so the
+  // least-squares cylinder tilts a little. Independent expectation: the linearised cylinder fit
+  // r - 10 = p0 + p1 cos + p2 sin + z (p3 cos + p4 sin) of the truth along the same helix.
+  const int n = 20000;
+  Eigen::MatrixXd a(n, 5);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
+    const double t = 4 * pi * i / (n - 1), th = -t, z = 20 - 5 * t / (2 * pi);
+    const Vec3 u(std::cos(th), std::sin(th), 0);
+    a.row(i) << 1, u.x(), u.y(), z * u.x(), z * u.y();
+    b(i) = 0.004 * std::cos(3 * th) + o.dot(u);
+  }
+  const Eigen::VectorXd q = a.colPivHouseholderQr().solve(b);
+  const Eigen::VectorXd e = b - a * q;
+  EXPECT_NEAR(f.actual->diameter_mm, 20 + 2 * q(0), 1e-4);
+  EXPECT_NEAR(f.actual->position.x(), 40 + q(1), 1e-4);  // the axis at the nominal's z = 0
+  EXPECT_NEAR(f.actual->position.y(), 50 + q(2), 1e-4);
+  EXPECT_NEAR(f.actual->direction.y() / f.actual->direction.z(), q(4), 1e-5);
+  EXPECT_NEAR(f.fit->form_mm, e.maxCoeff() - e.minCoeff(), 1e-4);
+  std::printf("helix into cylinder: form %.5f mm (linearised %.5f), tilt %.2e (linearised %.2e)\n", f.fit->form_mm,
+              e.maxCoeff() - e.minCoeff(), f.actual->direction.y() / f.actual->direction.z(), q(4));
+}
+
 TEST(Scanning, CompileErrorsAndWarningsArePositioned) {
   const auto identity = [](const Vec3& q) { return q; };
   const auto diag = [&](const std::string& body) { return run(body, identity)->diagnostics; };
