@@ -964,10 +964,10 @@ class UnitCompiler {
     emit(std::move(in));
   }
 
-  // SCNSET/DIST|CHORD|ACCEL|DEFLEC,value | SCNSET/LAW,VC1|VC1P|VC2 [, ...]
+  // SCNSET/DRAG|DIST|CHORD|ACCEL|DEFLEC,value | SCNSET/LAW,VC1|VC1P|VC2 [, ...]
   void scnset(const grammar::Statement& s) {
-    static const std::set<std::string> values = {"DIST", "CHORD", "ACCEL", "DEFLEC"};
-    if (!expect_params(s, 2, "a scan setting (DIST, CHORD, ACCEL, DEFLEC, LAW) and its value")) return;
+    static const std::set<std::string> values = {"DIST", "DRAG", "CHORD", "ACCEL", "DEFLEC"};
+    if (!expect_params(s, 2, "a scan setting (DRAG, DIST, CHORD, ACCEL, DEFLEC, LAW) and its value")) return;
     for (std::size_t i = 0; i < s.params.size(); i += 2) {
       const auto& w = s.params[i];
       if (!is_word(w) || (!values.count(w.text) && w.text != "LAW")) {
@@ -976,7 +976,7 @@ class UnitCompiler {
           emit(make(Op::Nop, s, "SCNSET"));
           return;
         }
-        return error(w.span, "sema.bad-setting", "expected DIST, CHORD, ACCEL, DEFLEC or LAW");
+        return error(w.span, "sema.bad-setting", "expected DRAG, DIST, CHORD, ACCEL, DEFLEC or LAW");
       }
       if (i + 1 >= s.params.size()) return error(w.span, "sema.missing-parameter", fmt::format("expected a value after {}", w.text));
       auto in = make(Op::ScanSet, s);

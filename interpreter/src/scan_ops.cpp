@@ -65,7 +65,7 @@ ExecStatus Interpreter::execute_scan(const ir::Instruction& in) {
       }
       const double v = nums[0];
       if (!(v > 0)) return fail(in.span, "the SCNSET/" + w + " value must be positive");
-      if (w == "DIST") scan.sample_spacing_mm = v * len;
+      if (w == "DIST" || w == "DRAG") scan.sample_spacing_mm = v * len;  // DRAG: contact scanning, point spacing
       else if (w == "CHORD") scan.chord_tolerance_mm = v * len;
       else if (w == "ACCEL") scan.centripetal_accel_mm_s2 = v * len;
       else if (w == "DEFLEC") scan.reference_deflection_mm = v * len;

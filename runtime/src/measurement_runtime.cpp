@@ -305,6 +305,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     commands.push_back({0, p});
     spans.push_back(span);
   };
+  std::optional<MeasStep> scan_start;  // SCNMOD/ON: a PTMEAS pair is the start and end of a scan
   if (has_points || block.steps.size() > 0) {
     for (const auto& step : block.steps) {
       const Vec3 p = m_alignment.to_machine_point(step.point);
@@ -321,10 +322,25 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       } else {
         const Vec3 n = step.normal ? m_alignment.to_machine_vector(*step.normal) : nominal_normal_at(feature.nominal, p);
         if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
-        ptmeas(p, n, step.span);
+        if (!m_scan.scan_mode) {
+          ptmeas(p, n, step.span);
+        } else if (!scan_start) {
+          scan_start = step;
+        } else {
+          auto contour = nominal_contour_between(feature.nominal, m_alignment.to_machine_point(scan_start->point), p,
+                                                 n.normalized(), 0.05);
+          if (!contour) return program_error(step.span, contour.error());
+          auto scan = scan_command(*contour, step.span);
+          if (!scan) return tl::unexpected(scan.error());
+          commands.push_back({0, std::move(*scan)});
+          spans.push_back(step.span);
+          scan_start.reset();
+        }
       }
     }
   }
+  if (scan_start)
+    return program_error(scan_start->span, "in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: this one has no end");
   if (!has_points && m_scan.scan_mode && m_mode != Mode::Man) {
     // SCNMOD/ON: scan the nominal feature instead of touching points.
     const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());

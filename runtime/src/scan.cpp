@@ -78,6 +78,40 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, 
   }
 }
 
+tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geometry& g, const Vec3& start, const Vec3& end,
+                                                                     const Vec3& normal, double step_mm) {
+  const Vec3 axis = g.direction.normalized();
+  switch (g.type) {
+    case FeatureType::Circle:
+    case FeatureType::Arc:
+    case FeatureType::Cylinder: {
+      const Vec3 a = start - g.position, b = end - g.position;
+      const double ha = a.dot(axis), hb = b.dot(axis);
+      const Vec3 ra = a - ha * axis, rb = b - hb * axis;
+      if (ra.norm() < 1e-9 || rb.norm() < 1e-9) return tl::unexpected(std::string("a scan's start or end lies on the feature's axis"));
+      double sweep = std::atan2(ra.cross(rb).dot(axis), ra.dot(rb)) * 180 / pi;
+      if (sweep <= 1e-9) sweep += 360;  // counterclockwise; the same point twice is a full turn
+      geometry::ArcSpec arc;
+      arc.centre = g.position + ha * axis;
+      arc.axis = axis;
+      arc.radius_mm = g.diameter_mm / 2;
+      arc.reference = ra.normalized();
+      arc.sweep_deg = sweep;
+      arc.inner = g.side != Side::Outer;
+      arc.pitch_mm = (hb - ha) * 360.0 / sweep;
+      return geometry::arc_contour(arc, step_mm);
+    }
+    case FeatureType::Line:
+    case FeatureType::Plane:
+      if ((end - start).norm() < 1e-9) return tl::unexpected(std::string("a scan's start and end are the same point"));
+      return geometry::line_contour(start, end, normal, step_mm);
+    default:
+      return tl::unexpected(fmt::format("scan mode with PTMEAS scans CIRCLE, ARC, CYLNDR, LINE and PLANE features; scan a {} "
+                                        "along a PATH with PAMEAS",
+                                        dmis_word(g.type)));
+  }
+}
+
 Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
   // Given in the current frame: stored in machine coordinates like feature nominals.
   path.point = m_alignment.to_machine_point(path.point);

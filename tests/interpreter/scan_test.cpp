@@ -181,7 +181,11 @@ TEST(Scanning, ScnmodScansACircleByItsNominalAndFitsTheHiddenForm) {
 
 // Independent expectations: peak-to-valley of least-squares residuals on a dense uniform grid.
 // Circle: algebraic (Kasa) fit in the plane, x^2 + y^2 + D x + E y + F = 0.
-double circle_form(const std::vector<Vec2>& p) {
+struct Kasa {
+  Vec2 centre;
+  double radius_mm, form_mm;
+};
+Kasa kasa(const std::vector<Vec2>& p) {
   Eigen::MatrixXd a(static_cast<Eigen::Index>(p.size()), 3);
   Eigen::VectorXd b(static_cast<Eigen::Index>(p.size()));
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -197,8 +201,9 @@ double circle_form(const std::vector<Vec2>& p) {
     lo = std::min(lo, (q - centre).norm() - radius);
     hi = std::max(hi, (q - centre).norm() - radius);
   }
-  return hi - lo;
+  return {centre, radius, hi - lo};
 }
+double circle_form(const std::vector<Vec2>& p) { return kasa(p).form_mm; }
 // Line z(x): linear regression.
 double line_form(const std::vector<Vec2>& p) {
   double sx = 0, sz = 0, sxx = 0, sxz = 0;
@@ -392,6 +397,52 @@ TEST(Scanning, HelicalPathIntoACylinder) {
   EXPECT_NEAR(f.fit->form_mm, e.maxCoeff() - e.minCoeff(), 1e-4);
   std::printf("helix into cylinder: form %.5f mm (linearised %.5f), tilt %.2e (linearised %.2e)\n", f.fit->form_mm,
               e.maxCoeff() - e.minCoeff(), f.actual->direction.y() / f.actual->direction.z(), q(4));
+}
+
+TEST(Scanning, ScnmodWithPtmeasPairsScansFromStartToEnd) {
+  // The RationalDMIS form: in scan mode two PTMEAS are the start and end of a scan (MEAS's count
+  // is the number of PTMEAS); here 0 -> 180 degrees, then 90 -> 270, around a 20 mm bore.
+  const Vec3 c(-20.5, 35.5, 107.5);
+  auto r = run("SCNMOD/ON\nSCNSET/DRAG, .1\n"
+               "F(CIR_11) = FEAT/CIRCLE, INNER, CART, -20.5, 35.5, 107.5, 0.0, 0.0, 1.0, 20\n"
+               "MEAS/CIRCLE, F(CIR_11), 4\n"
+               "PTMEAS/CART, -10.5, 35.5, 107.5, -1, 0, 0\nPTMEAS/CART, -30.5, 35.5, 107.5, 1, 0, 0\n"
+               "GOTO/-20.5, 35.5, 107.5\n"
+               "PTMEAS/CART, -20.5, 45.5, 107.5, 0, -1, 0\nPTMEAS/CART, -20.5, 25.5, 107.5, 0, 1, 0\nENDMES\n",
+               lobed_bore(c, Vec3(0.01, 0.005, 0), 0.002, 2.0));
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 2u);
+  const auto angle = [&](const Vec3& p) { return std::atan2(p.y() - c.y(), p.x() - c.x()) * 180 / pi; };
+  const auto& first = r->machine->scans[0].path;
+  const auto& second = r->machine->scans[1].path;
+  EXPECT_NEAR(angle(first.segments.front().start()), 0, 1e-9);
+  EXPECT_NEAR(std::abs(angle(first.segments.back().end())), 180, 1e-9);
+  EXPECT_GT(angle(first.segments.front().point(1.0)), 0);  // counterclockwise
+  EXPECT_NEAR(angle(second.segments.front().start()), 90, 1e-9);
+  EXPECT_NEAR(angle(second.segments.back().end()), -90, 1e-9);
+  EXPECT_EQ(r->machine->scans[0].sample_spacing_mm, 0.1);
+  const auto& f = r->runtime->features().at("CIR_11");
+  ASSERT_TRUE(f.actual && f.fit);
+  // Independent expectation: the truth sampled like the two scans (90..180 degrees twice), fitted.
+  std::vector<Vec2> truth;
+  for (double from : {0.0, 90.0})
+    for (int i = 0; i <= 5000; ++i) {
+      const double t = (from + 180.0 * i / 5000) * pi / 180;
+      const Vec2 u(std::cos(t), std::sin(t));
+      truth.push_back((10 + 0.002 * std::cos(3 * t) + 0.01 * u.x() + 0.005 * u.y()) * u);
+    }
+  const Kasa want = kasa(truth);
+  EXPECT_NEAR(f.actual->diameter_mm, 2 * want.radius_mm, 1e-4);
+  EXPECT_NEAR(f.actual->position.x(), c.x() + want.centre.x(), 1e-4);
+  EXPECT_NEAR(f.actual->position.y(), c.y() + want.centre.y(), 1e-4);
+  EXPECT_NEAR(f.fit->form_mm, want.form_mm, 1e-4);
+  // An odd PTMEAS in scan mode has no end: a positioned error.
+  auto odd = run("SCNMOD/ON\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\nMEAS/CIRCLE, F(B), 3\n"
+                 "PTMEAS/CART, 10, 0, 0\nPTMEAS/CART, -10, 0, 0\nPTMEAS/CART, 0, 10, 0\nENDMES\n",
+                 [](const Vec3& q) { return q; });
+  EXPECT_EQ(odd->status, ExecStatus::Error);
+  EXPECT_NE(odd->diagnostics.find("scan.dmi:10:1: error: in scan mode (SCNMOD/ON) PTMEAS come in pairs"), std::string::npos)
+      << odd->diagnostics;
 }
 
 TEST(Scanning, CompileErrorsAndWarningsArePositioned) {

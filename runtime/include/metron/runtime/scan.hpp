@@ -62,4 +62,11 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& nom
                                                              double depth_mm, const Vec3& up, const Vec3& arc_reference,
                                                              double step_mm);
 
+/// SCNMOD/ON with PTMEAS: the scan of a nominal feature from `start` to `end` (points near its
+/// surface, MCS). CIRCLE, ARC, CYLNDR: around the axis counterclockwise from start to end (rising
+/// or falling along the axis with them, a helix); LINE, PLANE: the straight line from start to end
+/// on the surface with normal `normal`. Error for other types.
+tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geometry& nominal, const Vec3& start,
+                                                                     const Vec3& end, const Vec3& normal, double step_mm);
+
 }  // namespace metron::runtime
