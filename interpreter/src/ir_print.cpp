@@ -44,6 +44,10 @@ const char* to_string(Op op) {
     case Op::DeviceOpen: return "DEVICE_OPEN";
     case Op::DeviceClose: return "DEVICE_CLOSE";
     case Op::JumpLabel: return "LABEL";
+    case Op::PathDef: return "PATH_DEF";
+    case Op::ScanMode: return "SCAN_MODE";
+    case Op::ScanSet: return "SCAN_SET";
+    case Op::PaMeas: return "PAMEAS";
   }
   return "?";
 }

@@ -294,7 +294,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   std::vector<machine::Command> commands;
   std::vector<Span> spans;
   const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
-                                      [](const MeasStep& s) { return s.kind == MeasStep::Kind::PtMeas; });
+                                      [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
   const auto ptmeas = [&](const Vec3& nominal, const Vec3& normal, Span span) {
     machine::PtMeas p;
     p.nominal_mm = nominal;
@@ -305,20 +305,55 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     commands.push_back({0, p});
     spans.push_back(span);
   };
+  std::optional<MeasStep> scan_start;  // SCNMOD/ON: a PTMEAS pair is the start and end of a scan
   if (has_points || block.steps.size() > 0) {
     for (const auto& step : block.steps) {
       const Vec3 p = m_alignment.to_machine_point(step.point);
       if (step.kind == MeasStep::Kind::GoTo) {
         commands.push_back({0, machine::GoTo{p, {}}});
         spans.push_back(step.span);
+      } else if (step.kind == MeasStep::Kind::Scan) {
+        auto path = m_paths.find(step.path);
+        if (path == m_paths.end()) return program_error(step.span, fmt::format("path P({}) is not defined", step.path));
+        auto scan = scan_command(path_contour(path->second, 0.05), step.span);
+        if (!scan) return tl::unexpected(scan.error());
+        commands.push_back({0, std::move(*scan)});
+        spans.push_back(step.span);
       } else {
         const Vec3 n = step.normal ? m_alignment.to_machine_vector(*step.normal) : nominal_normal_at(feature.nominal, p);
         if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
-        ptmeas(p, n, step.span);
+        if (!m_scan.scan_mode) {
+          ptmeas(p, n, step.span);
+        } else if (!scan_start) {
+          scan_start = step;
+        } else {
+          auto contour = nominal_contour_between(feature.nominal, m_alignment.to_machine_point(scan_start->point), p,
+                                                 n.normalized(), 0.05);
+          if (!contour) return program_error(step.span, contour.error());
+          auto scan = scan_command(*contour, step.span);
+          if (!scan) return tl::unexpected(scan.error());
+          commands.push_back({0, std::move(*scan)});
+          spans.push_back(step.span);
+          scan_start.reset();
+        }
       }
     }
   }
-  if (!has_points) {
+  if (scan_start)
+    return program_error(scan_start->span, "in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: this one has no end");
+  if (!has_points && m_scan.scan_mode && m_mode != Mode::Man) {
+    // SCNMOD/ON: scan the nominal feature instead of touching points.
+    const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
+    // Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
+    const bool along_x = std::abs(m_alignment.to_part_vector(feature.nominal.direction).normalized().x()) >= 0.99;
+    const Vec3 reference = m_alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
+    auto contour = nominal_contour(feature.nominal, m_machine.state().position_mm, m_probe.depth_mm, up, reference, 0.05);
+    if (!contour) return program_error(block.span, contour.error());
+    auto scan = scan_command(*contour, block.span);
+    if (!scan) return tl::unexpected(scan.error());
+    commands.push_back({0, std::move(*scan)});
+    spans.push_back(block.span);
+  } else if (!has_points) {
     if (m_mode == Mode::Man)
       return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");
     const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
@@ -342,7 +377,18 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     if (r.hit) {
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
       points.push_back({r.hit->centre_mm, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
-                        i < spans.size() ? spans[i] : block.span});
+                        i < spans.size() ? spans[i] : block.span, false});
+    }
+  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
+  // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
+  const auto tool = m_machine.state().tool;
+  for (const auto& r : execution.responses)
+    for (const auto& sample : r.scan) {
+      const double e = sample.deflection_mm.norm();
+      if (!(e > 0)) continue;  // not in contact
+      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->nominal_radius_mm : 0.0,
+                        sample.time_s, i < spans.size() ? spans[i] : block.span, true});
     }
   if (execution.error) {
     // Keep every point obtained before the fault; the feature gets no actual.
@@ -353,7 +399,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   feature.points = points;
   feature.measured_at = block.span;
   feature.source = ActualSource::Measured;
-  if (block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
+  const bool scanned = std::any_of(points.begin(), points.end(), [](const MeasuredPoint& p) { return p.scanned; });
+  if (!scanned && block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
     warn(block.span, fmt::format("MEAS declared {} points but {} were measured", block.point_count, points.size()));
   }
   auto fitted = fit_actual(feature.nominal, points);

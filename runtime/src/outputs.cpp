@@ -205,6 +205,7 @@ json feature_json(const Feature& f) {
                       {"approach", vector(p.normal)},
                       {"ball_radius_mm", number(p.ball_radius_mm)},
                       {"time_s", number(p.time_s)},
+                      {"scanned", p.scanned},
                       {"residual_mm", residuals ? number(f.fit->residuals_mm[i]) : json(nullptr)}});
   }
   return {{"label", f.label},

@@ -13,6 +13,7 @@
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/feature.hpp"
 #include "metron/runtime/run_record.hpp"
+#include "metron/runtime/scan.hpp"
 #include "metron/runtime/runtime_error.hpp"
 #include "metron/runtime/tolerance.hpp"
 #include "metron/stdlib/source.hpp"
@@ -47,10 +48,11 @@ struct FeatureRef {
 
 /// One step of a MEAS block, in current-frame coordinates (already in mm).
 struct MeasStep {
-  enum class Kind { GoTo, PtMeas } kind = Kind::PtMeas;
+  enum class Kind { GoTo, PtMeas, Scan } kind = Kind::PtMeas;
   Vec3 point = Vec3::Zero();
   std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
   Span span;
+  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label
 };
 
 /// MEAS/type,F(label),n ... ENDMES.
@@ -131,6 +133,12 @@ class MeasurementRuntime {
   [[nodiscard]] Vec3 position_current() const;
   Result<void> measure(const MeasBlock& block);
 
+  // Scanning (runtime/src/scan.cpp, docs/scanning-paths.md).
+  /// P(label)=PATH/...: points and vectors in the current frame.
+  Result<void> define_path(PathDefinition path_current, Span span);
+  [[nodiscard]] const std::map<std::string, PathDefinition>& paths() const { return m_paths; }
+  ScanSettings& scan_settings() { return m_scan; }
+
   // Alignments and datums.
   [[nodiscard]] const Alignment& alignment() const { return m_alignment; }
   Result<void> define_datum(const FeatureRef& feature, const std::string& datum, Span span);
@@ -165,6 +173,8 @@ class MeasurementRuntime {
   Result<std::vector<machine::Response>> run_commands(std::vector<machine::Command> commands,
                                                       const std::vector<Span>& spans);
   Result<void> ensure_tool(Span span);
+  /// The machine command that scans `contour` (MCS) with the current tool and scan settings.
+  Result<machine::ScanPath> scan_command(const geometry::Contour& contour, Span span);
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);
@@ -189,6 +199,9 @@ class MeasurementRuntime {
   std::map<std::string, machine::ToolInfo> m_tools;  ///< defined on the machine
   std::string m_active_sensor;
   ProbeSettings m_probe;
+  ScanSettings m_scan;
+  std::map<std::string, PathDefinition> m_paths;
+  std::map<std::string, geometry::Mesh> m_models;  ///< CAD models loaded by PATH/SECTION, by path
   Mode m_mode = Mode::Auto;
   struct Device {
     std::string path;
