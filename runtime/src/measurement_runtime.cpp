@@ -383,6 +383,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
   const auto tool = m_machine.state().tool;
   for (const auto& r : execution.responses)
+    for (const auto& line : r.scan_log) m_record.machine_log.push_back(feature.label + ": " + line);
+  for (const auto& r : execution.responses)
     for (const auto& sample : r.scan) {
       const double e = sample.deflection_mm.norm();
       if (!(e > 0)) continue;  // not in contact

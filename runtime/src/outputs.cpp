@@ -399,6 +399,7 @@ nlohmann::json results_json(const RunRecord& record) {
           {"status", status_word(record.status)},
           {"simulated_time_s", number(record.simulated_time_s)},
           {"diagnostics", record.diagnostics},
+          {"machine_log", record.machine_log},
           {"features", std::move(features)},
           {"outputs", std::move(outputs)},
           {"tolerances", std::move(tolerances)}};
