@@ -59,6 +59,7 @@ enum class Op {
   DeviceOpen,   ///< labels: DID; words: FDATA|DIRECT, format, access
   DeviceClose,  ///< labels: DID
   JumpLabel,    ///< `(name)`: a JUMPTO target (no effect)
+  System,       ///< CALL/EXTERN,SYS,'command': `name` = the command text (docs/touch-trigger.md)
 };
 
 /// Upper-case mnemonic of an operation (for --emit-ir).
