@@ -269,7 +269,9 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
     p.nominal_mm = surface;
     p.normal = n;
     p.approach_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + 0.3;
-    p.search_mm = 1.0;
+    // The probing move ends at rest at the search end: the latch must come before it slows
+    // down, i.e. within search - D1 of the surface (the stop distance is below the over-travel).
+    p.search_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + c.over_travel_mm + 0.5;
     p.retract_mm = 0.5;
     p.speed_mm_s = feed;
     std::vector<double> x;
@@ -303,17 +305,28 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
     const auto lowest = std::min_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
     const auto highest = std::max_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
     const double nn = static_cast<double>(highest->count);
-    const double noise_range = 6 * lowest->stddev_mm;
-    const double period = std::max(0.0, highest->range_mm - noise_range) / highest->feed_mm_s * (nn + 1) / (nn - 1);
-    // A scanned input has a period of a millisecond or more; a latched one jitters by microseconds.
-    r.scanned = period > 2e-4;
+    // The range of N uniform draws over a width W is W (N - 1) / (N + 1) on average; at the
+    // highest feed the jitter's width F * period dominates the probe's own scatter.
+    // Averaged over the faster feeds (each range scatters by about 3 % at 60 touches).
+    double period = 0;
+    int used = 0;
+    for (const auto& t : s)
+      if (t.feed_mm_s >= 0.25 * highest->feed_mm_s) {
+        const double k = static_cast<double>(t.count);
+        period += t.range_mm / t.feed_mm_s * (k + 1) / (k - 1);
+        ++used;
+      }
+    period /= std::max(1, used);
+    (void)nn;
+    // Jitter class: a scanned input spreads the points in proportion to the feed (the range
+    // grows with feed) by a period of a millisecond or more; a latched one by microseconds
+    // (the range stays the probe's own scatter at every feed).
+    const bool grows = highest->range_mm > 1.5 * lowest->range_mm;
+    r.scanned = grows && period > 2e-4;
     r.jitter_s = r.scanned ? period : 0;
-    r.noise_mm = r.scanned ? lowest->stddev_mm : std::min(lowest->stddev_mm, highest->stddev_mm);
-    if (r.scanned) {
-      // Remove the jitter's share from the lowest feed's scatter.
-      const double v = lowest->stddev_mm * lowest->stddev_mm - std::pow(lowest->feed_mm_s * period, 2) / 12;
-      r.noise_mm = std::sqrt(std::max(0.0, v));
-    }
+    // The probe's own scatter: the slowest feed's, less the jitter's share there.
+    const double v = lowest->stddev_mm * lowest->stddev_mm - std::pow(lowest->feed_mm_s * r.jitter_s, 2) / 12;
+    r.noise_mm = std::sqrt(std::max(0.0, v));
     r.delay_s = std::max(0.0, -slope - r.jitter_s / 2);
     // Nominal - effective radius = pre-travel + F_q * (delay + jitter / 2) (+ the ball's radius error).
     c.pre_travel_mm = std::max(0.0, st.tool->nominal_radius_mm - st.tool->effective_radius_mm -
@@ -328,7 +341,7 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   estimate();
   // Faster feeds, safely inside the preliminary limit, sharpen the delay and jitter estimates.
   const double prelim = c.max_feed_mm_s(-n);
-  for (double share : {0.3, 0.6}) {
+  for (double share : {0.3, 0.6, 0.9}) {
     const double feed = share * prelim;
     if (feed <= 5.5) continue;
     say(fmt::format("repeated touches at {:.1f} mm/s ...", feed));
@@ -343,7 +356,7 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   for (int i = 0; i < 3; ++i) c.max_probe_feed_mm_s = std::min(c.max_probe_feed_mm_s, c.max_feed_mm_s(Vec3::Unit(i)));
   // The accurate feed: the spread of repeated touches within the threshold (SEEDS.md 3).
   const double accurate = c.response.jitter_s > 0
-                              ? std::max(0.0, c.threshold_mm - 6 * c.response.noise_mm) / c.response.jitter_s
+                              ? std::max(c.threshold_mm / 2, c.threshold_mm - 6 * c.response.noise_mm) / c.response.jitter_s
                               : c.max_probe_feed_mm_s;
   c.first_feed_mm_s = c.max_probe_feed_mm_s;
   // SEEDS.md 3: one-touch cycles when the spread at the fast feed is below the threshold.

@@ -64,7 +64,7 @@ struct CharacterisationSettings {
   double repeatability_threshold_mm = 0.010;  ///< one-touch below this spread (SEEDS.md 3: 10 um)
   double nominal_tolerance_mm = 0;    ///< uncertainty of nominal surface positions (standoff term)
   double over_travel_margin = 0.8;    ///< the stop distance may use this share of the over-travel
-  int touches_per_feed = 25;          ///< repeated touches per feed
+  int touches_per_feed = 60;          ///< repeated touches per feed
   int dither = 10;                    ///< timed moves per feed, lengths spread over one cycle
   std::vector<double> timing_feeds_mm_s{2, 5, 10, 20, 50, 100, 150};  ///< feeds of the timed moves
 };
