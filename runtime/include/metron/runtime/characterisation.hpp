@@ -44,6 +44,7 @@ struct TouchSample {
   int count = 0;                      ///< touches
   double mean_mm = 0;                 ///< mean latched position along the probing direction
   double range_mm = 0;                ///< max - min of the latched positions
+  double midrange_mm = 0;             ///< (max + min) / 2: for a uniform latency far steadier than the mean
   double stddev_mm = 0;               ///< sample standard deviation
 };
 
