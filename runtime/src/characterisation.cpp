@@ -157,8 +157,10 @@ TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double
     return p;
   }
   p.first_feed_mm_s = std::min(first_feed_mm_s, max_feed_mm_s(u));
-  // The first touch only finds the surface: it starts just outside the nominal's tolerance.
-  p.approach_mm = approach_mm.value_or(nominal_tolerance_mm + 0.1);
+  // The first touch finds the surface: at its feed before the earliest possible contact, since
+  // the maximum protected feed assumes braking from constant speed (a trigger while still
+  // accelerating brakes later: the acceleration must ramp down first).
+  p.approach_mm = approach_mm.value_or(acceleration_distance_mm(u, p.first_feed_mm_s) + nominal_tolerance_mm);
   p.standoff_mm = standoff_mm(u, p.feed_mm_s, p.first_feed_mm_s, 0);
   // From the first latched centre back to the surface: pre-travel and the constant-delay part
   // of the first touch's dynamic zone (its jitter part is D2), then the standoff.

@@ -171,3 +171,65 @@ TEST(Characterisation, MaximumFeedIsSafeOnTheMachine) {
 }
 
 }  // namespace
+
+namespace {
+
+// Issue 4, figure 2: with the characterised standoff the point is within 0.5 um of a
+// constant-speed measurement, one-touch and two-touch (latched input: single points show the
+// bias without jitter), while a too-small standoff is off by tens of um.
+TEST(Characterisation, OptimalStandoffRemovesTheAccelerationZoneError) {
+  machine::World w = world_file("touch_const_time.json");
+  w.machine.skip = machine::SkipInput{};
+  w.probe.repeatability_mm = 0;
+  MachineCharacterisation c;
+  {
+    machine::VirtualCmm probe_cmm(w, 1);
+    auto got = characterise(probe_cmm, CharacterisationSettings{});
+    ASSERT_TRUE(got) << got.error();
+    c = *got;
+  }
+  machine::VirtualCmm cmm(w, 2);
+  std::uint64_t tag = 1;
+  const auto exec = [&](decltype(machine::Command::body) b) {
+    cmm.submit({tag++, std::move(b)});
+    return cmm.execute().front();
+  };
+  exec(machine::DefineTool{"T", 4.0, -Vec3::UnitZ(), 50});
+  exec(machine::SelectTool{"T"});
+  const Vec3 nominal(380, 250, 40), n = Vec3::UnitZ();
+  const auto hit = [&](const TouchPlan& plan) {
+    exec(machine::GoTo{nominal + Vec3(0, 0, 12), {}});
+    machine::PtMeas p;
+    p.nominal_mm = nominal;
+    p.normal = n;
+    p.approach_mm = plan.approach_mm;
+    p.search_mm = 5;
+    p.speed_mm_s = plan.feed_mm_s;
+    if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+    const auto r = exec(p);
+    EXPECT_TRUE(r.hit) << (r.fault ? r.fault->message : "");
+    return r.hit ? r.hit->centre_mm.z() : 0.0;
+  };
+  for (double feed : {2.0, 5.0, 15.0, c.max_probe_feed_mm_s}) {
+    TouchPlan constant;
+    constant.feed_mm_s = feed;
+    constant.approach_mm = 4 * c.acceleration_distance_mm(-n, feed) + 1;
+    const double reference = hit(constant);
+    TouchPlan one = c.plan(n, feed, std::nullopt);
+    one.two_touch = false;
+    one.approach_mm = c.standoff_mm(-n, feed, 0, 0);
+    EXPECT_NEAR(hit(one), reference, 0.5e-3) << "one-touch at " << feed;
+    TouchPlan too_small = one;
+    too_small.approach_mm = 0.2 * c.acceleration_distance_mm(-n, feed);
+    EXPECT_GT(hit(too_small) - reference, 2e-3) << "feed " << feed;
+    if (feed < c.max_probe_feed_mm_s) {
+      MachineCharacterisation two = c;
+      two.one_touch = false;
+      TouchPlan p2 = two.plan(n, feed, std::nullopt);
+      ASSERT_TRUE(p2.two_touch);
+      EXPECT_NEAR(hit(p2), reference, 0.5e-3) << "two-touch at " << feed;
+    }
+  }
+}
+
+}  // namespace
