@@ -25,6 +25,9 @@ struct CharacteriseArgs {
   double threshold_um = 10;
   double nominal_tolerance_mm = 0.2;
   bool truth = false;
+  bool blend = false;
+  bool optimise = false;
+  bool fastest = false;
 };
 
 // The hidden truth next to what was recovered: for checking the method only (the
@@ -80,6 +83,9 @@ int characterise_cmd(const CharacteriseArgs& args) {
   runtime::CharacterisationSettings settings;
   settings.repeatability_threshold_mm = args.threshold_um / 1000;
   settings.nominal_tolerance_mm = args.nominal_tolerance_mm;
+  settings.blend = args.blend;
+  settings.optimise_first_feed = args.optimise;
+  settings.fastest = args.fastest;
   auto c = runtime::characterise(*machine, settings, [](const std::string& line) { std::cerr << line << "\n"; });
   if (!c) {
     std::cerr << "error: characterisation failed: " << c.error() << "\n";
@@ -114,6 +120,13 @@ void add_characterise_command(CLI::App& app, std::vector<Command>& commands) {
   cmd->add_option("--nominal-tolerance", args->nominal_tolerance_mm,
                   "uncertainty of nominal surface positions (mm), the standoff's tolerance term")
       ->default_val(0.2);
+  cmd->add_flag("--blend", args->blend,
+                 "beyond the seed: PTMEAS blends the approach into the probing feed (one touch, no standoff stop)");
+  cmd->add_flag("--optimise-first-feed", args->optimise,
+                 "beyond the seed: choose the two-touch first-touch feed by timed trial cycles");
+  cmd->add_flag("--fastest", args->fastest,
+                "beyond the seed: use the fastest cycle (one-touch, two-touch, blended) that meets the threshold, "
+                "chosen by timed trial cycles");
   cmd->add_flag("--truth", args->truth, "also print the world's hidden truth next to the recovered values");
   commands.push_back({cmd, [args] { return characterise_cmd(*args); }});
 }

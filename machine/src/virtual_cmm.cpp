@@ -228,8 +228,11 @@ struct VirtualCmm::Impl {
   // One probing move from rest at `start` along unit u over `len` at `feed` until the trigger:
   // the controller latches the axes when it acts on the trigger (SEEDS.md 3, C->D), brakes, and
   // the probe's over-travel switch is checked.
-  tl::expected<Touch, Fault> touch(const Vec3& start, const Vec3& u, double len, double feed, double search_mm) {
-    const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(u, feed));
+  tl::expected<Touch, Fault> touch(const Vec3& start, const Vec3& u, double len, double feed, double search_mm,
+                                   std::optional<double> reach_mm = std::nullopt) {
+    const MotionProfile profile =
+        reach_mm ? MotionProfile::reach_feed(*reach_mm, len, std::min(feed, spec.max_speed_mm_s), limits(u, positioning_feed))
+                 : MotionProfile::rest_to_rest(len, limits(u, feed));
     const double t_end = profile.duration_s();
     const std::int64_t n_cycles = cycles_for(t_end), c0 = cycle;
     const double t0_abs = now();
@@ -311,8 +314,11 @@ struct VirtualCmm::Impl {
     const double len = m.approach_mm + m.search_mm;
     Vec3 latched;
     double latch_abs = 0;
+    if (m.blend_mm && (m.two_touch || !(*m.blend_mm >= 0) || *m.blend_mm > m.approach_mm))
+      return fault(FaultKind::BadCommand, "a blended ptmeas needs 0 <= blend <= approach and one touch", position, now());
     if (!m.two_touch) {
-      auto t = touch(start, u, len, feed, m.search_mm);
+      auto t = touch(start, u, len, feed, m.search_mm,
+                     m.blend_mm ? std::optional<double>(m.approach_mm - *m.blend_mm) : std::nullopt);
       if (!t) return tl::unexpected(t.error());
       latched = t->latched_mm;
       latch_abs = t->latch_time_s;

@@ -141,6 +141,10 @@ double MachineCharacterisation::standoff_mm(const Vec3& direction, double slow_m
   return d1 + d2 + d3 + tolerance_mm;
 }
 
+double MachineCharacterisation::qualified_offset_mm() const {
+  return pre_travel_mm + response.qualification_feed_mm_s * (response.delay_s + response.jitter_s / 2);
+}
+
 double MachineCharacterisation::dynamic_correction_mm(double feed_mm_s, double qualification_feed_mm_s) const {
   return (feed_mm_s - qualification_feed_mm_s) * (response.delay_s + response.jitter_s / 2);
 }
@@ -149,11 +153,18 @@ TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double
                                         std::optional<double> approach_mm) const {
   const Vec3 u = -normal.normalized();
   TouchPlan p;
-  p.two_touch = !one_touch;
+  p.two_touch = !one_touch && !blend;
   p.feed_mm_s = feed_mm_s.value_or(measuring_feed_mm_s);
+  if (blend) {
+    // No stop at a standoff: the approach move itself slows to the feed before the band in
+    // which the surface may be (the nominal tolerance), plus the dynamic zone D3.
+    p.blend_mm = nominal_tolerance_mm + p.feed_mm_s * (response.delay_s + response.jitter_s) + qualified_offset_mm();
+    p.approach_mm = std::max(approach_mm.value_or(2.0), *p.blend_mm);
+    return p;
+  }
   if (!p.two_touch) {
     // One touch from rest: at constant speed before the earliest possible contact.
-    p.approach_mm = approach_mm.value_or(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm));
+    p.approach_mm = approach_mm.value_or(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm) + qualified_offset_mm());
     return p;
   }
   p.first_feed_mm_s = std::min(first_feed_mm_s, max_feed_mm_s(u));
@@ -239,6 +250,7 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   c.threshold_mm = settings.repeatability_threshold_mm;
   c.nominal_tolerance_mm = settings.nominal_tolerance_mm;
   c.over_travel_margin = settings.over_travel_margin;
+  c.blend = settings.blend;
 
   // 1. Acceleration characteristic per axis from timed moves (SEEDS.md 3).
   for (int i = 0; i < 3; ++i) {
@@ -260,7 +272,8 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   const machine::MachineState st = machine.state();
   if (!st.last_hit || !st.tool) return tl::unexpected(std::string("qualification gave no point"));
   const Vec3 n = st.last_hit->normal.normalized();
-  const Vec3 surface = st.last_hit->surface_mm();
+  // With the qualified (effective) radius the latched centre gives the surface itself.
+  const Vec3 surface = st.last_hit->centre_mm - st.tool->effective_radius_mm * n;
   c.over_travel_mm = st.tool->rated_over_travel_mm;
   c.response.qualification_feed_mm_s = st.measuring_feed_mm_s;
   if (!(c.over_travel_mm > 0)) return tl::unexpected(std::string("the probe's rated over-travel is unknown"));
@@ -361,13 +374,72 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   for (int i = 0; i < 3; ++i) c.max_probe_feed_mm_s = std::min(c.max_probe_feed_mm_s, c.max_feed_mm_s(Vec3::Unit(i)));
   // The accurate feed: the spread of repeated touches within the threshold (SEEDS.md 3).
   const double accurate = c.response.jitter_s > 0
-                              ? std::max(c.threshold_mm / 2, c.threshold_mm - 6 * c.response.noise_mm) / c.response.jitter_s
+                              ? std::sqrt(std::max(std::pow(c.threshold_mm, 2) - std::pow(6 * c.response.noise_mm, 2),
+                                                   std::pow(c.threshold_mm / 2, 2))) / c.response.jitter_s
                               : c.max_probe_feed_mm_s;
   c.first_feed_mm_s = c.max_probe_feed_mm_s;
   // SEEDS.md 3: one-touch cycles when the spread at the fast feed is below the threshold.
   c.one_touch = c.response.spread_mm(c.first_feed_mm_s) <= c.threshold_mm;
   c.measuring_feed_mm_s = std::min(accurate, c.max_probe_feed_mm_s);
   if (!(c.measuring_feed_mm_s > 0)) return tl::unexpected(std::string("no probing feed meets the threshold"));
+
+  // 5. Beyond the seed: timed trial cycles on the same point (the controller clock is a sensor).
+  // A cycle starts at rest 2 mm above the nominal and ends retracted; the nominal is off the
+  // surface by -tol, 0, +tol in turn, as the standoff's tolerance term assumes.
+  const auto trial = [&](const MachineCharacterisation& cc) -> tl::expected<double, std::string> {
+    double total = 0;
+    int count = 0;
+    for (double offset : {-1.0, 0.0, 1.0, 0.5, -0.5}) {
+      const Vec3 nominal = surface + offset * cc.nominal_tolerance_mm * n;
+      const TouchPlan plan = cc.plan(n, std::nullopt, std::nullopt);
+      auto go = run1(machine, {tag++, machine::GoTo{nominal + (st.tool->effective_radius_mm + 2.0) * n, std::nullopt}});
+      if (go.status == machine::Response::Status::Fault)
+        return tl::unexpected("trial cycle: " + fault_text(go));
+      machine::PtMeas p;
+      p.nominal_mm = nominal;
+      p.normal = n;
+      p.approach_mm = std::min(plan.approach_mm, 2.0);
+      p.search_mm = 2 * cc.nominal_tolerance_mm + c.over_travel_mm + 1;
+      p.retract_mm = 2.0;
+      p.speed_mm_s = plan.feed_mm_s;
+      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+      if (plan.blend_mm) p.blend_mm = std::min(*plan.blend_mm, p.approach_mm);
+      auto r = run1(machine, {tag++, p});
+      if (r.status == machine::Response::Status::Fault)
+        return tl::unexpected("trial cycle: " + fault_text(r));
+      total += r.end_time_s - r.start_time_s;
+      ++count;
+    }
+    return total / count;
+  };
+  if (settings.optimise_first_feed && !c.one_touch) {
+    // The first touch's feed trades its own time against D2 = feed * jitter in the standoff
+    // (and its ramp D1 in the approach): pick the fastest of a few candidates by timing.
+    double best = inf, best_feed = c.first_feed_mm_s;
+    for (int k = 1; k <= 6; ++k) {
+      MachineCharacterisation cc = c;
+      cc.first_feed_mm_s = c.measuring_feed_mm_s + (c.max_probe_feed_mm_s - c.measuring_feed_mm_s) * k / 6;
+      auto t = trial(cc);
+      if (!t) return tl::unexpected(t.error());
+      say(fmt::format("trial two-touch cycles, first touch {:.1f} mm/s: {:.4f} s", cc.first_feed_mm_s, *t));
+      if (*t < best) best = *t, best_feed = cc.first_feed_mm_s;
+    }
+    c.first_feed_mm_s = best_feed;
+  }
+  if (settings.fastest) {
+    // Controller-aware: every cycle that meets the threshold, the fastest by timing.
+    MachineCharacterisation one = c, two = c, blend = c;
+    one.one_touch = true, one.blend = false;
+    two.one_touch = false, two.blend = false;
+    blend.blend = true;
+    double best = inf;
+    for (const MachineCharacterisation* cc : {&one, &two, &blend}) {
+      auto t = trial(*cc);
+      if (!t) return tl::unexpected(t.error());
+      say(fmt::format("trial {} cycles: {:.4f} s", cc->blend ? "blended one-touch" : cc->one_touch ? "one-touch" : "two-touch", *t));
+      if (*t < best) best = *t, c.one_touch = cc->one_touch, c.blend = cc->blend;
+    }
+  }
   return c;
 }
 
@@ -409,6 +481,7 @@ json to_json(const MachineCharacterisation& c) {
       {"max_probe_feed_mm_s", c.max_probe_feed_mm_s},
       {"strategy", {{"threshold_mm", c.threshold_mm},
                     {"cycle", c.one_touch ? "one_touch" : "two_touch"},
+                    {"blend", c.blend},
                     {"measuring_feed_mm_s", c.measuring_feed_mm_s},
                     {"first_feed_mm_s", c.first_feed_mm_s},
                     {"nominal_tolerance_mm", c.nominal_tolerance_mm}}},
@@ -458,6 +531,7 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     if (cycle != "one_touch" && cycle != "two_touch")
       return tl::unexpected(std::string("/strategy/cycle: expected one_touch or two_touch"));
     c.one_touch = cycle == "one_touch";
+    c.blend = s.value("blend", false);
     c.measuring_feed_mm_s = s.at("measuring_feed_mm_s").get<double>();
     c.first_feed_mm_s = s.at("first_feed_mm_s").get<double>();
     c.nominal_tolerance_mm = s.value("nominal_tolerance_mm", 0.0);
@@ -513,8 +587,9 @@ std::string format_characterisation(const MachineCharacterisation& c) {
                    c.over_travel_mm, 100 * c.over_travel_margin);
   o << fmt::format("maximum protected probing feed: {:.1f} mm/s (stop distance {:.3f} mm along z)\n", c.max_probe_feed_mm_s,
                    c.stop_distance_mm(-Vec3::UnitZ(), c.max_probe_feed_mm_s));
-  o << fmt::format("strategy: {} (threshold {:.1f} um; spread at {:.1f} mm/s: {:.1f} um)\n",
-                   c.one_touch ? "one-touch" : "two-touch", 1e3 * c.threshold_mm, c.first_feed_mm_s,
+  o << fmt::format("strategy: {}{} (threshold {:.1f} um; spread at {:.1f} mm/s: {:.1f} um)\n",
+                   c.blend ? "blended one-touch" : c.one_touch ? "one-touch" : "two-touch",
+                   c.blend ? " (beyond the seed)" : "", 1e3 * c.threshold_mm, c.first_feed_mm_s,
                    1e3 * c.response.spread_mm(c.first_feed_mm_s));
   const Vec3 down = -Vec3::UnitZ();
   if (c.one_touch)

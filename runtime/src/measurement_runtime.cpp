@@ -352,6 +352,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       p.approach_mm = plan.approach_mm;
       p.speed_mm_s = plan.feed_mm_s;
       if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+      p.blend_mm = plan.blend_mm;
     }
     commands.push_back({0, p});
     spans.push_back(span);

@@ -22,6 +22,10 @@ using metron::interpreter::run_program;
 using metron::runtime::FeatureReport;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
+// The characterised strategy keeps the spread (range) of repeated points within 10 um: a
+// uniform spread of that width has sigma = 10 / sqrt(12) = 2.9 um per point; the features below
+// are fitted from 4..8 points, so 3 sigma of a single point bounds their errors.
+constexpr double point_sigma_mm = 0.010 / 3.4641016;
 
 fs::path out_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("metron_touch_" + std::to_string(::getpid())) / name;
@@ -73,10 +77,10 @@ TEST(Touch, CharacterisedRunMeasuresTheBlock) {
     const FeatureReport* bore = report(o.record, "BORE1");
     ASSERT_TRUE(top && bore && top->actual && bore->actual);
     // The true block: top at z = 40, BORE1 20 mm at (40, 50) (no deviations in these worlds).
-    EXPECT_NEAR(top->actual->position.z(), 40, 2e-3) << w;
-    EXPECT_NEAR(bore->actual->diameter_mm, 20, 3e-3) << w;
-    EXPECT_NEAR(bore->actual->position.x(), 40, 3e-3) << w;
-    EXPECT_NEAR(bore->actual->position.y(), 50, 3e-3) << w;
+    EXPECT_NEAR(top->actual->position.z(), 40, 2 * point_sigma_mm) << w;
+    EXPECT_NEAR(bore->actual->diameter_mm, 20, 3 * point_sigma_mm) << w;
+    EXPECT_NEAR(bore->actual->position.x(), 40, 3 * point_sigma_mm) << w;
+    EXPECT_NEAR(bore->actual->position.y(), 50, 3 * point_sigma_mm) << w;
   }
 }
 
@@ -107,7 +111,7 @@ TEST(Touch, CharacteriseFromAProgram) {
   EXPECT_FALSE(c->one_touch);
   const FeatureReport* bore = report(o.record, "BORE1");
   ASSERT_TRUE(bore && bore->actual);
-  EXPECT_NEAR(bore->actual->diameter_mm, 20, 3e-3);
+  EXPECT_NEAR(bore->actual->diameter_mm, 20, 3 * point_sigma_mm);
   // A bad system command is a warning and is skipped; a missing file is a positioned error.
   const fs::path prog = out_dir("in_program") / "load.dmi";
   std::ofstream(prog) << "DMISMN/'load', 5.0\nCALL/EXTERN, SYS, 'CHARACTERISATION nothing_here.json'\nENDFIL\n";

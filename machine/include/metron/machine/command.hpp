@@ -40,6 +40,10 @@ struct PtMeas {
     double backoff_mm = 0.5;          ///< from the first latched centre to the second touch's start
   };
   std::optional<TwoTouch> two_touch;  ///< none: a one-touch cycle
+  /// One-touch only: the probing move from the approach point speeds up toward the positioning
+  /// feed and slows to the measuring feed (zero acceleration) this far before the nominal
+  /// surface, so the cycle does not stop at a standoff (docs/touch-trigger.md).
+  std::optional<double> blend_mm;
 };
 
 /// Defines a tool (stylus) on the probe head, as DMIS SNSDEF/PROBE does.

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <array>
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
@@ -56,8 +57,11 @@ struct ResponseTime {
   double noise_mm = 0;                ///< 1-sigma trigger noise (the probe's repeatability)
   double qualification_feed_mm_s = 0; ///< feed at which the tool's effective radius was qualified
   std::vector<TouchSample> samples;   ///< the measurements
-  /// Expected spread (range) of repeated touches at a feed: feed * jitter + 6 sigma.
-  [[nodiscard]] double spread_mm(double feed_mm_s) const { return feed_mm_s * jitter_s + 6 * noise_mm; }
+  /// Expected spread (range) of repeated touches at a feed: feed * jitter and 6 sigma of the
+  /// probe's own scatter, independent, added in quadrature.
+  [[nodiscard]] double spread_mm(double feed_mm_s) const {
+    return std::hypot(feed_mm_s * jitter_s, 6 * noise_mm);
+  }
 };
 
 /// Settings of a characterisation run.
@@ -68,6 +72,9 @@ struct CharacterisationSettings {
   int touches_per_feed = 60;          ///< repeated touches per feed
   int dither = 10;                    ///< timed moves per feed, lengths spread over one cycle
   std::vector<double> timing_feeds_mm_s{2, 5, 10, 20, 50, 100, 150};  ///< feeds of the timed moves
+  bool blend = false;                 ///< beyond the seed: blended one-touch cycles (TouchPlan::blend_mm)
+  bool optimise_first_feed = false;   ///< beyond the seed: first-touch feed from timed trial cycles
+  bool fastest = false;               ///< beyond the seed: the fastest cycle meeting the threshold, by timed trials
 };
 
 /// A touch cycle chosen for one probing direction.
@@ -78,6 +85,7 @@ struct TouchPlan {
   double approach_mm = 0;             ///< start distance before the nominal surface
   double backoff_mm = 0;              ///< two-touch: from the first latched centre to the second start
   double standoff_mm = 0;             ///< two-touch: D1 + D2 + D3 from the surface found
+  std::optional<double> blend_mm;     ///< blended one touch: the feed is reached this far before the nominal
 };
 
 /// Everything a characterisation found, and the strategy derived from it.
@@ -95,6 +103,9 @@ struct MachineCharacterisation {
   bool one_touch = false;             ///< strategy (SEEDS.md 3)
   double measuring_feed_mm_s = 0;     ///< one-touch feed, or the second touch's
   double first_feed_mm_s = 0;         ///< two-touch: first-touch feed
+  /// Beyond the seed: one touch at the measuring feed whose approach blends into it, reaching it
+  /// (with zero acceleration) the nominal tolerance + D3 before the nominal surface.
+  bool blend = false;
 
   /// Ramp time along unit `direction` at `feed_mm_s` (the slowest axis involved dominates).
   [[nodiscard]] double ramp_time_s(const Vec3& direction, double feed_mm_s) const;
@@ -106,6 +117,10 @@ struct MachineCharacterisation {
   [[nodiscard]] double max_feed_mm_s(const Vec3& direction) const;
   /// SEEDS.md 3: optimal standoff D1 + D2 + D3 (+ the nominal tolerance when `with_tolerance`).
   [[nodiscard]] double standoff_mm(const Vec3& direction, double slow_mm_s, double fast_mm_s, double tolerance_mm) const;
+  /// Nominal minus effective radius of a tool qualified at the qualification feed: the ball
+  /// centre is at nominal + effective radius when latched, this much before it at contact.
+  /// Approach distances (from nominal + effective radius) include it.
+  [[nodiscard]] double qualified_offset_mm() const;
   /// How much farther past the surface a hit at `feed_mm_s` is latched than one at the feed the
   /// tool was qualified at: (feed - qualification feed) * (delay + jitter / 2); hits are moved
   /// back by it along the normal (SEEDS.md 3: the delay-distance correction at constant feed).
