@@ -168,6 +168,19 @@ void table(const std::string& world_name) {
   two.one_touch = false;
   two.blend = false;
   rows.push_back(b.run("seed: optimal two-touch (D1+D2+D3)", from_plan(two.plan(b.n, fs, std::nullopt)), reference));
+  {
+    // Beyond the seed: the first-touch feed chosen by timed trial cycles on the machine.
+    machine::VirtualCmm m(*w, 1);
+    runtime::CharacterisationSettings s2 = settings;
+    s2.optimise_first_feed = true;
+    auto tuned = runtime::characterise(m, s2);
+    if (tuned && !tuned->one_touch) {
+      runtime::MachineCharacterisation t2 = *tuned;
+      t2.measuring_feed_mm_s = fs;
+      rows.push_back(b.run(fmt::format("beyond seed: two-touch, timed first feed {:.1f}", t2.first_feed_mm_s),
+                           from_plan(t2.plan(b.n, fs, std::nullopt)), reference));
+    }
+  }
   runtime::MachineCharacterisation one = c;
   one.one_touch = true;
   one.blend = false;
@@ -180,7 +193,8 @@ void table(const std::string& world_name) {
   // The physical limit (docs/touch-trigger.md): one jerk-limited move from rest at the
   // clearance that reaches the measuring feed (zero acceleration) at the top of the tolerance
   // band, crosses to the surface at that feed (on average the nominal), the trigger chain's
-  // time, the stop, and the fastest return move to the clearance above the hit.
+  // time, the stop, and the fastest return move to the clearance above the latched point (as
+  // every cycle above retracts). Controller-cycle rounding is not part of the limit.
   const auto& m = w->machine;
   const machine::MotionLimits fast = machine::path_limits(m, down, positioning_mm_s, m.max_acceleration_mm_s2);
   const double jitter = m.skip.kind == machine::SkipInput::Kind::Scanned ? m.skip.period_s : 0;
@@ -188,8 +202,11 @@ void table(const std::string& world_name) {
                        (m.skip.kind == machine::SkipInput::Kind::Latched ? m.skip.latency_s : 0) + jitter / 2;
   const double pt = w->probe.pre_travel.vertical_mm;
   const double td = machine::ramp_time_s(m, down, fs);
-  const double t_limit = reach_s(clearance_mm - tolerance_mm, fs, fast) + tolerance_mm / fs + pt / fs + delay + td +
-                         machine::rest_to_rest_time_s(clearance_mm + pt + fs * delay + fs * td / 2, fast);
+  // Every cycle starts `clearance` above nominal + effective radius, i.e. q = pre-travel +
+  // F_q * mean delay farther from the contact than that (the qualified radius absorbs q).
+  const double q = pt + c.response.qualification_feed_mm_s * delay;
+  const double t_limit = reach_s(clearance_mm + q - tolerance_mm, fs, fast) + tolerance_mm / fs + pt / fs + delay + td +
+                         machine::rest_to_rest_time_s(clearance_mm + fs * td / 2, fast);
   Row limit{"physical limit (jerk-limited move pair)", t_limit, 0, 0, false};
 
   fmt::print("\n== {}: skip {} (jitter {:.1f} ms recovered), max protected feed {:.1f} mm/s, strategy {}\n", world_name,
