@@ -234,8 +234,17 @@ tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::M
       // SEEDS.md 3: Td = Ta - Dc / V.
       for (double ta : *t) td.push_back(ta - len / feed);
     }
-    samples.push_back({feed, mean_of(td) - dt / 2});
+    const double ramp = mean_of(td) - dt / 2;
+    // A feed above the machine's speed limit is clamped by the controller: the apparent Td then
+    // grows with the length (Dc (1/Vmax - 1/V)). One move of twice the length tells; such feeds
+    // (and faster ones) are dropped.
+    auto check = timed(2 * base, feed);
+    if (!check) return tl::unexpected(check.error());
+    const double ramp2 = mean_of({(*check)[0] - 2 * base / feed, (*check)[1] - 2 * base / feed});
+    if (std::abs(ramp2 - ramp) > 0.01 * ramp + 1.5 * dt) break;
+    samples.push_back({feed, ramp});
   }
+  if (samples.size() < 3) return tl::unexpected(fmt::format("too few usable timing feeds on the {} axis", axis_name(axis)));
   return fit_axis(std::move(samples));
 }
 
