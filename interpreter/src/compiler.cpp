@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -1487,6 +1488,33 @@ class UnitCompiler {
     if (!expect_params(s, 1, "M(name) or EXTERN")) return;
     mark_control();
     if (is_word(s.params[0], "EXTERN")) {
+      if (s.params.size() >= 3 && is_word(s.params[1], "SYS") && s.params[2].kind == ExprKind::String) {
+        // metron's own system commands (docs/touch-trigger.md): CHARACTERISE ['file'],
+        // CHARACTERISATION 'file'.
+        const std::string text = s.params[2].text;
+        std::istringstream words(text);
+        std::string verb, arg, extra;
+        words >> verb >> arg >> extra;
+        verb = upper(verb);
+        if (verb == "CHARACTERISE" || verb == "CHARACTERIZE" || (verb == "CHARACTERISATION" && !arg.empty())) {
+          if (!extra.empty())
+            return error(s.params[2].span, "sema.system-command", fmt::format("too many words in '{}'", text));
+          if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
+            arg = (std::filesystem::path(m_module.units[m_unit].path).parent_path() / arg).string();
+          auto in = make(Op::System, s, verb == "CHARACTERIZE" ? "CHARACTERISE" : verb);
+          ir::Operand o;
+          o.kind = ir::Operand::Kind::Word;
+          o.word = arg;
+          o.span = s.params[2].span;
+          in.operands.push_back(o);
+          emit(std::move(in));
+          return;
+        }
+        warn(s.params[2].span, "sema.unsupported-call",
+             fmt::format("unknown system command '{}' (metron knows CHARACTERISE and CHARACTERISATION); the call is skipped", text));
+        emit(make(Op::Nop, s, "CALL"));
+        return;
+      }
       if (s.params.size() < 3 || !is_word(s.params[1], "DMIS")) {
         warn(s.params[0].span, "sema.unsupported-call", "only CALL/EXTERN,DMIS,'file' is supported; the call is skipped");
         emit(make(Op::Nop, s, "CALL"));

@@ -307,6 +307,14 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
     case Op::Nop:
     case Op::JumpLabel:
       return ExecStatus::Running;
+    case Op::System: {
+      const std::string& arg = in.operands.empty() ? std::string() : in.operands[0].word;
+      auto r = in.name == "CHARACTERISE"
+                   ? m_runtime.characterise_machine(arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
+                   : m_runtime.use_characterisation(arg, in.span);
+      if (!r) return from_runtime(r.error());
+      return ExecStatus::Running;
+    }
     case Op::End:
       if (frame.kind == Frame::Kind::Unit && frame.call_site.valid()) {
         m_frames.pop_back();  // ENDFIL of a file called with CALL/EXTERN: back to the caller
@@ -452,7 +460,7 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
       auto& p = m_runtime.probe_settings();
       const std::string& w = in.operands[0].word;
       const double d = *v * len;
-      if (w == "APPRCH") p.approach_mm = d;
+      if (w == "APPRCH") p.approach_mm = d, p.approach_explicit = true;
       else if (w == "RETRCT") p.retract_mm = d;
       else if (w == "SEARCH") p.search_mm = d;
       else if (w == "CLRSRF") p.clearance_mm = d;

@@ -18,6 +18,7 @@ const char* to_string(Op op) {
     case Op::SensorSelect: return "SENSOR_SELECT";
     case Op::ProbeSet: return "PROBE_SET";
     case Op::Feed: return "FEED";
+    case Op::System: return "SYSTEM";
     case Op::Accel: return "ACCEL";
     case Op::GoTo: return "GOTO";
     case Op::MeasBegin: return "MEAS_BEGIN";

@@ -237,6 +237,7 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
   if (!r) return tl::unexpected(r.error());
   m_active_sensor = label;
   const auto& tool = r->front().tool;
+  if (tool && !tool->qualified) m_qualification_feed_mm_s = m_machine.state().measuring_feed_mm_s;
   if (tool && !tool->qualified) {
     // Qualify on the reference sphere before the first use: the effective radius absorbs the
     // pre-travel and trigger delays at the measuring feed.
@@ -261,9 +262,50 @@ Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, st
   if (measuring) feeds.measuring_mm_s = *measuring;
   if ((positioning && !(*positioning > 0)) || (measuring && !(*measuring > 0)))
     return program_error(span, "a feed rate must be positive");
+  if (measuring) {
+    if (auto ok = check_probing_feed(*measuring, span); !ok) return ok;
+    m_measuring_feed_explicit = *measuring;
+  }
   auto r = run_commands({machine::Command{0, feeds}}, {span});
   if (!r) return tl::unexpected(r.error());
   return {};
+}
+
+Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::string>& path, Span span) {
+  auto c = characterise(m_machine, CharacterisationSettings{});
+  // The characterisation used its own tool: give the program's active one back.
+  if (!m_active_sensor.empty()) {
+    if (auto r = run_commands({machine::Command{0, machine::SelectTool{m_active_sensor}}}, {span}); !r)
+      return tl::unexpected(r.error());
+  }
+  if (!c) return program_error(span, "characterisation failed: " + c.error());
+  if (path) {
+    std::filesystem::path p(*path);
+    if (p.is_relative()) p = std::filesystem::path(m_output_dir) / p;
+    if (auto ok = save_characterisation(*c, p.string()); !ok) return program_error(span, ok.error());
+  }
+  text("PRINT", format_characterisation(*c));
+  m_characterisation = std::move(*c);
+  if (m_measuring_feed_explicit) return check_probing_feed(*m_measuring_feed_explicit, span);
+  return {};
+}
+
+Result<void> MeasurementRuntime::use_characterisation(const std::string& path, Span span) {
+  auto c = load_characterisation(path);
+  if (!c) return program_error(span, c.error());
+  m_characterisation = std::move(*c);
+  if (m_measuring_feed_explicit) return check_probing_feed(*m_measuring_feed_explicit, span);
+  return {};
+}
+
+Result<void> MeasurementRuntime::check_probing_feed(double measuring_mm_s, Span span) const {
+  if (!m_characterisation || measuring_mm_s <= m_characterisation->max_probe_feed_mm_s) return {};
+  return program_error(span, fmt::format("probing feed {:.3f} mm/s exceeds the maximum protected feed {:.3f} mm/s of "
+                                         "this machine (its stop distance would exceed {:.0f} % of the probe's "
+                                         "{:.3f} mm over-travel; docs/touch-trigger.md)",
+                                         measuring_mm_s, m_characterisation->max_probe_feed_mm_s,
+                                         100 * m_characterisation->over_travel_margin,
+                                         m_characterisation->over_travel_mm));
 }
 
 Result<void> MeasurementRuntime::set_acceleration(double acceleration_mm_s2, Span span) {
@@ -302,6 +344,16 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     p.approach_mm = m_probe.approach_mm;
     p.search_mm = m_probe.search_mm;
     p.retract_mm = m_probe.retract_mm;
+    if (m_characterisation) {
+      // SEEDS.md 3: the characterised cycle; SNSET/APPRCH and FEDRAT/MESVEL override.
+      const TouchPlan plan = m_characterisation->plan(
+          p.normal, m_measuring_feed_explicit,
+          m_probe.approach_explicit ? std::optional<double>(m_probe.approach_mm) : std::nullopt);
+      p.approach_mm = plan.approach_mm;
+      p.speed_mm_s = plan.feed_mm_s;
+      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+      p.blend_mm = plan.blend_mm;
+    }
     commands.push_back({0, p});
     spans.push_back(span);
   };
@@ -372,11 +424,20 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   }
 
   std::vector<MeasuredPoint> points;
+  std::vector<double> commands_feed;  // the measuring feed of each command (PtMeas)
+  for (const auto& c : commands)
+    if (const auto* p = std::get_if<machine::PtMeas>(&c.body)) commands_feed.push_back(p->speed_mm_s.value_or(m_machine.state().measuring_feed_mm_s));
+    else commands_feed.push_back(0);
   const auto execution = execute_commands(std::move(commands), spans);
   for (const auto& r : execution.responses)
     if (r.hit) {
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
-      points.push_back({r.hit->centre_mm, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
+      Vec3 centre = r.hit->centre_mm;
+      if (m_characterisation && i < commands_feed.size())
+        // The effective radius holds the delay distance at the qualification feed; a hit at
+        // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
+        centre += m_characterisation->dynamic_correction_mm(commands_feed[i], m_qualification_feed_mm_s) * r.hit->normal;
+      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
                         i < spans.size() ? spans[i] : block.span, false});
     }
   // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);

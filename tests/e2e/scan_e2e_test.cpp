@@ -40,7 +40,7 @@ bool no_scanning_machine(const metron::interpreter::RunOutcome& o) {
 
 TEST(ScanE2e, Example05OnTheDefaultBlock) {
   RunOptions o;
-  o.program = (source_dir / "programs" / "examples" / "05_scan_circle.dmi").string();
+  o.program = (source_dir / "programs" / "examples" / "07_scan_circle.dmi").string();
   o.out_dir = out_dir("example05").string();
   const auto out = run_program(o);
   if (no_scanning_machine(out)) GTEST_SKIP() << "the virtual CMM has no scanning probe in this build";

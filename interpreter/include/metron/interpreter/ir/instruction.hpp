@@ -63,6 +63,7 @@ enum class Op {
   ScanMode,     ///< words: ON|OFF
   ScanSet,      ///< words: DIST|CHORD|ACCEL|DEFLEC, expr: value | words: LAW, VC1|VC1P|VC2
   PaMeas,       ///< labels: P(path) (inside a MEAS block: a scan step)
+  System,       ///< CALL/EXTERN,SYS,'command': `name` = the command text (docs/touch-trigger.md)
 };
 
 /// Upper-case mnemonic of an operation (for --emit-ir).
