@@ -2,6 +2,8 @@
 #include "metron/machine/mesh_solid.hpp"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <limits>
@@ -161,6 +163,13 @@ std::optional<MeshSolid::Exact> MeshSolid::exact(const Surface& s, const Vec3& q
   return e;
 }
 
+namespace {
+std::atomic<bool> coherent_search{true};
+}  // namespace
+
+void MeshSolid::set_coherent_search(bool on) { coherent_search.store(on, std::memory_order_relaxed); }
+bool MeshSolid::coherent_search_enabled() { return coherent_search.load(std::memory_order_relaxed); }
+
 // ---- local views ----------------------------------------------------------------------------
 
 // Triangles binned by their boxes on a hierarchy of uniform grids (each level's cells 8 times
@@ -308,6 +317,16 @@ class MeshSolid::Local final : public Solid {
   // mesh (J. A. Baerentzen, H. Aanaes, "Signed distance computation using the angle weighted
   // pseudonormal", IEEE TVCG 11(3), 2005); the faces around the closest point are all local.
   [[nodiscard]] bool inside(const Vec3& q, const geometry::Mesh::Closest& c) const {
+    // The side cannot change within the distance of the last query decided here: the ball of
+    // that radius about it holds no surface.
+    const bool coherent = coherent_search_enabled();
+    if (coherent && m_side_radius > 0 && (q - m_side_point).norm() + anchor_slack_mm < m_side_radius) return m_side_inside;
+    const bool in = inside_by_pseudo_normal(q, c);
+    if (coherent) m_side_point = q, m_side_radius = c.distance_mm, m_side_inside = in;
+    return in;
+  }
+
+  [[nodiscard]] bool inside_by_pseudo_normal(const Vec3& q, const geometry::Mesh::Closest& c) const {
     const auto& mesh = *m_solid.m_mesh;
     const auto& f = mesh.faces()[c.face];
     const auto& v = mesh.vertices();
@@ -316,13 +335,16 @@ class MeshSolid::Local final : public Solid {
     int vertex = -1;
     for (int k = 0; k < 3; ++k)
       if ((v[f[k]] - c.point).norm() <= tol) vertex = static_cast<int>(f[k]);
+    // Every triangle through the closest point is as near q as it is, so it is among the last
+    // search's candidates; the others add nothing, so the sums are the same as over all.
     if (vertex >= 0) {
-      for (const Tri& t : m_tris)
+      each_candidate([&](const Tri& t) {
         for (int k = 0; k < 3; ++k)
           if (static_cast<int>(t.v[k]) == vertex) {
             const Vec3 e1 = (v[t.v[(k + 1) % 3]] - v[t.v[k]]).normalized(), e2 = (v[t.v[(k + 2) % 3]] - v[t.v[k]]).normalized();
             pn += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * mesh.face_normal(t.face);
           }
+      });
     } else {
       pn = mesh.face_normal(c.face);  // inside the face: its own side (rounding missed the normal line)
       for (int k = 0; k < 3; ++k) {
@@ -330,10 +352,10 @@ class MeshSolid::Local final : public Solid {
         const double s = std::clamp((c.point - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
         if ((a + s * (b - a) - c.point).norm() > tol) continue;
         pn = Vec3::Zero();
-        for (const Tri& t : m_tris) {
+        each_candidate([&](const Tri& t) {
           const auto has = [&](std::uint32_t x) { return t.v[0] == x || t.v[1] == x || t.v[2] == x; };
           if (has(f[k]) && has(f[(k + 1) % 3])) pn += mesh.face_normal(t.face);
-        }
+        });
         break;
       }
     }
@@ -358,31 +380,107 @@ class MeshSolid::Local final : public Solid {
     return *m_last;
   }
 
+  // An anchor: the view's triangles within `limit` of its point, sorted by their distance from
+  // it. Exactness: a query q at delta from the point needs only those whose key - delta is below
+  // the best distance found (a triangle's distance from q is at least key - delta), and the
+  // answer holds if it is below limit - delta (every triangle left out is farther). Ties go as
+  // in the full search, to the hint, else to the first in m_tris order, so both give the same.
+  struct Anchor {
+    Vec3 point = Vec3::Zero();
+    double limit = 0;
+    std::vector<std::pair<double, std::uint32_t>> tris;  ///< (distance from point, index into m_tris)
+    std::uint64_t used = 0;                              ///< last use (0: empty), for replacing the oldest
+  };
+  static constexpr double anchor_margin_mm = 0.25;  // limit - distance at the point
+  // Covers rounding in the distances (1e-13 mm) and inside()'s vertex tolerance (1e-9 relative).
+  static constexpr double anchor_slack_mm = 1e-5;
+
+  template <class F>
+  void each_candidate(F&& f) const {
+    if (!m_last_anchor) {
+      for (const Tri& t : m_tris) f(t);
+      return;
+    }
+    // The anchored search's candidates in m_tris order, so sums run in the full search's order.
+    m_scratch.clear();
+    for (std::size_t k = 0; k < m_last_visited; ++k) m_scratch.push_back(m_last_anchor->tris[k].second);
+    std::sort(m_scratch.begin(), m_scratch.end());
+    for (std::uint32_t i : m_scratch) f(m_tris[i]);
+  }
+
   [[nodiscard]] geometry::Mesh::Closest search(const Vec3& q) const {
+    m_last_anchor = nullptr;
     if (m_tris.empty()) return m_solid.m_mesh->closest(q);
     // Start from the previous answer's triangle (the probe moves um per query): its distance
     // prunes almost every other triangle by its bounding sphere, without a square root.
-    const Tri* best = &m_tris[std::min(m_hint, m_tris.size() - 1)];
-    Vec3 point = closest_on_triangle(q, best->a, best->b, best->c);
+    const std::size_t hint = std::min(m_hint, m_tris.size() - 1);
+    std::size_t best = hint;
+    Vec3 point = closest_on_triangle(q, m_tris[hint].a, m_tris[hint].b, m_tris[hint].c);
     double best_d = (q - point).norm();
-    for (const Tri& t : m_tris) {
-      const Vec3 w = q - t.centroid;
-      const double reach = best_d + t.radius, dc2 = w.squaredNorm();
-      if (dc2 >= reach * reach) continue;  // its bounding sphere
-      // Its plane, then the plane distance with the in-plane distance to its bounding circle.
-      const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
-      if (h2 >= best2) continue;
-      const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
-      if (e > 0 && h2 + e * e >= best2) continue;
-      const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
-      const double d = (q - p).norm();
-      if (d < best_d) best_d = d, best = &t, point = p;
+    const double off_centre = (q - m_centre).norm();
+    bool done = false;
+    if (coherent_search_enabled()) {
+      // The nearest anchor, if any.
+      const Anchor* anchor = nullptr;
+      double delta = 0;
+      for (const Anchor& a : m_anchors)
+        if (a.used > 0)
+          if (const double dl = (q - a.point).norm(); !anchor || dl < delta) anchor = &a, delta = dl;
+      if (anchor && best_d + delta < anchor->limit) {
+        std::size_t k = 0;
+        for (; k < anchor->tris.size(); ++k) {
+          const auto [key, i] = anchor->tris[k];
+          if (key - delta > best_d + anchor_slack_mm) break;
+          const Tri& t = m_tris[i];
+          // The full search's tests, with ties let through.
+          const Vec3 w = q - t.centroid;
+          const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+          if (dc2 > reach * reach) continue;
+          const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+          if (h2 > best2) continue;
+          const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+          if (e > 0 && h2 + e * e > best2) continue;
+          const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
+          const double d = (q - p).norm();
+          if (d < best_d || (d == best_d && best != hint && i < best)) best_d = d, best = i, point = p;
+        }
+        if (best_d + anchor_slack_mm < anchor->limit - delta) {
+          done = true;
+          m_last_anchor = anchor;
+          m_last_visited = k;
+          m_anchors[static_cast<std::size_t>(anchor - m_anchors.data())].used = ++m_clock;
+        } else {  // not provable here: the full search, from the same start
+          best = hint;
+          point = closest_on_triangle(q, m_tris[hint].a, m_tris[hint].b, m_tris[hint].c);
+          best_d = (q - point).norm();
+        }
+      }
     }
-    m_hint = static_cast<std::size_t>(best - m_tris.data());
+    if (!done)
+      for (std::size_t i = 0; i < m_tris.size(); ++i) {
+        const Tri& t = m_tris[i];
+        const Vec3 w = q - t.centroid;
+        const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+        if (dc2 >= reach * reach) continue;  // its bounding sphere
+        // Its plane, then the plane distance with the in-plane distance to its bounding circle.
+        const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+        if (h2 >= best2) continue;
+        const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+        if (e > 0 && h2 + e * e >= best2) continue;
+        const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
+        const double d = (q - p).norm();
+        if (d < best_d) best_d = d, best = i, point = p;
+      }
+    m_hint = best;
     const double d = best_d;
-    if (d + (q - m_centre).norm() > m_reach) return m_solid.m_mesh->closest(q);
+    if (d + off_centre > m_reach) {
+      m_last_anchor = nullptr;
+      return m_solid.m_mesh->closest(q);
+    }
+    if (!done && coherent_search_enabled()) add_anchor(q, d, off_centre);
     // The same normal as geometry::Mesh::closest gives.
-    geometry::Mesh::Closest c{point, m_solid.m_mesh->face_normal(best->face), d, best->face};
+    const Tri& bt = m_tris[best];
+    geometry::Mesh::Closest c{point, m_solid.m_mesh->face_normal(bt.face), d, bt.face};
     if (d > 0) {
       const Vec3 u = (q - point) / d;
       const double cos_angle = u.dot(c.normal);
@@ -391,11 +489,41 @@ class MeshSolid::Local final : public Solid {
     return c;
   }
 
+  // An anchor at q, whose mesh distance is d, in place of the least recently used one; its limit
+  // stays where the view holds every triangle (within m_reach of the centre).
+  void add_anchor(const Vec3& q, double d, double off_centre) const {
+    const double limit = std::min(d + anchor_margin_mm, m_reach - off_centre);
+    if (!(limit > d + 2 * anchor_slack_mm)) return;
+    Anchor* slot = &m_anchors[0];
+    for (Anchor& a : m_anchors)
+      if (a.used < slot->used) slot = &a;
+    slot->point = q;
+    slot->limit = limit;
+    slot->used = ++m_clock;
+    slot->tris.clear();
+    for (std::size_t i = 0; i < m_tris.size(); ++i) {
+      const Tri& t = m_tris[i];
+      const double reach = limit + t.radius;
+      if ((q - t.centroid).squaredNorm() > reach * reach) continue;
+      const double dt = (q - closest_on_triangle(q, t.a, t.b, t.c)).norm();
+      if (dt <= limit) slot->tris.emplace_back(dt, static_cast<std::uint32_t>(i));
+    }
+    std::sort(slot->tris.begin(), slot->tris.end());
+  }
+
   const MeshSolid& m_solid;
   Vec3 m_centre;       ///< part coordinates
   double m_reach = 0;  ///< every triangle outside the candidates is farther than this from the centre
   std::vector<Tri> m_tris;
   mutable std::size_t m_hint = 0;              ///< index of the last answer's triangle
+  mutable std::array<Anchor, 3> m_anchors;     ///< for the head and the ball centre, and one spare
+  mutable std::uint64_t m_clock = 0;
+  mutable const Anchor* m_last_anchor = nullptr;  ///< the last search's; null: it went over all
+  mutable std::size_t m_last_visited = 0;         ///< how many of its triangles it visited
+  mutable std::vector<std::uint32_t> m_scratch;
+  mutable Vec3 m_side_point = Vec3::Zero();  ///< the last query whose side inside() decided
+  mutable double m_side_radius = 0;          ///< its distance from the mesh (0: none yet)
+  mutable bool m_side_inside = false;
   mutable Vec3 m_last_query = Vec3::Zero();
   mutable std::optional<geometry::Mesh::Closest> m_last;
 };
