@@ -4,12 +4,12 @@
 //      offset from its design and rough: |Ep| - E0 (RMS, peak), oscillation, distance from the
 //      path, completion;
 //  (2) simulation speed of the 1 kHz scanning loop on a CAD mesh of >= 100k triangles.
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only].
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only]
+// [--full-search].
 #include <chrono>
 #include <ctime>
 #include <cmath>
 #include <cstring>
-#include <cstdlib>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -270,10 +270,6 @@ void speed() {
   cmd.speed_mm_s = 10;
   ScanSetup setup{&solid, ball_radius_mm, world.machine, world.scanning, 3};
   (void)solid.signed_distance(centre);  // builds the mesh's search trees (lazy) outside the timing
-  if (const char* rep = std::getenv("PROFILE_REPEAT")) {
-    for (int i = 0; i < std::atoi(rep); ++i) (void)run_scan(cmd, setup, scan_approach_point(cmd), 0);
-    std::exit(0);
-  }
   const auto t = time_scan(cmd, setup, 3);
   const ScanOutcome& out = t.second.out;
   fmt::print("Simulation speed: Vc2 scan of a {:.0f} mm circle on a UV-sphere mesh of {} triangles (MeshSolid), {} control\n"
@@ -323,6 +319,11 @@ void speed() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --full-search (last argument): the mesh search without its coherent path, to compare results.
+  if (argc > 1 && std::strcmp(argv[argc - 1], "--full-search") == 0) {
+    MeshSolid::set_coherent_search(false);
+    --argc;
+  }
   const bool table_only = argc > 1 && std::strcmp(argv[1], "--table-only") == 0;
   const bool speed_only = argc > 1 && std::strcmp(argv[1], "--speed-only") == 0;
   if (argc > 1 && std::strcmp(argv[1], "--step-only") == 0) {
