@@ -182,7 +182,45 @@ struct MeshSolid::Grid {
   };
   struct Level {
     double cell_mm = 1;
-    std::unordered_map<std::uint64_t, std::vector<Entry>> cells;
+    std::unordered_map<std::uint64_t, std::vector<Entry>> cells;  ///< while building
+    // Then an open-addressing table (linear probing, at most half full) of the occupied cells,
+    // each a range of `entries`: a lookup of an empty cell, the usual case, is a probe or two.
+    std::vector<std::uint64_t> slot_key;  ///< empty_key: free
+    std::vector<std::uint32_t> slot_begin, slot_end;
+    std::vector<Entry> entries;
+    std::uint64_t mask = 0;
+    int shift = 64;
+
+    static constexpr std::uint64_t empty_key = ~std::uint64_t{0};
+    [[nodiscard]] std::size_t slot_of(std::uint64_t k) const {
+      return static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ull) >> shift);
+    }
+    void freeze() {
+      std::size_t n = 2;
+      int bits = 1;
+      while (n < 2 * cells.size()) n *= 2, ++bits;
+      shift = 64 - bits;
+      mask = n - 1;
+      slot_key.assign(n, empty_key);
+      slot_begin.assign(n, 0);
+      slot_end.assign(n, 0);
+      for (auto& [k, list] : cells) {
+        std::size_t i = slot_of(k);
+        while (slot_key[i] != empty_key) i = (i + 1) & mask;
+        slot_key[i] = k;
+        slot_begin[i] = static_cast<std::uint32_t>(entries.size());
+        entries.insert(entries.end(), list.begin(), list.end());
+        slot_end[i] = static_cast<std::uint32_t>(entries.size());
+      }
+      cells = {};
+    }
+    /// The cell's entries in the order they were added (empty if none).
+    [[nodiscard]] std::pair<const Entry*, const Entry*> find(std::uint64_t k) const {
+      for (std::size_t i = slot_of(k);; i = (i + 1) & mask) {
+        if (slot_key[i] == k) return {entries.data() + slot_begin[i], entries.data() + slot_end[i]};
+        if (slot_key[i] == empty_key) return {nullptr, nullptr};
+      }
+    }
   };
   Vec3 origin = Vec3::Zero();
   std::vector<Level> levels;
@@ -202,10 +240,9 @@ struct MeshSolid::Grid {
       for (int x = a.x(); x <= b.x(); ++x)
         for (int y = a.y(); y <= b.y(); ++y)
           for (int z = a.z(); z <= b.z(); ++z) {
-            const auto it = l.cells.find(key({x, y, z}));
-            if (it == l.cells.end()) continue;
-            for (const Entry& e : it->second)
-              if (Eigen::Vector3i(x, y, z) == e.lo.cwiseMax(a)) f(e.face);
+            const auto [first, last] = l.find(key({x, y, z}));
+            for (const Entry* e = first; e != last; ++e)
+              if (Eigen::Vector3i(x, y, z) == e->lo.cwiseMax(a)) f(e->face);
           }
     }
   }
@@ -228,7 +265,7 @@ const MeshSolid::Grid& MeshSolid::grid() const {
                             box.sizes().maxCoeff() / 4000, 1e-3});
     g->origin = box.min();
     do {
-      g->levels.push_back({cell, {}});
+      g->levels.emplace_back().cell_mm = cell;
       cell *= 8;
     } while (g->levels.back().cell_mm < box.sizes().maxCoeff());
     for (std::uint32_t i = 0; i < f.size(); ++i) {
@@ -245,6 +282,7 @@ const MeshSolid::Grid& MeshSolid::grid() const {
         break;
       }
     }
+    for (Grid::Level& l : g->levels) l.freeze();
     m_grid = std::move(g);
   });
   return *m_grid;
@@ -425,7 +463,8 @@ class MeshSolid::Local final : public Solid {
       double delta = 0;
       for (const Anchor& a : m_anchors)
         if (a.used > 0)
-          if (const double dl = (q - a.point).norm(); !anchor || dl < delta) anchor = &a, delta = dl;
+          if (const double dl2 = (q - a.point).squaredNorm(); !anchor || dl2 < delta) anchor = &a, delta = dl2;
+      delta = std::sqrt(delta);
       if (anchor && best_d + delta < anchor->limit) {
         std::size_t k = 0;
         for (; k < anchor->tris.size(); ++k) {
