@@ -457,43 +457,50 @@ class MeshSolid::Local final : public Solid {
     double best_d = (q - point).norm();
     const double off_centre = (q - m_centre).norm();
     bool done = false;
-    if (coherent_search_enabled()) {
-      // The nearest anchor, if any.
-      const Anchor* anchor = nullptr;
-      double delta = 0;
-      for (const Anchor& a : m_anchors)
-        if (a.used > 0)
-          if (const double dl2 = (q - a.point).squaredNorm(); !anchor || dl2 < delta) anchor = &a, delta = dl2;
-      delta = std::sqrt(delta);
-      if (anchor && best_d + delta < anchor->limit) {
-        std::size_t k = 0;
-        for (; k < anchor->tris.size(); ++k) {
-          const auto [key, i] = anchor->tris[k];
-          if (key - delta > best_d + anchor_slack_mm) break;
-          const Tri& t = m_tris[i];
-          // The full search's tests, with ties let through.
-          const Vec3 w = q - t.centroid;
-          const double reach = best_d + t.radius, dc2 = w.squaredNorm();
-          if (dc2 > reach * reach) continue;
-          const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
-          if (h2 > best2) continue;
-          const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
-          if (e > 0 && h2 + e * e > best2) continue;
-          const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
-          const double d = (q - p).norm();
-          if (d < best_d || (d == best_d && best != hint && i < best)) best_d = d, best = i, point = p;
-        }
-        if (best_d + anchor_slack_mm < anchor->limit - delta) {
-          done = true;
-          m_last_anchor = anchor;
-          m_last_visited = k;
-          m_anchors[static_cast<std::size_t>(anchor - m_anchors.data())].used = ++m_clock;
-        } else {  // not provable here: the full search, from the same start
-          best = hint;
-          point = closest_on_triangle(q, m_tris[hint].a, m_tris[hint].b, m_tris[hint].c);
-          best_d = (q - point).norm();
-        }
+    // The search over an anchor's candidates for q at delta from its point; false (and the start
+    // restored) when its answer is not provable there.
+    const auto anchored = [&](Anchor& anchor, double delta) {
+      std::size_t k = 0;
+      for (; k < anchor.tris.size(); ++k) {
+        const auto [key, i] = anchor.tris[k];
+        if (key - delta > best_d + anchor_slack_mm) break;
+        const Tri& t = m_tris[i];
+        // The full search's tests, with ties let through.
+        const Vec3 w = q - t.centroid;
+        const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+        if (dc2 > reach * reach) continue;
+        const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+        if (h2 > best2) continue;
+        const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+        if (e > 0 && h2 + e * e > best2) continue;
+        const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
+        const double d = (q - p).norm();
+        if (d < best_d || (d == best_d && best != hint && i < best)) best_d = d, best = i, point = p;
       }
+      if (best_d + anchor_slack_mm < anchor.limit - delta) {
+        m_last_anchor = &anchor;
+        m_last_visited = k;
+        anchor.used = ++m_clock;
+        return true;
+      }
+      best = hint;
+      point = closest_on_triangle(q, m_tris[hint].a, m_tris[hint].b, m_tris[hint].c);
+      best_d = (q - point).norm();
+      return false;
+    };
+    if (coherent_search_enabled()) {
+      // The nearest anchor, if any; else (or if it cannot prove the answer) a new one at q, whose
+      // limit is set from the start's distance, an upper bound of q's.
+      Anchor* anchor = nullptr;
+      double delta2 = 0;
+      for (Anchor& a : m_anchors)
+        if (a.used > 0)
+          if (const double dl2 = (q - a.point).squaredNorm(); !anchor || dl2 < delta2) anchor = &a, delta2 = dl2;
+      const double delta = std::sqrt(delta2);
+      if (anchor && best_d + delta < anchor->limit) done = anchored(*anchor, delta);
+      // The first query of a view starts from an arbitrary triangle: a full search first.
+      if (!done && m_clock > 0)
+        if (Anchor* fresh = add_anchor(q, best_d, off_centre)) done = anchored(*fresh, 0);
     }
     if (!done)
       for (std::size_t i = 0; i < m_tris.size(); ++i) {
@@ -516,7 +523,7 @@ class MeshSolid::Local final : public Solid {
       m_last_anchor = nullptr;
       return m_solid.m_mesh->closest(q);
     }
-    if (!done && coherent_search_enabled()) add_anchor(q, d, off_centre);
+    if (!done && m_clock == 0 && coherent_search_enabled()) (void)add_anchor(q, d, off_centre);
     // The same normal as geometry::Mesh::closest gives.
     const Tri& bt = m_tris[best];
     geometry::Mesh::Closest c{point, m_solid.m_mesh->face_normal(bt.face), d, bt.face};
@@ -528,11 +535,11 @@ class MeshSolid::Local final : public Solid {
     return c;
   }
 
-  // An anchor at q, whose mesh distance is d, in place of the least recently used one; its limit
-  // stays where the view holds every triangle (within m_reach of the centre).
-  void add_anchor(const Vec3& q, double d, double off_centre) const {
-    const double limit = std::min(d + anchor_margin_mm, m_reach - off_centre);
-    if (!(limit > d + 2 * anchor_slack_mm)) return;
+  // An anchor at q, where the mesh is at most d_max away, in place of the least recently used
+  // one; its limit stays where the view holds every triangle (within m_reach of the centre).
+  Anchor* add_anchor(const Vec3& q, double d_max, double off_centre) const {
+    const double limit = std::min(d_max + anchor_margin_mm, m_reach - off_centre);
+    if (!(limit > d_max + 2 * anchor_slack_mm)) return nullptr;
     Anchor* slot = &m_anchors[0];
     for (Anchor& a : m_anchors)
       if (a.used < slot->used) slot = &a;
@@ -548,6 +555,7 @@ class MeshSolid::Local final : public Solid {
       if (dt <= limit) slot->tris.emplace_back(dt, static_cast<std::uint32_t>(i));
     }
     std::sort(slot->tris.begin(), slot->tris.end());
+    return slot;
   }
 
   const MeshSolid& m_solid;
