@@ -324,19 +324,19 @@ class MeshSolid::Local final : public Solid {
     const geometry::Mesh& mesh = *solid.m_mesh;
     m_reach = radius_mm;
     const Vec3 r = Vec3::Constant(m_reach);
-    std::vector<std::uint32_t> ids;
-    solid.grid().visit(m_centre - r, m_centre + r, [&](std::uint32_t i) { ids.push_back(i); });
     const auto& v = mesh.vertices();
-    for (std::uint32_t i : ids) {
+    m_tris.reserve(256);
+    solid.grid().visit(m_centre - r, m_centre + r, [&](std::uint32_t i) {
       const auto& f = mesh.faces()[i];
       Eigen::AlignedBox3d b(v[f[0]]);
       b.extend(v[f[1]]).extend(v[f[2]]);
-      if (b.exteriorDistance(m_centre) > m_reach) continue;
-      Tri t{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i};
+      if (b.squaredExteriorDistance(m_centre) > m_reach * m_reach) return;
+      Tri& t = m_tris.emplace_back(Tri{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i});
       t.centroid = (t.a + t.b + t.c) / 3;
-      t.radius = std::max({(t.a - t.centroid).norm(), (t.b - t.centroid).norm(), (t.c - t.centroid).norm()});
-      m_tris.push_back(t);
-    }
+      // sqrt is monotonic and correctly rounded: the same as the largest of the three norms.
+      t.radius = std::sqrt(std::max({(t.a - t.centroid).squaredNorm(), (t.b - t.centroid).squaredNorm(),
+                                     (t.c - t.centroid).squaredNorm()}));
+    });
   }
 
   [[nodiscard]] double signed_distance(const Vec3& p) const override {
