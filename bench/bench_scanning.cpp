@@ -4,8 +4,8 @@
 //      offset from its design and rough: |Ep| - E0 (RMS, peak), oscillation, distance from the
 //      path, completion;
 //  (2) simulation speed of the 1 kHz scanning loop on a CAD mesh of >= 100k triangles.
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only]
-// [--full-search].
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only |
+// --profile-sphere] [--full-search].
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -255,7 +255,8 @@ void speed_on_step_part() {
   print_timing(t);
 }
 
-void speed() {
+// profile_only: one untimed scan of the sphere, for a profiler (docs/scanning.md).
+void speed(bool profile_only = false) {
   const double radius = 30;
   auto mesh = std::make_shared<const geometry::Mesh>(uv_sphere(radius, 230, 230));
   const Vec3 centre(400, 400, 100);
@@ -271,6 +272,11 @@ void speed() {
   ScanSetup setup{&solid, ball_radius_mm, world.machine, world.scanning, 3};
   (void)solid.signed_distance(centre);  // builds the mesh's search trees (lazy) outside the timing
   (void)solid.local_view(centre, 1);     // and its grid
+  if (profile_only) {
+    const ScanOutcome o = run_scan(cmd, setup, scan_approach_point(cmd), 0);
+    fmt::print("one scan of the sphere: {} cycles, completed: {}\n", o.stats.cycles, o.completed ? "yes" : "no");
+    return;
+  }
   const auto t = time_scan(cmd, setup, 5);
   const ScanOutcome& out = t.second.out;
   fmt::print("Simulation speed: Vc2 scan of a {:.0f} mm circle on a UV-sphere mesh of {} triangles (MeshSolid), {} control\n"
@@ -328,6 +334,10 @@ int main(int argc, char** argv) {
   }
   const bool table_only = argc > 1 && std::strcmp(argv[1], "--table-only") == 0;
   const bool speed_only = argc > 1 && std::strcmp(argv[1], "--speed-only") == 0;
+  if (argc > 1 && std::strcmp(argv[1], "--profile-sphere") == 0) {
+    speed(true);
+    return 0;
+  }
   if (argc > 1 && std::strcmp(argv[1], "--step-only") == 0) {
     speed_on_step_part();
     return 0;
