@@ -429,7 +429,7 @@ class MeshSolid::Local final : public Solid {
     std::vector<std::pair<double, std::uint32_t>> tris;  ///< (distance from point, index into m_tris)
     std::uint64_t used = 0;                              ///< last use (0: empty), for replacing the oldest
   };
-  static constexpr double anchor_margin_mm = 0.25;  // limit - distance at the point
+  static constexpr double anchor_margin_mm = 0.15;  // limit - distance at the point (tuned by instruction count)
   // Covers rounding in the distances (1e-13 mm) and inside()'s vertex tolerance (1e-9 relative).
   static constexpr double anchor_slack_mm = 1e-5;
 

@@ -18,7 +18,7 @@ Vec3 ScanningProbe::deflection(const Vec3& head_mm) {
   // With the mesh's coherent search (the default) a view serves longer: its build, not its
   // queries, is then the larger cost.
   const bool coherent = MeshSolid::coherent_search_enabled();
-  const double renew_mm = coherent ? 0.5 : 0.2;
+  const double renew_mm = coherent ? 1.0 : 0.2;
   const double view_radius_mm = m_radius_mm + m_spec.reference_deflection_mm + renew_mm + 0.3;
   // A free ball stays free while the head is nearer to where it was last free than that
   // distance's excess over the radius allows (|grad d| <= lipschitz): no query needed.
