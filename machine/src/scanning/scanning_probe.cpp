@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/scanning/scanning_probe.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "metron/machine/mesh_solid.hpp"
@@ -21,9 +22,11 @@ Vec3 ScanningProbe::deflection(const Vec3& head_mm) {
   const double renew_mm = coherent ? 1.0 : 0.2;
   const double view_radius_mm = m_radius_mm + m_spec.reference_deflection_mm + renew_mm + 0.3;
   // A free ball stays free while the head is nearer to where it was last free than that
-  // distance's excess over the radius allows (|grad d| <= lipschitz): no query needed.
-  if (coherent && m_free_distance_mm > m_radius_mm &&
-      m_solid.lipschitz() * (head_mm - m_free_head).norm() < m_free_distance_mm - m_radius_mm)
+  // distance's excess over the radius allows (|grad d| <= lipschitz): no query needed. The slack
+  // covers the steps of MeshSolid's exact CAD faces (about 1.5 chord tolerances) at face edges.
+  constexpr double slack_mm = 0.01;
+  if (coherent && std::max(1.0, m_solid.lipschitz()) * (head_mm - m_free_head).norm() <
+                      m_free_distance_mm - m_radius_mm - slack_mm)
     return Vec3::Zero();
   if (!m_view || (head_mm - m_view_centre).norm() > renew_mm) {
     m_view = m_solid.local_view(head_mm, view_radius_mm);
