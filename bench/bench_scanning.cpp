@@ -4,8 +4,10 @@
 //      offset from its design and rough: |Ep| - E0 (RMS, peak), oscillation, distance from the
 //      path, completion;
 //  (2) simulation speed of the 1 kHz scanning loop on a CAD mesh of >= 100k triangles.
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only].
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only |
+// --profile-sphere] [--full-search].
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -177,6 +179,56 @@ geometry::Mesh uv_sphere(double radius, int rings, int sectors) {
   return *geometry::Mesh::from_triangles(std::move(v), std::move(f));
 }
 
+// Wall and CPU (this thread) seconds of one scan, the best of `repeats` runs with the mesh
+// search's coherent path off and on, interleaved; the machine is shared, so the CPU time is the
+// steadier figure and the minimum the least disturbed run.
+struct Timing {
+  double wall_s = 1e300, cpu_s = 1e300;
+  ScanOutcome out;
+};
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+std::pair<Timing, Timing> time_scan(const ScanPath& cmd, const ScanSetup& setup, int repeats) {
+  Timing t[2];
+  for (int r = 0; r < repeats; ++r)
+    for (int fast = 0; fast < 2; ++fast) {
+      MeshSolid::set_coherent_search(fast == 1);
+      const double c0 = thread_cpu_s();
+      const auto w0 = std::chrono::steady_clock::now();
+      ScanOutcome out = run_scan(cmd, setup, scan_approach_point(cmd), 0);
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+      const double cpu = thread_cpu_s() - c0;
+      t[fast].wall_s = std::min(t[fast].wall_s, wall);
+      t[fast].cpu_s = std::min(t[fast].cpu_s, cpu);
+      t[fast].out = std::move(out);
+    }
+  MeshSolid::set_coherent_search(true);
+  return {t[0], t[1]};
+}
+
+// One line per mode, and whether both modes scanned the same points.
+void print_timing(const std::pair<Timing, Timing>& t) {
+  for (const Timing* m : {&t.first, &t.second}) {
+    const double sim = m->out.end_time_s, cycles = static_cast<double>(m->out.stats.cycles);
+    fmt::print("  {:<28} {:>6.0f}x real time by wall clock ({:.2f} us per cycle), {:>6.0f}x by CPU time ({:.2f} us); "
+               "completed: {}\n",
+               m == &t.first ? "full search per query:" : "coherent search (default):", sim / m->wall_s,
+               1e6 * m->wall_s / cycles, sim / m->cpu_s, 1e6 * m->cpu_s / cycles, m->out.completed ? "yes" : "no");
+  }
+  const auto& a = t.first.out.samples;
+  const auto& b = t.second.out.samples;
+  double diff = a.size() == b.size() ? 0 : 1e300;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    diff = std::max(diff, (a[i].centre_mm - b[i].centre_mm).norm());
+  fmt::print("  speed-up {:.2f}x (wall) / {:.2f}x (CPU); {} samples each, largest difference {:.1e} mm\n",
+             t.first.wall_s / t.second.wall_s, t.first.cpu_s / t.second.cpu_s, b.size(), diff);
+}
+
 // The NIST DCX test part (STEP, tessellated at the default 1 um chord tolerance) with the table:
 // a 120 mm line on its flat top at z = -50 (y = 69), Vc2.
 void speed_on_step_part() {
@@ -195,17 +247,16 @@ void speed_on_step_part() {
   cmd.approach_normal = Vec3::UnitZ();
   cmd.law = ScanLaw::Vc2;
   ScanSetup setup{solid.get(), ball_radius_mm, world->machine, world->scanning, 3};
-  const auto t0 = std::chrono::steady_clock::now();
-  const ScanOutcome out = run_scan(cmd, setup, scan_approach_point(cmd), 0);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t = time_scan(cmd, setup, 5);
   fmt::print("Simulation speed on a STEP part: NIST DCX part ({} triangles, exact CAD faces) plus table, a 120 mm\n"
-             "line at 10 mm/s: {:.2f} s simulated in {:.3f} s wall = {:.0f}x real time ({:.2f} us per cycle); completed: {}{}\n",
-             cad.mesh->face_count(), out.end_time_s, wall, out.end_time_s / wall,
-             1e6 * wall / static_cast<double>(out.stats.cycles), out.completed ? "yes" : "no",
-             out.fault ? " (" + out.fault->message + ")" : "");
+             "line at 10 mm/s, {} cycles = {:.2f} s simulated (best of 5 runs){}:\n",
+             cad.mesh->face_count(), t.second.out.stats.cycles, t.second.out.end_time_s,
+             t.second.out.fault ? " (" + t.second.out.fault->message + ")" : "");
+  print_timing(t);
 }
 
-void speed() {
+// profile_only: one untimed scan of the sphere, for a profiler (docs/scanning.md).
+void speed(bool profile_only = false) {
   const double radius = 30;
   auto mesh = std::make_shared<const geometry::Mesh>(uv_sphere(radius, 230, 230));
   const Vec3 centre(400, 400, 100);
@@ -220,30 +271,35 @@ void speed() {
   cmd.speed_mm_s = 10;
   ScanSetup setup{&solid, ball_radius_mm, world.machine, world.scanning, 3};
   (void)solid.signed_distance(centre);  // builds the mesh's search trees (lazy) outside the timing
-  const auto t0 = std::chrono::steady_clock::now();
-  const ScanOutcome out = run_scan(cmd, setup, scan_approach_point(cmd), 0);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const double simulated = out.end_time_s;
+  (void)solid.local_view(centre, 1);     // and its grid
+  if (profile_only) {
+    const ScanOutcome o = run_scan(cmd, setup, scan_approach_point(cmd), 0);
+    fmt::print("one scan of the sphere: {} cycles, completed: {}\n", o.stats.cycles, o.completed ? "yes" : "no");
+    return;
+  }
+  const auto t = time_scan(cmd, setup, 5);
+  const ScanOutcome& out = t.second.out;
   fmt::print("Simulation speed: Vc2 scan of a {:.0f} mm circle on a UV-sphere mesh of {} triangles (MeshSolid), {} control\n"
-             "cycles of {} ms: {:.2f} s simulated in {:.3f} s wall = {:.0f}x real time ({:.2f} us per cycle); completed: {}\n",
-             2 * radius, mesh->face_count(), out.stats.cycles, 1000 * world.machine.dt_s, simulated, wall,
-             simulated / wall, 1e6 * wall / static_cast<double>(out.stats.cycles), out.completed ? "yes" : "no");
+             "cycles of {} ms = {:.2f} s simulated (best of 5 runs):\n",
+             2 * radius, mesh->face_count(), out.stats.cycles, 1000 * world.machine.dt_s, out.end_time_s);
+  print_timing(t);
   for (const auto& line : out.log) fmt::print("  log: {}\n", line);
   {
-    // Diagnostics: cost of a local view and of queries through it.
+    // Diagnostics: cost of a local view and of queries through it (the probe's radius with the
+    // coherent search: renewed every 1 mm).
     const Vec3 h = centre + Vec3(radius + 1.7, 0, 0);
     auto t1 = std::chrono::steady_clock::now();
     const int n_views = 200;
-    for (int i = 0; i < n_views; ++i) (void)solid.local_view(h + Vec3(0, 0.01 * i, 0), 2.8);
+    for (int i = 0; i < n_views; ++i) (void)solid.local_view(h + Vec3(0, 0.01 * i, 0), 3.6);
     auto t2 = std::chrono::steady_clock::now();
-    const auto view = solid.local_view(h, 2.8);
+    const auto view = solid.local_view(h, 3.6);
     double sum = 0;
     const int n_q = 20000;
     for (int i = 0; i < n_q; ++i) sum += view->signed_distance(h + Vec3(0, 1e-5 * i, 0));
     auto t3 = std::chrono::steady_clock::now();
     for (int i = 0; i < n_q; ++i) sum += solid.signed_distance(h + Vec3(0, 1e-5 * i, 0));
     auto t4 = std::chrono::steady_clock::now();
-    fmt::print("  where the time goes: a local view of the mesh (MeshSolid::local_view, renewed every 0.2 mm) takes {:.1f} us\n"
+    fmt::print("  where the time goes: a local view of the mesh (MeshSolid::local_view, renewed every 1 mm) takes {:.1f} us\n"
                "  to build; a distance query through it {:.3f} us, on the whole mesh {:.3f} us [{}]\n",
                1e6 * std::chrono::duration<double>(t2 - t1).count() / n_views,
                1e6 * std::chrono::duration<double>(t3 - t2).count() / n_q,
@@ -271,8 +327,17 @@ void speed() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --full-search (last argument): the mesh search without its coherent path, to compare results.
+  if (argc > 1 && std::strcmp(argv[argc - 1], "--full-search") == 0) {
+    MeshSolid::set_coherent_search(false);
+    --argc;
+  }
   const bool table_only = argc > 1 && std::strcmp(argv[1], "--table-only") == 0;
   const bool speed_only = argc > 1 && std::strcmp(argv[1], "--speed-only") == 0;
+  if (argc > 1 && std::strcmp(argv[1], "--profile-sphere") == 0) {
+    speed(true);
+    return 0;
+  }
   if (argc > 1 && std::strcmp(argv[1], "--step-only") == 0) {
     speed_on_step_part();
     return 0;

@@ -2,6 +2,8 @@
 #include "metron/machine/mesh_solid.hpp"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
 #include <numbers>
 #include <limits>
@@ -161,6 +163,13 @@ std::optional<MeshSolid::Exact> MeshSolid::exact(const Surface& s, const Vec3& q
   return e;
 }
 
+namespace {
+std::atomic<bool> coherent_search{true};
+}  // namespace
+
+void MeshSolid::set_coherent_search(bool on) { coherent_search.store(on, std::memory_order_relaxed); }
+bool MeshSolid::coherent_search_enabled() { return coherent_search.load(std::memory_order_relaxed); }
+
 // ---- local views ----------------------------------------------------------------------------
 
 // Triangles binned by their boxes on a hierarchy of uniform grids (each level's cells 8 times
@@ -173,7 +182,45 @@ struct MeshSolid::Grid {
   };
   struct Level {
     double cell_mm = 1;
-    std::unordered_map<std::uint64_t, std::vector<Entry>> cells;
+    std::unordered_map<std::uint64_t, std::vector<Entry>> cells;  ///< while building
+    // Then an open-addressing table (linear probing, at most half full) of the occupied cells,
+    // each a range of `entries`: a lookup of an empty cell, the usual case, is a probe or two.
+    std::vector<std::uint64_t> slot_key;  ///< empty_key: free
+    std::vector<std::uint32_t> slot_begin, slot_end;
+    std::vector<Entry> entries;
+    std::uint64_t mask = 0;
+    int shift = 64;
+
+    static constexpr std::uint64_t empty_key = ~std::uint64_t{0};
+    [[nodiscard]] std::size_t slot_of(std::uint64_t k) const {
+      return static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ull) >> shift);
+    }
+    void freeze() {
+      std::size_t n = 2;
+      int bits = 1;
+      while (n < 2 * cells.size()) n *= 2, ++bits;
+      shift = 64 - bits;
+      mask = n - 1;
+      slot_key.assign(n, empty_key);
+      slot_begin.assign(n, 0);
+      slot_end.assign(n, 0);
+      for (auto& [k, list] : cells) {
+        std::size_t i = slot_of(k);
+        while (slot_key[i] != empty_key) i = (i + 1) & mask;
+        slot_key[i] = k;
+        slot_begin[i] = static_cast<std::uint32_t>(entries.size());
+        entries.insert(entries.end(), list.begin(), list.end());
+        slot_end[i] = static_cast<std::uint32_t>(entries.size());
+      }
+      cells = {};
+    }
+    /// The cell's entries in the order they were added (empty if none).
+    [[nodiscard]] std::pair<const Entry*, const Entry*> find(std::uint64_t k) const {
+      for (std::size_t i = slot_of(k);; i = (i + 1) & mask) {
+        if (slot_key[i] == k) return {entries.data() + slot_begin[i], entries.data() + slot_end[i]};
+        if (slot_key[i] == empty_key) return {nullptr, nullptr};
+      }
+    }
   };
   Vec3 origin = Vec3::Zero();
   std::vector<Level> levels;
@@ -193,10 +240,9 @@ struct MeshSolid::Grid {
       for (int x = a.x(); x <= b.x(); ++x)
         for (int y = a.y(); y <= b.y(); ++y)
           for (int z = a.z(); z <= b.z(); ++z) {
-            const auto it = l.cells.find(key({x, y, z}));
-            if (it == l.cells.end()) continue;
-            for (const Entry& e : it->second)
-              if (Eigen::Vector3i(x, y, z) == e.lo.cwiseMax(a)) f(e.face);
+            const auto [first, last] = l.find(key({x, y, z}));
+            for (const Entry* e = first; e != last; ++e)
+              if (Eigen::Vector3i(x, y, z) == e->lo.cwiseMax(a)) f(e->face);
           }
     }
   }
@@ -219,7 +265,7 @@ const MeshSolid::Grid& MeshSolid::grid() const {
                             box.sizes().maxCoeff() / 4000, 1e-3});
     g->origin = box.min();
     do {
-      g->levels.push_back({cell, {}});
+      g->levels.emplace_back().cell_mm = cell;
       cell *= 8;
     } while (g->levels.back().cell_mm < box.sizes().maxCoeff());
     for (std::uint32_t i = 0; i < f.size(); ++i) {
@@ -236,6 +282,7 @@ const MeshSolid::Grid& MeshSolid::grid() const {
         break;
       }
     }
+    for (Grid::Level& l : g->levels) l.freeze();
     m_grid = std::move(g);
   });
   return *m_grid;
@@ -277,19 +324,19 @@ class MeshSolid::Local final : public Solid {
     const geometry::Mesh& mesh = *solid.m_mesh;
     m_reach = radius_mm;
     const Vec3 r = Vec3::Constant(m_reach);
-    std::vector<std::uint32_t> ids;
-    solid.grid().visit(m_centre - r, m_centre + r, [&](std::uint32_t i) { ids.push_back(i); });
     const auto& v = mesh.vertices();
-    for (std::uint32_t i : ids) {
+    m_tris.reserve(256);
+    solid.grid().visit(m_centre - r, m_centre + r, [&](std::uint32_t i) {
       const auto& f = mesh.faces()[i];
       Eigen::AlignedBox3d b(v[f[0]]);
       b.extend(v[f[1]]).extend(v[f[2]]);
-      if (b.exteriorDistance(m_centre) > m_reach) continue;
-      Tri t{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i};
+      if (b.squaredExteriorDistance(m_centre) > m_reach * m_reach) return;
+      Tri& t = m_tris.emplace_back(Tri{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i});
       t.centroid = (t.a + t.b + t.c) / 3;
-      t.radius = std::max({(t.a - t.centroid).norm(), (t.b - t.centroid).norm(), (t.c - t.centroid).norm()});
-      m_tris.push_back(t);
-    }
+      // sqrt is monotonic and correctly rounded: the same as the largest of the three norms.
+      t.radius = std::sqrt(std::max({(t.a - t.centroid).squaredNorm(), (t.b - t.centroid).squaredNorm(),
+                                     (t.c - t.centroid).squaredNorm()}));
+    });
   }
 
   [[nodiscard]] double signed_distance(const Vec3& p) const override {
@@ -308,6 +355,16 @@ class MeshSolid::Local final : public Solid {
   // mesh (J. A. Baerentzen, H. Aanaes, "Signed distance computation using the angle weighted
   // pseudonormal", IEEE TVCG 11(3), 2005); the faces around the closest point are all local.
   [[nodiscard]] bool inside(const Vec3& q, const geometry::Mesh::Closest& c) const {
+    // The side cannot change within the distance of the last query decided here: the ball of
+    // that radius about it holds no surface.
+    const bool coherent = coherent_search_enabled();
+    if (coherent && m_side_radius > 0 && (q - m_side_point).norm() + anchor_slack_mm < m_side_radius) return m_side_inside;
+    const bool in = inside_by_pseudo_normal(q, c);
+    if (coherent) m_side_point = q, m_side_radius = c.distance_mm, m_side_inside = in;
+    return in;
+  }
+
+  [[nodiscard]] bool inside_by_pseudo_normal(const Vec3& q, const geometry::Mesh::Closest& c) const {
     const auto& mesh = *m_solid.m_mesh;
     const auto& f = mesh.faces()[c.face];
     const auto& v = mesh.vertices();
@@ -316,13 +373,16 @@ class MeshSolid::Local final : public Solid {
     int vertex = -1;
     for (int k = 0; k < 3; ++k)
       if ((v[f[k]] - c.point).norm() <= tol) vertex = static_cast<int>(f[k]);
+    // Every triangle through the closest point is as near q as it is, so it is among the last
+    // search's candidates; the others add nothing, so the sums are the same as over all.
     if (vertex >= 0) {
-      for (const Tri& t : m_tris)
+      each_candidate([&](const Tri& t) {
         for (int k = 0; k < 3; ++k)
           if (static_cast<int>(t.v[k]) == vertex) {
             const Vec3 e1 = (v[t.v[(k + 1) % 3]] - v[t.v[k]]).normalized(), e2 = (v[t.v[(k + 2) % 3]] - v[t.v[k]]).normalized();
             pn += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * mesh.face_normal(t.face);
           }
+      });
     } else {
       pn = mesh.face_normal(c.face);  // inside the face: its own side (rounding missed the normal line)
       for (int k = 0; k < 3; ++k) {
@@ -330,10 +390,10 @@ class MeshSolid::Local final : public Solid {
         const double s = std::clamp((c.point - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
         if ((a + s * (b - a) - c.point).norm() > tol) continue;
         pn = Vec3::Zero();
-        for (const Tri& t : m_tris) {
+        each_candidate([&](const Tri& t) {
           const auto has = [&](std::uint32_t x) { return t.v[0] == x || t.v[1] == x || t.v[2] == x; };
           if (has(f[k]) && has(f[(k + 1) % 3])) pn += mesh.face_normal(t.face);
-        }
+        });
         break;
       }
     }
@@ -358,31 +418,115 @@ class MeshSolid::Local final : public Solid {
     return *m_last;
   }
 
+  // An anchor: the view's triangles within `limit` of its point, sorted by their distance from
+  // it. Exactness: a query q at delta from the point needs only those whose key - delta is below
+  // the best distance found (a triangle's distance from q is at least key - delta), and the
+  // answer holds if it is below limit - delta (every triangle left out is farther). Ties go as
+  // in the full search, to the hint, else to the first in m_tris order, so both give the same.
+  struct Anchor {
+    Vec3 point = Vec3::Zero();
+    double limit = 0;
+    std::vector<std::pair<double, std::uint32_t>> tris;  ///< (distance from point, index into m_tris)
+    std::uint64_t used = 0;                              ///< last use (0: empty), for replacing the oldest
+  };
+  static constexpr double anchor_margin_mm = 0.15;  // limit - distance at the point (tuned by instruction count)
+  // Covers rounding in the distances (1e-13 mm) and inside()'s vertex tolerance (1e-9 relative).
+  static constexpr double anchor_slack_mm = 1e-5;
+
+  template <class F>
+  void each_candidate(F&& f) const {
+    if (!m_last_anchor) {
+      for (const Tri& t : m_tris) f(t);
+      return;
+    }
+    // The anchored search's candidates in m_tris order, so sums run in the full search's order.
+    m_scratch.clear();
+    for (std::size_t k = 0; k < m_last_visited; ++k) m_scratch.push_back(m_last_anchor->tris[k].second);
+    std::sort(m_scratch.begin(), m_scratch.end());
+    for (std::uint32_t i : m_scratch) f(m_tris[i]);
+  }
+
   [[nodiscard]] geometry::Mesh::Closest search(const Vec3& q) const {
+    m_last_anchor = nullptr;
     if (m_tris.empty()) return m_solid.m_mesh->closest(q);
     // Start from the previous answer's triangle (the probe moves um per query): its distance
     // prunes almost every other triangle by its bounding sphere, without a square root.
-    const Tri* best = &m_tris[std::min(m_hint, m_tris.size() - 1)];
-    Vec3 point = closest_on_triangle(q, best->a, best->b, best->c);
+    const std::size_t hint = std::min(m_hint, m_tris.size() - 1);
+    std::size_t best = hint;
+    Vec3 point = closest_on_triangle(q, m_tris[hint].a, m_tris[hint].b, m_tris[hint].c);
     double best_d = (q - point).norm();
-    for (const Tri& t : m_tris) {
-      const Vec3 w = q - t.centroid;
-      const double reach = best_d + t.radius, dc2 = w.squaredNorm();
-      if (dc2 >= reach * reach) continue;  // its bounding sphere
-      // Its plane, then the plane distance with the in-plane distance to its bounding circle.
-      const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
-      if (h2 >= best2) continue;
-      const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
-      if (e > 0 && h2 + e * e >= best2) continue;
-      const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
-      const double d = (q - p).norm();
-      if (d < best_d) best_d = d, best = &t, point = p;
+    const double off_centre = (q - m_centre).norm();
+    bool done = false;
+    // The search over an anchor's candidates for q at delta from its point; false (and the start
+    // restored) when its answer is not provable there.
+    const auto anchored = [&](Anchor& anchor, double delta) {
+      std::size_t k = 0;
+      for (; k < anchor.tris.size(); ++k) {
+        const auto [key, i] = anchor.tris[k];
+        if (key - delta > best_d + anchor_slack_mm) break;
+        const Tri& t = m_tris[i];
+        // The full search's tests, with ties let through.
+        const Vec3 w = q - t.centroid;
+        const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+        if (dc2 > reach * reach) continue;
+        const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+        if (h2 > best2) continue;
+        const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+        if (e > 0 && h2 + e * e > best2) continue;
+        const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
+        const double d = (q - p).norm();
+        if (d < best_d || (d == best_d && best != hint && i < best)) best_d = d, best = i, point = p;
+      }
+      if (best_d + anchor_slack_mm < anchor.limit - delta) {
+        m_last_anchor = &anchor;
+        m_last_visited = k;
+        anchor.used = ++m_clock;
+        return true;
+      }
+      best = hint;
+      point = closest_on_triangle(q, m_tris[hint].a, m_tris[hint].b, m_tris[hint].c);
+      best_d = (q - point).norm();
+      return false;
+    };
+    if (coherent_search_enabled()) {
+      // The nearest anchor, if any; else (or if it cannot prove the answer) a new one at q, whose
+      // limit is set from the start's distance, an upper bound of q's.
+      Anchor* anchor = nullptr;
+      double delta2 = 0;
+      for (Anchor& a : m_anchors)
+        if (a.used > 0)
+          if (const double dl2 = (q - a.point).squaredNorm(); !anchor || dl2 < delta2) anchor = &a, delta2 = dl2;
+      const double delta = std::sqrt(delta2);
+      if (anchor && best_d + delta < anchor->limit) done = anchored(*anchor, delta);
+      // The first query of a view starts from an arbitrary triangle: a full search first.
+      if (!done && m_clock > 0)
+        if (Anchor* fresh = add_anchor(q, best_d, off_centre)) done = anchored(*fresh, 0);
     }
-    m_hint = static_cast<std::size_t>(best - m_tris.data());
+    if (!done)
+      for (std::size_t i = 0; i < m_tris.size(); ++i) {
+        const Tri& t = m_tris[i];
+        const Vec3 w = q - t.centroid;
+        const double reach = best_d + t.radius, dc2 = w.squaredNorm();
+        if (dc2 >= reach * reach) continue;  // its bounding sphere
+        // Its plane, then the plane distance with the in-plane distance to its bounding circle.
+        const double h = w.dot(t.normal), h2 = h * h, best2 = best_d * best_d;
+        if (h2 >= best2) continue;
+        const double e = std::sqrt(std::max(0.0, dc2 - h2)) - t.radius;
+        if (e > 0 && h2 + e * e >= best2) continue;
+        const Vec3 p = closest_on_triangle(q, t.a, t.b, t.c);
+        const double d = (q - p).norm();
+        if (d < best_d) best_d = d, best = i, point = p;
+      }
+    m_hint = best;
     const double d = best_d;
-    if (d + (q - m_centre).norm() > m_reach) return m_solid.m_mesh->closest(q);
+    if (d + off_centre > m_reach) {
+      m_last_anchor = nullptr;
+      return m_solid.m_mesh->closest(q);
+    }
+    if (!done && m_clock == 0 && coherent_search_enabled()) (void)add_anchor(q, d, off_centre);
     // The same normal as geometry::Mesh::closest gives.
-    geometry::Mesh::Closest c{point, m_solid.m_mesh->face_normal(best->face), d, best->face};
+    const Tri& bt = m_tris[best];
+    geometry::Mesh::Closest c{point, m_solid.m_mesh->face_normal(bt.face), d, bt.face};
     if (d > 0) {
       const Vec3 u = (q - point) / d;
       const double cos_angle = u.dot(c.normal);
@@ -391,11 +535,42 @@ class MeshSolid::Local final : public Solid {
     return c;
   }
 
+  // An anchor at q, where the mesh is at most d_max away, in place of the least recently used
+  // one; its limit stays where the view holds every triangle (within m_reach of the centre).
+  Anchor* add_anchor(const Vec3& q, double d_max, double off_centre) const {
+    const double limit = std::min(d_max + anchor_margin_mm, m_reach - off_centre);
+    if (!(limit > d_max + 2 * anchor_slack_mm)) return nullptr;
+    Anchor* slot = &m_anchors[0];
+    for (Anchor& a : m_anchors)
+      if (a.used < slot->used) slot = &a;
+    slot->point = q;
+    slot->limit = limit;
+    slot->used = ++m_clock;
+    slot->tris.clear();
+    for (std::size_t i = 0; i < m_tris.size(); ++i) {
+      const Tri& t = m_tris[i];
+      const double reach = limit + t.radius;
+      if ((q - t.centroid).squaredNorm() > reach * reach) continue;
+      const double dt = (q - closest_on_triangle(q, t.a, t.b, t.c)).norm();
+      if (dt <= limit) slot->tris.emplace_back(dt, static_cast<std::uint32_t>(i));
+    }
+    std::sort(slot->tris.begin(), slot->tris.end());
+    return slot;
+  }
+
   const MeshSolid& m_solid;
   Vec3 m_centre;       ///< part coordinates
   double m_reach = 0;  ///< every triangle outside the candidates is farther than this from the centre
   std::vector<Tri> m_tris;
   mutable std::size_t m_hint = 0;              ///< index of the last answer's triangle
+  mutable std::array<Anchor, 3> m_anchors;     ///< for the head and the ball centre, and one spare
+  mutable std::uint64_t m_clock = 0;
+  mutable const Anchor* m_last_anchor = nullptr;  ///< the last search's; null: it went over all
+  mutable std::size_t m_last_visited = 0;         ///< how many of its triangles it visited
+  mutable std::vector<std::uint32_t> m_scratch;
+  mutable Vec3 m_side_point = Vec3::Zero();  ///< the last query whose side inside() decided
+  mutable double m_side_radius = 0;          ///< its distance from the mesh (0: none yet)
+  mutable bool m_side_inside = false;
   mutable Vec3 m_last_query = Vec3::Zero();
   mutable std::optional<geometry::Mesh::Closest> m_last;
 };

@@ -477,6 +477,87 @@ TEST(Scanning, LocalViewsAnswerExactlyLikeTheirSolid) {
   EXPECT_EQ(compared, 1000);
 }
 
+// The coherent search (candidates reused near earlier queries, the side reused within the last
+// distance, MeshSolid::set_coherent_search) against brute force over every triangle, along
+// random probe-like walks: small steps, the ball centre off the head, and jumps.
+namespace {
+
+// Distance from p to triangle abc, written independently of the solid's: the plane's foot if it
+// lies inside (by the signs of the edge cross products), else the nearest of the three edges.
+double brute_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 n = (b - a).cross(c - a);
+  if (n.norm() > 0) {
+    const Vec3 un = n.normalized();
+    const Vec3 f = p - (p - a).dot(un) * un;
+    if ((b - a).cross(f - a).dot(n) >= 0 && (c - b).cross(f - b).dot(n) >= 0 && (a - c).cross(f - c).dot(n) >= 0)
+      return (p - f).norm();
+  }
+  const auto seg = [&](const Vec3& u, const Vec3& v) {
+    const double t = std::clamp((p - u).dot(v - u) / std::max((v - u).squaredNorm(), 1e-300), 0.0, 1.0);
+    return (p - (u + t * (v - u))).norm();
+  };
+  return std::min({seg(a, b), seg(b, c), seg(c, a)});
+}
+
+}  // namespace
+
+TEST(Scanning, CoherentMeshSearchAnswersLikeBruteForce) {
+  const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7) + 0.3 * std::sin(x * 1.3); };
+  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 40, -20, 20, 60, 50));
+  Frame pose = Frame::Identity();
+  pose.translate(origin);
+  const MeshSolid solid(mesh, pose);
+  const auto brute = [&](const Vec3& p_machine) {
+    const Vec3 p = p_machine - origin;
+    double d = 1e300;
+    for (const auto& f : mesh->faces())
+      d = std::min(d, brute_triangle_distance(p, mesh->vertices()[f[0]], mesh->vertices()[f[1]], mesh->vertices()[f[2]]));
+    return d;
+  };
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int compared = 0;
+  for (int walk = 0; walk < 6; ++walk) {
+    double x = 20 + 15 * u(rng), y = 15 * u(rng);
+    const Vec3 dir = Vec3(u(rng), u(rng), 0).normalized();
+    // One view per walk, as the probe holds it; a second with the coherent search off.
+    const Vec3 centre = origin + Vec3(x, y, height(x, y) + 1.7);
+    MeshSolid::set_coherent_search(true);
+    const auto fast = solid.local_view(centre, 3.1);
+    MeshSolid::set_coherent_search(false);
+    const auto full = solid.local_view(centre, 3.1);
+    for (int k = 0; k < 300; ++k) {
+      // The head 1.5-2 mm above the surface, 10 um per step, every 50th step a jump of up to 0.4 mm.
+      const double step = k % 50 == 49 ? 0.4 * std::abs(u(rng)) : 0.01;
+      x += step * dir.x() + 0.002 * u(rng), y += step * dir.y() + 0.002 * u(rng);
+      const Vec3 head = origin + Vec3(x, y, height(x, y) + 1.75 + 0.25 * u(rng));
+      const Vec3 ball = head + Vec3(0.05 * u(rng), 0.05 * u(rng), 0.3);  // the ball centre, pushed out
+      for (const Vec3& p : {head, ball, head}) {
+        MeshSolid::set_coherent_search(true);
+        const double d_fast = fast->signed_distance(p);
+        const Vec3 n_fast = fast->normal(p);
+        MeshSolid::set_coherent_search(false);
+        const double d_full = full->signed_distance(p);
+        const Vec3 n_full = full->normal(p);
+        EXPECT_NEAR(d_fast, brute(p), 1e-12) << p.transpose();  // outside the block: positive
+        EXPECT_EQ(d_fast, d_full) << p.transpose();
+        EXPECT_EQ(n_fast, n_full) << p.transpose();
+        EXPECT_NEAR(d_fast, solid.signed_distance(p), 1e-12);
+        ++compared;
+      }
+    }
+  }
+  MeshSolid::set_coherent_search(true);
+  EXPECT_EQ(compared, 6 * 300 * 3);
+  // Inside the material the side is right too.
+  MeshSolid::set_coherent_search(true);
+  const auto view = solid.local_view(origin + Vec3(20, 0, height(20, 0)), 3.1);
+  for (int k = 0; k < 200; ++k) {
+    const Vec3 p = origin + Vec3(20 + 0.01 * k, 0, height(20 + 0.01 * k, 0) - 0.5);
+    EXPECT_NEAR(view->signed_distance(p), -brute(p), 1e-12) << p.transpose();
+  }
+}
+
 // The scanning worlds in programs/worlds behave as their descriptions say.
 namespace {
 

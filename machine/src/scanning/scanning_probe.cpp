@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/scanning/scanning_probe.hpp"
 
+#include <algorithm>
 #include <cmath>
+
+#include "metron/machine/mesh_solid.hpp"
 
 namespace metron::machine {
 
@@ -10,18 +13,32 @@ ScanningProbe::ScanningProbe(const Solid& solid, double true_ball_radius_mm, con
 
 Vec3 ScanningProbe::deflection(const Vec3& head_mm) {
   // The head moves a few um per cycle: queries go to a local view of the solid (the same values,
-  // cheaper when the nearest surface is within the view's radius), renewed every 0.2 mm of
+  // cheaper when the nearest surface is within the view's radius), renewed every `renew_mm` of
   // travel. Its radius covers the ball centre (one ball radius from the surface, E0 from the
   // head) over that travel, with room for deflection errors; beyond, the view asks the solid.
-  constexpr double renew_mm = 0.2;
+  // With the mesh's coherent search (the default) a view serves longer: its build, not its
+  // queries, is then the larger cost.
+  const bool coherent = MeshSolid::coherent_search_enabled();
+  const double renew_mm = coherent ? 1.0 : 0.2;
   const double view_radius_mm = m_radius_mm + m_spec.reference_deflection_mm + renew_mm + 0.3;
+  // A free ball stays free while the head is nearer to where it was last free than that
+  // distance's excess over the radius allows (|grad d| <= lipschitz): no query needed. The slack
+  // covers the steps of MeshSolid's exact CAD faces (about 1.5 chord tolerances) at face edges.
+  constexpr double slack_mm = 0.01;
+  if (coherent && std::max(1.0, m_solid.lipschitz()) * (head_mm - m_free_head).norm() <
+                      m_free_distance_mm - m_radius_mm - slack_mm)
+    return Vec3::Zero();
   if (!m_view || (head_mm - m_view_centre).norm() > renew_mm) {
     m_view = m_solid.local_view(head_mm, view_radius_mm);
     m_view_centre = head_mm;
   }
   const Solid& solid = *m_view;
   double d = solid.signed_distance(head_mm);
-  if (d >= m_radius_mm) return Vec3::Zero();
+  m_free_distance_mm = 0;
+  if (d >= m_radius_mm) {
+    m_free_head = head_mm, m_free_distance_mm = d;
+    return Vec3::Zero();
+  }
   // The ball is pushed out along the surface normal until its centre is one radius from the
   // actual surface: Newton steps on signed_distance(c) = r (one is exact on a plane).
   Vec3 c = head_mm;

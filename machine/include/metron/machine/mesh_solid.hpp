@@ -42,6 +42,10 @@ class MeshSolid final : public Solid {
   /// The triangles within radius_mm of the centre, searched directly; a query whose closest
   /// point cannot be proven to lie among them goes to the whole mesh (the answer is exact).
   [[nodiscard]] std::unique_ptr<Solid> local_view(const Vec3& centre_mm, double radius_mm) const override;
+  /// Whether local views reuse the candidate triangles of nearby earlier queries (default on;
+  /// the answers are the same either way). Process-wide; for benchmarks and tests that compare.
+  static void set_coherent_search(bool on);
+  [[nodiscard]] static bool coherent_search_enabled();
 
  private:
   class Local;

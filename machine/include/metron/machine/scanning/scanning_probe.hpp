@@ -30,6 +30,8 @@ class ScanningProbe {
   const Solid& m_solid;
   std::unique_ptr<Solid> m_view;     ///< m_solid's local view about m_view_centre
   Vec3 m_view_centre = Vec3::Zero();
+  Vec3 m_free_head = Vec3::Zero();  ///< the last head position with a free ball
+  double m_free_distance_mm = 0;    ///< the solid's distance there (0: in contact since)
   double m_radius_mm;
   ScanningProbeSpec m_spec;
   Rng& m_rng;
