@@ -467,6 +467,12 @@ struct VirtualCmm::Impl {
     g.reported = samples.size();
     position = probe.position_mm();
     cycle += cycles_for(probe.time_s() - now());
+    if (problem || body.last) {
+      const segmented::SegmentedStats& st = ctl.stats();
+      response.scan_log.push_back(fmt::format(
+          "segmented scan: {} commands of up to {} segments, {} stops, {} retracts, {} late plans, {} samples",
+          body.index + 1, ctl.config().buffer_segments, st.stops, probe.retracts(), st.late_plans, samples.size()));
+    }
     if (problem) return fail(*problem);
     if (body.last) segmented_scan.reset();
   }
