@@ -78,6 +78,7 @@ SegmentedScanResult scan_segmented(machine::Machine& machine, const machine::Sca
     auto responses = machine.execute();
     machine::Response& r = responses.front();
     out.samples.insert(out.samples.end(), r.scan.begin(), r.scan.end());
+    out.log.insert(out.log.end(), r.scan_log.begin(), r.scan_log.end());
     if (r.status == machine::Response::Status::Fault) out.fault = r.fault;
     return !out.fault;
   };

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "../machine/scan_paths.hpp"
@@ -122,6 +123,13 @@ TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
     const runtime::SegmentedScanResult res = runtime::scan_segmented(cmm, c, 5);
     ASSERT_FALSE(res.fault) << res.fault->message;
     EXPECT_EQ(res.commands, runtime::command_sizes(c.path.segments.size(), 100).size());
+    // The machine's own account: every boundary a stop in the conventional mode, none else
+    // (Tp = 1.3 * 100 * 0.2 ms fits in every command).
+    ASSERT_FALSE(res.log.empty());
+    const std::string stops = mode == segmented::SegmentedMode::Conventional
+                                  ? fmt::format("{} stops, {} retracts", res.commands - 1, res.commands)
+                                  : std::string("0 stops, 1 retracts");
+    EXPECT_NE(res.log.back().find(stops), std::string::npos) << res.log.back();
     // A smooth circle: the foot moves with the head, 0.01 mm per cycle at 10 mm/s.
     expect_continuous(res.samples, c.sample_spacing_mm, c.path.length(), 0.05);
     std::vector<Vec3> pts;

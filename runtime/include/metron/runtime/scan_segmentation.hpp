@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <tl/expected.hpp>
@@ -40,6 +41,7 @@ struct SegmentedScanResult {
   std::vector<machine::ScanSample> samples;  ///< every sample, in path order (up to a fault)
   std::optional<machine::Fault> fault;       ///< why the scan stopped early
   std::size_t commands = 0;                  ///< measurement commands written (0: one ScanPath)
+  std::vector<std::string> log;              ///< the machine's scan log lines
 };
 
 /// Scans `scan` on `machine` (SEEDS.md 2 steps 1-2 over the command interface): a path that fits
