@@ -83,7 +83,8 @@ void ProbeScanDriver::sense() {
   if (m_contact) m_eu_last = m_ep / m_e;
 }
 
-Vec3 ProbeScanDriver::scan_law(double plan_s_mm, double plan_v_mm_s, std::size_t command, double min_vf_mm_s) {
+Vec3 ProbeScanDriver::scan_law(double plan_s_mm, double plan_v_mm_s, std::size_t command, double min_vf_mm_s,
+                               double max_vf_mm_s) {
   const ScanControlSpec& ctl = m_setup.scanning.control;
   const Vec3 head = m_servo->position_mm();
   m_cursor->project(head);
@@ -92,14 +93,23 @@ Vec3 ProbeScanDriver::scan_law(double plan_s_mm, double plan_v_mm_s, std::size_t
   const Vec3 tangent = m_cursor->tangent();
   const Vec3 eu = m_contact ? Vec3(m_ep / m_e) : m_cursor->nominal_normal(m_eu_last);
   // SEEDS.md 2 drives SEEDS.md 1: |Vf| is the segmented plan's speed, plus a position term so the
-  // foot keeps up with the planned arc length (never backwards: the samples stay ordered).
-  const double vf = std::max(min_vf_mm_s, plan_v_mm_s + m_drive.position_gain_1_s * (plan_s_mm - m_s_mm));
-  const ScanTerms tm = scan_law_terms(m_scan.law, ctl, m_e0_mm, m_e, eu, foot, head, tangent, std::max(0.0, vf));
+  // foot keeps up with the planned arc length (never backwards: the samples stay ordered). The
+  // catch-up may not push the probe's own path speed Gf*|Vf| above `max_vf_mm_s`.
+  ScanTerms tm = scan_law_terms(m_scan.law, ctl, m_e0_mm, m_e, eu, foot, head, tangent, 0.0);
+  double vf = plan_v_mm_s + m_drive.position_gain_1_s * (plan_s_mm - m_s_mm);
+  if (vf > plan_v_mm_s) vf = std::max(plan_v_mm_s, std::min(vf, max_vf_mm_s / tm.gf));
+  vf = std::max({0.0, min_vf_mm_s, vf});
+  tm.vf = vf * tangent;
   if (m_contact && m_s_mm >= m_next_sample_s) {
     m_samples.push_back({m_t_s, head + m_ep, m_ep, m_s_mm});
     m_sample_commands.push_back(command);
     m_next_sample_s = m_scan.sample_spacing_mm > 0 ? m_s_mm + m_scan.sample_spacing_mm : std::nextafter(m_s_mm, 1e300);
   }
+  if (plan_s_mm - m_s_mm > ctl.lost_contact_mm && !m_fault)
+    m_fault = Fault{FaultKind::Stalled,
+                    fmt::format("scan stalled at {:.3f} mm along the path: the probe trails the plan by {:.3f} mm", m_s_mm,
+                                plan_s_mm - m_s_mm),
+                    head, m_t_s};
   if (m_contact) {
     m_lost_at_s = -1;
   } else if (m_lost_at_s < 0) {
@@ -142,7 +152,7 @@ void ProbeScanDriver::record(const ScanCycle& c) {
   sense();
   m_command = c.command_index;
   if (m_fault) return apply(Vec3::Zero(), false, c.state.s_mm);
-  const Vec3 v = scan_law(c.state.s_mm, c.state.v_mm_s, c.command_index, 0.0);
+  const Vec3 v = scan_law(c.state.s_mm, c.state.v_mm_s, c.command_index, 0.0, c.limit_mm_s);
   apply(v, true, c.state.s_mm);
 }
 
@@ -168,7 +178,7 @@ bool ProbeScanDriver::off_path(OffPathMove move, double s_mm, double /*t_s*/) {
         // The plan rests at the stop; the probe's foot may trail it: scan on up to the stop so no
         // stretch of the path is left without samples.
         if (m_s_mm < s_mm - 1e-3 && m_contact) {
-          v = scan_law(s_mm, 0.0, m_command, m_drive.finish_creep_mm_s);
+          v = scan_law(s_mm, 0.0, m_command, m_drive.finish_creep_mm_s, ctl.feed_mm_s);
           scanning = true;
         } else {
           m_sub = Sub::Leave;

@@ -22,7 +22,8 @@ namespace metron::machine::segmented {
 
 /// How the probe-driving recorder turns the segmented plan into motion (controller side).
 struct ProbeDriveSpec {
-  /// Vf = v_plan + this * (s_plan - s): the probe's place along the path follows the plan's.
+  /// Vf = v_plan + this * (s_plan - s), at most the speed limit where the plan is: the probe's
+  /// place along the path follows the plan's.
   double position_gain_1_s = 10;
   double positioning_speed_mm_s = 50;        ///< free moves off the surface (retract, return)
   double positioning_acceleration_mm_s2 = 500;  ///< and their acceleration
@@ -74,7 +75,8 @@ class ProbeScanDriver final : public ScanRecorder {
   [[nodiscard]] const std::vector<std::size_t>& sample_commands() const { return m_sample_commands; }
   /// Every cycle.
   [[nodiscard]] const std::vector<DrivenCycle>& cycles() const { return m_cycles; }
-  /// The fault that stopped the probe (over-range, no contact on an approach, lost contact).
+  /// The fault that stopped the probe (over-range, no contact on an approach, lost contact, or
+  /// stalled: the foot trails the plan by more than the lost-contact distance).
   [[nodiscard]] const std::optional<Fault>& fault() const { return m_fault; }
   /// Retracts from and approaches to the surface (the first approach included).
   [[nodiscard]] std::size_t retracts() const { return m_retracts; }
@@ -89,7 +91,7 @@ class ProbeScanDriver final : public ScanRecorder {
  private:
   enum class Sub { Idle, Finish, Leave, Move, Search, Settle };
   void sense();
-  Vec3 scan_law(double plan_s_mm, double plan_v_mm_s, std::size_t command, double min_vf_mm_s);
+  Vec3 scan_law(double plan_s_mm, double plan_v_mm_s, std::size_t command, double min_vf_mm_s, double max_vf_mm_s);
   bool move_toward(const Vec3& target_mm, Vec3& v);
   void apply(Vec3 v, bool scanning, double plan_s_mm);
   [[nodiscard]] Vec3 point_at(double s_mm, Vec3* normal) const;
