@@ -191,3 +191,55 @@ TEST(SegmentedScanMachine, FreeFormBumpThroughSmallBuffers) {
                 name(mode), res.commands, res.samples.size(), cmm.simulated_time_s() - t0, peak, at);
   }
 }
+
+// The buffer-write protocol: a session starts with command 0, takes its commands in order and
+// nothing else; a fault ends it.
+TEST(SegmentedScanMachine, BufferWritesFollowTheProtocol) {
+  World w = world_file("scan_lobed_circle.json");
+  w.scanning.segmented.buffer_segments = 100;
+  ScanPath c;
+  c.path = subdivided(scan_test::circle_path(Vec3(200, 300, 15), 25 + ball_r - e0, true, 0, 90), 30);
+  c.approach_normal = Vec3::UnitX();
+  const auto commands = runtime::split_commands(c.path, 100);
+  ASSERT_EQ(commands.size(), 3u);  // 270 segments
+  const auto write = [&](std::size_t i) {
+    ScanBufferWrite b;
+    b.scan = c;
+    b.scan.path = {};
+    b.scan.path.segments = commands[i].segments;
+    b.scan.path.normals = commands[i].normals;
+    b.index = commands[i].index;
+    b.last = commands[i].last;
+    return b;
+  };
+  VirtualCmm cmm(w, 1);
+  start_machine(cmm);
+  cmm.submit({3, GoTo{scan_approach_point(c) + Vec3(0, 0, 40), std::nullopt}});
+  ASSERT_EQ(cmm.execute().front().status, Response::Status::Done);
+  cmm.submit({4, write(1)});  // no session yet
+  auto r = cmm.execute();
+  ASSERT_EQ(r.front().status, Response::Status::Fault);
+  EXPECT_NE(r.front().fault->message.find("without a segmented scan"), std::string::npos);
+  cmm.submit({5, write(0)});
+  r = cmm.execute();
+  ASSERT_EQ(r.front().status, Response::Status::Done) << r.front().fault->message;
+  cmm.submit({6, GoTo{Vec3(0, 0, 0), std::nullopt}});  // not while scanning
+  r = cmm.execute();
+  ASSERT_EQ(r.front().status, Response::Status::Fault);
+  EXPECT_NE(r.front().fault->message.find("in progress"), std::string::npos);
+  cmm.submit({7, write(2)});  // out of order: the controller refuses it, the session ends
+  r = cmm.execute();
+  ASSERT_EQ(r.front().status, Response::Status::Fault);
+  EXPECT_NE(r.front().fault->message.find("out of order"), std::string::npos);
+  cmm.submit({8, GoTo{scan_approach_point(c) + Vec3(0, 0, 40), std::nullopt}});
+  EXPECT_EQ(cmm.execute().front().status, Response::Status::Done);
+  // And a whole session in order scans the quarter circle.
+  std::vector<ScanSample> all;
+  for (std::size_t i = 0; i < commands.size(); ++i) {
+    cmm.submit({9 + i, write(i)});
+    r = cmm.execute();
+    ASSERT_EQ(r.front().status, Response::Status::Done) << r.front().fault->message;
+    all.insert(all.end(), r.front().scan.begin(), r.front().scan.end());
+  }
+  expect_continuous(all, c.sample_spacing_mm, c.path.length(), 0.05);
+}
