@@ -23,6 +23,7 @@ struct RunArgs {
   std::optional<std::uint64_t> seed;
   std::string out_dir = ".";
   bool quiet = false;
+  std::optional<std::string> characterisation;
 };
 
 struct FitArgs {
@@ -37,6 +38,7 @@ int run(const RunArgs& args) {
   options.world_path = args.world;
   options.seed = args.seed;
   options.out_dir = args.out_dir;
+  options.characterisation_path = args.characterisation;
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
   options.on_event = [&](const runtime::RunEvent& e) {
     std::string text;
@@ -144,6 +146,8 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   run_cmd->add_option("program", run_args->program, "the DMIS program")->required();
   run_cmd->add_option("--world", run_args->world, "world description (JSON); default: the embedded default world");
   run_cmd->add_option("--seed", run_args->seed, "random seed of the run (default: the world's)");
+  run_cmd->add_option("--characterisation", run_args->characterisation,
+                      "machine characterisation file from `metron characterise`: PTMEAS uses its touch strategy");
   run_cmd->add_option("--out", run_args->out_dir, "directory for results.json and DMIS output files")->default_val(".");
   run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
   commands.push_back({run_cmd, [run_args] { return run(*run_args); }});

@@ -19,6 +19,8 @@ struct Command {
 void add_run_commands(CLI::App& app, std::vector<Command>& commands);
 /// debug, repl (debug_command.cpp).
 void add_debug_commands(CLI::App& app, std::vector<Command>& commands);
+/// characterise (characterise_command.cpp).
+void add_characterise_command(CLI::App& app, std::vector<Command>& commands);
 /// test (test_command.cpp).
 void add_test_command(CLI::App& app, std::vector<Command>& commands);
 

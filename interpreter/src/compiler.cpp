@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <sstream>
 
 #include <fmt/format.h>
 
@@ -116,6 +117,7 @@ class UnitCompiler {
     int ptmeas = 0;
     int declared = 0;
     bool control = false;                // control flow inside a MEAS: counts are not static
+    bool scanned = false;                // PAMEAS inside: the point count is the machine's
     std::string feature, type;
   };
   static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
@@ -446,7 +448,7 @@ class UnitCompiler {
     }
     const std::string& m = s.major;
     if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
-      static const std::set<std::string> allowed = {"GOTO", "PTMEAS", "RMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
+      static const std::set<std::string> allowed = {"GOTO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
                                                     "IF", "ELSE", "ENDIF", "DO", "ENDDO", "ASSIGN", "CALL", "DISPLY"};
       if (!allowed.count(m) && !s.variable) {
         error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
@@ -484,7 +486,9 @@ class UnitCompiler {
         {"ENDMAC", &UnitCompiler::endmac},     {"CALL", &UnitCompiler::call},
         {"DEVICE", &UnitCompiler::device},     {"OPEN", &UnitCompiler::open},
         {"CLOSE", &UnitCompiler::close},       {"ASSIGN", &UnitCompiler::bad_assign},
-        {"OBTAIN", &UnitCompiler::bad_assign},
+        {"OBTAIN", &UnitCompiler::bad_assign},  {"PATH", &UnitCompiler::path},
+        {"PAMEAS", &UnitCompiler::pameas},      {"SCNMOD", &UnitCompiler::scnmod},
+        {"SCNSET", &UnitCompiler::scnset},
     };
     auto it = handlers.find(m);
     if (it == handlers.end()) return unknown(s);
@@ -806,12 +810,12 @@ class UnitCompiler {
     Block b = m_blocks.back();
     m_blocks.pop_back();
     if (b.start == invalid) return;
-    if (!b.control && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
+    if (!b.control && !b.scanned && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
       error(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS", b.declared, b.ptmeas));
     static const std::map<std::string, int> minimum = {{"POINT", 1}, {"LINE", 2}, {"PLANE", 3}, {"CIRCLE", 3}, {"ARC", 3},
                                                        {"SPHERE", 4}, {"CYLNDR", 5}, {"CONE", 6}};
     const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
-    if (!b.control && n > 0 && n < minimum.at(b.type))
+    if (!b.control && !b.scanned && n > 0 && n < minimum.at(b.type))
       error(b.span, "sema.too-few-points", fmt::format("a {} needs at least {} points, the block has {}", b.type, minimum.at(b.type), n));
     const std::size_t end = emit(make(Op::MeasEnd, s));
     code()[b.start].target = static_cast<std::int64_t>(end);
@@ -846,6 +850,152 @@ class UnitCompiler {
     for (auto& b : m_blocks)
       if (b.kind == Block::Kind::Meas) ++b.ptmeas;
     emit(std::move(in));
+  }
+
+  // P(l)=PATH/LINE,CART,x1,y1,z1,x2,y2,z2,i,j,k
+  // P(l)=PATH/ARC,CART,x,y,z,i,j,k,rad,ang1,ang2[,INNER|OUTER]
+  // P(l)=PATH/HELICAL,CART,x,y,z,i,j,k,rad,ang1,ang2,pitch[,INNER|OUTER]
+  void path(const grammar::Statement& s) {
+    if (!require_target(s, {"P"}, "P(label)=PATH/...")) return;
+    if (!expect_params(s, 1, "the path type (LINE, ARC, HELICAL, SECTION)")) return;
+    const auto& p = s.params;
+    const std::string name = upper(s.target->name);
+    if (is_word(p[0], "SECTION")) return path_section(s);
+    static const std::set<std::string> kinds = {"LINE", "ARC", "HELICAL"};
+    if (!is_word(p[0]) || !kinds.count(p[0].text)) {
+      if (is_word(p[0])) {
+        warn(p[0].span, "sema.unsupported-path", fmt::format("PATH/{} is not supported; P({}) is skipped", p[0].text, s.target->name));
+        m_symbols.skipped["P:" + name] = s.span;
+        emit(make(Op::Nop, s, "PATH"));
+        return;
+      }
+      return error(p[0].span, "sema.bad-path", "expected LINE, ARC or HELICAL after PATH/");
+    }
+    const std::string kind = p[0].text;
+    if (p.size() < 2 || !(is_word(p[1], "CART") || is_word(p[1], "POL")))
+      return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-form", fmt::format("expected CART after PATH/{}", kind));
+    if (is_word(p[1], "POL")) return error(p[1].span, "sema.unsupported-form", "PATH with POL coordinates is not supported: use CART");
+    auto in = make(Op::PathDef, s, name);
+    in.operands.push_back(word_operand(p[0]));
+    std::size_t end = p.size();
+    std::optional<ir::Operand> side;
+    if (kind != "LINE" && end > 2 && is_word(p[end - 1]) && !is_variable(p[end - 1].text)) {
+      if (!is_word(p[end - 1], "INNER") && !is_word(p[end - 1], "OUTER"))
+        return error(p[end - 1].span, "sema.expected-side", fmt::format("expected INNER or OUTER at the end of PATH/{}", kind));
+      side = word_operand(p[end - 1]);
+      --end;
+    }
+    const std::size_t want = kind == "LINE" ? 9 : kind == "ARC" ? 9 : 10;
+    const char* form = kind == "LINE" ? "x1,y1,z1,x2,y2,z2,i,j,k" : kind == "ARC" ? "x,y,z,i,j,k,rad,ang1,ang2" : "x,y,z,i,j,k,rad,ang1,ang2,pitch";
+    const std::size_t n = end - 2;
+    if (n != want)
+      return error(end > 2 ? p[end - 1].span : p[1].span, "sema.path-arity", fmt::format("PATH/{} expects {} numbers ({}), got {}", kind, want, form, n));
+    if (side) in.operands.push_back(*side);
+    std::vector<double> v;
+    for (std::size_t i = 2; i < end; ++i) {
+      auto e = numeric(p[i], "a path parameter");
+      if (!e) return;
+      v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
+      in.operands.push_back(expr_operand(std::move(*e)));
+    }
+    const std::size_t vec = kind == "LINE" ? 6 : 3;
+    if (v[vec] == 0 && v[vec + 1] == 0 && v[vec + 2] == 0) return error(p[2 + vec].span, "sema.zero-vector", "the path vector i,j,k is zero");
+    if (kind != "LINE" && v[6] <= 0) return error(p[8].span, "sema.bad-size", fmt::format("the radius of P({}) must be positive", s.target->name));
+    if (kind != "LINE" && v[7] == v[8]) return error(p[10].span, "sema.bad-angle", "the start and end angles of the path are equal");
+    if (kind == "LINE" && v[0] == v[3] && v[1] == v[4] && v[2] == v[5]) return error(p[5].span, "sema.bad-path", "the line's end points are the same");
+    m_symbols.paths.insert(name);
+    m_symbols.skipped.erase("P:" + name);
+    emit(std::move(in));
+  }
+
+  // P(l)=PATH/SECTION,'file',x,y,z,i,j,k,xs,ys,zs   (metron: a plane section of a CAD model)
+  void path_section(const grammar::Statement& s) {
+    const auto& p = s.params;
+    if (p.size() < 2 || p[1].kind != ExprKind::String)
+      return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-file", "expected the CAD file name as a string after PATH/SECTION, e.g. 'part.stl'");
+    std::filesystem::path file(p[1].text);
+    if (file.is_relative()) file = std::filesystem::path(m_module.units[m_unit].path).parent_path() / file;
+    if (!std::filesystem::exists(file)) return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
+    const std::size_t n = p.size() - 2;
+    if (n != 9)
+      return error(p.back().span, "sema.path-arity", fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near xs,ys,zs), got {}", n));
+    auto in = make(Op::PathDef, s, upper(s.target->name));
+    in.operands.push_back(word_operand(p[0]));
+    in.names.push_back(file.string());
+    std::vector<double> v;
+    for (std::size_t i = 2; i < p.size(); ++i) {
+      auto e = numeric(p[i], "a path parameter");
+      if (!e) return;
+      v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
+      in.operands.push_back(expr_operand(std::move(*e)));
+    }
+    if (v[3] == 0 && v[4] == 0 && v[5] == 0) return error(p[5].span, "sema.zero-vector", "the plane normal i,j,k is zero");
+    m_symbols.paths.insert(upper(s.target->name));
+    m_symbols.skipped.erase("P:" + upper(s.target->name));
+    emit(std::move(in));
+  }
+
+  // PAMEAS/P(l): scan along a path inside a MEAS block
+  void pameas(const grammar::Statement& s) {
+    if (m_blocks.empty() || std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
+      return error(s.major_span, "sema.ptmeas-outside", "PAMEAS outside a MEAS block");
+    if (!expect_params(s, 1, "P(label)")) return;
+    if (s.params.size() != 1 || !is_label(s.params[0], {"P"}))
+      return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.expected-path", "expected a single P(label) after PAMEAS/");
+    const std::string name = upper(s.params[0].label.name);
+    if (!m_symbols.paths.count(name) && !macro_param(name)) {
+      if (auto it = m_symbols.skipped.find("P:" + name); it != m_symbols.skipped.end())
+        return error(s.params[0].span, "sema.skipped-definition", fmt::format("path P({}) was defined by a skipped statement", s.params[0].label.name));
+      return error(s.params[0].span, "sema.undefined-path", fmt::format("path P({}) is not defined: define it with P({})=PATH/...", s.params[0].label.name, s.params[0].label.name));
+    }
+    auto in = make(Op::PaMeas, s);
+    in.operands.push_back(label_op(s.params[0]));
+    for (auto& b : m_blocks)
+      if (b.kind == Block::Kind::Meas) b.scanned = true;
+    emit(std::move(in));
+  }
+
+  // SCNMOD/ON|OFF
+  void scnmod(const grammar::Statement& s) {
+    if (!expect_params(s, 1, "ON or OFF")) return;
+    if (s.params.size() != 1 || !(is_word(s.params[0], "ON") || is_word(s.params[0], "OFF")))
+      return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.bad-setting", "expected ON or OFF after SCNMOD/");
+    auto in = make(Op::ScanMode, s);
+    in.operands.push_back(word_operand(s.params[0]));
+    emit(std::move(in));
+  }
+
+  // SCNSET/DRAG|DIST|CHORD|ACCEL|DEFLEC,value | SCNSET/LAW,VC1|VC1P|VC2 [, ...]
+  void scnset(const grammar::Statement& s) {
+    static const std::set<std::string> values = {"DIST", "DRAG", "CHORD", "ACCEL", "DEFLEC"};
+    if (!expect_params(s, 2, "a scan setting (DRAG, DIST, CHORD, ACCEL, DEFLEC, LAW) and its value")) return;
+    for (std::size_t i = 0; i < s.params.size(); i += 2) {
+      const auto& w = s.params[i];
+      if (!is_word(w) || (!values.count(w.text) && w.text != "LAW")) {
+        if (is_word(w)) {
+          warn(w.span, "sema.unsupported-setting", fmt::format("SCNSET/{} is not supported and is ignored", w.text));
+          emit(make(Op::Nop, s, "SCNSET"));
+          return;
+        }
+        return error(w.span, "sema.bad-setting", "expected DRAG, DIST, CHORD, ACCEL, DEFLEC or LAW");
+      }
+      if (i + 1 >= s.params.size()) return error(w.span, "sema.missing-parameter", fmt::format("expected a value after {}", w.text));
+      auto in = make(Op::ScanSet, s);
+      in.operands.push_back(word_operand(w));
+      if (w.text == "LAW") {
+        const auto& law = s.params[i + 1];
+        if (!(is_word(law, "VC1") || is_word(law, "VC1P") || is_word(law, "VC2")))
+          return error(law.span, "sema.bad-setting", "expected VC1, VC1P or VC2 after LAW");
+        in.operands.push_back(word_operand(law));
+      } else {
+        auto e = numeric(s.params[i + 1], "a value");
+        if (!e) return;
+        if (e->op == ir::ExprOp::Constant && !(e->value.number > 0))
+          return error(s.params[i + 1].span, "sema.bad-setting", fmt::format("the SCNSET/{} value must be positive", w.text));
+        in.operands.push_back(expr_operand(std::move(*e)));
+      }
+      emit(std::move(in));
+    }
   }
 
   // T(l)=TOL/kind,...
@@ -1338,6 +1488,33 @@ class UnitCompiler {
     if (!expect_params(s, 1, "M(name) or EXTERN")) return;
     mark_control();
     if (is_word(s.params[0], "EXTERN")) {
+      if (s.params.size() >= 3 && is_word(s.params[1], "SYS") && s.params[2].kind == ExprKind::String) {
+        // metron's own system commands (docs/touch-trigger.md): CHARACTERISE ['file'],
+        // CHARACTERISATION 'file'.
+        const std::string text = s.params[2].text;
+        std::istringstream words(text);
+        std::string verb, arg, extra;
+        words >> verb >> arg >> extra;
+        verb = upper(verb);
+        if (verb == "CHARACTERISE" || verb == "CHARACTERIZE" || (verb == "CHARACTERISATION" && !arg.empty())) {
+          if (!extra.empty())
+            return error(s.params[2].span, "sema.system-command", fmt::format("too many words in '{}'", text));
+          if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
+            arg = (std::filesystem::path(m_module.units[m_unit].path).parent_path() / arg).string();
+          auto in = make(Op::System, s, verb == "CHARACTERIZE" ? "CHARACTERISE" : verb);
+          ir::Operand o;
+          o.kind = ir::Operand::Kind::Word;
+          o.word = arg;
+          o.span = s.params[2].span;
+          in.operands.push_back(o);
+          emit(std::move(in));
+          return;
+        }
+        warn(s.params[2].span, "sema.unsupported-call",
+             fmt::format("unknown system command '{}' (metron knows CHARACTERISE and CHARACTERISATION); the call is skipped", text));
+        emit(make(Op::Nop, s, "CALL"));
+        return;
+      }
       if (s.params.size() < 3 || !is_word(s.params[1], "DMIS")) {
         warn(s.params[0].span, "sema.unsupported-call", "only CALL/EXTERN,DMIS,'file' is supported; the call is skipped");
         emit(make(Op::Nop, s, "CALL"));

@@ -307,6 +307,14 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
     case Op::Nop:
     case Op::JumpLabel:
       return ExecStatus::Running;
+    case Op::System: {
+      const std::string& arg = in.operands.empty() ? std::string() : in.operands[0].word;
+      auto r = in.name == "CHARACTERISE"
+                   ? m_runtime.characterise_machine(arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
+                   : m_runtime.use_characterisation(arg, in.span);
+      if (!r) return from_runtime(r.error());
+      return ExecStatus::Running;
+    }
     case Op::End:
       if (frame.kind == Frame::Kind::Unit && frame.call_site.valid()) {
         m_frames.pop_back();  // ENDFIL of a file called with CALL/EXTERN: back to the caller
@@ -452,7 +460,7 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
       auto& p = m_runtime.probe_settings();
       const std::string& w = in.operands[0].word;
       const double d = *v * len;
-      if (w == "APPRCH") p.approach_mm = d;
+      if (w == "APPRCH") p.approach_mm = d, p.approach_explicit = true;
       else if (w == "RETRCT") p.retract_mm = d;
       else if (w == "SEARCH") p.search_mm = d;
       else if (w == "CLRSRF") p.clearance_mm = d;
@@ -470,7 +478,10 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
       else if (unit == "IPM") mm_s = *v * 25.4 / 60.0;
       else if (unit == "IPS") mm_s = *v * 25.4;
       else if (unit == "PCENT") mm_s = *v / 100.0 * (kind == "POSVEL" ? state.positioning_feed_mm_s : state.measuring_feed_mm_s);
-      if (kind == "SCNVEL") return ExecStatus::Running;  // scanning feeds: used by scanning (not yet)
+      if (kind == "SCNVEL") {
+        m_runtime.scan_settings().feed_mm_s = unit == "PCENT" ? *v / 100.0 * state.measuring_feed_mm_s : mm_s;
+        return ExecStatus::Running;
+      }
       auto r = kind == "POSVEL" ? m_runtime.set_feeds(mm_s, std::nullopt, in.span) : m_runtime.set_feeds(std::nullopt, mm_s, in.span);
       if (!r) return from_runtime(r.error());
       return ExecStatus::Running;
@@ -505,7 +516,7 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
         target = Vec3(nums[0], nums[1], nums[2]) * len;
       }
       if (m_block) {
-        m_block->steps.push_back({runtime::MeasStep::Kind::GoTo, target, std::nullopt, in.span});
+        m_block->steps.push_back({runtime::MeasStep::Kind::GoTo, target, std::nullopt, in.span, {}});
         m_block_position = target;
         return ExecStatus::Running;
       }
@@ -545,7 +556,7 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
         if (!actual) return from_runtime(actual.error());
         p += actual->position - nominal->position;
       }
-      m_block->steps.push_back({runtime::MeasStep::Kind::PtMeas, p, n, in.span});
+      m_block->steps.push_back({runtime::MeasStep::Kind::PtMeas, p, n, in.span, {}});
       return ExecStatus::Running;
     }
     case Op::MeasEnd: {
@@ -745,6 +756,11 @@ ExecStatus Interpreter::execute(const ir::Instruction& in, Frame& frame) {
     case Op::DeviceClose:
       if (auto r = m_runtime.close_device(label_name(in.operands[0].label), in.span); !r) return from_runtime(r.error());
       return ExecStatus::Running;
+    case Op::PathDef:
+    case Op::ScanMode:
+    case Op::ScanSet:
+    case Op::PaMeas:
+      return execute_scan(in);
   }
   return fail(in.span, "unknown instruction");
 }

@@ -18,6 +18,7 @@ const char* to_string(Op op) {
     case Op::SensorSelect: return "SENSOR_SELECT";
     case Op::ProbeSet: return "PROBE_SET";
     case Op::Feed: return "FEED";
+    case Op::System: return "SYSTEM";
     case Op::Accel: return "ACCEL";
     case Op::GoTo: return "GOTO";
     case Op::MeasBegin: return "MEAS_BEGIN";
@@ -44,6 +45,10 @@ const char* to_string(Op op) {
     case Op::DeviceOpen: return "DEVICE_OPEN";
     case Op::DeviceClose: return "DEVICE_CLOSE";
     case Op::JumpLabel: return "LABEL";
+    case Op::PathDef: return "PATH_DEF";
+    case Op::ScanMode: return "SCAN_MODE";
+    case Op::ScanSet: return "SCAN_SET";
+    case Op::PaMeas: return "PAMEAS";
   }
   return "?";
 }

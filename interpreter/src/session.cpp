@@ -37,6 +37,27 @@ bool Session::load(const std::string& program) {
   auto unit = m_compiler.compile_file(program);
   if (!unit) return false;
   if (m_sink.has_errors()) return false;
+  if (m_runtime->characterisation()) {
+    // Refuse before any motion: every constant probing feed of the program and its macros.
+    const auto check = [&](const std::vector<ir::Instruction>& code) {
+      for (const auto& in : code) {
+        if (in.op != ir::Op::Feed || in.operands.size() < 3 || in.operands[0].word != "MESVEL") continue;
+        const ir::Expr& e = in.operands[2].expr;
+        if (e.op != ir::ExprOp::Constant || !e.value.is_number()) continue;
+        const std::string& u = in.operands[1].word;
+        double mm_s = e.value.number;
+        if (u == "PCENT") continue;
+        if (u == "MPM") mm_s *= 1000.0 / 60.0;
+        else if (u == "IPM") mm_s *= 25.4 / 60.0;
+        else if (u == "IPS") mm_s *= 25.4;
+        if (auto ok = m_runtime->check_probing_feed(mm_s, in.span); !ok)
+          m_sink.report(Diagnostic{Severity::Error, "run.probing-feed", in.span, ok.error().message, {}});
+      }
+    };
+    for (const auto& u : m_compiler.module().units) check(u.code);
+    for (const auto& m : m_compiler.module().macros) check(m.code);
+    if (m_sink.has_errors()) return false;
+  }
   m_interpreter->start(*unit);
   return true;
 }
@@ -79,6 +100,15 @@ RunOutcome run_program(const RunOptions& options) {
   }
   s.runtime().set_output_directory(options.out_dir);
   if (options.on_event) s.runtime().on_event(options.on_event);
+  if (options.characterisation_path) {
+    auto c = runtime::load_characterisation(*options.characterisation_path);
+    if (!c) {
+      outcome.exit = RunExit::BadInput;
+      outcome.diagnostics = "error: " + c.error() + "\n";
+      return outcome;
+    }
+    s.runtime().set_characterisation(std::move(*c));
+  }
   const bool loaded = s.load(options.program);
   ExecStatus status = ExecStatus::Error;
   if (loaded) status = s.interpreter().run();

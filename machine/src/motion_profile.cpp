@@ -72,6 +72,63 @@ MotionProfile MotionProfile::rest_to_rest(double distance_mm, const MotionLimits
   return p;
 }
 
+namespace {
+
+// A jerk-limited speed change by dv (>= 0 up, < 0 down) with zero acceleration at both ends:
+// its phases, duration and distance (the mean of both speeds times the duration, since the
+// speed curve is point-symmetric).
+struct SpeedChange {
+  std::vector<JerkPhase> phases;
+  double duration_s = 0;
+};
+SpeedChange speed_change(double dv, const MotionLimits& l) {
+  SpeedChange c;
+  const double sign = dv < 0 ? -1 : 1, m = std::abs(dv);
+  if (m <= 0) return c;
+  const double a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
+  if (m * j >= a * a) {
+    c.phases = {{a / j, sign * j}, {m / a - a / j, 0}, {a / j, -sign * j}};
+    c.duration_s = m / a + a / j;
+  } else {
+    const double t = std::sqrt(m / j);
+    c.phases = {{t, sign * j}, {t, -sign * j}};
+    c.duration_s = 2 * t;
+  }
+  return c;
+}
+double change_distance(double v0, double v1, const MotionLimits& l) {
+  return (v0 + v1) / 2 * speed_change(v1 - v0, l).duration_s;
+}
+
+}  // namespace
+
+MotionProfile MotionProfile::reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits) {
+  const double feed = std::min(feed_mm_s, limits.speed_mm_s);
+  const auto two_ramps = [&](double v) { return change_distance(0, v, limits) + change_distance(v, feed, limits); };
+  std::vector<JerkPhase> phases;
+  const auto append = [&](const std::vector<JerkPhase>& p) { phases.insert(phases.end(), p.begin(), p.end()); };
+  double covered = 0;
+  if (change_distance(0, feed, limits) >= reach_mm) {
+    append(speed_change(feed, limits).phases);  // too close: ramp straight to the feed
+    covered = change_distance(0, feed, limits);
+  } else {
+    double peak = limits.speed_mm_s;
+    if (two_ramps(peak) > reach_mm) {
+      double lo = feed, hi = peak;
+      for (int i = 0; i < 100; ++i) (two_ramps((lo + hi) / 2) < reach_mm ? lo : hi) = (lo + hi) / 2;
+      peak = lo;
+    }
+    append(speed_change(peak, limits).phases);
+    phases.push_back({(reach_mm - two_ramps(peak)) / peak, 0});  // cruise at the peak (0 when bisected)
+    append(speed_change(feed - peak, limits).phases);
+    covered = reach_mm;
+  }
+  const double stop = change_distance(feed, 0, limits);
+  phases.push_back({std::max(0.0, distance_mm - covered - stop) / feed, 0});
+  append(speed_change(-feed, limits).phases);
+  return MotionProfile({}, std::move(phases));
+}
+
 MotionProfile MotionProfile::stop(const MotionState& from, const MotionLimits& limits) {
   check_limits(limits);
   const double v0 = from.speed_mm_s, a0 = from.acceleration_mm_s2;

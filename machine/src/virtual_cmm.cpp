@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "metron/machine/axis_dynamics.hpp"
 #include "metron/machine/contact.hpp"
 #include "metron/machine/motion_profile.hpp"
 #include "metron/machine/rng.hpp"
@@ -135,6 +136,7 @@ struct VirtualCmm::Impl {
   std::int64_t cycle = 0;
   Vec3 position;
   double positioning_feed, measuring_feed, acceleration;
+  std::optional<double> acceleration_cap;  // a programmed acceleration (caps per-axis rates)
   std::optional<Hit> last_hit;
   std::size_t executed = 0;
   std::function<void(const TraceSample&)> trace;
@@ -163,11 +165,16 @@ struct VirtualCmm::Impl {
   [[nodiscard]] std::int64_t cycles_for(double t_s) const {
     return static_cast<std::int64_t>(std::ceil(t_s / spec.dt_s - 1e-9));
   }
-  [[nodiscard]] MotionLimits limits(double feed) const {
-    return {std::min(feed, spec.max_speed_mm_s), acceleration, spec.max_jerk_mm_s3};
+  [[nodiscard]] MotionLimits limits(const Vec3& u, double feed) const {
+    return path_limits(spec, u, feed, acceleration, acceleration_cap);
   }
-  [[nodiscard]] MotionLimits braking_limits() const {
-    return {spec.max_speed_mm_s, spec.max_acceleration_mm_s2, spec.max_jerk_mm_s3};
+  // Braking from `speed` along u: the axes decelerate as they accelerate (a constant-time axis
+  // stops from any speed in its time).
+  [[nodiscard]] MotionLimits braking_limits(const Vec3& u, double speed) const {
+    if (!spec.axes) return {spec.max_speed_mm_s, spec.max_acceleration_mm_s2, spec.max_jerk_mm_s3};
+    MotionLimits l = path_limits(spec, u, speed, spec.max_acceleration_mm_s2);
+    l.speed_mm_s = spec.max_speed_mm_s;
+    return l;
   }
   [[nodiscard]] Tool* active_tool() {
     const auto it = tools.find(active);
@@ -199,7 +206,7 @@ struct VirtualCmm::Impl {
       return {};
     }
     const Vec3 u = (target - a) / len;
-    const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(feed));
+    const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(u, feed));
     const double t_end = profile.duration_s();
     const std::int64_t n = cycles_for(t_end), c0 = cycle;
     double s_prev = 0;
@@ -223,6 +230,73 @@ struct VirtualCmm::Impl {
     cycle = c0 + n;
     position = target;
     return {};
+  }
+
+  struct Touch {
+    Vec3 latched_mm;                 // ball centre latched when the controller acted on the trigger
+    double latch_time_s = 0;         // absolute
+  };
+
+  // One probing move from rest at `start` along unit u over `len` at `feed` until the trigger:
+  // the controller latches the axes when it acts on the trigger (SEEDS.md 3, C->D), brakes, and
+  // the probe's over-travel switch is checked.
+  tl::expected<Touch, Fault> touch(const Vec3& start, const Vec3& u, double len, double feed, double search_mm,
+                                   std::optional<double> reach_mm = std::nullopt) {
+    const MotionProfile profile =
+        reach_mm ? MotionProfile::reach_feed(*reach_mm, len, std::min(feed, spec.max_speed_mm_s), limits(u, positioning_feed))
+                 : MotionProfile::rest_to_rest(len, limits(u, feed));
+    const double t_end = profile.duration_s();
+    const std::int64_t n_cycles = cycles_for(t_end), c0 = cycle;
+    const double t0_abs = now();
+    sim.begin_probe(&profile, start, u);
+    std::optional<double> signal;
+    for (std::int64_t k = 1; k <= n_cycles && !signal; ++k) {
+      const double t0 = static_cast<double>(k - 1) * spec.dt_s, t1 = std::min(static_cast<double>(k) * spec.dt_s, t_end);
+      signal = sim.probe_step(t0, t1);
+      const MotionState st = profile.at(t1);
+      if (!signal) emit(t0_abs + t1, start + st.position_mm * u, st.speed_mm_s);
+    }
+    if (!signal) {
+      cycle = c0 + n_cycles;
+      position = start + len * u;
+      return fault(FaultKind::NoContact,
+                   fmt::format("no {} within {:.3f} mm past the nominal point (probed {:.3f} mm from the approach point)",
+                               sim.touched() ? "trigger" : "contact", search_mm, len),
+                   position, now());
+    }
+
+    // SEEDS.md 3, C->D: the controller's response. Latched: fixed latency; scanned: the next
+    // tick of a scan clock whose phase is random relative to the motion (the jitter).
+    double latch = *signal + spec.skip.latency_s;
+    if (spec.skip.kind == SkipInput::Kind::Scanned) {
+      const double period = spec.skip.period_s;
+      const double phase = sim.scan_phase() * period;
+      latch = phase + std::ceil((*signal - phase) / period) * period;
+    }
+    const Vec3 latched = start + profile.at(latch).position_mm * u;
+
+    // The interpolator acts at its next cycle: a jerk-limited stop from the current state.
+    const double brake = static_cast<double>(cycles_for(latch)) * spec.dt_s;
+    double stop_s = len, stop_t = t_end;
+    if (brake < t_end) {
+      const MotionState at_brake = profile.at(brake);
+      const MotionProfile stop = MotionProfile::stop(at_brake, braking_limits(u, at_brake.speed_mm_s));
+      stop_s = std::min(stop.end_position_mm(), len);
+      stop_t = brake + stop.duration_s();
+      for (std::int64_t k = cycles_for(*signal); static_cast<double>(k) * spec.dt_s < stop_t; ++k) {
+        const double t = static_cast<double>(k) * spec.dt_s;
+        const MotionState st = t < brake ? profile.at(t) : stop.at(t - brake);
+        emit(t0_abs + t, start + st.position_mm * u, st.speed_mm_s);
+      }
+    }
+    cycle = c0 + cycles_for(stop_t);
+    position = start + stop_s * u;
+    if (const auto past = sim.over_travel(stop_s))
+      return fault(FaultKind::OverTravel,
+                   fmt::format("probe over-travel: stopped {:.3f} mm past contact, limit {:.3f} mm", *past,
+                               sim.world().probe.over_travel_mm),
+                   position, now());
+    return Touch{latched, t0_abs + latch};
   }
 
   // One touch-trigger point (SEEDS.md 3): approach, probe until the trigger, latch, brake,
@@ -250,63 +324,38 @@ struct VirtualCmm::Impl {
 
     const Vec3 u = -n;
     const double len = m.approach_mm + m.search_mm;
-    const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(feed));
-    const double t_end = profile.duration_s();
-    const std::int64_t n_cycles = cycles_for(t_end), c0 = cycle;
-    const double t0_abs = now();
-    sim.begin_probe(&profile, start, u);
-    std::optional<double> signal;
-    for (std::int64_t k = 1; k <= n_cycles && !signal; ++k) {
-      const double t0 = static_cast<double>(k - 1) * spec.dt_s, t1 = std::min(static_cast<double>(k) * spec.dt_s, t_end);
-      signal = sim.probe_step(t0, t1);
-      const MotionState st = profile.at(t1);
-      if (!signal) emit(t0_abs + t1, start + st.position_mm * u, st.speed_mm_s);
+    Vec3 latched;
+    double latch_abs = 0;
+    if (m.blend_mm && (m.two_touch || !(*m.blend_mm >= 0) || *m.blend_mm > m.approach_mm))
+      return fault(FaultKind::BadCommand, "a blended ptmeas needs 0 <= blend <= approach and one touch", position, now());
+    if (!m.two_touch) {
+      auto t = touch(start, u, len, feed, m.search_mm,
+                     m.blend_mm ? std::optional<double>(m.approach_mm - *m.blend_mm) : std::nullopt);
+      if (!t) return tl::unexpected(t.error());
+      latched = t->latched_mm;
+      latch_abs = t->latch_time_s;
+    } else {
+      // SEEDS.md 3, two-touch cycle: (1) fast first touch, (2) back off, (3) slow second touch
+      // from rest, which gives the measurement; (4) retract below.
+      const auto& tt = *m.two_touch;
+      if (!(tt.first_speed_mm_s > 0) || !(tt.backoff_mm > 0) || !std::isfinite(tt.backoff_mm))
+        return fault(FaultKind::BadCommand, "two-touch first speed and back-off must be positive", position, now());
+      auto first = touch(start, u, len, tt.first_speed_mm_s, m.search_mm);
+      if (!first) return tl::unexpected(first.error());
+      const Vec3 standoff = first->latched_mm + tt.backoff_mm * n;
+      if (auto ok = check_travel(standoff, "two-touch standoff point"); !ok) return tl::unexpected(ok.error());
+      if (auto ok = move_to(standoff, positioning_feed); !ok) return tl::unexpected(ok.error());
+      auto second = touch(standoff, u, tt.backoff_mm + m.search_mm, feed, m.search_mm);
+      if (!second) return tl::unexpected(second.error());
+      latched = second->latched_mm;
+      latch_abs = second->latch_time_s;
     }
-    if (!signal) {
-      cycle = c0 + n_cycles;
-      position = end;
-      return fault(FaultKind::NoContact,
-                   fmt::format("no {} within {:.3f} mm past the nominal point (probed {:.3f} mm from the approach point)",
-                               sim.touched() ? "trigger" : "contact", m.search_mm, len),
-                   position, now());
-    }
-
-    // SEEDS.md 3, C->D: the controller's response. Latched: fixed latency; scanned: the next
-    // tick of a scan clock whose phase is random relative to the motion (the jitter).
-    double latch = *signal + spec.skip.latency_s;
-    if (spec.skip.kind == SkipInput::Kind::Scanned) {
-      const double period = spec.skip.period_s;
-      const double phase = sim.scan_phase() * period;
-      latch = phase + std::ceil((*signal - phase) / period) * period;
-    }
-    const Vec3 latched = start + profile.at(latch).position_mm * u;
-
-    // The interpolator acts at its next cycle: a jerk-limited stop from the current state.
-    const double brake = static_cast<double>(cycles_for(latch)) * spec.dt_s;
-    double stop_s = len, stop_t = t_end;
-    if (brake < t_end) {
-      const MotionProfile stop = MotionProfile::stop(profile.at(brake), braking_limits());
-      stop_s = std::min(stop.end_position_mm(), len);
-      stop_t = brake + stop.duration_s();
-      for (std::int64_t k = cycles_for(*signal); static_cast<double>(k) * spec.dt_s < stop_t; ++k) {
-        const double t = static_cast<double>(k) * spec.dt_s;
-        const MotionState st = t < brake ? profile.at(t) : stop.at(t - brake);
-        emit(t0_abs + t, start + st.position_mm * u, st.speed_mm_s);
-      }
-    }
-    cycle = c0 + cycles_for(stop_t);
-    position = start + stop_s * u;
-    if (const auto past = sim.over_travel(stop_s))
-      return fault(FaultKind::OverTravel,
-                   fmt::format("probe over-travel: stopped {:.3f} mm past contact, limit {:.3f} mm", *past,
-                               sim.world().probe.over_travel_mm),
-                   position, now());
 
     Hit hit;
     hit.centre_mm = latched;
     hit.normal = n;
     hit.ball_radius_mm = r;
-    hit.time_s = t0_abs + latch;
+    hit.time_s = latch_abs;
     if (auto ok = move_to(latched + m.retract_mm * n, positioning_feed); !ok) return tl::unexpected(ok.error());
     last_hit = hit;
     return hit;
@@ -480,6 +529,7 @@ struct VirtualCmm::Impl {
   Response run(const Command& command) {
     Response response;
     response.tag = command.tag;
+    response.start_time_s = now();
     const auto fail = [&](Fault f) {
       response.status = Response::Status::Fault;
       response.fault = std::move(f);
@@ -508,6 +558,8 @@ struct VirtualCmm::Impl {
         t.info.name = body.name;
         t.info.nominal_radius_mm = body.ball_diameter_mm / 2;
         t.info.effective_radius_mm = t.info.nominal_radius_mm;
+        // The probe's data sheet: its rated over-travel is published, so the controller knows it.
+        t.info.rated_over_travel_mm = sim.world().probe.over_travel_mm;
         tools[body.name] = t;
         if (active == body.name) sim.mount_stylus(t.info.nominal_radius_mm);
         response.tool = t.info;
@@ -528,7 +580,10 @@ struct VirtualCmm::Impl {
         // Clamped to the machine's limits, as a controller's override would be.
         if (body.positioning_mm_s > 0) positioning_feed = std::min(body.positioning_mm_s, spec.max_speed_mm_s);
         if (body.measuring_mm_s > 0) measuring_feed = std::min(body.measuring_mm_s, spec.max_speed_mm_s);
-        if (body.acceleration_mm_s2 > 0) acceleration = std::min(body.acceleration_mm_s2, spec.max_acceleration_mm_s2);
+        if (body.acceleration_mm_s2 > 0) {
+          acceleration = std::min(body.acceleration_mm_s2, spec.max_acceleration_mm_s2);
+          acceleration_cap = acceleration;
+        }
       } else if constexpr (std::is_same_v<T, ScanPath>) {
         // docs/scanning.md: position to the approach point, then the scanning controller.
         const Tool* tool = active_tool();
@@ -559,6 +614,7 @@ struct VirtualCmm::Impl {
         write_scan_buffer(body, response);
       }
     }, command.body);
+    response.end_time_s = now();
     return response;
   }
 };

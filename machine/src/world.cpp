@@ -204,9 +204,44 @@ MachineSpec parse_machine(const json& j, const std::string& ptr) {
     }
     s.finish();
   });
+  o.read("axes", [&](const json& aj, const std::string& ap) {
+    // Axes not named keep the path limits (constant rate), read after them whatever the key order.
+    std::array<AxisDynamics, 3> axes;
+    for (auto& x : axes) x.acceleration_mm_s2 = x.jerk_mm_s3 = -1;  // -1: the path limit
+    Object a(aj, ap);
+    const char* names[] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i)
+      a.read(names[i], [&](const json& xj, const std::string& xp) {
+        Object x(xj, xp);
+        const json* rate = x.find("constant_rate");
+        const json* time = x.find("constant_time");
+        if ((rate != nullptr) == (time != nullptr)) fail(xp, "expected exactly one of 'constant_rate' or 'constant_time'");
+        if (rate) {
+          Object r(*rate, x.at("constant_rate"));
+          axes[i].mode = AxisDynamics::Mode::ConstantRate;
+          set_positive(r, "acceleration_mm_s2", axes[i].acceleration_mm_s2);
+          set_positive(r, "jerk_mm_s3", axes[i].jerk_mm_s3);
+          r.finish();
+        } else {
+          Object t(*time, x.at("constant_time"));
+          axes[i].mode = AxisDynamics::Mode::ConstantTime;
+          set_positive(t, "time_s", axes[i].time_s);
+          t.finish();
+        }
+        x.finish();
+      });
+    a.finish();
+    m.axes = axes;
+  });
   set_vec3(o, "home_mm", m.home_mm);
   set_number(o, "table_z_mm", m.table_z_mm);
   o.finish();
+  if (m.axes)
+    for (auto& a : *m.axes) {
+      if (a.mode != AxisDynamics::Mode::ConstantRate) continue;
+      if (a.acceleration_mm_s2 < 0) a.acceleration_mm_s2 = m.max_acceleration_mm_s2;
+      if (a.jerk_mm_s3 < 0) a.jerk_mm_s3 = m.max_jerk_mm_s3;
+    }
   for (int i = 0; i < 3; ++i) {
     if (m.home_mm[i] < m.travel[i].min_mm || m.home_mm[i] > m.travel[i].max_mm)
       fail(o.at("home_mm"), "outside the axis travel");
@@ -515,7 +550,7 @@ void anchor_cad_path(json& j, const std::string& base_dir) {
 
 // "extends": a base world ("default" for the embedded one, else a path relative to the file),
 // overridden by this file as an RFC 7386 merge patch; machine.skip and part.design replace the
-// base's whole.
+// base's whole (and so does machine.axes).
 tl::expected<json, WorldError> resolve_extends(json j, const std::string& source, const std::string& base_dir,
                                                int depth) {
   if (!j.is_object() || !j.contains("extends")) return j;
@@ -539,7 +574,7 @@ tl::expected<json, WorldError> resolve_extends(json j, const std::string& source
   }
   j.erase("extends");
   // One-of choices are replaced, not merged: a scanned skip must not keep the base's latched.
-  for (const auto& [section, key] : {std::pair{"machine", "skip"}, std::pair{"part", "design"}}) {
+  for (const auto& [section, key] : {std::pair{"machine", "skip"}, std::pair{"machine", "axes"}, std::pair{"part", "design"}}) {
     if (j.contains(section) && j[section].is_object() && j[section].contains(key) && base.contains(section) &&
         base[section].is_object())
       base[section].erase(key);

@@ -237,6 +237,7 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
   if (!r) return tl::unexpected(r.error());
   m_active_sensor = label;
   const auto& tool = r->front().tool;
+  if (tool && !tool->qualified) m_qualification_feed_mm_s = m_machine.state().measuring_feed_mm_s;
   if (tool && !tool->qualified) {
     // Qualify on the reference sphere before the first use: the effective radius absorbs the
     // pre-travel and trigger delays at the measuring feed.
@@ -261,9 +262,50 @@ Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, st
   if (measuring) feeds.measuring_mm_s = *measuring;
   if ((positioning && !(*positioning > 0)) || (measuring && !(*measuring > 0)))
     return program_error(span, "a feed rate must be positive");
+  if (measuring) {
+    if (auto ok = check_probing_feed(*measuring, span); !ok) return ok;
+    m_measuring_feed_explicit = *measuring;
+  }
   auto r = run_commands({machine::Command{0, feeds}}, {span});
   if (!r) return tl::unexpected(r.error());
   return {};
+}
+
+Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::string>& path, Span span) {
+  auto c = characterise(m_machine, CharacterisationSettings{});
+  // The characterisation used its own tool: give the program's active one back.
+  if (!m_active_sensor.empty()) {
+    if (auto r = run_commands({machine::Command{0, machine::SelectTool{m_active_sensor}}}, {span}); !r)
+      return tl::unexpected(r.error());
+  }
+  if (!c) return program_error(span, "characterisation failed: " + c.error());
+  if (path) {
+    std::filesystem::path p(*path);
+    if (p.is_relative()) p = std::filesystem::path(m_output_dir) / p;
+    if (auto ok = save_characterisation(*c, p.string()); !ok) return program_error(span, ok.error());
+  }
+  text("PRINT", format_characterisation(*c));
+  m_characterisation = std::move(*c);
+  if (m_measuring_feed_explicit) return check_probing_feed(*m_measuring_feed_explicit, span);
+  return {};
+}
+
+Result<void> MeasurementRuntime::use_characterisation(const std::string& path, Span span) {
+  auto c = load_characterisation(path);
+  if (!c) return program_error(span, c.error());
+  m_characterisation = std::move(*c);
+  if (m_measuring_feed_explicit) return check_probing_feed(*m_measuring_feed_explicit, span);
+  return {};
+}
+
+Result<void> MeasurementRuntime::check_probing_feed(double measuring_mm_s, Span span) const {
+  if (!m_characterisation || measuring_mm_s <= m_characterisation->max_probe_feed_mm_s) return {};
+  return program_error(span, fmt::format("probing feed {:.3f} mm/s exceeds the maximum protected feed {:.3f} mm/s of "
+                                         "this machine (its stop distance would exceed {:.0f} % of the probe's "
+                                         "{:.3f} mm over-travel; docs/touch-trigger.md)",
+                                         measuring_mm_s, m_characterisation->max_probe_feed_mm_s,
+                                         100 * m_characterisation->over_travel_margin,
+                                         m_characterisation->over_travel_mm));
 }
 
 Result<void> MeasurementRuntime::set_acceleration(double acceleration_mm_s2, Span span) {
@@ -294,7 +336,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   std::vector<machine::Command> commands;
   std::vector<Span> spans;
   const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
-                                      [](const MeasStep& s) { return s.kind == MeasStep::Kind::PtMeas; });
+                                      [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
   const auto ptmeas = [&](const Vec3& nominal, const Vec3& normal, Span span) {
     machine::PtMeas p;
     p.nominal_mm = nominal;
@@ -302,23 +344,68 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     p.approach_mm = m_probe.approach_mm;
     p.search_mm = m_probe.search_mm;
     p.retract_mm = m_probe.retract_mm;
+    if (m_characterisation) {
+      // SEEDS.md 3: the characterised cycle; SNSET/APPRCH and FEDRAT/MESVEL override.
+      const TouchPlan plan = m_characterisation->plan(
+          p.normal, m_measuring_feed_explicit,
+          m_probe.approach_explicit ? std::optional<double>(m_probe.approach_mm) : std::nullopt);
+      p.approach_mm = plan.approach_mm;
+      p.speed_mm_s = plan.feed_mm_s;
+      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+      p.blend_mm = plan.blend_mm;
+    }
     commands.push_back({0, p});
     spans.push_back(span);
   };
+  std::optional<MeasStep> scan_start;  // SCNMOD/ON: a PTMEAS pair is the start and end of a scan
   if (has_points || block.steps.size() > 0) {
     for (const auto& step : block.steps) {
       const Vec3 p = m_alignment.to_machine_point(step.point);
       if (step.kind == MeasStep::Kind::GoTo) {
         commands.push_back({0, machine::GoTo{p, {}}});
         spans.push_back(step.span);
+      } else if (step.kind == MeasStep::Kind::Scan) {
+        auto path = m_paths.find(step.path);
+        if (path == m_paths.end()) return program_error(step.span, fmt::format("path P({}) is not defined", step.path));
+        auto scan = scan_command(path_contour(path->second, 0.05), step.span);
+        if (!scan) return tl::unexpected(scan.error());
+        commands.push_back({0, std::move(*scan)});
+        spans.push_back(step.span);
       } else {
         const Vec3 n = step.normal ? m_alignment.to_machine_vector(*step.normal) : nominal_normal_at(feature.nominal, p);
         if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
-        ptmeas(p, n, step.span);
+        if (!m_scan.scan_mode) {
+          ptmeas(p, n, step.span);
+        } else if (!scan_start) {
+          scan_start = step;
+        } else {
+          auto contour = nominal_contour_between(feature.nominal, m_alignment.to_machine_point(scan_start->point), p,
+                                                 n.normalized(), 0.05);
+          if (!contour) return program_error(step.span, contour.error());
+          auto scan = scan_command(*contour, step.span);
+          if (!scan) return tl::unexpected(scan.error());
+          commands.push_back({0, std::move(*scan)});
+          spans.push_back(step.span);
+          scan_start.reset();
+        }
       }
     }
   }
-  if (!has_points) {
+  if (scan_start)
+    return program_error(scan_start->span, "in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: this one has no end");
+  if (!has_points && m_scan.scan_mode && m_mode != Mode::Man) {
+    // SCNMOD/ON: scan the nominal feature instead of touching points.
+    const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
+    // Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
+    const bool along_x = std::abs(m_alignment.to_part_vector(feature.nominal.direction).normalized().x()) >= 0.99;
+    const Vec3 reference = m_alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
+    auto contour = nominal_contour(feature.nominal, m_machine.state().position_mm, m_probe.depth_mm, up, reference, 0.05);
+    if (!contour) return program_error(block.span, contour.error());
+    auto scan = scan_command(*contour, block.span);
+    if (!scan) return tl::unexpected(scan.error());
+    commands.push_back({0, std::move(*scan)});
+    spans.push_back(block.span);
+  } else if (!has_points) {
     if (m_mode == Mode::Man)
       return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");
     const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
@@ -337,12 +424,34 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   }
 
   std::vector<MeasuredPoint> points;
+  std::vector<double> commands_feed;  // the measuring feed of each command (PtMeas)
+  for (const auto& c : commands)
+    if (const auto* p = std::get_if<machine::PtMeas>(&c.body)) commands_feed.push_back(p->speed_mm_s.value_or(m_machine.state().measuring_feed_mm_s));
+    else commands_feed.push_back(0);
   const auto execution = execute_commands(std::move(commands), spans);
   for (const auto& r : execution.responses)
     if (r.hit) {
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
-      points.push_back({r.hit->centre_mm, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
-                        i < spans.size() ? spans[i] : block.span});
+      Vec3 centre = r.hit->centre_mm;
+      if (m_characterisation && i < commands_feed.size())
+        // The effective radius holds the delay distance at the qualification feed; a hit at
+        // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
+        centre += m_characterisation->dynamic_correction_mm(commands_feed[i], m_qualification_feed_mm_s) * r.hit->normal;
+      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
+                        i < spans.size() ? spans[i] : block.span, false});
+    }
+  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
+  // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
+  const auto tool = m_machine.state().tool;
+  for (const auto& r : execution.responses)
+    for (const auto& line : r.scan_log) m_record.machine_log.push_back(feature.label + ": " + line);
+  for (const auto& r : execution.responses)
+    for (const auto& sample : r.scan) {
+      const double e = sample.deflection_mm.norm();
+      if (!(e > 0)) continue;  // not in contact
+      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->nominal_radius_mm : 0.0,
+                        sample.time_s, i < spans.size() ? spans[i] : block.span, true});
     }
   if (execution.error) {
     // Keep every point obtained before the fault; the feature gets no actual.
@@ -353,7 +462,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   feature.points = points;
   feature.measured_at = block.span;
   feature.source = ActualSource::Measured;
-  if (block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
+  const bool scanned = std::any_of(points.begin(), points.end(), [](const MeasuredPoint& p) { return p.scanned; });
+  if (!scanned && block.point_count > 0 && static_cast<int>(points.size()) != block.point_count) {
     warn(block.span, fmt::format("MEAS declared {} points but {} were measured", block.point_count, points.size()));
   }
   auto fitted = fit_actual(feature.nominal, points);

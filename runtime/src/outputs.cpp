@@ -205,6 +205,7 @@ json feature_json(const Feature& f) {
                       {"approach", vector(p.normal)},
                       {"ball_radius_mm", number(p.ball_radius_mm)},
                       {"time_s", number(p.time_s)},
+                      {"scanned", p.scanned},
                       {"residual_mm", residuals ? number(f.fit->residuals_mm[i]) : json(nullptr)}});
   }
   return {{"label", f.label},
@@ -398,6 +399,7 @@ nlohmann::json results_json(const RunRecord& record) {
           {"status", status_word(record.status)},
           {"simulated_time_s", number(record.simulated_time_s)},
           {"diagnostics", record.diagnostics},
+          {"machine_log", record.machine_log},
           {"features", std::move(features)},
           {"outputs", std::move(outputs)},
           {"tolerances", std::move(tolerances)}};

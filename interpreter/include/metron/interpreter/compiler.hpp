@@ -28,7 +28,7 @@ struct SymbolTable {
   };
   std::map<std::string, FeatureInfo> features;
   std::map<std::string, std::string> tolerances;   ///< label -> kind word
-  std::set<std::string> datums, sensors, alignments, devices, saved;
+  std::set<std::string> datums, sensors, alignments, devices, saved, paths;
   std::map<std::string, VariableInfo> variables;   ///< globals
   std::map<std::string, int> macros;               ///< name -> index in Module::macros
   /// Macro name -> (parameter index -> feature type) for FEAT statements whose label is a parameter:

@@ -60,6 +60,7 @@ class Interpreter {
 
  private:
   ExecStatus execute(const ir::Instruction& in, Frame& frame);
+  ExecStatus execute_scan(const ir::Instruction& in);  ///< PATH, SCNMOD, SCNSET, PAMEAS (scan_ops.cpp)
   ExecStatus fail(Span span, std::string message);
   ExecStatus from_runtime(const runtime::RuntimeError& e);
   std::string label_name(const ir::LabelOperand& l) const;

@@ -21,6 +21,8 @@ struct RunOptions {
   std::optional<std::uint64_t> seed;         ///< empty = the world's seed
   std::string out_dir = ".";                 ///< results.json and DMIS output files go here
   std::function<void(const runtime::RunEvent&)> on_event;  ///< live report
+  /// A machine characterisation file (docs/touch-trigger.md); PTMEAS uses its touch strategy.
+  std::optional<std::string> characterisation_path;
 };
 
 /// Exit status of a run: 0 completed, 1 program error (compile or run time), 3 machine fault,
@@ -42,7 +44,9 @@ class Session {
   /// Loads the world (or the default one) and builds the machine; errors name the file.
   static tl::expected<std::unique_ptr<Session>, std::string> create(const std::optional<std::string>& world_path,
                                                                     std::optional<std::uint64_t> seed);
-  /// Compiles the program as unit 0 and prepares to run it; false on compile errors.
+  /// Compiles the program as unit 0 and prepares to run it; false on compile errors, or when
+  /// a characterisation is in use and a FEDRAT/MESVEL with a constant value asks for a probing
+  /// feed above its maximum protected feed (refused before any motion).
   bool load(const std::string& program);
   /// Compiles REPL text as a new unit and runs it to completion in the current context.
   ExecStatus execute_text(const std::string& text);

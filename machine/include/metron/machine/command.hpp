@@ -32,6 +32,18 @@ struct PtMeas {
   double search_mm = 5.0;             ///< how far past the nominal the probe searches
   double retract_mm = 2.0;            ///< retract distance after the hit
   std::optional<double> speed_mm_s;   ///< default: the current measuring feed
+  /// Two-touch cycle (SEEDS.md 3): the probing move above becomes a first touch at
+  /// `first_speed_mm_s`; the machine backs off to `backoff_mm` from the first latched ball
+  /// centre along +normal and probes again from rest at `speed_mm_s`, which gives the hit.
+  struct TwoTouch {
+    double first_speed_mm_s = 20;     ///< feed of the first (finding) touch
+    double backoff_mm = 0.5;          ///< from the first latched centre to the second touch's start
+  };
+  std::optional<TwoTouch> two_touch;  ///< none: a one-touch cycle
+  /// One-touch only: the probing move from the approach point speeds up toward the positioning
+  /// feed and slows to the measuring feed (zero acceleration) this far before the nominal
+  /// surface, so the cycle does not stop at a standoff (docs/touch-trigger.md).
+  std::optional<double> blend_mm;
 };
 
 /// Defines a tool (stylus) on the probe head, as DMIS SNSDEF/PROBE does.
@@ -129,6 +141,7 @@ struct ToolInfo {
   double effective_radius_mm = 0;     ///< after qualification (includes pre-travel and delays)
   bool qualified = false;
   double qualification_form_mm = 0;   ///< sphere form of the qualification fit (a quality figure)
+  double rated_over_travel_mm = 0;    ///< the probe's over-travel limit from its data sheet (0: unknown)
 };
 
 /// The answer to one command.
@@ -140,6 +153,8 @@ struct Response {
   std::optional<Fault> fault;         ///< when status == Fault
   std::vector<ScanSample> scan;       ///< for ScanPath (ScanBufferWrite): the samples up to the end or the fault (since the last write)
   std::vector<std::string> scan_log;  ///< for ScanPath: which speed limit bound where, and the scan's figures
+  double start_time_s = 0;            ///< the controller clock when the command started (a sensor)
+  double end_time_s = 0;              ///< the controller clock when it ended (the machine at rest)
 };
 
 }  // namespace metron::machine

@@ -39,6 +39,12 @@ class MotionProfile {
   /// lowered when the distance is too short to reach `limits.speed_mm_s`.
   static MotionProfile rest_to_rest(double distance_mm, const MotionLimits& limits);
 
+  /// A probing move that blends the approach into the probing feed: from rest, as fast as
+  /// `limits` allow (up to limits.speed_mm_s), slowing to `feed_mm_s` with zero acceleration
+  /// exactly `reach_mm` from the start, at `feed_mm_s` from there on, and to rest at
+  /// `distance_mm`. When `reach_mm` is too short to reach the feed, the feed is reached later.
+  static MotionProfile reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits);
+
   /// Shortest jerk-limited stop from `from` (speed >= 0, |acceleration| <= limit).
   static MotionProfile stop(const MotionState& from, const MotionLimits& limits);
 

@@ -43,6 +43,19 @@ struct SkipInput {
   double period_s = 0.002;            ///< Scanned: scan period
 };
 
+/// How one axis accelerates to a programmed feed (SEEDS.md 3, acceleration zone). Simulated
+/// truth: the runtime never reads it, it measures it with timed moves (runtime/characterisation).
+struct AxisDynamics {
+  enum class Mode {
+    ConstantRate,  ///< acceleration ramps at the jerk limit up to a fixed rate: ramp time grows with feed
+    ConstantTime,  ///< the programmed feed is reached in a fixed time: ramp distance grows linearly with feed
+  };
+  Mode mode = Mode::ConstantRate;     ///< which of the two
+  double acceleration_mm_s2 = 1000;   ///< ConstantRate: acceleration limit of the axis
+  double jerk_mm_s3 = 10000;          ///< ConstantRate: jerk limit of the axis
+  double time_s = 0.06;               ///< ConstantTime: time to reach any programmed feed from rest
+};
+
 /// The machine and its controller (known to the controller: it is its own configuration).
 struct MachineSpec {
   std::array<AxisTravel, 3> travel{{{-100, 1100}, {-100, 900}, {-200, 600}}};  ///< x, y, z
@@ -53,6 +66,9 @@ struct MachineSpec {
   double positioning_feed_mm_s = 50;  ///< default GoTo speed
   double measuring_feed_mm_s = 3;     ///< default probing speed
   SkipInput skip;                     ///< the trigger input
+  /// Per-axis acceleration behaviour (x, y, z); none: every axis at the path limits above
+  /// (constant rate). Hidden from the runtime (measured by the characterisation).
+  std::optional<std::array<AxisDynamics, 3>> axes;
   Vec3 home_mm{0, 0, 500};            ///< ball centre at start
   double table_z_mm = 0;              ///< table surface; everything below it is solid
 };

@@ -38,7 +38,8 @@ struct MeasuredPoint {
   Vec3 normal = Vec3::UnitZ();     ///< probing (approach) direction, unit (MCS)
   double ball_radius_mm = 0;       ///< effective radius used for compensation
   double time_s = 0;               ///< simulated time of the trigger
-  Span origin;                     ///< the PTMEAS (or MEAS in AUTO mode) that took it
+  Span origin;                     ///< the PTMEAS (or MEAS in AUTO mode, or PAMEAS) that took it
+  bool scanned = false;            ///< a scanning sample: `normal` is the deflection direction
   [[nodiscard]] Vec3 surface_mm() const { return centre_mm - ball_radius_mm * normal; }
 };
 

@@ -11,8 +11,10 @@
 #include "metron/machine/machine.hpp"
 #include "metron/runtime/alignment.hpp"
 #include "metron/runtime/alignment_ops.hpp"
+#include "metron/runtime/characterisation.hpp"
 #include "metron/runtime/feature.hpp"
 #include "metron/runtime/run_record.hpp"
+#include "metron/runtime/scan.hpp"
 #include "metron/runtime/runtime_error.hpp"
 #include "metron/runtime/tolerance.hpp"
 #include "metron/stdlib/source.hpp"
@@ -29,6 +31,7 @@ struct ProbeSettings {
   double search_mm = 5.0;      ///< SNSET/SEARCH
   double clearance_mm = 10.0;  ///< SNSET/CLRSRF: clearance above the feature for AUTO moves
   double depth_mm = 0.0;       ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
+  bool approach_explicit = false;  ///< SNSET/APPRCH was given: it overrides a characterisation's approach
 };
 
 /// S(label)=SNSDEF/PROBE,...: a sensor as the program defines it.
@@ -47,10 +50,11 @@ struct FeatureRef {
 
 /// One step of a MEAS block, in current-frame coordinates (already in mm).
 struct MeasStep {
-  enum class Kind { GoTo, PtMeas } kind = Kind::PtMeas;
+  enum class Kind { GoTo, PtMeas, Scan } kind = Kind::PtMeas;
   Vec3 point = Vec3::Zero();
   std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
   Span span;
+  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label
 };
 
 /// MEAS/type,F(label),n ... ENDMES.
@@ -122,6 +126,23 @@ class MeasurementRuntime {
   Result<void> define_sensor(const SensorDefinition& sensor, Span span);
   Result<void> select_sensor(const std::string& label, Span span);
   ProbeSettings& probe_settings() { return m_probe; }
+  /// A machine characterisation (docs/touch-trigger.md): PTMEAS then uses its strategy, feeds
+  /// and standoff; SNSET/APPRCH and FEDRAT/MESVEL stay explicit overrides, and a measuring feed
+  /// above its maximum protected feed is refused.
+  void set_characterisation(std::optional<MachineCharacterisation> characterisation) {
+    m_characterisation = std::move(characterisation);
+  }
+  [[nodiscard]] const MachineCharacterisation* characterisation() const {
+    return m_characterisation ? &*m_characterisation : nullptr;
+  }
+  /// Characterises the machine now (CALL/EXTERN,SYS,'CHARACTERISE [file]'): the routines of
+  /// characterisation.hpp with default settings; the result is used from here on and written to
+  /// `path` (relative to the output directory) when given; a report goes to the live events.
+  Result<void> characterise_machine(const std::optional<std::string>& path, Span span);
+  /// Loads a characterisation file and uses it from here on (CALL/EXTERN,SYS,'CHARACTERISATION file').
+  Result<void> use_characterisation(const std::string& path, Span span);
+  /// Checks a probing feed against the characterisation's maximum protected feed.
+  Result<void> check_probing_feed(double measuring_mm_s, Span span) const;
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
   Result<void> set_acceleration(double acceleration_mm_s2, Span span);
   void set_mode(Mode mode) { m_mode = mode; }
@@ -130,6 +151,12 @@ class MeasurementRuntime {
   /// Current ball-centre position in the current frame.
   [[nodiscard]] Vec3 position_current() const;
   Result<void> measure(const MeasBlock& block);
+
+  // Scanning (runtime/src/scan.cpp, docs/scanning-paths.md).
+  /// P(label)=PATH/...: points and vectors in the current frame.
+  Result<void> define_path(PathDefinition path_current, Span span);
+  [[nodiscard]] const std::map<std::string, PathDefinition>& paths() const { return m_paths; }
+  ScanSettings& scan_settings() { return m_scan; }
 
   // Alignments and datums.
   [[nodiscard]] const Alignment& alignment() const { return m_alignment; }
@@ -165,6 +192,8 @@ class MeasurementRuntime {
   Result<std::vector<machine::Response>> run_commands(std::vector<machine::Command> commands,
                                                       const std::vector<Span>& spans);
   Result<void> ensure_tool(Span span);
+  /// The machine command that scans `contour` (MCS) with the current tool and scan settings.
+  Result<machine::ScanPath> scan_command(const geometry::Contour& contour, Span span);
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);
@@ -189,6 +218,12 @@ class MeasurementRuntime {
   std::map<std::string, machine::ToolInfo> m_tools;  ///< defined on the machine
   std::string m_active_sensor;
   ProbeSettings m_probe;
+  ScanSettings m_scan;
+  std::map<std::string, PathDefinition> m_paths;
+  std::map<std::string, geometry::Mesh> m_models;  ///< CAD models loaded by PATH/SECTION, by path
+  std::optional<MachineCharacterisation> m_characterisation;
+  std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
+  double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
   Mode m_mode = Mode::Auto;
   struct Device {
     std::string path;

@@ -60,6 +60,7 @@ struct RunRecord {
   std::vector<RunEvent> events;      ///< OUTPUT results, texts and faults, in order
   std::vector<Feature> features;     ///< every feature at the end of the run (MCS), measured points included
   std::vector<std::string> diagnostics;   ///< formatted compile/runtime diagnostics
+  std::vector<std::string> machine_log;   ///< what the machine logged per command (scan speed limits ...), prefixed with the feature
   double simulated_time_s = 0;
 };
 

@@ -59,6 +59,11 @@ enum class Op {
   DeviceOpen,   ///< labels: DID; words: FDATA|DIRECT, format, access
   DeviceClose,  ///< labels: DID
   JumpLabel,    ///< `(name)`: a JUMPTO target (no effect)
+  PathDef,      ///< `name` = P label; words: LINE|ARC|HELICAL, [INNER|OUTER]; exprs: the numbers
+  ScanMode,     ///< words: ON|OFF
+  ScanSet,      ///< words: DIST|CHORD|ACCEL|DEFLEC, expr: value | words: LAW, VC1|VC1P|VC2
+  PaMeas,       ///< labels: P(path) (inside a MEAS block: a scan step)
+  System,       ///< CALL/EXTERN,SYS,'command': `name` = the command text (docs/touch-trigger.md)
 };
 
 /// Upper-case mnemonic of an operation (for --emit-ir).

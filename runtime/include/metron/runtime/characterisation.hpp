@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <array>
+#include <cmath>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+#include <tl/expected.hpp>
+
+#include "metron/machine/machine.hpp"
+#include "metron/stdlib/geometry/vec.hpp"
+
+/// Touch-trigger machine characterisation (SEEDS.md 3, docs/touch-trigger.md): what the host
+/// learns about the controller and axes from its own sensors (the controller clock, latched
+/// positions), and the touch strategy it derives from that. Nothing here reads the world.
+namespace metron::runtime {
+
+/// One timed move: the ramp time Td = Ta - Dc/V at feed V (SEEDS.md 3).
+struct RampSample {
+  double feed_mm_s = 0;               ///< commanded feed
+  double ramp_time_s = 0;             ///< Td, averaged over dithered lengths
+};
+
+/// The acceleration characteristic of one axis, fitted over feed for lookup.
+struct AxisAcceleration {
+  enum class Mode { ConstantRate, ConstantTime };
+  Mode mode = Mode::ConstantRate;     ///< the model that fits the timed moves best
+  double time_s = 0;                  ///< ConstantTime: the ramp time
+  double acceleration_mm_s2 = 0;      ///< ConstantRate: fitted acceleration limit
+  double jerk_mm_s3 = 0;              ///< ConstantRate: fitted jerk limit
+  double fit_rms_relative = 0;        ///< RMS relative residual of Td of the chosen model
+  std::vector<RampSample> samples;    ///< the measurements
+  /// Ramp time Td at `feed_mm_s` from the fitted model.
+  [[nodiscard]] double ramp_time_s(double feed_mm_s) const;
+  /// SEEDS.md 3: acceleration distance D1 = V * Td / 2.
+  [[nodiscard]] double distance_mm(double feed_mm_s) const { return feed_mm_s * ramp_time_s(feed_mm_s) / 2; }
+};
+
+/// Repeated touches on one point at one feed (same standoff).
+struct TouchSample {
+  double feed_mm_s = 0;               ///< probing feed
+  int count = 0;                      ///< touches
+  double mean_mm = 0;                 ///< mean latched position along the probing direction
+  double range_mm = 0;                ///< max - min of the latched positions
+  double midrange_mm = 0;             ///< (max + min) / 2: for a uniform latency far steadier than the mean
+  double stddev_mm = 0;               ///< sample standard deviation
+};
+
+/// The controller's response to the trigger as seen from the latched positions.
+struct ResponseTime {
+  bool scanned = false;               ///< jitter class: scanned skip input (else latched)
+  double jitter_s = 0;                ///< estimated scan period (latency uniform in [0, jitter))
+  double delay_s = 0;                 ///< constant delay trigger -> latch (filter + transmission + latency)
+  double noise_mm = 0;                ///< 1-sigma trigger noise (the probe's repeatability)
+  double qualification_feed_mm_s = 0; ///< feed at which the tool's effective radius was qualified
+  std::vector<TouchSample> samples;   ///< the measurements
+  /// Expected spread (range) of repeated touches at a feed: feed * jitter and 6 sigma of the
+  /// probe's own scatter, independent, added in quadrature.
+  [[nodiscard]] double spread_mm(double feed_mm_s) const {
+    return std::hypot(feed_mm_s * jitter_s, 6 * noise_mm);
+  }
+};
+
+/// Settings of a characterisation run.
+struct CharacterisationSettings {
+  double repeatability_threshold_mm = 0.010;  ///< one-touch below this spread (SEEDS.md 3: 10 um)
+  double nominal_tolerance_mm = 0;    ///< uncertainty of nominal surface positions (standoff term)
+  double over_travel_margin = 0.8;    ///< the stop distance may use this share of the over-travel
+  int touches_per_feed = 60;          ///< repeated touches per feed
+  int dither = 10;                    ///< timed moves per feed, lengths spread over one cycle
+  std::vector<double> timing_feeds_mm_s{2, 5, 10, 20, 50, 100, 150};  ///< feeds of the timed moves
+  bool blend = false;                 ///< beyond the seed: blended one-touch cycles (TouchPlan::blend_mm)
+  bool optimise_first_feed = false;   ///< beyond the seed: first-touch feed from timed trial cycles
+  bool fastest = false;               ///< beyond the seed: the fastest cycle meeting the threshold, by timed trials
+};
+
+/// A touch cycle chosen for one probing direction.
+struct TouchPlan {
+  bool two_touch = false;             ///< else one touch
+  double feed_mm_s = 0;               ///< the measuring feed (second touch or the single touch)
+  double first_feed_mm_s = 0;         ///< two-touch: first-touch feed
+  double approach_mm = 0;             ///< start distance before the nominal surface
+  double backoff_mm = 0;              ///< two-touch: from the first latched centre to the second start
+  double standoff_mm = 0;             ///< two-touch: D1 + D2 + D3 from the surface found
+  std::optional<double> blend_mm;     ///< blended one touch: the feed is reached this far before the nominal
+};
+
+/// Everything a characterisation found, and the strategy derived from it.
+struct MachineCharacterisation {
+  std::string world;                  ///< informative: the machine it was measured on
+  std::array<AxisAcceleration, 3> axes;  ///< x, y, z
+  ResponseTime response;              ///< trigger response
+  double dt_s = 0.001;                ///< controller cycle (from the clock's resolution)
+  double over_travel_mm = 0;          ///< the probe's rated over-travel
+  double pre_travel_mm = 0;           ///< upper estimate of pre-travel (nominal - effective radius - delay term)
+  double max_probe_feed_mm_s = 0;     ///< fastest feed whose stop distance stays within margin * over-travel
+  double over_travel_margin = 0.8;    ///< share of the over-travel the stop distance may use
+  double threshold_mm = 0.010;        ///< strategy threshold on the spread
+  double nominal_tolerance_mm = 0;    ///< the standoff's tolerance term
+  bool one_touch = false;             ///< strategy (SEEDS.md 3)
+  double measuring_feed_mm_s = 0;     ///< one-touch feed, or the second touch's
+  double first_feed_mm_s = 0;         ///< two-touch: first-touch feed
+  /// Beyond the seed: one touch at the measuring feed whose approach blends into it, reaching it
+  /// (with zero acceleration) the nominal tolerance + D3 before the nominal surface.
+  bool blend = false;
+
+  /// Ramp time along unit `direction` at `feed_mm_s` (the slowest axis involved dominates).
+  [[nodiscard]] double ramp_time_s(const Vec3& direction, double feed_mm_s) const;
+  /// D1 along `direction` (SEEDS.md 3: V * Td / 2).
+  [[nodiscard]] double acceleration_distance_mm(const Vec3& direction, double feed_mm_s) const;
+  /// Distance from contact to standstill: pre-travel + feed * (delay + jitter + dt) + braking.
+  [[nodiscard]] double stop_distance_mm(const Vec3& direction, double feed_mm_s) const;
+  /// Fastest feed along `direction` whose stop distance stays within margin * over-travel.
+  [[nodiscard]] double max_feed_mm_s(const Vec3& direction) const;
+  /// SEEDS.md 3: optimal standoff D1 + D2 + D3 (+ the nominal tolerance when `with_tolerance`).
+  [[nodiscard]] double standoff_mm(const Vec3& direction, double slow_mm_s, double fast_mm_s, double tolerance_mm) const;
+  /// Nominal minus effective radius of a tool qualified at the qualification feed: the ball
+  /// centre is at nominal + effective radius when latched, this much before it at contact.
+  /// Approach distances (from nominal + effective radius) include it.
+  [[nodiscard]] double qualified_offset_mm() const;
+  /// How much farther past the surface a hit at `feed_mm_s` is latched than one at the feed the
+  /// tool was qualified at: (feed - qualification feed) * (delay + jitter / 2); hits are moved
+  /// back by it along the normal (SEEDS.md 3: the delay-distance correction at constant feed).
+  [[nodiscard]] double dynamic_correction_mm(double feed_mm_s, double qualification_feed_mm_s) const;
+  /// The cycle for probing along -normal (`normal` the surface normal), with optional explicit
+  /// feed and approach (FEDRAT/MESVEL, SNSET/APPRCH).
+  [[nodiscard]] TouchPlan plan(const Vec3& normal, std::optional<double> feed_mm_s,
+                               std::optional<double> approach_mm) const;
+};
+
+/// Runs the characterisation on `machine` with a tool of `ball_diameter_mm` (defined, selected
+/// and qualified on the reference sphere): timed moves per axis and feed, repeated touches on
+/// the last qualification point at several feeds, then the derived limits and strategy.
+/// `log` receives progress lines (may be empty).
+tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine& machine,
+                                                                const CharacterisationSettings& settings,
+                                                                const std::function<void(const std::string&)>& log = {},
+                                                                double ball_diameter_mm = 4.0);
+
+/// Only the acceleration characteristic of one axis (0..2) from timed moves; the controller
+/// clock's resolution (its cycle) is stored in `clock_resolution_s` when given.
+tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::Machine& machine, int axis,
+                                                                     const std::vector<double>& feeds_mm_s, int dither,
+                                                                     double* clock_resolution_s = nullptr);
+
+/// The characterisation file (docs/touch-trigger.md).
+nlohmann::json to_json(const MachineCharacterisation& c);
+/// Reads a characterisation file's JSON; errors name the key.
+tl::expected<MachineCharacterisation, std::string> characterisation_from_json(const nlohmann::json& j);
+/// Writes / reads the file.
+tl::expected<void, std::string> save_characterisation(const MachineCharacterisation& c, const std::string& path);
+tl::expected<MachineCharacterisation, std::string> load_characterisation(const std::string& path);
+/// A human-readable report.
+std::string format_characterisation(const MachineCharacterisation& c);
+
+}  // namespace metron::runtime

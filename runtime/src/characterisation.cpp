@@ -1,0 +1,622 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/runtime/characterisation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <numeric>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace metron::runtime {
+namespace {
+
+using nlohmann::json;
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+// The constant-rate model of the ramp time: a jerk-limited ramp to v (triangular acceleration
+// below a^2/j, trapezoidal above).
+double constant_rate_ramp_s(double v, double a, double j) {
+  if (v * j < a * a) return 2 * std::sqrt(v / j);
+  return v / a + a / j;
+}
+
+double rms_relative(const std::vector<RampSample>& s, const std::function<double(double)>& model) {
+  double sum = 0;
+  for (const auto& x : s) {
+    const double r = (model(x.feed_mm_s) - x.ramp_time_s) / x.ramp_time_s;
+    sum += r * r;
+  }
+  return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(1, s.size())));
+}
+
+// Fits both acceleration models to the timed moves; the constant-time model is chosen when it
+// explains the data within 0.5 % (a constant-rate fit can imitate it only with an unbounded
+// acceleration).
+AxisAcceleration fit_axis(std::vector<RampSample> samples) {
+  AxisAcceleration a;
+  a.samples = std::move(samples);
+  double mean = 0;
+  for (const auto& s : a.samples) mean += s.ramp_time_s;
+  mean /= static_cast<double>(a.samples.size());
+  const double rms_time = rms_relative(a.samples, [&](double) { return mean; });
+
+  // Constant rate: a coarse log grid over (a, j), then zoom in around the best cell.
+  double best = inf, la_best = 3, lj_best = 4;
+  double la_lo = 0.5, la_hi = 6.5, lj_lo = 1, lj_hi = 8.5;
+  for (int round = 0; round < 8; ++round) {
+    const int n = round == 0 ? 120 : 24;
+    for (int i = 0; i <= n; ++i)
+      for (int k = 0; k <= n; ++k) {
+        const double la = la_lo + (la_hi - la_lo) * i / n, lj = lj_lo + (lj_hi - lj_lo) * k / n;
+        const double acc = std::pow(10, la), jerk = std::pow(10, lj);
+        const double r = rms_relative(a.samples, [&](double v) { return constant_rate_ramp_s(v, acc, jerk); });
+        if (r < best) best = r, la_best = la, lj_best = lj;
+      }
+    const double wa = (la_hi - la_lo) / (round == 0 ? 20 : 6), wj = (lj_hi - lj_lo) / (round == 0 ? 20 : 6);
+    la_lo = la_best - wa, la_hi = la_best + wa, lj_lo = lj_best - wj, lj_hi = lj_best + wj;
+  }
+  a.acceleration_mm_s2 = std::pow(10, la_best);
+  a.jerk_mm_s3 = std::pow(10, lj_best);
+  a.time_s = mean;
+  if (rms_time < 0.005 && rms_time <= best * 1.5 + 0.002) {
+    a.mode = AxisAcceleration::Mode::ConstantTime;
+    a.fit_rms_relative = rms_time;
+  } else {
+    a.mode = AxisAcceleration::Mode::ConstantRate;
+    a.fit_rms_relative = best;
+  }
+  return a;
+}
+
+std::string fault_text(const machine::Response& r) {
+  return r.fault ? fmt::format("{}: {}", machine::to_string(r.fault->kind), r.fault->message) : "fault";
+}
+
+// Executes one command and returns its response (a fault is returned as a response too).
+machine::Response run1(machine::Machine& m, machine::Command c) {
+  m.submit(std::move(c));
+  auto rs = m.execute();
+  return rs.empty() ? machine::Response{} : rs.front();
+}
+
+double mean_of(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); }
+
+const char* axis_name(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
+
+}  // namespace
+
+double AxisAcceleration::ramp_time_s(double feed_mm_s) const {
+  if (mode == Mode::ConstantTime) return time_s;
+  return constant_rate_ramp_s(std::max(feed_mm_s, 1e-9), acceleration_mm_s2, jerk_mm_s3);
+}
+
+double MachineCharacterisation::ramp_time_s(const Vec3& direction, double feed_mm_s) const {
+  // The path's ramp is set by its most restrictive axis, as the controller plans it: per axis
+  // the path acceleration and jerk limits a_i/|u_i|, j_i/|u_i| (constant rate) or the axis's
+  // ramp time (constant time).
+  double a = inf, j = inf, t = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double c = std::abs(direction[i]);
+    if (c < 1e-9) continue;
+    const AxisAcceleration& ax = axes[static_cast<std::size_t>(i)];
+    if (ax.mode == AxisAcceleration::Mode::ConstantTime) t = std::max(t, ax.time_s);
+    else a = std::min(a, ax.acceleration_mm_s2 / c), j = std::min(j, ax.jerk_mm_s3 / c);
+  }
+  const double rate = std::isfinite(a) ? constant_rate_ramp_s(std::max(feed_mm_s, 1e-9), a, j) : 0;
+  return std::max(rate, t);
+}
+
+double MachineCharacterisation::acceleration_distance_mm(const Vec3& direction, double feed_mm_s) const {
+  return feed_mm_s * ramp_time_s(direction, feed_mm_s) / 2;  // SEEDS.md 3: D1 = V * Td / 2
+}
+
+double MachineCharacterisation::stop_distance_mm(const Vec3& direction, double feed_mm_s) const {
+  // SEEDS.md 3: pre-travel + feed x (interface + controller delays, worst-case latency and the
+  // interpolator's next cycle) + the braking distance (braking mirrors the ramp: V * Td / 2).
+  return pre_travel_mm + feed_mm_s * (response.delay_s + response.jitter_s + dt_s) +
+         acceleration_distance_mm(direction, feed_mm_s);
+}
+
+double MachineCharacterisation::max_feed_mm_s(const Vec3& direction) const {
+  const double limit = over_travel_margin * over_travel_mm;
+  if (stop_distance_mm(direction, 1e-6) >= limit) return 0;
+  double lo = 0, hi = 1;
+  while (stop_distance_mm(direction, hi) < limit && hi < 1e5) lo = hi, hi *= 2;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = (lo + hi) / 2;
+    (stop_distance_mm(direction, mid) < limit ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+double MachineCharacterisation::standoff_mm(const Vec3& direction, double slow_mm_s, double fast_mm_s,
+                                            double tolerance_mm) const {
+  const double d1 = acceleration_distance_mm(direction, slow_mm_s);  // SEEDS.md 3: D1, slow feed's ramp
+  const double d2 = fast_mm_s * response.jitter_s;                  // D2: first touch's uncertainty
+  const double d3 = slow_mm_s * (response.delay_s + response.jitter_s);  // D3: dynamic zone
+  return d1 + d2 + d3 + tolerance_mm;
+}
+
+double MachineCharacterisation::qualified_offset_mm() const {
+  return pre_travel_mm + response.qualification_feed_mm_s * (response.delay_s + response.jitter_s / 2);
+}
+
+double MachineCharacterisation::dynamic_correction_mm(double feed_mm_s, double qualification_feed_mm_s) const {
+  return (feed_mm_s - qualification_feed_mm_s) * (response.delay_s + response.jitter_s / 2);
+}
+
+TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double> feed_mm_s,
+                                        std::optional<double> approach_mm) const {
+  const Vec3 u = -normal.normalized();
+  TouchPlan p;
+  p.two_touch = !one_touch && !blend;
+  p.feed_mm_s = feed_mm_s.value_or(measuring_feed_mm_s);
+  if (blend) {
+    // No stop at a standoff: the approach move itself slows to the feed before the band in
+    // which the surface may be (the nominal tolerance), plus the dynamic zone D3.
+    p.blend_mm = nominal_tolerance_mm + p.feed_mm_s * (response.delay_s + response.jitter_s) + qualified_offset_mm();
+    p.approach_mm = std::max(approach_mm.value_or(2.0), *p.blend_mm);
+    return p;
+  }
+  if (!p.two_touch) {
+    // One touch from rest: at constant speed before the earliest possible contact.
+    p.approach_mm = approach_mm.value_or(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm) + qualified_offset_mm());
+    return p;
+  }
+  p.first_feed_mm_s = std::min(first_feed_mm_s, max_feed_mm_s(u));
+  // The first touch finds the surface: at its feed before the earliest possible contact, since
+  // the maximum protected feed assumes braking from constant speed (a trigger while still
+  // accelerating brakes later: the acceleration must ramp down first).
+  p.approach_mm = approach_mm.value_or(acceleration_distance_mm(u, p.first_feed_mm_s) + nominal_tolerance_mm);
+  p.standoff_mm = standoff_mm(u, p.feed_mm_s, p.first_feed_mm_s, 0);
+  // From the first latched centre back to the surface: pre-travel and the constant-delay part
+  // of the first touch's dynamic zone (its jitter part is D2), then the standoff.
+  p.backoff_mm = p.standoff_mm + pre_travel_mm + p.first_feed_mm_s * response.delay_s;
+  return p;
+}
+
+tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::Machine& machine, int axis,
+                                                                     const std::vector<double>& feeds, int dither,
+                                                                     double* clock_resolution_s) {
+  const Vec3 e = Vec3::Unit(axis);
+  std::uint64_t tag = 1u << 20;
+  double sign = 1;
+  // A timed out-and-back move; the first one that would leave the travel flips the direction.
+  const auto timed = [&](double length, double feed) -> tl::expected<std::array<double, 2>, std::string> {
+    const Vec3 p0 = machine.state().position_mm;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      auto out = run1(machine, {tag++, machine::GoTo{p0 + sign * length * e, feed}});
+      if (out.status == machine::Response::Status::Fault) {
+        if (attempt == 0 && out.fault && out.fault->kind == machine::FaultKind::AxisLimit) {
+          sign = -sign;
+          continue;
+        }
+        return tl::unexpected(fmt::format("timed move on {}: {}", axis_name(axis), fault_text(out)));
+      }
+      auto back = run1(machine, {tag++, machine::GoTo{p0, feed}});
+      if (back.status == machine::Response::Status::Fault)
+        return tl::unexpected(fmt::format("timed move on {}: {}", axis_name(axis), fault_text(back)));
+      return std::array<double, 2>{out.end_time_s - out.start_time_s, back.end_time_s - back.start_time_s};
+    }
+    return tl::unexpected(fmt::format("no room for a timed move of {:.1f} mm on {}", length, axis_name(axis)));
+  };
+
+  // The clock ticks once per controller cycle: find its resolution from moves whose lengths
+  // differ by a fifth of a millisecond of travel.
+  std::vector<double> durations;
+  for (int k = 0; k < 40; ++k) {
+    auto t = timed(20 + k * 20 * 0.0002, 20);
+    if (!t) return tl::unexpected(t.error());
+    durations.push_back((*t)[0]);
+  }
+  std::sort(durations.begin(), durations.end());
+  double dt = inf;
+  for (std::size_t i = 1; i < durations.size(); ++i)
+    if (durations[i] - durations[i - 1] > 1e-7) dt = std::min(dt, durations[i] - durations[i - 1]);
+  if (!std::isfinite(dt)) dt = 0;
+  if (clock_resolution_s) *clock_resolution_s = dt;
+
+  std::vector<RampSample> samples;
+  for (double feed : feeds) {
+    // Long enough to cruise (the ramp is well under half a second at any feed of interest).
+    const double base = feed * 0.6 + 5;
+    std::vector<double> td;
+    for (int k = 0; k < dither; ++k) {
+      // Lengths spread over one clock cycle of travel so the rounding to whole cycles averages
+      // to half a cycle.
+      const double len = base + feed * dt * k / dither;
+      auto t = timed(len, feed);
+      if (!t) return tl::unexpected(t.error());
+      // SEEDS.md 3: Td = Ta - Dc / V.
+      for (double ta : *t) td.push_back(ta - len / feed);
+    }
+    const double ramp = mean_of(td) - dt / 2;
+    // A feed above the machine's speed limit is clamped by the controller: the apparent Td then
+    // grows with the length (Dc (1/Vmax - 1/V)). One move of twice the length tells; such feeds
+    // (and faster ones) are dropped.
+    auto check = timed(2 * base, feed);
+    if (!check) return tl::unexpected(check.error());
+    const double ramp2 = mean_of({(*check)[0] - 2 * base / feed, (*check)[1] - 2 * base / feed});
+    if (std::abs(ramp2 - ramp) > 0.01 * ramp + 1.5 * dt) break;
+    samples.push_back({feed, ramp});
+  }
+  if (samples.size() < 3) return tl::unexpected(fmt::format("too few usable timing feeds on the {} axis", axis_name(axis)));
+  return fit_axis(std::move(samples));
+}
+
+tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine& machine,
+                                                                const CharacterisationSettings& settings,
+                                                                const std::function<void(const std::string&)>& log,
+                                                                double ball_diameter_mm) {
+  const auto say = [&](const std::string& s) {
+    if (log) log(s);
+  };
+  MachineCharacterisation c;
+  c.threshold_mm = settings.repeatability_threshold_mm;
+  c.nominal_tolerance_mm = settings.nominal_tolerance_mm;
+  c.over_travel_margin = settings.over_travel_margin;
+  c.blend = settings.blend;
+
+  // 1. Acceleration characteristic per axis from timed moves (SEEDS.md 3).
+  for (int i = 0; i < 3; ++i) {
+    say(fmt::format("timing moves on the {} axis ...", axis_name(i)));
+    auto a = measure_axis_acceleration(machine, i, settings.timing_feeds_mm_s, settings.dither, &c.dt_s);
+    if (!a) return tl::unexpected(a.error());
+    c.axes[static_cast<std::size_t>(i)] = *a;
+  }
+
+  // 2. A qualified tool: its last qualification point is a surface point with a known normal.
+  std::uint64_t tag = 1u << 24;
+  const std::string tool = "METRON_CHAR";
+  for (machine::Command cmd : {machine::Command{tag++, machine::DefineTool{tool, ball_diameter_mm, -Vec3::UnitZ(), 50}},
+                               machine::Command{tag++, machine::SelectTool{tool}},
+                               machine::Command{tag++, machine::QualifyTool{}}}) {
+    auto r = run1(machine, cmd);
+    if (r.status == machine::Response::Status::Fault) return tl::unexpected("tool qualification: " + fault_text(r));
+  }
+  const machine::MachineState st = machine.state();
+  if (!st.last_hit || !st.tool) return tl::unexpected(std::string("qualification gave no point"));
+  const Vec3 n = st.last_hit->normal.normalized();
+  // With the qualified (effective) radius the latched centre gives the surface itself.
+  const Vec3 surface = st.last_hit->centre_mm - st.tool->effective_radius_mm * n;
+  c.over_travel_mm = st.tool->rated_over_travel_mm;
+  c.response.qualification_feed_mm_s = st.measuring_feed_mm_s;
+  if (!(c.over_travel_mm > 0)) return tl::unexpected(std::string("the probe's rated over-travel is unknown"));
+
+  // 3. Repeated touches on that point at several feeds, same standoff (SEEDS.md 3).
+  const auto touches = [&](double feed) -> tl::expected<TouchSample, std::string> {
+    machine::PtMeas p;
+    p.nominal_mm = surface;
+    p.normal = n;
+    p.approach_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + 0.3;
+    // The probing move ends at rest at the search end: the latch must come before it slows
+    // down, i.e. within search - D1 of the surface (the stop distance is below the over-travel).
+    p.search_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + c.over_travel_mm + 0.5;
+    p.retract_mm = 0.5;
+    p.speed_mm_s = feed;
+    std::vector<double> x;
+    for (int k = 0; k < settings.touches_per_feed; ++k) {
+      auto r = run1(machine, {tag++, p});
+      if (r.status == machine::Response::Status::Fault || !r.hit)
+        return tl::unexpected(fmt::format("touch at {:.1f} mm/s: {}", feed, fault_text(r)));
+      x.push_back((r.hit->centre_mm - surface).dot(n));
+    }
+    TouchSample s;
+    s.feed_mm_s = feed;
+    s.count = static_cast<int>(x.size());
+    s.mean_mm = mean_of(x);
+    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+    s.range_mm = *hi - *lo;
+    s.midrange_mm = (*hi + *lo) / 2;
+    double var = 0;
+    for (double v : x) var += (v - s.mean_mm) * (v - s.mean_mm);
+    s.stddev_mm = std::sqrt(var / std::max(1.0, static_cast<double>(x.size() - 1)));
+    return s;
+  };
+  const auto estimate = [&]() {
+    auto& r = c.response;
+    const auto& s = r.samples;
+    // Midranges: x(F) = A - F * (delay + jitter / 2), a straight line in F. (The midrange of a
+    // uniform latency scatters ~3x less than the mean at 60 touches.)
+    double sf = 0, sx = 0, sff = 0, sfx = 0;
+    for (const auto& t : s)
+      sf += t.feed_mm_s, sx += t.midrange_mm, sff += t.feed_mm_s * t.feed_mm_s, sfx += t.feed_mm_s * t.midrange_mm;
+    const double m = static_cast<double>(s.size());
+    const double slope = (m * sfx - sf * sx) / (m * sff - sf * sf);
+    // Spread: uniform latency over one scan period spreads the points by F * period; the
+    // slowest feed's scatter is the probe's own noise.
+    const auto lowest = std::min_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
+    const auto highest = std::max_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
+    const double nn = static_cast<double>(highest->count);
+    // The range of N uniform draws over a width W is W (N - 1) / (N + 1) on average; at the
+    // highest feed the jitter's width F * period dominates the probe's own scatter.
+    // Averaged over the faster feeds (each range scatters by about 3 % at 60 touches).
+    double period = 0;
+    int used = 0;
+    for (const auto& t : s)
+      if (t.feed_mm_s >= 0.25 * highest->feed_mm_s) {
+        const double k = static_cast<double>(t.count);
+        period += t.range_mm / t.feed_mm_s * (k + 1) / (k - 1);
+        ++used;
+      }
+    period /= std::max(1, used);
+    (void)nn;
+    // Jitter class: a scanned input spreads the points in proportion to the feed (the range
+    // grows with feed) by a period of a millisecond or more; a latched one by microseconds
+    // (the range stays the probe's own scatter at every feed).
+    const bool grows = highest->range_mm > 1.5 * lowest->range_mm;
+    r.scanned = grows && period > 2e-4;
+    r.jitter_s = r.scanned ? period : 0;
+    // The probe's own scatter: the slowest feed's, less the jitter's share there.
+    const double v = lowest->stddev_mm * lowest->stddev_mm - std::pow(lowest->feed_mm_s * r.jitter_s, 2) / 12;
+    r.noise_mm = std::sqrt(std::max(0.0, v));
+    r.delay_s = std::max(0.0, -slope - r.jitter_s / 2);
+    // Nominal - effective radius = pre-travel + F_q * (delay + jitter / 2) (+ the ball's radius error).
+    c.pre_travel_mm = std::max(0.0, st.tool->nominal_radius_mm - st.tool->effective_radius_mm -
+                                        r.qualification_feed_mm_s * (r.delay_s + r.jitter_s / 2));
+  };
+  for (double feed : {2.0, 5.0}) {
+    say(fmt::format("repeated touches at {:.1f} mm/s ...", feed));
+    auto s = touches(feed);
+    if (!s) return tl::unexpected(s.error());
+    c.response.samples.push_back(*s);
+  }
+  estimate();
+  // Faster feeds, safely inside the preliminary limit, sharpen the delay and jitter estimates.
+  const double prelim = c.max_feed_mm_s(-n);
+  for (double share : {0.3, 0.6, 0.9}) {
+    const double feed = share * prelim;
+    if (feed <= 5.5) continue;
+    say(fmt::format("repeated touches at {:.1f} mm/s ...", feed));
+    auto s = touches(feed);
+    if (!s) return tl::unexpected(s.error());
+    c.response.samples.push_back(*s);
+  }
+  estimate();
+
+  // 4. Limits and strategy.
+  c.max_probe_feed_mm_s = inf;
+  for (int i = 0; i < 3; ++i) c.max_probe_feed_mm_s = std::min(c.max_probe_feed_mm_s, c.max_feed_mm_s(Vec3::Unit(i)));
+  // The accurate feed: the spread of repeated touches within the threshold (SEEDS.md 3).
+  const double accurate = c.response.jitter_s > 0
+                              ? std::sqrt(std::max(std::pow(c.threshold_mm, 2) - std::pow(6 * c.response.noise_mm, 2),
+                                                   std::pow(c.threshold_mm / 2, 2))) / c.response.jitter_s
+                              : c.max_probe_feed_mm_s;
+  c.first_feed_mm_s = c.max_probe_feed_mm_s;
+  // SEEDS.md 3: one-touch cycles when the spread at the fast feed is below the threshold.
+  c.one_touch = c.response.spread_mm(c.first_feed_mm_s) <= c.threshold_mm;
+  c.measuring_feed_mm_s = std::min(accurate, c.max_probe_feed_mm_s);
+  if (!(c.measuring_feed_mm_s > 0)) return tl::unexpected(std::string("no probing feed meets the threshold"));
+
+  // 5. Beyond the seed: timed trial cycles on the same point (the controller clock is a sensor).
+  // A cycle starts at rest 2 mm above the nominal and ends retracted; the nominal is off the
+  // surface by -tol, 0, +tol in turn, as the standoff's tolerance term assumes.
+  const auto trial = [&](const MachineCharacterisation& cc) -> tl::expected<double, std::string> {
+    double total = 0;
+    int count = 0;
+    for (double offset : {-1.0, 0.0, 1.0, 0.5, -0.5}) {
+      const Vec3 nominal = surface + offset * cc.nominal_tolerance_mm * n;
+      const TouchPlan plan = cc.plan(n, std::nullopt, std::nullopt);
+      auto go = run1(machine, {tag++, machine::GoTo{nominal + (st.tool->effective_radius_mm + 2.0) * n, std::nullopt}});
+      if (go.status == machine::Response::Status::Fault)
+        return tl::unexpected("trial cycle: " + fault_text(go));
+      machine::PtMeas p;
+      p.nominal_mm = nominal;
+      p.normal = n;
+      p.approach_mm = std::min(plan.approach_mm, 2.0);
+      p.search_mm = 2 * cc.nominal_tolerance_mm + c.over_travel_mm + 1;
+      p.retract_mm = 2.0;
+      p.speed_mm_s = plan.feed_mm_s;
+      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+      if (plan.blend_mm) p.blend_mm = std::min(*plan.blend_mm, p.approach_mm);
+      auto r = run1(machine, {tag++, p});
+      if (r.status == machine::Response::Status::Fault)
+        return tl::unexpected("trial cycle: " + fault_text(r));
+      total += r.end_time_s - r.start_time_s;
+      ++count;
+    }
+    return total / count;
+  };
+  if (settings.optimise_first_feed && !c.one_touch) {
+    // The first touch's feed trades its own time against D2 = feed * jitter in the standoff
+    // (and its ramp D1 in the approach): pick the fastest of a few candidates by timing.
+    double best = inf, best_feed = c.first_feed_mm_s;
+    for (int k = 1; k <= 6; ++k) {
+      MachineCharacterisation cc = c;
+      cc.first_feed_mm_s = c.measuring_feed_mm_s + (c.max_probe_feed_mm_s - c.measuring_feed_mm_s) * k / 6;
+      auto t = trial(cc);
+      if (!t) return tl::unexpected(t.error());
+      say(fmt::format("trial two-touch cycles, first touch {:.1f} mm/s: {:.4f} s", cc.first_feed_mm_s, *t));
+      if (*t < best) best = *t, best_feed = cc.first_feed_mm_s;
+    }
+    c.first_feed_mm_s = best_feed;
+  }
+  if (settings.fastest) {
+    // Controller-aware: every cycle that meets the threshold, the fastest by timing.
+    MachineCharacterisation one = c, two = c, blend = c;
+    one.one_touch = true, one.blend = false;
+    two.one_touch = false, two.blend = false;
+    blend.blend = true;
+    double best = inf;
+    for (const MachineCharacterisation* cc : {&one, &two, &blend}) {
+      auto t = trial(*cc);
+      if (!t) return tl::unexpected(t.error());
+      say(fmt::format("trial {} cycles: {:.4f} s", cc->blend ? "blended one-touch" : cc->one_touch ? "one-touch" : "two-touch", *t));
+      if (*t < best) best = *t, c.one_touch = cc->one_touch, c.blend = cc->blend;
+    }
+  }
+  return c;
+}
+
+// ---- the file ----
+
+json to_json(const MachineCharacterisation& c) {
+  json axes = json::object();
+  for (int i = 0; i < 3; ++i) {
+    const auto& a = c.axes[static_cast<std::size_t>(i)];
+    json samples = json::array();
+    for (const auto& s : a.samples) samples.push_back({{"feed_mm_s", s.feed_mm_s}, {"ramp_time_s", s.ramp_time_s}});
+    json ax = {{"mode", a.mode == AxisAcceleration::Mode::ConstantTime ? "constant_time" : "constant_rate"},
+               {"time_s", a.time_s},
+               {"acceleration_mm_s2", a.acceleration_mm_s2},
+               {"jerk_mm_s3", a.jerk_mm_s3},
+               {"fit_rms_relative", a.fit_rms_relative},
+               {"samples", samples}};
+    axes[axis_name(i)] = ax;
+  }
+  json touches = json::array();
+  for (const auto& s : c.response.samples)
+    touches.push_back({{"feed_mm_s", s.feed_mm_s}, {"count", s.count}, {"mean_mm", s.mean_mm},
+                       {"range_mm", s.range_mm}, {"midrange_mm", s.midrange_mm}, {"stddev_mm", s.stddev_mm}});
+  return {
+      {"format", "metron-touch-characterisation"},
+      {"version", 1},
+      {"world", c.world},
+      {"dt_s", c.dt_s},
+      {"axes", axes},
+      {"response", {{"skip", c.response.scanned ? "scanned" : "latched"},
+                    {"jitter_s", c.response.jitter_s},
+                    {"delay_s", c.response.delay_s},
+                    {"noise_mm", c.response.noise_mm},
+                    {"qualification_feed_mm_s", c.response.qualification_feed_mm_s},
+                    {"touches", touches}}},
+      {"over_travel_mm", c.over_travel_mm},
+      {"over_travel_margin", c.over_travel_margin},
+      {"pre_travel_mm", c.pre_travel_mm},
+      {"max_probe_feed_mm_s", c.max_probe_feed_mm_s},
+      {"strategy", {{"threshold_mm", c.threshold_mm},
+                    {"cycle", c.one_touch ? "one_touch" : "two_touch"},
+                    {"blend", c.blend},
+                    {"measuring_feed_mm_s", c.measuring_feed_mm_s},
+                    {"first_feed_mm_s", c.first_feed_mm_s},
+                    {"nominal_tolerance_mm", c.nominal_tolerance_mm}}},
+  };
+}
+
+tl::expected<MachineCharacterisation, std::string> characterisation_from_json(const json& j) {
+  try {
+    MachineCharacterisation c;
+    if (j.value("format", std::string()) != "metron-touch-characterisation")
+      return tl::unexpected(std::string("/format: expected \"metron-touch-characterisation\""));
+    c.world = j.value("world", std::string());
+    c.dt_s = j.at("dt_s").get<double>();
+    for (int i = 0; i < 3; ++i) {
+      const json& ax = j.at("axes").at(axis_name(i));
+      auto& a = c.axes[static_cast<std::size_t>(i)];
+      const std::string mode = ax.at("mode").get<std::string>();
+      if (mode != "constant_time" && mode != "constant_rate")
+        return tl::unexpected(fmt::format("/axes/{}/mode: expected constant_time or constant_rate", axis_name(i)));
+      a.mode = mode == "constant_time" ? AxisAcceleration::Mode::ConstantTime : AxisAcceleration::Mode::ConstantRate;
+      a.time_s = ax.at("time_s").get<double>();
+      a.acceleration_mm_s2 = ax.at("acceleration_mm_s2").get<double>();
+      a.jerk_mm_s3 = ax.at("jerk_mm_s3").get<double>();
+      a.fit_rms_relative = ax.value("fit_rms_relative", 0.0);
+      for (const auto& s : ax.value("samples", json::array()))
+        a.samples.push_back({s.at("feed_mm_s").get<double>(), s.at("ramp_time_s").get<double>()});
+      if (!(a.time_s > 0) || !(a.acceleration_mm_s2 > 0) || !(a.jerk_mm_s3 > 0))
+        return tl::unexpected(fmt::format("/axes/{}: time, acceleration and jerk must be positive", axis_name(i)));
+    }
+    const json& r = j.at("response");
+    c.response.scanned = r.at("skip").get<std::string>() == "scanned";
+    c.response.jitter_s = r.at("jitter_s").get<double>();
+    c.response.delay_s = r.at("delay_s").get<double>();
+    c.response.noise_mm = r.at("noise_mm").get<double>();
+    c.response.qualification_feed_mm_s = r.at("qualification_feed_mm_s").get<double>();
+    for (const auto& s : r.value("touches", json::array()))
+      c.response.samples.push_back({s.at("feed_mm_s").get<double>(), s.at("count").get<int>(), s.at("mean_mm").get<double>(),
+                                    s.at("range_mm").get<double>(), s.value("midrange_mm", 0.0),
+                                    s.at("stddev_mm").get<double>()});
+    c.over_travel_mm = j.at("over_travel_mm").get<double>();
+    c.over_travel_margin = j.value("over_travel_margin", 0.8);
+    c.pre_travel_mm = j.at("pre_travel_mm").get<double>();
+    c.max_probe_feed_mm_s = j.at("max_probe_feed_mm_s").get<double>();
+    const json& s = j.at("strategy");
+    c.threshold_mm = s.at("threshold_mm").get<double>();
+    const std::string cycle = s.at("cycle").get<std::string>();
+    if (cycle != "one_touch" && cycle != "two_touch")
+      return tl::unexpected(std::string("/strategy/cycle: expected one_touch or two_touch"));
+    c.one_touch = cycle == "one_touch";
+    c.blend = s.value("blend", false);
+    c.measuring_feed_mm_s = s.at("measuring_feed_mm_s").get<double>();
+    c.first_feed_mm_s = s.at("first_feed_mm_s").get<double>();
+    c.nominal_tolerance_mm = s.value("nominal_tolerance_mm", 0.0);
+    if (!(c.measuring_feed_mm_s > 0) || !(c.max_probe_feed_mm_s > 0) || !(c.dt_s > 0))
+      return tl::unexpected(std::string("feeds and dt_s must be positive"));
+    return c;
+  } catch (const json::exception& e) {
+    return tl::unexpected(fmt::format("bad characterisation file: {}", e.what()));
+  }
+}
+
+tl::expected<void, std::string> save_characterisation(const MachineCharacterisation& c, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) return tl::unexpected(fmt::format("cannot write {}", path));
+  out << to_json(c).dump(2) << "\n";
+  if (!out) return tl::unexpected(fmt::format("cannot write {}", path));
+  return {};
+}
+
+tl::expected<MachineCharacterisation, std::string> load_characterisation(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return tl::unexpected(fmt::format("{}: cannot read", path));
+  json j = json::parse(in, nullptr, false, true);
+  if (j.is_discarded()) return tl::unexpected(fmt::format("{}: not valid JSON", path));
+  auto c = characterisation_from_json(j);
+  if (!c) return tl::unexpected(fmt::format("{}: {}", path, c.error()));
+  return c;
+}
+
+std::string format_characterisation(const MachineCharacterisation& c) {
+  std::ostringstream o;
+  o << "acceleration characteristic (timed moves, SEEDS.md 3: Td = Ta - Dc/V, D1 = V*Td/2)\n";
+  for (int i = 0; i < 3; ++i) {
+    const auto& a = c.axes[static_cast<std::size_t>(i)];
+    if (a.mode == AxisAcceleration::Mode::ConstantTime)
+      o << fmt::format("  {}: constant time, Td = {:.4f} s (fit rms {:.2f} %)\n", axis_name(i), a.time_s, 100 * a.fit_rms_relative);
+    else
+      o << fmt::format("  {}: constant rate, a = {:.0f} mm/s^2, j = {:.0f} mm/s^3 (fit rms {:.2f} %)\n", axis_name(i),
+                       a.acceleration_mm_s2, a.jerk_mm_s3, 100 * a.fit_rms_relative);
+    o << "     feed mm/s  Td ms   D1 mm\n";
+    for (const auto& s : a.samples)
+      o << fmt::format("     {:9.1f} {:6.2f} {:7.4f}\n", s.feed_mm_s, 1e3 * s.ramp_time_s, s.feed_mm_s * s.ramp_time_s / 2);
+  }
+  o << fmt::format("controller cycle: {:.4f} s\n", c.dt_s);
+  o << "trigger response (repeated touches on one point)\n";
+  for (const auto& s : c.response.samples)
+    o << fmt::format("  {:7.1f} mm/s: {} touches, range {:.4f} mm, sigma {:.4f} mm\n", s.feed_mm_s, s.count, s.range_mm,
+                     s.stddev_mm);
+  o << fmt::format("  skip input: {} (jitter {:.2f} ms), constant delay {:.2f} ms, probe noise {:.2f} um (1 sigma)\n",
+                   c.response.scanned ? "scanned" : "latched", 1e3 * c.response.jitter_s, 1e3 * c.response.delay_s,
+                   1e3 * c.response.noise_mm);
+  o << fmt::format("pre-travel (upper estimate): {:.4f} mm; rated over-travel {:.3f} mm, margin {:.0f} %\n", c.pre_travel_mm,
+                   c.over_travel_mm, 100 * c.over_travel_margin);
+  o << fmt::format("maximum protected probing feed: {:.1f} mm/s (stop distance {:.3f} mm along z)\n", c.max_probe_feed_mm_s,
+                   c.stop_distance_mm(-Vec3::UnitZ(), c.max_probe_feed_mm_s));
+  o << fmt::format("strategy: {}{} (threshold {:.1f} um; spread at {:.1f} mm/s: {:.1f} um)\n",
+                   c.blend ? "blended one-touch" : c.one_touch ? "one-touch" : "two-touch",
+                   c.blend ? " (beyond the seed)" : "", 1e3 * c.threshold_mm, c.first_feed_mm_s,
+                   1e3 * c.response.spread_mm(c.first_feed_mm_s));
+  const Vec3 down = -Vec3::UnitZ();
+  if (c.one_touch)
+    o << fmt::format("  measuring feed {:.1f} mm/s, approach {:.3f} mm (D1 + D3 + tolerance {:.3f})\n", c.measuring_feed_mm_s,
+                     c.standoff_mm(down, c.measuring_feed_mm_s, 0, c.nominal_tolerance_mm), c.nominal_tolerance_mm);
+  else
+    o << fmt::format("  first touch {:.1f} mm/s, second touch {:.2f} mm/s, standoff D1+D2+D3 = {:.4f} mm along z\n",
+                     c.first_feed_mm_s, c.measuring_feed_mm_s,
+                     c.standoff_mm(down, c.measuring_feed_mm_s, c.first_feed_mm_s, 0));
+  o << "standoff per feed along z (second touch after a first touch at the first-touch feed)\n";
+  o << "  feed mm/s   D1 mm    D2 mm    D3 mm   standoff mm\n";
+  for (double f : {1.0, 2.0, 5.0, 10.0, 20.0}) {
+    if (f > c.max_probe_feed_mm_s) break;
+    const double d1 = c.acceleration_distance_mm(down, f), d2 = c.first_feed_mm_s * c.response.jitter_s,
+                 d3 = f * (c.response.delay_s + c.response.jitter_s);
+    o << fmt::format("  {:8.1f} {:8.4f} {:8.4f} {:8.4f} {:9.4f}\n", f, d1, d2, d3, d1 + d2 + d3);
+  }
+  return o.str();
+}
+
+}  // namespace metron::runtime

@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// End to end: `metron characterise`, runs with a characterisation file, the refusal of a too
+// fast probing feed, and the characterisation called from a program (docs/touch-trigger.md).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "metron/interpreter/session.hpp"
+#include "metron/runtime/characterisation.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using metron::interpreter::RunExit;
+using metron::interpreter::RunOptions;
+using metron::interpreter::run_program;
+using metron::runtime::FeatureReport;
+
+const fs::path source_dir = METRON_SOURCE_DIR;
+// The characterised strategy keeps the spread (range) of repeated points within 10 um: a
+// uniform spread of that width has sigma = 10 / sqrt(12) = 2.9 um per point; the features below
+// are fitted from 4..8 points, so 3 sigma of a single point bounds their errors.
+constexpr double point_sigma_mm = 0.010 / 3.4641016;
+
+fs::path out_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("metron_touch_" + std::to_string(::getpid())) / name;
+  fs::create_directories(d);
+  return d;
+}
+fs::path world(const std::string& name) { return source_dir / "programs" / "worlds" / name; }
+fs::path example(const std::string& name) { return source_dir / "programs" / "examples" / name; }
+
+const FeatureReport* report(const metron::runtime::RunRecord& r, const std::string& label) {
+  const FeatureReport* found = nullptr;
+  for (const auto& e : r.events)
+    if (const auto* f = std::get_if<FeatureReport>(&e); f && f->label == label) found = f;
+  return found;
+}
+
+// `metron characterise` as a user runs it; returns its stdout.
+std::string characterise(const std::string& world_name, const fs::path& out) {
+  const std::string cmd = std::string(METRON_BINARY) + " characterise --world " + world(world_name).string() + " --out " +
+                          out.string() + " 2>/dev/null";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  EXPECT_NE(p, nullptr);
+  std::string text;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) text.append(buf, n);
+  EXPECT_EQ(::pclose(p), 0) << text;
+  return text;
+}
+
+metron::interpreter::RunOutcome run(const fs::path& program, const std::string& world_name, const std::string& out,
+                                    std::optional<fs::path> characterisation) {
+  RunOptions o;
+  o.program = program.string();
+  o.world_path = world(world_name).string();
+  o.out_dir = out_dir(out).string();
+  if (characterisation) o.characterisation_path = characterisation->string();
+  return run_program(o);
+}
+
+TEST(Touch, CharacterisedRunMeasuresTheBlock) {
+  for (const char* w : {"touch_scanned_4ms.json", "touch_latched.json", "touch_const_time.json"}) {
+    const fs::path file = out_dir("char") / (std::string(w) + ".char.json");
+    const std::string text = characterise(w, file);
+    EXPECT_NE(text.find("strategy: "), std::string::npos) << text;
+    ASSERT_TRUE(metron::runtime::load_characterisation(file.string()));
+    const auto o = run(example("05_touch_strategy.dmi"), w, std::string("with_") + w, file);
+    ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+    const FeatureReport* top = report(o.record, "TOP");
+    const FeatureReport* bore = report(o.record, "BORE1");
+    ASSERT_TRUE(top && bore && top->actual && bore->actual);
+    // The true block: top at z = 40, BORE1 20 mm at (40, 50) (no deviations in these worlds).
+    EXPECT_NEAR(top->actual->position.z(), 40, 2 * point_sigma_mm) << w;
+    EXPECT_NEAR(bore->actual->diameter_mm, 20, 3 * point_sigma_mm) << w;
+    EXPECT_NEAR(bore->actual->position.x(), 40, 3 * point_sigma_mm) << w;
+    EXPECT_NEAR(bore->actual->position.y(), 50, 3 * point_sigma_mm) << w;
+  }
+}
+
+TEST(Touch, TooFastProbingFeedIsRefusedBeforeAnyMotion) {
+  const fs::path file = out_dir("refuse") / "c.json";
+  characterise("touch_scanned_4ms.json", file);
+  const fs::path prog = out_dir("refuse") / "fast.dmi";
+  std::ofstream(prog) << "DMISMN/'too fast', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n"
+                         "FEDRAT/MESVEL, MMPS, 40\nENDFIL\n";
+  const auto o = run(prog, "touch_scanned_4ms.json", "refused", file);
+  EXPECT_EQ(o.exit, RunExit::ProgramError);
+  EXPECT_NE(o.diagnostics.find("fast.dmi:4:1: error: probing feed 40.000 mm/s exceeds the maximum protected feed"),
+            std::string::npos)
+      << o.diagnostics;
+  EXPECT_EQ(o.record.simulated_time_s, 0.0);  // not even the GOTO before it ran
+  // The same program without a characterisation runs (the machine clamps nothing here).
+  const auto free = run(prog, "touch_scanned_4ms.json", "not_refused", std::nullopt);
+  EXPECT_EQ(free.exit, RunExit::Completed) << free.diagnostics;
+}
+
+TEST(Touch, CharacteriseFromAProgram) {
+  const auto o = run(example("06_characterise_in_program.dmi"), "touch_const_time.json", "in_program", std::nullopt);
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const fs::path file = out_dir("in_program") / "touch.json";
+  auto c = metron::runtime::load_characterisation(file.string());
+  ASSERT_TRUE(c) << c.error();
+  EXPECT_TRUE(c->response.scanned);
+  EXPECT_FALSE(c->one_touch);
+  const FeatureReport* bore = report(o.record, "BORE1");
+  ASSERT_TRUE(bore && bore->actual);
+  EXPECT_NEAR(bore->actual->diameter_mm, 20, 3 * point_sigma_mm);
+  // A bad system command is a warning and is skipped; a missing file is a positioned error.
+  const fs::path prog = out_dir("in_program") / "load.dmi";
+  std::ofstream(prog) << "DMISMN/'load', 5.0\nCALL/EXTERN, SYS, 'CHARACTERISATION nothing_here.json'\nENDFIL\n";
+  const auto bad = run(prog, "touch_const_time.json", "in_program_bad", std::nullopt);
+  EXPECT_EQ(bad.exit, RunExit::ProgramError);
+  EXPECT_NE(bad.diagnostics.find("load.dmi:2:1: error:"), std::string::npos) << bad.diagnostics;
+}
+
+}  // namespace
