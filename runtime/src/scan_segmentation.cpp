@@ -70,6 +70,23 @@ tl::expected<seg::SegmentedStats, machine::Fault> stream_commands(const std::vec
   return controller.stats();
 }
 
+std::vector<machine::Command> scan_commands(const machine::ScanPath& scan, std::size_t capacity) {
+  if (capacity == 0 || scan.path.segments.size() <= capacity) return {machine::Command{0, scan}};
+  std::vector<machine::Command> out;
+  for (seg::MeasurementCommand& c : split_commands(scan.path, capacity)) {
+    machine::ScanBufferWrite w;
+    w.scan = scan;
+    w.scan.path = {};
+    w.scan.path.segments = std::move(c.segments);
+    w.scan.path.normals = std::move(c.normals);
+    w.scan.path.speed_mm_s = std::move(c.speed_mm_s);
+    w.index = c.index;
+    w.last = c.last;
+    out.push_back({0, std::move(w)});
+  }
+  return out;
+}
+
 SegmentedScanResult scan_segmented(machine::Machine& machine, const machine::ScanPath& scan, std::uint64_t tag) {
   SegmentedScanResult out;
   const std::size_t capacity = machine.state().scan_buffer_segments;
@@ -82,21 +99,10 @@ SegmentedScanResult scan_segmented(machine::Machine& machine, const machine::Sca
     if (r.status == machine::Response::Status::Fault) out.fault = r.fault;
     return !out.fault;
   };
-  if (capacity == 0 || scan.path.segments.size() <= capacity) {
-    answer({tag, scan});
-    return out;
-  }
-  for (seg::MeasurementCommand& c : split_commands(scan.path, capacity)) {
-    machine::ScanBufferWrite w;
-    w.scan = scan;
-    w.scan.path = {};
-    w.scan.path.segments = std::move(c.segments);
-    w.scan.path.normals = std::move(c.normals);
-    w.scan.path.speed_mm_s = std::move(c.speed_mm_s);
-    w.index = c.index;
-    w.last = c.last;
-    ++out.commands;
-    if (!answer({tag, std::move(w)})) break;
+  for (machine::Command& c : scan_commands(scan, capacity)) {
+    if (std::holds_alternative<machine::ScanBufferWrite>(c.body)) ++out.commands;
+    c.tag = tag;
+    if (!answer(std::move(c))) break;
   }
   return out;
 }

@@ -44,6 +44,12 @@ struct SegmentedScanResult {
   std::vector<std::string> log;              ///< the machine's scan log lines
 };
 
+/// The machine commands for one scan (SEEDS.md 2 step 1 on the command interface): the ScanPath
+/// itself when it fits a buffer of `capacity` segments (or capacity is 0), else one
+/// ScanBufferWrite per measurement command of split_commands(). Queued in order, the machine
+/// takes each when a buffer is free and answers it with the samples recorded meanwhile.
+std::vector<machine::Command> scan_commands(const machine::ScanPath& scan, std::size_t capacity);
+
 /// Scans `scan` on `machine` (SEEDS.md 2 steps 1-2 over the command interface): a path that fits
 /// one command buffer (MachineState::scan_buffer_segments) goes as one ScanPath; a longer one is
 /// split with split_commands() and written command by command as ScanBufferWrite, each once the
