@@ -3,6 +3,8 @@
 // reference limit on long paths, the seed's fallback with a slow planner, data quality near
 // command boundaries, and the planner's wall-clock cost.
 // Build with -DMETRON_BENCH=ON; run ./build/bench/bench_segmented [segments (default 10000)].
+// ./build/bench/bench_segmented --probe [turns (default 5)]: the same modes driving the real
+// scanning probe (SEEDS.md 1 law, ProbeScanDriver) round a lobed boss in the simulated world.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,7 +15,12 @@
 #include <string>
 #include <vector>
 
+#include <numbers>
+
 #include "metron/machine/rng.hpp"
+#include "metron/machine/segmented/probe_scan_driver.hpp"
+#include "metron/machine/world_solid.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
 #include "metron/machine/segmented/reference_planner.hpp"
 #include "metron/machine/segmented/sample_paths.hpp"
 #include "metron/machine/segmented/segmented_controller.hpp"
@@ -138,7 +145,7 @@ void planner_cost(const geometry::PccPath& path) {
     for (std::size_t first = 0; first + P <= path.segments.size(); first += P) {
       std::span<const geometry::PccSegment> segs(path.segments.data() + first, P);
       const auto w0 = std::chrono::steady_clock::now();
-      const SpeedPlan plan = plan_command(segs, {}, 1, 0.0, PlanKind::Connection, limits, low, false);
+      const segmented::SpeedPlan plan = plan_command(segs, {}, 1, 0.0, PlanKind::Connection, limits, low, false);
       per_command.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
       if (plan.pieces.empty()) std::abort();
     }
@@ -146,7 +153,7 @@ void planner_cost(const geometry::PccPath& path) {
   for (std::size_t i = 0; i < std::min<std::size_t>(path.segments.size(), 20000); ++i) {
     std::span<const geometry::PccSegment> seg(path.segments.data() + i % path.segments.size(), 1);
     const auto w0 = std::chrono::steady_clock::now();
-    const SpeedPlan plan = plan_command(seg, {}, 1, 0.0, PlanKind::LookAhead, limits, low, false);
+    const segmented::SpeedPlan plan = plan_command(seg, {}, 1, 0.0, PlanKind::LookAhead, limits, low, false);
     per_segment.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
     if (plan.pieces.empty()) std::abort();
   }
@@ -157,9 +164,114 @@ void planner_cost(const geometry::PccPath& path) {
               quantile(per_segment, 0.99) * 1e6, per_segment.size());
 }
 
+
+// ---- the real probe: segmented plans driving the scanning law round a lobed boss ----
+
+constexpr double k_ball_mm = 2, k_e0_mm = 0.3, k_boss_d_mm = 50, k_lobe_mm = 0.0025;
+const Vec3 k_boss_centre(100, 100, 0);
+
+World lobed_boss_world() {
+  World w = default_world();
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), k_boss_d_mm, 30.0}};
+  PartSpec part;
+  part.design = boss;
+  part.pose.translation_mm = k_boss_centre;
+  part.seed = 5;
+  csg::Deviation dev;
+  dev.lobing = csg::Lobing{3, k_lobe_mm, 20.0};
+  part.deviations["BOSS"] = dev;
+  w.part = part;
+  return w;
+}
+
+ScanPath boss_scan(double turns, double segment_mm) {
+  ScanPath c;
+  const double r = k_boss_d_mm / 2 + k_ball_mm - k_e0_mm;
+  const auto n = static_cast<std::size_t>(std::ceil(turns * 2 * std::numbers::pi * r / segment_mm));
+  const double da = turns * 2 * std::numbers::pi / static_cast<double>(n);
+  const auto radial = [](double a) { return Vec3(std::cos(a), std::sin(a), 0); };
+  const auto tangent = [](double a) { return Vec3(-std::sin(a), std::cos(a), 0); };
+  const Vec3 c0 = k_boss_centre + Vec3(0, 0, 15);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a0 = da * static_cast<double>(k), a1 = a0 + da;
+    c.path.segments.push_back(
+        geometry::PccSegment::hermite(c0 + r * radial(a0), c0 + r * radial(a1), tangent(a0), tangent(a1)));
+    c.path.normals.push_back(radial(a0));
+  }
+  c.path.normals.push_back(radial(da * static_cast<double>(n)));
+  c.approach_normal = Vec3::UnitX();
+  c.sample_spacing_mm = 0.2;
+  return c;
+}
+
+void probe_bench(double turns) {
+  const World w = lobed_boss_world();
+  const auto solid = make_world_solid(w);
+  const ScanSetup setup{solid.get(), k_ball_mm, w.machine, w.scanning, 9};
+  const ScanPath scan = boss_scan(turns, 0.2);
+  ControllerConfig base;
+  base.limits.path = {w.scanning.control.feed_mm_s, 500.0, 5000.0};
+  base.limits.normal_acceleration_mm_s2 = w.scanning.control.max_centripetal_mm_s2;
+  const ReferenceProfile ref = reference_profile(scan.path, base.limits, base.dt_s);
+  std::printf("real probe: %zu segments (%.1f mm, %.0f turns round a 50 mm boss with a hidden 5 um 3-lobe form), "
+              "feed %.0f mm/s, a %.0f, j %.0f; reference %.2f s\n",
+              scan.path.segments.size(), ref.length_mm, turns, base.limits.path.speed_mm_s,
+              base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3, ref.time_s);
+  std::printf("dNear/dFar: max ||Ep| - E0| within 2 mm of a boundary / elsewhere (scanning cycles); gapMax: largest "
+              "sample spacing (spacing 0.2 mm); form: circle fit of the samples (hidden 5.0 um)\n");
+  std::printf("%5s %-12s %5s %6s %6s %9s %7s %7s %8s %8s %8s %8s %7s\n", "P", "mode", "stops", "retr", "late",
+              "time s", "/limit", "samples", "gapMax", "dNear um", "dFar um", "form um", "wall s");
+  for (std::size_t P : {std::size_t{1000}, std::size_t{50}, std::size_t{4}}) {
+    for (SegmentedMode mode : {SegmentedMode::Conventional, SegmentedMode::Seed, SegmentedMode::LookAhead}) {
+      const auto w0 = std::chrono::steady_clock::now();
+      ControllerConfig cfg = base;
+      cfg.mode = mode;
+      cfg.buffer_segments = P;
+      ScanPath settings = scan;
+      settings.path = {};
+      ProbeScanDriver probe(settings, setup, scan_approach_point(scan), 0);
+      SegmentedController ctl(cfg, &probe);
+      const auto cmds = runtime::split_commands(scan.path, P);
+      auto stats = runtime::stream_commands(cmds, ctl, 1e5);
+      bool ok = stats.has_value() && !probe.fault() && probe.finish(ctl.path_state().s_mm);
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+      if (!ok) {
+        std::printf("%5zu %-12s failed: %s\n", P, name(mode),
+                    probe.fault() ? probe.fault()->message.c_str() : stats ? "did not finish" : stats.error().message.c_str());
+        continue;
+      }
+      double gap = 0;
+      const auto& smp = probe.samples();
+      for (std::size_t i = 1; i < smp.size(); ++i) gap = std::max(gap, smp[i].path_s_mm - smp[i - 1].path_s_mm);
+      double near = 0, far = 0;
+      for (const DrivenCycle& c : probe.cycles()) {
+        if (!c.scanning) continue;
+        const bool close = std::any_of(stats->boundaries.begin(), stats->boundaries.end(),
+                                       [&](const BoundaryEvent& b) { return std::abs(b.s_mm - c.s_mm) < 2.0; });
+        double& m = close ? near : far;
+        m = std::max(m, std::abs(c.deflection_error_mm));
+      }
+      std::vector<Vec3> pts;
+      for (const ScanSample& x : smp) pts.push_back(x.surface_mm(k_ball_mm));
+      fitting::FitOptions o;
+      o.inner = false;
+      o.direction_hint = Vec3::UnitZ();
+      const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+      std::printf("%5zu %-12s %5zu %6zu %6zu %9.2f %7.3f %7zu %8.4f %8.2f %8.2f %8.2f %7.2f\n", P, name(mode),
+                  stats->stops, probe.retracts(), stats->late_plans, stats->scan_time_s(), stats->scan_time_s() / ref.time_s,
+                  smp.size(), gap, near * 1000, far * 1000, f ? f->form_mm * 1000 : std::nan(""), wall);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--probe") {
+    probe_bench(argc > 2 ? std::atof(argv[2]) : 5.0);
+    return 0;
+  }
   const std::size_t segments = argc > 1 ? static_cast<std::size_t>(std::atol(argv[1])) : 10000;
   struct Named {
     const char* name;

@@ -14,6 +14,7 @@
 #include "metron/machine/motion_profile.hpp"
 #include "metron/machine/rng.hpp"
 #include "metron/machine/scanning/scan_controller.hpp"
+#include "metron/machine/segmented/probe_scan_driver.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 
@@ -140,6 +141,15 @@ struct VirtualCmm::Impl {
   std::size_t executed = 0;
   std::function<void(const TraceSample&)> trace;
   std::unique_ptr<Solid> scan_solid;  // the world as the scanning probe touches it (simulation side)
+  // A segmented scan in progress (SEEDS.md 2): between its measurement commands the machine
+  // answers nothing else.
+  struct SegmentedScan {
+    std::unique_ptr<segmented::ProbeScanDriver> probe;
+    std::unique_ptr<segmented::SegmentedController> controller;
+    std::size_t reported = 0;       // samples already answered
+    std::size_t next_segment = 0;   // first segment of the next command in the whole path
+  };
+  std::unique_ptr<SegmentedScan> segmented_scan;
 
   Impl(const World& world, std::uint64_t seed)
       : sim(world, seed),
@@ -421,6 +431,101 @@ struct VirtualCmm::Impl {
     return tool->info;
   }
 
+  // SEEDS.md 2: the host writes Ci into a free buffer; the controller scans meanwhile.
+  void write_scan_buffer(const ScanBufferWrite& body, Response& response) {
+    const auto fail = [&](Fault f) {
+      response.status = Response::Status::Fault;
+      response.fault = std::move(f);
+      segmented_scan.reset();
+    };
+    if (body.index == 0) {
+      if (segmented_scan) return fail({FaultKind::BadCommand, "a segmented scan is already in progress", position, now()});
+      const Tool* tool = active_tool();
+      if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
+      if (const std::string bad = validate_scan(body.scan); !bad.empty())
+        return fail({FaultKind::BadCommand, bad, position, now()});
+      if (auto ok = move_to(scan_approach_point(body.scan), positioning_feed); !ok) return fail(ok.error());
+      const World& world = sim.world();
+      if (!scan_solid) scan_solid = make_world_solid(world);
+      const ScanSetup setup{scan_solid.get(), tool->info.nominal_radius_mm + world.probe.ball_radius_error_mm, spec,
+                            world.scanning, static_cast<std::uint64_t>(sim.scan_phase() * 0x1.0p53)};
+      const SegmentedScanSpec& g = world.scanning.segmented;
+      segmented::ControllerConfig cfg;
+      cfg.mode = g.mode;
+      cfg.buffer_segments = g.buffer_segments;
+      cfg.planning_s_per_segment = g.planning_s_per_segment;
+      cfg.planning_fixed_s = g.planning_fixed_s;
+      cfg.planning_margin = g.planning_margin;
+      cfg.low = {g.low_length_mm, g.low_speed_mm_s};
+      cfg.dt_s = spec.dt_s;
+      const double feed = body.scan.speed_mm_s.value_or(world.scanning.control.feed_mm_s);
+      cfg.limits.path = {std::min(feed, spec.max_speed_mm_s), g.path_acceleration_mm_s2, g.path_jerk_mm_s3};
+      cfg.limits.normal_acceleration_mm_s2 = world.scanning.control.max_centripetal_mm_s2;
+      cfg.retract_mm = body.scan.retract_mm;
+      segmented::ProbeDriveSpec drive;
+      drive.retract_mm = body.scan.retract_mm;
+      ScanPath settings = body.scan;
+      settings.path = {};
+      auto session = std::make_unique<SegmentedScan>();
+      session->probe = std::make_unique<segmented::ProbeScanDriver>(settings, setup, position, now(), drive);
+      session->controller = std::make_unique<segmented::SegmentedController>(cfg, session->probe.get());
+      segmented_scan = std::move(session);
+    } else if (!segmented_scan) {
+      return fail({FaultKind::BadCommand,
+                   fmt::format("measurement command {} without a segmented scan in progress (the first is 0)", body.index),
+                   position, now()});
+    }
+    SegmentedScan& g = *segmented_scan;
+    segmented::SegmentedController& ctl = *g.controller;
+    segmented::ProbeScanDriver& probe = *g.probe;
+    for (const auto& seg : body.scan.path.segments)
+      if (!seg.k.allFinite() || !std::isfinite(seg.d_mm) || seg.d_mm < 0)
+        return fail({FaultKind::BadCommand, "scan path has a non-finite segment", position, now()});
+    segmented::MeasurementCommand mc;
+    mc.index = body.index;
+    mc.first_segment = g.next_segment;
+    mc.segments = body.scan.path.segments;
+    mc.normals = body.scan.path.normals;
+    if (body.scan.path.speed_mm_s.size() == mc.segments.size()) mc.speed_mm_s = body.scan.path.speed_mm_s;
+    mc.last = body.last;
+    const double limit_s = now() + 3600;  // a controller that never frees a buffer is a bug, not a hang
+    const auto step = [&] {
+      ctl.step();
+      emit(probe.time_s(), probe.position_mm(), probe.velocity_mm_s().norm());
+    };
+    // The host waits on SB: the controller runs until a buffer is writable.
+    while (ctl.free_buffer() == 0 && !ctl.finished() && !probe.fault() && probe.time_s() < limit_s) step();
+    std::optional<Fault> problem = probe.fault();
+    if (!problem) {
+      if (auto ok = ctl.load(std::move(mc)); !ok) {
+        problem = ok.error();
+        problem->position_mm = probe.position_mm();
+        problem->time_s = probe.time_s();
+      } else {
+        g.next_segment += body.scan.path.segments.size();
+      }
+    }
+    if (!problem && body.last) {
+      while (!ctl.finished() && !probe.fault() && probe.time_s() < limit_s) step();
+      if (!probe.fault() && !probe.finish(ctl.path_state().s_mm))
+        problem = Fault{FaultKind::Stalled, "segmented scan did not finish at the path end", probe.position_mm(), probe.time_s()};
+      if (probe.fault()) problem = probe.fault();
+    }
+    const auto& samples = probe.samples();
+    response.scan.assign(samples.begin() + static_cast<std::ptrdiff_t>(g.reported), samples.end());
+    g.reported = samples.size();
+    position = probe.position_mm();
+    cycle += cycles_for(probe.time_s() - now());
+    if (problem || body.last) {
+      const segmented::SegmentedStats& st = ctl.stats();
+      response.scan_log.push_back(fmt::format(
+          "segmented scan: {} commands of up to {} segments, {} stops, {} retracts, {} late plans, {} samples",
+          body.index + 1, ctl.config().buffer_segments, st.stops, probe.retracts(), st.late_plans, samples.size()));
+    }
+    if (problem) return fail(*problem);
+    if (body.last) segmented_scan.reset();
+  }
+
   Response run(const Command& command) {
     Response response;
     response.tag = command.tag;
@@ -429,6 +534,11 @@ struct VirtualCmm::Impl {
       response.status = Response::Status::Fault;
       response.fault = std::move(f);
     };
+    if (segmented_scan && !std::holds_alternative<ScanBufferWrite>(command.body)) {
+      fail({FaultKind::BadCommand, "a segmented scan is in progress: only its next measurement command may follow",
+            position, now()});
+      return response;
+    }
     std::visit([&](const auto& body) {
       using T = std::decay_t<decltype(body)>;
       if constexpr (std::is_same_v<T, GoTo>) {
@@ -480,6 +590,13 @@ struct VirtualCmm::Impl {
         if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
         if (const std::string bad = validate_scan(body); !bad.empty())
           return fail({FaultKind::BadCommand, bad, position, now()});
+        const std::size_t capacity = sim.world().scanning.segmented.buffer_segments;
+        if (body.path.segments.size() > capacity)
+          return fail({FaultKind::BadCommand,
+                       fmt::format("scan path of {} segments exceeds the controller's command buffer of {} segments: "
+                                   "the host must send it as measurement commands (ScanBufferWrite)",
+                                   body.path.segments.size(), capacity),
+                       position, now()});
         if (auto ok = move_to(scan_approach_point(body), positioning_feed); !ok) return fail(ok.error());
         const World& world = sim.world();
         if (!scan_solid) scan_solid = make_world_solid(world);  // kept: a CAD part takes a while to build
@@ -493,6 +610,8 @@ struct VirtualCmm::Impl {
         response.scan = std::move(out.samples);
         response.scan_log = std::move(out.log);
         if (out.fault) fail(*out.fault);
+      } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
+        write_scan_buffer(body, response);
       }
     }, command.body);
     response.end_time_s = now();
@@ -538,6 +657,7 @@ MachineState VirtualCmm::state() const {
   s.measuring_feed_mm_s = m_impl->measuring_feed;
   s.queued_commands = m_impl->queue.size();
   s.executed_commands = m_impl->executed;
+  s.scan_buffer_segments = m_impl->sim.world().scanning.segmented.buffer_segments;
   return s;
 }
 

@@ -9,6 +9,7 @@
 #include "detail/fit_actual.hpp"
 #include "metron/runtime/measurement_plan.hpp"
 #include "metron/runtime/outputs.hpp"
+#include "metron/runtime/scan_segmentation.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 
 namespace metron::runtime {
@@ -337,6 +338,14 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   std::vector<Span> spans;
   const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
                                       [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
+  // A scan longer than the machine's command buffer goes as measurement commands (SEEDS.md 2),
+  // queued in order: the machine takes each one when a buffer is free.
+  const auto push_scan = [&](machine::ScanPath scan, Span span) {
+    for (machine::Command& c : scan_commands(scan, m_machine.state().scan_buffer_segments)) {
+      commands.push_back(std::move(c));
+      spans.push_back(span);
+    }
+  };
   const auto ptmeas = [&](const Vec3& nominal, const Vec3& normal, Span span) {
     machine::PtMeas p;
     p.nominal_mm = nominal;
@@ -369,8 +378,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
         if (path == m_paths.end()) return program_error(step.span, fmt::format("path P({}) is not defined", step.path));
         auto scan = scan_command(path_contour(path->second, 0.05), step.span);
         if (!scan) return tl::unexpected(scan.error());
-        commands.push_back({0, std::move(*scan)});
-        spans.push_back(step.span);
+        push_scan(std::move(*scan), step.span);
       } else {
         const Vec3 n = step.normal ? m_alignment.to_machine_vector(*step.normal) : nominal_normal_at(feature.nominal, p);
         if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
@@ -384,8 +392,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
           if (!contour) return program_error(step.span, contour.error());
           auto scan = scan_command(*contour, step.span);
           if (!scan) return tl::unexpected(scan.error());
-          commands.push_back({0, std::move(*scan)});
-          spans.push_back(step.span);
+          push_scan(std::move(*scan), step.span);
           scan_start.reset();
         }
       }
@@ -403,8 +410,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     if (!contour) return program_error(block.span, contour.error());
     auto scan = scan_command(*contour, block.span);
     if (!scan) return tl::unexpected(scan.error());
-    commands.push_back({0, std::move(*scan)});
-    spans.push_back(block.span);
+    push_scan(std::move(*scan), block.span);
   } else if (!has_points) {
     if (m_mode == Mode::Man)
       return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");

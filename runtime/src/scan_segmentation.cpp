@@ -39,6 +39,10 @@ std::vector<seg::MeasurementCommand> split_commands(const geometry::PccPath& pat
       const auto v = path.speed_mm_s.begin() + static_cast<std::ptrdiff_t>(first);
       c.speed_mm_s.assign(v, v + static_cast<std::ptrdiff_t>(sizes[i]));
     }
+    if (path.normals.size() == path.segments.size() + 1) {
+      const auto n = path.normals.begin() + static_cast<std::ptrdiff_t>(first);
+      c.normals.assign(n, n + static_cast<std::ptrdiff_t>(sizes[i]) + 1);
+    }
     c.last = i + 1 == sizes.size();
     first += sizes[i];
     out.push_back(std::move(c));
@@ -64,6 +68,43 @@ tl::expected<seg::SegmentedStats, machine::Fault> stream_commands(const std::vec
     }
   }
   return controller.stats();
+}
+
+std::vector<machine::Command> scan_commands(const machine::ScanPath& scan, std::size_t capacity) {
+  if (capacity == 0 || scan.path.segments.size() <= capacity) return {machine::Command{0, scan}};
+  std::vector<machine::Command> out;
+  for (seg::MeasurementCommand& c : split_commands(scan.path, capacity)) {
+    machine::ScanBufferWrite w;
+    w.scan = scan;
+    w.scan.path = {};
+    w.scan.path.segments = std::move(c.segments);
+    w.scan.path.normals = std::move(c.normals);
+    w.scan.path.speed_mm_s = std::move(c.speed_mm_s);
+    w.index = c.index;
+    w.last = c.last;
+    out.push_back({0, std::move(w)});
+  }
+  return out;
+}
+
+SegmentedScanResult scan_segmented(machine::Machine& machine, const machine::ScanPath& scan, std::uint64_t tag) {
+  SegmentedScanResult out;
+  const std::size_t capacity = machine.state().scan_buffer_segments;
+  const auto answer = [&](machine::Command command) {
+    machine.submit(std::move(command));
+    auto responses = machine.execute();
+    machine::Response& r = responses.front();
+    out.samples.insert(out.samples.end(), r.scan.begin(), r.scan.end());
+    out.log.insert(out.log.end(), r.scan_log.begin(), r.scan_log.end());
+    if (r.status == machine::Response::Status::Fault) out.fault = r.fault;
+    return !out.fault;
+  };
+  for (machine::Command& c : scan_commands(scan, capacity)) {
+    if (std::holds_alternative<machine::ScanBufferWrite>(c.body)) ++out.commands;
+    c.tag = tag;
+    if (!answer(std::move(c))) break;
+  }
+  return out;
 }
 
 }  // namespace metron::runtime

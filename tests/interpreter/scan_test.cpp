@@ -74,6 +74,11 @@ class FakeScanMachine : public machine::Machine {
   void answer(const machine::PtMeas& p, machine::Response& r) {
     r.hit = machine::Hit{p.nominal_mm + m_tool->effective_radius_mm * p.normal, p.normal, m_tool->effective_radius_mm, m_time};
   }
+  // Its state() reports no buffer limit (0), so the runtime never splits a scan for it.
+  void answer(const machine::ScanBufferWrite&, machine::Response& r) {
+    r.status = machine::Response::Status::Fault;
+    r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine has no command buffers", m_position, m_time};
+  }
   void answer(const machine::ScanPath& s, machine::Response& r) {
     scans.push_back(s);
     const double length = s.path.length();

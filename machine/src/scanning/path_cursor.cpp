@@ -11,6 +11,11 @@ PathCursor::PathCursor(const geometry::PccPath& path) : m_path(path) {
   for (const auto& s : path.segments) m_cumulative.push_back(m_cumulative.back() + s.length());
 }
 
+void PathCursor::extend() {
+  for (std::size_t i = m_cumulative.size() - 1; i < m_path.segments.size(); ++i)
+    m_cumulative.push_back(m_cumulative.back() + m_path.segments[i].length());
+}
+
 void PathCursor::project(const Vec3& p) {
   // Newton on f(S) = (X(S) - p) . X'(S) = 0; a step past a segment end continues on the
   // neighbour (at most a few hops per cycle: the probe moves far less than a segment).

@@ -40,6 +40,36 @@ Vec3 scan_approach_point(const ScanPath& c) {
   return c.path.segments.front().start() + c.approach_mm * c.approach_normal.normalized();
 }
 
+ScanTerms scan_law_terms(ScanLaw law, const ScanControlSpec& ctl, double e0_mm, double e_mm, const Vec3& eu,
+                         const Vec3& foot_mm, const Vec3& head_mm, const Vec3& tangent, double vf_mm_s) {
+  ScanTerms tm;
+  tm.vf = vf_mm_s * tangent;
+  // SEEDS.md 1: Ve = K*(|Ep| - E0)*eu (without contact |Ep| = 0: it searches toward the surface).
+  tm.ve = ctl.deflection_gain_1_s * (e_mm - e0_mm) * eu;
+  // SEEDS.md 1: Vc1 from the probe position Pp to the foot P of the perpendicular.
+  tm.vc1 = ctl.trajectory_gain_1_s * (foot_mm - head_mm);
+  switch (law) {
+    case ScanLaw::Vc1: tm.vc = tm.vc1; break;
+    // SEEDS.md 1: Vc1' = Vc1 - (Vc1 . eu) eu.
+    case ScanLaw::Vc1Prime: tm.vc = tm.vc1 - tm.vc1.dot(eu) * eu; break;
+    case ScanLaw::Vc2: {
+      // SEEDS.md 1: q = (eu x Vf)/|eu x Vf|, Vc2 = (Vc1 . q) q (Vf's direction is the tangent).
+      const Vec3 q = eu.cross(tangent);
+      const double qn = q.norm();
+      tm.vc = qn > 1e-9 ? Vec3(tm.vc1.dot(q / qn) * (q / qn)) : Vec3::Zero();
+      break;
+    }
+  }
+  // Gain functions (docs/scanning.md): the path speed drops while the deflection or the
+  // trajectory deviates, so the corrections can catch up; Ge and Gc stay at 1.
+  const double de = ctl.deflection_tolerance_mm > 0 ? (e_mm - e0_mm) / ctl.deflection_tolerance_mm : 0;
+  const double dp = ctl.trajectory_tolerance_mm > 0 ? (foot_mm - head_mm).norm() / ctl.trajectory_tolerance_mm : 0;
+  tm.gf = 1 / ((1 + de * de) * (1 + dp * dp));
+  tm.ge = 1;
+  tm.gc = 1;
+  return tm;
+}
+
 ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3& start_mm, double start_time_s,
                      const std::function<void(const ScanCycle&)>& on_cycle) {
   ScanOutcome out;
@@ -85,7 +115,7 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   const double length = cursor.length_mm();
   out.stats.path_length_mm = length;
 
-  const double k_e = ctl.deflection_gain_1_s, k_c = ctl.trajectory_gain_1_s;
+  const double k_e = ctl.deflection_gain_1_s;
   const double v_max = setup.machine.max_speed_mm_s, a_max = setup.machine.max_acceleration_mm_s2;
   Phase phase = Phase::Approach;
   Vec3 v_prev = Vec3::Zero();
@@ -153,7 +183,6 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       const Vec3 foot = cursor.foot_mm();
       const Vec3 tangent = cursor.tangent();
       const Vec3 eu = contact ? Vec3(ep / e) : cursor.nominal_normal(n_app);
-      ScanTerms& tm = rec.terms;
       // SEEDS.md 1: Vf along the path, its magnitude from curvature and the other limits. The
       // plan's speed, looked up ahead by the smoothing's lag, passes two first-order stages so
       // the drives see no step in Vf (a step would make the servo overshoot the limit).
@@ -161,30 +190,8 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       const double target = std::min({plan.speed_at(s), plan.speed_at(s + ahead / 2), plan.speed_at(s + ahead)});
       vf_smooth[0] += (target - vf_smooth[0]) * dt / speed_tau_s;
       vf_smooth[1] += (std::min(vf_smooth[0], target) - vf_smooth[1]) * dt / speed_tau_s;
-      tm.vf = vf_smooth[1] * tangent;
-      // SEEDS.md 1: Ve = K*(|Ep| - E0)*eu (without contact |Ep| = 0: it searches toward the surface).
-      tm.ve = k_e * (e - e0) * eu;
-      // SEEDS.md 1: Vc1 from the probe position Pp to the foot P of the perpendicular.
-      tm.vc1 = k_c * (foot - head);
-      switch (command.law) {
-        case ScanLaw::Vc1: tm.vc = tm.vc1; break;
-        // SEEDS.md 1: Vc1' = Vc1 - (Vc1 . eu) eu.
-        case ScanLaw::Vc1Prime: tm.vc = tm.vc1 - tm.vc1.dot(eu) * eu; break;
-        case ScanLaw::Vc2: {
-          // SEEDS.md 1: q = (eu x Vf)/|eu x Vf|, Vc2 = (Vc1 . q) q (Vf's direction is the tangent).
-          const Vec3 q = eu.cross(tangent);
-          const double qn = q.norm();
-          tm.vc = qn > 1e-9 ? Vec3(tm.vc1.dot(q / qn) * (q / qn)) : Vec3::Zero();
-          break;
-        }
-      }
-      // Gain functions (docs/scanning.md): the path speed drops while the deflection or the
-      // trajectory deviates, so the corrections can catch up; Ge and Gc stay at 1.
-      const double de = ctl.deflection_tolerance_mm > 0 ? (e - e0) / ctl.deflection_tolerance_mm : 0;
-      const double dp = ctl.trajectory_tolerance_mm > 0 ? (foot - head).norm() / ctl.trajectory_tolerance_mm : 0;
-      tm.gf = 1 / ((1 + de * de) * (1 + dp * dp));
-      tm.ge = 1;
-      tm.gc = 1;
+      rec.terms = scan_law_terms(command.law, ctl, e0, e, eu, foot, head, tangent, vf_smooth[1]);
+      const ScanTerms& tm = rec.terms;
       v = tm.gf * tm.vf + tm.ge * tm.ve + tm.gc * tm.vc;
 
       rec.scanning = true;

@@ -98,6 +98,31 @@ tl::expected<ScanningSpec, ScanningSpecError> parse_scanning_spec(const json& j,
            {"lost_contact_mm", number(c.lost_contact_mm, Range::Positive)},
          });
        }},
+      {"segmented", [&](const json& gj, const std::string& gp) {
+         SegmentedScanSpec& g = spec.segmented;
+         read_object(gj, gp, {
+           {"buffer_segments", [&](const json& bj, const std::string& bp) {
+              if (!bj.is_number_integer() || bj.get<std::int64_t>() < 1) fail(bp, "expected an integer >= 1");
+              g.buffer_segments = static_cast<std::size_t>(bj.get<std::int64_t>());
+            }},
+           {"mode", [&](const json& mj, const std::string& mp) {
+              const std::string m = mj.is_string() ? mj.get<std::string>() : "";
+              if (m == "conventional") g.mode = segmented::SegmentedMode::Conventional;
+              else if (m == "seed") g.mode = segmented::SegmentedMode::Seed;
+              else if (m == "look_ahead") g.mode = segmented::SegmentedMode::LookAhead;
+              else fail(mp, "expected \"conventional\", \"seed\" or \"look_ahead\"");
+            }},
+           {"planning_s_per_segment", number(g.planning_s_per_segment, Range::NonNegative)},
+           {"planning_fixed_s", number(g.planning_fixed_s, Range::NonNegative)},
+           {"planning_margin", number(g.planning_margin, Range::Positive)},
+           {"low_speed_mm_s", number(g.low_speed_mm_s, Range::Positive)},
+           {"low_length_mm", number(g.low_length_mm, Range::NonNegative)},
+           {"path_acceleration_mm_s2", number(g.path_acceleration_mm_s2, Range::Positive)},
+           {"path_jerk_mm_s3", number(g.path_jerk_mm_s3, Range::Positive)},
+         });
+         // SEEDS.md 2 step 3: the low speed is claimed for 1-5 mm/s.
+         if (g.low_speed_mm_s < 1 || g.low_speed_mm_s > 5) fail(gp + "/low_speed_mm_s", "expected 1 to 5 mm/s");
+       }},
     });
   } catch (const Failure& f) {
     return tl::unexpected(f.error);

@@ -58,6 +58,7 @@ tl::expected<void, Fault> SegmentedController::load(MeasurementCommand command) 
   buf = Buffer{};
   buf.full = true;
   buf.command = std::move(command);
+  if (m_recorder != nullptr) m_recorder->command_loaded(*buf.command);
   ++m_next_load;
   return {};
 }
@@ -179,10 +180,10 @@ void SegmentedController::pace() {
   m_interp.set_speed_override(cap);
 }
 
-void SegmentedController::record_cycle() {
-  if (m_recorder == nullptr) return;
+bool SegmentedController::record_cycle() {
+  if (m_recorder == nullptr) return false;
   const LimitPiece* p = m_interp.current_piece();
-  if (p == nullptr) return;
+  if (p == nullptr) return false;
   const PathState& x = m_interp.state();
   ScanCycle c;
   c.t_s = m_t_s;
@@ -200,6 +201,7 @@ void SegmentedController::record_cycle() {
     c.acceleration_mm_s2 = x.a_mm_s2 * t + x.v_mm_s * x.v_mm_s * kappa_n;
   }
   m_recorder->record(c);
+  return true;
 }
 
 void SegmentedController::step() {
@@ -225,6 +227,7 @@ void SegmentedController::step() {
   m_t_s += dt;
   switch (m_phase) {
     case Phase::Retracted: {
+      if (drives_probe()) m_recorder->off_path(OffPathMove::Hold, m_interp.state().s_mm, m_t_s);
       const int b = buffer_of(m_next_attach);
       if (b >= 0 && m_buffers[static_cast<std::size_t>(b)].plan_ready) {
         m_phase = Phase::Approaching;
@@ -233,8 +236,14 @@ void SegmentedController::step() {
       }
       break;
     }
-    case Phase::Approaching:
-      if (m_t_s + 1e-12 >= m_phase_end_s) {
+    case Phase::Approaching: {
+      // A driven probe reports when it touches and has settled; else the estimate decides.
+      const bool arrived =
+          drives_probe()
+              ? m_recorder->off_path(OffPathMove::Approach,
+                                     m_buffers[static_cast<std::size_t>(m_approach_buffer)].plan->start_mm, m_t_s)
+              : m_t_s + 1e-12 >= m_phase_end_s;
+      if (arrived) {
         attach(static_cast<std::size_t>(m_approach_buffer), true);
         if (m_recorder != nullptr) m_recorder->contact_changed(true, m_t_s);
         if (m_next_attach == 1) m_stats.scan_start_s = m_t_s;
@@ -242,6 +251,7 @@ void SegmentedController::step() {
         m_stop_counted = false;
       }
       break;
+    }
     case Phase::Scanning: {
       const int b = buffer_of(m_next_attach);
       if (b >= 0 && m_buffers[static_cast<std::size_t>(b)].plan_ready) {
@@ -253,7 +263,7 @@ void SegmentedController::step() {
       }
       if (m_config.mode == SegmentedMode::LookAhead && m_config.pace_to_planner) pace();
       m_interp.step(dt);
-      record_cycle();
+      if (!record_cycle() && drives_probe()) m_recorder->off_path(OffPathMove::Hold, m_interp.state().s_mm, m_t_s);
       finish_completed_commands();
       if (m_interp.at_rest_at_end()) {
         if (m_last_index && m_done_commands == *m_last_index + 1) {
@@ -289,7 +299,9 @@ void SegmentedController::step() {
       break;
     }
     case Phase::Retracting:
-      if (m_t_s + 1e-12 >= m_phase_end_s) m_phase = Phase::Retracted;
+      if (drives_probe() ? m_recorder->off_path(OffPathMove::Retract, m_interp.state().s_mm, m_t_s)
+                         : m_t_s + 1e-12 >= m_phase_end_s)
+        m_phase = Phase::Retracted;
       break;
     case Phase::Done:
       break;

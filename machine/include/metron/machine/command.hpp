@@ -91,10 +91,24 @@ struct ScanPath {
   double retract_mm = 2.0;            ///< retract distance after the end
 };
 
+/// One measurement command of a segmented scan (SEEDS.md 2, docs/segmented-scanning.md): a
+/// ScanPath longer than the controller's command buffer is split by the host (runtime) and written
+/// command by command into whichever buffer is free. `scan.path` holds this command's segments
+/// (and the normals at their ends); the other fields of `scan` are the scan's settings and are
+/// read from the first command (index 0), which also makes the machine approach the path. The
+/// answer comes once the command is in a buffer, with the samples recorded since the previous
+/// write (the controller keeps scanning meanwhile); the last command is answered after the path
+/// end and the retract.
+struct ScanBufferWrite {
+  ScanPath scan;                      ///< this command's segments, and the scan's settings
+  std::size_t index = 0;              ///< i of Ci (0-based, consecutive)
+  bool last = false;                  ///< the path ends with this command
+};
+
 /// A command with the client's tag (the runtime uses it to find the originating statement).
 struct Command {
   std::uint64_t tag = 0;
-  std::variant<GoTo, PtMeas, DefineTool, SelectTool, QualifyTool, SetFeeds, ScanPath> body;
+  std::variant<GoTo, PtMeas, DefineTool, SelectTool, QualifyTool, SetFeeds, ScanPath, ScanBufferWrite> body;
 };
 
 /// A probed point as the controller reports it.
@@ -137,7 +151,7 @@ struct Response {
   std::optional<Hit> hit;             ///< for PtMeas
   std::optional<ToolInfo> tool;       ///< for DefineTool, SelectTool, QualifyTool
   std::optional<Fault> fault;         ///< when status == Fault
-  std::vector<ScanSample> scan;       ///< for ScanPath: the samples up to the end or the fault
+  std::vector<ScanSample> scan;       ///< for ScanPath (ScanBufferWrite): the samples up to the end or the fault (since the last write)
   std::vector<std::string> scan_log;  ///< for ScanPath: which speed limit bound where, and the scan's figures
   double start_time_s = 0;            ///< the controller clock when the command started (a sensor)
   double end_time_s = 0;              ///< the controller clock when it ended (the machine at rest)

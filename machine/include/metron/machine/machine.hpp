@@ -21,6 +21,8 @@ struct MachineState {
   double measuring_feed_mm_s = 0;
   std::size_t queued_commands = 0;
   std::size_t executed_commands = 0;
+  /// Segments one scan command buffer holds (a longer ScanPath must come as ScanBufferWrite).
+  std::size_t scan_buffer_segments = 0;
 };
 
 /// A machine backend: the virtual CMM, or a real controller behind the same interface.

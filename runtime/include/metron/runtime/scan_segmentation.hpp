@@ -1,11 +1,15 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <tl/expected.hpp>
 
 #include "metron/machine/fault.hpp"
+#include "metron/machine/machine.hpp"
 #include "metron/machine/segmented/measurement_command.hpp"
 #include "metron/machine/segmented/segmented_controller.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
@@ -31,5 +35,26 @@ std::vector<machine::segmented::MeasurementCommand> split_commands(const geometr
 tl::expected<machine::segmented::SegmentedStats, machine::Fault> stream_commands(
     const std::vector<machine::segmented::MeasurementCommand>& commands,
     machine::segmented::SegmentedController& controller, double max_time_s);
+
+/// What a streamed scan returned.
+struct SegmentedScanResult {
+  std::vector<machine::ScanSample> samples;  ///< every sample, in path order (up to a fault)
+  std::optional<machine::Fault> fault;       ///< why the scan stopped early
+  std::size_t commands = 0;                  ///< measurement commands written (0: one ScanPath)
+  std::vector<std::string> log;              ///< the machine's scan log lines
+};
+
+/// The machine commands for one scan (SEEDS.md 2 step 1 on the command interface): the ScanPath
+/// itself when it fits a buffer of `capacity` segments (or capacity is 0), else one
+/// ScanBufferWrite per measurement command of split_commands(). Queued in order, the machine
+/// takes each when a buffer is free and answers it with the samples recorded meanwhile.
+std::vector<machine::Command> scan_commands(const machine::ScanPath& scan, std::size_t capacity);
+
+/// Scans `scan` on `machine` (SEEDS.md 2 steps 1-2 over the command interface): a path that fits
+/// one command buffer (MachineState::scan_buffer_segments) goes as one ScanPath; a longer one is
+/// split with split_commands() and written command by command as ScanBufferWrite, each once the
+/// machine has answered the previous (it answers when a buffer was free). The host only calls
+/// down (ARCHITECTURE.md rule 6): the machine never asks for the next command, it answers.
+SegmentedScanResult scan_segmented(machine::Machine& machine, const machine::ScanPath& scan, std::uint64_t tag);
 
 }  // namespace metron::runtime

@@ -15,6 +15,10 @@ class PathCursor {
   /// `path` must have at least one segment of positive length and outlive the cursor.
   explicit PathCursor(const geometry::PccPath& path);
 
+  /// Takes in segments appended to the path since construction or the last call (a path that
+  /// grows while it is scanned: segmented scanning loads it command by command).
+  void extend();
+
   /// Moves the foot to the local closest point of the path to `p_mm`.
   void project(const Vec3& p_mm);
 

@@ -79,6 +79,13 @@ std::string validate_scan(const ScanPath& command);
 /// The approach point: the path start plus approach_mm along the approach normal.
 Vec3 scan_approach_point(const ScanPath& command);
 
+/// The law's terms for one scanning cycle (SEEDS.md 1): Vf = vf_mm_s along `tangent`,
+/// Ve = K*(|Ep| - E0)*eu, the selected Vc from Vc1 = Kc*(P - Pp), and the gains Gf, Ge, Gc; the
+/// command is Gf*Vf + Ge*Ve + Gc*Vc. `e_mm` is |Ep| as read, `eu` the deflection's direction (or
+/// the nominal normal without contact), `foot_mm` the foot P, `head_mm` the encoder position Pp.
+ScanTerms scan_law_terms(ScanLaw law, const ScanControlSpec& ctl, double e0_mm, double e_mm, const Vec3& eu,
+                         const Vec3& foot_mm, const Vec3& head_mm, const Vec3& tangent, double vf_mm_s);
+
 /// Active nominal scanning (SEEDS.md 1). From rest at `start_mm` (normally the approach point),
 /// the head moves along -approach_normal until the deflection reaches E0, then every control
 /// cycle commands V = Gf*Vf + Ge*Ve + Gc*Vc with Vc the command's law, until the foot of the

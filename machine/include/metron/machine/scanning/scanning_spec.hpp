@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <cstddef>
 #include <string>
 
 #include <nlohmann/json_fwd.hpp>
 #include <tl/expected.hpp>
+
+#include "metron/machine/segmented/segmented_controller.hpp"
 
 /// The scanning side of a world (docs/scanning.md): the analogue probe as it truly is, the axis
 /// servo dynamics, and the scan controller's own configuration (gains, limits).
@@ -42,11 +45,27 @@ struct ScanControlSpec {
   double lost_contact_mm = 2.0;       ///< path length without contact before a fault
 };
 
+/// The controller's command buffers for segmented scanning (SEEDS.md 2,
+/// docs/segmented-scanning.md): a ScanPath longer than one buffer must come from the host as
+/// measurement commands (ScanBufferWrite), run by the segmented controller in `mode`.
+struct SegmentedScanSpec {
+  std::size_t buffer_segments = 1'000'000;  ///< P: one buffer's capacity (large: every usual scan fits)
+  segmented::SegmentedMode mode = segmented::SegmentedMode::Seed;  ///< boundary behaviour
+  double planning_s_per_segment = 2e-4;    ///< net simulated planning time per segment
+  double planning_fixed_s = 0;             ///< plus this per command
+  double planning_margin = 1.3;            ///< Tp = margin * net planning time
+  double low_speed_mm_s = 3;               ///< the seed's low speed (1-5 mm/s)
+  double low_length_mm = 3;                ///< L, the low-speed region
+  double path_acceleration_mm_s2 = 500;    ///< tangential acceleration of the plans
+  double path_jerk_mm_s3 = 5000;           ///< and jerk
+};
+
 /// Everything the world says about scanning.
 struct ScanningSpec {
   ScanningProbeSpec probe;            ///< the analogue probe
   ServoSpec servo;                    ///< axis dynamics
   ScanControlSpec control;            ///< the scan controller
+  SegmentedScanSpec segmented;        ///< command buffers and segmented-scanning controller
 };
 
 /// A "scanning" record that could not be read: JSON pointer and what was expected.

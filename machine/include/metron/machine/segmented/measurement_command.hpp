@@ -12,6 +12,8 @@ struct MeasurementCommand {
   std::size_t index = 0;                          ///< i (0-based, consecutive)
   std::size_t first_segment = 0;                  ///< index of its first segment in the whole path
   std::vector<geometry::PccSegment> segments;     ///< the segments (at most one buffer's capacity)
+  /// Nominal surface normals at the segment ends (segments.size() + 1), or empty.
+  std::vector<Vec3> normals;
   std::vector<double> speed_mm_s;                 ///< per-segment speed limit from the path (may be empty)
   bool last = false;                              ///< Cn+1: the path ends with it
 };

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "metron/machine/segmented/measurement_command.hpp"
 #include "metron/machine/segmented/path_interpolator.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
 
@@ -19,6 +20,13 @@ struct ScanCycle {
   Vec3 acceleration_mm_s2 = Vec3::Zero();  ///< path acceleration a*T + v^2*kappa*N
 };
 
+/// What the controller asks of a probe-driving recorder in a cycle off the path.
+enum class OffPathMove {
+  Hold,      ///< stay where it is (waiting for a plan, or before the first approach)
+  Retract,   ///< finish the path up to the stop, then leave the surface
+  Approach,  ///< find the surface again at the path point where the next command starts
+};
+
 /// Receives every scanning cycle; the scanning probe model plugs in here.
 class ScanRecorder {
  public:
@@ -27,6 +35,15 @@ class ScanRecorder {
   virtual void record(const ScanCycle& cycle) = 0;
   /// The probe leaves (false) or regains (true) contact: retract and approach.
   virtual void contact_changed(bool /*in_contact*/, double /*t_s*/) {}
+  /// A command has been written into a buffer (in order): a probe driver learns the path here.
+  virtual void command_loaded(const MeasurementCommand& /*command*/) {}
+  /// True when this recorder moves a real (simulated) probe: then the controller hands it every
+  /// cycle (record() while scanning, off_path() otherwise) and a retract or an approach ends
+  /// when the probe reports it done, not after the controller's own estimate of its duration.
+  [[nodiscard]] virtual bool drives_probe() const { return false; }
+  /// One cycle off the path (only called when drives_probe()): `s_mm` is the arc length of the
+  /// stop or of the command start; returns true when the move is complete.
+  virtual bool off_path(OffPathMove /*move*/, double /*s_mm*/, double /*t_s*/) { return true; }
 };
 
 /// A recorded measurement point.
@@ -84,6 +101,13 @@ class RecorderTee : public ScanRecorder {
   RecorderTee(ScanRecorder& a, ScanRecorder& b) : m_a(a), m_b(b) {}
   void record(const ScanCycle& c) override { m_a.record(c); m_b.record(c); }
   void contact_changed(bool in, double t) override { m_a.contact_changed(in, t); m_b.contact_changed(in, t); }
+  void command_loaded(const MeasurementCommand& c) override { m_a.command_loaded(c); m_b.command_loaded(c); }
+  [[nodiscard]] bool drives_probe() const override { return m_a.drives_probe() || m_b.drives_probe(); }
+  bool off_path(OffPathMove move, double s_mm, double t_s) override {
+    const bool a = m_a.off_path(move, s_mm, t_s);
+    const bool b = m_b.off_path(move, s_mm, t_s);
+    return a && b;
+  }
 
  private:
   ScanRecorder& m_a;

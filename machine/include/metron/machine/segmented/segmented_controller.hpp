@@ -123,7 +123,8 @@ class SegmentedController {
   [[nodiscard]] double remaining_time_s(const SpeedPlan& plan, double s_mm) const;
   [[nodiscard]] double gap_before_s(std::size_t index) const;
   [[nodiscard]] int buffer_of(std::size_t command_index) const;
-  void record_cycle();
+  bool record_cycle();  // false when there was nothing to record
+  [[nodiscard]] bool drives_probe() const { return m_recorder != nullptr && m_recorder->drives_probe(); }
   void pace();
 
   ControllerConfig m_config;
