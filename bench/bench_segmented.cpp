@@ -17,6 +17,7 @@
 
 #include <numbers>
 
+#include "../tests/machine/scan_paths.hpp"
 #include "metron/machine/rng.hpp"
 #include "metron/machine/segmented/probe_scan_driver.hpp"
 #include "metron/machine/world_solid.hpp"
@@ -167,43 +168,9 @@ void planner_cost(const geometry::PccPath& path) {
 
 // ---- the real probe: segmented plans driving the scanning law round a lobed boss ----
 
-constexpr double k_ball_mm = 2, k_e0_mm = 0.3, k_boss_d_mm = 50, k_lobe_mm = 0.0025;
-const Vec3 k_boss_centre(100, 100, 0);
-
-World lobed_boss_world() {
-  World w = default_world();
-  csg::Node boss;
-  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), k_boss_d_mm, 30.0}};
-  PartSpec part;
-  part.design = boss;
-  part.pose.translation_mm = k_boss_centre;
-  part.seed = 5;
-  csg::Deviation dev;
-  dev.lobing = csg::Lobing{3, k_lobe_mm, 20.0};
-  part.deviations["BOSS"] = dev;
-  w.part = part;
-  return w;
-}
-
-ScanPath boss_scan(double turns, double segment_mm) {
-  ScanPath c;
-  const double r = k_boss_d_mm / 2 + k_ball_mm - k_e0_mm;
-  const auto n = static_cast<std::size_t>(std::ceil(turns * 2 * std::numbers::pi * r / segment_mm));
-  const double da = turns * 2 * std::numbers::pi / static_cast<double>(n);
-  const auto radial = [](double a) { return Vec3(std::cos(a), std::sin(a), 0); };
-  const auto tangent = [](double a) { return Vec3(-std::sin(a), std::cos(a), 0); };
-  const Vec3 c0 = k_boss_centre + Vec3(0, 0, 15);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a0 = da * static_cast<double>(k), a1 = a0 + da;
-    c.path.segments.push_back(
-        geometry::PccSegment::hermite(c0 + r * radial(a0), c0 + r * radial(a1), tangent(a0), tangent(a1)));
-    c.path.normals.push_back(radial(a0));
-  }
-  c.path.normals.push_back(radial(da * static_cast<double>(n)));
-  c.approach_normal = Vec3::UnitX();
-  c.sample_spacing_mm = 0.2;
-  return c;
-}
+using metron::scan_test::boss_scan;
+using metron::scan_test::lobed_boss_world;
+constexpr double k_ball_mm = metron::scan_test::boss_ball_radius_mm;
 
 void probe_bench(double turns) {
   const World w = lobed_boss_world();

@@ -7,7 +7,9 @@
 #include <numbers>
 #include <vector>
 
+#include "metron/machine/command.hpp"
 #include "metron/machine/csg.hpp"
+#include "metron/machine/world.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
 
 namespace metron::scan_test {
@@ -143,6 +145,49 @@ inline machine::csg::Node ramp_design(double angle_deg, double x0 = 20, double r
                     half(Vec3(0, -30, 0), -Vec3::UnitY()), half(Vec3(0, 30, 0), Vec3::UnitY()),
                     half(Vec3(0, 0, 0), -Vec3::UnitZ())};
   return block;
+}
+
+/// The lobed boss of the segmented-scanning tests and benchmark: diameter 50 with a hidden
+/// 3-lobe form of 2.5 um amplitude (5 um roundness) at 20 degrees, its axis at (100, 100).
+constexpr double boss_ball_radius_mm = 2, boss_e0_mm = 0.3, boss_diameter_mm = 50, boss_lobe_mm = 0.0025;
+inline const Vec3 boss_centre_mm(100, 100, 0);
+
+inline machine::World lobed_boss_world() {
+  machine::World w = machine::default_world();
+  machine::csg::Node boss;
+  boss.primitive = {"BOSS", machine::csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), boss_diameter_mm, 30.0}};
+  machine::PartSpec part;
+  part.design = boss;
+  part.pose.translation_mm = boss_centre_mm;
+  part.seed = 5;
+  machine::csg::Deviation dev;
+  dev.lobing = machine::csg::Lobing{3, boss_lobe_mm, 20.0};
+  part.deviations["BOSS"] = dev;
+  w.part = part;
+  return w;
+}
+
+/// `turns` turns around the lobed boss at z = 15 (ball centres r - E0 off the surface) in
+/// segments of about `segment_mm`, with the outward normals; Vc2 law, a sample every 0.2 mm.
+inline machine::ScanPath boss_scan(double turns, double segment_mm) {
+  machine::ScanPath c;
+  const double r = boss_diameter_mm / 2 + boss_ball_radius_mm - boss_e0_mm;
+  const auto n = static_cast<std::size_t>(std::ceil(turns * 2 * std::numbers::pi * r / segment_mm));
+  const double da = turns * 2 * std::numbers::pi / static_cast<double>(n);
+  const auto radial = [](double a) { return Vec3(std::cos(a), std::sin(a), 0); };
+  const auto tangent = [](double a) { return Vec3(-std::sin(a), std::cos(a), 0); };
+  const Vec3 c0 = boss_centre_mm + Vec3(0, 0, 15);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double a0 = da * static_cast<double>(k), a1 = a0 + da;
+    c.path.segments.push_back(
+        geometry::PccSegment::hermite(c0 + r * radial(a0), c0 + r * radial(a1), tangent(a0), tangent(a1)));
+    c.path.normals.push_back(radial(a0));
+  }
+  c.path.normals.push_back(radial(da * static_cast<double>(n)));
+  c.approach_normal = Vec3::UnitX();
+  c.law = machine::ScanLaw::Vc2;
+  c.sample_spacing_mm = 0.2;
+  return c;
 }
 
 }  // namespace metron::scan_test

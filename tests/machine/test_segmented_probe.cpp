@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "metron/machine/segmented/probe_scan_driver.hpp"
+#include "scan_paths.hpp"
 #include "metron/machine/segmented/segmented_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world_solid.hpp"
@@ -21,47 +22,9 @@ using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
 
-constexpr double ball_r = 2, e0 = 0.3, boss_d = 50, lobe_mm = 0.0025;
-const Vec3 centre(100, 100, 0);
-
-// A boss of diameter 50 with a hidden 3-lobe form (5 um roundness), its axis at (100, 100).
-World lobed_boss_world() {
-  World w = default_world();
-  csg::Node boss;
-  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), boss_d, 30.0}};
-  PartSpec part;
-  part.design = boss;
-  part.pose.translation_mm = centre;
-  part.seed = 5;
-  csg::Deviation dev;
-  dev.lobing = csg::Lobing{3, lobe_mm, 20.0};
-  part.deviations["BOSS"] = dev;
-  w.part = part;
-  return w;
-}
-
-// `turns` turns around the boss at z = 15 (ball centres at r - E0 off the surface) in segments
-// of about `segment_mm`, with the outward normals.
-ScanPath boss_scan(double turns, double segment_mm) {
-  ScanPath c;
-  const double r = boss_d / 2 + ball_r - e0;
-  const auto n = static_cast<std::size_t>(std::ceil(turns * 2 * std::numbers::pi * r / segment_mm));
-  const double da = turns * 2 * std::numbers::pi / static_cast<double>(n);
-  const auto radial = [](double a) { return Vec3(std::cos(a), std::sin(a), 0); };
-  const auto tangent = [](double a) { return Vec3(-std::sin(a), std::cos(a), 0); };
-  const Vec3 c0 = centre + Vec3(0, 0, 15);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double a0 = da * static_cast<double>(k), a1 = a0 + da;
-    c.path.segments.push_back(
-        geometry::PccSegment::hermite(c0 + r * radial(a0), c0 + r * radial(a1), tangent(a0), tangent(a1)));
-    c.path.normals.push_back(radial(a0));
-  }
-  c.path.normals.push_back(radial(da * static_cast<double>(n)));
-  c.approach_normal = Vec3::UnitX();
-  c.law = ScanLaw::Vc2;
-  c.sample_spacing_mm = 0.2;
-  return c;
-}
+using namespace metron::scan_test;
+constexpr double ball_r = boss_ball_radius_mm, lobe_mm = boss_lobe_mm, boss_d = boss_diameter_mm;
+const Vec3 centre = boss_centre_mm;
 
 // Commands of P segments (the host's averaging rule is tested in tests/runtime).
 std::vector<MeasurementCommand> split(const geometry::PccPath& path, std::size_t P) {
