@@ -233,12 +233,7 @@ void probe_bench(double turns) {
         double& m = close ? near : far;
         m = std::max(m, std::abs(c.deflection_error_mm));
       }
-      std::vector<Vec3> pts;
-      for (const ScanSample& x : smp) pts.push_back(x.surface_mm(k_ball_mm));
-      fitting::FitOptions o;
-      o.inner = false;
-      o.direction_hint = Vec3::UnitZ();
-      const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+      const auto f = metron::scan_test::fit_scanned_boss(smp, k_ball_mm);
       std::printf("%5zu %-12s %5zu %6zu %6zu %9.2f %7.3f %7zu %8.4f %8.2f %8.2f %8.2f %7.2f\n", P, name(mode),
                   stats->stops, probe.retracts(), stats->late_plans, stats->scan_time_s(), stats->scan_time_s() / ref.time_s,
                   smp.size(), gap, near * 1000, far * 1000, f ? f->form_mm * 1000 : std::nan(""), wall);

@@ -9,7 +9,9 @@
 
 #include "metron/machine/command.hpp"
 #include "metron/machine/csg.hpp"
+#include "metron/machine/segmented/measurement_command.hpp"
 #include "metron/machine/world.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
 
 namespace metron::scan_test {
@@ -188,6 +190,37 @@ inline machine::ScanPath boss_scan(double turns, double segment_mm) {
   c.law = machine::ScanLaw::Vc2;
   c.sample_spacing_mm = 0.2;
   return c;
+}
+
+/// Commands of P segments each, the last one shorter (the host's averaging rule is runtime's
+/// and tested there); normals are copied when the path has them.
+inline std::vector<machine::segmented::MeasurementCommand> split(const geometry::PccPath& path, std::size_t P) {
+  std::vector<machine::segmented::MeasurementCommand> out;
+  const bool with_normals = path.normals.size() == path.segments.size() + 1;
+  for (std::size_t first = 0, i = 0; first < path.segments.size(); first += P, ++i) {
+    machine::segmented::MeasurementCommand c;
+    c.index = i;
+    c.first_segment = first;
+    const std::size_t n = std::min(P, path.segments.size() - first);
+    c.segments.assign(path.segments.begin() + static_cast<long>(first),
+                      path.segments.begin() + static_cast<long>(first + n));
+    if (with_normals)
+      c.normals.assign(path.normals.begin() + static_cast<long>(first),
+                       path.normals.begin() + static_cast<long>(first + n + 1));
+    c.last = first + n == path.segments.size();
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+/// Least-squares circle (outer, axis along Z) of scanned samples compensated with `ball_radius_mm`.
+inline auto fit_scanned_boss(const std::vector<machine::ScanSample>& samples, double ball_radius_mm) {
+  std::vector<Vec3> pts;
+  for (const machine::ScanSample& s : samples) pts.push_back(s.surface_mm(ball_radius_mm));
+  fitting::FitOptions o;
+  o.inner = false;
+  o.direction_hint = Vec3::UnitZ();
+  return fitting::fit(fitting::Shape::Circle, pts, o);
 }
 
 }  // namespace metron::scan_test

@@ -222,13 +222,10 @@ TEST(Scanning, LobedCircleFormIsRecoveredWithin1um) {
   c.sample_spacing_mm = 0.2;
   const ScanRun r = scan(w, c);
   ASSERT_TRUE(r.out.completed) << r.out.fault->message;
-  std::vector<Vec3> pts;
-  for (const ScanSample& s : r.out.samples) pts.push_back(s.surface_mm(ball_r));
-  fitting::FitOptions o;
-  o.inner = false;
-  o.direction_hint = Vec3::UnitZ();
-  const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+  const auto f = metron::scan_test::fit_scanned_boss(r.out.samples, ball_r);
   ASSERT_TRUE(f);
+  std::vector<Vec3> pts;  // the fitted points, for the harmonic analysis
+  for (const ScanSample& s : r.out.samples) pts.push_back(s.surface_mm(ball_r));
   EXPECT_NEAR(f->form_mm, 2 * amplitude, 0.001);
   EXPECT_NEAR(f->diameter_mm, d, 0.001);
   EXPECT_NEAR((f->position - (origin + offset)).head<2>().norm(), 0, 0.001);
@@ -593,12 +590,7 @@ TEST(ScanningWorlds, LobedCircleAndFreeFormBumpWorlds) {
     cmm.submit({4, c});
     const auto r = cmm.execute();
     ASSERT_EQ(r[3].status, Response::Status::Done) << r[3].fault->message;
-    std::vector<Vec3> pts;
-    for (const ScanSample& s : r[3].scan) pts.push_back(s.surface_mm(ball_r));
-    fitting::FitOptions o;
-    o.inner = false;
-    o.direction_hint = Vec3::UnitZ();
-    const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+    const auto f = metron::scan_test::fit_scanned_boss(r[3].scan, ball_r);
     ASSERT_TRUE(f);
     EXPECT_NEAR(f->form_mm, 0.005, 0.001);
     EXPECT_NEAR(f->position.x(), 200.15, 0.001);

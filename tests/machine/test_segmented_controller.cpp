@@ -10,6 +10,7 @@
 #include "metron/machine/segmented/reference_planner.hpp"
 #include "metron/machine/segmented/sample_paths.hpp"
 #include "metron/machine/segmented/segmented_controller.hpp"
+#include "scan_paths.hpp"
 
 namespace {
 
@@ -17,20 +18,7 @@ using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
 
-// Commands of P segments (plain split; the averaging rule is tested in tests/runtime).
-std::vector<MeasurementCommand> split(const geometry::PccPath& path, std::size_t P) {
-  std::vector<MeasurementCommand> out;
-  for (std::size_t first = 0, i = 0; first < path.segments.size(); first += P, ++i) {
-    MeasurementCommand c;
-    c.index = i;
-    c.first_segment = first;
-    const std::size_t n = std::min(P, path.segments.size() - first);
-    c.segments.assign(path.segments.begin() + static_cast<long>(first), path.segments.begin() + static_cast<long>(first + n));
-    c.last = first + n == path.segments.size();
-    out.push_back(std::move(c));
-  }
-  return out;
-}
+using metron::scan_test::split;
 
 struct ScanRun {
   SegmentedStats stats;

@@ -26,23 +26,6 @@ using namespace metron::scan_test;
 constexpr double ball_r = boss_ball_radius_mm, lobe_mm = boss_lobe_mm, boss_d = boss_diameter_mm;
 const Vec3 centre = boss_centre_mm;
 
-// Commands of P segments (the host's averaging rule is tested in tests/runtime).
-std::vector<MeasurementCommand> split(const geometry::PccPath& path, std::size_t P) {
-  std::vector<MeasurementCommand> out;
-  for (std::size_t first = 0, i = 0; first < path.segments.size(); first += P, ++i) {
-    MeasurementCommand c;
-    c.index = i;
-    c.first_segment = first;
-    const std::size_t n = std::min(P, path.segments.size() - first);
-    c.segments.assign(path.segments.begin() + static_cast<long>(first),
-                      path.segments.begin() + static_cast<long>(first + n));
-    c.normals.assign(path.normals.begin() + static_cast<long>(first),
-                     path.normals.begin() + static_cast<long>(first + n + 1));
-    c.last = first + n == path.segments.size();
-    out.push_back(std::move(c));
-  }
-  return out;
-}
 
 struct ProbeRun {
   SegmentedStats stats;
@@ -129,12 +112,7 @@ std::pair<double, double> junction_deflection(const ProbeRun& r, double window_m
 }
 
 void expect_lobed_form(const ProbeRun& r) {
-  std::vector<Vec3> pts;
-  for (const ScanSample& s : r.samples) pts.push_back(s.surface_mm(ball_r));
-  fitting::FitOptions o;
-  o.inner = false;
-  o.direction_hint = Vec3::UnitZ();
-  const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+  const auto f = metron::scan_test::fit_scanned_boss(r.samples, ball_r);
   ASSERT_TRUE(f);
   EXPECT_NEAR(f->form_mm, 2 * lobe_mm, 0.001);
   EXPECT_NEAR(f->diameter_mm, boss_d, 0.001);

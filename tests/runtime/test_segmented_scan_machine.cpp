@@ -132,12 +132,7 @@ TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
     EXPECT_NE(res.log.back().find(stops), std::string::npos) << res.log.back();
     // A smooth circle: the foot moves with the head, 0.01 mm per cycle at 10 mm/s.
     expect_continuous(res.samples, c.sample_spacing_mm, c.path.length(), 0.05);
-    std::vector<Vec3> pts;
-    for (const ScanSample& s : res.samples) pts.push_back(s.surface_mm(ball_r));
-    fitting::FitOptions o;
-    o.inner = false;
-    o.direction_hint = Vec3::UnitZ();
-    const auto f = fitting::fit(fitting::Shape::Circle, pts, o);
+    const auto f = metron::scan_test::fit_scanned_boss(res.samples, ball_r);
     ASSERT_TRUE(f);
     EXPECT_NEAR(f->form_mm, 0.005, 0.001);  // the world's hidden 3-lobe form
     EXPECT_NEAR(f->position.x(), 200.15, 0.001);
