@@ -235,9 +235,9 @@ class LeastSquares final : public FieldInterpolator {
     return (q - x[c]) / (x[c + 1] - x[c]);
   }
   void phi(const double u[3], double* out, Eigen::Index stride) const {
+    const double pw[3][3] = {{1, u[0], u[0] * u[0]}, {1, u[1], u[1] * u[1]}, {1, u[2], u[2] * u[2]}};
     for (std::size_t t = 0; t < m_terms.size(); ++t)
-      out[static_cast<Eigen::Index>(t) * stride] =
-          std::pow(u[0], m_terms[t][0]) * std::pow(u[1], m_terms[t][1]) * std::pow(u[2], m_terms[t][2]);
+      out[static_cast<Eigen::Index>(t) * stride] = pw[0][m_terms[t][0]] * pw[1][m_terms[t][1]] * pw[2][m_terms[t][2]];
   }
   [[nodiscard]] Estimate estimate_impl(double x, double y, double z, bool with_sd) const {
     int c[3];
