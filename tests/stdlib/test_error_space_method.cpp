@@ -155,6 +155,12 @@ TEST(TwoPointSurface, S7AsksToRemeasureALineWithAGlitch) {
   const SurfaceResult r = solve_surface(rd, opt);
   ASSERT_TRUE(r.remeasure);
   EXPECT_EQ(r.remeasure_lines, std::vector<int>{7});
+  // S6 on inconsistent data: every X curve's ends lie on the two Y boundary curves (S4, S5).
+  const LineResult y0 = solve_line(rd.y_line_first, r.delta_mm), yl = solve_line(rd.y_line_last, r.delta_mm);
+  for (int j = 0; j <= 12; ++j) {
+    EXPECT_NEAR(r.error_mm(0, j), y0.motion_mm[j], 1e-12) << j;
+    EXPECT_NEAR(r.error_mm(20, j), yl.motion_mm[j], 1e-12) << j;
+  }
 }
 
 TEST(TwoPointSurface, PropagatedNoiseFloorMatchesMonteCarlo) {
