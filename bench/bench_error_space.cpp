@@ -3,7 +3,8 @@
 // of one interpolation query per method (median and p99 over batches), and the every-second-point
 // validation error of trilinear, B-spline and least squares side by side (printed before the
 // timings, on the hidden smooth field and on a recovered noisy one).
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_error_space.
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_error_space;
+// ./build/bench/bench_error_space --report FILE.svg writes the calibration report page.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,12 +12,17 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
 #include <time.h>
 
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/machine_errors/grid_field.hpp"
 #include "metron/machine/machine_errors/rigid_body.hpp"
 #include "metron/stdlib/error_space/interpolation.hpp"
+#include "metron/stdlib/error_space/report_svg.hpp"
+
+#include <cstring>
+#include <fstream>
 
 namespace {
 
@@ -170,9 +176,64 @@ void print_validation() {
   std::printf("recovered space's noise floor RMS: %.4f um\n\n", 1e3 * std::sqrt(floor2 / static_cast<double>(run.space.sd_mm[2].size())));
 }
 
+// The calibration report of the 50 x 50 x 10 run as one offline SVG page (the template for the
+// future `metron calibrate error-space --report`).
+int write_report(const char* path) {
+  using namespace metron::error_space;
+  const auto plan = bench_plan();
+  const auto run = calibrate_space(machine(), plan);
+  const ErrorSpace& truth = truth_space();
+  ErrorSpace diff = run.space;
+  double d2 = 0, f2 = 0;
+  for (std::size_t i = 0; i < diff.values_mm[2].size(); ++i) {
+    diff.values_mm[2][i] -= truth.values_mm[2][i];
+    d2 += diff.values_mm[2][i] * diff.values_mm[2][i], f2 += run.space.sd_mm[2][i] * run.space.sd_mm[2][i];
+  }
+  const double n = static_cast<double>(diff.values_mm[2].size());
+  ReportInput in;
+  in.title = "Error-space calibration, sequential two-point method (SEEDS.md 4)";
+  in.notes.push_back(fmt::format("grid 50 x 50 x 10, step 20 mm; head d = 20 mm, sensor noise 0.1 um; plate form 5 um; "
+                                 "planes tied by an ISO 230-2 laser run along z ({} cycles)", plan.laser_cycles));
+  in.notes.push_back(fmt::format("recovered e_z vs hidden truth (method's reference): RMS {:.3f} um; noise floor RMS {:.3f} um; "
+                                 "S7 planes to re-measure: {}", 1e3 * std::sqrt(d2 / n), 1e3 * std::sqrt(f2 / n), run.planes_to_remeasure));
+  in.maps.push_back(slice_map(run.space, Component::Z, 0, "recovered e_z, z = -500"));
+  in.maps.push_back(slice_map(run.space, Component::Z, 9, "recovered e_z, z = -320"));
+  in.maps.push_back(slice_map(diff, Component::Z, 0, "recovered - hidden truth, z = -500"));
+  HeatMap plate;
+  plate.title = "plate profile recovered (under A), plane 0";
+  plate.x_label = "x (mm)", plate.y_label = "y (mm)";
+  plate.x_mm = plan.grid.axes_mm[0], plate.y_mm = plan.grid.axes_mm[1];
+  plate.values_mm = run.planes[0].surface.profile_mm;
+  in.maps.push_back(plate);
+  HeatMap plate_truth = plate;
+  plate_truth.title = "plate profile, hidden truth (same reference)";
+  plate_truth.values_mm = plate_truth_in_reference(machine(), plan, 2, 0);
+  in.maps.push_back(plate_truth);
+  HeatMap sd = slice_map(run.space, Component::Z, 0, "noise floor (sd), z = -500");
+  for (std::size_t i = 0; i < 50; ++i)
+    for (std::size_t j = 0; j < 50; ++j) sd.values_mm(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = run.space.sd_mm[2][plan.grid.index(i, j, 0)];
+  in.maps.push_back(sd);
+  const std::pair<InterpolationSpec, const char*> methods[] = {{{Method::Trilinear, {}}, "trilinear"},
+                                                                {{Method::BSpline, {}}, "bspline"},
+                                                                {{Method::LeastSquares, {2, 2}}, "least squares (quadratic, 64)"}};
+  for (const auto& [spec, name] : methods) {
+    const auto v = validate_every_second(plan.grid, run.space.values_mm[2], spec);
+    auto m = validation_map(run.space, Component::Z, 0, spec, fmt::format("validation residual, {}, z = -500", name));
+    if (!v || !m) continue;
+    in.notes.push_back(fmt::format("every-second-point validation, {}: RMS {:.3f} um, max {:.3f} um ({} points)", name, 1e3 * v->rms_mm,
+                                   1e3 * v->max_abs_mm, v->points));
+    in.maps.push_back(*m);
+  }
+  std::ofstream out(path);
+  out << report_svg(in);
+  std::printf("wrote %s\n", path);
+  return out ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 3 && std::strcmp(argv[1], "--report") == 0) return write_report(argv[2]);
   print_validation();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

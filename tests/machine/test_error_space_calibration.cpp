@@ -178,6 +178,13 @@ TEST(ErrorSpaceCalibration, SpaceOfPlanesWithLaserOffsetsWithinTheNoiseFloor) {
   const auto eval = error_space::evaluate_positioning(run.laser);
   ASSERT_TRUE(eval);
   EXPECT_EQ(eval->targets.size(), 5u);
+  EXPECT_EQ(run.planes_to_remeasure, 0);
+  // S7 on 50-line planes: no false re-measure from noise (a rounding-level D_0 once asked for one).
+  SpaceCalibrationPlan big;
+  big.head.spacing_mm = 20;
+  for (int i = 0; i < 50; ++i) big.grid.axes_mm[0].push_back(10 + 20.0 * i), big.grid.axes_mm[1].push_back(10 + 20.0 * i);
+  big.grid.axes_mm[2] = {-500, -480, -460};
+  EXPECT_EQ(calibrate_space(m, big).planes_to_remeasure, 0);
 }
 
 TEST(ErrorSpaceCalibration, EveryComponentThePlatesReach) {

@@ -14,6 +14,7 @@
 #include "metron/stdlib/error_space/error_space_file.hpp"
 #include "metron/stdlib/error_space/interpolation.hpp"
 #include "metron/stdlib/error_space/merge.hpp"
+#include "metron/stdlib/error_space/report_svg.hpp"
 #include "metron/stdlib/error_space/two_point.hpp"
 
 namespace metron::error_space {
@@ -344,6 +345,35 @@ TEST(ErrorSpaceFile, RoundTripsAndRejectsBadInputByPointer) {
   bad["temperatures"][0]["components"]["z"]["values_mm"] = std::vector<double>(32, 0.0);
   bad["temperatures"][0]["components"]["z"].erase("sd_mm");
   EXPECT_EQ(from_json(bad).error().pointer, "/interpolation");
+}
+
+}  // namespace
+}  // namespace metron::error_space
+
+namespace metron::error_space {
+namespace {
+
+TEST(ReportSvg, SelfContainedPageWithTheMaps) {
+  ErrorSpace s;
+  s.grid = uniform_grid(9, 7, 3);
+  s.values_mm[2] = sample(s.grid, [](double x, double y, double z) { return 1e-5 * std::sin(x / 20) * y + 1e-6 * z; });
+  ReportInput in;
+  in.title = "t <&>";
+  in.maps.push_back(slice_map(s, Component::Z, 1, "slice"));
+  auto v = validation_map(s, Component::Z, 0, {Method::Trilinear, {}}, "residual");
+  ASSERT_TRUE(v);
+  // Fitted points (even i and j on the even slice) carry no residual; the rest inside the subgrid do.
+  EXPECT_TRUE(std::isnan(v->values_mm(2, 4)));
+  EXPECT_FALSE(std::isnan(v->values_mm(1, 4)));
+  in.maps.push_back(*v);
+  const std::string svg = report_svg(in);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_NE(svg.find("t &lt;&amp;&gt;"), std::string::npos);
+  // Offline: the only URL is the SVG namespace.
+  std::size_t urls = 0;
+  for (std::size_t p = svg.find("http"); p != std::string::npos; p = svg.find("http", p + 1)) ++urls;
+  EXPECT_EQ(urls, 1u);
 }
 
 }  // namespace

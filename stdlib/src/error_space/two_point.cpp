@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/stdlib/error_space/two_point.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -89,10 +90,10 @@ SurfaceResult solve_surface(const SurfaceReadings& in, const SurfaceOptions& opt
     out.s7_disagreement_mm[j] = x_curves[j][l] - (yl.motion_mm[j] - y0.motion_mm[j]);
     const double var = options.known_delta_mm ? 2.0 * l + 4.0 * j : (j == 0 ? 0.0 : 4.0 * (l + j));
     out.s7_sd_mm[j] = sigma * std::sqrt(var);
-    const double limit = options.s7_factor * out.s7_sd_mm[j];
-    if (std::abs(out.s7_disagreement_mm[j]) > limit && (sigma > 0 || std::abs(out.s7_disagreement_mm[j]) > 1e-12)) {
-      out.remeasure_lines.push_back(static_cast<int>(j));
-    }
+    // A 1 nm floor keeps rounding (and noise-free simulations) from asking for a re-measure;
+    // with an estimated Delta, line 0 agrees by construction (D_0 = 0 up to rounding).
+    const double limit = std::max(options.s7_factor * out.s7_sd_mm[j], 1e-6);
+    if (std::abs(out.s7_disagreement_mm[j]) > limit) out.remeasure_lines.push_back(static_cast<int>(j));
   }
   out.remeasure = !out.remeasure_lines.empty();
 

@@ -68,7 +68,7 @@ struct SurfaceReadings {
 /// Choices of the surface method.
 struct SurfaceOptions {
   double sensor_sigma_mm = 0;       ///< sensor noise standard deviation, for the S7 threshold and the noise floor
-  double s7_factor = 4;             ///< S7: re-measure when |disagreement| > s7_factor * its standard deviation
+  double s7_factor = 4;             ///< S7: re-measure when |disagreement| > max(s7_factor * its standard deviation, 1 nm)
   std::optional<double> known_delta_mm;  ///< Delta known from elsewhere (e.g. a reversal): S2 is skipped
 };
 
