@@ -11,6 +11,7 @@
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/machine_errors/grid_field.hpp"
 #include "metron/machine/machine_errors/rigid_body.hpp"
+#include "metron/machine/machine_errors/thermal.hpp"
 #include "metron/stdlib/error_space/positioning.hpp"
 
 namespace metron::machine {
@@ -209,6 +210,32 @@ TEST(ErrorSpaceCalibration, EveryComponentThePlatesReach) {
                 1e3 * std::sqrt(e2[c] / 4), 1e3 * std::sqrt(f2[c] / 4), std::sqrt(e2[c] / f2[c]));
     EXPECT_LT(std::sqrt(e2[c] / f2[c]), 1.5) << "xyz"[c];
   }
+}
+
+TEST(ErrorSpaceCalibration, SpacesAtTwoTemperaturesInterpolatedBetween) {
+  // The Z scale (10 ppm/K, fixed at z = 0) follows the air: the same machine calibrated at 20 C and
+  // at 24 C, used at 22 C. The space interpolated by the monitored temperature against the nearest
+  // calibrated one, both against the hidden truth at 22 C.
+  auto machine_at = [](double t_c) {
+    MachineErrorModel m = realistic_machine();
+    std::array<ScaleThermalTerm::Scale, 3> scales;
+    scales[2] = {10e-6, 0.0, std::make_shared<TemperatureHistory>(std::vector<double>{0}, std::vector<double>{t_c}, 0, t_c)};
+    m.add(std::make_shared<ScaleThermalTerm>(scales));
+    return m;
+  };
+  SpaceCalibrationPlan plan = plan_z(16, 12, {-450, -410, -370, -330, -290});
+  auto cal20 = calibrate_space(machine_at(20), plan).space;
+  plan.seed = 2;
+  auto cal24 = calibrate_space(machine_at(24), plan).space;
+  cal20.temperature_c = 20, cal24.temperature_c = 24;
+  const auto truth22 = truth_in_reference(machine_at(22), plan);
+  const auto interp = error_space::at_temperature({cal20, cal24}, 22);
+  const Compare ci = compare(interp.values_mm[2], truth22.values_mm[2], interp.sd_mm[2]);
+  const Compare cn = compare(cal20.values_mm[2], truth22.values_mm[2], cal20.sd_mm[2]);
+  print("at 22 C: interpolated from 20 and 24 C", ci);
+  print("at 22 C: nearest (20 C) space", cn);
+  EXPECT_LT(ci.rms_mm, 1.5 * ci.floor_rms_mm);
+  EXPECT_GT(cn.rms_mm, 1.5 * ci.rms_mm);
 }
 
 TEST(ErrorSpaceCalibration, WhatBreakingTheSeedsAssumptionsCosts) {
