@@ -165,8 +165,7 @@ MachineErrorModel parse(const json& j, const std::string& p) {
   }
   if (const json* th = root.find("thermal")) {
     Object to(*th, root.at("thermal"));
-    const json* air = to.find("air_c");
-    if (air) Object(*air, to.at("air_c"));  // type-checked where used
+    const json* air = to.find("air_c");  // checked where a body follows it
     if (const json* sc = to.find("scales")) {
       Object so(*sc, to.at("scales"));
       std::array<ScaleThermalTerm::Scale, 3> scales;
@@ -179,7 +178,7 @@ MachineErrorModel parse(const json& j, const std::string& p) {
         if (const json* f = one.find("fixed_at_mm")) scales[static_cast<std::size_t>(ax)].fixed_at_mm = number(*f, one.at("fixed_at_mm"));
         const json* t = one.find("temperature");
         const json empty = json::object();
-        scales[static_cast<std::size_t>(ax)].temperature = history(t ? *t : empty, t ? one.at("temperature") : one.at("temperature"), air, to.at("air_c"));
+        scales[static_cast<std::size_t>(ax)].temperature = history(t ? *t : empty, one.at("temperature"), air, to.at("air_c"));
         one.finish();
       }
       so.finish();
