@@ -75,6 +75,24 @@ TEST(TwoPointLine, TheSeedsLiteralStartValuesLeaveAKink) {
   for (int k = 1; k < n; ++k) EXPECT_NEAR(c[k] - truth[k], -(1.0 - double(k) / n) * kink, 1e-12) << k;
 }
 
+TEST(TwoPointLine, DeltaByReversalIsFreeOfTheSlope) {
+  // Plate points -1..n+1; the forward head reads (k, k+1), the reversed one (k, k-1).
+  const int n = 15;
+  std::vector<double> e(n + 1), f(n + 3);
+  for (int k = 0; k <= n; ++k) e[k] = 0.003 * std::sin(0.4 * k) + 2e-4 * k;  // a real slope
+  for (int k = 0; k <= n + 2; ++k) f[k] = 0.002 * std::cos(0.3 * k);         // f[k + 1] is point k
+  const double ca = 0.004, cb = 0.0063;
+  LineReadings fwd, rev;
+  for (int k = 0; k <= n; ++k) {
+    fwd.a_mm.push_back(f[k + 1] - e[k] + ca), fwd.b_mm.push_back(f[k + 2] - e[k] + cb);
+    rev.a_mm.push_back(f[k + 1] - e[k] + ca), rev.b_mm.push_back(f[k] - e[k] + cb);
+  }
+  const double delta = delta_by_reversal(fwd, rev);
+  EXPECT_NEAR(delta, cb - ca, 1e-15);
+  const LineResult r = solve_line(fwd, delta);
+  for (int k = 0; k <= n; ++k) EXPECT_NEAR(r.motion_mm[k], e[k] - e[0], 1e-14);  // slope kept
+}
+
 TEST(TwoPointLine, NoiseIsARandomWalkAndABrownianBridge) {
   const int n = 16, trials = 20000;
   const double sigma = 1e-4;
@@ -141,6 +159,12 @@ TEST(TwoPointSurface, StepsS1ToS7RecoverTheSurfaceAndTheProfile) {
     for (int j = 0; j <= 9; ++j) EXPECT_NEAR(r.profile_mm(i, j), s.f(i, j) - s.f(0, 0) - slope * (i + j), 1e-12);
   EXPECT_FALSE(r.remeasure);
   for (double d : r.s7_disagreement_mm) EXPECT_NEAR(d, 0, 1e-12);
+  // With the true Delta known the plane keeps its slope: e - e(0,0).
+  SurfaceOptions known;
+  known.known_delta_mm = s.cb - s.ca;
+  const SurfaceResult k = solve_surface(read_surface(s), known);
+  EXPECT_LT((k.error_mm - (s.e.array() - s.e(0, 0)).matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_FALSE(k.remeasure);
 }
 
 TEST(TwoPointSurface, S7AsksToRemeasureALineWithAGlitch) {

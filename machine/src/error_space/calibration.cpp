@@ -101,8 +101,10 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
       laser_sd = plan.laser_noise_sd_mm / std::sqrt(static_cast<double>(plan.laser_cycles));
       out.laser.insert(out.laser.end(), records.begin(), records.end());
     }
-    const Eigen::MatrixXd floor =
-        error_space::surface_noise_sd_mm(static_cast<int>(nu - 1), static_cast<int>(nv - 1), plan.head.noise_sd_mm);
+    const double reversal_sd = plan.head.noise_sd_mm / std::sqrt(static_cast<double>(nu - 1));
+    const Eigen::MatrixXd floor = error_space::surface_noise_sd_mm(
+        static_cast<int>(nu - 1), static_cast<int>(nv - 1), plan.head.noise_sd_mm,
+        plan.delta_by_reversal ? reversal_sd : plan.known_delta_mm ? 0.0 : -1.0);
     auto& values = out.space.values_mm[static_cast<std::size_t>(c)];
     auto& sd = out.space.sd_mm[static_cast<std::size_t>(c)];
     values.assign(g.size(), 0.0);
@@ -121,6 +123,12 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
       opt.sensor_sigma_mm = plan.head.noise_sd_mm;
       opt.s7_factor = plan.s7_factor;
       opt.known_delta_mm = plan.known_delta_mm;
+      if (plan.delta_by_reversal) {
+        // A fresh forward line and the reversed one, so Delta's noise is independent of the plane's.
+        const auto forward = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1));
+        const auto reversed = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1), false, true);
+        opt.known_delta_mm = error_space::delta_by_reversal(forward, reversed);
+      }
       PlaneCalibration pc{c, static_cast<int>(k), error_space::solve_surface(readings, opt), offsets[k]};
       if (pc.surface.remeasure) ++out.planes_to_remeasure;
       for (std::size_t i = 0; i < nu; ++i)
@@ -151,7 +159,8 @@ error_space::ErrorSpace truth_in_reference(const MachineErrorModel& hidden, cons
     for (std::size_t k = 0; k < nc; ++k) {
       const Eigen::MatrixXd e = plane_truth(hidden, plan, c, k, t);
       // e - e(0,0) - s (i + j); with a known Delta the method keeps the slope: e - e(0,0).
-      const Eigen::MatrixXd ref = plan.known_delta_mm ? Eigen::MatrixXd(e.array() - e(0, 0)) : error_space::surface_reference(e);
+      const Eigen::MatrixXd ref = plan.known_delta_mm || plan.delta_by_reversal ? Eigen::MatrixXd(e.array() - e(0, 0))
+                                                                                 : error_space::surface_reference(e);
       const double offset = plan.laser_offsets && nc > 1 ? e(0, 0) - first : 0.0;
       for (Eigen::Index i = 0; i < e.rows(); ++i)
         for (Eigen::Index j = 0; j < e.cols(); ++j)
@@ -165,7 +174,8 @@ Eigen::MatrixXd plate_truth_in_reference(const MachineErrorModel& hidden, const 
   const FlatPlate plate = plan_plate(plan, c, k);
   const Eigen::MatrixXd e = plane_truth(hidden, plan, c, static_cast<std::size_t>(k), 0);
   const Eigen::Index l = e.rows() - 1;
-  const double s = (e(l, 0) - e(0, 0)) / static_cast<double>(l);
+  const bool keeps_slope = plan.known_delta_mm || plan.delta_by_reversal;
+  const double s = keeps_slope ? 0.0 : (e(l, 0) - e(0, 0)) / static_cast<double>(l);
   Eigen::MatrixXd f(e.rows(), e.cols());
   for (Eigen::Index i = 0; i < e.rows(); ++i)
     for (Eigen::Index j = 0; j < e.cols(); ++j) {

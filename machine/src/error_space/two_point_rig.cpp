@@ -7,13 +7,13 @@ TwoPointRig::TwoPointRig(const MachineErrorModel& errors, FlatPlate plate, TwoPo
                          double start_time_s)
     : m_errors(errors), m_plate(std::move(plate)), m_head(std::move(head)), m_rng(seed), m_time_s(start_time_s) {}
 
-std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, double travel_mm, bool turned) {
+std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, double travel_mm, bool turned, bool reversed) {
   const double d = m_head.spacing_mm;
   MachinePose pose;
   pose.axes_mm = axes;
   pose.approach = {1, 1, 1};
   Vec3 b_offset = m_head.sensor_offset_mm;
-  b_offset[step_axis] += d + m_head.spacing_error_mm;
+  b_offset[step_axis] += (reversed ? -1.0 : 1.0) * (d + m_head.spacing_error_mm);
   // Each tip moves with the machine's tool errors at its own offset (angular errors: Abbe).
   pose.probe_offset_mm = m_head.sensor_offset_mm;
   const Vec3 pa = pose.nominal_tip_mm() + m_errors.tool_displacement(pose, m_time_s);
@@ -27,18 +27,19 @@ std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, dou
     r += m_head.linearity_per_mm * r * r;
     return r + zero + m_head.noise_sd_mm * m_rng.normal();
   };
-  const double a = reading(pa, +0.5 * theta * d, m_head.zero_a_mm);
-  const double b = reading(pb, -0.5 * theta * d - m_head.delta_mm - (turned ? m_head.delta_change_turned_mm : 0.0), m_head.zero_b_mm);
+  const double lever = reversed ? -0.5 * theta * d : 0.5 * theta * d;
+  const double a = reading(pa, +lever, m_head.zero_a_mm);
+  const double b = reading(pb, -lever - m_head.delta_mm - (turned ? m_head.delta_change_turned_mm : 0.0), m_head.zero_b_mm);
   m_time_s += dwell_s;
   return {a, b};
 }
 
-error_space::LineReadings TwoPointRig::measure_line(const Vec3& start, int step_axis, int steps, bool turned) {
+error_space::LineReadings TwoPointRig::measure_line(const Vec3& start, int step_axis, int steps, bool turned, bool reversed) {
   error_space::LineReadings out;
   for (int k = 0; k <= steps; ++k) {
     Vec3 q = start;
     q[step_axis] += k * m_head.spacing_mm;
-    const auto [a, b] = read(q, step_axis, k * m_head.spacing_mm, turned);
+    const auto [a, b] = read(q, step_axis, k * m_head.spacing_mm, turned, reversed);
     out.a_mm.push_back(a);
     out.b_mm.push_back(b);
   }

@@ -78,17 +78,20 @@ SurfaceResult solve_surface(const SurfaceReadings& in, const SurfaceOptions& opt
     for (std::size_t i = 0; i <= l; ++i) c[i] -= static_cast<double>(i) * out.delta_mm;
   // S4, S5: the Y boundary curves with the sensors turned 90 degrees: the same Delta.
   const LineResult y0 = solve_line(in.y_line_first, out.delta_mm);
-  const LineResult yl = solve_line(in.y_line_last, out.delta_mm);
+  LineResult yl = solve_line(in.y_line_last, out.delta_mm);
+  // The Y curve at x_l starts where the first X curve ends (0 when S2 forced that end to zero;
+  // with a known Delta it keeps the slope).
+  for (double& v : yl.motion_mm) v += x_curves[0][l];
 
   // S7: where the X curves meet the Y curve at x_l, the rise along X must equal the difference of
-  // the two Y curves. Noise: X part 4 l sigma^2 (two chains of l steps, the second through Delta),
-  // Y part 4 j sigma^2 (two chains of j steps; Delta cancels); with a known Delta, 2 l + 4 j.
+  // the two Y curves. Noise: X part 4 l sigma^2 (the chains of lines j and 0, through Delta or the
+  // Y_l start), Y part 4 j sigma^2 (two chains of j steps; Delta cancels); D_0 = 0.
   const double sigma = options.sensor_sigma_mm;
   out.s7_disagreement_mm.resize(m + 1);
   out.s7_sd_mm.resize(m + 1);
   for (std::size_t j = 0; j <= m; ++j) {
     out.s7_disagreement_mm[j] = x_curves[j][l] - (yl.motion_mm[j] - y0.motion_mm[j]);
-    const double var = options.known_delta_mm ? 2.0 * l + 4.0 * j : (j == 0 ? 0.0 : 4.0 * (l + j));
+    const double var = j == 0 ? 0.0 : 4.0 * static_cast<double>(l + j);
     out.s7_sd_mm[j] = sigma * std::sqrt(var);
     // A 1 nm floor keeps rounding (and noise-free simulations) from asking for a re-measure;
     // with an estimated Delta, line 0 agrees by construction (D_0 = 0 up to rounding).
@@ -123,7 +126,18 @@ Eigen::MatrixXd surface_reference(const Eigen::MatrixXd& e) {
   return out;
 }
 
-Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma) {
+double delta_by_reversal(const LineReadings& fwd, const LineReadings& rev) {
+  check_line(fwd, "reversal, forward line");
+  check_line(rev, "reversal, reversed line");
+  if (fwd.a_mm.size() != rev.a_mm.size()) throw std::invalid_argument("reversal: the two lines differ in length");
+  const std::size_t n = fwd.a_mm.size() - 1;
+  double sum = 0;
+  for (std::size_t k = 1; k <= n; ++k)
+    sum += 0.5 * ((fwd.b_mm[k - 1] - fwd.a_mm[k]) - (rev.a_mm[k - 1] - rev.b_mm[k]));
+  return sum / static_cast<double>(n);
+}
+
+Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma, double known_delta_sd) {
   // The method is linear in the readings: propagate each reading's unit impulse and add the squares.
   SurfaceReadings r;
   r.x_lines.assign(static_cast<std::size_t>(m + 1), LineReadings{std::vector<double>(l + 1, 0.0), std::vector<double>(l + 1, 0.0)});
@@ -132,14 +146,20 @@ Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma) {
   Eigen::MatrixXd var = Eigen::MatrixXd::Zero(l + 1, m + 1);
   auto impulse = [&](double& reading) {
     reading = 1.0;
-    var += solve_surface(r).error_mm.array().square().matrix();
+    SurfaceOptions o;
+    if (known_delta_sd >= 0) o.known_delta_mm = 0.0;  // Delta from other readings: no impulse reaches it here
+    var += solve_surface(r, o).error_mm.array().square().matrix();
     reading = 0.0;
   };
   for (auto& line : r.x_lines)
     for (int i = 0; i <= l; ++i) impulse(line.a_mm[static_cast<std::size_t>(i)]), impulse(line.b_mm[static_cast<std::size_t>(i)]);
   for (auto* line : {&r.y_line_first, &r.y_line_last})
     for (int j = 0; j <= m; ++j) impulse(line->a_mm[static_cast<std::size_t>(j)]), impulse(line->b_mm[static_cast<std::size_t>(j)]);
-  return sigma * var.array().sqrt().matrix();
+  var *= sigma * sigma;
+  if (known_delta_sd > 0)
+    for (int i = 0; i <= l; ++i)
+      for (int j = 0; j <= m; ++j) var(i, j) += std::pow(known_delta_sd * (i + j), 2);
+  return var.array().sqrt().matrix();
 }
 
 }  // namespace metron::error_space

@@ -27,7 +27,10 @@ struct SpaceCalibrationPlan {
   int laser_cycles = 2;               ///< bidirectional runs for the offsets
   double laser_noise_sd_mm = 0.0002;  ///< the interferometer's noise
   double s7_factor = 4;               ///< S7 threshold in standard deviations
-  std::optional<double> known_delta_mm;  ///< tell the method Delta (e.g. from a reversal); default: S2 estimates it
+  std::optional<double> known_delta_mm;  ///< tell the method Delta; default: S2 estimates it
+  /// Measure Delta by a reversal (the first line again with the head turned 180 degrees) on every
+  /// plane, so the planes keep their slope (beyond the seed; see error_space::delta_by_reversal).
+  bool delta_by_reversal = false;
   std::uint64_t seed = 1;             ///< noise
   double start_time_s = 0;            ///< simulated time at the start
 };
@@ -56,7 +59,7 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
 
 /// For checking only (tests, `--truth`): the hidden error at the grid points, taken into the
 /// method's reference (each plane minus its common slope per step s_k (i + j), unless the plan gives
-/// Delta, when the method keeps that slope; with the laser, the
+/// Delta or measures it by a reversal, when the method keeps that slope; with the laser, the
 /// planes keep their offsets relative to the first grid point, else each plane is zeroed at its
 /// (u_0, v_0)).
 error_space::ErrorSpace truth_in_reference(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan, double time_s = 0);

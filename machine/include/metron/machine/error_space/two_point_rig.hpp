@@ -44,10 +44,12 @@ class TwoPointRig {
   void place_plate(int normal_axis, int normal_sign, const Vec3& origin_mm) { m_plate.place(normal_axis, normal_sign, origin_mm); }
   /// The readings (a, b) with the ram at `axes_mm`, the sensors lined up along machine axis
   /// `step_axis` (turned 90 degrees when that changes), `travel_mm` along the line for the head pitch.
-  std::pair<double, double> read(const Vec3& axes_mm, int step_axis, double travel_mm, bool turned = false);
+  /// `reversed`: the head turned 180 degrees, B one step behind A.
+  std::pair<double, double> read(const Vec3& axes_mm, int step_axis, double travel_mm, bool turned = false, bool reversed = false);
   /// A line: steps+1 head positions from `start_axes_mm` in steps of d along `step_axis`
   /// (`turned`: the sensors turned 90 degrees from their first orientation).
-  error_space::LineReadings measure_line(const Vec3& start_axes_mm, int step_axis, int steps, bool turned = false);
+  error_space::LineReadings measure_line(const Vec3& start_axes_mm, int step_axis, int steps, bool turned = false,
+                                         bool reversed = false);
   /// S1 and S4 of SEEDS.md 4 on the plate as placed: lines along u at v_0..v_m, then along v at
   /// u_0 and u_l; grid origin `origin_axes_mm` (ram positions), steps of d.
   error_space::SurfaceReadings measure_surface(const Vec3& origin_axes_mm, int u_axis, int v_axis, int l_steps, int m_steps);

@@ -78,14 +78,14 @@ struct SurfaceResult {
   Eigen::MatrixXd profile_mm;  ///< (l+1) x (m+1): plate profile under A, relative to the same plane
   double delta_mm = 0;         ///< S2: Delta from the first X line (includes that line's end slope per step)
   std::vector<double> s7_disagreement_mm;  ///< S7, per j: X curve end rise minus the Y boundary curves' difference
-  std::vector<double> s7_sd_mm;            ///< its standard deviation from sensor noise: 2 sigma sqrt(l + j)
+  std::vector<double> s7_sd_mm;            ///< its standard deviation from sensor noise: 2 sigma sqrt(l + j), 0 for j = 0
   std::vector<int> remeasure_lines;        ///< S7: the j whose disagreement exceeds the threshold
   bool remeasure = false;                  ///< S7 decision: any line to re-measure
 };
 
 /// S1-S7 of SEEDS.md 4. The result is relative to the reference plane P(i, j) = e(0,0) + s (i + j),
 /// s = (e(l,0) - e(0,0)) / l: the one Delta cannot be told from one common slope per step in both
-/// directions. Throws std::invalid_argument on inconsistent sizes (fewer than 2 points per line).
+/// directions. With `known_delta_mm` the slope stays: the result is e - e(0,0). Throws std::invalid_argument on inconsistent sizes (fewer than 2 points per line).
 SurfaceResult solve_surface(const SurfaceReadings& readings, const SurfaceOptions& options = {});
 
 /// The same reference applied to a known surface (for comparing with truth): e - P.
@@ -93,7 +93,17 @@ Eigen::MatrixXd surface_reference(const Eigen::MatrixXd& e_mm);
 
 /// The method's noise floor on a plane: the standard deviation of every recovered e(x_i, y_j) for
 /// sensor noise sigma, by exact linear propagation (the method is linear in the readings, so the
-/// variance is sigma^2 times the sum of squared impulse responses). (l+1) x (m+1).
-Eigen::MatrixXd surface_noise_sd_mm(int l_steps, int m_steps, double sigma_mm);
+/// variance is sigma^2 times the sum of squared impulse responses). (l+1) x (m+1). With
+/// `known_delta_sd_mm` >= 0 the plane was solved with a Delta measured elsewhere with that
+/// standard deviation: its error adds delta (i + j), independent of the plane's readings.
+Eigen::MatrixXd surface_noise_sd_mm(int l_steps, int m_steps, double sigma_mm, double known_delta_sd_mm = -1);
+
+/// Delta by a reversal (beyond the seed): the same line measured a second time with the head
+/// turned 180 degrees about the plate normal (B now one step behind A). Then
+/// b_{k-1} - a_k = e_k - e_{k-1} + Delta and a'_{k-1} - b'_k = e_k - e_{k-1} - Delta, so
+/// Delta = mean over k of ((b_{k-1} - a_k) - (a'_{k-1} - b'_k)) / 2, free of the machine's slope
+/// (which the end correction cannot separate from Delta). Its standard deviation is sigma / sqrt(n).
+/// Throws std::invalid_argument when the lines differ in length.
+double delta_by_reversal(const LineReadings& forward, const LineReadings& reversed);
 
 }  // namespace metron::error_space
