@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -30,8 +31,6 @@ fitting::Shape fit_shape(FeatureType type) {
 }
 
 Vec3 oriented(const Vec3& d, const Vec3& like) { return d.dot(like) < 0 ? Vec3(-d) : d; }
-
-constexpr double pi = 3.14159265358979323846;
 
 }  // namespace
 
@@ -88,7 +87,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     case FeatureType::Cone: {
       // Apex from the compensated surface points: rho = (t - t_apex) tan(half angle).
       const Vec3 dir = fit->direction.normalized();
-      const double half = fit->apex_angle_deg * pi / 360.0;
+      const double half = fit->apex_angle_deg * std::numbers::pi / 360.0;
       double sum = 0;
       for (std::size_t i = 0; i < points.size(); ++i) {
         const Vec3 q = points[i].surface_mm() - fit->position;

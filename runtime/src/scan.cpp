@@ -2,6 +2,7 @@
 #include "metron/runtime/scan.hpp"
 
 #include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -9,11 +10,6 @@
 #include "metron/runtime/measurement_runtime.hpp"
 
 namespace metron::runtime {
-namespace {
-
-constexpr double pi = 3.14159265358979323846;
-
-}  // namespace
 
 geometry::Contour path_contour(const PathDefinition& path, double step_mm) {
   if (path.section) return *path.section;
@@ -61,11 +57,11 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, 
     case FeatureType::Plane: {
       // A circle of 5 mm radius on the plane (the touch planner's 4 points lie on it too).
       const Vec3 u = any_perpendicular(axis), v = axis.cross(u);
-      const std::size_t n = std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(2 * pi * 5.0 / step_mm)));
+      const std::size_t n = std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(2 * std::numbers::pi * 5.0 / step_mm)));
       geometry::Contour c;
       c.closed = true;
       for (std::size_t i = 0; i <= n; ++i) {
-        const double a = 2 * pi * static_cast<double>(i) / static_cast<double>(n);
+        const double a = 2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n);
         c.points.push_back({g.position + 5.0 * (std::cos(a) * u + std::sin(a) * v), axis});
       }
       c.points.back() = c.points.front();
@@ -89,7 +85,7 @@ tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geome
       const double ha = a.dot(axis), hb = b.dot(axis);
       const Vec3 ra = a - ha * axis, rb = b - hb * axis;
       if (ra.norm() < 1e-9 || rb.norm() < 1e-9) return tl::unexpected(std::string("a scan's start or end lies on the feature's axis"));
-      double sweep = std::atan2(ra.cross(rb).dot(axis), ra.dot(rb)) * 180 / pi;
+      double sweep = std::atan2(ra.cross(rb).dot(axis), ra.dot(rb)) * 180 / std::numbers::pi;
       if (sweep <= 1e-9) sweep += 360;  // counterclockwise; the same point twice is a full turn
       geometry::ArcSpec arc;
       arc.centre = g.position + ha * axis;

@@ -1,0 +1,485 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Scanning statements end to end (PATH, SCNMOD, SCNSET, FEDRAT/SCNVEL, PAMEAS) on a small fake
+// machine that answers ScanPath with samples on a known actual surface (nominal + form + offset),
+// so fitted actuals and form can be checked against that truth. The virtual CMM's scanning probe
+// is tested in tests/machine.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+
+#include <nlohmann/json.hpp>
+
+#include "metron/interpreter/compiler.hpp"
+#include "metron/interpreter/interpreter.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/geometry/mesh.hpp"
+#include "metron/stdlib/geometry/scan_path.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace metron;
+using metron::interpreter::ExecStatus;
+// The ball centre touching the actual surface when the probe rests at `q` on the commanded path
+// (the truth of the fake world).
+using Truth = std::function<Vec3(const Vec3& q)>;
+
+class FakeScanMachine : public machine::Machine {
+ public:
+  explicit FakeScanMachine(Truth truth) : m_truth(std::move(truth)) {}
+  void submit(machine::Command c) override { m_queue.push_back(std::move(c)); }
+  std::vector<machine::Response> execute() override {
+    std::vector<machine::Response> out;
+    for (auto& c : m_queue) {
+      machine::Response r;
+      r.tag = c.tag;
+      std::visit([&](auto& body) { answer(body, r); }, c.body);
+      out.push_back(std::move(r));
+    }
+    m_queue.clear();
+    return out;
+  }
+  [[nodiscard]] machine::MachineState state() const override {
+    machine::MachineState s;
+    s.position_mm = m_position;
+    s.time_s = m_time;
+    s.tool = m_tool;
+    s.measuring_feed_mm_s = 5;
+    s.positioning_feed_mm_s = 50;
+    return s;
+  }
+  [[nodiscard]] std::vector<machine::Command> queued() const override { return m_queue; }
+  std::vector<machine::ScanPath> scans;  ///< every ScanPath received
+
+ private:
+  void answer(const machine::DefineTool& d, machine::Response& r) {
+    m_tool = machine::ToolInfo{d.name, d.ball_diameter_mm / 2, d.ball_diameter_mm / 2, false, 0};
+    r.tool = m_tool;
+  }
+  void answer(const machine::SelectTool&, machine::Response& r) { r.tool = m_tool; }
+  void answer(const machine::QualifyTool&, machine::Response& r) {
+    m_tool->qualified = true;
+    r.tool = m_tool;
+  }
+  void answer(const machine::GoTo& g, machine::Response&) { m_position = g.target_mm; }
+  void answer(const machine::SetFeeds&, machine::Response&) {}
+  void answer(const machine::PtMeas& p, machine::Response& r) {
+    r.hit = machine::Hit{p.nominal_mm + m_tool->effective_radius_mm * p.normal, p.normal, m_tool->effective_radius_mm, m_time};
+  }
+  // Its state() reports no buffer limit (0), so the runtime never splits a scan for it.
+  void answer(const machine::ScanBufferWrite&, machine::Response& r) {
+    r.status = machine::Response::Status::Fault;
+    r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine has no command buffers", m_position, m_time};
+  }
+  void answer(const machine::ScanPath& s, machine::Response& r) {
+    scans.push_back(s);
+    const double length = s.path.length();
+    const double speed = s.speed_mm_s.value_or(5);
+    for (double at = 0; at <= length + 1e-9; at += s.sample_spacing_mm) {
+      const auto p = geometry::point_at_length(s.path, at);
+      machine::ScanSample sample;
+      sample.centre_mm = m_truth(p.position);
+      sample.deflection_mm = sample.centre_mm - p.position;
+      sample.path_s_mm = at;
+      sample.time_s = m_time + at / speed;
+      r.scan.push_back(sample);
+    }
+    m_time += length / speed;
+    m_position = s.path.segments.back().end();
+  }
+
+  Truth m_truth;
+  std::vector<machine::Command> m_queue;
+  Vec3 m_position = Vec3(0, 0, 100);
+  double m_time = 0;
+  std::optional<machine::ToolInfo> m_tool;
+};
+
+struct Run {
+  ExecStatus status = ExecStatus::Error;
+  std::string diagnostics;
+  SourceManager sources;
+  DiagnosticSink sink;
+  runtime::RunRecord record;
+  std::unique_ptr<FakeScanMachine> machine;
+  std::unique_ptr<runtime::MeasurementRuntime> runtime;
+};
+
+std::unique_ptr<Run> run(const std::string& body, Truth truth) {
+  const fs::path dir = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "scan.dmi";
+  std::ofstream(file) << "DMISMN/'scan test', 5.0\nUNITS/MM, ANGDEC\n"
+                         "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+                      << body << "ENDFIL\n";
+  auto r = std::make_unique<Run>();
+  interpreter::Compiler compiler(r->sources, r->sink);
+  r->machine = std::make_unique<FakeScanMachine>(std::move(truth));
+  r->runtime = std::make_unique<runtime::MeasurementRuntime>(*r->machine, r->sources, r->record);
+  auto unit = compiler.compile_file(file.string());
+  if (unit && !r->sink.has_errors()) {
+    interpreter::Interpreter vm(compiler.module(), *r->runtime, r->sources, r->sink);
+    vm.start(*unit);
+    r->status = vm.run();
+  }
+  r->runtime->finish();
+  for (const auto& d : r->sink.items()) r->diagnostics += format_diagnostic(d, r->sources);
+  return r;
+}
+
+// Bore at c, nominal radius 10, actually shifted by o, with a 3-lobe form of amplitude A (radius
+// R + A cos 3 theta about the shifted centre, to first order).
+Truth lobed_bore(const Vec3& c, const Vec3& o, double amplitude_mm, double ball_radius_mm) {
+  return [=](const Vec3& q) {
+    Vec3 d = q - c;
+    d.z() = 0;
+    const Vec3 u = d.normalized();
+    const double theta = std::atan2(u.y(), u.x());
+    const double r_true = 10 + amplitude_mm * std::cos(3 * theta) + o.dot(u);
+    return Vec3(c + (r_true - ball_radius_mm) * u + Vec3(0, 0, q.z() - c.z()));
+  };
+}
+
+TEST(Scanning, ScnmodScansACircleByItsNominalAndFitsTheHiddenForm) {
+  const Vec3 c(340, 250, 30), o(0.02, -0.015, 0);
+  auto r = run("FEDRAT/SCNVEL, MMPS, 8\nSCNSET/DIST, 0.05, DEFLEC, 0.25, LAW, VC1P, CHORD, 0.0005\n"
+               "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+               "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+               "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n",
+               lobed_bore(c, o, 0.005, 2.0));
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  const auto& scan = r->machine->scans[0];
+  EXPECT_EQ(scan.law, machine::ScanLaw::Vc1Prime);
+  EXPECT_EQ(scan.speed_mm_s, 8.0);
+  EXPECT_EQ(scan.reference_deflection_mm, 0.25);
+  EXPECT_EQ(scan.sample_spacing_mm, 0.05);
+  // The path is the nominal bore offset by r - E0 = 1.75 toward the axis, within the chord tolerance.
+  for (const auto& seg : scan.path.segments)
+    for (int k = 0; k <= 10; ++k) {
+      Vec3 d = seg.point(seg.d_mm * k / 10) - c;
+      EXPECT_NEAR(d.z(), 0, 1e-9);
+      d.z() = 0;
+      EXPECT_NEAR(d.norm(), 10 - 1.75, 0.0005);
+    }
+  // Starts where the probe was nearest (it came down at the centre: any start is fine), approaches
+  // from the inside.
+  EXPECT_NEAR(scan.approach_normal.z(), 0, 1e-12);
+  const auto& f = r->runtime->features().at("B1");
+  ASSERT_TRUE(f.actual);
+  ASSERT_TRUE(f.fit);
+  EXPECT_GT(f.points.size(), 900u);  // 2 std::numbers::pi 8.25 / 0.05
+  EXPECT_TRUE(f.points.front().scanned);
+  EXPECT_NEAR(f.actual->position.x(), c.x() + o.x(), 1e-4);
+  EXPECT_NEAR(f.actual->position.y(), c.y() + o.y(), 1e-4);
+  EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-4);
+  EXPECT_NEAR(f.fit->form_mm, 0.010, 1e-4);  // roundness of a 3-lobe form: 2 A
+}
+
+// Independent expectations: peak-to-valley of least-squares residuals on a dense uniform grid.
+// Circle: algebraic (Kasa) fit in the plane, x^2 + y^2 + D x + E y + F = 0.
+struct Kasa {
+  Vec2 centre;
+  double radius_mm, form_mm;
+};
+Kasa kasa(const std::vector<Vec2>& p) {
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(p.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(p.size()));
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    a(k, 0) = p[i].x(), a(k, 1) = p[i].y(), a(k, 2) = 1;
+    b(k) = -p[i].squaredNorm();
+  }
+  const Eigen::Vector3d x = a.colPivHouseholderQr().solve(b);
+  const Vec2 centre(-x(0) / 2, -x(1) / 2);
+  const double radius = std::sqrt(centre.squaredNorm() - x(2));
+  double lo = 1e9, hi = -1e9;
+  for (const auto& q : p) {
+    lo = std::min(lo, (q - centre).norm() - radius);
+    hi = std::max(hi, (q - centre).norm() - radius);
+  }
+  return {centre, radius, hi - lo};
+}
+double circle_form(const std::vector<Vec2>& p) { return kasa(p).form_mm; }
+// Line z(x): linear regression.
+double line_form(const std::vector<Vec2>& p) {
+  double sx = 0, sz = 0, sxx = 0, sxz = 0;
+  const double n = static_cast<double>(p.size());
+  for (const auto& q : p) sx += q.x(), sz += q.y(), sxx += q.x() * q.x(), sxz += q.x() * q.y();
+  const double slope = (n * sxz - sx * sz) / (n * sxx - sx * sx), icpt = (sz - slope * sx) / n;
+  double lo = 1e9, hi = -1e9;
+  for (const auto& q : p) {
+    lo = std::min(lo, q.y() - slope * q.x() - icpt);
+    hi = std::max(hi, q.y() - slope * q.x() - icpt);
+  }
+  return (hi - lo) / std::sqrt(1 + slope * slope);
+}
+
+TEST(Scanning, PameasScansAnArcPathAndALinePath) {
+  const Vec3 c(40, 50, 25);
+  // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.
+  const auto truth = [&](const Vec3& q) {
+    if (std::abs(q.z() - 25) < 1e-6) return lobed_bore(c, Vec3::Zero(), 0.003, 2.0)(q);
+    const double z = 40.003 + 0.002 * std::sin(2 * std::numbers::pi * q.x() / 7.5);
+    return Vec3(q.x(), q.y(), z + 2.0);
+  };
+  auto r = run("P(A1) = PATH/ARC, CART, 40, 50, 25, 0, 0, 1, 10, 0, 270, INNER\n"
+               "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\n"
+               "MEAS/CIRCLE, F(B2), 0\n  PAMEAS/P(A1)\nENDMES\n"
+               "P(L1) = PATH/LINE, CART, 5, 20, 40, 35, 20, 40, 0, 0, 1\n"
+               "F(E1) = FEAT/LINE, BND, CART, 5, 20, 40, 35, 20, 40, 0, 1, 0\n"
+               "MEAS/LINE, F(E1), 0\n  PAMEAS/P(L1)\nENDMES\n",
+               truth);
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 2u);
+  // The arc runs counterclockwise from angle 0 (+X) to 270 degrees, at the default E0 0.3 and law Vc2.
+  const auto& arc = r->machine->scans[0];
+  EXPECT_EQ(arc.law, machine::ScanLaw::Vc2);
+  EXPECT_LT((arc.path.segments.front().start() - Vec3(40 + 8.3, 50, 25)).norm(), 1e-9);
+  EXPECT_LT((arc.path.segments.back().end() - Vec3(40, 50 - 8.3, 25)).norm(), 1e-9);
+  EXPECT_GT(arc.approach_normal.dot(-Vec3::UnitX()), 1 - 1e-12);
+  const auto& b2 = r->runtime->features().at("B2");
+  ASSERT_TRUE(b2.actual && b2.fit);
+  EXPECT_NEAR(b2.actual->diameter_mm, 20, 1e-3);
+  std::vector<Vec2> arc_truth;
+  for (int i = 0; i <= 20000; ++i) {
+    const double t = 1.5 * std::numbers::pi * i / 20000;
+    arc_truth.push_back((10 + 0.003 * std::cos(3 * t)) * Vec2(std::cos(t), std::sin(t)));
+  }
+  EXPECT_NEAR(b2.fit->form_mm, circle_form(arc_truth), 1e-4);
+  // The line: one straight segment 1.7 above the face; fitted 3 um up; straightness of the sine
+  // about its least-squares line.
+  const auto& line = r->machine->scans[1];
+  ASSERT_EQ(line.path.segments.size(), 1u);
+  EXPECT_LT((line.path.segments[0].start() - Vec3(5, 20, 41.7)).norm(), 1e-9);
+  const auto& e1 = r->runtime->features().at("E1");
+  ASSERT_TRUE(e1.actual && e1.fit);
+  EXPECT_NEAR(e1.actual->position.z(), 40.003, 2e-4);
+  std::vector<Vec2> line_truth;
+  for (int i = 0; i <= 20000; ++i) {
+    const double x = 5 + 30.0 * i / 20000;
+    line_truth.push_back(Vec2(x, 0.002 * std::sin(2 * std::numbers::pi * x / 7.5)));
+  }
+  EXPECT_NEAR(e1.fit->form_mm, line_form(line_truth), 1e-4);
+  std::printf("270-degree arc form %.5f mm (expected %.5f), line straightness %.5f mm (expected %.5f)\n",
+              b2.fit->form_mm, circle_form(arc_truth), e1.fit->form_mm, line_form(line_truth));
+  // Scanned points are in results.json, marked as scanned.
+  const auto j = runtime::results_json(r->record);
+  bool found = false;
+  for (const auto& f : j["features"])
+    if (f["label"] == "E1") {
+      found = true;
+      EXPECT_GT(f["points"].size(), 250u);
+      EXPECT_EQ(f["points"][0]["scanned"], true);
+    }
+  EXPECT_TRUE(found);
+}
+
+TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
+  // A boss of radius 10 about part (40, 50), as a 256-facet STL in part coordinates; the part
+  // frame is shifted to machine (300, 200, 0). Truth: radius 10 + 4 um cos 3 theta.
+  const double rb = 2.0;
+  const Vec3 c(340, 250, 15);
+  std::vector<Vec3> v;
+  std::vector<geometry::Mesh::Face> faces;
+  const int n = 256;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 0);
+    v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 30);
+  }
+  v.emplace_back(40, 50, 0);
+  v.emplace_back(40, 50, 30);
+  const auto bottom = static_cast<std::uint32_t>(2 * n);
+  for (int i = 0; i < n; ++i) {
+    const auto a0 = static_cast<std::uint32_t>(2 * i), a1 = a0 + 1;
+    const auto b0 = static_cast<std::uint32_t>(2 * ((i + 1) % n)), b1 = b0 + 1;
+    faces.push_back({a0, b0, b1});
+    faces.push_back({a0, b1, a1});
+    faces.push_back({bottom, b0, a0});
+    faces.push_back({bottom + 1, a1, b1});
+  }
+  auto mesh = geometry::Mesh::from_triangles(v, faces);
+  ASSERT_TRUE(mesh);
+  const fs::path stl = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid())) / "boss.stl";
+  fs::create_directories(stl.parent_path());
+  ASSERT_TRUE(geometry::save_mesh(*mesh, stl.string()));
+  const auto truth = [&](const Vec3& q) {
+    Vec3 d = q - c;
+    d.z() = 0;
+    const Vec3 u = d.normalized();
+    const double r_true = 10 + 0.004 * std::cos(3 * std::atan2(u.y(), u.x()));
+    return Vec3(c + (r_true + rb) * u + Vec3(0, 0, q.z() - c.z()));
+  };
+  auto r = run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+               "P(S1) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15\n"
+               "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 40, 50, 15, 0, 0, 1, 20\n"
+               "MEAS/CIRCLE, F(BOSS), 0\n  PAMEAS/P(S1)\nENDMES\n",
+               truth);
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  const auto& scan = r->machine->scans[0];
+  // Starts nearest the hint (part (40, 70) = machine (340, 270)), runs counterclockwise, 1.7 outside.
+  EXPECT_LT((scan.path.segments.front().start() - Vec3(340, 261.7, 15)).norm(), 0.05);
+  EXPECT_LT(scan.path.segments.front().tangent(0).x(), -0.99);
+  const double sagitta = 10 * (1 - std::cos(std::numbers::pi / n));
+  for (const auto& seg : scan.path.segments) {
+    Vec3 d = seg.point(seg.d_mm / 2) - c;
+    d.z() = 0;
+    EXPECT_NEAR(d.norm(), 11.7, 0.001 + sagitta);
+  }
+  const auto& f = r->runtime->features().at("BOSS");
+  ASSERT_TRUE(f.actual && f.fit);
+  EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-4);
+  EXPECT_NEAR(f.actual->position.x(), 340, 1e-4);
+  EXPECT_NEAR(f.fit->form_mm, 0.008, 1e-4);
+}
+
+TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
+  // Part frame rotated 90 degrees about Z: part +X is machine +Y, so angle 90 is machine -X.
+  const Vec3 c(100, 100, 10);
+  auto r = run("D(T) = TRANS/XORIG, 100, YORIG, 100, ZORIG, 10\nD(R) = ROTATE/ZAXIS, 90\n"
+               "F(A1) = FEAT/ARC, OUTER, CART, 0, 0, 0, 0, 0, 1, 10, 90, 180\n"
+               "SCNMOD/ON\nMEAS/ARC, F(A1), 0\nENDMES\n",
+               [&](const Vec3& q) {
+                 Vec3 d = q - c;
+                 d.z() = 0;
+                 return Vec3(c + 12.0 * d.normalized() + Vec3(0, 0, q.z() - c.z()));
+               });
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  ASSERT_LT((r->runtime->features().at("A1").nominal.position - c).norm(), 1e-9);
+  const auto& path = r->machine->scans[0].path;
+  const Vec3 start = path.segments.front().start(), end = path.segments.back().end();
+  ASSERT_LT(std::abs(start.z() - 10), 1e-9) << start.transpose();
+  EXPECT_LT((start - (c + Vec3(-11.7, 0, 0))).norm(), 1e-6) << start.transpose();
+  EXPECT_LT((end - (c + Vec3(11.7, 0, 0))).norm(), 1e-6) << end.transpose();
+  EXPECT_LT((path.segments.front().point(1.0) - c).y(), 0);  // counterclockwise: from -X through -Y
+  const auto& f = r->runtime->features().at("A1");
+  ASSERT_TRUE(f.actual);
+  EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-6);
+}
+
+TEST(Scanning, HelicalPathIntoACylinder) {
+  // Two turns of pitch 5 down a bore whose actual is a 3-lobe (A = 4 um) cylinder shifted by o.
+  const Vec3 c(40, 50, 0), o(-0.01, 0.02, 0);
+  auto r = run("P(H) = PATH/HELICAL, CART, 40, 50, 20, 0, 0, -1, 10, 0, 720, 5, INNER\n"
+               "F(C) = FEAT/CYLNDR, INNER, CART, 40, 50, 0, 0, 0, 1, 20, 25\n"
+               "MEAS/CYLNDR, F(C), 0\n  PAMEAS/P(H)\nENDMES\n",
+               lobed_bore(c, o, 0.004, 2.0));
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  const auto& path = r->machine->scans.at(0).path;
+  EXPECT_NEAR(path.segments.front().start().z(), 20, 1e-9);
+  EXPECT_NEAR(path.segments.back().end().z(), 10, 1e-9);  // the axis points down: it advances down
+  const auto& f = r->runtime->features().at("C");
+  ASSERT_TRUE(f.actual && f.fit);
+  // On a helix the lobes correlate with an axis tilt (z and the angle advance together), so the
+  // least-squares cylinder tilts a little. Independent expectation: the linearised cylinder fit
+  // r - 10 = p0 + p1 cos + p2 sin + z (p3 cos + p4 sin) of the truth along the same helix.
+  const int n = 20000;
+  Eigen::MatrixXd a(n, 5);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) {
+    const double t = 4 * std::numbers::pi * i / (n - 1), th = -t, z = 20 - 5 * t / (2 * std::numbers::pi);
+    const Vec3 u(std::cos(th), std::sin(th), 0);
+    a.row(i) << 1, u.x(), u.y(), z * u.x(), z * u.y();
+    b(i) = 0.004 * std::cos(3 * th) + o.dot(u);
+  }
+  const Eigen::VectorXd q = a.colPivHouseholderQr().solve(b);
+  const Eigen::VectorXd e = b - a * q;
+  EXPECT_NEAR(f.actual->diameter_mm, 20 + 2 * q(0), 1e-4);
+  EXPECT_NEAR(f.actual->position.x(), 40 + q(1), 1e-4);  // the axis at the nominal's z = 0
+  EXPECT_NEAR(f.actual->position.y(), 50 + q(2), 1e-4);
+  EXPECT_NEAR(f.actual->direction.y() / f.actual->direction.z(), q(4), 1e-5);
+  EXPECT_NEAR(f.fit->form_mm, e.maxCoeff() - e.minCoeff(), 1e-4);
+  std::printf("helix into cylinder: form %.5f mm (linearised %.5f), tilt %.2e (linearised %.2e)\n", f.fit->form_mm,
+              e.maxCoeff() - e.minCoeff(), f.actual->direction.y() / f.actual->direction.z(), q(4));
+}
+
+TEST(Scanning, ScnmodWithPtmeasPairsScansFromStartToEnd) {
+  // The RationalDMIS form: in scan mode two PTMEAS are the start and end of a scan (MEAS's count
+  // is the number of PTMEAS); here 0 -> 180 degrees, then 90 -> 270, around a 20 mm bore.
+  const Vec3 c(-20.5, 35.5, 107.5);
+  auto r = run("SCNMOD/ON\nSCNSET/DRAG, .1\n"
+               "F(CIR_11) = FEAT/CIRCLE, INNER, CART, -20.5, 35.5, 107.5, 0.0, 0.0, 1.0, 20\n"
+               "MEAS/CIRCLE, F(CIR_11), 4\n"
+               "PTMEAS/CART, -10.5, 35.5, 107.5, -1, 0, 0\nPTMEAS/CART, -30.5, 35.5, 107.5, 1, 0, 0\n"
+               "GOTO/-20.5, 35.5, 107.5\n"
+               "PTMEAS/CART, -20.5, 45.5, 107.5, 0, -1, 0\nPTMEAS/CART, -20.5, 25.5, 107.5, 0, 1, 0\nENDMES\n",
+               lobed_bore(c, Vec3(0.01, 0.005, 0), 0.002, 2.0));
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 2u);
+  const auto angle = [&](const Vec3& p) { return std::atan2(p.y() - c.y(), p.x() - c.x()) * 180 / std::numbers::pi; };
+  const auto& first = r->machine->scans[0].path;
+  const auto& second = r->machine->scans[1].path;
+  EXPECT_NEAR(angle(first.segments.front().start()), 0, 1e-9);
+  EXPECT_NEAR(std::abs(angle(first.segments.back().end())), 180, 1e-9);
+  EXPECT_GT(angle(first.segments.front().point(1.0)), 0);  // counterclockwise
+  EXPECT_NEAR(angle(second.segments.front().start()), 90, 1e-9);
+  EXPECT_NEAR(angle(second.segments.back().end()), -90, 1e-9);
+  EXPECT_EQ(r->machine->scans[0].sample_spacing_mm, 0.1);
+  const auto& f = r->runtime->features().at("CIR_11");
+  ASSERT_TRUE(f.actual && f.fit);
+  // Independent expectation: the truth sampled like the two scans (90..180 degrees twice), fitted.
+  std::vector<Vec2> truth;
+  for (double from : {0.0, 90.0})
+    for (int i = 0; i <= 5000; ++i) {
+      const double t = (from + 180.0 * i / 5000) * std::numbers::pi / 180;
+      const Vec2 u(std::cos(t), std::sin(t));
+      truth.push_back((10 + 0.002 * std::cos(3 * t) + 0.01 * u.x() + 0.005 * u.y()) * u);
+    }
+  const Kasa want = kasa(truth);
+  EXPECT_NEAR(f.actual->diameter_mm, 2 * want.radius_mm, 1e-4);
+  EXPECT_NEAR(f.actual->position.x(), c.x() + want.centre.x(), 1e-4);
+  EXPECT_NEAR(f.actual->position.y(), c.y() + want.centre.y(), 1e-4);
+  EXPECT_NEAR(f.fit->form_mm, want.form_mm, 1e-4);
+  // An odd PTMEAS in scan mode has no end: a positioned error.
+  auto odd = run("SCNMOD/ON\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\nMEAS/CIRCLE, F(B), 3\n"
+                 "PTMEAS/CART, 10, 0, 0\nPTMEAS/CART, -10, 0, 0\nPTMEAS/CART, 0, 10, 0\nENDMES\n",
+                 [](const Vec3& q) { return q; });
+  EXPECT_EQ(odd->status, ExecStatus::Error);
+  EXPECT_NE(odd->diagnostics.find("scan.dmi:10:1: error: in scan mode (SCNMOD/ON) PTMEAS come in pairs"), std::string::npos)
+      << odd->diagnostics;
+}
+
+TEST(Scanning, CompileErrorsAndWarningsArePositioned) {
+  const auto identity = [](const Vec3& q) { return q; };
+  const auto diag = [&](const std::string& body) { return run(body, identity)->diagnostics; };
+  // Lines 1-4 are the prologue of run(): the statement under test is on line 5.
+  EXPECT_NE(diag("PAMEAS/P(X)\n").find("scan.dmi:5:1: error: PAMEAS outside a MEAS block"), std::string::npos);
+  EXPECT_NE(diag("SCNMOD/MAYBE\n").find("scan.dmi:5:8: error: expected ON or OFF after SCNMOD/"), std::string::npos);
+  EXPECT_NE(diag("SCNSET/CHORD, 0\n").find("scan.dmi:5:15: error: the SCNSET/CHORD value must be positive"), std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/LINE, CART, 1, 2, 3, 1, 2, 3, 0, 0, 1\n").find("scan.dmi:5:34: error: the line's end points are the same"),
+            std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/ARC, CART, 0, 0, 0, 0, 0, 0, 5, 0, 90\n").find("scan.dmi:5:33: error: the path vector i,j,k is zero"),
+            std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/SECTION, 'nowhere.stl', 0, 0, 0, 0, 0, 1, 0, 0, 0\n").find("scan.dmi:5:22: error: CAD file 'nowhere.stl' not found"),
+            std::string::npos);
+  // An unsupported PATH type is skipped with a warning; using it is an error naming the skip.
+  const auto d = diag("P(C) = PATH/CURVE, PTDATA\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n"
+                      "MEAS/CIRCLE, F(B), 0\n  PAMEAS/P(C)\nENDMES\n");
+  EXPECT_NE(d.find("scan.dmi:5:13: warning: PATH/CURVE is not supported; P(C) is skipped"), std::string::npos) << d;
+  EXPECT_NE(d.find("scan.dmi:8:10: error: path P(C) was defined by a skipped statement"), std::string::npos) << d;
+}
+
+TEST(Scanning, RunTimeErrorsArePositioned) {
+  // A bore smaller than the ball: the offset path folds over.
+  auto r = run("F(S1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 3\nSCNMOD/ON\nMEAS/CIRCLE, F(S1), 0\nENDMES\n",
+               [](const Vec3& q) { return q; });
+  EXPECT_EQ(r->status, ExecStatus::Error);
+  EXPECT_NE(r->diagnostics.find("scan.dmi:7:1: error: cannot make a scan path: the offset path folds over"), std::string::npos)
+      << r->diagnostics;
+  // A sphere is scanned along a path, not by its nominal.
+  auto s = run("F(S2) = FEAT/SPHERE, OUTER, CART, 0, 0, 0, 20\nSCNMOD/ON\nMEAS/SPHERE, F(S2), 0\nENDMES\n",
+               [](const Vec3& q) { return q; });
+  EXPECT_EQ(s->status, ExecStatus::Error);
+  EXPECT_NE(s->diagnostics.find("scan a SPHERE along a PATH with PAMEAS"), std::string::npos) << s->diagnostics;
+}
+
+}  // namespace
