@@ -141,30 +141,4 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
   return {};
 }
 
-Result<machine::ScanPath> MeasurementRuntime::scan_command(const geometry::Contour& contour, Span span) {
-  const auto state = m_machine.state();
-  geometry::ScanPathOptions o;
-  // The nominal ball radius: a scanning probe reads its deflection, so the touch-trigger
-  // effective radius (which absorbs pre-travel and trigger delays) does not apply.
-  o.ball_radius_mm = state.tool ? state.tool->nominal_radius_mm : 2.0;
-  o.reference_deflection_mm = m_scan.reference_deflection_mm;
-  o.chord_tolerance_mm = m_scan.chord_tolerance_mm;
-  o.centripetal_accel_mm_s2 = m_scan.centripetal_accel_mm_s2;
-  // The segment speeds are capped by the scan feed; without FEDRAT/SCNVEL by the measuring feed.
-  o.feed_mm_s = m_scan.feed_mm_s ? *m_scan.feed_mm_s
-                                 : (state.measuring_feed_mm_s > 0 ? state.measuring_feed_mm_s : 10.0);
-  auto plan = geometry::make_scan_path(contour, o);
-  if (!plan) return program_error(span, "cannot make a scan path: " + plan.error().message);
-  machine::ScanPath scan;
-  scan.path = std::move(plan->path);
-  scan.approach_normal = contour.points.front().normal;
-  scan.law = m_scan.law;
-  scan.speed_mm_s = m_scan.feed_mm_s;
-  scan.reference_deflection_mm = m_scan.reference_deflection_mm;
-  scan.sample_spacing_mm = m_scan.sample_spacing_mm;
-  scan.approach_mm = m_probe.approach_mm;
-  scan.retract_mm = m_probe.retract_mm;
-  return scan;
-}
-
 }  // namespace metron::runtime
