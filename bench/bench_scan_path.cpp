@@ -18,8 +18,6 @@ namespace {
 
 using namespace metron;
 using namespace metron::geometry;
-constexpr double pi = std::numbers::pi;
-
 double height(double x, double y) { return 3 * std::sin(x / 12) * std::cos(y / 17) + 0.5 * std::sin(x / 3 + y / 5); }
 
 // z = height(x, y) over [-50, 50]^2 as a grid mesh of 2 (n - 1)^2 triangles, normals up.

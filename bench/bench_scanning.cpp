@@ -16,7 +16,8 @@
 
 #include <fmt/format.h>
 
-#include "../tests/machine/scan_paths.hpp"
+#include "fixtures.hpp"
+#include "scan_paths.hpp"
 #include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/scanning/scan_controller.hpp"
 #include "metron/machine/world_solid.hpp"
@@ -187,22 +188,16 @@ struct Timing {
   ScanOutcome out;
 };
 
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 std::pair<Timing, Timing> time_scan(const ScanPath& cmd, const ScanSetup& setup, int repeats) {
   Timing t[2];
   for (int r = 0; r < repeats; ++r)
     for (int fast = 0; fast < 2; ++fast) {
       MeshSolid::set_coherent_search(fast == 1);
-      const double c0 = thread_cpu_s();
+      const double c0 = test_support::thread_cpu_s();
       const auto w0 = std::chrono::steady_clock::now();
       ScanOutcome out = run_scan(cmd, setup, scan_approach_point(cmd), 0);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-      const double cpu = thread_cpu_s() - c0;
+      const double cpu = test_support::thread_cpu_s() - c0;
       t[fast].wall_s = std::min(t[fast].wall_s, wall);
       t[fast].cpu_s = std::min(t[fast].cpu_s, cpu);
       t[fast].out = std::move(out);

@@ -18,7 +18,8 @@
 
 #include <numbers>
 
-#include "../tests/machine/scan_paths.hpp"
+#include "fixtures.hpp"
+#include "scan_paths.hpp"
 #include "metron/machine/rng.hpp"
 #include "metron/machine/segmented/probe_scan_driver.hpp"
 #include "metron/machine/world_solid.hpp"
@@ -140,12 +141,6 @@ void row(const char* path, std::size_t P, const char* mode, const Outcome& o, co
 
 // CPU time of this thread: unlike the wall clock, it does not count time the thread waited for
 // a core, so it separates the planner's own cost from preemption on a loaded machine.
-double thread_cpu_s() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
 void planner_cost(const geometry::PccPath& path) {
   const ScanLimits limits;
   const LowSpeedRegion low;
@@ -155,9 +150,9 @@ void planner_cost(const geometry::PccPath& path) {
     for (std::size_t first = 0; first + P <= path.segments.size(); first += P) {
       std::span<const geometry::PccSegment> segs(path.segments.data() + first, P);
       const auto w0 = std::chrono::steady_clock::now();
-      const double c0 = thread_cpu_s();
+      const double c0 = test_support::thread_cpu_s();
       const segmented::SpeedPlan plan = plan_command(segs, {}, 1, 0.0, PlanKind::Connection, limits, low, false);
-      per_command_cpu.push_back(thread_cpu_s() - c0);
+      per_command_cpu.push_back(test_support::thread_cpu_s() - c0);
       per_command.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
       if (plan.pieces.empty()) std::abort();
     }

@@ -14,12 +14,10 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
-#include "metron/interpreter/regression.hpp"
+#include "metron/regression/regression.hpp"
 
 namespace metron::cli {
 namespace {
-
-namespace regression = interpreter::regression;
 
 struct TestArgs {
   std::vector<std::string> roots;

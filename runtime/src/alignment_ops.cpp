@@ -2,11 +2,10 @@
 #include "metron/runtime/alignment_ops.hpp"
 
 #include <cmath>
+#include <numbers>
 
 namespace metron::runtime {
 namespace {
-
-constexpr double pi = 3.14159265358979323846;
 
 // The direction a datum feature gives: a plane's normal, an axis's direction, a line's direction.
 Vec3 datum_direction(const Geometry& g) { return g.direction.normalized(); }
@@ -79,7 +78,7 @@ Frame translate_origin(const Frame& current, const std::optional<double> (&origi
 Frame rotate_about(const Frame& current, Axis axis, double angle_deg) {
   const Vec3 local_axis = Vec3::Unit(static_cast<int>(axis));
   Frame f = current;
-  f.linear() = current.linear() * Eigen::AngleAxisd(angle_deg * pi / 180.0, local_axis).toRotationMatrix();
+  f.linear() = current.linear() * Eigen::AngleAxisd(angle_deg * std::numbers::pi / 180.0, local_axis).toRotationMatrix();
   return f;
 }
 
@@ -92,8 +91,8 @@ tl::expected<Frame, std::string> rotate_to(const Frame& current, Axis about, con
   const double angle_dir = std::atan2(local[v], local[u]);
   if (std::hypot(local[u], local[v]) < 1e-9)
     return tl::unexpected(std::string("the feature's direction is parallel to the rotation axis"));
-  const double angle_axis = static_cast<int>(align) == u ? 0.0 : pi / 2.0;
-  return rotate_about(current, about, (angle_dir - angle_axis) * 180.0 / pi);
+  const double angle_axis = static_cast<int>(align) == u ? 0.0 : std::numbers::pi / 2.0;
+  return rotate_about(current, about, (angle_dir - angle_axis) * 180.0 / std::numbers::pi);
 }
 
 Geometry to_frame(const Geometry& g, const Frame& part_to_machine) {

@@ -248,137 +248,161 @@ tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::M
   return fit_axis(std::move(samples));
 }
 
-tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine& machine,
-                                                                const CharacterisationSettings& settings,
-                                                                const std::function<void(const std::string&)>& log,
-                                                                double ball_diameter_mm) {
-  const auto say = [&](const std::string& s) {
-    if (log) log(s);
-  };
-  MachineCharacterisation c;
-  c.threshold_mm = settings.repeatability_threshold_mm;
-  c.nominal_tolerance_mm = settings.nominal_tolerance_mm;
-  c.over_travel_margin = settings.over_travel_margin;
-  c.blend = settings.blend;
+namespace {
 
-  // 1. Acceleration characteristic per axis from timed moves (SEEDS.md 3).
+using Say = std::function<void(const std::string&)>;
+
+// The point the touch steps probe: the last qualification point, a surface point with a known
+// normal, and the tool that took it.
+struct TouchTarget {
+  Vec3 surface = Vec3::Zero();  // MCS; with the effective radius the latched centre lies on it
+  Vec3 normal = Vec3::UnitZ();  // unit, on the probe's side
+  machine::ToolInfo tool;       // as qualified
+};
+
+// The machine and the command tags the steps after the timed moves share, in order.
+struct Bench {
+  machine::Machine& machine;
+  std::uint64_t tag;
+  const Say& say;
+};
+
+// 1. Acceleration characteristic per axis from timed moves (SEEDS.md 3).
+tl::expected<void, std::string> measure_axes(machine::Machine& machine, const CharacterisationSettings& settings,
+                                             const Say& say, MachineCharacterisation& c) {
   for (int i = 0; i < 3; ++i) {
     say(fmt::format("timing moves on the {} axis ...", axis_name(i)));
     auto a = measure_axis_acceleration(machine, i, settings.timing_feeds_mm_s, settings.dither, &c.dt_s);
     if (!a) return tl::unexpected(a.error());
     c.axes[static_cast<std::size_t>(i)] = *a;
   }
+  return {};
+}
 
-  // 2. A qualified tool: its last qualification point is a surface point with a known normal.
-  std::uint64_t tag = 1u << 24;
+// 2. A qualified tool: its last qualification point is a surface point with a known normal.
+tl::expected<TouchTarget, std::string> qualify_touch_point(Bench& bench, double ball_diameter_mm,
+                                                           MachineCharacterisation& c) {
   const std::string tool = "METRON_CHAR";
-  for (machine::Command cmd : {machine::Command{tag++, machine::DefineTool{tool, ball_diameter_mm, -Vec3::UnitZ(), 50}},
-                               machine::Command{tag++, machine::SelectTool{tool}},
-                               machine::Command{tag++, machine::QualifyTool{}}}) {
-    auto r = run1(machine, cmd);
+  for (machine::Command cmd : {machine::Command{bench.tag++, machine::DefineTool{tool, ball_diameter_mm, -Vec3::UnitZ(), 50}},
+                               machine::Command{bench.tag++, machine::SelectTool{tool}},
+                               machine::Command{bench.tag++, machine::QualifyTool{}}}) {
+    auto r = run1(bench.machine, cmd);
     if (r.status == machine::Response::Status::Fault) return tl::unexpected("tool qualification: " + fault_text(r));
   }
-  const machine::MachineState st = machine.state();
+  const machine::MachineState st = bench.machine.state();
   if (!st.last_hit || !st.tool) return tl::unexpected(std::string("qualification gave no point"));
-  const Vec3 n = st.last_hit->normal.normalized();
+  TouchTarget target;
+  target.normal = st.last_hit->normal.normalized();
   // With the qualified (effective) radius the latched centre gives the surface itself.
-  const Vec3 surface = st.last_hit->centre_mm - st.tool->effective_radius_mm * n;
+  target.surface = st.last_hit->centre_mm - st.tool->effective_radius_mm * target.normal;
+  target.tool = *st.tool;
   c.over_travel_mm = st.tool->rated_over_travel_mm;
   c.response.qualification_feed_mm_s = st.measuring_feed_mm_s;
   if (!(c.over_travel_mm > 0)) return tl::unexpected(std::string("the probe's rated over-travel is unknown"));
+  return target;
+}
 
-  // 3. Repeated touches on that point at several feeds, same standoff (SEEDS.md 3).
-  const auto touches = [&](double feed) -> tl::expected<TouchSample, std::string> {
-    machine::PtMeas p;
-    p.nominal_mm = surface;
-    p.normal = n;
-    p.approach_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + 0.3;
-    // The probing move ends at rest at the search end: the latch must come before it slows
-    // down, i.e. within search - D1 of the surface (the stop distance is below the over-travel).
-    p.search_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + c.over_travel_mm + 0.5;
-    p.retract_mm = 0.5;
-    p.speed_mm_s = feed;
-    std::vector<double> x;
-    for (int k = 0; k < settings.touches_per_feed; ++k) {
-      auto r = run1(machine, {tag++, p});
-      if (r.status == machine::Response::Status::Fault || !r.hit)
-        return tl::unexpected(fmt::format("touch at {:.1f} mm/s: {}", feed, fault_text(r)));
-      x.push_back((r.hit->centre_mm - surface).dot(n));
+// Repeated touches on the target at one feed, from the same standoff (SEEDS.md 3).
+tl::expected<TouchSample, std::string> touch_sample(Bench& bench, const TouchTarget& target,
+                                                    const MachineCharacterisation& c, int touches, double feed) {
+  const Vec3& n = target.normal;
+  machine::PtMeas p;
+  p.nominal_mm = target.surface;
+  p.normal = n;
+  p.approach_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + 0.3;
+  // The probing move ends at rest at the search end: the latch must come before it slows
+  // down, i.e. within search - D1 of the surface (the stop distance is below the over-travel).
+  p.search_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + c.over_travel_mm + 0.5;
+  p.retract_mm = 0.5;
+  p.speed_mm_s = feed;
+  std::vector<double> x;
+  for (int k = 0; k < touches; ++k) {
+    auto r = run1(bench.machine, {bench.tag++, p});
+    if (r.status == machine::Response::Status::Fault || !r.hit)
+      return tl::unexpected(fmt::format("touch at {:.1f} mm/s: {}", feed, fault_text(r)));
+    x.push_back((r.hit->centre_mm - target.surface).dot(n));
+  }
+  TouchSample s;
+  s.feed_mm_s = feed;
+  s.count = static_cast<int>(x.size());
+  s.mean_mm = mean_of(x);
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  s.range_mm = *hi - *lo;
+  s.midrange_mm = (*hi + *lo) / 2;
+  double var = 0;
+  for (double v : x) var += (v - s.mean_mm) * (v - s.mean_mm);
+  s.stddev_mm = std::sqrt(var / std::max(1.0, static_cast<double>(x.size() - 1)));
+  return s;
+}
+
+// The trigger response (delay, jitter, noise) and the pre-travel from the touch samples so far.
+void estimate_response(const TouchTarget& target, MachineCharacterisation& c) {
+  auto& r = c.response;
+  const auto& s = r.samples;
+  // Midranges: x(F) = A - F * (delay + jitter / 2), a straight line in F. (The midrange of a
+  // uniform latency scatters ~3x less than the mean at 60 touches.)
+  double sf = 0, sx = 0, sff = 0, sfx = 0;
+  for (const auto& t : s)
+    sf += t.feed_mm_s, sx += t.midrange_mm, sff += t.feed_mm_s * t.feed_mm_s, sfx += t.feed_mm_s * t.midrange_mm;
+  const double m = static_cast<double>(s.size());
+  const double slope = (m * sfx - sf * sx) / (m * sff - sf * sf);
+  // Spread: uniform latency over one scan period spreads the points by F * period; the
+  // slowest feed's scatter is the probe's own noise.
+  const auto lowest = std::min_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
+  const auto highest = std::max_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
+  // The range of N uniform draws over a width W is W (N - 1) / (N + 1) on average; at the
+  // highest feed the jitter's width F * period dominates the probe's own scatter.
+  // Averaged over the faster feeds (each range scatters by about 3 % at 60 touches).
+  double period = 0;
+  int used = 0;
+  for (const auto& t : s)
+    if (t.feed_mm_s >= 0.25 * highest->feed_mm_s) {
+      const double k = static_cast<double>(t.count);
+      period += t.range_mm / t.feed_mm_s * (k + 1) / (k - 1);
+      ++used;
     }
-    TouchSample s;
-    s.feed_mm_s = feed;
-    s.count = static_cast<int>(x.size());
-    s.mean_mm = mean_of(x);
-    const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
-    s.range_mm = *hi - *lo;
-    s.midrange_mm = (*hi + *lo) / 2;
-    double var = 0;
-    for (double v : x) var += (v - s.mean_mm) * (v - s.mean_mm);
-    s.stddev_mm = std::sqrt(var / std::max(1.0, static_cast<double>(x.size() - 1)));
-    return s;
-  };
-  const auto estimate = [&]() {
-    auto& r = c.response;
-    const auto& s = r.samples;
-    // Midranges: x(F) = A - F * (delay + jitter / 2), a straight line in F. (The midrange of a
-    // uniform latency scatters ~3x less than the mean at 60 touches.)
-    double sf = 0, sx = 0, sff = 0, sfx = 0;
-    for (const auto& t : s)
-      sf += t.feed_mm_s, sx += t.midrange_mm, sff += t.feed_mm_s * t.feed_mm_s, sfx += t.feed_mm_s * t.midrange_mm;
-    const double m = static_cast<double>(s.size());
-    const double slope = (m * sfx - sf * sx) / (m * sff - sf * sf);
-    // Spread: uniform latency over one scan period spreads the points by F * period; the
-    // slowest feed's scatter is the probe's own noise.
-    const auto lowest = std::min_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
-    const auto highest = std::max_element(s.begin(), s.end(), [](auto& a, auto& b) { return a.feed_mm_s < b.feed_mm_s; });
-    const double nn = static_cast<double>(highest->count);
-    // The range of N uniform draws over a width W is W (N - 1) / (N + 1) on average; at the
-    // highest feed the jitter's width F * period dominates the probe's own scatter.
-    // Averaged over the faster feeds (each range scatters by about 3 % at 60 touches).
-    double period = 0;
-    int used = 0;
-    for (const auto& t : s)
-      if (t.feed_mm_s >= 0.25 * highest->feed_mm_s) {
-        const double k = static_cast<double>(t.count);
-        period += t.range_mm / t.feed_mm_s * (k + 1) / (k - 1);
-        ++used;
-      }
-    period /= std::max(1, used);
-    (void)nn;
-    // Jitter class: a scanned input spreads the points in proportion to the feed (the range
-    // grows with feed) by a period of a millisecond or more; a latched one by microseconds
-    // (the range stays the probe's own scatter at every feed).
-    const bool grows = highest->range_mm > 1.5 * lowest->range_mm;
-    r.scanned = grows && period > 2e-4;
-    r.jitter_s = r.scanned ? period : 0;
-    // The probe's own scatter: the slowest feed's, less the jitter's share there.
-    const double v = lowest->stddev_mm * lowest->stddev_mm - std::pow(lowest->feed_mm_s * r.jitter_s, 2) / 12;
-    r.noise_mm = std::sqrt(std::max(0.0, v));
-    r.delay_s = std::max(0.0, -slope - r.jitter_s / 2);
-    // Nominal - effective radius = pre-travel + F_q * (delay + jitter / 2) (+ the ball's radius error).
-    c.pre_travel_mm = std::max(0.0, st.tool->nominal_radius_mm - st.tool->effective_radius_mm -
-                                        r.qualification_feed_mm_s * (r.delay_s + r.jitter_s / 2));
-  };
-  for (double feed : {2.0, 5.0}) {
-    say(fmt::format("repeated touches at {:.1f} mm/s ...", feed));
-    auto s = touches(feed);
+  period /= std::max(1, used);
+  // Jitter class: a scanned input spreads the points in proportion to the feed (the range
+  // grows with feed) by a period of a millisecond or more; a latched one by microseconds
+  // (the range stays the probe's own scatter at every feed).
+  const bool grows = highest->range_mm > 1.5 * lowest->range_mm;
+  r.scanned = grows && period > 2e-4;
+  r.jitter_s = r.scanned ? period : 0;
+  // The probe's own scatter: the slowest feed's, less the jitter's share there.
+  const double v = lowest->stddev_mm * lowest->stddev_mm - std::pow(lowest->feed_mm_s * r.jitter_s, 2) / 12;
+  r.noise_mm = std::sqrt(std::max(0.0, v));
+  r.delay_s = std::max(0.0, -slope - r.jitter_s / 2);
+  // Nominal - effective radius = pre-travel + F_q * (delay + jitter / 2) (+ the ball's radius error).
+  c.pre_travel_mm = std::max(0.0, target.tool.nominal_radius_mm - target.tool.effective_radius_mm -
+                                      r.qualification_feed_mm_s * (r.delay_s + r.jitter_s / 2));
+}
+
+// 3. Repeated touches on the target at several feeds, same standoff (SEEDS.md 3).
+tl::expected<void, std::string> measure_touch_response(Bench& bench, const CharacterisationSettings& settings,
+                                                       const TouchTarget& target, MachineCharacterisation& c) {
+  const auto sample = [&](double feed) -> tl::expected<void, std::string> {
+    bench.say(fmt::format("repeated touches at {:.1f} mm/s ...", feed));
+    auto s = touch_sample(bench, target, c, settings.touches_per_feed, feed);
     if (!s) return tl::unexpected(s.error());
     c.response.samples.push_back(*s);
-  }
-  estimate();
+    return {};
+  };
+  for (double feed : {2.0, 5.0})
+    if (auto ok = sample(feed); !ok) return ok;
+  estimate_response(target, c);
   // Faster feeds, safely inside the preliminary limit, sharpen the delay and jitter estimates.
-  const double prelim = c.max_feed_mm_s(-n);
+  const double prelim = c.max_feed_mm_s(-target.normal);
   for (double share : {0.3, 0.6, 0.9}) {
     const double feed = share * prelim;
     if (feed <= 5.5) continue;
-    say(fmt::format("repeated touches at {:.1f} mm/s ...", feed));
-    auto s = touches(feed);
-    if (!s) return tl::unexpected(s.error());
-    c.response.samples.push_back(*s);
+    if (auto ok = sample(feed); !ok) return ok;
   }
-  estimate();
+  estimate_response(target, c);
+  return {};
+}
 
-  // 4. Limits and strategy.
+// 4. Limits and strategy.
+tl::expected<void, std::string> choose_limits_and_strategy(MachineCharacterisation& c) {
   c.max_probe_feed_mm_s = inf;
   for (int i = 0; i < 3; ++i) c.max_probe_feed_mm_s = std::min(c.max_probe_feed_mm_s, c.max_feed_mm_s(Vec3::Unit(i)));
   // The accurate feed: the spread of repeated touches within the threshold (SEEDS.md 3).
@@ -391,36 +415,43 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   c.one_touch = c.response.spread_mm(c.first_feed_mm_s) <= c.threshold_mm;
   c.measuring_feed_mm_s = std::min(accurate, c.max_probe_feed_mm_s);
   if (!(c.measuring_feed_mm_s > 0)) return tl::unexpected(std::string("no probing feed meets the threshold"));
+  return {};
+}
 
-  // 5. Beyond the seed: timed trial cycles on the same point (the controller clock is a sensor).
-  // A cycle starts at rest 2 mm above the nominal and ends retracted; the nominal is off the
-  // surface by -tol, 0, +tol in turn, as the standoff's tolerance term assumes.
-  const auto trial = [&](const MachineCharacterisation& cc) -> tl::expected<double, std::string> {
-    double total = 0;
-    int count = 0;
-    for (double offset : {-1.0, 0.0, 1.0, 0.5, -0.5}) {
-      const Vec3 nominal = surface + offset * cc.nominal_tolerance_mm * n;
-      const TouchPlan plan = cc.plan(n, std::nullopt, std::nullopt);
-      auto go = run1(machine, {tag++, machine::GoTo{nominal + (st.tool->effective_radius_mm + 2.0) * n, std::nullopt}});
-      if (go.status == machine::Response::Status::Fault)
-        return tl::unexpected("trial cycle: " + fault_text(go));
-      machine::PtMeas p;
-      p.nominal_mm = nominal;
-      p.normal = n;
-      p.approach_mm = std::min(plan.approach_mm, 2.0);
-      p.search_mm = 2 * cc.nominal_tolerance_mm + c.over_travel_mm + 1;
-      p.retract_mm = 2.0;
-      p.speed_mm_s = plan.feed_mm_s;
-      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
-      if (plan.blend_mm) p.blend_mm = std::min(*plan.blend_mm, p.approach_mm);
-      auto r = run1(machine, {tag++, p});
-      if (r.status == machine::Response::Status::Fault)
-        return tl::unexpected("trial cycle: " + fault_text(r));
-      total += r.end_time_s - r.start_time_s;
-      ++count;
-    }
-    return total / count;
-  };
+// Mean time of timed trial cycles with characterisation `cc` on the target (the controller clock
+// is a sensor). A cycle starts at rest 2 mm above the nominal and ends retracted; the nominal is
+// off the surface by -tol, 0, +tol in turn, as the standoff's tolerance term assumes.
+tl::expected<double, std::string> time_trial_cycles(Bench& bench, const TouchTarget& target,
+                                                    const MachineCharacterisation& cc) {
+  const Vec3& n = target.normal;
+  double total = 0;
+  int count = 0;
+  for (double offset : {-1.0, 0.0, 1.0, 0.5, -0.5}) {
+    const Vec3 nominal = target.surface + offset * cc.nominal_tolerance_mm * n;
+    const TouchPlan plan = cc.plan(n, std::nullopt, std::nullopt);
+    auto go = run1(bench.machine,
+                   {bench.tag++, machine::GoTo{nominal + (target.tool.effective_radius_mm + 2.0) * n, std::nullopt}});
+    if (go.status == machine::Response::Status::Fault) return tl::unexpected("trial cycle: " + fault_text(go));
+    machine::PtMeas p;
+    p.nominal_mm = nominal;
+    p.normal = n;
+    p.approach_mm = std::min(plan.approach_mm, 2.0);
+    p.search_mm = 2 * cc.nominal_tolerance_mm + cc.over_travel_mm + 1;
+    p.retract_mm = 2.0;
+    p.speed_mm_s = plan.feed_mm_s;
+    if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+    if (plan.blend_mm) p.blend_mm = std::min(*plan.blend_mm, p.approach_mm);
+    auto r = run1(bench.machine, {bench.tag++, p});
+    if (r.status == machine::Response::Status::Fault) return tl::unexpected("trial cycle: " + fault_text(r));
+    total += r.end_time_s - r.start_time_s;
+    ++count;
+  }
+  return total / count;
+}
+
+// 5. Beyond the seed: the first-touch feed and the cycle chosen by timed trial cycles.
+tl::expected<void, std::string> choose_cycle_by_timing(Bench& bench, const CharacterisationSettings& settings,
+                                                       const TouchTarget& target, MachineCharacterisation& c) {
   if (settings.optimise_first_feed && !c.one_touch) {
     // The first touch's feed trades its own time against D2 = feed * jitter in the standoff
     // (and its ramp D1 in the approach): pick the fastest of a few candidates by timing.
@@ -428,9 +459,9 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
     for (int k = 1; k <= 6; ++k) {
       MachineCharacterisation cc = c;
       cc.first_feed_mm_s = c.measuring_feed_mm_s + (c.max_probe_feed_mm_s - c.measuring_feed_mm_s) * k / 6;
-      auto t = trial(cc);
+      auto t = time_trial_cycles(bench, target, cc);
       if (!t) return tl::unexpected(t.error());
-      say(fmt::format("trial two-touch cycles, first touch {:.1f} mm/s: {:.4f} s", cc.first_feed_mm_s, *t));
+      bench.say(fmt::format("trial two-touch cycles, first touch {:.1f} mm/s: {:.4f} s", cc.first_feed_mm_s, *t));
       if (*t < best) best = *t, best_feed = cc.first_feed_mm_s;
     }
     c.first_feed_mm_s = best_feed;
@@ -443,12 +474,37 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
     blend.blend = true;
     double best = inf;
     for (const MachineCharacterisation* cc : {&one, &two, &blend}) {
-      auto t = trial(*cc);
+      auto t = time_trial_cycles(bench, target, *cc);
       if (!t) return tl::unexpected(t.error());
-      say(fmt::format("trial {} cycles: {:.4f} s", cc->blend ? "blended one-touch" : cc->one_touch ? "one-touch" : "two-touch", *t));
+      bench.say(fmt::format("trial {} cycles: {:.4f} s", cc->blend ? "blended one-touch" : cc->one_touch ? "one-touch" : "two-touch", *t));
       if (*t < best) best = *t, c.one_touch = cc->one_touch, c.blend = cc->blend;
     }
   }
+  return {};
+}
+
+}  // namespace
+
+tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine& machine,
+                                                                const CharacterisationSettings& settings,
+                                                                const std::function<void(const std::string&)>& log,
+                                                                double ball_diameter_mm) {
+  const Say say = [&](const std::string& s) {
+    if (log) log(s);
+  };
+  MachineCharacterisation c;
+  c.threshold_mm = settings.repeatability_threshold_mm;
+  c.nominal_tolerance_mm = settings.nominal_tolerance_mm;
+  c.over_travel_margin = settings.over_travel_margin;
+  c.blend = settings.blend;
+
+  if (auto ok = measure_axes(machine, settings, say, c); !ok) return tl::unexpected(ok.error());
+  Bench bench{machine, std::uint64_t{1} << 24, say};
+  auto target = qualify_touch_point(bench, ball_diameter_mm, c);
+  if (!target) return tl::unexpected(target.error());
+  if (auto ok = measure_touch_response(bench, settings, *target, c); !ok) return tl::unexpected(ok.error());
+  if (auto ok = choose_limits_and_strategy(c); !ok) return tl::unexpected(ok.error());
+  if (auto ok = choose_cycle_by_timing(bench, settings, *target, c); !ok) return tl::unexpected(ok.error());
   return c;
 }
 

@@ -3,11 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace metron::runtime {
 namespace {
-
-constexpr double pi = 3.14159265358979323846;
 
 // Unit radial direction of `p` about the axis through `c` along `axis` (any when on the axis).
 Vec3 radial(const Vec3& p, const Vec3& c, const Vec3& axis) {
@@ -23,13 +22,13 @@ void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis,
           int count, bool inner, double approach_mm, double phase_rad, std::optional<double>& last_angle) {
   const Vec3 u = any_perpendicular(axis);
   const Vec3 v = axis.cross(u);
-  const double walk_radius = (radius + approach_mm) / std::cos(pi / 16) + 0.5;
+  const double walk_radius = (radius + approach_mm) / std::cos(std::numbers::pi / 16) + 0.5;
   for (int i = 0; i < count; ++i) {
-    const double a = phase_rad + 2.0 * pi * i / count;
+    const double a = phase_rad + 2.0 * std::numbers::pi * i / count;
     const Vec3 dir = std::cos(a) * u + std::sin(a) * v;
     if (!inner && last_angle) {
       const double prev = *last_angle;
-      const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(a - prev) / (pi / 8))));
+      const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(a - prev) / (std::numbers::pi / 8))));
       for (int k = 0; k <= legs; ++k) {
         const double b = prev + (a - prev) * k / legs;
         steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), Vec3::UnitZ()});
@@ -80,7 +79,7 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
     }
     case FeatureType::Cone: {
       // Surface normal of a cone with apex at position, axis opening along direction.
-      const double half = g.apex_angle_deg * pi / 360.0;
+      const double half = g.apex_angle_deg * std::numbers::pi / 360.0;
       const Vec3 r = radial(point, g.position, axis);
       return sign * (std::cos(half) * r - std::sin(half) * axis).normalized();
     }
@@ -106,7 +105,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       const Vec3 u = any_perpendicular(axis);
       const Vec3 v = axis.cross(u);
       for (int i = 0; i < n; ++i) {
-        const double a = 2.0 * pi * i / n + pi / 4;
+        const double a = 2.0 * std::numbers::pi * i / n + std::numbers::pi / 4;
         steps.push_back({PlannedStep::Kind::Probe, g.position + 5.0 * (std::cos(a) * u + std::sin(a) * v), axis});
       }
       break;
@@ -134,7 +133,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       const int first = n / 2;
       std::optional<double> last;
       ring(steps, g.position + 0.25 * len * axis, axis, r, first, inner, probe.approach_mm, 0.0, last);
-      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm, pi / std::max(1, n - first), last);
+      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm, std::numbers::pi / std::max(1, n - first), last);
       break;
     }
     case FeatureType::Sphere: {
@@ -145,8 +144,8 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       const Vec3 u = any_perpendicular(up);
       const Vec3 v = up.cross(u);
       for (int i = 0; i < rest; ++i) {
-        const double elev = (i % 2 == 0 ? 15.0 : 45.0) * pi / 180.0;
-        const double az = 2.0 * pi * i / rest;
+        const double elev = (i % 2 == 0 ? 15.0 : 45.0) * std::numbers::pi / 180.0;
+        const double az = 2.0 * std::numbers::pi * i / rest;
         const Vec3 d = std::cos(elev) * (std::cos(az) * u + std::sin(az) * v) + std::sin(elev) * up;
         if (!inner) {
           // Over the top, out beyond the equator, down to the approach height, then in.
@@ -164,7 +163,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
     }
     case FeatureType::Cone: {
       const int n = count > 0 ? count : 8;
-      const double half = g.apex_angle_deg * pi / 360.0;
+      const double half = g.apex_angle_deg * std::numbers::pi / 360.0;
       const double len = g.length_mm > 0 ? g.length_mm : 5.0;
       for (int level = 0; level < 2; ++level) {
         const double t = (level == 0 ? 0.4 : 0.8) * len;
@@ -174,7 +173,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
         const Vec3 u = any_perpendicular(axis);
         const Vec3 v = axis.cross(u);
         for (int i = 0; i < m; ++i) {
-          const double a = 2.0 * pi * i / m + level * pi / m;
+          const double a = 2.0 * std::numbers::pi * i / m + level * std::numbers::pi / m;
           const Vec3 p = c + rr * (std::cos(a) * u + std::sin(a) * v);
           steps.push_back({PlannedStep::Kind::Probe, p, nominal_normal_at(g, p)});
         }

@@ -1,119 +1,16 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/runtime/measurement_runtime.hpp"
 
-#include <cmath>
+#include <algorithm>
 #include <filesystem>
 
 #include <fmt/format.h>
 
 #include "detail/fit_actual.hpp"
-#include "metron/runtime/measurement_plan.hpp"
+#include "metron/runtime/block_plan.hpp"
 #include "metron/runtime/outputs.hpp"
-#include "metron/runtime/scan_segmentation.hpp"
-#include "metron/stdlib/fitting/fit.hpp"
 
 namespace metron::runtime {
-namespace {
-
-fitting::Shape fit_shape(FeatureType type) {
-  switch (type) {
-    case FeatureType::Point: return fitting::Shape::Point;
-    case FeatureType::Line: return fitting::Shape::Line;
-    case FeatureType::Plane: return fitting::Shape::Plane;
-    case FeatureType::Circle:
-    case FeatureType::Arc: return fitting::Shape::Circle;
-    case FeatureType::Sphere: return fitting::Shape::Sphere;
-    case FeatureType::Cylinder: return fitting::Shape::Cylinder;
-    case FeatureType::Cone: return fitting::Shape::Cone;
-  }
-  return fitting::Shape::Point;
-}
-
-Vec3 oriented(const Vec3& d, const Vec3& like) { return d.dot(like) < 0 ? Vec3(-d) : d; }
-
-constexpr double pi = 3.14159265358979323846;
-
-}  // namespace
-
-// Fits the actual of a feature from ball centres with probe compensation (stdlib fitting).
-tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
-  if (points.empty()) return tl::unexpected(std::string("no points were measured"));
-  std::vector<Vec3> centres;
-  fitting::Compensation comp;
-  comp.ball_radius_mm = points.front().ball_radius_mm;
-  for (const auto& p : points) {
-    centres.push_back(p.centre_mm);
-    comp.approach.push_back(p.normal);
-  }
-  fitting::FitOptions options;
-  options.compensation = comp;
-  options.inner = nominal.side != Side::Outer;
-  // A line's DMIS i2,j2,k2 is the normal of the plane the line lies in (the working plane).
-  options.direction_hint = nominal.type == FeatureType::Line ? nominal.normal2 : nominal.direction;
-  options.circle_in_plane_of_hint = nominal.type == FeatureType::Circle || nominal.type == FeatureType::Arc;
-  options.start_from_hint = true;  // a measured feature is fitted from its nominal
-  auto fit = fitting::fit(fit_shape(nominal.type), centres, options);
-  if (!fit)
-    return tl::unexpected(fmt::format("cannot fit a {} to {} point{}: {}", dmis_word(nominal.type), points.size(),
-                                      points.size() == 1 ? "" : "s", fitting::to_string(fit.error())));
-  Geometry g = nominal;
-  const Vec3 axis = fit->direction.norm() > 0 ? oriented(fit->direction.normalized(), nominal.direction) : nominal.direction;
-  switch (nominal.type) {
-    case FeatureType::Point:
-      g.position = fit->position;
-      break;
-    case FeatureType::Line:
-      g.position = fit->position;
-      g.direction = axis;
-      break;
-    case FeatureType::Plane:
-      g.position = fit->position;
-      g.direction = axis;
-      break;
-    case FeatureType::Circle:
-    case FeatureType::Arc:
-    case FeatureType::Sphere:
-      g.position = fit->position;
-      if (nominal.type != FeatureType::Sphere) g.direction = axis;
-      g.diameter_mm = fit->diameter_mm;
-      break;
-    case FeatureType::Cylinder: {
-      // Report the axis point at the nominal position's height so positions compare like for like.
-      g.direction = axis;
-      g.position = fit->position + (nominal.position - fit->position).dot(axis) * axis;
-      g.diameter_mm = fit->diameter_mm;
-      break;
-    }
-    case FeatureType::Cone: {
-      // Apex from the compensated surface points: rho = (t - t_apex) tan(half angle).
-      const Vec3 dir = fit->direction.normalized();
-      const double half = fit->apex_angle_deg * pi / 360.0;
-      double sum = 0;
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        const Vec3 q = points[i].surface_mm() - fit->position;
-        const double t = q.dot(dir);
-        const double rho = (q - t * dir).norm();
-        sum += t - rho / std::tan(half);
-      }
-      g.position = fit->position + (sum / static_cast<double>(points.size())) * dir;
-      g.direction = dir;
-      g.apex_angle_deg = fit->apex_angle_deg;
-      break;
-    }
-  }
-  if (nominal.type == FeatureType::Cylinder || nominal.type == FeatureType::Cone) {
-    double lo = 1e300, hi = -1e300;
-    for (const auto& p : points) {
-      const double t = (p.surface_mm() - g.position).dot(g.direction);
-      lo = std::min(lo, t);
-      hi = std::max(hi, t);
-    }
-    if (nominal.length_mm <= 0) g.length_mm = hi - lo;
-  }
-  FitFigures figures{fit->residuals_mm, fit->rms_mm, fit->form_mm};
-  return std::make_pair(g, figures);
-}
 
 MeasurementRuntime::MeasurementRuntime(machine::Machine& machine, const SourceManager& sources, RunRecord& record)
     : m_machine(machine), m_sources(sources), m_record(record) {
@@ -328,137 +225,28 @@ Result<void> MeasurementRuntime::go_to(const Vec3& point, Span span) {
   return {};
 }
 
+BlockPlanContext MeasurementRuntime::plan_context() const {
+  BlockPlanContext context;
+  context.alignment = m_alignment;
+  context.probe = m_probe;
+  context.scan = m_scan;
+  context.mode = m_mode;
+  context.paths = &m_paths;
+  context.characterisation = characterisation();
+  context.measuring_feed_mm_s = m_measuring_feed_explicit;
+  context.state = m_machine.state();
+  return context;
+}
+
 Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   auto it = m_features.find(block.feature);
   if (it == m_features.end()) return program_error(block.span, fmt::format("feature F({}) is not defined", block.feature));
   Feature& feature = it->second;
   if (auto t = ensure_tool(block.span); !t) return t;
-
-  std::vector<machine::Command> commands;
-  std::vector<Span> spans;
-  const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
-                                      [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
-  // A scan longer than the machine's command buffer goes as measurement commands (SEEDS.md 2),
-  // queued in order: the machine takes each one when a buffer is free.
-  const auto push_scan = [&](machine::ScanPath scan, Span span) {
-    for (machine::Command& c : scan_commands(scan, m_machine.state().scan_buffer_segments)) {
-      commands.push_back(std::move(c));
-      spans.push_back(span);
-    }
-  };
-  const auto ptmeas = [&](const Vec3& nominal, const Vec3& normal, Span span) {
-    machine::PtMeas p;
-    p.nominal_mm = nominal;
-    p.normal = normal.normalized();
-    p.approach_mm = m_probe.approach_mm;
-    p.search_mm = m_probe.search_mm;
-    p.retract_mm = m_probe.retract_mm;
-    if (m_characterisation) {
-      // SEEDS.md 3: the characterised cycle; SNSET/APPRCH and FEDRAT/MESVEL override.
-      const TouchPlan plan = m_characterisation->plan(
-          p.normal, m_measuring_feed_explicit,
-          m_probe.approach_explicit ? std::optional<double>(m_probe.approach_mm) : std::nullopt);
-      p.approach_mm = plan.approach_mm;
-      p.speed_mm_s = plan.feed_mm_s;
-      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
-      p.blend_mm = plan.blend_mm;
-    }
-    commands.push_back({0, p});
-    spans.push_back(span);
-  };
-  std::optional<MeasStep> scan_start;  // SCNMOD/ON: a PTMEAS pair is the start and end of a scan
-  if (has_points || block.steps.size() > 0) {
-    for (const auto& step : block.steps) {
-      const Vec3 p = m_alignment.to_machine_point(step.point);
-      if (step.kind == MeasStep::Kind::GoTo) {
-        commands.push_back({0, machine::GoTo{p, {}}});
-        spans.push_back(step.span);
-      } else if (step.kind == MeasStep::Kind::Scan) {
-        auto path = m_paths.find(step.path);
-        if (path == m_paths.end()) return program_error(step.span, fmt::format("path P({}) is not defined", step.path));
-        auto scan = scan_command(path_contour(path->second, 0.05), step.span);
-        if (!scan) return tl::unexpected(scan.error());
-        push_scan(std::move(*scan), step.span);
-      } else {
-        const Vec3 n = step.normal ? m_alignment.to_machine_vector(*step.normal) : nominal_normal_at(feature.nominal, p);
-        if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
-        if (!m_scan.scan_mode) {
-          ptmeas(p, n, step.span);
-        } else if (!scan_start) {
-          scan_start = step;
-        } else {
-          auto contour = nominal_contour_between(feature.nominal, m_alignment.to_machine_point(scan_start->point), p,
-                                                 n.normalized(), 0.05);
-          if (!contour) return program_error(step.span, contour.error());
-          auto scan = scan_command(*contour, step.span);
-          if (!scan) return tl::unexpected(scan.error());
-          push_scan(std::move(*scan), step.span);
-          scan_start.reset();
-        }
-      }
-    }
-  }
-  if (scan_start)
-    return program_error(scan_start->span, "in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: this one has no end");
-  if (!has_points && m_scan.scan_mode && m_mode != Mode::Man) {
-    // SCNMOD/ON: scan the nominal feature instead of touching points.
-    const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
-    // Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
-    const bool along_x = std::abs(m_alignment.to_part_vector(feature.nominal.direction).normalized().x()) >= 0.99;
-    const Vec3 reference = m_alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
-    auto contour = nominal_contour(feature.nominal, m_machine.state().position_mm, m_probe.depth_mm, up, reference, 0.05);
-    if (!contour) return program_error(block.span, contour.error());
-    auto scan = scan_command(*contour, block.span);
-    if (!scan) return tl::unexpected(scan.error());
-    push_scan(std::move(*scan), block.span);
-  } else if (!has_points) {
-    if (m_mode == Mode::Man)
-      return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");
-    const Vec3 up = m_alignment.to_machine_vector(Vec3::UnitZ());
-    const auto state = m_machine.state();
-    const double ball = state.tool ? state.tool->effective_radius_mm : 0.0;
-    const auto plan = plan_auto_points(feature.nominal, block.point_count, m_probe, ball, up, state.position_mm);
-    if (plan.empty()) return program_error(block.span, "cannot plan automatic points for this feature");
-    for (const auto& s : plan) {
-      if (s.kind == PlannedStep::Kind::GoTo) {
-        commands.push_back({0, machine::GoTo{s.point, {}}});
-        spans.push_back(block.span);
-      } else {
-        ptmeas(s.point, s.normal, block.span);
-      }
-    }
-  }
-
-  std::vector<MeasuredPoint> points;
-  std::vector<double> commands_feed;  // the measuring feed of each command (PtMeas)
-  for (const auto& c : commands)
-    if (const auto* p = std::get_if<machine::PtMeas>(&c.body)) commands_feed.push_back(p->speed_mm_s.value_or(m_machine.state().measuring_feed_mm_s));
-    else commands_feed.push_back(0);
-  const auto execution = execute_commands(std::move(commands), spans);
-  for (const auto& r : execution.responses)
-    if (r.hit) {
-      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
-      Vec3 centre = r.hit->centre_mm;
-      if (m_characterisation && i < commands_feed.size())
-        // The effective radius holds the delay distance at the qualification feed; a hit at
-        // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
-        centre += m_characterisation->dynamic_correction_mm(commands_feed[i], m_qualification_feed_mm_s) * r.hit->normal;
-      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s,
-                        i < spans.size() ? spans[i] : block.span, false});
-    }
-  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
-  // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
-  const auto tool = m_machine.state().tool;
-  for (const auto& r : execution.responses)
-    for (const auto& line : r.scan_log) m_record.machine_log.push_back(feature.label + ": " + line);
-  for (const auto& r : execution.responses)
-    for (const auto& sample : r.scan) {
-      const double e = sample.deflection_mm.norm();
-      if (!(e > 0)) continue;  // not in contact
-      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
-      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->nominal_radius_mm : 0.0,
-                        sample.time_s, i < spans.size() ? spans[i] : block.span, true});
-    }
+  auto plan = plan_block(block, feature.nominal, plan_context());
+  if (!plan) return tl::unexpected(plan.error());
+  const auto execution = execute_commands(std::move(plan->commands), plan->spans);
+  std::vector<MeasuredPoint> points = collect_points(*plan, execution, feature.label, block.span);
   if (execution.error) {
     // Keep every point obtained before the fault; the feature gets no actual.
     feature.points = points;
@@ -477,6 +265,37 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   feature.actual = fitted->first;
   feature.fit = fitted->second;
   return {};
+}
+
+std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& plan, const Execution& execution,
+                                                              const std::string& feature, Span block_span) {
+  std::vector<MeasuredPoint> points;
+  const auto span_of = [&](std::size_t i) { return i < plan.spans.size() ? plan.spans[i] : block_span; };
+  for (const auto& r : execution.responses)
+    if (r.hit) {
+      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
+      Vec3 centre = r.hit->centre_mm;
+      if (m_characterisation && i < plan.measuring_feed_mm_s.size())
+        // The effective radius holds the delay distance at the qualification feed; a hit at
+        // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
+        centre += m_characterisation->dynamic_correction_mm(plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s) *
+                  r.hit->normal;
+      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s, span_of(i), false});
+    }
+  // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
+  // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
+  const auto tool = m_machine.state().tool;
+  for (const auto& r : execution.responses)
+    for (const auto& line : r.scan_log) m_record.machine_log.push_back(feature + ": " + line);
+  for (const auto& r : execution.responses)
+    for (const auto& sample : r.scan) {
+      const double e = sample.deflection_mm.norm();
+      if (!(e > 0)) continue;  // not in contact
+      const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->nominal_radius_mm : 0.0,
+                        sample.time_s, span_of(i), true});
+    }
+  return points;
 }
 
 Result<const Datum*> MeasurementRuntime::datum(const std::string& label, Span span) const {

@@ -2,6 +2,7 @@
 #include "metron/runtime/scan.hpp"
 
 #include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -9,11 +10,6 @@
 #include "metron/runtime/measurement_runtime.hpp"
 
 namespace metron::runtime {
-namespace {
-
-constexpr double pi = 3.14159265358979323846;
-
-}  // namespace
 
 geometry::Contour path_contour(const PathDefinition& path, double step_mm) {
   if (path.section) return *path.section;
@@ -61,11 +57,11 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, 
     case FeatureType::Plane: {
       // A circle of 5 mm radius on the plane (the touch planner's 4 points lie on it too).
       const Vec3 u = any_perpendicular(axis), v = axis.cross(u);
-      const std::size_t n = std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(2 * pi * 5.0 / step_mm)));
+      const std::size_t n = std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(2 * std::numbers::pi * 5.0 / step_mm)));
       geometry::Contour c;
       c.closed = true;
       for (std::size_t i = 0; i <= n; ++i) {
-        const double a = 2 * pi * static_cast<double>(i) / static_cast<double>(n);
+        const double a = 2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n);
         c.points.push_back({g.position + 5.0 * (std::cos(a) * u + std::sin(a) * v), axis});
       }
       c.points.back() = c.points.front();
@@ -89,7 +85,7 @@ tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geome
       const double ha = a.dot(axis), hb = b.dot(axis);
       const Vec3 ra = a - ha * axis, rb = b - hb * axis;
       if (ra.norm() < 1e-9 || rb.norm() < 1e-9) return tl::unexpected(std::string("a scan's start or end lies on the feature's axis"));
-      double sweep = std::atan2(ra.cross(rb).dot(axis), ra.dot(rb)) * 180 / pi;
+      double sweep = std::atan2(ra.cross(rb).dot(axis), ra.dot(rb)) * 180 / std::numbers::pi;
       if (sweep <= 1e-9) sweep += 360;  // counterclockwise; the same point twice is a full turn
       geometry::ArcSpec arc;
       arc.centre = g.position + ha * axis;
@@ -143,32 +139,6 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
   path.span = span;
   m_paths[path.label] = path;
   return {};
-}
-
-Result<machine::ScanPath> MeasurementRuntime::scan_command(const geometry::Contour& contour, Span span) {
-  const auto state = m_machine.state();
-  geometry::ScanPathOptions o;
-  // The nominal ball radius: a scanning probe reads its deflection, so the touch-trigger
-  // effective radius (which absorbs pre-travel and trigger delays) does not apply.
-  o.ball_radius_mm = state.tool ? state.tool->nominal_radius_mm : 2.0;
-  o.reference_deflection_mm = m_scan.reference_deflection_mm;
-  o.chord_tolerance_mm = m_scan.chord_tolerance_mm;
-  o.centripetal_accel_mm_s2 = m_scan.centripetal_accel_mm_s2;
-  // The segment speeds are capped by the scan feed; without FEDRAT/SCNVEL by the measuring feed.
-  o.feed_mm_s = m_scan.feed_mm_s ? *m_scan.feed_mm_s
-                                 : (state.measuring_feed_mm_s > 0 ? state.measuring_feed_mm_s : 10.0);
-  auto plan = geometry::make_scan_path(contour, o);
-  if (!plan) return program_error(span, "cannot make a scan path: " + plan.error().message);
-  machine::ScanPath scan;
-  scan.path = std::move(plan->path);
-  scan.approach_normal = contour.points.front().normal;
-  scan.law = m_scan.law;
-  scan.speed_mm_s = m_scan.feed_mm_s;
-  scan.reference_deflection_mm = m_scan.reference_deflection_mm;
-  scan.sample_spacing_mm = m_scan.sample_spacing_mm;
-  scan.approach_mm = m_probe.approach_mm;
-  scan.retract_mm = m_probe.retract_mm;
-  return scan;
 }
 
 }  // namespace metron::runtime

@@ -4,13 +4,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 
 namespace metron {
 namespace {
-
-constexpr double pi = 3.14159265358979323846;
 
 std::string upper(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -78,7 +77,7 @@ const Builtin* find_builtin(std::string_view name) {
 
 tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vector<Value>& args, bool degrees) {
   const std::string name(fn.name);
-  const double to_rad = degrees ? pi / 180.0 : 1.0;
+  const double to_rad = degrees ? std::numbers::pi / 180.0 : 1.0;
   std::vector<double> x;
   std::vector<std::string> s;
   for (const auto& a : args) {
@@ -126,9 +125,9 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
   if (name == "SIGN") return real(x[1] >= 0 ? std::abs(x[0]) : -std::abs(x[0]));
   if (name == "MN" || name == "MIN") return real(*std::min_element(x.begin(), x.end()));
   if (name == "MX" || name == "MAX") return real(*std::max_element(x.begin(), x.end()));
-  if (name == "DTOR") return real(x[0] * pi / 180.0);
-  if (name == "RTOD") return real(x[0] * 180.0 / pi);
-  if (name == "PI") return real(pi);
+  if (name == "DTOR") return real(x[0] * std::numbers::pi / 180.0);
+  if (name == "RTOD") return real(x[0] * 180.0 / std::numbers::pi);
+  if (name == "PI") return real(std::numbers::pi);
   if (name == "DBLE") return real(x[0]);
   if (name == "RL") {
     try {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include "metron/machine/motion_profile.hpp"
@@ -126,7 +127,7 @@ TEST(SegmentedPlan, CurvatureLimitsTheSpeed) {
   std::vector<geometry::PccSegment> segs;
   const int n = 16;
   for (int i = 0; i < n; ++i) {
-    const double a0 = M_PI / 2 * i / n, a1 = M_PI / 2 * (i + 1) / n;
+    const double a0 = std::numbers::pi / 2 * i / n, a1 = std::numbers::pi / 2 * (i + 1) / n;
     segs.push_back(geometry::PccSegment::hermite(Vec3(10 * std::cos(a0), 10 * std::sin(a0), 0),
                                                  Vec3(10 * std::cos(a1), 10 * std::sin(a1), 0),
                                                  Vec3(-std::sin(a0), std::cos(a0), 0), Vec3(-std::sin(a1), std::cos(a1), 0)));
@@ -135,7 +136,7 @@ TEST(SegmentedPlan, CurvatureLimitsTheSpeed) {
     const SegmentLimit l = segment_limit(s, {k_limits, 250.0});
     // A cubic Hermite arc of 5.6 degrees bends up to ~0.3 % off the circle's curvature.
     EXPECT_NEAR(l.limit_mm_s, std::sqrt(250.0 * 10.0), 0.1);
-    EXPECT_NEAR(l.length_mm, 10 * M_PI / 2 / n, 1e-5);
+    EXPECT_NEAR(l.length_mm, 10 * std::numbers::pi / 2 / n, 1e-5);
   }
 }
 

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fixtures.hpp"
 #include "metron/machine/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 
@@ -15,13 +16,7 @@ using namespace metron::machine;
 
 namespace {
 
-const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds";
-
-World world_file(const std::string& name) {
-  auto w = load_world(worlds_dir + "/" + name);
-  if (!w) throw std::runtime_error(w.error().message);
-  return *w;
-}
+using test_support::world_file;
 
 using Body = decltype(Command::body);
 

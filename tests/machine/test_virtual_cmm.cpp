@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 
+#include "fixtures.hpp"
 #include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -17,15 +18,10 @@ using namespace metron::machine;
 
 namespace {
 
-const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds";
 const Vec3 part_origin(300, 200, 0);  // the block's corner in the machine (default pose)
 constexpr double deg = std::numbers::pi / 180;
 
-World world_file(const std::string& name) {
-  auto w = load_world(worlds_dir + "/" + name);
-  if (!w) throw std::runtime_error(w.error().message);
-  return *w;
-}
+using test_support::world_file;
 
 World noiseless(World w) {
   w.probe.repeatability_mm = 0;

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fixtures.hpp"
 #include "metron/machine/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/characterisation.hpp"
@@ -16,13 +17,7 @@ using namespace metron::runtime;
 
 namespace {
 
-const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds";
-
-machine::World world_file(const std::string& name) {
-  auto w = machine::load_world(worlds_dir + "/" + name);
-  if (!w) throw std::runtime_error(w.error().message);
-  return *w;
-}
+using test_support::world_file;
 
 struct Characterised {
   machine::World world;

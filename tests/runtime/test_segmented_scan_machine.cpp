@@ -12,7 +12,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "../machine/scan_paths.hpp"
+#include "fixtures.hpp"
+#include "scan_paths.hpp"
 #include "metron/machine/scanning/scan_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
@@ -25,11 +26,7 @@ using namespace metron::machine;
 
 constexpr double ball_r = 2, e0 = 0.3;
 
-World world_file(const std::string& name) {
-  auto w = load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/" + name);
-  if (!w) throw std::runtime_error(w.error().message);
-  return *w;
-}
+using test_support::world_file;
 
 // Each segment cut into `pieces` Hermite segments (normals interpolated): a long path of short
 // segments over the same curve.

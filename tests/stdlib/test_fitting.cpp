@@ -24,7 +24,6 @@
 namespace metron::fitting {
 namespace {
 
-constexpr double pi = std::numbers::pi;
 constexpr double exact_tol = 1e-9;
 
 /// Angle between two directions in rad, optionally ignoring the sign.
@@ -32,7 +31,7 @@ double angle_between(const Vec3& a, const Vec3& b, bool up_to_sign) {
   const double c = a.normalized().dot(b.normalized());
   const double s = a.normalized().cross(b.normalized()).norm();
   double angle = std::atan2(s, c);
-  if (up_to_sign) angle = std::min(angle, pi - angle);
+  if (up_to_sign) angle = std::min(angle, std::numbers::pi - angle);
   return angle;
 }
 
@@ -71,7 +70,7 @@ std::vector<Vec3> circle_points(const CircleTruth& t, int count, double span_deg
   const auto [u, v] = basis(t.normal);
   std::vector<Vec3> pts;
   for (int k = 0; k < count; ++k) {
-    const double a = (span_deg * pi / 180) * k / (span_deg >= 360 ? count : count - 1) + 0.3;
+    const double a = (span_deg * std::numbers::pi / 180) * k / (span_deg >= 360 ? count : count - 1) + 0.3;
     const Vec3 radial = std::cos(a) * u + std::sin(a) * v;
     pts.push_back(t.centre + (t.radius_mm + noise()) * radial + wobble_mm * std::sin(3 * a) * t.normal.normalized());
   }
@@ -91,7 +90,7 @@ std::vector<Vec3> cylinder_points(const CylinderTruth& t, int rings, int per_rin
   for (int r = 0; r < rings; ++r) {
     const double w = length_mm * (r / double(rings - 1) - 0.5);
     for (int k = 0; k < per_ring; ++k) {
-      const double a = (span_deg * pi / 180) * k / (span_deg >= 360 ? per_ring : per_ring - 1) + 0.2 * r;
+      const double a = (span_deg * std::numbers::pi / 180) * k / (span_deg >= 360 ? per_ring : per_ring - 1) + 0.2 * r;
       pts.push_back(t.point + w * t.axis.normalized() + (t.radius_mm + noise()) * (std::cos(a) * u + std::sin(a) * v));
     }
   }
@@ -117,7 +116,7 @@ std::vector<Vec3> cone_points(const ConeTruth& t, int rings, int per_ring, doubl
     const double w = w0 + (w1 - w0) * r / double(rings - 1);
     const double radius = t.distance_mm / c + w * std::tan(t.half_angle_rad);
     for (int k = 0; k < per_ring; ++k) {
-      const double ang = (span_deg * pi / 180) * k / (span_deg >= 360 ? per_ring : per_ring - 1) + 0.15 * r;
+      const double ang = (span_deg * std::numbers::pi / 180) * k / (span_deg >= 360 ? per_ring : per_ring - 1) + 0.15 * r;
       const Vec3 radial = std::cos(ang) * u + std::sin(ang) * v;
       const Vec3 normal = c * radial - s * a;  // outward surface normal
       pts.push_back(t.point + w * a + radius * radial + noise() * normal);
@@ -281,9 +280,9 @@ TEST(FitExact, SpheresFullAndCap) {
   for (double cap_deg : {180.0, 45.0}) {
     std::vector<Vec3> pts;
     for (int i = 0; i < 6; ++i) {
-      const double polar = (cap_deg * pi / 180) * (i + 1) / 6.0;
+      const double polar = (cap_deg * std::numbers::pi / 180) * (i + 1) / 6.0;
       for (int k = 0; k < 8; ++k) {
-        const double az = 2 * pi * k / 8 + 0.1 * i;
+        const double az = 2 * std::numbers::pi * k / 8 + 0.1 * i;
         pts.push_back(centre + radius * Vec3(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar)));
       }
     }
@@ -316,14 +315,14 @@ TEST(FitExact, ConesSteepFlatAndPartial) {
     double half_angle_deg, w0, w1, span_deg;
   };
   for (const Case c : {Case{30, -5, 5, 360}, Case{1, -20, 20, 360}, Case{80, -1, 1, 360}, Case{20, 0, 10, 90}}) {
-    const ConeTruth truth{Vec3(-40, 70, 210), Vec3(-0.3, 0.1, 1).normalized(), c.half_angle_deg * pi / 180, 9};
+    const ConeTruth truth{Vec3(-40, 70, 210), Vec3(-0.3, 0.1, 1).normalized(), c.half_angle_deg * std::numbers::pi / 180, 9};
     const auto pts = cone_points(truth, 5, 10, c.w0, c.w1, c.span_deg);
     const auto r = fit_cone(pts);
     const std::string what = fmt::format("half angle {} span {}", c.half_angle_deg, c.span_deg);
     ASSERT_TRUE(r) << what;
     EXPECT_LT(angle_between(r->direction, truth.axis, false), exact_tol) << what;
     EXPECT_LT(distance_to_axis(truth.point, r->position, r->direction), exact_tol) << what;
-    EXPECT_NEAR(r->apex_angle_deg, 2 * c.half_angle_deg, exact_tol * 180 / pi) << what;
+    EXPECT_NEAR(r->apex_angle_deg, 2 * c.half_angle_deg, exact_tol * 180 / std::numbers::pi) << what;
     // The truth's distance, carried along the axis to the fitted point.
     const double w = (r->position - truth.point).dot(truth.axis);
     EXPECT_NEAR(r->cone_distance_mm, truth.distance_mm + w * std::sin(truth.half_angle_rad), exact_tol) << what;
@@ -365,7 +364,7 @@ TEST(FitNoisy, ResidualsAreOrthogonalDistances) {
   EXPECT_NEAR(r->rms_mm, std::sqrt(ssq / pts.size()), 1e-15);
   const auto [lo, hi] = std::minmax_element(r->residuals_mm.begin(), r->residuals_mm.end());
   EXPECT_DOUBLE_EQ(r->form_mm, *hi - *lo);
-  EXPECT_NEAR(r->apex_angle_deg, 2 * 0.4 * 180 / pi, 0.05);
+  EXPECT_NEAR(r->apex_angle_deg, 2 * 0.4 * 180 / std::numbers::pi, 0.05);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -458,7 +457,7 @@ TEST(FitCompensation, ResidualSignIsOutOfTheMaterial) {
 }
 
 TEST(FitCompensation, InnerAndOuterCones) {
-  const ConeTruth truth{Vec3(5, 5, 5), Vec3(0, 1, 1).normalized(), 30 * pi / 180, 6};
+  const ConeTruth truth{Vec3(5, 5, 5), Vec3(0, 1, 1).normalized(), 30 * std::numbers::pi / 180, 6};
   const auto surface = cone_points(truth, 4, 9, -2, 4, 360);
   for (bool inner : {true, false}) {
     std::vector<Vec3> approach;
@@ -553,10 +552,10 @@ NistErrors compare_nist(Shape shape, const std::string& name, const FitResult& r
     case Shape::Cone: {
       e.location_mm = distance_to_axis(point, r.position, r.direction);
       // Our distance carried along our axis to the foot of the reference point.
-      const double half = r.apex_angle_deg * pi / 360;
+      const double half = r.apex_angle_deg * std::numbers::pi / 360;
       const double w = (point - r.position).dot(r.direction);
       e.size_mm = std::abs(r.cone_distance_mm + w * std::sin(half) - ref.at(6));
-      e.apex_rad = std::abs(r.apex_angle_deg - ref.at(7)) * pi / 180;
+      e.apex_rad = std::abs(r.apex_angle_deg - ref.at(7)) * std::numbers::pi / 180;
       break;
     }
     default: break;

@@ -28,8 +28,6 @@ using metron::geometry::CadModel;
 using metron::geometry::Mesh;
 namespace fs = std::filesystem;
 
-constexpr double pi = std::numbers::pi;
-
 Mesh make(std::vector<Vec3> v, std::vector<Mesh::Face> f) {
   auto mesh = Mesh::from_triangles(std::move(v), std::move(f));
   if (!mesh) throw std::runtime_error(mesh.error().message);
@@ -162,8 +160,8 @@ TEST(Mesh, SphereClosestPointMatchesAnalyticWithinSagitta) {
   ASSERT_TRUE(sphere.is_closed());
   const double sag = sagitta(sphere, radius);
   EXPECT_LT(sag, 0.05);
-  EXPECT_NEAR(sphere.volume_mm3(), 4.0 / 3 * pi * std::pow(radius, 3),
-              4 * pi * radius * radius * sag);
+  EXPECT_NEAR(sphere.volume_mm3(), 4.0 / 3 * std::numbers::pi * std::pow(radius, 3),
+              4 * std::numbers::pi * radius * radius * sag);
   std::mt19937 rng(42);
   std::normal_distribution<double> gauss;
   for (int i = 0; i < 200; ++i) {
@@ -175,7 +173,7 @@ TEST(Mesh, SphereClosestPointMatchesAnalyticWithinSagitta) {
     const double d_sphere = std::abs(rho - radius);
     EXPECT_GE(c.distance_mm, d_sphere - sag - 1e-9) << "query " << q.transpose();
     EXPECT_LE(c.distance_mm, d_sphere + sag + 1e-9) << "query " << q.transpose();
-    EXPECT_GT(c.normal.dot(dir), std::cos(5 * pi / 180)) << "query " << q.transpose();
+    EXPECT_GT(c.normal.dot(dir), std::cos(5 * std::numbers::pi / 180)) << "query " << q.transpose();
     EXPECT_NEAR(c.point.norm(), radius, sag + 1e-9);
   }
 }
@@ -221,7 +219,7 @@ TEST(Mesh, RayCastOnSphere) {
     ASSERT_TRUE(in);
     EXPECT_GE(in->t, 40 - 1e-9);
     EXPECT_LE(in->t, 40 + sag + 1e-9);
-    EXPECT_GT(in->normal.dot(dir), std::cos(5 * pi / 180));
+    EXPECT_GT(in->normal.dot(dir), std::cos(5 * std::numbers::pi / 180));
   }
 }
 
@@ -563,7 +561,7 @@ struct Touch {
 void expect_on_surface(const Mesh& m, const Touch& t, double tol_mm, const std::string& what) {
   const auto c = m.closest(t.point);
   EXPECT_LE(c.distance_mm, tol_mm) << what << " at " << t.point.transpose();
-  EXPECT_GT(c.normal.dot(t.normal), std::cos(1.5 * pi / 180))
+  EXPECT_GT(c.normal.dot(t.normal), std::cos(1.5 * std::numbers::pi / 180))
       << what << " at " << t.point.transpose() << ": normal " << c.normal.transpose();
   EXPECT_FALSE(m.contains(t.point + 0.05 * t.normal)) << what << ": outside is material";
   EXPECT_TRUE(m.contains(t.point - 0.05 * t.normal)) << what << ": inside is not material";
@@ -649,9 +647,9 @@ TEST(CadSimplePart, StepIsInTheDmisProgramsCoordinates) {
   EXPECT_LT((b.min() - Vec3(0, 0, 0)).norm(), 1e-6);
   EXPECT_LT((b.max() - Vec3(100, 100, 50)).norm(), 1e-6);
   // The tessellated hole is an inscribed polygon: at most perimeter x chord x depth too full.
-  const double nominal = 100.0 * 100 * 50 - pi * 25 * 25 * 25;
+  const double nominal = 100.0 * 100 * 50 - std::numbers::pi * 25 * 25 * 25;
   EXPECT_GE(m.volume_mm3(), nominal - 1e-6);
-  EXPECT_LE(m.volume_mm3(), nominal + 2 * pi * 25 * 0.001 * 25);
+  EXPECT_LE(m.volume_mm3(), nominal + 2 * std::numbers::pi * 25 * 0.001 * 25);
 
   int holes = 0, bottoms = 0;
   for (const CadFace& f : model->faces) {
@@ -842,7 +840,7 @@ TEST_F(DcxPart, DmisFactsHoldInStepCoordinatesAfterTurningPartxByRz180) {
   const Vec3 corner(-86, -52, 30);
   const Vec3 clin1 = Vec3::UnitZ().cross(-Vec3::UnitY());
   ASSERT_LT((clin1 - Vec3::UnitX()).norm(), 1e-15);
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(-pi, Vec3::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(-std::numbers::pi, Vec3::UnitZ()).toRotationMatrix();
   auto caln1 = [&](const Vec3& p) { return Vec3(turn * (p - corner) - Vec3(-86, -52, -30)); };
   for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1, 2, 3), Vec3(-86, -52, 30)})
     EXPECT_LT((caln1(p) - from_partx(p)).norm(), 1e-12) << p.transpose();

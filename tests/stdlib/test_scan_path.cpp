@@ -16,8 +16,6 @@ namespace {
 
 using namespace metron;
 using namespace metron::geometry;
-constexpr double pi = std::numbers::pi;
-
 // Calls f(point, segment index) at n samples of every segment, ends included.
 template <class F>
 void each_sample(const PccPath& path, int n, F f) {
@@ -35,7 +33,7 @@ Mesh cylinder_mesh(double r, double z0, double z1, int n) {
   std::vector<Vec3> v;
   std::vector<Mesh::Face> f;
   for (int i = 0; i < n; ++i) {
-    const double a = 2 * pi * i / n;
+    const double a = 2 * std::numbers::pi * i / n;
     v.emplace_back(r * std::cos(a), r * std::sin(a), z0);
     v.emplace_back(r * std::cos(a), r * std::sin(a), z1);
   }
@@ -84,7 +82,7 @@ TEST(ScanPath, BoreCircleOffsetCurvatureSpeedAndTolerance) {
     EXPECT_LT((path.segments[i].end() - path.segments[i + 1].start()).norm(), 1e-12);
   EXPECT_LT((path.segments.back().end() - path.segments.front().start()).norm(), 1e-12);
   // S is close to arc length: the chain's length is the circumference.
-  EXPECT_NEAR(path.length(), 2 * pi * rc, 2 * pi * rc * 1e-4);
+  EXPECT_NEAR(path.length(), 2 * std::numbers::pi * rc, 2 * std::numbers::pi * rc * 1e-4);
   // Curvature 1/rc at every interpolation point; normals point to the axis; speed sqrt(a rc) < feed.
   ASSERT_EQ(plan->curvature_per_mm.size(), path.segments.size() + 1);
   ASSERT_EQ(path.normals.size(), path.segments.size() + 1);
@@ -118,8 +116,8 @@ TEST(ScanPath, ChordToleranceHonouredAndSegmentCountFollowsTheFourthRoot) {
     counts.push_back(static_cast<double>(plan->path.segments.size()));
     // The path starts and ends where the arc does (angle 30 and -170 degrees).
     const Vec3 s = plan->path.segments.front().start(), e = plan->path.segments.back().end();
-    EXPECT_NEAR(std::atan2(s.y(), s.x()) * 180 / pi, 30, 1e-9);
-    EXPECT_NEAR(std::atan2(e.y(), e.x()) * 180 / pi, -170, 1e-9);
+    EXPECT_NEAR(std::atan2(s.y(), s.x()) * 180 / std::numbers::pi, 30, 1e-9);
+    EXPECT_NEAR(std::atan2(e.y(), e.x()) * 180 / std::numbers::pi, -170, 1e-9);
   }
   // A cubic's chord error goes with D^4: ten times tighter needs about 10^(1/4) = 1.8x the segments
   // (between 1.2x and 3x allowing for the power-of-two splitting).
@@ -139,24 +137,24 @@ TEST(ScanPath, HelixPitchRadiusAndCurvature) {
   o.chord_tolerance_mm = 5e-4;
   auto plan = make_scan_path(arc_contour(helix, 0.01), o);
   ASSERT_TRUE(plan) << plan.error().message;
-  const double rc = 5 + 1.7, c = 2 / (2 * pi);
+  const double rc = 5 + 1.7, c = 2 / (2 * std::numbers::pi);
   // Dense samples stay on the helix: radius rc and z = c * angle (unwrapped).
   double worst_r = 0, worst_z = 0, prev_angle = 0, turns = 0;
   bool first = true;
   each_sample(plan->path, 40, [&](const Vec3& p, std::size_t) {
     worst_r = std::max(worst_r, std::abs(radial(p, Vec3::Zero(), Vec3::UnitZ()) - rc));
     double a = std::atan2(p.y(), p.x());
-    if (!first && a < prev_angle - pi) turns += 1;
+    if (!first && a < prev_angle - std::numbers::pi) turns += 1;
     first = false;
     prev_angle = a;
-    const double unwrapped = a + 2 * pi * turns;
+    const double unwrapped = a + 2 * std::numbers::pi * turns;
     // Distance from the helix along z is at most the tolerance over the helix's slope.
     worst_z = std::max(worst_z, std::abs(p.z() - c * unwrapped));
   });
   EXPECT_LE(worst_r, o.chord_tolerance_mm);
   EXPECT_LE(worst_z, 2 * o.chord_tolerance_mm);
   EXPECT_NEAR(plan->path.segments.back().end().z(), 4.0, 1e-9);  // two turns of pitch 2
-  EXPECT_NEAR(plan->path.length(), 4 * pi * std::hypot(rc, c), 1e-3);
+  EXPECT_NEAR(plan->path.length(), 4 * std::numbers::pi * std::hypot(rc, c), 1e-3);
   const double kappa = rc / (rc * rc + c * c);  // helix curvature
   for (double k : plan->curvature_per_mm) EXPECT_NEAR(k, kappa, 0.01 * kappa);
   // Normals are radial (no axial part) and outward.
@@ -201,7 +199,7 @@ TEST(ScanPath, PlaneSectionOfAMeshCylinder) {
   o.chord_tolerance_mm = 0.005;  // larger than the facets' sagitta, so the fit smooths them
   auto plan = make_scan_path(*contour, o);
   ASSERT_TRUE(plan) << plan.error().message;
-  const double sagitta = r * (1 - std::cos(pi / facets));
+  const double sagitta = r * (1 - std::cos(std::numbers::pi / facets));
   double lo = 1e9, hi = -1e9;
   each_sample(plan->path, 20, [&](const Vec3& p, std::size_t) {
     const double rho = radial(p, Vec3::Zero(), Vec3::UnitZ());
@@ -215,7 +213,7 @@ TEST(ScanPath, PlaneSectionOfAMeshCylinder) {
   // Normals are outward and radial within half a facet angle.
   for (std::size_t k = 0; k < plan->path.segments.size(); ++k) {
     const Vec3 p = plan->path.segments[k].start();
-    EXPECT_GT(plan->path.normals[k].dot(Vec3(p.x(), p.y(), 0).normalized()), std::cos(pi / facets) - 1e-9);
+    EXPECT_GT(plan->path.normals[k].dot(Vec3(p.x(), p.y(), 0).normalized()), std::cos(std::numbers::pi / facets) - 1e-9);
   }
   // Counterclockwise about +z (Mesh::section's orientation for an outer boundary).
   const Vec3 t = plan->path.segments.front().tangent(0);

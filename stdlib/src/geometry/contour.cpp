@@ -4,11 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace metron::geometry {
 namespace {
-
-constexpr double pi = 3.14159265358979323846;
 
 std::size_t sample_count(double length_mm, double step_mm) {
   const double step = step_mm > 0 ? step_mm : 0.05;
@@ -22,8 +21,8 @@ Contour arc_contour(const ArcSpec& arc, double step_mm) {
   Vec3 u = arc.reference - arc.reference.dot(axis) * axis;
   u = u.norm() > 1e-12 ? Vec3(u.normalized()) : any_perpendicular(axis);
   const Vec3 v = axis.cross(u);
-  const double sweep = arc.sweep_deg * pi / 180.0;
-  const double c = arc.pitch_mm / (2 * pi);  // axial advance per radian
+  const double sweep = arc.sweep_deg * std::numbers::pi / 180.0;
+  const double c = arc.pitch_mm / (2 * std::numbers::pi);  // axial advance per radian
   const double length = std::abs(sweep) * std::hypot(arc.radius_mm, c);
   const std::size_t n = sample_count(length, step_mm);
   Contour out;
@@ -31,7 +30,7 @@ Contour arc_contour(const ArcSpec& arc, double step_mm) {
   out.points.reserve(n + 1);
   for (std::size_t i = 0; i <= n; ++i) {
     const double dt = sweep * static_cast<double>(i) / static_cast<double>(n);
-    const double t = arc.start_deg * pi / 180.0 + dt;
+    const double t = arc.start_deg * std::numbers::pi / 180.0 + dt;
     const Vec3 radial = std::cos(t) * u + std::sin(t) * v;
     out.points.push_back({arc.centre + arc.radius_mm * radial + c * dt * axis, arc.inner ? Vec3(-radial) : radial});
   }
@@ -94,7 +93,7 @@ std::vector<Contour> mesh_section_contours(const Mesh& mesh, const Vec3& plane_p
         return;
       }
       const Vec3 axis = before.cross(after).normalized();
-      const std::size_t k = sample_count(angle, 2.0 * pi / 180.0);
+      const std::size_t k = sample_count(angle, 2.0 * std::numbers::pi / 180.0);
       for (std::size_t j = full ? 0 : k; j <= k; ++j)
         c.points.push_back({at, Eigen::AngleAxisd(angle * static_cast<double>(j) / static_cast<double>(k), axis) * before});
     };

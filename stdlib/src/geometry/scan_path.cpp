@@ -4,13 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include <fmt/format.h>
 
 namespace metron::geometry {
 namespace {
-
-constexpr double pi = 3.14159265358979323846;
 
 // Unit tangent at each sample: the derivative of the parabola through three neighbours in chord
 // parametrisation (exact for a parabola, second order for smooth curves sampled unevenly).
@@ -162,7 +161,7 @@ tl::expected<ScanPathPlan, ScanPathError> make_scan_path(const Contour& contour,
           src[i].position.x(), src[i].position.y(), src[i].position.z(), o.ball_radius_mm - o.reference_deflection_mm)});
   }
   // Sharp corners end a smooth piece; each piece is fitted on its own.
-  const double corner_cos = std::cos(o.corner_angle_deg * pi / 180.0);
+  const double corner_cos = std::cos(o.corner_angle_deg * std::numbers::pi / 180.0);
   std::vector<std::size_t> breaks;
   const std::size_t n = pts.size();
   for (std::size_t i = 1; i + 1 < n; ++i) {

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "metron/runtime/feature.hpp"
-#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/runtime/requests.hpp"
 
 namespace metron::runtime {
 

@@ -13,6 +13,7 @@
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/characterisation.hpp"
 #include "metron/runtime/feature.hpp"
+#include "metron/runtime/requests.hpp"
 #include "metron/runtime/run_record.hpp"
 #include "metron/runtime/scan.hpp"
 #include "metron/runtime/runtime_error.hpp"
@@ -21,86 +22,8 @@
 
 namespace metron::runtime {
 
-/// DMIS MODE: who takes the points. metron's virtual operator takes PROG MAN points as given.
-enum class Mode { Auto, ProgMan, Man };
-
-/// SNSET distances (mm).
-struct ProbeSettings {
-  double approach_mm = 2.0;    ///< SNSET/APPRCH
-  double retract_mm = 2.0;     ///< SNSET/RETRCT
-  double search_mm = 5.0;      ///< SNSET/SEARCH
-  double clearance_mm = 10.0;  ///< SNSET/CLRSRF: clearance above the feature for AUTO moves
-  double depth_mm = 0.0;       ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
-  bool approach_explicit = false;  ///< SNSET/APPRCH was given: it overrides a characterisation's approach
-};
-
-/// S(label)=SNSDEF/PROBE,...: a sensor as the program defines it.
-struct SensorDefinition {
-  std::string label;
-  double ball_diameter_mm = 4.0;
-  Vec3 direction = -Vec3::UnitZ();   ///< from the head to the ball (current frame)
-  double length_mm = 50.0;
-};
-
-/// A feature operand: F(x) (nominal) or FA(x) (actual).
-struct FeatureRef {
-  std::string label;
-  bool actual = true;
-};
-
-/// One step of a MEAS block, in current-frame coordinates (already in mm).
-struct MeasStep {
-  enum class Kind { GoTo, PtMeas, Scan } kind = Kind::PtMeas;
-  Vec3 point = Vec3::Zero();
-  std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
-  Span span;
-  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label
-};
-
-/// MEAS/type,F(label),n ... ENDMES.
-struct MeasBlock {
-  std::string feature;
-  FeatureType type = FeatureType::Point;
-  int point_count = 0;
-  std::vector<MeasStep> steps;
-  Span span;                         ///< the MEAS statement
-};
-
-/// DATSET/... with datum labels.
-struct DatsetRequest {
-  struct Clause {
-    std::string datum;
-    std::optional<Axis> direction;
-    bool minus = false;
-    std::vector<Axis> origins;
-  };
-  bool mcs = false;                  ///< DATSET/MCS
-  std::vector<Clause> clauses;
-};
-
-/// TRANS/XORIG,v|FA(f),...
-struct TransRequest {
-  std::optional<double> value[3];
-  std::optional<FeatureRef> feature[3];
-};
-
-/// ROTATE/axis,angle or ROTATE/axis,FA(f),XDIR|YDIR|ZDIR
-struct RotateRequest {
-  Axis about = Axis::Z;
-  std::optional<double> angle_deg;
-  std::optional<FeatureRef> feature;
-  Axis align = Axis::X;
-};
-
-/// CONST/type,F(x),method,sources...
-enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection };
-
-/// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
-struct OutputItem {
-  enum class Kind { Feature, Tolerance } kind = Kind::Feature;
-  FeatureRef feature;
-  std::string tolerance;
-};
+struct BlockPlan;
+struct BlockPlanContext;
 
 /// The measurement runtime: feature store, alignments, tolerances, the scheduler that turns
 /// measurement blocks into machine commands, and the outputs. The interpreter calls it.
@@ -192,8 +115,12 @@ class MeasurementRuntime {
   Result<std::vector<machine::Response>> run_commands(std::vector<machine::Command> commands,
                                                       const std::vector<Span>& spans);
   Result<void> ensure_tool(Span span);
-  /// The machine command that scans `contour` (MCS) with the current tool and scan settings.
-  Result<machine::ScanPath> scan_command(const geometry::Contour& contour, Span span);
+  /// What plan_block reads: the settings and the machine's state now.
+  [[nodiscard]] BlockPlanContext plan_context() const;
+  /// A MEAS block's points from the machine's answers to its plan (touch hits with the dynamic
+  /// correction, scan samples in contact); scan logs go to the machine log.
+  std::vector<MeasuredPoint> collect_points(const BlockPlan& plan, const Execution& execution,
+                                            const std::string& feature, Span block_span);
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);

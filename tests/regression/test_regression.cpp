@@ -14,12 +14,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "metron/interpreter/regression.hpp"
+#include "metron/regression/regression.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
-namespace rg = metron::interpreter::regression;
+namespace rg = metron::regression;
 
 fs::path temp_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("metron_regression_" + std::to_string(::getpid())) / name;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Simple scan paths and parts for the scanning tests and benchmark (the general path generator
-// from CAD lives in stdlib). Header-only: shared by tests/machine and bench/bench_scanning.cpp.
+// from CAD lives in stdlib). Header-only, in metron_test_support: shared by the machine and
+// runtime tests and the scanning benchmarks.
 #include <algorithm>
 #include <cmath>
 #include <numbers>

@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "fixtures.hpp"
 #include "metron/interpreter/session.hpp"
 
 namespace {
@@ -22,13 +24,7 @@ using metron::runtime::FeatureReport;
 using metron::runtime::ToleranceResult;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
-constexpr double pi = 3.14159265358979323846;
-
-fs::path out_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("metron_e2e_" + std::to_string(::getpid())) / name;
-  fs::create_directories(d);
-  return d;
-}
+fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_e2e", name); }
 
 metron::interpreter::RunOutcome run(const fs::path& program, const std::optional<fs::path>& world, const std::string& out,
                                     std::optional<std::uint64_t> seed = std::nullopt) {
@@ -113,7 +109,7 @@ TEST(EndToEnd, HiddenDeviationsAreRecovered) {
   // Datum A is tilted 0.05 deg about x, the bore is vertical in the machine: relative to the datum
   // frame its axis leans, and at the reported height (z = 40) it sits (40 - 22.5) tan(0.05 deg) off
   // in y, 22.5 being the mean height of the FRONT face points that fix the y origin.
-  const double lean = (40.0 - 22.5) * std::tan(0.05 * pi / 180.0);
+  const double lean = (40.0 - 22.5) * std::tan(0.05 * std::numbers::pi / 180.0);
   EXPECT_NEAR(std::abs(b1->actual->position.y() - 50.0), lean, 0.002);
   const auto* pos = tolerance(o.record, "POS_BORE1");
   ASSERT_TRUE(pos);
@@ -124,12 +120,12 @@ TEST(EndToEnd, HiddenDeviationsAreRecovered) {
   EXPECT_TRUE(d1->in_tolerance);          // +0.012 within [-0.010, +0.020]
   const auto* top = report(o.record, "TOP");
   ASSERT_TRUE(top && top->actual);
-  const double tilt_deg = std::acos(std::abs(top->actual->direction.normalized().z())) * 180.0 / pi;
+  const double tilt_deg = std::acos(std::abs(top->actual->direction.normalized().z())) * 180.0 / std::numbers::pi;
   EXPECT_NEAR(tilt_deg, 0.05, 0.003);
   // The bore is vertical in the machine; against the tilted datum A it leans 0.05 deg over 20 mm.
   const auto* perp = tolerance(o.record, "PERP_BORE1");
   ASSERT_TRUE(perp);
-  EXPECT_NEAR(perp->value, 20.0 * std::sin(0.05 * pi / 180.0), 0.002);
+  EXPECT_NEAR(perp->value, 20.0 * std::sin(0.05 * std::numbers::pi / 180.0), 0.002);
   const auto* boss = report(o.record, "BOSS1");
   ASSERT_TRUE(boss && boss->fit);
   // 8 points a section see the 3 lobes: peak to valley close to 2 x 5 um.

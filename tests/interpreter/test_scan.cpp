@@ -26,8 +26,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace metron;
 using metron::interpreter::ExecStatus;
-constexpr double pi = std::numbers::pi;
-
 // The ball centre touching the actual surface when the probe rests at `q` on the commanded path
 // (the truth of the fake world).
 using Truth = std::function<Vec3(const Vec3& q)>;
@@ -176,7 +174,7 @@ TEST(Scanning, ScnmodScansACircleByItsNominalAndFitsTheHiddenForm) {
   const auto& f = r->runtime->features().at("B1");
   ASSERT_TRUE(f.actual);
   ASSERT_TRUE(f.fit);
-  EXPECT_GT(f.points.size(), 900u);  // 2 pi 8.25 / 0.05
+  EXPECT_GT(f.points.size(), 900u);  // 2 std::numbers::pi 8.25 / 0.05
   EXPECT_TRUE(f.points.front().scanned);
   EXPECT_NEAR(f.actual->position.x(), c.x() + o.x(), 1e-4);
   EXPECT_NEAR(f.actual->position.y(), c.y() + o.y(), 1e-4);
@@ -228,7 +226,7 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.
   const auto truth = [&](const Vec3& q) {
     if (std::abs(q.z() - 25) < 1e-6) return lobed_bore(c, Vec3::Zero(), 0.003, 2.0)(q);
-    const double z = 40.003 + 0.002 * std::sin(2 * pi * q.x() / 7.5);
+    const double z = 40.003 + 0.002 * std::sin(2 * std::numbers::pi * q.x() / 7.5);
     return Vec3(q.x(), q.y(), z + 2.0);
   };
   auto r = run("P(A1) = PATH/ARC, CART, 40, 50, 25, 0, 0, 1, 10, 0, 270, INNER\n"
@@ -251,7 +249,7 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   EXPECT_NEAR(b2.actual->diameter_mm, 20, 1e-3);
   std::vector<Vec2> arc_truth;
   for (int i = 0; i <= 20000; ++i) {
-    const double t = 1.5 * pi * i / 20000;
+    const double t = 1.5 * std::numbers::pi * i / 20000;
     arc_truth.push_back((10 + 0.003 * std::cos(3 * t)) * Vec2(std::cos(t), std::sin(t)));
   }
   EXPECT_NEAR(b2.fit->form_mm, circle_form(arc_truth), 1e-4);
@@ -266,7 +264,7 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   std::vector<Vec2> line_truth;
   for (int i = 0; i <= 20000; ++i) {
     const double x = 5 + 30.0 * i / 20000;
-    line_truth.push_back(Vec2(x, 0.002 * std::sin(2 * pi * x / 7.5)));
+    line_truth.push_back(Vec2(x, 0.002 * std::sin(2 * std::numbers::pi * x / 7.5)));
   }
   EXPECT_NEAR(e1.fit->form_mm, line_form(line_truth), 1e-4);
   std::printf("270-degree arc form %.5f mm (expected %.5f), line straightness %.5f mm (expected %.5f)\n",
@@ -292,7 +290,7 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
   std::vector<geometry::Mesh::Face> faces;
   const int n = 256;
   for (int i = 0; i < n; ++i) {
-    const double a = 2 * pi * i / n;
+    const double a = 2 * std::numbers::pi * i / n;
     v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 0);
     v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 30);
   }
@@ -330,7 +328,7 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
   // Starts nearest the hint (part (40, 70) = machine (340, 270)), runs counterclockwise, 1.7 outside.
   EXPECT_LT((scan.path.segments.front().start() - Vec3(340, 261.7, 15)).norm(), 0.05);
   EXPECT_LT(scan.path.segments.front().tangent(0).x(), -0.99);
-  const double sagitta = 10 * (1 - std::cos(pi / n));
+  const double sagitta = 10 * (1 - std::cos(std::numbers::pi / n));
   for (const auto& seg : scan.path.segments) {
     Vec3 d = seg.point(seg.d_mm / 2) - c;
     d.z() = 0;
@@ -388,7 +386,7 @@ TEST(Scanning, HelicalPathIntoACylinder) {
   Eigen::MatrixXd a(n, 5);
   Eigen::VectorXd b(n);
   for (int i = 0; i < n; ++i) {
-    const double t = 4 * pi * i / (n - 1), th = -t, z = 20 - 5 * t / (2 * pi);
+    const double t = 4 * std::numbers::pi * i / (n - 1), th = -t, z = 20 - 5 * t / (2 * std::numbers::pi);
     const Vec3 u(std::cos(th), std::sin(th), 0);
     a.row(i) << 1, u.x(), u.y(), z * u.x(), z * u.y();
     b(i) = 0.004 * std::cos(3 * th) + o.dot(u);
@@ -417,7 +415,7 @@ TEST(Scanning, ScnmodWithPtmeasPairsScansFromStartToEnd) {
                lobed_bore(c, Vec3(0.01, 0.005, 0), 0.002, 2.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 2u);
-  const auto angle = [&](const Vec3& p) { return std::atan2(p.y() - c.y(), p.x() - c.x()) * 180 / pi; };
+  const auto angle = [&](const Vec3& p) { return std::atan2(p.y() - c.y(), p.x() - c.x()) * 180 / std::numbers::pi; };
   const auto& first = r->machine->scans[0].path;
   const auto& second = r->machine->scans[1].path;
   EXPECT_NEAR(angle(first.segments.front().start()), 0, 1e-9);
@@ -432,7 +430,7 @@ TEST(Scanning, ScnmodWithPtmeasPairsScansFromStartToEnd) {
   std::vector<Vec2> truth;
   for (double from : {0.0, 90.0})
     for (int i = 0; i <= 5000; ++i) {
-      const double t = (from + 180.0 * i / 5000) * pi / 180;
+      const double t = (from + 180.0 * i / 5000) * std::numbers::pi / 180;
       const Vec2 u(std::cos(t), std::sin(t));
       truth.push_back((10 + 0.002 * std::cos(3 * t) + 0.01 * u.x() + 0.005 * u.y()) * u);
     }

@@ -18,11 +18,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "metron/interpreter/regression.hpp"
+#include "metron/regression/regression.hpp"
 
 extern char** environ;
 
-namespace metron::interpreter::regression {
+namespace metron::regression {
 namespace {
 
 namespace fs = std::filesystem;
@@ -276,4 +276,4 @@ std::vector<CaseResult> run_cases(const std::vector<Case>& cases, const RunnerOp
   return out;
 }
 
-}  // namespace metron::interpreter::regression
+}  // namespace metron::regression

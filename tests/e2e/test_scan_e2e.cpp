@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "fixtures.hpp"
 #include "metron/interpreter/session.hpp"
 
 namespace {
@@ -19,11 +20,7 @@ using metron::interpreter::run_program;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
 
-fs::path out_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("metron_scan_e2e_" + std::to_string(::getpid())) / name;
-  fs::create_directories(d);
-  return d;
-}
+fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_scan_e2e", name); }
 
 const metron::runtime::Feature* feature(const metron::runtime::RunRecord& r, const std::string& label) {
   for (const auto& f : r.features)

@@ -10,6 +10,7 @@
 
 #include <unistd.h>
 
+#include "fixtures.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/characterisation.hpp"
 
@@ -27,11 +28,7 @@ const fs::path source_dir = METRON_SOURCE_DIR;
 // are fitted from 4..8 points, so 3 sigma of a single point bounds their errors.
 constexpr double point_sigma_mm = 0.010 / 3.4641016;
 
-fs::path out_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("metron_touch_" + std::to_string(::getpid())) / name;
-  fs::create_directories(d);
-  return d;
-}
+fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_touch", name); }
 fs::path world(const std::string& name) { return source_dir / "programs" / "worlds" / name; }
 fs::path example(const std::string& name) { return source_dir / "programs" / "examples" / name; }
 

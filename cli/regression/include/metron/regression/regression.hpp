@@ -14,7 +14,7 @@
 // The program regression suite behind `metron test` (docs/regression.md): expected-results files
 // (NAME.expected beside NAME.dmi), their comparison with a run's results.json, running the
 // programs as child processes, and JUnit XML.
-namespace metron::interpreter::regression {
+namespace metron::regression {
 
 /// How a quantity is compared: which default tolerance applies and how it is written.
 enum class QuantityClass {
@@ -162,4 +162,4 @@ std::string format_summary(const std::vector<CaseResult>& results);
 /// JUnit XML (one testsuite, a testcase per program; failure and skipped elements).
 std::string junit_xml(const std::vector<CaseResult>& results, double total_wall_s);
 
-}  // namespace metron::interpreter::regression
+}  // namespace metron::regression

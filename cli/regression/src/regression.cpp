@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Expected-results files, their comparison with results.json, discovery, reports (docs/regression.md).
-#include "metron/interpreter/regression.hpp"
+#include "metron/regression/regression.hpp"
 
 #include <fnmatch.h>
 
@@ -16,7 +16,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-namespace metron::interpreter::regression {
+namespace metron::regression {
 namespace {
 
 namespace fs = std::filesystem;
@@ -652,4 +652,4 @@ std::string junit_xml(const std::vector<CaseResult>& results, double total_wall_
                      counts, counts, body);
 }
 
-}  // namespace metron::interpreter::regression
+}  // namespace metron::regression

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "metron/runtime/alignment_ops.hpp"
+#include "metron/runtime/feature.hpp"
+#include "metron/stdlib/geometry/vec.hpp"
+#include "metron/stdlib/span.hpp"
+
+// What the interpreter asks of the measurement runtime: the operands of its calls, one type per
+// DMIS statement or setting (in current-frame coordinates, mm, unless a field says otherwise).
+namespace metron::runtime {
+
+/// DMIS MODE: who takes the points. metron's virtual operator takes PROG MAN points as given.
+enum class Mode { Auto, ProgMan, Man };
+
+/// SNSET distances (mm).
+struct ProbeSettings {
+  double approach_mm = 2.0;    ///< SNSET/APPRCH
+  double retract_mm = 2.0;     ///< SNSET/RETRCT
+  double search_mm = 5.0;      ///< SNSET/SEARCH
+  double clearance_mm = 10.0;  ///< SNSET/CLRSRF: clearance above the feature for AUTO moves
+  double depth_mm = 0.0;       ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
+  bool approach_explicit = false;  ///< SNSET/APPRCH was given: it overrides a characterisation's approach
+};
+
+/// S(label)=SNSDEF/PROBE,...: a sensor as the program defines it.
+struct SensorDefinition {
+  std::string label;
+  double ball_diameter_mm = 4.0;
+  Vec3 direction = -Vec3::UnitZ();   ///< from the head to the ball (current frame)
+  double length_mm = 50.0;
+};
+
+/// A feature operand: F(x) (nominal) or FA(x) (actual).
+struct FeatureRef {
+  std::string label;
+  bool actual = true;
+};
+
+/// One step of a MEAS block, in current-frame coordinates (already in mm).
+struct MeasStep {
+  enum class Kind { GoTo, PtMeas, Scan } kind = Kind::PtMeas;
+  Vec3 point = Vec3::Zero();
+  std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
+  Span span;
+  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label
+};
+
+/// MEAS/type,F(label),n ... ENDMES.
+struct MeasBlock {
+  std::string feature;
+  FeatureType type = FeatureType::Point;
+  int point_count = 0;
+  std::vector<MeasStep> steps;
+  Span span;                         ///< the MEAS statement
+};
+
+/// DATSET/... with datum labels.
+struct DatsetRequest {
+  struct Clause {
+    std::string datum;
+    std::optional<Axis> direction;
+    bool minus = false;
+    std::vector<Axis> origins;
+  };
+  bool mcs = false;                  ///< DATSET/MCS
+  std::vector<Clause> clauses;
+};
+
+/// TRANS/XORIG,v|FA(f),...
+struct TransRequest {
+  std::optional<double> value[3];
+  std::optional<FeatureRef> feature[3];
+};
+
+/// ROTATE/axis,angle or ROTATE/axis,FA(f),XDIR|YDIR|ZDIR
+struct RotateRequest {
+  Axis about = Axis::Z;
+  std::optional<double> angle_deg;
+  std::optional<FeatureRef> feature;
+  Axis align = Axis::X;
+};
+
+/// CONST/type,F(x),method,sources...
+enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection };
+
+/// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
+struct OutputItem {
+  enum class Kind { Feature, Tolerance } kind = Kind::Feature;
+  FeatureRef feature;
+  std::string tolerance;
+};
+
+}  // namespace metron::runtime
