@@ -279,7 +279,7 @@ struct Session::Impl {
       if (suffix == ".Max") return a.text + "(" + format_number(n.max) + ")";
       if (suffix == ".Min") return a.text + "(" + format_number(n.min) + ")";
     }
-    fail(ErrorCode::BadProperty);
+    fail(ErrorCode::BadArgument);  // NIST parser: an unknown property part is 0509
   }
   /// Returns true when the value was clamped into the property's range.
   bool set_property(const Argument& a) {
@@ -293,7 +293,7 @@ struct Session::Impl {
       n.act = std::clamp(v, n.min, n.max);
       return n.act != v;
     }
-    fail(ErrorCode::BadProperty);
+    fail(ErrorCode::BadArgument);  // NIST parser: an unknown property part is 0509
   }
   /// (name, type) of a property node's children, recursively with `all`.
   void enum_properties(const std::string& dotted, bool all) {
