@@ -198,6 +198,7 @@ tl::expected<CommandLine, ParseError> parse_command_line(std::string_view line) 
   command.name = std::string(line.substr(name_begin, r.i - name_begin));
   if (command.name.empty() || !is_alpha(command.name[0]))
     return fail(ErrorCode::IncorrectArguments, "expected a command name after the tag", tag);
+  r.skip_spaces();  // `SetProp (..)`: the NIST server accepts a space before the list (SetProp.prg)
   if (r.peek() != '(') return fail(ErrorCode::IncorrectArguments, "expected '(' after the command name", tag);
   ++r.i;
   auto args = r.list(0);
