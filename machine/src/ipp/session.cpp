@@ -101,6 +101,8 @@ struct Session::Impl {
   std::vector<std::string> scan_report{"X", "Y", "Z"};
   std::map<std::string, Daemon> daemons;    ///< by tag text
   double scan_hint_min_radius_mm = 0;
+  /// The acceleration last sent to the machine; the default (Accel.Def) leaves the machine's own
+  /// limits untouched, so a client that never sets Accel moves exactly as a direct run.
   double sent_acceleration = -1;
   double motion_s = 0;
 
@@ -111,6 +113,7 @@ struct Session::Impl {
 
   Impl(Machine& m, SessionOptions o) : machine(m), options(std::move(o)) {
     homed = options.start_homed;
+    sent_acceleration = options.max_acceleration_mm_s2;
     const auto s = machine.state();
     auto make = [&](std::string name, std::optional<DefineTool> d) {
       Tool t;
