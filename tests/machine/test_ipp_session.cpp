@@ -95,6 +95,17 @@ TEST(IppSession, PtMeasReportsTheTrueSurfacePoint) {
   EXPECT_NEAR(item(down, "Z"), 41, 1e-3);
 }
 
+// X, Y, Z are the ball centre at the nominal contact: from a nominal 0.3 mm above the contact
+// centre, a 0.5 mm search reaches the surface (0.2 mm past it); read as a surface point, the
+// same search would end 0.8 mm short of it.
+TEST(IppSession, PtMeasNominalIsTheBallCentre) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 SetProp(Tool.PtMeasPar.Search(0.5), Tool.PtMeasPar.Approach(1))"), 0);
+  const auto top = f.data("00020 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1))");
+  EXPECT_NEAR(item(top, "Z"), 41, 1e-4);
+}
+
 TEST(IppSession, PartCoordinateSystemTransformsInAndOut) {
   Fixture f;
   f.start();
