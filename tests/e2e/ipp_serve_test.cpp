@@ -227,3 +227,22 @@ TEST(IppServe, OverlongLineEndsOnlyThatConnection) {
   EXPECT_EQ(b.exchange("00001 StartSession()"), (std::vector<std::string>{"00001 &", "00001 %"}));
   EXPECT_EQ(server.terminate(SIGINT), 0);
 }
+
+// --realtime: the acknowledgement comes at once, the completion after the simulated motion
+// time (here at least the 100 mm path at 200 mm/s, 0.5 s).
+TEST(IppServe, RealtimePacesTheCompletion) {
+  ServerProcess server({"--realtime"});
+  Client a(server.port());
+  for (const char* c : {"00001 StartSession()", "00002 Home()", "00003 SetProp(Tool.GoToPar.Speed(200))"})
+    ASSERT_EQ(a.exchange(c).back().substr(6), "%") << c;
+  const auto t0 = std::chrono::steady_clock::now();
+  a.send_raw("00004 GoTo(X(100), Y(0), Z(500))\r\n");
+  EXPECT_EQ(a.line(), "00004 &");
+  const double ack_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(a.line(), "00004 %");
+  const double done_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(ack_s, 0.25);
+  EXPECT_GE(done_s, 0.5);
+  EXPECT_LT(done_s, 5.0);
+  EXPECT_EQ(server.terminate(SIGTERM), 0);
+}
