@@ -203,6 +203,18 @@ TEST(IppSession, DaemonsReportMotionUnderTheirTag) {
   EXPECT_EQ(f.error("00050 StopAllDaemons()"), 512);
 }
 
+// Arguments that would make the server allocate without bound are refused, not attempted.
+TEST(IppSession, HugeScansAndNumbersAreRefused) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 ScanOnLine(310, 206, 41, 450, 206, 41, 0, 0, 1, 1E-9)"), 504);
+  EXPECT_EQ(f.error("00020 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 1E12, 90, 1)"), 504);
+  EXPECT_EQ(f.error("00030 GetErrorInfo(999999999999)"), 504);
+  EXPECT_EQ(f.error("00040 SetCsyTransformation(PartCsy, 1E300, 0, 0, 0, 0, 0)"), 0);
+  EXPECT_EQ(f.error("00050 SetCoordSystem(PartCsy)"), 0);
+  EXPECT_EQ(f.error("00060 GoTo(X(0))"), 1008);  // 1E300 away: outside the travel
+}
+
 TEST(IppSession, ScanOnLineFollowsTheTopFace) {
   Fixture f;
   f.start();

@@ -9,6 +9,7 @@
 #include "metron/machine/ipp/command_line.hpp"
 
 #include <cctype>
+#include <cmath>
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
@@ -61,6 +62,7 @@ struct Reader {
     a.text = std::string(s.substr(begin, i - begin));
     // strtod accepts every form the grammar above lets through ("1.", ".5", "2E-3").
     a.number = std::strtod(a.text.c_str(), nullptr);
+    if (!std::isfinite(a.number)) return error(ErrorCode::BadArgument, "a number out of the double range");
     return a;
   }
 

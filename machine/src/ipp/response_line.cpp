@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/ipp/response_line.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -32,8 +33,8 @@ std::string format_error(const Tag& tag, ErrorCode code, std::string_view cause)
 
 std::string format_number(double value, int decimals) {
   if (!std::isfinite(value)) return "0";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  char buffer[400];  // %f of 1e308 has 309 digits before the point
+  std::snprintf(buffer, sizeof buffer, "%.*f", std::clamp(decimals, 0, 17), value);
   std::string s = buffer;
   if (s.find('.') != std::string::npos) {
     while (s.back() == '0') s.pop_back();

@@ -20,6 +20,7 @@ namespace {
 
 using Args = std::vector<Argument>;
 constexpr double k_deg = std::numbers::pi / 180;
+constexpr double k_max_scan_samples = 1e6;  ///< per scan command
 
 /// A number property of a tool (I++ DME: value with .Act, .Def, .Max, .Min).
 struct NumberProperty {
@@ -459,6 +460,7 @@ struct Session::Impl {
       const Vec3 s = to_machine({v[0], v[1], v[2]}), e = to_machine({v[3], v[4], v[5]});
       step = v[9];
       if (step <= 0 || (e - s).norm() < 1e-9) fail(ErrorCode::BadArgument);
+      if ((e - s).norm() / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
       hermite_line(s - deflection_mm * n, e - deflection_mm * n, n);
       sp.path.normals.push_back(n);
       sp.approach_normal = n;
@@ -473,6 +475,10 @@ struct Session::Impl {
       Vec3 e0 = (s - c) - (s - c).dot(w) * w;
       const double radius = e0.norm();
       if (step <= 0 || radius < 1e-9) fail(ErrorCode::BadArgument);
+      // At most ten turns and k_max_scan_samples samples: a client cannot make the server
+      // allocate without bound.
+      if (std::abs(delta) > 20 * std::numbers::pi || std::abs(delta) * radius / step > k_max_scan_samples)
+        fail(ErrorCode::ArgumentOutOfRange);
       e0 /= radius;
       // sfa 90: the probe touches the inside of a bore (normal towards the centre); else outside.
       const double sign = std::abs(sfa - 90) < 45 ? -1 : 1;
@@ -549,6 +555,7 @@ struct Session::Impl {
     } else if (n == "GetErrorInfo") {
       if (a.size() != 1 || !a[0].is_number() || a[0].text.find_first_of(".eE") != std::string::npos)
         fail(ErrorCode::IncorrectArguments);
+      if (a[0].number < 0 || a[0].number > 9999) fail(ErrorCode::ArgumentOutOfRange);
       const auto info = find_error(static_cast<int>(a[0].number));
       if (!info) fail(ErrorCode::ArgumentOutOfRange);
       data("\"" + std::string(info->text) + "\"");
