@@ -133,7 +133,10 @@ struct Session::Impl {
       t.numbers["PtMeasPar.Search"] = {5, 5, 0, 100};
       tools.push_back(std::move(t));
     };
+    // Tools without a stylus: no tool mounted, the head's mounting point (BaseTool, which the
+    // NIST files change to), and the reference tool.
     make("NoTool", std::nullopt);
+    make("BaseTool", std::nullopt);
     make("RefTool", std::nullopt);
     for (const auto& d : options.tools) make(d.name, d);
     for (const auto& n : k_transform_names) csys[n] = {};
@@ -319,9 +322,7 @@ struct Session::Impl {
           for (const auto& n : k_number_properties)
             if (n.rfind(group, 0) == 0) add_number(n);
       }
-      children.emplace_back("Name", "String");
-      children.emplace_back("Id", "String");
-      children.emplace_back("Alignment", "Vector");
+      // Name, Id and Alignment are readable (GetProp) but, as in the NIST files, not enumerated.
     } else if (node == "GoToPar" || node == "PtMeasPar") {
       for (const auto& n : k_number_properties)
         if (n.rfind(node + ".", 0) == 0) {

@@ -12,7 +12,7 @@ namespace metron::machine::ipp {
 
 /// What the server offers besides what the machine reports (docs/ipp-dme.md).
 struct SessionOptions {
-  /// Probing tools offered next to "NoTool" and "RefTool" (which carry no stylus).
+  /// Probing tools offered next to "NoTool", "BaseTool" and "RefTool" (which carry no stylus).
   std::vector<DefineTool> tools{DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0}};
   std::string machine_class = "CartCMM";   ///< GetMachineClass answer
   double max_speed_mm_s = 500;             ///< GoToPar.Speed.Max and PtMeasPar.Speed.Max
