@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#include "serve_command.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"metron: a toolchain for CMM part programs (DMIS) with a virtual CMM"};
@@ -13,6 +14,7 @@ int main(int argc, char** argv) {
   metron::cli::add_debug_commands(app, commands);
   metron::cli::add_test_command(app, commands);
   metron::cli::add_characterise_command(app, commands);
+  metron::cli::add_serve_command(app, commands);
   CLI11_PARSE(app, argc, argv);
   for (const auto& c : commands)
     if (c.app->parsed()) return c.run();

@@ -12,3 +12,6 @@ target_include_directories(metron_pegtl SYSTEM INTERFACE ${PEGTL_INCLUDE_DIR})
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(LIBEDIT REQUIRED IMPORTED_TARGET libedit)
 find_package(Threads REQUIRED)
+# Standalone Asio (header-only) for the I++ DME server (machine/src/ipp/server.cpp).
+find_path(ASIO_INCLUDE_DIR asio.hpp REQUIRED)
+include_directories(SYSTEM ${ASIO_INCLUDE_DIR})

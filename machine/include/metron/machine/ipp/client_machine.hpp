@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "metron/machine/machine.hpp"
+
+namespace metron::machine::ipp {
+
+/// "ipp://host:port" (port default 1294); nullopt when it is not of that form.
+std::optional<std::pair<std::string, std::uint16_t>> parse_ipp_url(std::string_view url);
+
+/// A machine backend that drives an I++ DME server over TCP (metron's own `metron serve`, or a
+/// controller): each machine command becomes protocol commands, each answer a Response.
+/// GoTo -> GoTo; PtMeas -> SetProp(Tool.PtMeasPar...) and PtMeas with the ball-centre nominal;
+/// SelectTool -> ChangeTool (the server must know the tool: DefineTool is only remembered);
+/// QualifyTool -> ReQualify; SetFeeds -> SetProp(Tool.GoToPar/PtMeasPar.Speed, .Accel). Scans
+/// are not mapped (answered BadCommand). Errors come back as faults, and the client clears them.
+/// The controller's clock is not part of the protocol: times in responses are 0.
+class ClientMachine final : public Machine {
+ public:
+  /// Connects, starts a session and homes the machine when it is not homed; throws
+  /// std::runtime_error when the server cannot be reached or refuses.
+  ClientMachine(const std::string& host, std::uint16_t port);
+  ~ClientMachine() override;  ///< ends the session
+
+  void submit(Command command) override;
+  std::vector<Response> execute() override;
+  [[nodiscard]] MachineState state() const override;
+  [[nodiscard]] std::vector<Command> queued() const override;
+  /// Every line sent (`> `) and received (`< `), for diagnostics.
+  [[nodiscard]] const std::vector<std::string>& transcript() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace metron::machine::ipp

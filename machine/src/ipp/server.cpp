@@ -1,0 +1,267 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The I++ DME server on standalone Asio: one io_context thread; the acceptor stays open so that
+// a second client can be told why it is refused; the connection reads CR/LF lines, hands them to
+// the Session and writes the answers, optionally paced by the simulated motion time.
+#include "metron/machine/ipp/server.hpp"
+
+#include <chrono>
+#include <csignal>
+#include <ctime>
+#include <deque>
+#include <fstream>
+#include <mutex>
+#include <stdexcept>
+
+#include <asio.hpp>
+
+#include "metron/machine/ipp/error_code.hpp"
+#include "metron/machine/ipp/response_line.hpp"
+
+namespace metron::machine::ipp {
+namespace {
+
+using asio::ip::tcp;
+
+/// The exchange log, one line per event: `2026-11-24_23:59:01.123 received: 00001 StartSession()`
+/// (the NIST suite's server logs: time, direction, the line as on the wire).
+class ExchangeLog {
+ public:
+  explicit ExchangeLog(const std::string& path) {
+    if (!path.empty()) {
+      m_out.open(path, std::ios::app);
+      if (!m_out) throw std::runtime_error("cannot open the log file " + path);
+    }
+  }
+  void write(std::string_view what, std::string_view line) {
+    if (!m_out.is_open()) return;
+    const auto now = std::chrono::system_clock::now();
+    const std::time_t t = std::chrono::system_clock::to_time_t(now);
+    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+    std::tm utc{};
+    gmtime_r(&t, &utc);
+    char stamp[40];
+    std::strftime(stamp, sizeof stamp, "%Y-%m-%d_%H:%M:%S", &utc);
+    char millis[8];
+    std::snprintf(millis, sizeof millis, ".%03d", static_cast<int>(ms));
+    m_out << stamp << millis << ' ' << what << ": " << line << '\n';
+    m_out.flush();
+  }
+
+ private:
+  std::ofstream m_out;
+};
+
+struct Connection;
+
+/// Everything the connections share (Server::Impl is this; a namespace-scope type so that
+/// Connection can name it).
+struct ServerCore {
+  Machine& machine;
+  SessionOptions session_options;
+  ServerOptions options;
+  asio::io_context io;
+  tcp::acceptor acceptor{io};
+  asio::signal_set signals{io};
+  ExchangeLog log;
+  bool busy = false;                      ///< a client holds the session
+  std::shared_ptr<Connection> active;
+
+  ServerCore(Machine& m, SessionOptions s, ServerOptions o)
+      : machine(m), session_options(std::move(s)), options(std::move(o)), log(options.log_path) {}
+
+  void accept();
+  void refuse(std::shared_ptr<tcp::socket> socket);
+  void shutdown() {
+    asio::error_code ignored;
+    acceptor.close(ignored);
+    signals.cancel(ignored);
+    if (active) active_close();
+    io.stop();
+  }
+  void active_close();
+};
+
+/// One client connection with its session.
+struct Connection : std::enable_shared_from_this<Connection> {
+  ServerCore& server;
+  tcp::socket socket;
+  asio::streambuf input;
+  asio::steady_timer pacing;
+  Session session;
+  std::string peer;
+  std::deque<std::string> pending;        ///< lines still to write for the current command
+  double pending_delay_s = 0;             ///< real-time pause before the lines after the first
+  bool closed = false;
+
+  Connection(ServerCore& s, tcp::socket sock)
+      : server(s), socket(std::move(sock)), input(s.options.max_line_bytes), pacing(s.io),
+        session(s.machine, s.session_options) {
+    asio::error_code ec;
+    const auto ep = socket.remote_endpoint(ec);
+    peer = ec ? "?" : ep.address().to_string() + ":" + std::to_string(ep.port());
+  }
+
+  void start() {
+    server.log.write("connected", peer);
+    read();
+  }
+
+  void read() {
+    auto self = shared_from_this();
+    asio::async_read_until(socket, input, '\n', [self](const asio::error_code& ec, std::size_t n) {
+      if (ec) {
+        if (ec == asio::error::not_found) {  // longer than max_line_bytes
+          const std::string line = format_error(Tag{true, 0}, ErrorCode::ProtocolError, "line too long");
+          self->server.log.write("sent", line);
+          asio::error_code ignored;
+          asio::write(self->socket, asio::buffer(line + "\r\n"), ignored);
+        }
+        self->close(ec == asio::error::eof ? "disconnected" : "closed: " + ec.message());
+        return;
+      }
+      std::string line(asio::buffers_begin(self->input.data()), asio::buffers_begin(self->input.data()) + static_cast<std::ptrdiff_t>(n));
+      self->input.consume(n);
+      while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+      if (line.empty()) {  // a blank line is no command: nothing to answer
+        self->read();
+        return;
+      }
+      self->server.log.write("received", line);
+      SessionReply reply = self->session.handle(line);
+      self->pending.assign(reply.lines.begin(), reply.lines.end());
+      self->pending_delay_s = self->server.options.realtime ? reply.motion_s : 0;
+      self->write_next(true);
+    });
+  }
+
+  // Writes the pending lines one by one; in real time the lines after the acknowledgement wait
+  // for the simulated motion time.
+  void write_next(bool first) {
+    if (closed) return;
+    if (pending.empty()) {
+      if (session.ended()) close("session ended");
+      else read();
+      return;
+    }
+    auto self = shared_from_this();
+    if (!first && pending_delay_s > 0) {
+      const auto delay = std::chrono::duration<double>(pending_delay_s);
+      pending_delay_s = 0;
+      pacing.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(delay));
+      pacing.async_wait([self](const asio::error_code& ec) {
+        if (!ec) self->write_next(false);
+      });
+      return;
+    }
+    auto line = std::make_shared<std::string>(pending.front() + "\r\n");
+    server.log.write("sent", pending.front());
+    pending.pop_front();
+    asio::async_write(socket, asio::buffer(*line), [self, line](const asio::error_code& ec, std::size_t) {
+      if (ec) self->close("write failed: " + ec.message());
+      else self->write_next(false);
+    });
+  }
+
+  void close(const std::string& why) {
+    if (closed) return;
+    closed = true;
+    asio::error_code ignored;
+    pacing.cancel();
+    socket.shutdown(tcp::socket::shutdown_both, ignored);
+    socket.close(ignored);
+    server.log.write(why, peer);
+    server.busy = false;
+    if (server.active.get() == this) server.active.reset();
+    if (server.options.once) server.shutdown();
+  }
+};
+
+void ServerCore::active_close() {
+  auto keep = active;  // close() resets `active`
+  keep->close("server shutdown");
+}
+
+void ServerCore::refuse(std::shared_ptr<tcp::socket> socket) {
+  // The protocol serves one client: the newcomer learns why and is closed.
+  auto line = std::make_shared<std::string>(
+      format_error(Tag{true, 0}, ErrorCode::BadContext, "another client holds the session; one client at a time") + "\r\n");
+  asio::error_code ec;
+  const auto ep = socket->remote_endpoint(ec);
+  log.write("refused", ec ? "?" : ep.address().to_string() + ":" + std::to_string(ep.port()));
+  asio::async_write(*socket, asio::buffer(*line), [socket, line](const asio::error_code&, std::size_t) {
+    asio::error_code ignored;
+    socket->shutdown(tcp::socket::shutdown_both, ignored);
+    socket->close(ignored);
+  });
+}
+
+void ServerCore::accept() {
+  acceptor.async_accept([this](const asio::error_code& ec, tcp::socket socket) {
+    if (ec) {
+      if (ec != asio::error::operation_aborted && acceptor.is_open()) accept();
+      return;
+    }
+    if (busy) {
+      refuse(std::make_shared<tcp::socket>(std::move(socket)));
+    } else {
+      busy = true;
+      asio::error_code ignored;
+      socket.set_option(tcp::no_delay(true), ignored);  // one short line per answer: no Nagle wait
+      active = std::make_shared<Connection>(*this, std::move(socket));
+      active->start();
+    }
+    accept();
+  });
+}
+
+}  // namespace
+
+struct Server::Impl : ServerCore {
+  using ServerCore::ServerCore;
+};
+
+Server::Server(Machine& machine, SessionOptions session_options, ServerOptions options)
+    : m_impl(std::make_unique<Impl>(machine, std::move(session_options), std::move(options))) {}
+
+Server::~Server() = default;
+
+void Server::listen() {
+  asio::error_code ec;
+  const auto address = asio::ip::make_address(m_impl->options.host, ec);
+  if (ec) throw std::runtime_error("bad host address '" + m_impl->options.host + "': " + ec.message());
+  const tcp::endpoint endpoint(address, m_impl->options.port);
+  auto& a = m_impl->acceptor;
+  a.open(endpoint.protocol(), ec);
+  if (!ec) a.set_option(tcp::acceptor::reuse_address(true), ec);
+  if (!ec) a.bind(endpoint, ec);
+  if (!ec) a.listen(asio::socket_base::max_listen_connections, ec);
+  if (ec) throw std::runtime_error("cannot listen on " + m_impl->options.host + ":" + std::to_string(m_impl->options.port) + ": " + ec.message());
+  m_impl->log.write("listening", m_impl->options.host + ":" + std::to_string(port()));
+}
+
+std::uint16_t Server::port() const {
+  asio::error_code ec;
+  const auto ep = m_impl->acceptor.local_endpoint(ec);
+  return ec ? 0 : ep.port();
+}
+
+void Server::run(bool handle_signals) {
+  if (handle_signals) {
+    m_impl->signals.add(SIGINT);
+    m_impl->signals.add(SIGTERM);
+    m_impl->signals.async_wait([this](const asio::error_code& ec, int signal) {
+      if (ec) return;
+      m_impl->log.write("signal", std::to_string(signal));
+      m_impl->shutdown();
+    });
+  }
+  m_impl->accept();
+  m_impl->io.run();
+  m_impl->log.write("stopped", m_impl->options.host);
+}
+
+void Server::stop() {
+  asio::post(m_impl->io, [this] { m_impl->shutdown(); });
+}
+
+}  // namespace metron::machine::ipp

@@ -1,0 +1,753 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The I++ DME server's session logic (docs/ipp-dme.md): each received command line is checked,
+// mapped onto machine::Machine commands, run to completion on the (simulated) machine, and
+// answered with `&`, data `#`, errors `!` and `%`, as the NIST test suite's server does.
+#include "metron/machine/ipp/session.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <set>
+
+#include "metron/machine/ipp/command_line.hpp"
+#include "metron/machine/ipp/error_code.hpp"
+#include "metron/machine/ipp/response_line.hpp"
+
+namespace metron::machine::ipp {
+namespace {
+
+using Args = std::vector<Argument>;
+constexpr double k_deg = std::numbers::pi / 180;
+constexpr double k_max_scan_samples = 1e6;  ///< per scan command
+
+/// A number property of a tool (I++ DME: value with .Act, .Def, .Max, .Min).
+struct NumberProperty {
+  double act = 0, def = 0, min = 0, max = 0;
+};
+
+struct Tool {
+  std::string name;
+  int id = 0;
+  std::optional<DefineTool> definition;   ///< none: NoTool and RefTool (no stylus)
+  bool defined_on_machine = false;
+  std::map<std::string, NumberProperty> numbers;  ///< "GoToPar.Speed", "PtMeasPar.Search", ...
+};
+
+const std::vector<std::string> k_number_properties{"GoToPar.Speed",     "GoToPar.Accel",      "PtMeasPar.Speed",
+                                                   "PtMeasPar.Accel",   "PtMeasPar.Approach", "PtMeasPar.Retract",
+                                                   "PtMeasPar.Search"};
+
+/// A coordinate system's placement: machine = origin + R * p, R = Rz(psi) Rx(theta) Rz(phi)
+/// (the Euler angles of I++ DME SetCsyTransformation, degrees).
+struct Csy {
+  double x0 = 0, y0 = 0, z0 = 0, theta = 0, psi = 0, phi = 0;
+  [[nodiscard]] Eigen::Matrix3d rotation() const {
+    return (Eigen::AngleAxisd(psi * k_deg, Vec3::UnitZ()) * Eigen::AngleAxisd(theta * k_deg, Vec3::UnitX()) *
+            Eigen::AngleAxisd(phi * k_deg, Vec3::UnitZ()))
+        .toRotationMatrix();
+  }
+  [[nodiscard]] Vec3 origin() const { return {x0, y0, z0}; }
+};
+
+const std::vector<std::string> k_csy_names{"MachineCsy", "MoveableMachineCsy", "MultipleArmCsy", "RotaryTableVarCsy",
+                                           "PartCsy"};
+const std::vector<std::string> k_transform_names{"PartCsy", "MoveableMachineCsy", "MultipleArmCsy", "JogDisplayCsy",
+                                                 "JogMoveCsy", "SensorCsy"};
+
+/// A daemon started by OnMoveReportE.
+struct Daemon {
+  std::vector<std::string> items;         ///< "X", "Y", "Z", "R", "Tool.A", ...
+};
+
+/// Thrown inside a command handler to answer it with an error; never leaves the Session.
+struct CommandError {
+  ErrorCode code;
+  std::string cause;  ///< the machine's fault message; empty: the command text is the cause
+};
+
+// Commands the standard defines that this server answers with 0501 "Unsupported command".
+const std::set<std::string> k_unsupported{"AlignPart",         "CenterPart",          "TiltPart",
+                                          "TiltCenterPart",    "LockAxis",            "ScanOnCurve",
+                                          "ScanInCylEndIsPlane", "ScanInCylEndIsSphere", "ScanInPlaneEndIsCyl",
+                                          "ScanInPlaneEndIsPlane", "ScanInPlaneEndIsSphere", "ScanOnCircleHint",
+                                          "ScanOnLineHint",    "ScanOnCurveHint",     "ScanOnCurveDensity",
+                                          "OnScanReportE"};
+
+bool is_event_command(std::string_view name) {
+  return name == "AbortE" || name == "GetErrStatusE" || name == "GetPropE" || name == "OnMoveReportE" ||
+         name == "SetPropE";
+}
+
+}  // namespace
+
+struct Session::Impl {
+  Machine& machine;
+  SessionOptions options;
+  bool started = false;
+  bool ended = false;
+  bool homed = false;
+  bool user_enabled = false;
+  bool error_state = false;
+  std::vector<std::string> pending_errors;  ///< error lines since the last ClearAllErrors
+  std::vector<Tool> tools;
+  std::size_t active_tool = 0;              ///< index into tools
+  std::size_t found_tool = 0;
+  std::uint64_t next_machine_tag = 1;
+  std::map<std::string, Csy> csys;          ///< transformations by name
+  std::map<std::string, Csy> saved_csys;
+  std::string active_csy = "MachineCsy";
+  std::vector<std::string> pt_report{"X", "Y", "Z"};
+  std::vector<std::string> scan_report{"X", "Y", "Z"};
+  std::map<std::string, Daemon> daemons;    ///< by tag text
+  double scan_hint_min_radius_mm = 0;
+  /// The acceleration last sent to the machine; the default (Accel.Def) leaves the machine's own
+  /// limits untouched, so a client that never sets Accel moves exactly as a direct run.
+  double sent_acceleration = -1;
+  double motion_s = 0;
+
+  // The reply under construction.
+  Tag tag;
+  std::string command_text;
+  std::vector<std::string>* out = nullptr;
+
+  Impl(Machine& m, SessionOptions o) : machine(m), options(std::move(o)) {
+    homed = options.start_homed;
+    sent_acceleration = options.max_acceleration_mm_s2;
+    const auto s = machine.state();
+    auto make = [&](std::string name, std::optional<DefineTool> d) {
+      Tool t;
+      t.name = std::move(name);
+      t.id = static_cast<int>(tools.size()) + 1;
+      t.definition = std::move(d);
+      const double pos = s.positioning_feed_mm_s > 0 ? s.positioning_feed_mm_s : 50;
+      const double meas = s.measuring_feed_mm_s > 0 ? s.measuring_feed_mm_s : 5;
+      const double vmax = options.max_speed_mm_s, amax = options.max_acceleration_mm_s2;
+      t.numbers["GoToPar.Speed"] = {pos, pos, 0.1, vmax};
+      t.numbers["GoToPar.Accel"] = {amax, amax, 1, amax};
+      t.numbers["PtMeasPar.Speed"] = {meas, meas, 0.1, vmax};
+      t.numbers["PtMeasPar.Accel"] = {amax, amax, 1, amax};
+      t.numbers["PtMeasPar.Approach"] = {2, 2, 0, 100};
+      t.numbers["PtMeasPar.Retract"] = {2, 2, 0, 100};
+      t.numbers["PtMeasPar.Search"] = {5, 5, 0, 100};
+      tools.push_back(std::move(t));
+    };
+    // Tools without a stylus: no tool mounted, the head's mounting point (BaseTool, which the
+    // NIST files change to), and the reference tool.
+    make("NoTool", std::nullopt);
+    make("BaseTool", std::nullopt);
+    make("RefTool", std::nullopt);
+    for (const auto& d : options.tools) make(d.name, d);
+    for (const auto& n : k_transform_names) csys[n] = {};
+    if (!s.active_tool.empty())
+      for (std::size_t k = 0; k < tools.size(); ++k)
+        if (tools[k].name == s.active_tool) active_tool = k, tools[k].defined_on_machine = true;
+  }
+
+  // ---- reply helpers
+  void data(const std::string& body) { out->push_back(format_data(tag, body)); }
+  [[noreturn]] static void fail(ErrorCode code) { throw CommandError{code, {}}; }
+
+  // ---- coordinates
+  [[nodiscard]] Csy active() const {
+    if (active_csy == "MachineCsy" || active_csy == "RotaryTableVarCsy") return {};
+    return csys.at(active_csy);
+  }
+  [[nodiscard]] Vec3 to_machine(const Vec3& p) const { const Csy c = active(); return c.origin() + c.rotation() * p; }
+  [[nodiscard]] Vec3 to_csy(const Vec3& m) const { const Csy c = active(); return c.rotation().transpose() * (m - c.origin()); }
+  [[nodiscard]] Vec3 dir_to_machine(const Vec3& d) const { return active().rotation() * d; }
+  [[nodiscard]] Vec3 dir_to_csy(const Vec3& d) const { return active().rotation().transpose() * d; }
+
+  // ---- argument checks (error numbers as the NIST parser assigns them)
+  static void no_args(const Args& a) {
+    if (!a.empty()) fail(ErrorCode::IncorrectArguments);
+  }
+  static const std::string& one_string(const Args& a) {
+    if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
+    if (a[0].kind != Argument::Kind::String) fail(ErrorCode::BadArgument);
+    return a[0].text;
+  }
+  static std::vector<double> numbers(const Args& a) {
+    std::vector<double> v;
+    for (const auto& x : a) {
+      if (!x.is_number()) fail(ErrorCode::IncorrectArguments);
+      v.push_back(x.number);
+    }
+    return v;
+  }
+  /// Item lists such as Get(X(), Tool.A()) or OnPtMeasReport(X(), IJK(), ER()): empty calls,
+  /// each from `allowed` and none twice.
+  static std::vector<std::string> items(const Args& a, const std::set<std::string>& allowed) {
+    std::vector<std::string> v;
+    if (a.empty()) fail(ErrorCode::IncorrectArguments);
+    for (const auto& x : a) {
+      if (x.kind != Argument::Kind::Call || !x.args.empty() || !allowed.count(x.text)) fail(ErrorCode::IncorrectArguments);
+      if (std::find(v.begin(), v.end(), x.text) != v.end()) fail(ErrorCode::IncorrectArguments);
+      v.push_back(x.text);
+    }
+    return v;
+  }
+
+  Tool& tool() { return tools[active_tool]; }
+  std::optional<std::size_t> find_tool(const std::string& name) const {
+    for (std::size_t k = 0; k < tools.size(); ++k)
+      if (tools[k].name == name) return k;
+    return std::nullopt;
+  }
+
+  // ---- the machine
+  Response run(decltype(Command::body) body) {
+    Command c{next_machine_tag++, std::move(body)};
+    machine.submit(std::move(c));
+    auto responses = machine.execute();
+    if (responses.empty()) fail(ErrorCode::ControllerCommunicationsFailure);
+    const Response r = responses.back();
+    motion_s += std::max(0.0, r.end_time_s - r.start_time_s);
+    if (r.status == Response::Status::Fault && r.fault) {
+      ErrorCode code = ErrorCode::ErrorProcessingMethod;
+      switch (r.fault->kind) {
+        case FaultKind::Collision: code = ErrorCode::Collision; break;
+        case FaultKind::NoContact: code = ErrorCode::NoTouch; break;
+        case FaultKind::OverTravel: code = ErrorCode::HeadErrorExcessiveForce; break;
+        case FaultKind::AxisLimit: code = ErrorCode::TargetOutOfVolume; break;
+        case FaultKind::NoTool: code = ErrorCode::ProbeTypeDoesNotAllow; break;
+        case FaultKind::UnknownTool: code = ErrorCode::ToolNotFound; break;
+        case FaultKind::BadCommand: code = ErrorCode::BadArgument; break;
+        case FaultKind::Aborted: code = ErrorCode::TransactionAborted; break;
+        case FaultKind::Stalled: code = ErrorCode::ErrorProcessingMethod; break;
+      }
+      throw CommandError{code, r.fault->message};
+    }
+    return r;
+  }
+  void require_motion_ready() {
+    if (!homed) fail(ErrorCode::IllegalCommand);
+  }
+  void apply_acceleration(double accel) {
+    if (accel != sent_acceleration) {
+      run(SetFeeds{0, 0, accel});
+      sent_acceleration = accel;
+    }
+  }
+  void select_on_machine(Tool& t) {
+    if (!t.definition) return;
+    if (!t.defined_on_machine) {
+      run(*t.definition);
+      t.defined_on_machine = true;
+    }
+    run(SelectTool{t.name});
+  }
+  void move_reports() {
+    for (const auto& [daemon_tag, d] : daemons) {
+      std::string body;
+      const Vec3 p = to_csy(machine.state().position_mm);
+      for (const char* item : {"R", "X", "Y", "Z", "Tool.A", "Tool.B", "Tool.C"}) {
+        if (std::find(d.items.begin(), d.items.end(), item) == d.items.end()) continue;
+        const std::string s = item;
+        const double v = s == "X" ? p.x() : s == "Y" ? p.y() : s == "Z" ? p.z() : 0.0;
+        body += (body.empty() ? "" : ", ") + s + "(" + format_number(v) + ")";
+      }
+      if (!body.empty()) out->push_back(daemon_tag + " # " + body);
+    }
+  }
+
+  // ---- properties
+  struct PropertyRef {
+    Tool* tool;
+    std::string prefix;   ///< "Tool" or "FoundTool"
+    std::string path;     ///< after the prefix: "GoToPar.Speed.Max", "Name", ...
+  };
+  PropertyRef property(const std::string& dotted) {
+    const auto dot = dotted.find('.');
+    const std::string head = dotted.substr(0, dot);
+    if (head != "Tool" && head != "FoundTool") fail(ErrorCode::BadArgument);
+    if (dot == std::string::npos) fail(ErrorCode::IncorrectArguments);
+    return {head == "Tool" ? &tools[active_tool] : &tools[found_tool], head, dotted.substr(dot + 1)};
+  }
+  std::string get_property(const Argument& a) {
+    if (a.kind != Argument::Kind::Call || !a.args.empty()) fail(ErrorCode::IncorrectArguments);
+    auto p = property(a.text);
+    const Tool& t = *p.tool;
+    const std::string& path = p.path;
+    if (path == "Name") return a.text + "(\"" + t.name + "\")";
+    if (path == "Id") return a.text + "(\"" + std::to_string(t.id) + "\")";
+    if (path == "Alignment") {
+      const Vec3 d = t.definition ? Vec3(dir_to_csy(-t.definition->stylus_direction)) : Vec3(0, 0, 1);
+      return a.text + "(" + format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z()) + ")";
+    }
+    if (path == "A" || path == "B" || path == "C") return a.text + "(0)";
+    for (const auto& name : k_number_properties) {
+      if (path.rfind(name, 0) != 0) continue;
+      const std::string suffix = path.substr(name.size());
+      const auto& n = t.numbers.at(name);
+      if (suffix.empty() || suffix == ".Act") return a.text + "(" + format_number(n.act) + ")";
+      if (suffix == ".Def") return a.text + "(" + format_number(n.def) + ")";
+      if (suffix == ".Max") return a.text + "(" + format_number(n.max) + ")";
+      if (suffix == ".Min") return a.text + "(" + format_number(n.min) + ")";
+    }
+    fail(ErrorCode::BadArgument);  // NIST parser: an unknown property part is 0509
+  }
+  /// Returns true when the value was clamped into the property's range.
+  bool set_property(const Argument& a) {
+    if (a.kind != Argument::Kind::Call || a.args.size() != 1) fail(ErrorCode::IncorrectArguments);
+    if (!a.args[0].is_number()) fail(ErrorCode::BadArgument);
+    auto p = property(a.text);
+    for (const auto& name : k_number_properties) {
+      if (p.path != name && p.path != name + ".Act") continue;
+      auto& n = p.tool->numbers.at(name);
+      const double v = a.args[0].number;
+      n.act = std::clamp(v, n.min, n.max);
+      return n.act != v;
+    }
+    fail(ErrorCode::BadArgument);  // NIST parser: an unknown property part is 0509
+  }
+  /// (name, type) of a property node's children, recursively with `all`.
+  void enum_properties(const std::string& dotted, bool all) {
+    auto p = property(dotted + ".X");  // validates the head
+    std::string node = p.path.substr(0, p.path.size() - 1);  // "" or "GoToPar." or "GoToPar.Speed."
+    if (!node.empty()) node.pop_back();
+    std::vector<std::pair<std::string, std::string>> children;
+    auto add_number = [&](const std::string& path) {
+      children.emplace_back(path, "Number");
+      if (all) {
+        children.emplace_back(path, "Property");
+        for (const char* s : {"Act", "Def", "Max", "Min"}) children.emplace_back(path + "." + s, "Number");
+      }
+    };
+    if (node.empty()) {
+      for (const char* group : {"GoToPar", "PtMeasPar"}) {
+        children.emplace_back(group, "Property");
+        if (all)
+          for (const auto& n : k_number_properties)
+            if (n.rfind(group, 0) == 0) add_number(n);
+      }
+      // Name, Id and Alignment are readable (GetProp) but, as in the NIST files, not enumerated.
+    } else if (node == "GoToPar" || node == "PtMeasPar") {
+      for (const auto& n : k_number_properties)
+        if (n.rfind(node + ".", 0) == 0) {
+          const std::string leaf = n.substr(node.size() + 1);
+          if (all) {
+            children.emplace_back(leaf, "Number");
+            children.emplace_back(leaf, "Property");
+            for (const char* s : {"Act", "Def", "Max", "Min"}) children.emplace_back(leaf + "." + s, "Number");
+          } else {
+            children.emplace_back(leaf, "Number");
+          }
+        }
+    } else if (std::find(k_number_properties.begin(), k_number_properties.end(), node) != k_number_properties.end()) {
+      for (const char* s : {"Act", "Def", "Max", "Min"}) children.emplace_back(s, "Number");
+    } else {
+      fail(ErrorCode::BadArgument);
+    }
+    for (const auto& [name, type] : children) data("\"" + name + "\", \"" + type + "\"");
+  }
+
+  // ---- motion
+  Vec3 target(const Args& a, bool allow_tool_angles) {
+    Vec3 p = to_csy(machine.state().position_mm);
+    std::set<std::string> seen;
+    bool any = false;
+    for (const auto& x : a) {
+      if (x.kind != Argument::Kind::Call) fail(ErrorCode::IncorrectArguments);
+      if (!seen.insert(x.text).second) fail(ErrorCode::IncorrectArguments);
+      const auto v = x.call_number();
+      const int axis = x.text == "X" ? 0 : x.text == "Y" ? 1 : x.text == "Z" ? 2 : -1;
+      if (axis >= 0) {
+        if (!v) fail(x.args.empty() ? ErrorCode::IncorrectArguments : ErrorCode::BadArgument);
+        p[axis] = *v;
+        any = true;
+      } else if (allow_tool_angles && (x.text == "Tool.A" || x.text == "Tool.B" || x.text == "Tool.C")) {
+        if (!v) fail(ErrorCode::IncorrectArguments);
+        if (*v != 0) fail(ErrorCode::AngleOutOfRange);  // a fixed probe head: only 0
+        any = true;
+      } else if (x.text != "IJK") {
+        fail(ErrorCode::IncorrectArguments);
+      }
+    }
+    if (!any) fail(ErrorCode::IncorrectArguments);
+    return p;
+  }
+
+  void go_to(const Args& a) {
+    require_motion_ready();
+    const Vec3 p = target(a, true);
+    const auto& n = tool().numbers;
+    apply_acceleration(n.at("GoToPar.Accel").act);
+    run(GoTo{to_machine(p), n.at("GoToPar.Speed").act});
+    move_reports();
+  }
+
+  void pt_meas(const Args& a) {
+    require_motion_ready();
+    std::optional<Vec3> ijk;
+    for (const auto& x : a)
+      if (x.is_call("IJK")) {
+        if (ijk || x.args.size() != 3) fail(ErrorCode::IncorrectArguments);
+        const auto v = numbers(x.args);
+        ijk = Vec3(v[0], v[1], v[2]);
+      }
+    const Vec3 nominal = target(a, false);
+    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+    const Vec3 here = to_csy(machine.state().position_mm);
+    Vec3 normal = ijk ? *ijk : Vec3(here - nominal);  // no IJK: approach from the current position
+    if (normal.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
+    normal.normalize();
+    const auto& n = tool().numbers;
+    apply_acceleration(n.at("PtMeasPar.Accel").act);
+    // X, Y, Z are the ball centre at the nominal contact; the machine wants the surface point.
+    const double r_mm = machine.state().tool ? machine.state().tool->effective_radius_mm : 0.0;
+    PtMeas m;
+    m.nominal_mm = to_machine(nominal) - r_mm * dir_to_machine(normal);
+    m.normal = dir_to_machine(normal);
+    m.approach_mm = n.at("PtMeasPar.Approach").act;
+    m.search_mm = n.at("PtMeasPar.Search").act;
+    m.retract_mm = n.at("PtMeasPar.Retract").act;
+    m.speed_mm_s = n.at("PtMeasPar.Speed").act;
+    run(SetFeeds{n.at("GoToPar.Speed").act, 0, 0});
+    const Response r = run(m);
+    move_reports();
+    if (!r.hit) fail(ErrorCode::NoTouch);
+    // The latched ball centre; ER lets the client compensate along its surface normal.
+    const Vec3 s = to_csy(r.hit->centre_mm);
+    const Vec3 d = dir_to_csy(r.hit->normal);
+    std::string body;
+    for (const auto& item : pt_report) {
+      std::string v;
+      if (item == "X") v = format_number(s.x());
+      else if (item == "Y") v = format_number(s.y());
+      else if (item == "Z") v = format_number(s.z());
+      else if (item == "IJK") v = format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z());
+      else if (item == "ER") v = format_number(r.hit->ball_radius_mm);
+      else v = "0";  // R, Tool.A/B/C: no rotary table, a fixed head
+      body += (body.empty() ? "" : ", ") + item + "(" + v + ")";
+    }
+    data(body);
+  }
+
+  void get(const Args& a) {
+    const auto wanted = items(a, {"X", "Y", "Z", "R", "Tool.A", "Tool.B", "Tool.C"});
+    const Vec3 p = to_csy(machine.state().position_mm);
+    std::string body;
+    for (const auto& item : wanted) {
+      const double v = item == "X" ? p.x() : item == "Y" ? p.y() : item == "Z" ? p.z() : 0.0;
+      body += (body.empty() ? "" : ", ") + item + "(" + format_number(v) + ")";
+    }
+    data(body);
+  }
+
+  // ScanOnLine(Sx,Sy,Sz,Ex,Ey,Ez,i,j,k,StepW) and
+  // ScanOnCircle(Cx,Cy,Cz,Sx,Sy,Sz,i,j,k,delta,sfa,StepW): the points are ball centres at the
+  // nominal contact (as in PtMeas); the machine follows them moved by the reference deflection
+  // E0 into the surface (ScanPath: the centre path at deflection E0); samples every StepW mm.
+  void scan(const std::string& name, const Args& a) {
+    require_motion_ready();
+    const auto v = numbers(a);
+    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+    const double deflection_mm = options.scan_reference_deflection_mm;
+    ScanPath sp;
+    sp.reference_deflection_mm = deflection_mm;
+    auto hermite_line = [&](const Vec3& p0, const Vec3& p1, const Vec3& normal) {
+      const Vec3 u = (p1 - p0).normalized();
+      sp.path.segments.push_back(geometry::PccSegment::hermite(p0, p1, u, u));
+      sp.path.normals.push_back(normal);
+    };
+    double step = 0;
+    if (name == "ScanOnLine") {
+      if (v.size() != 10) fail(ErrorCode::IncorrectArguments);
+      Vec3 n(v[6], v[7], v[8]);
+      if (n.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
+      n = dir_to_machine(n.normalized());
+      const Vec3 s = to_machine({v[0], v[1], v[2]}), e = to_machine({v[3], v[4], v[5]});
+      step = v[9];
+      if (step <= 0 || (e - s).norm() < 1e-9) fail(ErrorCode::BadArgument);
+      if ((e - s).norm() / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
+      hermite_line(s - deflection_mm * n, e - deflection_mm * n, n);
+      sp.path.normals.push_back(n);
+      sp.approach_normal = n;
+    } else {
+      if (v.size() != 12) fail(ErrorCode::IncorrectArguments);
+      Vec3 w(v[6], v[7], v[8]);
+      if (w.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
+      w = dir_to_machine(w.normalized());
+      const Vec3 c = to_machine({v[0], v[1], v[2]}), s = to_machine({v[3], v[4], v[5]});
+      const double delta = v[9] * k_deg, sfa = v[10];
+      step = v[11];
+      Vec3 e0 = (s - c) - (s - c).dot(w) * w;
+      const double radius = e0.norm();
+      if (step <= 0 || radius < 1e-9) fail(ErrorCode::BadArgument);
+      // At most ten turns and k_max_scan_samples samples: a client cannot make the server
+      // allocate without bound.
+      if (std::abs(delta) > 20 * std::numbers::pi || std::abs(delta) * radius / step > k_max_scan_samples)
+        fail(ErrorCode::ArgumentOutOfRange);
+      e0 /= radius;
+      // sfa 90: the probe touches the inside of a bore (normal towards the centre); else outside.
+      const double sign = std::abs(sfa - 90) < 45 ? -1 : 1;
+      const Vec3 e1 = w.cross(e0);
+      const int n = std::max(1, static_cast<int>(std::ceil(std::abs(delta) / (10 * k_deg))));
+      const double rc = radius - sign * deflection_mm;
+      for (int k = 0; k < n; ++k) {
+        const double a0 = delta * k / n, a1 = delta * (k + 1) / n;
+        const auto radial = [&](double t) { return Vec3(std::cos(t) * e0 + std::sin(t) * e1); };
+        const auto tangent = [&](double t) { return Vec3((delta > 0 ? 1 : -1) * (-std::sin(t) * e0 + std::cos(t) * e1)); };
+        sp.path.segments.push_back(geometry::PccSegment::hermite(c + rc * radial(a0), c + rc * radial(a1), tangent(a0), tangent(a1)));
+        sp.path.normals.push_back(sign * radial(a0));
+      }
+      sp.path.normals.push_back(sign * Vec3(std::cos(delta) * e0 + std::sin(delta) * e1));
+      sp.approach_normal = sp.path.normals.front();
+    }
+    sp.sample_spacing_mm = step;
+    sp.speed_mm_s = tool().numbers.at("PtMeasPar.Speed").act;
+    const Response resp = run(sp);
+    move_reports();
+    std::string body;
+    for (const auto& sample : resp.scan) {
+      const Vec3 p = to_csy(sample.centre_mm);
+      const Vec3 d = sample.deflection_mm.norm() > 0 ? Vec3(dir_to_csy(sample.deflection_mm.normalized())) : Vec3::Zero();
+      for (const auto& item : scan_report) {
+        if (!body.empty()) body += ",";
+        if (item == "X") body += format_number(p.x());
+        else if (item == "Y") body += format_number(p.y());
+        else if (item == "Z") body += format_number(p.z());
+        else if (item == "IJK") body += format_number(d.x()) + "," + format_number(d.y()) + "," + format_number(d.z());
+        else body += "0";
+      }
+    }
+    data(body);
+  }
+
+  // ---- dispatch
+  void dispatch(const CommandLine& c) {
+    const std::string& n = c.name;
+    const Args& a = c.args;
+    if (is_event_command(n) != c.tag.event) fail(ErrorCode::IllegalTag);
+    if (n == "StartSession") {
+      no_args(a);
+      started = true;
+      return;
+    }
+    if (!started) fail(ErrorCode::IllegalCommand);
+    if (error_state && n != "ClearAllErrors" && n != "GetErrStatusE" && n != "GetXtdErrStatus" && n != "GetErrorInfo" &&
+        n != "EndSession" && n != "StopDaemon" && n != "StopAllDaemons" && n != "AbortE")
+      fail(ErrorCode::UseClearAllErrors);
+    if (n == "EndSession") {
+      no_args(a);
+      ended = true;
+    } else if (n == "ClearAllErrors") {
+      no_args(a);
+      error_state = false;
+      pending_errors.clear();
+    } else if (n == "AbortE") {
+      no_args(a);  // every command ran to completion already: nothing is moving
+    } else if (n == "GetDMEVersion") {
+      no_args(a);
+      data("DMEVersion(\"1.4\")");
+    } else if (n == "GetMachineClass") {
+      no_args(a);
+      data("GetMachineClass(\"" + options.machine_class + "\")");
+    } else if (n == "GetErrStatusE") {
+      no_args(a);
+      data(std::string("ErrStatus(") + (error_state ? "1" : "0") + ")");
+    } else if (n == "GetXtdErrStatus") {
+      no_args(a);
+      data(std::string("IsHomed(") + (homed ? "1" : "0") + ")");
+      data(std::string("IsUserEnabled(") + (user_enabled ? "1" : "0") + ")");
+      for (const auto& e : pending_errors) data(e);
+    } else if (n == "GetErrorInfo") {
+      if (a.size() != 1 || !a[0].is_number() || a[0].text.find_first_of(".eE") != std::string::npos)
+        fail(ErrorCode::IncorrectArguments);
+      if (a[0].number < 0 || a[0].number > 9999) fail(ErrorCode::ArgumentOutOfRange);
+      const auto info = find_error(static_cast<int>(a[0].number));
+      if (!info) fail(ErrorCode::ArgumentOutOfRange);
+      data("\"" + std::string(info->text) + "\"");
+    } else if (n == "IsHomed") {
+      no_args(a);
+      data(std::string("IsHomed(") + (homed ? "1" : "0") + ")");
+    } else if (n == "Home") {
+      no_args(a);
+      apply_acceleration(tool().numbers.at("GoToPar.Accel").act);
+      run(GoTo{options.home_mm, tool().numbers.at("GoToPar.Speed").act});
+      homed = true;
+      move_reports();
+    } else if (n == "IsUserEnabled") {
+      no_args(a);
+      data(std::string("IsUserEnabled(") + (user_enabled ? "1" : "0") + ")");
+    } else if (n == "EnableUser" || n == "DisableUser") {
+      no_args(a);
+      user_enabled = n == "EnableUser";
+    } else if (n == "OnPtMeasReport") {
+      pt_report = items(a, {"X", "Y", "Z", "IJK", "ER", "R", "Tool.A", "Tool.B", "Tool.C"});
+    } else if (n == "OnScanReport") {
+      scan_report = items(a, {"X", "Y", "Z", "IJK", "Q", "R", "ER", "Tool.A", "Tool.B", "Tool.C"});
+    } else if (n == "OnMoveReportE") {
+      Daemon d;
+      std::set<std::string> seen;
+      for (const auto& x : a) {
+        if (x.kind != Argument::Kind::Call || !seen.insert(x.text).second) fail(ErrorCode::IncorrectArguments);
+        if (x.text == "Time" || x.text == "Dis") {
+          if (!x.call_number() || *x.call_number() < 0) fail(ErrorCode::BadArgument);
+        } else if (x.args.empty() && (x.text == "X" || x.text == "Y" || x.text == "Z" || x.text == "R" ||
+                                      x.text == "Tool.A" || x.text == "Tool.B" || x.text == "Tool.C")) {
+          d.items.push_back(x.text);
+        } else {
+          fail(ErrorCode::IncorrectArguments);
+        }
+      }
+      if (daemons.count(c.tag.text())) fail(ErrorCode::DaemonAlreadyExists);
+      daemons[c.tag.text()] = d;
+    } else if (n == "StopDaemon") {
+      if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      if (!daemons.erase(a[0].text)) fail(ErrorCode::DaemonDoesNotExist);
+    } else if (n == "StopAllDaemons") {
+      no_args(a);
+      if (daemons.empty()) fail(ErrorCode::NoDaemonsActive);
+      daemons.clear();
+    } else if (n == "EnumTools") {
+      no_args(a);
+      for (const auto& t : tools) data("\"" + t.name + "\"");
+    } else if (n == "ChangeTool" || n == "SetTool") {
+      const auto k = find_tool(one_string(a));
+      if (!k) fail(ErrorCode::ToolNotFound);
+      select_on_machine(tools[*k]);
+      active_tool = *k;
+    } else if (n == "FindTool") {
+      const auto k = find_tool(one_string(a));
+      if (!k) fail(ErrorCode::ToolNotFound);
+      found_tool = *k;
+    } else if (n == "FoundTool") {
+      no_args(a);
+      data("FoundTool.Name(\"" + tools[found_tool].name + "\")");
+    } else if (n == "GetChangeToolAction") {
+      const auto k = find_tool(one_string(a));
+      if (!k) fail(ErrorCode::ToolNotFound);
+      const Vec3 p = to_csy(machine.state().position_mm);
+      data(std::string("ChangeToolAction(") + (*k == active_tool ? "None" : "Switch") + ", X(" + format_number(p.x()) +
+           "), Y(" + format_number(p.y()) + "), Z(" + format_number(p.z()) + "))");
+    } else if (n == "AlignTool") {
+      // A fixed probe head: the tool's alignment is answered when it lies within the tolerance.
+      const auto v = numbers(a);
+      if (v.size() != 4 && v.size() != 8) fail(ErrorCode::IncorrectArguments);
+      Vec3 want(v[0], v[1], v[2]);
+      if (want.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
+      const Vec3 have = tool().definition ? Vec3(dir_to_csy(-tool().definition->stylus_direction)) : Vec3(0, 0, 1);
+      const double tolerance_deg = v.size() == 4 ? v[3] : v[6];
+      const double angle = std::acos(std::clamp(want.normalized().dot(have), -1.0, 1.0)) / k_deg;
+      if (angle > tolerance_deg) fail(ErrorCode::AngleOutOfRange);
+      data(format_number(have.x()) + ", " + format_number(have.y()) + ", " + format_number(have.z()));
+    } else if (n == "GetProp" || n == "GetPropE") {
+      if (a.empty()) fail(ErrorCode::IncorrectArguments);
+      std::string body;
+      for (const auto& x : a) body += (body.empty() ? "" : ", ") + get_property(x);
+      data(body);
+    } else if (n == "SetProp" || n == "SetPropE") {
+      if (a.empty()) fail(ErrorCode::IncorrectArguments);
+      bool clamped = false;
+      for (const auto& x : a) clamped = set_property(x) || clamped;
+      if (&tool() == &tools[active_tool]) {
+        const auto& num = tool().numbers;
+        run(SetFeeds{num.at("GoToPar.Speed").act, num.at("PtMeasPar.Speed").act, 0});
+      }
+      if (clamped) fail(ErrorCode::ArgumentOutOfRange);
+    } else if (n == "EnumProp" || n == "EnumAllProp") {
+      if (a.size() != 1 || a[0].kind != Argument::Kind::Call || !a[0].args.empty()) fail(ErrorCode::IncorrectArguments);
+      enum_properties(a[0].text, n == "EnumAllProp");
+    } else if (n == "GetCoordSystem") {
+      no_args(a);
+      data("CoordSystem(" + active_csy + ")");
+    } else if (n == "SetCoordSystem") {
+      if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      if (std::find(k_csy_names.begin(), k_csy_names.end(), a[0].text) == k_csy_names.end()) fail(ErrorCode::BadArgument);
+      active_csy = a[0].text;
+    } else if (n == "GetCsyTransformation") {
+      if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      const auto it = csys.find(a[0].text);
+      if (it == csys.end()) fail(ErrorCode::BadArgument);
+      const Csy& t = it->second;
+      data("GetCsyTransformation(" + format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) + ", " +
+           format_number(t.theta) + ", " + format_number(t.psi) + ", " + format_number(t.phi) + ")");
+    } else if (n == "SetCsyTransformation") {
+      if (a.size() != 7 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      const auto it = csys.find(a[0].text);
+      if (it == csys.end()) fail(ErrorCode::BadArgument);
+      const auto v = numbers(Args(a.begin() + 1, a.end()));
+      if (v[3] < 0 || v[3] > 180) fail(ErrorCode::ThetaOutOfRange);
+      it->second = {v[0], v[1], v[2], v[3], v[4], v[5]};
+    } else if (n == "SaveActiveCoordSystem") {
+      saved_csys[one_string(a)] = active();
+    } else if (n == "LoadCoordSystem") {
+      const auto it = saved_csys.find(one_string(a));
+      if (it == saved_csys.end()) fail(ErrorCode::BadArgument);
+      csys["PartCsy"] = it->second;
+      active_csy = "PartCsy";
+    } else if (n == "GoTo") {
+      go_to(a);
+    } else if (n == "PtMeas") {
+      pt_meas(a);
+    } else if (n == "Get") {
+      get(a);
+    } else if (n == "GetPos") {  // not in I++ DME 1.4: Get(X(), Y(), Z()) under a clearer name
+      no_args(a);
+      const Vec3 p = to_csy(machine.state().position_mm);
+      data("X(" + format_number(p.x()) + "), Y(" + format_number(p.y()) + "), Z(" + format_number(p.z()) + ")");
+    } else if (n == "ReQualify") {
+      no_args(a);
+      require_motion_ready();
+      if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+      run(QualifyTool{});
+      move_reports();
+    } else if (n == "ScanUnknownHint") {
+      if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
+      if (!a[0].is_number() || a[0].number <= 0) fail(ErrorCode::BadArgument);
+      scan_hint_min_radius_mm = a[0].number;
+    } else if (n == "ScanOnLine" || n == "ScanOnCircle") {
+      scan(n, a);
+    } else if (k_unsupported.count(n)) {
+      fail(ErrorCode::UnsupportedCommand);
+    } else {
+      fail(ErrorCode::IllegalCommand);
+    }
+  }
+
+  void error_line(const Tag& t, ErrorCode code, std::string_view cause) {
+    const std::string line = format_error(t, code, cause);
+    out->push_back(line);
+    if (static_cast<int>(error_info(code).severity) >= static_cast<int>(Severity::Stop)) {
+      error_state = true;
+      pending_errors.push_back(line.substr(8));
+    }
+  }
+
+  SessionReply handle(std::string_view line) {
+    SessionReply reply;
+    out = &reply.lines;
+    motion_s = 0;
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.remove_suffix(1);
+    auto parsed = parse_command_line(line);
+    if (!parsed) {
+      // Without a readable tag the error goes out under the server's own tag E0000.
+      const Tag t = parsed.error().tag.value_or(Tag{true, 0});
+      if (parsed.error().tag) out->push_back(format_ack(t));
+      error_line(t, parsed.error().code, line);
+      if (parsed.error().tag) out->push_back(format_complete(t));
+      return reply;
+    }
+    tag = parsed->tag;
+    command_text = parsed->text;
+    out->push_back(format_ack(tag));
+    try {
+      dispatch(*parsed);
+    } catch (const CommandError& e) {
+      error_line(tag, e.code, e.cause.empty() ? command_text : e.cause);
+    }
+    out->push_back(format_complete(tag));
+    reply.motion_s = motion_s;
+    return reply;
+  }
+};
+
+Session::Session(Machine& machine, SessionOptions options) : m_impl(std::make_unique<Impl>(machine, std::move(options))) {}
+Session::~Session() = default;
+SessionReply Session::handle(std::string_view line) { return m_impl->handle(line); }
+bool Session::ended() const { return m_impl->ended; }
+
+}  // namespace metron::machine::ipp

@@ -1,0 +1,253 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The I++ DME session logic on the virtual CMM, without a network. Expected coordinates come
+// from the simulated world's hidden truth (perfect.json: the 160 x 100 x 40 block with its
+// corner at (300, 200, 0), an ideal probe), error numbers from the specification's table.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "metron/machine/ipp/command_line.hpp"
+#include "metron/machine/ipp/response_line.hpp"
+#include "metron/machine/ipp/session.hpp"
+#include "metron/machine/virtual_cmm.hpp"
+
+using namespace metron;
+using namespace metron::machine;
+using namespace metron::machine::ipp;
+
+namespace {
+
+World perfect_world() {
+  auto w = load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/perfect.json");
+  if (!w) throw std::runtime_error(w.error().message);
+  return *w;
+}
+
+struct Fixture {
+  World world = perfect_world();
+  VirtualCmm cmm{world, 1};
+  Session session{cmm, [&] {
+                    SessionOptions o;
+                    o.home_mm = world.machine.home_mm;
+                    return o;
+                  }()};
+  std::vector<std::string> send(const std::string& line) { return session.handle(line).lines; }
+  /// Sends a line and returns its single data body (fails the test otherwise).
+  std::string data(const std::string& line) {
+    const auto r = send(line);
+    std::string body;
+    int n = 0;
+    for (const auto& l : r)
+      if (l.size() > 7 && l[6] == '#') body = l.substr(8), ++n;
+    EXPECT_EQ(n, 1) << line << " -> " << (r.size() > 1 ? r[1] : "");
+    return body;
+  }
+  /// The error number a line is answered with (0: none).
+  int error(const std::string& line) {
+    for (const auto& l : send(line))
+      if (auto p = parse_response_line(l); p && p->kind == ResponseLine::Kind::Error) return p->error_number;
+    return 0;
+  }
+  void start() {
+    ASSERT_EQ(error("00001 StartSession()"), 0);
+    ASSERT_EQ(error("00002 Home()"), 0);
+    ASSERT_EQ(error("00003 ChangeTool(\"Probe1\")"), 0);
+  }
+};
+
+double item(const std::string& body, const std::string& name) {
+  auto args = parse_arguments(body);
+  if (args)
+    for (const auto& a : *args)
+      if (a.is_call(name) && !a.args.empty() && a.args[0].is_number()) return a.args[0].number;
+  ADD_FAILURE() << "no " << name << " in " << body;
+  return NAN;
+}
+
+}  // namespace
+
+TEST(IppSession, AcknowledgesAndCompletesEveryCommand) {
+  Fixture f;
+  EXPECT_EQ(f.send("00001 StartSession()"), (std::vector<std::string>{"00001 &", "00001 %"}));
+  EXPECT_EQ(f.send("00005 GetDMEVersion()"),
+            (std::vector<std::string>{"00005 &", "00005 # DMEVersion(\"1.4\")", "00005 %"}));
+  EXPECT_EQ(f.send("09999 EndSession()"), (std::vector<std::string>{"09999 &", "09999 %"}));
+  EXPECT_TRUE(f.session.ended());
+}
+
+TEST(IppSession, PtMeasReportsTheTrueSurfacePoint) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 OnPtMeasReport(X(), Y(), Z(), IJK(), ER())"), 0);
+  // X, Y, Z are ball centres (1 mm ball): the top face at z = 40 (hidden truth) gives 41.
+  const auto top = f.data("00020 PtMeas(X(445), Y(210), Z(41), IJK(0,0,1))");
+  EXPECT_NEAR(item(top, "X"), 445, 1e-4);
+  EXPECT_NEAR(item(top, "Z"), 41, 1e-4);
+  EXPECT_NEAR(item(top, "ER"), 1.0, 1e-9);
+  // A side face, approached with a nominal 1 mm off the true surface: the answer is the truth.
+  EXPECT_EQ(f.error("00025 GoTo(X(465), Y(250), Z(60))"), 0);
+  const auto side = f.data("00030 PtMeas(X(461.5), Y(250), Z(20), IJK(1,0,0))");
+  EXPECT_NEAR(item(side, "X"), 461, 1e-4);
+  // Without IJK the approach is from the current position (here: straight above).
+  EXPECT_EQ(f.error("00034 GoTo(X(465), Y(250), Z(60))"), 0);
+  EXPECT_EQ(f.error("00035 GoTo(X(445), Y(210), Z(60))"), 0);
+  const auto down = f.data("00040 PtMeas(X(445), Y(210), Z(41))");
+  EXPECT_NEAR(item(down, "Z"), 41, 1e-3);
+}
+
+// X, Y, Z are the ball centre at the nominal contact: from a nominal 0.3 mm above the contact
+// centre, a 0.5 mm search reaches the surface (0.2 mm past it); read as a surface point, the
+// same search would end 0.8 mm short of it.
+TEST(IppSession, PtMeasNominalIsTheBallCentre) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 SetProp(Tool.PtMeasPar.Search(0.5), Tool.PtMeasPar.Approach(1))"), 0);
+  const auto top = f.data("00020 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1))");
+  EXPECT_NEAR(item(top, "Z"), 41, 1e-4);
+}
+
+TEST(IppSession, PartCoordinateSystemTransformsInAndOut) {
+  Fixture f;
+  f.start();
+  // Part frame at the block's corner, turned 90 degrees about Z (psi): part x = machine y.
+  EXPECT_EQ(f.error("00010 SetCsyTransformation(PartCsy, 300, 200, 0, 0, 90, 0)"), 0);
+  EXPECT_EQ(f.error("00020 SetCoordSystem(PartCsy)"), 0);
+  EXPECT_EQ(f.data("00025 GetCoordSystem()"), "CoordSystem(PartCsy)");
+  EXPECT_EQ(f.data("00026 GetCsyTransformation(PartCsy)"), "GetCsyTransformation(300, 200, 0, 0, 90, 0)");
+  EXPECT_EQ(f.error("00027 OnPtMeasReport(X(), Y(), Z())"), 0);
+  EXPECT_EQ(f.error("00028 GoTo(X(50), Y(-170), Z(60))"), 0);
+  // Machine side face x = 460 is, in the part frame, y = -160 with normal -y.
+  const auto side = f.data("00030 PtMeas(X(50), Y(-161.5), Z(20), IJK(0,-1,0))");
+  EXPECT_NEAR(item(side, "X"), 50, 1e-4);
+  EXPECT_NEAR(item(side, "Y"), -161, 1e-4);
+  EXPECT_NEAR(item(side, "Z"), 20, 1e-4);
+  EXPECT_EQ(f.error("00035 GoTo(X(50), Y(-163), Z(60))"), 0);
+  EXPECT_EQ(f.error("00040 GoTo(X(10), Y(-20), Z(60))"), 0);
+  const auto p = f.data("00050 Get(X(), Y(), Z())");
+  EXPECT_NEAR(item(p, "X"), 10, 1e-6);
+  EXPECT_NEAR(item(p, "Y"), -20, 1e-6);
+  EXPECT_EQ(f.error("00060 SetCoordSystem(MachineCsy)"), 0);
+  const auto m = f.data("00070 Get(X(), Y())");
+  EXPECT_NEAR(item(m, "X"), 320, 1e-6);
+  EXPECT_NEAR(item(m, "Y"), 210, 1e-6);
+  EXPECT_EQ(f.error("00080 SetCsyTransformation(PartCsy, 0, 0, 0, 190, 0, 0)"), 1007);
+}
+
+TEST(IppSession, MachineFaultsBecomeStandardErrors) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 GoTo(X(10000000))"), 1008);
+  EXPECT_EQ(f.error("00011 GoTo(X(100))"), 514);  // class 3: refused until ClearAllErrors
+  EXPECT_EQ(f.data("E0012 GetErrStatusE()"), "ErrStatus(1)");
+  EXPECT_EQ(f.error("00013 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00020 PtMeas(X(445), Y(150), Z(40), IJK(0,0,1))"), 1003);  // in front of the block: nothing to touch
+  EXPECT_EQ(f.error("00030 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00040 GoTo(X(380), Y(250), Z(20))"), 2504);  // through the block
+  EXPECT_EQ(f.error("00050 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00060 ChangeTool(\"NoSuchTool\")"), 1502);
+}
+
+TEST(IppSession, OrderAndArgumentErrors) {
+  Fixture f;
+  EXPECT_EQ(f.error("00001 GoTo(X(1))"), 507);          // before StartSession
+  EXPECT_EQ(f.error("00002 StartSession()"), 0);
+  EXPECT_EQ(f.error("00003 GoTo(X(1))"), 514);          // the 0507 above is class 3
+  EXPECT_EQ(f.error("00004 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00005 GoTo(X(1))"), 507);          // not homed
+  EXPECT_EQ(f.error("00006 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00007 AbortE()"), 1);              // an E-command needs an event tag
+  EXPECT_EQ(f.error("E0008 GoTo(X(1))"), 1);
+  EXPECT_EQ(f.error("00009 Home(1)"), 502);
+  EXPECT_EQ(f.error("00010 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00011 AlignPart(1,0,0,0,1,0,30)"), 501);
+  EXPECT_EQ(f.error("00012 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00013 CmdName()"), 507);
+  EXPECT_EQ(f.error("00014 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00015 Get(X(), X())"), 502);
+  EXPECT_EQ(f.error("00016 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00017 ChangeTool(3)"), 509);
+}
+
+TEST(IppSession, ToolPropertiesDriveTheMachine) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 SetProp(Tool.GoToPar.Speed(42), Tool.PtMeasPar.Speed(3.5))"), 0);
+  EXPECT_EQ(f.data("00020 GetProp(Tool.GoToPar.Speed(), Tool.PtMeasPar.Speed.Act(), Tool.Name())"),
+            "Tool.GoToPar.Speed(42), Tool.PtMeasPar.Speed.Act(3.5), Tool.Name(\"Probe1\")");
+  EXPECT_DOUBLE_EQ(f.cmm.state().positioning_feed_mm_s, 42);
+  EXPECT_DOUBLE_EQ(f.cmm.state().measuring_feed_mm_s, 3.5);
+  EXPECT_EQ(f.error("00030 SetProp(Tool.PtMeasPar.Speed(1e6))"), 504);  // clamped to Max, a warning
+  EXPECT_EQ(f.error("00040 GetProp(Tool.Nothing())"), 509);
+  EXPECT_EQ(f.error("00050 ClearAllErrors()"), 0);
+  const auto r = f.send("00060 EnumProp(Tool.GoToPar())");
+  EXPECT_EQ(r.size(), 4u);  // &, Speed, Accel, %
+  // The approach distance moves the probing start: a slow 1 mm/s probe from 20 mm takes longer.
+  EXPECT_EQ(f.error("00070 SetProp(Tool.PtMeasPar.Approach(20), Tool.PtMeasPar.Speed(1))"), 0);
+  const double slow = f.session.handle("00080 PtMeas(X(445), Y(210), Z(40), IJK(0,0,1))").motion_s;
+  EXPECT_EQ(f.error("00090 SetProp(Tool.PtMeasPar.Approach(2))"), 0);
+  const double fast = f.session.handle("00100 PtMeas(X(445), Y(210), Z(40), IJK(0,0,1))").motion_s;
+  EXPECT_GT(slow, fast + 15);  // 18 mm more at 1 mm/s
+}
+
+TEST(IppSession, DaemonsReportMotionUnderTheirTag) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("E0010 OnMoveReportE(Time(1), X(), Z())"), 0);
+  EXPECT_EQ(f.error("E0010 OnMoveReportE(Time(1), X())"), 515);
+  EXPECT_EQ(f.error("00015 ClearAllErrors()"), 0);
+  const auto r = f.send("00020 GoTo(X(400), Y(250), Z(100))");
+  ASSERT_EQ(r.size(), 3u);
+  EXPECT_EQ(r[1], "E0010 # X(400), Z(100)");
+  EXPECT_EQ(f.error("00030 StopDaemon(E0011)"), 513);
+  EXPECT_EQ(f.error("00040 StopDaemon(E0010)"), 0);
+  EXPECT_EQ(f.error("00050 StopAllDaemons()"), 512);
+}
+
+// Arguments that would make the server allocate without bound are refused, not attempted.
+TEST(IppSession, HugeScansAndNumbersAreRefused) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 ScanOnLine(310, 206, 41, 450, 206, 41, 0, 0, 1, 1E-9)"), 504);
+  EXPECT_EQ(f.error("00020 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 1E12, 90, 1)"), 504);
+  EXPECT_EQ(f.error("00030 GetErrorInfo(999999999999)"), 504);
+  EXPECT_EQ(f.error("00040 SetCsyTransformation(PartCsy, 1E300, 0, 0, 0, 0, 0)"), 0);
+  EXPECT_EQ(f.error("00050 SetCoordSystem(PartCsy)"), 0);
+  EXPECT_EQ(f.error("00060 GoTo(X(0))"), 1008);  // 1E300 away: outside the travel
+}
+
+TEST(IppSession, ScanOnLineFollowsTheTopFace) {
+  Fixture f;
+  f.start();
+  const auto body = f.data("00010 ScanOnLine(310, 206, 41, 450, 206, 41, 0, 0, 1, 1)");
+  auto values = std::vector<double>{};
+  std::size_t start = 0;
+  while (start < body.size()) {
+    const auto comma = body.find(',', start);
+    values.push_back(std::stod(body.substr(start, comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  ASSERT_GE(values.size(), 3u * 50);
+  for (std::size_t k = 2; k < values.size(); k += 3) EXPECT_NEAR(values[k], 41, 0.01) << k;  // ball centres
+}
+
+// Random and mutated lines never crash the session and every line gets a tagged answer.
+TEST(IppSession, FuzzedSessionNeverCrashes) {
+  Fixture f;
+  f.start();
+  std::mt19937_64 rng(1294);
+  const std::vector<std::string> seeds{
+      "00012 PtMeas(X(445), Y(210), Z(40), IJK(0,0,1))", "E0005 OnMoveReportE(Time(5), Dis(0.34), X(), Y(), Z())",
+      "00030 SetProp(Tool.PtMeasPar.Speed(5))",        "00020 ChangeTool(\"Probe1\")",
+      "00040 GoTo(X(400), Y(250), Z(100))",            "00050 SetCsyTransformation(PartCsy, 1, 2, 3, 4, 5, 6)",
+      "00060 EnumAllProp(Tool())",                     "00070 ClearAllErrors()",
+      "00080 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 360, 90, 1)"};
+  for (int i = 0; i < 3000; ++i) {
+    std::string s = seeds[rng() % seeds.size()];
+    const int edits = static_cast<int>(rng() % 3);
+    for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = "0123456789(),.-EXYZ\""[rng() % 20];
+    const auto reply = f.session.handle(s);
+    ASSERT_FALSE(reply.lines.empty()) << s;
+    for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
+  }
+}
