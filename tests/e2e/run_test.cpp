@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/virtual_cmm_backend.hpp"
 #include "metron/interpreter/session.hpp"
 
 namespace {
@@ -37,7 +38,7 @@ metron::interpreter::RunOutcome run(const fs::path& program, const std::optional
   if (world) o.world_path = world->string();
   o.seed = seed;
   o.out_dir = out_dir(out).string();
-  return run_program(o);
+  return run_program(o, metron::cli::virtual_cmm_backend);
 }
 
 // The last OUTPUT report of a feature / a tolerance result.

@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "metron/machine/segmented/reference_planner.hpp"
-#include "metron/machine/segmented/sample_paths.hpp"
-#include "metron/machine/segmented/segmented_controller.hpp"
+#include "support/reference_planner.hpp"
+#include "support/sample_paths.hpp"
+#include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "scan_paths.hpp"
 
 namespace {

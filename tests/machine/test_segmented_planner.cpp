@@ -7,10 +7,10 @@
 #include <random>
 
 #include "metron/machine/motion_profile.hpp"
-#include "metron/machine/segmented/path_interpolator.hpp"
-#include "metron/machine/segmented/reference_planner.hpp"
-#include "metron/machine/segmented/sample_paths.hpp"
-#include "metron/machine/segmented/speed_plan.hpp"
+#include "metron/machine/segmented_scanning/path_interpolator.hpp"
+#include "support/reference_planner.hpp"
+#include "support/sample_paths.hpp"
+#include "metron/machine/segmented_scanning/speed_plan.hpp"
 
 namespace {
 

@@ -5,7 +5,8 @@
 
 #include <numeric>
 
-#include "metron/machine/segmented/sample_paths.hpp"
+#include "support/sample_paths.hpp"
+#include "support/stream_commands.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 
 namespace {
@@ -78,7 +79,7 @@ TEST(ScanSegmentation, HostStreamsIntoFreedBuffers) {
   cfg.planning_s_per_segment = 1e-3;
   machine::segmented::SegmentedController ctl(cfg);
   const auto cmds = runtime::split_commands(path, 20);
-  const auto stats = runtime::stream_commands(cmds, ctl, 100.0);
+  const auto stats = test_support::stream_commands(cmds, ctl, 100.0);
   ASSERT_TRUE(stats.has_value()) << stats.error().message;
   EXPECT_TRUE(ctl.finished());
   EXPECT_EQ(stats->plan_kinds.size(), cmds.size());
@@ -86,7 +87,7 @@ TEST(ScanSegmentation, HostStreamsIntoFreedBuffers) {
   EXPECT_NEAR(ctl.path_state().s_mm, path.length(), 1e-6);
   // A run that cannot finish in the allowed time is reported, not hung.
   machine::segmented::SegmentedController slow(cfg);
-  const auto cut = runtime::stream_commands(cmds, slow, 0.5);
+  const auto cut = test_support::stream_commands(cmds, slow, 0.5);
   ASSERT_FALSE(cut.has_value());
   EXPECT_EQ(cut.error().kind, machine::FaultKind::Aborted);
 }
