@@ -389,6 +389,32 @@ TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
   }
 }
 
+// Two worlds (ARCHITECTURE.md rule 1): the controller plans the probe-dynamics speed limit from
+// the probe's data sheet, never from the hidden stiffness and mass. A data sheet that claims a
+// heavy stylus (the true one is light) gives the data sheet's limit.
+TEST(Scanning, ProbeDynamicsLimitComesFromTheDataSheet) {
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
+  const double path_r = 5 + ball_r - 0.3;
+  ScanPath c;
+  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), path_r, true));
+  c.approach_normal = Vec3::UnitX();
+  c.speed_mm_s = 100;
+  World w = world_with(boss);
+  w.machine.data_sheet.scanning_stylus_mass_g = 2000;  // the truth keeps its 5 g
+  const ScanRun r = scan(w, c);
+  ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+  const double from_sheet = 1000 * std::sqrt(w.machine.data_sheet.scanning_stiffness_n_mm / 2000) *
+                            std::sqrt(w.machine.scanning.probe.reference_deflection_mm * path_r);
+  bool logged = false;
+  for (const std::string& span : r.out.log)
+    if (span.find(": probe dynamics,") != std::string::npos) {
+      logged = true;
+      EXPECT_NEAR(std::stod(span.substr(span.find(">= ") + 3)), from_sheet, 0.01 * from_sheet) << span;
+    }
+  EXPECT_TRUE(logged);
+}
+
 // The VirtualCmm answers ScanPath: positioning, scan, retract, samples and the speed log.
 TEST(Scanning, VirtualCmmScansTheDefaultBlockTop) {
   VirtualCmm cmm(default_world(), 1);
