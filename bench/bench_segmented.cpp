@@ -34,6 +34,7 @@ namespace {
 using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
+using namespace metron::test_support;
 
 const char* name(SegmentedMode m) {
   switch (m) {

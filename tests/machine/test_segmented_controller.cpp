@@ -17,6 +17,7 @@ namespace {
 using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
+using namespace metron::test_support;
 
 using metron::scan_test::split;
 

@@ -17,6 +17,7 @@ namespace {
 using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
+using namespace metron::test_support;
 
 const MotionLimits k_limits{100.0, 1000.0, 10000.0};
 

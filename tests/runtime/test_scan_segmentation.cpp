@@ -55,7 +55,7 @@ TEST(ScanSegmentation, AveragingRuleHoldsForAllSizes) {
 }
 
 TEST(ScanSegmentation, CommandsCoverThePathInOrder) {
-  const geometry::PccPath path = machine::segmented::freeform_contour(103, 1.0);
+  const geometry::PccPath path = test_support::freeform_contour(103, 1.0);
   const auto cmds = runtime::split_commands(path, 20);
   ASSERT_EQ(cmds.size(), 6u);  // 103 = 5*20 + 3, 3 < 5: 20 20 20 20 | 12 11
   std::size_t next = 0;
@@ -73,7 +73,7 @@ TEST(ScanSegmentation, CommandsCoverThePathInOrder) {
 }
 
 TEST(ScanSegmentation, HostStreamsIntoFreedBuffers) {
-  const geometry::PccPath path = machine::segmented::freeform_contour(130, 1.0);
+  const geometry::PccPath path = test_support::freeform_contour(130, 1.0);
   machine::segmented::ControllerConfig cfg;
   cfg.buffer_segments = 20;
   cfg.planning_s_per_segment = 1e-3;

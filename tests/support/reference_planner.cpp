@@ -3,7 +3,9 @@
 
 #include "metron/machine/segmented_scanning/path_interpolator.hpp"
 
-namespace metron::machine::segmented {
+namespace metron::test_support {
+
+using namespace machine::segmented;
 
 ReferenceProfile reference_profile(const geometry::PccPath& path, const ScanLimits& limits, double dt_s,
                                    ScanRecorder* recorder) {
@@ -42,4 +44,4 @@ ReferenceProfile reference_profile(const geometry::PccPath& path, const ScanLimi
   return out;
 }
 
-}  // namespace metron::machine::segmented
+}  // namespace metron::test_support

@@ -6,7 +6,7 @@
 #include "metron/machine/segmented_scanning/speed_plan.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
 
-namespace metron::machine::segmented {
+namespace metron::test_support {
 
 /// The limit every mode is compared with: the whole path in the interpolator's horizon (no
 /// buffers, no planning time), rest to rest under the same limits.
@@ -18,7 +18,7 @@ struct ReferenceProfile {
 };
 
 /// Runs the reference motion (used only for comparison); `recorder` gets every cycle.
-ReferenceProfile reference_profile(const geometry::PccPath& path, const ScanLimits& limits, double dt_s,
-                                   ScanRecorder* recorder = nullptr);
+ReferenceProfile reference_profile(const geometry::PccPath& path, const machine::segmented::ScanLimits& limits, double dt_s,
+                                   machine::segmented::ScanRecorder* recorder = nullptr);
 
-}  // namespace metron::machine::segmented
+}  // namespace metron::test_support

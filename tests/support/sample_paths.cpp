@@ -7,7 +7,7 @@
 #include <vector>
 #include <numbers>
 
-namespace metron::machine::segmented {
+namespace metron::test_support {
 namespace {
 
 // Joins points of a parametric curve, sampled at about `step_mm` of arc length, with Hermite
@@ -75,4 +75,4 @@ geometry::PccPath tight_meander(std::size_t segments, double segment_mm) {
   return sample(f, df, segments, segment_mm);
 }
 
-}  // namespace metron::machine::segmented
+}  // namespace metron::test_support

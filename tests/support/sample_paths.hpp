@@ -5,7 +5,7 @@
 #include "metron/stdlib/geometry/pcc.hpp"
 
 // Long synthetic scan paths for the segmented-scanning tests and benchmark.
-namespace metron::machine::segmented {
+namespace metron::test_support {
 
 /// A free-form contour: `segments` Hermite segments of about `segment_mm` on a spiral around a
 /// lobed surface of revolution, r(theta) = 40 (1 + 0.3 sin 3 theta + 0.12 sin(7 theta + 1)) mm
@@ -17,4 +17,4 @@ geometry::PccPath freeform_contour(std::size_t segments, double segment_mm = 1.0
 /// about 1 mm, curvature changing sign every half wave).
 geometry::PccPath tight_meander(std::size_t segments, double segment_mm = 0.5);
 
-}  // namespace metron::machine::segmented
+}  // namespace metron::test_support
