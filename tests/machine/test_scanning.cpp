@@ -334,16 +334,31 @@ TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
               r.out.samples.size(), peak, worst);
 }
 
+namespace {
+
+// The speed-limit tests' set-up: a 10 mm boss and a circle around it at 100 mm/s.
+const double boss_path_r = 5 + ball_r - 0.3;
+csg::Node speed_test_boss() {
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
+  return boss;
+}
+ScanPath speed_test_circle() {
+  ScanPath c;
+  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), boss_path_r, true));
+  c.approach_normal = Vec3::UnitX();
+  c.speed_mm_s = 100;
+  return c;
+}
+
+}  // namespace
+
 // Speed limits: each bound is logged where it binds, equals its formula, and the measured speed
 // along the path stays under it.
 TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
-  csg::Node boss;
-  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
-  const double path_r = 5 + ball_r - 0.3;
-  ScanPath c;
-  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), path_r, true));
-  c.approach_normal = Vec3::UnitX();
-  c.speed_mm_s = 100;
+  const csg::Node boss = speed_test_boss();
+  const double path_r = boss_path_r;
+  const ScanPath c = speed_test_circle();
   struct Case {
     const char* name;
     std::function<void(World&)> setup;
@@ -393,13 +408,9 @@ TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
 // the probe's data sheet, never from the hidden stiffness and mass. A data sheet that claims a
 // heavy stylus (the true one is light) gives the data sheet's limit.
 TEST(Scanning, ProbeDynamicsLimitComesFromTheDataSheet) {
-  csg::Node boss;
-  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
-  const double path_r = 5 + ball_r - 0.3;
-  ScanPath c;
-  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), path_r, true));
-  c.approach_normal = Vec3::UnitX();
-  c.speed_mm_s = 100;
+  const csg::Node boss = speed_test_boss();
+  const double path_r = boss_path_r;
+  const ScanPath c = speed_test_circle();
   World w = world_with(boss);
   w.machine.data_sheet.scanning_stylus_mass_g = 2000;  // the truth keeps its 5 g
   const ScanRun r = scan(w, c);
