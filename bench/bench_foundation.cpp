@@ -7,6 +7,7 @@
 #include <random>
 
 #include "metron/interpreter/compiler.hpp"
+#include "cli/virtual_cmm_backend.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 
@@ -32,7 +33,7 @@ void run_block_inspection(benchmark::State& state) {
     metron::interpreter::RunOptions o;
     o.program = examples + "02_block_inspection.dmi";
     o.out_dir = out.string();
-    const auto r = metron::interpreter::run_program(o);
+    const auto r = metron::interpreter::run_program(o, metron::cli::virtual_cmm_backend);
     simulated += r.record.simulated_time_s;
   }
   state.counters["simulated_s_per_wall_s"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);

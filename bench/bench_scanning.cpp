@@ -19,7 +19,7 @@
 #include "fixtures.hpp"
 #include "scan_paths.hpp"
 #include "metron/machine/mesh_solid.hpp"
-#include "metron/machine/scanning/scan_controller.hpp"
+#include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/world_solid.hpp"
 
 using namespace metron;
@@ -53,15 +53,15 @@ struct Row {
 Row scan_ramp(ScanLaw law, double angle_deg, const Vec3& offset_mm, double roughness_mm, double cutoff_hz,
               double gain_1_s = 0) {
   World world = default_world();
-  if (gain_1_s > 0) world.scanning.control.deflection_gain_1_s = world.scanning.control.trajectory_gain_1_s = gain_1_s;
+  if (gain_1_s > 0) world.machine.scanning.control.deflection_gain_1_s = world.machine.scanning.control.trajectory_gain_1_s = gain_1_s;
   PartSpec part;
   part.design = scan_test::ramp_design(angle_deg);
   part.pose.translation_mm = part_origin + offset_mm;  // the part as machined sits off its design
   part.roughness = {roughness_mm, 0.5};
   part.seed = 7;
-  world.part = part;
-  world.probe.ball_radius_error_mm = 0;
-  const auto solid = make_world_solid(world);
+  world.truth.part = part;
+  world.truth.probe.ball_radius_error_mm = 0;
+  const auto solid = make_world_solid(world.truth);
 
   ScanPath cmd;
   cmd.path = scan_test::profile_path_xz(scan_test::ramp_profile(angle_deg), ball_radius_mm - 0.3, ball_radius_mm - 0.3);
@@ -69,7 +69,7 @@ Row scan_ramp(ScanLaw law, double angle_deg, const Vec3& offset_mm, double rough
   cmd.approach_normal = Vec3::UnitZ();
   cmd.law = law;
   cmd.sample_spacing_mm = 0.1;
-  ScanSetup setup{solid.get(), ball_radius_mm, world.machine, world.scanning, 11};
+  ScanSetup setup{solid.get(), ball_radius_mm, world.machine, world.truth.scanning, 11};
   std::vector<double> e;
   std::vector<double> s;
   Row row;
@@ -107,14 +107,14 @@ void table() {
   const double roughness_mm = 0.003, cutoff_hz = 25;
   const std::vector<Vec3> offsets = {Vec3(-0.3, 0, 0), Vec3(-1.0, 0, 0), Vec3(1.0, 0, 0.2)};
   const World defaults = default_world();
-  const auto& c = defaults.scanning.control;
+  const auto& c = defaults.machine.scanning.control;
   fmt::print("Ramp scans (docs/scanning.md): flat 20 mm, ramp rising 5 mm, plateau; 4 mm ball, E0 {} mm, feed {} mm/s,\n"
              "K {} /s, Kc {} /s, servo {} Hz / zeta {} / {} cycle delay, roughness {} mm (0.5 mm correlation).\n"
              "offset = the part as machined minus its design (mm). osc = RMS of |Ep| above {} Hz (2nd-order Butterworth\n"
              "high-pass), rev/mm = its sign changes per mm of path. dist = largest |P - Pp|. done = the path end was reached.\n\n",
-             defaults.scanning.probe.reference_deflection_mm, c.feed_mm_s, c.deflection_gain_1_s, c.trajectory_gain_1_s,
-             defaults.scanning.servo.natural_frequency_hz, defaults.scanning.servo.damping,
-             defaults.scanning.servo.command_delay_cycles, roughness_mm, cutoff_hz);
+             defaults.machine.scanning.probe.reference_deflection_mm, c.feed_mm_s, c.deflection_gain_1_s, c.trajectory_gain_1_s,
+             defaults.truth.scanning.servo.natural_frequency_hz, defaults.truth.scanning.servo.damping,
+             defaults.truth.scanning.servo.command_delay_cycles, roughness_mm, cutoff_hz);
   fmt::print("{:<5} {:<18} {:>5} | {:>9} {:>9} {:>9} {:>7} {:>8} {:>8} | {}\n", "law", "offset", "angle", "rms dE um",
              "peak dE um", "osc um", "rev/mm", "dist mm", "reach mm", "done");
   for (const Vec3& off : offsets)
@@ -233,15 +233,15 @@ void speed_on_step_part() {
     fmt::print("DCX part not available: {}\n", world.error().message);
     return;
   }
-  const auto& cad = std::get<CadDesign>(world->part->design);
-  const auto solid = make_world_solid(*world);
+  const auto& cad = std::get<CadDesign>(world->truth.part->design);
+  const auto solid = make_world_solid(world->truth);
   (void)solid->local_view(Vec3(300, 69, -48), 1);  // builds the mesh's grid outside the timing
   ScanPath cmd;
   const double z = -50 + ball_radius_mm - 0.3;
   cmd.path.segments.push_back(geometry::PccSegment::hermite({280, 69, z}, {400, 69, z}, Vec3::UnitX(), Vec3::UnitX()));
   cmd.approach_normal = Vec3::UnitZ();
   cmd.law = ScanLaw::Vc2;
-  ScanSetup setup{solid.get(), ball_radius_mm, world->machine, world->scanning, 3};
+  ScanSetup setup{solid.get(), ball_radius_mm, world->machine, world->truth.scanning, 3};
   const auto t = time_scan(cmd, setup, 5);
   fmt::print("Simulation speed on a STEP part: NIST DCX part ({} triangles, exact CAD faces) plus table, a 120 mm\n"
              "line at 10 mm/s, {} cycles = {:.2f} s simulated (best of 5 runs){}:\n",
@@ -264,7 +264,7 @@ void speed(bool profile_only = false) {
   cmd.approach_normal = Vec3::UnitX();
   cmd.law = ScanLaw::Vc2;
   cmd.speed_mm_s = 10;
-  ScanSetup setup{&solid, ball_radius_mm, world.machine, world.scanning, 3};
+  ScanSetup setup{&solid, ball_radius_mm, world.machine, world.truth.scanning, 3};
   (void)solid.signed_distance(centre);  // builds the mesh's search trees (lazy) outside the timing
   (void)solid.local_view(centre, 1);     // and its grid
   if (profile_only) {
@@ -303,13 +303,13 @@ void speed(bool profile_only = false) {
   {
     // The controller's own cost: the same kind of scan on an analytic surface (CSG plane, table).
     World plain = default_world();
-    plain.part.reset();
-    const auto table = make_world_solid(plain);
+    plain.truth.part.reset();
+    const auto table = make_world_solid(plain.truth);
     ScanPath line;
     const double z = ball_radius_mm - 0.3;
     line.path.segments.push_back(geometry::PccSegment::hermite({100, 100, z}, {300, 100, z}, Vec3::UnitX(), Vec3::UnitX()));
     line.approach_normal = Vec3::UnitZ();
-    ScanSetup flat{table.get(), ball_radius_mm, plain.machine, plain.scanning, 3};
+    ScanSetup flat{table.get(), ball_radius_mm, plain.machine, plain.truth.scanning, 3};
     const auto t1 = std::chrono::steady_clock::now();
     const ScanOutcome o = run_scan(line, flat, scan_approach_point(line), 0);
     const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();

@@ -21,12 +21,13 @@
 #include "fixtures.hpp"
 #include "scan_paths.hpp"
 #include "metron/machine/rng.hpp"
-#include "metron/machine/segmented/probe_scan_driver.hpp"
+#include "metron/machine/segmented_scanning/probe_scan_driver.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
-#include "metron/machine/segmented/reference_planner.hpp"
-#include "metron/machine/segmented/sample_paths.hpp"
-#include "metron/machine/segmented/segmented_controller.hpp"
+#include "reference_planner.hpp"
+#include "sample_paths.hpp"
+#include "stream_commands.hpp"
+#include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 
 namespace {
@@ -34,6 +35,7 @@ namespace {
 using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
+using namespace metron::test_support;
 
 const char* name(SegmentedMode m) {
   switch (m) {
@@ -108,7 +110,7 @@ Outcome run(const geometry::PccPath& path, double length, const ControllerConfig
   const auto cmds = runtime::split_commands(path, cfg.buffer_segments);
   o.commands = cmds.size();
   const auto w0 = std::chrono::steady_clock::now();
-  const auto r = runtime::stream_commands(cmds, ctl, 1e6);
+  const auto r = test_support::stream_commands(cmds, ctl, 1e6);
   o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   if (!r) {
     std::printf("run failed: %s\n", r.error().message.c_str());
@@ -183,12 +185,12 @@ constexpr double k_ball_mm = metron::scan_test::boss_ball_radius_mm;
 
 void probe_bench(double turns) {
   const World w = lobed_boss_world();
-  const auto solid = make_world_solid(w);
-  const ScanSetup setup{solid.get(), k_ball_mm, w.machine, w.scanning, 9};
+  const auto solid = make_world_solid(w.truth);
+  const ScanSetup setup{solid.get(), k_ball_mm, w.machine, w.truth.scanning, 9};
   const ScanPath scan = boss_scan(turns, 0.2);
   ControllerConfig base;
-  base.limits.path = {w.scanning.control.feed_mm_s, 500.0, 5000.0};
-  base.limits.normal_acceleration_mm_s2 = w.scanning.control.max_centripetal_mm_s2;
+  base.limits.path = {w.machine.scanning.control.feed_mm_s, 500.0, 5000.0};
+  base.limits.normal_acceleration_mm_s2 = w.machine.scanning.control.max_centripetal_mm_s2;
   const ReferenceProfile ref = reference_profile(scan.path, base.limits, base.dt_s);
   std::printf("real probe: %zu segments (%.1f mm, %.0f turns round a 50 mm boss with a hidden 5 um 3-lobe form), "
               "feed %.0f mm/s, a %.0f, j %.0f; reference %.2f s\n",
@@ -209,7 +211,7 @@ void probe_bench(double turns) {
       ProbeScanDriver probe(settings, setup, scan_approach_point(scan), 0);
       SegmentedController ctl(cfg, &probe);
       const auto cmds = runtime::split_commands(scan.path, P);
-      auto stats = runtime::stream_commands(cmds, ctl, 1e5);
+      auto stats = test_support::stream_commands(cmds, ctl, 1e5);
       bool ok = stats.has_value() && !probe.fault() && probe.finish(ctl.path_state().s_mm);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
       if (!ok) {

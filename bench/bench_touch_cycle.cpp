@@ -15,7 +15,7 @@
 
 #include <fmt/format.h>
 
-#include "metron/machine/axis_dynamics.hpp"
+#include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/characterisation.hpp"
 
@@ -196,12 +196,12 @@ void table(const std::string& world_name) {
   // time, the stop, and the fastest return move to the clearance above the latched point (as
   // every cycle above retracts). Controller-cycle rounding is not part of the limit.
   const auto& m = w->machine;
-  const machine::MotionLimits fast = machine::path_limits(m, down, positioning_mm_s, m.max_acceleration_mm_s2);
+  const machine::MotionLimits fast = machine::path_limits(m, w->truth.axes, down, positioning_mm_s, m.max_acceleration_mm_s2);
   const double jitter = m.skip.kind == machine::SkipInput::Kind::Scanned ? m.skip.period_s : 0;
-  const double delay = w->probe.filter_delay_s + w->probe.transmission_delay_s +
+  const double delay = w->truth.probe.filter_delay_s + w->truth.probe.transmission_delay_s +
                        (m.skip.kind == machine::SkipInput::Kind::Latched ? m.skip.latency_s : 0) + jitter / 2;
-  const double pt = w->probe.pre_travel.vertical_mm;
-  const double td = machine::ramp_time_s(m, down, fs);
+  const double pt = w->truth.probe.pre_travel.vertical_mm;
+  const double td = machine::ramp_time_s(m, w->truth.axes, down, fs);
   // Every cycle starts `clearance` above nominal + effective radius, i.e. q = pre-travel +
   // F_q * mean delay farther from the contact than that (the qualified radius absorbs q).
   const double q = pt + c.response.qualification_feed_mm_s * delay;

@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
-#include "metron/machine/axis_dynamics.hpp"
+#include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world.hpp"
 #include "metron/runtime/characterisation.hpp"
@@ -38,32 +38,32 @@ void print_truth(const machine::World& w, const runtime::MachineCharacterisation
     const Vec3 e = Vec3::Unit(i);
     std::cout << fmt::format("  {} axis: D1 true / recovered [mm] at", "xyz"[i]);
     for (double f : {2.0, 10.0, 50.0, 100.0}) {
-      const double t = f * machine::ramp_time_s(w.machine, e, f) / 2;
+      const double t = f * machine::ramp_time_s(w.machine, w.truth.axes, e, f) / 2;
       const double r = c.acceleration_distance_mm(e, f);
       std::cout << fmt::format("  {:.0f} mm/s: {:.4f}/{:.4f} ({:+.2f} %)", f, t, r, 100 * (r - t) / t);
     }
     std::cout << "\n";
   }
   const auto& s = w.machine.skip;
-  const double delay = w.probe.filter_delay_s + w.probe.transmission_delay_s +
+  const double delay = w.truth.probe.filter_delay_s + w.truth.probe.transmission_delay_s +
                        (s.kind == machine::SkipInput::Kind::Latched ? s.latency_s : 0);
   std::cout << fmt::format("  skip: {} true, {} recovered; jitter {:.3f} ms true, {:.3f} ms recovered\n",
                            s.kind == machine::SkipInput::Kind::Scanned ? "scanned" : "latched",
                            c.response.scanned ? "scanned" : "latched",
                            s.kind == machine::SkipInput::Kind::Scanned ? 1e3 * s.period_s : 0.0, 1e3 * c.response.jitter_s);
   std::cout << fmt::format("  constant delay {:.3f} ms true, {:.3f} ms recovered\n", 1e3 * delay, 1e3 * c.response.delay_s);
-  std::cout << fmt::format("  pre-travel (vertical) {:.4f} mm true, {:.4f} mm estimated\n", w.probe.pre_travel.vertical_mm,
+  std::cout << fmt::format("  pre-travel (vertical) {:.4f} mm true, {:.4f} mm estimated\n", w.truth.probe.pre_travel.vertical_mm,
                            c.pre_travel_mm);
   // True worst-case stop distance at the maximum feed along each axis.
   for (int i = 0; i < 3; ++i) {
     const Vec3 e = Vec3::Unit(i);
     const double f = c.max_feed_mm_s(e);
     const double jitter = s.kind == machine::SkipInput::Kind::Scanned ? s.period_s : 0;
-    const double stop = std::max(w.probe.pre_travel.horizontal_mm, w.probe.pre_travel.vertical_mm) +
-                        w.probe.repeatability_mm * 4 + f * (delay + jitter + w.machine.dt_s) +
-                        f * machine::ramp_time_s(w.machine, e, f) / 2;
+    const double stop = std::max(w.truth.probe.pre_travel.horizontal_mm, w.truth.probe.pre_travel.vertical_mm) +
+                        w.truth.probe.repeatability_mm * 4 + f * (delay + jitter + w.machine.dt_s) +
+                        f * machine::ramp_time_s(w.machine, w.truth.axes, e, f) / 2;
     std::cout << fmt::format("  {} axis: max feed {:.1f} mm/s, true worst stop distance {:.3f} mm of {:.3f} mm over-travel\n",
-                             "xyz"[i], f, stop, w.probe.over_travel_mm);
+                             "xyz"[i], f, stop, w.truth.probe.over_travel_mm);
   }
 }
 

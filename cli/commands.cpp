@@ -13,6 +13,7 @@
 #include "metron/runtime/outputs.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/point_file.hpp"
+#include "virtual_cmm_backend.hpp"
 
 namespace metron::cli {
 namespace {
@@ -53,7 +54,7 @@ int run(const RunArgs& args) {
     }
     if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << text << std::flush;
   };
-  const auto outcome = interpreter::run_program(options);
+  const auto outcome = interpreter::run_program(options, virtual_cmm_backend);
   std::cerr << outcome.diagnostics;
   const char* status = outcome.exit == interpreter::RunExit::Completed ? "completed"
                        : outcome.exit == interpreter::RunExit::Faulted ? "stopped by a machine fault"

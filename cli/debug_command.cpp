@@ -22,6 +22,7 @@
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/outputs.hpp"
+#include "virtual_cmm_backend.hpp"
 
 namespace metron::cli {
 namespace {
@@ -485,11 +486,12 @@ class Repl {
 };
 
 int debug(const DebugArgs& args) {
-  auto session = interpreter::Session::create(args.world, args.seed);
-  if (!session) {
-    std::cerr << "error: " << session.error() << "\n";
+  auto backend = virtual_cmm_backend(args.world, args.seed);
+  if (!backend) {
+    std::cerr << "error: " << backend.error() << "\n";
     return 2;
   }
+  auto session = interpreter::Session::create(std::move(*backend));
   std::unique_ptr<std::ifstream> file;
   if (args.commands) {
     file = std::make_unique<std::ifstream>(*args.commands);
@@ -498,7 +500,7 @@ int debug(const DebugArgs& args) {
       return 2;
     }
   }
-  interpreter::Session& s = **session;
+  interpreter::Session& s = *session;
   if (!args.program.empty()) {
     const bool ok = s.load(args.program);
     std::cout << s.take_diagnostics();

@@ -6,27 +6,15 @@
 
 #include <fmt/format.h>
 
-#include "metron/machine/virtual_cmm.hpp"
-#include "metron/machine/world.hpp"
 #include "metron/runtime/outputs.hpp"
 
 namespace metron::interpreter {
 
-tl::expected<std::unique_ptr<Session>, std::string> Session::create(const std::optional<std::string>& world_path,
-                                                                    std::optional<std::uint64_t> seed) {
-  machine::World world;
-  if (world_path) {
-    auto w = machine::load_world(*world_path);
-    if (!w) return tl::unexpected(w.error().message);
-    world = std::move(*w);
-  } else {
-    world = machine::default_world();
-  }
+std::unique_ptr<Session> Session::create(Backend backend) {
   std::unique_ptr<Session> s(new Session());
-  const std::uint64_t run_seed = seed ? *seed : world.seed;
-  s->m_record.world = world_path ? *world_path : std::string("<default>");
-  s->m_record.seed = run_seed;
-  s->m_machine = machine::make_virtual_cmm(world, run_seed);
+  s->m_record.world = std::move(backend.world);
+  s->m_record.seed = backend.seed;
+  s->m_machine = std::move(backend.machine);
   s->m_runtime = std::make_unique<runtime::MeasurementRuntime>(*s->m_machine, s->m_sources, s->m_record);
   s->m_interpreter = std::make_unique<Interpreter>(s->m_compiler.module(), *s->m_runtime, s->m_sources, s->m_sink);
   return s;
@@ -82,15 +70,16 @@ std::string Session::take_diagnostics() {
   return out;
 }
 
-RunOutcome run_program(const RunOptions& options) {
+RunOutcome run_program(const RunOptions& options, const BackendFactory& backend) {
   RunOutcome outcome;
-  auto session = Session::create(options.world_path, options.seed);
-  if (!session) {
+  auto built = backend(options.world_path, options.seed);
+  if (!built) {
     outcome.exit = RunExit::BadInput;
-    outcome.diagnostics = "error: " + session.error() + "\n";
+    outcome.diagnostics = "error: " + built.error() + "\n";
     return outcome;
   }
-  Session& s = **session;
+  const std::unique_ptr<Session> session = Session::create(std::move(*built));
+  Session& s = *session;
   std::error_code ec;
   std::filesystem::create_directories(options.out_dir, ec);
   if (ec) {

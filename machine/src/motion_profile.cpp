@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "metron/stdlib/jerk_limited_ramp.hpp"
+
 namespace metron::machine {
 namespace {
 
@@ -88,12 +90,11 @@ SpeedChange speed_change(double dv, const MotionLimits& l) {
   const double a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
   if (m * j >= a * a) {
     c.phases = {{a / j, sign * j}, {m / a - a / j, 0}, {a / j, -sign * j}};
-    c.duration_s = m / a + a / j;
   } else {
     const double t = std::sqrt(m / j);
     c.phases = {{t, sign * j}, {t, -sign * j}};
-    c.duration_s = 2 * t;
   }
+  c.duration_s = jerk_limited_ramp_time_s(m, a, j);
   return c;
 }
 double change_distance(double v0, double v1, const MotionLimits& l) {

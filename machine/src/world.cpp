@@ -14,157 +14,23 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "metron/stdlib/json_reader.hpp"
+
 namespace metron::machine {
 namespace {
 
 using nlohmann::json;
 
-// Thrown inside the parser only; parse_world turns it into a WorldError.
-struct ParseError {
-  std::string pointer;
-  std::string message;
-};
+namespace sj = strict_json;
+using sj::fail;
+using sj::number;
+using sj::Object;
+using sj::positive;
+using sj::string;
+using sj::unit;
+using sj::vec3;
 
-std::string pointer_token(std::string_view key) {  // RFC 6901 escaping
-  std::string out;
-  for (char c : key) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
-  }
-  return out;
-}
-
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
-[[noreturn]] void fail(const std::string& pointer, std::string message) {
-  throw ParseError{pointer.empty() ? "/" : pointer, std::move(message)};
-}
-
-double number(const json& j, const std::string& ptr) {
-  if (!j.is_number()) fail(ptr, "expected a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(ptr, "expected a finite number");
-  return v;
-}
-
-double positive(const json& j, const std::string& ptr) {
-  const double v = number(j, ptr);
-  if (!(v > 0)) fail(ptr, "expected a positive number");
-  return v;
-}
-
-double non_negative(const json& j, const std::string& ptr) {
-  const double v = number(j, ptr);
-  if (v < 0) fail(ptr, "expected a number >= 0");
-  return v;
-}
-
-Vec3 vec3(const json& j, const std::string& ptr) {
-  if (!j.is_array() || j.size() != 3) fail(ptr, "expected an array of 3 numbers");
-  return {number(j[0], ptr + "/0"), number(j[1], ptr + "/1"), number(j[2], ptr + "/2")};
-}
-
-Vec3 unit(const json& j, const std::string& ptr) {
-  const Vec3 v = vec3(j, ptr);
-  if (!(v.norm() > 1e-12)) fail(ptr, "expected a non-zero direction");
-  return v.normalized();
-}
-
-std::string string(const json& j, const std::string& ptr) {
-  if (!j.is_string()) fail(ptr, "expected a string");
-  return j.get<std::string>();
-}
-
-std::uint64_t seed(const json& j, const std::string& ptr) {
-  if (!j.is_number_unsigned()) fail(ptr, "expected a non-negative integer");
-  return j.get<std::uint64_t>();
-}
-
-int integer(const json& j, const std::string& ptr, int min) {
-  if (!j.is_number_integer()) fail(ptr, "expected an integer");
-  const auto v = j.get<std::int64_t>();
-  if (v < min || v > 1000000) fail(ptr, fmt::format("expected an integer >= {}", min));
-  return static_cast<int>(v);
-}
-
-// An object being read: remembers which keys the schema knows, so that finish() can report
-// every other key as unknown (typos must not be ignored silently).
-class Object {
- public:
-  Object(const json& j, std::string pointer) : m_json(j), m_pointer(std::move(pointer)) {
-    if (!j.is_object()) fail(m_pointer, "expected an object");
-  }
-  [[nodiscard]] std::string at(std::string_view key) const {
-    return m_pointer + "/" + pointer_token(key);
-  }
-  [[nodiscard]] const std::string& pointer() const { return m_pointer; }
-  const json* find(const std::string& key) {
-    m_known.insert(key);
-    const auto it = m_json.find(key);
-    return it == m_json.end() ? nullptr : &*it;
-  }
-  const json& required(const std::string& key) {
-    const json* j = find(key);
-    if (!j) fail(m_pointer, fmt::format("missing key '{}'", key));
-    return *j;
-  }
-  template <class Read>
-  void read(const std::string& key, Read read_value) {
-    if (const json* j = find(key)) read_value(*j, at(key));
-  }
-  void finish() const {
-    for (const auto& item : m_json.items()) {
-      if (m_known.count(item.key())) continue;
-      std::string message = fmt::format("unknown key '{}'", item.key());
-      std::string best;
-      std::size_t best_distance = 3;
-      for (const std::string& k : m_known) {
-        const std::size_t d = edit_distance(item.key(), k);
-        if (d < best_distance) best_distance = d, best = k;
-      }
-      if (!best.empty()) message += fmt::format(" (did you mean '{}'?)", best);
-      fail(at(item.key()), message);
-    }
-  }
-
- private:
-  const json& m_json;
-  std::string m_pointer;
-  std::set<std::string> m_known;
-};
-
-void set_number(Object& o, const std::string& key, double& out) {
-  o.read(key, [&](const json& j, const std::string& p) { out = number(j, p); });
-}
-void set_positive(Object& o, const std::string& key, double& out) {
-  o.read(key, [&](const json& j, const std::string& p) { out = positive(j, p); });
-}
-void set_non_negative(Object& o, const std::string& key, double& out) {
-  o.read(key, [&](const json& j, const std::string& p) { out = non_negative(j, p); });
-}
-void set_vec3(Object& o, const std::string& key, Vec3& out) {
-  o.read(key, [&](const json& j, const std::string& p) { out = vec3(j, p); });
-}
-void set_unit(Object& o, const std::string& key, Vec3& out) {
-  o.read(key, [&](const json& j, const std::string& p) { out = unit(j, p); });
-}
-
-MachineSpec parse_machine(const json& j, const std::string& ptr) {
-  MachineSpec m;
+void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, WorldTruth& truth) {
   Object o(j, ptr);
   o.read("travel_mm", [&](const json& tj, const std::string& tp) {
     Object t(tj, tp);
@@ -179,12 +45,12 @@ MachineSpec parse_machine(const json& j, const std::string& ptr) {
     }
     t.finish();
   });
-  set_positive(o, "max_speed_mm_s", m.max_speed_mm_s);
-  set_positive(o, "max_acceleration_mm_s2", m.max_acceleration_mm_s2);
-  set_positive(o, "max_jerk_mm_s3", m.max_jerk_mm_s3);
-  set_positive(o, "dt_s", m.dt_s);
-  set_positive(o, "positioning_feed_mm_s", m.positioning_feed_mm_s);
-  set_positive(o, "measuring_feed_mm_s", m.measuring_feed_mm_s);
+  o.positive("max_speed_mm_s", m.max_speed_mm_s);
+  o.positive("max_acceleration_mm_s2", m.max_acceleration_mm_s2);
+  o.positive("max_jerk_mm_s3", m.max_jerk_mm_s3);
+  o.positive("dt_s", m.dt_s);
+  o.positive("positioning_feed_mm_s", m.positioning_feed_mm_s);
+  o.positive("measuring_feed_mm_s", m.measuring_feed_mm_s);
   o.read("skip", [&](const json& sj, const std::string& sp) {
     Object s(sj, sp);
     const json* latched = s.find("latched");
@@ -194,12 +60,12 @@ MachineSpec parse_machine(const json& j, const std::string& ptr) {
     if (latched) {
       m.skip.kind = SkipInput::Kind::Latched;
       Object l(*latched, s.at("latched"));
-      set_non_negative(l, "latency_s", m.skip.latency_s);
+      l.non_negative("latency_s", m.skip.latency_s);
       l.finish();
     } else {
       m.skip.kind = SkipInput::Kind::Scanned;
       Object c(*scanned, s.at("scanned"));
-      set_positive(c, "period_s", m.skip.period_s);
+      c.positive("period_s", m.skip.period_s);
       c.finish();
     }
     s.finish();
@@ -219,25 +85,25 @@ MachineSpec parse_machine(const json& j, const std::string& ptr) {
         if (rate) {
           Object r(*rate, x.at("constant_rate"));
           axes[i].mode = AxisDynamics::Mode::ConstantRate;
-          set_positive(r, "acceleration_mm_s2", axes[i].acceleration_mm_s2);
-          set_positive(r, "jerk_mm_s3", axes[i].jerk_mm_s3);
+          r.positive("acceleration_mm_s2", axes[i].acceleration_mm_s2);
+          r.positive("jerk_mm_s3", axes[i].jerk_mm_s3);
           r.finish();
         } else {
           Object t(*time, x.at("constant_time"));
           axes[i].mode = AxisDynamics::Mode::ConstantTime;
-          set_positive(t, "time_s", axes[i].time_s);
+          t.positive("time_s", axes[i].time_s);
           t.finish();
         }
         x.finish();
       });
     a.finish();
-    m.axes = axes;
+    truth.axes = axes;
   });
-  set_vec3(o, "home_mm", m.home_mm);
-  set_number(o, "table_z_mm", m.table_z_mm);
+  o.vec3("home_mm", m.home_mm);
+  o.number("table_z_mm", truth.table_z_mm);
   o.finish();
-  if (m.axes)
-    for (auto& a : *m.axes) {
+  if (truth.axes)
+    for (auto& a : *truth.axes) {
       if (a.mode != AxisDynamics::Mode::ConstantRate) continue;
       if (a.acceleration_mm_s2 < 0) a.acceleration_mm_s2 = m.max_acceleration_mm_s2;
       if (a.jerk_mm_s3 < 0) a.jerk_mm_s3 = m.max_jerk_mm_s3;
@@ -248,49 +114,53 @@ MachineSpec parse_machine(const json& j, const std::string& ptr) {
   }
   if (m.positioning_feed_mm_s > m.max_speed_mm_s || m.measuring_feed_mm_s > m.max_speed_mm_s)
     fail(ptr, "a default feed exceeds max_speed_mm_s");
-  return m;
 }
 
 ProbeSpec parse_probe(const json& j, const std::string& ptr) {
   ProbeSpec p;
   Object o(j, ptr);
-  set_number(o, "ball_radius_error_mm", p.ball_radius_error_mm);
+  o.number("ball_radius_error_mm", p.ball_radius_error_mm);
   o.read("pre_travel", [&](const json& tj, const std::string& tp) {
     Object t(tj, tp);
-    set_non_negative(t, "horizontal_mm", p.pre_travel.horizontal_mm);
-    set_non_negative(t, "vertical_mm", p.pre_travel.vertical_mm);
-    t.read("lobes", [&](const json& lj, const std::string& lp) { p.pre_travel.lobes = integer(lj, lp, 0); });
-    set_non_negative(t, "lobe_amplitude_mm", p.pre_travel.lobe_amplitude_mm);
-    set_number(t, "lobe_phase_deg", p.pre_travel.lobe_phase_deg);
+    t.non_negative("horizontal_mm", p.pre_travel.horizontal_mm);
+    t.non_negative("vertical_mm", p.pre_travel.vertical_mm);
+    t.read("lobes", [&](const json& lj, const std::string& lp) {
+      p.pre_travel.lobes = static_cast<int>(sj::integer(lj, lp, 0));
+    });
+    t.non_negative("lobe_amplitude_mm", p.pre_travel.lobe_amplitude_mm);
+    t.number("lobe_phase_deg", p.pre_travel.lobe_phase_deg);
     t.finish();
   });
-  set_non_negative(o, "filter_delay_s", p.filter_delay_s);
-  set_non_negative(o, "transmission_delay_s", p.transmission_delay_s);
-  set_positive(o, "over_travel_mm", p.over_travel_mm);
-  set_non_negative(o, "repeatability_mm", p.repeatability_mm);
+  o.non_negative("filter_delay_s", p.filter_delay_s);
+  o.non_negative("transmission_delay_s", p.transmission_delay_s);
+  o.positive("over_travel_mm", p.over_travel_mm);
+  o.non_negative("repeatability_mm", p.repeatability_mm);
   o.finish();
   return p;
 }
 
-ReferenceSphereSpec parse_reference_sphere(const json& j, const std::string& ptr) {
-  ReferenceSphereSpec r;
+// The certificate goes to the controller's configuration, the sphere as it is to the truth
+// (by default exactly as certified).
+void parse_reference_sphere(const json& j, const std::string& ptr, ReferenceSphereConfig& known,
+                            ReferenceSphereTruth& r) {
   Object o(j, ptr);
-  set_vec3(o, "nominal_centre_mm", r.nominal_centre_mm);
-  set_positive(o, "certified_diameter_mm", r.certified_diameter_mm);
-  r.true_centre_mm = r.nominal_centre_mm;
-  r.true_diameter_mm = r.certified_diameter_mm;
-  set_vec3(o, "true_centre_mm", r.true_centre_mm);
-  set_positive(o, "true_diameter_mm", r.true_diameter_mm);
+  known = {};
+  r = {};
+  o.vec3("nominal_centre_mm", known.nominal_centre_mm);
+  o.positive("certified_diameter_mm", known.certified_diameter_mm);
+  r.true_centre_mm = known.nominal_centre_mm;
+  r.true_diameter_mm = known.certified_diameter_mm;
+  o.vec3("true_centre_mm", r.true_centre_mm);
+  o.positive("true_diameter_mm", r.true_diameter_mm);
   o.read("post", [&](const json& pj, const std::string& pp) {
     Object post(pj, pp);
-    set_positive(post, "diameter_mm", r.post_diameter_mm);
-    set_unit(post, "direction", r.post_direction);
-    set_positive(post, "length_mm", r.post_length_mm);
+    post.positive("diameter_mm", r.post_diameter_mm);
+    post.unit("direction", r.post_direction);
+    post.positive("length_mm", r.post_length_mm);
     post.finish();
     if (r.post_diameter_mm >= r.true_diameter_mm) fail(post.at("diameter_mm"), "the post must be thinner than the sphere");
   });
   o.finish();
-  return r;
 }
 
 csg::Node parse_node(const json& j, const std::string& ptr);
@@ -361,26 +231,26 @@ void collect_names(const csg::Node& n, std::map<std::string, std::vector<const c
 csg::Deviation parse_deviation(const json& j, const std::string& ptr, bool planar, bool round) {
   csg::Deviation d;
   Object o(j, ptr);
-  set_vec3(o, "offset_mm", d.offset_mm);
+  o.vec3("offset_mm", d.offset_mm);
   o.read("tilt_deg", [&](const json& tj, const std::string& tp) {
     if (!tj.is_array() || tj.size() != 2) fail(tp, "expected an array of 2 numbers");
     d.tilt_deg = {number(tj[0], tp + "/0"), number(tj[1], tp + "/1")};
   });
-  set_number(o, "size_mm", d.size_mm);
-  if (round) set_number(o, "diameter_mm", d.size_mm);  // the same as size_mm, for readability
+  o.number("size_mm", d.size_mm);
+  if (round) o.number("diameter_mm", d.size_mm);  // the same as size_mm, for readability
   o.read("form", [&](const json& fj, const std::string& fp) {
     Object f(fj, fp);
     if (planar) {
       csg::Waviness w;
-      set_number(f, "amplitude_mm", w.amplitude_mm);
-      set_positive(f, "wavelength_mm", w.wavelength_mm);
-      set_number(f, "phase_deg", w.phase_deg);
+      f.number("amplitude_mm", w.amplitude_mm);
+      f.positive("wavelength_mm", w.wavelength_mm);
+      f.number("phase_deg", w.phase_deg);
       d.waviness = w;
     } else {
       csg::Lobing l;
-      f.read("lobes", [&](const json& lj, const std::string& lp) { l.lobes = integer(lj, lp, 1); });
-      set_number(f, "amplitude_mm", l.amplitude_mm);
-      set_number(f, "phase_deg", l.phase_deg);
+      f.read("lobes", [&](const json& lj, const std::string& lp) { l.lobes = static_cast<int>(sj::integer(lj, lp, 1)); });
+      f.number("amplitude_mm", l.amplitude_mm);
+      f.number("phase_deg", l.phase_deg);
       d.lobing = l;
     }
     f.finish();
@@ -429,8 +299,8 @@ PartSpec parse_part(const json& j, const std::string& ptr, const std::string& ba
   }
   o.read("pose", [&](const json& pj, const std::string& pp) {
     Object pose(pj, pp);
-    set_vec3(pose, "translation_mm", part.pose.translation_mm);
-    set_vec3(pose, "rotation_deg", part.pose.rotation_deg);
+    pose.vec3("translation_mm", part.pose.translation_mm);
+    pose.vec3("rotation_deg", part.pose.rotation_deg);
     pose.finish();
   });
   o.read("deviations", [&](const json& dj, const std::string& dp) {
@@ -470,11 +340,11 @@ PartSpec parse_part(const json& j, const std::string& ptr, const std::string& ba
   });
   o.read("roughness", [&](const json& rj, const std::string& rp) {
     Object r(rj, rp);
-    set_non_negative(r, "amplitude_mm", part.roughness.amplitude_mm);
-    set_positive(r, "correlation_mm", part.roughness.correlation_mm);
+    r.non_negative("amplitude_mm", part.roughness.amplitude_mm);
+    r.positive("correlation_mm", part.roughness.correlation_mm);
     r.finish();
   });
-  o.read("seed", [&](const json& sj, const std::string& sp) { part.seed = seed(sj, sp); });
+  o.read("seed", [&](const json& nj, const std::string& np) { part.seed = sj::unsigned_integer(nj, np); });
   o.finish();
   return part;
 }
@@ -484,25 +354,33 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
   Object o(j, "");
   o.read("name", [&](const json& nj, const std::string& np) { w.name = string(nj, np); });
   o.read("description", [&](const json& dj, const std::string& dp) { string(dj, dp); });
-  o.read("seed", [&](const json& sj, const std::string& sp) { w.seed = seed(sj, sp); });
-  o.read("machine", [&](const json& mj, const std::string& mp) { w.machine = parse_machine(mj, mp); });
-  o.read("probe", [&](const json& pj, const std::string& pp) { w.probe = parse_probe(pj, pp); });
+  o.read("seed", [&](const json& nj, const std::string& np) { w.seed = sj::unsigned_integer(nj, np); });
+  o.read("machine", [&](const json& mj, const std::string& mp) { parse_machine(mj, mp, w.machine, w.truth); });
+  o.read("probe", [&](const json& pj, const std::string& pp) { w.truth.probe = parse_probe(pj, pp); });
   o.read("reference_sphere", [&](const json& rj, const std::string& rp) {
-    w.reference_sphere = parse_reference_sphere(rj, rp);
+    parse_reference_sphere(rj, rp, w.machine.reference_sphere, w.truth.reference_sphere);
   });
   o.read("part", [&](const json& pj, const std::string& pp) {
-    if (!pj.is_null()) w.part = parse_part(pj, pp, base_dir);
+    if (!pj.is_null()) w.truth.part = parse_part(pj, pp, base_dir);
   });
-  o.read("scanning", [&](const json& sj, const std::string& sp) {
-    auto spec = parse_scanning_spec(sj, sp);
-    if (!spec) fail(spec.error().pointer, spec.error().message);
-    w.scanning = *spec;
+  o.read("scanning", [&](const json& nj, const std::string& np) {
+    if (auto ok = parse_scanning_spec(nj, np, w.machine.scanning, w.truth.scanning); !ok) throw ok.error();
   });
   o.finish();
+  // The data sheets the controller is given: the true values (a data-sheet error would go here).
+  w.machine.data_sheet = data_sheet_of(w.truth);
   return w;
 }
 
 }  // namespace
+
+DataSheet data_sheet_of(const WorldTruth& truth) {
+  DataSheet d;
+  d.rated_over_travel_mm = truth.probe.over_travel_mm;
+  d.scanning_stiffness_n_mm = truth.scanning.probe.stiffness_n_mm;
+  d.scanning_stylus_mass_g = truth.scanning.probe.stylus_mass_g;
+  return d;
+}
 
 Frame Pose::part_to_machine() const {
   const double k = std::numbers::pi / 180.0;
@@ -589,13 +467,10 @@ tl::expected<World, WorldError> parse_world(const nlohmann::json& json_in, const
                                             const std::string& base_dir) {
   auto j = resolve_extends(json_in, source_name, base_dir, 0);
   if (!j) return tl::unexpected(j.error());
-  try {
-    World w = parse_world_or_throw(*j, base_dir);
-    w.source = source_name;
-    return w;
-  } catch (const ParseError& e) {
-    return tl::unexpected(WorldError{fmt::format("{}: {}: {}", source_name, e.pointer, e.message)});
-  }
+  auto w = sj::read([&] { return parse_world_or_throw(*j, base_dir); });
+  if (!w) return tl::unexpected(WorldError{fmt::format("{}: {}: {}", source_name, w.error().pointer, w.error().message)});
+  w->source = source_name;
+  return std::move(*w);
 }
 
 tl::expected<World, WorldError> load_world(const std::string& path) {

@@ -66,7 +66,7 @@ class RoughSolid final : public Solid {
 
 }  // namespace
 
-std::unique_ptr<Solid> make_part_solid(const World& world) {
+std::unique_ptr<Solid> make_part_solid(const WorldTruth& world) {
   if (!world.part) return nullptr;
   const PartSpec& part = *world.part;
   const Frame pose = part.pose.part_to_machine();
@@ -82,7 +82,7 @@ std::unique_ptr<Solid> make_part_solid(const World& world) {
   return solid;
 }
 
-std::unique_ptr<Solid> make_reference_sphere_solid(const ReferenceSphereSpec& s) {
+std::unique_ptr<Solid> make_reference_sphere_solid(const ReferenceSphereTruth& s) {
   csg::Node sphere;
   sphere.primitive = {"REFERENCE_SPHERE", csg::Sphere{s.true_centre_mm, s.true_diameter_mm}};
   csg::Node post;
@@ -94,9 +94,9 @@ std::unique_ptr<Solid> make_reference_sphere_solid(const ReferenceSphereSpec& s)
   return std::make_unique<CsgSolid>(rig, Frame::Identity());
 }
 
-std::unique_ptr<Solid> make_world_solid(const World& world) {
+std::unique_ptr<Solid> make_world_solid(const WorldTruth& world) {
   csg::Node table;
-  table.primitive = {"TABLE", csg::HalfSpace{Vec3(0, 0, world.machine.table_z_mm), Vec3::UnitZ()}};
+  table.primitive = {"TABLE", csg::HalfSpace{Vec3(0, 0, world.table_z_mm), Vec3::UnitZ()}};
   std::vector<std::unique_ptr<Solid>> solids;
   solids.push_back(std::make_unique<CsgSolid>(table, Frame::Identity()));
   solids.push_back(make_reference_sphere_solid(world.reference_sphere));

@@ -11,18 +11,17 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "metron/stdlib/jerk_limited_ramp.hpp"
+#include "metron/stdlib/json_reader.hpp"
+
 namespace metron::runtime {
 namespace {
 
 using nlohmann::json;
 constexpr double inf = std::numeric_limits<double>::infinity();
 
-// The constant-rate model of the ramp time: a jerk-limited ramp to v (triangular acceleration
-// below a^2/j, trapezoidal above).
-double constant_rate_ramp_s(double v, double a, double j) {
-  if (v * j < a * a) return 2 * std::sqrt(v / j);
-  return v / a + a / j;
-}
+// The constant-rate model of the ramp time: a jerk-limited ramp to v from rest.
+double constant_rate_ramp_s(double v, double a, double j) { return jerk_limited_ramp_time_s(v, a, j); }
 
 double rms_relative(const std::vector<RampSample>& s, const std::function<double(double)>& model) {
   double sum = 0;
@@ -554,58 +553,77 @@ json to_json(const MachineCharacterisation& c) {
 }
 
 tl::expected<MachineCharacterisation, std::string> characterisation_from_json(const json& j) {
-  try {
+  namespace sj = strict_json;
+  auto read = sj::read([&] {
     MachineCharacterisation c;
-    if (j.value("format", std::string()) != "metron-touch-characterisation")
-      return tl::unexpected(std::string("/format: expected \"metron-touch-characterisation\""));
-    c.world = j.value("world", std::string());
-    c.dt_s = j.at("dt_s").get<double>();
+    sj::Object o(j, "");
+    o.get("format", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"metron-touch-characterisation"}); });
+    o.read("version", [](const json& v, const std::string& p) { sj::integer(v, p, 1, 1); });
+    o.read("world", [&](const json& v, const std::string& p) { c.world = sj::string(v, p); });
+    c.dt_s = o.get("dt_s", sj::positive);
+    sj::Object axes(o.required("axes"), o.at("axes"));
     for (int i = 0; i < 3; ++i) {
-      const json& ax = j.at("axes").at(axis_name(i));
+      sj::Object ax(axes.required(axis_name(i)), axes.at(axis_name(i)));
       auto& a = c.axes[static_cast<std::size_t>(i)];
-      const std::string mode = ax.at("mode").get<std::string>();
-      if (mode != "constant_time" && mode != "constant_rate")
-        return tl::unexpected(fmt::format("/axes/{}/mode: expected constant_time or constant_rate", axis_name(i)));
+      const std::string mode =
+          ax.get("mode", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"constant_time", "constant_rate"}); });
       a.mode = mode == "constant_time" ? AxisAcceleration::Mode::ConstantTime : AxisAcceleration::Mode::ConstantRate;
-      a.time_s = ax.at("time_s").get<double>();
-      a.acceleration_mm_s2 = ax.at("acceleration_mm_s2").get<double>();
-      a.jerk_mm_s3 = ax.at("jerk_mm_s3").get<double>();
-      a.fit_rms_relative = ax.value("fit_rms_relative", 0.0);
-      for (const auto& s : ax.value("samples", json::array()))
-        a.samples.push_back({s.at("feed_mm_s").get<double>(), s.at("ramp_time_s").get<double>()});
-      if (!(a.time_s > 0) || !(a.acceleration_mm_s2 > 0) || !(a.jerk_mm_s3 > 0))
-        return tl::unexpected(fmt::format("/axes/{}: time, acceleration and jerk must be positive", axis_name(i)));
+      a.time_s = ax.get("time_s", sj::positive);
+      a.acceleration_mm_s2 = ax.get("acceleration_mm_s2", sj::positive);
+      a.jerk_mm_s3 = ax.get("jerk_mm_s3", sj::positive);
+      ax.non_negative("fit_rms_relative", a.fit_rms_relative);
+      ax.read("samples", [&](const json& v, const std::string& p) {
+        if (!v.is_array()) sj::fail(p, "expected an array");
+        for (std::size_t k = 0; k < v.size(); ++k) {
+          sj::Object s(v[k], p + "/" + std::to_string(k));
+          a.samples.push_back({s.get("feed_mm_s", sj::positive), s.get("ramp_time_s", sj::number)});
+          s.finish();
+        }
+      });
+      ax.finish();
     }
-    const json& r = j.at("response");
-    c.response.scanned = r.at("skip").get<std::string>() == "scanned";
-    c.response.jitter_s = r.at("jitter_s").get<double>();
-    c.response.delay_s = r.at("delay_s").get<double>();
-    c.response.noise_mm = r.at("noise_mm").get<double>();
-    c.response.qualification_feed_mm_s = r.at("qualification_feed_mm_s").get<double>();
-    for (const auto& s : r.value("touches", json::array()))
-      c.response.samples.push_back({s.at("feed_mm_s").get<double>(), s.at("count").get<int>(), s.at("mean_mm").get<double>(),
-                                    s.at("range_mm").get<double>(), s.value("midrange_mm", 0.0),
-                                    s.at("stddev_mm").get<double>()});
-    c.over_travel_mm = j.at("over_travel_mm").get<double>();
-    c.over_travel_margin = j.value("over_travel_margin", 0.8);
-    c.pre_travel_mm = j.at("pre_travel_mm").get<double>();
-    c.max_probe_feed_mm_s = j.at("max_probe_feed_mm_s").get<double>();
-    const json& s = j.at("strategy");
-    c.threshold_mm = s.at("threshold_mm").get<double>();
-    const std::string cycle = s.at("cycle").get<std::string>();
-    if (cycle != "one_touch" && cycle != "two_touch")
-      return tl::unexpected(std::string("/strategy/cycle: expected one_touch or two_touch"));
-    c.one_touch = cycle == "one_touch";
-    c.blend = s.value("blend", false);
-    c.measuring_feed_mm_s = s.at("measuring_feed_mm_s").get<double>();
-    c.first_feed_mm_s = s.at("first_feed_mm_s").get<double>();
-    c.nominal_tolerance_mm = s.value("nominal_tolerance_mm", 0.0);
-    if (!(c.measuring_feed_mm_s > 0) || !(c.max_probe_feed_mm_s > 0) || !(c.dt_s > 0))
-      return tl::unexpected(std::string("feeds and dt_s must be positive"));
+    axes.finish();
+    sj::Object r(o.required("response"), o.at("response"));
+    c.response.scanned = r.get("skip", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"latched", "scanned"}); }) ==
+                         "scanned";
+    c.response.jitter_s = r.get("jitter_s", sj::non_negative);
+    c.response.delay_s = r.get("delay_s", sj::number);
+    c.response.noise_mm = r.get("noise_mm", sj::non_negative);
+    c.response.qualification_feed_mm_s = r.get("qualification_feed_mm_s", sj::positive);
+    r.read("touches", [&](const json& v, const std::string& p) {
+      if (!v.is_array()) sj::fail(p, "expected an array");
+      for (std::size_t k = 0; k < v.size(); ++k) {
+        sj::Object s(v[k], p + "/" + std::to_string(k));
+        TouchSample t;
+        t.feed_mm_s = s.get("feed_mm_s", sj::positive);
+        t.count = static_cast<int>(s.get("count", [](const json& n, const std::string& q) { return sj::integer(n, q, 0); }));
+        t.mean_mm = s.get("mean_mm", sj::number);
+        t.range_mm = s.get("range_mm", sj::non_negative);
+        s.number("midrange_mm", t.midrange_mm);
+        t.stddev_mm = s.get("stddev_mm", sj::non_negative);
+        s.finish();
+        c.response.samples.push_back(t);
+      }
+    });
+    r.finish();
+    c.over_travel_mm = o.get("over_travel_mm", sj::non_negative);
+    o.positive("over_travel_margin", c.over_travel_margin);
+    c.pre_travel_mm = o.get("pre_travel_mm", sj::number);
+    c.max_probe_feed_mm_s = o.get("max_probe_feed_mm_s", sj::positive);
+    sj::Object s(o.required("strategy"), o.at("strategy"));
+    c.threshold_mm = s.get("threshold_mm", sj::non_negative);
+    c.one_touch =
+        s.get("cycle", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"one_touch", "two_touch"}); }) == "one_touch";
+    s.read("blend", [&](const json& v, const std::string& p) { c.blend = sj::boolean(v, p); });
+    c.measuring_feed_mm_s = s.get("measuring_feed_mm_s", sj::positive);
+    c.first_feed_mm_s = s.get("first_feed_mm_s", sj::positive);
+    s.non_negative("nominal_tolerance_mm", c.nominal_tolerance_mm);
+    s.finish();
+    o.finish();
     return c;
-  } catch (const json::exception& e) {
-    return tl::unexpected(fmt::format("bad characterisation file: {}", e.what()));
-  }
+  });
+  if (!read) return tl::unexpected(fmt::format("{}: {}", read.error().pointer, read.error().message));
+  return std::move(*read);
 }
 
 tl::expected<void, std::string> save_characterisation(const MachineCharacterisation& c, const std::string& path) {

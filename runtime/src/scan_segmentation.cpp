@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/runtime/scan_segmentation.hpp"
 
-#include <fmt/format.h>
-
 namespace metron::runtime {
 
 namespace seg = machine::segmented;
@@ -50,26 +48,6 @@ std::vector<seg::MeasurementCommand> split_commands(const geometry::PccPath& pat
   return out;
 }
 
-tl::expected<seg::SegmentedStats, machine::Fault> stream_commands(const std::vector<seg::MeasurementCommand>& commands,
-                                                                  seg::SegmentedController& controller,
-                                                                  double max_time_s) {
-  std::size_t next = 0;
-  while (!controller.finished()) {
-    // The host writes into a buffer as soon as its status flag says writable.
-    while (next < commands.size() && controller.free_buffer() != 0) {
-      if (auto r = controller.load(commands[next]); !r) return tl::unexpected(r.error());
-      ++next;
-    }
-    controller.step();
-    if (controller.time_s() > max_time_s) {
-      return tl::unexpected(machine::Fault{machine::FaultKind::Aborted,
-                                           fmt::format("segmented scan not finished after {:.1f} s", max_time_s),
-                                           Vec3::Zero(), controller.time_s()});
-    }
-  }
-  return controller.stats();
-}
-
 std::vector<machine::Command> scan_commands(const machine::ScanPath& scan, std::size_t capacity) {
   if (capacity == 0 || scan.path.segments.size() <= capacity) return {machine::Command{0, scan}};
   std::vector<machine::Command> out;
@@ -77,11 +55,7 @@ std::vector<machine::Command> scan_commands(const machine::ScanPath& scan, std::
     machine::ScanBufferWrite w;
     w.scan = scan;
     w.scan.path = {};
-    w.scan.path.segments = std::move(c.segments);
-    w.scan.path.normals = std::move(c.normals);
-    w.scan.path.speed_mm_s = std::move(c.speed_mm_s);
-    w.index = c.index;
-    w.last = c.last;
+    w.command = std::move(c);
     out.push_back({0, std::move(w)});
   }
   return out;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli/virtual_cmm_backend.hpp"
 #include "metron/interpreter/session.hpp"
 
 namespace {
@@ -28,7 +29,7 @@ metron::interpreter::RunOutcome run(const std::string& example, const std::strin
   o.program = (source_dir / "programs" / "examples" / example).string();
   o.world_path = (source_dir / "programs" / "worlds" / world).string();
   o.out_dir = (fs::temp_directory_path() / ("metron_nist_" + std::to_string(::getpid())) / out).string();
-  return metron::interpreter::run_program(o);
+  return metron::interpreter::run_program(o, metron::cli::virtual_cmm_backend);
 }
 
 TEST(NistParts, SimplePartProgramGivesTheNistOutput) {

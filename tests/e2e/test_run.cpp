@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/virtual_cmm_backend.hpp"
 #include "fixtures.hpp"
 #include "metron/interpreter/session.hpp"
 
@@ -33,7 +34,7 @@ metron::interpreter::RunOutcome run(const fs::path& program, const std::optional
   if (world) o.world_path = world->string();
   o.seed = seed;
   o.out_dir = out_dir(out).string();
-  return run_program(o);
+  return run_program(o, metron::cli::virtual_cmm_backend);
 }
 
 // The last OUTPUT report of a feature / a tolerance result.

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli/virtual_cmm_backend.hpp"
 #include "fixtures.hpp"
 #include "metron/interpreter/session.hpp"
 
@@ -40,7 +41,7 @@ TEST(ScanE2e, Example05OnTheDefaultBlock) {
   RunOptions o;
   o.program = (source_dir / "programs" / "examples" / "07_scan_circle.dmi").string();
   o.out_dir = out_dir("example05").string();
-  const auto out = run_program(o);
+  const auto out = run_program(o, metron::cli::virtual_cmm_backend);
   if (no_scanning_machine(out)) GTEST_SKIP() << "the virtual CMM has no scanning probe in this build";
   ASSERT_EQ(out.exit, RunExit::Completed) << out.diagnostics;
   // The default block is machined to its design: a 20 mm bore, a flat top at z = 40.
@@ -78,7 +79,7 @@ TEST(ScanE2e, LobedBossRecoveredWithEachLaw) {
     o.program = program.string();
     o.world_path = world.string();
     o.out_dir = dir.string();
-    const auto out = run_program(o);
+    const auto out = run_program(o, metron::cli::virtual_cmm_backend);
     ASSERT_EQ(out.exit, RunExit::Completed) << law << "\n" << out.diagnostics;
     const auto* f = feature(out.record, "BOSS");
     ASSERT_TRUE(f && f->actual && f->fit) << law;
@@ -112,7 +113,7 @@ TEST(ScanE2e, LobedBossThroughSmallCommandBuffers) {
     o.program = program.string();
     o.world_path = world.string();
     o.out_dir = dir.string();
-    const auto out = run_program(o);
+    const auto out = run_program(o, metron::cli::virtual_cmm_backend);
     ASSERT_EQ(out.exit, RunExit::Completed) << mode << "\n" << out.diagnostics;
     const auto* f = feature(out.record, "BOSS");
     ASSERT_TRUE(f && f->actual && f->fit) << mode;

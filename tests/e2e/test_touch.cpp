@@ -10,6 +10,7 @@
 
 #include <unistd.h>
 
+#include "cli/virtual_cmm_backend.hpp"
 #include "fixtures.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/characterisation.hpp"
@@ -59,7 +60,7 @@ metron::interpreter::RunOutcome run(const fs::path& program, const std::string& 
   o.world_path = world(world_name).string();
   o.out_dir = out_dir(out).string();
   if (characterisation) o.characterisation_path = characterisation->string();
-  return run_program(o);
+  return run_program(o, metron::cli::virtual_cmm_backend);
 }
 
 TEST(Touch, CharacterisedRunMeasuresTheBlock) {

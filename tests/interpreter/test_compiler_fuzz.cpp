@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "metron/interpreter/compiler.hpp"
+#include "cli/virtual_cmm_backend.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/outputs.hpp"
 
@@ -87,9 +88,10 @@ TEST(CompilerFuzz, MutatedProgramsThatCompileRunWithoutThrowing) {
     const std::string text = mutate(seeds[static_cast<std::size_t>(i) % seeds.size()], rng);
     const fs::path p = dir / "fuzz.dmi";
     std::ofstream(p) << text;
-    auto session = metron::interpreter::Session::create(std::nullopt, 1);
-    ASSERT_TRUE(session.has_value());
-    auto& s = **session;
+    auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
+    ASSERT_TRUE(backend.has_value());
+    auto session = metron::interpreter::Session::create(std::move(*backend));
+    auto& s = *session;
     s.runtime().set_output_directory(dir.string());
     try {
       if (!s.load(p.string())) continue;

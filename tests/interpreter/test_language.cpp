@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "cli/virtual_cmm_backend.hpp"
 #include "metron/interpreter/session.hpp"
 
 namespace {
@@ -34,10 +35,10 @@ fs::path write(const std::string& name, const std::string& text) {
 
 Ran run(const std::string& body, const std::string& name = "prog.dmi") {
   const fs::path p = write(name, "DMISMN/'test', 5.0\nUNITS/MM, ANGDEC\n" + body + "ENDFIL\n");
-  auto s = Session::create(std::nullopt, 1);
-  EXPECT_TRUE(s.has_value());
+  auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
+  EXPECT_TRUE(backend.has_value());
   Ran r;
-  r.session = std::move(*s);
+  r.session = Session::create(std::move(*backend));
   if (!r.session->load(p.string())) {
     r.status = ExecStatus::Error;
   } else {

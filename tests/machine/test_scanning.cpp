@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "metron/machine/mesh_solid.hpp"
-#include "metron/machine/scanning/scan_controller.hpp"
+#include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -36,7 +36,7 @@ World world_with(std::variant<csg::Node, CadDesign> design, const Vec3& offset =
   part.pose.translation_mm = origin + offset;
   part.roughness = {roughness_mm, 0.5};
   part.seed = 5;
-  w.part = part;
+  w.truth.part = part;
   return w;
 }
 
@@ -46,8 +46,8 @@ struct ScanRun {
 };
 
 ScanRun scan(const World& world, ScanPath cmd, const Solid* solid = nullptr) {
-  const auto own = solid ? nullptr : make_world_solid(world);
-  ScanSetup setup{solid ? solid : own.get(), ball_r, world.machine, world.scanning, 9};
+  const auto own = solid ? nullptr : make_world_solid(world.truth);
+  ScanSetup setup{solid ? solid : own.get(), ball_r, world.machine, world.truth.scanning, 9};
   ScanRun r;
   r.out = run_scan(cmd, setup, scan_approach_point(cmd), 0, [&](const ScanCycle& c) {
     if (c.scanning) r.cycles.push_back(c);
@@ -86,15 +86,15 @@ std::pair<double, double> deflection_error(const ScanRun& r, double from_mm, dou
 
 TEST(ScanningSpec, DefaultWorldHasAScanningProbeAndWorldsOverrideIt) {
   const World d = default_world();
-  EXPECT_DOUBLE_EQ(d.scanning.probe.reference_deflection_mm, 0.3);
-  EXPECT_GT(d.scanning.probe.measuring_range_mm, d.scanning.probe.reference_deflection_mm);
+  EXPECT_DOUBLE_EQ(d.machine.scanning.probe.reference_deflection_mm, 0.3);
+  EXPECT_GT(d.machine.scanning.probe.measuring_range_mm, d.machine.scanning.probe.reference_deflection_mm);
   using nlohmann::json;
   auto w = parse_world(json::parse(R"({"extends": "default", "scanning": {"probe": {"measuring_range_mm": 0.8},
                                        "servo": {"natural_frequency_hz": 30}}})"), "t.json");
   ASSERT_TRUE(w) << w.error().message;
-  EXPECT_DOUBLE_EQ(w->scanning.probe.measuring_range_mm, 0.8);
-  EXPECT_DOUBLE_EQ(w->scanning.servo.natural_frequency_hz, 30);
-  EXPECT_DOUBLE_EQ(w->scanning.probe.reference_deflection_mm, 0.3);  // kept from the base
+  EXPECT_DOUBLE_EQ(w->machine.scanning.probe.measuring_range_mm, 0.8);
+  EXPECT_DOUBLE_EQ(w->truth.scanning.servo.natural_frequency_hz, 30);
+  EXPECT_DOUBLE_EQ(w->machine.scanning.probe.reference_deflection_mm, 0.3);  // kept from the base
   auto typo = parse_world(json::parse(R"({"scanning": {"probe": {"stifness_n_mm": 1}}})"), "t.json");
   ASSERT_FALSE(typo);
   EXPECT_NE(typo.error().message.find("t.json: /scanning/probe/stifness_n_mm: unknown key"), std::string::npos)
@@ -129,7 +129,7 @@ TEST(Scanning, PlaneSurfaceIsReturnedWithinTheProbeNoise) {
 TEST(Scanning, Vc1FightsTheDeflectionCorrectionAsItsEquilibriumPredicts) {
   const double dz = 0.1;
   const World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, dz));
-  const double k = w.scanning.control.deflection_gain_1_s, kc = w.scanning.control.trajectory_gain_1_s;
+  const double k = w.machine.scanning.control.deflection_gain_1_s, kc = w.machine.scanning.control.trajectory_gain_1_s;
   const ScanRun vc1 = scan(w, ramp_scan(0, ScanLaw::Vc1));
   const ScanRun vc1p = scan(w, ramp_scan(0, ScanLaw::Vc1Prime));
   const ScanRun vc2 = scan(w, ramp_scan(0, ScanLaw::Vc2));
@@ -173,7 +173,7 @@ TEST(Scanning, CorrectionTermsHaveTheDirectionsTheLawsDefine) {
 TEST(Scanning, Vc1PrimeStallsOnSteepRampsWhereVc2Climbs) {
   const double dx = 1.0;
   const World d = default_world();
-  const double kc = d.scanning.control.trajectory_gain_1_s, vf = d.scanning.control.feed_mm_s;
+  const double kc = d.machine.scanning.control.trajectory_gain_1_s, vf = d.machine.scanning.control.feed_mm_s;
   for (double angle : {10.0, 45.0}) {
     const bool predicted_stall = kc * dx * std::pow(std::tan(angle * deg), 2) > vf;
     const World w = world_with(scan_test::ramp_design(angle), Vec3(-dx, 0, 0), 0.003);
@@ -193,10 +193,10 @@ TEST(Scanning, Vc1PrimeStallsOnSteepRampsWhereVc2Climbs) {
 // Vc2 at K = 2*60 (the same normal loop gain as Vc1 at K = Kc = 60) it rings too.
 TEST(Scanning, Vc1RingsBecauseItsNormalLoopGainIsKPlusKc) {
   World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, 0.05), 0.003);
-  w.scanning.control.deflection_gain_1_s = w.scanning.control.trajectory_gain_1_s = 60;
+  w.machine.scanning.control.deflection_gain_1_s = w.machine.scanning.control.trajectory_gain_1_s = 60;
   const double vc1 = deflection_error(scan(w, ramp_scan(0, ScanLaw::Vc1)), 15, 50).second;
   const double vc2 = deflection_error(scan(w, ramp_scan(0, ScanLaw::Vc2)), 15, 50).second;
-  w.scanning.control.deflection_gain_1_s = 120;
+  w.machine.scanning.control.deflection_gain_1_s = 120;
   const ScanRun fast = scan(w, ramp_scan(0, ScanLaw::Vc2));
   const double vc2_fast = fast.cycles.size() > 100 ? deflection_error(fast, 15, 50).second : 1.0;
   EXPECT_LT(vc2, 0.003);
@@ -214,7 +214,7 @@ TEST(Scanning, LobedCircleFormIsRecoveredWithin1um) {
   World w = world_with(boss, offset);
   csg::Deviation dev;
   dev.lobing = csg::Lobing{3, amplitude, phase_deg};
-  w.part->deviations["BOSS"] = dev;
+  w.truth.part->deviations["BOSS"] = dev;
   ScanPath c;
   c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), d / 2 + ball_r - 0.3, true));
   c.approach_normal = Vec3::UnitX();
@@ -293,7 +293,7 @@ TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
   cad.path = "<test mesh>";
   cad.mesh = mesh;
   World w = world_with(cad);
-  w.part->bumps = {bump};
+  w.truth.part->bumps = {bump};
   // Contour points on the design (the analytic surface it was tessellated from), offset by r - E0.
   const auto point = [&](double x) {
     const double hx = 1.5 * std::cos(x / 12) / 12;  // dz/dx at y = 0 (dz/dy = 0 there)
@@ -334,16 +334,31 @@ TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
               r.out.samples.size(), peak, worst);
 }
 
+namespace {
+
+// The speed-limit tests' set-up: a 10 mm boss and a circle around it at 100 mm/s.
+const double boss_path_r = 5 + ball_r - 0.3;
+csg::Node speed_test_boss() {
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
+  return boss;
+}
+ScanPath speed_test_circle() {
+  ScanPath c;
+  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), boss_path_r, true));
+  c.approach_normal = Vec3::UnitX();
+  c.speed_mm_s = 100;
+  return c;
+}
+
+}  // namespace
+
 // Speed limits: each bound is logged where it binds, equals its formula, and the measured speed
 // along the path stays under it.
 TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
-  csg::Node boss;
-  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 10.0, 30.0}};
-  const double path_r = 5 + ball_r - 0.3;
-  ScanPath c;
-  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), path_r, true));
-  c.approach_normal = Vec3::UnitX();
-  c.speed_mm_s = 100;
+  const csg::Node boss = speed_test_boss();
+  const double path_r = boss_path_r;
+  const ScanPath c = speed_test_circle();
   struct Case {
     const char* name;
     std::function<void(World&)> setup;
@@ -351,11 +366,15 @@ TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
   };
   const Case cases[] = {
       {"centripetal", [](World&) {},
-       [&](const World& w) { return std::sqrt(w.scanning.control.max_centripetal_mm_s2 * path_r); }},
-      {"probe dynamics", [](World& w) { w.scanning.probe.stylus_mass_g = 2000; },
+       [&](const World& w) { return std::sqrt(w.machine.scanning.control.max_centripetal_mm_s2 * path_r); }},
+      {"probe dynamics",  // a heavy stylus, and its data sheet says so (the controller plans with the data sheet)
+       [](World& w) {
+         w.truth.scanning.probe.stylus_mass_g = 2000;
+         w.machine.data_sheet = data_sheet_of(w.truth);
+       },
        [&](const World& w) {
-         return 1000 * std::sqrt(w.scanning.probe.stiffness_n_mm / w.scanning.probe.stylus_mass_g) *
-                std::sqrt(w.scanning.probe.reference_deflection_mm * path_r);
+         return 1000 * std::sqrt(w.machine.data_sheet.scanning_stiffness_n_mm / w.machine.data_sheet.scanning_stylus_mass_g) *
+                std::sqrt(w.machine.scanning.probe.reference_deflection_mm * path_r);
        }},
       {"machine", [](World& w) { w.machine.max_speed_mm_s = 20; }, [](const World&) { return 20.0; }},
       {"segment", [](World&) {}, [](const World&) { return 15.0; }},  // the path generator's per-segment speed
@@ -383,6 +402,28 @@ TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
     std::printf("[figures] %s limit %.3f mm/s, fastest measured %.3f mm/s, max ratio %.4f\n", k.name, expected, fastest,
                 r.out.stats.max_speed_ratio);
   }
+}
+
+// Two worlds (ARCHITECTURE.md rule 1): the controller plans the probe-dynamics speed limit from
+// the probe's data sheet, never from the hidden stiffness and mass. A data sheet that claims a
+// heavy stylus (the true one is light) gives the data sheet's limit.
+TEST(Scanning, ProbeDynamicsLimitComesFromTheDataSheet) {
+  const csg::Node boss = speed_test_boss();
+  const double path_r = boss_path_r;
+  const ScanPath c = speed_test_circle();
+  World w = world_with(boss);
+  w.machine.data_sheet.scanning_stylus_mass_g = 2000;  // the truth keeps its 5 g
+  const ScanRun r = scan(w, c);
+  ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+  const double from_sheet = 1000 * std::sqrt(w.machine.data_sheet.scanning_stiffness_n_mm / 2000) *
+                            std::sqrt(w.machine.scanning.probe.reference_deflection_mm * path_r);
+  bool logged = false;
+  for (const std::string& span : r.out.log)
+    if (span.find(": probe dynamics,") != std::string::npos) {
+      logged = true;
+      EXPECT_NEAR(std::stod(span.substr(span.find(">= ") + 3)), from_sheet, 0.01 * from_sheet) << span;
+    }
+  EXPECT_TRUE(logged);
 }
 
 // The VirtualCmm answers ScanPath: positioning, scan, retract, samples and the speed log.
@@ -421,7 +462,7 @@ TEST(Scanning, VirtualCmmScansTheDefaultBlockTop) {
 // (see the equilibrium test), beyond a 0.6 mm range.
 TEST(Scanning, OverRangeIsAFaultWithTheSamplesSoFar) {
   World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, 1.0));
-  w.scanning.probe.measuring_range_mm = 0.6;
+  w.machine.scanning.probe.measuring_range_mm = 0.6;
   VirtualCmm cmm(w, 1);
   cmm.submit({1, DefineTool{"T1", 2 * ball_r}});
   cmm.submit({2, SelectTool{"T1"}});
@@ -452,8 +493,8 @@ TEST(Scanning, LocalViewsAnswerExactlyLikeTheirSolid) {
   cad.path = "<test mesh>";
   cad.mesh = mesh;
   World w = world_with(cad, Vec3::Zero(), 0.002);
-  w.part->bumps = {Bump{Vec3(20, 0, height(20, 0)), 0.05, 2}};
-  const auto solid = make_world_solid(w);
+  w.truth.part->bumps = {Bump{Vec3(20, 0, height(20, 0)), 0.05, 2}};
+  const auto solid = make_world_solid(w.truth);
   std::mt19937_64 rng(4);
   std::uniform_real_distribution<double> u(-1, 1);
   int compared = 0;

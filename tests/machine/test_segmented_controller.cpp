@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "metron/machine/segmented/reference_planner.hpp"
-#include "metron/machine/segmented/sample_paths.hpp"
-#include "metron/machine/segmented/segmented_controller.hpp"
+#include "reference_planner.hpp"
+#include "sample_paths.hpp"
+#include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "scan_paths.hpp"
 
 namespace {
@@ -17,6 +17,7 @@ namespace {
 using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
+using namespace metron::test_support;
 
 using metron::scan_test::split;
 

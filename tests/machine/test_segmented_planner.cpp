@@ -8,16 +8,17 @@
 #include <random>
 
 #include "metron/machine/motion_profile.hpp"
-#include "metron/machine/segmented/path_interpolator.hpp"
-#include "metron/machine/segmented/reference_planner.hpp"
-#include "metron/machine/segmented/sample_paths.hpp"
-#include "metron/machine/segmented/speed_plan.hpp"
+#include "metron/machine/segmented_scanning/path_interpolator.hpp"
+#include "reference_planner.hpp"
+#include "sample_paths.hpp"
+#include "metron/machine/segmented_scanning/speed_plan.hpp"
 
 namespace {
 
 using namespace metron;
 using namespace metron::machine;
 using namespace metron::machine::segmented;
+using namespace metron::test_support;
 
 const MotionLimits k_limits{100.0, 1000.0, 10000.0};
 

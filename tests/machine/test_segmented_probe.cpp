@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <numbers>
 
-#include "metron/machine/segmented/probe_scan_driver.hpp"
+#include "metron/machine/segmented_scanning/probe_scan_driver.hpp"
 #include "scan_paths.hpp"
-#include "metron/machine/segmented/segmented_controller.hpp"
+#include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -39,8 +39,8 @@ struct ProbeRun {
 };
 
 ProbeRun run(const World& w, const ScanPath& scan, ControllerConfig cfg) {
-  const auto solid = make_world_solid(w);
-  const ScanSetup setup{solid.get(), ball_r, w.machine, w.scanning, 9};
+  const auto solid = make_world_solid(w.truth);
+  const ScanSetup setup{solid.get(), ball_r, w.machine, w.truth.scanning, 9};
   ScanPath settings = scan;
   settings.path = {};
   ProbeScanDriver probe(settings, setup, scan_approach_point(scan), 0);
@@ -76,8 +76,8 @@ ControllerConfig config(SegmentedMode mode, std::size_t P, const World& w) {
   ControllerConfig cfg;
   cfg.mode = mode;
   cfg.buffer_segments = P;
-  cfg.limits.path = {w.scanning.control.feed_mm_s, 500.0, 5000.0};
-  cfg.limits.normal_acceleration_mm_s2 = w.scanning.control.max_centripetal_mm_s2;
+  cfg.limits.path = {w.machine.scanning.control.feed_mm_s, 500.0, 5000.0};
+  cfg.limits.normal_acceleration_mm_s2 = w.machine.scanning.control.max_centripetal_mm_s2;
   return cfg;
 }
 

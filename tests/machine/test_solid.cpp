@@ -72,7 +72,7 @@ TEST(Solid, PrimitiveDistancesAreExact) {
 }
 
 TEST(Solid, DefaultBlockDistancesNearFaces) {
-  const auto part = make_part_solid(default_world());
+  const auto part = make_part_solid(default_world().truth);
   const Vec3 o(300, 200, 0);  // part origin in the machine
   EXPECT_NEAR(part->signed_distance(o + Vec3(20, 20, 42.5)), 2.5, 1e-12);    // above TOP
   EXPECT_NEAR(part->signed_distance(o + Vec3(-3, 50, 20)), 3, 1e-12);        // left of LEFT
@@ -92,7 +92,7 @@ TEST(Solid, DefaultBlockDistancesNearFaces) {
 }
 
 TEST(Solid, BallContactIsExactOnPlaneSphereBoreAndCone) {
-  const auto part = make_part_solid(default_world());
+  const auto part = make_part_solid(default_world().truth);
   const Vec3 o(300, 200, 0);
   const double r = 2;
   // TOP, straight down: the centre stops at z = 42.
@@ -147,8 +147,8 @@ TEST(Solid, StartingInContactIsFreeOnlyWhenMovingAway) {
 
 TEST(Solid, DeviationsMoveResizeTiltAndShapePrimitives) {
   const World w = default_world();
-  const csg::Node& design = std::get<csg::Node>(w.part->design);
-  const Frame pose = w.part->pose.part_to_machine();
+  const csg::Node& design = std::get<csg::Node>(w.truth.part->design);
+  const Frame pose = w.truth.part->pose.part_to_machine();
   const Vec3 o(300, 200, 0);
   const Vec3 in_bore = o + Vec3(40 + 7, 50, 30);  // 3 mm from the nominal wall at +x
   {
@@ -182,7 +182,7 @@ TEST(Solid, DeviationsMoveResizeTiltAndShapePrimitives) {
 
 TEST(Solid, WorldSolidHasTableReferenceSphereAndPost) {
   const World w = default_world();
-  const auto all = make_world_solid(w);
+  const auto all = make_world_solid(w.truth);
   EXPECT_NEAR(all->signed_distance(Vec3(600, 600, 5)), 5, 1e-12);             // the table
   EXPECT_EQ(all->feature_at(Vec3(600, 600, 5)), "TABLE");
   EXPECT_NEAR(all->signed_distance(Vec3(900, 700, 120)), 7.5, 1e-12);         // the sphere's top
@@ -193,12 +193,12 @@ TEST(Solid, WorldSolidHasTableReferenceSphereAndPost) {
 
 TEST(Solid, RoughnessIsASmallFixedFieldPerSeed) {
   World w = default_world();
-  const auto smooth = make_part_solid(w);
-  w.part->roughness = Roughness{0.001, 0.5};
-  const auto rough = make_part_solid(w);
-  const auto again = make_part_solid(w);
-  w.part->seed = 2;
-  const auto other = make_part_solid(w);
+  const auto smooth = make_part_solid(w.truth);
+  w.truth.part->roughness = Roughness{0.001, 0.5};
+  const auto rough = make_part_solid(w.truth);
+  const auto again = make_part_solid(w.truth);
+  w.truth.part->seed = 2;
+  const auto other = make_part_solid(w.truth);
   double largest = 0;
   bool differs = false;
   for (const Vec3& p : random_points(300, Vec3(300, 200, 38), Vec3(460, 300, 42))) {
@@ -258,7 +258,7 @@ std::vector<Vec3> near_simple_part(int n) {
 TEST(Solid, StepFacesAreExactAndNeverFartherThanTheChordTolerance) {
   if (!std::filesystem::exists(simple_part_step)) GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
   const World w = *load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/nist_simple_part.json");
-  const auto& cad = std::get<CadDesign>(w.part->design);
+  const auto& cad = std::get<CadDesign>(w.truth.part->design);
   ASSERT_TRUE(cad.faces);
   const double chord = cad.chord_tolerance_mm;
   EXPECT_EQ(chord, 0.001);
@@ -295,7 +295,7 @@ TEST(Solid, StepFacesAreExactAndNeverFartherThanTheChordTolerance) {
 TEST(Solid, BallContactOnAStepPartIsSafe) {
   if (!std::filesystem::exists(simple_part_step)) GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
   const World w = *load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/nist_simple_part.json");
-  const auto part = make_part_solid(w);
+  const auto part = make_part_solid(w.truth);
   const double r = 1.5, chord = 0.001;
   // Random moves from the air toward the part: at the contact the true gap is within the chord
   // tolerance of zero, and before it the ball never overlapped the true part by more than that.

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fixtures.hpp"
-#include "metron/machine/axis_dynamics.hpp"
+#include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 
 using namespace metron;
@@ -73,8 +73,8 @@ TEST(AxisDynamics, ConstantRatePerAxis) {
 
 TEST(AxisDynamics, DefaultWorldKeepsThePathLimits) {
   const World w = default_world();
-  EXPECT_FALSE(w.machine.axes);
-  const MotionLimits l = path_limits(w.machine, Vec3::UnitX(), 50, 1000);
+  EXPECT_FALSE(w.truth.axes);
+  const MotionLimits l = path_limits(w.machine, w.truth.axes, Vec3::UnitX(), 50, 1000);
   EXPECT_EQ(l.acceleration_mm_s2, 1000);
   EXPECT_EQ(l.jerk_mm_s3, 10000);
   EXPECT_EQ(l.speed_mm_s, 50);
@@ -94,9 +94,9 @@ TEST(AxisDynamics, WorldErrorsNameTheRecord) {
   // An axis not named keeps the path limits.
   auto partial = parse(R"({"extends": "default", "machine": {"axes": {"y": {"constant_time": {"time_s": 0.1}}}}})");
   ASSERT_TRUE(partial) << partial.error().message;
-  EXPECT_EQ((*partial->machine.axes)[0].mode, AxisDynamics::Mode::ConstantRate);
-  EXPECT_EQ((*partial->machine.axes)[0].acceleration_mm_s2, 1000);
-  EXPECT_EQ((*partial->machine.axes)[1].mode, AxisDynamics::Mode::ConstantTime);
+  EXPECT_EQ((*partial->truth.axes)[0].mode, AxisDynamics::Mode::ConstantRate);
+  EXPECT_EQ((*partial->truth.axes)[0].acceleration_mm_s2, 1000);
+  EXPECT_EQ((*partial->truth.axes)[1].mode, AxisDynamics::Mode::ConstantTime);
 }
 
 // The top of the default block (z = 40 at x 300..460, y 200..300).
@@ -112,7 +112,7 @@ PtMeas top_point(double approach, double feed) {
 
 TEST(TwoTouch, GivesTheSlowTouchFasterThanOneSlowTouch) {
   World w = default_world();
-  w.probe.repeatability_mm = 0;
+  w.truth.probe.repeatability_mm = 0;
   Cmm m(w);
   ASSERT_EQ(m.run(DefineTool{"T", 4.0}).status, Response::Status::Done);
   ASSERT_EQ(m.run(SelectTool{"T"}).status, Response::Status::Done);
@@ -147,9 +147,9 @@ TEST(TwoTouch, GivesTheSlowTouchFasterThanOneSlowTouch) {
 TEST(AccelerationZone, ErrorVsStandoffFollowsTheRamp) {
   World w = world_file("touch_const_time.json");
   w.machine.skip = SkipInput{};  // latched: no jitter, so single points show the bias
-  w.probe.repeatability_mm = 0;
-  const double feed = 5, ramp = 0.06, pt = w.probe.pre_travel.vertical_mm;
-  const double tau = w.probe.filter_delay_s + w.probe.transmission_delay_s + w.machine.skip.latency_s;
+  w.truth.probe.repeatability_mm = 0;
+  const double feed = 5, ramp = 0.06, pt = w.truth.probe.pre_travel.vertical_mm;
+  const double tau = w.truth.probe.filter_delay_s + w.truth.probe.transmission_delay_s + w.machine.skip.latency_s;
   Cmm m(w);
   m.run(DefineTool{"T", 4.0});
   m.run(SelectTool{"T"});

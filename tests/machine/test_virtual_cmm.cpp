@@ -24,7 +24,7 @@ constexpr double deg = std::numbers::pi / 180;
 using test_support::world_file;
 
 World noiseless(World w) {
-  w.probe.repeatability_mm = 0;
+  w.truth.probe.repeatability_mm = 0;
   return w;
 }
 
@@ -225,9 +225,9 @@ TEST(VirtualCmm, PerfectPartConeIsExact) {
 TEST(VirtualCmm, QualificationFindsTheEffectiveRadius) {
   // Analytic: the ball centre stops short by pre-travel + feed * (filter + transmission + latency).
   const World w = noiseless(default_world());
-  const double expected = 2 - w.probe.pre_travel.horizontal_mm -
+  const double expected = 2 - w.truth.probe.pre_travel.horizontal_mm -
                           w.machine.measuring_feed_mm_s *
-                              (w.probe.filter_delay_s + w.probe.transmission_delay_s + w.machine.skip.latency_s);
+                              (w.truth.probe.filter_delay_s + w.truth.probe.transmission_delay_s + w.machine.skip.latency_s);
   for (const char* file : {"default.json", "block_deviations.json"}) {
     Cmm cmm(noiseless(world_file(file)));
     cmm.tool(4);
@@ -244,7 +244,7 @@ TEST(VirtualCmm, QualificationFindsTheEffectiveRadius) {
 
 TEST(VirtualCmm, QualificationAbsorbsBallRadiusError) {
   World w = noiseless(default_world());
-  w.probe.ball_radius_error_mm = -0.003;
+  w.truth.probe.ball_radius_error_mm = -0.003;
   Cmm cmm(w);
   cmm.tool(4);
   const double expected = 2 - 0.003 - 0.010 - 3 * (0.004 + 4e-6);
@@ -366,7 +366,8 @@ TEST(VirtualCmm, ProbingInAirIsNoContact) {
 
 TEST(VirtualCmm, FastProbingOverTravels) {
   World w = default_world();
-  w.probe.over_travel_mm = 0.2;
+  w.truth.probe.over_travel_mm = 0.2;
+  w.machine.data_sheet = data_sheet_of(w.truth);  // its data sheet says so
   Cmm cmm(w);
   cmm.tool(4);
   const Vec3 p = part_origin + Vec3(20, 20, 40);
@@ -530,7 +531,7 @@ namespace {
 // The perfect probe on a CAD world.
 World perfect_cad(const std::string& name) {
   World w = world_file(name);
-  w.probe = world_file("perfect.json").probe;
+  w.truth.probe = world_file("perfect.json").truth.probe;
   w.machine.skip.latency_s = 0;
   return w;
 }
@@ -573,7 +574,7 @@ TEST(VirtualCmm, StepPartIsExact) {
   EXPECT_NE(r.fault->message.find("collision with face"), std::string::npos) << r.fault->message;
 
   // A Gaussian bump of the deviation field raises the top by its amplitude at its centre.
-  w.part->bumps = {Bump{Vec3(10, 10, 50), 0.004, 3}};
+  w.truth.part->bumps = {Bump{Vec3(10, 10, 50), 0.004, 3}};
   Cmm bumped(w);
   bumped.tool(4);
   bumped.go(Vec3(10, 10, 80));
@@ -589,7 +590,7 @@ TEST(VirtualCmm, DcxStepCylinderAndSphereAreExact) {
   {
     // Solid level, part coordinates: every recognised face is used exactly, and next to them
     // the exact distance differs from the mesh's by at most the guard of 1.5 chord tolerances.
-    const auto& cad = std::get<CadDesign>(w.part->design);
+    const auto& cad = std::get<CadDesign>(w.truth.part->design);
     ASSERT_TRUE(cad.faces);
     const MeshSolid exact(cad.mesh, Frame::Identity(), {}, *cad.faces, cad.chord_tolerance_mm);
     const MeshSolid mesh_only(cad.mesh, Frame::Identity());

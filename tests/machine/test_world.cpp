@@ -41,13 +41,13 @@ TEST(World, DefaultWorldContents) {
   EXPECT_EQ(w.machine.dt_s, 0.001);
   EXPECT_EQ(w.machine.skip.kind, SkipInput::Kind::Latched);
   EXPECT_EQ(w.machine.skip.latency_s, 4e-6);
-  EXPECT_EQ(w.probe.pre_travel.at(Vec3::UnitX()), 0.010);
-  EXPECT_EQ(w.probe.pre_travel.at(-Vec3::UnitZ()), 0.010);
-  EXPECT_EQ(w.probe.repeatability_mm, 0.0002);
-  EXPECT_EQ(w.reference_sphere.certified_diameter_mm, 25);
-  ASSERT_TRUE(w.part);
-  EXPECT_TRUE((w.part->pose.part_to_machine() * Vec3(1, 2, 3) - Vec3(301, 202, 3)).norm() < 1e-12);
-  EXPECT_TRUE(w.part->deviations.empty());
+  EXPECT_EQ(w.truth.probe.pre_travel.at(Vec3::UnitX()), 0.010);
+  EXPECT_EQ(w.truth.probe.pre_travel.at(-Vec3::UnitZ()), 0.010);
+  EXPECT_EQ(w.truth.probe.repeatability_mm, 0.0002);
+  EXPECT_EQ(w.machine.reference_sphere.certified_diameter_mm, 25);
+  ASSERT_TRUE(w.truth.part);
+  EXPECT_TRUE((w.truth.part->pose.part_to_machine() * Vec3(1, 2, 3) - Vec3(301, 202, 3)).norm() < 1e-12);
+  EXPECT_TRUE(w.truth.part->deviations.empty());
 }
 
 TEST(World, AllWorldFilesLoad) {
@@ -66,12 +66,12 @@ TEST(World, ExtendsMergesOverTheBase) {
   ASSERT_TRUE(w) << w.error().message;
   EXPECT_EQ(w->name, "block_deviations");
   EXPECT_EQ(w->machine.max_speed_mm_s, 300);  // from default.json
-  EXPECT_EQ(w->part->deviations.at("BORE1").size_mm, 0.012);
-  EXPECT_EQ(w->part->deviations.at("BORE1").offset_mm, Vec3(0.03, 0, 0));
-  EXPECT_EQ(w->part->deviations.at("TOP").tilt_deg, Vec2(0.05, 0));
-  EXPECT_EQ(w->part->deviations.at("BOSS1").lobing->lobes, 3);
-  EXPECT_EQ(w->reference_sphere.true_centre_mm, Vec3(900, 700, 100));
-  EXPECT_EQ(w->reference_sphere.nominal_centre_mm, Vec3(899.6, 700.3, 99.8));
+  EXPECT_EQ(w->truth.part->deviations.at("BORE1").size_mm, 0.012);
+  EXPECT_EQ(w->truth.part->deviations.at("BORE1").offset_mm, Vec3(0.03, 0, 0));
+  EXPECT_EQ(w->truth.part->deviations.at("TOP").tilt_deg, Vec2(0.05, 0));
+  EXPECT_EQ(w->truth.part->deviations.at("BOSS1").lobing->lobes, 3);
+  EXPECT_EQ(w->truth.reference_sphere.true_centre_mm, Vec3(900, 700, 100));
+  EXPECT_EQ(w->machine.reference_sphere.nominal_centre_mm, Vec3(899.6, 700.3, 99.8));
 
   auto scanned = parse_world(nlohmann::json::parse(R"({"extends": "default",
       "machine": {"skip": {"scanned": {"period_s": 0.003}}}})"), "s.json");
@@ -94,9 +94,11 @@ TEST(World, ErrorsNameTheFileAndTheJsonPath) {
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"deviations": {"BORE3": {}}}})"),
             "world.json: /part/deviations/BORE3: no primitive named 'BORE3' in the design");
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"deviations": {"TOP": {"diameter_mm": 0.1}}}})"),
-            "world.json: /part/deviations/TOP/diameter_mm: unknown key 'diameter_mm'");
+            "world.json: /part/deviations/TOP/diameter_mm: unknown key 'diameter_mm' "
+            "(expected one of: form, offset_mm, size_mm, tilt_deg)");
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"deviations": {"TOP": {"form": {"lobes": 3}}}}})"),
-            "world.json: /part/deviations/TOP/form/lobes: unknown key 'lobes'");
+            "world.json: /part/deviations/TOP/form/lobes: unknown key 'lobes' "
+            "(expected one of: amplitude_mm, phase_deg, wavelength_mm)");
   EXPECT_EQ(error_of(R"({"part": {"design": {"type": "cone", "apex": [0,0,0], "axis": [0,0,0], "half_angle_deg": 30}}})"),
             "world.json: /part/design/axis: expected a non-zero direction");
 }
@@ -104,7 +106,9 @@ TEST(World, ErrorsNameTheFileAndTheJsonPath) {
 TEST(World, UnknownKeysAreErrorsWithASuggestion) {
   EXPECT_EQ(error_of(R"({"probe": {"pre_travle": {}}})"),
             "world.json: /probe/pre_travle: unknown key 'pre_travle' (did you mean 'pre_travel'?)");
-  EXPECT_EQ(error_of(R"({"colour": "red"})"), "world.json: /colour: unknown key 'colour'");
+  EXPECT_EQ(error_of(R"({"colour": "red"})"),
+            "world.json: /colour: unknown key 'colour' "
+            "(expected one of: description, machine, name, part, probe, reference_sphere, scanning, seed)");
   EXPECT_EQ(error_of(R"([1, 2])"), "world.json: /: expected an object");
 }
 

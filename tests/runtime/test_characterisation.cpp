@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fixtures.hpp"
-#include "metron/machine/axis_dynamics.hpp"
+#include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/characterisation.hpp"
 
@@ -33,7 +33,7 @@ Characterised run(const std::string& name, std::uint64_t seed = 1) {
 }
 
 double true_delay_s(const machine::World& w) {
-  return w.probe.filter_delay_s + w.probe.transmission_delay_s +
+  return w.truth.probe.filter_delay_s + w.truth.probe.transmission_delay_s +
          (w.machine.skip.kind == machine::SkipInput::Kind::Latched ? w.machine.skip.latency_s : 0);
 }
 double true_jitter_s(const machine::World& w) {
@@ -49,15 +49,15 @@ TEST_P(Recovery, RecoversTheHiddenTruth) {
   const auto [w, c] = run(name, seed);
   for (int i = 0; i < 3; ++i) {
     const Vec3 e = Vec3::Unit(i);
-    const auto& truth = w.machine.axes ? (*w.machine.axes)[static_cast<std::size_t>(i)] : machine::AxisDynamics{};
-    if (w.machine.axes) {
+    const auto& truth = w.truth.axes ? (*w.truth.axes)[static_cast<std::size_t>(i)] : machine::AxisDynamics{};
+    if (w.truth.axes) {
       EXPECT_EQ(c.axes[static_cast<std::size_t>(i)].mode == AxisAcceleration::Mode::ConstantTime,
                 truth.mode == machine::AxisDynamics::Mode::ConstantTime)
           << name << " axis " << i;
     }
     // Measured feeds and feeds between them (the fitted function is the lookup).
     for (double f : {1.0, 2.0, 3.5, 7.0, 10.0, 33.0, 75.0, 150.0}) {
-      const double d_true = f * machine::ramp_time_s(w.machine, e, f) / 2;
+      const double d_true = f * machine::ramp_time_s(w.machine, w.truth.axes, e, f) / 2;
       EXPECT_NEAR(c.acceleration_distance_mm(e, f), d_true, 0.01 * d_true) << name << " axis " << i << " feed " << f;
     }
   }
@@ -70,18 +70,18 @@ TEST_P(Recovery, RecoversTheHiddenTruth) {
               0.02 * true_delay_s(w) + 0.02 * true_jitter_s(w)) << name;
   EXPECT_NEAR(c.response.delay_s, true_delay_s(w), 0.02 * true_delay_s(w) + 0.05 * true_jitter_s(w)) << name;
   EXPECT_NEAR(c.dt_s, w.machine.dt_s, 1e-9);
-  EXPECT_DOUBLE_EQ(c.over_travel_mm, w.probe.over_travel_mm);
+  EXPECT_DOUBLE_EQ(c.over_travel_mm, w.truth.probe.over_travel_mm);
   // The true worst case at the maximum feed of each axis direction: the largest pre-travel, 4
   // sigma of trigger noise, the delays, the whole scan period, one interpolator cycle, braking.
   for (int i = 0; i < 3; ++i) {
     const Vec3 e = Vec3::Unit(i);
     const double f = c.max_feed_mm_s(e);
     EXPECT_GT(f, 1.0);
-    const double pt = std::max(w.probe.pre_travel.horizontal_mm, w.probe.pre_travel.vertical_mm) +
-                      w.probe.pre_travel.lobe_amplitude_mm + 4 * w.probe.repeatability_mm;
+    const double pt = std::max(w.truth.probe.pre_travel.horizontal_mm, w.truth.probe.pre_travel.vertical_mm) +
+                      w.truth.probe.pre_travel.lobe_amplitude_mm + 4 * w.truth.probe.repeatability_mm;
     const double stop = pt + f * (true_delay_s(w) + true_jitter_s(w) + w.machine.dt_s) +
-                        f * machine::ramp_time_s(w.machine, e, f) / 2;
-    EXPECT_LT(stop, w.probe.over_travel_mm) << name << " axis " << i;
+                        f * machine::ramp_time_s(w.machine, w.truth.axes, e, f) / 2;
+    EXPECT_LT(stop, w.truth.probe.over_travel_mm) << name << " axis " << i;
   }
   EXPECT_LE(c.max_probe_feed_mm_s, c.max_feed_mm_s(Vec3::UnitZ()) + 1e-9);
 }
@@ -175,7 +175,7 @@ namespace {
 TEST(Characterisation, OptimalStandoffRemovesTheAccelerationZoneError) {
   machine::World w = world_file("touch_const_time.json");
   w.machine.skip = machine::SkipInput{};
-  w.probe.repeatability_mm = 0;
+  w.truth.probe.repeatability_mm = 0;
   MachineCharacterisation c;
   {
     machine::VirtualCmm probe_cmm(w, 1);

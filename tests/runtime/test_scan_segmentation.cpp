@@ -5,7 +5,8 @@
 
 #include <numeric>
 
-#include "metron/machine/segmented/sample_paths.hpp"
+#include "sample_paths.hpp"
+#include "stream_commands.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 
 namespace {
@@ -54,7 +55,7 @@ TEST(ScanSegmentation, AveragingRuleHoldsForAllSizes) {
 }
 
 TEST(ScanSegmentation, CommandsCoverThePathInOrder) {
-  const geometry::PccPath path = machine::segmented::freeform_contour(103, 1.0);
+  const geometry::PccPath path = test_support::freeform_contour(103, 1.0);
   const auto cmds = runtime::split_commands(path, 20);
   ASSERT_EQ(cmds.size(), 6u);  // 103 = 5*20 + 3, 3 < 5: 20 20 20 20 | 12 11
   std::size_t next = 0;
@@ -72,13 +73,13 @@ TEST(ScanSegmentation, CommandsCoverThePathInOrder) {
 }
 
 TEST(ScanSegmentation, HostStreamsIntoFreedBuffers) {
-  const geometry::PccPath path = machine::segmented::freeform_contour(130, 1.0);
+  const geometry::PccPath path = test_support::freeform_contour(130, 1.0);
   machine::segmented::ControllerConfig cfg;
   cfg.buffer_segments = 20;
   cfg.planning_s_per_segment = 1e-3;
   machine::segmented::SegmentedController ctl(cfg);
   const auto cmds = runtime::split_commands(path, 20);
-  const auto stats = runtime::stream_commands(cmds, ctl, 100.0);
+  const auto stats = test_support::stream_commands(cmds, ctl, 100.0);
   ASSERT_TRUE(stats.has_value()) << stats.error().message;
   EXPECT_TRUE(ctl.finished());
   EXPECT_EQ(stats->plan_kinds.size(), cmds.size());
@@ -86,7 +87,7 @@ TEST(ScanSegmentation, HostStreamsIntoFreedBuffers) {
   EXPECT_NEAR(ctl.path_state().s_mm, path.length(), 1e-6);
   // A run that cannot finish in the allowed time is reported, not hung.
   machine::segmented::SegmentedController slow(cfg);
-  const auto cut = runtime::stream_commands(cmds, slow, 0.5);
+  const auto cut = test_support::stream_commands(cmds, slow, 0.5);
   ASSERT_FALSE(cut.has_value());
   EXPECT_EQ(cut.error().kind, machine::FaultKind::Aborted);
 }

@@ -14,7 +14,7 @@
 
 #include "fixtures.hpp"
 #include "scan_paths.hpp"
-#include "metron/machine/scanning/scan_controller.hpp"
+#include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -75,19 +75,22 @@ const char* name(segmented::SegmentedMode m) {
 // The world record, its defaults and its errors.
 TEST(SegmentedScanMachine, WorldRecordConfiguresTheBuffers) {
   const World d = default_world();
-  EXPECT_GE(d.scanning.segmented.buffer_segments, 100000u);  // every usual scan fits one buffer
+  EXPECT_GE(d.machine.scanning.segmented.buffer_segments, 100000u);  // every usual scan fits one buffer
   const auto j = nlohmann::json::parse(R"({"segmented": {"buffer_segments": 50, "mode": "look_ahead",
                                            "planning_s_per_segment": 0.001, "low_speed_mm_s": 2}})");
-  const auto s = parse_scanning_spec(j, "/scanning");
-  ASSERT_TRUE(s);
+  ScanningSpec spec;
+  ScanningTruth truth;
+  const auto parse = [&](const nlohmann::json& json) { return parse_scanning_spec(json, "/scanning", spec, truth); };
+  ASSERT_TRUE(parse(j));
+  const ScanningSpec* s = &spec;
   EXPECT_EQ(s->segmented.buffer_segments, 50u);
   EXPECT_EQ(s->segmented.mode, segmented::SegmentedMode::LookAhead);
   EXPECT_DOUBLE_EQ(s->segmented.planning_s_per_segment, 0.001);
   EXPECT_DOUBLE_EQ(s->segmented.low_speed_mm_s, 2);
-  const auto bad_mode = parse_scanning_spec(nlohmann::json::parse(R"({"segmented": {"mode": "fast"}})"), "/scanning");
+  const auto bad_mode = parse(nlohmann::json::parse(R"({"segmented": {"mode": "fast"}})"));
   ASSERT_FALSE(bad_mode);
   EXPECT_EQ(bad_mode.error().pointer, "/scanning/segmented/mode");
-  const auto bad_low = parse_scanning_spec(nlohmann::json::parse(R"({"segmented": {"low_speed_mm_s": 8}})"), "/scanning");
+  const auto bad_low = parse(nlohmann::json::parse(R"({"segmented": {"low_speed_mm_s": 8}})"));
   ASSERT_FALSE(bad_low);
   EXPECT_EQ(bad_low.error().pointer, "/scanning/segmented/low_speed_mm_s");
 }
@@ -95,7 +98,7 @@ TEST(SegmentedScanMachine, WorldRecordConfiguresTheBuffers) {
 // Three turns around the lobed boss world (2,500 segments) through buffers of 100 segments.
 TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
   World w = world_file("scan_lobed_circle.json");
-  w.scanning.segmented.buffer_segments = 100;
+  w.machine.scanning.segmented.buffer_segments = 100;
   ScanPath c;
   const double r = 25 + ball_r - e0;
   c.path = scan_test::circle_path(Vec3(200, 300, 15), r, true, 0, 3 * 360.0);
@@ -105,7 +108,7 @@ TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
   ASSERT_GT(c.path.segments.size(), 3000u);
   for (const auto mode : {segmented::SegmentedMode::Conventional, segmented::SegmentedMode::Seed,
                           segmented::SegmentedMode::LookAhead}) {
-    w.scanning.segmented.mode = mode;
+    w.machine.scanning.segmented.mode = mode;
     VirtualCmm cmm(w, 1);
     start_machine(cmm);
     cmm.submit({3, GoTo{scan_approach_point(c) + Vec3(0, 0, 40), std::nullopt}});  // clear of the boss top
@@ -146,7 +149,7 @@ TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
 // hidden 10 um bump is found in every mode.
 TEST(SegmentedScanMachine, FreeFormBumpThroughSmallBuffers) {
   World w = world_file("scan_freeform_bump.json");
-  w.scanning.segmented.buffer_segments = 50;
+  w.machine.scanning.segmented.buffer_segments = 50;
   const auto height = [](double x) { return 20 + 1.5 * std::sin(x / 12); };  // at y = 0
   std::vector<Vec3> section;
   for (double x = 4; x <= 56 + 1e-9; x += 2) section.emplace_back(x, 0, height(x));
@@ -158,7 +161,7 @@ TEST(SegmentedScanMachine, FreeFormBumpThroughSmallBuffers) {
   ASSERT_GT(c.path.segments.size(), 2000u);
   for (const auto mode : {segmented::SegmentedMode::Conventional, segmented::SegmentedMode::Seed,
                           segmented::SegmentedMode::LookAhead}) {
-    w.scanning.segmented.mode = mode;
+    w.machine.scanning.segmented.mode = mode;
     VirtualCmm cmm(w, 1);
     start_machine(cmm);
     const double t0 = cmm.simulated_time_s();
@@ -188,7 +191,7 @@ TEST(SegmentedScanMachine, FreeFormBumpThroughSmallBuffers) {
 // nothing else; a fault ends it.
 TEST(SegmentedScanMachine, BufferWritesFollowTheProtocol) {
   World w = world_file("scan_lobed_circle.json");
-  w.scanning.segmented.buffer_segments = 100;
+  w.machine.scanning.segmented.buffer_segments = 100;
   ScanPath c;
   c.path = subdivided(scan_test::circle_path(Vec3(200, 300, 15), 25 + ball_r - e0, true, 0, 90), 30);
   c.approach_normal = Vec3::UnitX();
@@ -198,10 +201,7 @@ TEST(SegmentedScanMachine, BufferWritesFollowTheProtocol) {
     ScanBufferWrite b;
     b.scan = c;
     b.scan.path = {};
-    b.scan.path.segments = commands[i].segments;
-    b.scan.path.normals = commands[i].normals;
-    b.index = commands[i].index;
-    b.last = commands[i].last;
+    b.command = commands[i];
     return b;
   };
   VirtualCmm cmm(w, 1);

@@ -10,7 +10,7 @@
 
 #include "metron/machine/command.hpp"
 #include "metron/machine/csg.hpp"
-#include "metron/machine/segmented/measurement_command.hpp"
+#include "metron/machine/measurement_command.hpp"
 #include "metron/machine/world.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
@@ -166,7 +166,7 @@ inline machine::World lobed_boss_world() {
   machine::csg::Deviation dev;
   dev.lobing = machine::csg::Lobing{3, boss_lobe_mm, 20.0};
   part.deviations["BOSS"] = dev;
-  w.part = part;
+  w.truth.part = part;
   return w;
 }
 

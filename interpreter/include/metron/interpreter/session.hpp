@@ -14,6 +14,19 @@
 
 namespace metron::interpreter {
 
+/// A machine backend and what the run record says about it. The composition root (cli) builds
+/// it: the virtual CMM today, a real controller behind machine::Machine tomorrow.
+struct Backend {
+  std::unique_ptr<machine::Machine> machine;  ///< the backend
+  std::string world;                          ///< for the record: world file, or "<default>"
+  std::uint64_t seed = 0;                     ///< for the record: the run seed
+};
+
+/// Builds a backend for a world file (none: the default world) and a seed (none: the world's);
+/// the error message names the file.
+using BackendFactory = std::function<tl::expected<Backend, std::string>(const std::optional<std::string>& world_path,
+                                                                        std::optional<std::uint64_t> seed)>;
+
 /// What `metron run` needs.
 struct RunOptions {
   std::string program;                       ///< path of the main program
@@ -41,9 +54,8 @@ struct RunOutcome {
 /// runner share.
 class Session {
  public:
-  /// Loads the world (or the default one) and builds the machine; errors name the file.
-  static tl::expected<std::unique_ptr<Session>, std::string> create(const std::optional<std::string>& world_path,
-                                                                    std::optional<std::uint64_t> seed);
+  /// A session on `backend` (built by the composition root).
+  static std::unique_ptr<Session> create(Backend backend);
   /// Compiles the program as unit 0 and prepares to run it; false on compile errors, or when
   /// a characterisation is in use and a FEDRAT/MESVEL with a constant value asks for a probing
   /// feed above its maximum protected feed (refused before any motion).
@@ -72,7 +84,8 @@ class Session {
   std::unique_ptr<Interpreter> m_interpreter;
 };
 
-/// `metron run`: compile, run on the machine, write results.json and DMIS outputs.
-RunOutcome run_program(const RunOptions& options);
+/// `metron run`: build the backend with `backend` from the options' world and seed, compile, run
+/// on the machine, write results.json and DMIS outputs.
+RunOutcome run_program(const RunOptions& options, const BackendFactory& backend);
 
 }  // namespace metron::interpreter

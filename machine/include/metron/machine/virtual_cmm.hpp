@@ -3,6 +3,10 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
+#include <string>
+
+#include <tl/expected.hpp>
 
 #include "metron/machine/machine.hpp"
 #include "metron/machine/world.hpp"
@@ -20,7 +24,9 @@ struct TraceSample {
 /// collision checks every cycle, skip input latched or scanned) driving a simulated world (the
 /// part as machined, the probe's true pre-travel and delays, noise). The controller side only
 /// sees sensor data: encoder positions, the trigger signal at its skip input, the probe's
-/// collision and over-travel switches. Deterministic for a given world and seed.
+/// collision and over-travel switches. The world is split at construction: the controller keeps
+/// `world.machine` (its configuration), the simulation `world.truth`. Deterministic for a given
+/// world and seed.
 ///
 /// PtMeas geometry: with r the active tool's effective radius, the ball centre approaches to
 /// nominal + (r + approach) * normal, probes toward nominal + (r - search) * normal, and after
@@ -39,16 +45,22 @@ class VirtualCmm final : public Machine {
   [[nodiscard]] double simulated_time_s() const;
   /// Called once per controller cycle while the machine moves (nullptr: no tracing).
   void set_trace(std::function<void(const TraceSample&)> trace);
-  /// The simulated truth. For tests and hidden-truth reports only: the controller and the
-  /// runtime must not use it (ARCHITECTURE.md rule 1).
-  [[nodiscard]] const World& world() const;
+  /// The run seed every random draw derives from.
+  [[nodiscard]] std::uint64_t seed() const;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> m_impl;
+  std::uint64_t m_seed;
 };
 
 /// A virtual CMM for `world`, every random draw seeded from `seed`.
 std::unique_ptr<Machine> make_virtual_cmm(const World& world, std::uint64_t seed);
+
+/// The virtual CMM of the world file at `world_path` (none: the embedded default world), seeded
+/// with `seed` (none: the world's own seed); the error names the file. The composition root's
+/// way to build this backend.
+tl::expected<std::unique_ptr<VirtualCmm>, WorldError> open_virtual_cmm(const std::optional<std::string>& world_path,
+                                                                       std::optional<std::uint64_t> seed);
 
 }  // namespace metron::machine

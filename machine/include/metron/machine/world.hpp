@@ -14,16 +14,17 @@
 #include <tl/expected.hpp>
 
 #include "metron/machine/csg.hpp"
-#include "metron/machine/pre_travel.hpp"
-#include "metron/machine/scanning/scanning_spec.hpp"
+#include "metron/machine/touch_cycle/pre_travel.hpp"
+#include "metron/machine/active_scanning/scanning_spec.hpp"
 #include "metron/stdlib/geometry/cad_import.hpp"
 #include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
 
-/// The world description of the virtual CMM (docs/world.md): the machine and its controller,
-/// the probe as it truly is, the reference sphere, and the workpiece as designed and as
-/// machined. Everything marked "hidden" is simulated truth: only the simulation reads it, the
-/// controller learns it through simulated sensors (ARCHITECTURE.md rule 1).
+/// The world description of the virtual CMM (docs/world.md), in two types: the machine's
+/// configuration (MachineConfig, known to the controller) and the truth (WorldTruth: the probe
+/// as it truly is, the true reference sphere, the axes' dynamics, the workpiece as machined,
+/// noise). Only the simulation reads the truth, the controller learns it through simulated
+/// sensors (ARCHITECTURE.md rule 1).
 namespace metron::machine {
 
 /// Travel of one axis, machine coordinates of the ball centre.
@@ -56,8 +57,26 @@ struct AxisDynamics {
   double time_s = 0.06;               ///< ConstantTime: time to reach any programmed feed from rest
 };
 
-/// The machine and its controller (known to the controller: it is its own configuration).
-struct MachineSpec {
+/// Per-axis acceleration behaviour (x, y, z); none: every axis at the path limits (constant rate).
+using AxesDynamics = std::optional<std::array<AxisDynamics, 3>>;
+
+/// The reference sphere as the controller is told it is (its certificate).
+struct ReferenceSphereConfig {
+  Vec3 nominal_centre_mm{900, 700, 100};  ///< where it was set up
+  double certified_diameter_mm = 25;      ///< from its certificate
+};
+
+/// Published values of the probes, as the controller knows them: a copy of the truth made when
+/// the world is loaded (data_sheet_of), the one place where a data-sheet error would be applied.
+struct DataSheet {
+  double rated_over_travel_mm = 1.0;       ///< touch-trigger probe: largest travel from contact to standstill
+  double scanning_stiffness_n_mm = 0.6;    ///< scanning probe: contact force per mm of deflection
+  double scanning_stylus_mass_g = 5.0;     ///< scanning probe: effective moving stylus mass
+};
+
+/// The machine's configuration: everything its controller knows (its own settings, the reference
+/// sphere's certificate, the probes' data sheets). The controller code receives only this.
+struct MachineConfig {
   std::array<AxisTravel, 3> travel{{{-100, 1100}, {-100, 900}, {-200, 600}}};  ///< x, y, z
   double max_speed_mm_s = 300;        ///< path speed limit
   double max_acceleration_mm_s2 = 1000;  ///< path acceleration limit
@@ -65,12 +84,11 @@ struct MachineSpec {
   double dt_s = 0.001;                ///< controller cycle
   double positioning_feed_mm_s = 50;  ///< default GoTo speed
   double measuring_feed_mm_s = 3;     ///< default probing speed
-  SkipInput skip;                     ///< the trigger input
-  /// Per-axis acceleration behaviour (x, y, z); none: every axis at the path limits above
-  /// (constant rate). Hidden from the runtime (measured by the characterisation).
-  std::optional<std::array<AxisDynamics, 3>> axes;
+  SkipInput skip;                     ///< the trigger input, as configured
   Vec3 home_mm{0, 0, 500};            ///< ball centre at start
-  double table_z_mm = 0;              ///< table surface; everything below it is solid
+  ReferenceSphereConfig reference_sphere;  ///< nominal centre and certified diameter
+  ScanningSpec scanning;              ///< scan controller, scanning probe settings, command buffers
+  DataSheet data_sheet;               ///< the probes' published values
 };
 
 /// The touch-trigger probe as it truly is (hidden).
@@ -83,12 +101,10 @@ struct ProbeSpec {
   double repeatability_mm = 0.0002;   ///< 1-sigma noise of the trigger threshold
 };
 
-/// The reference sphere for tool qualification, on a post.
-struct ReferenceSphereSpec {
-  Vec3 nominal_centre_mm{900, 700, 100};  ///< what the controller is told
-  double certified_diameter_mm = 25;      ///< what the controller is told
-  Vec3 true_centre_mm{900, 700, 100};     ///< hidden
-  double true_diameter_mm = 25;           ///< hidden
+/// The reference sphere for tool qualification, on a post, as it truly is (hidden).
+struct ReferenceSphereTruth {
+  Vec3 true_centre_mm{900, 700, 100};     ///< where it is
+  double true_diameter_mm = 25;           ///< its size
   double post_diameter_mm = 10;       ///< the post: a capped cylinder, collision geometry
   Vec3 post_direction = -Vec3::UnitZ();   ///< unit, from the centre toward the post's foot
   double post_length_mm = 100;            ///< from the true centre
@@ -135,17 +151,29 @@ struct PartSpec {
   std::uint64_t seed = 1;             ///< of the roughness field
 };
 
-/// The whole world of one virtual CMM.
+/// The simulated truth: everything the controller must not read (ARCHITECTURE.md rule 1). Only
+/// the simulation receives it; the controller learns about it through simulated sensors.
+struct WorldTruth {
+  ProbeSpec probe;                    ///< the touch-trigger probe
+  ReferenceSphereTruth reference_sphere;  ///< true centre and size, the post
+  AxesDynamics axes;                  ///< how the axes accelerate (measured by the characterisation)
+  double table_z_mm = 0;              ///< table surface; everything below it is solid
+  std::optional<PartSpec> part;       ///< none: an empty table
+  ScanningTruth scanning;             ///< scanning probe dynamics and noise, axis servos
+};
+
+/// The whole world of one virtual CMM, as a world file describes it: the machine's
+/// configuration (known to its controller) and the truth (hidden), as two types.
 struct World {
   std::string name = "default";
   std::string source;                 ///< file it was read from ("<default>" when embedded)
   std::uint64_t seed = 1;             ///< default run seed (a tool may override it)
-  MachineSpec machine;                ///< known to the controller
-  ProbeSpec probe;                    ///< hidden
-  ReferenceSphereSpec reference_sphere;  ///< nominal and certified values known, true ones hidden
-  std::optional<PartSpec> part;       ///< none: an empty table
-  ScanningSpec scanning;              ///< scanning probe, servo dynamics and scan controller (docs/scanning.md)
+  MachineConfig machine;              ///< known to the controller
+  WorldTruth truth;                   ///< hidden
 };
+
+/// The data sheet of the world's probes: the true values, exactly (the loader's copy).
+DataSheet data_sheet_of(const WorldTruth& truth);
 
 /// A world file that could not be read; `message` is "file: /json/pointer: what was expected".
 struct WorldError {

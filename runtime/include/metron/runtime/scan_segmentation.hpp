@@ -10,8 +10,7 @@
 
 #include "metron/machine/fault.hpp"
 #include "metron/machine/machine.hpp"
-#include "metron/machine/segmented/measurement_command.hpp"
-#include "metron/machine/segmented/segmented_controller.hpp"
+#include "metron/machine/measurement_command.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
 
 // Host side of segmented continuous scanning (SEEDS.md 2 steps 1-2): cut the path into
@@ -28,13 +27,6 @@ std::vector<std::size_t> command_sizes(std::size_t segments, std::size_t per_com
 /// The measurement commands of `path` split with command_sizes().
 std::vector<machine::segmented::MeasurementCommand> split_commands(const geometry::PccPath& path,
                                                                    std::size_t per_command);
-
-/// Streams `commands` into `controller`: writes the next command whenever a buffer is writable
-/// (SB = 0), then advances the controller one cycle, until the path is scanned; a fault when a
-/// load is refused or the run exceeds `max_time_s` of simulated time.
-tl::expected<machine::segmented::SegmentedStats, machine::Fault> stream_commands(
-    const std::vector<machine::segmented::MeasurementCommand>& commands,
-    machine::segmented::SegmentedController& controller, double max_time_s);
 
 /// What a streamed scan returned.
 struct SegmentedScanResult {

@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "metron/machine/active_scanning/scan_controller.hpp"
+#include "metron/machine/motion_profile.hpp"
+#include "metron/machine/rng.hpp"
+#include "metron/machine/solid.hpp"
+#include "metron/machine/world.hpp"
+
+namespace metron::machine::detail {
+
+/// The probe in the simulated world, and the only holder of the truth (ARCHITECTURE.md rule 1):
+/// the controller asks it what a sensor would report (the trigger signal, the collision and
+/// over-travel switches, the axes' motion) and never reads the truth itself.
+class SimulatedProbe {
+ public:
+  SimulatedProbe(WorldTruth truth, std::uint64_t seed);
+
+  /// A stylus is screwed on: its true radius differs from the nominal by the world's error.
+  void mount_stylus(double nominal_radius_mm);
+
+  /// The probe's trigger used as a collision switch on a move from a to b: the fraction of the
+  /// move at which the ball first touches, if it does.
+  [[nodiscard]] std::optional<double> sweep(const Vec3& a, const Vec3& b);
+  /// The feature name at a contact point (for fault messages).
+  [[nodiscard]] std::string feature_at(const Vec3& p) const;
+
+  /// A probing move starts: the machine moves from `a` along unit `u` following `profile`.
+  void begin_probe(const MotionProfile* profile, const Vec3& a, const Vec3& u);
+  /// The machine moved over profile time [t0, t1]. Returns when the trigger signal reaches the
+  /// controller's skip input, once that is no later than t1.
+  std::optional<double> probe_step(double t0, double t1);
+  /// The ball touched during the current probing move.
+  [[nodiscard]] bool touched() const { return m_contact_s != inf; }
+  /// The probe's over-travel switch: how far past the contact the machine stopped, when that
+  /// exceeds the true limit.
+  [[nodiscard]] std::optional<double> over_travel(double stop_s) const;
+
+  /// Asynchrony of a scanned skip input relative to the motion: a fresh phase per trigger.
+  double scan_phase() { return m_rng.uniform(); }
+
+  /// How the axes move for a commanded straight move (their true acceleration behaviour).
+  [[nodiscard]] MotionLimits motion_limits(const MachineConfig& config, const Vec3& u, double feed_mm_s,
+                                           double acceleration_mm_s2, std::optional<double> cap_mm_s2) const;
+  [[nodiscard]] bool has_axis_dynamics() const { return m_truth.axes.has_value(); }
+
+  /// The simulation side of a scan with a stylus of `nominal_radius_mm` under controller
+  /// `config`: the world as the scanning probe touches it, the true ball, the probe's truth.
+  ScanSetup scan_setup(double nominal_radius_mm, const MachineConfig& config);
+
+ private:
+  static constexpr double inf = std::numeric_limits<double>::infinity();
+  WorldTruth m_truth;
+  std::unique_ptr<Solid> m_solid;
+  std::unique_ptr<Solid> m_scan_solid;  // kept: a CAD part takes a while to build
+  Rng m_rng;
+  double m_ball_radius_mm = 0;
+  Vec3 m_free_centre = Vec3::Zero();
+  double m_free_radius_mm = -1;  // none
+  const MotionProfile* m_profile = nullptr;
+  Vec3 m_probe_start = Vec3::Zero();
+  Vec3 m_probe_dir = Vec3::UnitZ();
+  double m_contact_s = inf;
+  double m_signal_s = inf;
+};
+
+}  // namespace metron::machine::detail
