@@ -76,6 +76,15 @@ Vec3 unit(const json& j, const std::string& ptr) {
   return v.normalized();
 }
 
+std::vector<double> numbers(const json& j, const std::string& ptr, long size) {
+  if (!j.is_array()) fail(ptr, "expected an array of numbers");
+  if (size >= 0 && static_cast<long>(j.size()) != size) fail(ptr, fmt::format("expected {} numbers, got {}", size, j.size()));
+  std::vector<double> out;
+  out.reserve(j.size());
+  for (std::size_t i = 0; i < j.size(); ++i) out.push_back(number(j[i], fmt::format("{}/{}", ptr, i)));
+  return out;
+}
+
 std::string string(const json& j, const std::string& ptr) {
   if (!j.is_string()) fail(ptr, "expected a string");
   return j.get<std::string>();

@@ -202,14 +202,14 @@ MachineErrorModel parse(const json& j, const std::string& p) {
 
 }  // namespace
 
-tl::expected<MachineErrorModel, strict_json::Error> parse_machine_errors(const json& j, const std::string& pointer) {
+tl::expected<MachineErrorModel, strict_json::ReadError> parse_machine_errors(const json& j, const std::string& pointer) {
   if (j.is_null()) return MachineErrorModel{};
   try {
     return parse(j, pointer);
-  } catch (const strict_json::Error& e) {
+  } catch (const strict_json::ReadError& e) {
     return tl::unexpected(e);
   } catch (const std::invalid_argument& e) {
-    return tl::unexpected(strict_json::Error{pointer, e.what()});
+    return tl::unexpected(strict_json::ReadError{pointer, e.what()});
   }
 }
 

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "metron/stdlib/error_space/strict_json.hpp"
+#include "metron/stdlib/json_reader.hpp"
 
 namespace metron::error_space {
 
@@ -111,7 +111,7 @@ tl::expected<ErrorSpaceFile, FileError> from_json(const json& j) {
     if (auto f = make_field(grid, std::vector<double>(grid.size(), 0.0), out.interpolation); !f)
       fail("/interpolation", f.error());
     return out;
-  } catch (const strict_json::Error& e) {
+  } catch (const strict_json::ReadError& e) {
     return tl::unexpected(FileError{e.pointer, e.message});
   }
 }

@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <tl/expected.hpp>
@@ -55,6 +56,8 @@ double open_interval(const nlohmann::json& j, const std::string& ptr, double lo,
 Vec3 vec3(const nlohmann::json& j, const std::string& ptr);            ///< [x, y, z]
 Vec3 unit(const nlohmann::json& j, const std::string& ptr);            ///< a non-zero [x, y, z], normalised
 std::string string(const nlohmann::json& j, const std::string& ptr);   ///< a string
+/// An array of finite numbers (its size checked when `size` >= 0).
+std::vector<double> numbers(const nlohmann::json& j, const std::string& ptr, long size = -1);
 bool boolean(const nlohmann::json& j, const std::string& ptr);         ///< true or false
 /// One of `choices` (a string); the message lists them.
 std::string one_of(const nlohmann::json& j, const std::string& ptr, std::initializer_list<std::string_view> choices);

@@ -7,7 +7,7 @@
 #include <tl/expected.hpp>
 
 #include "metron/machine/machine_errors/error_term.hpp"
-#include "metron/stdlib/error_space/strict_json.hpp"
+#include "metron/stdlib/json_reader.hpp"
 
 namespace metron::machine {
 
@@ -37,7 +37,7 @@ class MachineErrorModel {
 /// Reads a world file's `machine.errors` object (docs/error-space.md, "Machine errors"); strict:
 /// unknown keys and bad values are errors naming their JSON pointer below `pointer`. A missing
 /// object is the default: no errors.
-tl::expected<MachineErrorModel, strict_json::Error> parse_machine_errors(const nlohmann::json& errors,
+tl::expected<MachineErrorModel, strict_json::ReadError> parse_machine_errors(const nlohmann::json& errors,
                                                                          const std::string& pointer = "/machine/errors");
 
 }  // namespace metron::machine
