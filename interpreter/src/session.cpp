@@ -64,7 +64,8 @@ bool Session::load(const std::string& program) {
 
 ExecStatus Session::execute_text(const std::string& text) {
   const std::size_t before = m_sink.error_count();
-  const std::size_t unit = m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text);
+  const std::size_t unit = m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text,
+                                                     UnitKind::ReplEntry);
   if (m_sink.error_count() > before) return ExecStatus::Error;
   m_interpreter->start(unit);
   const std::size_t depth = m_interpreter->frames().size();

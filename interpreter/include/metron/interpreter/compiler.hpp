@@ -40,6 +40,10 @@ struct SymbolTable {
   std::set<std::string> tolerance_datums;          ///< tolerances defined with datum references
 };
 
+/// What a compiled text is: a program file (or text compiled as one), or a REPL entry, which
+/// may redefine names and need not start with DMISMN or end with ENDFIL.
+enum class UnitKind { File, ReplEntry };
+
 /// Compiles DMIS sources to IR: name resolution, type and semantic checks, lowering.
 class Compiler {
  public:
@@ -49,8 +53,10 @@ class Compiler {
   /// cannot be read. Errors go to the sink (check sink.has_errors()).
   std::optional<std::size_t> compile_file(const std::string& path, Span included_from = {},
                                           const std::string& written = {});
-  /// Compiles text held in memory (the REPL) as a new unit with the current symbols.
-  std::size_t compile_text(const std::string& name, const std::string& text);
+  /// Compiles text held in memory (a REPL entry) as a new unit with the current symbols.
+  std::size_t compile_text(const std::string& name, const std::string& text, UnitKind kind = UnitKind::File);
+  /// The DMIS major words the compiler knows (the statement table's rows, sorted).
+  static std::vector<std::string> statement_words();
 
   /// Compiles one expression (the debugger's `print` and `set`) with the current symbols.
   /// `runtime_names` are variables visible at run time only (macro parameters and locals).
@@ -62,7 +68,7 @@ class Compiler {
   [[nodiscard]] SourceManager& sources() { return m_sources; }
 
  private:
-  std::size_t compile_program(std::uint32_t file, const std::string& path);
+  std::size_t compile_program(std::uint32_t file, const std::string& path, UnitKind kind);
   SourceManager& m_sources;
   DiagnosticSink& m_sink;
   ir::Module m_module;
