@@ -9,36 +9,38 @@ namespace metron::interpreter::detail {
 
 using grammar::ExprKind;
 using ir::Op;
+using runtime::FeatureType;
+using runtime::ToleranceKind;
 
 namespace {
 
 
 // Which tolerance kinds apply to which feature types (checked at OUTPUT when both are known).
-bool tolerance_applies(const std::string& kind, const std::string& type) {
-  const auto in = [&](std::initializer_list<const char*> ts) {
-    return std::any_of(ts.begin(), ts.end(), [&](const char* t) { return type == t; });
-  };
-  if (kind == "DIAM" || kind == "RAD") return in({"CIRCLE", "ARC", "SPHERE", "CYLNDR"});
-  if (kind == "FLAT") return in({"PLANE"});
-  if (kind == "CIRLTY") return in({"CIRCLE", "ARC"});
-  if (kind == "CYLCTY") return in({"CYLNDR"});
-  if (kind == "SPHCTY") return in({"SPHERE"});
-  if (kind == "STRGHT") return in({"LINE"});
-  if (kind == "POS") return !in({"PLANE", "LINE"});
-  if (kind == "PROFS") return in({"PLANE", "CIRCLE", "ARC", "SPHERE", "CYLNDR", "CONE"});
-  return true;
+bool tolerance_applies(ToleranceKind kind, FeatureType type) {
+  using T = FeatureType;
+  const auto in = [&](std::initializer_list<T> ts) { return std::find(ts.begin(), ts.end(), type) != ts.end(); };
+  switch (kind) {
+    case ToleranceKind::Diam:
+    case ToleranceKind::Rad: return in({T::Circle, T::Arc, T::Sphere, T::Cylinder});
+    case ToleranceKind::Flat: return in({T::Plane});
+    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc});
+    case ToleranceKind::Cylcty: return in({T::Cylinder});
+    case ToleranceKind::Sphcty: return in({T::Sphere});
+    case ToleranceKind::Strght: return in({T::Line});
+    case ToleranceKind::Pos: return !in({T::Plane, T::Line});
+    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone});
+    default: return true;
+  }
 }
 
 }  // namespace
 
 void UnitCompiler::add_alignment(StatementTable& t) {
-  t.emplace("DATSET", &UnitCompiler::datset);
-  t.emplace("TRANS", &UnitCompiler::trans);
-  t.emplace("ROTATE", &UnitCompiler::rotate);
-  t.emplace("SAVE", &UnitCompiler::save);
-  t.emplace("RECALL", &UnitCompiler::recall);
-  t.emplace("CONST", &UnitCompiler::construct);
-  t.emplace("OUTPUT", &UnitCompiler::output);
+  t.insert({
+      {"DATSET", &UnitCompiler::datset}, {"TRANS", &UnitCompiler::trans}, {"ROTATE", &UnitCompiler::rotate},
+      {"SAVE", &UnitCompiler::save}, {"RECALL", &UnitCompiler::recall}, {"CONST", &UnitCompiler::construct},
+      {"OUTPUT", &UnitCompiler::output}
+  });
 }
 
 // D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...
@@ -157,14 +159,15 @@ void UnitCompiler::recall(const grammar::Statement& s) {
 void UnitCompiler::construct(const grammar::Statement& s) {
   if (!expect_params(s, 4, "the type, F(label), the method and the source features")) return;
   const auto& p = s.params;
-  if (!is_word(p[0]) || !feature_types.count(p[0].text)) return error(p[0].span, "sema.bad-feature-type", "expected a feature type after CONST/");
+  const auto const_type = type_word(p[0]);
+  if (!const_type) return error(p[0].span, "sema.bad-feature-type", "expected a feature type after CONST/");
   if (!is_label(p[1], {"F"})) return error(p[1].span, "sema.expected-feature", "expected F(label) after the feature type");
   const std::string label = upper(p[1].label.name);
-  const std::string type = feature_type(label);
-  if (!type.empty() && type != p[0].text)
-    return error(p[0].span, "sema.const-type", fmt::format("CONST/{} on F({}), which is a {}", p[0].text, p[1].label.name, type));
-  static const std::set<std::string> methods = {"BF", "INTOF", "MIDPT", "PROJPT", "PROJLN", "PROJCT"};
-  if (!is_word(p[2]) || !methods.count(p[2].text)) {
+  const auto type = feature_type(label);
+  if (type && *type != *const_type)
+    return error(p[0].span, "sema.const-type", fmt::format("CONST/{} on F({}), which is a {}", p[0].text, p[1].label.name, ir::word_of(*type)));
+  const auto method = is_word(p[2]) ? ir::parse_word<ir::ConstructionMethod>(p[2].text) : std::nullopt;
+  if (!method) {
     if (is_word(p[2])) {
       warn(p[2].span, "sema.unsupported-construction", fmt::format("construction method {} is not supported; F({}) gets no actual", p[2].text, p[1].label.name));
       emit(make(Op::Nop, s, "CONST"));
@@ -174,20 +177,16 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   }
   auto in = make(Op::Construct, s, label);
   in.name_is_param = macro_param(label).has_value();
-  in.operands.push_back(word_operand(p[0]));
-  in.operands.push_back(word_operand(p[2]));
+  in.payload = ir::ConstructPayload{*const_type, *method};
   for (std::size_t i = 3; i < p.size(); ++i) {
     if (!is_label(p[i], {"FA", "F"})) return error(p[i].span, "sema.expected-feature", "expected FA(label) source features");
     if (!check_feature(p[i])) return;
     in.operands.push_back(label_op(p[i]));
   }
   const std::size_t sources = p.size() - 3;
-  const std::string& m = p[2].text;
-  if ((m == "INTOF" || m == "MIDPT" || m == "PROJPT" || m == "PROJLN" || m == "PROJCT") && sources != 2)
-    return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", m, sources));
-  if (m_symbols.features.find(label) == m_symbols.features.end()) {
-    m_symbols.features[label] = {p[0].text, s.span};
-  }
+  if (*method != ir::ConstructionMethod::Bf && sources != 2)
+    return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", p[2].text, sources));
+  if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
   emit(std::move(in));
 }
 
@@ -195,7 +194,7 @@ void UnitCompiler::construct(const grammar::Statement& s) {
 void UnitCompiler::output(const grammar::Statement& s) {
   if (!expect_params(s, 1, "feature or tolerance labels")) return;
   auto in = make(Op::Output, s);
-  std::vector<std::string> types;
+  std::vector<std::optional<FeatureType>> types;
   for (const auto& p : s.params) {
     if (is_label(p, {"F", "FA"})) {
       if (!check_feature(p)) return;
@@ -208,14 +207,15 @@ void UnitCompiler::output(const grammar::Statement& s) {
           return error(p.span, m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
                        m_symbols.skipped.count("T:" + t) ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
                                                          : fmt::format("tolerance T({}) is not defined", p.label.name));
-        const std::string& kind = it->second;
-        if (kind == "DISTB" && types.size() != 2)
+        const ToleranceKind kind = it->second;
+        if (kind == ToleranceKind::DistB && types.size() != 2)
           return error(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
-        if (kind == "ANGLB" && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
+        if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
           return error(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
         for (const auto& type : types)
-          if (!type.empty() && !tolerance_applies(kind, type))
-            return error(p.span, "sema.tolerance-type", fmt::format("TOL/{} of T({}) does not apply to a {}", kind, p.label.name, type));
+          if (type && !tolerance_applies(kind, *type))
+            return error(p.span, "sema.tolerance-type",
+                         fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name, ir::word_of(*type)));
         if (types.empty()) return error(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
       }
     } else if (p.kind == ExprKind::Label) {

@@ -13,19 +13,13 @@ using grammar::ExprKind;
 using ir::Op;
 
 void UnitCompiler::add_control(StatementTable& t) {
-  t.emplace(assignment_row, &UnitCompiler::assignment);
-  t.emplace("ASSIGN", &UnitCompiler::bad_assign);
-  t.emplace("OBTAIN", &UnitCompiler::bad_assign);
-  t.emplace("ENDFIL", &UnitCompiler::endfil);
-  t.emplace("IF", &UnitCompiler::if_);
-  t.emplace("ELSE", &UnitCompiler::else_);
-  t.emplace("ENDIF", &UnitCompiler::endif);
-  t.emplace("DO", &UnitCompiler::do_);
-  t.emplace("ENDDO", &UnitCompiler::enddo);
-  t.emplace("JUMPTO", &UnitCompiler::jumpto);
-  t.emplace("MACRO", &UnitCompiler::macro);
-  t.emplace("ENDMAC", &UnitCompiler::endmac);
-  t.emplace("CALL", &UnitCompiler::call);
+  t.insert({
+      {std::string(assignment_row), &UnitCompiler::assignment}, {"ASSIGN", &UnitCompiler::bad_assign},
+      {"OBTAIN", &UnitCompiler::bad_assign}, {"ENDFIL", &UnitCompiler::endfil}, {"IF", &UnitCompiler::if_},
+      {"ELSE", &UnitCompiler::else_}, {"ENDIF", &UnitCompiler::endif}, {"DO", &UnitCompiler::do_},
+      {"ENDDO", &UnitCompiler::enddo}, {"JUMPTO", &UnitCompiler::jumpto}, {"MACRO", &UnitCompiler::macro},
+      {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}
+  });
 }
 
 // ENDFIL

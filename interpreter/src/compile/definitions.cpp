@@ -10,11 +10,10 @@ namespace metron::interpreter::detail {
 
 using grammar::ExprKind;
 using ir::Op;
+using runtime::FeatureType;
+using runtime::ToleranceKind;
 
 namespace {
-
-const std::set<std::string> tolerance_kinds = {"DIAM", "RAD", "DISTB", "POS", "FLAT", "CIRLTY", "CYLCTY",
-                                               "SPHCTY", "STRGHT", "PERP", "PARLEL", "ANGLB", "PROFS"};
 
 // The number of numeric parameters each feature form takes, after the words.
 struct FeatureForm {
@@ -23,27 +22,51 @@ struct FeatureForm {
   const char* meaning;
 };
 
-FeatureForm feature_form(const std::string& type, bool bounded) {
-  if (type == "POINT") return {6, 6, "x,y,z,i,j,k"};
-  if (type == "PLANE") return {6, 6, "x,y,z,i,j,k"};
-  if (type == "LINE") return bounded ? FeatureForm{9, 9, "x1,y1,z1,x2,y2,z2,i,j,k"} : FeatureForm{9, 9, "x,y,z,i,j,k,i2,j2,k2"};
-  if (type == "CIRCLE") return {7, 7, "x,y,z,i,j,k,diam"};
-  if (type == "ARC") return {9, 9, "x,y,z,i,j,k,rad,ang1,ang2"};
-  if (type == "SPHERE") return {4, 7, "x,y,z,diam (or x,y,z,i,j,k,diam)"};
-  if (type == "CYLNDR") return {7, 8, "x,y,z,i,j,k,diam[,len]"};
-  if (type == "CONE") return {7, 8, "x,y,z,i,j,k,angle[,len]"};
+FeatureForm feature_form(FeatureType type, bool bounded) {
+  switch (type) {
+    case FeatureType::Point:
+    case FeatureType::Plane: return {6, 6, "x,y,z,i,j,k"};
+    case FeatureType::Line: return bounded ? FeatureForm{9, 9, "x1,y1,z1,x2,y2,z2,i,j,k"} : FeatureForm{9, 9, "x,y,z,i,j,k,i2,j2,k2"};
+    case FeatureType::Circle: return {7, 7, "x,y,z,i,j,k,diam"};
+    case FeatureType::Arc: return {9, 9, "x,y,z,i,j,k,rad,ang1,ang2"};
+    case FeatureType::Sphere: return {4, 7, "x,y,z,diam (or x,y,z,i,j,k,diam)"};
+    case FeatureType::Cylinder: return {7, 8, "x,y,z,i,j,k,diam[,len]"};
+    case FeatureType::Cone: return {7, 8, "x,y,z,i,j,k,angle[,len]"};
+  }
   return {0, 0, ""};
+}
+
+// A literal number (or a negated one), NaN for anything computed at run time.
+double literal_value(const ir::Expr& e) {
+  if (e.op == ir::ExprOp::Constant) return e.value.number;
+  return e.op == ir::ExprOp::Unary && e.args[0].op == ir::ExprOp::Constant ? -e.args[0].value.number : NAN;
+}
+
+// The numbers a TOL statement of each kind needs (after the kind word).
+struct ToleranceNumbers {
+  std::size_t count;
+  const char* meaning;
+  bool zone;  ///< the number is a tolerance zone (not negative)
+};
+
+ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
+  switch (kind) {
+    case ToleranceKind::Diam:
+    case ToleranceKind::Rad:
+    case ToleranceKind::Profs: return {2, "lower and upper tolerance", false};
+    case ToleranceKind::DistB: return {3, "nominal distance, lower and upper tolerance", false};
+    case ToleranceKind::Anglb: return {3, "nominal angle, lower and upper tolerance", false};
+    default: return {1, "the tolerance zone", true};
+  }
 }
 
 }  // namespace
 
 void UnitCompiler::add_definitions(StatementTable& t) {
-  t.emplace("FEAT", &UnitCompiler::feat);
-  t.emplace("SNSDEF", &UnitCompiler::snsdef);
-  t.emplace("TOL", &UnitCompiler::tol);
-  t.emplace("DATDEF", &UnitCompiler::datdef);
-  t.emplace("PATH", &UnitCompiler::path);
-  t.emplace("DECL", &UnitCompiler::decl);
+  t.insert({
+      {"FEAT", &UnitCompiler::feat}, {"SNSDEF", &UnitCompiler::snsdef}, {"TOL", &UnitCompiler::tol},
+      {"DATDEF", &UnitCompiler::datdef}, {"PATH", &UnitCompiler::path}, {"DECL", &UnitCompiler::decl}
+  });
 }
 
 // F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE; CART|POL)
@@ -52,7 +75,8 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   if (!expect_params(s, 1, "the feature type")) return;
   const std::string label = upper(s.target->name);
   const auto& p = s.params;
-  if (!is_word(p[0]) || !feature_types.count(p[0].text)) {
+  const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
+  if (!parsed) {
     if (is_word(p[0]) && (p[0].text == "GCURVE" || p[0].text == "GSURF" || p[0].text == "EDGEPT" || p[0].text == "TORUS" ||
                           p[0].text == "PARPLN" || p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
@@ -61,37 +85,37 @@ void UnitCompiler::feat(const grammar::Statement& s) {
       return;
     }
     return error(p[0].span, "sema.bad-feature-type",
-                 "expected a feature type (POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE) after FEAT/");
+                 fmt::format("expected a feature type ({}) after FEAT/", ir::word_list<FeatureType>()));
   }
-  const std::string type = p[0].text;
+  const FeatureType type = *parsed;
+  const std::string& word = p[0].text;
   auto in = make(Op::FeatureDef, s, label);
-  in.operands.push_back(word_operand(p[0]));
+  ir::FeaturePayload payload;
+  payload.type = type;
   std::size_t i = 1;
-  const bool sized = type == "CIRCLE" || type == "ARC" || type == "SPHERE" || type == "CYLNDR" || type == "CONE";
-  bool bounded = false;
+  const bool sized = type != FeatureType::Point && type != FeatureType::Plane && type != FeatureType::Line;
   if (sized) {
     if (i >= p.size() || !(is_word(p[i], "INNER") || is_word(p[i], "OUTER")))
       return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-side",
-                   fmt::format("expected INNER or OUTER after the feature type {}", type));
-    in.operands.push_back(word_operand(p[i++]));
+                   fmt::format("expected INNER or OUTER after the feature type {}", word));
+    payload.side = p[i++].text == "INNER" ? runtime::Side::Inner : runtime::Side::Outer;
   }
-  if (type == "LINE") {
-    if (i < p.size() && (is_word(p[i], "BND") || is_word(p[i], "UNBND"))) {
-      bounded = p[i].text == "BND";
-      in.operands.push_back(word_operand(p[i++]));
-    } else {
+  if (type == FeatureType::Line) {
+    if (i < p.size() && (is_word(p[i], "BND") || is_word(p[i], "UNBND")))
+      payload.bounded = p[i++].text == "BND";
+    else
       return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-bnd", "expected BND or UNBND after LINE");
-    }
   }
   if (i >= p.size() || !(is_word(p[i], "CART") || is_word(p[i], "POL")))
     return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-form",
-                 fmt::format("expected CART or POL after the feature type {}", type));
-  in.operands.push_back(word_operand(p[i++]));
+                 fmt::format("expected CART or POL after the feature type {}", word));
+  payload.form = *ir::parse_word<ir::CoordinateForm>(p[i++].text);
+  const bool bounded = payload.bounded.value_or(false);
   const FeatureForm form = feature_form(type, bounded);
   const std::size_t n = p.size() - i;
   if (n < form.min_numbers || n > form.max_numbers)
     return error(n > form.max_numbers ? p[i + form.max_numbers].span : p.back().span, "sema.feature-arity",
-                 fmt::format("FEAT/{} expects {} numbers ({}), got {}", type,
+                 fmt::format("FEAT/{} expects {} numbers ({}), got {}", word,
                              form.min_numbers == form.max_numbers ? fmt::format("{}", form.min_numbers)
                                                                   : fmt::format("{} to {}", form.min_numbers, form.max_numbers),
                              form.meaning, n));
@@ -100,26 +124,27 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   for (; i < p.size(); ++i) {
     auto e = numeric(p[i], "a feature coordinate");
     if (!e) { ok = false; continue; }
-    literal.push_back(e->op == ir::ExprOp::Constant ? e->value.number
-                      : (e->op == ir::ExprOp::Unary && e->args[0].op == ir::ExprOp::Constant ? -e->args[0].value.number : NAN));
+    literal.push_back(literal_value(*e));
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   if (!ok) return;
   // Static checks on literal values: a zero direction, a non-positive size.
-  if (type != "SPHERE" || n == 7) {
-    const std::size_t d = (type == "LINE" && bounded) ? 6 : 3;
+  const auto number_span = [&](std::size_t k) { return s.params[s.params.size() - n + k].span; };
+  if (type != FeatureType::Sphere || n == 7) {
+    const std::size_t d = (type == FeatureType::Line && bounded) ? 6 : 3;
     if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
-      return error(s.params[s.params.size() - n + d].span, "sema.zero-vector", "the direction vector i,j,k is zero");
+      return error(number_span(d), "sema.zero-vector", "the direction vector i,j,k is zero");
   }
-  if (sized && type != "CONE") {
-    const double size = type == "ARC" ? literal[6] : literal.back();
-    const std::size_t idx = type == "ARC" ? 6 : (type == "CYLNDR" && n == 8 ? n - 2 : n - 1);
-    const double sz = type == "CYLNDR" && n == 8 ? literal[6] : size;
-    if (!std::isnan(sz) && sz <= 0)
-      return error(s.params[s.params.size() - n + idx].span, "sema.bad-size", fmt::format("the {} of F({}) must be positive", type == "ARC" ? "radius" : "diameter", s.target->name));
+  if (sized && type != FeatureType::Cone) {
+    const bool arc = type == FeatureType::Arc;
+    const bool with_length = type == FeatureType::Cylinder && n == 8;
+    const std::size_t idx = arc ? 6 : (with_length ? n - 2 : n - 1);
+    const double size = arc || with_length ? literal[6] : literal.back();
+    if (!std::isnan(size) && size <= 0)
+      return error(number_span(idx), "sema.bad-size", fmt::format("the {} of F({}) must be positive", arc ? "radius" : "diameter", s.target->name));
   }
-  if (type == "CONE" && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
-    return error(s.params[s.params.size() - n + 6].span, "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
+  if (type == FeatureType::Cone && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
+    return error(number_span(6), "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
   if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl) {
     const Location loc = m_sources.locate(it->second.span);
     warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
@@ -130,6 +155,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   m_symbols.features[label] = {type, s.span};
   m_symbols.skipped.erase("F:" + label);
+  in.payload = payload;
   emit(std::move(in));
 }
 
@@ -163,7 +189,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!require_target(s, {"T"}, "T(label)=TOL/...")) return;
   if (!expect_params(s, 1, "the tolerance type")) return;
   const auto& p = s.params;
-  if (!is_word(p[0]) || !tolerance_kinds.count(p[0].text)) {
+  const auto parsed = is_word(p[0]) ? ir::parse_word<ToleranceKind>(p[0].text) : std::nullopt;
+  if (!parsed) {
     if (is_word(p[0])) {
       warn(p[0].span, "sema.unsupported-tolerance", fmt::format("tolerance type {} is not supported; T({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["T:" + upper(s.target->name)] = s.span;
@@ -172,10 +199,11 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     }
     return error(p[0].span, "sema.bad-tolerance", "expected a tolerance type (DIAM, RAD, DISTB, POS, FLAT, ...) after TOL/");
   }
-  const std::string kind = p[0].text;
+  const ToleranceKind kind = *parsed;
+  const std::string& word = p[0].text;
   auto in = make(Op::ToleranceDef, s, upper(s.target->name));
   in.name_is_param = macro_param(upper(s.target->name)).has_value();
-  in.operands.push_back(word_operand(p[0]));
+  in.payload = ir::TolerancePayload{kind};
   std::vector<double> numbers;
   for (std::size_t i = 1; i < p.size(); ++i) {
     if (p[i].kind == ExprKind::Label) {
@@ -189,29 +217,21 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     } else {
       auto e = numeric(p[i], "a tolerance value");
       if (!e) return;
-      numbers.push_back(e->op == ir::ExprOp::Constant ? e->value.number
-                        : (e->op == ir::ExprOp::Unary && e->args[0].op == ir::ExprOp::Constant ? -e->args[0].value.number : NAN));
+      numbers.push_back(literal_value(*e));
       in.operands.push_back(expr_operand(std::move(*e)));
     }
   }
-  static const std::map<std::string, std::pair<std::size_t, const char*>> needs = {
-      {"DIAM", {2, "lower and upper tolerance"}}, {"RAD", {2, "lower and upper tolerance"}},
-      {"DISTB", {3, "nominal distance, lower and upper tolerance"}}, {"POS", {1, "the tolerance zone"}},
-      {"FLAT", {1, "the tolerance zone"}}, {"CIRLTY", {1, "the tolerance zone"}}, {"CYLCTY", {1, "the tolerance zone"}},
-      {"SPHCTY", {1, "the tolerance zone"}}, {"STRGHT", {1, "the tolerance zone"}}, {"PERP", {1, "the tolerance zone"}},
-      {"PARLEL", {1, "the tolerance zone"}}, {"ANGLB", {3, "nominal angle, lower and upper tolerance"}},
-      {"PROFS", {2, "lower and upper tolerance"}}};
-  const auto& need = needs.at(kind);
-  if (numbers.size() < need.first)
-    return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", kind, need.second, need.first, need.first == 1 ? "" : "s", numbers.size()));
-  if ((kind == "DIAM" || kind == "RAD" || kind == "PROFS") && numbers[0] > numbers[1])
+  const ToleranceNumbers need = tolerance_numbers(kind);
+  if (numbers.size() < need.count)
+    return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count, need.count == 1 ? "" : "s", numbers.size()));
+  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs) && numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
-  if ((kind == "PERP" || kind == "PARLEL") &&
+  if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel) &&
       std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
-    return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", kind));
-  if (kind == "POS" && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
+    return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
+  if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
-  if (!std::isnan(numbers[0]) && need.second == std::string("the tolerance zone") && numbers[0] < 0)
+  if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
   m_symbols.tolerances[upper(s.target->name)] = kind;
   if (std::any_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))

@@ -20,12 +20,10 @@ const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "
 
 void UnitCompiler::add_input_output(StatementTable& t) {
   for (const char* w : no_effect_words) t.emplace(w, &UnitCompiler::no_effect);
-  t.emplace("UNITS", &UnitCompiler::units);
-  t.emplace("MODE", &UnitCompiler::mode);
-  t.emplace("TEXT", &UnitCompiler::text);
-  t.emplace("DEVICE", &UnitCompiler::device);
-  t.emplace("OPEN", &UnitCompiler::open);
-  t.emplace("CLOSE", &UnitCompiler::close);
+  t.insert({
+      {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
+      {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close}
+  });
 }
 
 void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }
@@ -34,17 +32,18 @@ void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s
 void UnitCompiler::units(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a length unit (MM, INCH, CM, M, FEET)")) return;
   auto in = make(Op::Units, s);
-  static const std::set<std::string> lengths = {"MM", "INCH", "CM", "M", "FEET"};
-  static const std::set<std::string> angles = {"ANGDEC", "ANGRAD", "ANGDMS"};
-  if (!is_word(s.params[0]) || !lengths.count(s.params[0].text))
-    return error(s.params[0].span, "sema.bad-unit", "expected a length unit (MM, INCH, CM, M, FEET) after UNITS/");
-  in.operands.push_back(word_operand(s.params[0]));
+  ir::UnitsPayload units;
+  const auto length = is_word(s.params[0]) ? ir::parse_word<ir::LengthUnit>(s.params[0].text) : std::nullopt;
+  if (!length)
+    return error(s.params[0].span, "sema.bad-unit", fmt::format("expected a length unit ({}) after UNITS/", ir::word_list<ir::LengthUnit>()));
+  units.length = *length;
   if (s.params.size() > 1) {
-    if (!is_word(s.params[1]) || !angles.count(s.params[1].text))
+    units.angle = is_word(s.params[1]) ? ir::parse_word<ir::AngleUnit>(s.params[1].text) : std::nullopt;
+    if (!units.angle)
       return error(s.params[1].span, "sema.bad-unit", "expected an angle unit (ANGDEC, ANGRAD) after the length unit");
-    if (s.params[1].text == "ANGDMS") warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
-    in.operands.push_back(word_operand(s.params[1]));
+    if (units.angle == ir::AngleUnit::Angdms) warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
   }
+  in.payload = units;
   emit(std::move(in));
 }
 
@@ -54,13 +53,9 @@ void UnitCompiler::mode(const grammar::Statement& s) {
   auto in = make(Op::Mode, s);
   std::string w;
   for (const auto& p : s.params) w += (w.empty() ? "" : " ") + p.text;
-  if (w != "AUTO" && w != "PROG MAN" && w != "MAN")
-    return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
-  ir::Operand o;
-  o.kind = ir::Operand::Kind::Word;
-  o.word = w;
-  o.span = s.params[0].span;
-  in.operands.push_back(o);
+  const auto mode = ir::parse_word<ir::RunMode>(w);
+  if (!mode) return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+  in.payload = ir::ModePayload{*mode};
   emit(std::move(in));
 }
 
@@ -90,12 +85,23 @@ void UnitCompiler::device(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
+// The DID(label) of OPEN and CLOSE: given and defined.
+bool UnitCompiler::check_device(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "DID(label)")) return false;
+  if (!is_label(s.params[0], {"DID"})) {
+    error(s.params[0].span, "sema.expected-device", fmt::format("expected DID(label) after {}/", s.major));
+    return false;
+  }
+  if (!m_symbols.devices.count(upper(s.params[0].label.name))) {
+    error(s.params[0].span, "sema.undefined-device", fmt::format("device DID({}) is not defined", s.params[0].label.name));
+    return false;
+  }
+  return true;
+}
+
 // OPEN/DID(l),FDATA|DIRECT,DMIS|V(...),OUTPUT|INPUT|APPEND|OVERWR
 void UnitCompiler::open(const grammar::Statement& s) {
-  if (!expect_params(s, 1, "DID(label)")) return;
-  if (!is_label(s.params[0], {"DID"})) return error(s.params[0].span, "sema.expected-device", "expected DID(label) after OPEN/");
-  if (!m_symbols.devices.count(upper(s.params[0].label.name)))
-    return error(s.params[0].span, "sema.undefined-device", fmt::format("device DID({}) is not defined", s.params[0].label.name));
+  if (!check_device(s)) return;
   for (const auto& p : s.params)
     if (is_word(p, "INPUT")) {
       warn(p.span, "sema.unsupported-input", "OPEN for INPUT is not supported; the statement is skipped");
@@ -109,10 +115,7 @@ void UnitCompiler::open(const grammar::Statement& s) {
 
 // CLOSE/DID(l)
 void UnitCompiler::close(const grammar::Statement& s) {
-  if (!expect_params(s, 1, "DID(label)")) return;
-  if (!is_label(s.params[0], {"DID"})) return error(s.params[0].span, "sema.expected-device", "expected DID(label) after CLOSE/");
-  if (!m_symbols.devices.count(upper(s.params[0].label.name)))
-    return error(s.params[0].span, "sema.undefined-device", fmt::format("device DID({}) is not defined", s.params[0].label.name));
+  if (!check_device(s)) return;
   auto in = make(Op::DeviceClose, s);
   in.operands.push_back(label_op(s.params[0]));
   emit(std::move(in));

@@ -10,20 +10,33 @@ namespace metron::interpreter::detail {
 using grammar::ExprKind;
 using ir::Op;
 
+namespace {
+
+// The fewest points that define a feature of each type.
+int minimum_points(runtime::FeatureType type) {
+  switch (type) {
+    case runtime::FeatureType::Point: return 1;
+    case runtime::FeatureType::Line: return 2;
+    case runtime::FeatureType::Plane:
+    case runtime::FeatureType::Circle:
+    case runtime::FeatureType::Arc: return 3;
+    case runtime::FeatureType::Sphere: return 4;
+    case runtime::FeatureType::Cylinder: return 5;
+    case runtime::FeatureType::Cone: return 6;
+  }
+  return 1;
+}
+
+}  // namespace
+
 void UnitCompiler::add_measurement(StatementTable& t) {
-  t.emplace("SNSMNT", &UnitCompiler::snsmnt);
-  t.emplace("SNSLCT", &UnitCompiler::snslct);
-  t.emplace("SNSET", &UnitCompiler::snset);
-  t.emplace("FEDRAT", &UnitCompiler::fedrat);
-  t.emplace("ACLRAT", &UnitCompiler::aclrat);
-  t.emplace("SCNMOD", &UnitCompiler::scnmod);
-  t.emplace("SCNSET", &UnitCompiler::scnset);
-  t.emplace("GOTO", &UnitCompiler::go_to);
-  t.emplace("MEAS", &UnitCompiler::meas);
-  t.emplace("ENDMES", &UnitCompiler::endmes);
-  t.emplace("PTMEAS", &UnitCompiler::ptmeas);
-  t.emplace("RMEAS", &UnitCompiler::ptmeas);
-  t.emplace("PAMEAS", &UnitCompiler::pameas);
+  t.insert({
+      {"SNSMNT", &UnitCompiler::snsmnt}, {"SNSLCT", &UnitCompiler::snslct}, {"SNSET", &UnitCompiler::snset},
+      {"FEDRAT", &UnitCompiler::fedrat}, {"ACLRAT", &UnitCompiler::aclrat},
+      {"SCNMOD", &UnitCompiler::scnmod}, {"SCNSET", &UnitCompiler::scnset}, {"GOTO", &UnitCompiler::go_to},
+      {"MEAS", &UnitCompiler::meas}, {"ENDMES", &UnitCompiler::endmes}, {"PTMEAS", &UnitCompiler::ptmeas},
+      {"RMEAS", &UnitCompiler::ptmeas}, {"PAMEAS", &UnitCompiler::pameas}
+  });
 }
 
 // SNSMNT/XVEC,i,j,k,ZVEC,i,j,k,MNTLEN,x,y,z: the probe mount; the virtual CMM's head is fixed.
@@ -70,22 +83,21 @@ void UnitCompiler::snset(const grammar::Statement& s) {
 // FEDRAT/MESVEL|POSVEL|SCNVEL,MPM|MMPS|IPM|IPS|PCENT,v   (HEDROT/HEDMVEL... skipped)
 void UnitCompiler::fedrat(const grammar::Statement& s) {
   if (!expect_params(s, 3, "MESVEL|POSVEL, a unit (MPM, MMPS, IPM, IPS, PCENT) and a value")) return;
-  static const std::set<std::string> kinds = {"MESVEL", "POSVEL", "SCNVEL"};
-  static const std::set<std::string> units = {"MPM", "MMPS", "IPM", "IPS", "PCENT"};
-  if (is_word(s.params[0]) && !kinds.count(s.params[0].text)) {
+  const auto kind = is_word(s.params[0]) ? ir::parse_word<ir::FeedKind>(s.params[0].text) : std::nullopt;
+  const auto unit = is_word(s.params[1]) ? ir::parse_word<ir::FeedUnit>(s.params[1].text) : std::nullopt;
+  if (is_word(s.params[0]) && !kind) {
     warn(s.params[0].span, "sema.unsupported-setting", fmt::format("FEDRAT/{} is not supported and is ignored", s.params[0].text));
     emit(make(Op::Nop, s, "FEDRAT"));
     return;
   }
   if (!is_word(s.params[0])) return error(s.params[0].span, "sema.bad-setting", "expected MESVEL, POSVEL or SCNVEL after FEDRAT/");
-  if (!is_word(s.params[1]) || !units.count(s.params[1].text))
-    return error(s.params[1].span, "sema.bad-unit", fmt::format("expected a feed unit (MPM, MMPS, IPM, IPS, PCENT) after {}", s.params[0].text));
+  if (!unit)
+    return error(s.params[1].span, "sema.bad-unit", fmt::format("expected a feed unit ({}) after {}", ir::word_list<ir::FeedUnit>(), s.params[0].text));
   auto e = numeric(s.params[2], "a feed rate");
   if (!e) return;
   if (e->op == ir::ExprOp::Constant && e->value.number <= 0) return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
   auto in = make(Op::Feed, s);
-  in.operands.push_back(word_operand(s.params[0]));
-  in.operands.push_back(word_operand(s.params[1]));
+  in.payload = ir::FeedPayload{*kind, *unit};
   in.operands.push_back(expr_operand(std::move(*e)));
   emit(std::move(in));
 }
@@ -148,10 +160,12 @@ void UnitCompiler::scnset(const grammar::Statement& s) {
 // GOTO/x,y,z | GOTO/CART,x,y,z | GOTO/INCR,dist,i,j,k | GOTO/POL,r,a,h
 void UnitCompiler::go_to(const grammar::Statement& s) {
   auto in = make(Op::GoTo, s);
+  ir::FormPayload form;
   std::size_t i = 0;
-  if (!s.params.empty() && (is_word(s.params[0], "INCR") || is_word(s.params[0], "CART") || is_word(s.params[0], "POL")))
-    in.operands.push_back(word_operand(s.params[i++]));
-  const bool incr = !in.operands.empty() && in.operands[0].word == "INCR";
+  if (!s.params.empty() && is_word(s.params[0])) form.form = ir::parse_word<ir::CoordinateForm>(s.params[0].text);
+  if (form.form) ++i;
+  in.payload = form;
+  const bool incr = form.form == ir::CoordinateForm::Incr;
   const std::size_t n = s.params.size() - i;
   if (incr ? n != 4 : (n != 3 && n != 6))
     return error(n == 0 ? s.major_span : s.params.back().span, "sema.goto-arity",
@@ -173,19 +187,19 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   placeholder.control = true;
   m_blocks.push_back(placeholder);
   if (!expect_params(s, 3, "the feature type, F(label) and the number of points")) return;
-  if (!is_word(s.params[0]) || !feature_types.count(s.params[0].text))
-    return error(s.params[0].span, "sema.bad-feature-type", "expected a feature type after MEAS/");
+  const auto meas_type = type_word(s.params[0]);
+  if (!meas_type) return error(s.params[0].span, "sema.bad-feature-type", "expected a feature type after MEAS/");
   if (!is_label(s.params[1], {"F"})) return error(s.params[1].span, "sema.expected-feature", "expected F(label) after the feature type");
   if (!check_feature(s.params[1])) return;
   const std::string label = upper(s.params[1].label.name);
-  const std::string type = feature_type(label);
-  if (!type.empty() && type != s.params[0].text)
-    return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is a {}", s.params[0].text, s.params[1].label.name, type));
+  const auto type = feature_type(label);
+  if (type && *type != *meas_type)
+    return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is a {}", s.params[0].text, s.params[1].label.name, ir::word_of(*type)));
   auto count = numeric(s.params[2], "the number of points");
   if (!count) return;
   Block b = block(Block::Kind::Meas, s.span);
   b.feature = label;
-  b.type = s.params[0].text;
+  b.type = *meas_type;
   if (count->op == ir::ExprOp::Constant) {
     b.declared = static_cast<int>(count->value.number);
     if (count->value.number < 0 || count->value.number != std::floor(count->value.number))
@@ -193,7 +207,9 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   }
   auto in = make(Op::MeasBegin, s, label);
   in.name_is_param = macro_param(label).has_value();
-  in.operands.push_back(word_operand(s.params[0]));
+  ir::FeaturePayload payload;
+  payload.type = *meas_type;
+  in.payload = payload;
   in.operands.push_back(expr_operand(std::move(*count)));
   b.start = emit(std::move(in));
   m_blocks.back() = b;
@@ -208,11 +224,10 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
   if (b.start == invalid) return;
   if (!b.control && !b.scanned && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
     error(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS", b.declared, b.ptmeas));
-  static const std::map<std::string, int> minimum = {{"POINT", 1}, {"LINE", 2}, {"PLANE", 3}, {"CIRCLE", 3}, {"ARC", 3},
-                                                     {"SPHERE", 4}, {"CYLNDR", 5}, {"CONE", 6}};
   const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
-  if (!b.control && !b.scanned && n > 0 && n < minimum.at(b.type))
-    error(b.span, "sema.too-few-points", fmt::format("a {} needs at least {} points, the block has {}", b.type, minimum.at(b.type), n));
+  const int minimum = minimum_points(b.type);
+  if (!b.control && !b.scanned && n > 0 && n < minimum)
+    error(b.span, "sema.too-few-points", fmt::format("a {} needs at least {} points, the block has {}", ir::word_of(b.type), minimum, n));
   const std::size_t end = emit(make(Op::MeasEnd, s));
   code()[b.start].target = static_cast<std::int64_t>(end);
 }
@@ -225,7 +240,7 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
   if (!is_word(s.params[0], "CART") && !is_word(s.params[0], "POL"))
     return error(s.params[0].span, "sema.expected-form", fmt::format("expected CART or POL after {}/", s.major));
   auto in = make(Op::PtMeas, s);
-  in.operands.push_back(word_operand(s.params[0]));
+  in.payload = ir::FormPayload{ir::parse_word<ir::CoordinateForm>(s.params[0].text)};
   std::size_t end = s.params.size();
   if (s.major == "RMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label) {
     if (!is_label(s.params[end - 1], {"FA", "F"})) return error(s.params[end - 1].span, "sema.expected-feature", "expected FA(label) as the RMEAS reference");

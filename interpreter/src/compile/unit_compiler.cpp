@@ -67,9 +67,10 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   return false;
 }
 
-std::string UnitCompiler::feature_type(const std::string& name) const {
+std::optional<runtime::FeatureType> UnitCompiler::feature_type(const std::string& name) const {
   auto it = m_symbols.features.find(name);
-  return it == m_symbols.features.end() ? std::string() : it->second.type;
+  if (it == m_symbols.features.end()) return std::nullopt;
+  return it->second.type;
 }
 
 void UnitCompiler::statement(const grammar::Statement& s) {

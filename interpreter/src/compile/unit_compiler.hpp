@@ -26,9 +26,6 @@ inline std::string upper(std::string s) {
   return s;
 }
 
-/// The feature types metron measures (the DMIS words).
-inline const std::set<std::string> feature_types = {"POINT", "PLANE", "LINE", "CIRCLE", "ARC", "SPHERE", "CYLNDR", "CONE"};
-
 class UnitCompiler;
 using StatementHandler = void (UnitCompiler::*)(const grammar::Statement&);
 /// Major word -> handler; each statement family adds its own rows.
@@ -75,7 +72,8 @@ class UnitCompiler {
     int declared = 0;
     bool control = false;                // control flow inside a MEAS: counts are not static
     bool scanned = false;                // PAMEAS inside: the point count is the machine's
-    std::string feature, type;
+    std::string feature;                 // MEAS: the feature label; DO: the loop variable
+    runtime::FeatureType type = runtime::FeatureType::Point;  // MEAS
   };
   static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
   static Block block(Block::Kind kind, Span span) {
@@ -170,7 +168,11 @@ class UnitCompiler {
 
   // ---- name checks and the dispatcher (compile/unit_compiler.cpp) ---------------------------
   bool check_feature(const grammar::Expr& e);
-  std::string feature_type(const std::string& name) const;
+  std::optional<runtime::FeatureType> feature_type(const std::string& name) const;
+  /// A feature type word parameter (MEAS/, CONST/), or nullopt.
+  static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
+    return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
+  }
   void statement(const grammar::Statement& s);
   void unknown(const grammar::Statement& s);
   bool expect_params(const grammar::Statement& s, std::size_t n, const char* what);
@@ -182,6 +184,7 @@ class UnitCompiler {
   void mode(const grammar::Statement& s);
   void text(const grammar::Statement& s);
   void device(const grammar::Statement& s);
+  bool check_device(const grammar::Statement& s);
   void open(const grammar::Statement& s);
   void close(const grammar::Statement& s);
 

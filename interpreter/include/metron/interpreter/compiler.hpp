@@ -18,7 +18,7 @@ namespace metron::interpreter {
 /// What the compiler knows about the names a program defines (kept across REPL entries).
 struct SymbolTable {
   struct FeatureInfo {
-    std::string type;   ///< DMIS type word (CIRCLE, PLANE ...)
+    runtime::FeatureType type = runtime::FeatureType::Point;
     Span span;
   };
   struct VariableInfo {
@@ -27,13 +27,13 @@ struct SymbolTable {
     Span span;
   };
   std::map<std::string, FeatureInfo> features;
-  std::map<std::string, std::string> tolerances;   ///< label -> kind word
+  std::map<std::string, runtime::ToleranceKind> tolerances;   ///< label -> kind
   std::set<std::string> datums, sensors, alignments, devices, saved, paths;
   std::map<std::string, VariableInfo> variables;   ///< globals
   std::map<std::string, int> macros;               ///< name -> index in Module::macros
   /// Macro name -> (parameter index -> feature type) for FEAT statements whose label is a parameter:
   /// a call defines the feature named by its argument.
-  std::map<std::string, std::map<int, std::string>> macro_features;
+  std::map<std::string, std::map<int, runtime::FeatureType>> macro_features;
   std::map<std::string, Span> skipped;             ///< labels defined by skipped vendor statements
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
