@@ -88,9 +88,7 @@ void UnitCompiler::trans(const grammar::Statement& s) {
       if (!check_feature(v)) return;
       in.operands.push_back(label_op(v));
     } else {
-      auto e = numeric(v, "an origin coordinate");
-      if (!e) return;
-      in.operands.push_back(expr_operand(std::move(*e)));
+      if (!push_number(in, v, "an origin coordinate")) return;
     }
   }
   m_symbols.alignments.insert(upper(s.target->name));
@@ -115,9 +113,7 @@ void UnitCompiler::rotate(const grammar::Statement& s) {
     in.operands.push_back(word_operand(s.params[2]));
   } else {
     if (s.params.size() != 2) return error(s.params.back().span, "sema.bad-rotate", "ROTATE/axis,angle takes one angle");
-    auto e = numeric(s.params[1], "an angle");
-    if (!e) return;
-    in.operands.push_back(expr_operand(std::move(*e)));
+    if (!push_number(in, s.params[1], "an angle")) return;
   }
   m_symbols.alignments.insert(upper(s.target->name));
   emit(std::move(in));

@@ -47,9 +47,7 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
   if (v.kind == ExprKind::Index) {
     if (info && info->size == 0) return error(v.span, "sema.not-array", fmt::format("{} is not an array", name));
     for (const auto& a : v.args) {
-      auto e = numeric(a, "an array index");
-      if (!e) return;
-      in.operands.push_back(expr_operand(std::move(*e)));
+      if (!push_number(in, a, "an array index")) return;
     }
     in.count = static_cast<int>(v.args.size());
   } else if (info && info->size > 0) {

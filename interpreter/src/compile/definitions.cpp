@@ -128,23 +128,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   if (!ok) return;
-  // Static checks on literal values: a zero direction, a non-positive size.
-  const auto number_span = [&](std::size_t k) { return s.params[s.params.size() - n + k].span; };
-  if (type != FeatureType::Sphere || n == 7) {
-    const std::size_t d = (type == FeatureType::Line && bounded) ? 6 : 3;
-    if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
-      return error(number_span(d), "sema.zero-vector", "the direction vector i,j,k is zero");
-  }
-  if (sized && type != FeatureType::Cone) {
-    const bool arc = type == FeatureType::Arc;
-    const bool with_length = type == FeatureType::Cylinder && n == 8;
-    const std::size_t idx = arc ? 6 : (with_length ? n - 2 : n - 1);
-    const double size = arc || with_length ? literal[6] : literal.back();
-    if (!std::isnan(size) && size <= 0)
-      return error(number_span(idx), "sema.bad-size", fmt::format("the {} of F({}) must be positive", arc ? "radius" : "diameter", s.target->name));
-  }
-  if (type == FeatureType::Cone && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
-    return error(number_span(6), "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
+  if (!check_feature_numbers(s, payload, literal)) return;
   if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl) {
     const Location loc = m_sources.locate(it->second.span);
     warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
@@ -157,6 +141,34 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   m_symbols.skipped.erase("F:" + label);
   in.payload = payload;
   emit(std::move(in));
+}
+
+// Static checks on the literal numbers of a FEAT (NaN where computed at run time): a zero
+// direction, a non-positive size, a cone angle outside (0, 180).
+bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const ir::FeaturePayload& form,
+                                         const std::vector<double>& literal) {
+  const FeatureType type = form.type;
+  const std::size_t n = literal.size();
+  const auto fail = [&](std::size_t k, const char* code, std::string message) {
+    error(s.params[s.params.size() - n + k].span, code, std::move(message));
+    return false;
+  };
+  if (type != FeatureType::Sphere || n == 7) {
+    const std::size_t d = (type == FeatureType::Line && form.bounded.value_or(false)) ? 6 : 3;
+    if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
+      return fail(d, "sema.zero-vector", "the direction vector i,j,k is zero");
+  }
+  if (form.side && type != FeatureType::Cone) {
+    const bool arc = type == FeatureType::Arc;
+    const bool with_length = type == FeatureType::Cylinder && n == 8;
+    const std::size_t idx = arc ? 6 : (with_length ? n - 2 : n - 1);
+    const double size = arc || with_length ? literal[6] : literal.back();
+    if (!std::isnan(size) && size <= 0)
+      return fail(idx, "sema.bad-size", fmt::format("the {} of F({}) must be positive", arc ? "radius" : "diameter", s.target->name));
+  }
+  if (type == FeatureType::Cone && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
+    return fail(6, "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
+  return true;
 }
 
 // S(l)=SNSDEF/PROBE,FIXED|INDEX,CART|POL,...,diam
@@ -176,9 +188,7 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   const std::size_t n = s.params.size() - i;
   if (n < 4) return error(s.params.back().span, "sema.sensor-arity", "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
   for (; i < s.params.size(); ++i) {
-    auto e = numeric(s.params[i], "a sensor parameter");
-    if (!e) return;
-    in.operands.push_back(expr_operand(std::move(*e)));
+    if (!push_number(in, s.params[i], "a sensor parameter")) return;
   }
   m_symbols.sensors.insert(upper(s.target->name));
   emit(std::move(in));

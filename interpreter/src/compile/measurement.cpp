@@ -172,9 +172,7 @@ void UnitCompiler::go_to(const grammar::Statement& s) {
                  incr ? fmt::format("GOTO/INCR expects a distance and a direction i,j,k, got {} numbers", n)
                       : fmt::format("GOTO expects x,y,z (optionally i,j,k), got {} numbers", n));
   for (; i < s.params.size(); ++i) {
-    auto e = numeric(s.params[i], "a coordinate");
-    if (!e) return;
-    in.operands.push_back(expr_operand(std::move(*e)));
+    if (!push_number(in, s.params[i], "a coordinate")) return;
   }
   emit(std::move(in));
 }

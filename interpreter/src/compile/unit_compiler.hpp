@@ -165,6 +165,12 @@ class UnitCompiler {
   std::optional<Typed> unary_expression(const grammar::Expr& g);
   std::optional<Typed> binary_expression(const grammar::Expr& g);
   std::optional<ir::Expr> numeric(const grammar::Expr& g, const char* what);
+  /// A numeric parameter appended to `in` as an operand; false (reported) when it is not one.
+  bool push_number(ir::Instruction& in, const grammar::Expr& g, const char* what) {
+    auto e = numeric(g, what);
+    if (e) in.operands.push_back(expr_operand(std::move(*e)));
+    return e.has_value();
+  }
 
   // ---- name checks and the dispatcher (compile/unit_compiler.cpp) ---------------------------
   bool check_feature(const grammar::Expr& e);
@@ -190,6 +196,7 @@ class UnitCompiler {
 
   // ---- definitions: FEAT, SNSDEF, TOL, DATDEF, PATH, DECL (compile/definitions.cpp) ---------
   void feat(const grammar::Statement& s);
+  bool check_feature_numbers(const grammar::Statement& s, const ir::FeaturePayload& form, const std::vector<double>& literal);
   void snsdef(const grammar::Statement& s);
   void tol(const grammar::Statement& s);
   void datdef(const grammar::Statement& s);
