@@ -5,33 +5,10 @@
 #include <fmt/format.h>
 
 #include "execute/execute.hpp"
+#include "metron/runtime/feature_parameters.hpp"
 #include "metron/stdlib/builtins.hpp"
 
 namespace metron::interpreter {
-namespace {
-
-using runtime::FeatureType;
-
-// The numbers of a DMIS output statement FA(x)=FEAT/..., by parameter position (1-based; words
-// are NaN), so OBTAIN/FA(x),n reads what the output file would show.
-std::vector<double> output_parameters(const runtime::Geometry& g) {
-  const double w = NAN;
-  const Vec3& p = g.position;
-  const Vec3& d = g.direction;
-  switch (g.type) {
-    case FeatureType::Point:
-    case FeatureType::Plane: return {w, w, p.x(), p.y(), p.z(), d.x(), d.y(), d.z()};
-    case FeatureType::Line: return {w, w, w, p.x(), p.y(), p.z(), d.x(), d.y(), d.z(), g.normal2.x(), g.normal2.y(), g.normal2.z()};
-    case FeatureType::Circle: return {w, w, w, p.x(), p.y(), p.z(), d.x(), d.y(), d.z(), g.diameter_mm};
-    case FeatureType::Arc: return {w, w, w, p.x(), p.y(), p.z(), d.x(), d.y(), d.z(), g.diameter_mm / 2, g.start_angle_deg, g.included_angle_deg};
-    case FeatureType::Sphere: return {w, w, w, p.x(), p.y(), p.z(), g.diameter_mm};
-    case FeatureType::Cylinder: return {w, w, w, p.x(), p.y(), p.z(), d.x(), d.y(), d.z(), g.diameter_mm, g.length_mm};
-    case FeatureType::Cone: return {w, w, w, p.x(), p.y(), p.z(), d.x(), d.y(), d.z(), g.apex_angle_deg};
-  }
-  return {};
-}
-
-}  // namespace
 
 tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
   switch (e.op) {
@@ -93,17 +70,16 @@ tl::expected<Value, std::string> Execute::obtain(Interpreter& vm, const ir::Expr
   if (!index) return tl::unexpected(index.error());
   auto g = vm.m_runtime.feature_geometry({vm.label_name(e.label), e.label.prefix == "FA"}, e.span);
   if (!g) return tl::unexpected(g.error().message);
-  const auto params = output_parameters(*g);
+  // OBTAIN/FA(x),n reads what the DMIS output statement FA(x)=FEAT/... shows: n counts its words
+  // first, then the numbers in the one feature layout (runtime/feature_parameters.hpp).
+  const auto params = runtime::feature_parameters(*g);
+  const auto words = static_cast<long>(runtime::feature_word_count(g->type));
   const auto k = static_cast<long>(std::llround(*index));
-  if (k < 1 || k > static_cast<long>(params.size()) || std::isnan(params[static_cast<std::size_t>(k - 1)]))
+  if (k <= words || k > words + static_cast<long>(params.size()))
     return tl::unexpected(fmt::format("OBTAIN index {} is not a number of {}({})", k, e.label.prefix, vm.label_name(e.label)));
-  double v = params[static_cast<std::size_t>(k - 1)];
+  const runtime::FeatureParameter& p = params[static_cast<std::size_t>(k - words - 1)];
   // Lengths go back to program units; direction cosines and angles do not.
-  const bool angle = (g->type == FeatureType::Cone && k == 10) || (g->type == FeatureType::Arc && k >= 11);
-  const bool cosine = (k >= 6 && k <= 8 && (g->type == FeatureType::Point || g->type == FeatureType::Plane)) ||
-                      (k >= 7 && k <= 9 && g->type != FeatureType::Sphere && g->type != FeatureType::Point && g->type != FeatureType::Plane) ||
-                      (k >= 10 && g->type == FeatureType::Line);
-  if (!angle && !cosine) v /= vm.m_length_mm;
+  const double v = p.unit == runtime::ParameterUnit::Length ? p.value / vm.m_length_mm : p.value;
   return Value::real(v);
 }
 
