@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "metron/interpreter/run_events.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/outputs.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -42,17 +43,9 @@ int run(const RunArgs& args) {
   options.characterisation_path = args.characterisation;
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
   options.on_event = [&](const runtime::RunEvent& e) {
-    std::string text;
-    if (const auto* f = std::get_if<runtime::FeatureReport>(&e)) text = runtime::format_feature_report(*f);
-    else if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) {
-      (t->in_tolerance ? in_tol : out_tol)++;
-      text = runtime::format_tolerance_result(*t);
-    } else if (const auto* x = std::get_if<runtime::TextReport>(&e)) text = x->text + "\n";
-    else if (const auto* f2 = std::get_if<runtime::FaultReport>(&e)) {
-      ++faults;
-      text = runtime::format_fault(*f2);
-    }
-    if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << text << std::flush;
+    if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) (t->in_tolerance ? in_tol : out_tol)++;
+    if (std::holds_alternative<runtime::FaultReport>(e)) ++faults;
+    if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << interpreter::event_text(e) << std::flush;
   };
   const auto outcome = interpreter::run_program(options, virtual_cmm_backend);
   std::cerr << outcome.diagnostics;

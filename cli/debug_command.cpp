@@ -19,6 +19,7 @@
 
 #include "commands.hpp"
 #include "metron/interpreter/debugger.hpp"
+#include "metron/interpreter/run_events.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/outputs.hpp"
@@ -37,12 +38,6 @@ struct DebugArgs {
 
 const std::vector<std::string> command_names = {"break", "delete", "info", "run", "continue", "step", "next",
                                                 "finish", "where", "list", "print", "machine", "set", "help", "quit"};
-const std::vector<std::string> major_words = {
-    "ACLRAT", "ASSIGN", "CALL", "CLOSE", "CONST", "DATDEF", "DATSET", "DECL", "DEVICE", "DISPLY", "DO",
-    "ELSE", "ENDDO", "ENDIF", "ENDMAC", "ENDMES", "FEAT", "FEDRAT", "GOTO", "IF", "JUMPTO", "MACRO",
-    "MEAS", "MODE", "OBTAIN", "OPEN", "OUTPUT", "PTMEAS", "RECALL", "RMEAS", "ROTATE", "SAVE", "SNSDEF",
-    "SNSET", "SNSLCT", "TEXT", "TOL", "TRANS", "UNITS"};
-
 std::string upper(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return s;
@@ -108,12 +103,7 @@ class Repl {
  public:
   Repl(interpreter::Session& session, std::string out_dir) : m_session(session), m_debugger(session) {
     m_session.runtime().set_output_directory(std::move(out_dir));
-    m_session.runtime().on_event([](const runtime::RunEvent& e) {
-      if (const auto* f = std::get_if<runtime::FeatureReport>(&e)) std::cout << runtime::format_feature_report(*f);
-      else if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) std::cout << runtime::format_tolerance_result(*t);
-      else if (const auto* x = std::get_if<runtime::TextReport>(&e)) std::cout << x->text << "\n";
-      else if (const auto* fault = std::get_if<runtime::FaultReport>(&e)) std::cout << runtime::format_fault(*fault);
-    });
+    m_session.runtime().on_event([](const runtime::RunEvent& e) { std::cout << interpreter::event_text(e); });
   }
 
   int loop(LineSource& source, bool has_program) {
@@ -172,6 +162,7 @@ class Repl {
 
   void refresh_candidates() {
     g_candidates = command_names;
+    const auto major_words = interpreter::Compiler::statement_words();
     g_candidates.insert(g_candidates.end(), major_words.begin(), major_words.end());
     const auto& sym = m_session.compiler().symbols();
     for (const auto& [name, info] : sym.features) {
@@ -397,12 +388,10 @@ class Repl {
     }
     std::cout << fmt::format("T({})  {}  lower {:+.4f}  upper {:+.4f}  zone {:.4f}\n", name, runtime::dmis_word(t->kind),
                              t->lower, t->upper, t->zone);
-    const auto& events = m_session.record().events;
-    for (auto it = events.rbegin(); it != events.rend(); ++it)
-      if (const auto* r = std::get_if<runtime::ToleranceResult>(&*it); r && r->label == name) {
-        std::cout << "last result: " << runtime::format_tolerance_result(*r);
-        return true;
-      }
+    if (const auto* r = interpreter::last_tolerance_result(m_session.record(), name)) {
+      std::cout << "last result: " << runtime::format_tolerance_result(*r);
+      return true;
+    }
     std::cout << "  (not evaluated yet: OUTPUT it with a feature)\n";
     return true;
   }

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "metron/interpreter/run_events.hpp"
+
 namespace metron::interpreter {
 
 int Debugger::break_at_line(const std::string& file, std::uint32_t line) {
@@ -100,12 +102,7 @@ Stop Debugger::drive(Mode mode) {
       case ExecStatus::Finished: m_finished = true; return {StopReason::Finished, 0, "the program has ended"};
       case ExecStatus::Error: return {StopReason::Error, 0, "a run-time error stopped the program"};
       case ExecStatus::Faulted: {
-        std::string message = "machine fault";
-        for (auto it = m_session.record().events.rbegin(); it != m_session.record().events.rend(); ++it)
-          if (const auto* f = std::get_if<runtime::FaultReport>(&*it)) {
-            message = f->kind + ": " + f->message;
-            break;
-          }
+        const std::string message = last_fault(m_session.record()).value_or("machine fault");
         for (auto& b : m_breakpoints)
           if (b.kind == Breakpoint::Kind::Fault) {
             ++b.hits;
@@ -133,8 +130,8 @@ std::vector<std::string> Debugger::where() const {
   const auto& frames = m_session.interpreter().frames();
   const auto& module = m_session.compiler().module();
   for (auto it = frames.rbegin(); it != frames.rend(); ++it) {
-    const auto& code = it->kind == Frame::Kind::Unit ? module.units.at(it->index).code : module.macros.at(it->index).code;
-    const std::string where_name = it->kind == Frame::Kind::Unit ? module.units.at(it->index).path
+    const auto& code = it->kind == CallFrame::Kind::Unit ? module.units.at(it->index).code : module.macros.at(it->index).code;
+    const std::string where_name = it->kind == CallFrame::Kind::Unit ? module.units.at(it->index).path
                                                                  : "M(" + module.macros.at(it->index).name + ")";
     // Outer frames have already moved past their CALL: show the call itself.
     const std::size_t pc = it == frames.rbegin() || it->pc == 0 ? it->pc : it->pc - 1;

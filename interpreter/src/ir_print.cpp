@@ -78,6 +78,50 @@ std::string to_string(const Expr& e) {
 
 namespace {
 
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+
+}  // namespace
+
+std::vector<std::string> payload_words(const Payload& payload) {
+  std::vector<std::string> w;
+  const auto add = [&](auto value) { w.emplace_back(word_of(value)); };
+  std::visit(Overloaded{
+                 [](const std::monostate&) {},
+                 [&](const UnitsPayload& p) {
+                   add(p.length);
+                   if (p.angle) add(*p.angle);
+                 },
+                 [&](const ModePayload& p) { add(p.mode); },
+                 [&](const FeaturePayload& p) {
+                   add(p.type);
+                   if (p.side) w.emplace_back(runtime::dmis_word(*p.side));
+                   if (p.bounded) w.emplace_back(*p.bounded ? "BND" : "UNBND");
+                   if (p.form) add(*p.form);
+                 },
+                 [&](const TolerancePayload& p) { add(p.kind); },
+                 [&](const FeedPayload& p) {
+                   add(p.kind);
+                   add(p.unit);
+                 },
+                 [&](const FormPayload& p) {
+                   if (p.form) add(*p.form);
+                 },
+                 [&](const ConstructPayload& p) {
+                   add(p.type);
+                   add(p.method);
+                 },
+             },
+             payload);
+  return w;
+}
+
+namespace {
+
 std::string operand_text(const Operand& o) {
   switch (o.kind) {
     case Operand::Kind::Expr: return to_string(o.expr);
@@ -94,8 +138,10 @@ void print_code(std::string& out, const std::vector<Instruction>& code, const So
     std::string line = fmt::format("  {:4}  {:<14}", pc, to_string(in.op));
     if (!in.name.empty()) line += " " + in.name;
     for (std::size_t i = 0; i < in.names.size(); ++i) line += (i ? "," : " ") + in.names[i];
+    std::vector<std::string> items = payload_words(in.payload);
+    for (const auto& o : in.operands) items.push_back(operand_text(o));
     std::string ops;
-    for (std::size_t i = 0; i < in.operands.size(); ++i) ops += (i ? ", " : "") + operand_text(in.operands[i]);
+    for (std::size_t i = 0; i < items.size(); ++i) ops += (i ? ", " : "") + items[i];
     if (!ops.empty()) line += " [" + ops + "]";
     if (in.target >= 0) line += fmt::format(" -> {}", in.target);
     out += fmt::format("{:<72} ; {}:{}:{}\n", line, loc.path, loc.line, loc.column);

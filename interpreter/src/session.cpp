@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "metron/runtime/outputs.hpp"
+#include "passes/probing_feed_pass.hpp"
 
 namespace metron::interpreter {
 
@@ -27,23 +28,7 @@ bool Session::load(const std::string& program) {
   if (m_sink.has_errors()) return false;
   if (m_runtime->characterisation()) {
     // Refuse before any motion: every constant probing feed of the program and its macros.
-    const auto check = [&](const std::vector<ir::Instruction>& code) {
-      for (const auto& in : code) {
-        if (in.op != ir::Op::Feed || in.operands.size() < 3 || in.operands[0].word != "MESVEL") continue;
-        const ir::Expr& e = in.operands[2].expr;
-        if (e.op != ir::ExprOp::Constant || !e.value.is_number()) continue;
-        const std::string& u = in.operands[1].word;
-        double mm_s = e.value.number;
-        if (u == "PCENT") continue;
-        if (u == "MPM") mm_s *= 1000.0 / 60.0;
-        else if (u == "IPM") mm_s *= 25.4 / 60.0;
-        else if (u == "IPS") mm_s *= 25.4;
-        if (auto ok = m_runtime->check_probing_feed(mm_s, in.span); !ok)
-          m_sink.report(Diagnostic{Severity::Error, "run.probing-feed", in.span, ok.error().message, {}});
-      }
-    };
-    for (const auto& u : m_compiler.module().units) check(u.code);
-    for (const auto& m : m_compiler.module().macros) check(m.code);
+    passes::check_probing_feeds(m_compiler.module(), *m_runtime, m_sink);
     if (m_sink.has_errors()) return false;
   }
   m_interpreter->start(*unit);
@@ -52,7 +37,8 @@ bool Session::load(const std::string& program) {
 
 ExecStatus Session::execute_text(const std::string& text) {
   const std::size_t before = m_sink.error_count();
-  const std::size_t unit = m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text);
+  const std::size_t unit = m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text,
+                                                     UnitKind::ReplEntry);
   if (m_sink.error_count() > before) return ExecStatus::Error;
   m_interpreter->start(unit);
   const std::size_t depth = m_interpreter->frames().size();

@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include "metron/runtime/feature_parameters.hpp"
+
 namespace metron::runtime {
 namespace {
 
@@ -17,10 +19,6 @@ using nlohmann::json;
 // ---------------------------------------------------------------- which fields a type has
 
 bool has_direction(FeatureType type) { return type != FeatureType::Sphere; }
-bool has_side(FeatureType type) {
-  return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
-         type == FeatureType::Cylinder || type == FeatureType::Cone;
-}
 bool has_diameter(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
          type == FeatureType::Cylinder;
@@ -334,43 +332,11 @@ std::string dmis_feature_line(const FeatureReport& report) {
   const Geometry& g = report.actual ? *report.actual : report.nominal;
   std::string head =
       fmt::format("{}({}) = FEAT/{}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
-  std::vector<std::string> fields;
-  const auto add = [&fields](const Vec3& v) {
-    for (int i = 0; i < 3; ++i) fields.push_back(dmis_number(v[i]));
-  };
   if (g.type == FeatureType::Line) head += g.bounded ? ", BND" : ", UNBND";
   if (has_side(g.type)) head += fmt::format(", {}", side_word(g));
   head += ", CART";
-  add(g.position);
-  switch (g.type) {
-    case FeatureType::Point:
-    case FeatureType::Plane: add(g.direction); break;
-    case FeatureType::Line:
-      // BND: start and end point; UNBND: point and direction; then the normal of its plane.
-      add(g.bounded ? Vec3(g.position + g.length_mm * g.direction) : g.direction);
-      add(g.normal2);
-      break;
-    case FeatureType::Circle:
-      add(g.direction);
-      fields.push_back(dmis_number(g.diameter_mm));
-      break;
-    case FeatureType::Arc:
-      add(g.direction);
-      fields.push_back(dmis_number(0.5 * g.diameter_mm));
-      fields.push_back(dmis_number(g.start_angle_deg));
-      fields.push_back(dmis_number(g.included_angle_deg));
-      break;
-    case FeatureType::Sphere: fields.push_back(dmis_number(g.diameter_mm)); break;
-    case FeatureType::Cylinder:
-      add(g.direction);
-      fields.push_back(dmis_number(g.diameter_mm));
-      fields.push_back(dmis_number(g.length_mm));
-      break;
-    case FeatureType::Cone:
-      add(g.direction);
-      fields.push_back(dmis_number(g.apex_angle_deg));
-      break;
-  }
+  std::vector<std::string> fields;
+  for (const auto& p : feature_parameters(g)) fields.push_back(dmis_number(p.value));
   return dmis_statement(head, fields);
 }
 

@@ -149,6 +149,18 @@ TEST(Language, ObtainReadsFeatureParameters) {
   EXPECT_EQ(r.texts, (std::vector<std::string>{"10"}));
 }
 
+TEST(Language, ObtainOnABoundedLineReadsTheEndPoint) {
+  // FA(x)=FEAT/LINE,BND,CART,x1,y1,z1,x2,y2,z2,i2,j2,k2 (DMIS 5.x, as FEAT takes it and the DMIS
+  // output writes it): OBTAIN counts the words LINE, BND, CART first, so 7 is x2. UNBND: 7-9 are i,j,k.
+  auto r = run(
+      "F(L) = FEAT/LINE, BND, CART, 1, 2, 3, 11, 2, 3, 0, 0, 1\n"
+      "F(U) = FEAT/LINE, UNBND, CART, 1, 2, 3, 0, 1, 0, 0, 0, 1\n"
+      "DECL/REAL, X2, K2, J\nX2 = OBTAIN/F(L), 7\nK2 = OBTAIN/F(L), 12\nJ = OBTAIN/F(U), 8\n"
+      "TEXT/OPER, STR(X2)\nTEXT/OPER, STR(K2)\nTEXT/OPER, STR(J)\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"11", "1", "1"}));
+}
+
 TEST(Language, EmitIrKeepsSourcePositions) {
   const fs::path p = write("ir.dmi", "DMISMN/'ir', 5.0\nDECL/INTGR, I\nI = ASSIGN/1\nENDFIL\n");
   metron::SourceManager sources;

@@ -18,7 +18,7 @@ namespace metron::interpreter {
 /// What the compiler knows about the names a program defines (kept across REPL entries).
 struct SymbolTable {
   struct FeatureInfo {
-    std::string type;   ///< DMIS type word (CIRCLE, PLANE ...)
+    runtime::FeatureType type = runtime::FeatureType::Point;
     Span span;
   };
   struct VariableInfo {
@@ -27,18 +27,22 @@ struct SymbolTable {
     Span span;
   };
   std::map<std::string, FeatureInfo> features;
-  std::map<std::string, std::string> tolerances;   ///< label -> kind word
+  std::map<std::string, runtime::ToleranceKind> tolerances;   ///< label -> kind
   std::set<std::string> datums, sensors, alignments, devices, saved, paths;
   std::map<std::string, VariableInfo> variables;   ///< globals
   std::map<std::string, int> macros;               ///< name -> index in Module::macros
   /// Macro name -> (parameter index -> feature type) for FEAT statements whose label is a parameter:
   /// a call defines the feature named by its argument.
-  std::map<std::string, std::map<int, std::string>> macro_features;
+  std::map<std::string, std::map<int, runtime::FeatureType>> macro_features;
   std::map<std::string, Span> skipped;             ///< labels defined by skipped vendor statements
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
   std::set<std::string> tolerance_datums;          ///< tolerances defined with datum references
 };
+
+/// What a compiled text is: a program file (or text compiled as one), or a REPL entry, which
+/// may redefine names and need not start with DMISMN or end with ENDFIL.
+enum class UnitKind { File, ReplEntry };
 
 /// Compiles DMIS sources to IR: name resolution, type and semantic checks, lowering.
 class Compiler {
@@ -49,8 +53,10 @@ class Compiler {
   /// cannot be read. Errors go to the sink (check sink.has_errors()).
   std::optional<std::size_t> compile_file(const std::string& path, Span included_from = {},
                                           const std::string& written = {});
-  /// Compiles text held in memory (the REPL) as a new unit with the current symbols.
-  std::size_t compile_text(const std::string& name, const std::string& text);
+  /// Compiles text held in memory (a REPL entry) as a new unit with the current symbols.
+  std::size_t compile_text(const std::string& name, const std::string& text, UnitKind kind = UnitKind::File);
+  /// The DMIS major words the compiler knows (the statement table's rows, sorted).
+  static std::vector<std::string> statement_words();
 
   /// Compiles one expression (the debugger's `print` and `set`) with the current symbols.
   /// `runtime_names` are variables visible at run time only (macro parameters and locals).
@@ -62,7 +68,7 @@ class Compiler {
   [[nodiscard]] SourceManager& sources() { return m_sources; }
 
  private:
-  std::size_t compile_program(std::uint32_t file, const std::string& path);
+  std::size_t compile_program(std::uint32_t file, const std::string& path, UnitKind kind);
   SourceManager& m_sources;
   DiagnosticSink& m_sink;
   ir::Module m_module;

@@ -13,8 +13,12 @@
 
 namespace metron::interpreter {
 
+namespace detail {
+struct Execute;
+}
+
 /// Where execution is: a unit's code or a macro's code, and the next instruction.
-struct Frame {
+struct CallFrame {
   enum class Kind { Unit, Macro } kind = Kind::Unit;
   std::size_t index = 0;                 ///< unit or macro index in the module
   std::size_t pc = 0;                    ///< next instruction
@@ -47,7 +51,7 @@ class Interpreter {
 
   /// The instruction that will execute next (nullptr when none).
   [[nodiscard]] const ir::Instruction* current() const;
-  [[nodiscard]] const std::vector<Frame>& frames() const { return m_frames; }
+  [[nodiscard]] const std::vector<CallFrame>& frames() const { return m_frames; }
   [[nodiscard]] bool in_measurement() const { return m_block.has_value(); }
   [[nodiscard]] const std::optional<runtime::MeasBlock>& pending_block() const { return m_block; }
 
@@ -59,21 +63,20 @@ class Interpreter {
   tl::expected<Value, std::string> evaluate(const ir::Expr& e);
 
  private:
-  ExecStatus execute(const ir::Instruction& in, Frame& frame);
-  ExecStatus execute_scan(const ir::Instruction& in);  ///< PATH, SCNMOD, SCNSET, PAMEAS (scan_ops.cpp)
+  friend struct detail::Execute;  ///< the instruction handlers (src/execute/)
   ExecStatus fail(Span span, std::string message);
   ExecStatus from_runtime(const runtime::RuntimeError& e);
   std::string label_name(const ir::LabelOperand& l) const;
   std::string name_of(const ir::Instruction& in) const;  ///< the instruction's label, resolved through macro parameters
   tl::expected<double, std::string> number(const ir::Expr& e);
   std::vector<Value>* find_variable(const std::string& name);
-  const std::vector<ir::Instruction>& code_of(const Frame& f) const;
+  const std::vector<ir::Instruction>& code_of(const CallFrame& f) const;
 
   const ir::Module& m_module;
   runtime::MeasurementRuntime& m_runtime;
   const SourceManager& m_sources;
   DiagnosticSink& m_sink;
-  std::vector<Frame> m_frames;
+  std::vector<CallFrame> m_frames;
   std::map<std::string, std::vector<Value>> m_globals;
   std::map<std::string, ValueType> m_types;
   std::optional<runtime::MeasBlock> m_block;

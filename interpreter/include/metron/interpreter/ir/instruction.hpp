@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "metron/interpreter/ir/expr.hpp"
+#include "metron/interpreter/ir/vocabulary.hpp"
 #include "metron/stdlib/source.hpp"
 #include "metron/stdlib/span.hpp"
 
@@ -20,23 +23,24 @@ struct Operand {
 };
 
 /// IR operations. Operand layouts are documented per operation in docs/ir.md; the compiler has
-/// already checked them, so the interpreter decodes by position.
+/// already checked them, so the interpreter decodes by position. Words that select behaviour are
+/// lowered to the instruction's typed payload.
 enum class Op {
   Nop,          ///< a statement with no run-time effect (DMISMN, DISPLY, PRCOMP, skipped vendor statements); `name` = major word
   End,          ///< ENDFIL: end of the program
-  Units,        ///< words: length unit, angle unit
-  Mode,         ///< words: AUTO | PROG MAN | MAN
+  Units,        ///< payload: UnitsPayload
+  Mode,         ///< payload: ModePayload
   Text,         ///< words: OPER|OUTFIL|...; expr: the text
-  FeatureDef,   ///< `name` = label; words: type, [side], CART|POL, [BND|UNBND]; exprs: the numbers
-  ToleranceDef, ///< `name` = label; words: kind, modifiers; exprs: values; labels: datums
+  FeatureDef,   ///< `name` = label; payload: FeaturePayload; exprs: the numbers
+  ToleranceDef, ///< `name` = label; payload: kind; words: modifiers; exprs: values; labels: datums
   SensorDef,    ///< `name` = label; words: PROBE, FIXED|INDEX, CART|POL; exprs: numbers
   SensorSelect, ///< `name` = sensor label
   ProbeSet,     ///< words: APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH; expr: distance
-  Feed,         ///< words: MESVEL|POSVEL|SCNVEL, MPM|MMPS|IPM|IPS|PCENT; expr: value
+  Feed,         ///< payload: FeedPayload; expr: value
   Accel,        ///< words: MESACL|POSACL, unit; expr: value
-  GoTo,         ///< words: [INCR]; exprs: x, y, z (inside a MEAS block: a block step)
-  MeasBegin,    ///< `name` = feature; words: type; expr: point count; `target` = index of MeasEnd
-  PtMeas,       ///< words: CART|POL; exprs: x,y,z[,i,j,k]
+  GoTo,         ///< payload: FormPayload; exprs: x, y, z (inside a MEAS block: a block step)
+  MeasBegin,    ///< `name` = feature; payload: FeaturePayload (type); expr: point count; `target` = index of MeasEnd
+  PtMeas,       ///< payload: FormPayload; exprs: x,y,z[,i,j,k]; [label: RMEAS reference]
   MeasEnd,      ///< ENDMES: runs the collected block on the machine
   Output,       ///< labels: F/FA/T/TA in order
   DatDef,       ///< labels: feature, DAT(x)
@@ -45,7 +49,7 @@ enum class Op {
   Rotate,       ///< `name` = D label; operands: axis word, expr angle | (feature label, axis word)
   Save,         ///< labels: DA(x)
   Recall,       ///< labels: D(x) / DA(x)
-  Construct,    ///< `name` = feature; words: type, method; labels: sources
+  Construct,    ///< `name` = feature; payload: ConstructPayload; labels: sources
   Declare,      ///< words: scope, type; `names`: variables (with `count` = array size, 0 = scalar)
   Assign,       ///< `name` = variable; exprs: [indices...,] value; `count` = number of indices
   Jump,         ///< goto `target`
@@ -66,8 +70,52 @@ enum class Op {
   System,       ///< CALL/EXTERN,SYS,'command': `name` = the command text (docs/touch-trigger.md)
 };
 
+/// The number of operations (System is the last).
+inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::System) + 1;
+
 /// Upper-case mnemonic of an operation (for --emit-ir).
 const char* to_string(Op op);
+
+/// UNITS: the length and angle units.
+struct UnitsPayload {
+  LengthUnit length = LengthUnit::Mm;
+  std::optional<AngleUnit> angle;       ///< unchanged when not given
+};
+/// MODE.
+struct ModePayload {
+  RunMode mode = RunMode::Auto;
+};
+/// FEAT (and MEAS, which names only the type): the words before the numbers.
+struct FeaturePayload {
+  runtime::FeatureType type = runtime::FeatureType::Point;
+  std::optional<runtime::Side> side;    ///< INNER|OUTER, for features of size
+  std::optional<bool> bounded;          ///< LINE: BND (true) or UNBND
+  std::optional<CoordinateForm> form;   ///< CART|POL (FEAT; absent for MEAS)
+};
+/// TOL: the tolerance kind (its modifier words stay operands, in source order).
+struct TolerancePayload {
+  runtime::ToleranceKind kind = runtime::ToleranceKind::Diam;
+};
+/// FEDRAT.
+struct FeedPayload {
+  FeedKind kind = FeedKind::Mesvel;
+  FeedUnit unit = FeedUnit::Mmps;
+};
+/// GOTO and PTMEAS/RMEAS: how the coordinates are given (GOTO may leave it implicit: CART).
+struct FormPayload {
+  std::optional<CoordinateForm> form;
+};
+/// CONST: the constructed type and the method.
+struct ConstructPayload {
+  runtime::FeatureType type = runtime::FeatureType::Point;
+  ConstructionMethod method = ConstructionMethod::Bf;
+};
+/// The typed part of an instruction, lowered from DMIS words by the compiler.
+using Payload = std::variant<std::monostate, UnitsPayload, ModePayload, FeaturePayload, TolerancePayload, FeedPayload,
+                             FormPayload, ConstructPayload>;
+
+/// The payload's words, in source order (for --emit-ir, through the vocabulary tables).
+std::vector<std::string> payload_words(const Payload& payload);
 
 /// One IR instruction; every instruction keeps the span of the statement it came from.
 struct Instruction {
@@ -75,6 +123,7 @@ struct Instruction {
   Span span;
   std::string name;
   bool name_is_param = false;      ///< `name` is a macro parameter that supplies the label's name
+  Payload payload;                 ///< the statement's words as enumerators (UNITS, MODE, FEAT, MEAS, TOL, FEDRAT, GOTO, PTMEAS, CONST)
   std::vector<Operand> operands;
   std::vector<std::string> names;  ///< Declare: variable names
   std::int64_t target = -1;

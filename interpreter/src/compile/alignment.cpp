@@ -1,0 +1,228 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Alignment and constructions: DATSET, TRANS, ROTATE, SAVE, RECALL, CONST, OUTPUT.
+#include <algorithm>
+#include <cmath>
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+using runtime::FeatureType;
+using runtime::ToleranceKind;
+
+namespace {
+
+
+// Which tolerance kinds apply to which feature types (checked at OUTPUT when both are known).
+bool tolerance_applies(ToleranceKind kind, FeatureType type) {
+  using T = FeatureType;
+  const auto in = [&](std::initializer_list<T> ts) { return std::find(ts.begin(), ts.end(), type) != ts.end(); };
+  switch (kind) {
+    case ToleranceKind::Diam:
+    case ToleranceKind::Rad: return in({T::Circle, T::Arc, T::Sphere, T::Cylinder});
+    case ToleranceKind::Flat: return in({T::Plane});
+    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc});
+    case ToleranceKind::Cylcty: return in({T::Cylinder});
+    case ToleranceKind::Sphcty: return in({T::Sphere});
+    case ToleranceKind::Strght: return in({T::Line});
+    case ToleranceKind::Pos: return !in({T::Plane, T::Line});
+    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone});
+    default: return true;
+  }
+}
+
+}  // namespace
+
+void UnitCompiler::add_alignment(StatementTable& t) {
+  t.insert({
+      {"DATSET", &UnitCompiler::datset}, {"TRANS", &UnitCompiler::trans}, {"ROTATE", &UnitCompiler::rotate},
+      {"SAVE", &UnitCompiler::save}, {"RECALL", &UnitCompiler::recall}, {"CONST", &UnitCompiler::construct},
+      {"OUTPUT", &UnitCompiler::output}
+  });
+}
+
+// D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...
+void UnitCompiler::datset(const grammar::Statement& s) {
+  if (!require_target(s, {"D"}, "D(label)=DATSET/...")) return;
+  if (!expect_params(s, 1, "MCS or datums")) return;
+  auto in = make(Op::DatSet, s, upper(s.target->name));
+  static const std::set<std::string> words = {"XDIR", "YDIR", "ZDIR", "XMINUS", "YMINUS", "ZMINUS", "XORIG", "YORIG", "ZORIG"};
+  if (is_word(s.params[0], "MCS")) {
+    in.operands.push_back(word_operand(s.params[0]));
+  } else {
+    bool have_datum = false;
+    for (const auto& p : s.params) {
+      if (is_label(p, {"DAT"})) {
+        const std::string d = upper(p.label.name);
+        if (!m_symbols.datums.count(d) && !macro_param(d))
+          return error(p.span, "sema.undefined-datum", fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
+        in.operands.push_back(label_op(p));
+        have_datum = true;
+      } else if (is_word(p) && words.count(p.text)) {
+        if (!have_datum) return error(p.span, "sema.expected-datum", fmt::format("expected DAT(label) before {}", p.text));
+        in.operands.push_back(word_operand(p));
+      } else {
+        return error(p.span, "sema.bad-datset", "expected DAT(label) or XDIR, YDIR, ZDIR, XMINUS, ..., XORIG, YORIG, ZORIG");
+      }
+    }
+  }
+  m_symbols.alignments.insert(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// D(l)=TRANS/XORIG,v|FA(f),YORIG,...
+void UnitCompiler::trans(const grammar::Statement& s) {
+  if (!require_target(s, {"D"}, "D(label)=TRANS/...")) return;
+  if (s.params.empty() || s.params.size() % 2 != 0)
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.trans-arity", "TRANS expects pairs of XORIG|YORIG|ZORIG and a value or feature");
+  auto in = make(Op::Trans, s, upper(s.target->name));
+  for (std::size_t i = 0; i < s.params.size(); i += 2) {
+    const auto& w = s.params[i];
+    if (!(is_word(w, "XORIG") || is_word(w, "YORIG") || is_word(w, "ZORIG")))
+      return error(w.span, "sema.bad-trans", "expected XORIG, YORIG or ZORIG");
+    in.operands.push_back(word_operand(w));
+    const auto& v = s.params[i + 1];
+    if (is_label(v, {"F", "FA"})) {
+      if (!check_feature(v)) return;
+      in.operands.push_back(label_op(v));
+    } else {
+      if (!push_number(in, v, "an origin coordinate")) return;
+    }
+  }
+  m_symbols.alignments.insert(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// D(l)=ROTATE/XAXIS|YAXIS|ZAXIS,angle | ROTATE/ZAXIS,FA(f),XDIR|YDIR|ZDIR
+void UnitCompiler::rotate(const grammar::Statement& s) {
+  if (!require_target(s, {"D"}, "D(label)=ROTATE/...")) return;
+  if (!expect_params(s, 2, "an axis (XAXIS, YAXIS, ZAXIS) and an angle or feature")) return;
+  auto in = make(Op::Rotate, s, upper(s.target->name));
+  if (!(is_word(s.params[0], "XAXIS") || is_word(s.params[0], "YAXIS") || is_word(s.params[0], "ZAXIS")))
+    return error(s.params[0].span, "sema.bad-rotate", "expected XAXIS, YAXIS or ZAXIS after ROTATE/");
+  in.operands.push_back(word_operand(s.params[0]));
+  if (is_label(s.params[1], {"F", "FA"})) {
+    if (!check_feature(s.params[1])) return;
+    if (s.params.size() != 3 || !(is_word(s.params[2], "XDIR") || is_word(s.params[2], "YDIR") || is_word(s.params[2], "ZDIR")))
+      return error(s.params.back().span, "sema.bad-rotate", "expected XDIR, YDIR or ZDIR after the feature");
+    if (s.params[2].text[0] == s.params[0].text[0])
+      return error(s.params[2].span, "sema.bad-rotate", "the aligned axis cannot be the rotation axis");
+    in.operands.push_back(label_op(s.params[1]));
+    in.operands.push_back(word_operand(s.params[2]));
+  } else {
+    if (s.params.size() != 2) return error(s.params.back().span, "sema.bad-rotate", "ROTATE/axis,angle takes one angle");
+    if (!push_number(in, s.params[1], "an angle")) return;
+  }
+  m_symbols.alignments.insert(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// SAVE/DA(l)
+void UnitCompiler::save(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "a coordinate system DA(label)")) return;
+  if (!is_label(s.params[0], {"DA", "D"})) return error(s.params[0].span, "sema.expected-alignment", "expected DA(label) after SAVE/");
+  const std::string name = upper(s.params[0].label.name);
+  if (!m_symbols.alignments.count(name))
+    return error(s.params[0].span, "sema.undefined-alignment", fmt::format("coordinate system D({}) is not defined", s.params[0].label.name));
+  m_symbols.saved.insert(name);
+  auto in = make(Op::Save, s);
+  in.operands.push_back(label_op(s.params[0]));
+  emit(std::move(in));
+}
+
+// RECALL/DA(l) | RECALL/D(l)
+void UnitCompiler::recall(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "a coordinate system D(label) or DA(label)")) return;
+  if (!is_label(s.params[0], {"DA", "D"})) {
+    if (s.params[0].kind == ExprKind::Label) {  // RECALL/SA(), RECALL/FA() ...: not supported
+      warn(s.params[0].span, "sema.unsupported-recall", fmt::format("RECALL of {}() is not supported and is ignored", s.params[0].label.prefix));
+      emit(make(Op::Nop, s, "RECALL"));
+      return;
+    }
+    return error(s.params[0].span, "sema.expected-alignment", "expected D(label) or DA(label) after RECALL/");
+  }
+  const std::string name = upper(s.params[0].label.name);
+  if (!m_symbols.alignments.count(name) && !m_symbols.saved.count(name) && name != "MCS")
+    return error(s.params[0].span, "sema.undefined-alignment", fmt::format("coordinate system D({}) is not defined", s.params[0].label.name));
+  auto in = make(Op::Recall, s);
+  in.operands.push_back(label_op(s.params[0]));
+  emit(std::move(in));
+}
+
+// CONST/type,F(l),BF|INTOF|MIDPT|PROJPT|PROJLN,FA(a),FA(b),...
+void UnitCompiler::construct(const grammar::Statement& s) {
+  if (!expect_params(s, 4, "the type, F(label), the method and the source features")) return;
+  const auto& p = s.params;
+  const auto const_type = type_word(p[0]);
+  if (!const_type) return error(p[0].span, "sema.bad-feature-type", "expected a feature type after CONST/");
+  if (!is_label(p[1], {"F"})) return error(p[1].span, "sema.expected-feature", "expected F(label) after the feature type");
+  const std::string label = upper(p[1].label.name);
+  const auto type = feature_type(label);
+  if (type && *type != *const_type)
+    return error(p[0].span, "sema.const-type", fmt::format("CONST/{} on F({}), which is a {}", p[0].text, p[1].label.name, ir::word_of(*type)));
+  const auto method = is_word(p[2]) ? ir::parse_word<ir::ConstructionMethod>(p[2].text) : std::nullopt;
+  if (!method) {
+    if (is_word(p[2])) {
+      warn(p[2].span, "sema.unsupported-construction", fmt::format("construction method {} is not supported; F({}) gets no actual", p[2].text, p[1].label.name));
+      emit(make(Op::Nop, s, "CONST"));
+      return;
+    }
+    return error(p[2].span, "sema.bad-construction", "expected a construction method (BF, INTOF, MIDPT, PROJPT) after the feature");
+  }
+  auto in = make(Op::Construct, s, label);
+  in.name_is_param = macro_param(label).has_value();
+  in.payload = ir::ConstructPayload{*const_type, *method};
+  for (std::size_t i = 3; i < p.size(); ++i) {
+    if (!is_label(p[i], {"FA", "F"})) return error(p[i].span, "sema.expected-feature", "expected FA(label) source features");
+    if (!check_feature(p[i])) return;
+    in.operands.push_back(label_op(p[i]));
+  }
+  const std::size_t sources = p.size() - 3;
+  if (*method != ir::ConstructionMethod::Bf && sources != 2)
+    return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", p[2].text, sources));
+  if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+  emit(std::move(in));
+}
+
+// OUTPUT/FA(x),TA(t),...
+void UnitCompiler::output(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "feature or tolerance labels")) return;
+  auto in = make(Op::Output, s);
+  std::vector<std::optional<FeatureType>> types;
+  for (const auto& p : s.params) {
+    if (is_label(p, {"F", "FA"})) {
+      if (!check_feature(p)) return;
+      types.push_back(feature_type(upper(p.label.name)));
+    } else if (is_label(p, {"T", "TA"})) {
+      const std::string t = upper(p.label.name);
+      if (!macro_param(t)) {
+        auto it = m_symbols.tolerances.find(t);
+        if (it == m_symbols.tolerances.end())
+          return error(p.span, m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
+                       m_symbols.skipped.count("T:" + t) ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
+                                                         : fmt::format("tolerance T({}) is not defined", p.label.name));
+        const ToleranceKind kind = it->second;
+        if (kind == ToleranceKind::DistB && types.size() != 2)
+          return error(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
+        if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
+          return error(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
+        for (const auto& type : types)
+          if (type && !tolerance_applies(kind, *type))
+            return error(p.span, "sema.tolerance-type",
+                         fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name, ir::word_of(*type)));
+        if (types.empty()) return error(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
+      }
+    } else if (p.kind == ExprKind::Label) {
+      warn(p.span, "sema.unsupported-output", fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
+      continue;
+    } else {
+      return error(p.span, "sema.expected-label", "expected F(), FA(), T() or TA() labels after OUTPUT/");
+    }
+    in.operands.push_back(label_op(p));
+  }
+  emit(std::move(in));
+}
+
+}  // namespace metron::interpreter::detail

@@ -1,0 +1,291 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Control: assignment (ASSIGN, OBTAIN), IF, DO, JUMPTO, macros, CALL.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+
+void UnitCompiler::add_control(StatementTable& t) {
+  t.insert({
+      {std::string(assignment_row), &UnitCompiler::assignment}, {"ASSIGN", &UnitCompiler::bad_assign},
+      {"OBTAIN", &UnitCompiler::bad_assign}, {"ENDFIL", &UnitCompiler::endfil}, {"IF", &UnitCompiler::if_},
+      {"ELSE", &UnitCompiler::else_}, {"ENDIF", &UnitCompiler::endif}, {"DO", &UnitCompiler::do_},
+      {"ENDDO", &UnitCompiler::enddo}, {"JUMPTO", &UnitCompiler::jumpto}, {"MACRO", &UnitCompiler::macro},
+      {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}
+  });
+}
+
+// ENDFIL
+void UnitCompiler::endfil(const grammar::Statement& s) {
+  emit(make(Op::End, s));
+  m_ended = true;
+}
+
+// V=ASSIGN/expr | V[i]=ASSIGN/expr | V=OBTAIN/FA(x),n
+void UnitCompiler::assignment(const grammar::Statement& s) {
+  const grammar::Expr& v = *s.variable;
+  const std::string name = v.text;
+  if (s.major != "ASSIGN" && s.major != "OBTAIN") {
+    // Vendor statements of the form V=XXX/...: warn and skip.
+    warn(s.major_span, "sema.unknown-statement", fmt::format("unknown statement {} is skipped", s.major));
+    emit(make(Op::Nop, s, s.major));
+    return;
+  }
+  const SymbolTable::VariableInfo* info = nullptr;
+  if (auto it = m_locals.find(name); it != m_locals.end()) info = &it->second;
+  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end()) info = &jt->second;
+  if (!info && !macro_param(name))
+    return error(v.span, "sema.undeclared-variable", fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) first", name, name));
+  auto in = make(Op::Assign, s, name);
+  if (v.kind == ExprKind::Index) {
+    if (info && info->size == 0) return error(v.span, "sema.not-array", fmt::format("{} is not an array", name));
+    for (const auto& a : v.args) {
+      if (!push_number(in, a, "an array index")) return;
+    }
+    in.count = static_cast<int>(v.args.size());
+  } else if (info && info->size > 0) {
+    return error(v.span, "sema.array-without-index", fmt::format("array {} needs an index", name));
+  }
+  ir::Expr value;
+  bool dynamic = false;
+  if (s.major == "OBTAIN") {
+    if (s.params.size() != 2 || !is_label(s.params[0], {"FA", "F"}))
+      return error(s.params.empty() ? s.major_span : s.params[0].span, "sema.obtain", "OBTAIN expects FA(label),index");
+    if (!check_feature(s.params[0])) return;
+    auto idx = numeric(s.params[1], "a parameter index");
+    if (!idx) return;
+    value.op = ir::ExprOp::Obtain;
+    value.span = s.span;
+    value.label = label_operand(s.params[0].label);
+    value.type = ValueType::Real;
+    value.args.push_back(std::move(*idx));
+  } else {
+    if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.assign", "ASSIGN expects one expression");
+    auto e = expression(s.params[0]);
+    if (!e) return;
+    dynamic = e->dynamic;
+    value = std::move(e->e);
+  }
+  if (info && !dynamic) {
+    const bool num = info->type == ValueType::Real || info->type == ValueType::Integer;
+    const bool vnum = value.type == ValueType::Real || value.type == ValueType::Integer;
+    if (num != vnum || (!num && info->type != value.type))
+      return error(s.params.empty() ? s.span : s.params[0].span, "sema.type",
+                   fmt::format("cannot assign a {} to {}, which is declared {}", to_string(value.type), name, to_string(info->type)));
+  }
+  in.operands.push_back(expr_operand(std::move(value)));
+  emit(std::move(in));
+}
+
+void UnitCompiler::bad_assign(const grammar::Statement& s) {
+  error(s.major_span, "sema.missing-variable", fmt::format("{} needs a variable on the left: V1={}/...", s.major, s.major));
+}
+
+void UnitCompiler::mark_control() {
+  for (auto& b : m_blocks)
+    if (b.kind == Block::Kind::Meas) b.control = true;
+}
+
+// IF/(condition)  |  IF/condition
+void UnitCompiler::if_(const grammar::Statement& s) {
+  if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.if", "IF expects one condition, e.g. IF/(V1.GT.0)");
+  auto c = expression(s.params[0]);
+  if (!c) {
+    m_blocks.push_back(block(Block::Kind::If, s.span));
+    return;
+  }
+  if (!c->dynamic && c->e.type != ValueType::Bool)
+    error(s.params[0].span, "sema.type", fmt::format("the IF condition must be BOOL, got {}", to_string(c->e.type)));
+  mark_control();
+  auto in = make(Op::JumpIfFalse, s);
+  in.operands.push_back(expr_operand(std::move(c->e)));
+  Block b = block(Block::Kind::If, s.span);
+  b.branch = emit(std::move(in));
+  m_blocks.push_back(b);
+}
+
+void UnitCompiler::else_(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::If) return error(s.major_span, "sema.unmatched", "ELSE without a matching IF");
+  Block& b = m_blocks.back();
+  if (b.has_else) return error(s.major_span, "sema.unmatched", "a second ELSE for the same IF");
+  b.has_else = true;
+  b.exits.push_back(emit(make(Op::Jump, s)));
+  if (b.branch) code()[*b.branch].target = static_cast<std::int64_t>(code().size());
+  b.branch.reset();
+}
+
+void UnitCompiler::endif(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::If) return error(s.major_span, "sema.unmatched", "ENDIF without a matching IF");
+  Block b = m_blocks.back();
+  m_blocks.pop_back();
+  const std::size_t end = emit(make(Op::Nop, s, "ENDIF"));
+  if (b.branch) code()[*b.branch].target = static_cast<std::int64_t>(end);
+  for (auto e : b.exits) code()[e].target = static_cast<std::int64_t>(end);
+}
+
+// DO/V,start,end[,step]
+void UnitCompiler::do_(const grammar::Statement& s) {
+  Block placeholder = block(Block::Kind::Do, s.span);
+  placeholder.start = invalid;
+  m_blocks.push_back(placeholder);
+  if (s.params.size() < 3 || s.params.size() > 4)
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.do", "DO expects a variable, a start, an end and optionally a step");
+  const auto& v = s.params[0];
+  if (v.kind != ExprKind::Word || !is_variable(v.text))
+    return error(v.span, "sema.undeclared-variable", fmt::format("the DO variable {} is not declared: add DECL/INTGR,{}", v.text, v.text));
+  auto in = make(Op::DoInit, s, v.text);
+  for (std::size_t i = 1; i < s.params.size(); ++i) {
+    auto e = numeric(s.params[i], "a loop bound");
+    if (!e) return;
+    if (i == 3 && e->op == ir::ExprOp::Constant && e->value.number == 0) return error(s.params[i].span, "sema.do", "the DO step must not be zero");
+    in.operands.push_back(expr_operand(std::move(*e)));
+  }
+  mark_control();
+  Block b = block(Block::Kind::Do, s.span);
+  b.start = emit(std::move(in));
+  b.feature = v.text;
+  m_blocks.back() = b;
+}
+
+void UnitCompiler::enddo(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Do) return error(s.major_span, "sema.unmatched", "ENDDO without a matching DO");
+  Block b = m_blocks.back();
+  m_blocks.pop_back();
+  if (b.start == invalid) return;
+  auto in = make(Op::DoNext, s, b.feature);
+  in.target = static_cast<std::int64_t>(b.start + 1);
+  const std::size_t next = emit(std::move(in));
+  code()[b.start].target = static_cast<std::int64_t>(next + 1);
+}
+
+// JUMPTO/(label)
+void UnitCompiler::jumpto(const grammar::Statement& s) {
+  if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.jumpto", "JUMPTO expects one label, e.g. JUMPTO/(L1)");
+  const grammar::Expr* p = &s.params[0];
+  if (p->kind == ExprKind::Paren && !p->args.empty()) p = &p->args[0];
+  if (p->kind != ExprKind::Word) return error(p->span, "sema.jumpto", "expected a label name after JUMPTO/");
+  mark_control();
+  const std::size_t pc = emit(make(Op::Jump, s, p->text));
+  jumps().pending.push_back({pc, {p->text, p->span}});
+}
+
+// M(name)=MACRO/'P1','P2' | M(name)=MACRO/P1,P2
+void UnitCompiler::macro(const grammar::Statement& s) {
+  if (!require_target(s, {"M"}, "M(name)=MACRO/...")) return;
+  if (m_macro) return error(s.span, "sema.nested-macro", "a MACRO cannot be defined inside another MACRO");
+  ir::Macro m;
+  m.name = upper(s.target->name);
+  m.span = s.span;
+  for (const auto& p : s.params) {
+    if (p.kind == ExprKind::String || p.kind == ExprKind::Word) m.params.push_back(upper(p.text));
+    else return error(p.span, "sema.macro-param", "macro parameters are names, e.g. MACRO/'X','Y'");
+  }
+  if (m_symbols.macros.count(m.name)) warn(s.target->span, "sema.redefined-macro", fmt::format("macro M({}) is redefined", s.target->name));
+  m_module.macros.push_back(std::move(m));
+  m_macro = static_cast<int>(m_module.macros.size() - 1);
+  m_symbols.macros[m_module.macros.back().name] = *m_macro;
+  m_blocks.push_back(block(Block::Kind::Macro, s.span));
+}
+
+void UnitCompiler::endmac(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Macro) return error(s.major_span, "sema.unmatched", "ENDMAC without a matching MACRO");
+  m_blocks.pop_back();
+  emit(make(Op::Return, s));
+  resolve_jumps(m_macro_jumps, m_module.macros[static_cast<std::size_t>(*m_macro)].code);
+  m_macro.reset();
+  m_locals.clear();
+}
+
+// CALL/M(name),args... | CALL/EXTERN,DMIS,'file' | CALL/EXTERN,DMIS,M(name),'file'
+void UnitCompiler::call(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "M(name) or EXTERN")) return;
+  mark_control();
+  if (is_word(s.params[0], "EXTERN")) return call_extern(s);
+  if (!is_label(s.params[0], {"M"})) return error(s.params[0].span, "sema.expected-macro", "expected M(name) or EXTERN after CALL/");
+  const std::string name = upper(s.params[0].label.name);
+  auto it = m_symbols.macros.find(name);
+  if (it == m_symbols.macros.end()) return error(s.params[0].span, "sema.undefined-macro", fmt::format("macro M({}) is not defined before this call", s.params[0].label.name));
+  const auto& macro = m_module.macros[static_cast<std::size_t>(it->second)];
+  if (s.params.size() - 1 != macro.params.size())
+    return error(s.params.back().span, "sema.arity", fmt::format("M({}) takes {} argument{}, got {}", s.params[0].label.name, macro.params.size(), macro.params.size() == 1 ? "" : "s", s.params.size() - 1));
+  auto in = make(Op::CallMacro, s, name);
+  in.target = it->second;
+  if (auto mf = m_symbols.macro_features.find(name); mf != m_symbols.macro_features.end())
+    for (const auto& [index, type] : mf->second) {
+      const auto& a = s.params[static_cast<std::size_t>(index) + 1];
+      if (a.kind == ExprKind::Label) m_symbols.features[upper(a.label.name)] = {type, a.span};
+      else if (a.kind == ExprKind::String || a.kind == ExprKind::Word) m_symbols.features[upper(a.text)] = {type, a.span};
+    }
+  for (std::size_t i = 1; i < s.params.size(); ++i) {
+    const auto& a = s.params[i];
+    if (a.kind == ExprKind::Word && !is_variable(a.text)) {
+      // A bare word argument stands for itself (a name), as DMIS macros substitute text.
+      ir::Expr e;
+      e.op = ir::ExprOp::Constant;
+      e.value = Value::string(a.text);
+      e.type = ValueType::String;
+      e.span = a.span;
+      in.operands.push_back(expr_operand(std::move(e)));
+      continue;
+    }
+    auto e = expression(a, true);
+    if (!e) return;
+    in.operands.push_back(expr_operand(std::move(e->e)));
+  }
+  emit(std::move(in));
+}
+
+// CALL/EXTERN,DMIS,'file' | CALL/EXTERN,DMIS,M(name),'file' | CALL/EXTERN,SYS,'command'
+void UnitCompiler::call_extern(const grammar::Statement& s) {
+  if (s.params.size() >= 3 && is_word(s.params[1], "SYS") && s.params[2].kind == ExprKind::String) {
+    // metron's own system commands (docs/touch-trigger.md): CHARACTERISE ['file'],
+    // CHARACTERISATION 'file'.
+    const std::string text = s.params[2].text;
+    std::istringstream words(text);
+    std::string verb, arg, extra;
+    words >> verb >> arg >> extra;
+    verb = upper(verb);
+    if (verb == "CHARACTERISE" || verb == "CHARACTERIZE" || (verb == "CHARACTERISATION" && !arg.empty())) {
+      if (!extra.empty())
+        return error(s.params[2].span, "sema.system-command", fmt::format("too many words in '{}'", text));
+      if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
+        arg = (std::filesystem::path(m_module.units[m_unit].path).parent_path() / arg).string();
+      auto in = make(Op::System, s, verb == "CHARACTERIZE" ? "CHARACTERISE" : verb);
+      ir::Operand o;
+      o.kind = ir::Operand::Kind::Word;
+      o.word = arg;
+      o.span = s.params[2].span;
+      in.operands.push_back(o);
+      emit(std::move(in));
+      return;
+    }
+    warn(s.params[2].span, "sema.unsupported-call",
+         fmt::format("unknown system command '{}' (metron knows CHARACTERISE and CHARACTERISATION); the call is skipped", text));
+    emit(make(Op::Nop, s, "CALL"));
+    return;
+  }
+  if (s.params.size() < 3 || !is_word(s.params[1], "DMIS")) {
+    warn(s.params[0].span, "sema.unsupported-call", "only CALL/EXTERN,DMIS,'file' is supported; the call is skipped");
+    emit(make(Op::Nop, s, "CALL"));
+    return;
+  }
+  const grammar::Expr& f = s.params.back();
+  if (f.kind != ExprKind::String) return error(f.span, "sema.expected-file", "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
+  std::filesystem::path path(f.text);
+  if (path.is_relative()) path = std::filesystem::path(m_module.units[m_unit].path).parent_path() / path;
+  auto unit = m_include(path.string(), f.text, f.span);
+  if (!unit) return;
+  auto in = make(Op::CallUnit, s, path.string());
+  in.target = static_cast<std::int64_t>(*unit);
+  emit(std::move(in));
+  return;
+}
+
+}  // namespace metron::interpreter::detail

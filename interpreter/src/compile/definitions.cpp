@@ -1,0 +1,394 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Definitions: FEAT, SNSDEF, TOL, DATDEF, PATH, DECL.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+using runtime::FeatureType;
+using runtime::ToleranceKind;
+
+namespace {
+
+// The number of numeric parameters each feature form takes, after the words.
+struct FeatureForm {
+  std::size_t min_numbers;
+  std::size_t max_numbers;
+  const char* meaning;
+};
+
+FeatureForm feature_form(FeatureType type, bool bounded) {
+  switch (type) {
+    case FeatureType::Point:
+    case FeatureType::Plane: return {6, 6, "x,y,z,i,j,k"};
+    case FeatureType::Line: return bounded ? FeatureForm{9, 9, "x1,y1,z1,x2,y2,z2,i,j,k"} : FeatureForm{9, 9, "x,y,z,i,j,k,i2,j2,k2"};
+    case FeatureType::Circle: return {7, 7, "x,y,z,i,j,k,diam"};
+    case FeatureType::Arc: return {9, 9, "x,y,z,i,j,k,rad,ang1,ang2"};
+    case FeatureType::Sphere: return {4, 7, "x,y,z,diam (or x,y,z,i,j,k,diam)"};
+    case FeatureType::Cylinder: return {7, 8, "x,y,z,i,j,k,diam[,len]"};
+    case FeatureType::Cone: return {7, 8, "x,y,z,i,j,k,angle[,len]"};
+  }
+  return {0, 0, ""};
+}
+
+// A literal number (or a negated one), NaN for anything computed at run time.
+double literal_value(const ir::Expr& e) {
+  if (e.op == ir::ExprOp::Constant) return e.value.number;
+  return e.op == ir::ExprOp::Unary && e.args[0].op == ir::ExprOp::Constant ? -e.args[0].value.number : NAN;
+}
+
+// The numbers a TOL statement of each kind needs (after the kind word).
+struct ToleranceNumbers {
+  std::size_t count;
+  const char* meaning;
+  bool zone;  ///< the number is a tolerance zone (not negative)
+};
+
+ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
+  switch (kind) {
+    case ToleranceKind::Diam:
+    case ToleranceKind::Rad:
+    case ToleranceKind::Profs: return {2, "lower and upper tolerance", false};
+    case ToleranceKind::DistB: return {3, "nominal distance, lower and upper tolerance", false};
+    case ToleranceKind::Anglb: return {3, "nominal angle, lower and upper tolerance", false};
+    default: return {1, "the tolerance zone", true};
+  }
+}
+
+}  // namespace
+
+void UnitCompiler::add_definitions(StatementTable& t) {
+  t.insert({
+      {"FEAT", &UnitCompiler::feat}, {"SNSDEF", &UnitCompiler::snsdef}, {"TOL", &UnitCompiler::tol},
+      {"DATDEF", &UnitCompiler::datdef}, {"PATH", &UnitCompiler::path}, {"DECL", &UnitCompiler::decl}
+  });
+}
+
+// F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE; CART|POL)
+void UnitCompiler::feat(const grammar::Statement& s) {
+  if (!require_target(s, {"F"}, "F(label)=FEAT/...")) return;
+  if (!expect_params(s, 1, "the feature type")) return;
+  const std::string label = upper(s.target->name);
+  const auto& p = s.params;
+  const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
+  if (!parsed) {
+    if (is_word(p[0]) && (p[0].text == "GCURVE" || p[0].text == "GSURF" || p[0].text == "EDGEPT" || p[0].text == "TORUS" ||
+                          p[0].text == "PARPLN" || p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS")) {
+      warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
+      m_symbols.skipped["F:" + label] = s.span;
+      emit(make(Op::Nop, s, "FEAT"));
+      return;
+    }
+    return error(p[0].span, "sema.bad-feature-type",
+                 fmt::format("expected a feature type ({}) after FEAT/", ir::word_list<FeatureType>()));
+  }
+  const FeatureType type = *parsed;
+  const std::string& word = p[0].text;
+  auto in = make(Op::FeatureDef, s, label);
+  ir::FeaturePayload payload;
+  payload.type = type;
+  std::size_t i = 1;
+  const bool sized = type != FeatureType::Point && type != FeatureType::Plane && type != FeatureType::Line;
+  if (sized) {
+    if (i >= p.size() || !(is_word(p[i], "INNER") || is_word(p[i], "OUTER")))
+      return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-side",
+                   fmt::format("expected INNER or OUTER after the feature type {}", word));
+    payload.side = p[i++].text == "INNER" ? runtime::Side::Inner : runtime::Side::Outer;
+  }
+  if (type == FeatureType::Line) {
+    if (i < p.size() && (is_word(p[i], "BND") || is_word(p[i], "UNBND")))
+      payload.bounded = p[i++].text == "BND";
+    else
+      return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-bnd", "expected BND or UNBND after LINE");
+  }
+  if (i >= p.size() || !(is_word(p[i], "CART") || is_word(p[i], "POL")))
+    return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-form",
+                 fmt::format("expected CART or POL after the feature type {}", word));
+  payload.form = *ir::parse_word<ir::CoordinateForm>(p[i++].text);
+  const bool bounded = payload.bounded.value_or(false);
+  const FeatureForm form = feature_form(type, bounded);
+  const std::size_t n = p.size() - i;
+  if (n < form.min_numbers || n > form.max_numbers)
+    return error(n > form.max_numbers ? p[i + form.max_numbers].span : p.back().span, "sema.feature-arity",
+                 fmt::format("FEAT/{} expects {} numbers ({}), got {}", word,
+                             form.min_numbers == form.max_numbers ? fmt::format("{}", form.min_numbers)
+                                                                  : fmt::format("{} to {}", form.min_numbers, form.max_numbers),
+                             form.meaning, n));
+  bool ok = true;
+  std::vector<double> literal;
+  for (; i < p.size(); ++i) {
+    auto e = numeric(p[i], "a feature coordinate");
+    if (!e) { ok = false; continue; }
+    literal.push_back(literal_value(*e));
+    in.operands.push_back(expr_operand(std::move(*e)));
+  }
+  if (!ok) return;
+  if (!check_feature_numbers(s, payload, literal)) return;
+  if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl) {
+    const Location loc = m_sources.locate(it->second.span);
+    warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
+  }
+  if (auto param = macro_param(label)) {
+    in.name_is_param = true;
+    m_symbols.macro_features[m_module.macros[static_cast<std::size_t>(*m_macro)].name][*param] = type;
+  }
+  m_symbols.features[label] = {type, s.span};
+  m_symbols.skipped.erase("F:" + label);
+  in.payload = payload;
+  emit(std::move(in));
+}
+
+// Static checks on the literal numbers of a FEAT (NaN where computed at run time): a zero
+// direction, a non-positive size, a cone angle outside (0, 180).
+bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const ir::FeaturePayload& form,
+                                         const std::vector<double>& literal) {
+  const FeatureType type = form.type;
+  const std::size_t n = literal.size();
+  const auto fail = [&](std::size_t k, const char* code, std::string message) {
+    error(s.params[s.params.size() - n + k].span, code, std::move(message));
+    return false;
+  };
+  if (type != FeatureType::Sphere || n == 7) {
+    const std::size_t d = (type == FeatureType::Line && form.bounded.value_or(false)) ? 6 : 3;
+    if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
+      return fail(d, "sema.zero-vector", "the direction vector i,j,k is zero");
+  }
+  if (form.side && type != FeatureType::Cone) {
+    const bool arc = type == FeatureType::Arc;
+    const bool with_length = type == FeatureType::Cylinder && n == 8;
+    const std::size_t idx = arc ? 6 : (with_length ? n - 2 : n - 1);
+    const double size = arc || with_length ? literal[6] : literal.back();
+    if (!std::isnan(size) && size <= 0)
+      return fail(idx, "sema.bad-size", fmt::format("the {} of F({}) must be positive", arc ? "radius" : "diameter", s.target->name));
+  }
+  if (type == FeatureType::Cone && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
+    return fail(6, "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
+  return true;
+}
+
+// S(l)=SNSDEF/PROBE,FIXED|INDEX,CART|POL,...,diam
+void UnitCompiler::snsdef(const grammar::Statement& s) {
+  if (!require_target(s, {"S"}, "S(label)=SNSDEF/PROBE,...")) return;
+  if (!expect_params(s, 1, "the sensor type")) return;
+  if (!is_word(s.params[0], "PROBE")) {
+    warn(s.params[0].span, "sema.unsupported-sensor", fmt::format("sensor type {} is not supported; S({}) is skipped", s.params[0].text, s.target->name));
+    m_symbols.skipped["S:" + upper(s.target->name)] = s.span;
+    emit(make(Op::Nop, s, "SNSDEF"));
+    return;
+  }
+  auto in = make(Op::SensorDef, s, upper(s.target->name));
+  std::size_t i = 0;
+  for (; i < s.params.size() && is_word(s.params[i]) && !is_variable(s.params[i].text); ++i)
+    in.operands.push_back(word_operand(s.params[i]));
+  const std::size_t n = s.params.size() - i;
+  if (n < 4) return error(s.params.back().span, "sema.sensor-arity", "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
+  for (; i < s.params.size(); ++i) {
+    if (!push_number(in, s.params[i], "a sensor parameter")) return;
+  }
+  m_symbols.sensors.insert(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// T(l)=TOL/kind,...
+void UnitCompiler::tol(const grammar::Statement& s) {
+  if (!require_target(s, {"T"}, "T(label)=TOL/...")) return;
+  if (!expect_params(s, 1, "the tolerance type")) return;
+  const auto& p = s.params;
+  const auto parsed = is_word(p[0]) ? ir::parse_word<ToleranceKind>(p[0].text) : std::nullopt;
+  if (!parsed) {
+    if (is_word(p[0])) {
+      warn(p[0].span, "sema.unsupported-tolerance", fmt::format("tolerance type {} is not supported; T({}) is skipped", p[0].text, s.target->name));
+      m_symbols.skipped["T:" + upper(s.target->name)] = s.span;
+      emit(make(Op::Nop, s, "TOL"));
+      return;
+    }
+    return error(p[0].span, "sema.bad-tolerance", "expected a tolerance type (DIAM, RAD, DISTB, POS, FLAT, ...) after TOL/");
+  }
+  const ToleranceKind kind = *parsed;
+  const std::string& word = p[0].text;
+  auto in = make(Op::ToleranceDef, s, upper(s.target->name));
+  in.name_is_param = macro_param(upper(s.target->name)).has_value();
+  in.payload = ir::TolerancePayload{kind};
+  std::vector<double> numbers;
+  for (std::size_t i = 1; i < p.size(); ++i) {
+    if (p[i].kind == ExprKind::Label) {
+      if (!is_label(p[i], {"DAT", "DATT"})) return error(p[i].span, "sema.expected-datum", "expected a datum DAT(x)");
+      const std::string d = upper(p[i].label.name);
+      if (!m_symbols.datums.count(d) && !macro_param(d))
+        warn(p[i].span, "sema.datum-later", fmt::format("datum DAT({}) is not defined yet; it must be defined by DATDEF before the OUTPUT", p[i].label.name));
+      in.operands.push_back(label_op(p[i]));
+    } else if (is_word(p[i]) && !is_variable(p[i].text)) {
+      in.operands.push_back(word_operand(p[i]));
+    } else {
+      auto e = numeric(p[i], "a tolerance value");
+      if (!e) return;
+      numbers.push_back(literal_value(*e));
+      in.operands.push_back(expr_operand(std::move(*e)));
+    }
+  }
+  const ToleranceNumbers need = tolerance_numbers(kind);
+  if (numbers.size() < need.count)
+    return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count, need.count == 1 ? "" : "s", numbers.size()));
+  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs) && numbers[0] > numbers[1])
+    return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
+  if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel) &&
+      std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
+    return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
+  if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
+    return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
+  if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
+    return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
+  m_symbols.tolerances[upper(s.target->name)] = kind;
+  if (std::any_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
+    m_symbols.tolerance_datums.insert(upper(s.target->name));
+  else
+    m_symbols.tolerance_datums.erase(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// DATDEF/FA(x),DAT(A)
+void UnitCompiler::datdef(const grammar::Statement& s) {
+  if (!expect_params(s, 2, "a feature FA(x) and a datum DAT(y)")) return;
+  if (!is_label(s.params[0], {"F", "FA"})) return error(s.params[0].span, "sema.expected-feature", "expected FA(label) after DATDEF/");
+  if (!check_feature(s.params[0])) return;
+  if (!is_label(s.params[1], {"DAT"})) return error(s.params[1].span, "sema.expected-datum", "expected DAT(label) after the feature");
+  m_symbols.datums.insert(upper(s.params[1].label.name));
+  auto in = make(Op::DatDef, s);
+  in.operands.push_back(label_op(s.params[0]));
+  in.operands.push_back(label_op(s.params[1]));
+  emit(std::move(in));
+}
+
+// P(l)=PATH/LINE,CART,x1,y1,z1,x2,y2,z2,i,j,k
+// P(l)=PATH/ARC,CART,x,y,z,i,j,k,rad,ang1,ang2[,INNER|OUTER]
+// P(l)=PATH/HELICAL,CART,x,y,z,i,j,k,rad,ang1,ang2,pitch[,INNER|OUTER]
+void UnitCompiler::path(const grammar::Statement& s) {
+  if (!require_target(s, {"P"}, "P(label)=PATH/...")) return;
+  if (!expect_params(s, 1, "the path type (LINE, ARC, HELICAL, SECTION)")) return;
+  const auto& p = s.params;
+  const std::string name = upper(s.target->name);
+  if (is_word(p[0], "SECTION")) return path_section(s);
+  static const std::set<std::string> kinds = {"LINE", "ARC", "HELICAL"};
+  if (!is_word(p[0]) || !kinds.count(p[0].text)) {
+    if (is_word(p[0])) {
+      warn(p[0].span, "sema.unsupported-path", fmt::format("PATH/{} is not supported; P({}) is skipped", p[0].text, s.target->name));
+      m_symbols.skipped["P:" + name] = s.span;
+      emit(make(Op::Nop, s, "PATH"));
+      return;
+    }
+    return error(p[0].span, "sema.bad-path", "expected LINE, ARC or HELICAL after PATH/");
+  }
+  const std::string kind = p[0].text;
+  if (p.size() < 2 || !(is_word(p[1], "CART") || is_word(p[1], "POL")))
+    return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-form", fmt::format("expected CART after PATH/{}", kind));
+  if (is_word(p[1], "POL")) return error(p[1].span, "sema.unsupported-form", "PATH with POL coordinates is not supported: use CART");
+  auto in = make(Op::PathDef, s, name);
+  in.operands.push_back(word_operand(p[0]));
+  std::size_t end = p.size();
+  std::optional<ir::Operand> side;
+  if (kind != "LINE" && end > 2 && is_word(p[end - 1]) && !is_variable(p[end - 1].text)) {
+    if (!is_word(p[end - 1], "INNER") && !is_word(p[end - 1], "OUTER"))
+      return error(p[end - 1].span, "sema.expected-side", fmt::format("expected INNER or OUTER at the end of PATH/{}", kind));
+    side = word_operand(p[end - 1]);
+    --end;
+  }
+  const std::size_t want = kind == "LINE" ? 9 : kind == "ARC" ? 9 : 10;
+  const char* form = kind == "LINE" ? "x1,y1,z1,x2,y2,z2,i,j,k" : kind == "ARC" ? "x,y,z,i,j,k,rad,ang1,ang2" : "x,y,z,i,j,k,rad,ang1,ang2,pitch";
+  const std::size_t n = end - 2;
+  if (n != want)
+    return error(end > 2 ? p[end - 1].span : p[1].span, "sema.path-arity", fmt::format("PATH/{} expects {} numbers ({}), got {}", kind, want, form, n));
+  if (side) in.operands.push_back(*side);
+  std::vector<double> v;
+  for (std::size_t i = 2; i < end; ++i) {
+    auto e = numeric(p[i], "a path parameter");
+    if (!e) return;
+    v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
+    in.operands.push_back(expr_operand(std::move(*e)));
+  }
+  const std::size_t vec = kind == "LINE" ? 6 : 3;
+  if (v[vec] == 0 && v[vec + 1] == 0 && v[vec + 2] == 0) return error(p[2 + vec].span, "sema.zero-vector", "the path vector i,j,k is zero");
+  if (kind != "LINE" && v[6] <= 0) return error(p[8].span, "sema.bad-size", fmt::format("the radius of P({}) must be positive", s.target->name));
+  if (kind != "LINE" && v[7] == v[8]) return error(p[10].span, "sema.bad-angle", "the start and end angles of the path are equal");
+  if (kind == "LINE" && v[0] == v[3] && v[1] == v[4] && v[2] == v[5]) return error(p[5].span, "sema.bad-path", "the line's end points are the same");
+  m_symbols.paths.insert(name);
+  m_symbols.skipped.erase("P:" + name);
+  emit(std::move(in));
+}
+
+// P(l)=PATH/SECTION,'file',x,y,z,i,j,k,xs,ys,zs   (metron: a plane section of a CAD model)
+void UnitCompiler::path_section(const grammar::Statement& s) {
+  const auto& p = s.params;
+  if (p.size() < 2 || p[1].kind != ExprKind::String)
+    return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-file", "expected the CAD file name as a string after PATH/SECTION, e.g. 'part.stl'");
+  std::filesystem::path file(p[1].text);
+  if (file.is_relative()) file = std::filesystem::path(m_module.units[m_unit].path).parent_path() / file;
+  if (!std::filesystem::exists(file)) return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
+  const std::size_t n = p.size() - 2;
+  if (n != 9)
+    return error(p.back().span, "sema.path-arity", fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near xs,ys,zs), got {}", n));
+  auto in = make(Op::PathDef, s, upper(s.target->name));
+  in.operands.push_back(word_operand(p[0]));
+  in.names.push_back(file.string());
+  std::vector<double> v;
+  for (std::size_t i = 2; i < p.size(); ++i) {
+    auto e = numeric(p[i], "a path parameter");
+    if (!e) return;
+    v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
+    in.operands.push_back(expr_operand(std::move(*e)));
+  }
+  if (v[3] == 0 && v[4] == 0 && v[5] == 0) return error(p[5].span, "sema.zero-vector", "the plane normal i,j,k is zero");
+  m_symbols.paths.insert(upper(s.target->name));
+  m_symbols.skipped.erase("P:" + upper(s.target->name));
+  emit(std::move(in));
+}
+
+// DECL/[COMMON|GLOBAL|LOCAL,]INTGR|LONG|REAL|DOUBLE|BOOL|CHAR,n|VECTOR,V1,V2[10]
+void UnitCompiler::decl(const grammar::Statement& s) {
+  if (!expect_params(s, 2, "a type and variable names")) return;
+  std::size_t i = 0;
+  if (is_word(s.params[0], "COMMON") || is_word(s.params[0], "GLOBAL") || is_word(s.params[0], "LOCAL")) ++i;
+  if (i >= s.params.size() || !is_word(s.params[i])) return error(s.params[i < s.params.size() ? i : 0].span, "sema.bad-type", "expected a type (INTGR, LONG, REAL, DOUBLE, BOOL, CHAR) after DECL/");
+  static const std::map<std::string, ValueType> types = {{"INTGR", ValueType::Integer}, {"LONG", ValueType::Integer},
+                                                         {"REAL", ValueType::Real},    {"DOUBLE", ValueType::Real},
+                                                         {"BOOL", ValueType::Bool},    {"CHAR", ValueType::String}};
+  auto t = types.find(s.params[i].text);
+  if (t == types.end()) {
+    if (s.params[i].text == "VECTOR") return error(s.params[i].span, "sema.unsupported-type", "VECTOR variables are not supported yet");
+    return error(s.params[i].span, "sema.bad-type", fmt::format("unknown type {}: expected INTGR, LONG, REAL, DOUBLE, BOOL or CHAR", s.params[i].text));
+  }
+  auto in = make(Op::Declare, s);
+  ir::Operand type_word;
+  type_word.kind = ir::Operand::Kind::Word;
+  type_word.word = s.params[i].text;
+  in.operands.push_back(type_word);
+  ++i;
+  if (t->second == ValueType::String && i < s.params.size() && s.params[i].kind == ExprKind::Number) ++i;  // CHAR length
+  if (i >= s.params.size()) return error(s.params.back().span, "sema.missing-parameter", "expected variable names after the type");
+  for (; i < s.params.size(); ++i) {
+    const auto& p = s.params[i];
+    int size = 0;
+    if (p.kind == ExprKind::Index) {
+      if (p.args.size() != 1 || p.args[0].kind != ExprKind::Number || p.args[0].number < 1)
+        return error(p.span, "sema.bad-array", "an array declaration needs a positive size, e.g. V1[10]");
+      size = static_cast<int>(p.args[0].number);
+    } else if (p.kind != ExprKind::Word || p.text.empty()) {
+      return error(p.span, "sema.expected-name", "expected a variable name");
+    }
+    SymbolTable::VariableInfo info{t->second, size, p.span};
+    if (m_macro) m_locals[p.text] = info;
+    else m_symbols.variables[p.text] = info;
+    in.names.push_back(p.text);
+    ir::Operand sz;
+    sz.kind = ir::Operand::Kind::Expr;
+    sz.expr.value = Value::integer(size);
+    in.operands.push_back(sz);
+  }
+  emit(std::move(in));
+}
+
+}  // namespace metron::interpreter::detail

@@ -1,0 +1,248 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Expressions: typing and lowering of values, variables, calls and operators.
+#include <algorithm>
+#include <cmath>
+
+#include "metron/stdlib/builtins.hpp"
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+
+std::optional<UnitCompiler::Typed> UnitCompiler::expression(const grammar::Expr& g, bool allow_labels) {
+  Typed t;
+  t.e.span = g.span;
+  switch (g.kind) {
+    case ExprKind::Number:
+      t.e.op = ir::ExprOp::Constant;
+      t.e.value = Value::real(g.number);
+      t.e.type = ValueType::Real;
+      return t;
+    case ExprKind::String:
+      t.e.op = ir::ExprOp::Constant;
+      t.e.value = Value::string(g.text);
+      t.e.type = ValueType::String;
+      return t;
+    case ExprKind::Word:
+      return word_expression(g);
+    case ExprKind::Label: {
+      if (!allow_labels) {
+        error(g.span, "sema.label-not-value", fmt::format("expected a value, got the label {}({})", g.label.prefix, g.label.name));
+        return std::nullopt;
+      }
+      t.e.op = ir::ExprOp::Constant;
+      t.e.label = label_operand(g.label);
+      t.e.value = Value::label(t.e.label.prefix, t.e.label.name);
+      t.e.type = ValueType::Label;
+      return t;
+    }
+    case ExprKind::Paren:
+      return g.args.empty() ? std::nullopt : expression(g.args[0], allow_labels);
+    case ExprKind::Index:
+      return element_expression(g);
+    case ExprKind::Call:
+      return call_expression(g);
+    case ExprKind::Unary:
+      return unary_expression(g);
+    case ExprKind::Binary:
+      return binary_expression(g);
+  }
+  return std::nullopt;
+}
+
+// .TRUE., .FALSE. or a variable name
+std::optional<UnitCompiler::Typed> UnitCompiler::word_expression(const grammar::Expr& g) {
+  Typed t;
+  t.e.span = g.span;
+  if (g.text == ".TRUE." || g.text == ".FALSE.") {
+    t.e.op = ir::ExprOp::Constant;
+    t.e.value = Value::boolean_value(g.text == ".TRUE.");
+    t.e.type = ValueType::Bool;
+    return t;
+  }
+  t.e.op = ir::ExprOp::Variable;
+  t.e.name = g.text;
+  if (macro_param(g.text) || m_runtime_names.count(g.text)) {
+    t.dynamic = true;
+    return t;
+  }
+  if (auto it = m_locals.find(g.text); it != m_locals.end()) {
+    t.e.type = it->second.type;
+    return t;
+  }
+  if (auto it = m_symbols.variables.find(g.text); it != m_symbols.variables.end()) {
+    if (it->second.size > 0) {
+      error(g.span, "sema.array-without-index", fmt::format("array {} needs an index, e.g. {}[1]", g.text, g.text));
+      return std::nullopt;
+    }
+    t.e.type = it->second.type;
+    return t;
+  }
+  if (g.text.empty()) {
+    error(g.span, "sema.missing-value", "expected a value, got an empty parameter");
+    return std::nullopt;
+  }
+  error(g.span, "sema.undeclared-variable",
+        fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) before its use", g.text, g.text));
+  return std::nullopt;
+}
+
+// V[i,...]: an array element
+std::optional<UnitCompiler::Typed> UnitCompiler::element_expression(const grammar::Expr& g) {
+  Typed t;
+  t.e.span = g.span;
+  t.e.op = ir::ExprOp::Element;
+  t.e.name = g.text;
+  auto it = m_symbols.variables.find(g.text);
+  auto lt = m_locals.find(g.text);
+  const SymbolTable::VariableInfo* info = lt != m_locals.end() ? &lt->second : (it != m_symbols.variables.end() ? &it->second : nullptr);
+  if (!info) {
+    error(g.span, "sema.undeclared-variable", fmt::format("array {} is not declared", g.text));
+    return std::nullopt;
+  }
+  if (info->size == 0) {
+    error(g.span, "sema.not-array", fmt::format("{} is not an array", g.text));
+    return std::nullopt;
+  }
+  t.e.type = info->type;
+  for (const auto& a : g.args) {
+    auto i = expression(a);
+    if (!i) return std::nullopt;
+    if (!i->dynamic && !(i->e.type == ValueType::Real || i->e.type == ValueType::Integer)) {
+      error(a.span, "sema.type", "an array index must be a number");
+      return std::nullopt;
+    }
+    t.e.args.push_back(std::move(i->e));
+  }
+  return t;
+}
+
+// NAME(args...): an intrinsic function
+std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::Expr& g) {
+  Typed t;
+  t.e.span = g.span;
+  const Builtin* fn = find_builtin(g.text);
+  if (!fn) {
+    error(g.span, "sema.unknown-function", fmt::format("unknown function {}", g.text));
+    return std::nullopt;
+  }
+  const int n = static_cast<int>(g.args.size());
+  if (n < fn->min_args || n > fn->max_args) {
+    error(g.span, "sema.arity",
+          fn->min_args == fn->max_args
+              ? fmt::format("{} takes {} argument{}, got {}", g.text, fn->min_args, fn->min_args == 1 ? "" : "s", n)
+              : fmt::format("{} takes {} to {} arguments, got {}", g.text, fn->min_args, fn->max_args, n));
+    return std::nullopt;
+  }
+  t.e.op = ir::ExprOp::Call;
+  t.e.name = g.text;
+  t.e.type = fn->result;
+  for (const auto& a : g.args) {
+    auto x = expression(a);
+    if (!x) return std::nullopt;
+    if (!x->dynamic && x->e.type == ValueType::Bool) {
+      error(a.span, "sema.type", fmt::format("{} does not take a BOOL argument", g.text));
+      return std::nullopt;
+    }
+    if (!x->dynamic && !fn->string_args && g.text != "STR" && x->e.type == ValueType::String) {
+      error(a.span, "sema.type", fmt::format("{} expects a number, got a string", g.text));
+      return std::nullopt;
+    }
+    t.dynamic |= x->dynamic;
+    t.e.args.push_back(std::move(x->e));
+  }
+  return t;
+}
+
+// -x, +x, .NOT.b
+std::optional<UnitCompiler::Typed> UnitCompiler::unary_expression(const grammar::Expr& g) {
+  Typed t;
+  t.e.span = g.span;
+  auto x = expression(g.args.at(0));
+  if (!x) return std::nullopt;
+  t.e.op = ir::ExprOp::Unary;
+  t.e.name = g.text;
+  t.dynamic = x->dynamic;
+  if (g.text == ".NOT.") {
+    if (!x->dynamic && x->e.type != ValueType::Bool) {
+      error(g.span, "sema.type", fmt::format(".NOT. needs a BOOL, got {}", to_string(x->e.type)));
+      return std::nullopt;
+    }
+    t.e.type = ValueType::Bool;
+  } else {
+    if (!x->dynamic && !(x->e.type == ValueType::Real || x->e.type == ValueType::Integer)) {
+      error(g.span, "sema.type", fmt::format("unary {} needs a number, got {}", g.text, to_string(x->e.type)));
+      return std::nullopt;
+    }
+    t.e.type = x->e.type;
+  }
+  t.e.args.push_back(std::move(x->e));
+  return t;
+}
+
+// a op b: arithmetic, comparison, .AND., .OR.
+std::optional<UnitCompiler::Typed> UnitCompiler::binary_expression(const grammar::Expr& g) {
+  Typed t;
+  t.e.span = g.span;
+  auto a = expression(g.args.at(0));
+  auto b = expression(g.args.at(1));
+  if (!a || !b) return std::nullopt;
+  t.e.op = ir::ExprOp::Binary;
+  t.e.name = g.text;
+  t.dynamic = a->dynamic || b->dynamic;
+  const auto number = [](ValueType v) { return v == ValueType::Real || v == ValueType::Integer; };
+  const std::string& op = g.text;
+  if (op == ".AND." || op == ".OR.") {
+    if (!t.dynamic && (a->e.type != ValueType::Bool || b->e.type != ValueType::Bool)) {
+      error(g.span, "sema.type", fmt::format("{} needs BOOL operands", op));
+      return std::nullopt;
+    }
+    t.e.type = ValueType::Bool;
+  } else if (op[0] == '.') {
+    if (!t.dynamic && !((number(a->e.type) && number(b->e.type)) ||
+                        (a->e.type == ValueType::String && b->e.type == ValueType::String) ||
+                        (a->e.type == ValueType::Bool && b->e.type == ValueType::Bool && (op == ".EQ." || op == ".NE.")))) {
+      error(g.span, "sema.type", fmt::format("{} compares a {} with a {}", op, to_string(a->e.type), to_string(b->e.type)));
+      return std::nullopt;
+    }
+    t.e.type = ValueType::Bool;
+  } else {
+    if (!t.dynamic && op == "+" && a->e.type == ValueType::String && b->e.type == ValueType::String) {
+      error(g.span, "sema.type", "strings are joined with CONCAT(a,b), not +");
+      return std::nullopt;
+    }
+    if (!t.dynamic && (!number(a->e.type) || !number(b->e.type))) {
+      error(g.span, "sema.type", fmt::format("'{}' needs numbers, got {} and {}", op, to_string(a->e.type), to_string(b->e.type)));
+      return std::nullopt;
+    }
+    t.e.type = (a->e.type == ValueType::Integer && b->e.type == ValueType::Integer && op != "/" && op != "**")
+                   ? ValueType::Integer : ValueType::Real;
+  }
+  t.e.args.push_back(std::move(a->e));
+  t.e.args.push_back(std::move(b->e));
+  return t;
+}
+
+// A numeric parameter (a number, a variable or an arithmetic expression).
+std::optional<ir::Expr> UnitCompiler::numeric(const grammar::Expr& g, const char* what) {
+  if (g.kind == ExprKind::Word && !g.text.empty() && !is_variable(g.text)) {
+    error(g.span, "sema.expected-number", fmt::format("expected {} (a number), got the word {}", what, g.text));
+    return std::nullopt;
+  }
+  if (g.kind == ExprKind::String) {
+    error(g.span, "sema.expected-number", fmt::format("expected {} (a number), got a string", what));
+    return std::nullopt;
+  }
+  auto t = expression(g);
+  if (!t) return std::nullopt;
+  if (!t->dynamic && !(t->e.type == ValueType::Real || t->e.type == ValueType::Integer)) {
+    error(g.span, "sema.expected-number", fmt::format("expected {} (a number), got a {}", what, to_string(t->e.type)));
+    return std::nullopt;
+  }
+  return std::move(t->e);
+}
+
+}  // namespace metron::interpreter::detail

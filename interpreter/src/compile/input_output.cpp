@@ -1,0 +1,124 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Input/output statements: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (and the statements with no run-time effect).
+#include <algorithm>
+#include <cmath>
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+
+namespace {
+// Statements metron accepts with no run-time effect (settings a virtual CMM does not need).
+const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "WKPLAN", "VFORM",
+                                       "ERROR", "DMEHW", "DMESW", "FINPOS", "CLMPID", "CLMPSN", "PREVOP",
+                                       "OPERID", "PLANID", "PARTID", "PARTRV", "PARTSN", "PROCID", "QISDEF",
+                                       "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT", "RESUME"};
+}  // namespace
+
+void UnitCompiler::add_input_output(StatementTable& t) {
+  for (const char* w : no_effect_words) t.emplace(w, &UnitCompiler::no_effect);
+  t.insert({
+      {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
+      {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close}
+  });
+}
+
+void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }
+
+// UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC]
+void UnitCompiler::units(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "a length unit (MM, INCH, CM, M, FEET)")) return;
+  auto in = make(Op::Units, s);
+  ir::UnitsPayload units;
+  const auto length = is_word(s.params[0]) ? ir::parse_word<ir::LengthUnit>(s.params[0].text) : std::nullopt;
+  if (!length)
+    return error(s.params[0].span, "sema.bad-unit", fmt::format("expected a length unit ({}) after UNITS/", ir::word_list<ir::LengthUnit>()));
+  units.length = *length;
+  if (s.params.size() > 1) {
+    units.angle = is_word(s.params[1]) ? ir::parse_word<ir::AngleUnit>(s.params[1].text) : std::nullopt;
+    if (!units.angle)
+      return error(s.params[1].span, "sema.bad-unit", "expected an angle unit (ANGDEC, ANGRAD) after the length unit");
+    if (units.angle == ir::AngleUnit::Angdms) warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
+  }
+  in.payload = units;
+  emit(std::move(in));
+}
+
+// MODE/AUTO | MODE/PROG,MAN | MODE/MAN
+void UnitCompiler::mode(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "AUTO, PROG,MAN or MAN")) return;
+  auto in = make(Op::Mode, s);
+  std::string w;
+  for (const auto& p : s.params) w += (w.empty() ? "" : " ") + p.text;
+  const auto mode = ir::parse_word<ir::RunMode>(w);
+  if (!mode) return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+  in.payload = ir::ModePayload{*mode};
+  emit(std::move(in));
+}
+
+// TEXT/OPER|OUTFIL|MAN|DISPLY,'text'
+void UnitCompiler::text(const grammar::Statement& s) {
+  if (!expect_params(s, 2, "the text kind (OPER, OUTFIL, MAN) and the text")) return;
+  auto in = make(Op::Text, s);
+  in.operands.push_back(word_operand(s.params[0]));
+  auto e = expression(s.params[1]);
+  if (!e) return;
+  in.operands.push_back(expr_operand(std::move(e->e)));
+  emit(std::move(in));
+}
+
+// DID(l)=DEVICE/STOR|TERM|PRINT|INCR,'path'
+void UnitCompiler::device(const grammar::Statement& s) {
+  if (!require_target(s, {"DID"}, "DID(label)=DEVICE/STOR,'file'")) return;
+  if (!expect_params(s, 1, "the device kind")) return;
+  auto in = make(Op::DeviceDef, s, upper(s.target->name));
+  in.operands.push_back(word_operand(s.params[0]));
+  if (s.params.size() > 1) {
+    auto e = expression(s.params[1]);
+    if (!e) return;
+    in.operands.push_back(expr_operand(std::move(e->e)));
+  }
+  m_symbols.devices.insert(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// The DID(label) of OPEN and CLOSE: given and defined.
+bool UnitCompiler::check_device(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "DID(label)")) return false;
+  if (!is_label(s.params[0], {"DID"})) {
+    error(s.params[0].span, "sema.expected-device", fmt::format("expected DID(label) after {}/", s.major));
+    return false;
+  }
+  if (!m_symbols.devices.count(upper(s.params[0].label.name))) {
+    error(s.params[0].span, "sema.undefined-device", fmt::format("device DID({}) is not defined", s.params[0].label.name));
+    return false;
+  }
+  return true;
+}
+
+// OPEN/DID(l),FDATA|DIRECT,DMIS|V(...),OUTPUT|INPUT|APPEND|OVERWR
+void UnitCompiler::open(const grammar::Statement& s) {
+  if (!check_device(s)) return;
+  for (const auto& p : s.params)
+    if (is_word(p, "INPUT")) {
+      warn(p.span, "sema.unsupported-input", "OPEN for INPUT is not supported; the statement is skipped");
+      emit(make(Op::Nop, s, "OPEN"));
+      return;
+    }
+  auto in = make(Op::DeviceOpen, s);
+  in.operands.push_back(label_op(s.params[0]));
+  emit(std::move(in));
+}
+
+// CLOSE/DID(l)
+void UnitCompiler::close(const grammar::Statement& s) {
+  if (!check_device(s)) return;
+  auto in = make(Op::DeviceClose, s);
+  in.operands.push_back(label_op(s.params[0]));
+  emit(std::move(in));
+}
+
+}  // namespace metron::interpreter::detail

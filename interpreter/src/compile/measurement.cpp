@@ -1,0 +1,284 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Measurement: SNSLCT, SNSET, FEDRAT, ACLRAT, SCNMOD, SCNSET, GOTO, MEAS ... ENDMES, PTMEAS, RMEAS, PAMEAS.
+#include <algorithm>
+#include <cmath>
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+
+namespace {
+
+// The fewest points that define a feature of each type.
+int minimum_points(runtime::FeatureType type) {
+  switch (type) {
+    case runtime::FeatureType::Point: return 1;
+    case runtime::FeatureType::Line: return 2;
+    case runtime::FeatureType::Plane:
+    case runtime::FeatureType::Circle:
+    case runtime::FeatureType::Arc: return 3;
+    case runtime::FeatureType::Sphere: return 4;
+    case runtime::FeatureType::Cylinder: return 5;
+    case runtime::FeatureType::Cone: return 6;
+  }
+  return 1;
+}
+
+}  // namespace
+
+void UnitCompiler::add_measurement(StatementTable& t) {
+  t.insert({
+      {"SNSMNT", &UnitCompiler::snsmnt}, {"SNSLCT", &UnitCompiler::snslct}, {"SNSET", &UnitCompiler::snset},
+      {"FEDRAT", &UnitCompiler::fedrat}, {"ACLRAT", &UnitCompiler::aclrat},
+      {"SCNMOD", &UnitCompiler::scnmod}, {"SCNSET", &UnitCompiler::scnset}, {"GOTO", &UnitCompiler::go_to},
+      {"MEAS", &UnitCompiler::meas}, {"ENDMES", &UnitCompiler::endmes}, {"PTMEAS", &UnitCompiler::ptmeas},
+      {"RMEAS", &UnitCompiler::ptmeas}, {"PAMEAS", &UnitCompiler::pameas}
+  });
+}
+
+// SNSMNT/XVEC,i,j,k,ZVEC,i,j,k,MNTLEN,x,y,z: the probe mount; the virtual CMM's head is fixed.
+void UnitCompiler::snsmnt(const grammar::Statement& s) { emit(make(Op::Nop, s, "SNSMNT")); }
+
+// SNSLCT/S(l)
+void UnitCompiler::snslct(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "a sensor label S(...)")) return;
+  if (!is_label(s.params[0], {"S", "SA"})) return error(s.params[0].span, "sema.expected-sensor", "expected a sensor label S(...) after SNSLCT/");
+  const std::string name = upper(s.params[0].label.name);
+  if (!m_symbols.sensors.count(name)) {
+    if (auto it = m_symbols.skipped.find("S:" + name); it != m_symbols.skipped.end())
+      return error(s.params[0].span, "sema.skipped-definition", fmt::format("sensor S({}) was defined by a skipped statement", s.params[0].label.name));
+    return error(s.params[0].span, "sema.undefined-sensor", fmt::format("sensor S({}) is not defined: define it with S({})=SNSDEF/PROBE,...", s.params[0].label.name, s.params[0].label.name));
+  }
+  emit(make(Op::SensorSelect, s, name));
+}
+
+// SNSET/APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH,dist[, ...]
+void UnitCompiler::snset(const grammar::Statement& s) {
+  static const std::set<std::string> words = {"APPRCH", "RETRCT", "SEARCH", "CLRSRF", "DEPTH"};
+  if (!expect_params(s, 2, "a setting (APPRCH, RETRCT, SEARCH, CLRSRF, DEPTH) and a distance")) return;
+  for (std::size_t i = 0; i < s.params.size(); i += 2) {
+    if (!is_word(s.params[i]) || !words.count(s.params[i].text)) {
+      if (is_word(s.params[i])) {
+        warn(s.params[i].span, "sema.unsupported-setting", fmt::format("SNSET/{} is not supported and is ignored", s.params[i].text));
+        emit(make(Op::Nop, s, "SNSET"));
+        return;
+      }
+      return error(s.params[i].span, "sema.bad-setting", "expected APPRCH, RETRCT, SEARCH, CLRSRF or DEPTH");
+    }
+    if (i + 1 >= s.params.size()) return error(s.params[i].span, "sema.missing-parameter", fmt::format("expected a distance after {}", s.params[i].text));
+    auto e = numeric(s.params[i + 1], "a distance");
+    if (!e) return;
+    if (e->op == ir::ExprOp::Constant && e->value.number < 0 && s.params[i].text != "DEPTH")
+      return error(s.params[i + 1].span, "sema.negative-distance", fmt::format("the {} distance must not be negative", s.params[i].text));
+    auto in = make(Op::ProbeSet, s);
+    in.operands.push_back(word_operand(s.params[i]));
+    in.operands.push_back(expr_operand(std::move(*e)));
+    emit(std::move(in));
+  }
+}
+
+// FEDRAT/MESVEL|POSVEL|SCNVEL,MPM|MMPS|IPM|IPS|PCENT,v   (HEDROT/HEDMVEL... skipped)
+void UnitCompiler::fedrat(const grammar::Statement& s) {
+  if (!expect_params(s, 3, "MESVEL|POSVEL, a unit (MPM, MMPS, IPM, IPS, PCENT) and a value")) return;
+  const auto kind = is_word(s.params[0]) ? ir::parse_word<ir::FeedKind>(s.params[0].text) : std::nullopt;
+  const auto unit = is_word(s.params[1]) ? ir::parse_word<ir::FeedUnit>(s.params[1].text) : std::nullopt;
+  if (is_word(s.params[0]) && !kind) {
+    warn(s.params[0].span, "sema.unsupported-setting", fmt::format("FEDRAT/{} is not supported and is ignored", s.params[0].text));
+    emit(make(Op::Nop, s, "FEDRAT"));
+    return;
+  }
+  if (!is_word(s.params[0])) return error(s.params[0].span, "sema.bad-setting", "expected MESVEL, POSVEL or SCNVEL after FEDRAT/");
+  if (!unit)
+    return error(s.params[1].span, "sema.bad-unit", fmt::format("expected a feed unit ({}) after {}", ir::word_list<ir::FeedUnit>(), s.params[0].text));
+  auto e = numeric(s.params[2], "a feed rate");
+  if (!e) return;
+  if (e->op == ir::ExprOp::Constant && e->value.number <= 0) return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
+  auto in = make(Op::Feed, s);
+  in.payload = ir::FeedPayload{*kind, *unit};
+  in.operands.push_back(expr_operand(std::move(*e)));
+  emit(std::move(in));
+}
+
+// ACLRAT/MESACL|POSACL,MPMM|MMPSS|IPMM|IPSS|PCENT,v
+void UnitCompiler::aclrat(const grammar::Statement& s) {
+  if (!expect_params(s, 3, "MESACL|POSACL, a unit and a value")) return;
+  auto e = numeric(s.params[2], "an acceleration");
+  if (!e) return;
+  auto in = make(Op::Accel, s);
+  in.operands.push_back(word_operand(s.params[0]));
+  in.operands.push_back(word_operand(s.params[1]));
+  in.operands.push_back(expr_operand(std::move(*e)));
+  emit(std::move(in));
+}
+
+// SCNMOD/ON|OFF
+void UnitCompiler::scnmod(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "ON or OFF")) return;
+  if (s.params.size() != 1 || !(is_word(s.params[0], "ON") || is_word(s.params[0], "OFF")))
+    return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.bad-setting", "expected ON or OFF after SCNMOD/");
+  auto in = make(Op::ScanMode, s);
+  in.operands.push_back(word_operand(s.params[0]));
+  emit(std::move(in));
+}
+
+// SCNSET/DRAG|DIST|CHORD|ACCEL|DEFLEC,value | SCNSET/LAW,VC1|VC1P|VC2 [, ...]
+void UnitCompiler::scnset(const grammar::Statement& s) {
+  static const std::set<std::string> values = {"DIST", "DRAG", "CHORD", "ACCEL", "DEFLEC"};
+  if (!expect_params(s, 2, "a scan setting (DRAG, DIST, CHORD, ACCEL, DEFLEC, LAW) and its value")) return;
+  for (std::size_t i = 0; i < s.params.size(); i += 2) {
+    const auto& w = s.params[i];
+    if (!is_word(w) || (!values.count(w.text) && w.text != "LAW")) {
+      if (is_word(w)) {
+        warn(w.span, "sema.unsupported-setting", fmt::format("SCNSET/{} is not supported and is ignored", w.text));
+        emit(make(Op::Nop, s, "SCNSET"));
+        return;
+      }
+      return error(w.span, "sema.bad-setting", "expected DRAG, DIST, CHORD, ACCEL, DEFLEC or LAW");
+    }
+    if (i + 1 >= s.params.size()) return error(w.span, "sema.missing-parameter", fmt::format("expected a value after {}", w.text));
+    auto in = make(Op::ScanSet, s);
+    in.operands.push_back(word_operand(w));
+    if (w.text == "LAW") {
+      const auto& law = s.params[i + 1];
+      if (!(is_word(law, "VC1") || is_word(law, "VC1P") || is_word(law, "VC2")))
+        return error(law.span, "sema.bad-setting", "expected VC1, VC1P or VC2 after LAW");
+      in.operands.push_back(word_operand(law));
+    } else {
+      auto e = numeric(s.params[i + 1], "a value");
+      if (!e) return;
+      if (e->op == ir::ExprOp::Constant && !(e->value.number > 0))
+        return error(s.params[i + 1].span, "sema.bad-setting", fmt::format("the SCNSET/{} value must be positive", w.text));
+      in.operands.push_back(expr_operand(std::move(*e)));
+    }
+    emit(std::move(in));
+  }
+}
+
+// GOTO/x,y,z | GOTO/CART,x,y,z | GOTO/INCR,dist,i,j,k | GOTO/POL,r,a,h
+void UnitCompiler::go_to(const grammar::Statement& s) {
+  auto in = make(Op::GoTo, s);
+  ir::FormPayload form;
+  std::size_t i = 0;
+  if (!s.params.empty() && is_word(s.params[0])) form.form = ir::parse_word<ir::CoordinateForm>(s.params[0].text);
+  if (form.form) ++i;
+  in.payload = form;
+  const bool incr = form.form == ir::CoordinateForm::Incr;
+  const std::size_t n = s.params.size() - i;
+  if (incr ? n != 4 : (n != 3 && n != 6))
+    return error(n == 0 ? s.major_span : s.params.back().span, "sema.goto-arity",
+                 incr ? fmt::format("GOTO/INCR expects a distance and a direction i,j,k, got {} numbers", n)
+                      : fmt::format("GOTO expects x,y,z (optionally i,j,k), got {} numbers", n));
+  for (; i < s.params.size(); ++i) {
+    if (!push_number(in, s.params[i], "a coordinate")) return;
+  }
+  emit(std::move(in));
+}
+
+// MEAS/type,F(l),n
+void UnitCompiler::meas(const grammar::Statement& s) {
+  // Open the block first, so that a bad MEAS does not also make its ENDMES an error.
+  Block placeholder = block(Block::Kind::Meas, s.span);
+  placeholder.start = invalid;
+  placeholder.control = true;
+  m_blocks.push_back(placeholder);
+  if (!expect_params(s, 3, "the feature type, F(label) and the number of points")) return;
+  const auto meas_type = type_word(s.params[0]);
+  if (!meas_type) return error(s.params[0].span, "sema.bad-feature-type", "expected a feature type after MEAS/");
+  if (!is_label(s.params[1], {"F"})) return error(s.params[1].span, "sema.expected-feature", "expected F(label) after the feature type");
+  if (!check_feature(s.params[1])) return;
+  const std::string label = upper(s.params[1].label.name);
+  const auto type = feature_type(label);
+  if (type && *type != *meas_type)
+    return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is a {}", s.params[0].text, s.params[1].label.name, ir::word_of(*type)));
+  auto count = numeric(s.params[2], "the number of points");
+  if (!count) return;
+  Block b = block(Block::Kind::Meas, s.span);
+  b.feature = label;
+  b.type = *meas_type;
+  if (count->op == ir::ExprOp::Constant) {
+    b.declared = static_cast<int>(count->value.number);
+    if (count->value.number < 0 || count->value.number != std::floor(count->value.number))
+      return error(s.params[2].span, "sema.bad-count", "the number of points must be a whole number >= 0");
+  }
+  auto in = make(Op::MeasBegin, s, label);
+  in.name_is_param = macro_param(label).has_value();
+  ir::FeaturePayload payload;
+  payload.type = *meas_type;
+  in.payload = payload;
+  in.operands.push_back(expr_operand(std::move(*count)));
+  b.start = emit(std::move(in));
+  m_blocks.back() = b;
+}
+
+// ENDMES
+void UnitCompiler::endmes(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Meas)
+    return error(s.major_span, "sema.unmatched", "ENDMES without a matching MEAS");
+  Block b = m_blocks.back();
+  m_blocks.pop_back();
+  if (b.start == invalid) return;
+  if (!b.control && !b.scanned && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
+    error(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS", b.declared, b.ptmeas));
+  const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
+  const int minimum = minimum_points(b.type);
+  if (!b.control && !b.scanned && n > 0 && n < minimum)
+    error(b.span, "sema.too-few-points", fmt::format("a {} needs at least {} points, the block has {}", ir::word_of(b.type), minimum, n));
+  const std::size_t end = emit(make(Op::MeasEnd, s));
+  code()[b.start].target = static_cast<std::int64_t>(end);
+}
+
+// PTMEAS/CART,x,y,z[,i,j,k]  |  RMEAS/CART,x,y,z,i,j,k[,FA(ref)]
+void UnitCompiler::ptmeas(const grammar::Statement& s) {
+  if (m_blocks.empty() || std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
+    return error(s.major_span, "sema.ptmeas-outside", fmt::format("{} outside a MEAS block", s.major));
+  if (!expect_params(s, 1, "CART or POL")) return;
+  if (!is_word(s.params[0], "CART") && !is_word(s.params[0], "POL"))
+    return error(s.params[0].span, "sema.expected-form", fmt::format("expected CART or POL after {}/", s.major));
+  auto in = make(Op::PtMeas, s);
+  in.payload = ir::FormPayload{ir::parse_word<ir::CoordinateForm>(s.params[0].text)};
+  std::size_t end = s.params.size();
+  if (s.major == "RMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label) {
+    if (!is_label(s.params[end - 1], {"FA", "F"})) return error(s.params[end - 1].span, "sema.expected-feature", "expected FA(label) as the RMEAS reference");
+    if (!check_feature(s.params[end - 1])) return;
+    --end;
+  }
+  const std::size_t n = end - 1;
+  if (n != 3 && n != 6) return error(s.params.back().span, "sema.ptmeas-arity", fmt::format("{} expects x,y,z and optionally i,j,k, got {} numbers", s.major, n));
+  std::vector<double> v;
+  for (std::size_t i = 1; i < end; ++i) {
+    auto e = numeric(s.params[i], "a coordinate");
+    if (!e) return;
+    v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
+    in.operands.push_back(expr_operand(std::move(*e)));
+  }
+  if (n == 6 && v[3] == 0 && v[4] == 0 && v[5] == 0) return error(s.params[4].span, "sema.zero-vector", "the approach vector i,j,k is zero");
+  if (end < s.params.size()) in.operands.push_back(label_op(s.params[end]));
+  for (auto& b : m_blocks)
+    if (b.kind == Block::Kind::Meas) ++b.ptmeas;
+  emit(std::move(in));
+}
+
+// PAMEAS/P(l): scan along a path inside a MEAS block
+void UnitCompiler::pameas(const grammar::Statement& s) {
+  if (m_blocks.empty() || std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
+    return error(s.major_span, "sema.ptmeas-outside", "PAMEAS outside a MEAS block");
+  if (!expect_params(s, 1, "P(label)")) return;
+  if (s.params.size() != 1 || !is_label(s.params[0], {"P"}))
+    return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.expected-path", "expected a single P(label) after PAMEAS/");
+  const std::string name = upper(s.params[0].label.name);
+  if (!m_symbols.paths.count(name) && !macro_param(name)) {
+    if (auto it = m_symbols.skipped.find("P:" + name); it != m_symbols.skipped.end())
+      return error(s.params[0].span, "sema.skipped-definition", fmt::format("path P({}) was defined by a skipped statement", s.params[0].label.name));
+    return error(s.params[0].span, "sema.undefined-path", fmt::format("path P({}) is not defined: define it with P({})=PATH/...", s.params[0].label.name, s.params[0].label.name));
+  }
+  auto in = make(Op::PaMeas, s);
+  in.operands.push_back(label_op(s.params[0]));
+  for (auto& b : m_blocks)
+    if (b.kind == Block::Kind::Meas) b.scanned = true;
+  emit(std::move(in));
+}
+
+}  // namespace metron::interpreter::detail

@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The unit compiler's dispatcher: blocks, jump labels, name checks, the statement table.
+
+#include "compile/unit_compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+using grammar::ExprKind;
+using ir::Op;
+
+void UnitCompiler::compile(const grammar::Program& program, bool repl) {
+  m_repl = repl;
+  const auto& st = program.statements;
+  if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN")
+    warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
+  for (const auto& s : st) {
+    if (m_ended) {
+      warn(s.span, "sema.after-endfil", "statement after ENDFIL is ignored");
+      break;
+    }
+    statement(s);
+  }
+  for (auto it = m_blocks.rbegin(); it != m_blocks.rend(); ++it) {
+    static const char* closers[] = {"ENDMES", "ENDIF", "ENDDO", "ENDMAC"};
+    static const char* openers[] = {"MEAS", "IF", "DO", "MACRO"};
+    error(it->span, "sema.unclosed-block",
+          fmt::format("{} is never closed: expected {} before the end of the file",
+                      openers[static_cast<int>(it->kind)], closers[static_cast<int>(it->kind)]));
+  }
+  resolve_jumps(m_unit_jumps, m_module.units[m_unit].code);
+  if (!repl && !m_ended && !st.empty() && !m_included)
+    warn(st.back().span, "sema.no-endfil", "the program does not end with ENDFIL");
+}
+
+std::optional<ir::Expr> UnitCompiler::standalone_expression(const grammar::Expr& g) {
+  auto t = expression(g, true);
+  if (!t) return std::nullopt;
+  return std::move(t->e);
+}
+
+void UnitCompiler::resolve_jumps(JumpScope& scope, std::vector<ir::Instruction>& target_code) {
+  for (const auto& [pc, ref] : scope.pending) {
+    auto it = scope.labels.find(ref.first);
+    if (it == scope.labels.end())
+      error(ref.second, "sema.undefined-jump-label", fmt::format("JUMPTO target ({}) is not defined", ref.first));
+    else
+      target_code[pc].target = static_cast<std::int64_t>(it->second);
+  }
+  scope = {};
+}
+
+// A feature label must be defined before use; FA() needs it measured or constructed at run time.
+bool UnitCompiler::check_feature(const grammar::Expr& e) {
+  const std::string name = upper(e.label.name);
+  if (macro_param(name)) return true;
+  if (m_symbols.features.count(name)) return true;
+  if (auto it = m_symbols.skipped.find("F:" + name); it != m_symbols.skipped.end()) {
+    Diagnostic d{Severity::Error, "sema.skipped-definition", e.span,
+                 fmt::format("feature {}({}) is defined only by a statement metron skipped", e.label.prefix, e.label.name), {}};
+    const Location loc = m_sources.locate(it->second);
+    d.notes.push_back(fmt::format("the unsupported statement is at {}:{}:{}", loc.path, loc.line, loc.column));
+    m_sink.report(std::move(d));
+    return false;
+  }
+  error(e.span, "sema.undefined-feature",
+        fmt::format("feature {}({}) is used before its definition: define it with F({})=FEAT/...", e.label.prefix, e.label.name, e.label.name));
+  return false;
+}
+
+std::optional<runtime::FeatureType> UnitCompiler::feature_type(const std::string& name) const {
+  auto it = m_symbols.features.find(name);
+  if (it == m_symbols.features.end()) return std::nullopt;
+  return it->second.type;
+}
+
+void UnitCompiler::statement(const grammar::Statement& s) {
+  if (s.jump_label) {
+    jumps().labels[upper(*s.jump_label)] = code().size();
+    emit(make(Op::JumpLabel, s, upper(*s.jump_label)));
+    return;
+  }
+  const std::string& m = s.major;
+  if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
+    static const std::set<std::string> allowed = {"GOTO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
+                                                  "IF", "ELSE", "ENDIF", "DO", "ENDDO", "ASSIGN", "CALL", "DISPLY"};
+    if (!allowed.count(m) && !s.variable) {
+      error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
+      return;
+    }
+  }
+  // V=ASSIGN/... and V=OBTAIN/... are a row of their own (the grammar parsed the variable).
+  const auto& rows = statements();
+  auto it = rows.find(s.variable ? std::string_view(assignment_row) : std::string_view(m));
+  if (it == rows.end()) return unknown(s);
+  (this->*(it->second))(s);
+}
+
+const StatementTable& UnitCompiler::statements() {
+  static const StatementTable table = [] {
+    StatementTable t;
+    add_input_output(t);
+    add_definitions(t);
+    add_measurement(t);
+    add_alignment(t);
+    add_control(t);
+    return t;
+  }();
+  return table;
+}
+
+// A vendor or unsupported statement: warn and skip; remember labels it would have defined.
+void UnitCompiler::unknown(const grammar::Statement& s) {
+  warn(s.major_span, "sema.unknown-statement", fmt::format("unknown statement {} is skipped", s.major.empty() ? "?" : s.major));
+  if (s.target) m_symbols.skipped[(s.target->prefix == "F" ? "F:" : s.target->prefix + ":") + upper(s.target->name)] = s.span;
+  emit(make(Op::Nop, s, s.major));
+}
+
+bool UnitCompiler::expect_params(const grammar::Statement& s, std::size_t n, const char* what) {
+  if (s.params.size() >= n) return true;
+  error(s.params.empty() ? s.major_span : s.params.back().span, "sema.missing-parameter",
+        fmt::format("expected {} after {}", what, s.params.empty() ? s.major + "/" : "'" + s.major + "' parameters"));
+  return false;
+}
+
+bool UnitCompiler::require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example) {
+  if (s.target && std::any_of(prefixes.begin(), prefixes.end(), [&](const char* p) { return s.target->prefix == p; }))
+    return true;
+  error(s.span, "sema.missing-label", fmt::format("{} needs a label on the left: {}", s.major, example));
+  return false;
+}
+
+}  // namespace metron::interpreter::detail

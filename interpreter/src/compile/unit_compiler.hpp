@@ -1,0 +1,262 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The compiler of one unit (a file, a called file or a REPL entry), private to the interpreter.
+// The statement handlers live in one file per DMIS statement family (compile/*.cpp); each family
+// adds its rows to the statement table (major word -> handler), so the dispatcher in
+// unit_compiler.cpp knows no statement by name.
+#pragma once
+#include <algorithm>
+#include <cctype>
+#include <functional>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "metron/grammar/ast.hpp"
+#include "metron/interpreter/compiler.hpp"
+
+namespace metron::interpreter::detail {
+
+inline std::string upper(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+class UnitCompiler;
+using StatementHandler = void (UnitCompiler::*)(const grammar::Statement&);
+/// Major word -> handler; each statement family adds its own rows.
+using StatementTable = std::map<std::string, StatementHandler, std::less<>>;
+
+/// Resolves a CALL/EXTERN,DMIS file: (path, path as written, span of the call) -> unit index.
+using IncludeFile = std::function<std::optional<std::size_t>(const std::string&, const std::string&, Span)>;
+
+class UnitCompiler {
+ public:
+  UnitCompiler(SymbolTable& symbols, ir::Module& module, SourceManager& sources, DiagnosticSink& sink,
+               std::size_t unit, IncludeFile include)
+      : m_symbols(symbols), m_module(module), m_sources(sources), m_sink(sink), m_unit(unit),
+        m_include(std::move(include)) {}
+
+  /// Compiles a parsed program into this unit; `repl` relaxes the checks that suit whole files.
+  void compile(const grammar::Program& program, bool repl);
+  void set_included(bool v) { m_included = v; }
+  void set_runtime_names(const std::set<std::string>& names) { m_runtime_names = names; }
+  /// An expression parameter compiled in this unit's context (labels allowed: `print FA(x)`).
+  std::optional<ir::Expr> standalone_expression(const grammar::Expr& g);
+
+  /// The statement table: every family's rows (built once).
+  static const StatementTable& statements();
+  /// The row of `V=ASSIGN/...` and `V=OBTAIN/...` (and vendor `V=XXX/...`) statements.
+  static constexpr std::string_view assignment_row = "V=";
+
+ private:
+  // Each family's rows (one function per compile/*.cpp file).
+  static void add_input_output(StatementTable& t);
+  static void add_definitions(StatementTable& t);
+  static void add_measurement(StatementTable& t);
+  static void add_alignment(StatementTable& t);
+  static void add_control(StatementTable& t);
+
+  struct Block {
+    enum class Kind { Meas, If, Do, Macro } kind = Kind::Meas;
+    Span span;
+    std::size_t start = 0;
+    std::vector<std::size_t> exits;      // jumps to patch to the end
+    std::optional<std::size_t> branch;   // IF: the JumpIfFalse to patch at ELSE/ENDIF
+    bool has_else = false;
+    int ptmeas = 0;
+    int declared = 0;
+    bool control = false;                // control flow inside a MEAS: counts are not static
+    bool scanned = false;                // PAMEAS inside: the point count is the machine's
+    std::string feature;                 // MEAS: the feature label; DO: the loop variable
+    runtime::FeatureType type = runtime::FeatureType::Point;  // MEAS
+  };
+  static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
+  static Block block(Block::Kind kind, Span span) {
+    Block b;
+    b.kind = kind;
+    b.span = span;
+    return b;
+  }
+  struct JumpScope {
+    std::map<std::string, std::size_t> labels;
+    std::vector<std::pair<std::size_t, std::pair<std::string, Span>>> pending;
+  };
+
+  // ---- diagnostics --------------------------------------------------------------------------
+  void error(Span span, const char* code, std::string message) { m_sink.error(code, span, std::move(message)); }
+  void warn(Span span, const char* code, std::string message) { m_sink.warning(code, span, std::move(message)); }
+
+  // ---- emission -----------------------------------------------------------------------------
+  std::vector<ir::Instruction>& code() {
+    return m_macro ? m_module.macros[static_cast<std::size_t>(*m_macro)].code : m_module.units[m_unit].code;
+  }
+  std::size_t emit(ir::Instruction in) {
+    code().push_back(std::move(in));
+    return code().size() - 1;
+  }
+  static ir::Instruction make(ir::Op op, const grammar::Statement& s, std::string name = {}) {
+    ir::Instruction in;
+    in.op = op;
+    in.span = s.span;
+    in.name = std::move(name);
+    return in;
+  }
+  JumpScope& jumps() { return m_macro ? m_macro_jumps : m_unit_jumps; }
+  void resolve_jumps(JumpScope& scope, std::vector<ir::Instruction>& target_code);
+
+  // ---- operand helpers ----------------------------------------------------------------------
+  static bool is_word(const grammar::Expr& e) { return e.kind == grammar::ExprKind::Word; }
+  static bool is_word(const grammar::Expr& e, std::string_view w) { return e.kind == grammar::ExprKind::Word && e.text == w; }
+  static bool is_label(const grammar::Expr& e, std::initializer_list<const char*> prefixes) {
+    if (e.kind != grammar::ExprKind::Label) return false;
+    return std::any_of(prefixes.begin(), prefixes.end(), [&](const char* p) { return e.label.prefix == p; });
+  }
+  bool is_variable(const std::string& name) const {
+    return m_symbols.variables.count(name) || m_locals.count(name) || macro_param(name).has_value();
+  }
+  std::optional<int> macro_param(const std::string& name) const {
+    if (!m_macro) return std::nullopt;
+    const auto& params = m_module.macros[static_cast<std::size_t>(*m_macro)].params;
+    auto it = std::find(params.begin(), params.end(), name);
+    if (it == params.end()) return std::nullopt;
+    return static_cast<int>(it - params.begin());
+  }
+  ir::LabelOperand label_operand(const grammar::LabelRef& l) {
+    ir::LabelOperand out{upper(l.prefix), upper(l.name), std::nullopt, l.span};
+    out.param = macro_param(out.name);
+    return out;
+  }
+  static ir::Operand word_operand(const grammar::Expr& e) {
+    ir::Operand o;
+    o.kind = ir::Operand::Kind::Word;
+    o.word = e.text;
+    o.span = e.span;
+    return o;
+  }
+  ir::Operand label_op(const grammar::Expr& e) {
+    ir::Operand o;
+    o.kind = ir::Operand::Kind::Label;
+    o.label = label_operand(e.label);
+    o.span = e.span;
+    return o;
+  }
+  static ir::Operand expr_operand(ir::Expr e) {
+    ir::Operand o;
+    o.kind = ir::Operand::Kind::Expr;
+    o.span = e.span;
+    o.expr = std::move(e);
+    return o;
+  }
+
+  // ---- expressions (compile/expressions.cpp) -------------------------------------------------
+  struct Typed {
+    ir::Expr e;
+    bool dynamic = false;  // type known only at run time (macro parameter)
+  };
+  std::optional<Typed> expression(const grammar::Expr& g, bool allow_labels = false);
+  std::optional<Typed> word_expression(const grammar::Expr& g);
+  std::optional<Typed> element_expression(const grammar::Expr& g);
+  std::optional<Typed> call_expression(const grammar::Expr& g);
+  std::optional<Typed> unary_expression(const grammar::Expr& g);
+  std::optional<Typed> binary_expression(const grammar::Expr& g);
+  std::optional<ir::Expr> numeric(const grammar::Expr& g, const char* what);
+  /// A numeric parameter appended to `in` as an operand; false (reported) when it is not one.
+  bool push_number(ir::Instruction& in, const grammar::Expr& g, const char* what) {
+    auto e = numeric(g, what);
+    if (e) in.operands.push_back(expr_operand(std::move(*e)));
+    return e.has_value();
+  }
+
+  // ---- name checks and the dispatcher (compile/unit_compiler.cpp) ---------------------------
+  bool check_feature(const grammar::Expr& e);
+  std::optional<runtime::FeatureType> feature_type(const std::string& name) const;
+  /// A feature type word parameter (MEAS/, CONST/), or nullopt.
+  static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
+    return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
+  }
+  void statement(const grammar::Statement& s);
+  void unknown(const grammar::Statement& s);
+  bool expect_params(const grammar::Statement& s, std::size_t n, const char* what);
+  bool require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example);
+
+  // ---- input/output: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (compile/input_output.cpp) ------
+  void no_effect(const grammar::Statement& s);
+  void units(const grammar::Statement& s);
+  void mode(const grammar::Statement& s);
+  void text(const grammar::Statement& s);
+  void device(const grammar::Statement& s);
+  bool check_device(const grammar::Statement& s);
+  void open(const grammar::Statement& s);
+  void close(const grammar::Statement& s);
+
+  // ---- definitions: FEAT, SNSDEF, TOL, DATDEF, PATH, DECL (compile/definitions.cpp) ---------
+  void feat(const grammar::Statement& s);
+  bool check_feature_numbers(const grammar::Statement& s, const ir::FeaturePayload& form, const std::vector<double>& literal);
+  void snsdef(const grammar::Statement& s);
+  void tol(const grammar::Statement& s);
+  void datdef(const grammar::Statement& s);
+  void path(const grammar::Statement& s);
+  void path_section(const grammar::Statement& s);
+  void decl(const grammar::Statement& s);
+
+  // ---- measurement: SNSLCT ... SCNSET, GOTO, MEAS, PTMEAS, PAMEAS (compile/measurement.cpp) --
+  void snsmnt(const grammar::Statement& s);
+  void snslct(const grammar::Statement& s);
+  void snset(const grammar::Statement& s);
+  void fedrat(const grammar::Statement& s);
+  void aclrat(const grammar::Statement& s);
+  void go_to(const grammar::Statement& s);
+  void meas(const grammar::Statement& s);
+  void endmes(const grammar::Statement& s);
+  void ptmeas(const grammar::Statement& s);
+  void pameas(const grammar::Statement& s);
+  void scnmod(const grammar::Statement& s);
+  void scnset(const grammar::Statement& s);
+
+  // ---- alignment and constructions: DATSET ... RECALL, CONST, OUTPUT (compile/alignment.cpp) -
+  void datset(const grammar::Statement& s);
+  void trans(const grammar::Statement& s);
+  void rotate(const grammar::Statement& s);
+  void save(const grammar::Statement& s);
+  void recall(const grammar::Statement& s);
+  void construct(const grammar::Statement& s);
+  void output(const grammar::Statement& s);
+
+  // ---- control: assignment, IF, DO, JUMPTO, macros, CALL (compile/control.cpp) --------------
+  void endfil(const grammar::Statement& s);
+  void assignment(const grammar::Statement& s);
+  void bad_assign(const grammar::Statement& s);
+  void mark_control();
+  void if_(const grammar::Statement& s);
+  void else_(const grammar::Statement& s);
+  void endif(const grammar::Statement& s);
+  void do_(const grammar::Statement& s);
+  void enddo(const grammar::Statement& s);
+  void jumpto(const grammar::Statement& s);
+  void macro(const grammar::Statement& s);
+  void endmac(const grammar::Statement& s);
+  void call(const grammar::Statement& s);
+  void call_extern(const grammar::Statement& s);
+
+  SymbolTable& m_symbols;
+  ir::Module& m_module;
+  SourceManager& m_sources;
+  DiagnosticSink& m_sink;
+  std::size_t m_unit;
+  IncludeFile m_include;
+  std::vector<Block> m_blocks;
+  std::optional<int> m_macro;
+  std::map<std::string, SymbolTable::VariableInfo> m_locals;
+  JumpScope m_unit_jumps, m_macro_jumps;
+  bool m_ended = false;
+  bool m_repl = false;
+  bool m_included = false;
+  std::set<std::string> m_runtime_names;
+};
+
+}  // namespace metron::interpreter::detail

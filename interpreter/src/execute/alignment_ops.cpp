@@ -1,0 +1,136 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Alignment and constructions: DATSET, TRANS, ROTATE, SAVE, RECALL, CONST, OUTPUT.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "execute/execute.hpp"
+
+namespace metron::interpreter::detail {
+
+using ir::Op;
+using ir::Operand;
+using runtime::FeatureType;
+
+namespace {
+
+std::optional<runtime::Axis> axis_of(const std::string& w) {
+  switch (w.empty() ? ' ' : w[0]) {
+    case 'X': return runtime::Axis::X;
+    case 'Y': return runtime::Axis::Y;
+    case 'Z': return runtime::Axis::Z;
+    default: return std::nullopt;
+  }
+}
+
+}  // namespace
+
+void Execute::add_alignment(ExecuteTable& t) {
+  add_rows(t, {
+      {Op::Output, &output}, {Op::DatSet, &datset}, {Op::Trans, &trans}, {Op::Rotate, &rotate},
+      {Op::Save, &save}, {Op::Recall, &recall}, {Op::Construct, &construct}
+  });
+}
+
+// Op::Output
+ExecStatus Execute::output(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<runtime::OutputItem> items;
+  for (const auto& o : in.operands) {
+    runtime::OutputItem item;
+    if (o.label.prefix == "T" || o.label.prefix == "TA") {
+      item.kind = runtime::OutputItem::Kind::Tolerance;
+      item.tolerance = vm.label_name(o.label);
+    } else {
+      item.feature = feature_ref(vm, o.label);
+    }
+    items.push_back(item);
+  }
+  if (auto r = vm.m_runtime.output(items, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::DatSet
+ExecStatus Execute::datset(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  runtime::DatsetRequest req;
+  for (const auto& o : in.operands) {
+    if (o.kind == Operand::Kind::Word && o.word == "MCS") req.mcs = true;
+    else if (o.kind == Operand::Kind::Label) req.clauses.push_back({vm.label_name(o.label), std::nullopt, false, {}});
+    else if (o.kind == Operand::Kind::Word && !req.clauses.empty()) {
+      auto& c = req.clauses.back();
+      const auto axis = axis_of(o.word);
+      if (o.word.find("ORIG") != std::string::npos) c.origins.push_back(*axis);
+      else {
+        c.direction = axis;
+        c.minus = o.word.find("MINUS") != std::string::npos;
+      }
+    }
+  }
+  if (auto r = vm.m_runtime.datset(in.name, req, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Trans
+ExecStatus Execute::trans(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const double len = vm.m_length_mm;
+  runtime::TransRequest req;
+  for (std::size_t i = 0; i + 1 < in.operands.size(); i += 2) {
+    const int k = static_cast<int>(*axis_of(in.operands[i].word));
+    const Operand& v = in.operands[i + 1];
+    if (v.kind == Operand::Kind::Label) {
+      req.feature[k] = feature_ref(vm, v.label);
+    } else {
+      auto x = vm.number(v.expr);
+      if (!x) return vm.fail(in.span, x.error());
+      req.value[k] = *x * len;
+    }
+  }
+  if (auto r = vm.m_runtime.trans(in.name, req, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Rotate
+ExecStatus Execute::rotate(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const double deg = degrees(vm);
+  runtime::RotateRequest req;
+  req.about = *axis_of(in.operands[0].word);
+  if (in.operands[1].kind == Operand::Kind::Label) {
+    req.feature = feature_ref(vm, in.operands[1].label);
+    req.align = *axis_of(in.operands[2].word);
+  } else {
+    auto a = vm.number(in.operands[1].expr);
+    if (!a) return vm.fail(in.span, a.error());
+    req.angle_deg = *a * deg;
+  }
+  if (auto r = vm.m_runtime.rotate(in.name, req, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Save
+ExecStatus Execute::save(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.save(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Recall
+ExecStatus Execute::recall(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.recall(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Construct
+ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const auto& words = std::get<ir::ConstructPayload>(in.payload);
+  using M = ir::ConstructionMethod;
+  const auto method = words.method == M::Bf      ? runtime::ConstructMethod::BestFit
+                      : words.method == M::Intof ? runtime::ConstructMethod::Intersection
+                      : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint
+                                                 : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
+  std::vector<runtime::FeatureRef> sources;
+  for (const auto& o : in.operands) sources.push_back(feature_ref(vm, o.label));
+  if (auto r = vm.m_runtime.construct(vm.name_of(in), words.type, method, sources, in.span); !r)
+    return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+}  // namespace metron::interpreter::detail

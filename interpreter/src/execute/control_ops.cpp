@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Control: assignment, IF, DO, JUMPTO, macros, CALL (units, macros, system commands), ENDFIL.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "execute/execute.hpp"
+
+namespace metron::interpreter::detail {
+
+using ir::Op;
+using ir::Operand;
+using runtime::FeatureType;
+
+void Execute::add_control(ExecuteTable& t) {
+  add_rows(t, {
+      {Op::Nop, &nothing}, {Op::JumpLabel, &nothing}, {Op::System, &system}, {Op::End, &end},
+      {Op::Assign, &assign}, {Op::Jump, &jump}, {Op::JumpIfFalse, &jump_if_false}, {Op::DoInit, &do_init},
+      {Op::DoNext, &do_next}, {Op::CallMacro, &call_macro}, {Op::Return, &return_},
+      {Op::CallUnit, &call_unit}
+  });
+}
+
+// Op::Nop, Op::JumpLabel
+ExecStatus Execute::nothing(Interpreter&, const ir::Instruction&, CallFrame&) {
+  return ExecStatus::Running;
+}
+
+// Op::System
+ExecStatus Execute::system(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const std::string& arg = in.operands.empty() ? std::string() : in.operands[0].word;
+  auto r = in.name == "CHARACTERISE"
+               ? vm.m_runtime.characterise_machine(arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
+               : vm.m_runtime.use_characterisation(arg, in.span);
+  if (!r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::End
+ExecStatus Execute::end(Interpreter& vm, const ir::Instruction&, CallFrame& frame) {
+  if (frame.kind == CallFrame::Kind::Unit && frame.call_site.valid()) {
+    vm.m_frames.pop_back();  // ENDFIL of a file called with CALL/EXTERN: back to the caller
+    return ExecStatus::Running;
+  }
+  vm.m_finished = true;
+  return ExecStatus::Finished;
+}
+
+// Op::Assign
+ExecStatus Execute::assign(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  auto value = vm.evaluate(in.operands.back().expr);
+  if (!value) return vm.fail(in.span, value.error());
+  auto* var = vm.find_variable(in.name);
+  if (!var) return vm.fail(in.span, fmt::format("variable {} has no storage here", in.name));
+  std::size_t index = 0;
+  if (in.count > 0) {
+    auto k = vm.number(in.operands[0].expr);
+    if (!k) return vm.fail(in.span, k.error());
+    const auto i = static_cast<long>(std::llround(*k));
+    if (i < 1 || i > static_cast<long>(var->size()))
+      return vm.fail(in.span, fmt::format("index {} is outside {}[1..{}]", i, in.name, var->size()));
+    index = static_cast<std::size_t>(i - 1);
+  }
+  Value stored = *value;
+  if (auto t = vm.m_types.find(in.name); t != vm.m_types.end()) {
+    if (t->second == ValueType::Integer && stored.is_number()) stored = Value::integer(std::trunc(stored.number));
+    else if (t->second == ValueType::Real && stored.is_number()) stored = Value::real(stored.number);
+  }
+  (*var)[index] = stored;
+  return ExecStatus::Running;
+}
+
+// Op::Jump
+ExecStatus Execute::jump(Interpreter&, const ir::Instruction& in, CallFrame& frame) {
+  frame.pc = static_cast<std::size_t>(in.target);
+  return ExecStatus::Running;
+}
+
+// Op::JumpIfFalse
+ExecStatus Execute::jump_if_false(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  auto c = vm.evaluate(in.operands[0].expr);
+  if (!c) return vm.fail(in.span, c.error());
+  if (c->type != ValueType::Bool) return vm.fail(in.span, "the IF condition is not BOOL");
+  if (!c->boolean) frame.pc = static_cast<std::size_t>(in.target);
+  return ExecStatus::Running;
+}
+
+// Op::DoInit
+ExecStatus Execute::do_init(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  std::vector<double> nums;
+  const std::size_t pc = frame.pc - 1;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const double step = nums.size() > 2 ? nums[2] : 1.0;
+  if (step == 0) return vm.fail(in.span, "the DO step is zero");
+  if (!vm.set_variable(in.name, Value::real(nums[0]))) return vm.fail(in.span, fmt::format("DO variable {} has no storage", in.name));
+  frame.loops[pc] = {nums[1], step};
+  if (step > 0 ? nums[0] > nums[1] : nums[0] < nums[1]) frame.pc = static_cast<std::size_t>(in.target);
+  return ExecStatus::Running;
+}
+
+// Op::DoNext
+ExecStatus Execute::do_next(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  const auto [end, step] = frame.loops.at(static_cast<std::size_t>(in.target - 1));
+  auto v = vm.variable(in.name);
+  if (!v) return vm.fail(in.span, fmt::format("DO variable {} has no value", in.name));
+  const double next = v->number + step;
+  vm.set_variable(in.name, Value::real(next));
+  if (step > 0 ? next <= end : next >= end) frame.pc = static_cast<std::size_t>(in.target);
+  return ExecStatus::Running;
+}
+
+// Op::CallMacro
+ExecStatus Execute::call_macro(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const auto& macro = vm.m_module.macros.at(static_cast<std::size_t>(in.target));
+  CallFrame f;
+  f.kind = CallFrame::Kind::Macro;
+  f.index = static_cast<std::size_t>(in.target);
+  f.call_site = in.span;
+  for (std::size_t i = 0; i < macro.params.size(); ++i) {
+    auto v = vm.evaluate(in.operands.at(i).expr);
+    if (!v) return vm.fail(in.span, v.error());
+    f.locals[macro.params[i]] = {*v};
+  }
+  if (vm.m_frames.size() > 256) return vm.fail(in.span, "macro calls nest deeper than 256: is a macro calling itself?");
+  vm.m_frames.push_back(std::move(f));
+  return ExecStatus::Running;
+}
+
+// Op::Return
+ExecStatus Execute::return_(Interpreter& vm, const ir::Instruction&, CallFrame&) {
+  vm.m_frames.pop_back();
+  return ExecStatus::Running;
+}
+
+// Op::CallUnit
+ExecStatus Execute::call_unit(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  CallFrame f;
+  f.kind = CallFrame::Kind::Unit;
+  f.index = static_cast<std::size_t>(in.target);
+  f.call_site = in.span;
+  vm.m_frames.push_back(std::move(f));
+  return ExecStatus::Running;
+}
+
+}  // namespace metron::interpreter::detail

@@ -1,0 +1,168 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Definitions: FEAT, TOL, SNSDEF, DATDEF, DECL (PATH: scan_ops.cpp).
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "execute/execute.hpp"
+
+namespace metron::interpreter::detail {
+
+using ir::Op;
+using ir::Operand;
+using runtime::FeatureType;
+
+namespace {
+
+Value default_value(ValueType t) {
+  switch (t) {
+    case ValueType::Integer: return Value::integer(0);
+    case ValueType::Bool: return Value::boolean_value(false);
+    case ValueType::String: return Value::string("");
+    default: return Value::real(0);
+  }
+}
+
+}  // namespace
+
+void Execute::add_definitions(ExecuteTable& t) {
+  add_rows(t, {
+      {Op::FeatureDef, &feature_def}, {Op::ToleranceDef, &tolerance_def}, {Op::SensorDef, &sensor_def},
+      {Op::DatDef, &datdef}, {Op::Declare, &declare}
+  });
+}
+
+// Op::FeatureDef
+ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  const double deg = degrees(vm);
+  const double len = vm.m_length_mm;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const auto& words = std::get<ir::FeaturePayload>(in.payload);
+  runtime::Geometry g;
+  g.type = words.type;
+  if (words.side) g.side = *words.side;
+  if (words.bounded) g.bounded = *words.bounded;
+  const auto form = words.form.value_or(ir::CoordinateForm::Cart);
+  const auto point = [&](std::size_t i) { return ir::position_mm(form, nums[i], nums[i + 1], nums[i + 2], len, deg); };
+  const auto vec = [&](std::size_t i) { return Vec3(nums[i], nums[i + 1], nums[i + 2]); };
+  g.position = point(0);
+  switch (g.type) {
+    case FeatureType::Point:
+    case FeatureType::Plane: g.direction = vec(3); break;
+    case FeatureType::Line:
+      if (g.bounded) {
+        const Vec3 b = point(3);
+        g.direction = b - g.position;
+        g.length_mm = g.direction.norm();
+        g.normal2 = vec(6);
+      } else {
+        g.direction = vec(3);
+        g.normal2 = vec(6);
+      }
+      break;
+    case FeatureType::Circle: g.direction = vec(3); g.diameter_mm = nums[6] * len; break;
+    case FeatureType::Arc:
+      g.direction = vec(3);
+      g.diameter_mm = 2 * nums[6] * len;
+      g.start_angle_deg = nums[7] * deg;
+      g.included_angle_deg = nums[8] * deg;
+      break;
+    case FeatureType::Sphere:
+      if (nums.size() == 7) g.direction = vec(3);
+      g.diameter_mm = nums.back() * len;
+      break;
+    case FeatureType::Cylinder:
+      g.direction = vec(3);
+      g.diameter_mm = nums[6] * len;
+      if (nums.size() > 7) g.length_mm = nums[7] * len;
+      break;
+    case FeatureType::Cone:
+      g.direction = vec(3);
+      g.apex_angle_deg = nums[6] * deg;
+      if (nums.size() > 7) g.length_mm = nums[7] * len;
+      break;
+  }
+  if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
+  if (g.type == FeatureType::Line && g.normal2.norm() < 1e-12) g.normal2 = any_perpendicular(g.direction);
+  if (auto r = vm.m_runtime.define_feature(vm.name_of(in), g, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::ToleranceDef
+ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  const double deg = degrees(vm);
+  const double len = vm.m_length_mm;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  runtime::ToleranceSpec t;
+  t.label = vm.name_of(in);
+  t.defined_at = in.span;
+  t.kind = std::get<ir::TolerancePayload>(in.payload).kind;
+  for (const auto& word : words(in)) {  // the modifiers
+    if (word == "3D") t.three_d = true;
+    if (word == "MMC") t.condition = runtime::MaterialCondition::Mmc;
+    if (word == "LMC") t.condition = runtime::MaterialCondition::Lmc;
+    if (word == "XAXIS") t.axis = runtime::DistanceAxis::XAxis;
+    if (word == "YAXIS") t.axis = runtime::DistanceAxis::YAxis;
+    if (word == "ZAXIS") t.axis = runtime::DistanceAxis::ZAxis;
+  }
+  for (const auto& o : in.operands)
+    if (o.kind == Operand::Kind::Label) t.datums.push_back(vm.label_name(o.label));
+  using K = runtime::ToleranceKind;
+  switch (t.kind) {
+    case K::Diam:
+    case K::Profs: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
+    case K::Rad: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
+    case K::DistB: t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len; break;
+    case K::Anglb: t.nominal = nums[0] * deg; t.lower = nums[1] * deg; t.upper = nums[2] * deg; break;
+    default: t.zone = nums[0] * len; break;
+  }
+  if (auto r = vm.m_runtime.define_tolerance(t); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::SensorDef
+ExecStatus Execute::sensor_def(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  const double len = vm.m_length_mm;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const auto w = words(in);
+  const bool polar = std::find(w.begin(), w.end(), "POL") != w.end();
+  runtime::SensorDefinition s;
+  s.label = in.name;
+  s.ball_diameter_mm = nums.back() * len;
+  // INDEX,POL: tilt, rotation, i, j, k, length, diameter; CART: x, y, z, i, j, k, diameter.
+  if (nums.size() >= 7) {
+    s.direction = Vec3(nums[nums.size() - (polar ? 5 : 4)], nums[nums.size() - (polar ? 4 : 3)], nums[nums.size() - (polar ? 3 : 2)]);
+    if (polar) s.length_mm = nums[nums.size() - 2] * len;
+  }
+  if (s.direction.norm() < 1e-12) s.direction = -Vec3::UnitZ();
+  if (auto r = vm.m_runtime.define_sensor(s, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::DatDef
+ExecStatus Execute::datdef(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.define_datum(feature_ref(vm, in.operands[0].label), vm.label_name(in.operands[1].label), in.span); !r)
+    return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Declare
+ExecStatus Execute::declare(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  static const std::map<std::string, ValueType> types = {{"INTGR", ValueType::Integer}, {"LONG", ValueType::Integer},
+                                                         {"REAL", ValueType::Real},    {"DOUBLE", ValueType::Real},
+                                                         {"BOOL", ValueType::Bool},    {"CHAR", ValueType::String}};
+  const ValueType t = types.at(in.operands[0].word);
+  for (std::size_t i = 0; i < in.names.size(); ++i) {
+    const auto size = static_cast<std::size_t>(std::max(1.0, in.operands[i + 1].expr.value.number));
+    auto& store = frame.kind == CallFrame::Kind::Macro ? frame.locals : vm.m_globals;
+    store[in.names[i]] = std::vector<Value>(size, default_value(t));
+    vm.m_types[in.names[i]] = t;
+  }
+  return ExecStatus::Running;
+}
+
+}  // namespace metron::interpreter::detail

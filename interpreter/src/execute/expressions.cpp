@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Expressions at run time: variables, array elements, intrinsic calls, OBTAIN, operators.
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "execute/execute.hpp"
+#include "metron/runtime/feature_parameters.hpp"
+#include "metron/stdlib/builtins.hpp"
+
+namespace metron::interpreter {
+
+tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
+  switch (e.op) {
+    case ir::ExprOp::Constant:
+      if (e.value.type == ValueType::Label) return Value::label(e.label.prefix, label_name(e.label));
+      return e.value;
+    case ir::ExprOp::Variable: {
+      auto* v = find_variable(e.name);
+      if (!v || v->empty()) return tl::unexpected(fmt::format("variable {} has no value here", e.name));
+      return v->front();
+    }
+    case ir::ExprOp::Element: {
+      auto* v = find_variable(e.name);
+      if (!v) return tl::unexpected(fmt::format("array {} has no value here", e.name));
+      auto i = number(e.args.at(0));
+      if (!i) return tl::unexpected(i.error());
+      const auto k = static_cast<long>(std::llround(*i));
+      if (k < 1 || k > static_cast<long>(v->size()))
+        return tl::unexpected(fmt::format("index {} is outside {}[1..{}]", k, e.name, v->size()));
+      return (*v)[static_cast<std::size_t>(k - 1)];
+    }
+    case ir::ExprOp::Call: {
+      const Builtin* fn = find_builtin(e.name);
+      if (!fn) return tl::unexpected(fmt::format("unknown function {}", e.name));
+      std::vector<Value> args;
+      for (const auto& a : e.args) {
+        auto v = evaluate(a);
+        if (!v) return v;
+        args.push_back(*v);
+      }
+      return call_builtin(*fn, args, m_degrees);
+    }
+    case ir::ExprOp::Obtain:
+      return detail::Execute::obtain(*this, e);
+    case ir::ExprOp::Unary: {
+      auto v = evaluate(e.args.at(0));
+      if (!v) return v;
+      if (e.name == ".NOT.") {
+        if (v->type != ValueType::Bool) return tl::unexpected(std::string(".NOT. needs a BOOL"));
+        return Value::boolean_value(!v->boolean);
+      }
+      if (!v->is_number()) return tl::unexpected(fmt::format("unary {} needs a number", e.name));
+      if (e.name == "-") v->number = -v->number;
+      return v;
+    }
+    case ir::ExprOp::Binary:
+      return detail::Execute::binary(*this, e);
+  }
+  return tl::unexpected(std::string("bad expression"));
+}
+
+}  // namespace metron::interpreter
+
+namespace metron::interpreter::detail {
+
+// OBTAIN/FA(x),n as a value.
+tl::expected<Value, std::string> Execute::obtain(Interpreter& vm, const ir::Expr& e) {
+  auto index = vm.number(e.args.at(0));
+  if (!index) return tl::unexpected(index.error());
+  auto g = vm.m_runtime.feature_geometry({vm.label_name(e.label), e.label.prefix == "FA"}, e.span);
+  if (!g) return tl::unexpected(g.error().message);
+  // OBTAIN/FA(x),n reads what the DMIS output statement FA(x)=FEAT/... shows: n counts its words
+  // first, then the numbers in the one feature layout (runtime/feature_parameters.hpp).
+  const auto params = runtime::feature_parameters(*g);
+  const auto words = static_cast<long>(runtime::feature_word_count(g->type));
+  const auto k = static_cast<long>(std::llround(*index));
+  if (k <= words || k > words + static_cast<long>(params.size()))
+    return tl::unexpected(fmt::format("OBTAIN index {} is not a number of {}({})", k, e.label.prefix, vm.label_name(e.label)));
+  const runtime::FeatureParameter& p = params[static_cast<std::size_t>(k - words - 1)];
+  // Lengths go back to program units; direction cosines and angles do not.
+  const double v = p.unit == runtime::ParameterUnit::Length ? p.value / vm.m_length_mm : p.value;
+  return Value::real(v);
+}
+
+// a op b: arithmetic (+ - * / **), comparisons (.EQ. ... .GE.), .AND. and .OR. (short-circuit).
+tl::expected<Value, std::string> Execute::binary(Interpreter& vm, const ir::Expr& e) {
+  auto a = vm.evaluate(e.args.at(0));
+  if (!a) return a;
+  const std::string& op = e.name;
+  if (op == ".AND." || op == ".OR.") {
+    if (a->type != ValueType::Bool) return tl::unexpected(op + " needs BOOL operands");
+    if (op == ".AND." && !a->boolean) return Value::boolean_value(false);  // short-circuit
+    if (op == ".OR." && a->boolean) return Value::boolean_value(true);
+    auto b = vm.evaluate(e.args.at(1));
+    if (!b) return b;
+    if (b->type != ValueType::Bool) return tl::unexpected(op + " needs BOOL operands");
+    return Value::boolean_value(b->boolean);
+  }
+  auto b = vm.evaluate(e.args.at(1));
+  if (!b) return b;
+  if (op[0] == '.') {
+    int c = 0;
+    if (a->is_number() && b->is_number()) c = a->number < b->number ? -1 : (a->number > b->number ? 1 : 0);
+    else if (a->type == ValueType::String && b->type == ValueType::String) c = a->text.compare(b->text) < 0 ? -1 : (a->text == b->text ? 0 : 1);
+    else if (a->type == ValueType::Bool && b->type == ValueType::Bool) c = a->boolean == b->boolean ? 0 : 1;
+    else return tl::unexpected(fmt::format("{} compares a {} with a {}", op, to_string(a->type), to_string(b->type)));
+    if (op == ".EQ.") return Value::boolean_value(c == 0);
+    if (op == ".NE.") return Value::boolean_value(c != 0);
+    if (op == ".LT.") return Value::boolean_value(c < 0);
+    if (op == ".LE.") return Value::boolean_value(c <= 0);
+    if (op == ".GT.") return Value::boolean_value(c > 0);
+    if (op == ".GE.") return Value::boolean_value(c >= 0);
+    return tl::unexpected("unknown operator " + op);
+  }
+  if (!a->is_number() || !b->is_number()) return tl::unexpected(fmt::format("'{}' needs numbers", op));
+  const bool integer = a->type == ValueType::Integer && b->type == ValueType::Integer;
+  double r = 0;
+  if (op == "+") r = a->number + b->number;
+  else if (op == "-") r = a->number - b->number;
+  else if (op == "*") r = a->number * b->number;
+  else if (op == "/") {
+    if (b->number == 0) return tl::unexpected(std::string("division by zero"));
+    r = a->number / b->number;
+  } else if (op == "**") r = std::pow(a->number, b->number);
+  else return tl::unexpected("unknown operator " + op);
+  if (!std::isfinite(r)) return tl::unexpected(fmt::format("'{}' gives a number that is not finite", op));
+  return integer && op != "/" && op != "**" ? Value::integer(r) : Value::real(r);
+}
+
+}  // namespace metron::interpreter::detail

@@ -1,0 +1,148 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Measurement: SNSLCT, SNSET, FEDRAT, ACLRAT, GOTO, MEAS ... ENDMES, PTMEAS, RMEAS.
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "execute/execute.hpp"
+
+namespace metron::interpreter::detail {
+
+using ir::Op;
+using ir::Operand;
+using runtime::FeatureType;
+
+void Execute::add_measurement(ExecuteTable& t) {
+  add_rows(t, {
+      {Op::SensorSelect, &sensor_select}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
+      {Op::GoTo, &go_to}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
+  });
+}
+
+// Op::SensorSelect
+ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.select_sensor(in.name, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::ProbeSet
+ExecStatus Execute::probe_set(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const double len = vm.m_length_mm;
+  auto v = vm.number(in.operands[1].expr);
+  if (!v) return vm.fail(in.span, v.error());
+  auto& p = vm.m_runtime.probe_settings();
+  const std::string& w = in.operands[0].word;
+  const double d = *v * len;
+  if (w == "APPRCH") p.approach_mm = d, p.approach_explicit = true;
+  else if (w == "RETRCT") p.retract_mm = d;
+  else if (w == "SEARCH") p.search_mm = d;
+  else if (w == "CLRSRF") p.clearance_mm = d;
+  else if (w == "DEPTH") p.depth_mm = d;
+  return ExecStatus::Running;
+}
+
+// Op::Feed
+ExecStatus Execute::feed(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  auto v = vm.number(in.operands.at(0).expr);
+  if (!v) return vm.fail(in.span, v.error());
+  const auto [kind, unit] = std::get<ir::FeedPayload>(in.payload);
+  const auto state = vm.m_runtime.machine().state();
+  // PCENT: of the current positioning feed for POSVEL, of the measuring feed otherwise.
+  const double percent_of = kind == ir::FeedKind::Posvel ? state.positioning_feed_mm_s : state.measuring_feed_mm_s;
+  const double mm_s = ir::feed_mm_s(*v, unit).value_or(*v / 100.0 * percent_of);
+  if (kind == ir::FeedKind::Scnvel) {
+    vm.m_runtime.scan_settings().feed_mm_s = mm_s;
+    return ExecStatus::Running;
+  }
+  auto r = kind == ir::FeedKind::Posvel ? vm.m_runtime.set_feeds(mm_s, std::nullopt, in.span) : vm.m_runtime.set_feeds(std::nullopt, mm_s, in.span);
+  if (!r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Accel
+ExecStatus Execute::accel(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  auto v = vm.number(in.operands[2].expr);
+  if (!v) return vm.fail(in.span, v.error());
+  const std::string& unit = in.operands[1].word;
+  double a = *v;
+  if (unit == "MPMM") a = *v * 1000.0 / 3600.0;
+  else if (unit == "IPMM") a = *v * 25.4 / 3600.0;
+  else if (unit == "IPSS") a = *v * 25.4;
+  else if (unit == "PCENT") return ExecStatus::Running;  // relative to an unknown maximum: leave unchanged
+  if (auto r = vm.m_runtime.set_acceleration(a, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::GoTo
+ExecStatus Execute::go_to(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  const double deg = degrees(vm);
+  const double len = vm.m_length_mm;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const auto form = std::get<ir::FormPayload>(in.payload).form.value_or(ir::CoordinateForm::Cart);
+  const Vec3 from = vm.m_block ? vm.m_block_position : vm.m_runtime.position_current();
+  Vec3 target;
+  if (form == ir::CoordinateForm::Incr) {
+    const Vec3 d(nums[1], nums[2], nums[3]);
+    if (d.norm() < 1e-12) return vm.fail(in.span, "the GOTO/INCR direction is a zero vector");
+    target = from + nums[0] * len * d.normalized();
+  } else {
+    target = ir::position_mm(form, nums[0], nums[1], nums[2], len, deg);
+  }
+  if (vm.m_block) {
+    vm.m_block->steps.push_back({runtime::MeasStep::Kind::GoTo, target, std::nullopt, in.span, {}});
+    vm.m_block_position = target;
+    return ExecStatus::Running;
+  }
+  if (auto r = vm.m_runtime.go_to(target, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::MeasBegin
+ExecStatus Execute::meas_begin(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  auto n = vm.number(in.operands[0].expr);
+  if (!n) return vm.fail(in.span, n.error());
+  runtime::MeasBlock b;
+  b.feature = vm.name_of(in);
+  b.type = std::get<ir::FeaturePayload>(in.payload).type;
+  b.point_count = static_cast<int>(*n);
+  b.span = in.span;
+  vm.m_block = b;
+  vm.m_block_position = vm.m_runtime.position_current();
+  return ExecStatus::Running;
+}
+
+// Op::PtMeas
+ExecStatus Execute::ptmeas(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  const double deg = degrees(vm);
+  const double len = vm.m_length_mm;
+  if (!vm.m_block) return vm.fail(in.span, "PTMEAS outside a MEAS block");
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const auto form = std::get<ir::FormPayload>(in.payload).form.value_or(ir::CoordinateForm::Cart);
+  Vec3 p = ir::position_mm(form, nums[0], nums[1], nums[2], len, deg);
+  std::optional<Vec3> n;
+  if (nums.size() >= 6) n = Vec3(nums[3], nums[4], nums[5]);
+  if (!in.operands.empty() && in.operands.back().kind == Operand::Kind::Label) {
+    // RMEAS: relative to the actual of a reference feature: shift by its deviation.
+    const auto ref = feature_ref(vm, in.operands.back().label);
+    auto actual = vm.m_runtime.feature_geometry({ref.label, true}, in.span);
+    auto nominal = vm.m_runtime.feature_geometry({ref.label, false}, in.span);
+    if (!actual) return vm.from_runtime(actual.error());
+    p += actual->position - nominal->position;
+  }
+  vm.m_block->steps.push_back({runtime::MeasStep::Kind::PtMeas, p, n, in.span, {}});
+  return ExecStatus::Running;
+}
+
+// Op::MeasEnd
+ExecStatus Execute::meas_end(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (!vm.m_block) return vm.fail(in.span, "ENDMES without MEAS");
+  runtime::MeasBlock b = std::move(*vm.m_block);
+  vm.m_block.reset();
+  if (auto r = vm.m_runtime.measure(b); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+}  // namespace metron::interpreter::detail
