@@ -4,6 +4,10 @@
 
 #include "commands.hpp"
 
+namespace metron::cli {
+void add_calibrate_command(CLI::App& app, std::vector<Command>& commands);  // calibrate_command.cpp
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"metron: a toolchain for CMM part programs (DMIS) with a virtual CMM"};
   app.require_subcommand(1);
@@ -13,6 +17,7 @@ int main(int argc, char** argv) {
   metron::cli::add_debug_commands(app, commands);
   metron::cli::add_test_command(app, commands);
   metron::cli::add_characterise_command(app, commands);
+  metron::cli::add_calibrate_command(app, commands);
   CLI11_PARSE(app, argc, argv);
   for (const auto& c : commands)
     if (c.app->parsed()) return c.run();
