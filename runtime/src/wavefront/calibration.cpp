@@ -103,20 +103,25 @@ tl::expected<GaugeReading, std::string> acquire(WavefrontMachine& m, const Knowl
       ++maps;
       if (r) return r;
     }
+  // X-Y spiral, each point with a short Z search (an uncalibrated dz leaves a tall part's Z off by
+  // a fraction of a millimetre).
   const double dl = lateral_search_step_mm(m.gauge());
   for (int ring = 1; ring * dl <= 0.2; ++ring)
     for (int j = 0; j < 8 * ring; ++j) {
       const double t = 2 * std::numbers::pi * j / (8 * ring);
-      AxisCommand c = start;
-      c.steps.x() += ring * dl * std::cos(t) / k.step_mm.x();
-      c.steps.y() += ring * dl * std::sin(t) / k.step_mm.y();
-      m.move(c);
-      auto r = read_here(m);
-      ++maps;
-      if (r) return r;
+      for (int iz = 0; iz <= 10; ++iz) {
+        AxisCommand c = start;
+        c.steps.x() += ring * dl * std::cos(t) / k.step_mm.x();
+        c.steps.y() += ring * dl * std::sin(t) / k.step_mm.y();
+        c.steps.z() += (iz % 2 ? 1 : -1) * ((iz + 1) / 2) * dz;
+        m.move(c);
+        auto r = read_here(m);
+        ++maps;
+        if (r) return r;
+      }
     }
   m.move(start);
-  return tl::unexpected(fmt::format("the gauge reads nowhere near the start (Z +-2 mm, X-Y within 0.2 mm): {}",
+  return tl::unexpected(fmt::format("the gauge reads nowhere near the start (Z +-2 mm; X-Y within 0.2 mm, Z +-5 search steps): {}",
                                     first.error()));
 }
 
@@ -507,7 +512,9 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
     }
     const Eigen::VectorXd step = jac.colPivHouseholderQr().solve(-r0);
     p += step;
-    if (step.norm() < 1e-10 * (1 + p.norm())) break;
+    bool settled = true;  // per parameter: E is 1e-4 while R is 1e6 steps
+    for (int j = 0; j < 7; ++j) settled = settled && std::abs(step[j]) <= 1e-12 * std::max(1.0, std::abs(p[j]));
+    if (settled) break;
   }
   const Eigen::VectorXd r = model.residual(p);
   res.p_steps = p[0];
@@ -543,39 +550,47 @@ tl::expected<AzResult, std::string> align_a_to_z(WavefrontMachine& m, Knowledge&
   if (auto ok = ensure_focus_z(m, k, log); !ok) return tl::unexpected("a-z: " + ok.error());
   m.fit_element(Element::Sphere);
   AzResult res;
+  // Each height's centre is referred to one X, Y through the lateral response: it must be the
+  // calibrated one (the gauge's clocking turns a nominal one by degrees).
+  if (!k.steps_calibrated) {
+    m.mount(balls.front().name);
+    auto ar = axis_response(m, k, 100, log);
+    if (!ar) return tl::unexpected("a-z: " + ar.error());
+    res.maps += ar->maps;
+  }
   PartOnMountOptions pom_o = o.part_on_mount;
-  pom_o.null_first = false;  // X and Y stay where they are for every height (the seed's step 5 b)
+  // Each height is nulled on its own; its centre is then referred back to the first height's X, Y
+  // through the calibrated lateral response, which is what keeping X and Y fixed (the seed's step
+  // 5 b) measures, without losing the fringes when the A axis is far off Z.
+  pom_o.null_first = true;
   for (int iter = 0; iter < o.max_iterations; ++iter) {
     AzIteration it;
     std::vector<double> ox, oy;
-    Vec2 last_xy{0, 0}, last_centre{0, 0};
+    std::optional<Vec2> ref_xy;
+    Vec2 ref_centre{0, 0};
     for (const auto& b : balls) {
       if (auto ok = mount_at_null_guess(m, k, b.name); !ok) return tl::unexpected(ok.error());
-      auto focus = null_sphere(m, k, log, true);  // confocal in Z only
-      if (!focus) return tl::unexpected(fmt::format("a-z (iteration {}, {}): {}", iter + 1, b.name, focus.error()));
-      res.maps += focus->maps;
-      AxisCommand at = m.position();
-      at.steps.z() = focus->steps.z();
-      m.move(at);
       auto pom = part_on_mount(m, k, pom_o, log);
       if (!pom) return tl::unexpected(fmt::format("a-z (iteration {}, {}): {}", iter + 1, b.name, pom.error()));
       res.maps += pom->maps;
+      const Vec2 xy = pom->steps.head<2>();
+      if (!ref_xy) ref_xy = xy;
+      // Where the A axis would cross the focal plane with the table at the reference X, Y.
+      const Vec2 centre = pom->circle.centre - k.lateral_per_step * (xy - *ref_xy);
+      if (ref_xy == xy) ref_centre = centre;
       // The A axis from the focus in machine x, y: the gauge's lateral turned by its clocking.
-      const Vec2 off = Eigen::Rotation2Dd(k.gauge_clocking_rad) * pom->circle.centre;
+      const Vec2 off = Eigen::Rotation2Dd(k.gauge_clocking_rad) * centre;
       it.z_mm.push_back(pom->steps.z() * k.step_mm.z());
       it.a_offset_mm.push_back(off);
       ox.push_back(off.x());
       oy.push_back(off.y());
-      last_xy = pom->steps.head<2>();
-      last_centre = pom->circle.centre;
     }
     auto lx = metron::wavefront::fit_line(it.z_mm, ox);
     auto ly = metron::wavefront::fit_line(it.z_mm, oy);
     if (!lx || !ly) return tl::unexpected(std::string("a-z: the parts' heights do not differ"));
     // Raising the table by dZ moves the A axis' crossing of the focal plane by -dZ tan(tilt).
     it.angle_rad = Vec2(-std::atan(lx->slope), -std::atan(ly->slope));
-    const Vec2 dxy = -k.lateral_per_step.inverse() * last_centre;
-    k.a_through_focus_steps = last_xy + dxy;
+    k.a_through_focus_steps = *ref_xy - k.lateral_per_step.inverse() * ref_centre;
     const bool done = it.angle_rad.norm() < o.tolerance_rad;
     observe(k, fmt::format("a-z:{}", iter + 1));
     if (!done && o.correct) {
