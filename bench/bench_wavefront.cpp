@@ -47,7 +47,7 @@ struct Stat {
     truth_sum += truth, sum += e, sum2 += e * e, ++n;
   }
   [[nodiscard]] double bias() const { return sum / n; }
-  [[nodiscard]] double sd() const { return n > 1 ? std::sqrt((sum2 - sum * sum / n) / (n - 1)) : 0; }
+  [[nodiscard]] double sd() const { return n > 1 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1))) : 0; }
 };
 
 void print_stat(const char* name, const Stat& s, double scale, const char* unit, double bound = 0) {

@@ -152,7 +152,7 @@ struct AzResult {
 };
 struct AzOptions {
   std::vector<std::string> balls;     ///< parts at two or more heights (default: every sphere)
-  double tolerance_rad = 2e-6;        ///< stop when the recovered angle is below
+  double tolerance_rad = 0.05e-6;     ///< stop when the recovered angle is below (about 3 sd of its noise)
   int max_iterations = 8;
   bool correct = true;                ///< apply the corrections (false: measure once)
   PartOnMountOptions part_on_mount;
