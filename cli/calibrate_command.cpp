@@ -23,11 +23,16 @@ namespace {
 namespace mw = machine::wavefront;
 namespace rw = runtime::wavefront;
 
+}  // namespace
+std::string wavefront_html(const nlohmann::json& r, const machine::wavefront::GaugeMap* map);  // wavefront_html.cpp
+namespace {
+
 struct CalibrateArgs {
   std::string world;
   std::string step = "all";
   std::optional<std::uint64_t> seed;
   std::optional<std::string> out;
+  std::optional<std::string> html;
   bool truth = false;
 };
 
@@ -133,6 +138,20 @@ int calibrate_wavefront(const CalibrateArgs& args) {
     out << j.dump(2) << "\n";
     std::cout << "written: " << *args.out << "\n";
   }
+  if (args.html) {
+    // One more map at the end position for the picture, with the element that suits the part.
+    for (const auto& p : machine.parts())
+      if (p.name == machine.mounted_part())
+        machine.fit_element(p.kind == mw::PartKind::Flat ? mw::Element::Flat : mw::Element::Sphere);
+    auto map = machine.measure();
+    std::ofstream out(*args.html);
+    if (!out) {
+      std::cerr << "error: cannot write " << *args.html << "\n";
+      return 2;
+    }
+    out << wavefront_html(j, map ? &*map : nullptr);
+    std::cout << "written: " << *args.html << "\n";
+  }
   return 0;
 }
 
@@ -151,6 +170,7 @@ void add_calibrate_command(CLI::App& app, std::vector<Command>& commands) {
       ->default_val("all");
   wf->add_option("--seed", args->seed, "noise seed (default: the world's)");
   wf->add_option("--out", args->out, "write the results (JSON) here");
+  wf->add_option("--html", args->html, "write pictures (self-contained HTML with SVG) here");
   wf->add_flag("--truth", args->truth, "also print the hidden truth beside the recovered values");
   commands.push_back({cmd, [args] { return calibrate_wavefront(*args); }});
 }
