@@ -708,6 +708,12 @@ tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, cons
   if (all || step == "reversal") {
     known = true;
     if (auto ok = need(!flats.empty(), "a flat"); !ok) return tl::unexpected(ok.error());
+    if (!all) {  // a flat in the collimated beam needs the gauge aligned to A first (step 2)
+      say(log, "step 2 first: gauge frame (the wedged flat is beyond the fringe limit otherwise)");
+      auto g = align_gauge_frame(m, k, flats.front().name, {}, log);
+      if (!g) return tl::unexpected(g.error());
+      rep.gauge_frame = *g;
+    }
     say(log, "reversal: the part turned 180 degrees on the table");
     auto r = reversal(m, k, flats.back().name, {}, log);
     if (!r) return tl::unexpected(r.error());
