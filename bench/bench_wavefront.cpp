@@ -95,6 +95,8 @@ void table_whole(const std::string& name, bool form) {
     add("zF [um]", r.b_rotation->zf_mm, t["b-rotation"].zf_mm);
     add("dz = S dx [relative 1e-6]", r.b_rotation->dz_mm / t["b-rotation"].step_mm.z(), 1);
     add("B tilt out of perpendicular [urad]", r.b_rotation->b_axis_tilt_rad, t["b-rotation"].b_axis_tilt_rad);
+    add("yc (C rotation) [um]", r.c_rotation->yc_mm, t["c-rotation"].yc_mm);
+    add("zc (C rotation, with zF) [um]", *r.c_rotation->zc_mm, t["c-rotation"].zc_mm);
     add("reversal: wedge x [urad]", r.reversal->part_rad.x(), t["reversal"].part_wedge_rad.x());
     add("reversal: wedge y [urad]", r.reversal->part_rad.y(), t["reversal"].part_wedge_rad.y());
     add("reversal: table tilt x [urad]", r.reversal->table_rad.x(), t["reversal"].table_tilt_rad.x());

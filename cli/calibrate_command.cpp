@@ -91,6 +91,12 @@ void print_truth(const rw::CalibrationReport& r, const std::map<std::string, mw:
     row("B tilt out of perpendicular to X-Z [urad]", fmt::format("{:.3f}", b.b_axis_tilt_rad * 1e6),
         fmt::format("{:.3f}", a.b_axis_tilt_rad * 1e6));
   }
+  if (r.c_rotation && t.count("c-rotation")) {
+    const auto& a = t.at("c-rotation");
+    row("yc, A from C along Y [um]", fmt::format("{:.4f}", r.c_rotation->yc_mm * 1e3), fmt::format("{:.4f}", a.yc_mm * 1e3));
+    if (r.c_rotation->zc_mm)
+      row("zc, B to C along Z [mm]", fmt::format("{:.6f}", *r.c_rotation->zc_mm), fmt::format("{:.6f}", a.zc_mm));
+  }
   if (r.reversal && t.count("reversal")) {
     const auto& a = t.at("reversal");
     row("reversal: part wedge [urad]", pair(r.reversal->part_rad, 1e6, 3), pair(a.part_wedge_rad, 1e6, 3));
@@ -166,7 +172,7 @@ void add_calibrate_command(CLI::App& app, std::vector<Command>& commands) {
                                  "(SEEDS.md 5, docs/wavefront.md)");
   wf->add_option("--world", args->world, "world of kind \"wavefront\" (JSON)")->required();
   wf->add_option("--step", args->step,
-                 "part-on-mount, gauge-frame, focus, axis-response, a-z, b-rotation, reversal or all")
+                 "part-on-mount, gauge-frame, focus, axis-response, a-z, b-rotation, c-rotation, reversal or all")
       ->default_val("all");
   wf->add_option("--seed", args->seed, "noise seed (default: the world's)");
   wf->add_option("--out", args->out, "write the results (JSON) here");

@@ -77,6 +77,9 @@ TEST(WavefrontCalibration, WholeProcedureRecoversTheHiddenGeometry) {
     EXPECT_NEAR(b.zf_mm, tb.zf_mm, 2e-3);
     EXPECT_NEAR(b.dz_mm / tb.step_mm.z(), 1, 5e-5);
     EXPECT_NEAR(b.b_axis_tilt_rad, tb.b_axis_tilt_rad, 0.5e-6);
+    ASSERT_TRUE(r.report.c_rotation && r.report.c_rotation->zc_mm);
+    EXPECT_NEAR(r.report.c_rotation->yc_mm, t.at("c-rotation").yc_mm, 1e-5);
+    EXPECT_NEAR(*r.report.c_rotation->zc_mm, t.at("c-rotation").zc_mm, 2e-3);
     const auto& v = *r.report.reversal;
     EXPECT_LT((v.part_rad - t.at("reversal").part_wedge_rad).norm(), 0.05e-6);
     EXPECT_LT((v.table_rad - t.at("reversal").table_tilt_rad).norm(), 0.05e-6);

@@ -85,7 +85,7 @@ const PartSpec* SimulatedWavefrontMachine::mounted() const {
 
 // The chain T(X, Y, Z) -> B (about u_B ~ Y) -> C (about X, zc above B) -> A (xb, yc from the B and
 // C axes, its own tilt) -> table; docs/wavefront.md "The machine".
-Frame SimulatedWavefrontMachine::spindle_frame() const {
+Frame SimulatedWavefrontMachine::c_frame() const {
   const HiddenGeometry& h = m_world.hidden;
   const Vec3 t = m_position.steps.cwiseProduct(h.step_mm);
   const Vec3 u_b(std::sin(h.b_axis_tilt_rad), std::cos(h.b_axis_tilt_rad), 0);
@@ -96,6 +96,12 @@ Frame SimulatedWavefrontMachine::spindle_frame() const {
   f.rotate(AA(b, u_b));
   f.translate(Vec3(0, 0, h.zc_mm));
   f.rotate(AA(c, Vec3::UnitX()));
+  return f;
+}
+
+Frame SimulatedWavefrontMachine::spindle_frame() const {
+  const HiddenGeometry& h = m_world.hidden;
+  Frame f = c_frame();
   f.translate(Vec3(h.xb_mm, h.yc_mm, 0));
   f.rotate(AA(h.a_tilt_rad.x(), Vec3::UnitY()) * AA(-h.a_tilt_rad.y(), Vec3::UnitX()));
   f.rotate(AA(m_position.a_deg * kRad, Vec3::UnitZ()));
@@ -243,8 +249,13 @@ WavefrontTruth SimulatedWavefrontMachine::truth() const {
   t.table_tilt_rad = base_tilt - t.gauge_to_a_rad;
   const Vec3 b_o = m_position.steps.cwiseProduct(h.step_mm);
   t.b_axis_tilt_rad = h.b_axis_tilt_rad;
-  t.yc_mm = h.yc_mm;
-  t.zc_mm = h.zc_mm;
+  {  // the C axis (through the C frame's origin along its x) against the A line and the B axis
+    const Frame cf = c_frame();
+    const Vec3 c_o = cf.translation();
+    const double s = (c_o.z() - a_o.z()) / a.z();
+    t.yc_mm = (a_o + s * a).y() - c_o.y();
+    t.zc_mm = c_o.z() - b_o.z();
+  }
   {  // A line at the B axis' height, against the B axis at that y
     const double s = (b_o.z() - a_o.z()) / a.z();
     const Vec3 p = a_o + s * a;

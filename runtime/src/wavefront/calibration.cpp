@@ -529,8 +529,133 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
   res.zf_mm = res.r * dx;
   res.dz_mm = res.s * dx;
   k.step_mm.z() = res.dz_mm;
+  k.zf_mm = res.zf_mm;
   say(log, fmt::format("  B rotation: P {:.6f} mm, xb {:.6f} mm, zF {:.5f} mm, dz {:.8f} mm/step, B tilt {:.3f} urad",
                        res.eccentricity_mm, res.xb_mm, res.zf_mm, res.dz_mm, res.b_axis_tilt_rad * 1e6));
+  return res;
+}
+
+tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowledge& k, const std::string& ball,
+                                                      std::vector<double> c_deg, const Log& log) {
+  if (c_deg.empty()) c_deg = {0, 5, 10, 15, 20, -5, -10, -15, -20};
+  const auto pb = part_named(m, ball);
+  if (!pb || pb->kind != PartKind::Sphere) return tl::unexpected(fmt::format("c-rotation: '{}' is not a sphere", ball));
+  if (auto ok = ensure_focus_z(m, k, log); !ok) return tl::unexpected("c-rotation: " + ok.error());
+  m.fit_element(Element::Sphere);
+  if (auto ok = mount_at_null_guess(m, k, ball); !ok) return tl::unexpected(ok.error());
+  CRotationResult res;
+  auto pom = part_on_mount(m, k, {}, log);
+  if (!pom) return tl::unexpected("c-rotation: " + pom.error());
+  res.maps += pom->maps;
+  const Vec2 xy_a = pom->steps.head<2>() - k.lateral_per_step.inverse() * pom->circle.centre;
+  AxisCommand c = m.position();
+  c.steps = Vec3(xy_a.x(), xy_a.y(), pom->steps.z());
+  c.c_deg = 0;
+  m.move(c);
+  const auto& nom = m.nominal();
+  double rc_guess = k.zf_mm.value_or(nom.zc_mm + nom.table_height_mm + design_height_mm(*pb)) - nom.zc_mm;
+  double ey_guess = 0;
+  std::vector<double> t;
+  Vec3 last_null{0, 0, 0};
+  double last_t = 0;
+  for (std::size_t i = 0; i < c_deg.size(); ++i) {
+    const double th = c_deg[i] / kDeg;
+    AxisCommand cmd = m.position();
+    cmd.c_deg = c_deg[i];
+    if (i > 0) {  // Rot_X: y' = y cos - z sin, z' = y sin + z cos
+      const double from = (c_deg[i] < 0 && c_deg[i - 1] > 0) ? 0.0 : last_t;
+      const Vec3 from_steps = from == 0.0 ? Vec3(res.null_steps.front()) : last_null;
+      const double dcy = ey_guess * (std::cos(th) - std::cos(from)) - rc_guess * (std::sin(th) - std::sin(from));
+      const double dcz = ey_guess * (std::sin(th) - std::sin(from)) + rc_guess * (std::cos(th) - std::cos(from));
+      cmd.steps = from_steps - Vec3(0, dcy / k.step_mm.y(), dcz / k.step_mm.z());
+    }
+    m.move(cmd);
+    auto n = null_sphere(m, k, log);
+    if (!n) return tl::unexpected(fmt::format("c-rotation at C = {} deg: {}", c_deg[i], n.error()));
+    res.maps += n->maps;
+    res.c_deg.push_back(c_deg[i]);
+    res.null_steps.push_back(n->steps);
+    if (i == 0) observe(k, "c-rotation");
+    t.push_back(th);
+    last_null = n->steps;
+    last_t = th;
+    if (t.size() >= 3) {  // (Y - Y_0) dy = Rc sin t + e (1 - cos t)
+      Eigen::MatrixXd a(static_cast<Eigen::Index>(t.size()), 2);
+      Eigen::VectorXd b(static_cast<Eigen::Index>(t.size()));
+      for (std::size_t j = 0; j < t.size(); ++j) {
+        a.row(static_cast<Eigen::Index>(j)) << std::sin(t[j]), 1 - std::cos(t[j]);
+        b[static_cast<Eigen::Index>(j)] = (res.null_steps[j].y() - res.null_steps[0].y()) * k.step_mm.y();
+      }
+      const Eigen::Vector2d sol = a.colPivHouseholderQr().solve(b);
+      if (std::isfinite(sol[0])) rc_guess = sol[0], ey_guess = sol[1];
+    }
+  }
+  {
+    AxisCommand back = m.position();
+    back.c_deg = 0;
+    back.steps = res.null_steps.front();
+    m.move(back);
+  }
+  // docs/wavefront.md "The C-rotation null": in steps of dy, c = (., Q_c + P_y, R_c),
+  //   Y - Y_A = Q_c - v_y, Z = (Z0 - v_z) / S_c, v = Rot_X(t) c.
+  const auto n = static_cast<Eigen::Index>(t.size());
+  if (n < 3) return tl::unexpected(std::string("c-rotation needs at least 3 C angles"));
+  std::vector<double> y, z;
+  for (const auto& s : res.null_steps) y.push_back(s.y()), z.push_back(s.z());
+  const auto residual = [&](const Eigen::Matrix<double, 5, 1>& p) {
+    Eigen::VectorXd r(2 * n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double cy = p[1] + p[0], cz = p[2], co = std::cos(t[i]), si = std::sin(t[i]);
+      r[2 * i] = (y[i] - xy_a.y()) - (p[1] - (cy * co - cz * si));
+      r[2 * i + 1] = z[i] - (p[4] - (cy * si + cz * co)) / p[3];
+    }
+    return r;
+  };
+  Eigen::Matrix<double, 5, 1> p;
+  {
+    Eigen::MatrixXd a(n, 3);
+    Eigen::VectorXd b(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      a.row(i) << -std::cos(t[i]), 1 - std::cos(t[i]), std::sin(t[i]);
+      b[i] = y[i] - xy_a.y();
+    }
+    const Eigen::Vector3d pqr = a.colPivHouseholderQr().solve(b);
+    Eigen::MatrixXd az(n, 2);
+    Eigen::VectorXd bz(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      az.row(i) << z[i], -1;
+      bz[i] = -(pqr[0] + pqr[1]) * std::sin(t[i]) - pqr[2] * std::cos(t[i]);
+    }
+    const Eigen::Vector2d sz = az.colPivHouseholderQr().solve(bz);
+    p << pqr[0], pqr[1], pqr[2], sz[0], sz[1];
+  }
+  for (int it = 0; it < 30; ++it) {
+    const Eigen::VectorXd r0 = residual(p);
+    Eigen::MatrixXd jac(r0.size(), 5);
+    for (int j = 0; j < 5; ++j) {
+      Eigen::Matrix<double, 5, 1> q = p;
+      const double h = 1e-7 * std::max(1.0, std::abs(p[j]));
+      q[j] += h;
+      jac.col(j) = (residual(q) - r0) / h;
+    }
+    const Eigen::VectorXd step = jac.colPivHouseholderQr().solve(-r0);
+    p += step;
+    bool settled = true;
+    for (int j = 0; j < 5; ++j) settled = settled && std::abs(step[j]) <= 1e-12 * std::max(1.0, std::abs(p[j]));
+    if (settled) break;
+  }
+  const Eigen::VectorXd r = residual(p);
+  res.p_steps = p[0];
+  res.q = p[1];
+  res.r = p[2];
+  res.s = p[3];
+  res.residual_rms_steps = std::sqrt(r.squaredNorm() / static_cast<double>(r.size()));
+  const double dy = k.step_mm.y();
+  res.yc_mm = res.q * dy;
+  res.zf_minus_zc_mm = res.r * dy;
+  if (k.zf_mm) res.zc_mm = *k.zf_mm - res.zf_minus_zc_mm;
+  say(log, fmt::format("  C rotation: yc {:.6f} mm, zF - zc {:.5f} mm{}", res.yc_mm, res.zf_minus_zc_mm,
+                       res.zc_mm ? fmt::format(", zc {:.5f} mm", *res.zc_mm) : std::string()));
   return res;
 }
 
@@ -705,6 +830,14 @@ tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, cons
     if (!r) return tl::unexpected(r.error());
     rep.b_rotation = *r;
   }
+  if (all || step == "c-rotation") {
+    known = true;
+    if (auto ok = need(!spheres.empty(), "a sphere"); !ok) return tl::unexpected(ok.error());
+    say(log, "step 4 for C: C rotation null, yc and zc");
+    auto r = c_rotation(m, k, spheres.front().name, {}, log);
+    if (!r) return tl::unexpected(r.error());
+    rep.c_rotation = *r;
+  }
   if (all || step == "reversal") {
     known = true;
     if (auto ok = need(!flats.empty(), "a flat"); !ok) return tl::unexpected(ok.error());
@@ -722,7 +855,7 @@ tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, cons
   }
   if (!known)
     return tl::unexpected(fmt::format(
-        "unknown step '{}' (expected part-on-mount, gauge-frame, axis-response, focus, a-z, b-rotation, reversal, all)", step));
+        "unknown step '{}' (expected part-on-mount, gauge-frame, axis-response, focus, a-z, b-rotation, c-rotation, reversal, all)", step));
   // The focus Z with the step size the later steps calibrated (the cat's eye used the one then known).
   if (k.cat_eye_z_steps) {
     k.focus_table_z_steps = *k.cat_eye_z_steps + k.cat_eye_height_mm / k.step_mm.z();

@@ -86,6 +86,15 @@ nlohmann::json to_json(const CalibrationReport& r) {
                        {"dz_mm", b.dz_mm}, {"b_axis_tilt_rad", b.b_axis_tilt_rad},
                        {"residual_rms_steps", b.residual_rms_steps}, {"maps", b.maps}};
   }
+  if (r.c_rotation) {
+    const auto& c = *r.c_rotation;
+    json nulls = json::array();
+    for (std::size_t i = 0; i < c.c_deg.size(); ++i) nulls.push_back({{"c_deg", c.c_deg[i]}, {"steps", v3(c.null_steps[i])}});
+    j["c_rotation"] = {{"nulls", nulls}, {"P_steps", c.p_steps}, {"Q", c.q}, {"R", c.r}, {"S", c.s},
+                       {"yc_mm", c.yc_mm}, {"zf_minus_zc_mm", c.zf_minus_zc_mm},
+                       {"residual_rms_steps", c.residual_rms_steps}, {"maps", c.maps}};
+    if (c.zc_mm) j["c_rotation"]["zc_mm"] = *c.zc_mm;
+  }
   if (r.reversal) {
     const auto& v = *r.reversal;
     j["reversal"] = {{"part", v2(v.part_rad)}, {"table", v2(v.table_rad)},

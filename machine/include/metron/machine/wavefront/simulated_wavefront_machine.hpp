@@ -25,8 +25,8 @@ struct WavefrontTruth {
   double zf_mm;                 ///< Z distance from the B axis to the mounted sphere's centre of curvature
   double eccentricity_mm;       ///< X offset of the centre of curvature from the A axis (P of step 4)
   double b_axis_tilt_rad;       ///< B not perpendicular to X-Z
-  double yc_mm;                 ///< A axis from the C axis along Y (hidden, as given)
-  double zc_mm;                 ///< C axis above the B axis (hidden, as given)
+  double yc_mm;                 ///< Y distance from the C axis to the A axis line at the C axis' height
+  double zc_mm;                 ///< Z distance from the B axis to the C axis
 };
 
 /// The simulated machine: the kinematic chain and the Fizeau gauge of docs/wavefront.md, with
@@ -58,6 +58,7 @@ class SimulatedWavefrontMachine final : public WavefrontMachine {
   [[nodiscard]] const WavefrontWorld& world() const { return m_world; }
 
  private:
+  [[nodiscard]] Frame c_frame() const;            // after the C rotation, origin on the C axis
   [[nodiscard]] Frame spindle_frame() const;      // A axis frame (z along A) at the table's base
   [[nodiscard]] Frame part_frame() const;         // the mounted part's base frame
   [[nodiscard]] Frame gauge_frame() const;        // origin at the focus, z toward the gauge

@@ -33,6 +33,7 @@ struct Knowledge {
   double cat_eye_height_mm = 0;               ///< the flat's face above the table (design)
   std::optional<Vec2> a_through_focus_steps;  ///< X, Y that put the A axis through the focus
   Vec2 az_correction_deg{0, 0};         ///< total B, C zero shifts applied by the A-Z alignment
+  std::optional<double> zf_mm;          ///< B axis to the test ball's centre of curvature (B rotation)
   /// Instrumentation for tests and `--truth`: called with a tag ("focus:pom", ...) when the machine
   /// is in the state a recovered value refers to, so the caller can read its own truth there.
   std::function<void(const std::string&)> observe;
@@ -137,6 +138,23 @@ struct BRotationResult {
 tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowledge& k, const std::string& ball,
                                                       std::vector<double> b_deg = {}, const Log& log = {});
 
+/// Step 4 for C (the seed: steps e and f "adapt directly" to other rotary and translation pairs):
+/// C (about X) turned with re-nulls in Y and Z, and the fit of P_y (eccentricity along Y / dy),
+/// Q_c = yc/dy, R_c = (zF - zc)/dy, S_c = dz/dy (docs/wavefront.md "The C-rotation null"); with zF
+/// from the B rotation it gives zc.
+struct CRotationResult {
+  std::vector<double> c_deg;            ///< C commands
+  std::vector<Vec3> null_steps;         ///< X, Y, Z null per C
+  double p_steps = 0, q = 0, r = 0, s = 0;  ///< P_y, Q_c, R_c in steps of dy; S_c = dz/dy
+  double yc_mm = 0;                     ///< A axis from the C axis along Y
+  double zf_minus_zc_mm = 0;            ///< C axis to the centre of curvature along Z
+  std::optional<double> zc_mm;          ///< B to C along Z (needs zF from the B rotation)
+  double residual_rms_steps = 0;
+  int maps = 0;
+};
+tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowledge& k, const std::string& ball,
+                                                      std::vector<double> c_deg = {}, const Log& log = {});
+
 /// Step 5: A-Z alignment from part-on-mount at two or more heights, line fit, B/C zero correction,
 /// repeated until A is parallel to Z.
 struct AzIteration {
@@ -178,6 +196,7 @@ struct CalibrationReport {
   std::optional<FocusResult> focus;
   std::optional<AzResult> a_to_z;
   std::optional<BRotationResult> b_rotation;
+  std::optional<CRotationResult> c_rotation;
   std::optional<ReversalResult> reversal;
   std::optional<PartOnMountResult> part_on_mount;
   Knowledge knowledge;
@@ -185,7 +204,7 @@ struct CalibrationReport {
 };
 
 /// The steps by name: "part-on-mount", "gauge-frame", "axis-response", "focus", "a-z",
-/// "b-rotation", "reversal", "all".
+/// "b-rotation", "c-rotation", "reversal", "all".
 tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, const std::string& step,
                                                        const Log& log = {}, const AzOptions& az = {},
                                                        const std::function<void(const std::string&)>& observer = {});
