@@ -28,9 +28,4 @@ done
 for program in "$root"/programs/examples/*.dmi; do
   run_one "example_$(basename "${program%.dmi}")" "$program" "" 1
 done
-# the NIST parts' programs on the worlds built from their CAD (README.md)
-run_one example_03_on_nist_world "$root/programs/examples/03_nist_simple_part.dmi" \
-  "$root/programs/worlds/nist_simple_part.json" 1
-run_one example_04_on_nist_world "$root/programs/examples/04_nist_dcx_part.dmi" \
-  "$root/programs/worlds/nist_dcx_part.json" 1
 echo "snapshot of $(ls "$out" | wc -l) runs in $out"
