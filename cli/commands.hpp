@@ -21,6 +21,8 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands);
 void add_debug_commands(CLI::App& app, std::vector<Command>& commands);
 /// characterise (characterise_command.cpp).
 void add_characterise_command(CLI::App& app, std::vector<Command>& commands);
+/// `metron calibrate wavefront` (calibrate_command.cpp).
+void add_calibrate_command(CLI::App& app, std::vector<Command>& commands);
 /// test (test_command.cpp).
 void add_test_command(CLI::App& app, std::vector<Command>& commands);
 
