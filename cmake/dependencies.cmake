@@ -12,6 +12,8 @@ target_include_directories(metron_pegtl SYSTEM INTERFACE ${PEGTL_INCLUDE_DIR})
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(LIBEDIT REQUIRED IMPORTED_TARGET libedit)
 find_package(Threads REQUIRED)
-# Standalone Asio (header-only) for the I++ DME server (machine/src/ipp/server.cpp).
+# Standalone Asio (header-only) for the I++ DME server (machine/ipp/src/server.cpp).
 find_path(ASIO_INCLUDE_DIR asio.hpp REQUIRED)
-include_directories(SYSTEM ${ASIO_INCLUDE_DIR})
+add_library(metron_asio INTERFACE)
+target_include_directories(metron_asio SYSTEM INTERFACE ${ASIO_INCLUDE_DIR})
+target_compile_definitions(metron_asio INTERFACE ASIO_STANDALONE)

@@ -5,6 +5,7 @@
 
 #include "metron/machine/rng.hpp"
 #include "metron/machine/wavefront/wavefront_machine.hpp"
+#include "metron/machine/wavefront/wavefront_world.hpp"
 
 namespace metron::machine::wavefront {
 

@@ -6,7 +6,7 @@
 #include <tl/expected.hpp>
 
 #include "metron/machine/wavefront/gauge_map.hpp"
-#include "metron/machine/wavefront/wavefront_world.hpp"
+#include "metron/machine/wavefront/wavefront_design.hpp"
 
 namespace metron::machine::wavefront {
 

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "metron/machine/wavefront/wavefront_world.hpp"
+#include "metron/machine/wavefront/wavefront_design.hpp"
 
 namespace metron::machine::wavefront {
 
