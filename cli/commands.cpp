@@ -14,6 +14,7 @@
 #include "metron/runtime/outputs.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/point_file.hpp"
+#include "metron/machine/ipp/client_machine.hpp"
 #include "virtual_cmm_backend.hpp"
 
 namespace metron::cli {
@@ -26,7 +27,20 @@ struct RunArgs {
   std::string out_dir = ".";
   bool quiet = false;
   std::optional<std::string> characterisation;
+  std::optional<std::string> machine_url;
 };
+
+/// The backend of `metron run --machine ipp://host:port`: an I++ DME server (metron serve, or a
+/// controller) instead of the embedded virtual CMM; the world and seed are the server's business.
+tl::expected<interpreter::Backend, std::string> ipp_backend(const std::string& url) {
+  const auto address = machine::ipp::parse_ipp_url(url);
+  if (!address) return tl::unexpected(fmt::format("--machine {}: expected ipp://host[:port]", url));
+  try {
+    return interpreter::Backend{std::make_unique<machine::ipp::ClientMachine>(address->first, address->second), url, 0};
+  } catch (const std::runtime_error& e) {
+    return tl::unexpected(fmt::format("--machine {}: {}", url, e.what()));
+  }
+}
 
 struct FitArgs {
   std::string type;
@@ -47,7 +61,9 @@ int run(const RunArgs& args) {
     if (std::holds_alternative<runtime::FaultReport>(e)) ++faults;
     if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << interpreter::event_text(e) << std::flush;
   };
-  const auto outcome = interpreter::run_program(options, virtual_cmm_backend);
+  const auto outcome =
+      args.machine_url ? interpreter::run_program(options, [&](const auto&, auto) { return ipp_backend(*args.machine_url); })
+                       : interpreter::run_program(options, virtual_cmm_backend);
   std::cerr << outcome.diagnostics;
   const char* status = outcome.exit == interpreter::RunExit::Completed ? "completed"
                        : outcome.exit == interpreter::RunExit::Faulted ? "stopped by a machine fault"
@@ -142,6 +158,9 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   run_cmd->add_option("--seed", run_args->seed, "random seed of the run (default: the world's)");
   run_cmd->add_option("--characterisation", run_args->characterisation,
                       "machine characterisation file from `metron characterise`: PTMEAS uses its touch strategy");
+  run_cmd->add_option("--machine", run_args->machine_url,
+                      "run on an I++ DME server instead of the virtual CMM: ipp://host[:port] (docs/ipp-dme.md)")
+      ->excludes(run_cmd->get_option("--world"));
   run_cmd->add_option("--out", run_args->out_dir, "directory for results.json and DMIS output files")->default_val(".");
   run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
   commands.push_back({run_cmd, [run_args] { return run(*run_args); }});

@@ -352,6 +352,12 @@ PartSpec parse_part(const json& j, const std::string& ptr, const std::string& ba
 World parse_world_or_throw(const json& j, const std::string& base_dir) {
   World w;
   Object o(j, "");
+  // Worlds of other machine kinds share the folder (docs/world.md); say which command reads them.
+  o.read("kind", [&](const json& kj, const std::string& kp) {
+    if (sj::one_of(kj, kp, {"cmm", "wavefront"}) == "wavefront")
+      sj::fail(kp, "a world of kind \"wavefront\" is a wavefront-gauge machine, not a CMM: it is read by "
+                   "`metron calibrate wavefront --world FILE` (docs/wavefront.md)");
+  });
   o.read("name", [&](const json& nj, const std::string& np) { w.name = string(nj, np); });
   o.read("description", [&](const json& dj, const std::string& dp) { string(dj, dp); });
   o.read("seed", [&](const json& nj, const std::string& np) { w.seed = sj::unsigned_integer(nj, np); });
