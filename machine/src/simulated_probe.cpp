@@ -4,17 +4,36 @@
 #include <algorithm>
 
 #include "metron/machine/contact.hpp"
+#include "metron/machine/machine_errors/machine_error_solid.hpp"
 #include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/world_solid.hpp"
 
 namespace metron::machine::detail {
 
-SimulatedProbe::SimulatedProbe(WorldTruth truth, std::uint64_t seed)
-    : m_truth(std::move(truth)), m_solid(make_world_solid(m_truth)), m_rng(seed) {}
+namespace {
 
-void SimulatedProbe::mount_stylus(double nominal_radius_mm) {
+// What the probe touches: the world as the machine's scales see it (a perfect machine: the world).
+std::unique_ptr<Solid> make_probed_solid(const WorldTruth& truth, const Vec3& stylus_offset_mm) {
+  auto world = make_world_solid(truth);
+  if (truth.errors.empty()) return world;
+  auto seen = std::make_unique<MachineErrorSolid>(std::move(world), truth.errors);
+  seen->set_probe_offset(stylus_offset_mm);
+  return seen;
+}
+
+}  // namespace
+
+SimulatedProbe::SimulatedProbe(WorldTruth truth, std::uint64_t seed)
+    : m_truth(std::move(truth)), m_solid(make_probed_solid(m_truth, m_stylus_offset_mm)), m_rng(seed) {}
+
+void SimulatedProbe::mount_stylus(double nominal_radius_mm, const Vec3& offset_mm) {
   m_ball_radius_mm = nominal_radius_mm + m_truth.probe.ball_radius_error_mm;
   m_free_radius_mm = -1;
+  if (offset_mm != m_stylus_offset_mm) {
+    m_stylus_offset_mm = offset_mm;
+    for (auto* solid : {m_solid.get(), m_scan_solid.get()})
+      if (auto* seen = dynamic_cast<MachineErrorSolid*>(solid)) seen->set_probe_offset(offset_mm);
+  }
 }
 
 std::optional<double> SimulatedProbe::sweep(const Vec3& a, const Vec3& b) {
@@ -72,7 +91,7 @@ MotionLimits SimulatedProbe::motion_limits(const MachineConfig& config, const Ve
 }
 
 ScanSetup SimulatedProbe::scan_setup(double nominal_radius_mm, const MachineConfig& config) {
-  if (!m_scan_solid) m_scan_solid = make_world_solid(m_truth);
+  if (!m_scan_solid) m_scan_solid = make_probed_solid(m_truth, m_stylus_offset_mm);
   return ScanSetup{m_scan_solid.get(), nominal_radius_mm + m_truth.probe.ball_radius_error_mm, config,
                    m_truth.scanning, static_cast<std::uint64_t>(scan_phase() * 0x1.0p53)};
 }

@@ -21,8 +21,9 @@ class SimulatedProbe {
  public:
   SimulatedProbe(WorldTruth truth, std::uint64_t seed);
 
-  /// A stylus is screwed on: its true radius differs from the nominal by the world's error.
-  void mount_stylus(double nominal_radius_mm);
+  /// A stylus is screwed on: its true radius differs from the nominal by the world's error; its
+  /// ball centre sits `offset_mm` from the ram's reference point (the machine errors' Abbe lever).
+  void mount_stylus(double nominal_radius_mm, const Vec3& offset_mm);
 
   /// The probe's trigger used as a collision switch on a move from a to b: the fraction of the
   /// move at which the ball first touches, if it does.
@@ -58,6 +59,7 @@ class SimulatedProbe {
   WorldTruth m_truth;
   std::unique_ptr<Solid> m_solid;
   std::unique_ptr<Solid> m_scan_solid;  // kept: a CAD part takes a while to build
+  Vec3 m_stylus_offset_mm = Vec3::Zero();
   Rng m_rng;
   double m_ball_radius_mm = 0;
   Vec3 m_free_centre = Vec3::Zero();

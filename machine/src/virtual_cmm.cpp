@@ -8,6 +8,17 @@
 
 namespace metron::machine {
 namespace detail {
+namespace {
+
+// The ball centre from the ram's reference point, as the tool is defined (none for a degenerate
+// direction): the lever through which the machine's angular errors move the ball.
+Vec3 stylus_offset(const DefineTool& tool) {
+  const double n = tool.stylus_direction.norm();
+  return n > 1e-12 && std::isfinite(tool.stylus_length_mm) ? Vec3(tool.stylus_direction / n * tool.stylus_length_mm)
+                                                            : Vec3(Vec3::Zero());
+}
+
+}  // namespace
 
 void Controller::define_tool(const DefineTool& body, Response& response) {
   if (body.name.empty() || !(body.ball_diameter_mm > 0)) {
@@ -23,7 +34,7 @@ void Controller::define_tool(const DefineTool& body, Response& response) {
   // The probe's data sheet: its rated over-travel is published, so the controller knows it.
   t.info.rated_over_travel_mm = config.data_sheet.rated_over_travel_mm;
   tools[body.name] = t;
-  if (active == body.name) sim.mount_stylus(t.info.nominal_radius_mm);
+  if (active == body.name) sim.mount_stylus(t.info.nominal_radius_mm, stylus_offset(body));
   response.tool = t.info;
 }
 
@@ -87,7 +98,7 @@ Response Controller::run(const Command& command) {
       if (it == tools.end())
         return fail({FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name), position, now()});
       active = body.name;
-      sim.mount_stylus(it->second.info.nominal_radius_mm);
+      sim.mount_stylus(it->second.info.nominal_radius_mm, stylus_offset(it->second.definition));
       response.tool = it->second.info;
     } else if constexpr (std::is_same_v<T, QualifyTool>) {
       auto info = qualify();

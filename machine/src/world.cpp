@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/world.hpp"
 
+#include "metron/machine/machine_errors/error_model.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -101,6 +103,12 @@ void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, Worl
   });
   o.vec3("home_mm", m.home_mm);
   o.number("table_z_mm", truth.table_z_mm);
+  // The machine's geometry and thermal errors: hidden truth (docs/error-space.md, "Machine errors").
+  o.read("errors", [&](const json& ej, const std::string& ep) {
+    auto errors = parse_machine_errors(ej, ep);
+    if (!errors) fail(errors.error().pointer, errors.error().message);
+    truth.errors = std::move(*errors);
+  });
   o.finish();
   if (truth.axes)
     for (auto& a : *truth.axes) {

@@ -14,6 +14,7 @@
 #include <tl/expected.hpp>
 
 #include "metron/machine/csg.hpp"
+#include "metron/machine/machine_errors/error_model.hpp"
 #include "metron/machine/touch_cycle/pre_travel.hpp"
 #include "metron/machine/active_scanning/scanning_spec.hpp"
 #include "metron/stdlib/geometry/cad_import.hpp"
@@ -160,6 +161,9 @@ struct WorldTruth {
   double table_z_mm = 0;              ///< table surface; everything below it is solid
   std::optional<PartSpec> part;       ///< none: an empty table
   ScanningTruth scanning;             ///< scanning probe dynamics and noise, axis servos
+  /// The machine's geometry and thermal errors (machine.errors; none: a perfect machine): where
+  /// the scales say the ball is and where it really is differ by their displacement.
+  MachineErrorModel errors;
 };
 
 /// The whole world of one virtual CMM, as a world file describes it: the machine's
