@@ -178,7 +178,8 @@ void add_calibrate_command(CLI::App& app, std::vector<Command>& commands) {
   wf->add_option("--out", args->out, "write the results (JSON) here");
   wf->add_option("--html", args->html, "write pictures (self-contained HTML with SVG) here");
   wf->add_flag("--truth", args->truth, "also print the hidden truth beside the recovered values");
-  commands.push_back({cmd, [args] { return calibrate_wavefront(*args); }});
+  commands.push_back({wf, [args] { return calibrate_wavefront(*args); }});
+  add_calibrate_error_space_command(*cmd, commands);
 }
 
 }  // namespace metron::cli

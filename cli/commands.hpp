@@ -21,8 +21,10 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands);
 void add_debug_commands(CLI::App& app, std::vector<Command>& commands);
 /// characterise (characterise_command.cpp).
 void add_characterise_command(CLI::App& app, std::vector<Command>& commands);
-/// `metron calibrate wavefront` (calibrate_command.cpp).
+/// `metron calibrate wavefront` (calibrate_command.cpp) and `calibrate error-space`.
 void add_calibrate_command(CLI::App& app, std::vector<Command>& commands);
+/// `metron calibrate error-space` under `calibrate` (calibrate_error_space_command.cpp).
+void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>& commands);
 /// test (test_command.cpp).
 void add_test_command(CLI::App& app, std::vector<Command>& commands);
 
