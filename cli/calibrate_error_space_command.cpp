@@ -66,15 +66,12 @@ double rms(const std::vector<double>& v) {
 }
 
 int calibrate_error_space(const ErrorSpaceArgs& args) {
-  machine::World world = machine::default_world();
-  if (args.world) {
-    auto w = machine::load_world(*args.world);
-    if (!w) {
-      std::cerr << "error: " << w.error().message << "\n";
-      return 2;
-    }
-    world = std::move(*w);
+  auto loaded = machine::load_world_or_default(args.world);
+  if (!loaded) {
+    std::cerr << "error: " << loaded.error().message << "\n";
+    return 2;
   }
+  machine::World world = std::move(*loaded);
   if (args.size.size() != 3 || args.origin_mm.size() != 3 || !(args.step_mm > 0)) {
     std::cerr << "error: --size takes nx,ny,nz and --origin x,y,z; --step-mm must be positive\n";
     return 2;

@@ -68,17 +68,12 @@ void print_truth(const machine::World& w, const runtime::MachineCharacterisation
 }
 
 int characterise_cmd(const CharacteriseArgs& args) {
-  machine::World world;
-  if (args.world) {
-    auto w = machine::load_world(*args.world);
-    if (!w) {
-      std::cerr << "error: " << w.error().message << "\n";
-      return 2;
-    }
-    world = std::move(*w);
-  } else {
-    world = machine::default_world();
+  auto loaded = machine::load_world_or_default(args.world);
+  if (!loaded) {
+    std::cerr << "error: " << loaded.error().message << "\n";
+    return 2;
   }
+  machine::World world = std::move(*loaded);
   const auto machine = machine::make_virtual_cmm(world, args.seed.value_or(world.seed));
   runtime::CharacterisationSettings settings;
   settings.repeatability_threshold_mm = args.threshold_um / 1000;

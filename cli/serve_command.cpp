@@ -24,17 +24,12 @@ struct ServeArgs {
 };
 
 int serve_cmd(const ServeArgs& args) {
-  machine::World world;
-  if (args.world) {
-    auto w = machine::load_world(*args.world);
-    if (!w) {
-      std::cerr << "error: " << w.error().message << "\n";
-      return 2;
-    }
-    world = std::move(*w);
-  } else {
-    world = machine::default_world();
+  auto loaded = machine::load_world_or_default(args.world);
+  if (!loaded) {
+    std::cerr << "error: " << loaded.error().message << "\n";
+    return 2;
   }
+  machine::World world = std::move(*loaded);
   auto cmm = machine::make_virtual_cmm(world, args.seed.value_or(world.seed));
   machine::ipp::SessionOptions session;
   session.tools = {machine::DefineTool{"Probe1", args.probe_diameter_mm, -Vec3::UnitZ(), 50.0}};

@@ -184,16 +184,10 @@ std::unique_ptr<Machine> make_virtual_cmm(const World& world, std::uint64_t seed
 
 tl::expected<std::unique_ptr<VirtualCmm>, WorldError> open_virtual_cmm(const std::optional<std::string>& world_path,
                                                                        std::optional<std::uint64_t> seed) {
-  World world;
-  if (world_path) {
-    auto w = load_world(*world_path);
-    if (!w) return tl::unexpected(w.error());
-    world = std::move(*w);
-  } else {
-    world = default_world();
-  }
-  const std::uint64_t run_seed = seed ? *seed : world.seed;
-  return std::make_unique<VirtualCmm>(std::move(world), run_seed);
+  auto world = load_world_or_default(world_path);
+  if (!world) return tl::unexpected(world.error());
+  const std::uint64_t run_seed = seed ? *seed : world->seed;
+  return std::make_unique<VirtualCmm>(std::move(*world), run_seed);
 }
 
 }  // namespace metron::machine

@@ -499,4 +499,9 @@ World default_world() {
   return *w;
 }
 
+tl::expected<World, WorldError> load_world_or_default(const std::optional<std::string>& path) {
+  if (path) return load_world(*path);
+  return default_world();
+}
+
 }  // namespace metron::machine

@@ -197,6 +197,8 @@ tl::expected<World, WorldError> parse_world(const nlohmann::json& json, const st
 
 /// The embedded default world (identical to programs/worlds/default.json).
 World default_world();
+/// The world of a file given on a command line, or the embedded default when none is given.
+tl::expected<World, WorldError> load_world_or_default(const std::optional<std::string>& path);
 /// The JSON text of the default world.
 std::string_view default_world_json();
 
