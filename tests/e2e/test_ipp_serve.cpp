@@ -182,7 +182,8 @@ TEST(IppServe, SessionOverLoopback) {
     ASSERT_EQ(bad_number.size(), 3u);
     EXPECT_EQ(parse_response_line(bad_number[1])->error_number, 509);
     EXPECT_EQ(a.exchange("00007 ClearAllErrors()").back(), "00007 %");
-    const auto binary = a.exchange(std::string("00008 Get(X(\x01\xff\x00))", 20));
+    static constexpr char binary_line[] = "00008 Get(X(\x01\xff\x00))";  // a NUL inside the line
+    const auto binary = a.exchange(std::string(binary_line, sizeof binary_line - 1));
     EXPECT_EQ(parse_response_line(binary[1])->error_number, 7);
     EXPECT_EQ(a.exchange("00009 ClearAllErrors()").back(), "00009 %");
     const auto get = a.exchange("00010 Get(X(), Y(), Z())");
