@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "controller.hpp"
+#include "metron/machine/aborted_response.hpp"
 
 namespace metron::machine {
 namespace detail {
@@ -143,11 +144,7 @@ std::vector<Response> VirtualCmm::execute() {
     Command c = std::move(m_impl->queue.front());
     m_impl->queue.pop_front();
     if (faulted) {
-      Response r;
-      r.tag = c.tag;
-      r.status = Response::Status::Fault;
-      r.fault = Fault{FaultKind::Aborted, "not executed: an earlier command faulted", m_impl->position, m_impl->now()};
-      out.push_back(std::move(r));
+      out.push_back(aborted_response(c, m_impl->position, m_impl->now()));
       continue;
     }
     out.push_back(m_impl->run(c));

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/ipp/client_machine.hpp"
 
+#include "metron/machine/aborted_response.hpp"
+
 #include <charconv>
 #include <cstdio>
 #include <deque>
@@ -256,11 +258,7 @@ std::vector<Response> ClientMachine::execute() {
     Command c = std::move(m_impl->queue.front());
     m_impl->queue.pop_front();
     if (faulted) {
-      Response r;
-      r.tag = c.tag;
-      r.status = Response::Status::Fault;
-      r.fault = Fault{FaultKind::Aborted, "not executed: an earlier command faulted", Vec3::Zero(), 0};
-      out.push_back(r);
+      out.push_back(aborted_response(c, Vec3::Zero(), 0));  // the protocol gives no clock
       continue;
     }
     out.push_back(m_impl->run(c));
