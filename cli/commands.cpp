@@ -14,6 +14,7 @@
 #include "metron/runtime/outputs.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/point_file.hpp"
+#include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/ipp/client_machine.hpp"
 #include "virtual_cmm_backend.hpp"
 
@@ -28,6 +29,7 @@ struct RunArgs {
   bool quiet = false;
   std::optional<std::string> characterisation;
   std::optional<std::string> machine_url;
+  std::optional<std::string> compensation;
 };
 
 /// The backend of `metron run --machine ipp://host:port`: an I++ DME server (metron serve, or a
@@ -61,9 +63,23 @@ int run(const RunArgs& args) {
     if (std::holds_alternative<runtime::FaultReport>(e)) ++faults;
     if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << interpreter::event_text(e) << std::flush;
   };
-  const auto outcome =
-      args.machine_url ? interpreter::run_program(options, [&](const auto&, auto) { return ipp_backend(*args.machine_url); })
-                       : interpreter::run_program(options, virtual_cmm_backend);
+  // --compensation: the controller's error map as a decorator at the machine API, over any backend
+  // (docs/error-space.md, "Compensation"); without it the backend is used as it is.
+  std::shared_ptr<const machine::ErrorMap> map;
+  if (args.compensation) {
+    auto loaded = machine::load_error_map(*args.compensation);
+    if (!loaded) {
+      std::cerr << "error: --compensation " << loaded.error() << "\n";
+      return static_cast<int>(interpreter::RunExit::BadInput);
+    }
+    map = std::move(*loaded);
+  }
+  const interpreter::BackendFactory factory = [&](const std::optional<std::string>& world, std::optional<std::uint64_t> seed) {
+    auto backend = args.machine_url ? ipp_backend(*args.machine_url) : virtual_cmm_backend(world, seed);
+    if (backend && map) backend->machine = std::make_unique<machine::CompensatedMachine>(std::move(backend->machine), map);
+    return backend;
+  };
+  const auto outcome = interpreter::run_program(options, factory);
   std::cerr << outcome.diagnostics;
   const char* status = outcome.exit == interpreter::RunExit::Completed ? "completed"
                        : outcome.exit == interpreter::RunExit::Faulted ? "stopped by a machine fault"
@@ -161,6 +177,9 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   run_cmd->add_option("--machine", run_args->machine_url,
                       "run on an I++ DME server instead of the virtual CMM: ipp://host[:port] (docs/ipp-dme.md)")
       ->excludes(run_cmd->get_option("--world"));
+  run_cmd->add_option("--compensation", run_args->compensation,
+                      "error-space file (`metron calibrate error-space --out`): the controller corrects commanded and "
+                      "measured positions by it (docs/error-space.md)");
   run_cmd->add_option("--out", run_args->out_dir, "directory for results.json and DMIS output files")->default_val(".");
   run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
   commands.push_back({run_cmd, [run_args] { return run(*run_args); }});

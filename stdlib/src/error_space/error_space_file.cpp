@@ -19,6 +19,7 @@ json to_json(const ErrorSpaceFile& f) {
   out["format"] = "metron-error-space";
   out["version"] = 1;
   if (!f.description.empty()) out["description"] = f.description;
+  if (f.sensor_offset_mm != std::array<double, 3>{0, 0, 0}) out["sensor_offset_mm"] = f.sensor_offset_mm;
   out["grid"] = {{"x_mm", g.axes_mm[0]}, {"y_mm", g.axes_mm[1]}, {"z_mm", g.axes_mm[2]}};
   json interp = {{"method", std::string(to_string(f.interpolation.method))}};
   if (f.interpolation.method == Method::LeastSquares) {
@@ -51,6 +52,10 @@ tl::expected<ErrorSpaceFile, FileError> from_json(const json& j) {
       fail("/format", "expected \"metron-error-space\"");
     integer(root.required("version"), "/version", 1, 1);
     if (const json* d = root.find("description")) out.description = string(*d, "/description");
+    if (const json* o = root.find("sensor_offset_mm")) {
+      const auto v = numbers(*o, "/sensor_offset_mm", 3);
+      for (int a = 0; a < 3; ++a) out.sensor_offset_mm[a] = v[a];
+    }
     Grid grid;
     {
       Object g(root.required("grid"), "/grid");

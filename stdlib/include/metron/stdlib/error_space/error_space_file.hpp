@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,10 @@ struct ErrorSpaceFile {
   std::vector<ErrorSpace> spaces;     ///< one per temperature, all on the same grid with the same components
   InterpolationSpec interpolation;    ///< how the controller interpolates between grid points
   std::string description;            ///< free text (how it was measured)
+  /// The measuring tip's offset from the ram reference point during the calibration (the grid is
+  /// in ram positions): the map describes the error at the tip position grid + offset
+  /// (docs/error-space.md, "Compensation"). Optional in the file; default zero.
+  std::array<double, 3> sensor_offset_mm{0, 0, 0};
 };
 
 /// A file that could not be read: "pointer: message" (pointer as RFC 6901).

@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "metron/machine/compensation/error_map.hpp"
+#include "metron/machine/machine.hpp"
+
+namespace metron::machine {
+
+/// The controller's volumetric compensation as a decorator at the machine API (SEEDS.md 4,
+/// docs/error-space.md "Compensation"): any backend, seen through an error map. With e the map,
+///   a commanded position P (GoTo target, PtMeas nominal) goes to the inner machine as
+///   q = P - e(q), solved by the fixed point q_0 = P, q_{n+1} = P - e(q_n) (two steps; |grad e|
+///   is ~1e-5, so the residual is ~1e-10 of e);
+///   a reported position q (hit centre, scan sample, state, fault position) comes back as q + e(q).
+/// Directions (probing normals, scan paths' shapes) pass unchanged: the map's rotation is a few
+/// urad. A scan path is shifted as a whole by -e at its start (the probe's deflection absorbs the
+/// rest along the path). The machine's own internal cycles (tool qualification) are not corrected.
+class CompensatedMachine final : public Machine {
+ public:
+  /// `map` null: the identity (the inner machine as it is).
+  CompensatedMachine(std::unique_ptr<Machine> inner, std::shared_ptr<const ErrorMap> map);
+
+  void submit(Command command) override;
+  std::vector<Response> execute() override;
+  [[nodiscard]] MachineState state() const override;
+  [[nodiscard]] std::vector<Command> queued() const override;
+
+  /// Where to command the inner machine so the tip really reaches `wanted_mm`.
+  [[nodiscard]] Vec3 command_for(const Vec3& wanted_mm) const;
+  /// Where the tip really is when the inner machine reports `reported_mm`.
+  [[nodiscard]] Vec3 corrected(const Vec3& reported_mm) const;
+
+ private:
+  std::unique_ptr<Machine> m_inner;
+  std::shared_ptr<const ErrorMap> m_map;
+  std::vector<Command> m_queued;  ///< the commands as the client sent them
+  Vec3 m_scan_shift_mm = Vec3::Zero();  ///< the running segmented scan's shift (set by its command 0)
+};
+
+}  // namespace metron::machine

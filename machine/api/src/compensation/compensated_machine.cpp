@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/machine/compensation/compensated_machine.hpp"
+
+namespace metron::machine {
+
+CompensatedMachine::CompensatedMachine(std::unique_ptr<Machine> inner, std::shared_ptr<const ErrorMap> map)
+    : m_inner(std::move(inner)), m_map(std::move(map)) {}
+
+Vec3 CompensatedMachine::command_for(const Vec3& wanted_mm) const {
+  if (!m_map) return wanted_mm;
+  // The tip reaches q + e(q); we want P: q = P - e(q) (docs/error-space.md, "Compensation").
+  Vec3 q = wanted_mm;
+  for (int i = 0; i < 2; ++i) q = wanted_mm - m_map->error_at_mm(q);
+  return q;
+}
+
+Vec3 CompensatedMachine::corrected(const Vec3& reported_mm) const {
+  return m_map ? Vec3(reported_mm + m_map->error_at_mm(reported_mm)) : reported_mm;
+}
+
+namespace {
+
+void shift(std::vector<geometry::PccSegment>& segments, const Vec3& by_mm) {
+  for (auto& s : segments) s.k.col(0) += by_mm;
+}
+
+}  // namespace
+
+void CompensatedMachine::submit(Command command) {
+  m_queued.push_back(command);
+  if (m_map) {
+    if (auto* g = std::get_if<GoTo>(&command.body)) {
+      g->target_mm = command_for(g->target_mm);
+    } else if (auto* p = std::get_if<PtMeas>(&command.body)) {
+      p->nominal_mm = command_for(p->nominal_mm);
+    } else if (auto* s = std::get_if<ScanPath>(&command.body)) {
+      if (!s->path.segments.empty()) {
+        const Vec3 start = s->path.segments.front().start();
+        shift(s->path.segments, command_for(start) - start);
+      }
+    } else if (auto* w = std::get_if<ScanBufferWrite>(&command.body)) {
+      // One shift for the whole scan (its first command's start), so the pieces still join.
+      if (w->command.index == 0 && !w->command.segments.empty()) {
+        const Vec3 start = w->command.segments.front().start();
+        m_scan_shift_mm = command_for(start) - start;
+      }
+      shift(w->command.segments, m_scan_shift_mm);
+    }
+  }
+  m_inner->submit(std::move(command));
+}
+
+std::vector<Response> CompensatedMachine::execute() {
+  m_queued.clear();
+  auto responses = m_inner->execute();
+  if (!m_map) return responses;
+  for (auto& r : responses) {
+    if (r.hit) r.hit->centre_mm = corrected(r.hit->centre_mm);
+    for (auto& s : r.scan) s.centre_mm = corrected(s.centre_mm);
+    if (r.fault) r.fault->position_mm = corrected(r.fault->position_mm);
+  }
+  return responses;
+}
+
+MachineState CompensatedMachine::state() const {
+  MachineState s = m_inner->state();
+  if (m_map) {
+    s.position_mm = corrected(s.position_mm);
+    if (s.last_hit) s.last_hit->centre_mm = corrected(s.last_hit->centre_mm);
+  }
+  return s;
+}
+
+std::vector<Command> CompensatedMachine::queued() const { return m_queued; }
+
+}  // namespace metron::machine
