@@ -2,20 +2,27 @@
 // Error-space calibration (SEEDS.md 4): the method's compute for a 50 x 50 x 10 grid, the cost
 // of one interpolation query per method (median and p99 over batches), and the every-second-point
 // validation error of trilinear, B-spline and least squares side by side (printed before the
-// timings, on the hidden smooth field and on a recovered noisy one).
+// timings, on the hidden smooth field and on a recovered noisy one). The compensation: its gain on
+// the ball array of programs/worlds/cmm_errors_ball_plate.json against the hidden truth (printed),
+// and its cost per commanded and per reported position (CompensatedMachine, median and p99).
 // Build with -DMETRON_BENCH=ON; run ./build/bench/bench_error_space;
 // ./build/bench/bench_error_space --report FILE.svg writes the calibration report page.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 #include <time.h>
 
+#include "ball_array.hpp"
+#include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/error_space/calibration.hpp"
+#include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/machine_errors/grid_field.hpp"
 #include "metron/machine/machine_errors/rigid_body.hpp"
 #include "metron/stdlib/error_space/interpolation.hpp"
@@ -152,6 +159,103 @@ BENCHMARK(BM_Query_BSpline)->MeasureProcessCPUTime();
 BENCHMARK(BM_Query_LeastSquares_Linear8)->MeasureProcessCPUTime();
 BENCHMARK(BM_Query_LeastSquares_Quadratic64)->MeasureProcessCPUTime();
 
+
+// The gain (docs/error-space.md, "The gain of compensation"): length errors of the 20 balls of
+// programs/worlds/cmm_errors_ball_plate.json against their design with no map, calibrated maps and
+// the true errors; and the simulated time the calibration and the measurement take.
+SpaceCalibrationPlan ball_array_plan(int runs, int laser_cycles) {
+  SpaceCalibrationPlan plan;
+  plan.head.spacing_mm = 50;
+  plan.head.noise_sd_mm = 0.0001;
+  plan.head.sensor_offset_mm = Vec3(0, 0, -50);
+  for (int i = 0; i < 17; ++i) plan.grid.axes_mm[0].push_back(100 + 50.0 * i);
+  for (int i = 0; i < 13; ++i) plan.grid.axes_mm[1].push_back(100 + 50.0 * i);
+  for (int i = 0; i < 3; ++i) plan.grid.axes_mm[2].push_back(100 + 50.0 * i);
+  plan.components = {true, true, true};
+  plan.delta_by_reversal = true;
+  plan.runs = runs;
+  plan.laser_cycles = laser_cycles;
+  return plan;
+}
+
+std::vector<Vec3> ball_centres() {
+  std::vector<Vec3> out;
+  for (double y : {150, 400, 650})
+    for (double x : {150, 350, 550, 750}) out.emplace_back(x, y, 60);
+  for (double y : {275, 525})
+    for (double x : {250, 450, 650, 850}) out.emplace_back(x, y, 130);
+  return out;
+}
+
+World ball_world() {
+  auto w = load_world(std::string(METRON_SOURCE_DIR) + "/programs/worlds/cmm_errors_ball_plate.json");
+  if (!w) throw std::runtime_error(w.error().message);
+  return *w;
+}
+
+std::shared_ptr<const ErrorMap> calibrated_map(const World& world, const SpaceCalibrationPlan& plan, double* sim_s = nullptr) {
+  const auto run = calibrate_space(world.truth.errors, plan);
+  if (sim_s) *sim_s = run.end_time_s;
+  error_space::ErrorSpaceFile file;
+  file.spaces.push_back(run.space);
+  file.sensor_offset_mm = {0, 0, -50};
+  return std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(file));
+}
+
+void print_gain() {
+  const World world = ball_world();
+  const auto truth = ball_centres();
+  std::printf("compensation gain, 20 balls of cmm_errors_ball_plate.json, 190 length errors vs the hidden truth:\n");
+  std::printf("%-52s %10s %10s %8s %14s\n", "map", "RMS um", "max um", "gain", "measuring s");
+  double none_rms = 0;
+  const auto row = [&](const char* name, std::shared_ptr<const ErrorMap> map) {
+    CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 3), std::move(map));
+    const auto m = test_support::measure_balls(cmm, truth, 20, 200);
+    const auto e = test_support::length_errors(m.centres_mm, truth);
+    if (none_rms == 0) none_rms = e.rms_mm;
+    std::printf("%-52s %10.3f %10.3f %8.1f %14.1f%s\n", name, 1e3 * e.rms_mm, 1e3 * e.max_abs_mm, none_rms / e.rms_mm,
+                m.simulated_time_s, m.error.empty() ? "" : (" " + m.error).c_str());
+  };
+  row("none", nullptr);
+  double t1 = 0, t4 = 0;
+  row("calibrated, 1 run per plane, 2 laser cycles", calibrated_map(world, ball_array_plan(1, 2), &t1));
+  row("calibrated, 4 runs per plane, 8 laser cycles", calibrated_map(world, ball_array_plan(4, 8), &t4));
+  const auto plan = ball_array_plan(1, 2);
+  row("true errors on the 17 x 13 x 3 grid (trilinear)",
+      std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(
+          test_support::truth_error_space(world.truth.errors, plan.grid, Vec3(0, 0, -50), {}))));
+  row("true errors exactly", std::make_shared<const test_support::TruthErrorMap>(world.truth.errors, Vec3(0, 0, -50)));
+  std::printf("simulated calibration time: %.0f s (1 run), %.0f s (4 runs)\n\n", t1, t4);
+}
+
+// The controller's cost: a commanded target (two map queries, the fixed point) and a reported
+// point (one query) through CompensatedMachine with the calibrated trilinear map, in thread CPU time.
+void compensation_bench(benchmark::State& state, bool command) {
+  static const auto map = calibrated_map(ball_world(), ball_array_plan(1, 2));
+  const CompensatedMachine cmm(std::make_unique<VirtualCmm>(default_world(), 1), map);
+  Rng rng(5);
+  constexpr int batch = 256;
+  std::vector<Vec3> pts(batch * 64);
+  for (auto& p : pts) p = {100 + 800 * rng.uniform(), 100 + 600 * rng.uniform(), 50 + 100 * rng.uniform()};
+  std::vector<double> per_query_ns;
+  std::size_t at = 0;
+  for (auto _ : state) {
+    const double t0 = thread_cpu_ns();
+    Vec3 sum = Vec3::Zero();
+    for (int q = 0; q < batch; ++q, at = (at + 1) % pts.size()) sum += command ? cmm.command_for(pts[at]) : cmm.corrected(pts[at]);
+    benchmark::DoNotOptimize(sum);
+    per_query_ns.push_back((thread_cpu_ns() - t0) / batch);
+  }
+  std::sort(per_query_ns.begin(), per_query_ns.end());
+  state.counters["median_ns"] = per_query_ns[per_query_ns.size() / 2];
+  state.counters["p99_ns"] = per_query_ns[std::min(per_query_ns.size() - 1, per_query_ns.size() * 99 / 100)];
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * batch);
+}
+void BM_Compensation_CommandedTarget(benchmark::State& s) { compensation_bench(s, true); }
+void BM_Compensation_ReportedPoint(benchmark::State& s) { compensation_bench(s, false); }
+BENCHMARK(BM_Compensation_CommandedTarget)->MeasureProcessCPUTime();
+BENCHMARK(BM_Compensation_ReportedPoint)->MeasureProcessCPUTime();
+
 void print_validation() {
   const auto plan = bench_plan();
   const auto run = calibrate_space(machine(), plan);
@@ -235,6 +339,7 @@ int write_report(const char* path) {
 int main(int argc, char** argv) {
   if (argc == 3 && std::strcmp(argv[1], "--report") == 0) return write_report(argv[2]);
   print_validation();
+  print_gain();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -31,6 +31,9 @@ struct ErrorSpaceArgs {
   std::string components = "z";
   double sensor_noise_um = 0.1;
   bool reversal = false;
+  std::vector<double> sensor_offset_mm{0, 0, -120};
+  int runs = 1;
+  int laser_cycles = 2;
   std::optional<std::uint64_t> seed;
   std::optional<std::string> out;
   std::optional<std::string> report;
@@ -88,6 +91,13 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
   }
   for (int c = 0; c < 3; ++c) plan.components[c] = args.components.find("xyz"[c]) != std::string::npos;
   plan.delta_by_reversal = args.reversal;
+  if (args.sensor_offset_mm.size() != 3 || args.runs < 1 || args.runs > 100 || args.laser_cycles < 1 || args.laser_cycles > 100) {
+    std::cerr << "error: --sensor-offset takes x,y,z; --runs and --laser-cycles 1 to 100\n";
+    return 2;
+  }
+  plan.head.sensor_offset_mm = Vec3(args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]);
+  plan.runs = args.runs;
+  plan.laser_cycles = args.laser_cycles;
   plan.seed = args.seed.value_or(world.seed);
 
   machine::SpaceCalibration run;
@@ -117,6 +127,7 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
   if (args.out) {
     error_space::ErrorSpaceFile file;
     file.spaces.push_back(run.space);
+    file.sensor_offset_mm = {args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]};
     file.description = fmt::format("metron calibrate error-space, sequential two-point method (SEEDS.md 4), world {}",
                                    args.world.value_or("<default>"));
     if (auto w = error_space::write_error_space_file(*args.out, file); !w) {
@@ -173,6 +184,16 @@ void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>
       ->check(CLI::IsMember({"x", "y", "z", "xy", "xz", "yz", "xyz"}));
   cmd->add_option("--sensor-noise-um", args->sensor_noise_um, "white noise of each displacement reading")->default_val(0.1);
   cmd->add_flag("--reversal", args->reversal, "measure Delta by turning the head 180 degrees (keeps each plane's slope)");
+  cmd->add_option("--sensor-offset", args->sensor_offset_mm,
+                  "sensor A's tip from the ram reference point, mm; give the stylus the map will serve "
+                  "(e.g. 0,0,-50) so the Abbe levers match")
+      ->delimiter(',')
+      ->expected(3)
+      ->default_str("0,0,-120");
+  cmd->add_option("--runs", args->runs, "measure every plane this many times and average (noise floor / sqrt(runs))")
+      ->default_val(1);
+  cmd->add_option("--laser-cycles", args->laser_cycles, "bidirectional laser runs tying the planes (ISO 230-2)")
+      ->default_val(2);
   cmd->add_option("--seed", args->seed, "noise seed (default: the world's)");
   cmd->add_option("--out", args->out, "write the error-space file (docs/error-space.md) here");
   cmd->add_option("--report", args->report, "write an offline SVG page of maps here");

@@ -230,3 +230,17 @@ TEST(CompensationGain, WithNoiselessSensorsOnlyTheMethodsSystematicsRemain) {
 }
 
 }  // namespace
+
+namespace {
+
+// The chain's sensor noise is what limits the gain (above): four runs per plane and eight laser
+// cycles halve the floor.
+TEST(CompensationGain, FourRunsPerPlaneReachTheTenfoldGain) {
+  SpaceCalibrationPlan plan = ball_array_plan();
+  plan.runs = 4;
+  plan.laser_cycles = 8;
+  const Gain g = measure_gain(plan);
+  EXPECT_LT(g.calibrated.rms_mm, g.none.rms_mm / 10);
+}
+
+}  // namespace

@@ -117,25 +117,41 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
       origin[v_of(c)] = g.axes_mm[v_of(c)].front() + plan.head.sensor_offset_mm[v_of(c)] - 10;
       origin[c] = g.axes_mm[c][k] + plan.head.sensor_offset_mm[c] - plan.head.standoff_mm;
       rig.place_plate(c, +1, origin);
-      const auto readings = rig.measure_surface(grid_point(g, c, 0, 0, k), u_of(c), v_of(c), static_cast<int>(nu - 1),
-                                                static_cast<int>(nv - 1));
-      error_space::SurfaceOptions opt;
-      opt.sensor_sigma_mm = plan.head.noise_sd_mm;
-      opt.s7_factor = plan.s7_factor;
-      opt.known_delta_mm = plan.known_delta_mm;
-      if (plan.delta_by_reversal) {
-        // A fresh forward line and the reversed one, so Delta's noise is independent of the plane's.
-        const auto forward = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1));
-        const auto reversed = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1), false, true);
-        opt.known_delta_mm = error_space::delta_by_reversal(forward, reversed);
+      const int runs = std::max(1, plan.runs);
+      PlaneCalibration pc{c, static_cast<int>(k), {}, offsets[k]};
+      for (int r = 0; r < runs; ++r) {
+        const auto readings = rig.measure_surface(grid_point(g, c, 0, 0, k), u_of(c), v_of(c), static_cast<int>(nu - 1),
+                                                  static_cast<int>(nv - 1));
+        error_space::SurfaceOptions opt;
+        opt.sensor_sigma_mm = plan.head.noise_sd_mm;
+        opt.s7_factor = plan.s7_factor;
+        opt.known_delta_mm = plan.known_delta_mm;
+        if (plan.delta_by_reversal) {
+          // A fresh forward line and the reversed one, so Delta's noise is independent of the plane's.
+          const auto forward = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1));
+          const auto reversed = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1), false, true);
+          opt.known_delta_mm = error_space::delta_by_reversal(forward, reversed);
+        }
+        auto result = error_space::solve_surface(readings, opt);
+        if (r == 0) {
+          pc.surface = std::move(result);
+        } else {
+          // The runs share the grid and the reference (e(0,0) = 0, the same slope rule): their mean
+          // is the seed's merge of redundant data; S7 asks for a re-measure if any run does.
+          pc.surface.error_mm += result.error_mm;
+          pc.surface.profile_mm += result.profile_mm;
+          pc.surface.remeasure = pc.surface.remeasure || result.remeasure;
+        }
       }
-      PlaneCalibration pc{c, static_cast<int>(k), error_space::solve_surface(readings, opt), offsets[k]};
+      pc.surface.error_mm /= runs;
+      pc.surface.profile_mm /= runs;
       if (pc.surface.remeasure) ++out.planes_to_remeasure;
       for (std::size_t i = 0; i < nu; ++i)
         for (std::size_t j = 0; j < nv; ++j) {
           const auto fi = flat_index(g, c, i, j, k);
           values[fi] = pc.surface.error_mm(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) + offsets[k];
-          const double s = floor(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+          const double s = floor(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) /
+                           std::sqrt(static_cast<double>(std::max(1, plan.runs)));
           sd[fi] = std::sqrt(s * s + laser_sd * laser_sd);
         }
       out.planes.push_back(std::move(pc));

@@ -31,6 +31,10 @@ struct SpaceCalibrationPlan {
   /// Measure Delta by a reversal (the first line again with the head turned 180 degrees) on every
   /// plane, so the planes keep their slope (beyond the seed; see error_space::delta_by_reversal).
   bool delta_by_reversal = false;
+  /// Every plane measured this many times (fresh sensor noise, and a fresh reversal when asked) and
+  /// the recovered planes averaged (SEEDS.md 4, merging redundant data: same grid, same reference,
+  /// so the offsets agree and the mean is the merge); the floor falls by sqrt(runs).
+  int runs = 1;
   std::uint64_t seed = 1;             ///< noise
   double start_time_s = 0;            ///< simulated time at the start
 };

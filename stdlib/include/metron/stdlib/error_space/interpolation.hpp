@@ -66,7 +66,9 @@ class SpaceInterpolator {
   /// Builds the three fields; the first failure is returned.
   static tl::expected<SpaceInterpolator, std::string> build(const ErrorSpace& space, const InterpolationSpec& spec);
   /// The error vector (e_x, e_y, e_z) mm at a point mm. The correction of a measured point is its
-  /// negative (SEEDS.md 4: estimate e, subtract it from the measurement).
+  /// opposite:
+  /// e is where the tip really is minus where the scales put it, so a reading q is corrected to
+  /// q + e(q) and a target P commanded as P - e (docs/error-space.md, "Compensation").
   [[nodiscard]] std::array<double, 3> error_at(double x_mm, double y_mm, double z_mm) const;
   /// One component with its uncertainty.
   [[nodiscard]] Estimate estimate(Component c, double x_mm, double y_mm, double z_mm) const;

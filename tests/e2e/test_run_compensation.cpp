@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// `metron run --compensation` as a user runs it (issue 12, docs/error-space.md "The gain of
+// compensation"): calibrate the error space of programs/worlds/cmm_errors_ball_plate.json with the
+// two-point rig, then measure the world's 20 balls with programs/error_space/ball_array.dmi with and
+// without the map. Expected values are the hidden truth: the balls' design centres (written here by
+// hand from the world file; the part sits at the machine origin), whose distances the measured
+// centres must reproduce.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace {
+
+std::pair<int, std::string> shell(const std::string& command) {
+  std::string out;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return {-1, out};
+  char buffer[4096];
+  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
+  const int status = ::pclose(pipe);
+  return {WEXITSTATUS(status), out};
+}
+
+using Point = std::array<double, 3>;
+
+std::map<std::string, Point> true_centres() {
+  std::map<std::string, Point> out;
+  int n = 0;
+  for (double y : {150, 400, 650})
+    for (double x : {150, 350, 550, 750}) out["BALL" + std::to_string(++n)] = {x, y, 60};
+  for (double y : {275, 525})
+    for (double x : {250, 450, 650, 850}) out["BALL" + std::to_string(++n)] = {x, y, 130};
+  return out;
+}
+
+double dist(const Point& a, const Point& b) { return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]); }
+
+// RMS of every pair's measured minus true distance, mm (ISO 10360-2 style length errors).
+double length_error_rms(const std::string& results_json) {
+  std::ifstream in(results_json);
+  const auto j = nlohmann::json::parse(in);
+  std::map<std::string, Point> got;
+  for (const auto& f : j.at("features")) {
+    const auto& p = f.at("actual").at("position");
+    got[f.at("label").get<std::string>()] = {p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
+  }
+  const auto truth = true_centres();
+  EXPECT_EQ(got.size(), truth.size());
+  double sum = 0;
+  int pairs = 0;
+  for (auto a = truth.begin(); a != truth.end(); ++a)
+    for (auto b = std::next(a); b != truth.end(); ++b) {
+      const double e = dist(got[a->first], got[b->first]) - dist(a->second, b->second);
+      sum += e * e;
+      ++pairs;
+    }
+  return std::sqrt(sum / pairs);
+}
+
+TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
+  const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "none");
+  std::filesystem::create_directories(dir / "map");
+  const std::string bin = METRON_BINARY, src = METRON_SOURCE_DIR;
+  const std::string world = src + "/programs/worlds/cmm_errors_ball_plate.json";
+  const std::string map = (dir / "map.json").string();
+  auto [code, out] = shell(bin + " calibrate error-space --world " + world +
+                           " --components xyz --reversal --sensor-offset 0,0,-50 --size 17,13,3 --origin 100,100,100"
+                           " --runs 4 --laser-cycles 8 --out " + map);
+  ASSERT_EQ(code, 0) << out;
+  const std::string program = src + "/programs/error_space/ball_array.dmi";
+  std::tie(code, out) = shell(bin + " run " + program + " --world " + world + " --quiet --out " + (dir / "none").string());
+  ASSERT_EQ(code, 0) << out;
+  std::tie(code, out) = shell(bin + " run " + program + " --world " + world + " --quiet --compensation " + map +
+                              " --out " + (dir / "map").string());
+  ASSERT_EQ(code, 0) << out;
+  const double none = length_error_rms((dir / "none" / "results.json").string());
+  const double compensated = length_error_rms((dir / "map" / "results.json").string());
+  std::printf("ball array length errors: none RMS %.3f um, calibrated map RMS %.3f um, gain %.1f\n", 1e3 * none,
+              1e3 * compensated, none / compensated);
+  EXPECT_GT(none, 0.003);                // the machine's errors are there (4.3 um)
+  EXPECT_LT(compensated, none / 10);     // the issue's goal (measured: 0.22 um, 19x)
+}
+
+TEST(RunCompensationCli, ABadCompensationFileIsRefusedNamingWhere) {
+  const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation_bad";
+  std::filesystem::create_directories(dir);
+  const auto bad = (dir / "bad.json").string();
+  std::ofstream(bad) << R"({"format": "metron-error-space", "version": 1, "grid": {"x_mm": [0, 1], "y_mm": [0], "z_mm": [0]},
+    "interpolation": {"method": "trilinear"}, "temperatures": [{"temperature_c": 20, "components": {"x": {"values_mm": [0]}}}]})";
+  const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + METRON_SOURCE_DIR +
+                                 "/programs/examples/01_first_circle.dmi --quiet --compensation " + bad);
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_NE(out.find("/temperatures/0/components/x/values_mm"), std::string::npos) << out;
+}
+
+}  // namespace
