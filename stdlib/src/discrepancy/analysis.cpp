@@ -385,7 +385,9 @@ Analysis analyse(const Problem& p, const Options& opt) {
     for (int j = 0; j < 3; ++j) {
       const std::size_t ju = static_cast<std::size_t>(j);
       if (!F.q_varies[ju]) continue;
-      if (j != c && c < 3 && enabled("squareness")) {
+      // With the artefact's rotation free, "y along x" equals "x along y" (one squareness xy): keep one.
+      const bool rotation_free = out.nuisance.size() > comps.size();
+      if (j != c && c < 3 && enabled("squareness") && !(rotation_free && c == 1 && j == 0)) {
         Candidate k{"squareness", fmt::format("{} error growing with {} (squareness {}{})", kAxis[c], kAxis[j], kAxis[std::min(c, j)], kAxis[std::max(c, j)]),
                     fmt::format("{} position", kAxis[j]), expl("squareness"), c, j};
         k.columns = [&, c, ju](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return F.q[o][ju]; }); return m; };
@@ -563,10 +565,11 @@ Analysis analyse(const Problem& p, const Options& opt) {
     const Evaluated& ev = chosen[e].second;
     Effect& eff = out.effects[e];
     const Eigen::Index k = ev.cols.cols();
-    const Eigen::VectorXd b = ff.beta.segment(col, k);
+    const Eigen::VectorXd bd = ff.beta.segment(col, k);
     const Eigen::MatrixXd C = s2 * ff.cov_unscaled.block(col, col, k, k);
-    const Eigen::VectorXd contrib = ev.cols * b;
+    const Eigen::VectorXd contrib = ev.cols * bd;
     eff.contribution_mm.assign(contrib.data(), contrib.data() + n);
+    const Eigen::VectorXd b = sign * bd;  // parameters of the machine error e (data deviation = sign * e)
     // Nonlinear parameter: sd from the curvature of the profile RSS, var = 2 s^2 / RSS''.
     double nl_sd = 0;
     if (!c.grid.empty() && c.log_refine) {
@@ -585,18 +588,18 @@ Analysis analyse(const Problem& p, const Options& opt) {
     const double um = 1e3;
     if (c.kind == "scale" || c.kind == "squareness") {
       eff.parameters.push_back({c.kind == "scale" ? "scale" : "slope", b[0] * 1e6, std::sqrt(C(0, 0)) * 1e6, c.kind == "scale" ? "ppm" : "urad"});
-      eff.world_term = {{"kind", "linear"}, {"component", cx}, {"along", kAxis[c.along]}, {"coefficient", sign * b[0]}};
+      eff.world_term = {{"kind", "linear"}, {"component", cx}, {"along", kAxis[c.along]}, {"coefficient", b[0]}};
     } else if (c.kind == "cross-axis") {
       eff.parameters.push_back({"coefficient", b[0] * 1e6, std::sqrt(C(0, 0)) * 1e6, "um/m^2"});  // mm/mm^2 * 1e6 = um/m^2 * ... (1 mm/mm^2 = 1e9 um/m^2)
       eff.parameters.back().value = b[0] * 1e9, eff.parameters.back().sd = std::sqrt(C(0, 0)) * 1e9;
-      eff.world_term = {{"kind", "cross_axis"}, {"component", cx}, {"along", {kAxis[c.along], kAxis[c.along2]}}, {"coefficient", sign * b[0]}};
+      eff.world_term = {{"kind", "cross_axis"}, {"component", cx}, {"along", {kAxis[c.along], kAxis[c.along2]}}, {"coefficient", b[0]}};
     } else if (c.kind == "reversal") {
       eff.parameters.push_back({"reversal B", b[0] * um, std::sqrt(C(0, 0)) * um, "um"});
-      eff.world_term = {{"kind", "reversal"}, {"component", cx}, {"reversal_mm", sign * b[0]}};
+      eff.world_term = {{"kind", "reversal"}, {"component", cx}, {"reversal_mm", b[0]}};
     } else if (c.kind == "drift") {
       eff.parameters.push_back({"rate", b[0] * um * 3600, std::sqrt(C(0, 0)) * um * 3600, "um/h"});
       const double t0 = *std::min_element(time->values.begin(), time->values.end());
-      eff.world_term = {{"kind", "drift"}, {"component", cx}, {"rate_mm_per_s", sign * b[0]}, {"t0_s", t0}};
+      eff.world_term = {{"kind", "drift"}, {"component", cx}, {"rate_mm_per_s", b[0]}, {"t0_s", t0}};
     } else if (c.kind == "acceleration") {
       eff.parameters.push_back({"compliance", b[0] * um, std::sqrt(C(0, 0)) * um, "um per mm/s^2"});
     } else if (c.kind == "cyclic" || c.kind == "lobing") {
@@ -607,8 +610,7 @@ Analysis analyse(const Problem& p, const Options& opt) {
         eff.parameters.push_back({"period", ev.nl, nl_sd, "mm"});
         const double phase = std::atan2(bb, a);  // a sin + b cos = A sin(w q + phase)
         eff.parameters.push_back({"phase", phase, A > 0 ? sdA / A : 0, "rad"});
-        const double ph = sign > 0 ? phase : phase + kPi;
-        eff.world_term = {{"kind", "cyclic"}, {"component", cx}, {"along", kAxis[c.along]}, {"amplitude_mm", A}, {"period_mm", ev.nl}, {"phase_rad", ph}};
+        eff.world_term = {{"kind", "cyclic"}, {"component", cx}, {"along", kAxis[c.along]}, {"amplitude_mm", A}, {"period_mm", ev.nl}, {"phase_rad", phase}};
       } else {
         eff.parameters.push_back({"lobes", ev.nl, 0, ""});
         eff.parameters.push_back({"phase", std::atan2(bb, a), A > 0 ? sdA / A : 0, "rad"});
@@ -623,7 +625,7 @@ Analysis analyse(const Problem& p, const Options& opt) {
       std::stable_sort(order.begin(), order.end(), [&](auto a2, auto b2) { return time->values[a2] < time->values[b2]; });
       for (auto r : order)
         if (tt.empty() || time->values[r] > tt.back()) tt.push_back(time->values[r]), TT.push_back(c.temperature->values[r]);
-      eff.world_term = {{"kind", "thermal"}, {"component", cx}, {"mm_per_k", sign * b[0]}, {"per_k", k > 1 ? sign * b[1] : 0.0},
+      eff.world_term = {{"kind", "thermal"}, {"component", cx}, {"mm_per_k", b[0]}, {"per_k", k > 1 ? b[1] : 0.0},
                         {"reference_c", data.description.reference_temperature_c},
                         {"temperature", {{"t_s", tt}, {"temperature_c", TT}, {"lag_s", std::max(0.0, ev.nl)}}}};
     }
