@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "metron/machine/machine_errors/catalogue_terms.hpp"
 #include "metron/machine/machine_errors/grid_field.hpp"
 #include "metron/machine/machine_errors/rigid_body.hpp"
 #include "metron/machine/machine_errors/thermal.hpp"
@@ -196,6 +197,8 @@ MachineErrorModel parse(const json& j, const std::string& p) {
     }
     to.finish();
   }
+  // The model-discrepancy catalogue's terms (docs/discrepancy.md).
+  if (const json* t = root.find("terms")) parse_catalogue_terms(*t, root.at("terms"), model);
   root.finish();
   return model;
 }
