@@ -38,7 +38,9 @@ tl::expected<interpreter::Backend, std::string> ipp_backend(const std::string& u
   const auto address = machine::ipp::parse_ipp_url(url);
   if (!address) return tl::unexpected(fmt::format("--machine {}: expected ipp://host[:port]", url));
   try {
-    return interpreter::Backend{std::make_unique<machine::ipp::ClientMachine>(address->first, address->second), url, 0};
+    auto client = std::make_unique<machine::ipp::ClientMachine>(address->first, address->second);
+    client->on_warning([](const std::string& w) { std::cerr << "warning: " << w << "\n"; });
+    return interpreter::Backend{std::move(client), url, 0};
   } catch (const std::runtime_error& e) {
     return tl::unexpected(fmt::format("--machine {}: {}", url, e.what()));
   }

@@ -2,6 +2,7 @@
 // `metron serve`: the virtual CMM behind an I++ DME server (docs/ipp-dme.md).
 #include "serve_command.hpp"
 
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -21,6 +22,7 @@ struct ServeArgs {
   std::optional<std::uint64_t> seed;
   machine::ipp::ServerOptions server;
   double probe_diameter_mm = 2.0;
+  std::vector<std::string> tools;     ///< NAME=DIAMETER, offered beside Probe1
 };
 
 int serve_cmd(const ServeArgs& args) {
@@ -33,6 +35,21 @@ int serve_cmd(const ServeArgs& args) {
   auto cmm = machine::make_virtual_cmm(world, args.seed.value_or(world.seed));
   machine::ipp::SessionOptions session;
   session.tools = {machine::DefineTool{"Probe1", args.probe_diameter_mm, -Vec3::UnitZ(), 50.0}};
+  for (const auto& t : args.tools) {
+    // NAME=DIAMETER: a further probe (stylus along -Z, 50 mm), e.g. named as a program's SNSDEF.
+    const auto eq = t.find('=');
+    double d = 0;
+    try {
+      if (eq != std::string::npos) d = std::stod(t.substr(eq + 1));
+    } catch (const std::exception&) {
+      d = 0;
+    }
+    if (eq == 0 || eq == std::string::npos || !(d > 0) || !std::isfinite(d)) {
+      std::cerr << "error: --tool " << t << ": expected NAME=DIAMETER (mm, positive)\n";
+      return 2;
+    }
+    session.tools.push_back(machine::DefineTool{t.substr(0, eq), d, -Vec3::UnitZ(), 50.0});
+  }
   session.max_speed_mm_s = world.machine.max_speed_mm_s;
   session.max_acceleration_mm_s2 = world.machine.max_acceleration_mm_s2;
   session.home_mm = world.machine.home_mm;
@@ -64,6 +81,7 @@ void add_serve_command(CLI::App& app, std::vector<Command>& commands) {
   sub->add_option("--log", args->server.log_path, "append every exchange to this file");
   sub->add_flag("--once", args->server.once, "stop when the first client disconnects");
   sub->add_option("--probe-diameter", args->probe_diameter_mm, "ball diameter of the tool Probe1 [mm]")->capture_default_str();
+  sub->add_option("--tool", args->tools, "a further probe NAME=DIAMETER [mm] (stylus along -Z), repeatable");
   commands.push_back({sub, [args] { return serve_cmd(*args); }});
 }
 

@@ -8,6 +8,7 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -36,8 +37,12 @@ class ServerProcess {
   explicit ServerProcess(const std::vector<std::string>& extra) {
     int out[2];
     if (::pipe(out) != 0) throw std::runtime_error("pipe");
+    const pid_t parent = ::getpid();
     m_pid = ::fork();
     if (m_pid == 0) {
+      // Dies with the test process: a crashed test must not leave a server holding ctest's pipe.
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (::getppid() != parent) ::_exit(126);
       ::dup2(out[1], 1);
       ::close(out[0]);
       std::vector<std::string> args{METRON_BINARY, "serve", "--port", "0"};
@@ -51,17 +56,23 @@ class ServerProcess {
     ::close(out[1]);
     m_out = ::fdopen(out[0], "r");
     char line[512] = {};
-    if (!std::fgets(line, sizeof line, m_out)) throw std::runtime_error("metron serve printed nothing");
+    if (!std::fgets(line, sizeof line, m_out)) {
+      kill_child();  // the destructor does not run after a throwing constructor
+      throw std::runtime_error("metron serve printed nothing");
+    }
     const std::string s = line;
     const auto colon = s.rfind(':', s.find(" (world"));
     m_port = static_cast<std::uint16_t>(std::stoi(s.substr(colon + 1)));
   }
-  ~ServerProcess() {
+  ~ServerProcess() { kill_child(); }
+  void kill_child() {
     if (m_pid > 0) {
       ::kill(m_pid, SIGKILL);
       ::waitpid(m_pid, nullptr, 0);
+      m_pid = -1;
     }
     if (m_out) std::fclose(m_out);
+    m_out = nullptr;
   }
   [[nodiscard]] std::uint16_t port() const { return m_port; }
   /// Sends `signal` and returns the exit status (-1: still running after 10 s).

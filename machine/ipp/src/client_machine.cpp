@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cstdio>
 #include <deque>
+#include <functional>
 #include <map>
 #include <stdexcept>
 
@@ -73,6 +74,38 @@ std::optional<std::pair<std::string, std::uint16_t>> parse_ipp_url(std::string_v
   return std::make_pair(host, port);
 }
 
+namespace {
+
+/// A tool the server offers, as its properties describe it.
+struct ServerTool {
+  std::string name;
+  double radius_mm = 0;               ///< Tool.AvrRadius (0: no stylus, or not answered)
+  std::optional<Vec3> alignment;      ///< Tool.Alignment: from the tip towards the head
+};
+
+std::string describe(const DefineTool& d) {
+  const Vec3 u = d.stylus_direction.normalized();
+  return "ball " + format_number(d.ball_diameter_mm, 4) + " mm, stylus (" + format_number(u.x(), 4) + ", " +
+         format_number(u.y(), 4) + ", " + format_number(u.z(), 4) + ")";
+}
+
+std::string describe(const ServerTool& t) {
+  std::string s = t.name + " (ball " + format_number(2 * t.radius_mm, 4) + " mm";
+  if (t.alignment) {
+    const Vec3 u = -*t.alignment;
+    s += ", stylus (" + format_number(u.x(), 4) + ", " + format_number(u.y(), 4) + ", " + format_number(u.z(), 4) + ")";
+  }
+  return s + ")";
+}
+
+// Geometry that counts as "the same tool": the ball diameter to 1 µm, the stylus direction to
+// 0.1° (a qualified tool's radius differs from its nominal one by the pre-travel, which is why
+// the server's nominal/average radius before qualification is compared).
+constexpr double k_same_radius_mm = 0.0005;
+constexpr double k_same_direction_cos = 0.9999985;
+
+}  // namespace
+
 struct ClientMachine::Impl {
   asio::io_context io;
   tcp::socket socket{io};
@@ -81,6 +114,9 @@ struct ClientMachine::Impl {
   std::vector<std::string> transcript;
   std::deque<Command> queue;
   std::map<std::string, DefineTool> definitions;
+  std::map<std::string, ServerTool> mapped;     ///< DMIS sensor label -> the server's tool
+  std::optional<std::vector<ServerTool>> server_tools;  ///< read once, on the first DefineTool
+  std::function<void(const std::string&)> on_warning;
   std::optional<ToolInfo> tool;
   double positioning_feed = 0, measuring_feed = 0;
   std::size_t executed = 0;
@@ -123,6 +159,76 @@ struct ClientMachine::Impl {
     const Answer a = call("Get(X(), Y(), Z())");
     if (a.data.empty()) return Vec3::Zero();
     return {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0), item(a.data[0], "Z").value_or(0)};
+  }
+
+  /// EnumTools, then FindTool and GetProp(FoundTool.AvrRadius(), FoundTool.Alignment()) for each:
+  /// what a client can learn about the server's tools without changing the mounted one.
+  const std::vector<ServerTool>& enumerate_tools() {
+    if (server_tools) return *server_tools;
+    server_tools.emplace();
+    const Answer list = call("EnumTools()");
+    for (const auto& body : list.data) {
+      auto args = parse_arguments(body);
+      if (!args || args->size() != 1 || (*args)[0].kind != Argument::Kind::String) continue;
+      ServerTool t;
+      t.name = (*args)[0].text;
+      if (call("FindTool(\"" + t.name + "\")").error) continue;
+      // A server without AvrRadius answers an error for the pair: then only the name can match.
+      const Answer p = call("GetProp(FoundTool.AvrRadius(), FoundTool.Alignment())");
+      if (!p.error && !p.data.empty()) {
+        t.radius_mm = item(p.data[0], "FoundTool.AvrRadius").value_or(0);
+        const auto i = item(p.data[0], "FoundTool.Alignment", 0), j = item(p.data[0], "FoundTool.Alignment", 1),
+                   k = item(p.data[0], "FoundTool.Alignment", 2);
+        if (i && j && k && Vec3(*i, *j, *k).norm() > 1e-9) t.alignment = Vec3(*i, *j, *k).normalized();
+      }
+      server_tools->push_back(t);
+    }
+    return *server_tools;
+  }
+
+  /// The server's tool for a DMIS sensor (SNSDEF): the one of the same name, else the one with
+  /// the same ball diameter and stylus direction (with a warning), else a fault that names the
+  /// sensor and lists what the server offers.
+  tl::expected<ServerTool, std::string> resolve_tool(const DefineTool& d) {
+    const auto& tools = enumerate_tools();
+    const Vec3 want_alignment = -d.stylus_direction.normalized();
+    const auto same_geometry = [&](const ServerTool& t) {
+      return t.radius_mm > 0 && std::abs(2 * t.radius_mm - d.ball_diameter_mm) <= 2 * k_same_radius_mm &&
+             (!t.alignment || t.alignment->dot(want_alignment) >= k_same_direction_cos);
+    };
+    for (const auto& t : tools)
+      if (t.name == d.name) {
+        if (t.radius_mm > 0 && !same_geometry(t))
+          warn("sensor S(" + d.name + ") = SNSDEF (" + describe(d) + "): the I++ server's tool of the same name is " +
+               describe(t) + "; its geometry is used");
+        return t;
+      }
+    for (const auto& t : tools)
+      if (same_geometry(t)) {
+        warn("sensor S(" + d.name + ") = SNSDEF (" + describe(d) + "): the I++ server has no tool " + d.name +
+             "; using its tool " + describe(t) + ", the same geometry");
+        return t;
+      }
+    std::string offered;
+    for (const auto& t : tools)
+      if (t.radius_mm > 0) offered += (offered.empty() ? "" : ", ") + describe(t);
+    return tl::unexpected("sensor S(" + d.name + ") = SNSDEF (" + describe(d) + "): the I++ server has no tool named " +
+                          d.name + " and none with this geometry; it offers " +
+                          (offered.empty() ? std::string("no probing tool") : offered) +
+                          " (metron serve: --probe-diameter or --tool NAME=DIAMETER)");
+  }
+
+  void warn(const std::string& message) {
+    transcript.push_back("! warning: " + message);
+    if (on_warning) on_warning(message);
+  }
+
+  /// Tool.AvrRadius of the mounted tool (nullopt when the server does not answer it).
+  std::optional<double> mounted_radius() {
+    const Answer a = call("GetProp(Tool.AvrRadius())");
+    if (a.error || a.data.empty()) return std::nullopt;
+    const auto r = item(a.data[0], "Tool.AvrRadius");
+    return r && *r > 0 ? r : std::nullopt;
   }
 
   Response fault(std::uint64_t command_tag, const ResponseLine& e) {
@@ -179,18 +285,34 @@ struct ClientMachine::Impl {
             done.hit = h;
             return done;
           } else if constexpr (std::is_same_v<T, DefineTool>) {
+            // An I++ server owns its tools: the sensor is mapped onto one of them, as I++ clients do.
+            auto server_tool = resolve_tool(body);
+            if (!server_tool) {
+              Response r;
+              r.tag = c.tag;
+              r.status = Response::Status::Fault;
+              r.fault = Fault{FaultKind::UnknownTool, server_tool.error(), position(), 0};
+              return r;
+            }
             definitions[body.name] = body;
+            mapped[body.name] = *server_tool;
             ToolInfo info;
             info.name = body.name;
-            info.nominal_radius_mm = info.effective_radius_mm = body.ball_diameter_mm / 2;
+            info.nominal_radius_mm = info.effective_radius_mm =
+                server_tool->radius_mm > 0 ? server_tool->radius_mm : body.ball_diameter_mm / 2;
             done.tool = info;
             return done;
           } else if constexpr (std::is_same_v<T, SelectTool>) {
-            if (auto f = check(call("ChangeTool(\"" + body.name + "\")"))) return *f;
+            const auto m = mapped.find(body.name);
+            const std::string server_name = m != mapped.end() ? m->second.name : body.name;
+            if (auto f = check(call("ChangeTool(\"" + server_name + "\")"))) return *f;
             ToolInfo info;
             info.name = body.name;
             if (auto d = definitions.find(body.name); d != definitions.end())
               info.nominal_radius_mm = info.effective_radius_mm = d->second.ball_diameter_mm / 2;
+            if (m != mapped.end() && m->second.radius_mm > 0)
+              info.nominal_radius_mm = info.effective_radius_mm = m->second.radius_mm;
+            if (const auto r = mounted_radius()) info.effective_radius_mm = *r;
             tool = info;
             done.tool = info;
             // Feeds are per tool on the server: read the new tool's, unless this client set them.
@@ -204,7 +326,11 @@ struct ClientMachine::Impl {
             return done;
           } else if constexpr (std::is_same_v<T, QualifyTool>) {
             if (auto f = check(call("ReQualify()"))) return *f;
-            if (tool) tool->qualified = true;
+            if (tool) {
+              tool->qualified = true;
+              // The qualified (effective) radius, which the server also uses for PtMeas nominals.
+              if (const auto r = mounted_radius()) tool->effective_radius_mm = *r;
+            }
             done.tool = tool;
             return done;
           } else if constexpr (std::is_same_v<T, SetFeeds>) {
@@ -283,5 +409,7 @@ MachineState ClientMachine::state() const {
 std::vector<Command> ClientMachine::queued() const { return {m_impl->queue.begin(), m_impl->queue.end()}; }
 
 const std::vector<std::string>& ClientMachine::transcript() const { return m_impl->transcript; }
+
+void ClientMachine::on_warning(std::function<void(const std::string&)> handler) { m_impl->on_warning = std::move(handler); }
 
 }  // namespace metron::machine::ipp

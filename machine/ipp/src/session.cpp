@@ -32,6 +32,7 @@ struct Tool {
   int id = 0;
   std::optional<DefineTool> definition;   ///< none: NoTool and RefTool (no stylus)
   bool defined_on_machine = false;
+  std::optional<double> qualified_radius_mm;  ///< the effective radius from the last ReQualify
   std::map<std::string, NumberProperty> numbers;  ///< "GoToPar.Speed", "PtMeasPar.Search", ...
 };
 
@@ -252,6 +253,15 @@ struct Session::Impl {
     }
   }
 
+  /// Tool.AvrRadius: the tip's effective radius as the machine has it (after ReQualify the
+  /// qualified one), the nominal one before, 0 for the tools without a stylus.
+  double avr_radius(const Tool& t) const {
+    if (!t.definition) return 0;
+    if (&t == &tools[active_tool])
+      if (const auto s = machine.state(); s.tool && s.active_tool == t.name) return s.tool->effective_radius_mm;
+    return t.qualified_radius_mm.value_or(t.definition->ball_diameter_mm / 2);
+  }
+
   // ---- properties
   struct PropertyRef {
     Tool* tool;
@@ -277,6 +287,7 @@ struct Session::Impl {
       return a.text + "(" + format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z()) + ")";
     }
     if (path == "A" || path == "B" || path == "C") return a.text + "(0)";
+    if (path == "AvrRadius") return a.text + "(" + format_number(avr_radius(t)) + ")";
     for (const auto& name : k_number_properties) {
       if (path.rfind(name, 0) != 0) continue;
       const std::string suffix = path.substr(name.size());
@@ -322,7 +333,7 @@ struct Session::Impl {
           for (const auto& n : k_number_properties)
             if (n.rfind(group, 0) == 0) add_number(n);
       }
-      // Name, Id and Alignment are readable (GetProp) but, as in the NIST files, not enumerated.
+      // Name, Id, Alignment and AvrRadius are readable (GetProp) but, as in the NIST files, not enumerated.
     } else if (node == "GoToPar" || node == "PtMeasPar") {
       for (const auto& n : k_number_properties)
         if (n.rfind(node + ".", 0) == 0) {
@@ -693,7 +704,8 @@ struct Session::Impl {
       no_args(a);
       require_motion_ready();
       if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
-      run(QualifyTool{});
+      const Response q = run(QualifyTool{});
+      if (q.tool) tool().qualified_radius_mm = q.tool->effective_radius_mm;
       move_reports();
     } else if (n == "ScanUnknownHint") {
       if (a.size() != 1) fail(ErrorCode::IncorrectArguments);

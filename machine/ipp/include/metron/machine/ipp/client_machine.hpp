@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -18,7 +19,9 @@ std::optional<std::pair<std::string, std::uint16_t>> parse_ipp_url(std::string_v
 /// A machine backend that drives an I++ DME server over TCP (metron's own `metron serve`, or a
 /// controller): each machine command becomes protocol commands, each answer a Response.
 /// GoTo -> GoTo; PtMeas -> SetProp(Tool.PtMeasPar...) and PtMeas with the ball-centre nominal;
-/// SelectTool -> ChangeTool (the server must know the tool: DefineTool is only remembered);
+/// DefineTool (SNSDEF) -> the server's tool of the same name, else the one with the same ball
+/// diameter and stylus direction (EnumTools, FindTool, FoundTool.AvrRadius/.Alignment; with a
+/// warning), else a fault naming the sensor; SelectTool -> ChangeTool of that tool;
 /// QualifyTool -> ReQualify; SetFeeds -> SetProp(Tool.GoToPar/PtMeasPar.Speed, .Accel). Scans
 /// are not mapped (answered BadCommand). Errors come back as faults, and the client clears them.
 /// The controller's clock is not part of the protocol: times in responses are 0.
@@ -33,6 +36,9 @@ class ClientMachine final : public Machine {
   std::vector<Response> execute() override;
   [[nodiscard]] MachineState state() const override;
   [[nodiscard]] std::vector<Command> queued() const override;
+  /// Where warnings go (a sensor mapped onto a server tool of another name or geometry);
+  /// without a handler they are only in the transcript.
+  void on_warning(std::function<void(const std::string&)> handler);
   /// Every line sent (`> `) and received (`< `), for diagnostics.
   [[nodiscard]] const std::vector<std::string>& transcript() const;
 
