@@ -23,7 +23,7 @@ struct CharacteriseArgs {
   std::optional<std::uint64_t> seed;
   std::optional<std::string> out;
   double threshold_um = 10;
-  double nominal_tolerance_mm = 0.2;
+  double nominal_tolerance_mm = runtime::default_nominal_tolerance_mm;
   bool truth = false;
   bool blend = false;
   bool optimise = false;
@@ -114,7 +114,7 @@ void add_characterise_command(CLI::App& app, std::vector<Command>& commands) {
   cmd->add_option("--threshold-um", args->threshold_um, "one-touch when the spread is below this (um)")->default_val(10);
   cmd->add_option("--nominal-tolerance", args->nominal_tolerance_mm,
                   "uncertainty of nominal surface positions (mm), the standoff's tolerance term")
-      ->default_val(0.2);
+      ->default_val(runtime::default_nominal_tolerance_mm);
   cmd->add_flag("--blend", args->blend,
                  "beyond the seed: PTMEAS blends the approach into the probing feed (one touch, no standoff stop)");
   cmd->add_flag("--optimise-first-feed", args->optimise,

@@ -18,9 +18,10 @@ constexpr double contour_step_mm = 0.05;
 // Appends commands to a plan with their spans and feeds (one of each a command).
 class PlanBuilder {
  public:
-  explicit PlanBuilder(const BlockPlanContext& context) : m_context(context) {}
+  explicit PlanBuilder(const BlockPlanContext& context) : m_context(context), m_at(context.state.position_mm) {}
 
   void go_to(const Vec3& point, Span span) {
+    m_at = point;
     // Built in place: GCC 12 at -O3 warns (falsely) of an uninitialised variant when a
     // temporary Command is moved into the vector here.
     m_plan.commands.emplace_back().body = machine::GoTo{point, {}};
@@ -39,7 +40,7 @@ class PlanBuilder {
       // SEEDS.md 3: the characterised cycle; SNSET/APPRCH and FEDRAT/MESVEL override.
       const TouchPlan plan = m_context.characterisation->plan(
           p.normal, m_context.measuring_feed_mm_s,
-          probe.approach_explicit ? std::optional<double>(probe.approach_mm) : std::nullopt);
+          probe.approach_explicit ? std::optional<double>(probe.approach_mm) : std::nullopt, resting(p));
       p.approach_mm = plan.approach_mm;
       p.speed_mm_s = plan.feed_mm_s;
       if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
@@ -47,6 +48,9 @@ class PlanBuilder {
     }
     m_plan.commands.push_back({0, p});
     annotate(span, p.speed_mm_s.value_or(m_context.state.measuring_feed_mm_s));
+    // Where the retract ends (the latched centre is near nominal + effective radius).
+    m_at = m_context.state.tool ? std::optional<Vec3>(p.nominal_mm + (m_context.state.tool->effective_radius_mm + p.retract_mm) * p.normal)
+                                : std::nullopt;
   }
 
   // A scan longer than the machine's command buffer goes as measurement commands (SEEDS.md 2),
@@ -54,6 +58,7 @@ class PlanBuilder {
   Result<void> scan(const geometry::Contour& contour, Span span) {
     auto scan = scan_command(contour, m_context, span);
     if (!scan) return tl::unexpected(scan.error());
+    m_at.reset();
     for (machine::Command& c : scan_commands(*scan, m_context.state.scan_buffer_segments)) {
       m_plan.commands.push_back(std::move(c));
       annotate(span, 0);
@@ -70,8 +75,19 @@ class PlanBuilder {
     m_plan.measuring_feed_mm_s.push_back(feed_mm_s);
   }
 
+  // The head at rest on the touch's approach line (issue 11): the characterised plan may start
+  // the touch there instead of moving closer first.
+  std::optional<RestingHead> resting(const machine::PtMeas& p) const {
+    if (!m_at || !m_context.state.tool) return std::nullopt;
+    const Vec3 d = *m_at - (p.nominal_mm + m_context.state.tool->effective_radius_mm * p.normal);
+    const double along = d.dot(p.normal);
+    if (!(along > 0) || (d - along * p.normal).norm() > 1e-6) return std::nullopt;
+    return RestingHead{along, m_context.state.positioning_feed_mm_s > 0 ? m_context.state.positioning_feed_mm_s : 50.0};
+  }
+
   const BlockPlanContext& m_context;
   BlockPlan m_plan;
+  std::optional<Vec3> m_at;  // where the head will rest before the next command, when known
 };
 
 // The block's own GOTO, PTMEAS and PAMEAS steps.

@@ -115,9 +115,24 @@ double MachineCharacterisation::acceleration_distance_mm(const Vec3& direction, 
 
 double MachineCharacterisation::stop_distance_mm(const Vec3& direction, double feed_mm_s) const {
   // SEEDS.md 3: pre-travel + feed x (interface + controller delays, worst-case latency and the
-  // interpolator's next cycle) + the braking distance (braking mirrors the ramp: V * Td / 2).
+  // interpolator's next cycle) + the braking distance. The speed never exceeds the feed on the
+  // way to it, so the delay term holds for a contact anywhere on the ramp. Braking mirrors the
+  // ramp (V * Td / 2 from the feed); a contact while still accelerating must first ramp the
+  // acceleration down, which a jerk-limited ramp does in at most half its time (the ramp's
+  // acceleration rises and falls), at a speed still at most V: at most V * Td / 2 more.
+  // Hence V * Td in all, whatever the ramp's family (docs/touch-trigger.md).
   return pre_travel_mm + feed_mm_s * (response.delay_s + response.jitter_s + dt_s) +
-         acceleration_distance_mm(direction, feed_mm_s);
+         2 * acceleration_distance_mm(direction, feed_mm_s);
+}
+
+double MachineCharacterisation::move_time_s(const Vec3& direction, double length_mm, double feed_mm_s) const {
+  if (!(length_mm > 0)) return 0;
+  // Accelerating to v and braking from it covers v * Td(v) (two ramps of D1 = v Td / 2 each).
+  const auto ramps_mm = [&](double v) { return v * ramp_time_s(direction, v); };
+  if (ramps_mm(feed_mm_s) <= length_mm) return length_mm / feed_mm_s + ramp_time_s(direction, feed_mm_s);
+  double lo = 0, hi = feed_mm_s;
+  for (int i = 0; i < 60; ++i) (ramps_mm((lo + hi) / 2) < length_mm ? lo : hi) = (lo + hi) / 2;
+  return 2 * ramp_time_s(direction, hi);
 }
 
 double MachineCharacterisation::max_feed_mm_s(const Vec3& direction) const {
@@ -149,28 +164,38 @@ double MachineCharacterisation::dynamic_correction_mm(double feed_mm_s, double q
 }
 
 TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double> feed_mm_s,
-                                        std::optional<double> approach_mm) const {
+                                        std::optional<double> approach_mm, std::optional<RestingHead> resting) const {
   const Vec3 u = -normal.normalized();
   TouchPlan p;
   p.two_touch = !one_touch && !blend;
   p.feed_mm_s = feed_mm_s.value_or(measuring_feed_mm_s);
+  // A touch that starts at `planned` from rest at `feed`: where the head already rests farther
+  // out on the same line, probing the extra distance at the feed beats a rest-to-rest move
+  // closer and a new start from rest when it takes less time (issue 11: a plain one-touch from
+  // the clearance is quicker than positioning to a short standoff first).
+  const auto from_rest = [&](double planned, double feed) {
+    if (approach_mm || !resting || !(resting->distance_mm > planned)) return planned;
+    const double extra = resting->distance_mm - planned;
+    return extra / feed <= move_time_s(u, extra, resting->positioning_feed_mm_s) ? resting->distance_mm : planned;
+  };
   if (blend) {
     // No stop at a standoff: the approach move itself slows to the feed before the band in
     // which the surface may be (the nominal tolerance), plus the dynamic zone D3.
     p.blend_mm = nominal_tolerance_mm + p.feed_mm_s * (response.delay_s + response.jitter_s) + qualified_offset_mm();
-    p.approach_mm = std::max(approach_mm.value_or(2.0), *p.blend_mm);
+    p.approach_mm = std::max(approach_mm.value_or(resting ? resting->distance_mm : 2.0), *p.blend_mm);
     return p;
   }
   if (!p.two_touch) {
     // One touch from rest: at constant speed before the earliest possible contact.
-    p.approach_mm = approach_mm.value_or(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm) + qualified_offset_mm());
+    p.approach_mm = approach_mm.value_or(from_rest(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm) + qualified_offset_mm(),
+                                                   p.feed_mm_s));
     return p;
   }
   p.first_feed_mm_s = std::min(first_feed_mm_s, max_feed_mm_s(u));
-  // The first touch finds the surface: at its feed before the earliest possible contact, since
-  // the maximum protected feed assumes braking from constant speed (a trigger while still
-  // accelerating brakes later: the acceleration must ramp down first).
-  p.approach_mm = approach_mm.value_or(acceleration_distance_mm(u, p.first_feed_mm_s) + nominal_tolerance_mm);
+  // The first touch finds the surface: at its feed before the earliest possible contact (a
+  // touch at constant feed; the stop distance bound holds on the ramp as well).
+  p.approach_mm = approach_mm.value_or(
+      from_rest(acceleration_distance_mm(u, p.first_feed_mm_s) + nominal_tolerance_mm + qualified_offset_mm(), p.first_feed_mm_s));
   p.standoff_mm = standoff_mm(u, p.feed_mm_s, p.first_feed_mm_s, 0);
   // From the first latched centre back to the surface: pre-travel and the constant-delay part
   // of the first touch's dynamic zone (its jitter part is D2), then the standoff.
@@ -308,7 +333,9 @@ tl::expected<TouchSample, std::string> touch_sample(Bench& bench, const TouchTar
   machine::PtMeas p;
   p.nominal_mm = target.surface;
   p.normal = n;
-  p.approach_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + 0.3;
+  // Contact comes q (the qualified offset, ~0.03 mm) after nominal + effective radius; slow
+  // feeds start closer so that their touches stay short.
+  p.approach_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + (feed < 1 ? 0.1 : 0.3);
   // The probing move ends at rest at the search end: the latch must come before it slows
   // down, i.e. within search - D1 of the surface (the stop distance is below the over-travel).
   p.search_mm = 1.5 * c.acceleration_distance_mm(-n, feed) + c.over_travel_mm + 0.5;
@@ -397,6 +424,15 @@ tl::expected<void, std::string> measure_touch_response(Bench& bench, const Chara
     if (auto ok = sample(feed); !ok) return ok;
   }
   estimate_response(target, c);
+  if (c.response.scanned) {
+    // The probe's own scatter (issue 11): at the slowest feed so far the jitter's share of the
+    // variance, (F x period)^2 / 12, dwarfs the probe's (2 mm/s x 4 ms: 2.3 um against 0.2 um),
+    // and the difference of the two is ill-conditioned. A feed slow enough that the jitter's
+    // standard deviation is 0.05 um makes the subtraction a small correction.
+    const double slow = std::clamp(0.05e-3 * std::sqrt(12.0) / c.response.jitter_s, 0.01, 2.0);
+    if (auto ok = sample(slow); !ok) return ok;
+    estimate_response(target, c);
+  }
   return {};
 }
 

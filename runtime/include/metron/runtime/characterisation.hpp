@@ -64,10 +64,16 @@ struct ResponseTime {
   }
 };
 
+/// The documented default of CharacterisationSettings::nominal_tolerance_mm (mm).
+inline constexpr double default_nominal_tolerance_mm = 0.2;
+
 /// Settings of a characterisation run.
 struct CharacterisationSettings {
   double repeatability_threshold_mm = 0.010;  ///< one-touch below this spread (SEEDS.md 3: 10 um)
-  double nominal_tolerance_mm = 0;    ///< uncertainty of nominal surface positions (standoff term)
+  /// Uncertainty of nominal surface positions (the standoff's tolerance term): the same
+  /// documented default for `metron characterise` and CHARACTERISE in a program
+  /// (docs/touch-trigger.md); a surface farther off its nominal is touched while accelerating.
+  double nominal_tolerance_mm = default_nominal_tolerance_mm;
   double over_travel_margin = 0.8;    ///< the stop distance may use this share of the over-travel
   int touches_per_feed = 60;          ///< repeated touches per feed
   int dither = 10;                    ///< timed moves per feed, lengths spread over one cycle
@@ -86,6 +92,14 @@ struct TouchPlan {
   double backoff_mm = 0;              ///< two-touch: from the first latched centre to the second start
   double standoff_mm = 0;             ///< two-touch: D1 + D2 + D3 from the surface found
   std::optional<double> blend_mm;     ///< blended one touch: the feed is reached this far before the nominal
+};
+
+/// Where the head rests before a touch: on the touch's approach line, `distance_mm` from the
+/// nominal point (measured as TouchPlan::approach_mm), with the positioning feed a move closer
+/// would use.
+struct RestingHead {
+  double distance_mm = 0;             ///< from the nominal point (+ effective radius) along the normal
+  double positioning_feed_mm_s = 50;  ///< feed of a move to a closer standoff
 };
 
 /// Everything a characterisation found, and the strategy derived from it.
@@ -111,8 +125,14 @@ struct MachineCharacterisation {
   [[nodiscard]] double ramp_time_s(const Vec3& direction, double feed_mm_s) const;
   /// D1 along `direction` (SEEDS.md 3: V * Td / 2).
   [[nodiscard]] double acceleration_distance_mm(const Vec3& direction, double feed_mm_s) const;
-  /// Distance from contact to standstill: pre-travel + feed * (delay + jitter + dt) + braking.
+  /// Upper bound of the distance from contact to standstill for a contact anywhere on the ramp
+  /// to `feed_mm_s` or at that feed: pre-travel + feed * (delay + jitter + dt) + feed * Td
+  /// (docs/touch-trigger.md, "maximum protected feed").
   [[nodiscard]] double stop_distance_mm(const Vec3& direction, double feed_mm_s) const;
+  /// Time of a rest-to-rest move of `length_mm` along `direction` at `feed_mm_s`, from the
+  /// acceleration characteristic (braking mirrors the ramp): L / V + Td(V), or 2 Td(v) where
+  /// the move never reaches V (v Td(v) = L).
+  [[nodiscard]] double move_time_s(const Vec3& direction, double length_mm, double feed_mm_s) const;
   /// Fastest feed along `direction` whose stop distance stays within margin * over-travel.
   [[nodiscard]] double max_feed_mm_s(const Vec3& direction) const;
   /// SEEDS.md 3: optimal standoff D1 + D2 + D3 (+ the nominal tolerance when `with_tolerance`).
@@ -126,9 +146,11 @@ struct MachineCharacterisation {
   /// back by it along the normal (SEEDS.md 3: the delay-distance correction at constant feed).
   [[nodiscard]] double dynamic_correction_mm(double feed_mm_s, double qualification_feed_mm_s) const;
   /// The cycle for probing along -normal (`normal` the surface normal), with optional explicit
-  /// feed and approach (FEDRAT/MESVEL, SNSET/APPRCH).
-  [[nodiscard]] TouchPlan plan(const Vec3& normal, std::optional<double> feed_mm_s,
-                               std::optional<double> approach_mm) const;
+  /// feed and approach (FEDRAT/MESVEL, SNSET/APPRCH). When the head already rests on the
+  /// approach line beyond the planned start (`resting`) and probing that extra distance is
+  /// quicker than a rest-to-rest move closer, the touch starts where the head rests.
+  [[nodiscard]] TouchPlan plan(const Vec3& normal, std::optional<double> feed_mm_s, std::optional<double> approach_mm,
+                               std::optional<RestingHead> resting = std::nullopt) const;
 };
 
 /// Runs the characterisation on `machine` with a tool of `ball_diameter_mm` (defined, selected
