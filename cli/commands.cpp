@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "commands.hpp"
 
+#include <algorithm>
+#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -30,6 +32,9 @@ struct RunArgs {
   std::optional<std::string> characterisation;
   std::optional<std::string> machine_url;
   std::optional<std::string> compensation;
+  bool strict = false;
+  std::optional<std::string> answers;
+  std::vector<std::string> include_dirs;
 };
 
 /// The backend of `metron run --machine ipp://host:port`: an I++ DME server (metron serve, or a
@@ -59,6 +64,19 @@ int run(const RunArgs& args) {
   options.seed = args.seed;
   options.out_dir = args.out_dir;
   options.characterisation_path = args.characterisation;
+  options.strict = args.strict;
+  options.include_dirs = args.include_dirs;
+  if (args.answers) {
+    std::ifstream in(*args.answers);
+    if (!in) {
+      std::cerr << fmt::format("error: cannot read the answers file {}\n", *args.answers);
+      return static_cast<int>(interpreter::RunExit::BadInput);
+    }
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line.back() == '\r') line.pop_back();
+      options.prompt_answers.push_back(line);
+    }
+  }
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
   options.on_event = [&](const runtime::RunEvent& e) {
     if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) (t->in_tolerance ? in_tol : out_tol)++;
@@ -93,16 +111,21 @@ int run(const RunArgs& args) {
   return static_cast<int>(outcome.exit);
 }
 
-int check(const std::string& program) {
+int check(const std::string& program, bool strict, const std::vector<std::string>& include_dirs) {
   SourceManager sources;
   DiagnosticSink sink;
   interpreter::Compiler compiler(sources, sink);
+  compiler.set_parse_options(grammar::ParseOptions{strict});
+  compiler.set_include_dirs(include_dirs);
   const auto unit = compiler.compile_file(program);
   for (const auto& d : sink.items()) std::cout << format_diagnostic(d, sources);
   if (!unit && sink.items().empty()) std::cout << fmt::format("error: cannot read {}\n", program);
   const std::size_t errors = sink.error_count();
-  const std::size_t warnings = sink.items().size() - errors;
-  std::cout << fmt::format("{}: {} error{}, {} warning{}\n", program, errors, errors == 1 ? "" : "s", warnings, warnings == 1 ? "" : "s");
+  const std::size_t notes = static_cast<std::size_t>(std::count_if(
+      sink.items().begin(), sink.items().end(), [](const Diagnostic& d) { return d.severity == Severity::Note; }));
+  const std::size_t warnings = sink.items().size() - errors - notes;
+  std::cout << fmt::format("{}: {} error{}, {} warning{}{}\n", program, errors, errors == 1 ? "" : "s", warnings,
+                           warnings == 1 ? "" : "s", notes ? fmt::format(", {} note{}", notes, notes == 1 ? "" : "s") : "");
   return errors > 0 || !unit ? 1 : 0;
 }
 
@@ -184,12 +207,21 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
                       "measured positions by it (docs/error-space.md)");
   run_cmd->add_option("--out", run_args->out_dir, "directory for results.json and DMIS output files")->default_val(".");
   run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
+  run_cmd->add_flag("--strict", run_args->strict, "a line that is not a DMIS statement is an error (default: a warning)");
+  run_cmd->add_option("--answers", run_args->answers, "operator answers for PROMPT, one per line, used in order");
+  run_cmd->add_option("--include", run_args->include_dirs, "folder searched for CALL/EXTERN,DMIS files given with another machine's path (repeatable)");
   commands.push_back({run_cmd, [run_args] { return run(*run_args); }});
 
   auto check_program = std::make_shared<std::string>();
   auto* check_cmd = app.add_subcommand("check", "check a program and print diagnostics");
+  auto check_strict = std::make_shared<bool>(false);
   check_cmd->add_option("program", *check_program, "the DMIS program")->required();
-  commands.push_back({check_cmd, [check_program] { return check(*check_program); }});
+  auto check_includes = std::make_shared<std::vector<std::string>>();
+  check_cmd->add_flag("--strict", *check_strict, "a line that is not a DMIS statement is an error (default: a warning)");
+  check_cmd->add_option("--include", *check_includes, "folder searched for CALL/EXTERN,DMIS files given with another machine's path (repeatable)");
+  commands.push_back({check_cmd, [check_program, check_strict, check_includes] {
+                        return check(*check_program, *check_strict, *check_includes);
+                      }});
 
   auto compile_program = std::make_shared<std::string>();
   auto emit_ir = std::make_shared<bool>(false);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <exception>
 #include <string>
 #include <string_view>
@@ -65,16 +66,49 @@ bool is_label_prefix(std::string_view word) {
   return std::binary_search(label_prefixes.begin(), label_prefixes.end(), word);
 }
 
-Program parse_program(const SourceManager& sources, std::uint32_t file, DiagnosticSink& sink) {
+bool looks_like_statement(std::string_view line) {
+  std::size_t i = 0;
+  while (i < line.size() && is_blank(line[i])) ++i;
+  if (i == line.size() || line[i] == '(') return true;
+  // `=FEAT/PLANE`, `12=...`: a statement with an error, not a note.
+  if (line.find_first_of("/=") != std::string_view::npos) return true;
+  const auto alpha = [](char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'); };
+  const auto alnum = [&](char c) { return alpha(c) || (c >= '0' && c <= '9') || c == '_'; };
+  if (!alpha(line[i])) return false;
+  const std::size_t word_begin = i;
+  while (i < line.size() && alnum(line[i])) ++i;
+  std::string word(line.substr(word_begin, i - word_begin));
+  for (auto& c : word) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  while (i < line.size() && is_blank(line[i])) ++i;
+  if (i == line.size() || std::string_view("/=([").find(line[i]) != std::string_view::npos) return true;
+  return is_major_word(word);
+}
+
+Program parse_program(const SourceManager& sources, std::uint32_t file, DiagnosticSink& sink, const ParseOptions& options) {
   Program program;
   program.file = file;
   if (file == 0 || file > sources.size()) {
     sink.error("parse.no-file", Span{}, "no source file with id " + std::to_string(file));
     return program;
   }
+  DiagnosticSink after_endfil;  // what follows ENDFIL is reported once, by the compiler
+  bool ended = false;
   for (const LogicalLine& line : join_continuations(sources.file(file).text)) {
+    if (!ended && !options.strict && !looks_like_statement(line.text)) {
+      std::size_t first = 0;
+      while (first < line.text.size() && is_blank(line.text[first])) ++first;
+      std::size_t last = line.text.size();
+      while (last > first && is_blank(line.text[last - 1])) --last;
+      sink.warning("parse.not-a-statement", Span{file, line.physical[first], line.physical[last - 1] + 1},
+                   "this line is not a DMIS statement and is skipped (an operator note? write it as a $$ comment; "
+                   "--strict makes it an error)");
+      continue;
+    }
     Statement stmt;
-    if (parse_line(line, file, sink, stmt)) program.statements.push_back(std::move(stmt));
+    if (parse_line(line, file, ended ? after_endfil : sink, stmt)) {
+      if (stmt.major == "ENDFIL") ended = true;
+      program.statements.push_back(std::move(stmt));
+    }
   }
   return program;
 }

@@ -48,6 +48,11 @@ class Joiner {
       m_comment_continues = comment_continues(m_src, begin, end);
       return;
     }
+    // The blanks that start a continued line are not part of the statement: shop software
+    // splits long lines anywhere, even inside a label (`FA(CIR_$` / `   1)` is FA(CIR_1)).
+    if (m_continued && !m_in_string)
+      while (begin < end && is_blank(m_src[begin])) ++begin;
+    m_continued = false;
     // Find where a `$$` comment starts; `$$` inside a quoted string is text. The string state
     // carries over continuation lines because a continuation may split a string.
     std::size_t code_end = end;
@@ -71,6 +76,7 @@ class Joiner {
     if (last != code_end && m_src[last] == '$') {
       // Continuation: drop the `$`, what follows it and the newline; the next line is appended.
       append(begin, last);
+      m_continued = true;
       return;
     }
     append(begin, code_end);
@@ -100,6 +106,7 @@ class Joiner {
   LogicalLine m_cur;
   bool m_in_string = false;
   bool m_comment_continues = false;
+  bool m_continued = false;  // the previous physical line ended in a continuation `$`
 };
 
 }  // namespace

@@ -17,7 +17,7 @@ using detail::UnitCompiler;
 Compiler::Compiler(SourceManager& sources, DiagnosticSink& sink) : m_sources(sources), m_sink(sink) {}
 
 std::size_t Compiler::compile_program(std::uint32_t file, const std::string& path, UnitKind kind) {
-  const grammar::Program program = grammar::parse_program(m_sources, file, m_sink);
+  const grammar::Program program = grammar::parse_program(m_sources, file, m_sink, m_parse_options);
   const std::size_t unit = m_module.units.size();
   m_module.units.push_back({path, file, {}});
   UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, unit,
@@ -43,7 +43,11 @@ std::optional<ir::Expr> Compiler::compile_expression(const std::string& text, co
 
 std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span included_from, const std::string& written) {
   const std::string& shown = written.empty() ? path : written;
-  const std::string key = std::filesystem::weakly_canonical(path).string();
+  // A pipe (`metron check /dev/stdin`) has no canonical path: the error_code overload does not
+  // throw, and the path as given is the key.
+  std::error_code ec;
+  std::string key = std::filesystem::weakly_canonical(path, ec).string();
+  if (ec || key.empty()) key = path;
   if (m_symbols.units_in_progress.count(key)) {
     m_sink.error("sema.recursive-call", included_from, fmt::format("{} calls itself through CALL/EXTERN", shown));
     return std::nullopt;

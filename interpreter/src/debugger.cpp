@@ -76,10 +76,14 @@ Stop Debugger::drive(Mode mode) {
   const bool first = !m_started;
   m_started = true;
   bool moved = false;
+  bool left_start = false;  // an instruction of another statement ran: coming back to the start is new
   for (;;) {
     const ir::Instruction* in = vm.current();
-    // Statement boundaries: the next instruction belongs to another statement than the start.
-    const bool new_statement = in && moved && (in->span.file != start.file || in->span.begin != start.begin);
+    // Statement boundaries: the next instruction belongs to another statement than the start, or
+    // is the start statement again after others ran (the next iteration of a DO loop).
+    const bool other = in && (in->span.file != start.file || in->span.begin != start.begin);
+    if (moved && other) left_start = true;
+    const bool new_statement = in && moved && (other || left_start);
     if (in && (new_statement || (first && !moved))) {
       if (auto id = line_breakpoint_at(in->span)) {
         for (auto& b : m_breakpoints)

@@ -60,18 +60,37 @@ std::string to_string(const Expr& e) {
       return e.value.to_display();
     case ExprOp::Variable: return e.name;
     case ExprOp::Element: {
+      // Appended piece by piece: `(i ? "," : "") + to_string(...)` inserts at the front of a
+      // temporary, which g++ 12 reports as a false -Wrestrict overlap.
       std::string s = e.name + "[";
-      for (std::size_t i = 0; i < e.args.size(); ++i) s += (i ? "," : "") + to_string(e.args[i]);
+      for (std::size_t i = 0; i < e.args.size(); ++i) {
+        if (i) s += ',';
+        s += to_string(e.args[i]);
+      }
       return s + "]";
     }
     case ExprOp::Call: {
       std::string s = e.name + "(";
-      for (std::size_t i = 0; i < e.args.size(); ++i) s += (i ? "," : "") + to_string(e.args[i]);
+      for (std::size_t i = 0; i < e.args.size(); ++i) {
+        if (i) s += ',';
+        s += to_string(e.args[i]);
+      }
       return s + ")";
     }
     case ExprOp::Obtain: return fmt::format("OBTAIN({}({}),{})", e.label.prefix, e.label.name, to_string(e.args.at(0)));
-    case ExprOp::Unary: return e.name + to_string(e.args.at(0));
-    case ExprOp::Binary: return "(" + to_string(e.args.at(0)) + e.name + to_string(e.args.at(1)) + ")";
+    case ExprOp::Unary: {
+      std::string s = e.name;
+      s += to_string(e.args.at(0));
+      return s;
+    }
+    case ExprOp::Binary: {
+      std::string s = "(";
+      s += to_string(e.args.at(0));
+      s += e.name;
+      s += to_string(e.args.at(1));
+      s += ')';
+      return s;
+    }
   }
   return "?";
 }

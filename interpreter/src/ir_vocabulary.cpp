@@ -30,7 +30,8 @@ template <>
 const std::vector<WordEntry<runtime::ToleranceKind>>& vocabulary() {
   using K = runtime::ToleranceKind;
   static const auto rows = from_runtime({K::Diam, K::Rad, K::DistB, K::Pos, K::Flat, K::Cirlty, K::Cylcty, K::Sphcty,
-                                         K::Strght, K::Perp, K::Parlel, K::Anglb, K::Profs});
+                                         K::Strght, K::Perp, K::Parlel, K::Anglb, K::Profs, K::DistWrt, K::AngWrt,
+                                         K::Cortol});
   return rows;
 }
 
@@ -82,7 +83,8 @@ template <>
 const std::vector<WordEntry<ConstructionMethod>>& vocabulary() {
   using M = ConstructionMethod;
   static const std::vector<WordEntry<M>> rows = {{M::Bf, "BF"},         {M::Intof, "INTOF"},   {M::Midpt, "MIDPT"},
-                                                 {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"}};
+                                                 {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"},
+                                                 {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"}};
   return rows;
 }
 

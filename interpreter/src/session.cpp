@@ -84,6 +84,9 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
     }
     s.runtime().set_characterisation(std::move(*c));
   }
+  s.compiler().set_parse_options(grammar::ParseOptions{options.strict});
+  s.interpreter().set_prompt_answers(options.prompt_answers);
+  s.compiler().set_include_dirs(options.include_dirs);
   const bool loaded = s.load(options.program);
   ExecStatus status = ExecStatus::Error;
   if (loaded) status = s.interpreter().run();

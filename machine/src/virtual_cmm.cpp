@@ -95,9 +95,17 @@ Response Controller::run(const Command& command) {
     } else if constexpr (std::is_same_v<T, DefineTool>) {
       define_tool(body, response);
     } else if constexpr (std::is_same_v<T, SelectTool>) {
-      const auto it = tools.find(body.name);
-      if (it == tools.end())
-        return fail({FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name), position, now()});
+      auto it = tools.find(body.name);
+      if (it == tools.end()) {
+        // A sensor of the probe library is defined on its first selection, as a tool changer would.
+        const auto sensor = find_library_sensor(config.probe_library, body.name);
+        if (!sensor) return fail({FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name), position, now()});
+        DefineTool definition = tool_definition(*sensor);
+        definition.name = body.name;
+        define_tool(definition, response);
+        if (response.status != Response::Status::Done) return;
+        it = tools.find(body.name);
+      }
       active = body.name;
       sim.mount_stylus(it->second.info.nominal_radius_mm, stylus_offset(it->second.definition));
       response.tool = it->second.info;

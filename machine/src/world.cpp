@@ -371,6 +371,7 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
   o.read("seed", [&](const json& nj, const std::string& np) { w.seed = sj::unsigned_integer(nj, np); });
   o.read("machine", [&](const json& mj, const std::string& mp) { parse_machine(mj, mp, w.machine, w.truth); });
   o.read("probe", [&](const json& pj, const std::string& pp) { w.truth.probe = parse_probe(pj, pp); });
+  o.read("probe_library", [&](const json& lj, const std::string& lp) { w.machine.probe_library = parse_probe_library(lj, lp); });
   o.read("reference_sphere", [&](const json& rj, const std::string& rp) {
     parse_reference_sphere(rj, rp, w.machine.reference_sphere, w.truth.reference_sphere);
   });

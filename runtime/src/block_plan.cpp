@@ -140,11 +140,10 @@ Result<void> plan_nominal_scan(const MeasBlock& block, const Geometry& nominal, 
   return plan.scan(*contour, block.span);
 }
 
-// No steps: the automatic points of measurement_plan.hpp.
+// No steps: the automatic points of measurement_plan.hpp. In MODE/MAN the virtual CMM's operator
+// takes the same points, at the nominal (docs/language.md "MODE/MAN"), so check and run agree.
 Result<void> plan_auto(const MeasBlock& block, const Geometry& nominal, const BlockPlanContext& context,
                        PlanBuilder& plan) {
-  if (context.mode == Mode::Man)
-    return program_error(block.span, "MEAS in MODE/MAN needs PTMEAS statements: metron cannot take manual points itself");
   const Vec3 up = context.alignment.to_machine_vector(Vec3::UnitZ());
   const double ball = context.state.tool ? context.state.tool->effective_radius_mm : 0.0;
   const auto steps = plan_auto_points(nominal, block.point_count, context.probe, ball, up, context.state.position_mm);

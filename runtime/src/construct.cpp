@@ -155,4 +155,33 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
   return {};
 }
 
+// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: the point of FA(x) moved by an offset in the current
+// coordinate system (DMIS 5.3 6.31, MOVEPT).
+Result<void> MeasurementRuntime::construct_moved_point(const std::string& label, const FeatureRef& source,
+                                                       const Vec3& offset_current, Span span) {
+  auto g = resolve(source, span);
+  if (!g) return tl::unexpected(g.error());
+  auto it = m_features.find(label);
+  Geometry moved = it != m_features.end() ? it->second.nominal : Geometry{};
+  moved.type = FeatureType::Point;
+  moved.position = g->position + m_alignment.to_machine_vector(offset_current);
+  if (it == m_features.end()) {
+    warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
+    moved.direction = g->direction;
+    Feature f;
+    f.label = label;
+    f.nominal = moved;
+    f.defined_at = span;
+    m_feature_order.push_back(label);
+    it = m_features.emplace(label, f).first;
+  } else {
+    moved.direction = it->second.nominal.direction;
+  }
+  it->second.actual = moved;
+  it->second.source = ActualSource::Constructed;
+  it->second.fit.reset();
+  it->second.measured_at = span;
+  return {};
+}
+
 }  // namespace metron::runtime

@@ -130,7 +130,10 @@ Result<void> MeasurementRuntime::define_sensor(const SensorDefinition& sensor, S
 }
 
 Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span span) {
-  if (!m_sensors.count(label)) return program_error(span, fmt::format("sensor S({}) is not defined", label));
+  if (!m_sensors.count(label)) {
+    // Not defined by the program: a sensor of the machine's probe library (docs/language.md).
+    if (auto r = select_library_sensor(label, span); !r) return r;
+  }
   auto r = run_commands({machine::Command{0, machine::SelectTool{label}}}, {span});
   if (!r) return tl::unexpected(r.error());
   m_active_sensor = label;
@@ -143,6 +146,30 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
     if (!q) return tl::unexpected(q.error());
   }
   return {};
+}
+
+Result<void> MeasurementRuntime::select_library_sensor(const std::string& label, Span span) {
+  // Asked directly, not through run_commands: a name the library does not hold is no fault of
+  // the run but a documented default (a warning and a 4 mm tip), so no fault is recorded.
+  m_machine.submit(machine::Command{0, machine::SelectTool{label}});
+  const auto responses = m_machine.execute();
+  if (!responses.empty() && responses.front().status == machine::Response::Status::Done && responses.front().tool) {
+    const auto& tool = *responses.front().tool;
+    SensorDefinition def;
+    def.label = label;
+    def.ball_diameter_mm = 2 * tool.nominal_radius_mm;
+    m_sensors[label] = def;
+    m_tools[label] = tool;
+    return {};
+  }
+  if (!responses.empty() && responses.front().fault && responses.front().fault->kind != machine::FaultKind::UnknownTool) {
+    record_fault(*responses.front().fault, span);
+    return tl::unexpected(RuntimeError{RuntimeError::Kind::Fault, responses.front().fault->message, span, responses.front().fault});
+  }
+  warn(span, fmt::format("sensor {} is not in the machine's probe library; using a 4 mm default tip", label));
+  SensorDefinition def;
+  def.label = label;
+  return define_sensor(def, span);
 }
 
 Result<void> MeasurementRuntime::ensure_tool(Span span) {
@@ -416,10 +443,24 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
       if (!dd) return tl::unexpected(dd.error());
       context.datums.push_back(*dd);
     }
-    auto result = evaluate_tolerance(spec, features, context);
-    if (!result) return program_error(span, result.error());
-    write_device_line(dmis_tolerance_line(*result));
-    emit(*result);
+    // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
+    // feature is evaluated against it. CORTOL applies to each output feature.
+    std::vector<std::vector<const Feature*>> evaluations;
+    if (!spec.reference_feature.empty()) {
+      const Feature* reference = find_feature(spec.reference_feature);
+      if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", spec.reference_feature));
+      for (const Feature* f : features) evaluations.push_back({f, reference});
+    } else if (spec.kind == ToleranceKind::Cortol) {
+      for (const Feature* f : features) evaluations.push_back({f});
+    } else {
+      evaluations.push_back(features);
+    }
+    for (const auto& operands : evaluations) {
+      auto result = evaluate_tolerance(spec, operands, context);
+      if (!result) return program_error(span, result.error());
+      write_device_line(dmis_tolerance_line(*result));
+      emit(*result);
+    }
   }
   return {};
 }

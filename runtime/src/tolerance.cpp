@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "metron/stdlib/fitting/minimum_zone.hpp"
+
 namespace metron::runtime {
 
 const char* dmis_word(ToleranceKind kind) {
@@ -27,6 +29,9 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::Parlel: return "PARLEL";
     case ToleranceKind::Anglb: return "ANGLB";
     case ToleranceKind::Profs: return "PROFS";
+    case ToleranceKind::DistWrt: return "DISTWRT";
+    case ToleranceKind::AngWrt: return "ANGWRT";
+    case ToleranceKind::Cortol: return "CORTOL";
   }
   return "DIAM";
 }
@@ -322,7 +327,28 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, Toleran
         fmt::format("feature {} has no fit: {} needs the form of measured points, and it was "
                     "constructed without any",
                     feature.label, dmis_word(spec.kind)));
+  // ISO 1101 defines form by the minimum zone; the least-squares form stays in the note.
   result.value = feature.fit->form_mm;
+  const auto shape = feature.nominal.type == FeatureType::Plane      ? fitting::Shape::Plane
+                     : feature.nominal.type == FeatureType::Cylinder ? fitting::Shape::Cylinder
+                     : feature.nominal.type == FeatureType::Sphere   ? fitting::Shape::Sphere
+                     : feature.nominal.type == FeatureType::Line     ? fitting::Shape::Line
+                                                                     : fitting::Shape::Circle;
+  std::vector<Vec3> surface;
+  for (const auto& p : feature.points) surface.push_back(p.surface_mm());
+  std::optional<Vec3> plane = shape == fitting::Shape::Line     ? std::optional<Vec3>(feature.nominal.normal2)
+                              : shape == fitting::Shape::Circle ? std::optional<Vec3>(feature.nominal.direction)
+                                                                : std::nullopt;
+  if (plane && !(plane->norm() > 1e-12)) plane.reset();
+  const auto mz = surface.empty() ? tl::unexpected(fitting::FitFailure::TooFewPoints)
+                                  : fitting::minimum_zone(shape, surface, plane);
+  if (mz && mz->form_mm <= feature.fit->form_mm + 1e-9) {
+    result.value = mz->form_mm;
+    add_note(result, fmt::format("minimum zone (ISO 1101) over {} points; least squares gives {:.4f}", surface.size(),
+                                 feature.fit->form_mm));
+  } else {
+    add_note(result, "least-squares form (no minimum zone for these points)");
+  }
   result.actual = result.value;
   set_limits(result, 0, spec.zone);
   return result;
@@ -540,7 +566,31 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
   return result;
 }
 
-bool needs_two(ToleranceKind kind) { return kind == ToleranceKind::DistB; }
+bool needs_two(ToleranceKind kind) {
+  return kind == ToleranceKind::DistB || kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt;
+}
+
+// ---------------------------------------------------------------- CORTOL
+
+// T(l)=TOL/CORTOL,XAXIS|YAXIS|ZAXIS,lo,hi: the deviation of one coordinate of the feature's
+// position from its nominal, in the current coordinate system (DMIS 5.3 6.163 CORTOL).
+Outcome evaluate_cortol(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                        ToleranceResult result) {
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  if (spec.axis == DistanceAxis::PointToPoint) return Error("CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
+  const Alignment mcs;
+  const Alignment& frame = context.alignment ? *context.alignment : mcs;
+  const int k = spec.axis == DistanceAxis::XAxis ? 0 : spec.axis == DistanceAxis::YAxis ? 1 : 2;
+  const double a = frame.to_part_point((*actual)->position)[k];
+  const double n = frame.to_part_point(feature.nominal.position)[k];
+  result.actual = a;
+  result.nominal = n;
+  result.value = a - n;
+  set_limits(result, spec.lower, spec.upper);
+  add_note(result, fmt::format("{} coordinate in {}", axis_word(spec.axis), frame.label));
+  return result;
+}
 
 }  // namespace
 
@@ -579,6 +629,9 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Parlel: return evaluate_orientation(spec, feature, context, std::move(result));
     case ToleranceKind::Anglb: return evaluate_anglb(spec, features, context, std::move(result));
     case ToleranceKind::Profs: return evaluate_profs(spec, feature, context, std::move(result));
+    case ToleranceKind::DistWrt: return evaluate_distb(spec, feature, *features[1], context, std::move(result));
+    case ToleranceKind::AngWrt: return evaluate_anglb(spec, features, context, std::move(result));
+    case ToleranceKind::Cortol: return evaluate_cortol(spec, feature, context, std::move(result));
   }
   return Error(fmt::format("{} is not evaluated", word));
 }

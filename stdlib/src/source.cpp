@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/stdlib/source.hpp"
 
+#include "metron/stdlib/text_encoding.hpp"
+
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -11,7 +13,8 @@ namespace metron {
 std::uint32_t SourceManager::add(std::string path, std::string text) {
   auto f = std::make_unique<SourceFile>();
   f->path = std::move(path);
-  f->text = std::move(text);
+  // Shop software writes Latin-1 / Windows-1252 as well as UTF-8: read every file as UTF-8.
+  f->text = to_utf8(std::move(text), &f->encoding);
   f->line_starts.push_back(0);
   for (std::uint32_t i = 0; i < f->text.size(); ++i)
     if (f->text[i] == '\n') f->line_starts.push_back(i + 1);

@@ -76,12 +76,21 @@ TEST(Preprocess, ContinuationInsideALabelName) {
   expect_map_exact(src, lines[0]);
 }
 
+TEST(Preprocess, ContinuationInsideALabelWithAnIndentedRest) {
+  const std::string src = "OUTPUT/FA(A02$\n    F5),TA(T1)\n";
+  const auto lines = join_continuations(src);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].text, "OUTPUT/FA(A02F5),TA(T1)");
+  expect_map_exact(src, lines[0]);
+}
+
 TEST(Preprocess, ContinuationWithSpacesAndCrlf) {
-  // Blanks after the `$` are dropped; the next line is appended verbatim (its indentation too).
+  // Blanks after the `$` are dropped; the next line is appended without its indentation (shop
+  // software splits labels and indents the rest: issue 14).
   const std::string src = "F(CLIN1)=FEAT/LINE,0.000, $  \r\n  0.000,1.0\r\nENDFIL\r\n";
   const auto lines = join_continuations(src);
   ASSERT_EQ(lines.size(), 2u);
-  EXPECT_EQ(lines[0].text, "F(CLIN1)=FEAT/LINE,0.000,   0.000,1.0");
+  EXPECT_EQ(lines[0].text, "F(CLIN1)=FEAT/LINE,0.000, 0.000,1.0");
   EXPECT_EQ(lines[1].text, "ENDFIL");
   EXPECT_EQ(lines[1].physical[0], src.find("ENDFIL"));
   for (const auto& l : lines) expect_map_exact(src, l);
@@ -151,7 +160,7 @@ TEST(Preprocess, MapIsExactOnAMixedFile) {
       "TEXT/OPER,'a$\n$$b'\nDATDEF/FA(PL$\n.N-1_x),DAT(A)";
   const auto lines = join_continuations(src);
   ASSERT_EQ(lines.size(), 3u);
-  EXPECT_EQ(lines[0].text, "F(X)=FEAT/CIRCLE,INNER,CART, 1.5, 2, 3 ");
+  EXPECT_EQ(lines[0].text, "F(X)=FEAT/CIRCLE,INNER,CART,1.5, 2, 3 ");
   EXPECT_EQ(lines[1].text, "TEXT/OPER,'a$$b'");
   EXPECT_EQ(lines[2].text, "DATDEF/FA(PL.N-1_x),DAT(A)");
   for (const auto& l : lines) expect_map_exact(src, l);

@@ -21,7 +21,10 @@ struct ws : star<blank> {};
 struct ident_first : ranges<'a', 'z', 'A', 'Z'> {};
 struct ident_other : ranges<'a', 'z', 'A', 'Z', '0', '9', '_'> {};
 struct ident : seq<ident_first, star<ident_other>> {};
-struct label_char : sor<ident_other, one<'.', '-', '#', '@', '!', '~'>> {};
+// Shop software writes labels with non-ASCII letters (UTF-8 after decoding: `PLN_Sphères`),
+// `+` and `±` (`PNT+X`, `DIST±`): any byte >= 0x80 is part of a label.
+struct label_high_byte : range<static_cast<char>(0x80), static_cast<char>(0xFF)> {};
+struct label_char : sor<ident_other, one<'.', '-', '#', '@', '!', '~', '+'>, label_high_byte> {};
 struct label_name : plus<label_char> {};
 
 // Dotted operators; case-insensitive and delimited by their dots, so `5.EQ.X` is 5 .EQ. X.

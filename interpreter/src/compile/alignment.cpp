@@ -43,7 +43,7 @@ void UnitCompiler::add_alignment(StatementTable& t) {
   });
 }
 
-// D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...
+// D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...   (-ZDIR = ZMINUS)
 void UnitCompiler::datset(const grammar::Statement& s) {
   if (!require_target(s, {"D"}, "D(label)=DATSET/...")) return;
   if (!expect_params(s, 1, "MCS or datums")) return;
@@ -53,7 +53,17 @@ void UnitCompiler::datset(const grammar::Statement& s) {
     in.operands.push_back(word_operand(s.params[0]));
   } else {
     bool have_datum = false;
-    for (const auto& p : s.params) {
+    for (const auto& param : s.params) {
+      // Signed directions (DMIS 5.x, written by PC-DMIS and CAMIO): -XDIR is XMINUS, +XDIR is XDIR.
+      grammar::Expr signed_word;
+      const bool is_signed = param.kind == ExprKind::Unary && param.args.size() == 1 && (param.text == "-" || param.text == "+") &&
+                             (is_word(param.args[0], "XDIR") || is_word(param.args[0], "YDIR") || is_word(param.args[0], "ZDIR"));
+      if (is_signed) {
+        signed_word = param.args[0];
+        signed_word.span = param.span;
+        if (param.text == "-") signed_word.text = std::string(1, param.args[0].text[0]) + "MINUS";
+      }
+      const grammar::Expr& p = is_signed ? signed_word : param;
       if (is_label(p, {"DAT"})) {
         const std::string d = upper(p.label.name);
         if (!m_symbols.datums.count(d) && !macro_param(d))
@@ -132,9 +142,14 @@ void UnitCompiler::save(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// RECALL/DA(l) | RECALL/D(l)
+// RECALL/DA(l) | RECALL/D(l) | RECALL/SA(l)   (SA: a qualified sensor of the probe library)
 void UnitCompiler::recall(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a coordinate system D(label) or DA(label)")) return;
+  if (is_label(s.params[0], {"SA"})) {
+    library_sensor(s.params[0]);
+    emit(make(Op::Nop, s, "RECALL"));
+    return;
+  }
   if (!is_label(s.params[0], {"DA", "D"})) {
     if (s.params[0].kind == ExprKind::Label) {  // RECALL/SA(), RECALL/FA() ...: not supported
       warn(s.params[0].span, "sema.unsupported-recall", fmt::format("RECALL of {}() is not supported and is ignored", s.params[0].label.prefix));
@@ -174,6 +189,19 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   auto in = make(Op::Construct, s, label);
   in.name_is_param = macro_param(label).has_value();
   in.payload = ir::ConstructPayload{*const_type, *method};
+  if (*method == ir::ConstructionMethod::Movept) {
+    // CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz
+    if (*const_type != FeatureType::Point) return error(p[0].span, "sema.const-type", "MOVEPT constructs a POINT");
+    if (p.size() != 7 || !is_label(p[3], {"FA", "F"}))
+      return error(p.back().span, "sema.construction-arity", "MOVEPT takes a feature and an offset: MOVEPT,FA(x),dx,dy,dz");
+    if (!check_feature(p[3])) return;
+    in.operands.push_back(label_op(p[3]));
+    for (std::size_t i = 4; i < 7; ++i)
+      if (!push_number(in, p[i], "an offset")) return;
+    if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+    emit(std::move(in));
+    return;
+  }
   for (std::size_t i = 3; i < p.size(); ++i) {
     if (!is_label(p[i], {"FA", "F"})) return error(p[i].span, "sema.expected-feature", "expected FA(label) source features");
     if (!check_feature(p[i])) return;
@@ -199,11 +227,17 @@ void UnitCompiler::output(const grammar::Statement& s) {
       const std::string t = upper(p.label.name);
       if (!macro_param(t)) {
         auto it = m_symbols.tolerances.find(t);
+        if (auto u = m_symbols.unevaluated_tolerances.find(t); it == m_symbols.tolerances.end() && u != m_symbols.unevaluated_tolerances.end()) {
+          note(p.span, "sema.unevaluated-output", fmt::format("T({}) (TOL/{}) is not evaluated: left out of this OUTPUT", p.label.name, u->second));
+          continue;
+        }
         if (it == m_symbols.tolerances.end())
           return error(p.span, m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
                        m_symbols.skipped.count("T:" + t) ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
                                                          : fmt::format("tolerance T({}) is not defined", p.label.name));
         const ToleranceKind kind = it->second;
+        if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Cortol) && types.empty())
+          return error(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
         if (kind == ToleranceKind::DistB && types.size() != 2)
           return error(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
         if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)

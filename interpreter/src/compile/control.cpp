@@ -32,7 +32,7 @@ void UnitCompiler::endfil(const grammar::Statement& s) {
 void UnitCompiler::assignment(const grammar::Statement& s) {
   const grammar::Expr& v = *s.variable;
   const std::string name = v.text;
-  if (s.major != "ASSIGN" && s.major != "OBTAIN") {
+  if (s.major != "ASSIGN" && s.major != "OBTAIN" && s.major != "PROMPT") {
     // Vendor statements of the form V=XXX/...: warn and skip.
     warn(s.major_span, "sema.unknown-statement", fmt::format("unknown statement {} is skipped", s.major));
     emit(make(Op::Nop, s, s.major));
@@ -66,6 +66,17 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     value.label = label_operand(s.params[0].label);
     value.type = ValueType::Real;
     value.args.push_back(std::move(*idx));
+  } else if (s.major == "PROMPT") {
+    // V=PROMPT/'text'[,maxlen]: the operator's answer, typed as V (scripted or a default at run).
+    value.op = ir::ExprOp::Call;
+    value.name = "PROMPT";
+    value.span = s.span;
+    value.type = info ? info->type : ValueType::Real;
+    if (!s.params.empty()) {
+      auto q = expression(s.params[0]);
+      if (!q) return;
+      value.args.push_back(std::move(q->e));
+    }
   } else {
     if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.assign", "ASSIGN expects one expression");
     auto e = expression(s.params[0]);
@@ -169,11 +180,26 @@ void UnitCompiler::enddo(const grammar::Statement& s) {
 void UnitCompiler::jumpto(const grammar::Statement& s) {
   if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.jumpto", "JUMPTO expects one label, e.g. JUMPTO/(L1)");
   const grammar::Expr* p = &s.params[0];
-  if (p->kind == ExprKind::Paren && !p->args.empty()) p = &p->args[0];
-  if (p->kind != ExprKind::Word) return error(p->span, "sema.jumpto", "expected a label name after JUMPTO/");
+  std::string name;
+  if (p->kind == ExprKind::Paren && !p->args.empty()) {
+    // A jump label may hold '-', '.' ...: `JUMPTO/(L-1)` parses as the expression L-1, so the
+    // label is the text between the parentheses, as `(L-1)` on its own line is read.
+    const std::string& text = m_sources.file(p->span.file).text;
+    if (p->span.end <= text.size() && p->span.end >= p->span.begin + 2) {
+      std::string inner = text.substr(p->span.begin + 1, p->span.end - p->span.begin - 2);
+      std::erase_if(inner, [](char c) { return c == ' ' || c == '\t'; });
+      const bool plain = !inner.empty() && std::all_of(inner.begin(), inner.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_.-#@!~").find(c) != std::string_view::npos;
+      });
+      if (plain) name = upper(inner);
+    }
+    p = &p->args[0];
+  }
+  if (name.empty() && p->kind == ExprKind::Word) name = p->text;
+  if (name.empty()) return error(p->span, "sema.jumpto", "expected a label name after JUMPTO/");
   mark_control();
-  const std::size_t pc = emit(make(Op::Jump, s, p->text));
-  jumps().pending.push_back({pc, {p->text, p->span}});
+  const std::size_t pc = emit(make(Op::Jump, s, name));
+  jumps().pending.push_back({pc, {name, p->span}});
 }
 
 // M(name)=MACRO/'P1','P2' | M(name)=MACRO/P1,P2
@@ -266,8 +292,14 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       emit(std::move(in));
       return;
     }
-    warn(s.params[2].span, "sema.unsupported-call",
+    note(s.params[2].span, "sema.unsupported-call",
          fmt::format("unknown system command '{}' (metron knows CHARACTERISE and CHARACTERISATION); the call is skipped", text));
+    emit(make(Op::Nop, s, "CALL"));
+    return;
+  }
+  if (s.params.size() >= 2 && (is_word(s.params[1], "DME") || is_word(s.params[1], "SYS"))) {
+    // The DME's or the system's own commands: their contents mean nothing to a virtual CMM.
+    note(s.params[1].span, "sema.unsupported-call", fmt::format("CALL/EXTERN,{} is for the CMM's own software; the call is skipped", s.params[1].text));
     emit(make(Op::Nop, s, "CALL"));
     return;
   }
@@ -278,8 +310,36 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
   }
   const grammar::Expr& f = s.params.back();
   if (f.kind != ExprKind::String) return error(f.span, "sema.expected-file", "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
+  // A path written on another machine (`Z:\progs\sub.dmi`, `\\server\...`) is looked up by its
+  // base name beside the calling file and in the --include folders; not found, it is a warning
+  // here and an error when the call runs (docs/language.md "CALL/EXTERN").
+  const bool foreign = f.text.find('\\') != std::string::npos ||
+                       (f.text.size() > 1 && std::isalpha(static_cast<unsigned char>(f.text[0])) && f.text[1] == ':');
   std::filesystem::path path(f.text);
-  if (path.is_relative()) path = std::filesystem::path(m_module.units[m_unit].path).parent_path() / path;
+  if (foreign) {
+    const std::string base = f.text.substr(f.text.find_last_of("\\/:") + 1);
+    std::vector<std::filesystem::path> where = {std::filesystem::path(m_module.units[m_unit].path).parent_path()};
+    for (const auto& d : m_symbols.include_dirs) where.emplace_back(d);
+    std::optional<std::filesystem::path> found;
+    std::string searched;
+    for (const auto& d : where) {
+      std::error_code ec;
+      if (std::filesystem::is_regular_file(d / base, ec)) { found = d / base; break; }
+      searched += (searched.empty() ? "" : ", ") + (d.empty() ? std::string(".") : d.string());
+    }
+    if (!found) {
+      warn(f.span, "sema.foreign-path",
+           fmt::format("'{}' was written on another machine and {} is not in {}: give its folder with --include DIR; the "
+                       "run stops at this call", f.text, base, searched));
+      auto in = make(Op::CallUnit, s, f.text);
+      in.target = -1;
+      emit(std::move(in));
+      return;
+    }
+    path = *found;
+  } else if (path.is_relative()) {
+    path = std::filesystem::path(m_module.units[m_unit].path).parent_path() / path;
+  }
   auto unit = m_include(path.string(), f.text, f.span);
   if (!unit) return;
   auto in = make(Op::CallUnit, s, path.string());

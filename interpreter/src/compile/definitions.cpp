@@ -54,7 +54,10 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
     case ToleranceKind::Diam:
     case ToleranceKind::Rad:
     case ToleranceKind::Profs: return {2, "lower and upper tolerance", false};
-    case ToleranceKind::DistB: return {3, "nominal distance, lower and upper tolerance", false};
+    case ToleranceKind::DistB:
+    case ToleranceKind::DistWrt: return {3, "nominal distance, lower and upper tolerance", false};
+    case ToleranceKind::AngWrt: return {3, "nominal angle, lower and upper tolerance", false};
+    case ToleranceKind::Cortol: return {2, "lower and upper tolerance", false};
     case ToleranceKind::Anglb: return {3, "nominal angle, lower and upper tolerance", false};
     default: return {1, "the tolerance zone", true};
   }
@@ -201,6 +204,19 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   const auto& p = s.params;
   const auto parsed = is_word(p[0]) ? ir::parse_word<ToleranceKind>(p[0].text) : std::nullopt;
   if (!parsed) {
+    // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
+    // of one is left out with a warning instead of failing the program.
+    static const std::set<std::string> standard = {"CONCEN", "COAXIAL", "SYMMETRY", "RUNOUT", "TOTRUN", "PROFL",
+                                                   "PROFP", "PROFT", "CPARLN", "USETOL",
+                                                   "ANGL", "COMPOS", "GAP", "PNTDEF", "WIDTH", "CRNOUT"};
+    if (is_word(p[0]) && standard.count(p[0].text)) {
+      warn(p[0].span, "sema.unevaluated-tolerance",
+           fmt::format("tolerance type {} is not evaluated by metron; the OUTPUT of T({}) will be left out", p[0].text, s.target->name));
+      m_symbols.unevaluated_tolerances[upper(s.target->name)] = p[0].text;
+      m_symbols.tolerances.erase(upper(s.target->name));
+      emit(make(Op::Nop, s, "TOL"));
+      return;
+    }
     if (is_word(p[0])) {
       warn(p[0].span, "sema.unsupported-tolerance", fmt::format("tolerance type {} is not supported; T({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["T:" + upper(s.target->name)] = s.span;
@@ -215,8 +231,15 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   in.name_is_param = macro_param(upper(s.target->name)).has_value();
   in.payload = ir::TolerancePayload{kind};
   std::vector<double> numbers;
+  bool has_reference = false;
   for (std::size_t i = 1; i < p.size(); ++i) {
-    if (p[i].kind == ExprKind::Label) {
+    if (p[i].kind == ExprKind::Label && (kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) &&
+        is_label(p[i], {"F", "FA"})) {
+      // TOL/DISTWRT,NOMINL,d,lo,hi,FA(ref),XAXIS,AVG: the reference feature is part of the tolerance.
+      if (!check_feature(p[i])) return;
+      in.operands.push_back(label_op(p[i]));
+      has_reference = true;
+    } else if (p[i].kind == ExprKind::Label) {
       if (!is_label(p[i], {"DAT", "DATT"})) return error(p[i].span, "sema.expected-datum", "expected a datum DAT(x)");
       const std::string d = upper(p[i].label.name);
       if (!m_symbols.datums.count(d) && !macro_param(d))
@@ -234,7 +257,13 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   const ToleranceNumbers need = tolerance_numbers(kind);
   if (numbers.size() < need.count)
     return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count, need.count == 1 ? "" : "s", numbers.size()));
-  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs) && numbers[0] > numbers[1])
+  if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) && !has_reference)
+    return error(p.back().span, "sema.expected-feature", fmt::format("TOL/{} needs the reference feature FA(x)", word));
+  if (kind == ToleranceKind::Cortol &&
+      std::none_of(p.begin(), p.end(), [&](const grammar::Expr& e) { return is_word(e, "XAXIS") || is_word(e, "YAXIS") || is_word(e, "ZAXIS"); }))
+    return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
+  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs || kind == ToleranceKind::Cortol) &&
+      numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
   if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel) &&
       std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
@@ -244,7 +273,10 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
   m_symbols.tolerances[upper(s.target->name)] = kind;
-  if (std::any_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
+  m_symbols.unevaluated_tolerances.erase(upper(s.target->name));
+  if (std::any_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) {
+        return o.kind == ir::Operand::Kind::Label && (o.label.prefix == "DAT" || o.label.prefix == "DATT");
+      }))
     m_symbols.tolerance_datums.insert(upper(s.target->name));
   else
     m_symbols.tolerance_datums.erase(upper(s.target->name));

@@ -15,14 +15,18 @@ namespace {
 const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "WKPLAN", "VFORM",
                                        "ERROR", "DMEHW", "DMESW", "FINPOS", "CLMPID", "CLMPSN", "PREVOP",
                                        "OPERID", "PLANID", "PARTID", "PARTRV", "PARTSN", "PROCID", "QISDEF",
-                                       "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT", "RESUME"};
+                                       "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT", "RESUME",
+                                       // DMIS 5.x statements shop programs carry that change nothing on a
+                                       // virtual CMM: reporting precision, vendor switches, fly mode.
+                                       "DECPL", "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN"};
 }  // namespace
 
 void UnitCompiler::add_input_output(StatementTable& t) {
   for (const char* w : no_effect_words) t.emplace(w, &UnitCompiler::no_effect);
   t.insert({
       {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
-      {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close}
+      {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
+      {"PAUSE", &UnitCompiler::pause}
   });
 }
 
@@ -47,16 +51,31 @@ void UnitCompiler::units(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// MODE/AUTO | MODE/PROG,MAN | MODE/MAN
+// MODE/AUTO | MODE/PROG,MAN | MODE/MAN | MODE/AUTO,PROG | MODE/AUTO,PROG,MAN   (DMIS 5.3 6.106: the
+// words say what the DME may do; AUTO wins, PROG without AUTO is programmed-manual)
 void UnitCompiler::mode(const grammar::Statement& s) {
   if (!expect_params(s, 1, "AUTO, PROG,MAN or MAN")) return;
   auto in = make(Op::Mode, s);
-  std::string w;
-  for (const auto& p : s.params) w += (w.empty() ? "" : " ") + p.text;
-  const auto mode = ir::parse_word<ir::RunMode>(w);
-  if (!mode) return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
-  in.payload = ir::ModePayload{*mode};
+  bool is_auto = false, is_prog = false, is_man = false;
+  for (const auto& p : s.params) {
+    const std::string w = is_word(p) ? p.text : std::string();
+    if (w == "AUTO") is_auto = true;
+    else if (w == "PROG") is_prog = true;
+    else if (w == "MAN") is_man = true;
+    else return error(p.span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+  }
+  if (is_prog && !is_auto && !is_man) return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+  in.payload = ir::ModePayload{is_auto ? ir::RunMode::Auto : is_prog ? ir::RunMode::ProgMan : ir::RunMode::Man};
   emit(std::move(in));
+}
+
+// PAUSE: the operator resumes the program; a virtual CMM has no operator to wait for.
+void UnitCompiler::pause(const grammar::Statement& s) {
+  if (!m_paused) {
+    note(s.span, "sema.pause", "PAUSE does not wait on the virtual CMM: the run continues (noted once)");
+    m_paused = true;
+  }
+  emit(make(Op::Nop, s, "PAUSE"));
 }
 
 // TEXT/OPER|OUTFIL|MAN|DISPLY,'text'

@@ -42,7 +42,7 @@ void UnitCompiler::add_measurement(StatementTable& t) {
 // SNSMNT/XVEC,i,j,k,ZVEC,i,j,k,MNTLEN,x,y,z: the probe mount; the virtual CMM's head is fixed.
 void UnitCompiler::snsmnt(const grammar::Statement& s) { emit(make(Op::Nop, s, "SNSMNT")); }
 
-// SNSLCT/S(l)
+// SNSLCT/S(l) | SNSLCT/SA(l)   (SA: a sensor of the machine's probe library, RECALLed or not)
 void UnitCompiler::snslct(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a sensor label S(...)")) return;
   if (!is_label(s.params[0], {"S", "SA"})) return error(s.params[0].span, "sema.expected-sensor", "expected a sensor label S(...) after SNSLCT/");
@@ -50,9 +50,18 @@ void UnitCompiler::snslct(const grammar::Statement& s) {
   if (!m_symbols.sensors.count(name)) {
     if (auto it = m_symbols.skipped.find("S:" + name); it != m_symbols.skipped.end())
       return error(s.params[0].span, "sema.skipped-definition", fmt::format("sensor S({}) was defined by a skipped statement", s.params[0].label.name));
-    return error(s.params[0].span, "sema.undefined-sensor", fmt::format("sensor S({}) is not defined: define it with S({})=SNSDEF/PROBE,...", s.params[0].label.name, s.params[0].label.name));
+    library_sensor(s.params[0]);
   }
   emit(make(Op::SensorSelect, s, name));
+}
+
+void UnitCompiler::library_sensor(const grammar::Expr& label) {
+  const std::string name = upper(label.label.name);
+  if (m_symbols.sensors.count(name) || !m_symbols.library_sensors.insert(name).second) return;
+  note(label.span, "sema.library-sensor",
+       fmt::format("sensor {}({}) is not defined in the program: it is taken from the machine's probe library "
+                   "(a 4 mm default tip, with a warning, when the library does not hold it)",
+                   label.label.prefix, label.label.name));
 }
 
 // SNSET/APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH,dist[, ...]
@@ -221,7 +230,9 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
   m_blocks.pop_back();
   if (b.start == invalid) return;
   if (!b.control && !b.scanned && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
-    error(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS", b.declared, b.ptmeas));
+    // Shop software measures the PTMEAS it has and reports the difference (DMIS 5.3 leaves it to
+    // the DME): a warning, and the block's points are used.
+    warn(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS; the {} are used", b.declared, b.ptmeas, b.ptmeas));
   const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
   const int minimum = minimum_points(b.type);
   if (!b.control && !b.scanned && n > 0 && n < minimum)

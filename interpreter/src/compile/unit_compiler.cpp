@@ -13,9 +13,17 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   const auto& st = program.statements;
   if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN")
     warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
-  for (const auto& s : st) {
+  // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
+  for (const auto& s : st)
+    if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT") m_later_features.emplace(upper(s.target->name), s.span);
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const auto& s = st[i];
     if (m_ended) {
-      warn(s.span, "sema.after-endfil", "statement after ENDFIL is ignored");
+      const bool second = std::any_of(st.begin() + static_cast<std::ptrdiff_t>(i), st.end(),
+                                      [](const grammar::Statement& t) { return t.major == "DMISMN"; });
+      warn(s.span, "sema.after-endfil",
+           fmt::format("{} statement{} after ENDFIL {} ignored{}", st.size() - i, st.size() - i == 1 ? "" : "s",
+                       st.size() - i == 1 ? "is" : "are", second ? ": the file holds a second program (DMISMN after ENDFIL)" : ""));
       break;
     }
     statement(s);
@@ -62,8 +70,14 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
     m_sink.report(std::move(d));
     return false;
   }
+  if (auto later = m_later_features.find(name); later != m_later_features.end()) {
+    const Location loc = m_sources.locate(later->second);
+    error(e.span, "sema.undefined-feature",
+          fmt::format("feature {}({}) is used before its definition at line {}", e.label.prefix, e.label.name, loc.line));
+    return false;
+  }
   error(e.span, "sema.undefined-feature",
-        fmt::format("feature {}({}) is used before its definition: define it with F({})=FEAT/...", e.label.prefix, e.label.name, e.label.name));
+        fmt::format("feature {}({}) is not defined: define it with F({})=FEAT/...", e.label.prefix, e.label.name, e.label.name));
   return false;
 }
 

@@ -90,6 +90,12 @@ class UnitCompiler {
   // ---- diagnostics --------------------------------------------------------------------------
   void error(Span span, const char* code, std::string message) { m_sink.error(code, span, std::move(message)); }
   void warn(Span span, const char* code, std::string message) { m_sink.warning(code, span, std::move(message)); }
+  void note(Span span, const char* code, std::string message) {
+    m_sink.report({Severity::Note, code, span, std::move(message), {}});
+  }
+  /// A sensor the program does not define: taken from the machine's probe library at run
+  /// (docs/language.md "Sensors from the probe library"); one note per name.
+  void library_sensor(const grammar::Expr& label);
 
   // ---- emission -----------------------------------------------------------------------------
   std::vector<ir::Instruction>& code() {
@@ -188,6 +194,7 @@ class UnitCompiler {
   void no_effect(const grammar::Statement& s);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
+  void pause(const grammar::Statement& s);
   void text(const grammar::Statement& s);
   void device(const grammar::Statement& s);
   bool check_device(const grammar::Statement& s);
@@ -257,6 +264,8 @@ class UnitCompiler {
   bool m_repl = false;
   bool m_included = false;
   std::set<std::string> m_runtime_names;
+  bool m_paused = false;  // PAUSE noted once
+  std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
 };
 
 }  // namespace metron::interpreter::detail

@@ -122,8 +122,18 @@ ExecStatus Execute::recall(Interpreter& vm, const ir::Instruction& in, CallFrame
 ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   const auto& words = std::get<ir::ConstructPayload>(in.payload);
   using M = ir::ConstructionMethod;
+  if (words.method == M::Movept) {
+    std::vector<double> offset;
+    if (auto e = numbers(vm, in, offset)) return vm.fail(in.span, *e);
+    if (offset.size() != 3) return vm.fail(in.span, "MOVEPT needs dx, dy, dz");
+    const double len = vm.m_length_mm;
+    if (auto r = vm.m_runtime.construct_moved_point(vm.name_of(in), feature_ref(vm, in.operands[0].label),
+                                                    Vec3(offset[0] * len, offset[1] * len, offset[2] * len), in.span); !r)
+      return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
   const auto method = words.method == M::Bf      ? runtime::ConstructMethod::BestFit
-                      : words.method == M::Intof ? runtime::ConstructMethod::Intersection
+                      : words.method == M::Intof || words.method == M::Pierce ? runtime::ConstructMethod::Intersection
                       : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint
                                                  : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
   std::vector<runtime::FeatureRef> sources;

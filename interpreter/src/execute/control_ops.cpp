@@ -135,6 +135,8 @@ ExecStatus Execute::return_(Interpreter& vm, const ir::Instruction&, CallFrame&)
 
 // Op::CallUnit
 ExecStatus Execute::call_unit(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  // A called file that check could not find (a path of another machine): an error only now.
+  if (in.target < 0) return vm.fail(in.span, fmt::format("CALL/EXTERN,DMIS file {} was not found (give its folder with --include DIR)", in.name));
   CallFrame f;
   f.kind = CallFrame::Kind::Unit;
   f.index = static_cast<std::size_t>(in.target);

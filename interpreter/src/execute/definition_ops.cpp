@@ -108,14 +108,20 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (word == "YAXIS") t.axis = runtime::DistanceAxis::YAxis;
     if (word == "ZAXIS") t.axis = runtime::DistanceAxis::ZAxis;
   }
-  for (const auto& o : in.operands)
-    if (o.kind == Operand::Kind::Label) t.datums.push_back(vm.label_name(o.label));
+  for (const auto& o : in.operands) {
+    if (o.kind != Operand::Kind::Label) continue;
+    if (o.label.prefix == "F" || o.label.prefix == "FA") t.reference_feature = vm.label_name(o.label);  // DISTWRT, ANGWRT
+    else t.datums.push_back(vm.label_name(o.label));
+  }
   using K = runtime::ToleranceKind;
   switch (t.kind) {
     case K::Diam:
     case K::Profs: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
     case K::Rad: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
-    case K::DistB: t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len; break;
+    case K::DistB:
+    case K::DistWrt: t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len; break;
+    case K::Cortol: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
+    case K::AngWrt:
     case K::Anglb: t.nominal = nums[0] * deg; t.lower = nums[1] * deg; t.upper = nums[2] * deg; break;
     default: t.zone = nums[0] * len; break;
   }

@@ -31,6 +31,7 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
       return (*v)[static_cast<std::size_t>(k - 1)];
     }
     case ir::ExprOp::Call: {
+      if (e.name == "PROMPT") return prompt(e);
       const Builtin* fn = find_builtin(e.name);
       if (!fn) return tl::unexpected(fmt::format("unknown function {}", e.name));
       std::vector<Value> args;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "metron/grammar/parser.hpp"
 #include "metron/grammar/ast.hpp"
 #include "metron/interpreter/ir/instruction.hpp"
 #include "metron/stdlib/diagnostic.hpp"
@@ -38,6 +39,12 @@ struct SymbolTable {
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
   std::set<std::string> tolerance_datums;          ///< tolerances defined with datum references
+  /// Sensors the program takes from the machine's probe library (RECALL/SA, SNSLCT without SNSDEF).
+  std::set<std::string> library_sensors;
+  /// Tolerances of a DMIS type metron parses but does not evaluate (CONCEN, RUNOUT, ...): label -> type.
+  std::map<std::string, std::string> unevaluated_tolerances;
+  /// Folders searched for CALL/EXTERN,DMIS files written with another machine's path (--include).
+  std::vector<std::string> include_dirs;
 };
 
 /// What a compiled text is: a program file (or text compiled as one), or a REPL entry, which
@@ -62,6 +69,11 @@ class Compiler {
   /// `runtime_names` are variables visible at run time only (macro parameters and locals).
   std::optional<ir::Expr> compile_expression(const std::string& text, const std::set<std::string>& runtime_names = {});
 
+  /// How files are read (default lenient: non-statement lines are warnings; docs/language.md).
+  void set_parse_options(const grammar::ParseOptions& options) { m_parse_options = options; }
+  /// Folders searched for CALL/EXTERN,DMIS files given with another machine's path (`--include DIR`).
+  void set_include_dirs(std::vector<std::string> dirs) { m_symbols.include_dirs = std::move(dirs); }
+
   [[nodiscard]] const ir::Module& module() const { return m_module; }
   [[nodiscard]] ir::Module& module() { return m_module; }
   [[nodiscard]] const SymbolTable& symbols() const { return m_symbols; }
@@ -73,6 +85,7 @@ class Compiler {
   DiagnosticSink& m_sink;
   ir::Module m_module;
   SymbolTable m_symbols;
+  grammar::ParseOptions m_parse_options;
 };
 
 }  // namespace metron::interpreter

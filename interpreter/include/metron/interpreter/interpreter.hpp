@@ -55,6 +55,10 @@ class Interpreter {
   [[nodiscard]] bool in_measurement() const { return m_block.has_value(); }
   [[nodiscard]] const std::optional<runtime::MeasBlock>& pending_block() const { return m_block; }
 
+  /// Scripted operator answers for `V=PROMPT/...`, used in order (`metron run --answers FILE`);
+  /// when they run out a PROMPT takes its default answer ('' or 0) with a warning.
+  void set_prompt_answers(std::vector<std::string> answers) { m_prompt_answers = std::move(answers); m_next_answer = 0; }
+
   /// Variables (debugger `print`/`set`); nullopt when not declared.
   [[nodiscard]] std::optional<Value> variable(const std::string& name) const;
   bool set_variable(const std::string& name, const Value& value);
@@ -84,6 +88,9 @@ class Interpreter {
   double m_length_mm = 1.0;   ///< UNITS: mm per program length unit
   bool m_degrees = true;      ///< UNITS: ANGDEC (else ANGRAD)
   bool m_finished = false;
+  std::vector<std::string> m_prompt_answers;  // scripted PROMPT answers
+  std::size_t m_next_answer = 0;
+  tl::expected<Value, std::string> prompt(const ir::Expr& e);
 };
 
 }  // namespace metron::interpreter

@@ -36,6 +36,12 @@ struct RunOptions {
   std::function<void(const runtime::RunEvent&)> on_event;  ///< live report
   /// A machine characterisation file (docs/touch-trigger.md); PTMEAS uses its touch strategy.
   std::optional<std::string> characterisation_path;
+  /// Strict reading: a line that is not a DMIS statement is an error, not a warning.
+  bool strict = false;
+  /// Scripted operator answers for PROMPT, in order (`--answers FILE`, one per line).
+  std::vector<std::string> prompt_answers;
+  /// Folders searched for CALL/EXTERN,DMIS files written with another machine's path.
+  std::vector<std::string> include_dirs;
 };
 
 /// Exit status of a run: 0 completed, 1 program error (compile or run time), 3 machine fault,

@@ -13,6 +13,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <tl/expected.hpp>
 
+#include "metron/machine/probe_library.hpp"
 #include "metron/machine/csg.hpp"
 #include "metron/machine/machine_errors/error_model.hpp"
 #include "metron/machine/touch_cycle/pre_travel.hpp"
@@ -90,6 +91,7 @@ struct MachineConfig {
   ReferenceSphereConfig reference_sphere;  ///< nominal centre and certified diameter
   ScanningSpec scanning;              ///< scan controller, scanning probe settings, command buffers
   DataSheet data_sheet;               ///< the probes' published values
+  std::vector<LibrarySensor> probe_library;  ///< named qualified sensors (RECALL/SA, SNSLCT/SA)
 };
 
 /// The touch-trigger probe as it truly is (hidden).

@@ -48,6 +48,11 @@ class MeasurementRuntime {
   // Sensors, settings and motion.
   Result<void> define_sensor(const SensorDefinition& sensor, Span span);
   Result<void> select_sensor(const std::string& label, Span span);
+  /// A sensor the program did not define, from the machine's probe library (a 4 mm default
+  /// tip, with a warning, for a name the library does not hold).
+  Result<void> select_library_sensor(const std::string& label, Span span);
+  /// A positioned run-time warning in the record (the interpreter's PROMPT default, ...).
+  void warning(Span span, const std::string& message) { warn(span, message); }
   ProbeSettings& probe_settings() { return m_probe; }
   /// A machine characterisation (docs/touch-trigger.md): PTMEAS then uses its strategy, feeds
   /// and standoff; SNSET/APPRCH and FEDRAT/MESVEL stay explicit overrides, and a measuring feed
@@ -91,6 +96,8 @@ class MeasurementRuntime {
   Result<void> recall(const std::string& label, Span span);
 
   // Constructions and outputs.
+  /// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: FA(x)'s position moved by an offset (current frame, mm).
+  Result<void> construct_moved_point(const std::string& label, const FeatureRef& source, const Vec3& offset_current, Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
                          const std::vector<FeatureRef>& sources, Span span);
   Result<void> output(const std::vector<OutputItem>& items, Span span);

@@ -12,10 +12,13 @@
 namespace metron::runtime {
 
 /// The DMIS tolerance kinds metron evaluates.
-enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, Strght, Perp, Parlel, Anglb, Profs };
+enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, Strght, Perp, Parlel, Anglb, Profs,
+                           DistWrt,  ///< DISTB to a reference feature named in the TOL (DMIS 5.3 6.163)
+                           AngWrt,   ///< ANGLB to a reference feature named in the TOL
+                           Cortol }; ///< one coordinate of the feature's position (CORTOL)
 const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
 
-/// Distance direction for DISTB.
+/// Distance direction for DISTB (and the coordinate of CORTOL).
 enum class DistanceAxis { PointToPoint, XAxis, YAxis, ZAxis };
 /// Material condition modifier of POS.
 enum class MaterialCondition { Rfs, Mmc, Lmc };
@@ -32,6 +35,7 @@ struct ToleranceSpec {
   DistanceAxis axis = DistanceAxis::PointToPoint;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced
+  std::string reference_feature;   ///< DISTWRT, ANGWRT: the FA() the distance or angle is taken to
   Span defined_at;
 };
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "metron/stdlib/span.hpp"
+#include "metron/stdlib/text_encoding.hpp"
 
 namespace metron {
 
@@ -17,10 +18,12 @@ struct Location {
   std::uint32_t column = 0;
 };
 
-/// One loaded source file: its path and exact bytes.
+/// One loaded source file: its path and its text as UTF-8 (the exact bytes unless the file was
+/// Windows-1252 / Latin-1, which is decoded: docs/language.md "Encodings").
 struct SourceFile {
   std::string path;
   std::string text;
+  TextEncoding encoding = TextEncoding::Ascii;  ///< what the bytes were found to be
   std::vector<std::uint32_t> line_starts;  ///< byte offset of each line start
 };
 

@@ -24,7 +24,9 @@ enum class RunMode { Auto, ProgMan, Man };
 /// How a statement gives its coordinates: CART x,y,z; POL radius,angle,height; GOTO/INCR distance,i,j,k.
 enum class CoordinateForm { Cart, Pol, Incr };
 /// CONST methods.
-enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct };
+enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
+                                Pierce,   ///< a line-like feature through a surface: INTOF's point
+                                Movept }; ///< a feature's point moved by dx, dy, dz
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>

@@ -1,0 +1,37 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Minimum-zone (Chebyshev) form: the width of the narrowest zone that holds every point, as ISO
+// 1101 defines flatness, roundness, straightness, cylindricity and sphericity (ISO 12781-1,
+// 12181-1, 12780-1, 12180-1: MZ reference features). The least-squares form of fit.hpp stays
+// available; a report names which one it gives.
+#pragma once
+#include <optional>
+#include <vector>
+
+#include <tl/expected.hpp>
+
+#include "metron/stdlib/fitting/fit.hpp"
+#include "metron/stdlib/geometry/vec.hpp"
+
+namespace metron::fitting {
+
+/// The minimum zone of a point set and the reference feature that achieves it.
+struct MinimumZone {
+  double form_mm = 0;        ///< zone width: plane gap, annulus / shell width, cylinder-shell width, line-zone width
+  Vec3 position = Vec3::Zero();  ///< a point of the MZ reference: plane point, circle/sphere centre, point on the axis or line
+  Vec3 direction = Vec3::UnitZ();  ///< plane normal, circle plane normal, cylinder axis, line direction
+  double least_squares_form_mm = 0;  ///< the same points' least-squares form (max - min residual), for comparison
+  int evaluations = 0;       ///< objective evaluations of the search
+};
+
+/// Minimum-zone form of `points` (no probe compensation: give surface points) for a Plane
+/// (flatness), Circle (roundness in the plane normal to `plane_normal` when given, else in the
+/// least-squares plane), Line (straightness: two parallel
+/// lines in the plane normal to `plane_normal` when given, else the diameter of the narrowest
+/// cylinder about a line), Sphere (sphericity) or Cylinder (cylindricity: coaxial cylinders).
+/// The search starts at the least-squares feature, so the result is never wider than it
+/// (Nelder-Mead simplex on the reference's free parameters with restarts, J. A. Nelder and
+/// R. Mead, Computer Journal 7(4), 1965; the width is convex near the optimum for these sets).
+tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vector<Vec3>& points,
+                                                   const std::optional<Vec3>& plane_normal = std::nullopt);
+
+}  // namespace metron::fitting

@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The text encodings shop-floor software writes DMIS files in, detected and read as UTF-8.
+#pragma once
+#include <string>
+#include <string_view>
+
+namespace metron {
+
+/// What a file's bytes were found to be.
+enum class TextEncoding {
+  Ascii,        ///< 7-bit only: the same in every encoding
+  Utf8,         ///< valid UTF-8 with at least one multi-byte character
+  Windows1252,  ///< not valid UTF-8: read as Windows-1252 (a superset of Latin-1's printable characters)
+};
+
+/// The encoding's name as a message says it ("ASCII", "UTF-8", "Windows-1252").
+std::string_view to_string(TextEncoding e);
+
+/// Whether `bytes` are valid UTF-8 (no overlong forms, no surrogates, at most U+10FFFF).
+bool is_valid_utf8(std::string_view bytes);
+
+/// Detects the encoding of `bytes` and returns them as UTF-8: ASCII and UTF-8 unchanged, anything
+/// else decoded as Windows-1252 (bytes 0x81, 0x8D, 0x8F, 0x90 and 0x9D, undefined there, as the
+/// Latin-1 control characters of the same value, so no byte is lost).
+std::string to_utf8(std::string bytes, TextEncoding* detected = nullptr);
+
+}  // namespace metron

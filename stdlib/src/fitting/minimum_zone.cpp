@@ -1,0 +1,222 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/stdlib/fitting/minimum_zone.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+namespace metron::fitting {
+namespace {
+
+using Objective = std::function<double(const std::vector<double>&)>;
+
+// Nelder-Mead simplex minimisation (Nelder & Mead 1965; coefficients 1, 2, 0.5, 0.5), restarted
+// from the best vertex with a smaller simplex until a restart no longer improves: the zone width
+// is not smooth where the extreme points change, and restarts get past the simplex collapsing there.
+std::vector<double> nelder_mead(const Objective& f, std::vector<double> x0, double scale, int& evaluations) {
+  const std::size_t n = x0.size();
+  double best = f(x0);
+  ++evaluations;
+  for (int restart = 0; restart < 60 && scale > 1e-15; ++restart) {
+    std::vector<std::vector<double>> s(n + 1, x0);
+    std::vector<double> v(n + 1);
+    for (std::size_t i = 0; i < n; ++i) s[i + 1][i] += scale;
+    for (std::size_t i = 0; i <= n; ++i) v[i] = f(s[i]);
+    evaluations += static_cast<int>(n + 1);
+    for (int it = 0; it < 400 * static_cast<int>(n); ++it) {
+      std::vector<std::size_t> order(n + 1);
+      for (std::size_t i = 0; i <= n; ++i) order[i] = i;
+      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+      const std::size_t lo = order.front(), hi = order.back(), second = order[n - 1];
+      if (std::abs(v[hi] - v[lo]) <= 1e-16 * (1 + std::abs(v[lo]))) break;
+      std::vector<double> c(n, 0.0);
+      for (std::size_t i = 0; i <= n; ++i)
+        if (i != hi)
+          for (std::size_t k = 0; k < n; ++k) c[k] += s[i][k] / static_cast<double>(n);
+      const auto along = [&](double t) {
+        std::vector<double> p(n);
+        for (std::size_t k = 0; k < n; ++k) p[k] = c[k] + t * (s[hi][k] - c[k]);
+        return p;
+      };
+      const auto xr = along(-1.0);
+      const double fr = f(xr);
+      ++evaluations;
+      if (fr < v[lo]) {
+        const auto xe = along(-2.0);
+        const double fe = f(xe);
+        ++evaluations;
+        if (fe < fr) s[hi] = xe, v[hi] = fe;
+        else s[hi] = xr, v[hi] = fr;
+      } else if (fr < v[second]) {
+        s[hi] = xr, v[hi] = fr;
+      } else {
+        const auto xc = fr < v[hi] ? along(-0.5) : along(0.5);
+        const double fc = f(xc);
+        ++evaluations;
+        if (fc < std::min(fr, v[hi])) {
+          s[hi] = xc, v[hi] = fc;
+        } else {
+          for (std::size_t i = 0; i <= n; ++i) {
+            if (i == lo) continue;
+            for (std::size_t k = 0; k < n; ++k) s[i][k] = s[lo][k] + 0.5 * (s[i][k] - s[lo][k]);
+            v[i] = f(s[i]);
+            ++evaluations;
+          }
+        }
+      }
+    }
+    const std::size_t lo = static_cast<std::size_t>(std::min_element(v.begin(), v.end()) - v.begin());
+    const bool improved = v[lo] < best - 1e-15 * (1 + std::abs(best));
+    if (v[lo] <= best) {
+      best = v[lo];
+      x0 = s[lo];
+    }
+    scale *= improved ? 0.5 : 0.1;
+  }
+  return x0;
+}
+
+// Two unit vectors completing `n` to a right-handed frame.
+std::pair<Vec3, Vec3> frame_of(const Vec3& n) {
+  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 e1 = n.cross(a).normalized();
+  return {e1, n.cross(e1)};
+}
+
+// A direction near `n`: n + a e1 + b e2, normalised.
+Vec3 tilt(const Vec3& n, const Vec3& e1, const Vec3& e2, double a, double b) { return (n + a * e1 + b * e2).normalized(); }
+
+double spread(const std::vector<double>& r) {
+  const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+  return *mx - *mn;
+}
+
+double extent(const std::vector<Vec3>& points) {
+  Vec3 lo = points.front(), hi = points.front();
+  for (const auto& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  return std::max((hi - lo).norm(), 1e-9);
+}
+
+}  // namespace
+
+tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vector<Vec3>& points,
+                                                   const std::optional<Vec3>& plane_normal) {
+  FitOptions ls_options;
+  if ((shape == Shape::Line || shape == Shape::Circle) && plane_normal) ls_options.direction_hint = plane_normal;
+  ls_options.circle_in_plane_of_hint = shape == Shape::Circle && plane_normal.has_value();
+  auto ls = fit(shape, points, ls_options);
+  if (!ls) return tl::unexpected(ls.error());
+  MinimumZone mz;
+  mz.least_squares_form_mm = ls->form_mm;
+  mz.position = ls->position;
+  mz.direction = ls->direction.normalized();
+  mz.form_mm = ls->form_mm;
+  const double size = extent(points);
+  const Vec3 n0 = mz.direction;
+  const auto [e1, e2] = frame_of(n0);
+  std::vector<double> r(points.size());
+
+  switch (shape) {
+    case Shape::Plane: {
+      // Flatness: the normal (2 tilts); the zone is the spread of the heights along it.
+      const auto width = [&](const std::vector<double>& x) {
+        const Vec3 n = tilt(n0, e1, e2, x[0], x[1]);
+        for (std::size_t i = 0; i < points.size(); ++i) r[i] = n.dot(points[i]);
+        return spread(r);
+      };
+      const auto x = nelder_mead(width, {0, 0}, 1e-3, mz.evaluations);
+      mz.direction = tilt(n0, e1, e2, x[0], x[1]);
+      mz.form_mm = width(x);
+      for (std::size_t i = 0; i < points.size(); ++i) r[i] = mz.direction.dot(points[i]);
+      const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+      mz.position = ls->position + (0.5 * (*mn + *mx) - mz.direction.dot(ls->position)) * mz.direction;
+      break;
+    }
+    case Shape::Circle: {
+      // Roundness in the least-squares plane: the centre (2); the zone is the spread of radii.
+      const auto width = [&](const std::vector<double>& x) {
+        const Vec3 c = ls->position + x[0] * e1 + x[1] * e2;
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          const Vec3 d = points[i] - c;
+          r[i] = (d - d.dot(n0) * n0).norm();
+        }
+        return spread(r);
+      };
+      const auto x = nelder_mead(width, {0, 0}, 1e-3 * size, mz.evaluations);
+      mz.position = ls->position + x[0] * e1 + x[1] * e2;
+      mz.form_mm = width(x);
+      break;
+    }
+    case Shape::Sphere: {
+      const auto width = [&](const std::vector<double>& x) {
+        const Vec3 c = ls->position + Vec3(x[0], x[1], x[2]);
+        for (std::size_t i = 0; i < points.size(); ++i) r[i] = (points[i] - c).norm();
+        return spread(r);
+      };
+      const auto x = nelder_mead(width, {0, 0, 0}, 1e-3 * size, mz.evaluations);
+      mz.position = ls->position + Vec3(x[0], x[1], x[2]);
+      mz.form_mm = width(x);
+      break;
+    }
+    case Shape::Cylinder: {
+      // Cylindricity: the axis direction (2 tilts) and its point in the plane normal to it (2).
+      const auto axis = [&](const std::vector<double>& x, Vec3& point) {
+        const Vec3 a = tilt(n0, e1, e2, x[0], x[1]);
+        point = ls->position + x[2] * e1 + x[3] * e2;
+        return a;
+      };
+      const auto width = [&](const std::vector<double>& x) {
+        Vec3 c;
+        const Vec3 a = axis(x, c);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          const Vec3 d = points[i] - c;
+          r[i] = (d - d.dot(a) * a).norm();
+        }
+        return spread(r);
+      };
+      const auto x = nelder_mead(width, {0, 0, 0, 0}, 1e-3 * size, mz.evaluations);
+      mz.direction = axis(x, mz.position);
+      mz.form_mm = width(x);
+      break;
+    }
+    case Shape::Line: {
+      if (plane_normal) {
+        // Straightness in a plane: two parallel lines; the direction within the plane (1).
+        const Vec3 pn = plane_normal->normalized();
+        const Vec3 d0 = (n0 - n0.dot(pn) * pn).normalized();
+        const Vec3 across0 = pn.cross(d0);
+        const auto width = [&](const std::vector<double>& x) {
+          const Vec3 across = (across0 * std::cos(x[0]) - d0 * std::sin(x[0]));
+          for (std::size_t i = 0; i < points.size(); ++i) r[i] = across.dot(points[i]);
+          return spread(r);
+        };
+        const auto x = nelder_mead(width, {0}, 1e-3, mz.evaluations);
+        mz.direction = (d0 * std::cos(x[0]) + across0 * std::sin(x[0])).normalized();
+        mz.form_mm = width(x);
+      } else {
+        // Straightness in space: the narrowest cylinder about a line, diameter = 2 max distance.
+        const auto width = [&](const std::vector<double>& x) {
+          const Vec3 a = tilt(n0, e1, e2, x[0], x[1]);
+          const Vec3 c = ls->position + x[2] * e1 + x[3] * e2;
+          double m = 0;
+          for (const auto& p : points) {
+            const Vec3 d = p - c;
+            m = std::max(m, (d - d.dot(a) * a).norm());
+          }
+          return 2 * m;
+        };
+        const auto x = nelder_mead(width, {0, 0, 0, 0}, 1e-3 * size, mz.evaluations);
+        mz.direction = tilt(n0, e1, e2, x[0], x[1]);
+        mz.position = ls->position + x[2] * e1 + x[3] * e2;
+        mz.form_mm = width(x);
+      }
+      break;
+    }
+    default: return tl::unexpected(FitFailure::Degenerate);  // point, cone: no MZ form here
+  }
+  return mz;
+}
+
+}  // namespace metron::fitting

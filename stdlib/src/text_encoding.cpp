@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "metron/stdlib/text_encoding.hpp"
+
+#include <array>
+#include <cstdint>
+
+namespace metron {
+namespace {
+
+// Windows-1252 bytes 0x80..0x9F as Unicode code points (the Unicode consortium's
+// bestfit1252 / WHATWG encoding table); 0 marks the five undefined bytes.
+constexpr std::array<std::uint16_t, 32> cp1252_high = {
+    0x20AC, 0,      0x201A, 0x0192, 0x201E, 0x2026, 0x2020, 0x2021, 0x02C6, 0x2030, 0x0160,
+    0x2039, 0x0152, 0,      0x017D, 0,      0,      0x2018, 0x2019, 0x201C, 0x201D, 0x2022,
+    0x2013, 0x2014, 0x02DC, 0x2122, 0x0161, 0x203A, 0x0153, 0,      0x017E, 0x0178};
+
+void append_utf8(std::string& out, std::uint32_t cp) {
+  if (cp < 0x80) {
+    out.push_back(static_cast<char>(cp));
+  } else if (cp < 0x800) {
+    out.push_back(static_cast<char>(0xC0 | (cp >> 6)));
+    out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+  } else {
+    out.push_back(static_cast<char>(0xE0 | (cp >> 12)));
+    out.push_back(static_cast<char>(0x80 | ((cp >> 6) & 0x3F)));
+    out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+  }
+}
+
+}  // namespace
+
+std::string_view to_string(TextEncoding e) {
+  switch (e) {
+    case TextEncoding::Ascii: return "ASCII";
+    case TextEncoding::Utf8: return "UTF-8";
+    case TextEncoding::Windows1252: return "Windows-1252";
+  }
+  return "?";
+}
+
+bool is_valid_utf8(std::string_view s) {
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t n = 0;
+    std::uint32_t cp = 0, min = 0;
+    if (c < 0x80) { ++i; continue; }
+    if ((c & 0xE0) == 0xC0) { n = 1; cp = c & 0x1F; min = 0x80; }
+    else if ((c & 0xF0) == 0xE0) { n = 2; cp = c & 0x0F; min = 0x800; }
+    else if ((c & 0xF8) == 0xF0) { n = 3; cp = c & 0x07; min = 0x10000; }
+    else return false;
+    for (std::size_t k = 1; k <= n; ++k) {
+      if (i + k >= s.size()) return false;
+      const auto d = static_cast<unsigned char>(s[i + k]);
+      if ((d & 0xC0) != 0x80) return false;
+      cp = (cp << 6) | (d & 0x3F);
+    }
+    if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
+    i += n + 1;
+  }
+  return true;
+}
+
+std::string to_utf8(std::string bytes, TextEncoding* detected) {
+  bool ascii = true;
+  for (const char c : bytes)
+    if (static_cast<unsigned char>(c) >= 0x80) { ascii = false; break; }
+  if (ascii || is_valid_utf8(bytes)) {
+    if (detected) *detected = ascii ? TextEncoding::Ascii : TextEncoding::Utf8;
+    return bytes;
+  }
+  if (detected) *detected = TextEncoding::Windows1252;
+  std::string out;
+  out.reserve(bytes.size() + bytes.size() / 8);
+  for (const char ch : bytes) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x80) out.push_back(ch);
+    else if (c < 0xA0 && cp1252_high[c - 0x80] != 0) append_utf8(out, cp1252_high[c - 0x80]);
+    else append_utf8(out, c);
+  }
+  return out;
+}
+
+}  // namespace metron

@@ -1,0 +1,350 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// What real shop-floor DMIS programs contain (issue 14): sensors from the probe library, the
+// statements PC-DMIS, CAMIO and lab generators write, a lenient reader. The programs here are
+// written for these tests in the dialects' style (the public originals are not ours to copy).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+#include "cli/virtual_cmm_backend.hpp"
+#include "metron/grammar/parser.hpp"
+#include "metron/interpreter/compiler.hpp"
+#include "metron/interpreter/session.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using metron::DiagnosticSink;
+using metron::Severity;
+using metron::SourceManager;
+using metron::interpreter::Compiler;
+using metron::interpreter::ExecStatus;
+using metron::interpreter::Session;
+
+// `metron check` on a text: every diagnostic, formatted.
+struct Checked {
+  std::size_t errors = 0, warnings = 0, notes = 0;
+  std::string text;
+  [[nodiscard]] bool has(const std::string& s) const { return text.find(s) != std::string::npos; }
+};
+
+Checked check(const std::string& program, bool strict = false) {
+  SourceManager sources;
+  DiagnosticSink sink;
+  Compiler compiler(sources, sink);
+  compiler.set_parse_options(metron::grammar::ParseOptions{strict});
+  compiler.compile_text("shop.dmi", program);
+  Checked c;
+  for (const auto& d : sink.items()) {
+    c.text += metron::format_diagnostic(d, sources);
+    if (d.severity == Severity::Error) ++c.errors;
+    else if (d.severity == Severity::Warning) ++c.warnings;
+    else ++c.notes;
+  }
+  return c;
+}
+
+fs::path temp_dir() {
+  const fs::path d = fs::temp_directory_path() / ("metron_shop_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path p = temp_dir() / name;
+  std::ofstream(p, std::ios::binary) << text;
+  return p;
+}
+
+const fs::path source_dir = METRON_SOURCE_DIR;
+
+struct Ran {
+  ExecStatus status = ExecStatus::Error;
+  std::string diagnostics;
+  std::unique_ptr<Session> session;
+};
+
+Ran run(const std::string& text, const std::optional<fs::path>& world = std::nullopt,
+        std::vector<std::string> answers = {}) {
+  const fs::path p = write("run.dmi", text);
+  auto backend = metron::cli::virtual_cmm_backend(world ? std::optional<std::string>(world->string()) : std::nullopt, 1);
+  EXPECT_TRUE(backend.has_value()) << (backend ? "" : backend.error());
+  Ran r;
+  r.session = Session::create(std::move(*backend));
+  r.session->interpreter().set_prompt_answers(std::move(answers));
+  if (r.session->load(p.string())) r.status = r.session->interpreter().run();
+  r.diagnostics = r.session->take_diagnostics();
+  for (const auto& w : r.session->record().diagnostics) r.diagnostics += w + "\n";
+  return r;
+}
+
+const metron::runtime::FeatureReport* report(Session& s, const std::string& label) {
+  const metron::runtime::FeatureReport* found = nullptr;
+  for (const auto& e : s.record().events)
+    if (const auto* f = std::get_if<metron::runtime::FeatureReport>(&e); f && f->label == label) found = f;
+  return found;
+}
+const metron::runtime::ToleranceResult* tolerance(Session& s, const std::string& label) {
+  const metron::runtime::ToleranceResult* found = nullptr;
+  for (const auto& e : s.record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e); t && t->label == label) found = t;
+  return found;
+}
+
+// The default block's BORE1 (20 mm at part 40, 50; the part corner at machine 300, 200, 0), as
+// a shop program measures it with a sensor of the probe library.
+std::string bore_program(const std::string& sensor_lines) {
+  return "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\n" + sensor_lines +
+         "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+         "GOTO/40, 50, 80\n"
+         "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+         "MEAS/CIRCLE, F(BORE1), 4\n"
+         "  GOTO/40, 50, 30\n"
+         "  PTMEAS/CART, 50, 50, 30, -1, 0, 0\n  PTMEAS/CART, 40, 60, 30, 0, -1, 0\n"
+         "  PTMEAS/CART, 30, 50, 30, 1, 0, 0\n  PTMEAS/CART, 40, 40, 30, 0, 1, 0\n"
+         "  GOTO/40, 50, 80\n"
+         "ENDMES\nOUTPUT/FA(BORE1)\nENDFIL\n";
+}
+
+}  // namespace
+
+// ---- sensors defined outside the program ------------------------------------------------------
+
+TEST(ShopPrograms, RecallAndSelectOfALibrarySensorCheckWithOneNote) {
+  const auto c = check("DMISMN/'p', 5.1\nRECALL/SA(T1A0B0)\nSNSLCT/SA(T1A0B0)\nSNSLCT/S(TIP2)\nSNSLCT/SA(T1A0B0)\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 0u) << c.text;
+  EXPECT_EQ(c.notes, 2u) << c.text;  // one per name, not one per use
+  EXPECT_TRUE(c.has("sensor SA(T1A0B0) is not defined in the program: it is taken from the machine's probe library"));
+}
+
+TEST(ShopPrograms, LibrarySensorRunsWithItsTipFromTheWorld) {
+  const auto r = run(bore_program("RECALL/SA(T1A0B0)\nSNSLCT/SA(T1A0B0)\n"), source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.diagnostics.find("not in the machine's probe library"), std::string::npos) << r.diagnostics;
+  const auto* f = report(*r.session, "BORE1");
+  ASSERT_TRUE(f && f->actual);
+  // The perfect world's bore is the design bore: 20 mm at part (40, 50).
+  EXPECT_NEAR(f->actual->diameter_mm, 20.0, 2e-3);
+  EXPECT_NEAR(f->actual->position.x(), 40.0, 2e-3);
+}
+
+TEST(ShopPrograms, UnknownSensorNameGetsTheDefaultTipWithAWarningNotAHalt) {
+  const auto r = run(bore_program("SNSLCT/SA(NOT_IN_LIBRARY)\n"), source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("sensor NOT_IN_LIBRARY is not in the machine's probe library; using a 4 mm default tip"),
+            std::string::npos) << r.diagnostics;
+  const auto* f = report(*r.session, "BORE1");
+  ASSERT_TRUE(f && f->actual);
+  EXPECT_NEAR(f->actual->diameter_mm, 20.0, 2e-3);
+}
+
+// ---- statements real programs use -------------------------------------------------------------
+
+TEST(ShopPrograms, ModeCombinationsAndSignedDirections) {
+  const auto c = check(
+      "DMISMN/'p', 5.1\nMODE/AUTO,PROG,MAN\nMODE/AUTO,PROG\nMODE/PROG,MAN\nMODE/MAN\nMODE/AUTO\n"
+      "F(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nMEAS/PLANE,F(P),3\nPTMEAS/CART,0,0,0,0,0,1\nPTMEAS/CART,10,0,0,0,0,1\n"
+      "PTMEAS/CART,0,10,0,0,0,1\nENDMES\nDATDEF/FA(P),DAT(A)\nD(A1)=DATSET/DAT(A),-ZDIR,ZORIG\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(check("DMISMN/'p', 5.1\nMODE/PROG\nENDFIL\n").has("expected AUTO, PROG,MAN or MAN after MODE/"));
+}
+
+TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
+  const auto c = check("DMISMN/'p', 5.1\nDECPL/ALL,DEFALT,4\nDMESWI/'COMM/GOTOPARAMS'\nDMESWV/'NEWSPEED'\nFLY/1.0\n"
+                       "PAUSE\nPAUSE\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 0u) << c.text;
+  EXPECT_EQ(c.notes, 1u) << c.text;  // PAUSE, once
+}
+
+TEST(ShopPrograms, MeasPointCountMismatchIsAWarning) {
+  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nMEAS/CIRCLE,F(C1),4\n"
+                       "PTMEAS/CART,5,0,0,-1,0,0\nPTMEAS/CART,0,5,0,0,-1,0\nPTMEAS/CART,-5,0,0,1,0,0\nENDMES\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("warning: MEAS declares 4 points but the block has 3 PTMEAS; the 3 are used")) << c.text;
+}
+
+TEST(ShopPrograms, UnevaluatedToleranceTypesWarnAndTheirOutputIsLeftOut) {
+  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(CONC)=TOL/CONCEN,0.05,DAT(A)\n"
+                       "T(RUN)=TOL/RUNOUT,0.02,DAT(A)\nOUTPUT/FA(C1),TA(CONC)\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("tolerance type CONCEN is not evaluated by metron")) << c.text;
+  EXPECT_TRUE(c.has("T(CONC) (TOL/CONCEN) is not evaluated: left out of this OUTPUT")) << c.text;
+}
+
+// DISTWRT, CORTOL and MOVEPT against analytic answers on the perfect world (the bore is the design
+// bore at part (40, 50)): the moved point is 5 mm along X from the bore, at y = 47.
+TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
+  const std::string text =
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+      "MEAS/CIRCLE, F(BORE1), 4\n  GOTO/40, 50, 30\n"
+      "  PTMEAS/CART, 50, 50, 30, -1, 0, 0\n  PTMEAS/CART, 40, 60, 30, 0, -1, 0\n"
+      "  PTMEAS/CART, 30, 50, 30, 1, 0, 0\n  PTMEAS/CART, 40, 40, 30, 0, 1, 0\n  GOTO/40, 50, 80\nENDMES\n"
+      "F(PNT_MOVED) = FEAT/POINT, CART, 45, 47, 30, 0, 0, 1\n"
+      "CONST/POINT, F(PNT_MOVED), MOVEPT, FA(BORE1), 5, -3, 0\n"
+      "T(DX) = TOL/DISTWRT, NOMINL, 5, -0.01, 0.01, FA(BORE1), XAXIS, AVG\n"
+      "T(CY) = TOL/CORTOL, YAXIS, -0.01, 0.01\n"
+      "OUTPUT/FA(PNT_MOVED), TA(DX), TA(CY)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* p = report(*r.session, "PNT_MOVED");
+  ASSERT_TRUE(p && p->actual);
+  EXPECT_NEAR(p->actual->position.x(), 45.0, 2e-3);
+  EXPECT_NEAR(p->actual->position.y(), 47.0, 2e-3);
+  const auto* dx = tolerance(*r.session, "DX");
+  ASSERT_TRUE(dx);
+  EXPECT_NEAR(dx->actual, 5.0, 1e-6);  // exactly the MOVEPT offset along X
+  EXPECT_TRUE(dx->in_tolerance);
+  const auto* cy = tolerance(*r.session, "CY");
+  ASSERT_TRUE(cy);
+  EXPECT_NEAR(cy->actual, 47.0, 2e-3);
+  EXPECT_NEAR(cy->value, 0.0, 2e-3);
+}
+
+TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
+  const std::string text =
+      "DMISMN/'p', 5.0\nDECL/COMMON,CHAR,40,PARTNO\nDECL/COMMON,REAL,LIM\nDECL/COMMON,REAL,LIM2\n"
+      "PARTNO=PROMPT/'Part number ?'\nLIM=PROMPT/'Limit ?'\nLIM2=PROMPT/'Second limit ?'\n"
+      "TEXT/OPER,PARTNO\nTEXT/OPER,STR(LIM)\nTEXT/OPER,STR(LIM2)\nENDFIL\n";
+  const auto r = run(text, std::nullopt, {"SN-0042", "2.5"});
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> texts;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  ASSERT_EQ(texts.size(), 3u);
+  EXPECT_EQ(texts[0], "SN-0042");
+  EXPECT_EQ(std::stod(texts[1]), 2.5);
+  EXPECT_EQ(std::stod(texts[2]), 0.0);
+  EXPECT_NE(r.diagnostics.find("PROMPT 'Second limit ?': no operator on the virtual CMM, answered 0"), std::string::npos)
+      << r.diagnostics;
+}
+
+// ---- the lenient reader -----------------------------------------------------------------------
+
+TEST(ShopPrograms, LabelsWithAccentsPlusAndPlusMinusInEveryEncoding) {
+  // The same program in UTF-8 and in Windows-1252 (è = 0xE8, ± = 0xB1): both check clean and
+  // the label is the same UTF-8 text.
+  const std::string utf8 = "DMISMN/'p', 5.1\nF(PLN_Sph\xC3\xA8res+\xC2\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
+                           "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xC3\xA8res+\xC2\xB1),TA(F1)\nENDFIL\n";
+  const std::string latin = "DMISMN/'p', 5.1\nF(PLN_Sph\xE8res+\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
+                            "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xE8res+\xB1),TA(F1)\nENDFIL\n";
+  for (const auto* t : {&utf8, &latin}) {
+    const auto c = check(*t);
+    EXPECT_EQ(c.errors, 0u) << c.text;
+  }
+  SourceManager sources;
+  const auto id = sources.add("latin.dmi", latin);
+  EXPECT_EQ(sources.file(id).encoding, metron::TextEncoding::Windows1252);
+  EXPECT_EQ(sources.file(id).text, utf8);
+  // Windows-1252's own characters (0x80-0x9F): the euro sign and a curly quote.
+  EXPECT_EQ(metron::to_utf8("\x80\x93"), "\xE2\x82\xAC\xE2\x80\x9C");  // U+20AC, U+201C (WHATWG table)
+}
+
+TEST(ShopPrograms, ContinuationInsideALabelSkipsTheLeadingBlanks) {
+  const auto c = check("DMISMN/'p', 5.1\nF(CIR_1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
+                       "T(D1)=TOL/DIAM,-0.1,0.1\nOUTPUT/FA(CIR_$\n    1),TA(D1)\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+}
+
+TEST(ShopPrograms, NonStatementLinesAreOneWarningEachLenientAndErrorsStrict) {
+  const std::string text = "DMISMN/'p', 5.1\n-------------------------\nOperator: turn the part over\nFEAT PLANE\nENDFIL\n";
+  const auto lenient = check(text);
+  EXPECT_EQ(lenient.warnings, 2u) << lenient.text;
+  EXPECT_TRUE(lenient.has("2:1: warning: this line is not a DMIS statement and is skipped")) << lenient.text;
+  EXPECT_TRUE(lenient.has("3:1: warning: this line is not a DMIS statement")) << lenient.text;
+  EXPECT_EQ(lenient.errors, 1u) << lenient.text;  // FEAT PLANE is a statement with an error
+  EXPECT_TRUE(lenient.has("4:6: error: expected '/' after the major word 'FEAT'")) << lenient.text;
+  const auto strict = check(text, true);
+  EXPECT_EQ(strict.errors, 3u) << strict.text;
+}
+
+TEST(ShopPrograms, TextAfterEndfilIsReportedOnceAsASecondProgram) {
+  const auto c = check("DMISMN/'one', 5.1\nENDFIL\nDMISMN/'two', 5.1\nF(X)=FEAT/POINT,CART,0,0,0,0,0,1\nGARBAGE !!\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 1u) << c.text;
+  EXPECT_TRUE(c.has("3 statements after ENDFIL are ignored: the file holds a second program (DMISMN after ENDFIL)")) << c.text;
+}
+
+// ---- defects found as a new user --------------------------------------------------------------
+
+TEST(ShopPrograms, NeverDefinedFeatureIsNotDefinedNotUsedBeforeItsDefinition) {
+  EXPECT_TRUE(check("DMISMN/'p', 5.1\nOUTPUT/FA(NOWHERE)\nENDFIL\n")
+                  .has("feature FA(NOWHERE) is not defined: define it with F(NOWHERE)=FEAT/..."));
+  EXPECT_TRUE(check("DMISMN/'p', 5.1\nOUTPUT/FA(LATER)\nF(LATER)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n")
+                  .has("feature FA(LATER) is used before its definition at line 3"));
+}
+
+TEST(ShopPrograms, JumptoALabelWithAMinus) {
+  const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  const auto r = run("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\n"
+                     "TEXT/OPER,STR(I)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.session->interpreter().variable("I")->number, 3);
+}
+
+TEST(ShopPrograms, CheckOfAPipeReadsIt) {
+  // `metron check /dev/stdin` on a pipe: /proc/self/fd/N names `pipe:[...]`, which has no
+  // canonical form; the path as given is read.
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  const std::string text = "DMISMN/'p', 5.1\nSNSLCT/S(NOPE)\nENDFIL\n";
+  ASSERT_EQ(::write(fds[1], text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  ::close(fds[1]);
+  SourceManager sources;
+  DiagnosticSink sink;
+  Compiler compiler(sources, sink);
+  std::optional<std::size_t> unit;
+  EXPECT_NO_THROW(unit = compiler.compile_file("/proc/self/fd/" + std::to_string(fds[0])));
+  ::close(fds[0]);
+  EXPECT_TRUE(unit.has_value());
+  EXPECT_EQ(sink.error_count(), 0u);
+  ASSERT_FALSE(sink.items().empty());
+  EXPECT_EQ(sink.items().front().code, "sema.library-sensor");
+}
+
+// ---- the reconstructed shop programs of programs/real -----------------------------------------
+
+TEST(ShopPrograms, ReconstructedShopProgramsCheckCleanAndRunToTheEnd) {
+  int seen = 0;
+  for (const auto& entry : fs::directory_iterator(source_dir / "programs/real")) {
+    if (entry.path().extension() != ".dmi") continue;
+    ++seen;
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto c = check(text);
+    EXPECT_EQ(c.errors, 0u) << entry.path() << "\n" << c.text;
+    const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+    EXPECT_EQ(r.status, ExecStatus::Finished) << entry.path() << "\n" << r.diagnostics;
+  }
+  EXPECT_EQ(seen, 2);
+}
+
+TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtRun) {
+  const fs::path lib = temp_dir() / "library";
+  fs::create_directories(lib);
+  std::ofstream(lib / "SUB_PART.dmi") << "DMISMN/'sub', 5.0\nTEXT/OPER,'in the sub program'\nENDFIL\n";
+  const std::string text = "DMISMN/'p', 5.1\nTEXT/OPER,'before'\nCALL/EXTERN,DMIS,'Z:\\CMM\\Programs\\SUB_PART.dmi'\nTEXT/OPER,'after'\nENDFIL\n";
+  const auto c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("'Z:\\CMM\\Programs\\SUB_PART.dmi' was written on another machine and SUB_PART.dmi is not in")) << c.text;
+  {
+    SourceManager sources;
+    DiagnosticSink sink;
+    Compiler compiler(sources, sink);
+    compiler.set_include_dirs({lib.string()});
+    compiler.compile_text("shop.dmi", text);
+    EXPECT_TRUE(sink.items().empty()) << (sink.items().empty() ? "" : sink.items().front().message);
+    EXPECT_EQ(compiler.module().units.size(), 2u);  // the called file was found and compiled
+  }
+  const auto r = run(text);
+  EXPECT_EQ(r.status, ExecStatus::Error);
+  EXPECT_NE(r.diagnostics.find("was not found (give its folder with --include DIR)"), std::string::npos) << r.diagnostics;
+}

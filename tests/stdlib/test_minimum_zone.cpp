@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Minimum-zone form against analytic answers: point sets built so the narrowest zone is known
+// exactly (all points inside a zone of width t, with the alternating contact points that make it
+// minimal, ISO 12181-1 / 12781-1 / 12180-1), and biased so that least squares is wider.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "metron/stdlib/fitting/minimum_zone.hpp"
+
+using metron::Vec3;
+using metron::fitting::minimum_zone;
+using metron::fitting::Shape;
+
+namespace {
+constexpr double pi = std::numbers::pi;
+Vec3 polar(double r, double deg, double z = 0) { return {r * std::cos(deg * pi / 180), r * std::sin(deg * pi / 180), z}; }
+}  // namespace
+
+// Straightness in a plane: the minimum zone of a point set is the minimum width of its convex
+// hull. Hull (0,0), (3,0), (0.5,1): its smallest altitude is 1 (onto the base y = 0).
+TEST(MinimumZone, StraightnessIsTheHullsMinimumWidth) {
+  const std::vector<Vec3> pts = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {0.5, 1, 0}};
+  const auto mz = minimum_zone(Shape::Line, pts, Vec3::UnitZ());
+  ASSERT_TRUE(mz);
+  EXPECT_NEAR(mz->form_mm, 1.0, 1e-9);
+  EXPECT_GT(mz->least_squares_form_mm, 1.0 + 1e-3);  // least squares is tilted by the outlier
+  EXPECT_NEAR(std::abs(mz->direction.x()), 1.0, 1e-9);
+}
+
+// Flatness: a 100 mm grid on z = 0 and three points at z = t clustered over one corner. Every
+// point lies in 0 <= z <= t and the high points project inside the grid, so no slab is thinner.
+TEST(MinimumZone, FlatnessOfTwoLevelsIsTheirGap) {
+  const double t = 0.01;
+  std::vector<Vec3> pts;
+  for (int i = 0; i <= 4; ++i)
+    for (int j = 0; j <= 4; ++j) pts.push_back({25.0 * i, 25.0 * j, 0});
+  for (const auto& p : {Vec3(10, 10, t), Vec3(15, 10, t), Vec3(10, 15, t)}) pts.push_back(p);
+  const auto mz = minimum_zone(Shape::Plane, pts);
+  ASSERT_TRUE(mz);
+  EXPECT_NEAR(mz->form_mm, t, 1e-9);
+  EXPECT_GT(mz->least_squares_form_mm, t * 1.05);
+  EXPECT_NEAR(std::abs(mz->direction.z()), 1.0, 1e-9);
+}
+
+// Roundness: outer points (R + t) at 0 and 180 deg, inner points (R) at 90 and 270 deg alternate,
+// so the annulus about the origin is minimal (the four-point criterion); a cluster of inner points
+// near 20 deg pulls the least-squares centre away from it.
+TEST(MinimumZone, RoundnessWithAlternatingContactsIsTheAnnulusWidth) {
+  const double r = 10, t = 0.02;
+  std::vector<Vec3> pts = {polar(r + t, 0), polar(r, 90), polar(r + t, 180), polar(r, 270)};
+  for (double a = 10; a <= 40; a += 5) pts.push_back(polar(r, a));
+  const auto mz = minimum_zone(Shape::Circle, pts);
+  ASSERT_TRUE(mz);
+  EXPECT_NEAR(mz->form_mm, t, 1e-9);
+  EXPECT_NEAR(mz->position.norm(), 0.0, 1e-6);
+  EXPECT_GT(mz->least_squares_form_mm, t * 1.05);
+}
+
+// Sphericity: outer points on +-x, inner points on +-y and +-z: moving the centre along any axis
+// widens the shell, so the shell about the origin (width t) is minimal; an inner cluster biases LS.
+TEST(MinimumZone, SphericityWithAlternatingContactsIsTheShellWidth) {
+  const double r = 12.5, t = 0.015;
+  std::vector<Vec3> pts = {{r + t, 0, 0}, {-(r + t), 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, r}, {0, 0, -r}};
+  for (double a = 20; a <= 60; a += 10) pts.push_back(r * Vec3(std::cos(a * pi / 180), 0.3, std::sin(a * pi / 180)).normalized());
+  const auto mz = minimum_zone(Shape::Sphere, pts);
+  ASSERT_TRUE(mz);
+  EXPECT_NEAR(mz->form_mm, t, 1e-9);
+  EXPECT_GT(mz->least_squares_form_mm, t * 1.02);
+}
+
+// Cylindricity: the roundness configuration in two sections 40 mm apart about the z axis.
+TEST(MinimumZone, CylindricityOfTwoAlternatingSectionsIsTheShellWidth) {
+  const double r = 8, t = 0.01;
+  std::vector<Vec3> pts;
+  for (double z : {0.0, 40.0}) {
+    for (const auto& p : {polar(r + t, 0, z), polar(r, 90, z), polar(r + t, 180, z), polar(r, 270, z)}) pts.push_back(p);
+    for (double a = 10; a <= 40; a += 5) pts.push_back(polar(r, a, z));
+  }
+  const auto mz = minimum_zone(Shape::Cylinder, pts);
+  ASSERT_TRUE(mz);
+  EXPECT_NEAR(mz->form_mm, t, 1e-8);
+  EXPECT_GT(mz->least_squares_form_mm, t * 1.05);
+  EXPECT_NEAR(std::abs(mz->direction.z()), 1.0, 1e-8);
+}
+
+// Brute force against the fast path: for random planar data, no normal on a fine grid about the
+// result gives a thinner slab, and the minimum zone is never wider than least squares.
+TEST(MinimumZone, FlatnessIsNotBeatenByAGridOfNormals) {
+  std::mt19937 rng(14);
+  std::uniform_real_distribution<double> u(0, 50), e(-0.005, 0.005);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 40; ++i) {
+    const double x = u(rng), y = u(rng);
+    pts.push_back({x, y, 0.001 * x + e(rng) + 0.004 * std::sin(x / 7)});
+  }
+  const auto mz = minimum_zone(Shape::Plane, pts);
+  ASSERT_TRUE(mz);
+  EXPECT_LE(mz->form_mm, mz->least_squares_form_mm + 1e-12);
+  const Vec3 n = mz->direction;
+  const Vec3 e1 = n.cross(Vec3::UnitX()).normalized(), e2 = n.cross(e1);
+  for (int i = -20; i <= 20; ++i)
+    for (int j = -20; j <= 20; ++j) {
+      const Vec3 m = (n + 2e-6 * i * e1 + 2e-6 * j * e2).normalized();
+      double lo = 1e300, hi = -1e300;
+      for (const auto& p : pts) lo = std::min(lo, m.dot(p)), hi = std::max(hi, m.dot(p));
+      EXPECT_GE(hi - lo, mz->form_mm - 1e-10) << "normal offset " << i << ", " << j;
+    }
+}
