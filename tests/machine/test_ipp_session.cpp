@@ -4,6 +4,9 @@
 // corner at (300, 200, 0), an ideal probe), error numbers from the specification's table.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
+
 #include <random>
 
 #include "metron/machine/ipp/command_line.hpp"
@@ -231,6 +234,76 @@ TEST(IppSession, ScanOnLineFollowsTheTopFace) {
   for (std::size_t k = 2; k < values.size(); k += 3) EXPECT_NEAR(values[k], 41, 0.01) << k;  // ball centres
 }
 
+namespace {
+std::vector<double> csv_numbers(const std::string& body) {
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start < body.size()) {
+    const auto comma = body.find(',', start);
+    values.push_back(std::stod(body.substr(start, comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return values;
+}
+}  // namespace
+
+// ScanOnCurve, closed: 24 ball-centre points on a circle of radius 9 inside BORE1 (perfect world:
+// the bore of diameter 20 at (340, 250), 20 mm deep from the top z = 40; a 2 mm ball), normals
+// towards the axis. Every sample's ball centre lies 10 - 1 = 9 mm from the axis (hidden truth of
+// the world), all the way round.
+TEST(IppSession, ScanOnCurveFollowsAClosedCurveInABore) {
+  Fixture f;
+  f.start();
+  ASSERT_EQ(f.error("00010 GoTo(X(340), Y(250), Z(60))"), 0);
+  ASSERT_EQ(f.error("00011 GoTo(X(340), Y(250), Z(30))"), 0);
+  std::string data;
+  const int n = 24;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * std::numbers::pi * k / n;
+    const double c = std::cos(t), s = std::sin(t);
+    data += (k ? ", " : "") + std::to_string(340 + 9 * c) + ", " + std::to_string(250 + 9 * s) + ", 30, " +
+            std::to_string(-c) + ", " + std::to_string(-s) + ", 0, " + std::to_string(k);
+  }
+  const auto body = f.data("00020 ScanOnCurve(Closed(1), Format(X(), Y(), Z(), IJK(), tag), Data(" + data + "))");
+  const auto v = csv_numbers(body);
+  ASSERT_GE(v.size(), 3u * 20);
+  double max_angle = -10, min_angle = 10, worst = 0;
+  for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
+    const double r = std::hypot(v[k] - 340, v[k + 1] - 250);
+    worst = std::max(worst, std::abs(r - 9));
+    EXPECT_NEAR(v[k + 2], 30, 0.01) << k;
+    const double a = std::atan2(v[k + 1] - 250, v[k] - 340);
+    max_angle = std::max(max_angle, a), min_angle = std::min(min_angle, a);
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_GT(max_angle - min_angle, 5.5);  // round the whole bore
+  // Closed: the last sample is back at the start (an open curve would end 2.4 mm short).
+  const std::size_t last = v.size() / 3 * 3 - 3;
+  EXPECT_LT(std::hypot(v[last] - v[0], v[last + 1] - v[1]), 1.2);
+}
+
+// ScanOnCurve, open: a bent polyline on the top face clear of its features (z = 40, ball centres at 41); wrong forms
+// answered with the standard's numbers.
+TEST(IppSession, ScanOnCurveOnTheTopFaceAndItsErrors) {
+  Fixture f;
+  f.start();
+  const auto body = f.data(
+      "00010 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK()), Data(310, 206, 41, 0, 0, 1, 350, 210, 41, 0, 0, 1, "
+      "400, 205, 41, 0, 0, 1, 450, 209, 41, 0, 0, 1))");
+  const auto v = csv_numbers(body);
+  ASSERT_GE(v.size(), 3u * 20);
+  for (std::size_t k = 2; k < v.size(); k += 3) EXPECT_NEAR(v[k], 41, 0.01) << k;
+  EXPECT_NEAR(v[0], 310, 0.5);
+  EXPECT_NEAR(v[v.size() - 3], 450, 0.5);
+  EXPECT_EQ(f.error("00020 ScanOnCurve(Closed(2), Format(X(), Y(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5, 6, 0, 0, 1))"), 509);
+  EXPECT_EQ(f.error("00021 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00030 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5))"), 502);
+  EXPECT_EQ(f.error("00031 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00040 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK()), Data(320, 210, 41, 0, 0, 0, 330, 210, 41, 0, 0, 1))"), 1010);
+  EXPECT_EQ(f.error("00050 ScanOnCurve(Closed(0), Format(Y(), X(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5, 6, 0, 0, 1))"), 509);
+}
+
 // Random and mutated lines never crash the session and every line gets a tagged answer.
 TEST(IppSession, FuzzedSessionNeverCrashes) {
   Fixture f;
@@ -241,7 +314,8 @@ TEST(IppSession, FuzzedSessionNeverCrashes) {
       "00030 SetProp(Tool.PtMeasPar.Speed(5))",        "00020 ChangeTool(\"Probe1\")",
       "00040 GoTo(X(400), Y(250), Z(100))",            "00050 SetCsyTransformation(PartCsy, 1, 2, 3, 4, 5, 6)",
       "00060 EnumAllProp(Tool())",                     "00070 ClearAllErrors()",
-      "00080 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 360, 90, 1)"};
+      "00080 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 360, 90, 1)",
+      "00090 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK(), tag), Data(320, 210, 41, 0, 0, 1, 5, 360, 230, 41, 0, 0, 1, 6))"};
   for (int i = 0; i < 3000; ++i) {
     std::string s = seeds[rng() % seeds.size()];
     const int edits = static_cast<int>(rng() % 3);

@@ -70,7 +70,7 @@ struct CommandError {
 
 // Commands the standard defines that this server answers with 0501 "Unsupported command".
 const std::set<std::string> k_unsupported{"AlignPart",         "CenterPart",          "TiltPart",
-                                          "TiltCenterPart",    "LockAxis",            "ScanOnCurve",
+                                          "TiltCenterPart",    "LockAxis",
                                           "ScanInCylEndIsPlane", "ScanInCylEndIsSphere", "ScanInPlaneEndIsCyl",
                                           "ScanInPlaneEndIsPlane", "ScanInPlaneEndIsSphere", "ScanOnCircleHint",
                                           "ScanOnLineHint",    "ScanOnCurveHint",     "ScanOnCurveDensity",
@@ -508,6 +508,11 @@ struct Session::Impl {
       sp.approach_normal = sp.path.normals.front();
     }
     sp.sample_spacing_mm = step;
+    run_scan(sp);
+  }
+
+  /// Runs a scan on the machine and answers its samples in the OnScanReport format.
+  void run_scan(ScanPath& sp) {
     sp.speed_mm_s = tool().numbers.at("PtMeasPar.Speed").act;
     const Response resp = run(sp);
     move_reports();
@@ -525,6 +530,78 @@ struct Session::Impl {
       }
     }
     data(body);
+  }
+
+  // ScanOnCurve(Closed(b), Format(X(), Y(), Z(), IJK()[, tag][, pi(), pj(), pk()][, si(), sj(), sk()]),
+  // Data(x, y, z, i, j, k[, tag][, ...], ...)): the points are ball centres at the nominal contact
+  // with their surface normals (as in PtMeas); the machine follows the curve through them (cubic
+  // Hermite segments, Catmull-Rom tangents) moved by E0 into the surface. The tool directions
+  // pi..sk are read and ignored (a fixed head).
+  void scan_on_curve(const Args& a) {
+    require_motion_ready();
+    if (a.size() != 3 || !a[0].is_call("Closed") || !a[1].is_call("Format") || !a[2].is_call("Data"))
+      fail(ErrorCode::IncorrectArguments);
+    const auto closed = a[0].call_number();
+    if (!closed || (*closed != 0 && *closed != 1)) fail(ErrorCode::BadArgument);
+    // Columns of one Data record, and where X and IJK start in it.
+    std::size_t columns = 0;
+    std::vector<std::string> names;
+    for (const auto& f : a[1].args) {
+      const std::string n = f.text;
+      if (std::find(names.begin(), names.end(), n) != names.end()) fail(ErrorCode::IncorrectArguments);
+      if (f.kind == Argument::Kind::Name && n == "tag") columns += 1;
+      else if (f.kind != Argument::Kind::Call || !f.args.empty()) fail(ErrorCode::IncorrectArguments);
+      else if (n == "IJK") columns += 3;
+      else if (n == "X" || n == "Y" || n == "Z" || n == "pi" || n == "pj" || n == "pk" || n == "si" || n == "sj" || n == "sk")
+        columns += 1;
+      else fail(ErrorCode::BadArgument);
+      names.push_back(n);
+    }
+    // X, Y, Z, IJK first, in this order: the form of the standard's table and of the NIST files.
+    if (names.size() < 4 || names[0] != "X" || names[1] != "Y" || names[2] != "Z" || names[3] != "IJK")
+      fail(ErrorCode::BadArgument);
+    const auto v = numbers(a[2].args);
+    if (v.empty() || v.size() % columns != 0) fail(ErrorCode::IncorrectArguments);
+    const std::size_t n = v.size() / columns;
+    if (n < 2) fail(ErrorCode::BadArgument);
+    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+    const double e0 = options.scan_reference_deflection_mm;
+    std::vector<Vec3> q(n), normal(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double* r = &v[k * columns];
+      Vec3 ijk(r[3], r[4], r[5]);
+      if (ijk.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
+      normal[k] = dir_to_machine(ijk.normalized());
+      q[k] = to_machine({r[0], r[1], r[2]}) - e0 * normal[k];
+    }
+    const bool loop = *closed == 1;
+    const std::size_t segments = loop ? n : n - 1;
+    double length = 0;
+    for (std::size_t k = 0; k < segments; ++k) {
+      const double d = (q[(k + 1) % n] - q[k]).norm();
+      if (d < 1e-9) fail(ErrorCode::BadArgument);  // two equal points: no direction
+      length += d;
+    }
+    // Samples at the points' mean spacing, at least every millimetre.
+    const double step = std::min(1.0, length / static_cast<double>(segments));
+    if (length / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
+    // Catmull-Rom tangents (central differences; one-sided at the ends of an open curve).
+    auto tangent = [&](std::size_t k) {
+      const Vec3 prev = loop ? q[(k + n - 1) % n] : q[k == 0 ? 0 : k - 1];
+      const Vec3 next = loop ? q[(k + 1) % n] : q[k + 1 == n ? n - 1 : k + 1];
+      return Vec3((next - prev).normalized());
+    };
+    ScanPath sp;
+    sp.reference_deflection_mm = e0;
+    for (std::size_t k = 0; k < segments; ++k) {
+      const std::size_t j = (k + 1) % n;
+      sp.path.segments.push_back(geometry::PccSegment::hermite(q[k], q[j], tangent(k), tangent(j)));
+      sp.path.normals.push_back(normal[k]);
+    }
+    sp.path.normals.push_back(normal[loop ? 0 : n - 1]);
+    sp.approach_normal = normal[0];
+    sp.sample_spacing_mm = step;
+    run_scan(sp);
   }
 
   // ---- dispatch
@@ -713,6 +790,8 @@ struct Session::Impl {
       scan_hint_min_radius_mm = a[0].number;
     } else if (n == "ScanOnLine" || n == "ScanOnCircle") {
       scan(n, a);
+    } else if (n == "ScanOnCurve") {
+      scan_on_curve(a);
     } else if (k_unsupported.count(n)) {
       fail(ErrorCode::UnsupportedCommand);
     } else {
