@@ -98,6 +98,14 @@ class Child {
       line += c;
     }
   }
+  /// Kills (SIGKILL) and reaps the child now.
+  void kill() {
+    if (m_pid > 0) {
+      ::kill(m_pid, SIGKILL);
+      ::waitpid(m_pid, nullptr, 0);
+      m_pid = -1;
+    }
+  }
   /// Waits for the exit; the exit code, or nullopt when it did not end within `timeout_s`
   /// (the destructor then kills it).
   std::optional<int> wait(double timeout_s) {
@@ -258,4 +266,31 @@ TEST(IppRoundTrip, SensorOfTheSameNameIsTakenByName) {
                false, dir / "ipp.out", dir / "ipp.err");
   ASSERT_EQ(client.wait(120), std::optional<int>(0)) << slurp(dir / "ipp.out") << slurp(dir / "ipp.err");
   EXPECT_EQ(slurp(dir / "ipp.err").find("warning"), std::string::npos) << slurp(dir / "ipp.err");
+}
+
+// The server dies in the middle of a run (SIGKILL while a paced ReQualify runs): the client
+// reports a machine fault at the statement that was running, and exits as a faulted run (3), not
+// with an uncaught exception (it aborted with std::terminate before).
+TEST(IppRoundTrip, ServerDyingMidRunIsAFaultNotACrash) {
+  const fs::path dir = work_dir("dying");
+  const fs::path log = dir / "exchange.log";
+  Server server({"--probe-diameter", "4", "--realtime", "--log", log.string()}, dir);
+  const std::string program = (source_dir / "programs/examples/02_block_inspection.dmi").string();
+  Child client({"run", program, "--machine", "ipp://127.0.0.1:" + std::to_string(server.port), "--out",
+                (dir / "ipp").string(), "--quiet"},
+               false, dir / "ipp.out", dir / "ipp.err");
+  // Real-time pacing: the qualification takes seconds of wall time; kill the server during it.
+  bool requalifying = false;
+  for (int i = 0; i < 600 && !requalifying; ++i) {
+    requalifying = slurp(log).find("ReQualify()") != std::string::npos;
+    if (!requalifying) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(requalifying) << slurp(log);
+  server.child.kill();
+  const auto code = client.wait(60);
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 3) << slurp(dir / "ipp.out") << slurp(dir / "ipp.err");  // RunExit::Faulted
+  const std::string out = slurp(dir / "ipp.out");
+  EXPECT_NE(out.find("the connection to the I++ server is lost"), std::string::npos) << out;
+  EXPECT_NE(out.find("02_block_inspection.dmi:11:"), std::string::npos) << out;  // SNSLCT/S(PROBE4)
 }

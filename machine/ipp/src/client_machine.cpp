@@ -120,6 +120,8 @@ struct ClientMachine::Impl {
   std::optional<ToolInfo> tool;
   double positioning_feed = 0, measuring_feed = 0;
   std::size_t executed = 0;
+  std::optional<std::string> lost;        ///< why the connection is gone (then every command faults)
+  Vec3 last_position = Vec3::Zero();      ///< the last position the server answered
 
   std::string read_line() {
     asio::read_until(socket, input, '\n');
@@ -131,8 +133,21 @@ struct ClientMachine::Impl {
     return line;
   }
 
-  /// Sends one command and reads up to its `%`; an error leaves the server cleared again.
+  /// Sends one command and reads up to its `%`; an error leaves the server cleared again. A lost
+  /// connection or an unreadable answer throws std::runtime_error and marks the connection lost.
   Answer call(const std::string& command, bool clear_errors = true) {
+    if (lost) throw std::runtime_error(*lost);
+    try {
+      return exchange(command, clear_errors);
+    } catch (const std::exception& e) {
+      lost = std::string("the connection to the I++ server is lost: ") + e.what();
+      asio::error_code ignored;
+      socket.close(ignored);
+      throw std::runtime_error(*lost);
+    }
+  }
+
+  Answer exchange(const std::string& command, bool clear_errors) {
     tag = tag % 99999 + 1;
     const Tag t{false, tag};
     const std::string line = t.text() + " " + command;
@@ -151,14 +166,20 @@ struct ClientMachine::Impl {
       if (r->kind == ResponseLine::Kind::Error) answer.error = *r;
       if (r->kind == ResponseLine::Kind::Complete) break;
     }
-    if (answer.error && clear_errors && answer.error->severity >= 3) call("ClearAllErrors()", false);
+    if (answer.error && clear_errors && answer.error->severity >= 3) exchange("ClearAllErrors()", false);
     return answer;
   }
 
+  /// The ball centre as the server reports it; the last known one once the connection is lost.
   Vec3 position() {
-    const Answer a = call("Get(X(), Y(), Z())");
-    if (a.data.empty()) return Vec3::Zero();
-    return {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0), item(a.data[0], "Z").value_or(0)};
+    if (lost) return last_position;
+    try {
+      const Answer a = call("Get(X(), Y(), Z())");
+      if (!a.data.empty())
+        last_position = {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0), item(a.data[0], "Z").value_or(0)};
+    } catch (const std::runtime_error&) {  // lost: reported by the next command's fault
+    }
+    return last_position;
   }
 
   /// EnumTools, then FindTool and GetProp(FoundTool.AvrRadius(), FoundTool.Alignment()) for each:
@@ -387,7 +408,16 @@ std::vector<Response> ClientMachine::execute() {
       out.push_back(aborted_response(c, Vec3::Zero(), 0));  // the protocol gives no clock
       continue;
     }
-    out.push_back(m_impl->run(c));
+    try {
+      out.push_back(m_impl->run(c));
+    } catch (const std::runtime_error& e) {
+      // The server went away (or answered nonsense): a fault of this command, not a crash.
+      Response r;
+      r.tag = c.tag;
+      r.status = Response::Status::Fault;
+      r.fault = Fault{FaultKind::BadCommand, e.what(), m_impl->last_position, 0};
+      out.push_back(std::move(r));
+    }
     ++m_impl->executed;
     faulted = out.back().status == Response::Status::Fault;
   }
