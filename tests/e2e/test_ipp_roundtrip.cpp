@@ -98,6 +98,14 @@ class Child {
       line += c;
     }
   }
+  /// Kills (SIGKILL) and reaps the child now.
+  void kill() {
+    if (m_pid > 0) {
+      ::kill(m_pid, SIGKILL);
+      ::waitpid(m_pid, nullptr, 0);
+      m_pid = -1;
+    }
+  }
   /// Waits for the exit; the exit code, or nullopt when it did not end within `timeout_s`
   /// (the destructor then kills it).
   std::optional<int> wait(double timeout_s) {
@@ -258,4 +266,71 @@ TEST(IppRoundTrip, SensorOfTheSameNameIsTakenByName) {
                false, dir / "ipp.out", dir / "ipp.err");
   ASSERT_EQ(client.wait(120), std::optional<int>(0)) << slurp(dir / "ipp.out") << slurp(dir / "ipp.err");
   EXPECT_EQ(slurp(dir / "ipp.err").find("warning"), std::string::npos) << slurp(dir / "ipp.err");
+}
+
+// The server dies in the middle of a run (SIGKILL while a paced ReQualify runs): the client
+// reports a machine fault at the statement that was running, and exits as a faulted run (3), not
+// with an uncaught exception (it aborted with std::terminate before).
+TEST(IppRoundTrip, ServerDyingMidRunIsAFaultNotACrash) {
+  const fs::path dir = work_dir("dying");
+  const fs::path log = dir / "exchange.log";
+  Server server({"--probe-diameter", "4", "--realtime", "--log", log.string()}, dir);
+  const std::string program = (source_dir / "programs/examples/02_block_inspection.dmi").string();
+  Child client({"run", program, "--machine", "ipp://127.0.0.1:" + std::to_string(server.port), "--out",
+                (dir / "ipp").string(), "--quiet"},
+               false, dir / "ipp.out", dir / "ipp.err");
+  // Real-time pacing: the qualification takes seconds of wall time; kill the server during it.
+  bool requalifying = false;
+  for (int i = 0; i < 600 && !requalifying; ++i) {
+    requalifying = slurp(log).find("ReQualify()") != std::string::npos;
+    if (!requalifying) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(requalifying) << slurp(log);
+  server.child.kill();
+  const auto code = client.wait(60);
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 3) << slurp(dir / "ipp.out") << slurp(dir / "ipp.err");  // RunExit::Faulted
+  const std::string out = slurp(dir / "ipp.out");
+  EXPECT_NE(out.find("the connection to the I++ server is lost"), std::string::npos) << out;
+  EXPECT_NE(out.find("02_block_inspection.dmi:11:"), std::string::npos) << out;  // SNSLCT/S(PROBE4)
+}
+
+// Example 07's scans (a full bore circle, a 270° PAMEAS arc, a line on the top face) through the
+// client: each ScanPath becomes a ScanOnCurve through its interpolation points. The server samples
+// every 1 mm at most (the runtime asks for 0.1 mm, which ScanOnCurve cannot carry), so the point
+// counts differ; the fitted circles agree with the direct run within 0.5 µm (measured: 0.07 µm in
+// diameter, 0.1 µm in centre), the verdicts are the same.
+TEST(IppRoundTrip, ScansEqualTheDirectRunWithinHalfAMicrometre) {
+  const fs::path dir = work_dir("scans");
+  const std::string world = (source_dir / "programs/worlds/default.json").string();
+  const std::string program = (source_dir / "programs/examples/07_scan_circle.dmi").string();
+  Child direct({"run", program, "--world", world, "--out", (dir / "direct").string(), "--quiet"}, false,
+               dir / "direct.out", dir / "direct.err");
+  ASSERT_EQ(direct.wait(300), std::optional<int>(0)) << slurp(dir / "direct.err");
+  Server server({"--world", world, "--probe-diameter", "4"}, dir);
+  Child client({"run", program, "--machine", "ipp://127.0.0.1:" + std::to_string(server.port), "--out",
+                (dir / "ipp").string(), "--quiet"},
+               false, dir / "ipp.out", dir / "ipp.err");
+  ASSERT_EQ(client.wait(300), std::optional<int>(0)) << slurp(dir / "ipp.err") << slurp(dir / "ipp.out");
+  const json a = json::parse(std::ifstream(dir / "direct/results.json"));
+  const json b = json::parse(std::ifstream(dir / "ipp/results.json"));
+  ASSERT_EQ(a["features"].size(), 3u);
+  ASSERT_EQ(b["features"].size(), 3u);
+  for (const char* label : {"BORE1", "BORE2"}) {
+    const json* fa = nullptr;
+    const json* fb = nullptr;
+    for (const auto& f : a["features"]) if (f["label"] == label) fa = &f;
+    for (const auto& f : b["features"]) if (f["label"] == label) fb = &f;
+    ASSERT_TRUE(fa && fb) << label;
+    EXPECT_GE((*fb)["points"].size(), 30u) << label;  // scanned, not probed
+    EXPECT_NEAR((*fa)["actual"]["diameter_mm"].get<double>(), (*fb)["actual"]["diameter_mm"].get<double>(), 5e-4) << label;
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR((*fa)["actual"]["position"][i].get<double>(), (*fb)["actual"]["position"][i].get<double>(), 5e-4) << label;
+    EXPECT_NEAR((*fa)["form_mm"].get<double>(), (*fb)["form_mm"].get<double>(), 5e-4) << label;
+  }
+  ASSERT_EQ(a["tolerances"].size(), b["tolerances"].size());
+  for (std::size_t i = 0; i < a["tolerances"].size(); ++i) {
+    EXPECT_EQ(a["tolerances"][i]["label"], b["tolerances"][i]["label"]);
+    EXPECT_EQ(a["tolerances"][i]["status"], b["tolerances"][i]["status"]);
+  }
 }

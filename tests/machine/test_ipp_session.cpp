@@ -162,13 +162,44 @@ TEST(IppSession, OrderAndArgumentErrors) {
   EXPECT_EQ(f.error("E0008 GoTo(X(1))"), 1);
   EXPECT_EQ(f.error("00009 Home(1)"), 502);
   EXPECT_EQ(f.error("00010 ClearAllErrors()"), 0);
-  EXPECT_EQ(f.error("00011 AlignPart(1,0,0,0,1,0,30)"), 501);
+  EXPECT_EQ(f.error("00011 AlignPart(1,0,0,0,1,0,30)"), 507);  // not homed (NIST checks that first)
   EXPECT_EQ(f.error("00012 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00013 CmdName()"), 507);
   EXPECT_EQ(f.error("00014 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00015 Get(X(), X())"), 502);
   EXPECT_EQ(f.error("00016 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00017 ChangeTool(3)"), 509);
+}
+
+// The error numbers the NIST server recorded for its checker's contexts (checkerCmdErrors.res):
+// a second StartSession, the pseudo tool UnDefTool, probing with NoTool, arguments before tools.
+TEST(IppSession, NistContextErrors) {
+  Fixture f;
+  EXPECT_EQ(f.error("00001 StartSession()"), 0);
+  EXPECT_EQ(f.error("00002 StartSession()"), 507);
+  EXPECT_EQ(f.error("00003 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00004 ScanOnCircleHint(10, 1)"), 501);  // no motion: unsupported, homed or not
+  EXPECT_EQ(f.error("00005 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00006 Home()"), 0);
+  EXPECT_EQ(f.error("00007 AlignPart(1,0,0,0,1,0,30)"), 501);
+  EXPECT_EQ(f.error("00008 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00009 ChangeTool(\"UnDefTool\")"), 1503);
+  EXPECT_EQ(f.error("00010 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00011 FindTool(\"UnDefTool\")"), 1503);
+  EXPECT_EQ(f.error("00012 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00013 ChangeTool(\"NoTool\")"), 0);
+  EXPECT_EQ(f.error("00014 GetProp(Tool.PtMeasPar.Accel())"), 507);
+  EXPECT_EQ(f.error("00015 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00016 GetProp(Tool.GoToPar.Accel())"), 0);
+  EXPECT_EQ(f.error("00017 PtMeas(X(0))"), 507);
+  EXPECT_EQ(f.error("00018 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00019 PtMeas(X(0), IJK(0, 0, 0))"), 1010);  // the arguments before the tool
+  EXPECT_EQ(f.error("00020 ScanOnLine(1,2,3,1,2,3,7,8,9,10)"), 502);
+  EXPECT_EQ(f.error("00021 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00022 ScanOnCircle(1,2,3,4,5,6,7,8,9,10,1,2)"), 502);  // start not in the plane
+  EXPECT_EQ(f.error("00023 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00024 ChangeTool(\"BaseTool\")"), 0);
+  EXPECT_EQ(f.error("00025 PtMeas(X(0))"), 2002);  // a head without a stylus
 }
 
 TEST(IppSession, ToolPropertiesDriveTheMachine) {

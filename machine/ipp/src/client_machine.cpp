@@ -120,6 +120,8 @@ struct ClientMachine::Impl {
   std::optional<ToolInfo> tool;
   double positioning_feed = 0, measuring_feed = 0;
   std::size_t executed = 0;
+  std::optional<std::string> lost;        ///< why the connection is gone (then every command faults)
+  Vec3 last_position = Vec3::Zero();      ///< the last position the server answered
 
   std::string read_line() {
     asio::read_until(socket, input, '\n');
@@ -131,8 +133,21 @@ struct ClientMachine::Impl {
     return line;
   }
 
-  /// Sends one command and reads up to its `%`; an error leaves the server cleared again.
+  /// Sends one command and reads up to its `%`; an error leaves the server cleared again. A lost
+  /// connection or an unreadable answer throws std::runtime_error and marks the connection lost.
   Answer call(const std::string& command, bool clear_errors = true) {
+    if (lost) throw std::runtime_error(*lost);
+    try {
+      return exchange(command, clear_errors);
+    } catch (const std::exception& e) {
+      lost = std::string("the connection to the I++ server is lost: ") + e.what();
+      asio::error_code ignored;
+      socket.close(ignored);
+      throw std::runtime_error(*lost);
+    }
+  }
+
+  Answer exchange(const std::string& command, bool clear_errors) {
     tag = tag % 99999 + 1;
     const Tag t{false, tag};
     const std::string line = t.text() + " " + command;
@@ -151,14 +166,20 @@ struct ClientMachine::Impl {
       if (r->kind == ResponseLine::Kind::Error) answer.error = *r;
       if (r->kind == ResponseLine::Kind::Complete) break;
     }
-    if (answer.error && clear_errors && answer.error->severity >= 3) call("ClearAllErrors()", false);
+    if (answer.error && clear_errors && answer.error->severity >= 3) exchange("ClearAllErrors()", false);
     return answer;
   }
 
+  /// The ball centre as the server reports it; the last known one once the connection is lost.
   Vec3 position() {
-    const Answer a = call("Get(X(), Y(), Z())");
-    if (a.data.empty()) return Vec3::Zero();
-    return {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0), item(a.data[0], "Z").value_or(0)};
+    if (lost) return last_position;
+    try {
+      const Answer a = call("Get(X(), Y(), Z())");
+      if (!a.data.empty())
+        last_position = {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0), item(a.data[0], "Z").value_or(0)};
+    } catch (const std::runtime_error&) {  // lost: reported by the next command's fault
+    }
+    return last_position;
   }
 
   /// EnumTools, then FindTool and GetProp(FoundTool.AvrRadius(), FoundTool.Alignment()) for each:
@@ -237,6 +258,70 @@ struct ClientMachine::Impl {
     r.status = Response::Status::Fault;
     r.fault = Fault{fault_kind(e.error_number), e.error_text + " (" + e.error_cause + ")", position(), 0};
     return r;
+  }
+
+  /// ScanPath -> ScanOnCurve through the path's interpolation points, moved back from the
+  /// reference deflection E0 to the ball centre at the nominal contact (the server moves them by
+  /// its own E0 into the surface again); the samples' X, Y, Z and IJK (the deflection direction)
+  /// come back as ScanSamples. A path that ends where it starts is sent Closed(1).
+  Response scan(std::uint64_t command_tag, const ScanPath& body) {
+    Response done;
+    done.tag = command_tag;
+    const auto& path = body.path;
+    if (path.segments.empty() || path.normals.size() != path.segments.size() + 1) {
+      done.status = Response::Status::Fault;
+      done.fault = Fault{FaultKind::BadCommand, "a scan path needs segments and a normal at each point", last_position, 0};
+      return done;
+    }
+    const double e0 = body.reference_deflection_mm.value_or(0.3);
+    std::vector<Vec3> points, normals;
+    for (std::size_t k = 0; k < path.segments.size(); ++k) points.push_back(path.segments[k].start()), normals.push_back(path.normals[k]);
+    points.push_back(path.segments.back().end()), normals.push_back(path.normals.back());
+    const bool closed = points.size() > 3 && (points.back() - points.front()).norm() < 1e-6;
+    if (closed) points.pop_back(), normals.pop_back();
+    std::string data;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const Vec3 n = normals[k].normalized();
+      const Vec3 p = points[k] + e0 * n;
+      data += (k ? ", " : "") + number(p.x()) + ", " + number(p.y()) + ", " + number(p.z()) + ", " + number(n.x()) + ", " +
+              number(n.y()) + ", " + number(n.z());
+    }
+    const double speed = body.speed_mm_s.value_or(measuring_feed);
+    auto fault_of = [&](const Answer& a) -> std::optional<Response> {
+      if (a.error && a.error->severity >= 2) return fault(command_tag, *a.error);
+      return std::nullopt;
+    };
+    if (speed > 0)
+      if (auto f = fault_of(call("SetProp(Tool.PtMeasPar.Speed(" + number(speed) + "))"))) return *f;
+    if (auto f = fault_of(call("OnScanReport(X(), Y(), Z(), IJK())"))) return *f;
+    const Answer a = call(std::string("ScanOnCurve(Closed(") + (closed ? "1" : "0") + "), Format(X(), Y(), Z(), IJK()), Data(" + data + "))");
+    if (auto f = fault_of(a)) return *f;
+    std::vector<double> v;
+    for (const auto& body_line : a.data) {
+      std::size_t start = 0;
+      while (start < body_line.size()) {
+        const auto comma = body_line.find(',', start);
+        const std::string field = body_line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        double x = 0;
+        const auto* b = field.data() + field.find_first_not_of(' ');
+        std::from_chars(b, field.data() + field.size(), x);
+        v.push_back(x);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+      }
+    }
+    double s_mm = 0;
+    for (std::size_t k = 0; k + 5 < v.size(); k += 6) {
+      ScanSample sample;
+      sample.centre_mm = {v[k], v[k + 1], v[k + 2]};
+      // The report carries the deflection's direction; its size is the reference deflection.
+      sample.deflection_mm = e0 * Vec3(v[k + 3], v[k + 4], v[k + 5]);
+      if (!done.scan.empty()) s_mm += (sample.centre_mm - done.scan.back().centre_mm).norm();
+      sample.path_s_mm = s_mm;
+      done.scan.push_back(sample);
+    }
+    if (measuring_feed > 0) call("SetProp(Tool.PtMeasPar.Speed(" + number(measuring_feed) + "))");
+    return done;
   }
 
   Response run(const Command& c) {
@@ -343,11 +428,13 @@ struct ClientMachine::Impl {
             if (!props.empty())
               if (auto f = check(call("SetProp(" + props + ")"))) return *f;
             return done;
+          } else if constexpr (std::is_same_v<T, ScanPath>) {
+            return scan(c.tag, body);
           } else {
             Response r;
             r.tag = c.tag;
             r.status = Response::Status::Fault;
-            r.fault = Fault{FaultKind::BadCommand, "scans are not mapped onto I++ DME by this client", Vec3::Zero(), 0};
+            r.fault = Fault{FaultKind::BadCommand, "segmented scans (ScanBufferWrite) are not mapped onto I++ DME", Vec3::Zero(), 0};
             return r;
           }
         },
@@ -387,7 +474,16 @@ std::vector<Response> ClientMachine::execute() {
       out.push_back(aborted_response(c, Vec3::Zero(), 0));  // the protocol gives no clock
       continue;
     }
-    out.push_back(m_impl->run(c));
+    try {
+      out.push_back(m_impl->run(c));
+    } catch (const std::runtime_error& e) {
+      // The server went away (or answered nonsense): a fault of this command, not a crash.
+      Response r;
+      r.tag = c.tag;
+      r.status = Response::Status::Fault;
+      r.fault = Fault{FaultKind::BadCommand, e.what(), m_impl->last_position, 0};
+      out.push_back(std::move(r));
+    }
     ++m_impl->executed;
     faulted = out.back().status == Response::Status::Fault;
   }

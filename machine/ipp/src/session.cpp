@@ -191,6 +191,22 @@ struct Session::Impl {
   }
 
   Tool& tool() { return tools[active_tool]; }
+  /// The tool of a ChangeTool/SetTool/FindTool/GetChangeToolAction argument: "UnDefTool" is the
+  /// specification's pseudo tool for "none found" (1503 Tool not defined, as the NIST server
+  /// answers), any other unknown name 1502.
+  std::size_t named_tool(const Args& a) {
+    const std::string& name = one_string(a);
+    if (name == "UnDefTool") fail(ErrorCode::ToolNotDefined);
+    const auto k = find_tool(name);
+    if (!k) fail(ErrorCode::ToolNotFound);
+    return *k;
+  }
+  /// NoTool measures nothing and has no PtMeasPar: as the NIST server, 0507 for probing with it
+  /// (the other tools without a stylus answer 2002 from the machine's point of view).
+  void require_probing_tool() {
+    if (tool().name == "NoTool") fail(ErrorCode::IllegalCommand);
+    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+  }
   std::optional<std::size_t> find_tool(const std::string& name) const {
     for (std::size_t k = 0; k < tools.size(); ++k)
       if (tools[k].name == name) return k;
@@ -273,7 +289,10 @@ struct Session::Impl {
     const std::string head = dotted.substr(0, dot);
     if (head != "Tool" && head != "FoundTool") fail(ErrorCode::BadArgument);
     if (dot == std::string::npos) fail(ErrorCode::IncorrectArguments);
-    return {head == "Tool" ? &tools[active_tool] : &tools[found_tool], head, dotted.substr(dot + 1)};
+    PropertyRef ref{head == "Tool" ? &tools[active_tool] : &tools[found_tool], head, dotted.substr(dot + 1)};
+    // NoTool cannot probe: it has no PtMeasPar (NIST: 0507).
+    if (head == "Tool" && ref.tool->name == "NoTool" && ref.path.rfind("PtMeasPar", 0) == 0) fail(ErrorCode::IllegalCommand);
+    return ref;
   }
   std::string get_property(const Argument& a) {
     if (a.kind != Argument::Kind::Call || !a.args.empty()) fail(ErrorCode::IncorrectArguments);
@@ -399,7 +418,8 @@ struct Session::Impl {
         ijk = Vec3(v[0], v[1], v[2]);
       }
     const Vec3 nominal = target(a, false);
-    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+    if (ijk && ijk->norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);  // the arguments first (NIST)
+    require_probing_tool();
     const Vec3 here = to_csy(machine.state().position_mm);
     Vec3 normal = ijk ? *ijk : Vec3(here - nominal);  // no IJK: approach from the current position
     if (normal.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
@@ -454,7 +474,6 @@ struct Session::Impl {
   void scan(const std::string& name, const Args& a) {
     require_motion_ready();
     const auto v = numbers(a);
-    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
     const double deflection_mm = options.scan_reference_deflection_mm;
     ScanPath sp;
     sp.reference_deflection_mm = deflection_mm;
@@ -471,7 +490,9 @@ struct Session::Impl {
       n = dir_to_machine(n.normalized());
       const Vec3 s = to_machine({v[0], v[1], v[2]}), e = to_machine({v[3], v[4], v[5]});
       step = v[9];
-      if (step <= 0 || (e - s).norm() < 1e-9) fail(ErrorCode::BadArgument);
+      if ((e - s).norm() < 1e-9) fail(ErrorCode::IncorrectArguments);  // NIST: start = end is 0502
+      if (step <= 0) fail(ErrorCode::BadArgument);
+      require_probing_tool();
       if ((e - s).norm() / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
       hermite_line(s - deflection_mm * n, e - deflection_mm * n, n);
       sp.path.normals.push_back(n);
@@ -484,6 +505,8 @@ struct Session::Impl {
       const Vec3 c = to_machine({v[0], v[1], v[2]}), s = to_machine({v[3], v[4], v[5]});
       const double delta = v[9] * k_deg, sfa = v[10];
       step = v[11];
+      // NIST: a zero radius, or a start not in the plane through C normal to IJK, is 0502.
+      if ((s - c).norm() < 1e-9 || std::abs((s - c).dot(w)) > 1e-6 * (s - c).norm()) fail(ErrorCode::IncorrectArguments);
       Vec3 e0 = (s - c) - (s - c).dot(w) * w;
       const double radius = e0.norm();
       if (step <= 0 || radius < 1e-9) fail(ErrorCode::BadArgument);
@@ -491,6 +514,7 @@ struct Session::Impl {
       // allocate without bound.
       if (std::abs(delta) > 20 * std::numbers::pi || std::abs(delta) * radius / step > k_max_scan_samples)
         fail(ErrorCode::ArgumentOutOfRange);
+      require_probing_tool();
       e0 /= radius;
       // sfa 90: the probe touches the inside of a bore (normal towards the centre); else outside.
       const double sign = std::abs(sfa - 90) < 45 ? -1 : 1;
@@ -564,7 +588,7 @@ struct Session::Impl {
     if (v.empty() || v.size() % columns != 0) fail(ErrorCode::IncorrectArguments);
     const std::size_t n = v.size() / columns;
     if (n < 2) fail(ErrorCode::BadArgument);
-    if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+    require_probing_tool();
     const double e0 = options.scan_reference_deflection_mm;
     std::vector<Vec3> q(n), normal(n);
     for (std::size_t k = 0; k < n; ++k) {
@@ -611,6 +635,7 @@ struct Session::Impl {
     if (is_event_command(n) != c.tag.event) fail(ErrorCode::IllegalTag);
     if (n == "StartSession") {
       no_args(a);
+      if (started) fail(ErrorCode::IllegalCommand);  // one session per connection (NIST: 0507)
       started = true;
       return;
     }
@@ -621,6 +646,7 @@ struct Session::Impl {
     if (n == "EndSession") {
       no_args(a);
       ended = true;
+      started = false;  // a new StartSession may follow (NIST StartSession.prg)
     } else if (n == "ClearAllErrors") {
       no_args(a);
       error_state = false;
@@ -694,25 +720,22 @@ struct Session::Impl {
       no_args(a);
       for (const auto& t : tools) data("\"" + t.name + "\"");
     } else if (n == "ChangeTool" || n == "SetTool") {
-      const auto k = find_tool(one_string(a));
-      if (!k) fail(ErrorCode::ToolNotFound);
-      select_on_machine(tools[*k]);
-      active_tool = *k;
+      const auto k = named_tool(a);
+      select_on_machine(tools[k]);
+      active_tool = k;
     } else if (n == "FindTool") {
-      const auto k = find_tool(one_string(a));
-      if (!k) fail(ErrorCode::ToolNotFound);
-      found_tool = *k;
+      found_tool = named_tool(a);
     } else if (n == "FoundTool") {
       no_args(a);
       data("FoundTool.Name(\"" + tools[found_tool].name + "\")");
     } else if (n == "GetChangeToolAction") {
-      const auto k = find_tool(one_string(a));
-      if (!k) fail(ErrorCode::ToolNotFound);
+      const auto k = named_tool(a);
       const Vec3 p = to_csy(machine.state().position_mm);
-      data(std::string("ChangeToolAction(") + (*k == active_tool ? "None" : "Switch") + ", X(" + format_number(p.x()) +
+      data(std::string("ChangeToolAction(") + (k == active_tool ? "None" : "Switch") + ", X(" + format_number(p.x()) +
            "), Y(" + format_number(p.y()) + "), Z(" + format_number(p.z()) + "))");
     } else if (n == "AlignTool") {
       // A fixed probe head: the tool's alignment is answered when it lies within the tolerance.
+      require_motion_ready();
       const auto v = numbers(a);
       if (v.size() != 4 && v.size() != 8) fail(ErrorCode::IncorrectArguments);
       Vec3 want(v[0], v[1], v[2]);
@@ -780,7 +803,7 @@ struct Session::Impl {
     } else if (n == "ReQualify") {
       no_args(a);
       require_motion_ready();
-      if (!tool().definition) fail(ErrorCode::ProbeTypeDoesNotAllow);
+      require_probing_tool();
       const Response q = run(QualifyTool{});
       if (q.tool) tool().qualified_radius_mm = q.tool->effective_radius_mm;
       move_reports();
@@ -793,6 +816,9 @@ struct Session::Impl {
     } else if (n == "ScanOnCurve") {
       scan_on_curve(a);
     } else if (k_unsupported.count(n)) {
+      // Commands that would move the machine need Home first, supported or not (NIST: 0507).
+      if (n != "OnScanReportE" && n.rfind("Scan", 0) == 0 && n.find("Hint") == std::string::npos) require_motion_ready();
+      if (n == "AlignPart" || n == "CenterPart" || n == "TiltPart" || n == "TiltCenterPart") require_motion_ready();
       fail(ErrorCode::UnsupportedCommand);
     } else {
       fail(ErrorCode::IllegalCommand);
