@@ -25,6 +25,8 @@ void add_characterise_command(CLI::App& app, std::vector<Command>& commands);
 void add_calibrate_command(CLI::App& app, std::vector<Command>& commands);
 /// `metron calibrate error-space` under `calibrate` (calibrate_error_space_command.cpp).
 void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>& commands);
+/// scan-compare (scan_compare_command.cpp).
+void add_scan_compare_command(CLI::App& app, std::vector<Command>& commands);
 /// test (test_command.cpp).
 void add_test_command(CLI::App& app, std::vector<Command>& commands);
 
