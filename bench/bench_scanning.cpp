@@ -4,9 +4,13 @@
 //      offset from its design and rough: |Ep| - E0 (RMS, peak), oscillation, distance from the
 //      path, completion;
 //  (2) simulation speed of the 1 kHz scanning loop on a CAD mesh of >= 100k triangles.
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --speed-only | --step-only |
+//  (1b) cases where the path deviates from the surface across the scan direction: lateral error
+//      for no correction, Vc1, Vc1', Vc2, and a Kc-only sweep per law (--lateral-only);
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --lateral-only | --speed-only | --step-only |
 // --profile-sphere] [--full-search].
+#include <array>
 #include <chrono>
+#include <limits>
 #include <ctime>
 #include <cmath>
 #include <cstring>
@@ -153,6 +157,130 @@ void gain_sweep() {
     fmt::print("\n");
   }
   fmt::print("(* = not completed; a fault name: it came within 0.4 s of scanning)\n\n");
+}
+
+// Cases where the path deviates from the actual surface ACROSS the scan direction (issue 11
+// item 1, SEEDS.md 1): there Vc2 = (Vc1 . q) q does its work. lateral = (P - Pp) . q, the
+// deviation from the foot of the perpendicular along q (ScanCycle::lateral_error_mm).
+struct LateralRow {
+  ScanOutcome outcome;
+  double late_lateral_mm = 0;  // mean |lateral| over the second half of the path (steady state)
+  double hf_rms_mm = 0;        // RMS of |Ep| above the cutoff (oscillation)
+};
+
+LateralRow scan_lateral(const scan_test::LateralCase& lc, ScanLaw law, double kc) {
+  World w = lc.world;
+  w.machine.scanning.control.trajectory_gain_1_s = kc;
+  const auto solid = make_world_solid(w.truth);
+  ScanPath cmd = lc.command;
+  cmd.law = law;
+  ScanSetup setup{solid.get(), ball_radius_mm, w.machine, w.truth.scanning, 11};
+  std::vector<double> e, lat, s;
+  LateralRow row;
+  row.outcome = run_scan(cmd, setup, lc.start_mm, 0, [&](const ScanCycle& c) {
+    if (!c.scanning) return;
+    e.push_back(c.deflection_mm.norm());
+    lat.push_back(std::abs(c.lateral_error_mm));
+    s.push_back(c.path_s_mm);
+  });
+  const double half = row.outcome.stats.path_length_mm / 2;
+  double sum = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < lat.size(); ++i)
+    if (s[i] >= half) sum += lat[i], ++n;
+  row.late_lateral_mm = n ? sum / n : std::numeric_limits<double>::quiet_NaN();
+  const auto hp = high_pass(e, 25, 1 / w.machine.dt_s);
+  double sq = 0;
+  std::size_t m = 0;
+  for (std::size_t i = std::min<std::size_t>(hp.size(), 200); i < hp.size(); ++i) sq += hp[i] * hp[i], ++m;
+  row.hf_rms_mm = m ? std::sqrt(sq / static_cast<double>(m)) : 0;
+  return row;
+}
+
+std::vector<scan_test::LateralCase> lateral_cases(double roughness_mm) {
+  std::vector<scan_test::LateralCase> cases = {
+      scan_test::tilted_plane_case(20, 0.3, roughness_mm), scan_test::start_offset_case(0.5, roughness_mm),
+      scan_test::sphere_latitude_case(Vec3(0.3, -0.3, 0.2), 45, roughness_mm), scan_test::free_form_case(0.5, roughness_mm)};
+  cases[0].name = "plane tilted 20 deg sideways, +0.3 mm";
+  cases[1].name = "flat, start 0.5 mm sideways";
+  cases[2].name = "sphere D40 latitude 45, centre (0.3,-0.3,0.2) off";
+  cases[3].name = "free-form (20 deg side slope), 0.5 mm sideways";
+  // A ramp climbing 30 degrees along x, its block also tilted 15 degrees sideways and starting
+  // 0.5 mm early: Vc1' opposes Vf on the slope, Vc1 fights Ve, both while correcting sideways.
+  scan_test::LateralCase ramp = scan_test::tilted_plane_case(0, 0, roughness_mm);
+  ramp.name = "ramp 30 deg, tilted 15 deg sideways, 0.5 mm early";
+  ramp.world.truth.part->design = scan_test::ramp_design(30);
+  ramp.world.truth.part->pose.rotation_deg = Vec3(15, 0, 0);
+  // Keep the part's (0, 0, 10) at the design's place after the tilt about the machine x axis.
+  const double a = 15 * scan_test::deg;
+  ramp.world.truth.part->pose.translation_mm = part_origin + Vec3(-0.5, 10 * std::sin(a), 10 - 10 * std::cos(a));
+  ramp.command.path = scan_test::profile_path_xz(scan_test::ramp_profile(30), ball_radius_mm - 0.3, ball_radius_mm - 0.3);
+  for (auto& seg : ramp.command.path.segments) seg.k.col(0) += part_origin;
+  ramp.start_mm = scan_approach_point(ramp.command);
+  cases.push_back(ramp);
+  return cases;
+}
+
+std::string done_text(const ScanOutcome& o) {
+  return o.completed ? "yes" : fmt::format("no: {} at {:.1f} mm", o.fault ? to_string(o.fault->kind) : "?", o.stats.reached_mm);
+}
+
+void lateral_table() {
+  const double roughness_mm = 0.003;
+  const World d = default_world();
+  const double kc0 = d.machine.scanning.control.trajectory_gain_1_s;
+  fmt::print("Lateral cases (issue 11, SEEDS.md 1): the path deviates from the actual surface across the scan\n"
+             "direction. lat = (P - Pp) . q, q = eu x t: rms over the scan, peak, and the mean |lat| over the second\n"
+             "half of the path (steady state). K {} /s, Kc {} /s, roughness {} mm; \"none\" = Kc 0 (Vf + Ve only).\n\n",
+             d.machine.scanning.control.deflection_gain_1_s, kc0, roughness_mm);
+  fmt::print("{:<50} {:<5} | {:>8} {:>8} {:>9} | {:>9} {:>9} {:>7} {:>7} | {}\n", "case", "law", "lat rms", "lat pk",
+             "lat late", "rms dE um", "pk dE um", "osc um", "dist", "done");
+  const auto cases = lateral_cases(roughness_mm);
+  for (const auto& lc : cases) {
+    const auto row = [&](const char* name, ScanLaw law, double kc) {
+      const LateralRow r = scan_lateral(lc, law, kc);
+      const ScanStats& st = r.outcome.stats;
+      fmt::print("{:<50} {:<5} | {:>8.4f} {:>8.4f} {:>9.4f} | {:>9.2f} {:>9.2f} {:>7.2f} {:>7.3f} | {}\n", lc.name, name,
+                 st.rms_lateral_error_mm, st.max_lateral_error_mm, r.late_lateral_mm, 1000 * st.rms_deflection_error_mm,
+                 1000 * st.peak_deflection_error_mm, 1000 * r.hf_rms_mm, st.max_path_distance_mm, done_text(r.outcome));
+    };
+    row("none", ScanLaw::Vc2, 0);
+    for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) row(law_name(law), law, kc0);
+    fmt::print("\n");
+  }
+}
+
+// Each law at its own best Kc (K fixed): a Kc-only sweep, scored by lat rms + rms dE (both mm of
+// deviation from where the probe should be), so Vc1 is not judged only at K = Kc.
+void lateral_kc_sweep() {
+  const double roughness_mm = 0.003;
+  const std::vector<double> gains = {2.5, 5, 10, 20, 40, 80, 160};
+  fmt::print("Kc-only sweep (K = {} /s fixed): per law, lat rms / rms dE in um (* = not completed); [best] = the\n"
+             "smallest lat rms + rms dE among completed runs.\n\n",
+             default_world().machine.scanning.control.deflection_gain_1_s);
+  for (const auto& lc : lateral_cases(roughness_mm)) {
+    fmt::print("{}\n{:>6} |", lc.name, "Kc");
+    for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) fmt::print(" {:>18}", law_name(law));
+    fmt::print("\n");
+    double best[3] = {1e300, 1e300, 1e300}, best_kc[3] = {0, 0, 0};
+    std::vector<std::array<std::string, 3>> cells;
+    for (double kc : gains) {
+      std::array<std::string, 3> line;
+      int i = 0;
+      for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) {
+        const LateralRow r = scan_lateral(lc, law, kc);
+        const ScanStats& st = r.outcome.stats;
+        const double score = st.rms_lateral_error_mm + st.rms_deflection_error_mm;
+        if (r.outcome.completed && score < best[i]) best[i] = score, best_kc[i] = kc;
+        line[static_cast<std::size_t>(i)] = fmt::format("{:.1f}/{:.1f}{}", 1000 * st.rms_lateral_error_mm,
+                                                        1000 * st.rms_deflection_error_mm, r.outcome.completed ? " " : "*");
+        ++i;
+      }
+      fmt::print("{:>6.1f} | {:>18} {:>18} {:>18}\n", kc, line[0], line[1], line[2]);
+    }
+    fmt::print("  best | {:>18} {:>18} {:>18}\n\n", fmt::format("Kc {} ({:.1f})", best_kc[0], 1000 * best[0]),
+               fmt::format("Kc {} ({:.1f})", best_kc[1], 1000 * best[1]), fmt::format("Kc {} ({:.1f})", best_kc[2], 1000 * best[2]));
+  }
 }
 
 // A UV sphere of radius R with `rings` x `sectors` quads (2 triangles each, fans at the poles).
@@ -328,6 +456,11 @@ int main(int argc, char** argv) {
     --argc;
   }
   const bool table_only = argc > 1 && std::strcmp(argv[1], "--table-only") == 0;
+  if (argc > 1 && std::strcmp(argv[1], "--lateral-only") == 0) {
+    lateral_table();
+    lateral_kc_sweep();
+    return 0;
+  }
   const bool speed_only = argc > 1 && std::strcmp(argv[1], "--speed-only") == 0;
   if (argc > 1 && std::strcmp(argv[1], "--profile-sphere") == 0) {
     speed(true);
@@ -339,6 +472,8 @@ int main(int argc, char** argv) {
   }
   if (!speed_only) table();
   if (!speed_only) gain_sweep();
+  if (!speed_only) lateral_table();
+  if (!speed_only) lateral_kc_sweep();
   if (!table_only) speed();
   return 0;
 }

@@ -28,6 +28,7 @@
 #include "sample_paths.hpp"
 #include "stream_commands.hpp"
 #include "metron/machine/segmented_scanning/segmented_controller.hpp"
+#include "metron/machine/segmented_scanning/time_optimal_bound.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 
 namespace {
@@ -125,17 +126,22 @@ Outcome run(const geometry::PccPath& path, double length, const ControllerConfig
 }
 
 void header() {
-  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "path", "P", "mode",
-              "cmds", "stops", "retr", "late", "time_s", "/limit", "/bound", "v_junc", "dNear", "dNmax", "dFar",
+  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "path", "P", "mode",
+              "cmds", "stops", "retr", "late", "time_s", "/limit", "/topp", "/bound", "v_junc", "dNear", "dNmax", "dFar",
               "gapNmed", "gapFmed", "gapNmax", "wall_s");
-  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "", "", "", "", "",
-              "", "", "", "", "", "mm/s", "um", "um", "um", "mm", "mm", "mm", "");
+  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "", "", "", "", "",
+              "", "", "", "", "", "", "mm/s", "um", "um", "um", "mm", "mm", "mm", "");
 }
 
-void row(const char* path, std::size_t P, const char* mode, const Outcome& o, const ReferenceProfile& ref) {
+// The independent lower bound (time-optimal, no jerk limit; time_optimal_bound.hpp) for a path.
+double topp_s(const geometry::PccPath& path, const ScanLimits& l) {
+  return time_optimal_bound(path, BoundLimits{l.path.speed_mm_s, l.path.acceleration_mm_s2, l.normal_acceleration_mm_s2}).time_s;
+}
+
+void row(const char* path, std::size_t P, const char* mode, const Outcome& o, const ReferenceProfile& ref, double topp) {
   const double t = o.stats.scan_time_s();
-  std::printf("%-8s %5zu %-12s %5zu %6zu %5zu %5zu %9.2f %7.3f %7.3f %7.2f | %7.2f %7.2f %7.2f | %8.4f %8.4f %8.4f | %6.2f%s\n",
-              path, P, mode, o.commands, o.stats.stops, o.stats.retracts, o.stats.late_plans, t, t / ref.time_s,
+  std::printf("%-8s %5zu %-12s %5zu %6zu %5zu %5zu %9.2f %7.3f %7.3f %7.3f %7.2f | %7.2f %7.2f %7.2f | %8.4f %8.4f %8.4f | %6.2f%s\n",
+              path, P, mode, o.commands, o.stats.stops, o.stats.retracts, o.stats.late_plans, t, t / ref.time_s, t / topp,
               t / ref.lower_bound_s, o.mean_junction_mm_s, o.q.defl_near_mean_um, o.q.defl_near_max_um,
               o.q.defl_far_mean_um, o.q.gap_near_median_mm, o.q.gap_far_median_mm, o.q.gap_near_max_mm, o.wall_s,
               o.q.continuous ? "" : "  DISCONTINUOUS");
@@ -171,6 +177,10 @@ void planner_cost(const geometry::PccPath& path) {
               quantile(per_command, 0.0) * 1e3, quantile(per_command, 0.5) * 1e3, quantile(per_command, 0.9) * 1e3,
               quantile(per_command, 0.99) * 1e3, per_command.size(), quantile(per_segment, 0.5) * 1e6,
               quantile(per_segment, 0.99) * 1e6, per_segment.size());
+  std::printf("planner cost per segment (P=1000, median wall): %.2f us; the configured net planning time "
+              "(SegmentedScanSpec::planning_s_per_segment) is %.0f us per segment, %.0fx that\n",
+              quantile(per_command, 0.5) * 1e6 / static_cast<double>(P), ControllerConfig{}.planning_s_per_segment * 1e6,
+              ControllerConfig{}.planning_s_per_segment / (quantile(per_command, 0.5) / static_cast<double>(P)));
   std::printf("planner cost (thread CPU time): one P=1000 command: min %.3f median %.3f p90 %.3f p99 %.3f ms\n",
               quantile(per_command_cpu, 0.0) * 1e3, quantile(per_command_cpu, 0.5) * 1e3,
               quantile(per_command_cpu, 0.9) * 1e3, quantile(per_command_cpu, 0.99) * 1e3);
@@ -192,14 +202,15 @@ void probe_bench(double turns) {
   base.limits.path = {w.machine.scanning.control.feed_mm_s, 500.0, 5000.0};
   base.limits.normal_acceleration_mm_s2 = w.machine.scanning.control.max_centripetal_mm_s2;
   const ReferenceProfile ref = reference_profile(scan.path, base.limits, base.dt_s);
+  const double topp = topp_s(scan.path, base.limits);
   std::printf("real probe: %zu segments (%.1f mm, %.0f turns round a 50 mm boss with a hidden 5 um 3-lobe form), "
-              "feed %.0f mm/s, a %.0f, j %.0f; reference %.2f s\n",
+              "feed %.0f mm/s, a %.0f, j %.0f; reference %.2f s, independent time-optimal bound %.2f s\n",
               scan.path.segments.size(), ref.length_mm, turns, base.limits.path.speed_mm_s,
-              base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3, ref.time_s);
+              base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3, ref.time_s, topp);
   std::printf("dNear/dFar: max ||Ep| - E0| within 2 mm of a boundary / elsewhere (scanning cycles); gapMax: largest "
               "sample spacing (spacing 0.2 mm); form: circle fit of the samples (hidden 5.0 um)\n");
-  std::printf("%5s %-12s %5s %6s %6s %9s %7s %7s %8s %8s %8s %8s %7s\n", "P", "mode", "stops", "retr", "late",
-              "time s", "/limit", "samples", "gapMax", "dNear um", "dFar um", "form um", "wall s");
+  std::printf("%5s %-12s %5s %6s %6s %9s %7s %7s %7s %8s %8s %8s %8s %7s\n", "P", "mode", "stops", "retr", "late",
+              "time s", "/limit", "/topp", "samples", "gapMax", "dNear um", "dFar um", "form um", "wall s");
   for (std::size_t P : {std::size_t{1000}, std::size_t{50}, std::size_t{4}}) {
     for (SegmentedMode mode : {SegmentedMode::Conventional, SegmentedMode::Seed, SegmentedMode::LookAhead}) {
       const auto w0 = std::chrono::steady_clock::now();
@@ -231,8 +242,9 @@ void probe_bench(double turns) {
         m = std::max(m, std::abs(c.deflection_error_mm));
       }
       const auto f = metron::scan_test::fit_scanned_boss(smp, k_ball_mm);
-      std::printf("%5zu %-12s %5zu %6zu %6zu %9.2f %7.3f %7zu %8.4f %8.2f %8.2f %8.2f %7.2f\n", P, name(mode),
+      std::printf("%5zu %-12s %5zu %6zu %6zu %9.2f %7.3f %7.3f %7zu %8.4f %8.2f %8.2f %8.2f %7.2f\n", P, name(mode),
                   stats->stops, probe.retracts(), stats->late_plans, stats->scan_time_s(), stats->scan_time_s() / ref.time_s,
+                  stats->scan_time_s() / topp,
                   smp.size(), gap, near * 1000, far * 1000, f ? f->form_mm * 1000 : std::nan(""), wall);
     }
   }
@@ -258,24 +270,29 @@ int main(int argc, char** argv) {
               base.limits.path.speed_mm_s, base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3,
               base.limits.normal_acceleration_mm_s2, base.dt_s * 1e3, base.low.length_mm, base.low.speed_mm_s,
               base.planning_margin, base.planning_s_per_segment * 1e3, base.retract_mm, base.contact_settle_s);
-  std::printf("/limit: scan time over the reference (whole path buffered); /bound: over sum(length/v_limit);\n"
+  std::printf("/limit: scan time over the reference (metron's interpolator, whole path buffered); /topp: over the\n"
+              "independent time-optimal bound (speed, acceleration, centripetal limits, no jerk); /bound: over sum(length/v_limit);\n"
               "dNear/dNmax/dFar: stylus deflection error mean/max within 2 mm of a boundary, mean elsewhere;\n"
               "gapNmed/gapFmed/gapNmax: point spacing median near/far from boundaries, max near\n\n");
   for (const auto& [pname, path] : paths) {
     const ReferenceProfile ref = reference_profile(path, base.limits, base.dt_s);
-    std::printf("%s: %zu segments, %.1f mm; reference %.2f s (%zu cycles), lower bound %.2f s\n", pname,
-                path.segments.size(), ref.length_mm, ref.time_s, ref.cycles, ref.lower_bound_s);
+    const double topp = topp_s(path, base.limits);
+    std::printf("%s: %zu segments, %.1f mm; reference %.2f s (%zu cycles, +%.1f %% over the bound), independent "
+                "time-optimal bound (no jerk limit) %.2f s, sum(length/v_limit) %.2f s\n",
+                pname, path.segments.size(), ref.length_mm, ref.time_s, ref.cycles, 100 * (ref.time_s / topp - 1), topp,
+                ref.lower_bound_s);
   }
   std::printf("\n");
   header();
   for (const auto& [pname, path] : paths) {
     const ReferenceProfile ref = reference_profile(path, base.limits, base.dt_s);
+    const double topp = topp_s(path, base.limits);
     for (std::size_t P : {std::size_t{1000}, std::size_t{50}, std::size_t{4}}) {
       for (SegmentedMode mode : {SegmentedMode::Conventional, SegmentedMode::Seed, SegmentedMode::LookAhead}) {
         ControllerConfig cfg = base;
         cfg.mode = mode;
         cfg.buffer_segments = P;
-        row(pname, P, name(mode), run(path, ref.length_mm, cfg), ref);
+        row(pname, P, name(mode), run(path, ref.length_mm, cfg), ref, topp);
       }
     }
   }
@@ -286,6 +303,7 @@ int main(int argc, char** argv) {
   header();
   for (const auto& [pname, path] : paths) {
     const ReferenceProfile ref = reference_profile(path, base.limits, base.dt_s);
+    const double topp = topp_s(path, base.limits);
     for (bool jitter : {false, true}) {
       for (SegmentedMode mode : {SegmentedMode::Conventional, SegmentedMode::Seed, SegmentedMode::LookAhead}) {
         ControllerConfig cfg = base;
@@ -299,7 +317,7 @@ int main(int argc, char** argv) {
           cfg.planning_factor = [factors](std::size_t i) { return (*factors)[i % factors->size()]; };
         }
         const std::string mname = std::string(name(mode)) + (jitter ? "~" : "");
-        row(pname, 50, mname.c_str(), run(path, ref.length_mm, cfg), ref);
+        row(pname, 50, mname.c_str(), run(path, ref.length_mm, cfg), ref, topp);
       }
     }
   }

@@ -27,6 +27,8 @@ void add_calibrate_command(CLI::App& app, std::vector<Command>& commands);
 void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>& commands);
 /// discrepancy (discrepancy_command.cpp).
 void add_discrepancy_command(CLI::App& app, std::vector<Command>& commands);
+/// scan-compare (scan_compare_command.cpp).
+void add_scan_compare_command(CLI::App& app, std::vector<Command>& commands);
 /// test (test_command.cpp).
 void add_test_command(CLI::App& app, std::vector<Command>& commands);
 

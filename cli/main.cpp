@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   metron::cli::add_serve_command(app, commands);
   metron::cli::add_calibrate_command(app, commands);
   metron::cli::add_discrepancy_command(app, commands);
+  metron::cli::add_scan_compare_command(app, commands);
   CLI11_PARSE(app, argc, argv);
   for (const auto& c : commands)
     if (c.app->parsed()) return c.run();

@@ -3,6 +3,7 @@
 // trajectory-correction laws, accuracy against hidden form, speed limits, the VirtualCmm command.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -124,7 +125,8 @@ TEST(Scanning, PlaneSurfaceIsReturnedWithinTheProbeNoise) {
 }
 
 // SEEDS.md 1: Vc1 has a component along eu that fights Ve. With the part dz above its design,
-// the head settles where K*(e - E0) = Kc*(dz - (e - E0)), i.e. e - E0 = dz*Kc/(K + Kc);
+// the head settles where Ge*K*(e - E0) = Gc*Kc*(dz - (e - E0)) (without the gain functions
+// e - E0 = dz*Kc/(K + Kc));
 // Vc1' and Vc2 have no component along eu and hold E0.
 TEST(Scanning, Vc1FightsTheDeflectionCorrectionAsItsEquilibriumPredicts) {
   const double dz = 0.1;
@@ -134,7 +136,17 @@ TEST(Scanning, Vc1FightsTheDeflectionCorrectionAsItsEquilibriumPredicts) {
   const ScanRun vc1p = scan(w, ramp_scan(0, ScanLaw::Vc1Prime));
   const ScanRun vc2 = scan(w, ramp_scan(0, ScanLaw::Vc2));
   ASSERT_TRUE(vc1.out.completed && vc1p.out.completed && vc2.out.completed);
-  EXPECT_NEAR(deflection_error(vc1, 20, 50).first, dz * kc / (k + kc), 0.002);
+  // With the gain functions: K Ge(x) x = Kc Gc(y) (dz - x), x = e - E0, y = dz - x (the path is
+  // straight above the head), solved by bisection; dz Kc/(K + Kc) at Ge = Gc = 1.
+  const auto& ctl = w.machine.scanning.control;
+  const auto ge = [&](double x) { const double u = x / ctl.deflection_tolerance_mm; return u < 0 ? 1 + 0.2 * u * u / (1 + u * u) : 1.0; };
+  const auto gc = [&](double y) { const double u = y / ctl.trajectory_tolerance_mm; return 1 + 0.5 * u * u / (1 + u * u); };
+  double lo = 0, hi = dz;
+  for (int i = 0; i < 100; ++i) {
+    const double x = (lo + hi) / 2;
+    (k * ge(x) * x < kc * gc(dz - x) * (dz - x) ? lo : hi) = x;
+  }
+  EXPECT_NEAR(deflection_error(vc1, 20, 50).first, lo, 0.002);
   EXPECT_NEAR(deflection_error(vc1p, 20, 50).first, 0, 0.001);
   EXPECT_NEAR(deflection_error(vc2, 20, 50).first, 0, 0.001);
 }
@@ -189,16 +201,168 @@ TEST(Scanning, Vc1PrimeStallsOnSteepRampsWhereVc2Climbs) {
   }
 }
 
+namespace {
+
+// A lateral case scanned with `law`; kc < 0 keeps the world's Kc, kc = 0 is no trajectory correction.
+ScanRun scan_lateral(const scan_test::LateralCase& lc, ScanLaw law, double kc = -1) {
+  World w = lc.world;
+  if (kc >= 0) w.machine.scanning.control.trajectory_gain_1_s = kc;
+  const auto solid = make_world_solid(w.truth);
+  ScanSetup setup{solid.get(), ball_r, w.machine, w.truth.scanning, 9};
+  ScanPath cmd = lc.command;
+  cmd.law = law;
+  ScanRun r;
+  r.out = run_scan(cmd, setup, lc.start_mm, 0, [&](const ScanCycle& c) {
+    if (c.scanning) r.cycles.push_back(c);
+  });
+  return r;
+}
+
+// Mean head position over the cycles with path_s in [from, to].
+Vec3 mean_head(const ScanRun& r, double from_mm, double to_mm) {
+  Vec3 sum = Vec3::Zero();
+  int n = 0;
+  for (const ScanCycle& c : r.cycles)
+    if (c.path_s_mm >= from_mm && c.path_s_mm <= to_mm) sum += c.head_mm, ++n;
+  return n ? Vec3(sum / n) : Vec3::Constant(1e9);
+}
+
+}  // namespace
+
+// SEEDS.md 1, Vc2 across the scan direction: the flat design's line over a top actually tilted
+// 20 degrees sideways (normal n = (0, -sin a, cos a)) and raised 0.3 mm. At Vc2's equilibrium the
+// head holds E0 (n . (H - C) = r - E0) and has no deviation along q = n x t, so P - H is along n:
+// H = P + t n with t = (r - E0) - n . (P - C) = 1.7 - 1.4 cos a. Without a trajectory correction
+// the head keeps the y where its approach along z met the surface. Fails when Vc2 is zeroed
+// (y stays put) or its sign flipped (the head runs away sideways).
+TEST(ScanningLateral, Vc2MovesTheHeadToThePerpendicularFootOnASidewaysTiltedPlane) {
+  const double a = 20 * deg, t = 1.7 - 1.4 * std::cos(a);
+  const Vec3 expected(0, 100 - t * std::sin(a), 11.7 + t * std::cos(a));
+  const auto lc = scan_test::tilted_plane_case(20, 0.3);
+  const ScanRun vc2 = scan_lateral(lc, ScanLaw::Vc2);
+  const ScanRun none = scan_lateral(lc, ScanLaw::Vc2, 0);
+  ASSERT_TRUE(vc2.out.completed) << (vc2.out.fault ? vc2.out.fault->message : "");
+  ASSERT_TRUE(none.out.completed) << (none.out.fault ? none.out.fault->message : "");
+  const Vec3 h2 = mean_head(vc2, 20, 55), h0 = mean_head(none, 20, 55);
+  EXPECT_NEAR(h2.y(), expected.y(), 0.002);
+  EXPECT_NEAR(h2.z(), expected.z(), 0.002);
+  EXPECT_GT(std::abs(h0.y() - expected.y()), 0.1);  // the case needs the correction
+  for (const ScanCycle& c : vc2.cycles)
+    if (c.path_s_mm > 20) {
+      ASSERT_LT(std::abs(c.lateral_error_mm), 0.003) << c.path_s_mm;
+    }
+  std::printf("[figures] tilted plane: head y %.4f (Vc2) vs %.4f analytic, %.4f without correction; "
+              "lateral rms %.4f / %.4f mm\n",
+              h2.y(), expected.y(), h0.y(), vc2.out.stats.rms_lateral_error_mm, none.out.stats.rms_lateral_error_mm);
+}
+
+// A head starting 0.5 mm sideways of the path on a flat top (q = y): Vc2 = Kc (P - Pp).q q pulls
+// it back (Gc = 1 at E0); without the correction it stays 0.5 mm off. Fails when Vc2 is zeroed
+// or its sign flipped (the head runs off sideways).
+TEST(ScanningLateral, Vc2RemovesALateralStartOffsetAtTheRateKc) {
+  const auto lc = scan_test::start_offset_case(0.5);
+  const double kc = lc.world.machine.scanning.control.trajectory_gain_1_s;
+  const ScanRun vc2 = scan_lateral(lc, ScanLaw::Vc2);
+  const ScanRun none = scan_lateral(lc, ScanLaw::Vc2, 0);
+  ASSERT_TRUE(vc2.out.completed) << (vc2.out.fault ? vc2.out.fault->message : "");
+  EXPECT_NEAR(mean_head(vc2, 10, 55).y(), 100, 0.001);
+  EXPECT_NEAR(mean_head(none, 10, 55).y(), 100.5, 0.001);
+  // How fast: Vc2 commands Kc * 0.5 mm = 20 mm/s sideways at first; through the 20 Hz servo
+  // (hidden truth: closed-loop poles about -48 /s and -26 +- 112j /s at Kc = 40) the offset
+  // falls from 90 % to 10 % of its start within a few 1/Kc, and not faster than 1/(2 Kc).
+  double t1 = -1, t2 = -1;
+  for (const ScanCycle& c : vc2.cycles) {
+    const double d = std::abs(c.head_mm.y() - 100);
+    if (t1 < 0 && d < 0.45) t1 = c.time_s;
+    if (t2 < 0 && d < 0.05) t2 = c.time_s;
+  }
+  ASSERT_GT(t1, 0);
+  ASSERT_GT(t2, t1);
+  EXPECT_GT(t2 - t1, 0.5 / kc);
+  EXPECT_LT(t2 - t1, 3 / kc);
+  const double rate = std::log(9.0) / (t2 - t1);
+  std::printf("[figures] lateral start offset 0.5 mm: 90 %% -> 10 %% at %.1f /s (Kc = %.0f /s), final y %.4f; none %.4f\n", rate,
+              kc, mean_head(vc2, 10, 55).y(), mean_head(none, 10, 55).y());
+}
+
+// A latitude circle (45 degrees) on a sphere whose actual centre is off the design: the truth
+// (the actual centre c) gives the normal n = (H - c)/|H - c| and q = n x t; at Vc2's equilibrium
+// (P - H) . q = 0. Checked against that hidden truth, not the controller's eu; without the
+// correction the head drifts along the meridian.
+TEST(ScanningLateral, Vc2HoldsTheLatitudeOnASphereOffItsNominalCentre) {
+  const Vec3 off(0.3, -0.3, 0.2);
+  const auto lc = scan_test::sphere_latitude_case(off);
+  const Vec3 centre = scan_test::sphere_centre_mm + off;
+  const auto true_lateral = [&](const ScanRun& r, double from_mm) {
+    double worst = 0;
+    for (const ScanCycle& c : r.cycles) {
+      if (c.path_s_mm < from_mm) continue;
+      const Vec3 n = (c.head_mm - centre).normalized();
+      worst = std::max(worst, std::abs((c.foot_mm - c.head_mm).dot(n.cross(c.tangent).normalized())));
+    }
+    return worst;
+  };
+  const ScanRun vc2 = scan_lateral(lc, ScanLaw::Vc2);
+  const ScanRun none = scan_lateral(lc, ScanLaw::Vc2, 0);
+  ASSERT_TRUE(vc2.out.completed) << (vc2.out.fault ? vc2.out.fault->message : "");
+  const double length = vc2.out.stats.path_length_mm;
+  EXPECT_LT(true_lateral(vc2, 5), 0.003);
+  EXPECT_GT(true_lateral(none, 5), 0.1);
+  // The head stays on the actual sphere's offset surface: |H - c| = R + r - E0.
+  for (const ScanCycle& c : vc2.cycles)
+    if (c.path_s_mm > 5) {
+      ASSERT_NEAR((c.head_mm - centre).norm(), 20 + 1.7, 0.01);
+    }
+  std::printf("[figures] sphere latitude, centre off by (0.3, -0.3, 0.2): largest true lateral error %.4f mm (Vc2), "
+              "%.4f mm without correction, over %.1f mm\n",
+              true_lateral(vc2, 5), true_lateral(none, 5), length);
+}
+
+// The gain functions (docs/scanning.md): Gf = 1/((1 + x^2)(1 + y^2)), Ge = 1 + x^2/(5(1 + x^2)) for x < 0 (else 1),
+// Gc = 1 + y^2/(2(1 + y^2)), x = dE/e_tol, y = |P - Pp|/d_tol: all 1 on the path at E0.
+TEST(ScanningLateral, GainsFollowTheirDeviationFunctions) {
+  ScanControlSpec ctl;
+  ctl.deflection_tolerance_mm = 0.1;
+  ctl.trajectory_tolerance_mm = 0.5;
+  const Vec3 eu = Vec3::UnitZ(), t = Vec3::UnitX(), p = Vec3(0, 0.2, 0);
+  const ScanTerms on_path = scan_law_terms(ScanLaw::Vc2, ctl, 0.3, 0.3, eu, Vec3::Zero(), Vec3::Zero(), t, 10);
+  EXPECT_NEAR(on_path.gf, 1, 1e-12);
+  EXPECT_NEAR(on_path.ge, 1, 1e-12);
+  EXPECT_NEAR(on_path.gc, 1, 1e-12);
+  const ScanTerms at_e0 = scan_law_terms(ScanLaw::Vc2, ctl, 0.3, 0.3, eu, p, Vec3::Zero(), t, 10);
+  EXPECT_NEAR(at_e0.ge, 1, 1e-12);
+  EXPECT_NEAR(at_e0.gc, 1 + 0.5 * 0.16 / 1.16, 1e-12);
+  EXPECT_NEAR(at_e0.gf, 1 / 1.16, 1e-12);
+  const ScanTerms off = scan_law_terms(ScanLaw::Vc2, ctl, 0.3, 0.4, eu, Vec3(0, 0.5, 0), Vec3::Zero(), t, 10);
+  EXPECT_NEAR(off.gf, 0.25, 1e-12);
+  EXPECT_NEAR(off.ge, 1, 1e-12);  // above E0: no boost
+  const ScanTerms light = scan_law_terms(ScanLaw::Vc2, ctl, 0.3, 0.2, eu, Vec3::Zero(), Vec3::Zero(), t, 10);
+  EXPECT_NEAR(light.ge, 1.1, 1e-12);
+  EXPECT_NEAR(off.gc, 1.25, 1e-12);
+  const ScanTerms free = scan_law_terms(ScanLaw::Vc2, ctl, 0.3, 0, eu, Vec3::Zero(), Vec3::Zero(), t, 10);
+  EXPECT_NEAR(free.ge, 1 + 0.2 * 9 / 10, 1e-12);
+  // Vc2 itself: along q = eu x t = +y or -y, magnitude Kc * 0.2 (sign of q irrelevant, of Vc2 not).
+  EXPECT_NEAR(at_e0.vc.y(), ctl.trajectory_gain_1_s * 0.2, 1e-12);
+  EXPECT_NEAR(at_e0.vc.x(), 0, 1e-12);
+  EXPECT_NEAR(at_e0.vc.z(), 0, 1e-12);
+}
+
 // Along eu the Vc1 law adds Kc to K, so its normal loop rings at gains where Vc2's is calm; with
 // Vc2 at K = 2*60 (the same normal loop gain as Vc1 at K = Kc = 60) it rings too.
 TEST(Scanning, Vc1RingsBecauseItsNormalLoopGainIsKPlusKc) {
   World w = world_with(scan_test::ramp_design(0), Vec3(0, 0, 0.05), 0.003);
   w.machine.scanning.control.deflection_gain_1_s = w.machine.scanning.control.trajectory_gain_1_s = 60;
-  const double vc1 = deflection_error(scan(w, ramp_scan(0, ScanLaw::Vc1)), 15, 50).second;
-  const double vc2 = deflection_error(scan(w, ramp_scan(0, ScanLaw::Vc2)), 15, 50).second;
+  // Ringing so hard that the scan faults before the window counts as ringing (1 mm).
+  const auto ring = [](const ScanRun& r) {
+    const auto n = std::count_if(r.cycles.begin(), r.cycles.end(), [](const ScanCycle& c) { return c.path_s_mm >= 15 && c.path_s_mm <= 50; });
+    if (r.out.fault) std::printf("[figures] %s\n", r.out.fault->message.c_str());
+    return n > 100 ? deflection_error(r, 15, 50).second : 1.0;
+  };
+  const double vc1 = ring(scan(w, ramp_scan(0, ScanLaw::Vc1)));
+  const double vc2 = ring(scan(w, ramp_scan(0, ScanLaw::Vc2)));
   w.machine.scanning.control.deflection_gain_1_s = 120;
   const ScanRun fast = scan(w, ramp_scan(0, ScanLaw::Vc2));
-  const double vc2_fast = fast.cycles.size() > 100 ? deflection_error(fast, 15, 50).second : 1.0;
+  const double vc2_fast = ring(fast);
   EXPECT_LT(vc2, 0.003);
   EXPECT_GT(vc1, 5 * vc2);
   EXPECT_GT(vc2_fast, 5 * vc2);
@@ -242,51 +406,10 @@ TEST(Scanning, LobedCircleFormIsRecoveredWithin1um) {
               f->form_mm, f->diameter_mm, std::abs(h3), -std::arg(h3) / 3 / deg);
 }
 
-namespace {
-
-// A closed mesh of the free-form block 0 <= z <= height(x, y) over [x0, x1] x [y0, y1].
-template <class F>
-geometry::Mesh heightfield_block(F height, double x0, double x1, double y0, double y1, int nx, int ny) {
-  std::vector<Vec3> v;
-  std::vector<geometry::Mesh::Face> f;
-  const auto at = [&](int i, int j, bool top) { return static_cast<std::uint32_t>((top ? 0 : (nx + 1) * (ny + 1)) + j * (nx + 1) + i); };
-  for (int top = 1; top >= 0; --top)
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i) {
-        const double x = x0 + (x1 - x0) * i / nx, y = y0 + (y1 - y0) * j / ny;
-        v.emplace_back(x, y, top ? height(x, y) : 0.0);
-      }
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      f.push_back({at(i, j, true), at(i + 1, j, true), at(i + 1, j + 1, true)});
-      f.push_back({at(i, j, true), at(i + 1, j + 1, true), at(i, j + 1, true)});
-      f.push_back({at(i, j, false), at(i + 1, j + 1, false), at(i + 1, j, false)});
-      f.push_back({at(i, j, false), at(i, j + 1, false), at(i + 1, j + 1, false)});
-    }
-  // Walls: each boundary edge of the top joined to the bottom, facing out.
-  const auto wall = [&](std::uint32_t a, std::uint32_t b, std::uint32_t a0, std::uint32_t b0) {
-    f.push_back({a, b0, a0});
-    f.push_back({a, b, b0});
-  };
-  for (int i = 0; i < nx; ++i) {
-    wall(at(i + 1, 0, true), at(i, 0, true), at(i + 1, 0, false), at(i, 0, false));          // y = y0
-    wall(at(i, ny, true), at(i + 1, ny, true), at(i, ny, false), at(i + 1, ny, false));      // y = y1
-  }
-  for (int j = 0; j < ny; ++j) {
-    wall(at(0, j, true), at(0, j + 1, true), at(0, j, false), at(0, j + 1, false));          // x = x0
-    wall(at(nx, j + 1, true), at(nx, j, true), at(nx, j + 1, false), at(nx, j, false));      // x = x1
-  }
-  auto m = geometry::Mesh::from_triangles(std::move(v), std::move(f));
-  if (!m) throw std::runtime_error(m.error().message);
-  return *m;
-}
-
-}  // namespace
-
 // Accuracy: a free-form surface with a hidden 10 um bump; the scan line crosses it.
 TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
   const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 12) * std::cos(y / 15); };
-  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 60, -20, 20, 120, 80));
+  auto mesh = std::make_shared<const geometry::Mesh>(scan_test::heightfield_block(height, 0, 60, -20, 20, 120, 80));
   ASSERT_TRUE(mesh->is_closed());
   const Bump bump{Vec3(30, 0, height(30, 0)), 0.010, 3};
   CadDesign cad;
@@ -488,7 +611,7 @@ TEST(Scanning, OverRangeIsAFaultWithTheSamplesSoFar) {
 // as the solid everywhere, near the centre (the fast path) and far from it (the fallback).
 TEST(Scanning, LocalViewsAnswerExactlyLikeTheirSolid) {
   const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7); };
-  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 40, -20, 20, 40, 40));
+  auto mesh = std::make_shared<const geometry::Mesh>(scan_test::heightfield_block(height, 0, 40, -20, 20, 40, 40));
   CadDesign cad;
   cad.path = "<test mesh>";
   cad.mesh = mesh;
@@ -541,7 +664,7 @@ double brute_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 
 TEST(Scanning, CoherentMeshSearchAnswersLikeBruteForce) {
   const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7) + 0.3 * std::sin(x * 1.3); };
-  auto mesh = std::make_shared<const geometry::Mesh>(heightfield_block(height, 0, 40, -20, 20, 60, 50));
+  auto mesh = std::make_shared<const geometry::Mesh>(scan_test::heightfield_block(height, 0, 40, -20, 20, 60, 50));
   Frame pose = Frame::Identity();
   pose.translate(origin);
   const MeshSolid solid(mesh, pose);

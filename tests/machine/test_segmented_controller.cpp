@@ -168,6 +168,59 @@ TEST(SegmentedController, ConnectionFlagDropsTpBeforeTheCommandEnd) {
   for (std::size_t k = 0; k < 5; ++k) EXPECT_NEAR(r.stats.boundaries[k].t_s - falls[k], 0.104, 0.003) << k;
 }
 
+// SEEDS.md 2 step 4: the planner acts on LF, and LF compares the gap time tei - t with Tp
+// (1.3 x the net planning time), not with the net time. The host loads C1 late, when C0's gap time
+// lies between the net time (0.4 s) and Tp (0.52 s): LF = 0, so C1 gets an individual plan and
+// the probe stops at the boundary; loaded with a gap above Tp it connects. Fails when LF is
+// compared with the net time, or when the planner decides by anything but LF.
+TEST(SegmentedController, PlannerReadsLFAndLFComparesTheGapWithTp) {
+  ControllerConfig cfg = base(SegmentedMode::Seed, 40);
+  cfg.planning_s_per_segment = 0.01;  // net 0.4 s, Tp 0.52 s for 40 segments
+  const auto cmds = split(test_path(), 40);
+  ASSERT_GE(cmds.size(), 3u);
+  // When C0 ends: C0's plan does not depend on C1 (it always ends at the low speed).
+  double te0 = 0;
+  {
+    SegmentedController ctl(cfg);
+    ASSERT_TRUE(ctl.load(cmds[0]).has_value());
+    ASSERT_TRUE(ctl.load(cmds[1]).has_value());
+    while (ctl.stats().boundaries.empty() && ctl.time_s() < 60) ctl.step();
+    ASSERT_FALSE(ctl.stats().boundaries.empty());
+    te0 = ctl.stats().boundaries.front().t_s;
+  }
+  struct Outcome {
+    PlanKind kind;
+    bool lf_at_load;
+    bool stopped;
+  };
+  const auto load_late = [&](double gap_s) {
+    SegmentedController ctl(cfg);
+    EXPECT_TRUE(ctl.load(cmds[0]).has_value());
+    while (ctl.time_s() < te0 - gap_s) ctl.step();
+    const bool lf = ctl.connection_flag();
+    EXPECT_TRUE(ctl.load(cmds[1]).has_value());
+    std::size_t next = 2;
+    while (!ctl.finished() && ctl.time_s() < 120) {
+      while (next < cmds.size() && ctl.free_buffer() != 0) EXPECT_TRUE(ctl.load(cmds[next++]).has_value());
+      ctl.step();
+    }
+    EXPECT_TRUE(ctl.finished());
+    const auto& st = ctl.stats();
+    EXPECT_GE(st.plan_kinds.size(), 2u);
+    EXPECT_GE(st.boundaries.size(), 1u);
+    return Outcome{st.plan_kinds.size() > 1 ? st.plan_kinds[1] : PlanKind::LookAhead, lf,
+                   !st.boundaries.empty() && st.boundaries.front().stopped};
+  };
+  const Outcome between = load_late(0.46);
+  EXPECT_FALSE(between.lf_at_load);
+  EXPECT_EQ(between.kind, PlanKind::Individual);
+  EXPECT_TRUE(between.stopped);
+  const Outcome above = load_late(0.60);
+  EXPECT_TRUE(above.lf_at_load);
+  EXPECT_EQ(above.kind, PlanKind::Connection);
+  EXPECT_FALSE(above.stopped);
+}
+
 TEST(SegmentedController, SeedFallsBackOnlyAtTheLateBoundary) {
   // The plan of C3 takes 3x its net time, longer than Tp = 1.3x: LF said "connect", the plan is
   // late, the probe stops at the end of C2 only, retracts and approaches again.

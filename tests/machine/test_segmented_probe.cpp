@@ -85,6 +85,7 @@ ControllerConfig config(SegmentedMode mode, std::size_t P, const World& w) {
 void expect_continuous(const ProbeRun& r, double spacing_mm) {
   ASSERT_FALSE(r.fault) << r.fault->message;
   ASSERT_GT(r.samples.size(), 10u);
+  ASSERT_EQ(r.sample_commands.size(), r.samples.size());
   double worst_gap = 0;
   for (std::size_t i = 1; i < r.samples.size(); ++i) {
     const double ds = r.samples[i].path_s_mm - r.samples[i - 1].path_s_mm;
@@ -178,6 +179,7 @@ TEST(SegmentedProbe, LatePlanFallsBackAtThatBoundaryOnly) {
   EXPECT_EQ(r.retracts, 2u);
   EXPECT_EQ(r.approaches, 2u);
   // The probe really left the surface there: cycles without contact around boundary 10.
+  ASSERT_GE(r.stats.boundaries.size(), 10u);
   const double b10 = r.stats.boundaries[9].s_mm;
   std::size_t free_cycles = 0;
   for (const DrivenCycle& c : r.cycles)

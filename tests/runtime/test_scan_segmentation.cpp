@@ -15,7 +15,10 @@ using namespace metron;
 using metron::runtime::command_sizes;
 
 TEST(ScanSegmentation, SeedExamples) {
-  // P = 8 (the seed's example buffer): 8n + m.
+  // P = 8, 8n + m (the seed's example buffer is P = 4, SEEDS.md 2 step 1; 8 makes P/4 = 2 a
+  // threshold with both sides reachable). The seed's own P = 4 cases:
+  EXPECT_EQ(command_sizes(13, 4), (std::vector<std::size_t>{4, 4, 4, 1}));  // m = 1 >= P/4 = 1: no averaging
+  EXPECT_EQ(command_sizes(12, 4), (std::vector<std::size_t>{4, 4, 4}));     // m = 0
   EXPECT_EQ(command_sizes(32, 8), (std::vector<std::size_t>{8, 8, 8, 8}));          // m = 0
   EXPECT_EQ(command_sizes(33, 8), (std::vector<std::size_t>{8, 8, 8, 5, 4}));       // m = 1 < 2: (8+1)/2, odd
   EXPECT_EQ(command_sizes(34, 8), (std::vector<std::size_t>{8, 8, 8, 8, 2}));       // m = 2 = P/4: no averaging

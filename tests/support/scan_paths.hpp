@@ -5,7 +5,11 @@
 // runtime tests and the scanning benchmarks.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
+#include <string>
+#include <variant>
+#include <stdexcept>
 #include <vector>
 
 #include "metron/machine/command.hpp"
@@ -13,6 +17,7 @@
 #include "metron/machine/measurement_command.hpp"
 #include "metron/machine/world.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
+#include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/geometry/pcc.hpp"
 
 namespace metron::scan_test {
@@ -222,6 +227,180 @@ inline auto fit_scanned_boss(const std::vector<machine::ScanSample>& samples, do
   o.inner = false;
   o.direction_hint = Vec3::UnitZ();
   return fitting::fit(fitting::Shape::Circle, pts, o);
+}
+
+// A closed mesh of the free-form block 0 <= z <= height(x, y) over [x0, x1] x [y0, y1].
+template <class F>
+inline geometry::Mesh heightfield_block(F height, double x0, double x1, double y0, double y1, int nx, int ny) {
+  std::vector<Vec3> v;
+  std::vector<geometry::Mesh::Face> f;
+  const auto at = [&](int i, int j, bool top) { return static_cast<std::uint32_t>((top ? 0 : (nx + 1) * (ny + 1)) + j * (nx + 1) + i); };
+  for (int top = 1; top >= 0; --top)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) {
+        const double x = x0 + (x1 - x0) * i / nx, y = y0 + (y1 - y0) * j / ny;
+        v.emplace_back(x, y, top ? height(x, y) : 0.0);
+      }
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      f.push_back({at(i, j, true), at(i + 1, j, true), at(i + 1, j + 1, true)});
+      f.push_back({at(i, j, true), at(i + 1, j + 1, true), at(i, j + 1, true)});
+      f.push_back({at(i, j, false), at(i + 1, j + 1, false), at(i + 1, j, false)});
+      f.push_back({at(i, j, false), at(i, j + 1, false), at(i + 1, j + 1, false)});
+    }
+  // Walls: each boundary edge of the top joined to the bottom, facing out.
+  const auto wall = [&](std::uint32_t a, std::uint32_t b, std::uint32_t a0, std::uint32_t b0) {
+    f.push_back({a, b0, a0});
+    f.push_back({a, b, b0});
+  };
+  for (int i = 0; i < nx; ++i) {
+    wall(at(i + 1, 0, true), at(i, 0, true), at(i + 1, 0, false), at(i, 0, false));          // y = y0
+    wall(at(i, ny, true), at(i + 1, ny, true), at(i, ny, false), at(i + 1, ny, false));      // y = y1
+  }
+  for (int j = 0; j < ny; ++j) {
+    wall(at(0, j, true), at(0, j + 1, true), at(0, j, false), at(0, j + 1, false));          // x = x0
+    wall(at(nx, j + 1, true), at(nx, j, true), at(nx, j + 1, false), at(nx, j, false));      // x = x1
+  }
+  auto m = geometry::Mesh::from_triangles(std::move(v), std::move(f));
+  if (!m) throw std::runtime_error(m.error().message);
+  return *m;
+}
+
+
+/// The ramp part's block with a plane top through (0, 0, base + raise_mm) tilted sideways (about
+/// x) by tilt_deg: its outward normal is (0, -sin(tilt), cos(tilt)). A flat design's path along x
+/// then deviates from the actual surface across the scan direction (SEEDS.md 1, Vc2's case).
+inline machine::csg::Node tilted_block_design(double tilt_deg, double raise_mm, double base = 10) {
+  using namespace machine::csg;
+  const auto half = [](const Vec3& p, const Vec3& n) {
+    Node leaf;
+    leaf.primitive = {"", HalfSpace{p, n.normalized()}};
+    return leaf;
+  };
+  const double a = tilt_deg * deg;
+  Node block;
+  block.op = Node::Op::Intersection;
+  block.children = {half(Vec3(0, 0, base + raise_mm), Vec3(0, -std::sin(a), std::cos(a))),
+                    half(Vec3(-20, 0, 0), -Vec3::UnitX()), half(Vec3(200, 0, 0), Vec3::UnitX()),
+                    half(Vec3(0, -30, 0), -Vec3::UnitY()), half(Vec3(0, 30, 0), Vec3::UnitY()),
+                    half(Vec3(0, 0, 0), -Vec3::UnitZ())};
+  return block;
+}
+
+/// Hermite segments through the points f(u), u from u0 to u1 in n steps, tangents by central
+/// differences, with normals g(u): a smooth nominal path from a parametric contour.
+template <class F, class G>
+inline geometry::PccPath sampled_path(F f, G g, double u0, double u1, int n) {
+  geometry::PccPath path;
+  const double h = (u1 - u0) * 1e-5;
+  const auto tangent = [&](double u) { return Vec3((f(u + h) - f(u - h)).normalized()); };
+  for (int i = 0; i < n; ++i) {
+    const double a = u0 + (u1 - u0) * i / n, b = u0 + (u1 - u0) * (i + 1) / n;
+    path.segments.push_back(geometry::PccSegment::hermite(f(a), f(b), tangent(a), tangent(b)));
+    path.normals.push_back(g(a));
+  }
+  path.normals.push_back(g(u1));
+  return path;
+}
+
+/// A scan whose path deviates from the actual surface across the scan direction (issue 11 item 1):
+/// the world (its part as machined), the nominal command, and where the head starts.
+struct LateralCase {
+  std::string name;                   ///< for tables
+  machine::World world;               ///< the part as machined (hidden)
+  machine::ScanPath command;          ///< the path from the design
+  Vec3 start_mm = Vec3::Zero();       ///< the head's start (the approach point, or off it)
+};
+
+/// The design pose of the lateral cases' parts.
+inline const Vec3 lateral_origin_mm(100, 100, 0);
+
+/// The flat block's design path: along x at y = 100 over the top z = 10, ball centres r - E0 above.
+inline machine::ScanPath flat_line_scan(double ball_radius_mm = 2, double e0_mm = 0.3) {
+  machine::ScanPath c;
+  c.path = profile_path_xz(ramp_profile(0), ball_radius_mm - e0_mm, ball_radius_mm - e0_mm);
+  for (auto& s : c.path.segments) s.k.col(0) += lateral_origin_mm;
+  c.approach_normal = Vec3::UnitZ();
+  c.sample_spacing_mm = 0.1;
+  return c;
+}
+
+inline machine::World lateral_world(std::variant<machine::csg::Node, machine::CadDesign> design, const Vec3& at_mm,
+                                    double roughness_mm) {
+  machine::World w = machine::default_world();
+  machine::PartSpec part;
+  part.design = std::move(design);
+  part.pose.translation_mm = at_mm;
+  part.roughness = {roughness_mm, 0.5};
+  part.seed = 7;
+  w.truth.part = part;
+  w.truth.probe.ball_radius_error_mm = 0;
+  return w;
+}
+
+/// Case 1: the flat design's line over a top that is actually tilted sideways by tilt_deg and
+/// raised by raise_mm.
+inline LateralCase tilted_plane_case(double tilt_deg = 20, double raise_mm = 0.3, double roughness_mm = 0) {
+  LateralCase c{"plane tilted sideways", lateral_world(tilted_block_design(tilt_deg, raise_mm), lateral_origin_mm, roughness_mm),
+                flat_line_scan(), Vec3::Zero()};
+  c.start_mm = c.command.path.segments.front().start() + c.command.approach_mm * Vec3::UnitZ();
+  return c;
+}
+
+/// Case 2: the flat part as designed, the head starting offset_mm sideways (+y) of the approach point.
+inline LateralCase start_offset_case(double offset_mm = 0.5, double roughness_mm = 0) {
+  LateralCase c{"lateral start offset", lateral_world(tilted_block_design(0, 0), lateral_origin_mm, roughness_mm),
+                flat_line_scan(), Vec3::Zero()};
+  c.start_mm = c.command.path.segments.front().start() + c.command.approach_mm * Vec3::UnitZ() + Vec3(0, offset_mm, 0);
+  return c;
+}
+
+/// Case 3: a latitude circle (polar angle polar_deg) on a sphere of diameter 40 designed at
+/// sphere_centre_mm, actually centred `offset_mm` away.
+inline const Vec3 sphere_centre_mm(100, 100, 50);
+constexpr double sphere_diameter_mm = 40;
+inline LateralCase sphere_latitude_case(const Vec3& offset_mm, double polar_deg = 45, double roughness_mm = 0,
+                                        double ball_radius_mm = 2, double e0_mm = 0.3) {
+  machine::csg::Node ball;
+  ball.primitive = {"SPHERE", machine::csg::Sphere{Vec3::Zero(), sphere_diameter_mm}};
+  LateralCase c{"sphere latitude, centre off", lateral_world(ball, sphere_centre_mm + offset_mm, roughness_mm), {}, Vec3::Zero()};
+  const double r = sphere_diameter_mm / 2 + ball_radius_mm - e0_mm, th = polar_deg * deg;
+  const auto radial = [th](double phi) { return Vec3(std::sin(th) * std::cos(phi), std::sin(th) * std::sin(phi), std::cos(th)); };
+  c.command.path = sampled_path([&](double phi) { return Vec3(sphere_centre_mm + r * radial(phi)); }, radial, 0,
+                                2 * std::numbers::pi, 72);
+  c.command.approach_normal = radial(0);
+  c.command.sample_spacing_mm = 0.1;
+  c.start_mm = c.command.path.segments.front().start() + c.command.approach_mm * radial(0);
+  return c;
+}
+
+/// Case 4: a free-form surface z = 20 + 1.5 sin(x/12) cos(y/15) + tan(slope) y (a mesh), the path
+/// along its y = 0 contour, the part actually shifted shift_mm sideways (+y).
+inline double free_form_height(double x, double y, double slope_deg = 20) {
+  return 20 + 1.5 * std::sin(x / 12) * std::cos(y / 15) + std::tan(slope_deg * deg) * y;
+}
+inline LateralCase free_form_case(double shift_mm = 0.5, double roughness_mm = 0, double ball_radius_mm = 2,
+                                  double e0_mm = 0.3) {
+  auto mesh = std::make_shared<const geometry::Mesh>(
+      heightfield_block([](double x, double y) { return free_form_height(x, y); }, 0, 60, -20, 20, 120, 80));
+  machine::CadDesign cad;
+  cad.path = "<free-form heightfield>";
+  cad.mesh = mesh;
+  LateralCase c{"free-form shifted sideways", lateral_world(cad, lateral_origin_mm + Vec3(0, shift_mm, 0), roughness_mm), {},
+                Vec3::Zero()};
+  const auto normal = [](double x) {
+    const double h = 1e-5;
+    const double hx = (free_form_height(x + h, 0) - free_form_height(x - h, 0)) / (2 * h);
+    const double hy = (free_form_height(x, h) - free_form_height(x, -h)) / (2 * h);
+    return Vec3(Vec3(-hx, -hy, 1).normalized());
+  };
+  c.command.path = sampled_path(
+      [&](double x) { return Vec3(lateral_origin_mm + Vec3(x, 0, free_form_height(x, 0)) + (ball_radius_mm - e0_mm) * normal(x)); },
+      normal, 5, 55, 50);
+  c.command.approach_normal = normal(5);
+  c.command.sample_spacing_mm = 0.1;
+  c.start_mm = c.command.path.segments.front().start() + c.command.approach_mm * normal(5);
+  return c;
 }
 
 }  // namespace metron::scan_test

@@ -40,6 +40,12 @@ Vec3 scan_approach_point(const ScanPath& c) {
   return c.path.segments.front().start() + c.approach_mm * c.approach_normal.normalized();
 }
 
+Vec3 scan_correction_direction(const Vec3& eu, const Vec3& tangent) {
+  const Vec3 q = eu.cross(tangent);
+  const double qn = q.norm();
+  return qn > 1e-9 ? Vec3(q / qn) : Vec3::Zero();
+}
+
 ScanTerms scan_law_terms(ScanLaw law, const ScanControlSpec& ctl, double e0_mm, double e_mm, const Vec3& eu,
                          const Vec3& foot_mm, const Vec3& head_mm, const Vec3& tangent, double vf_mm_s) {
   ScanTerms tm;
@@ -54,19 +60,27 @@ ScanTerms scan_law_terms(ScanLaw law, const ScanControlSpec& ctl, double e0_mm, 
     case ScanLaw::Vc1Prime: tm.vc = tm.vc1 - tm.vc1.dot(eu) * eu; break;
     case ScanLaw::Vc2: {
       // SEEDS.md 1: q = (eu x Vf)/|eu x Vf|, Vc2 = (Vc1 . q) q (Vf's direction is the tangent).
-      const Vec3 q = eu.cross(tangent);
-      const double qn = q.norm();
-      tm.vc = qn > 1e-9 ? Vec3(tm.vc1.dot(q / qn) * (q / qn)) : Vec3::Zero();
+      const Vec3 q = scan_correction_direction(eu, tangent);
+      tm.vc = tm.vc1.dot(q) * q;
       break;
     }
   }
-  // Gain functions (docs/scanning.md): the path speed drops while the deflection or the
-  // trajectory deviates, so the corrections can catch up; Ge and Gc stay at 1.
+  // SEEDS.md 1: "Gf, Ge, Gc ... each adjusted by a function of the current deviations"
+  // (docs/scanning.md, "The control law"). With dE = |Ep| - E0 and d = |P - Pp| in units of their
+  // tolerances:
+  // - Gf drops while either deviates, so the corrections can catch up;
+  // - Ge rises from 1 toward 1.2 as the deflection falls below E0 (contact weakening: the probe
+  //   is pulled back to the surface faster before it lifts off); above E0 it stays 1, because a
+  //   higher gain there adds to the normal loop exactly where Vc1's term already does and makes
+  //   it ring (the bench's gain sweep);
+  // - Gc rises from 1 toward 1.5 with d: a large trajectory deviation is closed faster, while near
+  //   the path (where noise and roughness live) it stays at Kc.
+  // (Larger boosts of Ge overshoot on tight curves at speed: Scanning.SpeedLimitsAreHonouredAndLogged.)
   const double de = ctl.deflection_tolerance_mm > 0 ? (e_mm - e0_mm) / ctl.deflection_tolerance_mm : 0;
   const double dp = ctl.trajectory_tolerance_mm > 0 ? (foot_mm - head_mm).norm() / ctl.trajectory_tolerance_mm : 0;
   tm.gf = 1 / ((1 + de * de) * (1 + dp * dp));
-  tm.ge = 1;
-  tm.gc = 1;
+  tm.ge = de < 0 ? 1 + 0.2 * de * de / (1 + de * de) : 1.0;
+  tm.gc = 1 + 0.5 * dp * dp / (1 + dp * dp);
   return tm;
 }
 
@@ -127,7 +141,7 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   int settled_cycles = 0;
   constexpr double speed_tau_s = 0.02;
   double vf_smooth[2] = {0, 0};
-  double sum_sq = 0;
+  double sum_sq = 0, lateral_sq = 0;
   std::int64_t k = 0;
   constexpr std::int64_t max_cycles = 100'000'000;
 
@@ -199,6 +213,9 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       rec.scanning = true;
       rec.path_s_mm = s;
       rec.path_distance_mm = (foot - head).norm();
+      rec.foot_mm = foot;
+      rec.tangent = tangent;
+      rec.lateral_error_mm = (foot - head).dot(scan_correction_direction(eu, tangent));
       rec.speed_limit_mm_s = plan.limit_at(s);
       rec.tangential_speed_mm_s = servo.velocity_mm_s().dot(tangent);
       ScanStats& st = out.stats;
@@ -206,6 +223,8 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       sum_sq += (e - e0) * (e - e0);
       st.peak_deflection_error_mm = std::max(st.peak_deflection_error_mm, std::abs(e - e0));
       st.max_path_distance_mm = std::max(st.max_path_distance_mm, rec.path_distance_mm);
+      st.max_lateral_error_mm = std::max(st.max_lateral_error_mm, std::abs(rec.lateral_error_mm));
+      lateral_sq += rec.lateral_error_mm * rec.lateral_error_mm;
       st.max_speed_ratio = std::max(st.max_speed_ratio, rec.tangential_speed_mm_s / rec.speed_limit_mm_s);
       st.reached_mm = std::max(st.reached_mm, s);
       if (!contact) ++st.free_cycles;
@@ -258,13 +277,16 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   out.stats.cycles = k;
   out.stats.rms_deflection_error_mm =
       out.stats.scan_cycles > 0 ? std::sqrt(sum_sq / static_cast<double>(out.stats.scan_cycles)) : 0;
+  out.stats.rms_lateral_error_mm =
+      out.stats.scan_cycles > 0 ? std::sqrt(lateral_sq / static_cast<double>(out.stats.scan_cycles)) : 0;
   out.end_position_mm = servo.position_mm();
   out.end_time_s = start_time_s + static_cast<double>(k) * dt;
   out.log = plan.log();
   out.log.push_back(fmt::format("measured speed: at most {:.3f} of the limit; |Ep| - E0: rms {:.4f} mm, peak {:.4f} mm; "
-                                "largest distance from the path {:.4f} mm",
+                                "largest distance from the path {:.4f} mm, across it (along q) rms {:.4f} mm, peak {:.4f} mm",
                                 out.stats.max_speed_ratio, out.stats.rms_deflection_error_mm,
-                                out.stats.peak_deflection_error_mm, out.stats.max_path_distance_mm));
+                                out.stats.peak_deflection_error_mm, out.stats.max_path_distance_mm,
+                                out.stats.rms_lateral_error_mm, out.stats.max_lateral_error_mm));
   return out;
 }
 

@@ -98,9 +98,10 @@ void SegmentedController::start_planning(std::size_t b) {
   PlanKind kind = PlanKind::LookAhead;
   if (m_config.mode == SegmentedMode::Conventional) kind = PlanKind::Conventional;
   if (m_config.mode == SegmentedMode::Seed) {
-    // SEEDS.md 2 step 4: the planner reads LF when it takes up the command: LF = 1 (gap time
-    // tei - t > Tp) gives a connection plan, LF = 0 an individual plan.
-    const bool lf = cmd.index > 0 && gap_before_s(cmd.index) > planning_time_s(cmd.segments.size());
+    // SEEDS.md 2 step 4: the planner reads LF when it takes up the command: LF = 1 gives a
+    // connection plan, LF = 0 an individual plan. LF judges the command that follows the one
+    // executing; any other command (nothing executing before it) gets an individual plan.
+    const bool lf = cmd.index > 0 && cmd.index == m_done_commands + 1 && m_lf;
     kind = lf ? PlanKind::Connection : PlanKind::Individual;
   }
   const auto w0 = std::chrono::steady_clock::now();
@@ -212,6 +213,8 @@ void SegmentedController::step() {
     m_buffers[static_cast<std::size_t>(m_planning)].plan_ready = true;
     m_planning = -1;
   }
+  // LF as of this cycle, before the planner may read it.
+  update_connection_flag();
   if (m_planning < 0) {
     const int b = buffer_of(m_next_plan);
     const bool conventional_ready =
@@ -306,11 +309,17 @@ void SegmentedController::step() {
     case Phase::Done:
       break;
   }
-  // The connection judgement every cycle (SEEDS.md 2 step 4): LF = 1 while tei - t > Tp.
+  update_connection_flag();
+}
+
+void SegmentedController::update_connection_flag() {
+  // SEEDS.md 2 step 4: every cycle, with the gap time tei - t of the executing command Ci, LF = 1
+  // while tei - t > Tp (Tp = margin * the net planning time of Ci+1, not the net time itself: the
+  // margin is what makes a connection plan ready in time). No Ci+1 (Ci is the last): LF = 0.
   const int nb = buffer_of(m_done_commands + 1);
   const std::size_t next_segments = nb >= 0 ? m_buffers[static_cast<std::size_t>(nb)].command->segments.size()
                                             : m_config.buffer_segments;
-  m_lf = m_phase == Phase::Scanning && !(m_last_index && m_done_commands >= *m_last_index) &&
+  m_lf = m_phase != Phase::Done && !(m_last_index && m_done_commands >= *m_last_index) &&
          gap_before_s(m_done_commands + 1) > planning_time_s(next_segments);
 }
 

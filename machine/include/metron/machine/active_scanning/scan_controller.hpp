@@ -33,6 +33,9 @@ struct ScanCycle {
   Vec3 deflection_mm = Vec3::Zero();  ///< Ep as read
   double path_s_mm = 0;               ///< arc length at the foot P
   double path_distance_mm = 0;        ///< |P - Pp|
+  Vec3 foot_mm = Vec3::Zero();        ///< the foot P of the perpendicular from Pp onto the path
+  Vec3 tangent = Vec3::Zero();        ///< the path's unit tangent at P
+  double lateral_error_mm = 0;        ///< (P - Pp) . q, q = (eu x t)/|eu x t|: the deviation across the scan
   double speed_limit_mm_s = 0;        ///< lowest speed limit at the foot
   double tangential_speed_mm_s = 0;   ///< encoder velocity along the path tangent
   ScanTerms terms;                    ///< what was commanded
@@ -45,6 +48,8 @@ struct ScanStats {
   double rms_deflection_error_mm = 0; ///< RMS of |Ep| - E0 while scanning
   double peak_deflection_error_mm = 0;  ///< max of | |Ep| - E0 | while scanning
   double max_path_distance_mm = 0;    ///< max |P - Pp| while scanning
+  double rms_lateral_error_mm = 0;    ///< RMS of (P - Pp) . q while scanning (the part Vc2 corrects)
+  double max_lateral_error_mm = 0;    ///< max |(P - Pp) . q| while scanning
   double max_speed_ratio = 0;         ///< max tangential speed / speed limit at the foot
   double max_force_n = 0;             ///< largest contact force
   std::int64_t free_cycles = 0;       ///< scanning cycles without contact
@@ -73,6 +78,10 @@ struct ScanSetup {
   std::uint64_t seed = 1;             ///< of the probe noise
 };
 
+/// The trajectory-correction direction q = (eu x t)/|eu x t| (SEEDS.md 1; t stands in for Vf's
+/// direction), or zero when eu is parallel to t.
+Vec3 scan_correction_direction(const Vec3& eu, const Vec3& tangent);
+
 /// "" when the command can be scanned, else what is wrong with it.
 std::string validate_scan(const ScanPath& command);
 
@@ -81,7 +90,8 @@ Vec3 scan_approach_point(const ScanPath& command);
 
 /// The law's terms for one scanning cycle (SEEDS.md 1): Vf = vf_mm_s along `tangent`,
 /// Ve = K*(|Ep| - E0)*eu, the selected Vc from Vc1 = Kc*(P - Pp), and the gains Gf, Ge, Gc; the
-/// command is Gf*Vf + Ge*Ve + Gc*Vc. `e_mm` is |Ep| as read, `eu` the deflection's direction (or
+/// command is Gf*Vf + Ge*Ve + Gc*Vc, each gain a function of the deviations (docs/scanning.md,
+/// "The control law"). `e_mm` is |Ep| as read, `eu` the deflection's direction (or
 /// the nominal normal without contact), `foot_mm` the foot P, `head_mm` the encoder position Pp.
 ScanTerms scan_law_terms(ScanLaw law, const ScanControlSpec& ctl, double e0_mm, double e_mm, const Vec3& eu,
                          const Vec3& foot_mm, const Vec3& head_mm, const Vec3& tangent, double vf_mm_s);

@@ -81,7 +81,8 @@ class SegmentedController {
   [[nodiscard]] int status_flag(int b) const { return m_buffers.at(static_cast<std::size_t>(b - 1)).full ? 1 : 0; }
   /// Buffer flag B: the buffer (1 or 2) holding the command being executed.
   [[nodiscard]] int buffer_flag() const { return m_exec_buffer + 1; }
-  /// Connection flag LF of the current cycle.
+  /// Connection flag LF of the current cycle (SEEDS.md 2 step 4): 1 while the executing command's
+  /// gap time tei - t exceeds Tp; the planner reads it when it takes up the next command.
   [[nodiscard]] bool connection_flag() const { return m_lf; }
   /// A writable buffer (1 or 2), or 0 when both are full.
   [[nodiscard]] int free_buffer() const;
@@ -117,6 +118,7 @@ class SegmentedController {
   };
 
   void start_planning(std::size_t b);
+  void update_connection_flag();
   void attach(std::size_t b, bool from_rest);
   void finish_completed_commands();
   void finish_one_command();
