@@ -136,4 +136,35 @@ TEST(Touch, SurfaceBeyondTheNominalToleranceIsReported) {
   EXPECT_EQ(o.diagnostics.find("early.dmi:13"), std::string::npos) << o.diagnostics;
 }
 
+// Issue 11 item 11: the benchmark's baselines from the command line. On the latched world the
+// seed's one-touch (starting where the head rests) is as fast as the plain one-touch baseline,
+// the blended one faster, every cycle within the 10 um threshold; with --truth the physical
+// limit (hidden truth) lies below every cycle.
+TEST(Touch, CharacteriseCompareShowsTheBaselines) {
+  const std::string cmd = std::string(METRON_BINARY) + " characterise --world " + world("touch_latched.json").string() +
+                          " --compare --truth 2>/dev/null";
+  FILE* p = ::popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string text;
+  char buf[4096];
+  while (std::size_t n = std::fread(buf, 1, sizeof buf, p)) text.append(buf, n);
+  ASSERT_EQ(::pclose(p), 0) << text;
+  const auto time_of = [&](const std::string& name) {
+    const auto at = text.find(name);
+    EXPECT_NE(at, std::string::npos) << name << "\n" << text;
+    return at == std::string::npos ? 0.0 : std::stod(text.substr(at + name.size()));
+  };
+  const double plain = time_of("baseline: plain one-touch from the clearance");
+  const double two1 = time_of("baseline: two-touch, 1.0 mm back-off");
+  const double one = time_of("seed: one-touch (D1+D3+tol)");
+  const double blend = time_of("beyond seed: blended one-touch");
+  const double limit = time_of("physical limit (hidden truth, docs/touch-trigger.md):");
+  EXPECT_LE(one, plain + 1e-4);
+  EXPECT_LT(blend, plain);
+  EXPECT_LT(plain, two1);
+  EXPECT_GT(limit, 0);
+  EXPECT_LT(limit, blend);
+  EXPECT_EQ(text.find("outside the threshold"), std::string::npos) << text;
+}
+
 }  // namespace
