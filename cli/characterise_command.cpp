@@ -13,7 +13,9 @@
 #include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world.hpp"
+#include "metron/machine/touch_cycle/cycle_limit.hpp"
 #include "metron/runtime/characterisation.hpp"
+#include "metron/runtime/cycle_comparison.hpp"
 
 namespace metron::cli {
 namespace {
@@ -28,6 +30,7 @@ struct CharacteriseArgs {
   bool blend = false;
   bool optimise = false;
   bool fastest = false;
+  bool compare = false;
 };
 
 // The hidden truth next to what was recovered: for checking the method only (the
@@ -90,6 +93,26 @@ int characterise_cmd(const CharacteriseArgs& args) {
   std::cout << "machine characterisation of " << c->world << "\n" << runtime::format_characterisation(*c);
   std::cout << fmt::format("simulated time: {:.1f} s\n", machine->state().time_s);
   if (args.truth) print_truth(world, *c);
+  if (args.compare) {
+    // Issue 11: the touch benchmark's baselines on the user's own world.
+    std::cerr << "timing cycles ...\n";
+    const runtime::CycleComparisonSettings cs;
+    auto cmp = runtime::compare_cycles(*machine, *c, cs);
+    if (!cmp) {
+      std::cerr << "error: cycle comparison failed: " << cmp.error() << "\n";
+      return 3;
+    }
+    double limit = 0;
+    if (args.truth)
+      limit = machine::touch_cycle_limit(world.machine, world.truth, -cmp->normal, c->measuring_feed_mm_s, cs.clearance_mm,
+                                         c->nominal_tolerance_mm, cs.positioning_mm_s, c->response.qualification_feed_mm_s)
+                  .time_s;
+    std::cout << fmt::format("\ntouch cycles on the reference sphere's touch point (start and end at rest {:.1f} mm above, "
+                             "nominal +-{:.3f} mm, {} points, positioning {:.0f} mm/s; measuring feed {:.2f} mm/s)\n",
+                             cs.clearance_mm, c->nominal_tolerance_mm, cs.points, cs.positioning_mm_s, c->measuring_feed_mm_s)
+              << runtime::format_cycle_comparison(cmp->rows, c->threshold_mm, limit);
+    if (args.truth) std::cout << fmt::format("  physical limit (hidden truth, docs/touch-trigger.md): {:.4f} s\n", limit);
+  }
   if (args.out) {
     if (auto ok = runtime::save_characterisation(*c, *args.out); !ok) {
       std::cerr << "error: " << ok.error() << "\n";
@@ -122,6 +145,9 @@ void add_characterise_command(CLI::App& app, std::vector<Command>& commands) {
   cmd->add_flag("--fastest", args->fastest,
                 "beyond the seed: use the fastest cycle (one-touch, two-touch, blended) that meets the threshold, "
                 "chosen by timed trial cycles");
+  cmd->add_flag("--compare", args->compare,
+                "also time the conventional baselines (plain one-touch, two-touch with 1 and 0.5 mm back-off) and the "
+                "characterised cycles on the touch point, side by side (with --truth: against the physical limit)");
   cmd->add_flag("--truth", args->truth, "also print the world's hidden truth next to the recovered values");
   commands.push_back({cmd, [args] { return characterise_cmd(*args); }});
 }

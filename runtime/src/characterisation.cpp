@@ -163,6 +163,22 @@ double MachineCharacterisation::dynamic_correction_mm(double feed_mm_s, double q
   return (feed_mm_s - qualification_feed_mm_s) * (response.delay_s + response.jitter_s / 2);
 }
 
+std::optional<double> MachineCharacterisation::early_contact_mm(const machine::PtMeas& p, const machine::Hit& hit) const {
+  if (p.two_touch || !p.speed_mm_s) return std::nullopt;
+  const Vec3 n = p.normal.normalized();
+  const double feed = *p.speed_mm_s;
+  // From the start (nominal + effective radius + approach) to the latched centre, less the
+  // pre-travel and the mean trigger chain at the feed: where the contact came.
+  const double travelled = (p.nominal_mm + (hit.ball_radius_mm + p.approach_mm) * n - hit.centre_mm).dot(n);
+  const double contact = travelled - pre_travel_mm - feed * (response.delay_s + response.jitter_s / 2);
+  // Where the feed is reached: the ramp's D1 from rest, or the blend point.
+  const double reach = p.blend_mm ? p.approach_mm - *p.blend_mm : acceleration_distance_mm(-n, feed);
+  // Half the latency's spread and a micrometre of noise are not evidence.
+  if (contact >= reach - feed * response.jitter_s / 2 - 1e-3) return std::nullopt;
+  // On its nominal the surface is touched q (the qualified offset) after the start's approach.
+  return p.approach_mm - qualified_offset_mm() - contact;
+}
+
 TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double> feed_mm_s,
                                         std::optional<double> approach_mm, std::optional<RestingHead> resting) const {
   const Vec3 u = -normal.normalized();

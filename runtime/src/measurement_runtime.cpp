@@ -272,7 +272,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (auto t = ensure_tool(block.span); !t) return t;
   auto plan = plan_block(block, feature.nominal, plan_context());
   if (!plan) return tl::unexpected(plan.error());
-  const auto execution = execute_commands(std::move(plan->commands), plan->spans);
+  const auto execution = execute_commands(plan->commands, plan->spans);  // a copy: collect_points reads the PtMeas
   std::vector<MeasuredPoint> points = collect_points(*plan, execution, feature.label, block.span);
   if (execution.error) {
     // Keep every point obtained before the fault; the feature gets no actual.
@@ -308,6 +308,13 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
         centre += m_characterisation->dynamic_correction_mm(plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s) *
                   r.hit->normal;
       points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s, span_of(i), false});
+      // Issue 11: a surface beyond the nominal tolerance is touched while still accelerating.
+      const auto* pt = m_characterisation && i < plan.commands.size() ? std::get_if<machine::PtMeas>(&plan.commands[i].body) : nullptr;
+      if (const auto early = pt ? m_characterisation->early_contact_mm(*pt, *r.hit) : std::nullopt)
+        warn(span_of(i), fmt::format("the surface lies about {:.3f} mm above its nominal, beyond the nominal tolerance of {:.3f} mm: "
+                                     "the probe touched it before reaching the probing feed and the point may be off "
+                                     "(raise the tolerance or SNSET/APPRCH)",
+                                     *early, m_characterisation->nominal_tolerance_mm));
     }
   // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
   // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).

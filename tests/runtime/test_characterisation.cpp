@@ -410,6 +410,30 @@ TEST_P(RampProtection, MaximumFeedIsSafeAnywhereOnTheRamp) {
     ASSERT_TRUE(r.hit) << name << " offset " << offset << ": " << r.fault->message;
     EXPECT_NEAR(r.hit->centre_mm.z() - offset, ref.hit->centre_mm.z() - offset, c.threshold_mm) << name << " offset " << offset;
   }
+  // Beyond the tolerance a one-touch cycle touches the surface before reaching its feed: no
+  // over-travel (above), and the hit is reported as early (the runtime warns), with the
+  // surface's height above its nominal. Within the tolerance it is not.
+  const TouchPlan plan = c.plan(Vec3::UnitZ(), std::nullopt, std::nullopt);
+  // Up to just short of the start's own contact point.
+  const double highest = plan.approach_mm - c.qualified_offset_mm() - 0.03;
+  for (double offset : {0.0, c.nominal_tolerance_mm, 0.5 * (c.nominal_tolerance_mm + highest), highest}) {
+    if (plan.two_touch) break;  // the second touch starts from the surface found
+    machine::PtMeas p = ptmeas_of(plan);
+    const auto r = b.cycle(p, offset);
+    ASSERT_TRUE(r.hit) << name << " offset " << offset << ": " << r.fault->message;
+    p.nominal_mm = b.nominal - offset * Vec3::UnitZ();
+    p.normal = Vec3::UnitZ();
+    const auto early = c.early_contact_mm(p, *r.hit);
+    if (offset <= c.nominal_tolerance_mm) {
+      EXPECT_FALSE(early) << name << " offset " << offset << ": " << *early;
+    } else {
+      ASSERT_TRUE(early) << name << " offset " << offset;
+      // Estimated with the feed's delay distance: a touch still accelerating covers less, so
+      // the estimate is high by at most that whole distance.
+      EXPECT_GE(*early, offset - 2e-3) << name;
+      EXPECT_LE(*early, offset + plan.feed_mm_s * (c.response.delay_s + c.response.jitter_s) + 2e-3) << name;
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Worlds, RampProtection,

@@ -145,6 +145,12 @@ struct MachineCharacterisation {
   /// tool was qualified at: (feed - qualification feed) * (delay + jitter / 2); hits are moved
   /// back by it along the normal (SEEDS.md 3: the delay-distance correction at constant feed).
   [[nodiscard]] double dynamic_correction_mm(double feed_mm_s, double qualification_feed_mm_s) const;
+  /// Issue 11: a one-touch `hit` of `p` whose contact came before the probing feed was reached
+  /// (a surface farther above its nominal than the approach allows for: the point is taken while
+  /// still accelerating and may be off). Returns how far above its nominal the surface lies,
+  /// estimated from the latched centre; none when the contact was at the feed, or for two-touch
+  /// cycles (their second touch starts from the surface found).
+  [[nodiscard]] std::optional<double> early_contact_mm(const machine::PtMeas& p, const machine::Hit& hit) const;
   /// The cycle for probing along -normal (`normal` the surface normal), with optional explicit
   /// feed and approach (FEDRAT/MESVEL, SNSET/APPRCH). When the head already rests on the
   /// approach line beyond the planned start (`resting`) and probing that extra distance is
