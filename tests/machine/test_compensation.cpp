@@ -282,3 +282,28 @@ TEST(CompensatedMachine, TheCommandedNominalIsMovedByMinusE) {
 }
 
 }  // namespace
+
+namespace {
+
+// The file's grid is in ram positions of the calibrating sensor: the map answers for the tip at
+// grid + sensor_offset_mm, and the offset survives the file.
+TEST(ErrorSpaceMap, IsQueriedAtTheTipMinusTheSensorOffsetAndKeepsItInTheFile) {
+  error_space::ErrorSpace s;
+  s.grid.axes_mm = {std::vector<double>{0, 1000}, std::vector<double>{0, 1000}, std::vector<double>{0, 500}};
+  s.values_mm[2].resize(s.grid.size());
+  for (std::size_t k = 0; k < 2; ++k)
+    for (std::size_t j = 0; j < 2; ++j)
+      for (std::size_t i = 0; i < 2; ++i) s.values_mm[2][s.grid.index(i, j, k)] = 1e-5 * s.grid.axes_mm[2][k];  // e_z = 1e-5 z_ram
+  error_space::ErrorSpaceFile f;
+  f.spaces.push_back(s);
+  f.sensor_offset_mm = {0, 0, -50};
+  const auto back = error_space::from_json(error_space::to_json(f));
+  ASSERT_TRUE(back) << back.error().pointer << ": " << back.error().message;
+  EXPECT_EQ(back->sensor_offset_mm, f.sensor_offset_mm);
+  const auto map = ErrorSpaceMap::build(*back);
+  ASSERT_TRUE(map) << map.error();
+  // The tip at z = 100 had the ram at z = 150.
+  EXPECT_NEAR(map->error_at_mm(Vec3(300, 400, 100)).z(), 1e-5 * 150, 1e-15);
+}
+
+}  // namespace
