@@ -96,7 +96,11 @@ int run(const RunArgs& args) {
   }
   const interpreter::BackendFactory factory = [&](const std::optional<std::string>& world, std::optional<std::uint64_t> seed) {
     auto backend = args.machine_url ? ipp_backend(*args.machine_url) : virtual_cmm_backend(world, seed);
-    if (backend && map) backend->machine = std::make_unique<machine::CompensatedMachine>(std::move(backend->machine), map);
+    if (!backend) return backend;
+    if (auto* compensated = dynamic_cast<machine::CompensatedMachine*>(backend->machine.get()))
+      compensated->set_map(map);
+    else
+      backend->machine = std::make_unique<machine::CompensatedMachine>(std::move(backend->machine), map);
     return backend;
   };
   const auto outcome = interpreter::run_program(options, factory);

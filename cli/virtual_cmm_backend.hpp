@@ -7,6 +7,7 @@
 #include <tl/expected.hpp>
 
 #include "metron/interpreter/session.hpp"
+#include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 
 // The composition root's choice of backend: the virtual CMM of a world file. Header-only so the
@@ -20,7 +21,10 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
   auto cmm = machine::open_virtual_cmm(world_path, seed);
   if (!cmm) return tl::unexpected(cmm.error().message);
   const std::uint64_t run_seed = (*cmm)->seed();
-  return interpreter::Backend{std::move(*cmm), world_path ? *world_path : std::string("<default>"), run_seed};
+  // The controller's compensation (docs/error-space.md): none until `--compensation` or a
+  // program's CALL/EXTERN,SYS,'COMPENSATION file' gives a map; without one it is the identity.
+  return interpreter::Backend{std::make_unique<machine::CompensatedMachine>(std::move(*cmm), nullptr),
+                              world_path ? *world_path : std::string("<default>"), run_seed};
 }
 
 }  // namespace metron::cli

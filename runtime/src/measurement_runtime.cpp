@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "detail/fit_actual.hpp"
+#include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/runtime/block_plan.hpp"
 #include "metron/runtime/outputs.hpp"
 
@@ -220,6 +221,15 @@ Result<void> MeasurementRuntime::use_characterisation(const std::string& path, S
   if (!c) return program_error(span, c.error());
   m_characterisation = std::move(*c);
   if (m_measuring_feed_explicit) return check_probing_feed(*m_measuring_feed_explicit, span);
+  return {};
+}
+
+Result<void> MeasurementRuntime::use_compensation(const std::string& path, Span span) {
+  auto* compensated = dynamic_cast<machine::CompensatedMachine*>(&m_machine);
+  if (!compensated) return program_error(span, "this machine backend takes no compensation map");
+  auto map = machine::load_error_map(path);
+  if (!map) return program_error(span, map.error());
+  compensated->set_map(std::move(*map));
   return {};
 }
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// `metron run --compensation` as a user runs it (issue 12, docs/error-space.md "The gain of
+// `metron run --compensation` (and CALL/EXTERN,SYS,'COMPENSATION file') as a user runs it (issue 12, docs/error-space.md "The gain of
 // compensation"): calibrate the error space of programs/worlds/cmm_errors_ball_plate.json with the
 // two-point rig, then measure the world's 20 balls with programs/error_space/ball_array.dmi with and
 // without the map. Expected values are the hidden truth: the balls' design centres (written here by
@@ -88,6 +88,18 @@ TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
               1e3 * compensated, none / compensated);
   EXPECT_GT(none, 0.003);                // the machine's errors are there (4.3 um)
   EXPECT_LT(compensated, none / 10);     // the issue's goal (measured: 0.22 um, 19x)
+
+  // The same map loaded by the program itself (CALL/EXTERN,SYS,'COMPENSATION file', a path relative
+  // to the program), then the ball array called as a file: the same centres as --compensation.
+  std::filesystem::create_directories(dir / "dmis");
+  std::ofstream(dir / "compensated.dmi") << "DMISMN/'compensation from the program', 5.0\n"
+                                            "CALL/EXTERN, SYS, 'COMPENSATION map.json'\n"
+                                            "CALL/EXTERN, DMIS, '" << program << "'\n"
+                                            "ENDFIL\n";
+  std::tie(code, out) = shell(bin + " run " + (dir / "compensated.dmi").string() + " --world " + world + " --quiet --out " +
+                              (dir / "dmis").string());
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NEAR(length_error_rms((dir / "dmis" / "results.json").string()), compensated, 1e-12);
 }
 
 TEST(RunCompensationCli, ABadCompensationFileIsRefusedNamingWhere) {

@@ -272,13 +272,14 @@ void UnitCompiler::call(const grammar::Statement& s) {
 void UnitCompiler::call_extern(const grammar::Statement& s) {
   if (s.params.size() >= 3 && is_word(s.params[1], "SYS") && s.params[2].kind == ExprKind::String) {
     // metron's own system commands (docs/touch-trigger.md): CHARACTERISE ['file'],
-    // CHARACTERISATION 'file'.
+    // CHARACTERISATION 'file'; COMPENSATION 'file' (docs/error-space.md).
     const std::string text = s.params[2].text;
     std::istringstream words(text);
     std::string verb, arg, extra;
     words >> verb >> arg >> extra;
     verb = upper(verb);
-    if (verb == "CHARACTERISE" || verb == "CHARACTERIZE" || (verb == "CHARACTERISATION" && !arg.empty())) {
+    if (verb == "CHARACTERISE" || verb == "CHARACTERIZE" ||
+        ((verb == "CHARACTERISATION" || verb == "COMPENSATION") && !arg.empty())) {
       if (!extra.empty())
         return error(s.params[2].span, "sema.system-command", fmt::format("too many words in '{}'", text));
       if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
@@ -293,7 +294,7 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       return;
     }
     note(s.params[2].span, "sema.unsupported-call",
-         fmt::format("unknown system command '{}' (metron knows CHARACTERISE and CHARACTERISATION); the call is skipped", text));
+         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION and COMPENSATION); the call is skipped", text));
     emit(make(Op::Nop, s, "CALL"));
     return;
   }

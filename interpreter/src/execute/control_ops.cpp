@@ -32,7 +32,8 @@ ExecStatus Execute::system(Interpreter& vm, const ir::Instruction& in, CallFrame
   const std::string& arg = in.operands.empty() ? std::string() : in.operands[0].word;
   auto r = in.name == "CHARACTERISE"
                ? vm.m_runtime.characterise_machine(arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
-               : vm.m_runtime.use_characterisation(arg, in.span);
+           : in.name == "COMPENSATION" ? vm.m_runtime.use_compensation(arg, in.span)
+                                       : vm.m_runtime.use_characterisation(arg, in.span);
   if (!r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }

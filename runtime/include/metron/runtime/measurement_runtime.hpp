@@ -69,6 +69,10 @@ class MeasurementRuntime {
   Result<void> characterise_machine(const std::optional<std::string>& path, Span span);
   /// Loads a characterisation file and uses it from here on (CALL/EXTERN,SYS,'CHARACTERISATION file').
   Result<void> use_characterisation(const std::string& path, Span span);
+  /// Loads an error-space file and compensates by it from here on (CALL/EXTERN,SYS,'COMPENSATION
+  /// file', docs/error-space.md): the backend must be a machine::CompensatedMachine, as the
+  /// composition root builds it.
+  Result<void> use_compensation(const std::string& path, Span span);
   /// Checks a probing feed against the characterisation's maximum protected feed.
   Result<void> check_probing_feed(double measuring_mm_s, Span span) const;
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);

@@ -27,6 +27,10 @@ class CompensatedMachine final : public Machine {
   [[nodiscard]] MachineState state() const override;
   [[nodiscard]] std::vector<Command> queued() const override;
 
+  /// Compensates by `map` from the next command on (null: none); a DMIS program loads one with
+  /// CALL/EXTERN,SYS,'COMPENSATION file' (docs/error-space.md).
+  void set_map(std::shared_ptr<const ErrorMap> map) { m_map = std::move(map); }
+
   /// Where to command the inner machine so the tip really reaches `wanted_mm`.
   [[nodiscard]] Vec3 command_for(const Vec3& wanted_mm) const;
   /// Where the tip really is when the inner machine reports `reported_mm`.
