@@ -248,6 +248,15 @@ TEST(DiscrepancyHidden, DriftInDriftLog) {
   expect_within(param(a.effects[0], "rate").value, 1.0, "um/h");
 }
 
+TEST(DiscrepancyHidden, TransientInDriftLog) {
+  const auto log = drift_log();
+  const auto d = simulate(log.data, terms({{"kind", "transient"}, {"component", "z"}, {"amplitude_mm", 0.004}, {"tau_s", 2400}}), 22);
+  const auto a = analyse(d);
+  expect_found(a, "transient", 2);
+  expect_within(param(a.effects[0], "amplitude").value, 4.0, "amplitude um");
+  expect_within(param(a.effects[0], "time constant").value, 2400, "tau s");
+}
+
 TEST(DiscrepancyHidden, ThermalLagInDriftLog) {
   const auto log = drift_log();
   const json t{{"kind", "thermal"}, {"component", "z"}, {"mm_per_k", 0.002}, {"reference_c", 20},
