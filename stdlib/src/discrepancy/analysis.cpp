@@ -199,7 +199,10 @@ Eigen::VectorXd cv_residual(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, 
     for (Eigen::Index i = 0; i < y.size(); ++i) (fold[static_cast<std::size_t>(i)] == k ? te : tr).push_back(i);
     if (te.empty()) continue;
     const Fit f = least_squares(X(tr, Eigen::all), y(tr));
-    if (!f.ok) continue;
+    if (!f.ok) {
+      out(te) = y(te);  // no prediction from a failed fit
+      continue;
+    }
     out(te) = y(te) - X(te, Eigen::all) * f.beta;
   }
   return out;
