@@ -25,6 +25,9 @@ Vec3 CyclicTerm::displacement(const MachinePose& p, double) const {
   return along(m_c, m_a * std::sin(2 * kPi * p.axes_mm[m_j] / m_p + m_phi));
 }
 Vec3 DriftTerm::displacement(const MachinePose&, double t) const { return along(m_c, m_rate * (t - m_t0)); }
+Vec3 TransientTerm::displacement(const MachinePose&, double t) const {
+  return along(m_c, t >= m_t0 ? m_a * std::exp(-(t - m_t0) / m_tau) : 0.0);
+}
 Vec3 ThermalLagTerm::displacement(const MachinePose& p, double t) const {
   const double dT = (m_t ? m_t->body_c(t) : 20.0) - m_ref;
   return along(m_c, (m_k0 + m_k1 * p.axes_mm[m_c]) * dT);
@@ -40,7 +43,7 @@ void parse_catalogue_terms(const nlohmann::json& terms, const std::string& point
   for (std::size_t i = 0; i < terms.size(); ++i) {
     const std::string p = fmt::format("{}/{}", pointer, i);
     Object o(terms[i], p);
-    const std::string kind = one_of(o.required("kind"), o.at("kind"), {"linear", "cross_axis", "cyclic", "drift", "thermal", "reversal"});
+    const std::string kind = one_of(o.required("kind"), o.at("kind"), {"linear", "cross_axis", "cyclic", "drift", "transient", "thermal", "reversal"});
     const int c = axis(o.required("component"), o.at("component"));
     if (kind == "linear") {
       model.add(std::make_shared<LinearTerm>(c, axis(o.required("along"), o.at("along")), o.get("coefficient", number)));
@@ -59,6 +62,10 @@ void parse_catalogue_terms(const nlohmann::json& terms, const std::string& point
       double t0 = 0;
       o.number("t0_s", t0);
       model.add(std::make_shared<DriftTerm>(c, o.get("rate_mm_per_s", number), t0));
+    } else if (kind == "transient") {
+      double t0 = 0;
+      o.number("t0_s", t0);
+      model.add(std::make_shared<TransientTerm>(c, o.get("amplitude_mm", number), o.get("tau_s", positive), t0));
     } else if (kind == "reversal") {
       std::array<double, 3> rev{0, 0, 0};
       rev[static_cast<std::size_t>(c)] = o.get("reversal_mm", number);

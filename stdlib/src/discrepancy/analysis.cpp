@@ -6,6 +6,7 @@
 #include <map>
 #include <numeric>
 #include <set>
+#include <tuple>
 
 #include <Eigen/Dense>
 #include <fmt/format.h>
@@ -148,7 +149,7 @@ Evaluated fit_candidate(const Candidate& c, const Eigen::MatrixXd& base, const E
     const double g = 0.6180339887498949;
     double x1 = b - g * (b - a), x2 = a + g * (b - a);
     double f1 = rss_at(x1, nullptr), f2 = rss_at(x2, nullptr);
-    for (int it = 0; it < 40; ++it) {
+    for (int it = 0; it < 25; ++it) {
       if (f1 < f2) b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = rss_at(x1, nullptr);
       else a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = rss_at(x2, nullptr);
     }
@@ -185,7 +186,7 @@ std::vector<int> make_folds(const Problem& p, std::string& how, int& count) {
       return fold;
     }
   }
-  count = static_cast<int>(std::min<std::size_t>(5, std::max<std::size_t>(2, p.data->rows / 4)));
+  count = static_cast<int>(std::min<std::size_t>(10, std::max<std::size_t>(2, p.data->rows / 8)));
   for (std::size_t o = 0; o < n; ++o) fold[o] = static_cast<int>(p.row[o] * static_cast<std::size_t>(count) / p.data->rows);
   how = fmt::format("{} contiguous blocks of rows (time order)", count);
   return fold;
@@ -198,7 +199,10 @@ Eigen::VectorXd cv_residual(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, 
     for (Eigen::Index i = 0; i < y.size(); ++i) (fold[static_cast<std::size_t>(i)] == k ? te : tr).push_back(i);
     if (te.empty()) continue;
     const Fit f = least_squares(X(tr, Eigen::all), y(tr));
-    if (!f.ok) continue;
+    if (!f.ok) {
+      out(te) = y(te);  // no prediction from a failed fit
+      continue;
+    }
     out(te) = y(te) - X(te, Eigen::all) * f.beta;
   }
   return out;
@@ -287,6 +291,7 @@ const std::vector<CatalogueEntry>& catalogue() {
       {"reversal", "e_c = B/2 d_c", "reversal (backlash, friction, servo lag at the stop): half the reversal value with the sign of the approach (ISO 230-2 B)"},
       {"cyclic", "e_c = a sin(2 pi q_j / P) + b cos(2 pi q_j / P)", "cyclic error of a lead screw, rack or scale graduation with period P (ISO 230-2 periodic error)"},
       {"drift", "e_c = r (t - t0)", "linear drift over time: warm-up, creep, sensor drift"},
+      {"transient", "e_c = A exp(-(t - t0) / tau)", "start-up transient: the first readings after a start or a pause settle with time constant tau (warm-up of drives, settling of a stepper)"},
       {"thermal", "e_c = (k0 + k1 q_c)(T_lag(t; tau) - T_ref)", "thermal expansion of part, scale or structure following a recorded temperature through a first-order lag tau (ISO 230-3)"},
       {"acceleration", "e_c = k a", "deflection under acceleration: inertial bending of the structure or the stylus (dynamic error)"},
       {"lobing", "e_n = a cos(m theta) + b sin(m theta)", "probe pre-travel lobing: a kinematic touch-trigger probe triggers later in some directions (m = 3 for a three-point seat)"},
@@ -358,6 +363,18 @@ Analysis analyse(const Problem& p, const Options& opt) {
     nuis.push_back(v);
     out.nuisance.push_back("rotation of the artefact about z (its placement)");
   }
+  if (data.description.per_position_table) {
+    // One systematic deviation per (component, nominal position): the zero offsets are in it.
+    std::map<std::pair<int, std::array<double, 3>>, std::size_t> group;
+    for (std::size_t o = 0; o < nu; ++o) group.emplace(std::make_pair(F.comp[o], F.q[o]), group.size());
+    nuis.clear();
+    for (const auto& [key, g] : group) {
+      Eigen::VectorXd v(n);
+      for (Eigen::Index o = 0; o < n; ++o) v[o] = std::make_pair(F.comp[static_cast<std::size_t>(o)], F.q[static_cast<std::size_t>(o)]) == key ? 1 : 0;
+      nuis.push_back(v);
+    }
+    out.nuisance = {fmt::format("a table of {} systematic deviations per nominal position (ISO 230-2 mean bidirectional deviation)", group.size())};
+  }
   Eigen::MatrixXd base(n, static_cast<Eigen::Index>(nuis.size()));
   for (std::size_t k = 0; k < nuis.size(); ++k) base.col(static_cast<Eigen::Index>(k)) = nuis[k];
 
@@ -411,7 +428,9 @@ Analysis analyse(const Problem& p, const Options& opt) {
           for (std::size_t i = 1; i < v.size(); ++i) gaps.push_back(v[i] - v[i - 1]);
           std::nth_element(gaps.begin(), gaps.begin() + static_cast<long>(gaps.size() / 2), gaps.end());
           const double span = v.back() - v.front();
-          const double pmin = std::max(2 * gaps[gaps.size() / 2], span / 200), pmax = span;
+          // At least two whole periods in the span: a longer wave is a form (bow) error, not a
+          // screw's or scale's cycle, and stays unexplained rather than forced into this entry.
+          const double pmin = std::max(2 * gaps[gaps.size() / 2], span / 200), pmax = span / 2;
           Candidate k{"cyclic", fmt::format("cyclic error of {} along {}", kAxis[c], kAxis[j]), fmt::format("{} position", kAxis[j]), expl("cyclic"), c, j};
           // Frequencies 1/pmax .. 1/pmin, four times oversampled (Lomb-Scargle practice).
           const double df = 1 / (4 * span);
@@ -440,6 +459,23 @@ Analysis analyse(const Problem& p, const Options& opt) {
       const double t0 = *std::min_element(time->values.begin(), time->values.end());
       Candidate k{"drift", fmt::format("drift of {}", kAxis[c]), time->name, expl("drift"), c};
       k.columns = [&, c, t0](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return time->values[F.row[o]] - t0; }); return m; };
+      cands.push_back(k);
+    }
+    if (time && variance(time->values) > 0 && enabled("transient")) {
+      // A start-up transient decaying from the first reading: e = A exp(-(t - t0) / tau).
+      const double t0 = *std::min_element(time->values.begin(), time->values.end());
+      const double t1 = *std::max_element(time->values.begin(), time->values.end());
+      Candidate k{"transient", fmt::format("start-up transient of {}", kAxis[c]), time->name, expl("transient"), c};
+      const double dtmin = std::max((t1 - t0) / static_cast<double>(data.rows), 1e-6);
+      k.grid = logspace(dtmin, (t1 - t0) / 2, 30);
+      k.log_refine = true;
+      k.tests = 10;
+      k.nl_name = "time constant", k.nl_unit = "s";
+      k.columns = [&, c, t0](double tau) {
+        Eigen::MatrixXd m(n, 1);
+        m.col(0) = on(c, [&](std::size_t o) { return std::exp(-(time->values[F.row[o]] - t0) / std::max(tau, 1e-9)); });
+        return m;
+      };
       cands.push_back(k);
     }
     const Series* acc = data.find(Role::Acceleration, c);
@@ -541,7 +577,12 @@ Analysis analyse(const Problem& p, const Options& opt) {
     const bool significant = opt.significance ? (pv * total_tests < opt.alpha && bic < 0) : true;
     say(fmt::format("best: {} F={:.3g} p={:.3g} x{:.0f} tests, dBIC={:.1f}, CV {:.4g} -> {:.4g} mm{}", c.what, Fst, pv, total_tests, bic,
                     cv_cur, cv1, significant ? "" : " (not significant)"));
-    if (!significant || (opt.significance && cv1 >= cv_cur)) break;
+    if (!significant || (opt.significance && cv1 >= cv_cur)) {
+      out.stopped_at = fmt::format("best remaining candidate {}: F={:.3g}, p={:.2g} x {:.0f} tests, dBIC={:.1f}, CV RMS {:.4g} -> {:.4g} um: {}", c.what,
+                                   Fst, pv, total_tests, bic, cv_cur * 1e3, cv1 * 1e3,
+                                   !significant ? "not significant" : "significant in the fit but not confirmed by cross-validation");
+      break;
+    }
     Effect eff;
     eff.kind = c.kind, eff.what = c.what, eff.explanation = c.explanation, eff.condition = c.condition, eff.component = c.component;
     eff.f_statistic = Fst, eff.p_value = pv, eff.tests = total_tests, eff.delta_bic = bic, eff.cv_rms_mm = cv1;
@@ -600,6 +641,11 @@ Analysis analyse(const Problem& p, const Options& opt) {
       eff.parameters.push_back({"rate", b[0] * um * 3600, std::sqrt(C(0, 0)) * um * 3600, "um/h"});
       const double t0 = *std::min_element(time->values.begin(), time->values.end());
       eff.world_term = {{"kind", "drift"}, {"component", cx}, {"rate_mm_per_s", b[0]}, {"t0_s", t0}};
+    } else if (c.kind == "transient") {
+      eff.parameters.push_back({"amplitude", b[0] * um, std::sqrt(C(0, 0)) * um, "um"});
+      eff.parameters.push_back({"time constant", ev.nl, nl_sd, "s"});
+      const double t0 = *std::min_element(time->values.begin(), time->values.end());
+      eff.world_term = {{"kind", "transient"}, {"component", cx}, {"amplitude_mm", b[0]}, {"tau_s", ev.nl}, {"t0_s", t0}};
     } else if (c.kind == "acceleration") {
       eff.parameters.push_back({"compliance", b[0] * um, std::sqrt(C(0, 0)) * um, "um per mm/s^2"});
     } else if (c.kind == "cyclic" || c.kind == "lobing") {
@@ -637,8 +683,25 @@ Analysis analyse(const Problem& p, const Options& opt) {
   if (std::isfinite(data.description.noise_mm)) {
     out.noise_mm = data.description.noise_mm, out.noise_stated = true, out.noise_source = "stated in the description";
   } else {
-    out.noise_mm = std::sqrt(s2);
-    out.noise_source = "estimated from the residual after the effects";
+    // Pooled repeatability: readings repeated at the same component, position and direction
+    // (ISO 230-2's unidirectional s_i), after the effects; else the residual's sd.
+    std::map<std::tuple<int, std::array<double, 3>, double>, std::vector<double>> groups;
+    const Series* dir = dir_any;
+    for (std::size_t o = 0; o < nu; ++o)
+      groups[{F.comp[o], F.q[o], dir ? dir->values[F.row[o]] : 0.0}].push_back(ff.residual[static_cast<Eigen::Index>(o)]);
+    double ss = 0, df = 0;
+    for (const auto& [k, v] : groups) {
+      if (v.size() < 2) continue;
+      ss += variance(v) * static_cast<double>(v.size() - 1);
+      df += static_cast<double>(v.size() - 1);
+    }
+    if (data.find(Role::Cycle) && df >= 5 && df >= 0.3 * dn) {
+      out.noise_mm = std::sqrt(ss / df);
+      out.noise_source = fmt::format("repeatability of repeated readings ({} degrees of freedom)", df);
+    } else {
+      out.noise_mm = std::sqrt(s2);
+      out.noise_source = "estimated from the residual after the effects";
+    }
   }
 
   // Structure searches: every recorded condition and position, binned means; periodograms.
@@ -727,6 +790,7 @@ nlohmann::json to_json(const Analysis& a) {
   j["noise_source"] = a.noise_source;
   j["folds"] = a.folds;
   j["nuisance"] = a.nuisance;
+  j["stopped_at"] = a.stopped_at;
   j["effects"] = json::array();
   for (const auto& e : a.effects) {
     json je{{"kind", e.kind}, {"what", e.what}, {"explanation", e.explanation}, {"condition", e.condition},
@@ -772,6 +836,7 @@ std::string summary(const Analysis& a, const MeasuredData& data) {
     for (const auto& p : e.parameters) s += fmt::format("  {} = {:.6g} +- {:.2g} {}\n", p.name, p.value, p.sd, p.unit);
     if (e.world_term.is_null()) s += "  (not written into the world: no machine error term simulates it yet)\n";
   }
+  if (!a.stopped_at.empty()) s += "stopped: " + a.stopped_at + "\n";
   s += fmt::format("gain: cross-validated RMS {:.3f} um -> {:.3f} um ({}), noise {:.3f} um ({})\n", a.cv_rms_before_mm * 1e3,
                    a.cv_rms_after_mm * 1e3, a.folds, a.noise_mm * 1e3, a.noise_source);
   if (a.unexplained.empty()) s += "unexplained structure: none\n";

@@ -96,6 +96,7 @@ Description parse(const json& j) {
   if (const json* h = o.find("header")) d.header = boolean(*h, o.at("header"));
   if (const json* n = o.find("noise_mm")) d.noise_mm = positive(*n, o.at("noise_mm"));
   o.number("reference_temperature_c", d.reference_temperature_c);
+  if (const json* b = o.find("base")) d.per_position_table = one_of(*b, o.at("base"), {"world", "world+per-position-table"}) != "world";
   if (const json* f = o.find("fixed_position_mm")) {
     const auto v = numbers(*f, o.at("fixed_position_mm"), 3);
     d.fixed_position_mm = {v[0], v[1], v[2]};

@@ -61,6 +61,18 @@ class DriftTerm final : public ErrorTerm {
   double m_rate, m_t0;
 };
 
+/// e_c += A exp(-(t - t0) / tau) for t >= t0: a start-up transient settling over simulated time.
+class TransientTerm final : public ErrorTerm {
+ public:
+  TransientTerm(int component, double amplitude_mm, double tau_s, double t0_s) : m_c(component), m_a(amplitude_mm), m_tau(tau_s), m_t0(t0_s) {}
+  [[nodiscard]] Vec3 displacement(const MachinePose& pose, double time_s) const override;
+  [[nodiscard]] std::string_view name() const override { return "transient"; }
+
+ private:
+  int m_c;
+  double m_a, m_tau, m_t0;
+};
+
 /// e_c += (k0 + k1 q_c)(T(t) - T_ref), T a recorded temperature through a first-order lag: thermal
 /// growth of a structure (k0) or a scale (k1 = alpha) that follows a temperature (ISO 230-3).
 class ThermalLagTerm final : public ErrorTerm {
@@ -76,7 +88,7 @@ class ThermalLagTerm final : public ErrorTerm {
   std::shared_ptr<const TemperatureHistory> m_t;
 };
 
-/// Reads `machine.errors.terms` (an array of {"kind": linear|cross_axis|cyclic|drift|thermal|reversal, ...})
+/// Reads `machine.errors.terms` (an array of {"kind": linear|cross_axis|cyclic|drift|transient|thermal|reversal, ...})
 /// into `model`; strict, throws strict_json::ReadError naming the pointer.
 void parse_catalogue_terms(const nlohmann::json& terms, const std::string& pointer, MachineErrorModel& model);
 

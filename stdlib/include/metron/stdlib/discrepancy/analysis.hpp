@@ -84,6 +84,8 @@ struct Analysis {
   int fold_count = 0;
   std::vector<std::string> nuisance;  ///< terms always fitted (zero offsets, placement)
   std::vector<Effect> effects;        ///< claimed, in the order found
+  /// The best remaining candidate when the selection stopped: why it was not claimed.
+  std::string stopped_at;
   std::vector<Structure> structure_before;  ///< structure searches on the base residual
   std::vector<Structure> unexplained;       ///< structure left after the effects
   std::vector<Spectrum> spectra_before, spectra_after;

@@ -58,6 +58,10 @@ struct Description {
   double reference_temperature_c = 20;  ///< ISO 1
   std::array<double, 3> fixed_position_mm{0, 0, 0};  ///< position of axes without a nominal column
   std::string name;                 ///< for reports
+  /// The base model's own table of systematic deviations per nominal position (ISO 230-2's mean
+  /// bidirectional deviation per target): what a compensation table holds; effects are then
+  /// searched beyond it (reversal, drift, thermal), not in the per-target shape itself.
+  bool per_position_table = false;
 };
 
 /// A recorded column in metron units.
