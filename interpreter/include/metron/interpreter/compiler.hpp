@@ -11,6 +11,7 @@
 #include "metron/grammar/ast.hpp"
 #include "metron/interpreter/ir/instruction.hpp"
 #include "metron/stdlib/diagnostic.hpp"
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/source.hpp"
 
 namespace metron::interpreter {
@@ -67,12 +68,21 @@ class Compiler {
   [[nodiscard]] const SymbolTable& symbols() const { return m_symbols; }
   [[nodiscard]] SourceManager& sources() { return m_sources; }
 
+  /// Folders CALL/EXTERN may read besides the main program's own (`--include`, docs/security.md).
+  void set_include_dirs(std::vector<std::string> dirs) { m_include_dirs = std::move(dirs); }
+  [[nodiscard]] const std::vector<std::string>& include_dirs() const { return m_include_dirs; }
+  /// The read policy in force: set when the main program is compiled (its folder and the include
+  /// folders); unrestricted before that.
+  [[nodiscard]] const FileAccessPolicy& file_policy() const { return m_policy; }
+
  private:
   std::size_t compile_program(std::uint32_t file, const std::string& path, UnitKind kind);
   SourceManager& m_sources;
   DiagnosticSink& m_sink;
   ir::Module m_module;
   SymbolTable m_symbols;
+  std::vector<std::string> m_include_dirs;
+  FileAccessPolicy m_policy;
 };
 
 }  // namespace metron::interpreter
