@@ -2,6 +2,8 @@
 #include "commands.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -35,6 +37,7 @@ struct RunArgs {
   bool strict = false;
   std::optional<std::string> answers;
   std::vector<std::string> include_dirs;
+  interpreter::RunLimits limits;
 };
 
 /// The backend of `metron run --machine ipp://host:port`: an I++ DME server (metron serve, or a
@@ -77,6 +80,9 @@ int run(const RunArgs& args) {
       options.prompt_answers.push_back(line);
     }
   }
+  options.limits = args.limits;
+  // SIGINT/SIGTERM stop the run at the next statement; the results so far are written.
+  interpreter::install_stop_signal_handlers();
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
   options.on_event = [&](const runtime::RunEvent& e) {
     if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) (t->in_tolerance ? in_tol : out_tol)++;
@@ -108,6 +114,7 @@ int run(const RunArgs& args) {
   const char* status = outcome.exit == interpreter::RunExit::Completed ? "completed"
                        : outcome.exit == interpreter::RunExit::Faulted ? "stopped by a machine fault"
                        : outcome.exit == interpreter::RunExit::BadInput ? "not started"
+                       : outcome.exit == interpreter::RunExit::Stopped  ? "stopped by a limit or a signal"
                                                                         : "stopped by an error";
   std::cout << fmt::format("\nrun {}: {} features, {} tolerances in, {} out, {} faults, {:.3f} s simulated\n", status,
                            outcome.record.features.size(), in_tol, out_tol, faults, outcome.record.simulated_time_s);
@@ -130,18 +137,20 @@ int check(const std::string& program, bool strict, const std::vector<std::string
   const std::size_t warnings = sink.items().size() - errors - notes;
   std::cout << fmt::format("{}: {} error{}, {} warning{}{}\n", program, errors, errors == 1 ? "" : "s", warnings,
                            warnings == 1 ? "" : "s", notes ? fmt::format(", {} note{}", notes, notes == 1 ? "" : "s") : "");
-  return errors > 0 || !unit ? 1 : 0;
+  if (!unit) return 2;  // the program cannot be read: bad input
+  return errors > 0 ? 1 : 0;
 }
 
-int compile(const std::string& program, bool emit_ir) {
+int compile(const std::string& program, bool emit_ir, const std::vector<std::string>& include_dirs) {
   SourceManager sources;
   DiagnosticSink sink;
   interpreter::Compiler compiler(sources, sink);
+  compiler.set_include_dirs(include_dirs);
   const auto unit = compiler.compile_file(program);
   for (const auto& d : sink.items()) std::cerr << format_diagnostic(d, sources);
   if (!unit || sink.has_errors()) {
     if (!unit && sink.items().empty()) std::cerr << fmt::format("error: cannot read {}\n", program);
-    return 1;
+    return unit ? 1 : 2;
   }
   if (emit_ir) std::cout << interpreter::ir::to_string(compiler.module(), sources);
   return 0;
@@ -195,12 +204,51 @@ int fit(const FitArgs& args) {
 
 }  // namespace
 
+void add_include_option(CLI::App& cmd, std::vector<std::string>& dirs) {
+  cmd.add_option("--include", dirs,
+                 "a folder CALL/EXTERN and CHARACTERISATION may read besides the program's own, also searched for "
+                 "CALL/EXTERN,DMIS files written with another machine's path (repeatable; docs/security.md)")
+      ->check(CLI::ExistingDirectory);
+}
+
+void add_seed_option(CLI::App& cmd, std::optional<std::uint64_t>& seed) {
+  // Parsed here, not by CLI11's conversion, which turns -1 and 1e23 into 2^64-1 silently.
+  cmd.add_option_function<std::string>(
+      "--seed",
+      [&seed](const std::string& text) {
+        const bool digits = !text.empty() && text.size() <= 20 &&
+                            std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+        errno = 0;
+        const unsigned long long v = digits ? std::strtoull(text.c_str(), nullptr, 10) : 0;
+        if (!digits || errno == ERANGE)
+          throw CLI::ValidationError("--seed", "expected an integer from 0 to 18446744073709551615, got '" + text + "'");
+        seed = static_cast<std::uint64_t>(v);
+      },
+      "random seed of the run, 0 to 2^64-1 (default: the world's)");
+}
+
+void add_limit_options(CLI::App& cmd, interpreter::RunLimits& limits) {
+  const auto non_negative = CLI::Range(0.0, 1e12);
+  cmd.add_option("--max-steps", limits.max_steps, "stop after this many executed instructions (0: no limit; docs/limits.md)")
+      ->default_val(limits.max_steps)
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000'000}));
+  cmd.add_option("--max-sim-time", limits.max_simulated_s, "stop after this much simulated time, s (0: no limit)")
+      ->default_val(limits.max_simulated_s)
+      ->check(non_negative);
+  cmd.add_option("--max-wall-time", limits.max_wall_s, "stop after this much wall-clock time, s (0: no limit)")
+      ->default_val(limits.max_wall_s)
+      ->check(non_negative);
+  cmd.add_option("--max-outputs", limits.max_outputs, "stop after this many reported outputs (0: no limit)")
+      ->default_val(limits.max_outputs)
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000'000}));
+}
+
 void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   auto run_args = std::make_shared<RunArgs>();
   auto* run_cmd = app.add_subcommand("run", "run an inspection program on the virtual CMM");
   run_cmd->add_option("program", run_args->program, "the DMIS program")->required();
   run_cmd->add_option("--world", run_args->world, "world description (JSON); default: the embedded default world");
-  run_cmd->add_option("--seed", run_args->seed, "random seed of the run (default: the world's)");
+  add_seed_option(*run_cmd, run_args->seed);
   run_cmd->add_option("--characterisation", run_args->characterisation,
                       "machine characterisation file from `metron characterise`: PTMEAS uses its touch strategy");
   run_cmd->add_option("--machine", run_args->machine_url,
@@ -213,16 +261,17 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
   run_cmd->add_flag("--strict", run_args->strict, "a line that is not a DMIS statement is an error (default: a warning)");
   run_cmd->add_option("--answers", run_args->answers, "operator answers for PROMPT, one per line, used in order");
-  run_cmd->add_option("--include", run_args->include_dirs, "folder searched for CALL/EXTERN,DMIS files given with another machine's path (repeatable)");
+  add_include_option(*run_cmd, run_args->include_dirs);
+  add_limit_options(*run_cmd, run_args->limits);
   commands.push_back({run_cmd, [run_args] { return run(*run_args); }});
 
   auto check_program = std::make_shared<std::string>();
+  auto check_includes = std::make_shared<std::vector<std::string>>();
   auto* check_cmd = app.add_subcommand("check", "check a program and print diagnostics");
   auto check_strict = std::make_shared<bool>(false);
   check_cmd->add_option("program", *check_program, "the DMIS program")->required();
-  auto check_includes = std::make_shared<std::vector<std::string>>();
   check_cmd->add_flag("--strict", *check_strict, "a line that is not a DMIS statement is an error (default: a warning)");
-  check_cmd->add_option("--include", *check_includes, "folder searched for CALL/EXTERN,DMIS files given with another machine's path (repeatable)");
+  add_include_option(*check_cmd, *check_includes);
   commands.push_back({check_cmd, [check_program, check_strict, check_includes] {
                         return check(*check_program, *check_strict, *check_includes);
                       }});
@@ -232,7 +281,11 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   auto* compile_cmd = app.add_subcommand("compile", "compile a program to IR");
   compile_cmd->add_option("program", *compile_program, "the DMIS program")->required();
   compile_cmd->add_flag("--emit-ir", *emit_ir, "print the IR");
-  commands.push_back({compile_cmd, [compile_program, emit_ir] { return compile(*compile_program, *emit_ir); }});
+  auto compile_includes = std::make_shared<std::vector<std::string>>();
+  add_include_option(*compile_cmd, *compile_includes);
+  commands.push_back({compile_cmd, [compile_program, emit_ir, compile_includes] {
+                        return compile(*compile_program, *emit_ir, *compile_includes);
+                      }});
 
   auto fit_args = std::make_shared<FitArgs>();
   auto* fit_cmd = app.add_subcommand("fit", "least-squares fit of a point file (NIST .ds or CSV x,y,z)");

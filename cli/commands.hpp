@@ -1,7 +1,12 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <cstdint>
 #include <functional>
+#include <optional>
+#include <string>
 #include <vector>
+
+#include "metron/interpreter/run_limits.hpp"
 
 namespace CLI {
 class App;
@@ -14,6 +19,13 @@ struct Command {
   CLI::App* app = nullptr;
   std::function<int()> run;
 };
+
+/// `--include DIR` (repeatable): folders a program may read besides its own (docs/security.md).
+void add_include_option(CLI::App& cmd, std::vector<std::string>& dirs);
+/// `--seed N`, checked to be an integer in [0, 2^64-1].
+void add_seed_option(CLI::App& cmd, std::optional<std::uint64_t>& seed);
+/// `--max-steps`, `--max-sim-time`, `--max-wall-time`, `--max-outputs` (docs/limits.md).
+void add_limit_options(CLI::App& cmd, interpreter::RunLimits& limits);
 
 /// run, check, compile, fit (commands.cpp).
 void add_run_commands(CLI::App& app, std::vector<Command>& commands);

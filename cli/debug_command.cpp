@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -23,6 +24,7 @@
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/file_access.hpp"
 #include "virtual_cmm_backend.hpp"
 
 namespace metron::cli {
@@ -34,6 +36,8 @@ struct DebugArgs {
   std::optional<std::uint64_t> seed;
   std::optional<std::string> commands;  ///< read commands from this file instead of the terminal
   std::string out_dir = ".";
+  std::vector<std::string> include_dirs;
+  interpreter::RunLimits limits;
 };
 
 const std::vector<std::string> command_names = {"break", "delete", "info", "run", "continue", "step", "next",
@@ -141,11 +145,13 @@ class Repl {
   }
   bool is_command(const std::string& text) const {
     const std::string w = first_word(text);
-    if (w.empty() || text.find('/') != std::string::npos) return false;
-    if (text.size() > w.size() && text[w.size()] == '(') return false;  // F(x)=... is DMIS
+    if (w.empty()) return false;
+    if (text.size() > w.size() && (text[w.size()] == '(' || text[w.size()] == '/')) return false;  // F(x)=..., MAJOR/...
     static const std::set<std::string> aliases = {"c", "s", "n", "bt", "l", "p", "q", "exit", "b", "help"};
     std::string lw = w;
     for (auto& c : lw) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    // `print 4/2` and `set V = A/B` are commands: their expressions may divide.
+    if (text.find('/') != std::string::npos && lw != "print" && lw != "p" && lw != "set") return false;
     return std::find(command_names.begin(), command_names.end(), lw) != command_names.end() || aliases.count(lw);
   }
   // +1 for a statement that opens a block, -1 for one that closes it.
@@ -316,15 +322,41 @@ class Repl {
       id = m_debugger.break_at_feature(label);
       std::cout << fmt::format("breakpoint {}: when F({}) is measured\n", id, label);
     } else if (std::regex_match(rest, m, file_line)) {
-      id = m_debugger.break_at_line(m[1].str(), static_cast<std::uint32_t>(std::stoul(m[2].str())));
+      const auto line = line_number(m[2].str());
+      if (!line_exists(m[1].str(), line)) {
+        std::cout << fmt::format("error: {} has no line {} (or is not part of the program)\n", m[1].str(), m[2].str());
+        return true;
+      }
+      id = m_debugger.break_at_line(m[1].str(), line);
       std::cout << fmt::format("breakpoint {}: {}:{}\n", id, m[1].str(), m[2].str());
     } else if (!rest.empty() && std::all_of(rest.begin(), rest.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
-      id = m_debugger.break_at_line(m_session.record().program, static_cast<std::uint32_t>(std::stoul(rest)));
+      if (!line_exists(m_session.record().program, line_number(rest))) {
+        std::cout << fmt::format("error: the program has no line {}\n", rest);
+        return true;
+      }
+      id = m_debugger.break_at_line(m_session.record().program, line_number(rest));
       std::cout << fmt::format("breakpoint {}: line {}\n", id, rest);
     } else {
       std::cout << "error: expected break LINE, break FILE:LINE, break F(label) or break fault\n";
     }
     return true;
+  }
+
+  // A line number as typed (0 when it does not fit: no such line).
+  static std::uint32_t line_number(const std::string& digits) {
+    return digits.size() > 9 ? 0 : static_cast<std::uint32_t>(std::stoul(digits));
+  }
+  // Whether `file` (as the program names it, or its file name) is a compiled unit with `line`.
+  bool line_exists(const std::string& file, std::uint32_t line) const {
+    if (line == 0) return false;
+    const auto& units = m_session.compiler().module().units;
+    for (const auto& u : units) {
+      if (u.file == 0) continue;
+      const std::filesystem::path a(u.path), b(file);
+      if (!(a == b || a.filename() == b.filename())) continue;
+      if (line <= m_session.sources().file(u.file).line_starts.size()) return true;
+    }
+    return false;
   }
 
   bool print(const std::string& rest) {
@@ -454,7 +486,11 @@ class Repl {
       std::cout << "error: " << v.error() << "\n";
       return true;
     }
-    m_session.interpreter().set_variable(name, *v);
+    if (!m_session.interpreter().set_variable(name, *v)) {
+      std::cout << fmt::format("error: {} cannot hold the {} value {}: it was declared with another type\n", name,
+                               to_string(v->type), v->to_display());
+      return true;
+    }
     std::cout << name << " = " << m_session.interpreter().variable(name)->to_display() << "\n";
     return true;
   }
@@ -481,16 +517,31 @@ int debug(const DebugArgs& args) {
     return 2;
   }
   auto session = interpreter::Session::create(std::move(*backend));
-  std::unique_ptr<std::ifstream> file;
+  std::unique_ptr<std::istringstream> file;
   if (args.commands) {
-    file = std::make_unique<std::ifstream>(*args.commands);
-    if (!*file) {
-      std::cerr << fmt::format("error: cannot read {}\n", *args.commands);
+    // Read whole, with the input size cap: /dev/zero or a huge file is refused, not streamed.
+    auto text = read_input_file(*args.commands);
+    if (!text) {
+      std::cerr << "error: " << printable(text.error(), 1000) << "\n";
       return 2;
     }
+    file = std::make_unique<std::istringstream>(std::move(*text));
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(args.out_dir, ec);
+  if (ec || !std::filesystem::is_directory(args.out_dir, ec)) {
+    std::cerr << fmt::format("error: cannot create the output directory {}\n", args.out_dir);
+    return 2;
   }
   interpreter::Session& s = *session;
+  s.runtime().set_output_directory(args.out_dir);
+  s.set_include_dirs(args.include_dirs);
+  s.interpreter().set_limits(args.limits);
   if (!args.program.empty()) {
+    if (auto text = read_input_file(args.program); !text) {
+      std::cerr << "error: " << printable(text.error(), 1000) << "\n";
+      return 2;
+    }
     const bool ok = s.load(args.program);
     std::cout << s.take_diagnostics();
     if (!ok) {
@@ -512,7 +563,9 @@ void add_debug_commands(CLI::App& app, std::vector<Command>& commands) {
                              : app.add_subcommand("repl", "an interactive DMIS session on the virtual CMM");
     if (with_program) cmd->add_option("program", args->program, "the DMIS program")->required();
     cmd->add_option("--world", args->world, "world description (JSON); default: the embedded default world");
-    cmd->add_option("--seed", args->seed, "random seed (default: the world's)");
+    add_seed_option(*cmd, args->seed);
+    add_include_option(*cmd, args->include_dirs);
+    add_limit_options(*cmd, args->limits);
     cmd->add_option("--commands", args->commands, "read the commands from this file instead of the terminal");
     cmd->add_option("--out", args->out_dir, "directory for DMIS output files")->default_val(".");
     commands.push_back({cmd, [args] { return debug(*args); }});

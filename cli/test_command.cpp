@@ -11,10 +11,15 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <cstdlib>
+
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "metron/interpreter/run_limits.hpp"
 #include "metron/regression/regression.hpp"
+#include "metron/runtime/outputs.hpp"
 
 namespace metron::cli {
 namespace {
@@ -58,6 +63,9 @@ int test(const TestArgs& args) {
   options.jobs = args.jobs ? args.jobs : std::max(1u, std::thread::hardware_concurrency());
   options.timeout_s = args.timeout_s;
   options.update = args.update;
+  // SIGINT/SIGTERM: the children are stopped and the temporary folder removed (docs/limits.md).
+  interpreter::install_stop_signal_handlers();
+  options.stop_requested = [] { return interpreter::stop_requested() != 0; };
   const auto start = std::chrono::steady_clock::now();
   const auto results = regression::run_cases(cases, options, [](const regression::CaseResult& r) {
     std::cout << regression::format_case_result(r) << std::flush;
@@ -67,14 +75,13 @@ int test(const TestArgs& args) {
   bool failed = false;
   for (const auto& r : results) failed |= r.verdict == regression::Verdict::Fail;
   if (!args.junit.empty()) {
-    std::ofstream out(args.junit);
-    out << regression::junit_xml(results, total_s);
-    if (!out) {
-      std::cerr << fmt::format("error: cannot write {}\n", args.junit);
+    if (auto error = runtime::write_file_atomically(args.junit, regression::junit_xml(results, total_s))) {
+      std::cerr << "error: " << *error << "\n";
       failed = true;
     }
   }
   std::cout << regression::format_summary(results) << "\n";
+  if (interpreter::stop_requested() != 0) return 4;
   return failed ? 1 : 0;
 }
 
@@ -88,7 +95,17 @@ void add_test_command(CLI::App& app, std::vector<Command>& commands) {
   cmd->add_option("--filter", args->filter, "only programs whose path contains PATTERN (or matches it, with * ? [ ])");
   cmd->add_option("--junit", args->junit, "also write JUnit XML to FILE");
   cmd->add_option("--jobs,-j", args->jobs, "programs run at once (default: the number of cores)")->check(CLI::PositiveNumber);
-  cmd->add_option("--timeout", args->timeout_s, "wall-clock limit of each program, seconds")->default_val(120)->check(CLI::PositiveNumber);
+  cmd->add_option("--timeout", args->timeout_s, "wall-clock limit of each program, seconds")->default_val(120)
+      ->check(CLI::Validator(
+          [](const std::string& text) -> std::string {
+            // CLI11's PositiveNumber lets nan through and 1e308 never fires: a finite (0, 1 day].
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || !(v > 0) || v > 86400)
+              return "expected a number of seconds in (0, 86400], got '" + text + "'";
+            return {};
+          },
+          "SECONDS"));
   commands.push_back({cmd, [args] { return test(*args); }});
 }
 

@@ -3,6 +3,7 @@
 // detail::UnitCompiler (compile/), one file per DMIS statement family.
 #include "metron/interpreter/compiler.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -55,11 +56,27 @@ std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span 
   // A file called several times is compiled once: its definitions are not redefinitions.
   if (auto done = m_symbols.compiled_units.find(key); done != m_symbols.compiled_units.end() && included_from.valid())
     return done->second;
-  const std::uint32_t file = m_sources.load(path);
-  if (file == 0) {
-    m_sink.error("io.cannot-read", included_from, fmt::format("cannot read {}", shown));
+  if (!included_from.valid()) {
+    // The main program: its folder and the --include folders are what CALL/EXTERN may read.
+    std::vector<std::string> dirs{std::filesystem::path(path).parent_path().string()};
+    dirs.insert(dirs.end(), m_include_dirs.begin(), m_include_dirs.end());
+    m_policy = FileAccessPolicy(dirs, ".");
+  } else if (auto refused = m_policy.refuse_read(path)) {
+    m_sink.error("io.refused", included_from, "CALL/EXTERN,DMIS: " + *refused);
     return std::nullopt;
   }
+  auto text = read_input_file(path);
+  if (!text) {
+    const std::string reason = text.error().substr(text.error().rfind(": ") + 2);
+    m_sink.error("io.cannot-read", included_from,
+                 reason == "no such file" ? fmt::format("cannot read {}", shown) : fmt::format("cannot read {}: {}", shown, reason));
+    return std::nullopt;
+  }
+  // CR-only line ends (classic Mac OS) made the whole file one line, a leading comment swallowing
+  // every statement: read them as line ends (same length, so positions are unchanged).
+  bool cr_only = text->find('\r') != std::string::npos && text->find('\n') == std::string::npos;
+  if (cr_only) std::replace(text->begin(), text->end(), '\r', '\n');
+  const std::uint32_t file = m_sources.add(path, std::move(*text));
   m_symbols.units_in_progress.insert(key);
   const std::size_t unit = compile_program(file, path, UnitKind::File);
   m_symbols.units_in_progress.erase(key);

@@ -3,6 +3,7 @@
 // the handlers in execute/, one file per DMIS statement family.
 #include "metron/interpreter/interpreter.hpp"
 
+#include <chrono>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -10,6 +11,9 @@
 #include "execute/execute.hpp"
 
 namespace metron::interpreter {
+namespace {
+constexpr int SIGINT_NUMBER = 2, SIGTERM_NUMBER = 15;  // POSIX values, without <csignal> here
+}  // namespace
 
 Interpreter::Interpreter(const ir::Module& module, runtime::MeasurementRuntime& runtime, const SourceManager& sources,
                          DiagnosticSink& sink)
@@ -52,10 +56,42 @@ ExecStatus Interpreter::step() {
   }
   CallFrame& frame = m_frames.back();
   const ir::Instruction& in = code_of(frame)[frame.pc];
+  if (auto stop = check_limits(in)) return *stop;
   ++frame.pc;
   detail::ExecuteFn* handler = detail::Execute::table()[detail::index(in.op)];
   if (!handler) return fail(in.span, "unknown instruction");
   return handler(*this, in, frame);
+}
+
+std::optional<ExecStatus> Interpreter::check_limits(const ir::Instruction& in) {
+  ++m_steps;
+  const auto wall_now = [] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  };
+  if (m_wall_start_s < 0) m_wall_start_s = wall_now();
+  std::string why;
+  if (const int signal = stop_requested(); signal != 0) {
+    why = signal == SIGINT_NUMBER    ? "interrupted by SIGINT"
+          : signal == SIGTERM_NUMBER ? "interrupted by SIGTERM"
+                                     : "interrupted";
+  } else if (m_limits.max_steps && m_steps > m_limits.max_steps) {
+    why = fmt::format("the run reached its limit of {} executed instructions here (--max-steps; docs/limits.md)",
+                      m_limits.max_steps);
+  } else if (m_limits.max_outputs && m_runtime.record_event_count() > m_limits.max_outputs) {
+    why = fmt::format("the run reached its limit of {} reported outputs here (--max-outputs; docs/limits.md)",
+                      m_limits.max_outputs);
+  } else if (m_limits.max_simulated_s > 0 && m_runtime.machine().state().time_s > m_limits.max_simulated_s) {
+    // Checked every statement: one motion statement may take seconds of simulated time.
+    why = fmt::format("the run reached its limit of {:g} s of simulated time here (--max-sim-time; docs/limits.md)",
+                      m_limits.max_simulated_s);
+  } else if ((m_steps & 63) == 0) {
+    if (m_limits.max_wall_s > 0 && wall_now() - m_wall_start_s > m_limits.max_wall_s)
+      why = fmt::format("the run reached its limit of {:g} s of wall-clock time here (--max-wall-time; docs/limits.md)",
+                        m_limits.max_wall_s);
+  }
+  if (why.empty()) return std::nullopt;
+  m_stopped_by = why;
+  return fail(in.span, why + "; the results obtained so far are kept");
 }
 
 ExecStatus Interpreter::fail(Span span, std::string message) {
@@ -91,6 +127,8 @@ bool Interpreter::set_variable(const std::string& name, const Value& value) {
   if (auto t = m_types.find(name); t != m_types.end()) {
     if (t->second == ValueType::Integer && stored.is_number()) stored = Value::integer(std::trunc(stored.number));
     else if (t->second == ValueType::Real && stored.is_number()) stored = Value::real(stored.number);
+    // The declared type holds: a CHAR value into a REAL (the debugger's set) is refused.
+    else if (stored.type != t->second) return false;
   }
   v->front() = stored;
   return true;

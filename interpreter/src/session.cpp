@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/file_access.hpp"
 #include "passes/probing_feed_pass.hpp"
 
 namespace metron::interpreter {
@@ -24,6 +25,15 @@ std::unique_ptr<Session> Session::create(Backend backend) {
 bool Session::load(const std::string& program) {
   m_record.program = program;
   auto unit = m_compiler.compile_file(program);
+  // The runtime's files (CHARACTERISE, CHARACTERISATION, output files) follow the same policy:
+  // read where the compiler may, write inside the output directory (docs/security.md).
+  m_runtime->set_file_policy(FileAccessPolicy(
+      [&] {
+        std::vector<std::string> dirs;
+        for (const auto& d : m_compiler.file_policy().read_dirs()) dirs.push_back(d.string());
+        return dirs;
+      }(),
+      m_runtime->output_directory()));
   if (!unit) return false;
   if (m_sink.has_errors()) return false;
   if (m_runtime->characterisation()) {
@@ -56,30 +66,59 @@ std::string Session::take_diagnostics() {
   return out;
 }
 
+namespace {
+/// results.json of a run that did not start: the refusal and why, so that a caller reading the
+/// results file learns what happened (issue 11).
+void write_refusal(RunOutcome& outcome, const RunOptions& options, RunExit exit, const std::string& message) {
+  outcome.exit = exit;
+  outcome.diagnostics += message;
+  runtime::RunRecord& record = outcome.record;
+  record.program = options.program;
+  record.status = runtime::RunStatus::Refused;
+  if (record.diagnostics.empty())
+    record.diagnostics.push_back(!message.empty() && message.back() == '\n' ? message.substr(0, message.size() - 1) : message);
+  std::error_code ec;
+  if (!std::filesystem::is_directory(options.out_dir, ec)) return;
+  const std::string path = (std::filesystem::path(options.out_dir) / "results.json").string();
+  if (auto failed = runtime::write_results_file(record, path)) {
+    outcome.diagnostics += "error: " + *failed + "\n";
+    return;
+  }
+  outcome.results_path = path;
+}
+}  // namespace
+
 RunOutcome run_program(const RunOptions& options, const BackendFactory& backend) {
   RunOutcome outcome;
+  std::error_code ec;
+  std::filesystem::create_directories(options.out_dir, ec);
+  if (ec || !std::filesystem::is_directory(options.out_dir, ec)) {
+    outcome.exit = RunExit::BadInput;
+    outcome.diagnostics = fmt::format("error: cannot create the output directory {}: {}\n", options.out_dir,
+                                      ec ? ec.message() : "a file of that name exists");
+    return outcome;
+  }
+  // A program that cannot be read (missing, a directory, a device, too large) is bad input.
+  if (auto text = read_input_file(options.program); !text) {
+    write_refusal(outcome, options, RunExit::BadInput, "error: " + printable(text.error(), 1000) + "\n");
+    return outcome;
+  }
   auto built = backend(options.world_path, options.seed);
   if (!built) {
-    outcome.exit = RunExit::BadInput;
-    outcome.diagnostics = "error: " + built.error() + "\n";
+    write_refusal(outcome, options, RunExit::BadInput, "error: " + printable(built.error(), 1000) + "\n");
     return outcome;
   }
   const std::unique_ptr<Session> session = Session::create(std::move(*built));
   Session& s = *session;
-  std::error_code ec;
-  std::filesystem::create_directories(options.out_dir, ec);
-  if (ec) {
-    outcome.exit = RunExit::BadInput;
-    outcome.diagnostics = fmt::format("error: cannot create the output directory {}: {}\n", options.out_dir, ec.message());
-    return outcome;
-  }
   s.runtime().set_output_directory(options.out_dir);
+  s.set_include_dirs(options.include_dirs);
+  s.interpreter().set_limits(options.limits);
   if (options.on_event) s.runtime().on_event(options.on_event);
   if (options.characterisation_path) {
     auto c = runtime::load_characterisation(*options.characterisation_path);
     if (!c) {
-      outcome.exit = RunExit::BadInput;
-      outcome.diagnostics = "error: " + c.error() + "\n";
+      outcome.record = s.record();
+      write_refusal(outcome, options, RunExit::BadInput, "error: " + printable(c.error(), 1000) + "\n");
       return outcome;
     }
     s.runtime().set_characterisation(std::move(*c));
@@ -107,10 +146,21 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
     case ExecStatus::Faulted: record.status = runtime::RunStatus::Faulted; outcome.exit = RunExit::Faulted; break;
     case ExecStatus::Error: record.status = runtime::RunStatus::Error; outcome.exit = RunExit::ProgramError; break;
   }
-  if (loaded || !record.events.empty()) {
-    outcome.results_path = (std::filesystem::path(options.out_dir) / "results.json").string();
-    std::ofstream out(outcome.results_path);
-    out << runtime::results_json(record).dump(2) << "\n";
+  if (!s.interpreter().stopped_by().empty()) {
+    record.status = runtime::RunStatus::Interrupted;
+    outcome.exit = RunExit::Stopped;
+  }
+  if (!loaded) record.status = runtime::RunStatus::Refused;  // compile errors: nothing ran
+  for (const auto& e : s.runtime().output_errors()) {
+    record.diagnostics.push_back("error: " + e);
+    outcome.diagnostics += "error: " + e + "\n";
+    if (outcome.exit == RunExit::Completed) outcome.exit = RunExit::ProgramError;
+  }
+  outcome.results_path = (std::filesystem::path(options.out_dir) / "results.json").string();
+  if (auto failed = runtime::write_results_file(record, outcome.results_path)) {
+    outcome.diagnostics += "error: " + *failed + "\n";
+    outcome.results_path.clear();
+    if (outcome.exit == RunExit::Completed) outcome.exit = RunExit::ProgramError;
   }
   outcome.record = record;
   return outcome;

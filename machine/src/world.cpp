@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/json_reader.hpp"
 
 namespace metron::machine {
@@ -50,7 +51,11 @@ void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, Worl
   o.positive("max_speed_mm_s", m.max_speed_mm_s);
   o.positive("max_acceleration_mm_s2", m.max_acceleration_mm_s2);
   o.positive("max_jerk_mm_s3", m.max_jerk_mm_s3);
-  o.positive("dt_s", m.dt_s);
+  o.read("dt_s", [&](const json& dj, const std::string& dp) {
+    // A step of 1e-12 s made every move take 1e9 steps and never finish (issue 15).
+    m.dt_s = number(dj, dp);
+    if (!(m.dt_s >= 1e-5 && m.dt_s <= 0.1)) fail(dp, "expected a time step from 1e-05 to 0.1 s");
+  });
   o.positive("positioning_feed_mm_s", m.positioning_feed_mm_s);
   o.positive("measuring_feed_mm_s", m.measuring_feed_mm_s);
   o.read("skip", [&](const json& sj, const std::string& sp) {
@@ -409,26 +414,18 @@ Frame Pose::part_to_machine() const {
 
 namespace {
 
-std::string read_text(const std::string& path, bool& ok) {
-  std::ifstream in(path, std::ios::binary);
-  ok = static_cast<bool>(in);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 tl::expected<json, WorldError> read_json(const std::string& path) {
-  bool ok = false;
-  const std::string text = read_text(path, ok);
-  if (!ok) return tl::unexpected(WorldError{fmt::format("{}: cannot read the file", path)});
-  try {
-    return json::parse(text, nullptr, true, /*ignore_comments=*/true);
-  } catch (const json::parse_error& e) {
-    // what() is "[json.exception.parse_error.101] parse error at line L, column C: ..."
-    std::string what = e.what();
-    if (const auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
-    return tl::unexpected(WorldError{fmt::format("{}: invalid JSON: {}", path, what)});
+  // The strict reader's parse: a size cap (no /dev/zero), a nesting limit and numbers out of
+  // range (1e400) reported, never thrown.
+  auto text = read_input_file(path);
+  if (!text) {
+    const std::string reason = text.error().substr(text.error().rfind(": ") + 2);
+    return tl::unexpected(WorldError{reason == "no such file" ? fmt::format("{}: cannot read the file", path)
+                                                              : fmt::format("{}: cannot read the file: {}", path, reason)});
   }
+  auto j = sj::parse_document(*text);
+  if (!j) return tl::unexpected(WorldError{fmt::format("{}: invalid JSON: {}", path, j.error())});
+  return std::move(*j);
 }
 
 // A CAD path in a base world stays relative to the base file, not to the file extending it.

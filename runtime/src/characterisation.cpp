@@ -687,11 +687,9 @@ tl::expected<void, std::string> save_characterisation(const MachineCharacterisat
 }
 
 tl::expected<MachineCharacterisation, std::string> load_characterisation(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return tl::unexpected(fmt::format("{}: cannot read", path));
-  json j = json::parse(in, nullptr, false, true);
-  if (j.is_discarded()) return tl::unexpected(fmt::format("{}: not valid JSON", path));
-  auto c = characterisation_from_json(j);
+  auto j = strict_json::read_document(path);
+  if (!j) return tl::unexpected(j.error());
+  auto c = characterisation_from_json(*j);
   if (!c) return tl::unexpected(fmt::format("{}: {}", path, c.error()));
   return c;
 }

@@ -188,6 +188,13 @@ Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, st
   if (measuring) feeds.measuring_mm_s = *measuring;
   if ((positioning && !(*positioning > 0)) || (measuring && !(*measuring > 0)))
     return program_error(span, "a feed rate must be positive");
+  // The virtual CMM steps time at dt: FEDRAT/POSVEL,1e-9 made one move last 1e11 simulated
+  // seconds and never finish (issue 15); no CMM moves slower than 10 um/s (docs/limits.md).
+  constexpr double min_feed_mm_s = 0.01;
+  if ((positioning && *positioning < min_feed_mm_s) || (measuring && *measuring < min_feed_mm_s))
+    return program_error(span, fmt::format("a feed rate of {:g} mm/s is below the minimum of {:g} mm/s (docs/limits.md)",
+                                           positioning && *positioning < min_feed_mm_s ? *positioning : *measuring,
+                                           min_feed_mm_s));
   if (measuring) {
     if (auto ok = check_probing_feed(*measuring, span); !ok) return ok;
     m_measuring_feed_explicit = *measuring;
@@ -208,6 +215,8 @@ Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::s
   if (path) {
     std::filesystem::path p(*path);
     if (p.is_relative()) p = std::filesystem::path(m_output_dir) / p;
+    if (auto refused = m_policy.refuse_write(p.string()))
+      return program_error(span, "CALL/EXTERN,SYS 'CHARACTERISE': " + *refused);
     if (auto ok = save_characterisation(*c, p.string()); !ok) return program_error(span, ok.error());
   }
   text("PRINT", format_characterisation(*c));
@@ -217,6 +226,8 @@ Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::s
 }
 
 Result<void> MeasurementRuntime::use_characterisation(const std::string& path, Span span) {
+  if (auto refused = m_policy.refuse_read(path))
+    return program_error(span, "CALL/EXTERN,SYS 'CHARACTERISATION': " + *refused);
   auto c = load_characterisation(path);
   if (!c) return program_error(span, c.error());
   m_characterisation = std::move(*c);
@@ -482,35 +493,82 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
   return {};
 }
 
-Result<void> MeasurementRuntime::define_device(const std::string& label, const std::string& path, Span) {
-  m_devices[label] = Device{path, false, nullptr};
+namespace {
+/// A program's path (often a Windows path on another machine) reduced to its base name: DMIS
+/// output files are written into the run's output directory, never elsewhere (docs/security.md).
+std::string device_file_name(const std::string& label, const std::string& path) {
+  std::string name = path;
+  const auto cut = name.find_last_of("/\\:");
+  if (cut != std::string::npos) name = name.substr(cut + 1);
+  if (name.empty() || name == "." || name == "..") name = label + ".dmo";
+  return name;
+}
+}  // namespace
+
+Result<void> MeasurementRuntime::define_device(const std::string& label, const std::string& path, Span span) {
+  const std::string name = device_file_name(label, path);
+  if (name == "results.json")
+    return program_error(span, fmt::format("DEVICE DID({}): the file name 'results.json' is reserved for the run's "
+                                           "results; choose another name",
+                                           label));
+  for (const auto& [other, device] : m_devices)
+    if (other != label && device_file_name(other, device.path) == name)
+      return program_error(span, fmt::format("DEVICE DID({}): '{}' would write the same output file {} as DID({}) "
+                                             "('{}'); output files keep only their base name, so give them distinct "
+                                             "names",
+                                             label, path, name, other, device.path));
+  if (auto it = m_devices.find(label); it != m_devices.end() && it->second.open) commit_device(it->second);
+  m_devices[label] = Device{path, false, nullptr, {}};
   return {};
+}
+
+bool MeasurementRuntime::commit_device(Device& device) {
+  if (!device.stream) return true;
+  device.stream->flush();
+  const bool written = static_cast<bool>(*device.stream);
+  device.stream->close();
+  device.stream.reset();
+  std::error_code ec;
+  if (!written) {
+    m_output_errors.push_back(fmt::format("cannot write the output file {}: a write failed (disk full?); the "
+                                          "earlier file, if any, is kept",
+                                          device.path));
+    std::filesystem::remove(device.temp_path, ec);
+    return false;
+  }
+  std::filesystem::rename(device.temp_path, device.path, ec);
+  if (ec) {
+    m_output_errors.push_back(fmt::format("cannot write the output file {}: {}", device.path, ec.message()));
+    std::filesystem::remove(device.temp_path, ec);
+    return false;
+  }
+  return true;
 }
 
 Result<void> MeasurementRuntime::open_device(const std::string& label, Span span) {
   auto it = m_devices.find(label);
   if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));
-  // A program's path (often a Windows path on another machine) is reduced to its base name and
-  // written into the run's output directory.
-  std::string name = it->second.path;
-  const auto cut = name.find_last_of("/\\:");
-  if (cut != std::string::npos) name = name.substr(cut + 1);
-  if (name.empty()) name = label + ".dmo";
+  if (it->second.open) commit_device(it->second);
+  const std::string name = device_file_name(label, it->second.path);
   const std::string full = (std::filesystem::path(m_output_dir) / name).string();
-  auto stream = std::make_shared<std::ofstream>(full);
+  if (auto refused = m_policy.refuse_write(full)) return program_error(span, "OPEN/DID(" + label + "): " + *refused);
+  // Written to a temporary file and renamed when closed: a failed run never leaves a truncated
+  // file nor destroys the previous one.
+  const std::string temp = (std::filesystem::path(m_output_dir) / ("." + name + ".partial")).string();
+  auto stream = std::make_shared<std::ofstream>(temp, std::ios::binary | std::ios::trunc);
   if (!*stream) return program_error(span, fmt::format("cannot open output file {}", full));
   it->second.stream = stream;
   it->second.open = true;
   it->second.path = full;
+  it->second.temp_path = temp;
   return {};
 }
 
 Result<void> MeasurementRuntime::close_device(const std::string& label, Span span) {
   auto it = m_devices.find(label);
   if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));
-  if (it->second.stream) it->second.stream->flush();
   it->second.open = false;
-  it->second.stream.reset();
+  if (!commit_device(it->second)) return program_error(span, m_output_errors.back());
   return {};
 }
 
@@ -523,8 +581,10 @@ void MeasurementRuntime::finish() {
   m_record.features.clear();
   for (const auto& label : m_feature_order) m_record.features.push_back(m_features.at(label));
   m_record.simulated_time_s = m_machine.state().time_s;
-  for (auto& [label, device] : m_devices)
-    if (device.stream) device.stream->flush();
+  for (auto& [label, device] : m_devices) {
+    device.open = false;
+    commit_device(device);
+  }
 }
 
 }  // namespace metron::runtime

@@ -4,6 +4,9 @@
 #include "metron/runtime/outputs.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <optional>
 #include <string_view>
 
@@ -267,6 +270,8 @@ const char* status_word(RunStatus status) {
     case RunStatus::Completed: return "completed";
     case RunStatus::Faulted: return "faulted";
     case RunStatus::Error: return "error";
+    case RunStatus::Refused: return "refused";
+    case RunStatus::Interrupted: return "interrupted";
   }
   return "error";
 }
@@ -370,6 +375,48 @@ nlohmann::json results_json(const RunRecord& record) {
           {"features", std::move(features)},
           {"outputs", std::move(outputs)},
           {"tolerances", std::move(tolerances)}};
+}
+
+std::optional<std::string> write_file_atomically(const std::string& path, const std::string& text) {
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  std::error_code status_error;
+  if (fs::exists(target, status_error) && !fs::is_regular_file(target, status_error)) {
+    // A device or a pipe (/dev/stdout, /dev/null): written in place. Renaming over it would
+    // replace the device node itself (as root, /dev/full became a regular file).
+    if (fs::is_directory(target, status_error)) return fmt::format("cannot write {}: it is a directory", path);
+    std::ofstream out(target, std::ios::binary);
+    out << text;
+    out.flush();
+    if (!out) return fmt::format("cannot write {}: a write failed", path);
+    return std::nullopt;
+  }
+  const fs::path temp = target.parent_path() / ("." + target.filename().string() + ".partial");
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) return fmt::format("cannot write {}: cannot create {}", path, temp.string());
+    out << text;
+    out.flush();
+    if (!out) {
+      out.close();
+      std::error_code ec;
+      fs::remove(temp, ec);
+      return fmt::format("cannot write {}: a write failed (disk full?); the earlier file, if any, is kept", path);
+    }
+  }
+  std::error_code ec;
+  fs::rename(temp, target, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    return fmt::format("cannot write {}: {}", path, ec.message());
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> write_results_file(const RunRecord& record, const std::string& path) {
+  // Program texts, file names and echoed lines may hold any bytes (a Latin-1 TEXT, CHR(200)):
+  // they are replaced, never allowed to abort the dump and lose the results.
+  return write_file_atomically(path, results_json(record).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 }  // namespace metron::runtime

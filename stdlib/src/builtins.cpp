@@ -168,7 +168,12 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
   }
   if (name == "UPC") return Value::string(upper(s[0]));
   if (name == "LWC") return Value::string(lower(s[0]));
-  if (name == "CHR") return Value::string(std::string(1, static_cast<char>(static_cast<int>(x[0]))));
+  if (name == "CHR") {
+    // A code outside 0..255 wrapped modulo 256 (and a huge one cast undefined): refused.
+    if (!(x[0] >= 0 && x[0] <= 255) || x[0] != std::floor(x[0]))
+      return tl::unexpected(fmt::format("CHR needs a character code from 0 to 255, got {:g}", x[0]));
+    return Value::string(std::string(1, static_cast<char>(static_cast<int>(x[0]))));
+  }
   if (name == "ORD") return Value::integer(s[0].empty() ? 0.0 : static_cast<unsigned char>(s[0][0]));
   return tl::unexpected(fmt::format("intrinsic {} is not implemented", name));
 }

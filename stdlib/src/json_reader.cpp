@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/stdlib/json_reader.hpp"
 
+#include "metron/stdlib/file_access.hpp"
+
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <vector>
 
@@ -172,6 +175,63 @@ void Object::finish() const {
     }
     fail(at(item.key()), message);
   }
+}
+
+namespace {
+/// The deepest nesting of `text`, counted outside strings and comments; stops counting once past
+/// `limit` (returns the offset where it was passed).
+std::optional<std::size_t> too_deep_at(std::string_view text, std::size_t limit) {
+  std::size_t depth = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      for (++i; i < text.size() && text[i] != '"'; ++i)
+        if (text[i] == '\\') ++i;
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      while (i < text.size() && text[i] != '\n') ++i;
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      const auto close = text.find("*/", i + 2);
+      i = close == std::string_view::npos ? text.size() : close + 1;
+    } else if (c == '[' || c == '{') {
+      if (++depth > limit) return i;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return std::nullopt;
+}
+}  // namespace
+
+tl::expected<nlohmann::json, std::string> parse_document(std::string_view text, std::size_t max_depth) {
+  if (const auto at = too_deep_at(text, max_depth)) {
+    std::size_t line = 1, column = 1;
+    for (std::size_t i = 0; i < *at; ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        column = 1;
+      } else {
+        ++column;
+      }
+    }
+    return tl::unexpected(fmt::format("line {}, column {}: nested more than {} levels deep", line, column, max_depth));
+  }
+  try {
+    return nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/true);
+  } catch (const nlohmann::json::exception& e) {
+    // what() is "[json.exception.parse_error.101] parse error at line L, column C: ..." (or
+    // out_of_range.406 "number overflow parsing '1e400'").
+    std::string what = e.what();
+    if (const auto p = what.find("] "); p != std::string::npos) what = what.substr(p + 2);
+    return tl::unexpected(what);
+  }
+}
+
+tl::expected<nlohmann::json, std::string> read_document(const std::string& path) {
+  auto text = read_input_file(path);
+  if (!text) return tl::unexpected(text.error());
+  auto j = parse_document(*text);
+  if (!j) return tl::unexpected(fmt::format("{}: invalid JSON: {}", path, j.error()));
+  return j;
 }
 
 }  // namespace metron::strict_json

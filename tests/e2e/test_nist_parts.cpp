@@ -29,6 +29,7 @@ metron::interpreter::RunOutcome run(const std::string& example, const std::strin
   o.program = (source_dir / "programs" / "examples" / example).string();
   o.world_path = (source_dir / "programs" / "worlds" / world).string();
   o.out_dir = (fs::temp_directory_path() / ("metron_nist_" + std::to_string(::getpid())) / out).string();
+  o.include_dirs = {shared.string()};  // the examples call ../../../shared/data/... (docs/security.md)
   return metron::interpreter::run_program(o, metron::cli::virtual_cmm_backend);
 }
 

@@ -14,6 +14,9 @@ run_one() {  # name program world seed
   mkdir -p "$dir/run"
   local args=(run "$program" --seed "$seed" --out "$dir/run")
   [ -n "$world" ] && args+=(--world "$world")
+  # the NIST examples call ../../../shared/data/...: a folder a program may read only when given
+  # (docs/security.md)
+  [ -d "$root/../shared/data" ] && args+=(--include "$(realpath "$root/../shared/data")")
   (cd "$(dirname "$program")" && "$metron" "${args[@]}" >"$dir/stdout" 2>"$dir/stderr"; echo $? >"$dir/exit")
   # paths differ between checkouts: print them relative to the project
   sed -i "s#$root#<root>#g; s#$dir#<out>#g" "$dir/stdout" "$dir/stderr" "$dir"/run/* 2>/dev/null

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Expected-results files, their comparison with results.json, discovery, reports (docs/regression.md).
 #include "metron/regression/regression.hpp"
+#include "metron/stdlib/file_access.hpp"
 
 #include <fnmatch.h>
 
@@ -162,7 +163,9 @@ void first_error(const std::string& text, Observed& out) {
   }
 }
 
-std::string xml_escape(const std::string& s) {
+std::string xml_escape(const std::string& text) {
+  // Expected files and program output may hold any bytes: XML must be valid UTF-8.
+  const std::string s = valid_utf8(text);
   std::string out;
   for (unsigned char c : s) {
     switch (c) {
@@ -574,7 +577,9 @@ tl::expected<std::vector<Case>, std::string> discover_cases(const std::vector<st
     fs::path program = p, expected = p;
     program.replace_extension(".dmi");
     expected.replace_extension(".expected");
-    if (!fs::exists(expected)) return;
+    // A directory named NAME.expected is not an expected file (it was read as an empty one).
+    std::error_code ec;
+    if (!fs::is_regular_file(expected, ec)) return;
     const std::string name = program.lexically_normal().generic_string();
     found.emplace(name, Case{name, program.lexically_normal(), expected.lexically_normal()});
   };

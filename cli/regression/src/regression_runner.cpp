@@ -67,6 +67,8 @@ struct Prepared {
 std::variant<Prepared, CaseResult> prepare(const Case& c, const fs::path& dir) {
   if (!fs::exists(c.program))
     return fail(c, fmt::format("no program {} beside {}", c.program.filename().string(), c.expected.string()));
+  std::error_code ec;
+  if (!fs::is_regular_file(c.expected, ec)) return fail(c, fmt::format("{} is not a regular file", c.expected.string()));
   Prepared p;
   p.expected_text = slurp(c.expected);
   auto parsed = parse_expected(p.expected_text);
@@ -205,8 +207,18 @@ std::vector<CaseResult> run_cases(const std::vector<Case>& cases, const RunnerOp
   std::vector<Running> running;
   std::size_t next = 0;
   const unsigned jobs = std::max(1u, options.jobs);
+  bool stopping = false;
+  Clock::time_point stop_time{};
   while (next < cases.size() || !running.empty()) {
-    while (running.size() < jobs && next < cases.size()) {
+    if (!stopping && options.stop_requested && options.stop_requested()) {
+      // Forward the stop to the children (metron run writes its results on SIGTERM) and start no
+      // more; a child that does not end within 2 s is killed below.
+      stopping = true;
+      stop_time = Clock::now();
+      for (auto& r : running) ::kill(r.pid, SIGTERM);
+      for (; next < cases.size(); ++next) done[next] = fail(cases[next], "interrupted: not run");
+    }
+    while (!stopping && running.size() < jobs && next < cases.size()) {
       const std::size_t i = next++;
       const Case& c = cases[i];
       if (!have_root) {
@@ -237,7 +249,11 @@ std::vector<CaseResult> run_cases(const std::vector<Case>& cases, const RunnerOp
       ProcessEnd end;
       end.wall_s = wall_s;
       pid_t r = ::waitpid(it->pid, &status, WNOHANG);
-      if (r == 0 && wall_s > options.timeout_s) {
+      if (r == 0 && stopping && std::chrono::duration<double>(now - stop_time).count() > 2) {
+        ::kill(it->pid, SIGKILL);
+        r = ::waitpid(it->pid, &status, 0);
+        end.kind = ProcessEnd::Kind::TimedOut;
+      } else if (r == 0 && wall_s > options.timeout_s) {
         ::kill(it->pid, SIGKILL);
         r = ::waitpid(it->pid, &status, 0);
         end.kind = ProcessEnd::Kind::TimedOut;
@@ -254,7 +270,8 @@ std::vector<CaseResult> run_cases(const std::vector<Case>& cases, const RunnerOp
       if (r < 0) {
         done[it->index] = fail(cases[it->index], fmt::format("lost the child process: {}", std::strerror(errno)), {}, wall_s);
       } else {
-        done[it->index] = evaluate(cases[it->index], it->prepared, end, options);
+        done[it->index] = stopping ? fail(cases[it->index], "interrupted by a signal to metron test", {}, wall_s)
+                                   : evaluate(cases[it->index], it->prepared, end, options);
       }
       std::error_code ec;
       fs::remove_all(it->prepared.dir, ec);

@@ -187,6 +187,11 @@ template <typename Rule>
 struct push_op {
   template <typename In>
   static void apply(const In& in, Builder& b) {
+    if (++b.operators > max_operators)
+      throw SyntaxError{"parse.too-long",
+                        "expression too long (more than " + std::to_string(max_operators) +
+                            " operators in one statement)",
+                        b.point(in.begin())};
     b.ops.push_back({upper(in.string_view()), b.span(in.begin(), in.end())});
   }
 };

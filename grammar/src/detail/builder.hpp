@@ -35,6 +35,10 @@ struct PendingOp {
 
 /// Nesting limit for parentheses and unary chains, so hostile input cannot overflow the stack.
 inline constexpr int max_nesting = 64;
+/// Limit on binary operators in one statement: a left-associative chain (1+1+...+1) nests one
+/// tree level per operator, and the compiler, the evaluator and the tree's destructor recurse
+/// once per level; 6,600 terms overflowed the stack (issue 15). No real statement has 1,000.
+inline constexpr int max_operators = 1000;
 
 /// Builder state for one logical line.
 struct Builder {
@@ -49,6 +53,7 @@ struct Builder {
   std::string label_name;             ///< the name of the label reference just read
   const char* string_open = nullptr;  ///< the opening quote of the string being read
   int depth = 0;
+  int operators = 0;                  ///< binary and sign operators read so far (max_operators)
   Statement stmt;
 
   [[nodiscard]] std::size_t offset(const char* p) const { return static_cast<std::size_t>(p - base); }

@@ -282,6 +282,16 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
         ((verb == "CHARACTERISATION" || verb == "COMPENSATION") && !arg.empty())) {
       if (!extra.empty())
         return error(s.params[2].span, "sema.system-command", fmt::format("too many words in '{}'", text));
+      if ((verb == "CHARACTERISE" || verb == "CHARACTERIZE") && !arg.empty()) {
+        // The file is written relative to --out; a path that leaves it is refused when run
+        // (docs/security.md), which check can already say.
+        const std::filesystem::path p(arg);
+        bool leaves = p.is_absolute();
+        for (const auto& part : p) leaves = leaves || part == "..";
+        if (leaves)
+          warn(s.params[2].span, "io.write-outside",
+               fmt::format("CHARACTERISE writes '{}' outside the output folder (--out); the run will refuse it", arg));
+      }
       if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
         arg = (std::filesystem::path(m_module.units[m_unit].path).parent_path() / arg).string();
       auto in = make(Op::System, s, verb == "CHARACTERIZE" ? "CHARACTERISE" : verb);

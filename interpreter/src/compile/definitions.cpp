@@ -193,6 +193,7 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   for (; i < s.params.size(); ++i) {
     if (!push_number(in, s.params[i], "a sensor parameter")) return;
   }
+  note_definition("S", upper(s.target->name), s.span);
   m_symbols.sensors.insert(upper(s.target->name));
   emit(std::move(in));
 }
@@ -272,6 +273,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
+  note_definition("T", upper(s.target->name), s.span);
   m_symbols.tolerances[upper(s.target->name)] = kind;
   m_symbols.unevaluated_tolerances.erase(upper(s.target->name));
   if (std::any_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) {
@@ -405,13 +407,31 @@ void UnitCompiler::decl(const grammar::Statement& s) {
     const auto& p = s.params[i];
     int size = 0;
     if (p.kind == ExprKind::Index) {
-      if (p.args.size() != 1 || p.args[0].kind != ExprKind::Number || p.args[0].number < 1)
-        return error(p.span, "sema.bad-array", "an array declaration needs a positive size, e.g. V1[10]");
+      // At most max_array_size elements, a whole number: V[1e9] would allocate gigabytes, a size
+      // of 2^31 or more wrapped to 1 and V[2.5] was taken as 2 (issue 15).
+      constexpr double max_array_size = 1'000'000;
+      if (p.args.size() != 1 || p.args[0].kind != ExprKind::Number || !(p.args[0].number >= 1) ||
+          p.args[0].number != std::floor(p.args[0].number))
+        return error(p.span, "sema.bad-array", "an array declaration needs a positive whole size, e.g. V1[10]");
+      if (p.args[0].number > max_array_size)
+        return error(p.args[0].span, "sema.bad-array",
+                     fmt::format("array size {:g} exceeds the limit of {:g} elements (docs/limits.md)",
+                                 p.args[0].number, max_array_size));
       size = static_cast<int>(p.args[0].number);
     } else if (p.kind != ExprKind::Word || p.text.empty()) {
       return error(p.span, "sema.expected-name", "expected a variable name");
     }
     SymbolTable::VariableInfo info{t->second, size, p.span};
+    if (!m_repl) {
+      // A second DECL of one name silently replaced the first (its type and size).
+      const auto& scope = m_macro ? m_locals : m_symbols.variables;
+      if (auto prior = scope.find(p.text); prior != scope.end() && prior->second.span.file == p.span.file) {
+        const Location at = m_sources.locate(prior->second.span);
+        warn(p.span, "sema.redeclared",
+             fmt::format("variable {} is declared again (first at line {}); the later declaration replaces it",
+                         p.text, at.line));
+      }
+    }
     if (m_macro) m_locals[p.text] = info;
     else m_symbols.variables[p.text] = info;
     in.names.push_back(p.text);

@@ -100,6 +100,7 @@ void UnitCompiler::device(const grammar::Statement& s) {
     if (!e) return;
     in.operands.push_back(expr_operand(std::move(e->e)));
   }
+  note_definition("DID", upper(s.target->name), s.span);
   m_symbols.devices.insert(upper(s.target->name));
   emit(std::move(in));
 }

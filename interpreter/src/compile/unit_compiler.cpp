@@ -11,6 +11,9 @@ using ir::Op;
 void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   m_repl = repl;
   const auto& st = program.statements;
+  if (!repl && !m_included && st.empty())
+    warn(Span{program.file, 0, 0}, "sema.empty-program",
+         "the program has no statements: it does not start with DMISMN nor end with ENDFIL, and measures nothing");
   if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN")
     warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
   // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
@@ -87,9 +90,28 @@ std::optional<runtime::FeatureType> UnitCompiler::feature_type(const std::string
   return it->second.type;
 }
 
+void UnitCompiler::note_definition(const char* kind, const std::string& name, Span span) {
+  const std::string key = std::string(kind) + ":" + name;
+  if (auto prior = m_defined_here.find(key); prior != m_defined_here.end() && !m_repl) {
+    const Location at = m_sources.locate(prior->second);
+    warn(span, "sema.redefined",
+         fmt::format("{}({}) is defined again (first at line {}); the later definition replaces it", kind, name, at.line));
+  }
+  m_defined_here[key] = span;
+}
+
 void UnitCompiler::statement(const grammar::Statement& s) {
   if (s.jump_label) {
-    jumps().labels[upper(*s.jump_label)] = code().size();
+    const std::string name = upper(*s.jump_label);
+    if (auto prior = jumps().labels.find(name); prior != jumps().labels.end() && prior->second < code().size()) {
+      // JUMPTO would go to one of them silently (the last); a program must not be ambiguous.
+      const Location at = m_sources.locate(code()[prior->second].span);
+      error(s.span, "sema.duplicate-label",
+            fmt::format("label ({}) is defined twice (first at line {}): JUMPTO({}) would be ambiguous", *s.jump_label,
+                        at.line, *s.jump_label));
+      return;
+    }
+    jumps().labels[name] = code().size();
     emit(make(Op::JumpLabel, s, upper(*s.jump_label)));
     return;
   }

@@ -262,6 +262,11 @@ class UnitCompiler {
   JumpScope m_unit_jumps, m_macro_jumps;
   bool m_ended = false;
   bool m_repl = false;
+  /// Labels defined in this unit ("T:NAME", "S:NAME", "DID:NAME", "DAT:NAME") and where: a second
+  /// definition is warned about (it silently replaced the first).
+  std::map<std::string, Span> m_defined_here;
+  /// Warns when `kind`(`name`) was already defined in this unit; remembers this definition.
+  void note_definition(const char* kind, const std::string& name, Span span);
   bool m_included = false;
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once

@@ -130,15 +130,9 @@ tl::expected<void, std::string> write_error_space_file(const std::string& path, 
 }
 
 tl::expected<ErrorSpaceFile, FileError> read_error_space_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return tl::unexpected(FileError{"", fmt::format("{}: cannot open", path)});
-  json j;
-  try {
-    j = json::parse(in, nullptr, true, true);
-  } catch (const json::parse_error& e) {
-    return tl::unexpected(FileError{"", fmt::format("{}: not JSON: {}", path, e.what())});
-  }
-  auto f = from_json(j);
+  auto j = strict_json::read_document(path);
+  if (!j) return tl::unexpected(FileError{"", j.error()});
+  auto f = from_json(*j);
   if (!f) return tl::unexpected(FileError{f.error().pointer, fmt::format("{}: {}: {}", path, f.error().pointer, f.error().message)});
   return f;
 }

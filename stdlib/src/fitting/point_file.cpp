@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/stdlib/fitting/point_file.hpp"
 
+#include "metron/stdlib/file_access.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -144,13 +146,11 @@ tl::expected<std::vector<Vec3>, PointFileError> read_point_file(const std::strin
   if (std::filesystem::is_directory(path, ec)) {
     return tl::unexpected(PointFileError{fmt::format("'{}' is a directory", path), 0});
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return tl::unexpected(PointFileError{fmt::format("cannot open '{}'", path), 0});
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) return tl::unexpected(PointFileError{fmt::format("cannot read '{}'", path), 0});
-  const std::string text = std::move(buffer).str();
-  return parse_point_text(text);
+  if (!std::ifstream(path, std::ios::binary)) return tl::unexpected(PointFileError{fmt::format("cannot open '{}'", path), 0});
+  // The input size cap and regular files only: /dev/zero must not grow memory (docs/security.md).
+  auto text = read_input_file(path);
+  if (!text) return tl::unexpected(PointFileError{text.error(), 0});
+  return parse_point_text(*text);
 }
 
 }  // namespace metron::fitting

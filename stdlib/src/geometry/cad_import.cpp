@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <regex>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -56,7 +57,10 @@ namespace metron::geometry {
 namespace {
 
 MeshError file_error(const std::string& path, const std::string& what) {
-  return MeshError{"'" + path + "': " + what};
+  // OCCT's failure texts carry object addresses ("0x55d4c3a1b2c0"): noise to a user, and they
+  // make the message differ from run to run (issue 15).
+  static const std::regex address("0x[0-9a-fA-F]{6,}");
+  return MeshError{"'" + path + "': " + std::regex_replace(what, address, "<address>")};
 }
 
 Vec3 to_eigen(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }

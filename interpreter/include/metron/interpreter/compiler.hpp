@@ -12,6 +12,7 @@
 #include "metron/grammar/ast.hpp"
 #include "metron/interpreter/ir/instruction.hpp"
 #include "metron/stdlib/diagnostic.hpp"
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/source.hpp"
 
 namespace metron::interpreter {
@@ -71,13 +72,22 @@ class Compiler {
 
   /// How files are read (default lenient: non-statement lines are warnings; docs/language.md).
   void set_parse_options(const grammar::ParseOptions& options) { m_parse_options = options; }
-  /// Folders searched for CALL/EXTERN,DMIS files given with another machine's path (`--include DIR`).
-  void set_include_dirs(std::vector<std::string> dirs) { m_symbols.include_dirs = std::move(dirs); }
 
   [[nodiscard]] const ir::Module& module() const { return m_module; }
   [[nodiscard]] ir::Module& module() { return m_module; }
   [[nodiscard]] const SymbolTable& symbols() const { return m_symbols; }
   [[nodiscard]] SourceManager& sources() { return m_sources; }
+
+  /// Folders a program may read besides its own (file policy) and where CALL/EXTERN,DMIS files
+  /// written with another machine's path are searched.
+  void set_include_dirs(std::vector<std::string> dirs) {
+    m_symbols.include_dirs = dirs;
+    m_include_dirs = std::move(dirs);
+  }
+  [[nodiscard]] const std::vector<std::string>& include_dirs() const { return m_include_dirs; }
+  /// The read policy in force: set when the main program is compiled (its folder and the include
+  /// folders); unrestricted before that.
+  [[nodiscard]] const FileAccessPolicy& file_policy() const { return m_policy; }
 
  private:
   std::size_t compile_program(std::uint32_t file, const std::string& path, UnitKind kind);
@@ -86,6 +96,8 @@ class Compiler {
   ir::Module m_module;
   SymbolTable m_symbols;
   grammar::ParseOptions m_parse_options;
+  std::vector<std::string> m_include_dirs;
+  FileAccessPolicy m_policy;
 };
 
 }  // namespace metron::interpreter

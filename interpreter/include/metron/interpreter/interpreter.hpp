@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "metron/interpreter/ir/instruction.hpp"
+#include "metron/interpreter/run_limits.hpp"
 #include "metron/runtime/measurement_runtime.hpp"
 #include "metron/stdlib/diagnostic.hpp"
 #include "metron/stdlib/value.hpp"
@@ -48,6 +49,11 @@ class Interpreter {
   ExecStatus step();
   /// Runs until the program ends, faults or errs.
   ExecStatus run();
+  /// The limits checked between statements (docs/limits.md); the defaults unless set.
+  void set_limits(const RunLimits& limits) { m_limits = limits; }
+  [[nodiscard]] const RunLimits& limits() const { return m_limits; }
+  /// Why the run stopped at a limit or on a signal (empty: it did not).
+  [[nodiscard]] const std::string& stopped_by() const { return m_stopped_by; }
 
   /// The instruction that will execute next (nullptr when none).
   [[nodiscard]] const ir::Instruction* current() const;
@@ -91,6 +97,12 @@ class Interpreter {
   std::vector<std::string> m_prompt_answers;  // scripted PROMPT answers
   std::size_t m_next_answer = 0;
   tl::expected<Value, std::string> prompt(const ir::Expr& e);
+  RunLimits m_limits;
+  std::uint64_t m_steps = 0;
+  double m_wall_start_s = -1;  ///< steady-clock time of the first step
+  std::string m_stopped_by;
+  /// Checks the limits and a stop request before `in` executes; an error naming it when one is hit.
+  std::optional<ExecStatus> check_limits(const ir::Instruction& in);
 };
 
 }  // namespace metron::interpreter

@@ -8,6 +8,7 @@
 
 #include "metron/interpreter/compiler.hpp"
 #include "metron/interpreter/interpreter.hpp"
+#include "metron/interpreter/run_limits.hpp"
 #include "metron/machine/machine.hpp"
 #include "metron/runtime/measurement_runtime.hpp"
 #include "metron/runtime/run_record.hpp"
@@ -40,13 +41,17 @@ struct RunOptions {
   bool strict = false;
   /// Scripted operator answers for PROMPT, in order (`--answers FILE`, one per line).
   std::vector<std::string> prompt_answers;
-  /// Folders searched for CALL/EXTERN,DMIS files written with another machine's path.
+  /// Folders CALL/EXTERN and CHARACTERISATION may read besides the program's own, also searched
+  /// for CALL/EXTERN,DMIS files written with another machine's path (--include; docs/security.md).
   std::vector<std::string> include_dirs;
+  /// Step, time and output limits (docs/limits.md).
+  RunLimits limits;
 };
 
-/// Exit status of a run: 0 completed, 1 program error (compile or run time), 3 machine fault,
-/// 2 bad input (world, options).
-enum class RunExit { Completed = 0, ProgramError = 1, BadInput = 2, Faulted = 3 };
+/// Exit status of a run: 0 completed, 1 program error (compile or run time, an output that could
+/// not be written), 2 bad input (program file, world, options), 3 machine fault, 4 stopped by a
+/// run limit or a signal (docs/limits.md; results so far are written).
+enum class RunExit { Completed = 0, ProgramError = 1, BadInput = 2, Faulted = 3, Stopped = 4 };
 
 /// The outcome of a run.
 struct RunOutcome {
@@ -66,6 +71,8 @@ class Session {
   /// a characterisation is in use and a FEDRAT/MESVEL with a constant value asks for a probing
   /// feed above its maximum protected feed (refused before any motion).
   bool load(const std::string& program);
+  /// Folders the program may read besides its own (--include); set before load().
+  void set_include_dirs(std::vector<std::string> dirs) { m_compiler.set_include_dirs(std::move(dirs)); }
   /// Compiles REPL text as a new unit and runs it to completion in the current context.
   ExecStatus execute_text(const std::string& text);
 

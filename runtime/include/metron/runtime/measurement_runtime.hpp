@@ -18,6 +18,7 @@
 #include "metron/runtime/scan.hpp"
 #include "metron/runtime/runtime_error.hpp"
 #include "metron/runtime/tolerance.hpp"
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/source.hpp"
 
 namespace metron::runtime {
@@ -35,6 +36,16 @@ class MeasurementRuntime {
   void on_event(std::function<void(const RunEvent&)> callback) { m_on_event = std::move(callback); }
   /// Where DMIS output files (DEVICE/STOR) are written: their base name in this directory.
   void set_output_directory(std::string dir) { m_output_dir = std::move(dir); }
+  [[nodiscard]] const std::string& output_directory() const { return m_output_dir; }
+  /// How many events the run has reported so far (the output limit, docs/limits.md).
+  [[nodiscard]] std::size_t record_event_count() const { return m_record.events.size(); }
+  /// What the program may read and write (docs/security.md): CHARACTERISE 'file' and
+  /// CHARACTERISATION 'file' are checked against it; DMIS output files are written in the
+  /// output directory only.
+  void set_file_policy(FileAccessPolicy policy) { m_policy = std::move(policy); }
+  /// Output files that could not be written completely (finish() and CLOSE/DID); the run
+  /// reports them and exits non-zero.
+  [[nodiscard]] const std::vector<std::string>& output_errors() const { return m_output_errors; }
 
   // Features and tolerances.
   Result<void> define_feature(const std::string& label, const Geometry& nominal_current, Span span);
@@ -144,6 +155,8 @@ class MeasurementRuntime {
   RunRecord& m_record;
   std::function<void(const RunEvent&)> m_on_event;
   std::string m_output_dir = ".";
+  FileAccessPolicy m_policy;
+  std::vector<std::string> m_output_errors;
 
   std::map<std::string, Feature> m_features;
   std::vector<std::string> m_feature_order;
@@ -167,7 +180,11 @@ class MeasurementRuntime {
     std::string path;
     bool open = false;
     std::shared_ptr<std::ofstream> stream;
+    std::string temp_path;  ///< written while open; renamed to `path` when closed (atomic output)
   };
+  /// Closes a device's stream and moves its temporary file into place; false (and an entry in
+  /// m_output_errors) when a write failed.
+  bool commit_device(Device& device);
   std::map<std::string, Device> m_devices;
   std::uint64_t m_next_tag = 1;
 };

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -22,5 +23,14 @@ std::string dmis_tolerance_line(const ToleranceResult& result);
 
 /// results.json (schema documented in docs/results-json.md).
 nlohmann::json results_json(const RunRecord& record);
+
+/// Writes results.json atomically: the JSON (every string made valid UTF-8, invalid bytes as
+/// U+FFFD) goes to a temporary file in the same folder, which is renamed over `path` only when
+/// completely written. Any failure leaves the earlier file intact and says why.
+std::optional<std::string> write_results_file(const RunRecord& record, const std::string& path);
+
+/// Writes `text` to `path` atomically (a temporary file in the same folder, then rename); the
+/// error names the file.
+std::optional<std::string> write_file_atomically(const std::string& path, const std::string& text);
 
 }  // namespace metron::runtime

@@ -49,7 +49,9 @@ struct TextReport {
 using RunEvent = std::variant<FeatureReport, ToleranceResult, TextReport, FaultReport>;
 
 /// How a run ended.
-enum class RunStatus { Completed, Faulted, Error };
+/// Refused: not started (bad input, a file the policy does not allow, compile errors before any
+/// motion); Interrupted: stopped by SIGINT/SIGTERM or a run limit, the results so far kept.
+enum class RunStatus { Completed, Faulted, Error, Refused, Interrupted };
 
 /// Everything a run produced: the input of the report, results.json and the DMIS output file.
 struct RunRecord {

@@ -22,7 +22,10 @@ struct Diagnostic {
 /// Collects diagnostics from every phase so later phases can report all errors.
 class DiagnosticSink {
  public:
-  void report(Diagnostic d) { m_items.push_back(std::move(d)); }
+  /// Errors kept at most: hostile input (1 MB of random bytes) must not flood the terminal; the
+  /// error after the last kept one says how the list was cut.
+  static constexpr std::size_t max_errors = 100;
+  void report(Diagnostic d);
   void error(std::string code, Span span, std::string message) {
     report({Severity::Error, std::move(code), span, std::move(message), {}});
   }
@@ -32,13 +35,18 @@ class DiagnosticSink {
   [[nodiscard]] bool has_errors() const;
   [[nodiscard]] std::size_t error_count() const;
   [[nodiscard]] const std::vector<Diagnostic>& items() const { return m_items; }
-  void clear() { m_items.clear(); }
+  void clear() {
+    m_items.clear();
+    m_errors = 0;
+  }
 
  private:
   std::vector<Diagnostic> m_items;
+  std::size_t m_errors = 0;
 };
 
-/// `file:line:col: error: message`, then the source line and a caret under the column.
+/// `file:line:col: error: message`, then the source line and a caret under the column. Control
+/// bytes of the message and the line are shown escaped (\xNN) and the line is cut at 200 bytes.
 std::string format_diagnostic(const Diagnostic& d, const SourceManager& sources);
 
 }  // namespace metron

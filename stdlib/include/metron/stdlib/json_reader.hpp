@@ -43,6 +43,20 @@ auto read(Parse&& parse) -> tl::expected<decltype(parse()), ReadError> {
   }
 }
 
+/// The deepest nesting of arrays and objects a document may have: metron's schemas need fewer
+/// than 10 levels; nlohmann's copy, merge_patch and destructor recurse once per level, so an
+/// attacker's 70,000 levels would overflow the stack.
+inline constexpr std::size_t max_document_depth = 256;
+
+/// Parses a JSON document (comments allowed) without ever throwing: nesting deeper than
+/// `max_depth`, numbers out of the double range (1e400) and syntax errors all come back as a
+/// message ("parse error at line L, column C: ...").
+tl::expected<nlohmann::json, std::string> parse_document(std::string_view text,
+                                                         std::size_t max_depth = max_document_depth);
+/// Reads a file (a regular file within metron's input size cap, so /dev/zero is refused) and
+/// parses it with parse_document; the message names the file.
+tl::expected<nlohmann::json, std::string> read_document(const std::string& path);
+
 /// RFC 6901 escaping of one reference token ('~' -> "~0", '/' -> "~1").
 std::string pointer_token(std::string_view key);
 /// Levenshtein distance (for the did-you-mean suggestions).

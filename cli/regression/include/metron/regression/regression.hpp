@@ -147,6 +147,10 @@ struct RunnerOptions {
   unsigned jobs = 1;                      ///< at most this many programs at once
   double timeout_s = 120;                 ///< wall-clock limit of each program; then it is killed
   bool update = false;                    ///< rewrite expected files from the results
+  /// Polled while running: when it returns true (SIGINT/SIGTERM to `metron test`), every child
+  /// gets SIGTERM (SIGKILL 2 s later), no new one starts, the temporary folder is removed and the
+  /// cases not finished fail as "interrupted".
+  std::function<bool()> stop_requested;
 };
 
 /// Runs the cases as child processes, at most `jobs` at once, and compares. `on_result` is
