@@ -17,6 +17,7 @@
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/outputs.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
+#include "metron/stdlib/fitting/minimum_zone.hpp"
 #include "metron/stdlib/fitting/point_file.hpp"
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/ipp/client_machine.hpp"
@@ -174,6 +175,10 @@ int fit(const FitArgs& args) {
     return 1;
   }
   const auto& r = *result;
+  // ISO 1101 form: the minimum zone beside the least-squares form (plane, circle, line, sphere, cylinder).
+  const bool zoned = r.shape == fitting::Shape::Plane || r.shape == fitting::Shape::Circle || r.shape == fitting::Shape::Line ||
+                     r.shape == fitting::Shape::Sphere || r.shape == fitting::Shape::Cylinder;
+  const auto mz = zoned ? fitting::minimum_zone(r.shape, *points) : tl::unexpected(fitting::FitFailure::Degenerate);
   if (args.format == "json") {
     nlohmann::json j;
     j["type"] = std::string(fitting::to_string(r.shape));
@@ -188,6 +193,7 @@ int fit(const FitArgs& args) {
     }
     j["rms_mm"] = r.rms_mm;
     j["form_mm"] = r.form_mm;
+    if (mz) j["form_minimum_zone_mm"] = mz->form_mm;
     std::cout << j.dump(2) << "\n";
     return 0;
   }
@@ -198,7 +204,8 @@ int fit(const FitArgs& args) {
   if (r.diameter_mm > 0) std::cout << fmt::format("  diameter   {:.9f}\n", r.diameter_mm);
   if (r.shape == fitting::Shape::Cone)
     std::cout << fmt::format("  apex angle {:.9f} deg\n  distance   {:.9f}\n", r.apex_angle_deg, r.cone_distance_mm);
-  std::cout << fmt::format("  rms        {:.9f}\n  form       {:.9f}\n", r.rms_mm, r.form_mm);
+  std::cout << fmt::format("  rms        {:.9f}\n  form       {:.9f}   (least squares)\n", r.rms_mm, r.form_mm);
+  if (mz) std::cout << fmt::format("  form       {:.9f}   (minimum zone, ISO 1101)\n", mz->form_mm);
   return 0;
 }
 

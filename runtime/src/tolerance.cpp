@@ -344,7 +344,7 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, Toleran
                                   : fitting::minimum_zone(shape, surface, plane);
   if (mz && mz->form_mm <= feature.fit->form_mm + 1e-9) {
     result.value = mz->form_mm;
-    add_note(result, fmt::format("minimum zone (ISO 1101) over {} points; least squares gives {:.4f}", surface.size(),
+    add_note(result, fmt::format("minimum zone (ISO 1101) over {} points; least squares gives {:.6f}", surface.size(),
                                  feature.fit->form_mm));
   } else {
     add_note(result, "least-squares form (no minimum zone for these points)");

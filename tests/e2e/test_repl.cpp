@@ -95,3 +95,25 @@ TEST(Debugger, StopsOnAFaultWithBreakFault) {
 }
 
 }  // namespace
+
+// `continue` from a breakpoint inside a DO loop stops at it again on the next iteration (issue
+// 14: it ran to the end, while `next` stopped).
+TEST(Debugger, ContinueStopsAtTheSameBreakpointOnEachIterationOfADoLoop) {
+  const fs::path prog = temp("loop.dmi");
+  std::ofstream(prog) << "DMISMN/'loop', 5.0\n"        // 1
+                         "DECL/INTGR, I\n"              // 2
+                         "DO/I, 1, 3\n"                 // 3
+                         "TEXT/OPER, STR(I)\n"          // 4
+                         "ENDDO\n"                      // 5
+                         "TEXT/OPER, 'done'\n"          // 6
+                         "ENDFIL\n";
+  const auto [code, out] = session("debug " + prog.string(), "break 4\nrun\ncontinue\ncontinue\ncontinue\n");
+  EXPECT_EQ(code, 0) << out;
+  std::size_t hits = 0;
+  for (std::size_t at = out.find("breakpoint 1: " + prog.string() + ":4:"); at != std::string::npos;
+       at = out.find("breakpoint 1: " + prog.string() + ":4:", at + 1))
+    ++hits;
+  EXPECT_EQ(hits, 3u) << out;
+  EXPECT_NE(out.find("1\n"), std::string::npos) << out;
+  EXPECT_NE(out.find("done"), std::string::npos) << out;
+}

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "metron/machine/wavefront/wavefront_world.hpp"
+#include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world.hpp"
 
 using namespace metron;
@@ -118,7 +119,7 @@ TEST(World, UnknownKeysAreErrorsWithASuggestion) {
             "world.json: /probe/pre_travle: unknown key 'pre_travle' (did you mean 'pre_travel'?)");
   EXPECT_EQ(error_of(R"({"colour": "red"})"),
             "world.json: /colour: unknown key 'colour' "
-            "(expected one of: description, kind, machine, name, part, probe, reference_sphere, scanning, seed)");
+            "(expected one of: description, kind, machine, name, part, probe, probe_library, reference_sphere, scanning, seed)");
   EXPECT_EQ(error_of(R"([1, 2])"), "world.json: /: expected an object");
 }
 
@@ -151,4 +152,29 @@ TEST(World, PreTravelModel) {
   EXPECT_NEAR(p.at(Vec3(std::cos(std::numbers::pi / 3), std::sin(std::numbers::pi / 3), 0)), 0.005, 1e-15);
   EXPECT_NEAR(p.at(-Vec3::UnitZ()), 0.015, 1e-15);
   EXPECT_NEAR(p.at(Vec3(1, 0, 1).normalized()), (0.011 + 0.015) / 2, 1e-15);
+}
+
+// The probe library (issue 14): named sensors the controller knows; a library name is defined as
+// a tool on its first selection with the library's tip, an unknown name stays an unknown tool.
+TEST(World, ProbeLibraryIsReadCheckedAndSelectsTools) {
+  auto w = parse_world(nlohmann::json::parse(R"({"probe_library": [
+      {"name": "T1A0B0", "tip_diameter_mm": 3, "offset_mm": [0, 0, -50]},
+      {"name": "Star_2", "tip_diameter_mm": 2}]})"), "world.json");
+  ASSERT_TRUE(w) << w.error().message;
+  ASSERT_EQ(w->machine.probe_library.size(), 2u);
+  EXPECT_EQ(w->machine.probe_library[1].offset_mm, metron::Vec3(0, 0, -50));
+  EXPECT_EQ(error_of(R"({"probe_library": [{"name": "A", "tip_diameter_mm": 3}, {"name": "a", "tip_diameter_mm": 2}]})"),
+            "world.json: /probe_library/1/name: sensor 'a' is listed twice");
+  EXPECT_EQ(error_of(R"({"probe_library": [{"name": "A"}]})"), "world.json: /probe_library/0: missing key 'tip_diameter_mm'");
+
+  metron::machine::VirtualCmm cmm(*w, 1);
+  cmm.submit({1, metron::machine::SelectTool{"t1a0b0"}});  // names are case-insensitive
+  cmm.submit({2, metron::machine::SelectTool{"NOT_THERE"}});
+  const auto r = cmm.execute();
+  ASSERT_EQ(r.size(), 2u);
+  ASSERT_TRUE(r[0].tool);
+  EXPECT_DOUBLE_EQ(r[0].tool->nominal_radius_mm, 1.5);
+  EXPECT_EQ(r[1].status, metron::machine::Response::Status::Fault);
+  ASSERT_TRUE(r[1].fault);
+  EXPECT_EQ(r[1].fault->kind, metron::machine::FaultKind::UnknownTool);
 }
