@@ -4,6 +4,8 @@
 // the number of spindle angles and the gauge noise, A-Z iterations from several starting errors,
 // the reversal, skipped steps; then wall-clock cost of one map, one fit, part-on-mount and the
 // whole procedure. `bench_wavefront --seeds N` (default 20) sets the repetitions of the tables;
+// `--whole WORLD` prints only that world's whole-procedure table, `--raw-nulls` without the
+// form stitching of the rotation nulls;
 // `--no-tables` runs only the timings.
 #include <benchmark/benchmark.h>
 
@@ -28,6 +30,7 @@ namespace {
 
 const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds/";
 int g_seeds = 20;
+bool g_remove_form = true;  // --raw-nulls: the B and C rotations without the form stitching
 
 mw::WavefrontWorld world(const std::string& name) {
   auto w = mw::load_wavefront_world(worlds_dir + name);
@@ -69,7 +72,7 @@ void table_whole(const std::string& name, bool form) {
   for (int s = 0; s < g_seeds; ++s) {
     mw::SimulatedWavefrontMachine m(w, 100 + s);
     std::map<std::string, mw::WavefrontTruth> t;
-    auto rep = rw::calibrate(m, "all", {}, {}, [&](const std::string& tag) { t[tag] = m.truth(); });
+    auto rep = rw::calibrate(m, "all", {}, {}, [&](const std::string& tag) { t[tag] = m.truth(); }, g_remove_form);
     if (!rep) {
       std::printf("  seed %d failed: %s\n", 100 + s, rep.error().c_str());
       continue;
@@ -102,8 +105,9 @@ void table_whole(const std::string& name, bool form) {
     add("reversal: table tilt x [urad]", r.reversal->table_rad.x(), t["reversal"].table_tilt_rad.x());
     add("reversal: table tilt y [urad]", r.reversal->table_rad.y(), t["reversal"].table_tilt_rad.y());
   }
-  std::printf("\n%s, %s, %d seeds: recovered - truth (whole procedure, mean A-Z iterations %.2f)\n", name.c_str(),
-              form ? "parts with form" : "form-free parts", g_seeds, iterations);
+  std::printf("\n%s, %s%s, %d seeds: recovered - truth (whole procedure, mean A-Z iterations %.2f)\n", name.c_str(),
+              form ? "parts with form" : "form-free parts", g_remove_form ? "" : " (raw nulls, no form stitching)",
+              g_seeds, iterations);
   std::printf("  %-44s %14s %12s %12s %8s\n", "quantity", "mean truth", "bias", "sd", "|bias|/sd");
   for (const auto& k : order) {
     const double scale = k.find("urad") != std::string::npos || k.find("um") != std::string::npos   ? 1e6
@@ -264,13 +268,20 @@ BENCHMARK(BM_WholeProcedure)->Arg(128)->Arg(256)->Unit(benchmark::kMillisecond)-
 
 int main(int argc, char** argv) {
   bool tables = true;
+  std::string only_whole;
   std::vector<char*> rest;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--no-tables") == 0) tables = false;
     else if (std::strcmp(argv[i], "--seeds") == 0 && i + 1 < argc) g_seeds = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--raw-nulls") == 0) g_remove_form = false;
+    else if (std::strcmp(argv[i], "--whole") == 0 && i + 1 < argc) only_whole = argv[++i];
     else rest.push_back(argv[i]);
   }
   int n = static_cast<int>(rest.size());
+  if (!only_whole.empty()) {  // --whole WORLD: the whole-procedure table of one shipped world, parts with form
+    table_whole(only_whole, true);
+    return 0;
+  }
   if (tables) {
     table_whole("wavefront_sphere_machine.json", true);
     table_whole("wavefront_sphere_machine.json", false);

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "metron/runtime/wavefront/calibration.hpp"
+#include "metron/runtime/wavefront/form_stitching.hpp"
 #include "metron/stdlib/wavefront/circle_fit.hpp"
 
 namespace metron::runtime::wavefront {
@@ -132,6 +133,44 @@ Vec3 null_move(const Knowledge& k, const GaugeReading& r, bool z_only) {
   const Vec2 lateral = r.lateral_mm + k.lateral_per_z_step * dzeta;
   const Vec2 dxy = -k.lateral_per_step.inverse() * lateral;
   return {dxy.x(), dxy.y(), dzeta};
+}
+
+// Gauge-frame directions to the part's frame at the commanded A, B, C (degrees, with the zero
+// shifts applied so far) and the calibrated clocking: the simulated chain's rotations without
+// the small hidden tilts (docs/wavefront.md "The machine"), all the form stitching needs.
+Mat3 gauge_to_part(const Knowledge& k, double a_deg, double b_deg, double c_deg) {
+  using AA = Eigen::AngleAxisd;
+  const double b = (b_deg + k.az_correction_deg.x()) / kDeg, c = (c_deg + k.az_correction_deg.y()) / kDeg;
+  return (AA(-a_deg / kDeg, Vec3::UnitZ()) * AA(-c, Vec3::UnitX()) * AA(-b, Vec3::UnitY()) *
+          AA(k.gauge_clocking_rad, Vec3::UnitZ()))
+      .toRotationMatrix();
+}
+
+// The map at a null, for the form stitching of a rotation series: the machine moves onto the null
+// estimate and takes one more map.
+tl::expected<SubApertureMap, std::string> map_at_null(WavefrontMachine& m, const Knowledge& k, const Vec3& null_steps) {
+  AxisCommand at = m.position();
+  at.steps = null_steps;
+  m.move(at);
+  auto map = m.measure();
+  if (!map) return tl::unexpected("the map at the null: " + map.error().message);
+  return SubApertureMap{*map, gauge_to_part(k, at.a_deg, at.b_deg, at.c_deg)};
+}
+
+double max_shift(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, (a[i] - b[i]).norm());
+  return m;
+}
+
+// Sub-aperture stitching of the nulls' maps (docs/wavefront.md "The part's form in the rotation
+// nulls"): each null moves by what its placement alone reads once the common form is removed.
+tl::expected<FormStitch, std::string> remove_form(const WavefrontMachine& m, const Knowledge& k, const PartSpec& part,
+                                                  const std::vector<SubApertureMap>& maps, std::vector<Vec3>& nulls) {
+  auto st = stitch_common_form(maps, m.gauge(), part.radius_mm, part.clear_radius_mm);
+  if (!st) return tl::unexpected(st.error());
+  for (std::size_t i = 0; i < nulls.size(); ++i) nulls[i] += null_move(k, st->readings[i], false);
+  return st;
 }
 
 }  // namespace
@@ -433,6 +472,7 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
   Vec3 last_null{0, 0, 0};
   double last_t = 0;
   const double base_a = c.a_deg;
+  std::vector<SubApertureMap> sub_maps;
   for (std::size_t i = 0; i < b_deg.size(); ++i) {
     const double th = b_deg[i] / kDeg;
     AxisCommand cmd = m.position();
@@ -452,6 +492,12 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
     res.b_deg.push_back(b_deg[i]);
     res.null_steps.push_back(n->steps);
     if (i == 0) observe(k, "b-rotation");
+    if (k.remove_form) {
+      auto sm = map_at_null(m, k, n->steps);
+      ++res.maps;
+      if (!sm) return tl::unexpected(fmt::format("b-rotation at B = {} deg: {}", b_deg[i], sm.error()));
+      sub_maps.push_back(std::move(*sm));
+    }
     t.push_back(th);
     last_null = n->steps;
     last_t = th;
@@ -472,6 +518,15 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
     back.b_deg = 0;
     back.steps = res.null_steps.front();
     m.move(back);
+  }
+  res.raw_null_steps = res.null_steps;
+  if (k.remove_form) {
+    auto st = remove_form(m, k, *pb, sub_maps, res.null_steps);
+    if (!st) return tl::unexpected("b-rotation: " + st.error());
+    res.form_height_nm = st->form_height_nm;
+    res.form_residual_rms_nm = st->residual_rms_nm;
+    say(log, fmt::format("  B rotation: the part's form stitched from {} maps (rms {:.2f} nm left); nulls moved by up to {:.2f} steps",
+                         sub_maps.size(), st->residual_rms_nm, max_shift(res.raw_null_steps, res.null_steps)));
   }
   // (f) least squares of P, Q, R, S (and Z0, Y0, E) by Gauss-Newton from a linear start.
   BModel model;
@@ -555,6 +610,7 @@ tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowl
   const auto& nom = m.nominal();
   double rc_guess = k.zf_mm.value_or(nom.zc_mm + nom.table_height_mm + design_height_mm(*pb)) - nom.zc_mm;
   double ey_guess = 0;
+  std::vector<SubApertureMap> sub_maps;
   std::vector<double> t;
   Vec3 last_null{0, 0, 0};
   double last_t = 0;
@@ -576,6 +632,12 @@ tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowl
     res.c_deg.push_back(c_deg[i]);
     res.null_steps.push_back(n->steps);
     if (i == 0) observe(k, "c-rotation");
+    if (k.remove_form) {
+      auto sm = map_at_null(m, k, n->steps);
+      ++res.maps;
+      if (!sm) return tl::unexpected(fmt::format("c-rotation at C = {} deg: {}", c_deg[i], sm.error()));
+      sub_maps.push_back(std::move(*sm));
+    }
     t.push_back(th);
     last_null = n->steps;
     last_t = th;
@@ -595,6 +657,15 @@ tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowl
     back.c_deg = 0;
     back.steps = res.null_steps.front();
     m.move(back);
+  }
+  res.raw_null_steps = res.null_steps;
+  if (k.remove_form) {
+    auto st = remove_form(m, k, *pb, sub_maps, res.null_steps);
+    if (!st) return tl::unexpected("c-rotation: " + st.error());
+    res.form_height_nm = st->form_height_nm;
+    res.form_residual_rms_nm = st->residual_rms_nm;
+    say(log, fmt::format("  C rotation: the part's form stitched from {} maps (rms {:.2f} nm left); nulls moved by up to {:.2f} steps",
+                         sub_maps.size(), st->residual_rms_nm, max_shift(res.raw_null_steps, res.null_steps)));
   }
   // docs/wavefront.md "The C-rotation null": in steps of dy, c = (., Q_c + P_y, R_c),
   //   Y - Y_A = Q_c - v_y, Z = (Z0 - v_z) / S_c, v = Rot_X(t) c.
@@ -763,11 +834,13 @@ tl::expected<ReversalResult, std::string> reversal(WavefrontMachine& m, Knowledg
 
 tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, const std::string& step, const Log& log,
                                                        const AzOptions& az,
-                                                       const std::function<void(const std::string&)>& observer) {
+                                                       const std::function<void(const std::string&)>& observer,
+                                                       bool remove_form) {
   CalibrationReport rep;
   Knowledge& k = rep.knowledge;
   k = initial_knowledge(m);
   k.observe = observer;
+  k.remove_form = remove_form;
   std::vector<PartSpec> flats, spheres;
   for (const auto& p : m.parts()) (p.kind == PartKind::Flat ? flats : spheres).push_back(p);
   const auto need = [&](bool ok, const char* what) -> tl::expected<void, std::string> {

@@ -76,24 +76,36 @@ nlohmann::json to_json(const CalibrationReport& r) {
     }
     j["a_to_z"] = {{"iterations", its}, {"converged", r.a_to_z->converged}, {"maps", r.a_to_z->maps}};
   }
+  // The stitched form's basis, x and y over the part's clear radius (form_stitching.hpp).
+  const json form_terms = {"x2-y2", "2xy", "x3-3xy2", "3x2y-y3", "x r2", "y r2", "r4"};
   if (r.b_rotation) {
     const auto& b = *r.b_rotation;
     json nulls = json::array();
-    for (std::size_t i = 0; i < b.b_deg.size(); ++i) nulls.push_back({{"b_deg", b.b_deg[i]}, {"steps", v3(b.null_steps[i])}});
+    for (std::size_t i = 0; i < b.b_deg.size(); ++i) {
+      nulls.push_back({{"b_deg", b.b_deg[i]}, {"steps", v3(b.null_steps[i])}});
+      if (i < b.raw_null_steps.size()) nulls.back()["raw_steps"] = v3(b.raw_null_steps[i]);
+    }
     j["b_rotation"] = {{"nulls", nulls},
                        {"P_steps", b.p_steps}, {"Q", b.q}, {"R", b.r}, {"S", b.s},
                        {"eccentricity_mm", b.eccentricity_mm}, {"xb_mm", b.xb_mm}, {"zf_mm", b.zf_mm},
                        {"dz_mm", b.dz_mm}, {"b_axis_tilt_rad", b.b_axis_tilt_rad},
                        {"residual_rms_steps", b.residual_rms_steps}, {"maps", b.maps}};
+    if (!b.form_height_nm.empty())
+      j["b_rotation"]["form"] = {{"terms", form_terms}, {"height_nm", b.form_height_nm}, {"residual_rms_nm", b.form_residual_rms_nm}};
   }
   if (r.c_rotation) {
     const auto& c = *r.c_rotation;
     json nulls = json::array();
-    for (std::size_t i = 0; i < c.c_deg.size(); ++i) nulls.push_back({{"c_deg", c.c_deg[i]}, {"steps", v3(c.null_steps[i])}});
+    for (std::size_t i = 0; i < c.c_deg.size(); ++i) {
+      nulls.push_back({{"c_deg", c.c_deg[i]}, {"steps", v3(c.null_steps[i])}});
+      if (i < c.raw_null_steps.size()) nulls.back()["raw_steps"] = v3(c.raw_null_steps[i]);
+    }
     j["c_rotation"] = {{"nulls", nulls}, {"P_steps", c.p_steps}, {"Q", c.q}, {"R", c.r}, {"S", c.s},
                        {"yc_mm", c.yc_mm}, {"zf_minus_zc_mm", c.zf_minus_zc_mm},
                        {"residual_rms_steps", c.residual_rms_steps}, {"maps", c.maps}};
     if (c.zc_mm) j["c_rotation"]["zc_mm"] = *c.zc_mm;
+    if (!c.form_height_nm.empty())
+      j["c_rotation"]["form"] = {{"terms", form_terms}, {"height_nm", c.form_height_nm}, {"residual_rms_nm", c.form_residual_rms_nm}};
   }
   if (r.reversal) {
     const auto& v = *r.reversal;

@@ -34,6 +34,9 @@ struct Knowledge {
   std::optional<Vec2> a_through_focus_steps;  ///< X, Y that put the A axis through the focus
   Vec2 az_correction_deg{0, 0};         ///< total B, C zero shifts applied by the A-Z alignment
   std::optional<double> zf_mm;          ///< B axis to the test ball's centre of curvature (B rotation)
+  /// B and C rotations: stitch the nulls' maps and remove the part's own form from each null
+  /// (docs/wavefront.md "The part's form in the rotation nulls"); false reads the raw nulls.
+  bool remove_form = true;
   /// Instrumentation for tests and `--truth`: called with a tag ("focus:pom", ...) when the machine
   /// is in the state a recovered value refers to, so the caller can read its own truth there.
   std::function<void(const std::string&)> observe;
@@ -128,7 +131,10 @@ tl::expected<FocusResult, std::string> focus_on_axis(WavefrontMachine& m, Knowle
 /// "The B-rotation null"), with the Y adjustment giving B's tilt out of perpendicular to X-Z.
 struct BRotationResult {
   std::vector<double> b_deg;            ///< B commands
-  std::vector<Vec3> null_steps;         ///< X, Y, Z null per B
+  std::vector<Vec3> null_steps;         ///< X, Y, Z null per B (the part's form removed when Knowledge::remove_form)
+  std::vector<Vec3> raw_null_steps;     ///< X, Y, Z where each map read zero tilt and focus (form included)
+  std::vector<double> form_height_nm;   ///< the ball's form stitched from the nulls' maps (FormStitch::form_height_nm)
+  double form_residual_rms_nm = 0;      ///< rms of the maps minus the stitched model
   double p_steps = 0, q = 0, r = 0, s = 0;  ///< P (eccentricity / dx), Q = xb/dx, R = zF/dx, S = dz/dx
   double eccentricity_mm = 0, xb_mm = 0, zf_mm = 0, dz_mm = 0;  ///< with dx from the axis response
   double b_axis_tilt_rad = 0;           ///< from the Y adjustment (sign: + when Y must increase with +B... see docs)
@@ -144,7 +150,10 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
 /// from the B rotation it gives zc.
 struct CRotationResult {
   std::vector<double> c_deg;            ///< C commands
-  std::vector<Vec3> null_steps;         ///< X, Y, Z null per C
+  std::vector<Vec3> null_steps;         ///< X, Y, Z null per C (the part's form removed when Knowledge::remove_form)
+  std::vector<Vec3> raw_null_steps;     ///< X, Y, Z where each map read zero tilt and focus (form included)
+  std::vector<double> form_height_nm;   ///< the ball's form stitched from the nulls' maps (FormStitch::form_height_nm)
+  double form_residual_rms_nm = 0;      ///< rms of the maps minus the stitched model
   double p_steps = 0, q = 0, r = 0, s = 0;  ///< P_y, Q_c, R_c in steps of dy; S_c = dz/dy
   double yc_mm = 0;                     ///< A axis from the C axis along Y
   double zf_minus_zc_mm = 0;            ///< C axis to the centre of curvature along Z
@@ -203,11 +212,12 @@ struct CalibrationReport {
   long maps = 0;
 };
 
-/// The steps by name: "part-on-mount", "gauge-frame", "axis-response", "focus", "a-z",
+/// The steps by name (`remove_form`: Knowledge::remove_form): "part-on-mount", "gauge-frame", "axis-response", "focus", "a-z",
 /// "b-rotation", "c-rotation", "reversal", "all".
 tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, const std::string& step,
                                                        const Log& log = {}, const AzOptions& az = {},
-                                                       const std::function<void(const std::string&)>& observer = {});
+                                                       const std::function<void(const std::string&)>& observer = {},
+                                                       bool remove_form = true);
 
 /// The report as JSON (docs/wavefront.md "Results file").
 nlohmann::json to_json(const CalibrationReport& r);
