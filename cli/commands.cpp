@@ -36,7 +36,7 @@ tl::expected<interpreter::Backend, std::string> ipp_backend(const std::string& u
   const auto address = machine::ipp::parse_ipp_url(url);
   if (!address) return tl::unexpected(fmt::format("--machine {}: expected ipp://host[:port]", url));
   try {
-    return interpreter::Backend{std::make_unique<machine::ipp::ClientMachine>(address->first, address->second), url, 0};
+    return interpreter::Backend{std::make_unique<machine::ipp::ClientMachine>(address->first, address->second), url, 0, {}};
   } catch (const std::runtime_error& e) {
     return tl::unexpected(fmt::format("--machine {}: {}", url, e.what()));
   }

@@ -8,6 +8,7 @@
 
 #include "metron/interpreter/session.hpp"
 #include "metron/machine/virtual_cmm.hpp"
+#include "metron/machine/wavefront/simulated_wavefront_machine.hpp"
 
 // The composition root's choice of backend: the virtual CMM of a world file. Header-only so the
 // end-to-end tests build the same backend as `metron run`; a real controller would be another
@@ -20,7 +21,17 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
   auto cmm = machine::open_virtual_cmm(world_path, seed);
   if (!cmm) return tl::unexpected(cmm.error().message);
   const std::uint64_t run_seed = (*cmm)->seed();
-  return interpreter::Backend{std::move(*cmm), world_path ? *world_path : std::string("<default>"), run_seed};
+  interpreter::Backend b{std::move(*cmm), world_path ? *world_path : std::string("<default>"), run_seed, {}};
+  // CALIBRATE WAVEFRONT: the simulated station of a wavefront world, with the world's own seed
+  // (the same run as `metron calibrate wavefront --world W`).
+  b.wavefront_stations = [](const std::string& path)
+      -> tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string> {
+    auto w = machine::wavefront::load_wavefront_world(path);
+    if (!w) return tl::unexpected(w.error());
+    const auto world_seed = w->seed;
+    return std::make_unique<machine::wavefront::SimulatedWavefrontMachine>(std::move(*w), world_seed);
+  };
+  return b;
 }
 
 }  // namespace metron::cli

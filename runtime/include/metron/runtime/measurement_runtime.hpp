@@ -20,6 +20,10 @@
 #include "metron/runtime/tolerance.hpp"
 #include "metron/stdlib/source.hpp"
 
+namespace metron::machine::wavefront {
+class WavefrontMachine;
+}
+
 namespace metron::runtime {
 
 struct BlockPlan;
@@ -27,6 +31,16 @@ struct BlockPlanContext;
 
 /// The measurement runtime: feature store, alignments, tolerances, the scheduler that turns
 /// measurement blocks into machine commands, and the outputs. The interpreter calls it.
+/// Builds the wavefront station of a world file (kind "wavefront") for CALIBRATE WAVEFRONT. The
+/// composition root provides it (the simulation is not the runtime's to build, ARCHITECTURE.md);
+/// the error names the file.
+using WavefrontStationFactory = std::function<tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string>(
+    const std::string& world_path)>;
+
+/// The results file of CALIBRATE WAVEFRONT in the run's output directory: wavefront-calibration.json
+/// for the whole procedure, wavefront-calibration-STEP.json for one step.
+std::string wavefront_result_file_name(const std::string& step);
+
 class MeasurementRuntime {
  public:
   MeasurementRuntime(machine::Machine& machine, const SourceManager& sources, RunRecord& record);
@@ -64,6 +78,13 @@ class MeasurementRuntime {
   Result<void> characterise_machine(const std::optional<std::string>& path, Span span);
   /// Loads a characterisation file and uses it from here on (CALL/EXTERN,SYS,'CHARACTERISATION file').
   Result<void> use_characterisation(const std::string& path, Span span);
+  /// The wavefront station's geometry calibration (CALL/EXTERN,SYS,'CALIBRATE WAVEFRONT world [step]';
+  /// runtime/src/wavefront/system_command.cpp, docs/wavefront.md): the SEEDS.md 5 procedure on the
+  /// station the factory builds for `world_path`, its JSON written into the output directory as
+  /// wavefront_result_file_name(step), a summary to the live events.
+  Result<void> calibrate_wavefront(const std::string& world_path, const std::string& step, Span span);
+  /// Where CALIBRATE WAVEFRONT gets its station (none: the command fails with a message).
+  void set_wavefront_stations(WavefrontStationFactory factory) { m_wavefront_stations = std::move(factory); }
   /// Checks a probing feed against the characterisation's maximum protected feed.
   Result<void> check_probing_feed(double measuring_mm_s, Span span) const;
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
@@ -133,6 +154,7 @@ class MeasurementRuntime {
   RunRecord& m_record;
   std::function<void(const RunEvent&)> m_on_event;
   std::string m_output_dir = ".";
+  WavefrontStationFactory m_wavefront_stations;  ///< CALIBRATE WAVEFRONT (set by the composition root)
 
   std::map<std::string, Feature> m_features;
   std::vector<std::string> m_feature_order;
