@@ -4,8 +4,8 @@
 // the number of spindle angles and the gauge noise, A-Z iterations from several starting errors,
 // the reversal, skipped steps; then wall-clock cost of one map, one fit, part-on-mount and the
 // whole procedure. `bench_wavefront --seeds N` (default 20) sets the repetitions of the tables;
-// `--whole WORLD` prints only that world's whole-procedure table, `--raw-nulls` without the
-// form stitching of the rotation nulls;
+// `--whole WORLD` prints only that world's whole-procedure table (`--pixels N` with an N-pixel
+// camera), `--raw-nulls` without the form stitching of the rotation nulls;
 // `--no-tables` runs only the timings.
 #include <benchmark/benchmark.h>
 
@@ -31,6 +31,7 @@ namespace {
 const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds/";
 int g_seeds = 20;
 bool g_remove_form = true;  // --raw-nulls: the B and C rotations without the form stitching
+int g_pixels = 0;           // --pixels N: the camera of --whole's world (0: the world's own)
 
 mw::WavefrontWorld world(const std::string& name) {
   auto w = mw::load_wavefront_world(worlds_dir + name);
@@ -62,6 +63,7 @@ void print_stat(const char* name, const Stat& s, double scale, const char* unit,
 void table_whole(const std::string& name, bool form) {
   auto w = world(name);
   if (!form) strip_form(w);
+  if (g_pixels > 0) w.gauge.pixels = g_pixels;
   std::map<std::string, Stat> st;
   std::vector<std::string> order;
   const auto add = [&](const std::string& k, double r, double t) {
@@ -105,6 +107,7 @@ void table_whole(const std::string& name, bool form) {
     add("reversal: table tilt x [urad]", r.reversal->table_rad.x(), t["reversal"].table_tilt_rad.x());
     add("reversal: table tilt y [urad]", r.reversal->table_rad.y(), t["reversal"].table_tilt_rad.y());
   }
+  if (g_pixels > 0) std::printf("\n(camera of %d pixels)", g_pixels);
   std::printf("\n%s, %s%s, %d seeds: recovered - truth (whole procedure, mean A-Z iterations %.2f)\n", name.c_str(),
               form ? "parts with form" : "form-free parts", g_remove_form ? "" : " (raw nulls, no form stitching)",
               g_seeds, iterations);
@@ -274,6 +277,7 @@ int main(int argc, char** argv) {
     if (std::strcmp(argv[i], "--no-tables") == 0) tables = false;
     else if (std::strcmp(argv[i], "--seeds") == 0 && i + 1 < argc) g_seeds = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--raw-nulls") == 0) g_remove_form = false;
+    else if (std::strcmp(argv[i], "--pixels") == 0 && i + 1 < argc) g_pixels = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--whole") == 0 && i + 1 < argc) only_whole = argv[++i];
     else rest.push_back(argv[i]);
   }

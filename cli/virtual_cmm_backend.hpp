@@ -9,6 +9,7 @@
 #include "metron/interpreter/session.hpp"
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/virtual_cmm.hpp"
+#include "metron/machine/wavefront/simulated_wavefront_machine.hpp"
 
 // The composition root's choice of backend: the virtual CMM of a world file. Header-only so the
 // end-to-end tests build the same backend as `metron run`; a real controller would be another
@@ -23,8 +24,18 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
   const std::uint64_t run_seed = (*cmm)->seed();
   // The controller's compensation (docs/error-space.md): none until `--compensation` or a
   // program's CALL/EXTERN,SYS,'COMPENSATION file' gives a map; without one it is the identity.
-  return interpreter::Backend{std::make_unique<machine::CompensatedMachine>(std::move(*cmm), nullptr),
-                              world_path ? *world_path : std::string("<default>"), run_seed};
+  interpreter::Backend b{std::make_unique<machine::CompensatedMachine>(std::move(*cmm), nullptr),
+                         world_path ? *world_path : std::string("<default>"), run_seed, {}};
+  // CALIBRATE WAVEFRONT: the simulated station of a wavefront world, with the world's own seed
+  // (the same run as `metron calibrate wavefront --world W`).
+  b.wavefront_stations = [](const std::string& path)
+      -> tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string> {
+    auto w = machine::wavefront::load_wavefront_world(path);
+    if (!w) return tl::unexpected(w.error());
+    const auto world_seed = w->seed;
+    return std::make_unique<machine::wavefront::SimulatedWavefrontMachine>(std::move(*w), world_seed);
+  };
+  return b;
 }
 
 }  // namespace metron::cli

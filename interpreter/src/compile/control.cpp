@@ -12,6 +12,29 @@ namespace metron::interpreter::detail {
 using grammar::ExprKind;
 using ir::Op;
 
+namespace {
+
+// CALIBRATE WAVEFRONT world [step] (docs/wavefront.md, "Calling it from a DMIS program"): the
+// world file and the step (default "all"), or why the words are not that command.
+tl::expected<std::pair<std::string, std::string>, std::string> calibrate_wavefront_words(const std::string& text) {
+  std::istringstream words(text);
+  std::string verb, what, world, step, extra;
+  words >> verb >> what >> world >> step >> extra;
+  if (upper(what) != "WAVEFRONT")
+    return tl::unexpected(fmt::format("'{}': metron calibrates WAVEFRONT only (CALIBRATE WAVEFRONT world [step])", text));
+  if (world.empty()) return tl::unexpected(fmt::format("'{}': name the wavefront world, e.g. CALIBRATE WAVEFRONT station.json a-z", text));
+  if (!extra.empty()) return tl::unexpected(fmt::format("too many words in '{}'", text));
+  if (step.empty()) step = "all";
+  static const char* const steps[] = {"all", "part-on-mount", "gauge-frame", "focus", "axis-response",
+                                      "a-z", "b-rotation", "c-rotation", "reversal"};
+  if (std::none_of(std::begin(steps), std::end(steps), [&](const char* k) { return step == k; }))
+    return tl::unexpected(fmt::format("unknown wavefront calibration step '{}' (all, part-on-mount, gauge-frame, focus, "
+                                      "axis-response, a-z, b-rotation, c-rotation, reversal)", step));
+  return std::pair{world, step};
+}
+
+}  // namespace
+
 void UnitCompiler::add_control(StatementTable& t) {
   t.insert({
       {std::string(assignment_row), &UnitCompiler::assignment}, {"ASSIGN", &UnitCompiler::bad_assign},
@@ -303,8 +326,25 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       emit(std::move(in));
       return;
     }
+    if (verb == "CALIBRATE") {
+      auto c = calibrate_wavefront_words(text);
+      if (!c) return error(s.params[2].span, "sema.system-command", c.error());
+      std::filesystem::path world(c->first);
+      if (world.is_relative()) world = std::filesystem::path(m_module.units[m_unit].path).parent_path() / world;
+      auto in = make(Op::System, s, "CALIBRATE WAVEFRONT");
+      for (const std::string& w : {world.string(), c->second}) {
+        ir::Operand o;
+        o.kind = ir::Operand::Kind::Word;
+        o.word = w;
+        o.span = s.params[2].span;
+        in.operands.push_back(o);
+      }
+      emit(std::move(in));
+      return;
+    }
     note(s.params[2].span, "sema.unsupported-call",
-         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION and COMPENSATION); the call is skipped", text));
+         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION, COMPENSATION and CALIBRATE WAVEFRONT); "
+                     "the call is skipped", text));
     emit(make(Op::Nop, s, "CALL"));
     return;
   }

@@ -30,6 +30,11 @@ ExecStatus Execute::nothing(Interpreter&, const ir::Instruction&, CallFrame&) {
 // Op::System
 ExecStatus Execute::system(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   const std::string& arg = in.operands.empty() ? std::string() : in.operands[0].word;
+  if (in.name == "CALIBRATE WAVEFRONT") {  // operands: the world file, the step (compile/control.cpp)
+    auto w = vm.m_runtime.calibrate_wavefront(arg, in.operands.at(1).word, in.span);
+    if (!w) return vm.from_runtime(w.error());
+    return ExecStatus::Running;
+  }
   auto r = in.name == "CHARACTERISE"
                ? vm.m_runtime.characterise_machine(arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
            : in.name == "COMPENSATION" ? vm.m_runtime.use_compensation(arg, in.span)

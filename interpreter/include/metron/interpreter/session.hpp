@@ -21,6 +21,8 @@ struct Backend {
   std::unique_ptr<machine::Machine> machine;  ///< the backend
   std::string world;                          ///< for the record: world file, or "<default>"
   std::uint64_t seed = 0;                     ///< for the record: the run seed
+  /// Wavefront stations for CALL/EXTERN,SYS,'CALIBRATE WAVEFRONT world' (empty: none).
+  runtime::WavefrontStationFactory wavefront_stations;
 };
 
 /// Builds a backend for a world file (none: the default world) and a seed (none: the world's);

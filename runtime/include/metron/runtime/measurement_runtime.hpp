@@ -21,6 +21,10 @@
 #include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/source.hpp"
 
+namespace metron::machine::wavefront {
+class WavefrontMachine;
+}
+
 namespace metron::runtime {
 
 struct BlockPlan;
@@ -28,6 +32,16 @@ struct BlockPlanContext;
 
 /// The measurement runtime: feature store, alignments, tolerances, the scheduler that turns
 /// measurement blocks into machine commands, and the outputs. The interpreter calls it.
+/// Builds the wavefront station of a world file (kind "wavefront") for CALIBRATE WAVEFRONT. The
+/// composition root provides it (the simulation is not the runtime's to build, ARCHITECTURE.md);
+/// the error names the file.
+using WavefrontStationFactory = std::function<tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string>(
+    const std::string& world_path)>;
+
+/// The results file of CALIBRATE WAVEFRONT in the run's output directory: wavefront-calibration.json
+/// for the whole procedure, wavefront-calibration-STEP.json for one step.
+std::string wavefront_result_file_name(const std::string& step);
+
 class MeasurementRuntime {
  public:
   MeasurementRuntime(machine::Machine& machine, const SourceManager& sources, RunRecord& record);
@@ -84,6 +98,13 @@ class MeasurementRuntime {
   /// file', docs/error-space.md): the backend must be a machine::CompensatedMachine, as the
   /// composition root builds it.
   Result<void> use_compensation(const std::string& path, Span span);
+  /// The wavefront station's geometry calibration (CALL/EXTERN,SYS,'CALIBRATE WAVEFRONT world [step]';
+  /// runtime/src/wavefront/system_command.cpp, docs/wavefront.md): the SEEDS.md 5 procedure on the
+  /// station the factory builds for `world_path`, its JSON written into the output directory as
+  /// wavefront_result_file_name(step), a summary to the live events.
+  Result<void> calibrate_wavefront(const std::string& world_path, const std::string& step, Span span);
+  /// Where CALIBRATE WAVEFRONT gets its station (none: the command fails with a message).
+  void set_wavefront_stations(WavefrontStationFactory factory) { m_wavefront_stations = std::move(factory); }
   /// Checks a probing feed against the characterisation's maximum protected feed.
   Result<void> check_probing_feed(double measuring_mm_s, Span span) const;
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
@@ -157,6 +178,7 @@ class MeasurementRuntime {
   std::string m_output_dir = ".";
   FileAccessPolicy m_policy;
   std::vector<std::string> m_output_errors;
+  WavefrontStationFactory m_wavefront_stations;  ///< CALIBRATE WAVEFRONT (set by the composition root)
 
   std::map<std::string, Feature> m_features;
   std::vector<std::string> m_feature_order;
