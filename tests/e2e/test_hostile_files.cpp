@@ -311,6 +311,27 @@ TEST(HostileFiles, SimulatedTimeLimit) {
   EXPECT_LT(o.record.simulated_time_s, 400);
 }
 
+TEST(HostileFiles, TinyFeedsAndTimeStepsAreRefused) {
+  // Before: FEDRAT/POSVEL,1e-9 or a world dt_s of 1e-12 never finished.
+  const fs::path d = scratch("tiny_feed");
+  write(d / "p.dmi", header + probe + "FEDRAT/POSVEL, MMPS, 1e-9\nGOTO/20, 20, 100\nENDFIL\n");
+  auto o = run(d / "p.dmi", d / "out");
+  EXPECT_EQ(o.exit, RunExit::ProgramError);
+  EXPECT_NE(o.diagnostics.find("p.dmi:6:1: error: a feed rate of 1e-09 mm/s is below the minimum"), std::string::npos)
+      << o.diagnostics;
+  write(d / "w.json", R"({"extends": "default", "machine": {"dt_s": 1e-12}})");
+  write(d / "q.dmi", header + "ENDFIL\n");
+  const auto [code, text] = metron_cli("run " + (d / "q.dmi").string() + " --world " + (d / "w.json").string() +
+                                       " --out " + (d / "o2").string());
+  EXPECT_EQ(code, 2) << text;
+  EXPECT_NE(text.find("/machine/dt_s: expected a time step from 1e-05 to 0.1 s"), std::string::npos) << text;
+  // CHR outside 0..255 wrapped modulo 256 before.
+  write(d / "c.dmi", header + "DECL/CHAR, 10, C\nC = ASSIGN/CHR(300)\nENDFIL\n");
+  o = run(d / "c.dmi", d / "o3");
+  EXPECT_EQ(o.exit, RunExit::ProgramError);
+  EXPECT_NE(o.diagnostics.find("CHR needs a character code from 0 to 255, got 300"), std::string::npos) << o.diagnostics;
+}
+
 // ---------------------------------------------------------------- the command line
 
 TEST(HostileFiles, ExitCodesFollowTheDocs) {
