@@ -374,7 +374,14 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
   o.read("name", [&](const json& nj, const std::string& np) { w.name = string(nj, np); });
   o.read("description", [&](const json& dj, const std::string& dp) { string(dj, dp); });
   o.read("seed", [&](const json& nj, const std::string& np) { w.seed = sj::unsigned_integer(nj, np); });
-  o.read("machine", [&](const json& mj, const std::string& mp) { parse_machine(mj, mp, w.machine, w.truth); });
+  // machine.data_sheet: published probe values that differ from the truth (issue 11: the
+  // controller plans with its data sheet, never with the hidden values). Read after the rest.
+  json sheet;
+  o.read("machine", [&](const json& mj, const std::string& mp) {
+    json m = mj;
+    if (m.is_object() && m.contains("data_sheet")) sheet = m["data_sheet"], m.erase("data_sheet");
+    parse_machine(m, mp, w.machine, w.truth);
+  });
   o.read("probe", [&](const json& pj, const std::string& pp) { w.truth.probe = parse_probe(pj, pp); });
   o.read("probe_library", [&](const json& lj, const std::string& lp) { w.machine.probe_library = parse_probe_library(lj, lp); });
   o.read("reference_sphere", [&](const json& rj, const std::string& rp) {
@@ -389,6 +396,13 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
   o.finish();
   // The data sheets the controller is given: the true values (a data-sheet error would go here).
   w.machine.data_sheet = data_sheet_of(w.truth);
+  if (!sheet.is_null()) {
+    Object d(sheet, "/machine/data_sheet");
+    d.positive("rated_over_travel_mm", w.machine.data_sheet.rated_over_travel_mm);
+    d.positive("scanning_stiffness_n_mm", w.machine.data_sheet.scanning_stiffness_n_mm);
+    d.positive("scanning_stylus_mass_g", w.machine.data_sheet.scanning_stylus_mass_g);
+    d.finish();
+  }
   return w;
 }
 

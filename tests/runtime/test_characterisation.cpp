@@ -461,3 +461,34 @@ TEST(Characterisation, ProbeNoiseMatchesTheTruthOverSeeds) {
 }
 
 }  // namespace
+
+namespace {
+
+// Issue 11 item 8: the controller plans with its data sheet, not the hidden truth. A world whose
+// published over-travel (machine.data_sheet) is half the true one gives a characterisation that
+// knows the published value and a lower protected feed; the switch still trips at the truth.
+TEST(Characterisation, UsesTheDataSheetNotTheTruth) {
+  const std::string dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds";
+  nlohmann::json j = {{"extends", "touch_scanned_4ms.json"},
+                      {"machine", {{"data_sheet", {{"rated_over_travel_mm", 0.5}, {"scanning_stiffness_n_mm", 0.9}}}}}};
+  auto w = machine::parse_world(j, "sheet", dir);
+  ASSERT_TRUE(w) << w.error().message;
+  EXPECT_DOUBLE_EQ(w->truth.probe.over_travel_mm, 1.0);
+  EXPECT_DOUBLE_EQ(w->machine.data_sheet.rated_over_travel_mm, 0.5);
+  EXPECT_DOUBLE_EQ(w->machine.data_sheet.scanning_stiffness_n_mm, 0.9);
+  EXPECT_DOUBLE_EQ(w->machine.data_sheet.scanning_stylus_mass_g, w->truth.scanning.probe.stylus_mass_g);
+  machine::VirtualCmm cmm(*w, 1);
+  auto c = characterise(cmm, CharacterisationSettings{});
+  ASSERT_TRUE(c) << c.error();
+  EXPECT_DOUBLE_EQ(c->over_travel_mm, 0.5);
+  const auto plain = run("touch_scanned_4ms.json").c;
+  EXPECT_DOUBLE_EQ(plain.over_travel_mm, 1.0);
+  EXPECT_LT(c->max_probe_feed_mm_s, 0.8 * plain.max_probe_feed_mm_s);
+  // A damaged data sheet names its key.
+  j["machine"]["data_sheet"] = {{"rated_over_travel", 0.5}};
+  auto bad = machine::parse_world(j, "sheet", dir);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("data_sheet"), std::string::npos) << bad.error().message;
+}
+
+}  // namespace

@@ -69,7 +69,8 @@ struct ReferenceSphereConfig {
 };
 
 /// Published values of the probes, as the controller knows them: a copy of the truth made when
-/// the world is loaded (data_sheet_of), the one place where a data-sheet error would be applied.
+/// the world is loaded (data_sheet_of), overridden by the world file's machine.data_sheet where
+/// the published values differ from the true ones (docs/world.md).
 struct DataSheet {
   double rated_over_travel_mm = 1.0;       ///< touch-trigger probe: largest travel from contact to standstill
   double scanning_stiffness_n_mm = 0.6;    ///< scanning probe: contact force per mm of deflection
