@@ -144,7 +144,7 @@ TEST(SegmentedProbe, LongScanAroundALobedBossInEveryMode) {
       EXPECT_EQ(r.retracts, commands);  // plus the one at the path end
       EXPECT_EQ(r.approaches, commands);
     } else {
-      // Tp (1.3 * 100 * 0.2 ms) fits in every command (about 1 s): no stop at all.
+      // Tp (1.3 * 100 * 1 us by default) fits in every command (about 1 s): no stop at all.
       EXPECT_EQ(r.stats.stops, 0u);
       EXPECT_EQ(r.retracts, 1u);
       EXPECT_EQ(r.approaches, 1u);
@@ -166,6 +166,7 @@ TEST(SegmentedProbe, LatePlanFallsBackAtThatBoundaryOnly) {
   const World w = lobed_boss_world();
   const ScanPath scan = boss_scan(3, 0.2);
   ControllerConfig cfg = config(SegmentedMode::Seed, 100, w);
+  cfg.planning_s_per_segment = 2e-4;  // a slow controller CPU: Tp = 1.3 * 100 * 0.2 ms
   cfg.planning_factor = [](std::size_t i) { return i == 10 ? 200.0 : 1.0; };  // 4 s for C10
   const ProbeRun r = run(w, scan, cfg);
   expect_continuous(r, scan.sample_spacing_mm);

@@ -124,7 +124,7 @@ TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
     ASSERT_FALSE(res.fault) << res.fault->message;
     EXPECT_EQ(res.commands, runtime::command_sizes(c.path.segments.size(), 100).size());
     // The machine's own account: every boundary a stop in the conventional mode, none else
-    // (Tp = 1.3 * 100 * 0.2 ms fits in every command).
+    // (Tp = 1.3 * 100 * 1 us by default fits in every command).
     ASSERT_FALSE(res.log.empty());
     const std::string stops = mode == segmented::SegmentedMode::Conventional
                                   ? fmt::format("{} stops, {} retracts", res.commands - 1, res.commands)
