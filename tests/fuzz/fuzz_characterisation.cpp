@@ -1,17 +1,15 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// libFuzzer target: a machine characterisation file (docs/touch-trigger.md) through the strict
-// JSON reader and its schema.
+// libFuzzer target: the machine characterisation loader (runtime::load_characterisation, as
+// `metron run --characterisation` reaches it through the session), then its text report.
 #include <cstddef>
 #include <cstdint>
-#include <string_view>
 
+#include "fuzz_file.hpp"
 #include "metron/runtime/characterisation.hpp"
-#include "metron/stdlib/json_reader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const auto j = metron::strict_json::parse_document(std::string_view(reinterpret_cast<const char*>(data), size));
-  if (!j) return 0;
-  const auto c = metron::runtime::characterisation_from_json(*j);
-  if (c) (void)metron::runtime::format_characterisation(*c);
+  const std::string path = metron::fuzz::input_file(data, size, "characterisation.json");
+  const auto c = metron::runtime::load_characterisation(path);
+  if (c) return metron::runtime::format_characterisation(*c).empty() ? 0 : 0;
   return 0;
 }

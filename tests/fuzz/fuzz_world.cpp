@@ -1,17 +1,14 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// libFuzzer target: a world file through the strict JSON reader and the world parser (no
-// "extends" to files: the base directory is empty).
+// libFuzzer target: the machine world loader (machine::load_world_or_default, as `metron run
+// --world`, `serve`, `characterise` and `calibrate error-space` call it).
 #include <cstddef>
 #include <cstdint>
-#include <string_view>
 
+#include "fuzz_file.hpp"
 #include "metron/machine/world.hpp"
-#include "metron/stdlib/json_reader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const auto j = metron::strict_json::parse_document(std::string_view(reinterpret_cast<const char*>(data), size));
-  if (!j) return 0;
-  if (j->is_object() && j->contains("extends") && (*j)["extends"] != "default") return 0;
-  const auto w = metron::machine::parse_world(*j, "<fuzz>", "");
-  return w ? 0 : 0;
+  const std::string path = metron::fuzz::input_file(data, size, "world.json");
+  const auto world = metron::machine::load_world_or_default(path);
+  return world ? 0 : 0;
 }

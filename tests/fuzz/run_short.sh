@@ -1,42 +1,38 @@
 #!/usr/bin/env bash
-# Runs every libFuzzer target for a short time (default 10 s each) on its seed corpus: programs/,
-# the worlds, characterisation files, expected files and the shared point files. Exit status 1
-# when a target finds a crash (its reproducer is left in DIR/crashes/).
-# Usage: tests/fuzz/run_short.sh BUILD_DIR [SECONDS_PER_TARGET] [WORK_DIR]
-# BUILD_DIR is a -DMETRON_FUZZ=ON build (tests/fuzz/CMakeLists.txt). Not part of CI: CI builds with
-# g++ only; run it by hand or in a nightly job with clang installed.
+# SPDX-License-Identifier: GPL-3.0-or-later
+# Runs each fuzz target of a METRON_FUZZ build for a few seconds on its seed corpus (docs/fuzzing.md).
+# Exits non-zero when a target finds a crash, a leak, a sanitizer report or a timeout; the
+# reproducer is left in BUILD_DIR/fuzz/artifacts/<target>/.
+# Usage: tests/fuzz/run_short.sh BUILD_DIR [seconds per target, default 10] [targets...]
 set -uo pipefail
-build=$(realpath "$1"); seconds=${2:-10}; work=$(realpath -m "${3:-$build/fuzz-work}")
-root=$(cd "$(dirname "$0")/../.." && pwd)
-shared=${METRON_SHARED_DATA:-$root/../shared/data}
-mkdir -p "$work/crashes"
-seed() {  # target: its seed corpus folder, filled once
-  local dir="$work/seeds/$1"
-  [ -d "$dir" ] && { echo "$dir"; return; }
-  mkdir -p "$dir"
-  case $1 in
-    fuzz_dmis) find "$root/programs" "$shared" -name '*.dmi' -o -name '*.dms' -o -name '*.DMI' | head -400 | xargs -I{} cp {} "$dir/" 2>/dev/null ;;
-    fuzz_world) cp "$root"/programs/worlds/*.json "$dir/" 2>/dev/null ;;
-    fuzz_characterisation) find "$root/programs" "$root/tests" -name '*characteris*.json' -o -name 'touch*.json' | xargs -I{} cp {} "$dir/" 2>/dev/null
-                           printf '{"version": 1}' >"$dir/minimal.json" ;;
-    fuzz_expected) cp "$root"/programs/regression/*.expected "$dir/" 2>/dev/null ;;
-    fuzz_point_file) find "$shared" -name '*.ds' -size -200k | head -50 | xargs -I{} cp {} "$dir/" 2>/dev/null
-                     printf '1,2,3\n4,5,6\n' >"$dir/csv.txt" ;;
-  esac
-  echo "$dir"
-}
-status=0
-for t in fuzz_dmis fuzz_world fuzz_characterisation fuzz_expected fuzz_point_file; do
-  exe="$build/tests/fuzz/$t"
-  [ -x "$exe" ] || { echo "missing $exe (build with -DMETRON_FUZZ=ON)"; status=1; continue; }
-  corpus="$work/corpus/$t"; mkdir -p "$corpus"
-  log="$work/$t.log"
-  "$exe" "$corpus" "$(seed $t)" -max_total_time="$seconds" -max_len=65536 -rss_limit_mb=2048 -timeout=10 \
-    -artifact_prefix="$work/crashes/$t-" -print_final_stats=1 >"$log" 2>&1
+here="$(cd "$(dirname "$0")" && pwd)"
+build="$(cd "${1:?usage: run_short.sh BUILD_DIR [seconds] [targets...]}" && pwd)"
+seconds="${2:-10}"
+shift; [ $# -gt 0 ] && shift
+targets=("$@")
+[ ${#targets[@]} -eq 0 ] && targets=(dmis world characterisation expected points)
+
+[ -d "$build/fuzz/seeds" ] || bash "$here/make_corpus.sh" "$build"
+failed=()
+for t in "${targets[@]}"; do
+  exe="$build/tests/fuzz/fuzz_$t"
+  if [ ! -x "$exe" ]; then echo "run_short: $exe not built" >&2; failed+=("$t"); continue; fi
+  # New inputs go to a working corpus beside the seeds, so that the seeds stay as collected.
+  corpus="$build/fuzz/corpus/$t"; artifacts="$build/fuzz/artifacts/$t"
+  mkdir -p "$corpus" "$artifacts"
+  dict=(); [ -f "$build/fuzz/$t.dict" ] && dict=(-dict="$build/fuzz/$t.dict")
+  log="$build/fuzz/$t.log"
+  # -timeout: one input taking over 10 s is a hang; -rss_limit_mb: the sanitizers' own overhead
+  # fits well inside 2 GB, more is unbounded growth.
+  "$exe" "$corpus" "$build/fuzz/seeds/$t" "${dict[@]}" -max_total_time="$seconds" -timeout=10 \
+    -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 -artifact_prefix="$artifacts/" >"$log" 2>&1
   rc=$?
-  execs=$(awk '/stat::number_of_executed_units/{print $2}' "$log")
-  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1)
-  echo "$t: exit $rc, $execs executions, $cov"
-  [ $rc -ne 0 ] && { status=1; grep -m3 -E 'ERROR|SUMMARY' "$log"; }
+  stats=$(grep -E '^stat::number_of_executed_units|^stat::average_exec_per_sec' "$log" | awk '{print $2}' | paste -sd' ')
+  cov=$(grep -E '#[0-9]+.*(cov|DONE)' "$log" | tail -1 | grep -oE 'cov: [0-9]+ ft: [0-9]+')
+  echo "fuzz_$t: exit $rc, ${seconds}s, executions/exec-per-s: ${stats:-?}, ${cov:-no coverage line} (log $log)"
+  [ $rc -ne 0 ] && failed+=("$t")
 done
-exit $status
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "run_short: findings or errors in: ${failed[*]} (reproducers in $build/fuzz/artifacts/)" >&2
+  exit 1
+fi

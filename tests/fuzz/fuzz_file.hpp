@@ -1,0 +1,30 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+// The fuzz input as a file: the loaders under test take paths (as the CLI passes them), so each
+// input is written to a private temporary folder and the real entry point reads it from there.
+// Relative references inside the input (CALL/EXTERN, "extends", CAD paths) resolve inside it.
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace metron::fuzz {
+
+/// Writes `data` to `name` inside a folder made once per process (mkdtemp); returns its path.
+inline std::string input_file(const std::uint8_t* data, std::size_t size, const char* name) {
+  static const std::string dir = [] {
+    char pattern[] = "/tmp/metron-fuzz-XXXXXX";
+    const char* made = mkdtemp(pattern);
+    if (!made) std::abort();
+    return std::string(made);
+  }();
+  const std::string path = dir + "/" + name;
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) std::abort();
+  if (size > 0 && std::fwrite(data, 1, size, f) != size) std::abort();
+  std::fclose(f);
+  return path;
+}
+
+}  // namespace metron::fuzz
