@@ -14,7 +14,21 @@ tl::expected<std::string, std::string> read_input_file(const std::string& path, 
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st)) return tl::unexpected(fmt::format("cannot read {}: no such file", path));
   if (fs::is_directory(st)) return tl::unexpected(fmt::format("cannot read {}: it is a directory", path));
-  // Devices, FIFOs and sockets have no size to check and may never end (/dev/zero, a pipe).
+  // A pipe (`metron check /dev/stdin`) is read up to the cap: it ends when its writer closes it,
+  // and one that never ends (`yes |`) stops at the cap.
+  if (fs::is_fifo(st)) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return tl::unexpected(fmt::format("cannot read {}: permission denied or unreadable", path));
+    std::string text;
+    char chunk[65536];
+    while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+      text.append(chunk, static_cast<std::size_t>(in.gcount()));
+      if (text.size() > max_bytes)
+        return tl::unexpected(fmt::format("cannot read {}: more than the limit of {} bytes for an input file", path, max_bytes));
+    }
+    return text;
+  }
+  // Devices and sockets have no size to check and may never end (/dev/zero).
   if (!fs::is_regular_file(st)) return tl::unexpected(fmt::format("cannot read {}: not a regular file", path));
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) return tl::unexpected(fmt::format("cannot read {}: {}", path, ec.message()));

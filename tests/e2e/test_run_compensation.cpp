@@ -96,7 +96,9 @@ TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
                                             "CALL/EXTERN, SYS, 'COMPENSATION map.json'\n"
                                             "CALL/EXTERN, DMIS, '" << program << "'\n"
                                             "ENDFIL\n";
-  std::tie(code, out) = shell(bin + " run " + (dir / "compensated.dmi").string() + " --world " + world + " --quiet --out " +
+  // The ball array lives outside this program's folder: --include lets it be read (docs/security.md).
+  std::tie(code, out) = shell(bin + " run " + (dir / "compensated.dmi").string() + " --world " + world +
+                              " --include " + std::filesystem::path(program).parent_path().string() + " --quiet --out " +
                               (dir / "dmis").string());
   ASSERT_EQ(code, 0) << out;
   EXPECT_NEAR(length_error_rms((dir / "dmis" / "results.json").string()), compensated, 1e-12);
