@@ -5,6 +5,8 @@
 // accuracy against truth is tested in tests/machine/test_error_space_calibration.cpp).
 #include <gtest/gtest.h>
 
+#include "shell.hpp"
+
 #include <cstdio>
 #include <filesystem>
 #include <regex>
@@ -14,15 +16,7 @@
 
 namespace {
 
-std::pair<int, std::string> shell(const std::string& command) {
-  std::string out;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return {-1, out};
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
-  const int status = ::pclose(pipe);
-  return {WEXITSTATUS(status), out};
-}
+using metron::test_support::shell;
 
 TEST(CalibrateErrorSpaceCli, WritesAFileAndComparesWithTheHiddenErrors) {
   const auto dir = std::filesystem::temp_directory_path() / "metron_calibrate_es";

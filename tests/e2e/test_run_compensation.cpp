@@ -7,6 +7,8 @@
 // centres must reproduce.
 #include <gtest/gtest.h>
 
+#include "shell.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -18,15 +20,7 @@
 
 namespace {
 
-std::pair<int, std::string> shell(const std::string& command) {
-  std::string out;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return {-1, out};
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
-  const int status = ::pclose(pipe);
-  return {WEXITSTATUS(status), out};
-}
+using metron::test_support::shell;
 
 using Point = std::array<double, 3>;
 

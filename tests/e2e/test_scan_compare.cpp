@@ -3,21 +3,15 @@
 // scan direction, and the segmented modes against the independent time-optimal bound.
 #include <gtest/gtest.h>
 
+#include "shell.hpp"
+
 #include <cstdio>
 #include <regex>
 #include <string>
 
 namespace {
 
-std::pair<int, std::string> shell(const std::string& command) {
-  std::string out;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return {-1, out};
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) out += buffer;
-  const int status = ::pclose(pipe);
-  return {WEXITSTATUS(status), out};
-}
+using metron::test_support::shell;
 
 double field(const std::string& out, const std::string& row_regex) {
   std::smatch m;
