@@ -318,11 +318,7 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
         arg = (std::filesystem::path(m_module.units[m_unit].path).parent_path() / arg).string();
       auto in = make(Op::System, s, verb == "CHARACTERIZE" ? "CHARACTERISE" : verb);
-      ir::Operand o;
-      o.kind = ir::Operand::Kind::Word;
-      o.word = arg;
-      o.span = s.params[2].span;
-      in.operands.push_back(o);
+      in.operands.push_back(word_operand(arg, s.params[2].span));
       emit(std::move(in));
       return;
     }
@@ -332,13 +328,7 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       std::filesystem::path world(c->first);
       if (world.is_relative()) world = std::filesystem::path(m_module.units[m_unit].path).parent_path() / world;
       auto in = make(Op::System, s, "CALIBRATE WAVEFRONT");
-      for (const std::string& w : {world.string(), c->second}) {
-        ir::Operand o;
-        o.kind = ir::Operand::Kind::Word;
-        o.word = w;
-        o.span = s.params[2].span;
-        in.operands.push_back(o);
-      }
+      for (const std::string& w : {world.string(), c->second}) in.operands.push_back(word_operand(w, s.params[2].span));
       emit(std::move(in));
       return;
     }

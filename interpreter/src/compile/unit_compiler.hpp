@@ -137,13 +137,14 @@ class UnitCompiler {
     out.param = macro_param(out.name);
     return out;
   }
-  static ir::Operand word_operand(const grammar::Expr& e) {
+  static ir::Operand word_operand(std::string word, Span span) {
     ir::Operand o;
     o.kind = ir::Operand::Kind::Word;
-    o.word = e.text;
-    o.span = e.span;
+    o.word = std::move(word);
+    o.span = span;
     return o;
   }
+  static ir::Operand word_operand(const grammar::Expr& e) { return word_operand(e.text, e.span); }
   ir::Operand label_op(const grammar::Expr& e) {
     ir::Operand o;
     o.kind = ir::Operand::Kind::Label;
