@@ -98,10 +98,7 @@ struct Bench {
 
 machine::PtMeas from_plan(const runtime::TouchPlan& plan) {
   machine::PtMeas p;
-  p.approach_mm = plan.approach_mm;
-  p.speed_mm_s = plan.feed_mm_s;
-  if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
-  p.blend_mm = plan.blend_mm;
+  runtime::apply_touch_plan(plan, p);
   return p;
 }
 

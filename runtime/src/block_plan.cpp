@@ -41,10 +41,7 @@ class PlanBuilder {
       const TouchPlan plan = m_context.characterisation->plan(
           p.normal, m_context.measuring_feed_mm_s,
           probe.approach_explicit ? std::optional<double>(probe.approach_mm) : std::nullopt, resting(p));
-      p.approach_mm = plan.approach_mm;
-      p.speed_mm_s = plan.feed_mm_s;
-      if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
-      p.blend_mm = plan.blend_mm;
+      apply_touch_plan(plan, p);
     }
     m_plan.commands.push_back({0, p});
     annotate(span, p.speed_mm_s.value_or(m_context.state.measuring_feed_mm_s));

@@ -90,10 +90,7 @@ tl::expected<CycleComparison, std::string> compare_cycles(machine::Machine& mach
   };
   const auto from_plan = [](const TouchPlan& plan) {
     machine::PtMeas p;
-    p.approach_mm = plan.approach_mm;
-    p.speed_mm_s = plan.feed_mm_s;
-    if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
-    p.blend_mm = plan.blend_mm;
+    apply_touch_plan(plan, p);
     return p;
   };
   // Conventional baselines (docs/touch-trigger.md): a plain one-touch from the clearance at the

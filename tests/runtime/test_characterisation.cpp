@@ -268,10 +268,7 @@ struct CycleBench {
 
 machine::PtMeas ptmeas_of(const TouchPlan& plan) {
   machine::PtMeas p;
-  p.approach_mm = plan.approach_mm;
-  p.speed_mm_s = plan.feed_mm_s;
-  if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
-  p.blend_mm = plan.blend_mm;
+  apply_touch_plan(plan, p);
   return p;
 }
 

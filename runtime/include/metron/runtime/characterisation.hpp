@@ -94,6 +94,15 @@ struct TouchPlan {
   std::optional<double> blend_mm;     ///< blended one touch: the feed is reached this far before the nominal
 };
 
+/// Puts a plan's cycle (approach, feeds, two-touch, blend) into a touch command; its point, normal,
+/// search and retract stay the caller's.
+inline void apply_touch_plan(const TouchPlan& plan, machine::PtMeas& p) {
+  p.approach_mm = plan.approach_mm;
+  p.speed_mm_s = plan.feed_mm_s;
+  if (plan.two_touch) p.two_touch = machine::PtMeas::TwoTouch{plan.first_feed_mm_s, plan.backoff_mm};
+  p.blend_mm = plan.blend_mm;
+}
+
 /// Where the head rests before a touch: on the touch's approach line, `distance_mm` from the
 /// nominal point (measured as TouchPlan::approach_mm), with the positioning feed a move closer
 /// would use.
