@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include <CLI/CLI.hpp>
 
@@ -14,8 +15,10 @@
 #include <nlohmann/json.hpp>
 
 #include "metron/interpreter/run_events.hpp"
+#include "metron/interpreter/run_limits.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/outputs.hpp"
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
 #include "metron/stdlib/fitting/point_file.hpp"
@@ -71,17 +74,20 @@ int run(const RunArgs& args) {
   options.strict = args.strict;
   options.include_dirs = args.include_dirs;
   if (args.answers) {
-    std::ifstream in(*args.answers);
-    if (!in) {
-      std::cerr << fmt::format("error: cannot read the answers file {}\n", *args.answers);
+    // Read whole with the input-file rules (docs/security.md): /dev/zero is refused, not streamed.
+    auto text = read_input_file(*args.answers);
+    if (!text) {
+      std::cerr << fmt::format("error: the answers file: {}\n", printable(text.error(), 1000));
       return static_cast<int>(interpreter::RunExit::BadInput);
     }
+    std::istringstream in(*text);
     for (std::string line; std::getline(in, line);) {
       if (!line.empty() && line.back() == '\r') line.pop_back();
       options.prompt_answers.push_back(line);
     }
   }
   options.limits = args.limits;
+  if (auto failed = interpreter::apply_memory_limit(args.limits.max_memory_mib)) std::cerr << "warning: " << *failed << "\n";
   // SIGINT/SIGTERM stop the run at the next statement; the results so far are written.
   interpreter::install_stop_signal_handlers();
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
@@ -248,6 +254,9 @@ void add_limit_options(CLI::App& cmd, interpreter::RunLimits& limits) {
   cmd.add_option("--max-outputs", limits.max_outputs, "stop after this many reported outputs (0: no limit)")
       ->default_val(limits.max_outputs)
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000'000}));
+  cmd.add_option("--max-memory", limits.max_memory_mib, "stop when the heap would grow past this many MiB (0: no limit)")
+      ->default_val(limits.max_memory_mib)
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000}));
 }
 
 void add_run_commands(CLI::App& app, std::vector<Command>& commands) {

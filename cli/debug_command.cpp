@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,7 @@
 #include "commands.hpp"
 #include "metron/interpreter/debugger.hpp"
 #include "metron/interpreter/run_events.hpp"
+#include "metron/interpreter/run_limits.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/outputs.hpp"
@@ -94,7 +96,7 @@ class LineSource {
     }
     std::string s;
     if (!std::getline(m_in ? *m_in : std::cin, s)) return std::nullopt;
-    std::cout << prompt << s << "\n";  // a transcript that reads like the session
+    std::cout << prompt << s << std::endl;  // a transcript that reads like the session, as it happens
     return s;
   }
 
@@ -134,6 +136,7 @@ class Repl {
       }
       statement(text);
     }
+    if (m_terminated) return 4;  // docs/limits.md: stopped by a signal
     return m_errors > 0 && !std::cin ? 1 : 0;
   }
 
@@ -191,7 +194,12 @@ class Repl {
   }
 
   void statement(const std::string& text) {
-    const auto status = m_session.execute_text(text + "\n");
+    // A long statement typed at the prompt (a MEAS block) stops at SIGINT with an error; the
+    // session goes on.
+    const auto status = [&] {
+      const interpreter::StopSignalScope signals;
+      return m_session.execute_text(text + "\n");
+    }();
     print_diagnostics();
     if (status == interpreter::ExecStatus::Faulted) std::cout << "the statement stopped on a machine fault\n";
   }
@@ -211,6 +219,10 @@ class Repl {
         break;
       case StopReason::Error: std::cout << stop.detail << "\n"; break;
       case StopReason::Finished: std::cout << "the program has ended\n"; break;
+      case StopReason::Interrupted:
+        std::cout << fmt::format("interrupted by {} before {}\n", stop.signal == SIGTERM ? "SIGTERM" : "SIGINT", stop.detail);
+        if (stop.signal != SIGTERM) std::cout << "'continue' resumes the program\n";
+        break;
     }
   }
   void show_current() {
@@ -265,11 +277,20 @@ class Repl {
       }
       m_ran = true;
       interpreter::Stop stop;
-      if (word == "run" || word == "continue" || word == "c") stop = m_debugger.resume();
-      else if (word == "step" || word == "s") stop = m_debugger.step();
-      else if (word == "next" || word == "n") stop = m_debugger.next();
-      else stop = m_debugger.finish();
+      {
+        // While the program runs, SIGINT (Ctrl-C) pauses it and SIGTERM ends the session cleanly;
+        // at the prompt both act as usual (docs/debugger.md).
+        const interpreter::StopSignalScope signals;
+        if (word == "run" || word == "continue" || word == "c") stop = m_debugger.resume();
+        else if (word == "step" || word == "s") stop = m_debugger.step();
+        else if (word == "next" || word == "n") stop = m_debugger.next();
+        else stop = m_debugger.finish();
+      }
       report_stop(stop);
+      if (stop.reason == interpreter::StopReason::Interrupted && stop.signal == SIGTERM) {
+        m_terminated = true;
+        return false;
+      }
       return true;
     }
     if (word == "where" || word == "bt") {
@@ -486,9 +507,8 @@ class Repl {
       std::cout << "error: " << v.error() << "\n";
       return true;
     }
-    if (!m_session.interpreter().set_variable(name, *v)) {
-      std::cout << fmt::format("error: {} cannot hold the {} value {}: it was declared with another type\n", name,
-                               to_string(v->type), v->to_display());
+    if (auto set = m_session.interpreter().set_variable(name, *v); !set) {
+      std::cout << "error: " << set.error() << "\n";
       return true;
     }
     std::cout << name << " = " << m_session.interpreter().variable(name)->to_display() << "\n";
@@ -507,6 +527,7 @@ class Repl {
   interpreter::Debugger m_debugger;
   bool m_has_program = false;
   bool m_ran = false;
+  bool m_terminated = false;  // SIGTERM while the program ran: the session ends (exit 4)
   int m_errors = 0;
 };
 
@@ -537,6 +558,7 @@ int debug(const DebugArgs& args) {
   s.runtime().set_output_directory(args.out_dir);
   s.set_include_dirs(args.include_dirs);
   s.interpreter().set_limits(args.limits);
+  if (auto failed = interpreter::apply_memory_limit(args.limits.max_memory_mib)) std::cerr << "warning: " << *failed << "\n";
   if (!args.program.empty()) {
     if (auto text = read_input_file(args.program); !text) {
       std::cerr << "error: " << printable(text.error(), 1000) << "\n";

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/interpreter/debugger.hpp"
+#include "metron/interpreter/run_limits.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -75,6 +76,12 @@ Stop Debugger::drive(Mode mode) {
   const std::size_t depth = vm.frames().size();
   const bool first = !m_started;
   m_started = true;
+  // The interpreter leaves signals to this loop, which pauses on them (never an error).
+  struct SignalsHere {
+    Interpreter& vm;
+    explicit SignalsHere(Interpreter& v) : vm(v) { vm.leave_signals_to_caller(true); }
+    ~SignalsHere() { vm.leave_signals_to_caller(false); }
+  } signals_here(vm);
   bool moved = false;
   bool left_start = false;  // an instruction of another statement ran: coming back to the start is new
   for (;;) {
@@ -96,6 +103,12 @@ Stop Debugger::drive(Mode mode) {
       if (mode == Mode::Step) return {StopReason::Step, 0, describe(in->span)};
       if (mode == Mode::Next && d <= depth) return {StopReason::Step, 0, describe(in->span)};
       if (mode == Mode::Finish && d < depth) return {StopReason::Step, 0, describe(in->span)};
+    }
+    // A signal pauses the program before its next instruction (the interpreter's own check would
+    // end it with an error): the debugger's user wanted to look, not to lose the session.
+    if (const int signal = stop_requested(); signal != 0 && in) {
+      clear_stop();
+      return {StopReason::Interrupted, 0, describe(in->span), signal};
     }
     std::optional<std::string> measuring;
     if (in && in->op == ir::Op::MeasEnd && vm.pending_block()) measuring = vm.pending_block()->feature;

@@ -70,7 +70,7 @@ std::optional<ExecStatus> Interpreter::check_limits(const ir::Instruction& in) {
   };
   if (m_wall_start_s < 0) m_wall_start_s = wall_now();
   std::string why;
-  if (const int signal = stop_requested(); signal != 0) {
+  if (const int signal = m_signals_to_caller ? 0 : stop_requested(); signal != 0) {
     why = signal == SIGINT_NUMBER    ? "interrupted by SIGINT"
           : signal == SIGTERM_NUMBER ? "interrupted by SIGTERM"
                                      : "interrupted";
@@ -120,18 +120,41 @@ std::optional<Value> Interpreter::variable(const std::string& name) const {
   return v->front();
 }
 
-bool Interpreter::set_variable(const std::string& name, const Value& value) {
-  auto* v = find_variable(name);
-  if (!v || v->empty()) return false;
-  Value stored = value;
-  if (auto t = m_types.find(name); t != m_types.end()) {
-    if (t->second == ValueType::Integer && stored.is_number()) stored = Value::integer(std::trunc(stored.number));
-    else if (t->second == ValueType::Real && stored.is_number()) stored = Value::real(stored.number);
-    // The declared type holds: a CHAR value into a REAL (the debugger's set) is refused.
-    else if (stored.type != t->second) return false;
+void Interpreter::discard_program_state() {
+  std::map<std::string, std::vector<Value>>().swap(m_globals);
+  std::vector<CallFrame>().swap(m_frames);
+  m_finished = true;
+}
+
+tl::expected<Value, std::string> Interpreter::typed_value(const std::string& name, const Value& value) const {
+  auto t = m_types.find(name);
+  if (t == m_types.end()) return value;
+  if (t->second == ValueType::Real && value.is_number()) return Value::real(value.number);
+  if (t->second == ValueType::Integer && value.is_number()) {
+    // DMIS leaves the integer ranges to the implementation: metron's INTGR is 32-bit signed (as
+    // the CMM packages' C ints), LONG is what a double counts exactly (docs/language.md).
+    const bool intgr = m_intgr.count(name) > 0;
+    const double lo = intgr ? -2147483648.0 : -9007199254740992.0, hi = intgr ? 2147483647.0 : 9007199254740992.0;
+    const double whole = std::trunc(value.number);
+    if (!std::isfinite(value.number) || whole < lo || whole > hi)
+      return tl::unexpected(fmt::format("{} is declared {}: {} is outside its range {:.0f} .. {:.0f}", name,
+                                        intgr ? "INTGR" : "LONG", value.to_display(), lo, hi));
+    return Value::integer(whole);
   }
-  v->front() = stored;
-  return true;
+  // The declared type holds: a CHAR value into a REAL (the debugger's set) is refused.
+  if (value.type != t->second)
+    return tl::unexpected(fmt::format("{} cannot hold the {} value {}: it was declared {}", name, to_string(value.type),
+                                      value.to_display(), to_string(t->second)));
+  return value;
+}
+
+tl::expected<void, std::string> Interpreter::set_variable(const std::string& name, const Value& value) {
+  auto* v = find_variable(name);
+  if (!v || v->empty()) return tl::unexpected(fmt::format("variable {} is not declared here", name));
+  auto stored = typed_value(name, value);
+  if (!stored) return tl::unexpected(stored.error());
+  v->front() = std::move(*stored);
+  return {};
 }
 
 std::string Interpreter::label_name(const ir::LabelOperand& l) const {

@@ -2,6 +2,7 @@
 #include "metron/interpreter/session.hpp"
 
 #include <filesystem>
+#include <new>
 #include <fstream>
 
 #include <fmt/format.h>
@@ -127,9 +128,20 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
   s.compiler().set_parse_options(grammar::ParseOptions{options.strict});
   s.interpreter().set_prompt_answers(options.prompt_answers);
   s.compiler().set_include_dirs(options.include_dirs);
-  const bool loaded = s.load(options.program);
+  bool loaded = false;
+  bool out_of_memory = false;
   ExecStatus status = ExecStatus::Error;
-  if (loaded) status = s.interpreter().run();
+  try {
+    loaded = s.load(options.program);
+    if (loaded) status = s.interpreter().run();
+  } catch (const std::bad_alloc&) {
+    // The memory limit (--max-memory) or the machine's own: stop like the other limits and keep
+    // the results so far. The program's variables go first: one of them is most likely the hog,
+    // and writing results.json needs memory.
+    out_of_memory = true;
+    status = ExecStatus::Error;
+    s.interpreter().discard_program_state();
+  }
   s.runtime().finish();
   runtime::RunRecord& record = s.record();
   // Runtime warnings (collected in the record while running) are printed after the positioned ones.
@@ -147,7 +159,16 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
     case ExecStatus::Faulted: record.status = runtime::RunStatus::Faulted; outcome.exit = RunExit::Faulted; break;
     case ExecStatus::Error: record.status = runtime::RunStatus::Error; outcome.exit = RunExit::ProgramError; break;
   }
-  if (!s.interpreter().stopped_by().empty()) {
+  if (out_of_memory) {
+    const std::string why = fmt::format("error: the run ran out of memory{} (--max-memory; docs/limits.md); the "
+                                        "results obtained so far are kept",
+                                        options.limits.max_memory_mib
+                                            ? fmt::format(" at its limit of {} MiB", options.limits.max_memory_mib)
+                                            : std::string());
+    record.diagnostics.push_back(why);
+    outcome.diagnostics += why + "\n";
+  }
+  if (!s.interpreter().stopped_by().empty() || out_of_memory) {
     record.status = runtime::RunStatus::Interrupted;
     outcome.exit = RunExit::Stopped;
   }

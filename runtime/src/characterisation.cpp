@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/runtime/characterisation.hpp"
+#include "metron/runtime/outputs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -604,6 +605,29 @@ json to_json(const MachineCharacterisation& c) {
   };
 }
 
+namespace {
+
+// The feeds a file states must be the ones its own measurements protect (issue 15): a file whose
+// maximum feed was raised by hand would let a probing feed through into an over-travel.
+void check_protected_feeds(const MachineCharacterisation& c) {
+  namespace sj = strict_json;
+  double protected_mm_s = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) protected_mm_s = std::min(protected_mm_s, c.max_feed_mm_s(Vec3::Unit(i)));
+  const double allowed = protected_mm_s * (1 + 1e-9);
+  if (c.max_probe_feed_mm_s > allowed)
+    sj::fail("/max_probe_feed_mm_s",
+             fmt::format("{:g} mm/s exceeds {:.4g} mm/s, the fastest feed this file's own ramps, delays, pre-travel and "
+                         "over-travel protect (docs/touch-trigger.md, \"maximum protected feed\")",
+                         c.max_probe_feed_mm_s, protected_mm_s));
+  for (const auto& [key, feed] : {std::pair{"measuring_feed_mm_s", c.measuring_feed_mm_s},
+                                  std::pair{"first_feed_mm_s", c.first_feed_mm_s}})
+    if (feed > c.max_probe_feed_mm_s * (1 + 1e-9))
+      sj::fail(std::string("/strategy/") + key,
+               fmt::format("{:g} mm/s exceeds the maximum protected feed {:g} mm/s", feed, c.max_probe_feed_mm_s));
+}
+
+}  // namespace
+
 tl::expected<MachineCharacterisation, std::string> characterisation_from_json(const json& j) {
   namespace sj = strict_json;
   auto read = sj::read([&] {
@@ -639,7 +663,7 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     c.response.scanned = r.get("skip", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"latched", "scanned"}); }) ==
                          "scanned";
     c.response.jitter_s = r.get("jitter_s", sj::non_negative);
-    c.response.delay_s = r.get("delay_s", sj::number);
+    c.response.delay_s = r.get("delay_s", sj::non_negative);
     c.response.noise_mm = r.get("noise_mm", sj::non_negative);
     c.response.qualification_feed_mm_s = r.get("qualification_feed_mm_s", sj::positive);
     r.read("touches", [&](const json& v, const std::string& p) {
@@ -659,8 +683,11 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     });
     r.finish();
     c.over_travel_mm = o.get("over_travel_mm", sj::non_negative);
-    o.positive("over_travel_margin", c.over_travel_margin);
-    c.pre_travel_mm = o.get("pre_travel_mm", sj::number);
+    o.read("over_travel_margin", [&](const json& v, const std::string& p) {
+      c.over_travel_margin = sj::positive(v, p);
+      if (c.over_travel_margin > 1) sj::fail(p, "the stop distance may use at most the whole over-travel (a margin <= 1)");
+    });
+    c.pre_travel_mm = o.get("pre_travel_mm", sj::non_negative);
     c.max_probe_feed_mm_s = o.get("max_probe_feed_mm_s", sj::positive);
     sj::Object s(o.required("strategy"), o.at("strategy"));
     c.threshold_mm = s.get("threshold_mm", sj::non_negative);
@@ -672,6 +699,7 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     s.non_negative("nominal_tolerance_mm", c.nominal_tolerance_mm);
     s.finish();
     o.finish();
+    check_protected_feeds(c);
     return c;
   });
   if (!read) return tl::unexpected(fmt::format("{}: {}", read.error().pointer, read.error().message));
@@ -679,10 +707,9 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
 }
 
 tl::expected<void, std::string> save_characterisation(const MachineCharacterisation& c, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) return tl::unexpected(fmt::format("cannot write {}", path));
-  out << to_json(c).dump(2) << "\n";
-  if (!out) return tl::unexpected(fmt::format("cannot write {}", path));
+  // Atomically, like every output (docs/security.md): a failed write keeps an earlier file.
+  const std::string text = to_json(c).dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+  if (auto failed = write_file_atomically(path, text)) return tl::unexpected(*failed);
   return {};
 }
 

@@ -217,7 +217,8 @@ Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::s
     if (p.is_relative()) p = std::filesystem::path(m_output_dir) / p;
     if (auto refused = m_policy.refuse_write(p.string()))
       return program_error(span, "CALL/EXTERN,SYS 'CHARACTERISE': " + *refused);
-    if (auto ok = save_characterisation(*c, p.string()); !ok) return program_error(span, ok.error());
+    if (auto ok = save_characterisation(*c, p.string()); !ok)
+      return program_error(span, "CALL/EXTERN,SYS 'CHARACTERISE': " + ok.error());
   }
   text("PRINT", format_characterisation(*c));
   m_characterisation = std::move(*c);
@@ -237,6 +238,8 @@ Result<void> MeasurementRuntime::use_characterisation(const std::string& path, S
 
 Result<void> MeasurementRuntime::use_compensation(const std::string& path, Span span) {
   auto* compensated = dynamic_cast<machine::CompensatedMachine*>(&m_machine);
+  if (auto refused = m_policy.refuse_read(path))
+    return program_error(span, "CALL/EXTERN,SYS 'COMPENSATION': " + *refused);
   if (!compensated) return program_error(span, "this machine backend takes no compensation map");
   auto map = machine::load_error_map(path);
   if (!map) return program_error(span, map.error());

@@ -120,6 +120,7 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
     // The model is in part coordinates: place it with the current alignment, then cut it.
     auto it = m_models.find(path.model_path);
     if (it == m_models.end()) {
+      if (auto refused = m_policy.refuse_read(path.model_path)) return program_error(span, "PATH/SECTION: " + *refused);
       auto mesh = geometry::load_mesh(path.model_path);
       if (!mesh) return program_error(span, "cannot load the CAD model: " + mesh.error().message);
       it = m_models.emplace(path.model_path, std::move(*mesh)).first;

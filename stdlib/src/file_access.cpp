@@ -47,6 +47,19 @@ tl::expected<std::string, std::string> read_input_file(const std::string& path, 
   return text;
 }
 
+std::optional<std::string> refuse_input_file(const std::string& path, std::uintmax_t max_bytes) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) return fmt::format("cannot read {}: no such file", path);
+  if (fs::is_directory(st)) return fmt::format("cannot read {}: it is a directory", path);
+  if (!fs::is_regular_file(st)) return fmt::format("cannot read {}: not a regular file", path);
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) return fmt::format("cannot read {}: {}", path, ec.message());
+  if (size > max_bytes)
+    return fmt::format("cannot read {}: {} bytes exceeds the limit of {} bytes for an input file", path, size, max_bytes);
+  return std::nullopt;
+}
+
 namespace {
 fs::path resolved(const fs::path& p) {
   std::error_code ec;

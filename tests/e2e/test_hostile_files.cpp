@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -141,6 +142,33 @@ TEST(HostileFiles, ASymlinkDoesNotLeadOut) {
   EXPECT_NE(o.diagnostics.find("is not allowed"), std::string::npos) << o.diagnostics;
 }
 
+TEST(HostileFiles, SystemCommandsAndCadSectionsReadOnlyWhatThePolicyAllows) {
+  // Before: COMPENSATION, CALIBRATE WAVEFRONT and PATH/SECTION read any file the user could read,
+  // and check said nothing; a device linked in as a mesh (/dev/zero as part.stl) never ended.
+  const fs::path d = scratch("system_reads");
+  write(d / "secret" / "map.json", "{}\n");
+  write(d / "secret" / "part.stl", "solid x\nendsolid x\n");
+  write(d / "secret" / "station.json", "{}\n");
+  const std::vector<std::string> statements = {
+      "CALL/EXTERN, SYS, 'COMPENSATION ../secret/map.json'\n",
+      "CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT ../secret/station.json'\n",
+      "P(CUT) = PATH/SECTION, '../secret/part.stl', 0, 0, 10, 0, 0, 1, 0, 0, 10\n"};
+  for (const auto& statement : statements) {
+    write(d / "prog" / "p.dmi", header + probe + statement + "ENDFIL\n");
+    const auto o = run(d / "prog" / "p.dmi", d / "out");
+    EXPECT_EQ(o.exit, RunExit::ProgramError) << statement << o.diagnostics;
+    EXPECT_NE(o.diagnostics.find("p.dmi:6:"), std::string::npos) << o.diagnostics;  // names the statement
+    EXPECT_NE(o.diagnostics.find("is not allowed"), std::string::npos) << o.diagnostics;
+    const auto [code, text] = metron_cli("check " + (d / "prog" / "p.dmi").string());
+    EXPECT_NE(text.find("the run will refuse it"), std::string::npos) << statement << text;
+  }
+  fs::create_symlink("/dev/zero", d / "prog" / "zero.stl");
+  write(d / "prog" / "z.dmi", header + probe + "P(CUT) = PATH/SECTION, 'zero.stl', 0, 0, 10, 0, 0, 1, 0, 0, 10\nENDFIL\n");
+  const auto z = run(d / "prog" / "z.dmi", d / "out", {"/dev"});
+  EXPECT_EQ(z.exit, RunExit::ProgramError) << z.diagnostics;
+  EXPECT_NE(z.diagnostics.find("not a regular file"), std::string::npos) << z.diagnostics;
+}
+
 TEST(HostileFiles, DevicesAndHugeFilesAreRefusedBySize) {
   // Before: /dev/zero as a program, EXTERN target, --world or --commands grew memory without bound.
   const fs::path d = scratch("dev_zero");
@@ -153,6 +181,10 @@ TEST(HostileFiles, DevicesAndHugeFilesAreRefusedBySize) {
   EXPECT_NE(text.find("not a regular file"), std::string::npos) << text;
   std::tie(code, text) = metron_cli("debug " + (d / "p.dmi").string() + " --commands /dev/zero --out " + (d / "o3").string());
   EXPECT_EQ(code, 2) << text;
+  // Before: --answers streamed /dev/zero line by line without end.
+  std::tie(code, text) = metron_cli("run " + (d / "p.dmi").string() + " --answers /dev/zero --out " + (d / "o6").string());
+  EXPECT_EQ(code, 2) << text;
+  EXPECT_NE(text.find("not a regular file"), std::string::npos) << text;
   write(d / "q.dmi", header + "CALL/EXTERN, DMIS, '/dev/zero'\nENDFIL\n");
   const auto o = run(d / "q.dmi", d / "o4", {"/dev"});
   EXPECT_EQ(o.exit, RunExit::ProgramError);
@@ -273,6 +305,47 @@ TEST(HostileFiles, SigtermKeepsTheResultsObtainedSoFar) {
   EXPECT_NE(j["diagnostics"].dump().find("SIGTERM"), std::string::npos);
 }
 
+// Before: the debugger had no signal handling; Ctrl-C during `run` killed the session with
+// everything in it. Now SIGINT pauses the program at its next statement and the session goes on;
+// SIGTERM ends the session cleanly with exit status 4 (docs/debugger.md).
+TEST(HostileFiles, TheDebuggerPausesOnSigintAndEndsOnSigterm) {
+  const fs::path d = scratch("debug_signals");
+  write(d / "p.dmi", header + "DECL/INTGR, N\nN = ASSIGN/0\n(L1)\nN = ASSIGN/N + 1\nJUMPTO/(L1)\nENDFIL\n");
+  write(d / "commands", "run\nprint N\nquit\n");
+  for (const int signal : {SIGINT, SIGTERM}) {
+    const fs::path transcript = d / ("stdout" + std::to_string(signal));
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      const std::string out = (d / "out").string(), prog = (d / "p.dmi").string(), commands = (d / "commands").string();
+      if (!::freopen(transcript.c_str(), "w", stdout)) ::_exit(126);
+      ::execl(METRON_BINARY, METRON_BINARY, "debug", prog.c_str(), "--commands", commands.c_str(), "--out", out.c_str(),
+              "--max-steps", "0", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    for (int i = 0; i < 1200 && slurp(transcript).find("(metron) run") == std::string::npos; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    ::kill(pid, signal);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    const std::string text = slurp(transcript);
+    ASSERT_TRUE(WIFEXITED(status)) << text;  // not killed by the signal
+    if (signal == SIGINT) {
+      EXPECT_EQ(WEXITSTATUS(status), 0) << text;
+      EXPECT_NE(text.find("interrupted by SIGINT before"), std::string::npos) << text;
+      EXPECT_NE(text.find("p.dmi:"), std::string::npos) << text;
+      const auto n = text.find("\nN = ");  // the session went on: `print N`, the loop counter past 0
+      ASSERT_NE(n, std::string::npos) << text;
+      EXPECT_GT(std::stol(text.substr(n + 5)), 0) << text;
+    } else {
+      EXPECT_EQ(WEXITSTATUS(status), 4) << text;
+      EXPECT_NE(text.find("interrupted by SIGTERM"), std::string::npos) << text;
+      EXPECT_EQ(text.find("\nN = "), std::string::npos) << text;  // the session ended before `print N`
+    }
+  }
+}
+
 // ---------------------------------------------------------------- limits
 
 TEST(HostileFiles, AnEndlessLoopStopsAtTheStepLimitNamingTheStatement) {
@@ -288,6 +361,24 @@ TEST(HostileFiles, AnEndlessLoopStopsAtTheStepLimitNamingTheStatement) {
   const auto j = results(d / "out");
   EXPECT_EQ(j["status"], "interrupted");
   EXPECT_EQ(j["features"].size(), 1u);  // the result before the loop is kept
+}
+
+TEST(HostileFiles, AStringThatDoublesStopsAtTheMemoryLimit) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "the sanitizer build does not apply --max-memory (docs/limits.md)";
+#endif
+  // Before: nothing bounded a CHAR value: S = CONCAT(S, S) in a loop grew until the machine's
+  // memory ran out, and the process died with the results.
+  const fs::path d = scratch("memory");
+  write(d / "p.dmi", header + probe + measure_top +
+                         "DECL/CHAR, 10, S\nDECL/INTGR, I\nS = ASSIGN/'x'\nDO/I, 1, 60\n"
+                         "S = ASSIGN/CONCAT(S, S)\nENDDO\nENDFIL\n");
+  const auto [code, text] = metron_cli("run " + (d / "p.dmi").string() + " --max-memory 400 --out " + (d / "out").string());
+  EXPECT_EQ(code, 4) << text;
+  EXPECT_NE(text.find("ran out of memory at its limit of 400 MiB"), std::string::npos) << text;
+  const auto j = results(d / "out");
+  EXPECT_EQ(j["status"], "interrupted");
+  EXPECT_EQ(j["features"].size(), 1u);  // the TOP plane measured before is kept
 }
 
 TEST(HostileFiles, TextInALoopStopsAtTheOutputLimit) {

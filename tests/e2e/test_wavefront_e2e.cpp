@@ -28,10 +28,12 @@ constexpr double kRad = std::numbers::pi / 180;
 
 fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_wavefront", name); }
 
+// The worlds are outside the programs' folders: the file policy (docs/security.md) needs --include.
 metron::interpreter::RunOutcome run(const fs::path& program, const std::string& out) {
   RunOptions o;
   o.program = program.string();
   o.out_dir = out_dir(out).string();
+  o.include_dirs = {(source_dir / "programs/worlds").string()};
   return run_program(o, metron::cli::virtual_cmm_backend);
 }
 

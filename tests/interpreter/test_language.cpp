@@ -66,6 +66,32 @@ TEST(Language, ArithmeticPrecedenceAndIntrinsics) {
   EXPECT_EQ(r.texts[3], "ab3yz");
 }
 
+// Issue 15: INTGR had no range check (3e9 was stored as it came, NaN too). INTGR is 32-bit signed,
+// LONG exact up to 2^53 (docs/language.md); a value outside is an error naming the statement.
+TEST(Language, IntegerVariablesHoldTheirRangeOnly) {
+  auto ok = run("DECL/INTGR, I, J\nDECL/LONG, L\nI = ASSIGN/2147483647\nJ = ASSIGN/-2147483648.9\n"
+                "L = ASSIGN/3000000000 * 1000\nTEXT/OPER, STR(I)\nTEXT/OPER, STR(J)\nTEXT/OPER, STR(L)\n");
+  ASSERT_EQ(ok.status, ExecStatus::Finished) << ok.diagnostics;
+  ASSERT_EQ(ok.texts.size(), 3u);
+  EXPECT_EQ(ok.texts[0], "2147483647");
+  EXPECT_EQ(ok.texts[1], "-2147483648");  // truncated toward zero, still inside
+  EXPECT_EQ(ok.texts[2], "3000000000000");
+  for (const char* value : {"2147483648", "-3E9", "-2147483649", "1E300"}) {
+    auto r = run(std::string("DECL/INTGR, I\nI = ASSIGN/") + value + "\nTEXT/OPER, 'not reached'\n");
+    EXPECT_EQ(r.status, ExecStatus::Error) << value;
+    EXPECT_TRUE(r.texts.empty()) << value;
+    EXPECT_NE(r.diagnostics.find("prog.dmi:4:"), std::string::npos) << r.diagnostics;
+    EXPECT_NE(r.diagnostics.find("I is declared INTGR"), std::string::npos) << r.diagnostics;
+  }
+  auto l = run("DECL/LONG, L\nL = ASSIGN/1E17\n");
+  EXPECT_EQ(l.status, ExecStatus::Error);
+  EXPECT_NE(l.diagnostics.find("L is declared LONG"), std::string::npos) << l.diagnostics;
+  // A DO loop over an INTGR cannot step past the range either.
+  auto loop = run("DECL/INTGR, I\nDO/I, 2147483646, 2147483648\nENDDO\n");
+  EXPECT_EQ(loop.status, ExecStatus::Error);
+  EXPECT_NE(loop.diagnostics.find("DO: I is declared INTGR"), std::string::npos) << loop.diagnostics;
+}
+
 TEST(Language, IfElseWithAndWithoutParentheses) {
   auto r = run(
       "DECL/INTGR, I\nI = ASSIGN/5\n"

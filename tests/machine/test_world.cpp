@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <nlohmann/json.hpp>
 
 #include "metron/machine/wavefront/wavefront_world.hpp"
@@ -70,6 +72,23 @@ TEST(World, AllWorldFilesLoad) {
     auto w = load_world(entry.path().string());
     EXPECT_TRUE(w) << (w ? "" : w.error().message);
   }
+}
+
+// Issue 15: the wavefront world loader used nlohmann's parser directly: 1e400 threw an uncaught
+// out_of_range (abort), /dev/zero grew memory, and syntax errors printed the library's text.
+TEST(World, WavefrontWorldsAreReadByTheStrictReader) {
+  const auto dir = std::filesystem::temp_directory_path() / ("metron_wavefront_hostile_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto file = dir / "station.json";
+  std::ofstream(file) << R"({"kind": "wavefront", "seed": 1e400})";
+  auto big = wavefront::load_wavefront_world(file.string());
+  ASSERT_FALSE(big);
+  EXPECT_NE(big.error().find("number overflow"), std::string::npos) << big.error();
+  EXPECT_NE(big.error().find(file.string()), std::string::npos) << big.error();
+  auto zero = wavefront::load_wavefront_world("/dev/zero");
+  ASSERT_FALSE(zero);
+  EXPECT_NE(zero.error().find("not a regular file"), std::string::npos) << zero.error();
+  std::filesystem::remove_all(dir);
 }
 
 TEST(World, ExtendsMergesOverTheBase) {

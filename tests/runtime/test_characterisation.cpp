@@ -133,6 +133,44 @@ TEST(Characterisation, FileRoundTrip) {
   std::filesystem::remove(path);
 }
 
+// Issue 15: a characterisation file was checked for its shape only; a hand-raised maximum feed
+// (then a 500 mm/s probing feed went through into an over-travel), a negative delay or a margin
+// above the whole over-travel were accepted. The file's feeds must be the ones its own
+// measurements protect.
+TEST(Characterisation, AFileCannotClaimFeedsItsMeasurementsDoNotProtect) {
+  const auto c = run("touch_scanned_4ms.json").c;
+  ASSERT_TRUE(characterisation_from_json(to_json(c)));  // as written: consistent
+  const auto refused = [](nlohmann::json j, const std::string& pointer) {
+    auto r = characterisation_from_json(j);
+    ASSERT_FALSE(r) << pointer;
+    EXPECT_EQ(r.error().rfind(pointer + ":", 0), 0u) << r.error();
+  };
+  nlohmann::json j = to_json(c);
+  j["max_probe_feed_mm_s"] = 500.0;
+  refused(j, "/max_probe_feed_mm_s");
+  j = to_json(c);
+  j["max_probe_feed_mm_s"] = c.max_probe_feed_mm_s * 1.01;  // 1 % above is already unprotected
+  refused(j, "/max_probe_feed_mm_s");
+  j = to_json(c);
+  j["strategy"]["measuring_feed_mm_s"] = 500.0;
+  refused(j, "/strategy/measuring_feed_mm_s");
+  j = to_json(c);
+  j["strategy"]["first_feed_mm_s"] = c.max_probe_feed_mm_s * 2;
+  refused(j, "/strategy/first_feed_mm_s");
+  j = to_json(c);
+  j["response"]["delay_s"] = -0.004;
+  refused(j, "/response/delay_s");
+  j = to_json(c);
+  j["pre_travel_mm"] = -0.01;
+  refused(j, "/pre_travel_mm");
+  j = to_json(c);
+  j["over_travel_margin"] = 1.5;
+  refused(j, "/over_travel_margin");
+  j = to_json(c);
+  j["over_travel_mm"] = c.over_travel_mm / 2;  // a smaller probe: the stated feed is no longer protected
+  refused(j, "/max_probe_feed_mm_s");
+}
+
 // At the maximum protected feed the real machine never faults on over-travel (many touches,
 // every random scan phase), while a feed well above it does.
 TEST(Characterisation, MaximumFeedIsSafeOnTheMachine) {

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "metron/stdlib/file_access.hpp"
+#include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/json_reader.hpp"
 
 namespace {
@@ -22,6 +23,22 @@ TEST(HostileInput, ReadInputFileRefusesDevicesDirectoriesAndHugeFiles) {
   EXPECT_NE(metron::read_input_file(p.string(), 1000).error().find("exceeds the limit of 1000 bytes"), std::string::npos);
   EXPECT_EQ(metron::read_input_file(p.string(), 2000)->size(), 2000u);
   fs::remove(p);
+}
+
+TEST(HostileInput, CadReadersRefuseDevicesBeforeTheLibraryReadsThem) {
+  // Before: CGAL and OCCT read whatever the path named; /dev/zero linked in as part.stl never ended.
+  const fs::path d = fs::temp_directory_path() / ("metron_hostile_cad_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  for (const char* name : {"zero.stl", "zero.off", "zero.step"}) {
+    fs::create_symlink("/dev/zero", d / name);
+    const auto mesh = metron::geometry::load_mesh((d / name).string());
+    ASSERT_FALSE(mesh) << name;
+    EXPECT_NE(mesh.error().message.find("not a regular file"), std::string::npos) << mesh.error().message;
+  }
+  EXPECT_NE(metron::refuse_input_file(d.string()).value_or("").find("is a directory"), std::string::npos);
+  EXPECT_NE(metron::refuse_input_file("/no/such.stl").value_or("").find("no such file"), std::string::npos);
+  fs::remove_all(d);
 }
 
 TEST(HostileInput, JsonNumbersOutOfRangeAndDeepNestingAreErrorsNotCrashes) {

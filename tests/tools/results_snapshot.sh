@@ -17,6 +17,8 @@ run_one() {  # name program world seed
   # the NIST examples call ../../../shared/data/...: a folder a program may read only when given
   # (docs/security.md)
   [ -d "$root/../shared/data" ] && args+=(--include "$(realpath "$root/../shared/data")")
+  # example 08 calibrates the wavefront world in programs/worlds (outside programs/examples)
+  args+=(--include "$root/programs/worlds")
   (cd "$(dirname "$program")" && "$metron" "${args[@]}" >"$dir/stdout" 2>"$dir/stderr"; echo $? >"$dir/exit")
   # paths differ between checkouts: print them relative to the project
   sed -i "s#$root#<root>#g; s#$dir#<out>#g" "$dir/stdout" "$dir/stderr" "$dir"/run/* 2>/dev/null

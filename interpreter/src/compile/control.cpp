@@ -317,6 +317,7 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       }
       if (!arg.empty() && std::filesystem::path(arg).is_relative() && verb != "CHARACTERISE" && verb != "CHARACTERIZE")
         arg = (std::filesystem::path(m_module.units[m_unit].path).parent_path() / arg).string();
+      if (verb == "CHARACTERISATION" || verb == "COMPENSATION") warn_if_unreadable(s.params[2].span, verb, arg);
       auto in = make(Op::System, s, verb == "CHARACTERIZE" ? "CHARACTERISE" : verb);
       in.operands.push_back(word_operand(arg, s.params[2].span));
       emit(std::move(in));
@@ -327,6 +328,7 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       if (!c) return error(s.params[2].span, "sema.system-command", c.error());
       std::filesystem::path world(c->first);
       if (world.is_relative()) world = std::filesystem::path(m_module.units[m_unit].path).parent_path() / world;
+      warn_if_unreadable(s.params[2].span, "CALIBRATE WAVEFRONT", world.string());
       auto in = make(Op::System, s, "CALIBRATE WAVEFRONT");
       for (const std::string& w : {world.string(), c->second}) in.operands.push_back(word_operand(w, s.params[2].span));
       emit(std::move(in));

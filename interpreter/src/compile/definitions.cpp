@@ -291,6 +291,8 @@ void UnitCompiler::datdef(const grammar::Statement& s) {
   if (!is_label(s.params[0], {"F", "FA"})) return error(s.params[0].span, "sema.expected-feature", "expected FA(label) after DATDEF/");
   if (!check_feature(s.params[0])) return;
   if (!is_label(s.params[1], {"DAT"})) return error(s.params[1].span, "sema.expected-datum", "expected DAT(label) after the feature");
+  // A second DATDEF of one datum silently replaced the first (issue 15): say so.
+  note_definition("DAT", upper(s.params[1].label.name), s.span);
   m_symbols.datums.insert(upper(s.params[1].label.name));
   auto in = make(Op::DatDef, s);
   in.operands.push_back(label_op(s.params[0]));
@@ -362,6 +364,7 @@ void UnitCompiler::path_section(const grammar::Statement& s) {
   std::filesystem::path file(p[1].text);
   if (file.is_relative()) file = std::filesystem::path(m_module.units[m_unit].path).parent_path() / file;
   if (!std::filesystem::exists(file)) return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
+  warn_if_unreadable(p[1].span, "PATH/SECTION", file.string());
   const std::size_t n = p.size() - 2;
   if (n != 9)
     return error(p.back().span, "sema.path-arity", fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near xs,ys,zs), got {}", n));

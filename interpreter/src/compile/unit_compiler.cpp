@@ -100,6 +100,12 @@ void UnitCompiler::note_definition(const char* kind, const std::string& name, Sp
   m_defined_here[key] = span;
 }
 
+void UnitCompiler::warn_if_unreadable(Span span, const std::string& what, const std::string& path) {
+  if (!m_read_policy) return;
+  if (auto refused = m_read_policy->refuse_read(path))
+    warn(span, "io.read-outside", fmt::format("{}: {}; the run will refuse it", what, *refused));
+}
+
 void UnitCompiler::statement(const grammar::Statement& s) {
   if (s.jump_label) {
     const std::string name = upper(*s.jump_label);

@@ -45,6 +45,9 @@ class UnitCompiler {
   void compile(const grammar::Program& program, bool repl);
   void set_included(bool v) { m_included = v; }
   void set_runtime_names(const std::set<std::string>& names) { m_runtime_names = names; }
+  /// The run's read policy (docs/security.md): files the program names are checked against it
+  /// at compile time, so that `check` warns where the run will refuse.
+  void set_read_policy(const FileAccessPolicy* policy) { m_read_policy = policy; }
   /// An expression parameter compiled in this unit's context (labels allowed: `print FA(x)`).
   std::optional<ir::Expr> standalone_expression(const grammar::Expr& g);
 
@@ -268,6 +271,9 @@ class UnitCompiler {
   std::map<std::string, Span> m_defined_here;
   /// Warns when `kind`(`name`) was already defined in this unit; remembers this definition.
   void note_definition(const char* kind, const std::string& name, Span span);
+  /// Warns when the read policy will refuse `path` (named by the statement as `what`) at run time.
+  void warn_if_unreadable(Span span, const std::string& what, const std::string& path);
+  const FileAccessPolicy* m_read_policy = nullptr;
   bool m_included = false;
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once

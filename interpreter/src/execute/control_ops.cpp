@@ -68,12 +68,9 @@ ExecStatus Execute::assign(Interpreter& vm, const ir::Instruction& in, CallFrame
       return vm.fail(in.span, fmt::format("index {} is outside {}[1..{}]", i, in.name, var->size()));
     index = static_cast<std::size_t>(i - 1);
   }
-  Value stored = *value;
-  if (auto t = vm.m_types.find(in.name); t != vm.m_types.end()) {
-    if (t->second == ValueType::Integer && stored.is_number()) stored = Value::integer(std::trunc(stored.number));
-    else if (t->second == ValueType::Real && stored.is_number()) stored = Value::real(stored.number);
-  }
-  (*var)[index] = stored;
+  auto stored = vm.typed_value(in.name, *value);
+  if (!stored) return vm.fail(in.span, stored.error());
+  (*var)[index] = std::move(*stored);
   return ExecStatus::Running;
 }
 
@@ -99,7 +96,7 @@ ExecStatus Execute::do_init(Interpreter& vm, const ir::Instruction& in, CallFram
   if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
   const double step = nums.size() > 2 ? nums[2] : 1.0;
   if (step == 0) return vm.fail(in.span, "the DO step is zero");
-  if (!vm.set_variable(in.name, Value::real(nums[0]))) return vm.fail(in.span, fmt::format("DO variable {} has no storage", in.name));
+  if (auto set = vm.set_variable(in.name, Value::real(nums[0])); !set) return vm.fail(in.span, "DO: " + set.error());
   frame.loops[pc] = {nums[1], step};
   if (step > 0 ? nums[0] > nums[1] : nums[0] < nums[1]) frame.pc = static_cast<std::size_t>(in.target);
   return ExecStatus::Running;
@@ -111,7 +108,7 @@ ExecStatus Execute::do_next(Interpreter& vm, const ir::Instruction& in, CallFram
   auto v = vm.variable(in.name);
   if (!v) return vm.fail(in.span, fmt::format("DO variable {} has no value", in.name));
   const double next = v->number + step;
-  vm.set_variable(in.name, Value::real(next));
+  if (auto set = vm.set_variable(in.name, Value::real(next)); !set) return vm.fail(in.span, "DO: " + set.error());
   if (step > 0 ? next <= end : next >= end) frame.pc = static_cast<std::size_t>(in.target);
   return ExecStatus::Running;
 }

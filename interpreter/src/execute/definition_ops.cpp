@@ -167,6 +167,8 @@ ExecStatus Execute::declare(Interpreter& vm, const ir::Instruction& in, CallFram
     auto& store = frame.kind == CallFrame::Kind::Macro ? frame.locals : vm.m_globals;
     store[in.names[i]] = std::vector<Value>(size, default_value(t));
     vm.m_types[in.names[i]] = t;
+    if (in.operands[0].word == "INTGR") vm.m_intgr.insert(in.names[i]);
+    else vm.m_intgr.erase(in.names[i]);
   }
   return ExecStatus::Running;
 }

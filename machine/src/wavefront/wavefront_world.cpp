@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "metron/machine/wavefront/wavefront_world.hpp"
+#include "metron/stdlib/json_reader.hpp"
 
 namespace metron::machine::wavefront {
 namespace {
@@ -210,15 +211,11 @@ tl::expected<WavefrontWorld, std::string> parse_wavefront_world(const nlohmann::
 }
 
 tl::expected<WavefrontWorld, std::string> load_wavefront_world(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return tl::unexpected(fmt::format("{}: cannot open the file", path));
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    return tl::unexpected(fmt::format("{}: not valid JSON: {}", path, e.what()));
-  }
-  return parse_wavefront_world(j, path);
+  // The strict reader: a regular file within the input cap, bounded nesting, numbers in range,
+  // never an exception (nlohmann's parse threw out_of_range on 1e400, which nothing caught).
+  auto j = strict_json::read_document(path);
+  if (!j) return tl::unexpected(j.error());
+  return parse_wavefront_world(*j, path);
 }
 
 }  // namespace metron::machine::wavefront

@@ -2,13 +2,13 @@
 // CALL/EXTERN,SYS,'CALIBRATE WAVEFRONT world [step]' (docs/wavefront.md, "Calling it from a DMIS
 // program"): the SEEDS.md 5 calibration on a simulated wavefront station, from a part program.
 #include <filesystem>
-#include <fstream>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "metron/machine/wavefront/wavefront_machine.hpp"
 #include "metron/runtime/measurement_runtime.hpp"
+#include "metron/runtime/outputs.hpp"
 #include "metron/runtime/wavefront/calibration.hpp"
 
 namespace metron::runtime {
@@ -18,6 +18,7 @@ std::string wavefront_result_file_name(const std::string& step) {
 }
 
 Result<void> MeasurementRuntime::calibrate_wavefront(const std::string& world_path, const std::string& step, Span span) {
+  if (auto refused = m_policy.refuse_read(world_path)) return program_error(span, "CALIBRATE WAVEFRONT: " + *refused);
   if (!m_wavefront_stations)
     return program_error(span, "CALIBRATE WAVEFRONT: this run has no wavefront station (the backend provides none)");
   auto station = m_wavefront_stations(world_path);
@@ -31,9 +32,8 @@ Result<void> MeasurementRuntime::calibrate_wavefront(const std::string& world_pa
   // chose: docs/wavefront.md).
   const std::string name = wavefront_result_file_name(step);
   const std::string full = (std::filesystem::path(m_output_dir) / name).string();
-  std::ofstream out(full);
-  if (!out) return program_error(span, fmt::format("CALIBRATE WAVEFRONT: cannot write {}", full));
-  out << j.dump(2) << "\n";
+  const std::string json_text = j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+  if (auto failed = write_file_atomically(full, json_text)) return program_error(span, "CALIBRATE WAVEFRONT: " + *failed);
   std::string summary = fmt::format("wavefront calibration ({}, {} gauge maps) written to {}", step, report->maps, name);
   if (report->b_rotation)
     summary += fmt::format("; B rotation: xb {:.4f} um, zF {:.4f} mm, B tilt {:.3f} urad", report->b_rotation->xb_mm * 1e3,

@@ -51,6 +51,7 @@
 #include <gp_Sphere.hxx>
 #include <gp_Torus.hxx>
 
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/geometry/cad_import.hpp"
 
 namespace metron::geometry {
@@ -397,6 +398,9 @@ tl::expected<CadModel, MeshError> load_cad_model(const std::string& path,
     return tl::unexpected(file_error(
         path, "unsupported CAD format '" + ext + "' (expected .step, .stp, .iges or .igs)"));
   if (!std::ifstream(path)) return tl::unexpected(file_error(path, "cannot open file"));
+  // A device named like a mesh (/dev/zero as part.stl) would never end: regular files within the
+  // input cap only (docs/security.md).
+  if (auto refused = refuse_input_file(path)) return tl::unexpected(MeshError{*refused});
   if (!(options.chord_tolerance_mm > 0) || !(options.angular_tolerance_rad > 0))
     return tl::unexpected(file_error(path, "tessellation tolerances must be positive"));
   redirect_occt_messages();

@@ -19,6 +19,7 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/geometry/cad_import.hpp"
 #include "metron/stdlib/geometry/mesh.hpp"
 
@@ -72,6 +73,9 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
         path, "unsupported mesh format '" + ext +
                   "' (expected .stl, .off, .obj, .ply, .step, .stp, .iges or .igs)"));
   if (!std::ifstream(path)) return tl::unexpected(file_error(path, "cannot open file"));
+  // A device named like a mesh (/dev/zero as part.stl) would never end: regular files within the
+  // input cap only (docs/security.md).
+  if (auto refused = refuse_input_file(path)) return tl::unexpected(MeshError{*refused});
 
   std::vector<Point> points;
   std::vector<Polygon> polygons;

@@ -27,6 +27,7 @@ enum class StopReason {
   Fault,        ///< a machine fault (with `break fault`, or ending the run)
   Error,        ///< a run-time program error
   Finished,     ///< the program ended
+  Interrupted,  ///< SIGINT or SIGTERM while the program ran (Stop::signal); it can resume
 };
 
 /// The outcome of a run/continue/step command.
@@ -34,6 +35,7 @@ struct Stop {
   StopReason reason = StopReason::Finished;
   int breakpoint = 0;      ///< the breakpoint id that stopped it, when one did
   std::string detail;      ///< e.g. the feature measured, the fault message
+  int signal = 0;          ///< Interrupted: the signal number
 };
 
 /// The debugger core: breakpoints and stepping over the IR interpreter; the REPL (cli) drives it.

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,8 +53,14 @@ class Interpreter {
   /// The limits checked between statements (docs/limits.md); the defaults unless set.
   void set_limits(const RunLimits& limits) { m_limits = limits; }
   [[nodiscard]] const RunLimits& limits() const { return m_limits; }
+  /// While true, a stop signal is left to the caller (the debugger pauses on it) instead of ending
+  /// the run with an error; the other limits still apply.
+  void leave_signals_to_caller(bool v) { m_signals_to_caller = v; }
   /// Why the run stopped at a limit or on a signal (empty: it did not).
   [[nodiscard]] const std::string& stopped_by() const { return m_stopped_by; }
+  /// Drops the variables and call frames (after an allocation failed: the run is over, and its
+  /// results must still be written).
+  void discard_program_state();
 
   /// The instruction that will execute next (nullptr when none).
   [[nodiscard]] const ir::Instruction* current() const;
@@ -67,7 +74,13 @@ class Interpreter {
 
   /// Variables (debugger `print`/`set`); nullopt when not declared.
   [[nodiscard]] std::optional<Value> variable(const std::string& name) const;
-  bool set_variable(const std::string& name, const Value& value);
+  /// Sets a declared variable (the debugger's `set`, DO loops); the error says why it cannot hold
+  /// `value` (undeclared, another type, out of its range).
+  tl::expected<void, std::string> set_variable(const std::string& name, const Value& value);
+  /// `value` as variable `name` stores it under its declared type: INTGR truncates toward zero and
+  /// must lie in the signed 32-bit range, LONG within +-2^53 (where a double still counts every
+  /// integer), REAL stays REAL; a value of another type is refused.
+  [[nodiscard]] tl::expected<Value, std::string> typed_value(const std::string& name, const Value& value) const;
   [[nodiscard]] const std::map<std::string, std::vector<Value>>& globals() const { return m_globals; }
   /// Evaluates an IR expression in the current context.
   tl::expected<Value, std::string> evaluate(const ir::Expr& e);
@@ -89,6 +102,7 @@ class Interpreter {
   std::vector<CallFrame> m_frames;
   std::map<std::string, std::vector<Value>> m_globals;
   std::map<std::string, ValueType> m_types;
+  std::set<std::string> m_intgr;  ///< variables declared INTGR (32-bit) rather than LONG
   std::optional<runtime::MeasBlock> m_block;
   Vec3 m_block_position = Vec3::Zero();
   double m_length_mm = 1.0;   ///< UNITS: mm per program length unit
@@ -98,6 +112,7 @@ class Interpreter {
   std::size_t m_next_answer = 0;
   tl::expected<Value, std::string> prompt(const ir::Expr& e);
   RunLimits m_limits;
+  bool m_signals_to_caller = false;
   std::uint64_t m_steps = 0;
   double m_wall_start_s = -1;  ///< steady-clock time of the first step
   std::string m_stopped_by;

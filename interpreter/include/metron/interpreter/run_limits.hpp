@@ -3,7 +3,10 @@
 // memory without bound; each limit stops the run with an error naming the statement, and the
 // results obtained so far are written.
 #pragma once
+#include <csignal>
 #include <cstdint>
+#include <optional>
+#include <string>
 
 namespace metron::interpreter {
 
@@ -18,7 +21,16 @@ struct RunLimits {
   double max_wall_s = 3'600;
   /// Reported events (OUTPUT results, texts, faults) kept in memory for results.json: 200,000.
   std::uint64_t max_outputs = 200'000;
+  /// The process's heap, MiB (RLIMIT_DATA, which the CLI sets for run, debug and repl with
+  /// apply_memory_limit): 4 GiB, several times the largest run measured (docs/limits.md). An
+  /// allocation beyond it stops the run like the other limits, with the results so far kept.
+  std::uint64_t max_memory_mib = 4096;
 };
+
+/// Caps the process's data segment (heap and private writable mappings: RLIMIT_DATA) at `mib`
+/// MiB; 0 leaves it. The sanitizer build leaves it too (ASan's own mappings count against the
+/// limit). Empty when done (or left on purpose), otherwise why it could not be set.
+std::optional<std::string> apply_memory_limit(std::uint64_t mib);
 
 /// Asks every running interpreter to stop at its next statement (async-signal-safe: only sets a
 /// flag). `signal` is the signal number for the message (0: not a signal).
@@ -29,5 +41,20 @@ int stop_requested() noexcept;
 void clear_stop() noexcept;
 /// Installs SIGINT and SIGTERM handlers that call request_stop (metron run, debug).
 void install_stop_signal_handlers();
+
+/// The stop handlers for the lifetime of the scope, the earlier dispositions after it, and no
+/// stale request on either side: the debugger runs the program inside one, so that Ctrl-C pauses
+/// the program while it runs and acts as usual at the prompt.
+class StopSignalScope {
+ public:
+  StopSignalScope();
+  ~StopSignalScope();
+  StopSignalScope(const StopSignalScope&) = delete;
+  StopSignalScope& operator=(const StopSignalScope&) = delete;
+
+ private:
+  struct sigaction m_interrupt{};
+  struct sigaction m_terminate{};
+};
 
 }  // namespace metron::interpreter

@@ -24,6 +24,11 @@ inline constexpr std::uintmax_t max_input_file_bytes = 64u * 1024u * 1024u;
 tl::expected<std::string, std::string> read_input_file(const std::string& path,
                                                         std::uintmax_t max_bytes = max_input_file_bytes);
 
+/// The checks of read_input_file without the reading, for files a library reads itself (CAD
+/// through CGAL or OCCT): empty when `path` is a regular file of at most `max_bytes` bytes,
+/// otherwise why not (a device such as /dev/zero would never end).
+std::optional<std::string> refuse_input_file(const std::string& path, std::uintmax_t max_bytes = max_input_file_bytes);
+
 /// What a program may touch: it reads files inside its own folder and the include directories
 /// given on the command line, and writes only inside the output directory. Paths are compared
 /// after resolving symbolic links and `..`, so neither leads out.
