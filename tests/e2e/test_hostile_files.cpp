@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -149,15 +150,16 @@ TEST(HostileFiles, SystemCommandsAndCadSectionsReadOnlyWhatThePolicyAllows) {
   write(d / "secret" / "map.json", "{}\n");
   write(d / "secret" / "part.stl", "solid x\nendsolid x\n");
   write(d / "secret" / "station.json", "{}\n");
-  const std::vector<std::string> statements = {
-      "CALL/EXTERN, SYS, 'COMPENSATION ../secret/map.json'\n",
-      "CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT ../secret/station.json'\n",
-      "P(CUT) = PATH/SECTION, '../secret/part.stl', 0, 0, 10, 0, 0, 1, 0, 0, 10\n"};
-  for (const auto& statement : statements) {
+  // The statement and the run-time error it must give (check's warning is another line).
+  const std::vector<std::pair<std::string, std::string>> statements = {
+      {"CALL/EXTERN, SYS, 'COMPENSATION ../secret/map.json'\n", "error: CALL/EXTERN,SYS 'COMPENSATION': reading "},
+      {"CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT ../secret/station.json'\n", "error: CALIBRATE WAVEFRONT: reading "},
+      {"P(CUT) = PATH/SECTION, '../secret/part.stl', 0, 0, 10, 0, 0, 1, 0, 0, 10\n", "error: PATH/SECTION: reading "}};
+  for (const auto& [statement, refusal] : statements) {
     write(d / "prog" / "p.dmi", header + probe + statement + "ENDFIL\n");
     const auto o = run(d / "prog" / "p.dmi", d / "out");
     EXPECT_EQ(o.exit, RunExit::ProgramError) << statement << o.diagnostics;
-    EXPECT_NE(o.diagnostics.find("p.dmi:6:"), std::string::npos) << o.diagnostics;  // names the statement
+    EXPECT_NE(o.diagnostics.find("p.dmi:6:1: " + refusal), std::string::npos) << o.diagnostics;  // names the statement
     EXPECT_NE(o.diagnostics.find("is not allowed"), std::string::npos) << o.diagnostics;
     const auto [code, text] = metron_cli("check " + (d / "prog" / "p.dmi").string());
     EXPECT_NE(text.find("the run will refuse it"), std::string::npos) << statement << text;
