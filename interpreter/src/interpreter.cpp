@@ -57,6 +57,7 @@ ExecStatus Interpreter::step() {
   CallFrame& frame = m_frames.back();
   const ir::Instruction& in = code_of(frame)[frame.pc];
   if (auto stop = check_limits(in)) return *stop;
+  m_executing = in.span;
   ++frame.pc;
   detail::ExecuteFn* handler = detail::Execute::table()[detail::index(in.op)];
   if (!handler) return fail(in.span, "unknown instruction");

@@ -160,13 +160,19 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
     case ExecStatus::Error: record.status = runtime::RunStatus::Error; outcome.exit = RunExit::ProgramError; break;
   }
   if (out_of_memory) {
-    const std::string why = fmt::format("error: the run ran out of memory{} (--max-memory; docs/limits.md); the "
-                                        "results obtained so far are kept",
+    const std::string why = fmt::format("the run ran out of memory{} here (--max-memory; docs/limits.md); the results "
+                                        "obtained so far are kept",
                                         options.limits.max_memory_mib
                                             ? fmt::format(" at its limit of {} MiB", options.limits.max_memory_mib)
                                             : std::string());
-    record.diagnostics.push_back(why);
-    outcome.diagnostics += why + "\n";
+    const Span at = s.interpreter().executing();
+    std::string line = "error: " + why;
+    if (at.valid()) {
+      const Location l = s.sources().locate(at);
+      line = fmt::format("{}:{}:{}: {}", l.path, l.line, l.column, line);
+    }
+    record.diagnostics.push_back(line);
+    outcome.diagnostics += line + "\n";
   }
   if (!s.interpreter().stopped_by().empty() || out_of_memory) {
     record.status = runtime::RunStatus::Interrupted;

@@ -61,6 +61,8 @@ class Interpreter {
   /// Drops the variables and call frames (after an allocation failed: the run is over, and its
   /// results must still be written).
   void discard_program_state();
+  /// The statement of the instruction that ran last (an allocation failure names it).
+  [[nodiscard]] Span executing() const { return m_executing; }
 
   /// The instruction that will execute next (nullptr when none).
   [[nodiscard]] const ir::Instruction* current() const;
@@ -113,6 +115,7 @@ class Interpreter {
   tl::expected<Value, std::string> prompt(const ir::Expr& e);
   RunLimits m_limits;
   bool m_signals_to_caller = false;
+  Span m_executing;
   std::uint64_t m_steps = 0;
   double m_wall_start_s = -1;  ///< steady-clock time of the first step
   std::string m_stopped_by;
