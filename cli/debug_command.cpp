@@ -135,6 +135,7 @@ class Repl {
         depth += block_delta(trim(*more));
       }
       statement(text);
+      if (m_terminated) break;
     }
     if (m_terminated) return 4;  // docs/limits.md: stopped by a signal
     return m_errors > 0 && !std::cin ? 1 : 0;
@@ -194,11 +195,13 @@ class Repl {
   }
 
   void statement(const std::string& text) {
-    // A long statement typed at the prompt (a MEAS block) stops at SIGINT with an error; the
-    // session goes on.
+    // A long statement typed at the prompt (a MEAS block) stops at SIGINT with an error and the
+    // session goes on; at SIGTERM the session ends.
     const auto status = [&] {
       const interpreter::StopSignalScope signals;
-      return m_session.execute_text(text + "\n");
+      const auto executed = m_session.execute_text(text + "\n");
+      if (interpreter::stop_requested() == SIGTERM) m_terminated = true;
+      return executed;
     }();
     print_diagnostics();
     if (status == interpreter::ExecStatus::Faulted) std::cout << "the statement stopped on a machine fault\n";
