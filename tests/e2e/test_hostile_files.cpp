@@ -346,6 +346,29 @@ TEST(HostileFiles, TheDebuggerPausesOnSigintAndEndsOnSigterm) {
       EXPECT_EQ(text.find("\nN = "), std::string::npos) << text;  // the session ended before `print N`
     }
   }
+  // A loop typed at the repl prompt: SIGTERM ends the session (before: the statement erred and the
+  // session read on).
+  write(d / "typed", "DECL/INTGR, I\nDO/I, 1, 2000000000\nENDDO\nTEXT/OPER, 'after'\n");
+  const fs::path transcript = d / "stdout_repl";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string out = (d / "out").string(), commands = (d / "typed").string();
+    if (!::freopen(transcript.c_str(), "w", stdout)) ::_exit(126);
+    ::execl(METRON_BINARY, METRON_BINARY, "repl", "--commands", commands.c_str(), "--out", out.c_str(), "--max-steps", "0",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int i = 0; i < 1200 && slurp(transcript).find("...> ENDDO") == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const std::string text = slurp(transcript);
+  ASSERT_TRUE(WIFEXITED(status)) << text;
+  EXPECT_EQ(WEXITSTATUS(status), 4) << text;
+  EXPECT_EQ(text.find("\nafter"), std::string::npos) << text;
 }
 
 // ---------------------------------------------------------------- limits
