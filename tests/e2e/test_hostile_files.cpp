@@ -307,6 +307,29 @@ TEST(HostileFiles, SigtermKeepsTheResultsObtainedSoFar) {
   EXPECT_NE(j["diagnostics"].dump().find("SIGTERM"), std::string::npos);
 }
 
+// Runs the metron binary with `args` (stdout into `transcript`), waits until the transcript shows
+// `ready`, then 300 ms more, sends `signal`, and returns the wait status.
+int signal_metron_when(const std::vector<std::string>& args, const fs::path& transcript, const std::string& ready,
+                       int signal) {
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    std::vector<char*> argv{const_cast<char*>(METRON_BINARY)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    if (!::freopen(transcript.c_str(), "w", stdout)) ::_exit(126);
+    ::execv(METRON_BINARY, argv.data());
+    ::_exit(127);
+  }
+  for (int i = 0; i < 1200 && slurp(transcript).find(ready) == std::string::npos; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(pid, signal);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
 // Before: the debugger had no signal handling; Ctrl-C during `run` killed the session with
 // everything in it. Now SIGINT pauses the program at its next statement and the session goes on;
 // SIGTERM ends the session cleanly with exit status 4 (docs/debugger.md).
@@ -314,23 +337,12 @@ TEST(HostileFiles, TheDebuggerPausesOnSigintAndEndsOnSigterm) {
   const fs::path d = scratch("debug_signals");
   write(d / "p.dmi", header + "DECL/INTGR, N\nN = ASSIGN/0\n(L1)\nN = ASSIGN/N + 1\nJUMPTO/(L1)\nENDFIL\n");
   write(d / "commands", "run\nprint N\nquit\n");
+  const std::string out = (d / "out").string();
   for (const int signal : {SIGINT, SIGTERM}) {
     const fs::path transcript = d / ("stdout" + std::to_string(signal));
-    const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-      const std::string out = (d / "out").string(), prog = (d / "p.dmi").string(), commands = (d / "commands").string();
-      if (!::freopen(transcript.c_str(), "w", stdout)) ::_exit(126);
-      ::execl(METRON_BINARY, METRON_BINARY, "debug", prog.c_str(), "--commands", commands.c_str(), "--out", out.c_str(),
-              "--max-steps", "0", static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-    for (int i = 0; i < 1200 && slurp(transcript).find("(metron) run") == std::string::npos; ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    ::kill(pid, signal);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
+    const int status = signal_metron_when({"debug", (d / "p.dmi").string(), "--commands", (d / "commands").string(), "--out",
+                                           out, "--max-steps", "0"},
+                                          transcript, "(metron) run", signal);
     const std::string text = slurp(transcript);
     ASSERT_TRUE(WIFEXITED(status)) << text;  // not killed by the signal
     if (signal == SIGINT) {
@@ -350,21 +362,8 @@ TEST(HostileFiles, TheDebuggerPausesOnSigintAndEndsOnSigterm) {
   // session read on).
   write(d / "typed", "DECL/INTGR, I\nDO/I, 1, 2000000000\nENDDO\nTEXT/OPER, 'after'\n");
   const fs::path transcript = d / "stdout_repl";
-  const pid_t pid = ::fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    const std::string out = (d / "out").string(), commands = (d / "typed").string();
-    if (!::freopen(transcript.c_str(), "w", stdout)) ::_exit(126);
-    ::execl(METRON_BINARY, METRON_BINARY, "repl", "--commands", commands.c_str(), "--out", out.c_str(), "--max-steps", "0",
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  for (int i = 0; i < 1200 && slurp(transcript).find("...> ENDDO") == std::string::npos; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
+  const int status = signal_metron_when({"repl", "--commands", (d / "typed").string(), "--out", out, "--max-steps", "0"},
+                                        transcript, "...> ENDDO", SIGTERM);
   const std::string text = slurp(transcript);
   ASSERT_TRUE(WIFEXITED(status)) << text;
   EXPECT_EQ(WEXITSTATUS(status), 4) << text;
