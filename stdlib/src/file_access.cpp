@@ -9,11 +9,22 @@
 namespace metron {
 namespace fs = std::filesystem;
 
+std::optional<std::string> refuse_input_file(const std::string& path, std::uintmax_t max_bytes) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) return fmt::format("cannot read {}: no such file", path);
+  if (fs::is_directory(st)) return fmt::format("cannot read {}: it is a directory", path);
+  if (!fs::is_regular_file(st)) return fmt::format("cannot read {}: not a regular file", path);
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) return fmt::format("cannot read {}: {}", path, ec.message());
+  if (size > max_bytes)
+    return fmt::format("cannot read {}: {} bytes exceeds the limit of {} bytes for an input file", path, size, max_bytes);
+  return std::nullopt;
+}
+
 tl::expected<std::string, std::string> read_input_file(const std::string& path, std::uintmax_t max_bytes) {
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) return tl::unexpected(fmt::format("cannot read {}: no such file", path));
-  if (fs::is_directory(st)) return tl::unexpected(fmt::format("cannot read {}: it is a directory", path));
   // A pipe (`metron check /dev/stdin`) is read up to the cap: it ends when its writer closes it,
   // and one that never ends (`yes |`) stops at the cap.
   if (fs::is_fifo(st)) {
@@ -28,13 +39,10 @@ tl::expected<std::string, std::string> read_input_file(const std::string& path, 
     }
     return text;
   }
-  // Devices and sockets have no size to check and may never end (/dev/zero).
-  if (!fs::is_regular_file(st)) return tl::unexpected(fmt::format("cannot read {}: not a regular file", path));
+  // Missing files, folders, devices and sockets (no size to check, may never end: /dev/zero), and
+  // files above the cap.
+  if (auto refused = refuse_input_file(path, max_bytes)) return tl::unexpected(*refused);
   const std::uintmax_t size = fs::file_size(path, ec);
-  if (ec) return tl::unexpected(fmt::format("cannot read {}: {}", path, ec.message()));
-  if (size > max_bytes)
-    return tl::unexpected(fmt::format("cannot read {}: {} bytes exceeds the limit of {} bytes for an input file", path,
-                                      size, max_bytes));
   std::ifstream in(path, std::ios::binary);
   if (!in) return tl::unexpected(fmt::format("cannot read {}: permission denied or unreadable", path));
   std::string text;
@@ -45,19 +53,6 @@ tl::expected<std::string, std::string> read_input_file(const std::string& path, 
   if (in && in.peek() != std::char_traits<char>::eof())
     return tl::unexpected(fmt::format("cannot read {}: the file grew past {} bytes while read", path, size));
   return text;
-}
-
-std::optional<std::string> refuse_input_file(const std::string& path, std::uintmax_t max_bytes) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) return fmt::format("cannot read {}: no such file", path);
-  if (fs::is_directory(st)) return fmt::format("cannot read {}: it is a directory", path);
-  if (!fs::is_regular_file(st)) return fmt::format("cannot read {}: not a regular file", path);
-  const std::uintmax_t size = fs::file_size(path, ec);
-  if (ec) return fmt::format("cannot read {}: {}", path, ec.message());
-  if (size > max_bytes)
-    return fmt::format("cannot read {}: {} bytes exceeds the limit of {} bytes for an input file", path, size, max_bytes);
-  return std::nullopt;
 }
 
 namespace {

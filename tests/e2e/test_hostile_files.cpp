@@ -308,7 +308,9 @@ TEST(HostileFiles, SigtermKeepsTheResultsObtainedSoFar) {
 }
 
 // Runs the metron binary with `args` (stdout into `transcript`), waits until the transcript shows
-// `ready`, then 300 ms more, sends `signal`, and returns the wait status.
+// `ready`, then 300 ms more, sends `signal`, and returns the wait status. A process that has not
+// ended 60 s after the signal is killed (SIGKILL: not WIFEXITED), so that a signal ignored fails
+// the test instead of hanging it.
 int signal_metron_when(const std::vector<std::string>& args, const fs::path& transcript, const std::string& ready,
                        int signal) {
   const pid_t pid = ::fork();
@@ -326,7 +328,12 @@ int signal_metron_when(const std::vector<std::string>& args, const fs::path& tra
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   ::kill(pid, signal);
   int status = 0;
-  ::waitpid(pid, &status, 0);
+  for (int i = 0; i < 600 && ::waitpid(pid, &status, WNOHANG) == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  if (::waitpid(pid, &status, WNOHANG) == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+  }
   return status;
 }
 
