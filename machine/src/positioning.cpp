@@ -67,6 +67,7 @@ tl::expected<void, Fault> Controller::move_to(const Vec3& target, double feed) {
   for (std::int64_t k = 1; k <= n; ++k) {
     const double t = std::min(static_cast<double>(k) * config.dt_s, t_end);
     const MotionState st = profile.at(t);
+    sim.set_time(static_cast<double>(c0) * config.dt_s + t);
     if (const auto f = sim.sweep(a + s_prev * u, a + st.position_mm * u)) {
       const double s_contact = s_prev + *f * (st.position_mm - s_prev);
       const double t_contact = profile.time_at(s_contact);

@@ -2,6 +2,7 @@
 #include "simulated_probe.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "metron/machine/contact.hpp"
 #include "metron/machine/machine_errors/machine_error_solid.hpp"
@@ -36,7 +37,30 @@ void SimulatedProbe::mount_stylus(double nominal_radius_mm, const Vec3& offset_m
   }
 }
 
+void SimulatedProbe::set_time(double time_s) {
+  const double sampled = std::floor(time_s / kErrorTimeStep_s) * kErrorTimeStep_s;
+  if (sampled == m_error_time_s) return;
+  m_error_time_s = sampled;
+  update_error_state();
+}
+
+// The errors changed: the solids see the new state, and the free space known so far is forgotten.
+void SimulatedProbe::update_error_state() {
+  if (m_truth.errors.empty()) return;
+  for (auto* solid : {m_solid.get(), m_scan_solid.get()})
+    if (auto* seen = dynamic_cast<MachineErrorSolid*>(solid)) seen->set_state(m_error_time_s, m_approach);
+  m_free_radius_mm = -1;
+}
+
 std::optional<double> SimulatedProbe::sweep(const Vec3& a, const Vec3& b) {
+  // An axis that moves sets its approach direction; one that stands keeps its last.
+  std::array<int, 3> approach = m_approach;
+  for (int i = 0; i < 3; ++i)
+    if (b[i] != a[i]) approach[static_cast<std::size_t>(i)] = b[i] > a[i] ? 1 : -1;
+  if (approach != m_approach) {
+    m_approach = approach;
+    update_error_state();
+  }
   // A segment inside a ball of space known to be free cannot touch (the ball is convex); this
   // saves the distance queries of most cycles of a long move, without changing any result.
   if ((a - m_free_centre).norm() < m_free_radius_mm && (b - m_free_centre).norm() < m_free_radius_mm)
@@ -52,8 +76,9 @@ std::optional<double> SimulatedProbe::sweep(const Vec3& a, const Vec3& b) {
 
 std::string SimulatedProbe::feature_at(const Vec3& p) const { return m_solid->feature_at(p); }
 
-void SimulatedProbe::begin_probe(const MotionProfile* profile, const Vec3& a, const Vec3& u) {
+void SimulatedProbe::begin_probe(const MotionProfile* profile, const Vec3& a, const Vec3& u, double t0_s) {
   m_profile = profile;
+  m_probe_t0_s = t0_s;
   m_probe_start = a;
   m_probe_dir = u;
   m_contact_s = inf;
@@ -62,6 +87,7 @@ void SimulatedProbe::begin_probe(const MotionProfile* profile, const Vec3& a, co
 
 std::optional<double> SimulatedProbe::probe_step(double t0, double t1) {
   if (m_contact_s == inf) {
+    set_time(m_probe_t0_s + t0);
     const double s0 = m_profile->at(t0).position_mm, s1 = m_profile->at(t1).position_mm;
     const auto f = sweep(m_probe_start + s0 * m_probe_dir, m_probe_start + s1 * m_probe_dir);
     if (!f) return std::nullopt;
@@ -91,7 +117,10 @@ MotionLimits SimulatedProbe::motion_limits(const MachineConfig& config, const Ve
 }
 
 ScanSetup SimulatedProbe::scan_setup(double nominal_radius_mm, const MachineConfig& config) {
-  if (!m_scan_solid) m_scan_solid = make_probed_solid(m_truth, m_stylus_offset_mm);
+  if (!m_scan_solid) {
+    m_scan_solid = make_probed_solid(m_truth, m_stylus_offset_mm);
+    update_error_state();
+  }
   return ScanSetup{m_scan_solid.get(), nominal_radius_mm + m_truth.probe.ball_radius_error_mm, config,
                    m_truth.scanning, static_cast<std::uint64_t>(scan_phase() * 0x1.0p53)};
 }

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -25,14 +26,24 @@ class SimulatedProbe {
   /// ball centre sits `offset_mm` from the ram's reference point (the machine errors' Abbe lever).
   void mount_stylus(double nominal_radius_mm, const Vec3& offset_mm);
 
+  /// The controller's clock reached `time_s`: the machine errors' time-dependent terms (thermal,
+  /// drift) follow it, sampled every `kErrorTimeStep_s` of simulated time.
+  void set_time(double time_s);
+  /// How often the time-dependent machine errors are re-evaluated. Thermal lags and drifts of a
+  /// CMM change its errors by well under 0.1 um in 0.1 s; the step keeps the free-space cache of
+  /// `sweep` valid over many cycles.
+  static constexpr double kErrorTimeStep_s = 0.1;
+
   /// The probe's trigger used as a collision switch on a move from a to b: the fraction of the
-  /// move at which the ball first touches, if it does.
+  /// move at which the ball first touches, if it does. The move's direction sets each moving
+  /// axis' approach direction (the machine errors' reversal terms).
   [[nodiscard]] std::optional<double> sweep(const Vec3& a, const Vec3& b);
   /// The feature name at a contact point (for fault messages).
   [[nodiscard]] std::string feature_at(const Vec3& p) const;
 
-  /// A probing move starts: the machine moves from `a` along unit `u` following `profile`.
-  void begin_probe(const MotionProfile* profile, const Vec3& a, const Vec3& u);
+  /// A probing move starts at controller time `t0_s`: the machine moves from `a` along unit `u`
+  /// following `profile`.
+  void begin_probe(const MotionProfile* profile, const Vec3& a, const Vec3& u, double t0_s);
   /// The machine moved over profile time [t0, t1]. Returns when the trigger signal reaches the
   /// controller's skip input, once that is no later than t1.
   std::optional<double> probe_step(double t0, double t1);
@@ -51,8 +62,13 @@ class SimulatedProbe {
   [[nodiscard]] bool has_axis_dynamics() const { return m_truth.axes.has_value(); }
 
   /// The simulation side of a scan with a stylus of `nominal_radius_mm` under controller
-  /// `config`: the world as the scanning probe touches it, the true ball, the probe's truth.
+  /// `config`: the world as the scanning probe touches it, the true ball, the probe's truth. The
+  /// machine errors keep their state at the scan's start (its time and approach directions) for
+  /// the whole scan.
   ScanSetup scan_setup(double nominal_radius_mm, const MachineConfig& config);
+
+ private:
+  void update_error_state();
 
  private:
   static constexpr double inf = std::numeric_limits<double>::infinity();
@@ -64,6 +80,9 @@ class SimulatedProbe {
   double m_ball_radius_mm = 0;
   Vec3 m_free_centre = Vec3::Zero();
   double m_free_radius_mm = -1;  // none
+  double m_error_time_s = 0;     // the machine errors' state: time (a multiple of the step) and
+  std::array<int, 3> m_approach{0, 0, 0};  // each axis' last direction of motion
+  double m_probe_t0_s = 0;
   const MotionProfile* m_profile = nullptr;
   Vec3 m_probe_start = Vec3::Zero();
   Vec3 m_probe_dir = Vec3::UnitZ();

@@ -57,6 +57,7 @@ void Controller::scan(const ScanPath& body, Response& response) {
                              body.path.segments.size(), capacity),
                  position, now()});
   if (auto ok = move_to(scan_approach_point(body), positioning_feed); !ok) return fail(ok.error());
+  sim.set_time(now());
   const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
   ScanOutcome out = run_scan(body, setup, position, now(), [&](const ScanCycle& c) {
     emit(c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s.norm());

@@ -10,7 +10,8 @@ Vec3 MachineErrorSolid::actual_point(const Vec3& p) const {
   MachinePose pose;
   pose.axes_mm = p - m_probe_offset_mm;
   pose.probe_offset_mm = m_probe_offset_mm;
-  return m_errors.actual_tip_mm(pose, 0.0);
+  pose.approach = m_approach;
+  return m_errors.actual_tip_mm(pose, m_time_s);
 }
 
 double MachineErrorSolid::signed_distance(const Vec3& p) const { return m_actual->signed_distance(actual_point(p)); }

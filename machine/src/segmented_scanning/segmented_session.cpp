@@ -27,6 +27,7 @@ void Controller::write_scan_buffer(const ScanBufferWrite& body, Response& respon
     first.path.speed_mm_s = command.speed_mm_s;
     if (const std::string bad = validate_scan(first); !bad.empty()) return fail({FaultKind::BadCommand, bad, position, now()});
     if (auto ok = move_to(scan_approach_point(first), positioning_feed); !ok) return fail(ok.error());
+    sim.set_time(now());
     const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
     const SegmentedScanSpec& g = config.scanning.segmented;
     segmented::ControllerConfig cfg;

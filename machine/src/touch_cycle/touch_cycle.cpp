@@ -20,7 +20,7 @@ tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, cons
   const double t_end = profile.duration_s();
   const std::int64_t n_cycles = cycles_for(t_end), c0 = cycle;
   const double t0_abs = now();
-  sim.begin_probe(&profile, start, u);
+  sim.begin_probe(&profile, start, u, t0_abs);
   std::optional<double> signal;
   for (std::int64_t k = 1; k <= n_cycles && !signal; ++k) {
     const double t0 = static_cast<double>(k - 1) * config.dt_s, t1 = std::min(static_cast<double>(k) * config.dt_s, t_end);
