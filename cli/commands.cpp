@@ -52,7 +52,7 @@ tl::expected<interpreter::Backend, std::string> ipp_backend(const std::string& u
   try {
     auto client = std::make_unique<machine::ipp::ClientMachine>(address->first, address->second);
     client->on_warning([](const std::string& w) { std::cerr << "warning: " << w << "\n"; });
-    return interpreter::Backend{std::move(client), url, 0, {}};
+    return interpreter::Backend{std::move(client), url, 0, {}, {}};
   } catch (const std::runtime_error& e) {
     return tl::unexpected(fmt::format("--machine {}: {}", url, e.what()));
   }

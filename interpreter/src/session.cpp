@@ -20,6 +20,7 @@ std::unique_ptr<Session> Session::create(Backend backend) {
   s->m_machine = std::move(backend.machine);
   s->m_runtime = std::make_unique<runtime::MeasurementRuntime>(*s->m_machine, s->m_sources, s->m_record);
   s->m_runtime->set_wavefront_stations(std::move(backend.wavefront_stations));
+  s->m_runtime->set_error_space_rig(std::move(backend.error_space_rig));
   s->m_interpreter = std::make_unique<Interpreter>(s->m_compiler.module(), *s->m_runtime, s->m_sources, s->m_sink);
   return s;
 }

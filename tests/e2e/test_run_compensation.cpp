@@ -98,6 +98,59 @@ TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
   EXPECT_NEAR(length_error_rms((dir / "dmis" / "results.json").string()), compensated, 1e-12);
 }
 
+// CALL/EXTERN,SYS,'CALIBRATE ERROR-SPACE ...' in an installation program: the same grid, instruments
+// and seed as the command line give the same map (written into --out), and the ball array measured
+// after it in the same run reads exactly as with that map loaded by --compensation.
+TEST(RunCompensationCli, AProgramCalibratesTheErrorSpaceAndCompensatesByIt) {
+  const auto dir = std::filesystem::temp_directory_path() / "metron_run_calibrate_error_space";
+  std::filesystem::remove_all(dir);
+  for (const char* d : {"cli", "program", "none"}) std::filesystem::create_directories(dir / d);
+  const std::string bin = METRON_BINARY, src = METRON_SOURCE_DIR;
+  const std::string world = src + "/programs/worlds/cmm_errors_ball_plate.json";
+  const std::string map = (dir / "map.json").string();
+  auto [code, out] = shell(bin + " calibrate error-space --world " + world +
+                           " --components xyz --reversal --sensor-offset 0,0,-50 --size 17,13,3 --origin 100,100,100"
+                           " --runs 4 --laser-cycles 8 --out " + map);
+  ASSERT_EQ(code, 0) << out;
+  std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/ball_array.dmi --world " + world +
+                              " --quiet --compensation " + map + " --out " + (dir / "cli").string());
+  ASSERT_EQ(code, 0) << out;
+  std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/ball_array.dmi --world " + world +
+                              " --quiet --out " + (dir / "none").string());
+  ASSERT_EQ(code, 0) << out;
+  std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/calibrate_then_measure.dmi --world " + world +
+                              " --out " + (dir / "program").string());
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("error space 17 x 13 x 3 written to error-space.json"), std::string::npos) << out;
+
+  auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return nlohmann::json::parse(in);
+  };
+  const auto from_cli = read(map), from_program = read(dir / "program" / "error-space.json");
+  EXPECT_EQ(from_cli.at("temperatures"), from_program.at("temperatures"));
+  EXPECT_EQ(from_cli.at("sensor_offset_mm"), from_program.at("sensor_offset_mm"));
+  EXPECT_TRUE(std::filesystem::file_size(dir / "program" / "error-space.svg") > 1000);
+
+  const double none = length_error_rms((dir / "none" / "results.json").string());
+  const double by_program = length_error_rms((dir / "program" / "results.json").string());
+  EXPECT_NEAR(by_program, length_error_rms((dir / "cli" / "results.json").string()), 1e-12);
+  EXPECT_LT(by_program, none / 10);
+
+  // Bad words are positioned errors before anything runs.
+  std::ofstream(dir / "bad.dmi") << "DMISMN/'bad', 5.0\n"
+                                    "CALL/EXTERN, SYS, 'CALIBRATE ERROR-SPACE SIZE=17,13 STEP=50'\n"
+                                    "ENDFIL\n";
+  std::tie(code, out) = shell(bin + " check " + (dir / "bad.dmi").string());
+  EXPECT_NE(code, 0);
+  EXPECT_NE(out.find("bad.dmi:2:19: error: CALIBRATE ERROR-SPACE: SIZE=17,13: expected three numbers"), std::string::npos) << out;
+  std::ofstream(dir / "huge.dmi") << "DMISMN/'huge', 5.0\n"
+                                     "CALL/EXTERN, SYS, 'CALIBRATE ERROR-SPACE SIZE=1000,1000,3 RUNS=7'\n"
+                                     "ENDFIL\n";
+  std::tie(code, out) = shell(bin + " check " + (dir / "huge.dmi").string());
+  EXPECT_NE(out.find("3000000 grid points; at most 250000"), std::string::npos) << out;
+}
+
 TEST(RunCompensationCli, ABadCompensationFileIsRefusedNamingWhere) {
   const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation_bad";
   std::filesystem::create_directories(dir);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "compile/unit_compiler.hpp"
+#include "metron/runtime/error_space/calibrate_command.hpp"
 
 namespace metron::interpreter::detail {
 
@@ -21,7 +22,8 @@ tl::expected<std::pair<std::string, std::string>, std::string> calibrate_wavefro
   std::string verb, what, world, step, extra;
   words >> verb >> what >> world >> step >> extra;
   if (upper(what) != "WAVEFRONT")
-    return tl::unexpected(fmt::format("'{}': metron calibrates WAVEFRONT only (CALIBRATE WAVEFRONT world [step])", text));
+    return tl::unexpected(fmt::format("'{}': metron calibrates WAVEFRONT (CALIBRATE WAVEFRONT world [step]) and ERROR-SPACE "
+                                      "(CALIBRATE ERROR-SPACE [SIZE=nx,ny,nz ORIGIN=x,y,z STEP=d COMPONENTS=xyz ...])", text));
   if (world.empty()) return tl::unexpected(fmt::format("'{}': name the wavefront world, e.g. CALIBRATE WAVEFRONT station.json a-z", text));
   if (!extra.empty()) return tl::unexpected(fmt::format("too many words in '{}'", text));
   if (step.empty()) step = "all";
@@ -323,6 +325,18 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       emit(std::move(in));
       return;
     }
+    if (verb == "CALIBRATE" && upper(arg) == "ERROR-SPACE") {
+      // CALIBRATE ERROR-SPACE [KEY=VALUE | REVERSAL]... (docs/error-space.md): the words are
+      // checked here so that `check` names a bad one; the run reads them again.
+      const std::size_t at = upper(text).find("ERROR-SPACE") + std::string("ERROR-SPACE").size();
+      const std::string rest = text.substr(at);
+      if (auto r = runtime::parse_error_space_request(rest); !r)
+        return error(s.params[2].span, "sema.system-command", "CALIBRATE ERROR-SPACE: " + r.error());
+      auto in = make(Op::System, s, "CALIBRATE ERROR-SPACE");
+      in.operands.push_back(word_operand(rest, s.params[2].span));
+      emit(std::move(in));
+      return;
+    }
     if (verb == "CALIBRATE") {
       auto c = calibrate_wavefront_words(text);
       if (!c) return error(s.params[2].span, "sema.system-command", c.error());
@@ -335,7 +349,7 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       return;
     }
     note(s.params[2].span, "sema.unsupported-call",
-         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION, COMPENSATION and CALIBRATE WAVEFRONT); "
+         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION, COMPENSATION, CALIBRATE WAVEFRONT and CALIBRATE ERROR-SPACE); "
                      "the call is skipped", text));
     emit(make(Op::Nop, s, "CALL"));
     return;

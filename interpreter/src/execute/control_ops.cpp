@@ -30,6 +30,13 @@ ExecStatus Execute::nothing(Interpreter&, const ir::Instruction&, CallFrame&) {
 // Op::System
 ExecStatus Execute::system(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   const std::string& arg = in.operands.empty() ? std::string() : in.operands[0].word;
+  if (in.name == "CALIBRATE ERROR-SPACE") {  // operand: the words after ERROR-SPACE (compile/control.cpp)
+    auto request = runtime::parse_error_space_request(arg);
+    if (!request) return vm.fail(in.span, request.error());
+    auto c = vm.m_runtime.calibrate_error_space(*request, in.span);
+    if (!c) return vm.from_runtime(c.error());
+    return ExecStatus::Running;
+  }
   if (in.name == "CALIBRATE WAVEFRONT") {  // operands: the world file, the step (compile/control.cpp)
     auto w = vm.m_runtime.calibrate_wavefront(arg, in.operands.at(1).word, in.span);
     if (!w) return vm.from_runtime(w.error());

@@ -23,6 +23,7 @@ struct Backend {
   std::uint64_t seed = 0;                     ///< for the record: the run seed
   /// Wavefront stations for CALL/EXTERN,SYS,'CALIBRATE WAVEFRONT world' (empty: none).
   runtime::WavefrontStationFactory wavefront_stations;
+  runtime::ErrorSpaceRig error_space_rig;     ///< CALIBRATE ERROR-SPACE on this machine (none: refused)
 };
 
 /// Builds a backend for a world file (none: the default world) and a seed (none: the world's);

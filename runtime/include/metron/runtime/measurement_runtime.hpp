@@ -12,6 +12,7 @@
 #include "metron/runtime/alignment.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/characterisation.hpp"
+#include "metron/runtime/error_space/calibrate_command.hpp"
 #include "metron/runtime/feature.hpp"
 #include "metron/runtime/requests.hpp"
 #include "metron/runtime/run_record.hpp"
@@ -105,6 +106,13 @@ class MeasurementRuntime {
   Result<void> calibrate_wavefront(const std::string& world_path, const std::string& step, Span span);
   /// Where CALIBRATE WAVEFRONT gets its station (none: the command fails with a message).
   void set_wavefront_stations(WavefrontStationFactory factory) { m_wavefront_stations = std::move(factory); }
+  /// The error-space calibration of the run's machine (CALL/EXTERN,SYS,'CALIBRATE ERROR-SPACE ...';
+  /// runtime/src/error_space/calibrate_command.cpp, docs/error-space.md): the rig the composition
+  /// root provides measures, the map and its report go into the output directory, and the
+  /// controller compensates by the map from here on.
+  Result<void> calibrate_error_space(const ErrorSpaceRequest& request, Span span);
+  /// Where CALIBRATE ERROR-SPACE gets its rig (none: the command fails with a message).
+  void set_error_space_rig(ErrorSpaceRig rig) { m_error_space_rig = std::move(rig); }
   /// Checks a probing feed against the characterisation's maximum protected feed.
   Result<void> check_probing_feed(double measuring_mm_s, Span span) const;
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
@@ -179,6 +187,7 @@ class MeasurementRuntime {
   FileAccessPolicy m_policy;
   std::vector<std::string> m_output_errors;
   WavefrontStationFactory m_wavefront_stations;  ///< CALIBRATE WAVEFRONT (set by the composition root)
+  ErrorSpaceRig m_error_space_rig;               ///< CALIBRATE ERROR-SPACE (set by the composition root)
 
   std::map<std::string, Feature> m_features;
   std::vector<std::string> m_feature_order;
