@@ -5,7 +5,9 @@
 // map the two-point calibration recovers, and with the ideal map sampled from the hidden errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <numeric>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -14,6 +16,7 @@
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/virtual_cmm.hpp"
+#include "scan_paths.hpp"
 
 using namespace metron;
 using namespace metron::machine;
@@ -304,6 +307,75 @@ TEST(ErrorSpaceMap, IsQueriedAtTheTipMinusTheSensorOffsetAndKeepsItInTheFile) {
   ASSERT_TRUE(map) << map.error();
   // The tip at z = 100 had the ram at z = 150.
   EXPECT_NEAR(map->error_at_mm(Vec3(300, 400, 100)).z(), 1e-5 * 150, 1e-15);
+}
+
+}  // namespace
+
+namespace {
+
+// e_z = k x^2 on a 50 mm grid in x (trilinear: at most k h^2 / 4 = 0.125 um from the parabola).
+std::shared_ptr<const ErrorMap> bow_map_file(double k_per_mm2) {
+  error_space::ErrorSpace s;
+  std::vector<double> xs;
+  for (int i = 0; i <= 24; ++i) xs.push_back(50.0 * i);
+  s.grid.axes_mm = {xs, std::vector<double>{0, 1000}, std::vector<double>{-200, 600}};
+  s.values_mm[2].resize(s.grid.size());
+  for (std::size_t kk = 0; kk < 2; ++kk)
+    for (std::size_t j = 0; j < 2; ++j)
+      for (std::size_t i = 0; i < xs.size(); ++i) s.values_mm[2][s.grid.index(i, j, kk)] = k_per_mm2 * xs[i] * xs[i];
+  error_space::ErrorSpaceFile f;
+  f.spaces.push_back(s);
+  f.sensor_offset_mm = {0, 0, -50};
+  return std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(f));
+}
+
+// The heights of the block's TOP face (z = 40) scanned along x from 310 to 450 at y 205 (clear of
+// the bores and the countersink), surface points of the samples.
+std::vector<double> scanned_top_heights(const World& world, std::shared_ptr<const ErrorMap> map) {
+  CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 1), std::move(map));
+  std::uint64_t tag = 0;
+  auto run = [&](decltype(Command::body) body) {
+    cmm.submit({++tag, std::move(body)});
+    auto r = cmm.execute().front();
+    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
+    return r;
+  };
+  run(DefineTool{"T1", 4.0});
+  run(SelectTool{"T1"});
+  run(GoTo{Vec3(305, 205, 60), std::nullopt});
+  ScanPath c;
+  const double centre_z = 40 + 2 - 0.3;  // ball radius 2, reference deflection 0.3
+  scan_test::add_line(c.path, Vec3(310, 205, centre_z), Vec3(450, 205, centre_z), 10, Vec3::UnitZ());
+  c.approach_normal = Vec3::UnitZ();
+  c.sample_spacing_mm = 1;
+  const Response r = run(c);
+  std::vector<double> z;
+  for (const ScanSample& s : r.scan) z.push_back(s.surface_mm(2.0).z());
+  return z;
+}
+
+// A bowed X guideway (EZX = k x^2, 19 to 41 um over the scan) makes the flat TOP face scan as a
+// 21 um slope; the map of the same bow, applied to the scan's samples, brings it back to the
+// perfect machine's flat face. (The scanning probe's own ball radius error is the same in all
+// three, so the heights are compared with the perfect machine's, not with 40.)
+TEST(CompensatedMachine, AScanOfAFlatFaceOnABowedGuidewayIsFlatAgainWithTheMap) {
+  const double k = 2e-7;
+  const World bowed = default_with(R"({"axes": {"x": {"tz_mm": {"poly": [0, 0, 2e-7]}}}})");
+  const auto perfect = scanned_top_heights(default_with(""), nullptr);
+  const auto raw = scanned_top_heights(bowed, nullptr);
+  const auto compensated = scanned_top_heights(bowed, bow_map_file(k));
+  ASSERT_GT(perfect.size(), 100u);
+  auto range = [](const std::vector<double>& v) {
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    return *hi - *lo;
+  };
+  auto mean = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); };
+  std::printf("TOP face heights over the scan, range: perfect %.3f um, bowed %.3f um, bowed with the map %.3f um\n",
+              1e3 * range(perfect), 1e3 * range(raw), 1e3 * range(compensated));
+  EXPECT_GT(range(raw), 0.018) << "the bow shows: k (450^2 - 310^2) = 21 um";
+  EXPECT_LT(range(compensated), range(perfect) + 0.001) << "raw " << range(raw) * 1e3 << " um, compensated "
+                                                        << range(compensated) * 1e3 << " um, perfect " << range(perfect) * 1e3;
+  EXPECT_NEAR(mean(compensated), mean(perfect), 0.001);
 }
 
 }  // namespace
