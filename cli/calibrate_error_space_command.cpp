@@ -5,6 +5,8 @@
 // rig's readings; `--truth` prints the world's hidden errors beside them, for checking.
 #include <array>
 #include <cmath>
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -31,11 +33,14 @@ struct ErrorSpaceArgs {
   std::string components = "z";
   double sensor_noise_um = 0.1;
   bool reversal = false;
+  bool angle_instrument = false;
+  double angle_noise_urad = 0.25;
   std::vector<double> sensor_offset_mm{0, 0, -120};
   int runs = 1;
   int laser_cycles = 2;
   std::optional<std::uint64_t> seed;
   std::optional<std::string> out;
+  bool append = false;
   std::optional<std::string> report;
   bool truth = false;
 };
@@ -91,6 +96,8 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
   }
   for (int c = 0; c < 3; ++c) plan.components[c] = args.components.find("xyz"[c]) != std::string::npos;
   plan.delta_by_reversal = args.reversal;
+  plan.head.angle_instrument = args.angle_instrument;
+  plan.head.angle_noise_sd_rad = args.angle_noise_urad * 1e-6;
   if (args.sensor_offset_mm.size() != 3 || args.runs < 1 || args.runs > 100 || args.laser_cycles < 1 || args.laser_cycles > 100) {
     std::cerr << "error: --sensor-offset takes x,y,z; --runs and --laser-cycles 1 to 100\n";
     return 2;
@@ -108,9 +115,10 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
     return 2;
   }
   const char* names = "xyz";
-  std::cout << fmt::format("error space {} x {} x {} points, step {} mm, components {}; {} planes, {} to re-measure (S7)\n",
+  std::cout << fmt::format("error space {} x {} x {} points, step {} mm, components {}; {} planes, {} to re-measure (S7); "
+                           "machine at {:.2f} C\n",
                            args.size[0], args.size[1], args.size[2], args.step_mm, args.components, run.planes.size(),
-                           run.planes_to_remeasure);
+                           run.planes_to_remeasure, run.space.temperature_c);
   std::optional<error_space::ErrorSpace> truth;
   if (args.truth) truth = machine::truth_in_reference(world.truth.errors, plan);
   for (int c = 0; c < 3; ++c) {
@@ -126,10 +134,40 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
   }
   if (args.out) {
     error_space::ErrorSpaceFile file;
+    if (args.append && std::filesystem::exists(*args.out)) {
+      // Another temperature for the same machine: the spaces must share the grid and components.
+      auto earlier = error_space::read_error_space_file(*args.out);
+      if (!earlier) {
+        std::cerr << "error: " << *args.out << ": " << earlier.error().pointer << ": " << earlier.error().message << "\n";
+        return 2;
+      }
+      file = std::move(*earlier);
+      if (file.sensor_offset_mm != std::array<double, 3>{args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]}) {
+        std::cerr << "error: " << *args.out << " was calibrated with another --sensor-offset\n";
+        return 2;
+      }
+      for (const auto& s : file.spaces)
+        if (std::abs(s.temperature_c - run.space.temperature_c) < 0.005) {
+          std::cerr << fmt::format("error: {} already holds a space at {:.2f} C\n", *args.out, s.temperature_c);
+          return 2;
+        }
+    }
     file.spaces.push_back(run.space);
+    std::sort(file.spaces.begin(), file.spaces.end(),
+              [](const auto& a, const auto& b) { return a.temperature_c < b.temperature_c; });
     file.sensor_offset_mm = {args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]};
     file.description = fmt::format("metron calibrate error-space, sequential two-point method (SEEDS.md 4), world {}",
                                    args.world.value_or("<default>"));
+    // The spaces must agree (grid, components): the file's own reader checks what it will be read with.
+    try {
+      if (auto back = error_space::from_json(error_space::to_json(file)); !back) {
+        std::cerr << "error: " << *args.out << ": " << back.error().pointer << ": " << back.error().message << "\n";
+        return 2;
+      }
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "error: " << *args.out << ": " << e.what() << "\n";
+      return 2;
+    }
     if (auto w = error_space::write_error_space_file(*args.out, file); !w) {
       std::cerr << "error: " << w.error() << "\n";
       return 2;
@@ -184,6 +222,12 @@ void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>
       ->check(CLI::IsMember({"x", "y", "z", "xy", "xz", "yz", "xyz"}));
   cmd->add_option("--sensor-noise-um", args->sensor_noise_um, "white noise of each displacement reading")->default_val(0.1);
   cmd->add_flag("--reversal", args->reversal, "measure Delta by turning the head 180 degrees (keeps each plane's slope)");
+  cmd->add_flag("--angle-instrument", args->angle_instrument,
+                "read the head's rotation with an autocollimator or electronic level at every position and remove "
+                "it from the chain (for machines whose carriages pitch or yaw; beyond the seed)");
+  cmd->add_option("--angle-noise-urad", args->angle_noise_urad, "the angle instrument's noise")
+      ->default_val(0.25)
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--sensor-offset", args->sensor_offset_mm,
                   "sensor A's tip from the ram reference point, mm; give the stylus the map will serve "
                   "(e.g. 0,0,-50) so the Abbe levers match")
@@ -196,6 +240,9 @@ void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>
       ->default_val(2);
   cmd->add_option("--seed", args->seed, "noise seed (default: the world's)");
   cmd->add_option("--out", args->out, "write the error-space file (docs/error-space.md) here");
+  cmd->add_flag("--append", args->append,
+                "add this calibration to the spaces already in --out (the same machine at another temperature; "
+                "the controller interpolates them by its thermometer)");
   cmd->add_option("--report", args->report, "write an offline SVG page of maps here");
   cmd->add_flag("--truth", args->truth, "also compare with the world's hidden errors (for checking only)");
   commands.push_back({cmd, [args] { return calibrate_error_space(*args); }});

@@ -50,6 +50,8 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
       for (int i = 0; i < r.size[a]; ++i) plan.grid.axes_mm[a].push_back(r.origin_mm[a] + r.step_mm * i);
     plan.components = r.components;
     plan.delta_by_reversal = r.reversal;
+    plan.head.angle_instrument = r.angle_instrument;
+    plan.head.angle_noise_sd_rad = r.angle_noise_urad * 1e-6;
     plan.runs = r.runs;
     plan.laser_cycles = r.laser_cycles;
     plan.seed = run_seed;

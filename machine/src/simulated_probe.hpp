@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -26,6 +27,13 @@ class SimulatedProbe {
   /// ball centre sits `offset_mm` from the ram's reference point (the machine errors' Abbe lever).
   void mount_stylus(double nominal_radius_mm, const Vec3& offset_mm);
 
+  /// The machine's thermometer at `time_s` (its scales' temperature to 0.01 K), if the world's
+  /// machine errors model one.
+  [[nodiscard]] std::optional<double> thermometer_c(double time_s) const {
+    const auto t = m_truth.errors.machine_temperature_c(time_s);
+    if (!t) return std::nullopt;
+    return std::round(*t * 100) / 100;
+  }
   /// The controller's clock reached `time_s`: the machine errors' time-dependent terms (thermal,
   /// drift) follow it, sampled every `kErrorTimeStep_s` of simulated time.
   void set_time(double time_s);

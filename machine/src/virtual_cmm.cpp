@@ -176,6 +176,7 @@ MachineState VirtualCmm::state() const {
   s.queued_commands = m_impl->queue.size();
   s.executed_commands = m_impl->executed;
   s.scan_buffer_segments = m_impl->config.scanning.segmented.buffer_segments;
+  s.temperature_c = m_impl->sim.thermometer_c(m_impl->now());
   return s;
 }
 

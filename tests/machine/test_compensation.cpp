@@ -379,3 +379,95 @@ TEST(CompensatedMachine, AScanOfAFlatFaceOnABowedGuidewayIsFlatAgainWithTheMap) 
 }
 
 }  // namespace
+
+namespace {
+
+// The default block's machine with an X scale (10.5 um/m/K, fixed at 0) following an air history
+// without lag: a thermometer on the scales reads it.
+World warm_block(const std::string& air_json) {
+  return default_with(R"({"thermal": {"air_c": )" + air_json +
+                      R"(, "scales": {"x": {"alpha_per_k": 10.5e-6, "temperature": {"lag_s": 0}}}}})");
+}
+
+// The block's LEFT and RIGHT faces probed (y 250, z 20), each from outside; the ball centres' x
+// distance. `wait_s`: a long positioning loop first (the air moves meanwhile).
+double block_width(const World& world, std::shared_ptr<const ErrorMap> map, double wait_s = 0) {
+  CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 1), std::move(map));
+  std::uint64_t tag = 0;
+  auto run = [&](decltype(Command::body) body) {
+    cmm.submit({++tag, std::move(body)});
+    auto r = cmm.execute().front();
+    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
+    return r;
+  };
+  run(DefineTool{"T1", 4.0});
+  run(SelectTool{"T1"});
+  while (run(GoTo{Vec3(800, 700, 300), std::nullopt}).end_time_s < wait_s) run(GoTo{Vec3(100, 100, 300), std::nullopt});
+  auto touch = [&](double x, double outward) {
+    run(GoTo{Vec3(x + 10 * outward, 250, 60), std::nullopt});
+    run(GoTo{Vec3(x + 10 * outward, 250, 20), std::nullopt});
+    PtMeas m;
+    m.nominal_mm = Vec3(x, 250, 20);
+    m.normal = Vec3(outward, 0, 0);
+    const Response r = run(m);
+    run(GoTo{Vec3(x + 10 * outward, 250, 60), std::nullopt});
+    return r.hit ? r.hit->centre_mm.x() : 0.0;
+  };
+  const double left = touch(300, -1);
+  return touch(460, 1) - left;
+}
+
+// The machine calibrated at 20 C and at 24 C (e_x over the block, the laser giving the scale),
+// one file with both spaces; the controller interpolates them by its thermometer.
+error_space::ErrorSpaceFile two_temperature_file(std::vector<double> temperatures) {
+  SpaceCalibrationPlan plan;
+  plan.head.spacing_mm = 50;
+  plan.head.noise_sd_mm = 0.0001;
+  plan.head.sensor_offset_mm = Vec3(0, 0, -50);
+  for (int i = 0; i < 7; ++i) plan.grid.axes_mm[0].push_back(250 + 50.0 * i);
+  for (int j = 0; j < 3; ++j) plan.grid.axes_mm[1].push_back(200 + 50.0 * j);
+  for (int k = 0; k < 3; ++k) plan.grid.axes_mm[2].push_back(50 + 50.0 * k);
+  plan.components = {true, false, false};
+  plan.laser_cycles = 8;
+  error_space::ErrorSpaceFile f;
+  f.sensor_offset_mm = {0, 0, -50};
+  for (double t : temperatures) {
+    const World w = warm_block(fmt::format(R"({{"t_s": [0], "temperature_c": [{}]}})", t));
+    f.spaces.push_back(calibrate_space(w.truth.errors, plan).space);
+  }
+  return f;
+}
+
+// The block at 22 C: the map interpolated between 20 and 24 C by the thermometer reads it as the
+// perfect machine does; the nearest calibrated space (20 C only) leaves the scale's growth,
+// alpha 2 K 160 mm = 3.4 um. The air then warming 20 -> 24 C during the run: the map follows. (A
+// map without the thermometer stays at 20 C: the `nearest` figures.)
+TEST(CompensatedMachine, AMapAtTwoTemperaturesFollowsTheMachinesThermometer) {
+  const auto both = two_temperature_file({20, 24});
+  ASSERT_DOUBLE_EQ(both.spaces[0].temperature_c, 20);  // labelled by the thermometer at the calibration
+  ASSERT_DOUBLE_EQ(both.spaces[1].temperature_c, 24);
+  auto only20 = both;
+  only20.spaces.pop_back();
+  const auto interpolated = std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(both));
+  const auto nearest = std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(only20));
+
+  const double perfect = block_width(default_with(""), nullptr);
+  const World at22 = warm_block(R"({"t_s": [0], "temperature_c": [22]})");
+  const double raw = block_width(at22, nullptr) - perfect;
+  const double with_interpolated = block_width(at22, interpolated) - perfect;
+  const double with_nearest = block_width(at22, nearest) - perfect;
+  // The air warms from 20 to 24 C over 400 s; the block is probed after 300 s (23 C and rising).
+  const World warming = warm_block(R"({"t_s": [0, 400], "temperature_c": [20, 24]})");
+  const double warming_perfect = block_width(default_with(""), nullptr, 300);
+  const double warming_interpolated = block_width(warming, interpolated, 300) - warming_perfect;
+  const double warming_nearest = block_width(warming, nearest, 300) - warming_perfect;
+  std::printf("block width minus the perfect machine's, um: at 22 C raw %.3f, nearest (20 C) %.3f, interpolated %.3f; "
+              "warming to 23 C: nearest %.3f, interpolated %.3f\n",
+              1e3 * raw, 1e3 * with_nearest, 1e3 * with_interpolated, 1e3 * warming_nearest, 1e3 * warming_interpolated);
+  EXPECT_NEAR(with_nearest, -10.5e-6 * 2 * 160, 0.0005);  // the map at 20 C undoes the 20 C errors only
+  EXPECT_NEAR(with_interpolated, 0, 0.0004);
+  EXPECT_LT(warming_nearest, -10.5e-6 * 3 * 160);  // 3 K and more by the time of the touches
+  EXPECT_NEAR(warming_interpolated, 0, 0.0004);
+}
+
+}  // namespace

@@ -76,6 +76,8 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
   SpaceCalibration out;
   out.space.grid = plan.grid;
   double time_s = plan.start_time_s;
+  // The machine's thermometer at the start labels the space (a world without one: 20 C).
+  if (const auto t = hidden.machine_temperature_c(time_s)) out.space.temperature_c = std::round(*t * 100) / 100;
   Rng laser_rng(plan.seed ^ 0x5a5a5a5aULL);
   for (int c = 0; c < 3; ++c) {
     if (!plan.components[static_cast<std::size_t>(c)]) continue;
@@ -101,10 +103,14 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
       laser_sd = plan.laser_noise_sd_mm / std::sqrt(static_cast<double>(plan.laser_cycles));
       out.laser.insert(out.laser.end(), records.begin(), records.end());
     }
-    const double reversal_sd = plan.head.noise_sd_mm / std::sqrt(static_cast<double>(nu - 1));
+    // An angle instrument's noise reaches B's corrected readings on the lever d.
+    const double sigma_b = plan.head.angle_instrument
+                               ? std::hypot(plan.head.noise_sd_mm, plan.head.angle_noise_sd_rad * plan.head.spacing_mm)
+                               : plan.head.noise_sd_mm;
+    const double reversal_sd = std::hypot(plan.head.noise_sd_mm, sigma_b) / std::sqrt(2.0 * static_cast<double>(nu - 1));
     const Eigen::MatrixXd floor = error_space::surface_noise_sd_mm(
         static_cast<int>(nu - 1), static_cast<int>(nv - 1), plan.head.noise_sd_mm,
-        plan.delta_by_reversal ? reversal_sd : plan.known_delta_mm ? 0.0 : -1.0);
+        plan.delta_by_reversal ? reversal_sd : plan.known_delta_mm ? 0.0 : -1.0, sigma_b);
     auto& values = out.space.values_mm[static_cast<std::size_t>(c)];
     auto& sd = out.space.sd_mm[static_cast<std::size_t>(c)];
     values.assign(g.size(), 0.0);

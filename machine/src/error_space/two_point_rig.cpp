@@ -28,6 +28,14 @@ std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, dou
     return r + zero + m_head.noise_sd_mm * m_rng.normal();
   };
   const double lever = reversed ? -0.5 * theta * d : 0.5 * theta * d;
+  // The angle instrument: the rotation that moved B's tip away from the plate relative to A's
+  // (the tool displacements' difference along the normal, and the head's own pitch on its lever),
+  // per unit of B's nominal lever.
+  const int normal = m_plate.normal_axis();
+  const double b_lever = reversed ? -d : d;
+  const double rotated_mm = m_plate.normal_sign() * ((pb - pa)[normal] - (b_offset - m_head.sensor_offset_mm)[normal]) - 2 * lever;
+  m_last_angle_rad = rotated_mm / b_lever;
+  if (m_head.angle_instrument) m_last_angle_rad += m_head.angle_noise_sd_rad * m_rng.normal();
   const double a = reading(pa, +lever, m_head.zero_a_mm);
   const double b = reading(pb, -lever - m_head.delta_mm - (turned ? m_head.delta_change_turned_mm : 0.0), m_head.zero_b_mm);
   m_time_s += dwell_s;
@@ -42,7 +50,9 @@ error_space::LineReadings TwoPointRig::measure_line(const Vec3& start, int step_
     const auto [a, b] = read(q, step_axis, k * m_head.spacing_mm, turned, reversed);
     out.a_mm.push_back(a);
     out.b_mm.push_back(b);
+    if (m_head.angle_instrument) out.angle_rad.push_back(m_last_angle_rad);
   }
+  out.b_lever_mm = reversed ? -m_head.spacing_mm : m_head.spacing_mm;
   return out;
 }
 

@@ -57,6 +57,15 @@ Vec3 ScaleThermalTerm::displacement(const MachinePose& pose, double t) const {
   return e;
 }
 
+std::optional<double> ScaleThermalTerm::machine_temperature_c(double t) const {
+  double sum = 0;
+  int n = 0;
+  for (const Scale& s : m_scales)
+    if (s.temperature) sum += s.temperature->body_c(t), ++n;
+  if (n == 0) return std::nullopt;
+  return sum / n;
+}
+
 Vec3 PartThermalTerm::displacement(const MachinePose& pose, double t) const {
   if (!m_temperature) return Vec3::Zero();
   return -m_alpha * (m_temperature->body_c(t) - 20.0) * (pose.nominal_tip_mm() - m_fixed);

@@ -80,9 +80,17 @@ tl::expected<ErrorSpaceRequest, std::string> parse_error_space_request(const std
       r.reversal = true;
       continue;
     }
+    if (key == "ANGLE") {
+      r.angle_instrument = true;
+      if (eq == std::string::npos) continue;
+      auto v = one_number(key, value, 0, 100);
+      if (!v) return tl::unexpected(v.error());
+      r.angle_noise_urad = *v;
+      continue;
+    }
     if (eq == std::string::npos || value.empty())
       return tl::unexpected(fmt::format("'{}': expected KEY=VALUE (SIZE, ORIGIN, STEP, COMPONENTS, NOISE, OFFSET, RUNS, "
-                                        "LASER) or REVERSAL",
+                                        "LASER, ANGLE) or REVERSAL, ANGLE",
                                         word));
     if (key == "SIZE") {
       auto t = triple<int>(key, value);
@@ -117,7 +125,7 @@ tl::expected<ErrorSpaceRequest, std::string> parse_error_space_request(const std
       }
     } else {
       return tl::unexpected(fmt::format("unknown word '{}' (SIZE, ORIGIN, STEP, COMPONENTS, NOISE, OFFSET, RUNS, LASER, "
-                                        "REVERSAL)",
+                                        "REVERSAL, ANGLE)",
                                         word));
     }
   }

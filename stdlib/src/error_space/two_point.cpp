@@ -12,22 +12,28 @@ void check_line(const LineReadings& r, const char* what) {
   if (r.a_mm.size() != r.b_mm.size())
     throw std::invalid_argument(std::string(what) + ": sensors A and B have different numbers of readings");
   if (r.a_mm.size() < 2) throw std::invalid_argument(std::string(what) + ": a line needs at least 2 head positions");
+  if (!r.angle_rad.empty() && r.angle_rad.size() != r.a_mm.size())
+    throw std::invalid_argument(std::string(what) + ": the angle instrument has a different number of readings");
 }
 
 }  // namespace
+
+double rotation_free_b(const LineReadings& r, std::size_t k) {
+  return r.angle_rad.empty() ? r.b_mm[k] : r.b_mm[k] + r.angle_rad[k] * r.b_lever_mm;
+}
 
 std::vector<double> chain(const LineReadings& r) {
   check_line(r, "two-point line");
   std::vector<double> e(r.a_mm.size(), 0.0);
   // SEEDS.md 4: e_k = e_{k-1} - a_k + b_{k-1}
-  for (std::size_t k = 1; k < e.size(); ++k) e[k] = e[k - 1] - r.a_mm[k] + r.b_mm[k - 1];
+  for (std::size_t k = 1; k < e.size(); ++k) e[k] = e[k - 1] - r.a_mm[k] + rotation_free_b(r, k - 1);
   return e;
 }
 
 std::vector<double> chain_literal_start(const LineReadings& r) {
   check_line(r, "two-point line");
   std::vector<double> e(r.a_mm.size(), 0.0);
-  for (std::size_t k = 2; k < e.size(); ++k) e[k] = e[k - 1] - r.a_mm[k] + r.b_mm[k - 1];
+  for (std::size_t k = 2; k < e.size(); ++k) e[k] = e[k - 1] - r.a_mm[k] + rotation_free_b(r, k - 1);
   return e;
 }
 
@@ -133,29 +139,30 @@ double delta_by_reversal(const LineReadings& fwd, const LineReadings& rev) {
   const std::size_t n = fwd.a_mm.size() - 1;
   double sum = 0;
   for (std::size_t k = 1; k <= n; ++k)
-    sum += 0.5 * ((fwd.b_mm[k - 1] - fwd.a_mm[k]) - (rev.a_mm[k - 1] - rev.b_mm[k]));
+    sum += 0.5 * ((rotation_free_b(fwd, k - 1) - fwd.a_mm[k]) - (rev.a_mm[k - 1] - rotation_free_b(rev, k)));
   return sum / static_cast<double>(n);
 }
 
-Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma, double known_delta_sd) {
+Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma, double known_delta_sd, double sigma_b) {
+  if (sigma_b < 0) sigma_b = sigma;
   // The method is linear in the readings: propagate each reading's unit impulse and add the squares.
   SurfaceReadings r;
-  r.x_lines.assign(static_cast<std::size_t>(m + 1), LineReadings{std::vector<double>(l + 1, 0.0), std::vector<double>(l + 1, 0.0)});
-  r.y_line_first = LineReadings{std::vector<double>(m + 1, 0.0), std::vector<double>(m + 1, 0.0)};
+  r.x_lines.assign(static_cast<std::size_t>(m + 1), LineReadings{std::vector<double>(l + 1, 0.0), std::vector<double>(l + 1, 0.0), {}, 0});
+  r.y_line_first = LineReadings{std::vector<double>(m + 1, 0.0), std::vector<double>(m + 1, 0.0), {}, 0};
   r.y_line_last = r.y_line_first;
   Eigen::MatrixXd var = Eigen::MatrixXd::Zero(l + 1, m + 1);
-  auto impulse = [&](double& reading) {
+  // B's readings may be noisier (an angle instrument's noise times the lever adds to them).
+  auto impulse = [&](double& reading, double sd) {
     reading = 1.0;
     SurfaceOptions o;
     if (known_delta_sd >= 0) o.known_delta_mm = 0.0;  // Delta from other readings: no impulse reaches it here
-    var += solve_surface(r, o).error_mm.array().square().matrix();
+    var += sd * sd * solve_surface(r, o).error_mm.array().square().matrix();
     reading = 0.0;
   };
   for (auto& line : r.x_lines)
-    for (int i = 0; i <= l; ++i) impulse(line.a_mm[static_cast<std::size_t>(i)]), impulse(line.b_mm[static_cast<std::size_t>(i)]);
+    for (int i = 0; i <= l; ++i) impulse(line.a_mm[static_cast<std::size_t>(i)], sigma), impulse(line.b_mm[static_cast<std::size_t>(i)], sigma_b);
   for (auto* line : {&r.y_line_first, &r.y_line_last})
-    for (int j = 0; j <= m; ++j) impulse(line->a_mm[static_cast<std::size_t>(j)]), impulse(line->b_mm[static_cast<std::size_t>(j)]);
-  var *= sigma * sigma;
+    for (int j = 0; j <= m; ++j) impulse(line->a_mm[static_cast<std::size_t>(j)], sigma), impulse(line->b_mm[static_cast<std::size_t>(j)], sigma_b);
   if (known_delta_sd > 0)
     for (int i = 0; i <= l; ++i)
       for (int j = 0; j <= m; ++j) var(i, j) += std::pow(known_delta_sd * (i + j), 2);

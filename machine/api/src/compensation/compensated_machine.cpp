@@ -1,10 +1,30 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/compensation/compensated_machine.hpp"
 
+#include <cmath>
+
 namespace metron::machine {
 
 CompensatedMachine::CompensatedMachine(std::unique_ptr<Machine> inner, std::shared_ptr<const ErrorMap> map)
-    : m_inner(std::move(inner)), m_map(std::move(map)) {}
+    : m_inner(std::move(inner)) {
+  set_map(std::move(map));
+}
+
+void CompensatedMachine::set_map(std::shared_ptr<const ErrorMap> map) {
+  m_map = std::move(map);
+  const auto by_file = std::dynamic_pointer_cast<const ErrorSpaceMap>(m_map);
+  m_by_temperature = by_file && by_file->follows_temperature() ? by_file : nullptr;
+  follow_temperature();
+}
+
+void CompensatedMachine::follow_temperature() {
+  if (!m_by_temperature) return;
+  const auto t = m_inner->state().temperature_c;
+  if (!t) return;  // no thermometer: the map stays at the temperature it was built for
+  const auto* now = static_cast<const ErrorSpaceMap*>(m_map.get());
+  if (std::abs(*t - now->temperature_c()) < 0.01) return;
+  if (auto at = m_by_temperature->at_temperature(*t)) m_map = std::make_shared<const ErrorSpaceMap>(std::move(*at));
+}
 
 Vec3 CompensatedMachine::command_for(const Vec3& wanted_mm) const {
   if (!m_map) return wanted_mm;
@@ -28,6 +48,7 @@ void shift(std::vector<geometry::PccSegment>& segments, const Vec3& by_mm) {
 
 void CompensatedMachine::submit(Command command) {
   m_queued.push_back(command);
+  follow_temperature();
   if (m_map) {
     if (auto* g = std::get_if<GoTo>(&command.body)) {
       g->target_mm = command_for(g->target_mm);

@@ -16,8 +16,7 @@ tl::expected<ErrorSpaceMap, std::string> ErrorSpaceMap::build(const error_space:
   }
   auto interpolator = error_space::SpaceInterpolator::build(space, file.interpolation);
   if (!interpolator) return tl::unexpected(interpolator.error());
-  const auto& o = file.sensor_offset_mm;
-  return ErrorSpaceMap(std::move(*interpolator), Vec3(o[0], o[1], o[2]));
+  return ErrorSpaceMap(std::move(*interpolator), std::make_shared<const error_space::ErrorSpaceFile>(file), monitored_temperature_c);
 }
 
 Vec3 ErrorSpaceMap::error_at_mm(const Vec3& q_mm) const {

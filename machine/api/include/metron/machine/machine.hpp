@@ -23,6 +23,9 @@ struct MachineState {
   std::size_t executed_commands = 0;
   /// Segments one scan command buffer holds (a longer ScanPath must come as ScanBufferWrite).
   std::size_t scan_buffer_segments = 0;
+  /// The machine's thermometer (its scales' temperature, C, to 0.01 K) when it has one: the
+  /// controller interpolates a compensation map calibrated at several temperatures by it.
+  std::optional<double> temperature_c;
 };
 
 /// A machine backend: the virtual CMM, or a real controller behind the same interface.

@@ -31,6 +31,11 @@ struct TwoPointHead {
   /// Hidden change of Delta when the sensors are turned 90 degrees (S4 assumes none).
   double delta_change_turned_mm = 0;
   Vec3 sensor_offset_mm{0, 0, -120};  ///< A's tip from the ram reference point (an Abbe lever for the angular errors)
+  /// An angle instrument on the head (electronic level or autocollimator, zero set by reversal):
+  /// reads the head's true rotation in the plane of the line and the plate normal (the machine's
+  /// angular errors and the head's own pitch) with white noise, at every position.
+  bool angle_instrument = false;
+  double angle_noise_sd_rad = 0.25e-6;  ///< its noise (0.05 arcsec, a good autocollimator's repeatability)
 };
 
 /// The head on the (hidden-error) machine facing a plate: produces readings only. Every reading
@@ -54,6 +59,8 @@ class TwoPointRig {
   /// u_0 and u_l; grid origin `origin_axes_mm` (ram positions), steps of d.
   error_space::SurfaceReadings measure_surface(const Vec3& origin_axes_mm, int u_axis, int v_axis, int l_steps, int m_steps);
 
+  /// The angle instrument's reading at the last `read` (rad; see LineReadings::angle_rad).
+  [[nodiscard]] double last_angle_rad() const { return m_last_angle_rad; }
   [[nodiscard]] double time_s() const { return m_time_s; }  ///< simulated time now
   [[nodiscard]] const TwoPointHead& head() const { return m_head; }  ///< the head
   [[nodiscard]] const FlatPlate& plate() const { return m_plate; }   ///< the plate (hidden profile)
@@ -65,6 +72,7 @@ class TwoPointRig {
   TwoPointHead m_head;
   Rng m_rng;
   double m_time_s = 0;
+  double m_last_angle_rad = 0;
 };
 
 }  // namespace metron::machine

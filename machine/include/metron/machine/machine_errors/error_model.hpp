@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -25,6 +26,13 @@ class MachineErrorModel {
   [[nodiscard]] Vec3 displacement(const MachinePose& pose, double time_s) const;
   /// Sum of the terms that move the tool (what a sensor on the ram sees against a rig on the table).
   [[nodiscard]] Vec3 tool_displacement(const MachinePose& pose, double time_s) const;
+  /// What the machine's thermometer reads at `time_s` (the first term that models the machine's
+  /// temperature); none when no term does.
+  [[nodiscard]] std::optional<double> machine_temperature_c(double time_s) const {
+    for (const auto& t : m_terms)
+      if (auto c = t->machine_temperature_c(time_s)) return c;
+    return std::nullopt;
+  }
   /// nominal tip + displacement.
   [[nodiscard]] Vec3 actual_tip_mm(const MachinePose& pose, double time_s) const {
     return pose.nominal_tip_mm() + displacement(pose, time_s);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <optional>
 #include <array>
 #include <string_view>
 
@@ -35,6 +36,9 @@ class ErrorTerm {
   [[nodiscard]] virtual std::string_view name() const = 0;
   /// What it moves (default: the tool).
   [[nodiscard]] virtual Acts acts() const { return Acts::Tool; }
+  /// For a term that models the machine's own temperature (its scales): what a thermometer on the
+  /// machine reads at `time_s`, C. Others: none.
+  [[nodiscard]] virtual std::optional<double> machine_temperature_c(double /*time_s*/) const { return std::nullopt; }
 };
 
 }  // namespace metron::machine

@@ -43,6 +43,8 @@ class ScaleThermalTerm final : public ErrorTerm {
   explicit ScaleThermalTerm(std::array<Scale, 3> scales) : m_scales(std::move(scales)) {}
   [[nodiscard]] Vec3 displacement(const MachinePose& pose, double time_s) const override;
   [[nodiscard]] std::string_view name() const override { return "scale-thermal"; }
+  /// The mean temperature of the scales that follow a history (the controller's scale sensors).
+  [[nodiscard]] std::optional<double> machine_temperature_c(double time_s) const override;
 
  private:
   std::array<Scale, 3> m_scales;

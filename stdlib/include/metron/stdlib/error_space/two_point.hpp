@@ -21,7 +21,21 @@ namespace metron::error_space {
 struct LineReadings {
   std::vector<double> a_mm;  ///< sensor A, reading the plate under the head point x_k
   std::vector<double> b_mm;  ///< sensor B, one step ahead (x_{k+1})
+  /// Optional: an angle instrument on the head (electronic level or autocollimator, its zero set by
+  /// a reversal) read at every position: the head's rotation in the plane of the line and the
+  /// plate normal, positive when it moves B away from the plate relative to A. Empty: none (the
+  /// seed's case, which assumes the head does not rotate).
+  std::vector<double> angle_rad;
+  /// B's position relative to A along the step direction (+d; -d with the head reversed): the
+  /// lever on which a rotation moves B against A.
+  double b_lever_mm = 0;
 };
+
+/// B's reading at k with the head's rotation removed: b_k + angle_k * lever (the rotation moved B's
+/// tip by angle_k * lever away from the plate, which the reading saw as the plate receding). A
+/// carriage that pitches (a real CMM's EBX, ECX ...) otherwise puts angle * d into every increment
+/// of the chain, which sums into e_k (docs/error-space.md, "The head's rotation").
+double rotation_free_b(const LineReadings& readings, std::size_t k);
 
 /// One line solved.
 struct LineResult {
@@ -96,7 +110,10 @@ Eigen::MatrixXd surface_reference(const Eigen::MatrixXd& e_mm);
 /// variance is sigma^2 times the sum of squared impulse responses). (l+1) x (m+1). With
 /// `known_delta_sd_mm` >= 0 the plane was solved with a Delta measured elsewhere with that
 /// standard deviation: its error adds delta (i + j), independent of the plane's readings.
-Eigen::MatrixXd surface_noise_sd_mm(int l_steps, int m_steps, double sigma_mm, double known_delta_sd_mm = -1);
+/// `sigma_b_mm` >= 0: B's readings have this noise instead (with an angle instrument, sigma and
+/// the instrument's noise times the lever in quadrature).
+Eigen::MatrixXd surface_noise_sd_mm(int l_steps, int m_steps, double sigma_mm, double known_delta_sd_mm = -1,
+                                    double sigma_b_mm = -1);
 
 /// Delta by a reversal (beyond the seed): the same line measured a second time with the head
 /// turned 180 degrees about the plate normal (B now one step behind A). Then

@@ -17,6 +17,9 @@ namespace metron::machine {
 /// Directions (probing normals, scan paths' shapes) pass unchanged: the map's rotation is a few
 /// urad. A scan path is shifted as a whole by -e at its start (the probe's deflection absorbs the
 /// rest along the path). The machine's own internal cycles (tool qualification) are not corrected.
+/// A map calibrated at several temperatures follows the inner machine's thermometer
+/// (MachineState::temperature_c): before each command it is rebuilt for the monitored temperature
+/// when that moved by 0.01 K or more (docs/error-space.md, "Temperature").
 class CompensatedMachine final : public Machine {
  public:
   /// `map` null: the identity (the inner machine as it is).
@@ -29,7 +32,9 @@ class CompensatedMachine final : public Machine {
 
   /// Compensates by `map` from the next command on (null: none); a DMIS program loads one with
   /// CALL/EXTERN,SYS,'COMPENSATION file' (docs/error-space.md).
-  void set_map(std::shared_ptr<const ErrorMap> map) { m_map = std::move(map); }
+  void set_map(std::shared_ptr<const ErrorMap> map);
+  /// The map in use now (null: none).
+  [[nodiscard]] const ErrorMap* map() const { return m_map.get(); }
 
   /// Where to command the inner machine so the tip really reaches `wanted_mm`.
   [[nodiscard]] Vec3 command_for(const Vec3& wanted_mm) const;
@@ -38,7 +43,9 @@ class CompensatedMachine final : public Machine {
 
  private:
   std::unique_ptr<Machine> m_inner;
+  void follow_temperature();
   std::shared_ptr<const ErrorMap> m_map;
+  std::shared_ptr<const ErrorSpaceMap> m_by_temperature;  ///< the loaded map when it follows the temperature
   std::vector<Command> m_queued;  ///< the commands as the client sent them
   Vec3 m_scan_shift_mm = Vec3::Zero();  ///< the running segmented scan's shift (set by its command 0)
 };

@@ -32,11 +32,25 @@ class ErrorSpaceMap final : public ErrorMap {
   static tl::expected<ErrorSpaceMap, std::string> build(const error_space::ErrorSpaceFile& file,
                                                         double monitored_temperature_c = 20);
   [[nodiscard]] Vec3 error_at_mm(const Vec3& q_mm) const override;
+  /// The file's spaces were measured at more than one temperature: the map depends on the monitored one.
+  [[nodiscard]] bool follows_temperature() const { return m_file->spaces.size() > 1; }
+  /// The monitored temperature this map was built for.
+  [[nodiscard]] double temperature_c() const { return m_temperature_c; }
+  /// The same file's map at another monitored temperature.
+  [[nodiscard]] tl::expected<ErrorSpaceMap, std::string> at_temperature(double monitored_temperature_c) const {
+    return build(*m_file, monitored_temperature_c);
+  }
 
  private:
-  ErrorSpaceMap(error_space::SpaceInterpolator interpolator, const Vec3& sensor_offset_mm)
-      : m_interpolator(std::move(interpolator)), m_sensor_offset_mm(sensor_offset_mm) {}
+  ErrorSpaceMap(error_space::SpaceInterpolator interpolator, std::shared_ptr<const error_space::ErrorSpaceFile> file,
+                double temperature_c)
+      : m_interpolator(std::move(interpolator)), m_file(std::move(file)), m_temperature_c(temperature_c) {
+    const auto& o = m_file->sensor_offset_mm;
+    m_sensor_offset_mm = Vec3(o[0], o[1], o[2]);
+  }
   error_space::SpaceInterpolator m_interpolator;
+  std::shared_ptr<const error_space::ErrorSpaceFile> m_file;  ///< for another temperature
+  double m_temperature_c = 20;
   Vec3 m_sensor_offset_mm = Vec3::Zero();
 };
 
