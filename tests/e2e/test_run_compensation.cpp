@@ -220,7 +220,9 @@ TEST(RunCompensationCli, TheExampleBlockReadsAsOnAPerfectMachineAfterCompensatio
   std::printf("example block, machine errors' share of 17 part-frame deviations: none RMS %.3f um, map RMS %.3f um (%.1fx)\n",
               1e3 * none, 1e3 * compensated, none / compensated);
   EXPECT_GT(none, 0.0005);              // the errors show in the part frame (measured 0.78 um)
-  EXPECT_LT(compensated, none / 5);     // measured 0.086 um, 9.1x
+  // Measured 0.072 um, 10.8x (0.086 um with the tool qualification left uncompensated); over seeds
+  // 1-6 of calibration and run 4.7x to 10.8x (docs/error-space.md), so the bound is the worst seed's.
+  EXPECT_LT(compensated, none / 4);
 }
 
 TEST(RunCompensationCli, ABadCompensationFileIsRefusedNamingWhere) {

@@ -471,3 +471,56 @@ TEST(CompensatedMachine, AMapAtTwoTemperaturesFollowsTheMachinesThermometer) {
 }
 
 }  // namespace
+
+namespace {
+
+// The effective radius of T1 qualified on the reference sphere (900, 700, 100), as the machine in
+// front of the runtime reports it.
+double qualified_radius(const World& world, std::shared_ptr<const ErrorMap> map) {
+  CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 1), std::move(map));
+  std::uint64_t tag = 0;
+  auto run = [&](decltype(Command::body) body) {
+    cmm.submit({++tag, std::move(body)});
+    auto r = cmm.execute().front();
+    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
+    return r;
+  };
+  run(DefineTool{"T1", 4.0});
+  run(SelectTool{"T1"});
+  const Response q = run(QualifyTool{});
+  EXPECT_TRUE(q.tool && q.tool->qualified);
+  EXPECT_EQ(cmm.state().tool->effective_radius_mm, q.tool->effective_radius_mm);
+  return q.tool ? q.tool->effective_radius_mm : 0.0;
+}
+
+// The qualification is probing too: on the X scale warmed to 24 C (the reference sphere stretched
+// along x as the scales see it) the machine's own fit gives another effective radius than the
+// perfect machine's; refitted through a map of the sphere's region it is the perfect machine's
+// again, and so are the bores and bosses sized with it.
+TEST(CompensatedMachine, TheQualificationIsRefittedThroughTheMap) {
+  // A map over the sphere (the block's grid does not reach it), calibrated at 24 C.
+  SpaceCalibrationPlan plan;
+  plan.head.spacing_mm = 25;
+  plan.head.noise_sd_mm = 0.0001;
+  plan.head.sensor_offset_mm = Vec3(0, 0, -50);
+  for (int i = 0; i < 5; ++i) plan.grid.axes_mm[0].push_back(850 + 25.0 * i);
+  for (int j = 0; j < 5; ++j) plan.grid.axes_mm[1].push_back(650 + 25.0 * j);
+  for (int k = 0; k < 3; ++k) plan.grid.axes_mm[2].push_back(125 + 25.0 * k);
+  plan.components = {true, false, false};
+  plan.laser_cycles = 8;
+  error_space::ErrorSpaceFile f;
+  f.sensor_offset_mm = {0, 0, -50};
+  const World at24 = warm_block(R"({"t_s": [0], "temperature_c": [24]})");
+  f.spaces.push_back(calibrate_space(at24.truth.errors, plan).space);
+  const auto sphere_map = std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(f));
+
+  const double perfect = qualified_radius(default_with(""), nullptr);
+  const double raw = qualified_radius(at24, nullptr);
+  const double compensated = qualified_radius(at24, sphere_map);
+  std::printf("effective radius minus the perfect machine's, um: raw %.3f, through the map %.3f\n", 1e3 * (raw - perfect),
+              1e3 * (compensated - perfect));
+  EXPECT_GT(std::abs(raw - perfect), 0.0002);
+  EXPECT_NEAR(compensated, perfect, 0.00005);
+}
+
+}  // namespace

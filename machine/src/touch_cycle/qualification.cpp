@@ -78,6 +78,8 @@ tl::expected<ToolInfo, Fault> Controller::qualify() {
   tool->info.effective_radius_mm = result->diameter_mm / 2 - sphere_r;
   tool->info.qualified = true;
   tool->info.qualification_form_mm = result->form_mm;
+  tool->info.qualification_centres_mm = *fine;
+  tool->info.reference_diameter_mm = config.reference_sphere.certified_diameter_mm;
   return tool->info;
 }
 

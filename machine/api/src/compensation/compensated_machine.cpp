@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "metron/stdlib/fitting/fit.hpp"
+
 namespace metron::machine {
 
 CompensatedMachine::CompensatedMachine(std::unique_ptr<Machine> inner, std::shared_ptr<const ErrorMap> map)
@@ -71,11 +73,40 @@ void CompensatedMachine::submit(Command command) {
   m_inner->submit(std::move(command));
 }
 
+std::optional<double> CompensatedMachine::compensated_radius(const std::string& tool) const {
+  const auto it = m_qualifications.find(tool);
+  if (!m_map || it == m_qualifications.end()) return std::nullopt;
+  const Qualification& q = it->second;
+  if (q.radius_map != m_map.get()) {
+    // The sphere of corrected ball centres has radius R + r_effective (as in the machine's own fit).
+    std::vector<Vec3> pts;
+    for (const Vec3& c : q.centres_mm) pts.push_back(corrected(c));
+    fitting::FitOptions options;
+    options.inner = false;
+    const auto f = fitting::fit(fitting::Shape::Sphere, pts, options);
+    if (!f) return std::nullopt;
+    q.radius_mm = f->diameter_mm / 2 - q.reference_diameter_mm / 2;
+    q.radius_map = m_map.get();
+  }
+  return q.radius_mm;
+}
+
+void CompensatedMachine::compensate_tool(ToolInfo& info) const {
+  if (const auto r = compensated_radius(info.name)) info.effective_radius_mm = *r;
+}
+
 std::vector<Response> CompensatedMachine::execute() {
   m_queued.clear();
   auto responses = m_inner->execute();
+  for (const auto& r : responses)
+    if (r.tool && r.tool->qualified && !r.tool->qualification_centres_mm.empty() && r.tool->reference_diameter_mm > 0)
+      m_qualifications[r.tool->name] = {r.tool->qualification_centres_mm, r.tool->reference_diameter_mm};
   if (!m_map) return responses;
+  const std::string active = m_inner->state().active_tool;
+  const auto radius = compensated_radius(active);
   for (auto& r : responses) {
+    if (r.tool) compensate_tool(*r.tool);
+    if (r.hit && radius) r.hit->ball_radius_mm = *radius;
     if (r.hit) r.hit->centre_mm = corrected(r.hit->centre_mm);
     for (auto& s : r.scan) s.centre_mm = corrected(s.centre_mm);
     if (r.fault) r.fault->position_mm = corrected(r.fault->position_mm);
@@ -87,7 +118,11 @@ MachineState CompensatedMachine::state() const {
   MachineState s = m_inner->state();
   if (m_map) {
     s.position_mm = corrected(s.position_mm);
-    if (s.last_hit) s.last_hit->centre_mm = corrected(s.last_hit->centre_mm);
+    if (s.tool) compensate_tool(*s.tool);
+    if (s.last_hit) {
+      s.last_hit->centre_mm = corrected(s.last_hit->centre_mm);
+      if (const auto r = compensated_radius(s.active_tool)) s.last_hit->ball_radius_mm = *r;
+    }
   }
   return s;
 }

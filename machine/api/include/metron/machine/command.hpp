@@ -141,6 +141,11 @@ struct ToolInfo {
   bool qualified = false;
   double qualification_form_mm = 0;   ///< sphere form of the qualification fit (a quality figure)
   double rated_over_travel_mm = 0;    ///< the probe's over-travel limit from its data sheet (0: unknown)
+  /// The qualification's ball-centre points on the reference sphere (machine coordinates, as the
+  /// scales read them) and the sphere's certified diameter: a compensating controller refits them
+  /// through its map (machine::CompensatedMachine), as a real controller compensates every probing.
+  std::vector<Vec3> qualification_centres_mm{};
+  double reference_diameter_mm = 0;
 };
 
 /// The answer to one command.

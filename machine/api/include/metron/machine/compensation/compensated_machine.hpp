@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <map>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "metron/machine/compensation/error_map.hpp"
@@ -16,7 +19,10 @@ namespace metron::machine {
 ///   a reported position q (hit centre, scan sample, state, fault position) comes back as q + e(q).
 /// Directions (probing normals, scan paths' shapes) pass unchanged: the map's rotation is a few
 /// urad. A scan path is shifted as a whole by -e at its start (the probe's deflection absorbs the
-/// rest along the path). The machine's own internal cycles (tool qualification) are not corrected.
+/// rest along the path). The tool qualification, a cycle inside the machine, is redone here: its
+/// ball-centre points (ToolInfo::qualification_centres_mm) are corrected and the sphere refitted,
+/// and the effective radius that results replaces the machine's in tool infos and hits (a real
+/// controller compensates the qualification's probing like any other).
 /// A map calibrated at several temperatures follows the inner machine's thermometer
 /// (MachineState::temperature_c): before each command it is rebuilt for the monitored temperature
 /// when that moved by 0.01 K or more (docs/error-space.md, "Temperature").
@@ -44,10 +50,22 @@ class CompensatedMachine final : public Machine {
  private:
   std::unique_ptr<Machine> m_inner;
   void follow_temperature();
+  /// The effective radius of `tool` qualified through the current map (none: not qualified with points).
+  std::optional<double> compensated_radius(const std::string& tool) const;
+  void compensate_tool(ToolInfo& info) const;
   std::shared_ptr<const ErrorMap> m_map;
   std::shared_ptr<const ErrorSpaceMap> m_by_temperature;  ///< the loaded map when it follows the temperature
   std::vector<Command> m_queued;  ///< the commands as the client sent them
   Vec3 m_scan_shift_mm = Vec3::Zero();  ///< the running segmented scan's shift (set by its command 0)
+  /// Per tool, its last qualification (centres as the scales read them, certified diameter), and
+  /// the effective radius refitted through the map it was last computed with.
+  struct Qualification {
+    std::vector<Vec3> centres_mm;
+    double reference_diameter_mm = 0;
+    mutable const ErrorMap* radius_map = nullptr;
+    mutable double radius_mm = 0;
+  };
+  std::map<std::string, Qualification> m_qualifications;
 };
 
 }  // namespace metron::machine
