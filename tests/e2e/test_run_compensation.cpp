@@ -59,6 +59,13 @@ double length_error_rms(const std::string& results_json) {
   return std::sqrt(sum / pairs);
 }
 
+// The map that covers the ball array (docs/error-space.md, "The gain of compensation").
+std::pair<int, std::string> calibrate_ball_array_map(const std::string& map) {
+  return shell(std::string(METRON_BINARY) + " calibrate error-space --world " + METRON_SOURCE_DIR +
+               "/programs/worlds/cmm_errors_ball_plate.json --components xyz --reversal --sensor-offset 0,0,-50"
+               " --size 17,13,3 --origin 100,100,100 --runs 4 --laser-cycles 8 --out " + map);
+}
+
 TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
   const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation";
   std::filesystem::remove_all(dir);
@@ -67,9 +74,7 @@ TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
   const std::string bin = METRON_BINARY, src = METRON_SOURCE_DIR;
   const std::string world = src + "/programs/worlds/cmm_errors_ball_plate.json";
   const std::string map = (dir / "map.json").string();
-  auto [code, out] = shell(bin + " calibrate error-space --world " + world +
-                           " --components xyz --reversal --sensor-offset 0,0,-50 --size 17,13,3 --origin 100,100,100"
-                           " --runs 4 --laser-cycles 8 --out " + map);
+  auto [code, out] = calibrate_ball_array_map(map);
   ASSERT_EQ(code, 0) << out;
   const std::string program = src + "/programs/error_space/ball_array.dmi";
   std::tie(code, out) = shell(bin + " run " + program + " --world " + world + " --quiet --out " + (dir / "none").string());
@@ -109,9 +114,7 @@ TEST(RunCompensationCli, AProgramCalibratesTheErrorSpaceAndCompensatesByIt) {
   const std::string bin = METRON_BINARY, src = METRON_SOURCE_DIR;
   const std::string world = src + "/programs/worlds/cmm_errors_ball_plate.json";
   const std::string map = (dir / "map.json").string();
-  auto [code, out] = shell(bin + " calibrate error-space --world " + world +
-                           " --components xyz --reversal --sensor-offset 0,0,-50 --size 17,13,3 --origin 100,100,100"
-                           " --runs 4 --laser-cycles 8 --out " + map);
+  auto [code, out] = calibrate_ball_array_map(map);
   ASSERT_EQ(code, 0) << out;
   std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/ball_array.dmi --world " + world +
                               " --quiet --compensation " + map + " --out " + (dir / "cli").string());

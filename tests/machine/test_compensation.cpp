@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <numeric>
 
@@ -16,6 +17,7 @@
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/virtual_cmm.hpp"
+#include "block_probing.hpp"
 #include "scan_paths.hpp"
 
 using namespace metron;
@@ -333,15 +335,8 @@ std::shared_ptr<const ErrorMap> bow_map_file(double k_per_mm2) {
 // the bores and the countersink), surface points of the samples.
 std::vector<double> scanned_top_heights(const World& world, std::shared_ptr<const ErrorMap> map) {
   CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 1), std::move(map));
-  std::uint64_t tag = 0;
-  auto run = [&](decltype(Command::body) body) {
-    cmm.submit({++tag, std::move(body)});
-    auto r = cmm.execute().front();
-    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
-    return r;
-  };
-  run(DefineTool{"T1", 4.0});
-  run(SelectTool{"T1"});
+  test_support::BlockProbing probing(cmm);
+  auto run = [&](decltype(Command::body) body) { return probing.run(std::move(body)); };
   run(GoTo{Vec3(305, 205, 60), std::nullopt});
   ScanPath c;
   const double centre_z = 40 + 2 - 0.3;  // ball radius 2, reference deflection 0.3
@@ -393,42 +388,30 @@ World warm_block(const std::string& air_json) {
 // distance. `wait_s`: a long positioning loop first (the air moves meanwhile).
 double block_width(const World& world, std::shared_ptr<const ErrorMap> map, double wait_s = 0) {
   CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 1), std::move(map));
-  std::uint64_t tag = 0;
-  auto run = [&](decltype(Command::body) body) {
-    cmm.submit({++tag, std::move(body)});
-    auto r = cmm.execute().front();
-    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
-    return r;
-  };
-  run(DefineTool{"T1", 4.0});
-  run(SelectTool{"T1"});
-  while (run(GoTo{Vec3(800, 700, 300), std::nullopt}).end_time_s < wait_s) run(GoTo{Vec3(100, 100, 300), std::nullopt});
-  auto touch = [&](double x, double outward) {
-    run(GoTo{Vec3(x + 10 * outward, 250, 60), std::nullopt});
-    run(GoTo{Vec3(x + 10 * outward, 250, 20), std::nullopt});
-    PtMeas m;
-    m.nominal_mm = Vec3(x, 250, 20);
-    m.normal = Vec3(outward, 0, 0);
-    const Response r = run(m);
-    run(GoTo{Vec3(x + 10 * outward, 250, 60), std::nullopt});
-    return r.hit ? r.hit->centre_mm.x() : 0.0;
-  };
-  const double left = touch(300, -1);
-  return touch(460, 1) - left;
+  test_support::BlockProbing probing(cmm);
+  probing.pass_time(wait_s);
+  const double left = probing.touch_face(300, -1).centre_mm.x();
+  return probing.touch_face(460, 1).centre_mm.x() - left;
 }
 
-// The machine calibrated at 20 C and at 24 C (e_x over the block, the laser giving the scale),
-// one file with both spaces; the controller interpolates them by its thermometer.
-error_space::ErrorSpaceFile two_temperature_file(std::vector<double> temperatures) {
+// An e_x calibration plan (0.1 um sensors, the stylus' 50 mm offset, 8 laser cycles) over a grid
+// from `origin` in steps of `step` with `counts` points per axis.
+SpaceCalibrationPlan e_x_plan(const Vec3& origin, double step, const std::array<int, 3>& counts) {
   SpaceCalibrationPlan plan;
-  plan.head.spacing_mm = 50;
+  plan.head.spacing_mm = step;
   plan.head.noise_sd_mm = 0.0001;
   plan.head.sensor_offset_mm = Vec3(0, 0, -50);
-  for (int i = 0; i < 7; ++i) plan.grid.axes_mm[0].push_back(250 + 50.0 * i);
-  for (int j = 0; j < 3; ++j) plan.grid.axes_mm[1].push_back(200 + 50.0 * j);
-  for (int k = 0; k < 3; ++k) plan.grid.axes_mm[2].push_back(50 + 50.0 * k);
+  for (int a = 0; a < 3; ++a)
+    for (int i = 0; i < counts[static_cast<std::size_t>(a)]; ++i) plan.grid.axes_mm[a].push_back(origin[a] + step * i);
   plan.components = {true, false, false};
   plan.laser_cycles = 8;
+  return plan;
+}
+
+// The block's machine calibrated at each of `temperatures` (e_x over the block, the laser giving
+// the scale), one file with all the spaces; the controller interpolates them by its thermometer.
+error_space::ErrorSpaceFile two_temperature_file(std::vector<double> temperatures) {
+  const SpaceCalibrationPlan plan = e_x_plan(Vec3(250, 200, 50), 50, {7, 3, 3});
   error_space::ErrorSpaceFile f;
   f.sensor_offset_mm = {0, 0, -50};
   for (double t : temperatures) {
@@ -478,15 +461,8 @@ namespace {
 // front of the runtime reports it.
 double qualified_radius(const World& world, std::shared_ptr<const ErrorMap> map) {
   CompensatedMachine cmm(std::make_unique<VirtualCmm>(world, 1), std::move(map));
-  std::uint64_t tag = 0;
-  auto run = [&](decltype(Command::body) body) {
-    cmm.submit({++tag, std::move(body)});
-    auto r = cmm.execute().front();
-    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
-    return r;
-  };
-  run(DefineTool{"T1", 4.0});
-  run(SelectTool{"T1"});
+  test_support::BlockProbing probing(cmm);
+  auto run = [&](decltype(Command::body) body) { return probing.run(std::move(body)); };
   const Response q = run(QualifyTool{});
   EXPECT_TRUE(q.tool && q.tool->qualified);
   EXPECT_EQ(cmm.state().tool->effective_radius_mm, q.tool->effective_radius_mm);
@@ -499,19 +475,10 @@ double qualified_radius(const World& world, std::shared_ptr<const ErrorMap> map)
 // again, and so are the bores and bosses sized with it.
 TEST(CompensatedMachine, TheQualificationIsRefittedThroughTheMap) {
   // A map over the sphere (the block's grid does not reach it), calibrated at 24 C.
-  SpaceCalibrationPlan plan;
-  plan.head.spacing_mm = 25;
-  plan.head.noise_sd_mm = 0.0001;
-  plan.head.sensor_offset_mm = Vec3(0, 0, -50);
-  for (int i = 0; i < 5; ++i) plan.grid.axes_mm[0].push_back(850 + 25.0 * i);
-  for (int j = 0; j < 5; ++j) plan.grid.axes_mm[1].push_back(650 + 25.0 * j);
-  for (int k = 0; k < 3; ++k) plan.grid.axes_mm[2].push_back(125 + 25.0 * k);
-  plan.components = {true, false, false};
-  plan.laser_cycles = 8;
   error_space::ErrorSpaceFile f;
   f.sensor_offset_mm = {0, 0, -50};
   const World at24 = warm_block(R"({"t_s": [0], "temperature_c": [24]})");
-  f.spaces.push_back(calibrate_space(at24.truth.errors, plan).space);
+  f.spaces.push_back(calibrate_space(at24.truth.errors, e_x_plan(Vec3(850, 650, 125), 25, {5, 5, 3})).space);
   const auto sphere_map = std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(f));
 
   const double perfect = qualified_radius(default_with(""), nullptr);

@@ -10,6 +10,7 @@
 #include "metron/machine/machine_errors/error_model.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world.hpp"
+#include "block_probing.hpp"
 
 namespace metron::machine {
 namespace {
@@ -21,31 +22,13 @@ World block_on(const std::string& errors_json) {
   return w;
 }
 
-/// Commands one at a time on the default block's machine.
+/// The default block probed on a virtual CMM of `world`.
 struct Session {
   VirtualCmm cmm;
-  std::uint64_t tag = 0;
-  explicit Session(const World& world) : cmm(world, 1) {
-    run(DefineTool{"T1", 4.0});
-    run(SelectTool{"T1"});
-  }
-  Response run(decltype(Command::body) body) {
-    cmm.submit({++tag, std::move(body)});
-    auto r = cmm.execute();
-    EXPECT_EQ(r.front().status, Response::Status::Done) << (r.front().fault ? r.front().fault->message : "");
-    return r.front();
-  }
-  /// A face of the block (x = 300 LEFT or x = 460 RIGHT) probed at y 250, z 20 from 10 mm outside.
-  Hit touch_face(double x, double outward) {
-    run(GoTo{Vec3(x + 10 * outward, 250, 60), std::nullopt});
-    run(GoTo{Vec3(x + 10 * outward, 250, 20), std::nullopt});
-    PtMeas m;
-    m.nominal_mm = Vec3(x, 250, 20);
-    m.normal = Vec3(outward, 0, 0);
-    const Response r = run(m);
-    run(GoTo{Vec3(x + 10 * outward, 250, 100), std::nullopt});
-    return r.hit.value_or(Hit{});
-  }
+  test_support::BlockProbing probing{cmm};
+  explicit Session(const World& world) : cmm(world, 1) {}
+  Response run(decltype(Command::body) body) { return probing.run(std::move(body)); }
+  Hit touch_face(double x, double outward) { return probing.touch_face(x, outward); }
 };
 
 // The air warms 20 -> 30 C over the first minute and the X scale (alpha 10.5e-6) follows it without
@@ -57,7 +40,7 @@ TEST(MachineErrorsInARun, ThermalErrorsFollowTheControllersClock) {
   const World world = block_on(errors);
   Session s(world);
   const Hit early = s.touch_face(300, -1);
-  while (s.run(GoTo{Vec3(800, 700, 300), std::nullopt}).end_time_s < 70) s.run(GoTo{Vec3(100, 100, 300), std::nullopt});
+  s.probing.pass_time(70);
   const Hit late = s.touch_face(300, -1);
   ASSERT_GT(late.time_s, 70);
 
@@ -74,8 +57,7 @@ TEST(MachineErrorsInARun, ThermalErrorsFollowTheControllersClock) {
   // On a machine without errors the same sequence reads the same face the same.
   Session perfect(block_on(""));
   const double a = perfect.touch_face(300, -1).centre_mm.x();
-  while (perfect.run(GoTo{Vec3(800, 700, 300), std::nullopt}).end_time_s < 70)
-    perfect.run(GoTo{Vec3(100, 100, 300), std::nullopt});
+  perfect.probing.pass_time(70);
   EXPECT_NEAR(perfect.touch_face(300, -1).centre_mm.x(), a, 1e-9);
 }
 

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -26,6 +27,19 @@ std::string upper(std::string s) {
   return s;
 }
 
+// The whole word as a finite number.
+std::optional<double> whole_number(const std::string& word) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(word, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used == 0 || used != word.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
 // "a,b,c" as three numbers.
 template <typename T>
 tl::expected<std::array<T, 3>, std::string> triple(const std::string& key, const std::string& value) {
@@ -35,35 +49,21 @@ tl::expected<std::array<T, 3>, std::string> triple(const std::string& key, const
   int n = 0;
   while (std::getline(in, part, ',')) {
     if (n == 3) return tl::unexpected(fmt::format("{}={}: expected three numbers", key, value));
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != part.size() || !std::isfinite(v))
-      return tl::unexpected(fmt::format("{}={}: '{}' is not a number", key, value, part));
+    const auto v = whole_number(part);
+    if (!v) return tl::unexpected(fmt::format("{}={}: '{}' is not a number", key, value, part));
     if constexpr (std::is_integral_v<T>) {
-      if (v != std::floor(v) || v < 1 || v > 1000) return tl::unexpected(fmt::format("{}={}: counts are whole numbers 1 to 1000", key, value));
+      if (*v != std::floor(*v) || *v < 1 || *v > 1000) return tl::unexpected(fmt::format("{}={}: counts are whole numbers 1 to 1000", key, value));
     }
-    out[static_cast<std::size_t>(n++)] = static_cast<T>(v);
+    out[static_cast<std::size_t>(n++)] = static_cast<T>(*v);
   }
   if (n != 3) return tl::unexpected(fmt::format("{}={}: expected three numbers", key, value));
   return out;
 }
 
 tl::expected<double, std::string> one_number(const std::string& key, const std::string& value, double lo, double hi) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != value.size() || !(v >= lo && v <= hi))
-    return tl::unexpected(fmt::format("{}={}: expected a number from {} to {}", key, value, lo, hi));
-  return v;
+  const auto v = whole_number(value);
+  if (!v || !(*v >= lo && *v <= hi)) return tl::unexpected(fmt::format("{}={}: expected a number from {} to {}", key, value, lo, hi));
+  return *v;
 }
 
 }  // namespace
