@@ -228,6 +228,51 @@ TEST(RunCompensationCli, TheExampleBlockReadsAsOnAPerfectMachineAfterCompensatio
   EXPECT_LT(compensated, none / 4);
 }
 
+// The block at 22 C with maps calibrated at 20 and 24 C in one file (`--append`): the controller
+// interpolates them by its thermometer; the 20 C map alone leaves the scales' growth
+// (docs/error-space.md, "Temperature").
+TEST(RunCompensationCli, AMapAppendedAtASecondTemperatureIsInterpolatedByTheThermometer) {
+  const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation_temperature";
+  std::filesystem::remove_all(dir);
+  for (const char* d : {"perfect", "only20", "both"}) std::filesystem::create_directories(dir / d);
+  const std::string bin = METRON_BINARY, src = METRON_SOURCE_DIR, worlds = src + "/programs/worlds/";
+  const std::string program = src + "/programs/examples/02_block_inspection.dmi";
+  auto calibrate = [&](int t, const std::string& map, bool append) {
+    return shell(bin + " calibrate error-space --world " + worlds + "cmm_errors_at_" + std::to_string(t) + "c.json" +
+                 " --components xyz --reversal --sensor-offset 0,0,-50 --size 15,13,4 --origin 250,150,50 --runs 4"
+                 " --laser-cycles 8 --out " + map + (append ? " --append" : ""));
+  };
+  const std::string only20 = (dir / "only20.json").string(), both = (dir / "both.json").string();
+  auto [code, out] = calibrate(20, only20, false);
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("machine at 20.00 C"), std::string::npos) << out;
+  std::filesystem::copy_file(only20, both);
+  std::tie(code, out) = calibrate(24, both, true);
+  ASSERT_EQ(code, 0) << out;
+  std::tie(code, out) = calibrate(20, both, true);
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(out.find("already holds a space at 20.00 C"), std::string::npos) << out;
+  std::ifstream in(both);
+  const auto j = nlohmann::json::parse(in);
+  ASSERT_EQ(j.at("temperatures").size(), 2u);
+  EXPECT_EQ(j.at("temperatures")[1].at("temperature_c"), 24.0);
+
+  std::tie(code, out) = shell(bin + " run " + program + " --quiet --out " + (dir / "perfect").string());
+  ASSERT_EQ(code, 0) << out;
+  for (const auto& [folder, map] : {std::pair<std::string, std::string>{"only20", only20}, {"both", both}}) {
+    std::tie(code, out) = shell(bin + " run " + program + " --world " + worlds + "cmm_errors_at_22c.json --compensation " +
+                                map + " --quiet --out " + (dir / folder).string());
+    ASSERT_EQ(code, 0) << out;
+  }
+  const auto perfect = block_deviations((dir / "perfect" / "results.json").string());
+  const double nearest = rms_difference(block_deviations((dir / "only20" / "results.json").string()), perfect);
+  const double interpolated = rms_difference(block_deviations((dir / "both" / "results.json").string()), perfect);
+  std::printf("example block at 22 C, machine errors' share: 20 C map RMS %.3f um, 20 and 24 C interpolated RMS %.3f um\n",
+              1e3 * nearest, 1e3 * interpolated);
+  EXPECT_GT(nearest, 0.0008);             // measured 1.06 um
+  EXPECT_LT(interpolated, nearest / 5);  // measured 0.072 um
+}
+
 TEST(RunCompensationCli, ABadCompensationFileIsRefusedNamingWhere) {
   const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation_bad";
   std::filesystem::create_directories(dir);
