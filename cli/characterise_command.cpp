@@ -57,14 +57,17 @@ void print_truth(const machine::World& w, const runtime::MachineCharacterisation
   std::cout << fmt::format("  constant delay {:.3f} ms true, {:.3f} ms recovered\n", 1e3 * delay, 1e3 * c.response.delay_s);
   std::cout << fmt::format("  pre-travel (vertical) {:.4f} mm true, {:.4f} mm estimated\n", w.truth.probe.pre_travel.vertical_mm,
                            c.pre_travel_mm);
-  // True worst-case stop distance at the maximum feed along each axis.
+  // Worst-case stop distance at the maximum feed along each axis, from the true parameters, for a
+  // trigger anywhere on the ramp (docs/touch-trigger.md: S(F) = pre-travel + F (delay + period +
+  // dt) + F Td(F); braking from F takes F Td/2, and a contact while still accelerating first
+  // ramps the acceleration down, another F Td/2 at most).
   for (int i = 0; i < 3; ++i) {
     const Vec3 e = Vec3::Unit(i);
     const double f = c.max_feed_mm_s(e);
     const double jitter = s.kind == machine::SkipInput::Kind::Scanned ? s.period_s : 0;
     const double stop = std::max(w.truth.probe.pre_travel.horizontal_mm, w.truth.probe.pre_travel.vertical_mm) +
                         w.truth.probe.repeatability_mm * 4 + f * (delay + jitter + w.machine.dt_s) +
-                        f * machine::ramp_time_s(w.machine, w.truth.axes, e, f) / 2;
+                        f * machine::ramp_time_s(w.machine, w.truth.axes, e, f);
     std::cout << fmt::format("  {} axis: max feed {:.1f} mm/s, true worst stop distance {:.3f} mm of {:.3f} mm over-travel\n",
                              "xyz"[i], f, stop, w.truth.probe.over_travel_mm);
   }
