@@ -55,11 +55,15 @@ struct Prim {
     return d;
   }
 
-  // amplitude * cos(n (theta - phase)), faded as (rho / r_ref)^n inside r_ref so that the field
-  // stays smooth on the axis (rho^n cos(n theta) is a harmonic polynomial).
+  // amplitude * cos(n (theta - phase)), faded as (rho / rho_0)^n inside rho_0 so that the field
+  // stays smooth on the axis (rho^n cos(n theta) is a harmonic polynomial). Cylinders and cones
+  // keep the whole amplitude down to half their radius (rho_0 = R/2): inside a bore or a
+  // countersink the ball centre runs at R - r, and a ball up to half the radius must see the form
+  // the surface has. A sphere fades from its radius (toward the poles as sin(polar)^n).
   [[nodiscard]] double lobing(const Vec3& q, double rho) const {
     double reference = radius;
     if (kind == Kind::Cone) reference = std::max(q.z(), 0.0) * tan_a;
+    if (kind != Kind::Sphere) reference /= 2;
     const double c = std::cos(lobes * (std::atan2(q.y(), q.x()) - lobe_phase));
     const double fade = rho >= reference ? 1.0 : std::pow(rho / reference, lobes);
     return lobe_amplitude * c * fade;
@@ -105,8 +109,9 @@ Prim compile_primitive(const csg::Primitive& p, const csg::Deviation* dev, doubl
     out.lobes = dev->lobing->lobes;
     out.lobe_amplitude = dev->lobing->amplitude_mm;
     out.lobe_phase = dev->lobing->phase_deg * deg;
-    // |grad| <= amplitude * lobes / reference radius (1 mm for a cone, whose radius varies).
-    const double reference = out.kind == Kind::Cone ? 1.0 : out.radius;
+    // |grad| <= amplitude * lobes / rho_0 (R/2 for a cylinder, R for a sphere; 1 mm for a cone,
+    // whose radius varies).
+    const double reference = out.kind == Kind::Cone ? 1.0 : out.kind == Kind::Sphere ? out.radius : out.radius / 2;
     lipschitz_extra += std::abs(out.lobe_amplitude) * out.lobes / reference;
   }
   if (dev && dev->waviness && dev->waviness->amplitude_mm != 0) {

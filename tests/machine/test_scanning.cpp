@@ -406,6 +406,94 @@ TEST(Scanning, LobedCircleFormIsRecoveredWithin1um) {
               f->form_mm, f->diameter_mm, std::abs(h3), -std::arg(h3) / 3 / deg);
 }
 
+namespace {
+
+// A 36 mm bore through an 80 mm ring 30 mm high, with a hidden 5-lobe form of 1.8 um at 10 deg
+// (issue 11 item 10: the form must be exact where the ball centre runs, at R - r inside a bore).
+const double bore_r = 18, bore_amplitude = 0.0018, bore_phase_deg = 10;
+World lobed_bore_world() {
+  csg::Node ring, bore, part;
+  ring.primitive = {"RING", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 80.0, 30.0}};
+  bore.primitive = {"BORE", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 2 * bore_r, std::nullopt}};
+  part.op = csg::Node::Op::Difference;
+  part.children = {ring, bore};
+  World w = world_with(part);
+  csg::Deviation dev;
+  dev.lobing = csg::Lobing{5, bore_amplitude, bore_phase_deg};
+  w.truth.part->deviations["BORE"] = dev;
+  w.truth.probe.repeatability_mm = 0;
+  return w;
+}
+
+// The fitted circle's 5th harmonic of the radial residuals (amplitude, phase in degrees) and form.
+std::tuple<double, double, double> fifth_harmonic(const std::vector<Vec3>& surface_points) {
+  fitting::FitOptions o;
+  o.inner = true;
+  o.direction_hint = Vec3::UnitZ();
+  const auto f = fitting::fit(fitting::Shape::Circle, surface_points, o);
+  EXPECT_TRUE(f);
+  if (!f) return {0, 0, 0};
+  std::complex<double> h = 0;
+  for (std::size_t i = 0; i < surface_points.size(); ++i) {
+    const Vec3 v = surface_points[i] - f->position;
+    h += f->residuals_mm[i] * std::exp(std::complex<double>(0, -5 * std::atan2(v.y(), v.x())));
+  }
+  h *= 2.0 / static_cast<double>(surface_points.size());
+  return {std::abs(h), -std::arg(h) / 5 / deg, f->form_mm};
+}
+
+}  // namespace
+
+// The lobed bore scanned with a 4 mm ball: the centre runs at R - r = 16 mm, where the old fade
+// (rho / R)^5 showed (16/18)^5 = 0.56 of the form; now the full amplitude and phase.
+TEST(Scanning, ALobedBoreShowsItsWholeFormToTheScan) {
+  ScanPath c;
+  c.path = placed(scan_test::circle_path(Vec3(0, 0, 15), bore_r - ball_r + 0.3, false));
+  c.approach_normal = -Vec3::UnitX();
+  c.law = ScanLaw::Vc2;
+  c.sample_spacing_mm = 0.2;
+  const ScanRun r = scan(lobed_bore_world(), c);
+  ASSERT_TRUE(r.out.completed) << r.out.fault->message;
+  std::vector<Vec3> pts;
+  for (const ScanSample& s : r.out.samples) pts.push_back(s.surface_mm(ball_r));
+  const auto [amplitude, phase, form] = fifth_harmonic(pts);
+  std::printf("[figures] lobed bore, scanned: 5th harmonic %.5f mm (hidden %.4f) at %.2f deg (hidden %.0f), form %.5f mm\n",
+              amplitude, bore_amplitude, phase, bore_phase_deg, form);
+  EXPECT_NEAR(amplitude, bore_amplitude, 0.1 * bore_amplitude);
+  EXPECT_NEAR(phase, bore_phase_deg, 3);
+}
+
+// The same bore touched at 72 points by the virtual CMM's touch cycle.
+TEST(Scanning, ALobedBoreShowsItsWholeFormToTouches) {
+  VirtualCmm cmm(lobed_bore_world(), 1);
+  std::uint64_t tag = 0;
+  auto run = [&](decltype(Command::body) body) {
+    cmm.submit({++tag, std::move(body)});
+    auto r = cmm.execute().front();
+    EXPECT_EQ(r.status, Response::Status::Done) << (r.fault ? r.fault->message : "");
+    return r;
+  };
+  run(DefineTool{"T1", 2 * ball_r});
+  run(SelectTool{"T1"});
+  run(GoTo{origin + Vec3(0, 0, 40), std::nullopt});
+  run(GoTo{origin + Vec3(0, 0, 15), std::nullopt});
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 72; ++i) {
+    const Vec3 radial(std::cos(5 * i * deg), std::sin(5 * i * deg), 0);
+    PtMeas m;
+    m.nominal_mm = origin + Vec3(0, 0, 15) + bore_r * radial;
+    m.normal = -radial;  // the bore's surface normal points to its axis
+    const Response h = run(m);
+    if (h.hit) pts.push_back(h.hit->surface_mm());
+  }
+  ASSERT_EQ(pts.size(), 72u);
+  const auto [amplitude, phase, form] = fifth_harmonic(pts);
+  std::printf("[figures] lobed bore, touched: 5th harmonic %.5f mm (hidden %.4f) at %.2f deg (hidden %.0f), form %.5f mm\n",
+              amplitude, bore_amplitude, phase, bore_phase_deg, form);
+  EXPECT_NEAR(amplitude, bore_amplitude, 0.1 * bore_amplitude);
+  EXPECT_NEAR(phase, bore_phase_deg, 3);
+}
+
 // Accuracy: a free-form surface with a hidden 10 um bump; the scan line crosses it.
 TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
   const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 12) * std::cos(y / 15); };
