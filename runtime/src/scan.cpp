@@ -128,6 +128,17 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
     const geometry::Mesh placed = it->second.transformed(m_alignment.part_to_machine);
     auto contour = geometry::nearest_contour(geometry::mesh_section_contours(placed, path.point, path.direction, 0.05), path.point2);
     if (!contour) return program_error(span, "the PATH/SECTION plane does not cut the CAD model");
+    if (path.point3) {
+      // A sub-range: from the start to the contour's point nearest the end hint, in the contour's
+      // direction.
+      const Vec3 end = m_alignment.to_machine_point(*path.point3);
+      std::size_t last = 0;
+      for (std::size_t i = 1; i < contour->points.size(); ++i)
+        if ((contour->points[i].position - end).norm() < (contour->points[last].position - end).norm()) last = i;
+      if (last == 0) return program_error(span, "PATH/SECTION: the end of the sub-range is where it starts");
+      contour->points.resize(last + 1);
+      contour->closed = false;
+    }
     path.section = std::move(*contour);
   }
   if (path.kind == PathDefinition::Kind::Line && (path.point2 - path.point).norm() < 1e-9)

@@ -281,14 +281,12 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   EXPECT_TRUE(found);
 }
 
-TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
-  // A boss of radius 10 about part (40, 50), as a 256-facet STL in part coordinates; the part
-  // frame is shifted to machine (300, 200, 0). Truth: radius 10 + 4 um cos 3 theta.
-  const double rb = 2.0;
-  const Vec3 c(340, 250, 15);
+// A boss of radius 10 about part (40, 50), 30 high, as a 256-facet STL in part coordinates.
+constexpr int boss_facets = 256;
+fs::path boss_stl() {
   std::vector<Vec3> v;
   std::vector<geometry::Mesh::Face> faces;
-  const int n = 256;
+  const int n = boss_facets;
   for (int i = 0; i < n; ++i) {
     const double a = 2 * std::numbers::pi * i / n;
     v.emplace_back(40 + 10 * std::cos(a), 50 + 10 * std::sin(a), 0);
@@ -306,10 +304,20 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
     faces.push_back({bottom + 1, a1, b1});
   }
   auto mesh = geometry::Mesh::from_triangles(v, faces);
-  ASSERT_TRUE(mesh);
+  EXPECT_TRUE(mesh);
   const fs::path stl = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid())) / "boss.stl";
   fs::create_directories(stl.parent_path());
-  ASSERT_TRUE(geometry::save_mesh(*mesh, stl.string()));
+  EXPECT_TRUE(mesh && geometry::save_mesh(*mesh, stl.string()));
+  return stl;
+}
+
+TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
+  // The boss of boss_stl(); the part frame is shifted to machine (300, 200, 0). Truth: radius
+  // 10 + 4 um cos 3 theta.
+  const double rb = 2.0;
+  const Vec3 c(340, 250, 15);
+  const int n = boss_facets;
+  const fs::path stl = boss_stl();
   const auto truth = [&](const Vec3& q) {
     Vec3 d = q - c;
     d.z() = 0;
@@ -339,6 +347,35 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
   EXPECT_NEAR(f.actual->diameter_mm, 20, 1e-4);
   EXPECT_NEAR(f.actual->position.x(), 340, 1e-4);
   EXPECT_NEAR(f.fit->form_mm, 0.008, 1e-4);
+}
+
+// A sub-range of a section (issue 11 item 11): from the point nearest part (40, 70) to the point
+// nearest part (30, 50), in the section's direction (counterclockwise about the plane normal for
+// an outer boundary): a quarter of the boss, from its top to its left side.
+TEST(Scanning, PathSectionScansASubRangeBetweenTwoPoints) {
+  const fs::path stl = boss_stl();
+  const Vec3 c(340, 250, 15);
+  auto r = run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+               "P(Q) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50, 15\n"
+               "F(BOSS) = FEAT/ARC, OUTER, CART, 40, 50, 15, 0, 0, 1, 10, 90, 180\n"
+               "MEAS/ARC, F(BOSS), 0\n  PAMEAS/P(Q)\nENDMES\n",
+               [&](const Vec3& q) {
+                 Vec3 d = q - c;
+                 d.z() = 0;
+                 return Vec3(c + 12.0 * d.normalized() + Vec3(0, 0, q.z() - c.z()));
+               });
+  ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+  ASSERT_EQ(r->machine->scans.size(), 1u);
+  const auto& path = r->machine->scans[0].path;
+  EXPECT_LT((path.segments.front().start() - Vec3(340, 261.7, 15)).norm(), 0.05);
+  EXPECT_LT((path.segments.back().end() - Vec3(328.3, 250, 15)).norm(), 0.05);
+  double length = 0;
+  for (const auto& seg : path.segments) length += seg.d_mm;
+  EXPECT_NEAR(length, 11.7 * std::numbers::pi / 2, 0.05);  // a quarter turn at the ball centre's radius
+  // Three end numbers or none: anything else names the statement.
+  EXPECT_NE(run("P(Q) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50\n", nullptr)->diagnostics
+                .find("PATH/SECTION expects the file and 9 numbers"),
+            std::string::npos);
 }
 
 TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {

@@ -356,7 +356,7 @@ void UnitCompiler::path(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// P(l)=PATH/SECTION,'file',x,y,z,i,j,k,xs,ys,zs   (metron: a plane section of a CAD model)
+// P(l)=PATH/SECTION,'file',x,y,z,i,j,k,xs,ys,zs[,xe,ye,ze]   (metron: a plane section of a CAD model)
 void UnitCompiler::path_section(const grammar::Statement& s) {
   const auto& p = s.params;
   if (p.size() < 2 || p[1].kind != ExprKind::String)
@@ -366,8 +366,10 @@ void UnitCompiler::path_section(const grammar::Statement& s) {
   if (!std::filesystem::exists(file)) return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
   warn_if_unreadable(p[1].span, "PATH/SECTION", file.string());
   const std::size_t n = p.size() - 2;
-  if (n != 9)
-    return error(p.back().span, "sema.path-arity", fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near xs,ys,zs), got {}", n));
+  if (n != 9 && n != 12)
+    return error(p.back().span, "sema.path-arity",
+                 fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near "
+                             "xs,ys,zs) or 12 (and end near xe,ye,ze), got {}", n));
   auto in = make(Op::PathDef, s, upper(s.target->name));
   in.operands.push_back(word_operand(p[0]));
   in.names.push_back(file.string());

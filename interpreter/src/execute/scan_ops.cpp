@@ -31,6 +31,7 @@ ExecStatus Execute::path_def(Interpreter& vm, const ir::Instruction& in, CallFra
     p.point = a * len;
     p.direction = Vec3(nums[3], nums[4], nums[5]);
     p.point2 = Vec3(nums[6], nums[7], nums[8]) * len;
+    if (nums.size() >= 12) p.point3 = Vec3(nums[9], nums[10], nums[11]) * len;
   } else if (w[0] == "LINE") {
     p.kind = runtime::PathDefinition::Kind::Line;
     p.point = a * len;

@@ -38,6 +38,7 @@ struct PathDefinition {
   Kind kind = Kind::Line;
   Vec3 point = Vec3::Zero();        ///< line start; arc/helix centre; section: a point on the plane
   Vec3 point2 = Vec3::Zero();       ///< line end; section: near the start of the scan
+  std::optional<Vec3> point3;       ///< section: near the end of a sub-range (none: the whole section)
   Vec3 direction = Vec3::UnitZ();   ///< line: surface normal; arc/helix: axis; section: plane normal
   Vec3 reference = Vec3::UnitX();   ///< arc/helix: direction of angle 0
   double radius_mm = 0;
