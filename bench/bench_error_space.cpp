@@ -256,6 +256,33 @@ void BM_Compensation_ReportedPoint(benchmark::State& s) { compensation_bench(s, 
 BENCHMARK(BM_Compensation_CommandedTarget)->MeasureProcessCPUTime();
 BENCHMARK(BM_Compensation_ReportedPoint)->MeasureProcessCPUTime();
 
+// A map calibrated at two temperatures follows the controller's thermometer: each 0.01 K step
+// rebuilds it (at_temperature, then the interpolator) before the next command. The cost of one
+// rebuild for the 50 x 50 x 10 e_z space, per interpolation method, in process CPU time.
+void rebuild_bench(benchmark::State& state, error_space::Method method) {
+  error_space::ErrorSpaceFile file;
+  error_space::ErrorSpace warm = truth_space();
+  warm.temperature_c = 24;
+  for (double& v : warm.values_mm[2]) v *= 1.2;
+  file.spaces = {truth_space(), warm};
+  file.interpolation.method = method;
+  const auto map = ErrorSpaceMap::build(file, 20);
+  if (!map) {
+    state.SkipWithError(map.error().c_str());
+    return;
+  }
+  double t = 20;
+  for (auto _ : state) {
+    t = t >= 24 ? 20 : t + 0.01;
+    auto at = map->at_temperature(t);
+    benchmark::DoNotOptimize(at);
+  }
+}
+void BM_Compensation_RebuildAtTemperature_Trilinear(benchmark::State& s) { rebuild_bench(s, error_space::Method::Trilinear); }
+void BM_Compensation_RebuildAtTemperature_BSpline(benchmark::State& s) { rebuild_bench(s, error_space::Method::BSpline); }
+BENCHMARK(BM_Compensation_RebuildAtTemperature_Trilinear)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+BENCHMARK(BM_Compensation_RebuildAtTemperature_BSpline)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+
 void print_validation() {
   const auto plan = bench_plan();
   const auto run = calibrate_space(machine(), plan);
