@@ -281,6 +281,37 @@ TEST(ScanPath, BallThatDoesNotFitAndBadOptionsAreErrors) {
   EXPECT_FALSE(make_scan_path(line_contour(Vec3::Zero(), Vec3::UnitX(), Vec3::UnitZ()), o));
 }
 
+// A concave fillet of radius 3 tessellated at 2 degrees per facet, as a mesh section gives it
+// (facet normals along each facet, the mean normal at a concave vertex, samples every 0.05 mm and
+// one 10 um before each edge, where the section crossed a diagonal):
+// r - E0 = 1.7 < 3, so the ball fits; the points each vertex shadows are dropped, and the ball
+// centre runs on the 1.3 mm arc within the facets' sagitta (issue 11 item 11).
+TEST(ScanPath, AFacetedConcaveFilletWiderThanTheBallIsScanned) {
+  const double radius = 3, facet = 2 * std::numbers::pi / 180;
+  Contour c;
+  const int facets = 45;  // a quarter turn
+  auto vertex = [&](int k) { return Vec3(radius * std::cos(k * facet), radius * std::sin(k * facet), 0); };
+  auto facet_normal = [&](int k) { return Vec3(-(vertex(k) + vertex(k + 1)).normalized()); };  // toward the centre
+  for (int k = 0; k < facets; ++k) {
+    const Vec3 n = k == 0 ? facet_normal(0) : Vec3((facet_normal(k - 1) + facet_normal(k)).normalized());
+    c.points.push_back({vertex(k), n});
+    const int m = static_cast<int>(std::ceil((vertex(k + 1) - vertex(k)).norm() / 0.05));
+    for (int j = 1; j < m; ++j) c.points.push_back({vertex(k) + (vertex(k + 1) - vertex(k)) * j / m, facet_normal(k)});
+    // Where the section crosses a triangle's diagonal just before the facet's edge, a point 10 um
+    // short of the vertex: its offset lies beyond the vertex's (1.7 sin 1 deg = 30 um back).
+    c.points.push_back({vertex(k + 1) - 0.01 * (vertex(k + 1) - vertex(k)).normalized(), facet_normal(k)});
+  }
+  c.points.push_back({vertex(facets), facet_normal(facets - 1)});
+  const auto plan = make_scan_path(c, ScanPathOptions{});
+  ASSERT_TRUE(plan) << plan.error().message;
+  double worst = 0;
+  for (const auto& seg : plan->path.segments)
+    for (int i = 0; i <= 10; ++i) worst = std::max(worst, std::abs(seg.point(seg.d_mm * i / 10).norm() - 1.3));
+  // Facet sagitta 3 (1 - cos 1 deg) = 0.46 um, plus the chord tolerance.
+  EXPECT_LT(worst, 0.0005 + ScanPathOptions{}.chord_tolerance_mm);
+  std::printf("faceted concave fillet R 3 at 2 deg: ball-centre path within %.5f mm of the 1.3 mm arc\n", worst);
+}
+
 TEST(ScanPath, BoxSectionHasFourCornersAndStaysOnTheOffsetSides) {
   // A box section is a rectangle: the ball centre rolls around its four corners.
   std::vector<Vec3> v = {{0, 0, 0}, {30, 0, 0}, {30, 20, 0}, {0, 20, 0}, {0, 0, 10}, {30, 0, 10}, {30, 20, 10}, {0, 20, 10}};

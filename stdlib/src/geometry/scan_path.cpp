@@ -147,19 +147,36 @@ tl::expected<ScanPathPlan, ScanPathError> make_scan_path(const Contour& contour,
   if (!(o.ball_radius_mm > 0) || o.reference_deflection_mm < 0 || o.reference_deflection_mm >= o.ball_radius_mm)
     return tl::unexpected(ScanPathError{"need a ball radius r > 0 and a reference deflection 0 <= E0 < r"});
   // SEEDS.md 1: offset contour points = contour points + (r - E0) * normal.
-  const Contour offset = offset_contour(contour, o.ball_radius_mm - o.reference_deflection_mm);
-  const auto& src = contour.points;
-  const auto& pts = offset.points;
-  // The offset must not fold over (a concave radius smaller than r - E0: the ball does not fit).
-  for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
-    const Vec3 a = src[i + 1].position - src[i].position;
-    const Vec3 b = pts[i + 1].position - pts[i].position;
-    if (a.norm() > 1e-9 && a.dot(b) <= 0)
-      return tl::unexpected(ScanPathError{fmt::format(
-          "the offset path folds over near ({:.3f}, {:.3f}, {:.3f}): the surface is curved more tightly than the "
-          "ball radius minus the reference deflection ({:.3f} mm)",
-          src[i].position.x(), src[i].position.y(), src[i].position.z(), o.ball_radius_mm - o.reference_deflection_mm)});
+  const double lever = o.ball_radius_mm - o.reference_deflection_mm;
+  const Contour full = offset_contour(contour, lever);
+  // At a concave vertex of a faceted surface (a fillet tessellated at a few degrees) the offsets of
+  // the two facets cross: the points within (r - E0) tan(turn / 2) of the vertex are shadowed (the
+  // ball touches both facets before it reaches them) and their offsets step backwards. Those are
+  // dropped. A run of backward steps longer than a turn of corner_angle_deg could shadow means the
+  // ball does not fit (a concave radius smaller than r - E0, a bore smaller than the ball).
+  const double shadow_limit_mm = 2 * lever * std::tan(o.corner_angle_deg / 2 * std::numbers::pi / 180.0);
+  std::vector<ContourPoint> src;
+  Contour offset;
+  offset.closed = full.closed;
+  for (std::size_t i = 0; i < full.points.size(); ++i) {
+    if (!src.empty()) {
+      const Vec3 a = contour.points[i].position - src.back().position;
+      const Vec3 b = full.points[i].position - offset.points.back().position;
+      if (a.norm() > 1e-9 && a.dot(b) <= 0) {
+        if (a.norm() <= shadow_limit_mm) continue;
+        return tl::unexpected(ScanPathError{fmt::format(
+            "the offset path folds over near ({:.3f}, {:.3f}, {:.3f}): the surface is curved more tightly than the "
+            "ball radius minus the reference deflection ({:.3f} mm)",
+            src.back().position.x(), src.back().position.y(), src.back().position.z(), lever)});
+      }
+    }
+    src.push_back(contour.points[i]);
+    offset.points.push_back(full.points[i]);
   }
+  if (offset.points.size() < 2) return tl::unexpected(ScanPathError{"the ball does not fit the contour"});
+  // A closed contour whose closing point was shadowed is scanned open.
+  if (offset.closed && (offset.points.back().position - offset.points.front().position).norm() > 1e-9) offset.closed = false;
+  const auto& pts = offset.points;
   // Sharp corners end a smooth piece; each piece is fitted on its own.
   const double corner_cos = std::cos(o.corner_angle_deg * std::numbers::pi / 180.0);
   std::vector<std::size_t> breaks;
