@@ -281,6 +281,16 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   EXPECT_TRUE(found);
 }
 
+// The truth of a round boss about the vertical axis through c: the ball centre stands
+// `centre_radius_mm` from the axis, at the probe's height.
+Truth ball_centres_around(const Vec3& c, double centre_radius_mm) {
+  return [c, centre_radius_mm](const Vec3& q) {
+    Vec3 d = q - c;
+    d.z() = 0;
+    return Vec3(c + centre_radius_mm * d.normalized() + Vec3(0, 0, q.z() - c.z()));
+  };
+}
+
 // A boss of radius 10 about part (40, 50), 30 high, as a 256-facet STL in part coordinates.
 constexpr int boss_facets = 256;
 fs::path boss_stl() {
@@ -359,11 +369,7 @@ TEST(Scanning, PathSectionScansASubRangeBetweenTwoPoints) {
                "P(Q) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50, 15\n"
                "F(BOSS) = FEAT/ARC, OUTER, CART, 40, 50, 15, 0, 0, 1, 10, 90, 180\n"
                "MEAS/ARC, F(BOSS), 0\n  PAMEAS/P(Q)\nENDMES\n",
-               [&](const Vec3& q) {
-                 Vec3 d = q - c;
-                 d.z() = 0;
-                 return Vec3(c + 12.0 * d.normalized() + Vec3(0, 0, q.z() - c.z()));
-               });
+               ball_centres_around(c, 12.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 1u);
   const auto& path = r->machine->scans[0].path;
@@ -384,11 +390,7 @@ TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
   auto r = run("D(T) = TRANS/XORIG, 100, YORIG, 100, ZORIG, 10\nD(R) = ROTATE/ZAXIS, 90\n"
                "F(A1) = FEAT/ARC, OUTER, CART, 0, 0, 0, 0, 0, 1, 10, 90, 180\n"
                "SCNMOD/ON\nMEAS/ARC, F(A1), 0\nENDMES\n",
-               [&](const Vec3& q) {
-                 Vec3 d = q - c;
-                 d.z() = 0;
-                 return Vec3(c + 12.0 * d.normalized() + Vec3(0, 0, q.z() - c.z()));
-               });
+               ball_centres_around(c, 12.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 1u);
   ASSERT_LT((r->runtime->features().at("A1").nominal.position - c).norm(), 1e-9);
