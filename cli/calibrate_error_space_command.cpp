@@ -183,11 +183,12 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
     for (int c = 0; c < 3; ++c) {
       const auto comp = static_cast<error_space::Component>(c);
       if (!run.space.has(comp)) continue;
-      in.maps.push_back(error_space::slice_map(run.space, comp, 0, fmt::format("recovered e_{}, first plane", names[c])));
+      const double z0 = run.space.grid.axes_mm[2].front();
+      in.maps.push_back(error_space::slice_map(run.space, comp, 0, fmt::format("recovered e_{} at z = {} mm", names[c], z0)));
       if (truth) {
         error_space::ErrorSpace diff = run.space;
         for (std::size_t i = 0; i < diff.values_mm[c].size(); ++i) diff.values_mm[c][i] -= truth->values_mm[c][i];
-        in.maps.push_back(error_space::slice_map(diff, comp, 0, fmt::format("recovered - hidden truth, e_{}", names[c])));
+        in.maps.push_back(error_space::slice_map(diff, comp, 0, fmt::format("recovered - hidden truth, e_{} at z = {} mm", names[c], z0)));
       }
       const error_space::InterpolationSpec spec;
       if (auto m = error_space::validation_map(run.space, comp, 0, spec, fmt::format("validation residual, e_{}", names[c])))

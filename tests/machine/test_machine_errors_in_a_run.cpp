@@ -7,10 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "block_probing.hpp"
 #include "metron/machine/machine_errors/error_model.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world.hpp"
-#include "block_probing.hpp"
 
 namespace metron::machine {
 namespace {
@@ -49,7 +49,8 @@ TEST(MachineErrorsInARun, ThermalErrorsFollowTheControllersClock) {
     p.axes_mm = h.centre_mm;
     return world.truth.errors.displacement(p, h.time_s).x();
   };
-  const double expected_shift = -(scale_error(late) - scale_error(early));  // the encoders read short where the scale grew
+  const double expected_shift =
+      -(scale_error(late) - scale_error(early));  // the encoders read short where the scale grew
   const double shift = late.centre_mm.x() - early.centre_mm.x();
   EXPECT_LT(expected_shift, -0.02);  // about 31 um: the test can tell time from no time
   EXPECT_NEAR(shift, expected_shift, 0.0003) << "early t " << early.time_s << " s, late t " << late.time_s << " s";

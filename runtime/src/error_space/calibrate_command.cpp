@@ -52,7 +52,8 @@ tl::expected<std::array<T, 3>, std::string> triple(const std::string& key, const
     const auto v = whole_number(part);
     if (!v) return tl::unexpected(fmt::format("{}={}: '{}' is not a number", key, value, part));
     if constexpr (std::is_integral_v<T>) {
-      if (*v != std::floor(*v) || *v < 1 || *v > 1000) return tl::unexpected(fmt::format("{}={}: counts are whole numbers 1 to 1000", key, value));
+      if (*v != std::floor(*v) || *v < 1 || *v > 1000)
+        return tl::unexpected(fmt::format("{}={}: counts are whole numbers 1 to 1000", key, value));
     }
     out[static_cast<std::size_t>(n++)] = static_cast<T>(*v);
   }
@@ -62,7 +63,8 @@ tl::expected<std::array<T, 3>, std::string> triple(const std::string& key, const
 
 tl::expected<double, std::string> one_number(const std::string& key, const std::string& value, double lo, double hi) {
   const auto v = whole_number(value);
-  if (!v || !(*v >= lo && *v <= hi)) return tl::unexpected(fmt::format("{}={}: expected a number from {} to {}", key, value, lo, hi));
+  if (!v || !(*v >= lo && *v <= hi))
+    return tl::unexpected(fmt::format("{}={}: expected a number from {} to {}", key, value, lo, hi));
   return *v;
 }
 
@@ -89,9 +91,10 @@ tl::expected<ErrorSpaceRequest, std::string> parse_error_space_request(const std
       continue;
     }
     if (eq == std::string::npos || value.empty())
-      return tl::unexpected(fmt::format("'{}': expected KEY=VALUE (SIZE, ORIGIN, STEP, COMPONENTS, NOISE, OFFSET, RUNS, "
-                                        "LASER, ANGLE) or REVERSAL, ANGLE",
-                                        word));
+      return tl::unexpected(
+          fmt::format("'{}': expected KEY=VALUE (SIZE, ORIGIN, STEP, COMPONENTS, NOISE, OFFSET, RUNS, "
+                      "LASER, ANGLE) or REVERSAL, ANGLE",
+                      word));
     if (key == "SIZE") {
       auto t = triple<int>(key, value);
       if (!t) return tl::unexpected(t.error());
@@ -114,19 +117,22 @@ tl::expected<ErrorSpaceRequest, std::string> parse_error_space_request(const std
       r.sensor_noise_um = *v;
     } else if (key == "RUNS" || key == "LASER") {
       auto v = one_number(key, value, 1, 100);
-      if (!v || *v != std::floor(*v)) return tl::unexpected(fmt::format("{}={}: expected a whole number from 1 to 100", key, value));
+      if (!v || *v != std::floor(*v))
+        return tl::unexpected(fmt::format("{}={}: expected a whole number from 1 to 100", key, value));
       (key == "RUNS" ? r.runs : r.laser_cycles) = static_cast<int>(*v);
     } else if (key == "COMPONENTS") {
       const std::string axes = upper(value);
       r.components = {false, false, false};
       for (char c : axes) {
-        if (c != 'X' && c != 'Y' && c != 'Z') return tl::unexpected(fmt::format("COMPONENTS={}: the axes are X, Y and Z", value));
+        if (c != 'X' && c != 'Y' && c != 'Z')
+          return tl::unexpected(fmt::format("COMPONENTS={}: the axes are X, Y and Z", value));
         r.components[static_cast<std::size_t>(c - 'X')] = true;
       }
     } else {
-      return tl::unexpected(fmt::format("unknown word '{}' (SIZE, ORIGIN, STEP, COMPONENTS, NOISE, OFFSET, RUNS, LASER, "
-                                        "REVERSAL, ANGLE)",
-                                        word));
+      return tl::unexpected(
+          fmt::format("unknown word '{}' (SIZE, ORIGIN, STEP, COMPONENTS, NOISE, OFFSET, RUNS, LASER, "
+                      "REVERSAL, ANGLE)",
+                      word));
     }
   }
   const long points = static_cast<long>(r.size[0]) * r.size[1] * r.size[2];
@@ -140,7 +146,8 @@ Result<void> MeasurementRuntime::calibrate_error_space(const ErrorSpaceRequest& 
   if (!compensated || !m_error_space_rig)
     return program_error(span, what + ": this machine backend has no error-space rig and takes no compensation map");
   const std::filesystem::path dir(m_output_dir);
-  const std::string map_path = (dir / kErrorSpaceFileName).string(), report_path = (dir / kErrorSpaceReportName).string();
+  const std::string map_path = (dir / kErrorSpaceFileName).string(),
+                    report_path = (dir / kErrorSpaceReportName).string();
   for (const std::string& p : {map_path, report_path})
     if (auto refused = m_policy.refuse_write(p)) return program_error(span, what + ": " + *refused);
   auto outcome = m_error_space_rig(request);
@@ -157,16 +164,20 @@ Result<void> MeasurementRuntime::calibrate_error_space(const ErrorSpaceRequest& 
 
   error_space::ReportInput report;
   report.title = "Error-space calibration from a DMIS program, sequential two-point method (SEEDS.md 4)";
-  report.notes.push_back(fmt::format("grid {} x {} x {}, step {} mm; sensor noise {} um; {} planes, S7 planes to re-measure: {}",
-                                     request.size[0], request.size[1], request.size[2], request.step_mm,
-                                     request.sensor_noise_um, outcome->planes, outcome->planes_to_remeasure));
-  std::string summary = fmt::format("error space {} x {} x {} written to {} (report {}); the controller compensates by it from here on",
-                                    request.size[0], request.size[1], request.size[2], kErrorSpaceFileName, kErrorSpaceReportName);
+  report.notes.push_back(
+      fmt::format("grid {} x {} x {}, step {} mm; sensor noise {} um; {} planes, S7 planes to re-measure: {}",
+                  request.size[0], request.size[1], request.size[2], request.step_mm, request.sensor_noise_um,
+                  outcome->planes, outcome->planes_to_remeasure));
+  std::string summary =
+      fmt::format("error space {} x {} x {} written to {} (report {}); the controller compensates by it from here on",
+                  request.size[0], request.size[1], request.size[2], kErrorSpaceFileName, kErrorSpaceReportName);
   for (int c = 0; c < 3; ++c) {
     const auto comp = static_cast<error_space::Component>(c);
     if (!outcome->space.has(comp)) continue;
     const char axis = "xyz"[c];
-    report.maps.push_back(error_space::slice_map(outcome->space, comp, 0, fmt::format("recovered e_{}, first plane", axis)));
+    const double z0 = outcome->space.grid.axes_mm[2].front();
+    report.maps.push_back(
+        error_space::slice_map(outcome->space, comp, 0, fmt::format("recovered e_{} at z = {} mm", axis, z0)));
     if (auto m = error_space::validation_map(outcome->space, comp, 0, error_space::InterpolationSpec{},
                                              fmt::format("validation residual, e_{}", axis)))
       report.maps.push_back(*m);
@@ -178,7 +189,8 @@ Result<void> MeasurementRuntime::calibrate_error_space(const ErrorSpaceRequest& 
       if (i < sd.size()) f2 += sd[i] * sd[i];
     }
     const double n = static_cast<double>(std::max<std::size_t>(1, values.size()));
-    summary += fmt::format("; e_{} RMS {:.3f} um (noise floor {:.3f} um)", axis, 1e3 * std::sqrt(v2 / n), 1e3 * std::sqrt(f2 / n));
+    summary += fmt::format("; e_{} RMS {:.3f} um (noise floor {:.3f} um)", axis, 1e3 * std::sqrt(v2 / n),
+                           1e3 * std::sqrt(f2 / n));
   }
   if (outcome->planes_to_remeasure > 0)
     warn(span, fmt::format("{}: {} planes fail the S7 disagreement check and should be measured again", what,

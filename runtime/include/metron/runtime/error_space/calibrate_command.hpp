@@ -14,17 +14,17 @@ namespace metron::runtime {
 /// DMIS program"): the grid and the instruments of the sequential two-point calibration, with the
 /// defaults of `metron calibrate error-space`.
 struct ErrorSpaceRequest {
-  std::array<int, 3> size{11, 11, 3};                 ///< SIZE=nx,ny,nz grid points
-  std::array<double, 3> origin_mm{100, 100, 0};       ///< ORIGIN=x,y,z ram position of the first point
-  double step_mm = 50;                                ///< STEP=d grid step, the head's sensor spacing
-  std::array<bool, 3> components{false, false, true}; ///< COMPONENTS=xyz plates facing these axes
-  double sensor_noise_um = 0.1;                       ///< NOISE=um each reading's white noise
-  bool reversal = false;                              ///< REVERSAL: Delta by turning the head 180 degrees
-  bool angle_instrument = false;                      ///< ANGLE[=urad]: the head's rotation read and removed
-  double angle_noise_urad = 0.25;                     ///<   with this noise
-  std::array<double, 3> sensor_offset_mm{0, 0, -120}; ///< OFFSET=x,y,z sensor A's tip from the ram reference
-  int runs = 1;                                       ///< RUNS=n every plane n times, averaged
-  int laser_cycles = 2;                               ///< LASER=n bidirectional ISO 230-2 runs tying the planes
+  std::array<int, 3> size{11, 11, 3};                  ///< SIZE=nx,ny,nz grid points
+  std::array<double, 3> origin_mm{100, 100, 0};        ///< ORIGIN=x,y,z ram position of the first point
+  double step_mm = 50;                                 ///< STEP=d grid step, the head's sensor spacing
+  std::array<bool, 3> components{false, false, true};  ///< COMPONENTS=xyz plates facing these axes
+  double sensor_noise_um = 0.1;                        ///< NOISE=um each reading's white noise
+  bool reversal = false;                               ///< REVERSAL: Delta by turning the head 180 degrees
+  bool angle_instrument = false;                       ///< ANGLE[=urad]: the head's rotation read and removed
+  double angle_noise_urad = 0.25;                      ///<   with this noise
+  std::array<double, 3> sensor_offset_mm{0, 0, -120};  ///< OFFSET=x,y,z sensor A's tip from the ram reference
+  int runs = 1;                                        ///< RUNS=n every plane n times, averaged
+  int laser_cycles = 2;                                ///< LASER=n bidirectional ISO 230-2 runs tying the planes
 };
 
 /// Reads the words after CALIBRATE ERROR-SPACE (keys case-insensitive); the error quotes the word.
