@@ -17,6 +17,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "virtual_cmm_backend.hpp"
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/world.hpp"
 #include "metron/stdlib/error_space/error_space_file.hpp"
@@ -84,28 +85,29 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
     std::cerr << "error: --size takes nx,ny,nz and --origin x,y,z; --step-mm must be positive\n";
     return 2;
   }
-  machine::SpaceCalibrationPlan plan;
-  plan.head.spacing_mm = args.step_mm;
-  plan.head.noise_sd_mm = args.sensor_noise_um * 1e-3;
+  runtime::ErrorSpaceRequest request;
   for (int a = 0; a < 3; ++a) {
     if (args.size[a] < 1 || args.size[a] > 1000) {
       std::cerr << "error: --size: each count must be 1 to 1000\n";
       return 2;
     }
-    for (int i = 0; i < args.size[a]; ++i) plan.grid.axes_mm[a].push_back(args.origin_mm[a] + args.step_mm * i);
+    request.size[a] = args.size[a];
+    request.origin_mm[a] = args.origin_mm[a];
   }
-  for (int c = 0; c < 3; ++c) plan.components[c] = args.components.find("xyz"[c]) != std::string::npos;
-  plan.delta_by_reversal = args.reversal;
-  plan.head.angle_instrument = args.angle_instrument;
-  plan.head.angle_noise_sd_rad = args.angle_noise_urad * 1e-6;
   if (args.sensor_offset_mm.size() != 3 || args.runs < 1 || args.runs > 100 || args.laser_cycles < 1 || args.laser_cycles > 100) {
     std::cerr << "error: --sensor-offset takes x,y,z; --runs and --laser-cycles 1 to 100\n";
     return 2;
   }
-  plan.head.sensor_offset_mm = Vec3(args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]);
-  plan.runs = args.runs;
-  plan.laser_cycles = args.laser_cycles;
-  plan.seed = args.seed.value_or(world.seed);
+  request.step_mm = args.step_mm;
+  for (int c = 0; c < 3; ++c) request.components[c] = args.components.find("xyz"[c]) != std::string::npos;
+  request.sensor_noise_um = args.sensor_noise_um;
+  request.reversal = args.reversal;
+  request.angle_instrument = args.angle_instrument;
+  request.angle_noise_urad = args.angle_noise_urad;
+  for (int a = 0; a < 3; ++a) request.sensor_offset_mm[a] = args.sensor_offset_mm[a];
+  request.runs = args.runs;
+  request.laser_cycles = args.laser_cycles;
+  const machine::SpaceCalibrationPlan plan = error_space_plan(request, args.seed.value_or(world.seed));
 
   machine::SpaceCalibration run;
   try {

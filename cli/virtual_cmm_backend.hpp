@@ -17,6 +17,25 @@
 // BackendFactory here.
 namespace metron::cli {
 
+/// The calibration plan of CALIBRATE ERROR-SPACE's words or `metron calibrate error-space`'s options
+/// (both held as a runtime::ErrorSpaceRequest): the grid from origin in steps of the head's spacing.
+inline machine::SpaceCalibrationPlan error_space_plan(const runtime::ErrorSpaceRequest& r, std::uint64_t seed) {
+  machine::SpaceCalibrationPlan plan;
+  plan.head.spacing_mm = r.step_mm;
+  plan.head.noise_sd_mm = r.sensor_noise_um * 1e-3;
+  plan.head.sensor_offset_mm = Vec3(r.sensor_offset_mm[0], r.sensor_offset_mm[1], r.sensor_offset_mm[2]);
+  for (int a = 0; a < 3; ++a)
+    for (int i = 0; i < r.size[a]; ++i) plan.grid.axes_mm[a].push_back(r.origin_mm[a] + r.step_mm * i);
+  plan.components = r.components;
+  plan.delta_by_reversal = r.reversal;
+  plan.head.angle_instrument = r.angle_instrument;
+  plan.head.angle_noise_sd_rad = r.angle_noise_urad * 1e-6;
+  plan.runs = r.runs;
+  plan.laser_cycles = r.laser_cycles;
+  plan.seed = seed;
+  return plan;
+}
+
 /// The virtual CMM for a world file (none: the embedded default) and a seed (none: the world's).
 inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const std::optional<std::string>& world_path,
                                                                            std::optional<std::uint64_t> seed) {
@@ -42,19 +61,7 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
       -> tl::expected<runtime::ErrorSpaceOutcome, std::string> {
     auto world = machine::load_world_or_default(world_path);
     if (!world) return tl::unexpected(world.error().message);
-    machine::SpaceCalibrationPlan plan;
-    plan.head.spacing_mm = r.step_mm;
-    plan.head.noise_sd_mm = r.sensor_noise_um * 1e-3;
-    plan.head.sensor_offset_mm = Vec3(r.sensor_offset_mm[0], r.sensor_offset_mm[1], r.sensor_offset_mm[2]);
-    for (int a = 0; a < 3; ++a)
-      for (int i = 0; i < r.size[a]; ++i) plan.grid.axes_mm[a].push_back(r.origin_mm[a] + r.step_mm * i);
-    plan.components = r.components;
-    plan.delta_by_reversal = r.reversal;
-    plan.head.angle_instrument = r.angle_instrument;
-    plan.head.angle_noise_sd_rad = r.angle_noise_urad * 1e-6;
-    plan.runs = r.runs;
-    plan.laser_cycles = r.laser_cycles;
-    plan.seed = run_seed;
+    const machine::SpaceCalibrationPlan plan = error_space_plan(r, run_seed);
     try {
       machine::SpaceCalibration run = machine::calibrate_space(world->truth.errors, plan);
       return runtime::ErrorSpaceOutcome{std::move(run.space), static_cast<int>(run.planes.size()), run.planes_to_remeasure};
