@@ -144,6 +144,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
     Feature f;
     f.label = label;
     f.nominal = g;
+    f.nominal_frame = m_alignment.part_to_machine;
     f.defined_at = span;
     m_feature_order.push_back(label);
     it = m_features.emplace(label, f).first;
@@ -171,6 +172,7 @@ Result<void> MeasurementRuntime::construct_moved_point(const std::string& label,
     Feature f;
     f.label = label;
     f.nominal = moved;
+    f.nominal_frame = m_alignment.part_to_machine;
     f.defined_at = span;
     m_feature_order.push_back(label);
     it = m_features.emplace(label, f).first;

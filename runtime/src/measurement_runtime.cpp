@@ -36,6 +36,7 @@ Result<void> MeasurementRuntime::define_feature(const std::string& label, const 
   Feature f;
   f.label = label;
   f.nominal = to_machine(nominal, m_alignment.part_to_machine);
+  f.nominal_frame = m_alignment.part_to_machine;
   f.nominal.direction.normalize();
   if (f.nominal.normal2.norm() > 0) f.nominal.normal2.normalize();
   f.defined_at = span;
@@ -365,7 +366,8 @@ Result<const Datum*> MeasurementRuntime::datum(const std::string& label, Span sp
 Result<void> MeasurementRuntime::define_datum(const FeatureRef& ref, const std::string& label, Span span) {
   auto g = resolve(ref, span);
   if (!g) return tl::unexpected(g.error());
-  m_datums[label] = Datum{label, ref.label, *g};
+  const Feature* f = find_feature(ref.label);
+  m_datums[label] = Datum{label, ref.label, *g, f->nominal, f->nominal_frame};
   return {};
 }
 

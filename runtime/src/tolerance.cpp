@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "metron/runtime/datum_frame.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
 
 namespace metron::runtime {
@@ -32,6 +33,10 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::DistWrt: return "DISTWRT";
     case ToleranceKind::AngWrt: return "ANGWRT";
     case ToleranceKind::Cortol: return "CORTOL";
+    case ToleranceKind::Concen: return "CONCEN";
+    case ToleranceKind::Coaxial: return "COAXIAL";
+    case ToleranceKind::Crnout: return "CRNOUT";
+    case ToleranceKind::Totrun: return "TOTRUN";
   }
   return "DIAM";
 }
@@ -101,30 +106,46 @@ Error wrong_type(ToleranceKind kind, Types types, FeatureType got) {
                            article(dmis_word(got)), dmis_word(got)));
 }
 
-std::string join(const std::vector<std::string>& items, const char* separator) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
-  return out;
-}
-
 void add_note(ToleranceResult& result, const std::string& note) {
   if (note.empty()) return;
   if (!result.note.empty()) result.note += "; ";
   result.note += note;
 }
 
-std::string alignment_label(const ToleranceContext& context) {
-  return context.alignment ? context.alignment->label : std::string("MCS");
+/// Location tolerances with datums: the datum reference frame the DAT labels build, fitted for
+/// this feature (datum_frame.hpp); the feature's actual is moved with it. Without datums the
+/// actual is compared as it stands (the current alignment is the frame).
+///
+/// A program's datum nominals can be read two ways: where their FEAT put them on the machine, or
+/// as part-frame numbers to be read in the toleranced feature's alignment (datum features defined
+/// under a rough alignment, the feature under the fine one). Real programs do both (the NIST DCX
+/// program writes its datum planes in a shifted, turned frame of its own), so metron fits both
+/// and keeps the reading under which the datums' nominals and actuals agree best: the one that
+/// moves the feature least. The note says which.
+tl::expected<DatumFrame, std::string> frame_of_datums(const ToleranceSpec& spec, const Feature& feature,
+                                                     const ToleranceContext& context) {
+  if (spec.datums.empty()) return DatumFrame{};
+  for (std::size_t i = 0; i < spec.datums.size(); ++i)
+    if (i >= context.datums.size() || !context.datums[i])
+      return Error(fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.datums[i],
+                               spec.datums[i]));
+  auto as_defined = fit_datum_frame(context.datums, feature.nominal_frame, DatumNominals::AsDefined);
+  if (!as_defined) return as_defined;
+  auto in_frame = fit_datum_frame(context.datums, feature.nominal_frame, DatumNominals::InFeaturesFrame);
+  const Vec3 p = feature.actual ? feature.actual->position : feature.nominal.position;
+  const auto moved = [&](const DatumFrame& f) { return (f.actual_to_nominal * p - p).norm(); };
+  if (moved(*in_frame) + 1e-9 < moved(*as_defined)) {
+    in_frame->description += " (datum nominals read in the feature's alignment)";
+    return in_frame;
+  }
+  return as_defined;
 }
 
-/// Location tolerances with datums are evaluated in the current alignment: metron does not
-/// build a datum reference frame itself, the program's DATSET does.
-std::string datum_frame_note(const ToleranceSpec& spec, const ToleranceContext& context) {
-  if (spec.datums.empty()) return {};
-  return fmt::format(
-      "{} {}: evaluated in the current alignment {} (the program's DATSET is "
-      "expected to have established the datum frame)",
-      spec.datums.size() == 1 ? "datum" : "datums", join(spec.datums, ", "), alignment_label(context));
+/// The note of a datum frame, with how far it moved the feature's actual position.
+std::string datum_frame_note(const DatumFrame& frame, const Vec3& actual_position) {
+  if (frame.description.empty()) return {};
+  return fmt::format("{}; the feature's actual moved {:.4f} mm", frame.description,
+                     (frame.actual_to_nominal * actual_position - actual_position).norm());
 }
 
 void set_limits(ToleranceResult& result, double lower, double upper) {
@@ -256,7 +277,9 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
   const auto actual_or = actual_of(feature);
   if (!actual_or) return Error(actual_or.error());
-  const Geometry& actual = **actual_or;
+  const auto frame = frame_of_datums(spec, feature, context);
+  if (!frame) return Error(frame.error());
+  const Geometry actual = moved_by(**actual_or, frame->actual_to_nominal);
 
   Vec3 deviation = actual.position - nominal.position;
   if (!spec.three_d) {
@@ -300,7 +323,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
     if (nominal.side == Side::None) add_note(result, "side unknown: treated as OUTER");
   }
   set_limits(result, 0, spec.zone + bonus_mm);
-  add_note(result, datum_frame_note(spec, context));
+  add_note(result, datum_frame_note(*frame, (*actual_or)->position));
   return result;
 }
 
@@ -546,10 +569,12 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
   if (!actual) return Error(actual.error());
   if (feature.points.empty())
     return Error(fmt::format("PROFS of {} needs measured points: it has none", feature.label));
+  const auto frame = frame_of_datums(spec, feature, context);
+  if (!frame) return Error(frame.error());
   double lo = std::numeric_limits<double>::infinity();
   double hi = -lo;
   for (const MeasuredPoint& p : feature.points) {
-    const double dev = profile_deviation(feature.nominal, p.surface_mm());
+    const double dev = profile_deviation(feature.nominal, frame->actual_to_nominal * p.surface_mm());
     lo = std::min(lo, dev);
     hi = std::max(hi, dev);
   }
@@ -562,7 +587,7 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
                                lo, hi, feature.points.size()));
   if (feature.nominal.type != FeatureType::Plane && feature.nominal.side == Side::None)
     add_note(result, "side unknown: treated as OUTER");
-  add_note(result, datum_frame_note(spec, context));
+  add_note(result, datum_frame_note(*frame, (*actual)->position));
   return result;
 }
 
@@ -589,6 +614,196 @@ Outcome evaluate_cortol(const ToleranceSpec& spec, const Feature& feature, const
   result.value = a - n;
   set_limits(result, spec.lower, spec.upper);
   add_note(result, fmt::format("{} coordinate in {}", axis_word(spec.axis), frame.label));
+  return result;
+}
+
+// ---------------------------------------------------------------- CONCEN, COAXIAL, runout
+
+/// The datum axis of a coaxiality or runout tolerance (ISO 5459 common datums, ASME Y14.5 4.12):
+/// one axis datum (line, circle, arc, cylinder, cone) is its axis; two axis datums A-B are the
+/// common axis through their centres; a plane then an axis is the axis through the second's
+/// centre along the plane's normal; a sphere or point alone is a datum point.
+struct DatumAxis {
+  Vec3 point = Vec3::Zero();
+  Vec3 direction = Vec3::UnitZ();
+  bool is_point = false;  ///< a datum point (sphere, point): distances are to it
+  std::string name;
+};
+
+bool is_axis_type(FeatureType t) {
+  return t == FeatureType::Line || t == FeatureType::Circle || t == FeatureType::Arc ||
+         t == FeatureType::Cylinder || t == FeatureType::Cone;
+}
+
+tl::expected<DatumAxis, std::string> datum_axis(const ToleranceSpec& spec, const ToleranceContext& context) {
+  const char* word = dmis_word(spec.kind);
+  if (spec.datums.empty()) return Error(fmt::format("{} needs a datum axis: TOL/{},zone,DAT(A)", word, word));
+  for (std::size_t i = 0; i < spec.datums.size(); ++i)
+    if (i >= context.datums.size() || !context.datums[i])
+      return Error(fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.datums[i],
+                               spec.datums[i]));
+  const Geometry& first = context.datums[0]->geometry;
+  DatumAxis axis;
+  axis.name = "datum " + spec.datums[0];
+  if (first.type == FeatureType::Sphere || first.type == FeatureType::Point) {
+    axis.point = first.position;
+    axis.is_point = true;
+    return axis;
+  }
+  const auto d = unit(first.direction, axis.name);
+  if (!d) return Error(d.error());
+  axis.point = first.position;
+  axis.direction = *d;
+  if (context.datums.size() >= 2) {
+    const Geometry& second = context.datums[1]->geometry;
+    const std::string common = "common datum axis " + spec.datums[0] + "-" + spec.datums[1];
+    if (is_axis_type(first.type) && is_axis_type(second.type)) {
+      const Vec3 span = second.position - first.position;
+      if (std::abs(span.dot(*d)) > 1.0) {  // centres at least 1 mm apart along the axis
+        axis.direction = (span.dot(*d) > 0 ? span : Vec3(-span)).normalized();
+        axis.name = common;
+      }
+    } else if (first.type == FeatureType::Plane && is_axis_type(second.type)) {
+      axis.point = second.position;
+      axis.name = "the axis of datum " + spec.datums[1] + " normal to datum " + spec.datums[0];
+    }
+  }
+  if (first.type == FeatureType::Plane && axis.name == "datum " + spec.datums[0])
+    return Error(fmt::format("{} is a PLANE: {} needs a datum axis (a cylinder, circle, cone or line)",
+                             axis.name, word));
+  return axis;
+}
+
+double distance_from(const DatumAxis& axis, const Vec3& p) {
+  const Vec3 v = p - axis.point;
+  return axis.is_point ? v.norm() : (v - v.dot(axis.direction) * axis.direction).norm();
+}
+
+// CONCEN (ISO 1101 18.13.1, concentricity of a point): the centre of a circle, arc or sphere
+// within a circle (sphere about a datum point) of diameter t about the datum axis:
+//     value = 2 * distance(centre, datum axis)
+// COAXIAL (ISO 1101 18.13.2): the feature's axis within a cylinder of diameter t about the datum
+// axis. The distance from a line to a straight segment is largest at an end, so
+//     value = 2 * max(distance(e1), distance(e2)),
+// e1, e2 the ends of the actual axis over the extent of its points along it (else its length).
+Outcome evaluate_coaxiality(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                            ToleranceResult result) {
+  static constexpr Types k_axes = {FeatureType::Cylinder, FeatureType::Cone, FeatureType::Line};
+  static constexpr Types k_all = {FeatureType::Circle,   FeatureType::Arc,  FeatureType::Sphere, FeatureType::Point,
+                                  FeatureType::Cylinder, FeatureType::Cone, FeatureType::Line};
+  if (!is_one_of(feature.nominal.type, k_all)) return wrong_type(spec.kind, k_all, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  const auto axis = datum_axis(spec, context);
+  if (!axis) return Error(axis.error());
+  const Geometry& g = **actual;
+  double largest_mm = distance_from(*axis, g.position);
+  if (is_one_of(g.type, k_axes)) {
+    const auto a = unit(g.direction, "the actual of " + feature.label);
+    if (!a) return Error(a.error());
+    double lo = -0.5 * g.length_mm;
+    double hi = 0.5 * g.length_mm;
+    if (!feature.points.empty()) {
+      lo = std::numeric_limits<double>::infinity();
+      hi = -lo;
+      for (const MeasuredPoint& p : feature.points) {
+        const double t = (p.surface_mm() - g.position).dot(*a);
+        lo = std::min(lo, t);
+        hi = std::max(hi, t);
+      }
+    }
+    largest_mm = std::max(distance_from(*axis, g.position + lo * *a), distance_from(*axis, g.position + hi * *a));
+    add_note(result, fmt::format("axis of {} over {:.3f} mm, to {}", feature.label, hi - lo, axis->name));
+    if (spec.kind == ToleranceKind::Concen)
+      add_note(result, fmt::format("CONCEN of {} {} is evaluated as its coaxiality", article(dmis_word(g.type)),
+                                   dmis_word(g.type)));
+  } else {
+    add_note(result, fmt::format("centre of {} to {}", feature.label, axis->name));
+  }
+  result.value = 2.0 * largest_mm;
+  result.actual = result.value;
+  result.nominal = 0;
+  set_limits(result, 0, spec.zone);
+  return result;
+}
+
+/// Sections of a runout: groups of values (axial positions of the points for a radial runout,
+/// radii for an axial one) closer than 0.5 mm to their neighbours. Returns one index list a group.
+std::vector<std::vector<std::size_t>> sections(const std::vector<double>& keys) {
+  std::vector<std::size_t> order(keys.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+  std::vector<std::vector<std::size_t>> groups;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    if (k == 0 || keys[order[k]] - keys[order[k - 1]] > 0.5) groups.emplace_back();
+    groups.back().push_back(order[k]);
+  }
+  return groups;
+}
+
+// Runout about the datum axis (ISO 1101 18.16, 18.17), from the measured surface points:
+//   radial (circle, arc, cylinder, cone, sphere): r_k = distance of point k from the datum axis;
+//   axial (plane, a face square to the axis): h_k = its position along the datum axis.
+// CRNOUT: in each section (points at one axial position, or one radius for a face)
+//     value = max over sections of (max r - min r)         (cone: times cos(apex/2), normal to it)
+// TOTRUN: the same over all points at once.
+Outcome evaluate_runout(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                        ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc,  FeatureType::Cylinder,
+                                    FeatureType::Cone,   FeatureType::Sphere, FeatureType::Plane};
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  const auto axis = datum_axis(spec, context);
+  if (!axis) return Error(axis.error());
+  if (axis->is_point)
+    return Error(fmt::format("{} is a datum point: {} needs a datum axis", axis->name, dmis_word(spec.kind)));
+  if (feature.points.size() < 2)
+    return Error(fmt::format("{} of {} needs measured points: it has {}", dmis_word(spec.kind), feature.label,
+                             feature.points.size()));
+  const bool axial = feature.nominal.type == FeatureType::Plane;
+  std::vector<double> measured, keys;
+  for (const MeasuredPoint& p : feature.points) {
+    const Vec3 s = p.surface_mm();
+    const double along = (s - axis->point).dot(axis->direction);
+    const double radius = distance_from(*axis, s);
+    measured.push_back(axial ? along : radius);
+    keys.push_back(axial ? radius : along);
+  }
+  std::vector<std::vector<std::size_t>> groups;
+  if (spec.kind == ToleranceKind::Totrun || feature.nominal.type == FeatureType::Circle ||
+      feature.nominal.type == FeatureType::Arc) {
+    groups.emplace_back();
+    for (std::size_t i = 0; i < measured.size(); ++i) groups.back().push_back(i);
+  } else {
+    groups = sections(keys);
+  }
+  double value = 0;
+  std::size_t used = 0;
+  for (const auto& group : groups) {
+    if (group.size() < 2) continue;
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -lo;
+    for (const std::size_t i : group) {
+      lo = std::min(lo, measured[i]);
+      hi = std::max(hi, measured[i]);
+    }
+    value = std::max(value, hi - lo);
+    ++used;
+  }
+  if (used == 0)
+    return Error(fmt::format("CRNOUT of {}: no section holds two points (points of one section lie within 0.5 mm "
+                             "{}); measure circles, or use TOTRUN",
+                             feature.label, axial ? "of one radius" : "of one axial position"));
+  if (feature.nominal.type == FeatureType::Cone)
+    value *= std::cos(0.5 * feature.nominal.apex_angle_deg * k_pi / 180.0);
+  result.value = value;
+  result.actual = value;
+  result.nominal = 0;
+  set_limits(result, 0, spec.zone);
+  add_note(result, fmt::format("{} runout about {} over {} point{} in {} section{}", axial ? "axial" : "radial",
+                               axis->name, measured.size(), measured.size() == 1 ? "" : "s", used,
+                               used == 1 ? "" : "s"));
   return result;
 }
 
@@ -632,6 +847,10 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::DistWrt: return evaluate_distb(spec, feature, *features[1], context, std::move(result));
     case ToleranceKind::AngWrt: return evaluate_anglb(spec, features, context, std::move(result));
     case ToleranceKind::Cortol: return evaluate_cortol(spec, feature, context, std::move(result));
+    case ToleranceKind::Concen:
+    case ToleranceKind::Coaxial: return evaluate_coaxiality(spec, feature, context, std::move(result));
+    case ToleranceKind::Crnout:
+    case ToleranceKind::Totrun: return evaluate_runout(spec, feature, context, std::move(result));
   }
   return Error(fmt::format("{} is not evaluated", word));
 }

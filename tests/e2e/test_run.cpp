@@ -199,6 +199,50 @@ std::pair<int, std::string> shell(const std::string& command) {
   return {WEXITSTATUS(status), out};
 }
 
+// POS to datums A|B|C is evaluated in the frame the datums build, whether or not the program
+// aligned to them first. The block is misplaced on the table (block_misplaced.json) and its bore
+// is made 0.03 mm off along X in the part frame (block_deviations.json): the hidden truth is a
+// 2D position deviation of 0.06 mm (plus what the 0.05 deg tilt of face A adds, under 0.01 mm).
+TEST(DatumReferenceFrame, PositionToDatumsDoesNotDependOnTheProgramsAlignment) {
+  std::ifstream in(program("02_block_inspection.dmi"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string unaligned = text.str();
+  // The same program without its part alignment: everything stays in the fixture's frame, where
+  // the misplaced part is 0.3 mm off, and a POS without datums is added to show it.
+  for (const std::string line : {"D(DATUMS) = DATSET/DAT(A), ZDIR, ZORIG, DAT(B), YMINUS, YORIG, DAT(C), XORIG\n",
+                                 "D(PART) = TRANS/ZORIG, -40\n", "SAVE/DA(PART)\n"}) {
+    const auto at = unaligned.find(line);
+    ASSERT_NE(at, std::string::npos) << line;
+    unaligned.erase(at, line.size());
+  }
+  const std::string bare_pos = "T(POS_BARE) = TOL/POS, 2D, 0.050, RFS\n";
+  unaligned.insert(unaligned.find("T(POS_BORE1)"), bare_pos);
+  const std::string output = "OUTPUT/FA(BORE1), TA(D_BORE1), TA(POS_BORE1)";
+  unaligned.insert(unaligned.find(output) + output.size(), ", TA(POS_BARE)");
+  const fs::path dir = out_dir("drf_program");
+  fs::create_directories(dir);
+  const fs::path variant = dir / "02_unaligned.dmi";
+  std::ofstream(variant) << unaligned;
+
+  const auto aligned_run = run(program("02_block_inspection.dmi"), world("block_misplaced.json"), "drf_aligned", 7);
+  const auto unaligned_run = run(variant, world("block_misplaced.json"), "drf_unaligned", 7);
+  ASSERT_EQ(aligned_run.exit, RunExit::Completed) << aligned_run.diagnostics;
+  ASSERT_EQ(unaligned_run.exit, RunExit::Completed) << unaligned_run.diagnostics;
+  const auto* with_alignment = tolerance(aligned_run.record, "POS_BORE1");
+  const auto* without_alignment = tolerance(unaligned_run.record, "POS_BORE1");
+  const auto* bare = tolerance(unaligned_run.record, "POS_BARE");
+  ASSERT_TRUE(with_alignment && without_alignment && bare);
+  EXPECT_NEAR(with_alignment->value, 0.06, 0.01);
+  EXPECT_NEAR(without_alignment->value, 0.06, 0.01);
+  // The two programs probe the bore at points 0.3 mm apart: the same bore to the probe's noise.
+  EXPECT_NEAR(without_alignment->value, with_alignment->value, 0.003);
+  EXPECT_GT(bare->value, 0.2) << "without datums the misplacement shows";
+  std::printf("POS_BORE1 aligned %.4f, unaligned %.4f, without datums %.4f\n", with_alignment->value,
+              without_alignment->value, bare->value);
+  EXPECT_NE(without_alignment->note.find("datum reference frame A|B|C"), std::string::npos);
+}
+
 TEST(Cli, CheckPrintsPositionedDiagnosticsWithACaret) {
   const fs::path bad = source_dir / "programs" / "bad" / "tolerance_wrong_type.dmi";
   const auto [code, out] = shell(std::string(METRON_BINARY) + " check " + bad.string());

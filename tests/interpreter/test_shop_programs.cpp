@@ -170,11 +170,23 @@ TEST(ShopPrograms, MeasPointCountMismatchIsAWarning) {
 }
 
 TEST(ShopPrograms, UnevaluatedToleranceTypesWarnAndTheirOutputIsLeftOut) {
-  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(CONC)=TOL/CONCEN,0.05,DAT(A)\n"
-                       "T(RUN)=TOL/RUNOUT,0.02,DAT(A)\nOUTPUT/FA(C1),TA(CONC)\nENDFIL\n");
+  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(SYM)=TOL/SYMMTY,0.05,DAT(A)\n"
+                       "T(PL)=TOL/PROFL,-0.02,0.02\nOUTPUT/FA(C1),TA(SYM)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("tolerance type CONCEN is not evaluated by metron")) << c.text;
-  EXPECT_TRUE(c.has("T(CONC) (TOL/CONCEN) is not evaluated: left out of this OUTPUT")) << c.text;
+  EXPECT_TRUE(c.has("tolerance type SYMMTY is not evaluated by metron")) << c.text;
+  EXPECT_TRUE(c.has("T(SYM) (TOL/SYMMTY) is not evaluated: left out of this OUTPUT")) << c.text;
+}
+
+TEST(ShopPrograms, CoaxialityAndRunoutTolerancesAreCheckedAndNeedADatum) {
+  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nDATDEF/F(C1),DAT(A)\n"
+                       "T(CONC)=TOL/CONCEN,0.05,DAT(A)\nT(COAX)=TOL/COAXIAL,0.05,DAT(A)\n"
+                       "T(RUN)=TOL/RUNOUT,0.02,DAT(A)\nT(CR)=TOL/CRNOUT,0.02,DAT(A)\n"
+                       "T(TR)=TOL/TOTRUN,0.02,DAT(A)\nT(TR2)=TOL/TRNOUT,0.02,DAT(A)\n"
+                       "OUTPUT/FA(C1),TA(CONC),TA(RUN)\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_FALSE(c.has("not evaluated")) << c.text;
+  const auto bad = check("DMISMN/'p', 5.1\nT(CONC)=TOL/CONCEN,0.05\nENDFIL\n");
+  EXPECT_TRUE(bad.has("TOL/CONCEN needs a datum DAT(x)")) << bad.text;
 }
 
 // DISTWRT, CORTOL and MOVEPT against analytic answers on the perfect world (the bore is the design

@@ -74,7 +74,7 @@ ToleranceSpec spec(ToleranceKind kind) {
   return s;
 }
 
-Datum datum(const std::string& label, const Geometry& g) { return Datum{label, "D_" + label, g}; }
+Datum datum(const std::string& label, const Geometry& g) { return Datum{label, "D_" + label, g, g, Frame::Identity()}; }
 
 tl::expected<ToleranceResult, std::string> evaluate(const ToleranceSpec& s, std::vector<const Feature*> fs,
                                                     const ToleranceContext& context = {}) {
@@ -282,21 +282,25 @@ TEST(TolerancePosition, MaterialConditionBonus) {
   EXPECT_EQ(evaluate(s, {&p}).error(), "MMC applies to a circle, arc, sphere or cylinder, not to a POINT");
 }
 
-TEST(TolerancePosition, DatumsAreNotedAndPlanesRejected) {
+TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
   const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
                             round(FeatureType::Circle, Side::Inner, {0.01, 0, 0}, Vec3::UnitZ(), 10));
   ToleranceSpec s = spec(ToleranceKind::Pos);
   s.zone = 0.1;
   s.datums = {"A", "B"};
-  Alignment part;
-  part.label = "PART";
+  EXPECT_EQ(evaluate(s, {&c}).error(), "datum A is not defined: DATDEF/FA(feature),DAT(A) first");
+  // Datums whose actuals are their nominals leave the evaluation as it stands (the frame is
+  // tested against misplaced parts in test_datum_frame.cpp).
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  const Datum b = datum("B", plane({-20, 0, 0}, -Vec3::UnitX()));
   ToleranceContext context;
-  context.alignment = &part;
+  context.datums = {&a, &b};
   const auto r = evaluate(s, {&c}, context);
-  ASSERT_TRUE(r);
-  EXPECT_EQ(r->note,
-            "datums A, B: evaluated in the current alignment PART (the program's DATSET is expected "
-            "to have established the datum frame)");
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.02, k_tight);
+  EXPECT_NE(r->note.find("datum reference frame A|B: 3 of 3 rotations and 2 of 3 translations fixed"),
+            std::string::npos)
+      << r->note;
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(s, {&pl}).error(),
             "POS applies to a point, circle, arc, sphere, cylinder, cone or line, not to a PLANE");
@@ -558,6 +562,137 @@ TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
   const Feature p = feature("P1", point({0, 0, 0}), point({0, 0, 0}));
   EXPECT_EQ(evaluate(s, {&p}, context).error(),
             "ANGLB applies to a plane, line, cylinder, cone, circle or arc, not to a POINT");
+}
+
+// ------------------------------------------------------------------ CONCEN, COAXIAL, runout
+
+/// Surface points of a circle of radius r about centre c in the plane normal to z (probed from
+/// inside a bore: approach toward the centre), every `step_deg`.
+void add_ring(Feature& f, const Vec3& centre, double r, double step_deg = 45) {
+  for (double a = 0; a < 360; a += step_deg) {
+    const Vec3 radial(std::cos(a * k_pi / 180), std::sin(a * k_pi / 180), 0);
+    f.points.push_back(probed(centre + r * radial, -radial));
+  }
+}
+
+TEST(ToleranceCoaxiality, ConcentricityIsTwiceTheCentresDistanceFromTheDatumAxis) {
+  const Datum a = datum("A", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20, 30));
+  const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 40}, Vec3::UnitZ(), 10),
+                            round(FeatureType::Circle, Side::Inner, {0.01, 0.02, 40}, Vec3::UnitZ(), 10));
+  ToleranceSpec s = spec(ToleranceKind::Concen);
+  s.zone = 0.05;
+  s.datums = {"A"};
+  ToleranceContext context;
+  context.datums = {&a};
+  const auto r = evaluate(s, {&c}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 2 * std::hypot(0.01, 0.02), k_tight);
+  EXPECT_TRUE(r->in_tolerance);
+  // A plane cannot be a datum axis; no datum at all is an error too.
+  const Datum plane_a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  context.datums = {&plane_a};
+  EXPECT_EQ(evaluate(s, {&c}, context).error(),
+            "datum A is a PLANE: CONCEN needs a datum axis (a cylinder, circle, cone or line)");
+  s.datums.clear();
+  EXPECT_EQ(evaluate(s, {&c}).error(), "CONCEN needs a datum axis: TOL/CONCEN,zone,DAT(A)");
+}
+
+TEST(ToleranceCoaxiality, CoaxialityTakesTheFartherEndOfTheAxis) {
+  // The actual axis runs from (0.01, 0, 0) to (0.03, 0, 20); its points span z = 0..20.
+  const Datum a = datum("A", round(FeatureType::Cylinder, Side::Inner, {0, 0, -50}, Vec3::UnitZ(), 20, 30));
+  const Vec3 axis = Vec3(0.02, 0, 20).normalized();
+  Feature cyl = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 10}, Vec3::UnitZ(), 10, 20),
+                        round(FeatureType::Cylinder, Side::Inner, {0.02, 0, 10}, axis, 10, 20));
+  add_ring(cyl, {0.01, 0, 0}, 5);
+  add_ring(cyl, {0.03, 0, 20}, 5);
+  ToleranceSpec s = spec(ToleranceKind::Coaxial);
+  s.zone = 0.05;
+  s.datums = {"A"};
+  ToleranceContext context;
+  context.datums = {&a};
+  const auto r = evaluate(s, {&cyl}, context);
+  ASSERT_TRUE(r) << r.error();
+  // The rings are level, so their points reach 0.005 mm past the axis ends (5 mm x 0.001 slope):
+  // the ends found from the points lie 5e-6 mm farther out.
+  EXPECT_NEAR(r->value, 0.06, 2e-5);
+  EXPECT_FALSE(r->in_tolerance);
+}
+
+TEST(ToleranceCoaxiality, TwoAxisDatumsMakeACommonAxis) {
+  // Datum circles A at z = 0 and B at z = 100, B 0.1 mm off along x: the common axis A-B passes
+  // (0.05, 0, 50), where the feature's centre is.
+  const Datum a = datum("A", round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 20));
+  const Datum b = datum("B", round(FeatureType::Circle, Side::Outer, {0.1, 0, 100}, Vec3::UnitZ(), 20));
+  const Feature c = feature("C1", round(FeatureType::Circle, Side::Outer, {0, 0, 50}, Vec3::UnitZ(), 30),
+                            round(FeatureType::Circle, Side::Outer, {0.05, 0, 50}, Vec3::UnitZ(), 30));
+  ToleranceSpec s = spec(ToleranceKind::Concen);
+  s.zone = 0.01;
+  s.datums = {"A", "B"};
+  ToleranceContext context;
+  context.datums = {&a, &b};
+  auto r = evaluate(s, {&c}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.0, 1e-9);
+  EXPECT_NE(r->note.find("common datum axis A-B"), std::string::npos) << r->note;
+  s.datums = {"A"};
+  context.datums = {&a};
+  r = evaluate(s, {&c}, context);
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->value, 0.1, 1e-9);
+}
+
+TEST(ToleranceRunout, RadialRunoutIsTheLargestSectionsSpreadTotalRunoutTheWholeSpread) {
+  // Section z = 0: a circle of radius 5 centred 0.01 off the datum axis (spread 0.02); section
+  // z = 10: radius 5.02 on the axis (spread 0). Circular runout 0.02; total 5.02 - 4.99 = 0.03.
+  const Datum a = datum("A", round(FeatureType::Cylinder, Side::Outer, {0, 0, -40}, Vec3::UnitZ(), 20, 30));
+  Feature cyl = feature("CYL1", round(FeatureType::Cylinder, Side::Outer, {0, 0, 5}, Vec3::UnitZ(), 10, 10),
+                        round(FeatureType::Cylinder, Side::Outer, {0, 0, 5}, Vec3::UnitZ(), 10, 10));
+  add_ring(cyl, {0.01, 0, 0}, 5);
+  add_ring(cyl, {0, 0, 10}, 5.02);
+  ToleranceContext context;
+  context.datums = {&a};
+  ToleranceSpec s = spec(ToleranceKind::Crnout);
+  s.zone = 0.025;
+  s.datums = {"A"};
+  auto r = evaluate(s, {&cyl}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.02, 1e-9);
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_NE(r->note.find("radial runout about datum A over 16 points in 2 sections"), std::string::npos) << r->note;
+  s.kind = ToleranceKind::Totrun;
+  r = evaluate(s, {&cyl}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.03, 1e-9);
+  EXPECT_FALSE(r->in_tolerance);
+}
+
+TEST(ToleranceRunout, AxialRunoutOfAFaceSquareToTheAxis) {
+  // A face tilted 0.001 rad about y (h = 0.001 x): on the circle r = 10 it spreads 0.02; the
+  // circle r = 5 is also stepped up 0.02 (spread 0.01, from 0.015 to 0.025). Circular runout 0.02,
+  // total runout 0.025 - (-0.01) = 0.035.
+  const Datum a = datum("A", round(FeatureType::Cylinder, Side::Outer, {0, 0, -40}, Vec3::UnitZ(), 20, 30));
+  Feature face = feature("FACE", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  for (const double r : {10.0, 5.0})
+    for (double deg = 0; deg < 360; deg += 30) {
+      const double x = r * std::cos(deg * k_pi / 180), y = r * std::sin(deg * k_pi / 180);
+      face.points.push_back(probed({x, y, 0.001 * x + (r == 5.0 ? 0.02 : 0.0)}, Vec3::UnitZ()));
+    }
+  ToleranceContext context;
+  context.datums = {&a};
+  ToleranceSpec s = spec(ToleranceKind::Crnout);
+  s.zone = 0.03;
+  s.datums = {"A"};
+  auto r = evaluate(s, {&face}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.02, 1e-9);
+  EXPECT_NE(r->note.find("axial runout"), std::string::npos);
+  s.kind = ToleranceKind::Totrun;
+  r = evaluate(s, {&face}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.035, 1e-9);
+  // Without points there is nothing to take a runout from.
+  const Feature bare = feature("BARE", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  EXPECT_EQ(evaluate(s, {&bare}, context).error(), "TOTRUN of BARE needs measured points: it has 0");
 }
 
 // ------------------------------------------------------------------ PROFS

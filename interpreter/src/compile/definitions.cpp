@@ -203,13 +203,19 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!require_target(s, {"T"}, "T(label)=TOL/...")) return;
   if (!expect_params(s, 1, "the tolerance type")) return;
   const auto& p = s.params;
-  const auto parsed = is_word(p[0]) ? ir::parse_word<ToleranceKind>(p[0].text) : std::nullopt;
+  auto parsed = is_word(p[0]) ? ir::parse_word<ToleranceKind>(p[0].text) : std::nullopt;
+  // Older and vendor spellings of the runouts: RUNOUT (circular, or TOTAL when the word follows),
+  // TRNOUT for total runout.
+  if (!parsed && is_word(p[0], "RUNOUT"))
+    parsed = std::any_of(p.begin(), p.end(), [](const grammar::Expr& e) { return is_word(e, "TOTAL"); })
+                 ? ToleranceKind::Totrun
+                 : ToleranceKind::Crnout;
+  if (!parsed && is_word(p[0], "TRNOUT")) parsed = ToleranceKind::Totrun;
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
-    static const std::set<std::string> standard = {"CONCEN", "COAXIAL", "SYMMETRY", "RUNOUT", "TOTRUN", "PROFL",
-                                                   "PROFP", "PROFT", "CPARLN", "USETOL",
-                                                   "ANGL", "COMPOS", "GAP", "PNTDEF", "WIDTH", "CRNOUT"};
+    static const std::set<std::string> standard = {"SYMMETRY", "SYMMTY", "SYM", "PROFL", "PROFP", "PROFT",
+                                                   "CPARLN", "USETOL", "ANGL", "COMPOS", "GAP", "PNTDEF", "WIDTH"};
     if (is_word(p[0]) && standard.count(p[0].text)) {
       warn(p[0].span, "sema.unevaluated-tolerance",
            fmt::format("tolerance type {} is not evaluated by metron; the OUTPUT of T({}) will be left out", p[0].text, s.target->name));
@@ -266,7 +272,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs || kind == ToleranceKind::Cortol) &&
       numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
-  if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel) &&
+  if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||
+       kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout || kind == ToleranceKind::Totrun) &&
       std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
     return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
   if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))

@@ -57,6 +57,9 @@ enum class ActualSource { Measured, Constructed };
 struct Feature {
   std::string label;                 ///< the F()/FA() name
   Geometry nominal;
+  /// The alignment in force when the nominal was defined: the program wrote the nominal's
+  /// numbers in that frame (a datum reference frame compares nominals in one part frame).
+  Frame nominal_frame = Frame::Identity();
   std::optional<Geometry> actual;
   ActualSource source = ActualSource::Measured;
   std::vector<MeasuredPoint> points;

@@ -15,7 +15,11 @@ namespace metron::runtime {
 enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, Strght, Perp, Parlel, Anglb, Profs,
                            DistWrt,  ///< DISTB to a reference feature named in the TOL (DMIS 5.3 6.163)
                            AngWrt,   ///< ANGLB to a reference feature named in the TOL
-                           Cortol }; ///< one coordinate of the feature's position (CORTOL)
+                           Cortol,   ///< one coordinate of the feature's position (CORTOL)
+                           Concen,   ///< concentricity: a centre within a circle about the datum axis
+                           Coaxial,  ///< coaxiality: an axis within a cylinder about the datum axis
+                           Crnout,   ///< circular runout (CRNOUT; RUNOUT in older programs)
+                           Totrun }; ///< total runout (TOTRUN; TRNOUT)
 const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
 
 /// Distance direction for DISTB (and the coordinate of CORTOL).
@@ -44,6 +48,8 @@ struct Datum {
   std::string label;
   std::string feature;
   Geometry geometry;             ///< the actual (MCS) at DATDEF time
+  Geometry nominal;              ///< the datum feature's nominal (MCS)
+  Frame nominal_frame = Frame::Identity();  ///< the alignment that nominal was written in
 };
 
 /// The outcome of evaluating one tolerance on one or two features.
@@ -57,7 +63,7 @@ struct ToleranceResult {
   double lower = 0;              ///< accepted range for `value`
   double upper = 0;
   bool in_tolerance = false;
-  std::string note;              ///< how it was evaluated when not obvious (e.g. "datum frame = current alignment")
+  std::string note;              ///< how it was evaluated when not obvious (e.g. the datum reference frame)
   bool three_d = false;          ///< POS: the spec's 3D zone (else 2D); the DMIS output line needs it
 };
 
