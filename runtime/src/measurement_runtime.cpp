@@ -462,6 +462,7 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
     report.fit = f->fit;
     report.point_count = f->points.size();
     report.source = f->source;
+    report.units = m_report_units;
     if (item.feature.actual && !f->actual)
       warn(span, fmt::format("OUTPUT of FA({}) before it was measured", f->label));
     write_device_line(dmis_feature_line(report));
@@ -491,6 +492,7 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
     for (const auto& operands : evaluations) {
       auto result = evaluate_tolerance(spec, operands, context);
       if (!result) return program_error(span, result.error());
+      result->units = m_report_units;
       write_device_line(dmis_tolerance_line(*result));
       emit(*result);
     }

@@ -3,12 +3,16 @@
 // (schema in docs/results-json.md).
 #include "metron/runtime/outputs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <optional>
 #include <string_view>
+#include <tuple>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -38,10 +42,33 @@ const char* side_word(const Geometry& g) { return g.side == Side::Inner ? "INNER
 
 enum class Unit { Millimetre, Cosine, Degree };
 
-std::string fixed(double v, Unit unit, bool sign) {
+/// Default decimals of a length in `units` on reports: 4 in mm (0.1 um), and as many more as the
+/// unit is larger (CM 5, INCH 5, FEET 6, M 7), so the resolution stays about 0.1 um.
+int default_length_decimals(const ReportUnits& units, int mm_decimals) {
+  return mm_decimals + static_cast<int>(std::lround(std::log10(std::max(units.mm_per_length, 1.0))));
+}
+
+/// `v` (mm or degrees) in the report's units, and the decimals to write it with.
+std::pair<double, int> in_units(double v, Unit unit, const ReportUnits& units, int mm_decimals) {
+  switch (unit) {
+    case Unit::Cosine: return {v, 6};
+    case Unit::Degree: {
+      const int d = units.angle_decimals >= 0    ? units.angle_decimals
+                    : units.length_decimals >= 0 ? units.length_decimals
+                    : units.radians              ? 6
+                                                 : 4;
+      return {units.radians ? v * std::numbers::pi / 180.0 : v, d};
+    }
+    case Unit::Millimetre: break;
+  }
+  return {v / units.mm_per_length,
+          units.length_decimals >= 0 ? units.length_decimals : default_length_decimals(units, mm_decimals)};
+}
+
+std::string fixed(double v, Unit unit, bool sign, const ReportUnits& units = {}) {
   if (!std::isfinite(v)) return "-";
-  const int decimals = unit == Unit::Cosine ? 6 : 4;
-  std::string s = fmt::format("{:+.{}f}", v, decimals);
+  const auto [value, decimals] = in_units(v, unit, units, 4);
+  std::string s = fmt::format("{:+.{}f}", value, decimals);
   if (s.find_first_not_of("+-0.") == std::string::npos) s[0] = '+';  // no "-0.0000"
   return sign || s[0] == '-' ? s : s.substr(1);
 }
@@ -85,6 +112,11 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
   return rows;
 }
 
+/// "INCH, ANGRAD" for a heading (only written when not the default MM, ANGDEC).
+std::string units_words(const ReportUnits& units) {
+  return fmt::format("{}, {}", units.length, units.radians ? "ANGRAD" : "ANGDEC");
+}
+
 std::string feature_heading(const FeatureReport& report) {
   const Geometry& g = report.nominal;
   std::string out = fmt::format("{}({})  {}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
@@ -96,7 +128,9 @@ std::string feature_heading(const FeatureReport& report) {
   else
     out += "  measured";
   if (report.point_count > 0) out += fmt::format(", {} points", report.point_count);
-  out += fmt::format("  frame {}\n", report.frame);
+  out += fmt::format("  frame {}", report.frame);
+  if (!report.units.is_default()) out += fmt::format(", {}", units_words(report.units));
+  out += "\n";
   return out;
 }
 
@@ -120,9 +154,17 @@ std::string kind_words(const ToleranceResult& result) {
 
 // ---------------------------------------------------------------- DMIS output
 
-/// 5 decimals as in DMIS output files; never "-0.00000".
-std::string dmis_number(double v) {
-  std::string s = fmt::format("{:.5f}", v);
+/// 5 decimals as in DMIS output files (lengths in the program's units, DECPL when given);
+/// never "-0.00000".
+std::string dmis_number(double v, ParameterUnit unit = ParameterUnit::Cosine, const ReportUnits& units = {}) {
+  int decimals = 5;
+  if (unit == ParameterUnit::Length) {
+    std::tie(v, decimals) = in_units(v, Unit::Millimetre, units, 5);
+  } else if (unit == ParameterUnit::Angle) {
+    std::tie(v, decimals) = in_units(v, Unit::Degree, units, 5);
+    if (units.angle_decimals < 0 && units.length_decimals < 0) decimals = units.radians ? 7 : 5;
+  }
+  std::string s = fmt::format("{:.{}f}", v, decimals);
   if (s.find_first_not_of("-0.") == std::string::npos && s[0] == '-') s.erase(0, 1);
   return s;
 }
@@ -285,17 +327,18 @@ std::string format_feature_report(const FeatureReport& report) {
     out += fmt::format("{:8}{:>14}{:>14}{:>14}\n", "", "NOMINAL", "ACTUAL", "DEVIATION");
   else
     out += fmt::format("{:8}{:>14}\n", "", "NOMINAL");
+  const ReportUnits& u = report.units;
   for (const Row& row : report_rows(report.nominal, actual)) {
-    out += fmt::format("  {:6}{:>14}", row.name, fixed(row.nominal, row.unit, false));
+    out += fmt::format("  {:6}{:>14}", row.name, fixed(row.nominal, row.unit, false, u));
     if (actual)
-      out += fmt::format("{:>14}{:>14}", fixed(row.actual, row.unit, false),
-                         fixed(row.actual - row.nominal, row.unit, true));
+      out += fmt::format("{:>14}{:>14}", fixed(row.actual, row.unit, false, u),
+                         fixed(row.actual - row.nominal, row.unit, true, u));
     out += "\n";
   }
   if (actual && report.fit) {
-    out += fmt::format("  {:6}{:>14}{:>14}\n", "RMS", "", fixed(report.fit->rms_mm, Unit::Millimetre, false));
-    out +=
-        fmt::format("  {:6}{:>14}{:>14}\n", "FORM", "", fixed(report.fit->form_mm, Unit::Millimetre, false));
+    out += fmt::format("  {:6}{:>14}{:>14}\n", "RMS", "", fixed(report.fit->rms_mm, Unit::Millimetre, false, u));
+    out += fmt::format("  {:6}{:>14}{:>14}\n", "FORM", "",
+                       fixed(report.fit->form_mm, Unit::Millimetre, false, u));
   }
   return out;
 }
@@ -303,7 +346,9 @@ std::string format_feature_report(const FeatureReport& report) {
 std::string format_tolerance_result(const ToleranceResult& result) {
   std::string out =
       fmt::format("T({})  {}  {}  ", result.label, kind_words(result), feature_list(result.features));
-  const auto mm = [](double v, bool sign) { return fixed(v, Unit::Millimetre, sign); };
+  const Unit unit = result.kind == ToleranceKind::Anglb || result.kind == ToleranceKind::AngWrt ? Unit::Degree
+                                                                                               : Unit::Millimetre;
+  const auto mm = [&](double v, bool sign) { return fixed(v, unit, sign, result.units); };
   if (is_deviation_kind(result.kind)) {
     // The nominal the deviation is taken from (DISTB: the tolerance's, not the features').
     out += fmt::format("nominal {}  actual {}  ", mm(result.actual - result.value, false),
@@ -314,7 +359,9 @@ std::string format_tolerance_result(const ToleranceResult& result) {
                        mm(result.upper, true));
   else
     out += fmt::format("value {}  zone {}", mm(result.value, false), mm(result.upper, false));
-  out += result.in_tolerance ? "  IN\n" : "  OUT\n";
+  out += result.in_tolerance ? "  IN" : "  OUT";
+  if (!result.units.is_default()) out += fmt::format("  ({})", units_words(result.units));
+  out += "\n";
   if (!result.note.empty()) out += "  note: " + result.note + "\n";
   return out;
 }
@@ -342,14 +389,15 @@ std::string dmis_feature_line(const FeatureReport& report) {
   if (has_side(g.type)) head += fmt::format(", {}", side_word(g));
   head += ", CART";
   std::vector<std::string> fields;
-  for (const auto& p : feature_parameters(g)) fields.push_back(dmis_number(p.value));
+  for (const auto& p : feature_parameters(g)) fields.push_back(dmis_number(p.value, p.unit, report.units));
   return dmis_statement(head, fields);
 }
 
 std::string dmis_tolerance_line(const ToleranceResult& result) {
   std::vector<std::string> fields;
   if (result.kind == ToleranceKind::Pos) fields.emplace_back(result.three_d ? "3D" : "2D");
-  fields.push_back(dmis_number(result.value));
+  const bool angle = result.kind == ToleranceKind::Anglb || result.kind == ToleranceKind::AngWrt;
+  fields.push_back(dmis_number(result.value, angle ? ParameterUnit::Angle : ParameterUnit::Length, result.units));
   fields.emplace_back(result.in_tolerance ? "INTOL" : "OUTOL");
   const std::string head = fmt::format("TA({}) = TOL/{}", result.label, dmis_word(result.kind));
   return dmis_statement(head, fields);

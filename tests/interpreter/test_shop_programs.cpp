@@ -4,6 +4,8 @@
 // written for these tests in the dialects' style (the public originals are not ours to copy).
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +14,7 @@
 
 #include "cli/virtual_cmm_backend.hpp"
 #include "metron/grammar/parser.hpp"
+#include "metron/runtime/outputs.hpp"
 #include "metron/interpreter/compiler.hpp"
 #include "metron/interpreter/session.hpp"
 
@@ -218,6 +221,46 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
   ASSERT_TRUE(cy);
   EXPECT_NEAR(cy->actual, 47.0, 2e-3);
   EXPECT_NEAR(cy->value, 0.0, 2e-3);
+}
+
+// UNITS/INCH and DECPL: the report and the DMIS output statement are in the program's units with
+// the decimals DECPL asks for; the truth is the world's 20 mm bore at part (40, 50, 30) mm.
+TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
+  const auto inch = [](double mm) { return fmt::format("{:.6f}", mm / 25.4); };
+  const std::string text =
+      "DMISMN/'inch', 5.0\nUNITS/INCH, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, " + inch(300) + ", YORIG, " + inch(200) + ", ZORIG, 0\nGOTO/" + inch(40) + ", " +
+      inch(50) + ", " + inch(80) + "\nF(BORE1) = FEAT/CIRCLE, INNER, CART, " + inch(40) + ", " + inch(50) + ", " +
+      inch(30) + ", 0, 0, 1, " + inch(20) + "\nT(D1) = TOL/DIAM, -0.0005, 0.0005\nMEAS/CIRCLE, F(BORE1), 4\nENDMES\n"
+      "OUTPUT/FA(BORE1), TA(D1)\nDECPL/ALL, 3\nOUTPUT/FA(BORE1), TA(D1)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<metron::runtime::FeatureReport> reports;
+  std::vector<metron::runtime::ToleranceResult> results;
+  for (const auto& e : r.session->record().events) {
+    if (const auto* f = std::get_if<metron::runtime::FeatureReport>(&e)) reports.push_back(*f);
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) results.push_back(*t);
+  }
+  ASSERT_EQ(reports.size(), 2u);
+  ASSERT_EQ(results.size(), 2u);
+  // The record stays in mm (results.json's unit); the report converts.
+  ASSERT_TRUE(reports[0].actual);
+  EXPECT_NEAR(reports[0].actual->diameter_mm, 20.0, 2e-3);
+  const std::string first = metron::runtime::format_feature_report(reports[0]);
+  EXPECT_NE(first.find("frame PART, INCH, ANGDEC"), std::string::npos) << first;
+  EXPECT_NE(first.find("  D            0.78740"), std::string::npos) << first;  // 20 mm, 5 decimals in inch
+  EXPECT_NE(first.find("  X            1.57480"), std::string::npos) << first;
+  const std::string second = metron::runtime::format_feature_report(reports[1]);
+  EXPECT_NE(second.find("  D              0.787"), std::string::npos) << second;  // DECPL/ALL,3
+  const std::string line = metron::runtime::dmis_feature_line(reports[1]);
+  // Direction cosines keep their 5 decimals (DECPL is for lengths and angles).
+  EXPECT_NE(line.find("1.575, 1.969, 1.181, 0.00000, 0.00000, 1.00000, 0.787"),
+            std::string::npos)
+      << line;
+  EXPECT_TRUE(results[0].in_tolerance);
+  const std::string tol = metron::runtime::format_tolerance_result(results[0]);
+  EXPECT_NE(tol.find("limits [-0.00050, +0.00050]"), std::string::npos) << tol;
+  EXPECT_NE(tol.find("(INCH, ANGDEC)"), std::string::npos) << tol;
 }
 
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {

@@ -17,8 +17,8 @@ const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "
                                        "OPERID", "PLANID", "PARTID", "PARTRV", "PARTSN", "PROCID", "QISDEF",
                                        "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT", "RESUME",
                                        // DMIS 5.x statements shop programs carry that change nothing on a
-                                       // virtual CMM: reporting precision, vendor switches, fly mode.
-                                       "DECPL", "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN"};
+                                       // virtual CMM: vendor switches, fly mode.
+                                       "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN"};
 }  // namespace
 
 void UnitCompiler::add_input_output(StatementTable& t) {
@@ -26,8 +26,23 @@ void UnitCompiler::add_input_output(StatementTable& t) {
   t.insert({
       {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
       {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
-      {"PAUSE", &UnitCompiler::pause}
+      {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl}
   });
+}
+
+// DECPL/ALL,n | DECPL/LENGTH,n[,ANGLE,m] | DECPL/n: the decimals of reports and DMIS output files
+// (docs/language.md). Other words (vendor sub-kinds) are kept and count as lengths.
+void UnitCompiler::decpl(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "ALL, LENGTH or ANGLE and the number of decimals")) return;
+  auto in = make(Op::DecimalPlaces, s);
+  for (const auto& p : s.params) {
+    if (is_word(p) && !is_variable(p.text)) {
+      in.operands.push_back(word_operand(p));
+    } else if (!push_number(in, p, "a number of decimals")) {
+      return;
+    }
+  }
+  emit(std::move(in));
 }
 
 void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }

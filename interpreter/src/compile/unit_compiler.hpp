@@ -199,6 +199,7 @@ class UnitCompiler {
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
   void pause(const grammar::Statement& s);
+  void decpl(const grammar::Statement& s);
   void text(const grammar::Statement& s);
   void device(const grammar::Statement& s);
   bool check_device(const grammar::Statement& s);

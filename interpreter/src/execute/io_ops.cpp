@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Input/output: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE.
+// Input/output: UNITS, DECPL, MODE, TEXT, DEVICE, OPEN, CLOSE.
 #include <algorithm>
 #include <cmath>
 
@@ -15,7 +15,7 @@ using runtime::FeatureType;
 
 void Execute::add_input_output(ExecuteTable& t) {
   add_rows(t, {
-      {Op::Units, &units}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
+      {Op::Units, &units}, {Op::DecimalPlaces, &decimal_places}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
       {Op::DeviceOpen, &device_open}, {Op::DeviceClose, &device_close}
   });
 }
@@ -25,6 +25,37 @@ ExecStatus Execute::units(Interpreter& vm, const ir::Instruction& in, CallFrame&
   const auto& units = std::get<ir::UnitsPayload>(in.payload);
   vm.m_length_mm = ir::millimetres_per(units.length);
   if (units.angle) vm.m_degrees = *units.angle != ir::AngleUnit::Angrad;
+  // Reports and DMIS output files follow the program's units (results.json stays in mm).
+  runtime::ReportUnits report = vm.m_runtime.report_units();
+  report.mm_per_length = vm.m_length_mm;
+  report.length = std::string(ir::word_of(units.length));
+  report.radians = !vm.m_degrees;
+  vm.m_runtime.set_report_units(report);
+  return ExecStatus::Running;
+}
+
+// Op::DecimalPlaces: DECPL pairs each word with the number after it; a lone number (or ALL) sets
+// lengths and angles alike.
+ExecStatus Execute::decimal_places(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const auto w = words(in);
+  runtime::ReportUnits report = vm.m_runtime.report_units();
+  for (std::size_t i = 0; i < nums.size(); ++i) {
+    if (!(nums[i] >= 0 && nums[i] <= 12))
+      return vm.fail(in.span, fmt::format("DECPL: {} decimals is outside 0..12", nums[i]));
+    const int decimals = static_cast<int>(std::lround(nums[i]));
+    const std::string word = i < w.size() ? w[i] : "ALL";
+    if (word == "ALL" || word == "ALLDEC") {
+      report.length_decimals = decimals;
+      report.angle_decimals = decimals;
+    } else if (word == "ANGLE" || word == "ANGL" || word == "ANG") {
+      report.angle_decimals = decimals;
+    } else {
+      report.length_decimals = decimals;
+    }
+  }
+  vm.m_runtime.set_report_units(report);
   return ExecStatus::Running;
 }
 

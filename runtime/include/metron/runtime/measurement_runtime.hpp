@@ -118,6 +118,9 @@ class MeasurementRuntime {
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
   Result<void> set_acceleration(double acceleration_mm_s2, Span span);
   void set_mode(Mode mode) { m_mode = mode; }
+  /// UNITS and DECPL: what OUTPUT reports and DMIS output files are written in.
+  void set_report_units(ReportUnits units) { m_report_units = std::move(units); }
+  [[nodiscard]] const ReportUnits& report_units() const { return m_report_units; }
   [[nodiscard]] Mode mode() const { return m_mode; }
   Result<void> go_to(const Vec3& point_current, Span span);
   /// Current ball-centre position in the current frame.
@@ -207,6 +210,7 @@ class MeasurementRuntime {
   std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
   Mode m_mode = Mode::Auto;
+  ReportUnits m_report_units;
   struct Device {
     std::string path;
     bool open = false;

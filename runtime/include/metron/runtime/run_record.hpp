@@ -21,6 +21,7 @@ struct FeatureReport {
   std::optional<FitFigures> fit;
   std::size_t point_count = 0;
   ActualSource source = ActualSource::Measured;
+  ReportUnits units;                 ///< the program's UNITS and DECPL at the OUTPUT
 };
 
 /// A position in a source file, resolved for reports (file, line, column).

@@ -7,6 +7,7 @@
 
 #include "metron/runtime/alignment.hpp"
 #include "metron/runtime/feature.hpp"
+#include "metron/runtime/report_units.hpp"
 #include "metron/stdlib/span.hpp"
 
 namespace metron::runtime {
@@ -65,6 +66,7 @@ struct ToleranceResult {
   bool in_tolerance = false;
   std::string note;              ///< how it was evaluated when not obvious (e.g. the datum reference frame)
   bool three_d = false;          ///< POS: the spec's 3D zone (else 2D); the DMIS output line needs it
+  ReportUnits units;             ///< the program's UNITS and DECPL at the OUTPUT (reports only)
 };
 
 /// What an evaluation needs besides the spec and features.

@@ -68,10 +68,11 @@ enum class Op {
   ScanSet,      ///< words: DIST|CHORD|ACCEL|DEFLEC, expr: value | words: LAW, VC1|VC1P|VC2
   PaMeas,       ///< labels: P(path) (inside a MEAS block: a scan step)
   System,       ///< CALL/EXTERN,SYS,'command': `name` = the command text (docs/touch-trigger.md)
+  DecimalPlaces,  ///< DECPL: words ALL|LENGTH|ANGLE|...; exprs: the decimals, paired in order
 };
 
-/// The number of operations (System is the last).
-inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::System) + 1;
+/// The number of operations (DecimalPlaces is the last).
+inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::DecimalPlaces) + 1;
 
 /// Upper-case mnemonic of an operation (for --emit-ir).
 const char* to_string(Op op);
