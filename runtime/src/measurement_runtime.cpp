@@ -579,6 +579,30 @@ Result<void> MeasurementRuntime::close_device(const std::string& label, Span spa
   return {};
 }
 
+Result<std::string> MeasurementRuntime::read_input_device(const std::string& label, Span span) {
+  auto it = m_devices.find(label);
+  if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));
+  namespace fs = std::filesystem;
+  const fs::path written(it->second.path);
+  std::vector<fs::path> candidates;
+  if (written.is_absolute() || m_policy.read_dirs().empty()) {
+    candidates.push_back(written);
+  } else {
+    for (const auto& dir : m_policy.read_dirs()) candidates.push_back(dir / written);
+  }
+  std::error_code ec;
+  const auto found = std::find_if(candidates.begin(), candidates.end(),
+                                  [&](const fs::path& p) { return fs::exists(p, ec); });
+  if (found == candidates.end())
+    return program_error(span, fmt::format("OPEN/DID({}),INPUT: the file '{}' is not there (looked in {})", label,
+                                           it->second.path, candidates.front().parent_path().string()));
+  if (auto refused = m_policy.refuse_read(found->string()))
+    return program_error(span, fmt::format("OPEN/DID({}),INPUT: {}", label, *refused));
+  auto text = read_input_file(found->string());
+  if (!text) return program_error(span, fmt::format("OPEN/DID({}),INPUT: {}", label, text.error()));
+  return *text;
+}
+
 void MeasurementRuntime::text(const std::string& kind, const std::string& text) {
   if (kind == "OUTFIL") write_device_line("TEXT/OUTFIL,'" + text + "'");
   emit(TextReport{text});

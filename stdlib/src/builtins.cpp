@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -65,6 +66,14 @@ const std::vector<Builtin>& builtins() {
       {"TRIM", 1, 1, ValueType::String, true}, {"UPC", 1, 1, ValueType::String, true},
       {"LWC", 1, 1, ValueType::String, true},  {"CHR", 1, 1, ValueType::String, false},
       {"ORD", 1, 1, ValueType::Integer, true},
+      // Strings to numbers and fields (DMIS 5.3 6.5): VAL('12.5'), ELEMNT(n, ',', 'a,b,c').
+      {"VAL", 1, 1, ValueType::Real, true},    {"ELEMNT", 3, 3, ValueType::String, true},
+      // Intrinsics of the run (the interpreter answers them: docs/language.md): the date and time
+      // on the run's clock, the simulated seconds since the start, end of an input file, the
+      // number of points of a feature.
+      {"SDATE", 0, 0, ValueType::String, false},   {"STIME", 0, 0, ValueType::String, false},
+      {"SDATETIME", 0, 0, ValueType::String, false}, {"SELAPSETIME", 0, 0, ValueType::Real, false},
+      {"EOF", 1, 1, ValueType::Bool, true},        {"PTDATA", 1, 1, ValueType::Integer, true},
   };
   return table;
 }
@@ -175,6 +184,29 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
     return Value::string(std::string(1, static_cast<char>(static_cast<int>(x[0]))));
   }
   if (name == "ORD") return Value::integer(s[0].empty() ? 0.0 : static_cast<unsigned char>(s[0][0]));
+  if (name == "VAL") {
+    std::string t = s[0];
+    while (!t.empty() && t.front() == ' ') t.erase(0, 1);
+    while (!t.empty() && t.back() == ' ') t.pop_back();
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    if (t.empty() || end != t.c_str() + t.size()) return tl::unexpected(fmt::format("VAL: '{}' is not a number", s[0]));
+    return real(v);
+  }
+  if (name == "ELEMNT") {
+    // ELEMNT(n, delimiter, string): the n-th field (1-based); '' past the last.
+    if (!args[0].is_number() || args[0].number < 1) return tl::unexpected(std::string("ELEMNT: the index must be 1 or more"));
+    const std::string& delimiter = s[1];
+    if (delimiter.empty()) return tl::unexpected(std::string("ELEMNT: the delimiter is empty"));
+    std::size_t start = 0;
+    for (long k = 1; k < static_cast<long>(args[0].number); ++k) {
+      const auto at = s[2].find(delimiter, start);
+      if (at == std::string::npos) return Value::string("");
+      start = at + delimiter.size();
+    }
+    const auto at = s[2].find(delimiter, start);
+    return Value::string(s[2].substr(start, at == std::string::npos ? std::string::npos : at - start));
+  }
   return tl::unexpected(fmt::format("intrinsic {} is not implemented", name));
 }
 

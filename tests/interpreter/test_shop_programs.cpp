@@ -263,6 +263,40 @@ TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   EXPECT_NE(tol.find("(INCH, ANGDEC)"), std::string::npos) << tol;
 }
 
+// OPEN ... INPUT, READ and EOF read a data file beside the program; the date and time come from
+// the run's clock (SOURCE_DATE_EPOCH fixes its start), SELAPSETIME from the simulated machine.
+TEST(ShopPrograms, InputFilesAndTheIntrinsicsOfTheRun) {
+  write("offsets.txt", "P1, 1.5, 2.5\nP2 3 4\n'A B',5,6\n");
+  const std::string text =
+      "DMISMN/'p', 5.0\nDECL/CHAR,20,NAME\nDECL/REAL,X,Y,ET\nDECL/INTGR,K\nDECL/CHAR,30,WHEN\n"
+      "DID(IN1)=DEVICE/STOR,'offsets.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nK=ASSIGN/0\n"
+      "(NEXT)\nIF/(.NOT.EOF(DID(IN1)))\n  READ/DID(IN1),NAME,X,Y\n  TEXT/OPER,CONCAT(NAME,'=',STR(X+Y,1))\n"
+      "  K=ASSIGN/K+1\n  JUMPTO/(NEXT)\nENDIF\nCLOSE/DID(IN1)\nTEXT/OPER,STR(K)\n"
+      "WHEN=ASSIGN/SDATETIME()\nTEXT/OPER,WHEN\nTEXT/OPER,CONCAT(SDATE(),'|',STIME())\n"
+      "ET=ASSIGN/SELAPSETIME()\nTEXT/OPER,STR(ET,3)\n"
+      "TEXT/OPER,STR(VAL(' 12.5 ')*2,2)\nTEXT/OPER,ELEMNT(2,',','a,b,c')\nENDFIL\n";
+  ::setenv("SOURCE_DATE_EPOCH", "31622400", 1);  // 1971-01-02 00:00:00 UTC
+  const auto r = run(text);
+  ::unsetenv("SOURCE_DATE_EPOCH");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> texts;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> expected = {"P1=4.0", "P2=7.0", "A B=11.0", "3", "1971/01/02 00:00:00",
+                                             "1971/01/02|00:00:00", "0.000", "25.00", "b"};
+  EXPECT_EQ(texts, expected);
+
+  // Reading past the end, a number that is not one, a file that is not there: positioned errors.
+  const auto past = run("DMISMN/'p', 5.0\nDECL/REAL,X\nDID(IN1)=DEVICE/STOR,'offsets.txt'\n"
+                        "OPEN/DID(IN1),DIRECT,INPUT\nREAD/DID(IN1),X\nENDFIL\n");
+  EXPECT_NE(past.diagnostics.find("READ/DID(IN1): 'P1' is not a number for X (field 1 of the file)"), std::string::npos)
+      << past.diagnostics;
+  const auto missing = run("DMISMN/'p', 5.0\nDID(IN1)=DEVICE/STOR,'nowhere.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nENDFIL\n");
+  EXPECT_NE(missing.diagnostics.find("OPEN/DID(IN1),INPUT: the file 'nowhere.txt' is not there"), std::string::npos)
+      << missing.diagnostics;
+  EXPECT_NE(missing.diagnostics.find("run.dmi:3:1: error"), std::string::npos) << missing.diagnostics;
+}
+
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   const std::string text =
       "DMISMN/'p', 5.0\nDECL/COMMON,CHAR,40,PARTNO\nDECL/COMMON,REAL,LIM\nDECL/COMMON,REAL,LIM2\n"

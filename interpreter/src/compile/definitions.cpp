@@ -81,7 +81,9 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
     if (is_word(p[0]) && (p[0].text == "GCURVE" || p[0].text == "GSURF" || p[0].text == "EDGEPT" || p[0].text == "TORUS" ||
-                          p[0].text == "PARPLN" || p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS")) {
+                          p[0].text == "PARPLN" || p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS" ||
+                          p[0].text == "COMPOUND" || p[0].text == "PATERN" || p[0].text == "OBJECT" ||
+                          p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["F:" + label] = s.span;
       emit(make(Op::Nop, s, "FEAT"));

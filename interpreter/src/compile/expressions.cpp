@@ -140,8 +140,14 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
   t.e.op = ir::ExprOp::Call;
   t.e.name = g.text;
   t.e.type = fn->result;
+  // EOF(DID(x)) and PTDATA(FA(x)) take a label.
+  const char* label_kind = g.text == "EOF" ? "DID" : g.text == "PTDATA" ? "FA" : nullptr;
   for (const auto& a : g.args) {
-    auto x = expression(a);
+    if (label_kind && !(a.kind == ExprKind::Label && (is_label(a, {label_kind}) || (g.text == "PTDATA" && is_label(a, {"F"}))))) {
+      error(a.span, "sema.type", fmt::format("{} takes {}(label)", g.text, label_kind));
+      return std::nullopt;
+    }
+    auto x = expression(a, label_kind != nullptr);
     if (!x) return std::nullopt;
     if (!x->dynamic && x->e.type == ValueType::Bool) {
       error(a.span, "sema.type", fmt::format("{} does not take a BOOL argument", g.text));

@@ -18,7 +18,10 @@ const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "
                                        "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT", "RESUME",
                                        // DMIS 5.x statements shop programs carry that change nothing on a
                                        // virtual CMM: vendor switches, fly mode.
-                                       "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN"};
+                                       "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN",
+                                       // Report layout and fitting-algorithm choices: metron's reports
+                                       // and fits are its own (least squares, minimum zone for form).
+                                       "REPORT", "GEOALG", "CZONE"};
 }  // namespace
 
 void UnitCompiler::add_input_output(StatementTable& t) {
@@ -26,7 +29,8 @@ void UnitCompiler::add_input_output(StatementTable& t) {
   t.insert({
       {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
       {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
-      {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl}
+      {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
+      {"READ", &UnitCompiler::read}
   });
 }
 
@@ -137,14 +141,26 @@ bool UnitCompiler::check_device(const grammar::Statement& s) {
 // OPEN/DID(l),FDATA|DIRECT,DMIS|V(...),OUTPUT|INPUT|APPEND|OVERWR
 void UnitCompiler::open(const grammar::Statement& s) {
   if (!check_device(s)) return;
-  for (const auto& p : s.params)
-    if (is_word(p, "INPUT")) {
-      warn(p.span, "sema.unsupported-input", "OPEN for INPUT is not supported; the statement is skipped");
-      emit(make(Op::Nop, s, "OPEN"));
-      return;
-    }
   auto in = make(Op::DeviceOpen, s);
   in.operands.push_back(label_op(s.params[0]));
+  for (const auto& p : s.params)
+    if (is_word(p, "INPUT")) in.operands.push_back(word_operand(p));
+  emit(std::move(in));
+}
+
+// READ/DID(l),v1,v2,...: the next values of an input file into declared variables (docs/language.md).
+void UnitCompiler::read(const grammar::Statement& s) {
+  if (!check_device(s)) return;
+  auto in = make(Op::Read, s);
+  in.operands.push_back(label_op(s.params[0]));
+  if (s.params.size() < 2) return error(s.params[0].span, "sema.read", "READ/DID(x) needs the variables to read into");
+  for (std::size_t i = 1; i < s.params.size(); ++i) {
+    const auto& p = s.params[i];
+    if (p.kind != ExprKind::Word || !(is_variable(p.text) || macro_param(p.text) || m_locals.count(p.text)))
+      return error(p.span, "sema.read", fmt::format("READ reads into declared scalar variables; {} is not one",
+                                                    p.text.empty() ? std::string("this") : p.text));
+    in.names.push_back(p.text);
+  }
   emit(std::move(in));
 }
 

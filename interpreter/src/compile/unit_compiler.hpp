@@ -200,6 +200,7 @@ class UnitCompiler {
   void mode(const grammar::Statement& s);
   void pause(const grammar::Statement& s);
   void decpl(const grammar::Statement& s);
+  void read(const grammar::Statement& s);
   void text(const grammar::Statement& s);
   void device(const grammar::Statement& s);
   bool check_device(const grammar::Statement& s);

@@ -32,6 +32,7 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
     }
     case ir::ExprOp::Call: {
       if (e.name == "PROMPT") return prompt(e);
+      if (auto answered = run_function(e)) return *answered;
       const Builtin* fn = find_builtin(e.name);
       if (!fn) return tl::unexpected(fmt::format("unknown function {}", e.name));
       std::vector<Value> args;

@@ -15,7 +15,7 @@ using runtime::FeatureType;
 
 void Execute::add_input_output(ExecuteTable& t) {
   add_rows(t, {
-      {Op::Units, &units}, {Op::DecimalPlaces, &decimal_places}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
+      {Op::Units, &units}, {Op::DecimalPlaces, &decimal_places}, {Op::Read, &read}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
       {Op::DeviceOpen, &device_open}, {Op::DeviceClose, &device_close}
   });
 }
@@ -89,14 +89,71 @@ ExecStatus Execute::device_def(Interpreter& vm, const ir::Instruction& in, CallF
   return ExecStatus::Running;
 }
 
-// Op::DeviceOpen
+// Op::DeviceOpen; with INPUT the file is read whole into fields (separated by commas, blanks
+// and line ends; a quoted field keeps its commas and blanks) for READ.
 ExecStatus Execute::device_open(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const auto w = words(in);
+  if (std::find(w.begin(), w.end(), "INPUT") != w.end()) {
+    const std::string label = vm.label_name(in.operands[0].label);
+    auto text = vm.m_runtime.read_input_device(label, in.span);
+    if (!text) return vm.from_runtime(text.error());
+    Interpreter::InputFile file;
+    std::string field;
+    bool quoted = false, any = false;
+    for (const char c : *text) {
+      if (c == '\'') {
+        quoted = !quoted;
+        any = true;
+      } else if (!quoted && (c == ',' || c == ' ' || c == '\t' || c == '\n' || c == '\r')) {
+        if (any) file.fields.push_back(field);
+        field.clear();
+        any = false;
+      } else {
+        field += c;
+        any = true;
+      }
+    }
+    if (any) file.fields.push_back(field);
+    vm.m_inputs[label] = std::move(file);
+    return ExecStatus::Running;
+  }
   if (auto r = vm.m_runtime.open_device(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Read: the next fields of the input file into the variables, each converted to its type.
+ExecStatus Execute::read(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const std::string label = vm.label_name(in.operands[0].label);
+  auto it = vm.m_inputs.find(label);
+  if (it == vm.m_inputs.end())
+    return vm.fail(in.span, fmt::format("READ/DID({}): the device is not open for INPUT (OPEN/DID({}),DIRECT,INPUT)",
+                                        label, label));
+  for (const std::string& name : in.names) {
+    auto& file = it->second;
+    if (file.next >= file.fields.size())
+      return vm.fail(in.span, fmt::format("READ/DID({}): the file ended before {} (test EOF(DID({})) first)", label,
+                                          name, label));
+    const std::string& field = file.fields[file.next++];
+    const auto current = vm.variable(name);
+    ValueType type = current ? current->type : ValueType::String;
+    if (auto declared = vm.m_types.find(name); declared != vm.m_types.end()) type = declared->second;
+    Value value = Value::string(field);
+    if (type != ValueType::String) {
+      char* end = nullptr;
+      const double v = std::strtod(field.c_str(), &end);
+      if (field.empty() || end != field.c_str() + field.size())
+        return vm.fail(in.span, fmt::format("READ/DID({}): '{}' is not a number for {} (field {} of the file)", label,
+                                            field, name, file.next));
+      value = type == ValueType::Bool ? Value::boolean_value(v != 0) : Value::real(v);
+    }
+    if (auto set = vm.set_variable(name, value); !set) return vm.fail(in.span, set.error());
+  }
   return ExecStatus::Running;
 }
 
 // Op::DeviceClose
 ExecStatus Execute::device_close(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (vm.m_inputs.erase(vm.label_name(in.operands[0].label)) > 0) return ExecStatus::Running;
   if (auto r = vm.m_runtime.close_device(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }

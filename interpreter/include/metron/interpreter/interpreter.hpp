@@ -113,6 +113,18 @@ class Interpreter {
   std::vector<std::string> m_prompt_answers;  // scripted PROMPT answers
   std::size_t m_next_answer = 0;
   tl::expected<Value, std::string> prompt(const ir::Expr& e);
+  /// The intrinsics that need the run (SDATE, STIME, SDATETIME, SELAPSETIME, EOF, PTDATA);
+  /// nullopt for any other function (execute/run_functions.cpp).
+  std::optional<tl::expected<Value, std::string>> run_function(const ir::Expr& e);
+  /// An input file opened by OPEN/DID(x),...,INPUT: its fields, read in order by READ.
+  struct InputFile {
+    std::vector<std::string> fields;
+    std::size_t next = 0;
+  };
+  std::map<std::string, InputFile> m_inputs;
+  /// The run clock's start for SDATE/STIME (seconds since 1970, UTC): SOURCE_DATE_EPOCH when
+  /// set (reproducible runs), else the wall clock when the run starts.
+  std::int64_t m_clock_start_s = 0;
   RunLimits m_limits;
   bool m_signals_to_caller = false;
   Span m_executing;

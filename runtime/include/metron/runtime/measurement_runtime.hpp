@@ -151,6 +151,9 @@ class MeasurementRuntime {
   Result<void> define_device(const std::string& label, const std::string& path, Span span);
   Result<void> open_device(const std::string& label, Span span);
   Result<void> close_device(const std::string& label, Span span);
+  /// OPEN/DID(l),...,INPUT: the text of the device's file, found as written (absolute) or in the
+  /// program's folders (the read policy's folders, in order), read under the read policy.
+  Result<std::string> read_input_device(const std::string& label, Span span);
   void text(const std::string& kind, const std::string& text);
 
   /// Records a machine fault with the statement that caused it (also emitted as an event).

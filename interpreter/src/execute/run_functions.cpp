@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// The intrinsics that need the run rather than their arguments: the run's date and time, the
+// simulated seconds since the start, the end of an input file, a feature's number of points.
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <ctime>
+
+#include <fmt/format.h>
+
+#include "metron/interpreter/interpreter.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
+
+namespace metron::interpreter {
+
+namespace {
+
+/// SOURCE_DATE_EPOCH (the reproducible-builds convention) when set to a whole number of seconds,
+/// else the wall clock now.
+std::int64_t clock_start_s() {
+  if (const char* fixed = std::getenv("SOURCE_DATE_EPOCH")) {
+    char* end = nullptr;
+    errno = 0;
+    const long long v = std::strtoll(fixed, &end, 10);
+    if (errno == 0 && end != fixed && *end == '\0' && v >= 0) return v;
+  }
+  return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const ir::Expr& e) {
+  const std::string& name = e.name;
+  if (name == "SDATE" || name == "STIME" || name == "SDATETIME" || name == "SELAPSETIME") {
+    if (m_clock_start_s == 0) m_clock_start_s = clock_start_s();
+    const double elapsed_s = m_runtime.machine().state().time_s;
+    if (name == "SELAPSETIME") return Value::real(elapsed_s);
+    // The run's clock: its start plus the simulated time, in UTC (a report does not depend on the
+    // time zone of the computer that ran it).
+    const std::time_t now = static_cast<std::time_t>(m_clock_start_s + static_cast<std::int64_t>(elapsed_s));
+    std::tm utc{};
+    gmtime_r(&now, &utc);
+    const std::string date =
+        fmt::format("{:04d}/{:02d}/{:02d}", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday);
+    const std::string time = fmt::format("{:02d}:{:02d}:{:02d}", utc.tm_hour, utc.tm_min, utc.tm_sec);
+    if (name == "SDATE") return Value::string(date);
+    if (name == "STIME") return Value::string(time);
+    return Value::string(date + " " + time);
+  }
+  if (name == "EOF") {
+    const std::string device = label_name(e.args.at(0).label);
+    auto it = m_inputs.find(device);
+    if (it == m_inputs.end())
+      return tl::unexpected(fmt::format("EOF(DID({})): the device is not open for INPUT", device));
+    return Value::boolean_value(it->second.next >= it->second.fields.size());
+  }
+  if (name == "PTDATA") {
+    const std::string label = label_name(e.args.at(0).label);
+    const runtime::Feature* f = m_runtime.find_feature(label);
+    if (!f) return tl::unexpected(fmt::format("PTDATA: feature {} is not defined", label));
+    return Value::integer(static_cast<double>(f->points.size()));
+  }
+  return std::nullopt;
+}
+
+}  // namespace metron::interpreter
