@@ -10,6 +10,9 @@
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/runtime/block_plan.hpp"
 #include "metron/runtime/outputs.hpp"
+#include "metron/runtime/scan.hpp"
+#include "metron/runtime/scan_segmentation.hpp"
+#include "metron/stdlib/fitting/fit.hpp"
 
 namespace metron::runtime {
 
@@ -297,6 +300,12 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (auto t = ensure_tool(block.span); !t) return t;
   auto plan = plan_block(block, feature.nominal, plan_context());
   if (!plan) return tl::unexpected(plan.error());
+  const bool scans = std::any_of(plan->commands.begin(), plan->commands.end(), [](const machine::Command& c) {
+    return std::holds_alternative<machine::ScanPath>(c.body) || std::holds_alternative<machine::ScanBufferWrite>(c.body);
+  });
+  if (scans) {
+    if (auto r = scanning_radius(block.span); !r) return tl::unexpected(r.error());
+  }
   const auto execution = execute_commands(plan->commands, plan->spans);  // a copy: collect_points reads the PtMeas
   std::vector<MeasuredPoint> points = collect_points(*plan, execution, feature.label, block.span);
   if (execution.error) {
@@ -351,10 +360,86 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
       const double e = sample.deflection_mm.norm();
       if (!(e > 0)) continue;  // not in contact
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
-      points.push_back({sample.centre_mm, sample.deflection_mm / e, tool ? tool->nominal_radius_mm : 0.0,
-                        sample.time_s, span_of(i), true});
+      const auto qualified = tool ? m_scanning_radius_mm.find(tool->name) : m_scanning_radius_mm.end();
+      const double radius_mm = qualified != m_scanning_radius_mm.end() ? qualified->second
+                               : tool                                  ? tool->nominal_radius_mm
+                                                                       : 0.0;
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, radius_mm, sample.time_s, span_of(i), true});
     }
   return points;
+}
+
+// Scanning-probe qualification. A scanning probe reads its deflection, so the touch-trigger
+// effective radius (which absorbs pre-travel and trigger delays) does not apply to its samples;
+// what does is the ball's true radius and any bias of the deflection reading at the scan's
+// reference deflection. Scanning the certified reference sphere's equator measures both: the
+// ball centres lie on a circle of radius R + r_scan about the sphere's centre (ISO 10360-4 scans
+// a sphere the same way). The centre comes from the touch qualification's points.
+Result<double> MeasurementRuntime::scanning_radius(Span span) {
+  const auto state = m_machine.state();
+  if (!state.tool) return program_error(span, "no sensor selected for the scan: SNSLCT first");
+  const machine::ToolInfo tool = *state.tool;
+  if (auto it = m_scanning_radius_mm.find(tool.name); it != m_scanning_radius_mm.end()) return it->second;
+  if (!tool.qualified || tool.qualification_centres_mm.size() < 4 || !(tool.reference_diameter_mm > 0))
+    return tool.nominal_radius_mm;
+  fitting::FitOptions sphere_options;
+  sphere_options.inner = false;
+  const auto sphere = fitting::fit(fitting::Shape::Sphere, tool.qualification_centres_mm, sphere_options);
+  if (!sphere) return tool.nominal_radius_mm;
+  const double big_r = tool.reference_diameter_mm / 2;
+  const Vec3 centre = sphere->position;
+  Geometry equator;
+  equator.type = FeatureType::Circle;
+  equator.side = Side::Outer;
+  equator.position = centre;
+  equator.direction = Vec3::UnitZ();
+  equator.diameter_mm = tool.reference_diameter_mm;
+  auto contour = nominal_contour(equator, centre + big_r * Vec3::UnitX(), 0, Vec3::UnitZ(), Vec3::UnitX(),
+                                 m_scan.sample_spacing_mm > 0 ? m_scan.sample_spacing_mm : 0.5);
+  if (!contour) return program_error(span, "scanning qualification: " + contour.error());
+  auto scan = scan_command(*contour, plan_context(), span);
+  if (!scan) return tl::unexpected(scan.error());
+  // Up, over the sphere beside the start, down to the equator; the scan; back up and to where
+  // the probe was, so the block's plan goes on from there.
+  const double r = tool.nominal_radius_mm;
+  const double safe_z = std::max(centre.z() + big_r + r + 10, state.position_mm.z());
+  const Vec3 start_side = centre + (big_r + r + scan->approach_mm + 1) * contour->points.front().normal;
+  std::vector<machine::Command> commands;
+  const auto go = [&](const Vec3& p) { commands.push_back(machine::Command{0, machine::GoTo{p, std::nullopt}}); };
+  go({state.position_mm.x(), state.position_mm.y(), safe_z});
+  go({start_side.x(), start_side.y(), safe_z});
+  go(start_side);
+  // As the machine takes scans: whole, or as measurement commands into its buffers.
+  for (machine::Command& c : scan_commands(*scan, state.scan_buffer_segments)) commands.push_back(std::move(c));
+  go({start_side.x(), start_side.y(), safe_z});
+  go({state.position_mm.x(), state.position_mm.y(), safe_z});
+  go(state.position_mm);
+  const std::size_t count = commands.size();
+  auto responses = run_commands(std::move(commands), std::vector<Span>(count, span));
+  if (!responses) return tl::unexpected(responses.error());
+  std::vector<Vec3> centres;
+  for (const auto& response : *responses)
+    for (const auto& sample : response.scan)
+      if (sample.deflection_mm.norm() > 0) centres.push_back(sample.centre_mm);
+  if (centres.size() < 8)
+    return program_error(span, fmt::format("scanning qualification: the scan of the reference sphere gave {} samples "
+                                           "in contact",
+                                           centres.size()));
+  fitting::FitOptions circle_options;
+  circle_options.inner = false;
+  circle_options.direction_hint = Vec3::UnitZ();
+  const auto circle = fitting::fit(fitting::Shape::Circle, centres, circle_options);
+  if (!circle) return program_error(span, "scanning qualification: the circle fit failed");
+  // The equator of the ball-centre sphere (radius R + r) at the height scanned: the circle found
+  // is its section at that height, so the sphere radius is sqrt(rho^2 + dz^2).
+  const double dz = circle->position.z() - centre.z();
+  const double radius_mm = std::sqrt(std::pow(circle->diameter_mm / 2, 2) + dz * dz) - big_r;
+  m_scanning_radius_mm[tool.name] = radius_mm;
+  m_record.machine_log.push_back(fmt::format("scanning qualification of {}: {} samples on the reference sphere's "
+                                             "equator, scanning radius {:.4f} mm (nominal {:.4f}, touch effective {:.4f})",
+                                             tool.name, centres.size(), radius_mm, tool.nominal_radius_mm,
+                                             tool.effective_radius_mm));
+  return radius_mm;
 }
 
 Result<const Datum*> MeasurementRuntime::datum(const std::string& label, Span span) const {

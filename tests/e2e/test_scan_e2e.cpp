@@ -93,6 +93,37 @@ TEST(ScanE2e, LobedBossRecoveredWithEachLaw) {
   }
 }
 
+// Scanning-probe qualification: the stylus ball is worn 4 um below its nominal radius (hidden in
+// the world). A scanning probe reads its deflection, so the touch qualification's effective radius
+// does not apply to its samples; the scan of the reference sphere's equator finds the true
+// radius, and the scanned boss keeps its true 50 mm diameter. Compensated with the nominal
+// radius it would read 49.992.
+TEST(ScanE2e, AWornBallIsFoundByTheScanningQualification) {
+  const fs::path base = source_dir / "programs" / "worlds" / "scan_lobed_circle.json";
+  const fs::path dir = out_dir("scan_worn_ball");
+  const fs::path world = dir / "world.json";
+  std::ofstream(world) << "{\"extends\": \"" << base.string() << "\", \"probe\": {\"ball_radius_error_mm\": -0.004}}\n";
+  const fs::path program = dir / "worn.dmi";
+  std::ofstream(program) << "DMISMN/'scan with a worn ball', 5.0\nUNITS/MM, ANGDEC\n"
+                            "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+                            "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 200, 300, 15, 0, 0, 1, 50\n"
+                            "GOTO/240, 300, 60\nGOTO/240, 300, 15\n"
+                            "SCNSET/DIST, 0.1\nSCNMOD/ON\nMEAS/CIRCLE, F(BOSS), 0\nENDMES\nGOTO/240, 300, 60\nENDFIL\n";
+  RunOptions o;
+  o.program = program.string();
+  o.world_path = world.string();
+  o.out_dir = dir.string();
+  const auto out = run_program(o, metron::cli::virtual_cmm_backend);
+  ASSERT_EQ(out.exit, RunExit::Completed) << out.diagnostics;
+  const auto* f = feature(out.record, "BOSS");
+  ASSERT_TRUE(f && f->actual && f->fit);
+  EXPECT_NEAR(f->actual->diameter_mm, 50, 0.001);
+  std::string qualification;
+  for (const auto& line : out.record.machine_log)
+    if (line.find("scanning qualification of P4") != std::string::npos) qualification = line;
+  EXPECT_NE(qualification.find("scanning radius 1.996"), std::string::npos) << qualification;
+}
+
 // The same boss on a controller whose command buffer holds 4 segments (SEEDS.md 2): the runtime
 // sends the scan as measurement commands (ScanBufferWrite) and the segmented controller drives
 // the scanning probe; the hidden truth is recovered as from one ScanPath, in each mode.

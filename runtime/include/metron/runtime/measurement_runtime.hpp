@@ -172,6 +172,11 @@ class MeasurementRuntime {
   Result<std::vector<machine::Response>> run_commands(std::vector<machine::Command> commands,
                                                       const std::vector<Span>& spans);
   Result<void> ensure_tool(Span span);
+  /// The radius scanned samples of the active tool are compensated with: qualified once per tool
+  /// by scanning the reference sphere's equator at the scan settings in force (docs/scanning.md,
+  /// "Scanning-probe qualification"); the nominal radius when the tool has no touch qualification.
+  Result<double> scanning_radius(Span span);
+  std::map<std::string, double> m_scanning_radius_mm;  ///< tool name -> qualified scanning radius
   /// What plan_block reads: the settings and the machine's state now.
   [[nodiscard]] BlockPlanContext plan_context() const;
   /// A MEAS block's points from the machine's answers to its plan (touch hits with the dynamic
