@@ -48,6 +48,23 @@ Result<void> MeasurementRuntime::define_feature(const std::string& label, const 
   return {};
 }
 
+Result<void> MeasurementRuntime::define_reported_actual(const std::string& label, const Geometry& actual_current,
+                                                       Span span) {
+  if (!m_features.count(label)) {
+    if (auto r = define_feature(label, actual_current, span); !r) return r;
+  }
+  Feature& f = m_features.at(label);
+  Geometry actual = to_machine(actual_current, m_alignment.part_to_machine);
+  actual.direction.normalize();
+  if (actual.normal2.norm() > 0) actual.normal2.normalize();
+  f.actual = actual;
+  f.source = ActualSource::Measured;
+  f.points.clear();
+  f.fit.reset();
+  f.measured_at = span;
+  return {};
+}
+
 Result<void> MeasurementRuntime::define_tolerance(ToleranceSpec spec) {
   m_tolerances[spec.label] = std::move(spec);
   return {};

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <unistd.h>
 
@@ -295,6 +296,36 @@ TEST(ShopPrograms, InputFilesAndTheIntrinsicsOfTheRun) {
   EXPECT_NE(missing.diagnostics.find("OPEN/DID(IN1),INPUT: the file 'nowhere.txt' is not there"), std::string::npos)
       << missing.diagnostics;
   EXPECT_NE(missing.diagnostics.find("run.dmi:3:1: error"), std::string::npos) << missing.diagnostics;
+}
+
+// A DMIS output file (NIST's, for the simple part) is DMIS too: each OUTPUT is followed by the
+// result lines it produced, FA(x)=FEAT and TA(x)=TOL. metron checks it without error, and a
+// stated actual can be judged against a tolerance again.
+TEST(ShopPrograms, DmisOutputFilesCheckAndTheirActualsCanBeJudged) {
+  const fs::path nist = source_dir.parent_path() / "shared" / "data" / "nist-simple-part" / "output.dms";
+  if (fs::exists(nist)) {
+    std::ifstream in(nist);
+    std::stringstream text;
+    text << in.rdbuf();
+    const auto c = check(text.str());
+    EXPECT_EQ(c.errors, 0u) << c.text;
+    EXPECT_TRUE(c.has("FA(A_CIRCLE)=FEAT/... states a measured actual")) << c.text;
+  }
+  const auto results = check("DMISMN/'out', 5.0\nOUTPUT/FA(C1),TA(D1)\nFA(C1)=FEAT/CIRCLE,INNER,CART,1,2,3,0,0,1,10.01\n"
+                             "TA(D1)=TOL/DIAM,0.01000,INTOL\nENDFIL\n");
+  EXPECT_EQ(results.errors, 0u) << results.text;
+  const auto r = run("DMISMN/'judge', 5.0\nF(C1)=FEAT/CIRCLE,INNER,CART,50,50,40,0,0,1,50\n"
+                     "FA(C1)=FEAT/CIRCLE,INNER,CART,50.01,50,40,0,0,1,50.02\nT(D)=TOL/DIAM,-0.01,0.01\n"
+                     "OUTPUT/FA(C1),TA(D)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* d = tolerance(*r.session, "D");
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(d->value, 0.02, 1e-9);
+  EXPECT_FALSE(d->in_tolerance);
+  const auto* c1 = report(*r.session, "C1");
+  ASSERT_TRUE(c1 && c1->actual);
+  EXPECT_NEAR(c1->actual->position.x(), 50.01, 1e-9);
+  EXPECT_NEAR(c1->nominal.position.x(), 50.0, 1e-9);
 }
 
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {

@@ -219,7 +219,17 @@ void UnitCompiler::output(const grammar::Statement& s) {
   if (!expect_params(s, 1, "feature or tolerance labels")) return;
   auto in = make(Op::Output, s);
   std::vector<std::optional<FeatureType>> types;
+  std::size_t echoed = 0;
   for (const auto& p : s.params) {
+    // In a DMIS output file each OUTPUT is followed by the result lines it produced: an OUTPUT of
+    // a result stated below (and not defined before) echoes it.
+    const bool feature_label = is_label(p, {"F", "FA"});
+    const std::string key = std::string(feature_label ? "FA:" : "TA:") + upper(p.label.name);
+    if ((feature_label || is_label(p, {"T", "TA"})) && m_reported_results.count(key) &&
+        !(feature_label ? m_symbols.features.count(upper(p.label.name)) : m_symbols.tolerances.count(upper(p.label.name)))) {
+      ++echoed;
+      continue;
+    }
     if (is_label(p, {"F", "FA"})) {
       if (!check_feature(p)) return;
       types.push_back(feature_type(upper(p.label.name)));
@@ -255,6 +265,10 @@ void UnitCompiler::output(const grammar::Statement& s) {
       return error(p.span, "sema.expected-label", "expected F(), FA(), T() or TA() labels after OUTPUT/");
     }
     in.operands.push_back(label_op(p));
+  }
+  if (in.operands.empty() && echoed > 0) {
+    emit(make(Op::Nop, s, "OUTPUT"));
+    return;
   }
   emit(std::move(in));
 }

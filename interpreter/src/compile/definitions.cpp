@@ -74,7 +74,10 @@ void UnitCompiler::add_definitions(StatementTable& t) {
 
 // F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE; CART|POL)
 void UnitCompiler::feat(const grammar::Statement& s) {
-  if (!require_target(s, {"F"}, "F(label)=FEAT/...")) return;
+  if (!require_target(s, {"F", "FA"}, "F(label)=FEAT/...")) return;
+  // FA(l)=FEAT/... states a feature's actual, as DMIS output files report it: metron takes it as
+  // the feature's actual (docs/language.md, "DMIS output files").
+  const bool reported_actual = upper(s.target->prefix) == "FA";
   if (!expect_params(s, 1, "the feature type")) return;
   const std::string label = upper(s.target->name);
   const auto& p = s.params;
@@ -134,7 +137,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   if (!ok) return;
   if (!check_feature_numbers(s, payload, literal)) return;
-  if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl) {
+  if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl && !reported_actual) {
     const Location loc = m_sources.locate(it->second.span);
     warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
   }
@@ -142,7 +145,19 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     in.name_is_param = true;
     m_symbols.macro_features[m_module.macros[static_cast<std::size_t>(*m_macro)].name][*param] = type;
   }
-  m_symbols.features[label] = {type, s.span};
+  if (reported_actual) {
+    in.count = 1;  // the actual, not the nominal
+    if (!m_reported_results_noted) {
+      note(s.target->span, "sema.reported-actual",
+           fmt::format("FA({})=FEAT/... states a measured actual, as a DMIS output file does: it becomes the feature's "
+                       "actual (the nominal too when the feature has none)",
+                       s.target->name));
+      m_reported_results_noted = true;
+    }
+    if (!m_symbols.features.count(label)) m_symbols.features[label] = {type, s.span};
+  } else {
+    m_symbols.features[label] = {type, s.span};
+  }
   m_symbols.skipped.erase("F:" + label);
   in.payload = payload;
   emit(std::move(in));
@@ -202,7 +217,19 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
 
 // T(l)=TOL/kind,...
 void UnitCompiler::tol(const grammar::Statement& s) {
-  if (!require_target(s, {"T"}, "T(label)=TOL/...")) return;
+  if (!require_target(s, {"T", "TA"}, "T(label)=TOL/...")) return;
+  if (upper(s.target->prefix) == "TA") {
+    // TA(l)=TOL/kind,value,INTOL|OUTOL: a tolerance result a DMIS output file reports.
+    if (!m_reported_results_noted) {
+      note(s.target->span, "sema.reported-tolerance",
+           fmt::format("TA({})=TOL/... is a reported tolerance result (a DMIS output file's line): kept as it is, "
+                       "not evaluated",
+                       s.target->name));
+      m_reported_results_noted = true;
+    }
+    emit(make(Op::Nop, s, "TOL"));
+    return;
+  }
   if (!expect_params(s, 1, "the tolerance type")) return;
   const auto& p = s.params;
   auto parsed = is_word(p[0]) ? ir::parse_word<ToleranceKind>(p[0].text) : std::nullopt;

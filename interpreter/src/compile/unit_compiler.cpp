@@ -17,8 +17,11 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN")
     warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
   // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
-  for (const auto& s : st)
+  for (const auto& s : st) {
     if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT") m_later_features.emplace(upper(s.target->name), s.span);
+    if (s.target && ((upper(s.target->prefix) == "FA" && s.major == "FEAT") || (upper(s.target->prefix) == "TA" && s.major == "TOL")))
+      m_reported_results.emplace(upper(s.target->prefix) + ":" + upper(s.target->name), s.span);
+  }
   for (std::size_t i = 0; i < st.size(); ++i) {
     const auto& s = st[i];
     if (m_ended) {

@@ -280,6 +280,10 @@ class UnitCompiler {
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
+  /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
+  /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
+  std::map<std::string, Span> m_reported_results;
+  bool m_reported_results_noted = false;  // one note per unit for reported results
 };
 
 }  // namespace metron::interpreter::detail

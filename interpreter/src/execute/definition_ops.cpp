@@ -86,7 +86,10 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
   if (g.type == FeatureType::Line && g.normal2.norm() < 1e-12) g.normal2 = any_perpendicular(g.direction);
-  if (auto r = vm.m_runtime.define_feature(vm.name_of(in), g, in.span); !r) return vm.from_runtime(r.error());
+  // count 1: FA(l)=FEAT/..., a stated actual (a DMIS output file's line).
+  const auto r = in.count == 1 ? vm.m_runtime.define_reported_actual(vm.name_of(in), g, in.span)
+                               : vm.m_runtime.define_feature(vm.name_of(in), g, in.span);
+  if (!r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

@@ -64,6 +64,9 @@ class MeasurementRuntime {
 
   // Features and tolerances.
   Result<void> define_feature(const std::string& label, const Geometry& nominal_current, Span span);
+  /// FA(l)=FEAT/...: a stated actual (current frame), as DMIS output files report one; it becomes
+  /// the feature's actual, and its nominal too when the feature has none.
+  Result<void> define_reported_actual(const std::string& label, const Geometry& actual_current, Span span);
   Result<void> define_tolerance(ToleranceSpec spec);
   [[nodiscard]] const Feature* find_feature(const std::string& label) const;
   [[nodiscard]] const ToleranceSpec* find_tolerance(const std::string& label) const;

@@ -31,7 +31,7 @@ enum class Op {
   Units,        ///< payload: UnitsPayload
   Mode,         ///< payload: ModePayload
   Text,         ///< words: OPER|OUTFIL|...; expr: the text
-  FeatureDef,   ///< `name` = label; payload: FeaturePayload; exprs: the numbers
+  FeatureDef,   ///< `name` = label; payload: FeaturePayload; exprs: the numbers; `count` 1: FA(l)=FEAT, a stated actual
   ToleranceDef, ///< `name` = label; payload: kind; words: modifiers; exprs: values; labels: datums
   SensorDef,    ///< `name` = label; words: PROBE, FIXED|INDEX, CART|POL; exprs: numbers
   SensorSelect, ///< `name` = sensor label
