@@ -354,7 +354,8 @@ std::string format_tolerance_result(const ToleranceResult& result) {
     out += fmt::format("nominal {}  actual {}  ", mm(result.actual - result.value, false),
                        mm(result.actual, false));
   }
-  if (is_deviation_kind(result.kind) || result.kind == ToleranceKind::Profs)
+  if (is_deviation_kind(result.kind) || result.kind == ToleranceKind::Profs || result.kind == ToleranceKind::Profl ||
+      result.kind == ToleranceKind::Profp)
     out += fmt::format("dev {}  limits [{}, {}]", mm(result.value, true), mm(result.lower, true),
                        mm(result.upper, true));
   else

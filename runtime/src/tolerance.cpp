@@ -37,6 +37,8 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::Coaxial: return "COAXIAL";
     case ToleranceKind::Crnout: return "CRNOUT";
     case ToleranceKind::Totrun: return "TOTRUN";
+    case ToleranceKind::Profl: return "PROFL";
+    case ToleranceKind::Profp: return "PROFP";
   }
   return "DIAM";
 }
@@ -541,7 +543,13 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
   const double radius_mm = 0.5 * nominal.diameter_mm;
   double outward = 0;  // + away from the centre/axis (for a plane: along its normal)
   switch (nominal.type) {
-    case FeatureType::Plane: return n.dot(v);
+    case FeatureType::Plane:
+    case FeatureType::Point: return n.dot(v);  // a point: along its nominal normal
+    case FeatureType::Line: {
+      // In the line's working plane (normal2), across the line: + on the side of n2 x direction.
+      const Vec3 across = nominal.normal2.cross(n).normalized();
+      return across.dot(v);
+    }
     case FeatureType::Sphere: outward = v.norm() - radius_mm; break;
     case FeatureType::Circle:
     case FeatureType::Arc:
@@ -562,18 +570,29 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
 
 Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                        ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
-                                    FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone};
-  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  static constexpr Types k_surfaces = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
+                                       FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone};
+  static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc};
+  static constexpr Types k_points = {FeatureType::Point};
+  const Types types = spec.kind == ToleranceKind::Profl ? k_lines : spec.kind == ToleranceKind::Profp ? k_points : k_surfaces;
+  if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
-  if (feature.points.empty())
-    return Error(fmt::format("PROFS of {} needs measured points: it has none", feature.label));
+  // A point's profile is its own position when it has no probed point (a constructed point).
+  std::vector<MeasuredPoint> own;
+  if (spec.kind == ToleranceKind::Profp && feature.points.empty()) {
+    MeasuredPoint p;
+    p.centre_mm = (*actual)->position;
+    own.push_back(p);
+  }
+  const std::vector<MeasuredPoint>& points = own.empty() ? feature.points : own;
+  if (points.empty())
+    return Error(fmt::format("{} of {} needs measured points: it has none", dmis_word(spec.kind), feature.label));
   const auto frame = frame_of_datums(spec, feature, context);
   if (!frame) return Error(frame.error());
   double lo = std::numeric_limits<double>::infinity();
   double hi = -lo;
-  for (const MeasuredPoint& p : feature.points) {
+  for (const MeasuredPoint& p : points) {
     const double dev = profile_deviation(feature.nominal, frame->actual_to_nominal * p.surface_mm());
     lo = std::min(lo, dev);
     hi = std::max(hi, dev);
@@ -583,9 +602,11 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
   result.lower = spec.lower;
   result.upper = spec.upper;
   result.in_tolerance = lo >= spec.lower - k_limit_slack && hi <= spec.upper + k_limit_slack;
-  add_note(result, fmt::format("deviations from the nominal surface: min {:+.4f}, max {:+.4f} over {} points",
-                               lo, hi, feature.points.size()));
-  if (feature.nominal.type != FeatureType::Plane && feature.nominal.side == Side::None)
+  add_note(result, fmt::format("deviations from the nominal {}: min {:+.4f}, max {:+.4f} over {} point{}",
+                               spec.kind == ToleranceKind::Profs ? "surface" : "profile", lo, hi, points.size(),
+                               points.size() == 1 ? "" : "s"));
+  if (feature.nominal.type != FeatureType::Plane && feature.nominal.type != FeatureType::Line &&
+      feature.nominal.type != FeatureType::Point && feature.nominal.side == Side::None)
     add_note(result, "side unknown: treated as OUTER");
   add_note(result, datum_frame_note(*frame, (*actual)->position));
   return result;
@@ -851,6 +872,8 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Coaxial: return evaluate_coaxiality(spec, feature, context, std::move(result));
     case ToleranceKind::Crnout:
     case ToleranceKind::Totrun: return evaluate_runout(spec, feature, context, std::move(result));
+    case ToleranceKind::Profl:
+    case ToleranceKind::Profp: return evaluate_profs(spec, feature, context, std::move(result));
   }
   return Error(fmt::format("{} is not evaluated", word));
 }

@@ -564,6 +564,54 @@ TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
             "ANGLB applies to a plane, line, cylinder, cone, circle or arc, not to a POINT");
 }
 
+// ------------------------------------------------------------------ PROFL, PROFP
+
+TEST(ToleranceProfile, PointProfileIsTheDeviationAlongTheNominalNormal) {
+  // A point 0.03 above its nominal along the normal (and 0.5 aside, which does not count).
+  Feature p = feature("P1", point({10, 0, 5}, Vec3::UnitZ()), point({10.5, 0, 5.03}, Vec3::UnitZ()));
+  p.points.push_back(probed({10.5, 0, 5.03}, Vec3::UnitZ()));
+  ToleranceSpec s = spec(ToleranceKind::Profp);
+  s.lower = -0.02;
+  s.upper = 0.02;
+  auto r = evaluate(s, {&p});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.03, k_tight);
+  EXPECT_FALSE(r->in_tolerance);
+  // A constructed point (no probed point) is judged by its own position.
+  const Feature c = feature("P2", point({10, 0, 5}, Vec3::UnitZ()), point({10, 0, 4.99}, Vec3::UnitZ()));
+  r = evaluate(s, {&c});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, -0.01, k_tight);
+  EXPECT_TRUE(r->in_tolerance);
+}
+
+TEST(ToleranceProfile, LineProfileOfACircleAndOfALine) {
+  // A bore of radius 5 whose points lie at radius 5.01 and 4.995: deviations -0.01 and +0.005
+  // (for a bore the material is outward: oversize is negative, as for PROFS).
+  Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
+                      round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
+  c.points.push_back(probed({5.01, 0, 0}, -Vec3::UnitX()));
+  c.points.push_back(probed({0, 4.995, 0}, -Vec3::UnitY()));
+  ToleranceSpec s = spec(ToleranceKind::Profl);
+  s.lower = -0.02;
+  s.upper = 0.02;
+  auto r = evaluate(s, {&c});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, -0.01, k_tight);
+  // A line along x in the x-y plane (normal2 = z): deviations across it, along z x x = y.
+  Geometry nominal = line({0, 0, 0}, Vec3::UnitX(), 50);
+  nominal.normal2 = Vec3::UnitZ();
+  Feature l = feature("L1", nominal, nominal);
+  l.points.push_back(probed({10, 0.004, 0}, Vec3::UnitY()));
+  l.points.push_back(probed({40, -0.012, 0}, Vec3::UnitY()));
+  r = evaluate(s, {&l});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, -0.012, k_tight);
+  EXPECT_EQ(r->note.find("side unknown"), std::string::npos) << r->note;
+  const Feature pl = feature("PL", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  EXPECT_EQ(evaluate(s, {&pl}).error(), "PROFL applies to a line, circle or arc, not to a PLANE");
+}
+
 // ------------------------------------------------------------------ CONCEN, COAXIAL, runout
 
 /// Surface points of a circle of radius r about centre c in the plane normal to z (probed from

@@ -29,6 +29,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Strght: return in({T::Line});
     case ToleranceKind::Pos: return !in({T::Plane, T::Line});
     case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone});
+    case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc});
+    case ToleranceKind::Profp: return in({T::Point});
     default: return true;
   }
 }

@@ -53,7 +53,9 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
   switch (kind) {
     case ToleranceKind::Diam:
     case ToleranceKind::Rad:
-    case ToleranceKind::Profs: return {2, "lower and upper tolerance", false};
+    case ToleranceKind::Profs:
+    case ToleranceKind::Profl:
+    case ToleranceKind::Profp: return {2, "lower and upper tolerance", false};
     case ToleranceKind::DistB:
     case ToleranceKind::DistWrt: return {3, "nominal distance, lower and upper tolerance", false};
     case ToleranceKind::AngWrt: return {3, "nominal angle, lower and upper tolerance", false};
@@ -243,7 +245,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
-    static const std::set<std::string> standard = {"SYMMETRY", "SYMMTY", "SYM", "PROFL", "PROFP", "PROFT",
+    static const std::set<std::string> standard = {"SYMMETRY", "SYMMTY", "SYM", "PROFT",
                                                    "CPARLN", "USETOL", "ANGL", "COMPOS", "GAP", "PNTDEF", "WIDTH"};
     if (is_word(p[0]) && standard.count(p[0].text)) {
       warn(p[0].span, "sema.unevaluated-tolerance",
@@ -298,7 +300,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (kind == ToleranceKind::Cortol &&
       std::none_of(p.begin(), p.end(), [&](const grammar::Expr& e) { return is_word(e, "XAXIS") || is_word(e, "YAXIS") || is_word(e, "ZAXIS"); }))
     return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
-  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs || kind == ToleranceKind::Cortol) &&
+  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
+       kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol) &&
       numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
   if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||

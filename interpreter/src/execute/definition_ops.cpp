@@ -119,7 +119,9 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
   using K = runtime::ToleranceKind;
   switch (t.kind) {
     case K::Diam:
-    case K::Profs: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
+    case K::Profs:
+    case K::Profl:
+    case K::Profp: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
     case K::Rad: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
     case K::DistB:
     case K::DistWrt: t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len; break;

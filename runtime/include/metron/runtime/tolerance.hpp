@@ -20,7 +20,9 @@ enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, 
                            Concen,   ///< concentricity: a centre within a circle about the datum axis
                            Coaxial,  ///< coaxiality: an axis within a cylinder about the datum axis
                            Crnout,   ///< circular runout (CRNOUT; RUNOUT in older programs)
-                           Totrun }; ///< total runout (TOTRUN; TRNOUT)
+                           Totrun,   ///< total runout (TOTRUN; TRNOUT)
+                           Profl,    ///< line profile: PROFS on a line, circle or arc
+                           Profp };  ///< point profile: a point's deviation along its nominal normal
 const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
 
 /// Distance direction for DISTB (and the coordinate of CORTOL).
