@@ -21,6 +21,7 @@ const char* to_string(Op op) {
     case Op::System: return "SYSTEM";
     case Op::DecimalPlaces: return "DECPL";
     case Op::Read: return "READ";
+    case Op::Write: return "WRITE";
     case Op::Accel: return "ACCEL";
     case Op::GoTo: return "GOTO";
     case Op::MeasBegin: return "MEAS_BEGIN";

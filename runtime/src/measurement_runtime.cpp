@@ -681,6 +681,16 @@ Result<void> MeasurementRuntime::close_device(const std::string& label, Span spa
   return {};
 }
 
+Result<void> MeasurementRuntime::write_device(const std::string& label, const std::string& line, Span span) {
+  auto it = m_devices.find(label);
+  if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));
+  if (!it->second.open || !it->second.stream)
+    return program_error(span, fmt::format("WRITE/DID({}): the device is not open for OUTPUT (OPEN/DID({}),DIRECT,OUTPUT)",
+                                           label, label));
+  *it->second.stream << line << "\n";
+  return {};
+}
+
 Result<std::string> MeasurementRuntime::read_input_device(const std::string& label, Span span) {
   auto it = m_devices.find(label);
   if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));

@@ -243,6 +243,25 @@ TEST(DatumReferenceFrame, PositionToDatumsDoesNotDependOnTheProgramsAlignment) {
   EXPECT_NE(without_alignment->note.find("datum reference frame A|B|C"), std::string::npos);
 }
 
+// WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
+TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
+  const fs::path dir = out_dir("write_program");
+  fs::create_directories(dir);
+  const fs::path program = dir / "write.dmi";
+  std::ofstream(program) << "DMISMN/'write', 5.0\nDECL/REAL,X\nX=ASSIGN/2.5\nDID(OUT)=DEVICE/STOR,'values.txt'\n"
+                            "OPEN/DID(OUT),DIRECT,OUTPUT\nWRITE/DID(OUT),'X=',X\nWRITE/DID(OUT),'done'\n"
+                            "CLOSE/DID(OUT)\nWRITE/DID(OUT),'too late'\nENDFIL\n";
+  const auto o = run(program, std::nullopt, "write_out");
+  EXPECT_EQ(o.exit, RunExit::ProgramError);
+  EXPECT_NE(o.diagnostics.find("write.dmi:9:1: error: WRITE/DID(OUT): the device is not open for OUTPUT"),
+            std::string::npos)
+      << o.diagnostics;
+  std::ifstream in(out_dir("write_out") / "values.txt");
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), "X=2.5\ndone\n");
+}
+
 TEST(Cli, CheckPrintsPositionedDiagnosticsWithACaret) {
   const fs::path bad = source_dir / "programs" / "bad" / "tolerance_wrong_type.dmi";
   const auto [code, out] = shell(std::string(METRON_BINARY) + " check " + bad.string());

@@ -30,7 +30,7 @@ void UnitCompiler::add_input_output(StatementTable& t) {
       {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
       {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
       {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
-      {"READ", &UnitCompiler::read}
+      {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write}
   });
 }
 
@@ -145,6 +145,20 @@ void UnitCompiler::open(const grammar::Statement& s) {
   in.operands.push_back(label_op(s.params[0]));
   for (const auto& p : s.params)
     if (is_word(p, "INPUT")) in.operands.push_back(word_operand(p));
+  emit(std::move(in));
+}
+
+// WRITE/DID(l),e1,e2,...: one line of the values (text as it is, numbers as TEXT shows them) into
+// an output file open for OUTPUT.
+void UnitCompiler::write(const grammar::Statement& s) {
+  if (!check_device(s)) return;
+  auto in = make(Op::Write, s);
+  in.operands.push_back(label_op(s.params[0]));
+  for (std::size_t i = 1; i < s.params.size(); ++i) {
+    auto e = standalone_expression(s.params[i]);
+    if (!e) return;
+    in.operands.push_back(expr_operand(std::move(*e)));
+  }
   emit(std::move(in));
 }
 

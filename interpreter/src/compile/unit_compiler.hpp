@@ -201,6 +201,7 @@ class UnitCompiler {
   void pause(const grammar::Statement& s);
   void decpl(const grammar::Statement& s);
   void read(const grammar::Statement& s);
+  void write(const grammar::Statement& s);
   void text(const grammar::Statement& s);
   void device(const grammar::Statement& s);
   bool check_device(const grammar::Statement& s);

@@ -52,7 +52,7 @@ struct Execute {
   static void add_alignment(ExecuteTable& t);     // alignment_ops.cpp
   static void add_control(ExecuteTable& t);       // control_ops.cpp
 
-  static ExecuteFn units, decimal_places, read, mode, text, device_def, device_open, device_close;
+  static ExecuteFn units, decimal_places, read, write, mode, text, device_def, device_open, device_close;
   static ExecuteFn feature_def, tolerance_def, sensor_def, datdef, declare;
   static ExecuteFn sensor_select, probe_set, feed, accel, go_to, meas_begin, ptmeas, meas_end;
   static ExecuteFn path_def, scan_mode, scan_set, pameas;

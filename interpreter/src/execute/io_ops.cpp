@@ -15,7 +15,7 @@ using runtime::FeatureType;
 
 void Execute::add_input_output(ExecuteTable& t) {
   add_rows(t, {
-      {Op::Units, &units}, {Op::DecimalPlaces, &decimal_places}, {Op::Read, &read}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
+      {Op::Units, &units}, {Op::DecimalPlaces, &decimal_places}, {Op::Read, &read}, {Op::Write, &write}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
       {Op::DeviceOpen, &device_open}, {Op::DeviceClose, &device_close}
   });
 }
@@ -148,6 +148,19 @@ ExecStatus Execute::read(Interpreter& vm, const ir::Instruction& in, CallFrame&)
     }
     if (auto set = vm.set_variable(name, value); !set) return vm.fail(in.span, set.error());
   }
+  return ExecStatus::Running;
+}
+
+// Op::Write
+ExecStatus Execute::write(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::string line;
+  for (std::size_t i = 1; i < in.operands.size(); ++i) {
+    auto v = vm.evaluate(in.operands[i].expr);
+    if (!v) return vm.fail(in.span, v.error());
+    line += v->to_display();
+  }
+  if (auto r = vm.m_runtime.write_device(vm.label_name(in.operands[0].label), line, in.span); !r)
+    return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

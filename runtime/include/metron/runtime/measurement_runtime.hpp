@@ -157,6 +157,8 @@ class MeasurementRuntime {
   /// OPEN/DID(l),...,INPUT: the text of the device's file, found as written (absolute) or in the
   /// program's folders (the read policy's folders, in order), read under the read policy.
   Result<std::string> read_input_device(const std::string& label, Span span);
+  /// WRITE/DID(l),...: one line into the device's output file (open for OUTPUT).
+  Result<void> write_device(const std::string& label, const std::string& line, Span span);
   void text(const std::string& kind, const std::string& text);
 
   /// Records a machine fault with the statement that caused it (also emitted as an event).

@@ -70,10 +70,11 @@ enum class Op {
   System,       ///< CALL/EXTERN,SYS,'command': `name` = the command text (docs/touch-trigger.md)
   DecimalPlaces,  ///< DECPL: words ALL|LENGTH|ANGLE|...; exprs: the decimals, paired in order
   Read,         ///< READ/DID(x),v1,v2,...: labels: DID; `names`: the variables, in order
+  Write,        ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
 };
 
-/// The number of operations (Read is the last).
-inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::Read) + 1;
+/// The number of operations (Write is the last).
+inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::Write) + 1;
 
 /// Upper-case mnemonic of an operation (for --emit-ir).
 const char* to_string(Op op);
