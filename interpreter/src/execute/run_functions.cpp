@@ -24,8 +24,7 @@ std::int64_t clock_start_s() {
     const long long v = std::strtoll(fixed, &end, 10);
     if (errno == 0 && end != fixed && *end == '\0' && v >= 0) return v;
   }
-  return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
@@ -41,8 +40,7 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     const std::time_t now = static_cast<std::time_t>(m_clock_start_s + static_cast<std::int64_t>(elapsed_s));
     std::tm utc{};
     gmtime_r(&now, &utc);
-    const std::string date =
-        fmt::format("{:04d}/{:02d}/{:02d}", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday);
+    const std::string date = fmt::format("{:04d}/{:02d}/{:02d}", utc.tm_year + 1900, utc.tm_mon + 1, utc.tm_mday);
     const std::string time = fmt::format("{:02d}:{:02d}:{:02d}", utc.tm_hour, utc.tm_min, utc.tm_sec);
     if (name == "SDATE") return Value::string(date);
     if (name == "STIME") return Value::string(time);
