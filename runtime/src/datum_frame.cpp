@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/runtime/datum_frame.hpp"
 
+#include "metron/runtime/alignment_ops.hpp"
+
 #include <fmt/format.h>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -9,13 +11,7 @@
 
 namespace metron::runtime {
 
-Geometry moved_by(const Geometry& g, const Frame& motion) {
-  Geometry out = g;
-  out.position = motion * g.position;
-  out.direction = motion.linear() * g.direction;
-  out.normal2 = motion.linear() * g.normal2;
-  return out;
-}
+Geometry moved_by(const Geometry& g, const Frame& motion) { return to_machine(g, motion); }
 
 namespace {
 

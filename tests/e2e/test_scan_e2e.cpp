@@ -93,6 +93,21 @@ TEST(ScanE2e, LobedBossRecoveredWithEachLaw) {
   }
 }
 
+/// Scans the lobed boss of scan_lobed_circle.json (or a world extending it) with a 4 mm probe.
+metron::interpreter::RunOutcome scan_lobed_boss(const fs::path& dir, const fs::path& world) {
+  const fs::path program = dir / "lobed.dmi";
+  std::ofstream(program) << "DMISMN/'scan the lobed boss', 5.0\nUNITS/MM, ANGDEC\n"
+                            "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+                            "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 200, 300, 15, 0, 0, 1, 50\n"
+                            "GOTO/240, 300, 60\nGOTO/240, 300, 15\n"
+                            "SCNSET/DIST, 0.1\nSCNMOD/ON\nMEAS/CIRCLE, F(BOSS), 0\nENDMES\nGOTO/240, 300, 60\nENDFIL\n";
+  RunOptions o;
+  o.program = program.string();
+  o.world_path = world.string();
+  o.out_dir = dir.string();
+  return run_program(o, metron::cli::virtual_cmm_backend);
+}
+
 // Scanning-probe qualification: the stylus ball is worn 4 um below its nominal radius (hidden in
 // the world). A scanning probe reads its deflection, so the touch qualification's effective radius
 // does not apply to its samples; the scan of the reference sphere's equator finds the true
@@ -103,17 +118,7 @@ TEST(ScanE2e, AWornBallIsFoundByTheScanningQualification) {
   const fs::path dir = out_dir("scan_worn_ball");
   const fs::path world = dir / "world.json";
   std::ofstream(world) << "{\"extends\": \"" << base.string() << "\", \"probe\": {\"ball_radius_error_mm\": -0.004}}\n";
-  const fs::path program = dir / "worn.dmi";
-  std::ofstream(program) << "DMISMN/'scan with a worn ball', 5.0\nUNITS/MM, ANGDEC\n"
-                            "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
-                            "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 200, 300, 15, 0, 0, 1, 50\n"
-                            "GOTO/240, 300, 60\nGOTO/240, 300, 15\n"
-                            "SCNSET/DIST, 0.1\nSCNMOD/ON\nMEAS/CIRCLE, F(BOSS), 0\nENDMES\nGOTO/240, 300, 60\nENDFIL\n";
-  RunOptions o;
-  o.program = program.string();
-  o.world_path = world.string();
-  o.out_dir = dir.string();
-  const auto out = run_program(o, metron::cli::virtual_cmm_backend);
+  const auto out = scan_lobed_boss(dir, world);
   ASSERT_EQ(out.exit, RunExit::Completed) << out.diagnostics;
   const auto* f = feature(out.record, "BOSS");
   ASSERT_TRUE(f && f->actual && f->fit);
@@ -135,16 +140,7 @@ TEST(ScanE2e, LobedBossThroughSmallCommandBuffers) {
     std::ofstream(world) << "{\"extends\": \"" << base.string() << "\", \"scanning\": {\"segmented\": "
                          << "{\"buffer_segments\": 4, \"mode\": \"" << mode << "\"}}}\n";
     const fs::path program = dir / "lobed.dmi";
-    std::ofstream(program) << "DMISMN/'scan the lobed boss', 5.0\nUNITS/MM, ANGDEC\n"
-                              "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
-                              "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 200, 300, 15, 0, 0, 1, 50\n"
-                              "GOTO/240, 300, 60\nGOTO/240, 300, 15\n"
-                              "SCNSET/DIST, 0.1\nSCNMOD/ON\nMEAS/CIRCLE, F(BOSS), 0\nENDMES\nGOTO/240, 300, 60\nENDFIL\n";
-    RunOptions o;
-    o.program = program.string();
-    o.world_path = world.string();
-    o.out_dir = dir.string();
-    const auto out = run_program(o, metron::cli::virtual_cmm_backend);
+    const auto out = scan_lobed_boss(dir, world);
     ASSERT_EQ(out.exit, RunExit::Completed) << mode << "\n" << out.diagnostics;
     const auto* f = feature(out.record, "BOSS");
     ASSERT_TRUE(f && f->actual && f->fit) << mode;

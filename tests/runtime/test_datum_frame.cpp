@@ -10,6 +10,7 @@
 
 #include "metron/runtime/datum_frame.hpp"
 #include "metron/runtime/tolerance.hpp"
+#include "feature_geometry.hpp"
 
 namespace metron::runtime {
 namespace {
@@ -25,13 +26,7 @@ Frame misplacement() {
   return m;
 }
 
-Geometry plane(const Vec3& position, const Vec3& normal) {
-  Geometry g;
-  g.type = FeatureType::Plane;
-  g.position = position;
-  g.direction = normal.normalized();
-  return g;
-}
+using test_support::plane;
 
 Geometry bore(FeatureType type, const Vec3& position, const Vec3& axis, double diameter_mm) {
   Geometry g;

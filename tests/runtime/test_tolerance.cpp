@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "metron/runtime/tolerance.hpp"
+#include "feature_geometry.hpp"
 
 namespace metron::runtime {
 namespace {
@@ -12,13 +13,7 @@ namespace {
 constexpr double k_pi = 3.14159265358979323846;
 constexpr double k_tight = 1e-9;
 
-Geometry plane(const Vec3& position, const Vec3& normal) {
-  Geometry g;
-  g.type = FeatureType::Plane;
-  g.position = position;
-  g.direction = normal.normalized();
-  return g;
-}
+using test_support::plane;
 
 Geometry round(FeatureType type, Side side, const Vec3& position, const Vec3& axis, double diameter_mm,
                double length_mm = 0) {
