@@ -399,6 +399,22 @@ const char* const circle_program =
     "PTMEAS/CART, 30, 50, 30, 1, 0, 0\nPTMEAS/CART, 40, 40, 30, 0, 1, 0\nGOTO/40, 50, 80\nENDMES\n"
     "OUTPUT/FA(BORE1)\nENDFIL\n";
 
+// A file centred on the hidden truth is not rewritten by --update: metron's values would replace
+// the truth. It fails instead, naming why; a passing one is left as it is.
+TEST(Cli, UpdateLeavesFilesCentredOnTheTruth) {
+  const fs::path d = temp_dir("truth");
+  write(d / "bore.dmi", circle_program);
+  const std::string truth =
+      "# Centred on the hidden truth, not on metron's output: the design bore d20.\nseed 1\n\nstatus completed\n\n"
+      "feature BORE1 diameter 20.01000 +-0.002\n";
+  write(d / "bore.expected", truth);
+  const std::string metron = METRON_BINARY;
+  auto [code, out] = shell(metron + " test " + d.string() + " --update");
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("not updated: the file is centred on the hidden truth; edit it by hand"), std::string::npos) << out;
+  EXPECT_EQ(read(d / "bore.expected"), truth);
+}
+
 TEST(Cli, PassingChangedBeyondToleranceAndFaultingPrograms) {
   const fs::path d = temp_dir("cli");
   write(d / "pass_a.dmi", circle_program);
