@@ -412,6 +412,12 @@ tl::expected<Reference, std::string> primary_datum(const ToleranceSpec& spec,
   return reference_of(datum->geometry, "datum " + datum->label, spec.kind);
 }
 
+std::string join_datums(const ToleranceSpec& spec) {
+  std::string out;
+  for (const auto& d : spec.datums) out += (out.empty() ? "" : "|") + d;
+  return out;
+}
+
 std::string secondary_datum_note(const ToleranceSpec& spec) {
   if (spec.datums.size() < 2) return {};
   return fmt::format("only the primary datum {} orients the zone", spec.datums.front());
@@ -455,7 +461,23 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
     // Zone: two planes of the tolerated orientation; their normal is the reference direction
     // itself, or the plane's normal made perpendicular to it.
     Vec3 zone_normal = d;
-    if (perp == datum->plane) {
+    bool oriented_by_secondary = false;
+    if (perp == datum->plane && spec.datums.size() >= 2) {
+      // A secondary datum fixes the rotation the primary leaves free: the zone's normal is the
+      // plane's nominal normal in the datum reference frame (ASME Y14.5 6.3), kept square to the
+      // primary datum.
+      const auto frame = frame_of_datums(spec, feature, context);
+      if (!frame) return Error(frame.error());
+      if (frame->rotations_fixed == 3) {
+        const Vec3 n = frame->actual_to_nominal.linear().transpose() * feature.nominal.direction.normalized();
+        const Vec3 m = n - n.dot(d) * d;
+        if (m.norm() > 1e-9) {
+          zone_normal = m.normalized();
+          oriented_by_secondary = true;
+        }
+      }
+    }
+    if (perp == datum->plane && !oriented_by_secondary) {
       Vec3 m = *own - own->dot(d) * d;
       if (m.norm() < 1e-9) m = feature.nominal.direction - feature.nominal.direction.dot(d) * d;
       if (m.norm() < 1e-9)
@@ -475,6 +497,13 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
     result.value = hi - lo;
     add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label,
                                  line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis"));
+    if (oriented_by_secondary) {
+      add_note(result, fmt::format("zone oriented by datums {}: its normal at {:.4f} deg to the plane's", join_datums(spec),
+                                   line_angle_deg(*own, zone_normal)));
+      set_limits(result, 0, spec.zone);
+      result.actual = result.value;
+      return result;
+    }
   } else {
     const double length_mm = axis_length_mm(feature, actual, *own);
     if (!(length_mm > 0))

@@ -268,6 +268,47 @@ TEST(DatumFrame, SurfaceProfileToDatumsIgnoresTheMisplacement) {
   EXPECT_FALSE(bare->in_tolerance);  // the 0.4 mm misplacement
 }
 
+TEST(DatumFrame, ASecondaryDatumOrientsThePerpendicularityZoneOfAPlane) {
+  // A front face square to the top (A) but yawed 0.1 deg about z against the left face (B), its
+  // points spread 100 mm along x. Perpendicular to A alone the yaw is free (the value is the
+  // face's form, 0); to A|B the zone's normal is the drawn one, and the yaw shows as
+  // 100 sin(0.1 deg) = 0.17453 mm.
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  const Datum b = datum("B", plane({-50, 0, -10}, -Vec3::UnitX()), plane({-50, 0, -10}, -Vec3::UnitX()));
+  const double yaw = 0.1 * 3.14159265358979323846 / 180.0;
+  const Vec3 normal(std::sin(yaw), -std::cos(yaw), 0);  // the yawed face's normal (part frame)
+  const Vec3 along(std::cos(yaw), std::sin(yaw), 0);
+  Feature face;
+  face.label = "FRONT";
+  face.nominal = plane({0, -20, -10}, -Vec3::UnitY());
+  face.actual = moved_by(plane({0, -20, -10}, normal), misplacement());
+  for (const double x : {-50.0, 50.0})
+    for (const double z : {-5.0, -15.0}) {
+      MeasuredPoint p;
+      p.ball_radius_mm = 1;
+      p.normal = misplacement().linear() * normal;
+      p.centre_mm = misplacement() * (Vec3(0, -20, 0) + x * along + Vec3(0, 0, z) + 1.0 * normal);
+      face.points.push_back(p);
+    }
+  ToleranceSpec s;
+  s.label = "T3";
+  s.kind = ToleranceKind::Perp;
+  s.zone = 0.05;
+  s.datums = {"A"};
+  ToleranceContext context;
+  context.datums = {&a};
+  auto r = evaluate_tolerance(s, {&face}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.0, 1e-9);
+  s.datums = {"A", "B"};
+  context.datums = {&a, &b};
+  r = evaluate_tolerance(s, {&face}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 100 * std::sin(yaw), 1e-9);
+  EXPECT_FALSE(r->in_tolerance);
+  EXPECT_NE(r->note.find("zone oriented by datums A|B"), std::string::npos) << r->note;
+}
+
 TEST(DatumFrame, AnUndefinedOrMismatchedDatumIsAnError) {
   const Geometry nominal = bore(FeatureType::Circle, {40, 30, -5}, Vec3::UnitZ(), 8);
   const Feature hole = feature(nominal, nominal);
