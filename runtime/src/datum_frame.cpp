@@ -11,8 +11,6 @@
 
 namespace metron::runtime {
 
-Geometry moved_by(const Geometry& g, const Frame& motion) { return to_machine(g, motion); }
-
 namespace {
 
 using Error = tl::unexpected<std::string>;
@@ -78,9 +76,9 @@ tl::expected<DatumFrame, std::string> fit_datum_frame(const std::vector<const Da
       return Error(fmt::format("datum {}: its actual is {} and its nominal {}: they cannot be matched", datum->label,
                                dmis_word(datum->geometry.type), dmis_word(datum->nominal.type)));
     const Geometry nominal = nominals == DatumNominals::InFeaturesFrame
-                                 ? moved_by(datum->nominal, feature_frame * datum->nominal_frame.inverse())
+                                 ? to_machine(datum->nominal, feature_frame * datum->nominal_frame.inverse())
                                  : datum->nominal;
-    Geometry actual = moved_by(datum->geometry, motion);
+    Geometry actual = to_machine(datum->geometry, motion);
     const bool all_fixed_before = free_translations.cols() == 0;
 
     // Orientation: the datum's direction, then (about an axis already set) its location.
@@ -109,7 +107,7 @@ tl::expected<DatumFrame, std::string> fit_datum_frame(const std::vector<const Da
       }
     }
     if (!oriented && rotation == Rotation::AboutAxis && axis_located && nominal.type != FeatureType::Plane) {
-      actual = moved_by(datum->geometry, motion);
+      actual = to_machine(datum->geometry, motion);
       const Vec3 va = across(actual.position - axis_point, axis);
       const Vec3 vn = across(nominal.position - axis_point, axis);
       if (va.norm() > k_min_offset_mm && vn.norm() > k_min_offset_mm) {
@@ -122,7 +120,7 @@ tl::expected<DatumFrame, std::string> fit_datum_frame(const std::vector<const Da
 
     // Location: the translation, within what is still free, that best puts the actual datum on
     // its nominal along the directions this datum fixes (least squares when they overlap).
-    actual = moved_by(datum->geometry, motion);
+    actual = to_machine(datum->geometry, motion);
     bool located_here = false;
     if (free_translations.cols() > 0) {
       const Eigen::MatrixXd rows = fixed_translations(nominal);

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/datum_frame.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
 
@@ -281,7 +282,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   if (!actual_or) return Error(actual_or.error());
   const auto frame = frame_of_datums(spec, feature, context);
   if (!frame) return Error(frame.error());
-  const Geometry actual = moved_by(**actual_or, frame->actual_to_nominal);
+  const Geometry actual = to_machine(**actual_or, frame->actual_to_nominal);
 
   Vec3 deviation = actual.position - nominal.position;
   if (!spec.three_d) {
@@ -716,9 +717,10 @@ tl::expected<DatumAxis, std::string> datum_axis(const ToleranceSpec& spec, const
     } else if (first.type == FeatureType::Plane && is_axis_type(second.type)) {
       axis.point = second.position;
       axis.name = "the axis of datum " + spec.datums[1] + " normal to datum " + spec.datums[0];
+      return axis;
     }
   }
-  if (first.type == FeatureType::Plane && axis.name == "datum " + spec.datums[0])
+  if (first.type == FeatureType::Plane)
     return Error(fmt::format("{} is a PLANE: {} needs a datum axis (a cylinder, circle, cone or line)",
                              axis.name, word));
   return axis;

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/datum_frame.hpp"
 #include "metron/runtime/tolerance.hpp"
 #include "feature_geometry.hpp"
@@ -42,14 +43,14 @@ Geometry bore(FeatureType type, const Vec3& position, const Vec3& axis, double d
 /// A datum whose nominal is `nominal` and whose actual is the true part geometry (`truth`, part
 /// frame) misplaced on the machine.
 Datum datum(const std::string& label, const Geometry& nominal, const Geometry& truth) {
-  return Datum{label, "F_" + label, moved_by(truth, misplacement()), nominal, Frame::Identity()};
+  return Datum{label, "F_" + label, to_machine(truth, misplacement()), nominal, Frame::Identity()};
 }
 
 Feature feature(const Geometry& nominal, const Geometry& truth) {
   Feature f;
   f.label = "HOLE";
   f.nominal = nominal;
-  f.actual = moved_by(truth, misplacement());
+  f.actual = to_machine(truth, misplacement());
   return f;
 }
 
@@ -75,9 +76,9 @@ struct Block {
 /// by precedence): z along A's normal, its origin on A; x along B's normal made perpendicular to z,
 /// the plane x = 0 through B's centroid; y = z x x, the plane y = 0 through C's centroid.
 Vec3 coordinates_in_faces_frame(const Block& block, const Vec3& hole_truth) {
-  const Geometry a = moved_by(block.a.geometry, misplacement().inverse());
-  const Geometry b = moved_by(block.b.geometry, misplacement().inverse());
-  const Geometry c = moved_by(block.c.geometry, misplacement().inverse());
+  const Geometry a = to_machine(block.a.geometry, misplacement().inverse());
+  const Geometry b = to_machine(block.b.geometry, misplacement().inverse());
+  const Geometry c = to_machine(block.c.geometry, misplacement().inverse());
   const Vec3 z = -a.direction.normalized();
   const Vec3 x = (-b.direction - (-b.direction).dot(z) * z).normalized();
   const Vec3 y = z.cross(x);
@@ -154,12 +155,12 @@ TEST(DatumFrame, ADatumLeavesFreeWhatItDoesNotConstrain) {
   Frame shift_only = Frame::Identity();
   shift_only.translation() = Vec3(0.02, -0.01, 0.3);  // no turn: what A leaves free is a pure shift
   Datum shifted_a = a;
-  shifted_a.geometry = moved_by(plane({0, 0, 0}, Vec3::UnitZ()), shift_only);
+  shifted_a.geometry = to_machine(plane({0, 0, 0}, Vec3::UnitZ()), shift_only);
   const Geometry nominal = bore(FeatureType::Circle, {40, 30, -5}, Vec3::UnitZ(), 8);
   Feature hole;
   hole.label = "HOLE";
   hole.nominal = nominal;
-  hole.actual = moved_by(nominal, shift_only);
+  hole.actual = to_machine(nominal, shift_only);
   ToleranceContext context;
   context.datums = {&shifted_a};
   ToleranceSpec s = position({"A"});
@@ -179,15 +180,15 @@ TEST(DatumFrame, DatumNominalsWrittenBeforeTheAlignmentCompareInTheFeaturesFrame
   Datum a = block.a, b = block.b, c = block.c;
   // The part alignment the program's DATSET made: exactly the misplacement (faces as drawn).
   const Frame part = misplacement();
-  a.geometry = moved_by(a.nominal, part);
-  b.geometry = moved_by(b.nominal, part);
-  c.geometry = moved_by(c.nominal, part);
+  a.geometry = to_machine(a.nominal, part);
+  b.geometry = to_machine(b.nominal, part);
+  c.geometry = to_machine(c.nominal, part);
   const Geometry nominal_part = bore(FeatureType::Cylinder, {40, 25, 10}, Vec3::UnitZ(), 8);
   Feature hole;
   hole.label = "HOLE";
-  hole.nominal = moved_by(nominal_part, part);  // FEAT under the part alignment
+  hole.nominal = to_machine(nominal_part, part);  // FEAT under the part alignment
   hole.nominal_frame = part;
-  hole.actual = moved_by(bore(FeatureType::Cylinder, {40.01, 25, 10}, Vec3::UnitZ(), 8), part);
+  hole.actual = to_machine(bore(FeatureType::Cylinder, {40.01, 25, 10}, Vec3::UnitZ(), 8), part);
   ToleranceContext context;
   context.datums = {&a, &b, &c};
   const auto r = evaluate_tolerance(position({"A", "B", "C"}), {&hole}, context);
@@ -205,7 +206,7 @@ TEST(DatumFrame, DatumNominalsInAFrameOfTheirOwnAreTakenWhereTheyWereDefined) {
   own.linear() = Eigen::AngleAxisd(3.14159265358979323846, Vec3::UnitZ()).toRotationMatrix();
   own.translation() = Vec3(355, 91, -80);
   auto defined_in_own = [&](const std::string& label, const Geometry& numbers) {
-    const Geometry placed = moved_by(numbers, own);
+    const Geometry placed = to_machine(numbers, own);
     return Datum{label, "F_" + label, placed, placed, own};
   };
   const Datum a = defined_in_own("A", plane({0, 0, 30}, Vec3::UnitZ()));
@@ -237,7 +238,7 @@ TEST(DatumFrame, SurfaceProfileToDatumsIgnoresTheMisplacement) {
   ball.nominal = nominal;
   Geometry truth = nominal;
   truth.diameter_mm = 10.06;
-  ball.actual = moved_by(truth, misplacement());
+  ball.actual = to_machine(truth, misplacement());
   for (const Vec3& d : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1), Vec3(-1, 0, 0), Vec3(0, -1, 0)}) {
     MeasuredPoint p;
     p.ball_radius_mm = 1;
@@ -253,9 +254,9 @@ TEST(DatumFrame, SurfaceProfileToDatumsIgnoresTheMisplacement) {
   s.datums = {"A", "B", "C"};
   // The faces as drawn, so the truth is exactly +0.03 at every point.
   Datum a = block.a, b = block.b, c = block.c;
-  a.geometry = moved_by(a.nominal, misplacement());
-  b.geometry = moved_by(b.nominal, misplacement());
-  c.geometry = moved_by(c.nominal, misplacement());
+  a.geometry = to_machine(a.nominal, misplacement());
+  b.geometry = to_machine(b.nominal, misplacement());
+  c.geometry = to_machine(c.nominal, misplacement());
   ToleranceContext context;
   context.datums = {&a, &b, &c};
   const auto r = evaluate_tolerance(s, {&ball}, context);
@@ -281,7 +282,7 @@ TEST(DatumFrame, ASecondaryDatumOrientsThePerpendicularityZoneOfAPlane) {
   Feature face;
   face.label = "FRONT";
   face.nominal = plane({0, -20, -10}, -Vec3::UnitY());
-  face.actual = moved_by(plane({0, -20, -10}, normal), misplacement());
+  face.actual = to_machine(plane({0, -20, -10}, normal), misplacement());
   for (const double x : {-50.0, 50.0})
     for (const double z : {-5.0, -15.0}) {
       MeasuredPoint p;

@@ -35,7 +35,4 @@ enum class DatumNominals {
 tl::expected<DatumFrame, std::string> fit_datum_frame(const std::vector<const Datum*>& datums,
                                                       const Frame& feature_frame, DatumNominals nominals);
 
-/// `g` moved by `motion` (position, direction and the line's plane normal).
-Geometry moved_by(const Geometry& g, const Frame& motion);
-
 }  // namespace metron::runtime
