@@ -21,6 +21,25 @@ std::string lower(std::string s) {
   return s;
 }
 
+// VCROSS, VDOT, VMAG, VUNIT on VECTOR arguments.
+tl::expected<Value, std::string> call_vector_builtin(const std::string& name, const std::vector<Value>& args) {
+  for (const auto& a : args)
+    if (a.type != ValueType::Vector)
+      return tl::unexpected(fmt::format("{} takes VECTOR arguments, got a {}", name, to_string(a.type)));
+  const auto& u = args[0].components;
+  const double magnitude = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  if (name == "VMAG") return Value::real(magnitude);
+  if (name == "VUNIT") {
+    if (magnitude == 0) return tl::unexpected(std::string("VUNIT of a zero vector"));
+    return Value::vector(u[0] / magnitude, u[1] / magnitude, u[2] / magnitude);
+  }
+  if (name != "VDOT" && name != "VCROSS") return tl::unexpected(fmt::format("{} is answered by the interpreter (it reads the alignment)", name));
+  const auto& v = args[1].components;
+  if (name == "VDOT") return Value::real(u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+  if (name == "VCROSS") return Value::vector(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
+  return tl::unexpected("unknown vector function " + name);
+}
+
 }  // namespace
 
 const char* to_string(ValueType type) {
@@ -30,8 +49,18 @@ const char* to_string(ValueType type) {
     case ValueType::Bool: return "BOOL";
     case ValueType::String: return "CHAR";
     case ValueType::Label: return "label";
+    case ValueType::Vector: return "VECTOR";
   }
   return "?";
+}
+
+std::optional<ValueType> declared_type(std::string_view word) {
+  if (word == "INTGR" || word == "LONG") return ValueType::Integer;
+  if (word == "REAL" || word == "DOUBLE") return ValueType::Real;
+  if (word == "BOOL") return ValueType::Bool;
+  if (word == "CHAR") return ValueType::String;
+  if (word == "VECTOR") return ValueType::Vector;
+  return std::nullopt;
 }
 
 std::string Value::to_display() const {
@@ -41,6 +70,7 @@ std::string Value::to_display() const {
     case ValueType::Bool: return boolean ? ".TRUE." : ".FALSE.";
     case ValueType::String: return text;
     case ValueType::Label: return prefix + "(" + text + ")";
+    case ValueType::Vector: return fmt::format("{:.10g},{:.10g},{:.10g}", components[0], components[1], components[2]);
   }
   return {};
 }
@@ -74,6 +104,14 @@ const std::vector<Builtin>& builtins() {
       {"SDATE", 0, 0, ValueType::String, false},   {"STIME", 0, 0, ValueType::String, false},
       {"SDATETIME", 0, 0, ValueType::String, false}, {"SELAPSETIME", 0, 0, ValueType::Real, false},
       {"EOF", 1, 1, ValueType::Bool, true},        {"PTDATA", 1, 1, ValueType::Integer, true},
+      // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as
+      // the POL coordinates of FEAT/POINT), combined (VCROSS, VDOT, VMAG, VUNIT), and turned
+      // between the part and machine systems (VMCS, VPCS: the interpreter answers those, they
+      // need the current alignment).
+      {"VCART", 3, 3, ValueType::Vector, false},   {"VPOL", 3, 3, ValueType::Vector, false},
+      {"VCROSS", 2, 2, ValueType::Vector, false, true}, {"VDOT", 2, 2, ValueType::Real, false, true},
+      {"VMAG", 1, 1, ValueType::Real, false, true},     {"VUNIT", 1, 1, ValueType::Vector, false, true},
+      {"VMCS", 1, 1, ValueType::Vector, false, true},   {"VPCS", 1, 1, ValueType::Vector, false, true},
   };
   return table;
 }
@@ -87,9 +125,14 @@ const Builtin* find_builtin(std::string_view name) {
 tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vector<Value>& args, bool degrees) {
   const std::string name(fn.name);
   const double to_rad = degrees ? std::numbers::pi / 180.0 : 1.0;
+  if (fn.vector_args) return call_vector_builtin(name, args);
   std::vector<double> x;
   std::vector<std::string> s;
   for (const auto& a : args) {
+    if (a.type == ValueType::Vector) {
+      if (name == "STR") return Value::string(a.to_display());
+      return tl::unexpected(fmt::format("{} does not take a VECTOR argument", name));
+    }
     if (a.is_number()) {
       x.push_back(a.number);
       s.push_back(a.to_display());
@@ -125,6 +168,8 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
     if (x[0] <= 0) return tl::unexpected(fmt::format("{} of a number that is not positive", name));
     return real(name == "LN" ? std::log(x[0]) : std::log10(x[0]));
   }
+  if (name == "VCART") return Value::vector(x[0], x[1], x[2]);
+  if (name == "VPOL") return Value::vector(x[0] * std::cos(x[1] * to_rad), x[0] * std::sin(x[1] * to_rad), x[2]);
   if (name == "INT") return Value::integer(std::trunc(x[0]));
   if (name == "NINT") return Value::integer(std::round(x[0]));
   if (name == "MOD") {

@@ -298,6 +298,44 @@ TEST(ShopPrograms, InputFilesAndTheIntrinsicsOfTheRun) {
   EXPECT_NE(missing.diagnostics.find("run.dmi:3:1: error"), std::string::npos) << missing.diagnostics;
 }
 
+// DECL/VECTOR and the vector intrinsics (DMIS 5.3 6.5). Expected values by hand: the cross
+// product of x and y is z; |(3,4,12)| = 13; VPOL(2,30,5) = (2 cos 30, 2 sin 30, 5); after a
+// 90 deg turn about z, part x is machine y (VMCS) and machine x is part -y (VPCS).
+TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
+  write("vectors.txt", "1.5, -2, 0.25\n");
+  const std::string text =
+      "DMISMN/'p', 5.0\nUNITS/MM, ANGDEC\nDECL/COMMON,VECTOR,U,V,W\nDECL/VECTOR,ARR[2]\nDECL/REAL,D\n"
+      "U=ASSIGN/VCART(1,0,0)\nV=ASSIGN/VCART(0,1,0)\nW=ASSIGN/VCROSS(U,V)\nTEXT/OPER,STR(VDOT(W,VCART(0,0,1)))\n"
+      "D=ASSIGN/VMAG(VCART(3,4,12))\nTEXT/OPER,STR(D)\nW=ASSIGN/VUNIT(VCART(0,0,-7))\nTEXT/OPER,STR(W)\n"
+      "W=ASSIGN/2*U-V/4+(-U)\nTEXT/OPER,STR(VDOT(W,VCART(1,10,100)))\n"
+      "ARR[2]=ASSIGN/VPOL(2,30,5)\nTEXT/OPER,STR(VDOT(ARR[2],VCART(1,0,0)),6)\nTEXT/OPER,STR(VDOT(ARR[2],VCART(0,1,1)),6)\n"
+      "IF/(VCROSS(U,V).EQ.VCART(0,0,1))\n  TEXT/OPER,'cross ok'\nENDIF\n"
+      "D(R) = ROTATE/ZAXIS, 90\nTEXT/OPER,STR(VDOT(VMCS(U),VCART(0,1,0)),6)\nTEXT/OPER,STR(VDOT(VPCS(U),VCART(0,-1,0)),6)\n"
+      "DID(IN1)=DEVICE/STOR,'vectors.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nREAD/DID(IN1),U\n"
+      "TEXT/OPER,STR(VDOT(U,VCART(100,10,1)),3)\nENDFIL\n";
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> texts;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> expected = {"1", "13", "0,0,-1", "-1.5", "1.732051", "6.000000", "cross ok",
+                                             "1.000000", "1.000000", "130.250"};
+  EXPECT_EQ(texts, expected);
+
+  // Type errors are found by check, with the place.
+  const auto wrong = check("DMISMN/'p', 5.0\nDECL/VECTOR,U\nDECL/REAL,X\nX=ASSIGN/VCART(1,2,3)\nU=ASSIGN/U*U\n"
+                           "X=ASSIGN/SQRT(U)\nX=ASSIGN/VMAG(X)\nENDFIL\n");
+  EXPECT_EQ(wrong.errors, 4U) << wrong.text;
+  EXPECT_TRUE(wrong.has("shop.dmi:4:")) << wrong.text;
+  EXPECT_TRUE(wrong.has("cannot assign a VECTOR to X, which is declared REAL")) << wrong.text;
+  EXPECT_TRUE(wrong.has("'*' does not apply to a VECTOR and a VECTOR")) << wrong.text;
+  EXPECT_TRUE(wrong.has("SQRT does not take a VECTOR argument")) << wrong.text;
+  EXPECT_TRUE(wrong.has("VMAG takes VECTOR arguments, got a REAL")) << wrong.text;
+  const auto zero = run("DMISMN/'p', 5.0\nDECL/VECTOR,U\nU=ASSIGN/VUNIT(VCART(0,0,0))\nENDFIL\n");
+  EXPECT_NE(zero.diagnostics.find("run.dmi:3:"), std::string::npos) << zero.diagnostics;
+  EXPECT_NE(zero.diagnostics.find("VUNIT of a zero vector"), std::string::npos) << zero.diagnostics;
+}
+
 // A DMIS output file (NIST's, for the simple part) is DMIS too: each OUTPUT is followed by the
 // result lines it produced, FA(x)=FEAT and TA(x)=TOL. metron checks it without error, and a
 // stated actual can be judged against a tolerance again.

@@ -430,22 +430,18 @@ void UnitCompiler::decl(const grammar::Statement& s) {
   if (!expect_params(s, 2, "a type and variable names")) return;
   std::size_t i = 0;
   if (is_word(s.params[0], "COMMON") || is_word(s.params[0], "GLOBAL") || is_word(s.params[0], "LOCAL")) ++i;
-  if (i >= s.params.size() || !is_word(s.params[i])) return error(s.params[i < s.params.size() ? i : 0].span, "sema.bad-type", "expected a type (INTGR, LONG, REAL, DOUBLE, BOOL, CHAR) after DECL/");
-  static const std::map<std::string, ValueType> types = {{"INTGR", ValueType::Integer}, {"LONG", ValueType::Integer},
-                                                         {"REAL", ValueType::Real},    {"DOUBLE", ValueType::Real},
-                                                         {"BOOL", ValueType::Bool},    {"CHAR", ValueType::String}};
-  auto t = types.find(s.params[i].text);
-  if (t == types.end()) {
-    if (s.params[i].text == "VECTOR") return error(s.params[i].span, "sema.unsupported-type", "VECTOR variables are not supported yet");
-    return error(s.params[i].span, "sema.bad-type", fmt::format("unknown type {}: expected INTGR, LONG, REAL, DOUBLE, BOOL or CHAR", s.params[i].text));
-  }
+  if (i >= s.params.size() || !is_word(s.params[i])) return error(s.params[i < s.params.size() ? i : 0].span, "sema.bad-type", "expected a type (INTGR, LONG, REAL, DOUBLE, BOOL, CHAR, VECTOR) after DECL/");
+  const std::optional<ValueType> type = declared_type(s.params[i].text);
+  if (!type)
+    return error(s.params[i].span, "sema.bad-type",
+                 fmt::format("unknown type {}: expected INTGR, LONG, REAL, DOUBLE, BOOL, CHAR or VECTOR", s.params[i].text));
   auto in = make(Op::Declare, s);
   ir::Operand type_word;
   type_word.kind = ir::Operand::Kind::Word;
   type_word.word = s.params[i].text;
   in.operands.push_back(type_word);
   ++i;
-  if (t->second == ValueType::String && i < s.params.size() && s.params[i].kind == ExprKind::Number) ++i;  // CHAR length
+  if (*type == ValueType::String && i < s.params.size() && s.params[i].kind == ExprKind::Number) ++i;  // CHAR length
   if (i >= s.params.size()) return error(s.params.back().span, "sema.missing-parameter", "expected variable names after the type");
   for (; i < s.params.size(); ++i) {
     const auto& p = s.params[i];
@@ -465,7 +461,7 @@ void UnitCompiler::decl(const grammar::Statement& s) {
     } else if (p.kind != ExprKind::Word || p.text.empty()) {
       return error(p.span, "sema.expected-name", "expected a variable name");
     }
-    SymbolTable::VariableInfo info{t->second, size, p.span};
+    SymbolTable::VariableInfo info{*type, size, p.span};
     if (!m_repl) {
       // A second DECL of one name silently replaced the first (its type and size).
       const auto& scope = m_macro ? m_locals : m_symbols.variables;

@@ -153,6 +153,12 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
       error(a.span, "sema.type", fmt::format("{} does not take a BOOL argument", g.text));
       return std::nullopt;
     }
+    if (!x->dynamic && g.text != "STR" && fn->vector_args != (x->e.type == ValueType::Vector)) {
+      error(a.span, "sema.type",
+            fn->vector_args ? fmt::format("{} takes VECTOR arguments, got a {}", g.text, to_string(x->e.type))
+                            : fmt::format("{} does not take a VECTOR argument", g.text));
+      return std::nullopt;
+    }
     if (!x->dynamic && !fn->string_args && g.text != "STR" && x->e.type == ValueType::String) {
       error(a.span, "sema.type", fmt::format("{} expects a number, got a string", g.text));
       return std::nullopt;
@@ -179,8 +185,8 @@ std::optional<UnitCompiler::Typed> UnitCompiler::unary_expression(const grammar:
     }
     t.e.type = ValueType::Bool;
   } else {
-    if (!x->dynamic && !(x->e.type == ValueType::Real || x->e.type == ValueType::Integer)) {
-      error(g.span, "sema.type", fmt::format("unary {} needs a number, got {}", g.text, to_string(x->e.type)));
+    if (!x->dynamic && !(x->e.type == ValueType::Real || x->e.type == ValueType::Integer || x->e.type == ValueType::Vector)) {
+      error(g.span, "sema.type", fmt::format("unary {} needs a number or a VECTOR, got {}", g.text, to_string(x->e.type)));
       return std::nullopt;
     }
     t.e.type = x->e.type;
@@ -210,7 +216,8 @@ std::optional<UnitCompiler::Typed> UnitCompiler::binary_expression(const grammar
   } else if (op[0] == '.') {
     if (!t.dynamic && !((number(a->e.type) && number(b->e.type)) ||
                         (a->e.type == ValueType::String && b->e.type == ValueType::String) ||
-                        (a->e.type == ValueType::Bool && b->e.type == ValueType::Bool && (op == ".EQ." || op == ".NE.")))) {
+                        ((a->e.type == ValueType::Bool || a->e.type == ValueType::Vector) && b->e.type == a->e.type &&
+                         (op == ".EQ." || op == ".NE.")))) {
       error(g.span, "sema.type", fmt::format("{} compares a {} with a {}", op, to_string(a->e.type), to_string(b->e.type)));
       return std::nullopt;
     }
@@ -220,12 +227,26 @@ std::optional<UnitCompiler::Typed> UnitCompiler::binary_expression(const grammar
       error(g.span, "sema.type", "strings are joined with CONCAT(a,b), not +");
       return std::nullopt;
     }
-    if (!t.dynamic && (!number(a->e.type) || !number(b->e.type))) {
-      error(g.span, "sema.type", fmt::format("'{}' needs numbers, got {} and {}", op, to_string(a->e.type), to_string(b->e.type)));
-      return std::nullopt;
+    const bool va = a->e.type == ValueType::Vector, vb = b->e.type == ValueType::Vector;
+    if (va || vb) {
+      // Vector arithmetic: u+v, u-v, s*v, v*s, v/s.
+      const bool fits = ((op == "+" || op == "-") && va && vb) || (op == "*" && (va != vb) && number(va ? b->e.type : a->e.type)) ||
+                        (op == "/" && va && number(b->e.type));
+      if (!t.dynamic && !fits) {
+        error(g.span, "sema.type",
+              fmt::format("'{}' does not apply to a {} and a {} (vectors add, subtract, and scale by a number)", op,
+                          to_string(a->e.type), to_string(b->e.type)));
+        return std::nullopt;
+      }
+      t.e.type = ValueType::Vector;
+    } else {
+      if (!t.dynamic && (!number(a->e.type) || !number(b->e.type))) {
+        error(g.span, "sema.type", fmt::format("'{}' needs numbers, got {} and {}", op, to_string(a->e.type), to_string(b->e.type)));
+        return std::nullopt;
+      }
+      t.e.type = (a->e.type == ValueType::Integer && b->e.type == ValueType::Integer && op != "/" && op != "**")
+                     ? ValueType::Integer : ValueType::Real;
     }
-    t.e.type = (a->e.type == ValueType::Integer && b->e.type == ValueType::Integer && op != "/" && op != "**")
-                   ? ValueType::Integer : ValueType::Real;
   }
   t.e.args.push_back(std::move(a->e));
   t.e.args.push_back(std::move(b->e));

@@ -20,6 +20,7 @@ Value default_value(ValueType t) {
     case ValueType::Integer: return Value::integer(0);
     case ValueType::Bool: return Value::boolean_value(false);
     case ValueType::String: return Value::string("");
+    case ValueType::Vector: return Value::vector(0, 0, 0);
     default: return Value::real(0);
   }
 }
@@ -163,10 +164,7 @@ ExecStatus Execute::datdef(Interpreter& vm, const ir::Instruction& in, CallFrame
 
 // Op::Declare
 ExecStatus Execute::declare(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
-  static const std::map<std::string, ValueType> types = {{"INTGR", ValueType::Integer}, {"LONG", ValueType::Integer},
-                                                         {"REAL", ValueType::Real},    {"DOUBLE", ValueType::Real},
-                                                         {"BOOL", ValueType::Bool},    {"CHAR", ValueType::String}};
-  const ValueType t = types.at(in.operands[0].word);
+  const ValueType t = *declared_type(in.operands[0].word);  // the compiler admitted only DECL types
   for (std::size_t i = 0; i < in.names.size(); ++i) {
     const auto size = static_cast<std::size_t>(std::max(1.0, in.operands[i + 1].expr.value.number));
     auto& store = frame.kind == CallFrame::Kind::Macro ? frame.locals : vm.m_globals;

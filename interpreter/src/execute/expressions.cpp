@@ -52,6 +52,11 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
         if (v->type != ValueType::Bool) return tl::unexpected(std::string(".NOT. needs a BOOL"));
         return Value::boolean_value(!v->boolean);
       }
+      if (v->type == ValueType::Vector) {
+        if (e.name == "-")
+          for (double& c : v->components) c = -c;
+        return v;
+      }
       if (!v->is_number()) return tl::unexpected(fmt::format("unary {} needs a number", e.name));
       if (e.name == "-") v->number = -v->number;
       return v;
@@ -65,6 +70,29 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
 }  // namespace metron::interpreter
 
 namespace metron::interpreter::detail {
+
+namespace {
+
+// u+v, u-v, s*v, v*s, v/s on VECTORs.
+tl::expected<Value, std::string> vector_arithmetic(const std::string& op, const Value& a, const Value& b) {
+  const bool va = a.type == ValueType::Vector, vb = b.type == ValueType::Vector;
+  Value r = va ? a : b;
+  if ((op == "+" || op == "-") && va && vb) {
+    for (std::size_t i = 0; i < 3; ++i) r.components[i] = op == "+" ? a.components[i] + b.components[i] : a.components[i] - b.components[i];
+  } else if (op == "*" && va != vb && (va ? b : a).is_number()) {
+    for (double& c : r.components) c *= (va ? b : a).number;
+  } else if (op == "/" && va && b.is_number()) {
+    if (b.number == 0) return tl::unexpected(std::string("division by zero"));
+    for (double& c : r.components) c /= b.number;
+  } else {
+    return tl::unexpected(fmt::format("'{}' does not apply to a {} and a {}", op, to_string(a.type), to_string(b.type)));
+  }
+  for (double c : r.components)
+    if (!std::isfinite(c)) return tl::unexpected(fmt::format("'{}' gives a vector that is not finite", op));
+  return r;
+}
+
+}  // namespace
 
 // OBTAIN/FA(x),n as a value.
 tl::expected<Value, std::string> Execute::obtain(Interpreter& vm, const ir::Expr& e) {
@@ -106,6 +134,8 @@ tl::expected<Value, std::string> Execute::binary(Interpreter& vm, const ir::Expr
     if (a->is_number() && b->is_number()) c = a->number < b->number ? -1 : (a->number > b->number ? 1 : 0);
     else if (a->type == ValueType::String && b->type == ValueType::String) c = a->text.compare(b->text) < 0 ? -1 : (a->text == b->text ? 0 : 1);
     else if (a->type == ValueType::Bool && b->type == ValueType::Bool) c = a->boolean == b->boolean ? 0 : 1;
+    else if (a->type == ValueType::Vector && b->type == ValueType::Vector && (op == ".EQ." || op == ".NE."))
+      c = a->components == b->components ? 0 : 1;
     else return tl::unexpected(fmt::format("{} compares a {} with a {}", op, to_string(a->type), to_string(b->type)));
     if (op == ".EQ.") return Value::boolean_value(c == 0);
     if (op == ".NE.") return Value::boolean_value(c != 0);
@@ -115,6 +145,7 @@ tl::expected<Value, std::string> Execute::binary(Interpreter& vm, const ir::Expr
     if (op == ".GE.") return Value::boolean_value(c >= 0);
     return tl::unexpected("unknown operator " + op);
   }
+  if (a->type == ValueType::Vector || b->type == ValueType::Vector) return vector_arithmetic(op, *a, *b);
   if (!a->is_number() || !b->is_number()) return tl::unexpected(fmt::format("'{}' needs numbers", op));
   const bool integer = a->type == ValueType::Integer && b->type == ValueType::Integer;
   double r = 0;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Input/output: UNITS, DECPL, MODE, TEXT, DEVICE, OPEN, CLOSE.
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -133,19 +134,26 @@ ExecStatus Execute::read(Interpreter& vm, const ir::Instruction& in, CallFrame&)
     if (file.next >= file.fields.size())
       return vm.fail(in.span, fmt::format("READ/DID({}): the file ended before {} (test EOF(DID({})) first)", label,
                                           name, label));
-    const std::string& field = file.fields[file.next++];
     const auto current = vm.variable(name);
     ValueType type = current ? current->type : ValueType::String;
     if (auto declared = vm.m_types.find(name); declared != vm.m_types.end()) type = declared->second;
-    Value value = Value::string(field);
-    if (type != ValueType::String) {
+    // A VECTOR reads three fields, x, y and z.
+    std::array<double, 3> numbers{};
+    const std::size_t fields = type == ValueType::Vector ? 3 : type == ValueType::String ? 0 : 1;
+    for (std::size_t k = 0; k < fields; ++k) {
+      if (file.next >= file.fields.size())
+        return vm.fail(in.span, fmt::format("READ/DID({}): the file ended inside the vector {}", label, name));
+      const std::string& field = file.fields[file.next++];
       char* end = nullptr;
-      const double v = std::strtod(field.c_str(), &end);
+      numbers[k] = std::strtod(field.c_str(), &end);
       if (field.empty() || end != field.c_str() + field.size())
         return vm.fail(in.span, fmt::format("READ/DID({}): '{}' is not a number for {} (field {} of the file)", label,
                                             field, name, file.next));
-      value = type == ValueType::Bool ? Value::boolean_value(v != 0) : Value::real(v);
     }
+    Value value = type == ValueType::Vector ? Value::vector(numbers[0], numbers[1], numbers[2])
+                  : type == ValueType::Bool ? Value::boolean_value(numbers[0] != 0)
+                  : fields == 1             ? Value::real(numbers[0])
+                                            : Value::string(file.fields[file.next++]);
     if (auto set = vm.set_variable(name, value); !set) return vm.fail(in.span, set.error());
   }
   return ExecStatus::Running;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The intrinsics that need the run rather than their arguments: the run's date and time, the
-// simulated seconds since the start, the end of an input file, a feature's number of points.
+// simulated seconds since the start, the end of an input file, a feature's number of points, and
+// vectors turned between the part and machine systems.
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -52,6 +53,17 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     if (it == m_inputs.end())
       return tl::unexpected(fmt::format("EOF(DID({})): the device is not open for INPUT", device));
     return Value::boolean_value(it->second.next >= it->second.fields.size());
+  }
+  if (name == "VMCS" || name == "VPCS") {
+    // A vector of the current part system in machine coordinates (VMCS), or one of the machine
+    // system in the part system (VPCS): directions turn only, they do not shift.
+    auto v = evaluate(e.args.at(0));
+    if (!v) return v;
+    if (v->type != ValueType::Vector) return tl::unexpected(fmt::format("{} takes a VECTOR, got a {}", name, to_string(v->type)));
+    const runtime::Alignment& a = m_runtime.alignment();
+    const Vec3 u(v->components[0], v->components[1], v->components[2]);
+    const Vec3 w = name == "VMCS" ? a.to_machine_vector(u) : a.to_part_vector(u);
+    return Value::vector(w.x(), w.y(), w.z());
   }
   if (name == "PTDATA") {
     const std::string label = label_name(e.args.at(0).label);
