@@ -22,7 +22,7 @@ template <>
 const std::vector<WordEntry<runtime::FeatureType>>& vocabulary() {
   using T = runtime::FeatureType;
   static const auto rows =
-      from_runtime({T::Point, T::Plane, T::Line, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone});
+      from_runtime({T::Point, T::Plane, T::Line, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::ParallelPlanes});
   return rows;
 }
 
@@ -32,7 +32,7 @@ const std::vector<WordEntry<runtime::ToleranceKind>>& vocabulary() {
   static const auto rows = from_runtime({K::Diam, K::Rad, K::DistB, K::Pos, K::Flat, K::Cirlty, K::Cylcty, K::Sphcty,
                                          K::Strght, K::Perp, K::Parlel, K::Anglb, K::Profs, K::DistWrt, K::AngWrt,
                                          K::Cortol, K::Concen, K::Coaxial, K::Crnout, K::Totrun,
-                                         K::Profl, K::Profp});
+                                         K::Profl, K::Profp, K::Width, K::Symmty});
   return rows;
 }
 

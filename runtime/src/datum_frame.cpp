@@ -17,12 +17,13 @@ using Error = tl::unexpected<std::string>;
 
 bool has_direction(FeatureType t) { return t != FeatureType::Point && t != FeatureType::Sphere; }
 
-/// The translation directions a datum feature fixes (rows): a plane its normal; an axis (line,
+/// The translation directions a datum feature fixes (rows): a plane or PARPLN its normal; an axis (line,
 /// circle, arc, cylinder) the two directions across it; a point, sphere centre or cone apex all three.
 Eigen::MatrixXd fixed_translations(const Geometry& nominal) {
   const Vec3 n = nominal.direction.normalized();
   switch (nominal.type) {
-    case FeatureType::Plane: return n.transpose();
+    case FeatureType::Plane:
+    case FeatureType::ParallelPlanes: return n.transpose();  // a PARPLN: its median plane
     case FeatureType::Line:
     case FeatureType::Circle:
     case FeatureType::Arc:
@@ -106,7 +107,8 @@ tl::expected<DatumFrame, std::string> fit_datum_frame(const std::vector<const Da
         }
       }
     }
-    if (!oriented && rotation == Rotation::AboutAxis && axis_located && nominal.type != FeatureType::Plane) {
+    if (!oriented && rotation == Rotation::AboutAxis && axis_located && nominal.type != FeatureType::Plane &&
+        nominal.type != FeatureType::ParallelPlanes) {
       actual = to_machine(datum->geometry, motion);
       const Vec3 va = across(actual.position - axis_point, axis);
       const Vec3 vn = across(nominal.position - axis_point, axis);

@@ -13,6 +13,7 @@ const char* dmis_word(FeatureType type) {
     case FeatureType::Sphere: return "SPHERE";
     case FeatureType::Cylinder: return "CYLNDR";
     case FeatureType::Cone: return "CONE";
+    case FeatureType::ParallelPlanes: return "PARPLN";
   }
   return "POINT";
 }

@@ -6,7 +6,7 @@ namespace metron::runtime {
 
 bool has_side(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
-         type == FeatureType::Cylinder || type == FeatureType::Cone;
+         type == FeatureType::Cylinder || type == FeatureType::Cone || type == FeatureType::ParallelPlanes;
 }
 
 std::size_t feature_word_count(FeatureType type) {
@@ -50,6 +50,10 @@ std::vector<FeatureParameter> feature_parameters(const Geometry& g) {
     case FeatureType::Cone:
       add(g.direction, ParameterUnit::Cosine);
       out.push_back({g.apex_angle_deg, ParameterUnit::Angle});
+      break;
+    case FeatureType::ParallelPlanes:
+      add(g.direction, ParameterUnit::Cosine);
+      length(g.width_mm);
       break;
   }
   return out;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include "metron/stdlib/fitting/fit.hpp"
@@ -24,11 +25,65 @@ fitting::Shape fit_shape(FeatureType type) {
     case FeatureType::Sphere: return fitting::Shape::Sphere;
     case FeatureType::Cylinder: return fitting::Shape::Cylinder;
     case FeatureType::Cone: return fitting::Shape::Cone;
+    case FeatureType::ParallelPlanes: return fitting::Shape::Plane;  // fitted here, below
   }
   return fitting::Shape::Point;
 }
 
 Vec3 oriented(const Vec3& d, const Vec3& like) { return d.dot(like) < 0 ? Vec3(-d) : d; }
+
+// PARPLN: two parallel planes fitted together by least squares. Each compensated surface point
+// belongs to the face on its side of the nominal median plane; with c_f the centroid of face f,
+// the common normal n minimises sum_f sum_i (n . (p_i - c_f))^2, i.e. it is the eigenvector of
+// the smallest eigenvalue of the pooled scatter matrix (the orthogonal regression of one plane,
+// ISO 10360-6 / Forbes NPL DITC 140/89, with a centroid per face). The width is the distance
+// between the faces' planes, the median plane lies midway.
+tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(const Geometry& nominal,
+    const std::vector<MeasuredPoint>& points) {
+  const Vec3 axis = nominal.direction.normalized();
+  std::vector<Vec3> surface[2];
+  std::vector<int> face_of;
+  for (const auto& p : points) {
+    const Vec3 s = p.surface_mm();
+    face_of.push_back((s - nominal.position).dot(axis) >= 0 ? 0 : 1);
+    surface[face_of.back()].push_back(s);
+  }
+  if (surface[0].empty() || surface[1].empty() || points.size() < 4)
+    return tl::unexpected(fmt::format("cannot fit a PARPLN to {} point{}: it needs points on both faces ({} on the "
+                                      "+normal side, {} on the other) and 4 in all",
+                                      points.size(), points.size() == 1 ? "" : "s", surface[0].size(), surface[1].size()));
+  Vec3 centroid[2];
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (int f = 0; f < 2; ++f) {
+    centroid[f] = Vec3::Zero();
+    for (const auto& s : surface[f]) centroid[f] += s;
+    centroid[f] /= static_cast<double>(surface[f].size());
+    for (const auto& s : surface[f]) scatter += (s - centroid[f]) * (s - centroid[f]).transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
+  const Vec3 n = oriented(eigen.eigenvectors().col(0).normalized(), axis);
+  const double d0 = n.dot(centroid[0]), d1 = n.dot(centroid[1]);
+  Geometry g = nominal;
+  g.direction = n;
+  g.width_mm = std::abs(d0 - d1);
+  // The nominal point moved onto the median plane along the normal.
+  g.position = nominal.position + (0.5 * (d0 + d1) - n.dot(nominal.position)) * n;
+  FitFigures figures;
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300}, sum = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int f = face_of[i];
+    // Signed along the face's outward normal: + is material beyond the fitted face.
+    const double r = (n.dot(points[i].surface_mm()) - (f == 0 ? d0 : d1)) *
+                     (nominal.side == Side::Inner ? -1.0 : 1.0) * (f == 0 ? 1.0 : -1.0);
+    figures.residuals_mm.push_back(r);
+    lo[f] = std::min(lo[f], r);
+    hi[f] = std::max(hi[f], r);
+    sum += r * r;
+  }
+  figures.rms_mm = std::sqrt(sum / static_cast<double>(points.size()));
+  figures.form_mm = std::max(hi[0] - lo[0], hi[1] - lo[1]);  // the worse face's flatness
+  return std::make_pair(g, figures);
+}
 
 }  // namespace
 
@@ -36,6 +91,7 @@ Vec3 oriented(const Vec3& d, const Vec3& like) { return d.dot(like) < 0 ? Vec3(-
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geometry& nominal,
     const std::vector<MeasuredPoint>& points) {
   if (points.empty()) return tl::unexpected(std::string("no points were measured"));
+  if (nominal.type == FeatureType::ParallelPlanes) return fit_parallel_planes(nominal, points);
   std::vector<Vec3> centres;
   fitting::Compensation comp;
   comp.ball_radius_mm = points.front().ball_radius_mm;
@@ -82,6 +138,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
       g.diameter_mm = fit->diameter_mm;
       break;
     }
+    case FeatureType::ParallelPlanes: break;  // fitted above
     case FeatureType::Cone: {
       // Apex from the compensated surface points: rho = (t - t_apex) tan(half angle).
       const Vec3 dir = fit->direction.normalized();

@@ -54,6 +54,7 @@ int minimum_points(FeatureType type) {
     case FeatureType::Point: return 1;
     case FeatureType::Line: return 2;
     case FeatureType::Plane: return 3;
+    case FeatureType::ParallelPlanes: return 4;  // three on one face and one on the other fix both
     case FeatureType::Circle:
     case FeatureType::Arc: return 3;
     case FeatureType::Sphere: return 4;
@@ -69,6 +70,12 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
   switch (g.type) {
     case FeatureType::Point:
     case FeatureType::Plane: return axis;
+    case FeatureType::ParallelPlanes: {
+      // The face on the +normal side of the median plane faces +normal on a tab (OUTER), -normal
+      // in a slot (INNER); the other face the opposite way.
+      const double face = (point - g.position).dot(axis) >= 0 ? 1.0 : -1.0;
+      return (g.side == Side::Inner ? -face : face) * axis;
+    }
     case FeatureType::Line: return line_surface_normal(g);
     case FeatureType::Circle:
     case FeatureType::Arc:
@@ -108,6 +115,35 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
         const double a = 2.0 * std::numbers::pi * i / n + std::numbers::pi / 4;
         steps.push_back({PlannedStep::Kind::Probe, g.position + 5.0 * (std::cos(a) * u + std::sin(a) * v), axis});
       }
+      break;
+    }
+    case FeatureType::ParallelPlanes: {
+      // Half the points on each face, about the nominal point's foot on it; between the faces the
+      // probe goes over the feature at the clearance height (the start and end moves' height).
+      const int n = std::max(count > 0 ? count : 6, 4);
+      const Vec3 u = any_perpendicular(axis);
+      const Vec3 v = axis.cross(u);
+      std::vector<PlannedStep> faces[2];
+      for (int i = 0; i < n; ++i) {
+        const int face = i < (n + 1) / 2 ? 0 : 1;
+        const int m = face == 0 ? (n + 1) / 2 : n / 2;
+        const int k = face == 0 ? i : i - (n + 1) / 2;
+        const double a = 2.0 * std::numbers::pi * k / m + std::numbers::pi / 4;
+        const Vec3 p = g.position + (face == 0 ? 0.5 : -0.5) * g.width_mm * axis + 5.0 * (std::cos(a) * u + std::sin(a) * v);
+        faces[face].push_back({PlannedStep::Kind::Probe, p, nominal_normal_at(g, p)});
+      }
+      double top = current_position.dot(up);
+      for (const auto& face : faces)
+        for (const auto& s : face) top = std::max(top, (s.point + probe.approach_mm * s.normal).dot(up));
+      const double clear = top + probe.clearance_mm;
+      const auto over = [&](const PlannedStep& s) {
+        const Vec3 a = s.point + probe.approach_mm * s.normal;
+        return PlannedStep{PlannedStep::Kind::GoTo, Vec3(a + (clear - a.dot(up)) * up), Vec3::UnitZ()};
+      };
+      steps = faces[0];
+      steps.push_back(over(faces[0].back()));
+      steps.push_back(over(faces[1].front()));
+      steps.insert(steps.end(), faces[1].begin(), faces[1].end());
       break;
     }
     case FeatureType::Line: {

@@ -97,6 +97,8 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
   if (has_diameter(nominal.type))
     rows.push_back(
         {"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
+  if (nominal.type == FeatureType::ParallelPlanes)
+    rows.push_back({"W", Unit::Millimetre, nominal.width_mm, act([](const Geometry& g) { return g.width_mm; })});
   if (nominal.type == FeatureType::Arc) {
     rows.push_back({"START", Unit::Degree, nominal.start_angle_deg,
                     act([](const Geometry& g) { return g.start_angle_deg; })});
@@ -206,6 +208,7 @@ json geometry_json(const Geometry& g) {
     j["bounded"] = g.bounded;
   }
   if (has_diameter(g.type)) j["diameter_mm"] = number(g.diameter_mm);
+  if (g.type == FeatureType::ParallelPlanes) j["width_mm"] = number(g.width_mm);
   if (has_length(g)) j["length_mm"] = number(g.length_mm);
   if (g.type == FeatureType::Cone) j["apex_angle_deg"] = number(g.apex_angle_deg);
   if (g.type == FeatureType::Arc) {
@@ -221,6 +224,7 @@ json deviation_json(const Geometry& nominal, const Geometry& actual) {
   if (has_direction(nominal.type)) j["direction"] = vector(actual.direction - nominal.direction);
   if (nominal.type == FeatureType::Line) j["normal2"] = vector(actual.normal2 - nominal.normal2);
   if (has_diameter(nominal.type)) j["diameter_mm"] = number(actual.diameter_mm - nominal.diameter_mm);
+  if (nominal.type == FeatureType::ParallelPlanes) j["width_mm"] = number(actual.width_mm - nominal.width_mm);
   if (has_length(nominal)) j["length_mm"] = number(actual.length_mm - nominal.length_mm);
   if (nominal.type == FeatureType::Cone)
     j["apex_angle_deg"] = number(actual.apex_angle_deg - nominal.apex_angle_deg);

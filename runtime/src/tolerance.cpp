@@ -40,6 +40,8 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::Totrun: return "TOTRUN";
     case ToleranceKind::Profl: return "PROFL";
     case ToleranceKind::Profp: return "PROFP";
+    case ToleranceKind::Width: return "WIDTH";
+    case ToleranceKind::Symmty: return "SYMMTY";
   }
   return "DIAM";
 }
@@ -74,6 +76,7 @@ const char* lowercase_name(FeatureType type) {
     case FeatureType::Sphere: return "sphere";
     case FeatureType::Cylinder: return "cylinder";
     case FeatureType::Cone: return "cone";
+    case FeatureType::ParallelPlanes: return "pair of parallel planes";
   }
   return "point";
 }
@@ -178,12 +181,15 @@ bool has_axis(FeatureType type) {
 Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
                                     FeatureType::Cylinder};
-  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  static constexpr Types k_widths = {FeatureType::ParallelPlanes};
+  const bool width = spec.kind == ToleranceKind::Width;
+  if (!is_one_of(feature.nominal.type, width ? k_widths : k_types))
+    return wrong_type(spec.kind, width ? k_widths : k_types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
   const double scale = spec.kind == ToleranceKind::Rad ? 0.5 : 1.0;
-  result.actual = scale * (*actual)->diameter_mm;
-  result.nominal = scale * feature.nominal.diameter_mm;
+  result.actual = width ? (*actual)->width_mm : scale * (*actual)->diameter_mm;
+  result.nominal = width ? feature.nominal.width_mm : scale * feature.nominal.diameter_mm;
   result.value = result.actual - result.nominal;
   set_limits(result, spec.lower, spec.upper);
   return result;
@@ -391,13 +397,15 @@ struct Reference {
 tl::expected<Reference, std::string> reference_of(const Geometry& g, const std::string& name,
                                                   ToleranceKind kind) {
   static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line,   FeatureType::Cylinder,
-                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc};
+                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc,
+                                    FeatureType::ParallelPlanes};
   if (!is_one_of(g.type, k_types))
     return Error(fmt::format("{} is {} {}: it has no direction to measure {} against", name,
                              article(dmis_word(g.type)), dmis_word(g.type), dmis_word(kind)));
   const auto d = unit(g.direction, name);
   if (!d) return Error(d.error());
-  return Reference{*d, g.type == FeatureType::Plane, name};
+  // A PARPLN orients like its median plane.
+  return Reference{*d, g.type == FeatureType::Plane || g.type == FeatureType::ParallelPlanes, name};
 }
 
 tl::expected<Reference, std::string> primary_datum(const ToleranceSpec& spec,
@@ -861,6 +869,48 @@ Outcome evaluate_runout(const ToleranceSpec& spec, const Feature& feature, const
 
 }  // namespace
 
+// SYMMTY (ISO 1101 18.14, symmetry of a median plane): the derived median surface of a slot or
+// tab within two parallel planes t apart, symmetric about the datum's median plane. The median
+// point of each measured surface point is that point moved half the actual width toward the
+// other face, along the fitted normal (so the faces' form enters as it does on the part); then
+//     value = 2 * max |distance(median point, datum plane)|.
+// The datum plane is a PARPLN's median plane or a PLANE, taken as measured (both actuals are in
+// one system, so the alignment does not matter).
+Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                          ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::ParallelPlanes};
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  const auto datum = primary_datum(spec, context);
+  if (!datum) return Error(datum.error());
+  if (!datum->plane)
+    return Error(fmt::format("{} is not a plane: SYMMTY needs a datum median plane (a PARPLN) or a PLANE", datum->name));
+  const Geometry& datum_plane = context.datums.front()->geometry;
+  const Geometry& g = **actual;
+  const auto n = unit(g.direction, "the actual of " + feature.label);
+  if (!n) return Error(n.error());
+  std::vector<Vec3> median;
+  for (const MeasuredPoint& p : feature.points) {
+    const Vec3 s = p.surface_mm();
+    const double side = (s - g.position).dot(*n) >= 0 ? 1.0 : -1.0;
+    median.push_back(s - side * 0.5 * g.width_mm * *n);
+  }
+  if (median.empty()) median.push_back(g.position);  // a constructed or stated actual: its median plane's point
+  double largest_mm = 0;
+  for (const Vec3& m : median) largest_mm = std::max(largest_mm, std::abs((m - datum_plane.position).dot(datum->direction)));
+  result.value = 2.0 * largest_mm;
+  result.actual = result.value;
+  result.nominal = 0;
+  add_note(result, fmt::format("median plane of {} from {} median points, about the median plane of {}",
+                               feature.label, median.size(), datum->name));
+  if (line_angle_deg(*n, datum->direction) > 45)
+    add_note(result, fmt::format("{}'s median plane is {:.1f} deg from the datum plane: not a symmetry about it",
+                                 feature.label, line_angle_deg(*n, datum->direction)));
+  set_limits(result, 0, spec.zone);
+  return result;
+}
+
 tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpec& spec,
                                                               const std::vector<const Feature*>& features,
                                                               const ToleranceContext& context) {
@@ -905,6 +955,8 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Totrun: return evaluate_runout(spec, feature, context, std::move(result));
     case ToleranceKind::Profl:
     case ToleranceKind::Profp: return evaluate_profs(spec, feature, context, std::move(result));
+    case ToleranceKind::Width: return evaluate_size(spec, feature, std::move(result));
+    case ToleranceKind::Symmty: return evaluate_symmetry(spec, feature, context, std::move(result));
   }
   return Error(fmt::format("{} is not evaluated", word));
 }

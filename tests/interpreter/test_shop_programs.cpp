@@ -174,11 +174,11 @@ TEST(ShopPrograms, MeasPointCountMismatchIsAWarning) {
 }
 
 TEST(ShopPrograms, UnevaluatedToleranceTypesWarnAndTheirOutputIsLeftOut) {
-  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(SYM)=TOL/SYMMTY,0.05,DAT(A)\n"
-                       "T(PL)=TOL/PROFL,-0.02,0.02\nOUTPUT/FA(C1),TA(SYM)\nENDFIL\n");
+  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(PT)=TOL/PROFT,0.05,DAT(A)\n"
+                       "T(PL)=TOL/PROFL,-0.02,0.02\nOUTPUT/FA(C1),TA(PT)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("tolerance type SYMMTY is not evaluated by metron")) << c.text;
-  EXPECT_TRUE(c.has("T(SYM) (TOL/SYMMTY) is not evaluated: left out of this OUTPUT")) << c.text;
+  EXPECT_TRUE(c.has("tolerance type PROFT is not evaluated by metron")) << c.text;
+  EXPECT_TRUE(c.has("T(PT) (TOL/PROFT) is not evaluated: left out of this OUTPUT")) << c.text;
 }
 
 TEST(ShopPrograms, CoaxialityAndRunoutTolerancesAreCheckedAndNeedADatum) {
@@ -222,6 +222,58 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
   ASSERT_TRUE(cy);
   EXPECT_NEAR(cy->actual, 47.0, 2e-3);
   EXPECT_NEAR(cy->value, 0.0, 2e-3);
+}
+
+// FEAT/PARPLN with TOL/WIDTH on a block whose side faces were moved (programs/worlds/
+// block_width.json states the truth): the x pair measured with PTMEAS, the y pair planned by
+// metron (MODE/AUTO, no PTMEAS), which must go over the part between the faces.
+TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
+  const std::string text =
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/175, 50, 80\n"
+      "F(XPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 1, 0, 0, 160\n"
+      "MEAS/PARPLN, F(XPAIR), 7\n  GOTO/175, 50, 20\n"
+      "  PTMEAS/CART, 160, 30, 20, 1, 0, 0\n  PTMEAS/CART, 160, 70, 20, 1, 0, 0\n"
+      "  PTMEAS/CART, 160, 50, 30, 1, 0, 0\n  PTMEAS/CART, 160, 50, 10, 1, 0, 0\n"
+      "  GOTO/175, 50, 80\n  GOTO/-15, 50, 80\n  GOTO/-15, 50, 20\n"
+      "  PTMEAS/CART, 0, 30, 20, -1, 0, 0\n  PTMEAS/CART, 0, 70, 25, -1, 0, 0\n  PTMEAS/CART, 0, 50, 10, -1, 0, 0\n"
+      "  GOTO/-15, 50, 80\nENDMES\n"
+      "MODE/AUTO\nF(YPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 0, 1, 0, 100\nMEAS/PARPLN, F(YPAIR), 6\nENDMES\n"
+      "T(WX) = TOL/WIDTH, -0.01, 0.01\nT(WY) = TOL/WIDTH, -0.01, 0.01\n"
+      "OUTPUT/FA(XPAIR), TA(WX)\nOUTPUT/FA(YPAIR), TA(WY)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_width.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* x = report(*r.session, "XPAIR");
+  ASSERT_TRUE(x && x->actual);
+  EXPECT_NEAR(x->actual->width_mm, 160.02, 1e-3);
+  EXPECT_NEAR(x->actual->position.x(), 80.02, 1e-3);
+  EXPECT_NEAR(x->actual->direction.x(), 1.0, 1e-7);
+  const auto* wx = tolerance(*r.session, "WX");
+  ASSERT_TRUE(wx);
+  EXPECT_NEAR(wx->value, 0.02, 1e-3);
+  EXPECT_FALSE(wx->in_tolerance);
+  const auto* y = report(*r.session, "YPAIR");
+  ASSERT_TRUE(y && y->actual);
+  EXPECT_EQ(y->point_count, 6U);
+  EXPECT_NEAR(y->actual->width_mm, 100.015, 1e-3);
+  EXPECT_NEAR(y->actual->position.y(), 50.0075, 1e-3);
+  const auto* wy = tolerance(*r.session, "WY");
+  ASSERT_TRUE(wy);
+  EXPECT_NEAR(wy->value, 0.015, 1e-3);
+  EXPECT_FALSE(wy->in_tolerance);
+
+  // Points on one face only, or a PARPLN where a circle is toleranced: positioned errors.
+  const auto one_side = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                            "GOTO/175, 50, 80\nF(XPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 1, 0, 0, 160\n"
+                            "MEAS/PARPLN, F(XPAIR), 4\n  GOTO/175, 50, 20\n"
+                            "  PTMEAS/CART, 160, 30, 20, 1, 0, 0\n  PTMEAS/CART, 160, 70, 20, 1, 0, 0\n"
+                            "  PTMEAS/CART, 160, 50, 30, 1, 0, 0\n  PTMEAS/CART, 160, 50, 10, 1, 0, 0\nENDMES\nENDFIL\n",
+                            source_dir / "programs/worlds/block_width.json");
+  EXPECT_NE(one_side.diagnostics.find("it needs points on both faces (4 on the +normal side, 0 on the other)"),
+            std::string::npos)
+      << one_side.diagnostics;
+  const auto bad = check("DMISMN/'p', 5.0\nF(S) = FEAT/PARPLN, INNER, CART, 0, 0, 0, 1, 0, 0, -2\nENDFIL\n");
+  EXPECT_TRUE(bad.has("shop.dmi:2:") && bad.has("the width of F(S) must be positive")) << bad.text;
 }
 
 // UNITS/INCH and DECPL: the report and the DMIS output statement are in the program's units with

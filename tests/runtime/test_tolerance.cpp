@@ -6,6 +6,7 @@
 
 #include "metron/runtime/tolerance.hpp"
 #include "feature_geometry.hpp"
+#include "runtime/src/detail/fit_actual.hpp"
 
 namespace metron::runtime {
 namespace {
@@ -803,6 +804,113 @@ TEST(ToleranceProfile, Errors) {
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&pl}).error(),
             "PROFS of PL1 needs measured points: it has none");
+}
+
+// ------------------------------------------------------------------ PARPLN, WIDTH, SYMMTY
+
+/// A slot (INNER) or tab (OUTER) of the given median point, unit normal and width, probed at the
+/// in-plane offsets (v along the faces, z) on each face; `bump_mm` moves points of the + face out
+/// of the material (all of them, or only the first when `one_point`).
+Feature parallel_planes(Side side, const Vec3& median, const Vec3& normal, double width_mm, double bump_mm = 0,
+                        bool one_point = false) {
+  Geometry nominal;
+  nominal.type = FeatureType::ParallelPlanes;
+  nominal.side = side;
+  nominal.position = {0, 0, 0};
+  nominal.direction = Vec3::UnitX();
+  nominal.width_mm = 10;
+  Feature f = feature("SLOT", nominal, std::nullopt);
+  const Vec3 n = normal.normalized();
+  const Vec3 v = Vec3::UnitZ().cross(n).normalized();
+  const double offsets[][2] = {{-10, -3}, {10, -3}, {0, 4}};
+  for (double face : {1.0, -1.0})
+    for (const auto& o : offsets) {
+      const Vec3 outward = (side == Side::Inner ? -face : face) * n;  // out of the material
+      const double bump = face > 0 && (!one_point || &o == &offsets[0]) ? bump_mm : 0;
+      const Vec3 surface = median + face * 0.5 * width_mm * n + o[0] * v + o[1] * Vec3::UnitZ() + bump * outward;
+      f.points.push_back(probed(surface, outward));
+    }
+  auto fitted = fit_actual(f.nominal, f.points);
+  EXPECT_TRUE(fitted) << (fitted ? "" : fitted.error());
+  if (fitted) {
+    f.actual = fitted->first;
+    f.fit = fitted->second;
+  }
+  return f;
+}
+
+// The fit recovers a slot's width, normal and median plane (truth: the faces the points were
+// put on, 0.3 deg from nominal, the median 0.02 mm off).
+TEST(ToleranceWidth, ParallelPlanesFitAndWidthDeviation) {
+  const double a = 0.3 * k_pi / 180;
+  const Vec3 n(std::cos(a), std::sin(a), 0);
+  for (Side side : {Side::Inner, Side::Outer}) {
+    const Feature slot = parallel_planes(side, {0.02, 0, 0}, n, 10.012);
+    ASSERT_TRUE(slot.actual);
+    EXPECT_NEAR(slot.actual->width_mm, 10.012, 1e-9);
+    EXPECT_NEAR(slot.actual->direction.dot(n), 1.0, 1e-12);
+    EXPECT_NEAR((slot.actual->position - Vec3(0.02, 0, 0)).dot(n), 0.0, 1e-9);
+    EXPECT_NEAR(slot.fit->form_mm, 0.0, 1e-9);
+    ToleranceSpec w = spec(ToleranceKind::Width);
+    w.lower = -0.01;
+    w.upper = 0.01;
+    const auto r = evaluate(w, {&slot});
+    ASSERT_TRUE(r) << r.error();
+    EXPECT_NEAR(r->value, 0.012, 1e-9);
+    EXPECT_FALSE(r->in_tolerance);
+  }
+  // A face 5 um out of the material: a slot narrows by it, a tab widens, the median plane moves
+  // half of it; no form. One point out: some form, at most the 5 um.
+  const Feature narrower = parallel_planes(Side::Inner, {0, 0, 0}, Vec3::UnitX(), 10, 0.005);
+  EXPECT_NEAR(narrower.actual->width_mm, 10 - 0.005, 1e-9);
+  EXPECT_NEAR(narrower.actual->position.x(), -0.0025, 1e-9);
+  EXPECT_NEAR(narrower.fit->form_mm, 0.0, 1e-9);
+  const Feature wider = parallel_planes(Side::Outer, {0, 0, 0}, Vec3::UnitX(), 10, 0.005);
+  EXPECT_NEAR(wider.actual->width_mm, 10 + 0.005, 1e-9);
+  EXPECT_NEAR(wider.actual->position.x(), 0.0025, 1e-9);
+  const Feature bumped = parallel_planes(Side::Inner, {0, 0, 0}, Vec3::UnitX(), 10, 0.005, true);
+  EXPECT_GT(bumped.fit->form_mm, 0.001);
+  EXPECT_LE(bumped.fit->form_mm, 0.005 + 1e-12);
+  // WIDTH needs a PARPLN.
+  const Feature bore = feature("B", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
+                               round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
+  EXPECT_FALSE(evaluate(spec(ToleranceKind::Width), {&bore}));
+}
+
+// SYMMTY: twice the largest distance of the median points from the datum's median plane. The
+// slot's median plane is 0.02 mm off the datum's and turned 0.1 deg about z; its points reach
+// 10 mm either way along the faces, so the farthest median point is 0.02 + 10 sin(0.1 deg) off.
+TEST(ToleranceSymmetry, TwiceTheFarthestMedianPointFromTheDatumMedianPlane) {
+  const double a = 0.1 * k_pi / 180;
+  const Feature slot = parallel_planes(Side::Inner, {0.02, 0, 0}, {std::cos(a), std::sin(a), 0}, 10);
+  Geometry datum_slot;
+  datum_slot.type = FeatureType::ParallelPlanes;
+  datum_slot.position = {0, 50, 0};
+  datum_slot.direction = Vec3::UnitX();
+  datum_slot.width_mm = 30;
+  const Datum d = datum("A", datum_slot);
+  ToleranceSpec s = spec(ToleranceKind::Symmty);
+  s.zone = 0.05;
+  s.datums = {"A"};
+  ToleranceContext context;
+  context.datums = {&d};
+  const auto r = evaluate(s, {&slot}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 2 * (0.02 * std::cos(a) + 10 * std::sin(a)), 1e-6);
+  EXPECT_FALSE(r->in_tolerance);
+  // Centred and square to the datum: zero, within the zone.
+  const Feature centred = parallel_planes(Side::Inner, {0, 7, 0}, Vec3::UnitX(), 10);
+  const auto c = evaluate(s, {&centred}, context);
+  ASSERT_TRUE(c) << c.error();
+  EXPECT_NEAR(c->value, 0.0, 1e-9);
+  EXPECT_TRUE(c->in_tolerance);
+  // The datum must be a plane; without one it is an error.
+  const Datum axis = datum("A", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20, 30));
+  context.datums = {&axis};
+  EXPECT_EQ(evaluate(s, {&slot}, context).error(),
+            "datum A is not a plane: SYMMTY needs a datum median plane (a PARPLN) or a PLANE");
+  s.datums.clear();
+  EXPECT_FALSE(evaluate(s, {&slot}));
 }
 
 TEST(ToleranceWords, DmisWords) {

@@ -32,6 +32,7 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
     case FeatureType::Sphere: return {4, 7, "x,y,z,diam (or x,y,z,i,j,k,diam)"};
     case FeatureType::Cylinder: return {7, 8, "x,y,z,i,j,k,diam[,len]"};
     case FeatureType::Cone: return {7, 8, "x,y,z,i,j,k,angle[,len]"};
+    case FeatureType::ParallelPlanes: return {7, 7, "x,y,z,i,j,k,width (a point on the median plane, its normal, the width)"};
   }
   return {0, 0, ""};
 }
@@ -55,7 +56,8 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
     case ToleranceKind::Rad:
     case ToleranceKind::Profs:
     case ToleranceKind::Profl:
-    case ToleranceKind::Profp: return {2, "lower and upper tolerance", false};
+    case ToleranceKind::Profp:
+    case ToleranceKind::Width: return {2, "lower and upper tolerance", false};
     case ToleranceKind::DistB:
     case ToleranceKind::DistWrt: return {3, "nominal distance, lower and upper tolerance", false};
     case ToleranceKind::AngWrt: return {3, "nominal angle, lower and upper tolerance", false};
@@ -74,7 +76,7 @@ void UnitCompiler::add_definitions(StatementTable& t) {
   });
 }
 
-// F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE; CART|POL)
+// F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE, PARPLN; CART|POL)
 void UnitCompiler::feat(const grammar::Statement& s) {
   if (!require_target(s, {"F", "FA"}, "F(label)=FEAT/...")) return;
   // FA(l)=FEAT/... states a feature's actual, as DMIS output files report it: metron takes it as
@@ -86,7 +88,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
     if (is_word(p[0]) && (p[0].text == "GCURVE" || p[0].text == "GSURF" || p[0].text == "EDGEPT" || p[0].text == "TORUS" ||
-                          p[0].text == "PARPLN" || p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS" ||
+                          p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS" ||
                           p[0].text == "COMPOUND" || p[0].text == "PATERN" || p[0].text == "OBJECT" ||
                           p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
@@ -186,7 +188,9 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const ir::
     const std::size_t idx = arc ? 6 : (with_length ? n - 2 : n - 1);
     const double size = arc || with_length ? literal[6] : literal.back();
     if (!std::isnan(size) && size <= 0)
-      return fail(idx, "sema.bad-size", fmt::format("the {} of F({}) must be positive", arc ? "radius" : "diameter", s.target->name));
+      return fail(idx, "sema.bad-size",
+                  fmt::format("the {} of F({}) must be positive",
+                              arc ? "radius" : type == FeatureType::ParallelPlanes ? "width" : "diameter", s.target->name));
   }
   if (type == FeatureType::Cone && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
     return fail(6, "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
@@ -242,11 +246,11 @@ void UnitCompiler::tol(const grammar::Statement& s) {
                  ? ToleranceKind::Totrun
                  : ToleranceKind::Crnout;
   if (!parsed && is_word(p[0], "TRNOUT")) parsed = ToleranceKind::Totrun;
+  if (!parsed && (is_word(p[0], "SYMMETRY") || is_word(p[0], "SYM"))) parsed = ToleranceKind::Symmty;
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
-    static const std::set<std::string> standard = {"SYMMETRY", "SYMMTY", "SYM", "PROFT",
-                                                   "CPARLN", "USETOL", "ANGL", "COMPOS", "GAP", "PNTDEF", "WIDTH"};
+    static const std::set<std::string> standard = {"PROFT", "CPARLN", "USETOL", "ANGL", "COMPOS", "GAP", "PNTDEF"};
     if (is_word(p[0]) && standard.count(p[0].text)) {
       warn(p[0].span, "sema.unevaluated-tolerance",
            fmt::format("tolerance type {} is not evaluated by metron; the OUTPUT of T({}) will be left out", p[0].text, s.target->name));
@@ -301,11 +305,13 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       std::none_of(p.begin(), p.end(), [&](const grammar::Expr& e) { return is_word(e, "XAXIS") || is_word(e, "YAXIS") || is_word(e, "ZAXIS"); }))
     return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
-       kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol) &&
+       kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
+       kind == ToleranceKind::Width) &&
       numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
   if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||
-       kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout || kind == ToleranceKind::Totrun) &&
+       kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout || kind == ToleranceKind::Totrun ||
+       kind == ToleranceKind::Symmty) &&
       std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
     return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
   if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))

@@ -84,6 +84,10 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
       g.apex_angle_deg = nums[6] * deg;
       if (nums.size() > 7) g.length_mm = nums[7] * len;
       break;
+    case FeatureType::ParallelPlanes:
+      g.direction = vec(3);
+      g.width_mm = nums[6] * len;
+      break;
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
   if (g.type == FeatureType::Line && g.normal2.norm() < 1e-12) g.normal2 = any_perpendicular(g.direction);
@@ -120,6 +124,7 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
   using K = runtime::ToleranceKind;
   switch (t.kind) {
     case K::Diam:
+    case K::Width:
     case K::Profs:
     case K::Profl:
     case K::Profp: t.lower = nums[0] * len; t.upper = nums[1] * len; break;

@@ -10,21 +10,23 @@
 namespace metron::runtime {
 
 /// DMIS feature types metron measures and constructs.
-enum class FeatureType { Point, Plane, Line, Circle, Arc, Sphere, Cylinder, Cone };
+enum class FeatureType { Point, Plane, Line, Circle, Arc, Sphere, Cylinder, Cone,
+                         ParallelPlanes };  ///< PARPLN: a slot (INNER) or tab (OUTER) between two parallel faces
 /// Material side of a feature of size: INNER (a bore) or OUTER (a boss); None for others.
 enum class Side { None, Inner, Outer };
 
-const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE
+const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE, PARPLN
 const char* dmis_word(Side side);         ///< INNER, OUTER, or ""
 
 /// The geometry of a feature (nominal or actual), always in machine coordinates (MCS), mm.
 struct Geometry {
   FeatureType type = FeatureType::Point;
   Side side = Side::None;
-  Vec3 position = Vec3::Zero();   ///< point; a point on a plane/line; centre; a point on an axis (cone: apex)
-  Vec3 direction = Vec3::UnitZ(); ///< point/plane normal, line direction, circle/cylinder/cone axis
+  Vec3 position = Vec3::Zero();   ///< point; a point on a plane/line; centre; a point on an axis (cone: apex); PARPLN: on the median plane
+  Vec3 direction = Vec3::UnitZ(); ///< point/plane normal, line direction, circle/cylinder/cone axis, PARPLN normal
   Vec3 normal2 = Vec3::UnitZ();   ///< line: the normal of the plane the line lies in (DMIS LINE ... ,i2,j2,k2)
   double diameter_mm = 0;         ///< circle, arc, sphere, cylinder
+  double width_mm = 0;            ///< PARPLN: the distance between its faces
   double length_mm = 0;           ///< cylinder, cone, bounded line
   double apex_angle_deg = 0;      ///< cone full apex angle
   double start_angle_deg = 0;     ///< arc

@@ -22,7 +22,9 @@ enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, 
                            Crnout,   ///< circular runout (CRNOUT; RUNOUT in older programs)
                            Totrun,   ///< total runout (TOTRUN; TRNOUT)
                            Profl,    ///< line profile: PROFS on a line, circle or arc
-                           Profp };  ///< point profile: a point's deviation along its nominal normal
+                           Profp,    ///< point profile: a point's deviation along its nominal normal
+                           Width,    ///< size of a PARPLN (slot or tab): its width's deviation
+                           Symmty }; ///< symmetry: a PARPLN's median plane about a datum plane
 const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
 
 /// Distance direction for DISTB (and the coordinate of CORTOL).
