@@ -22,7 +22,8 @@ template <>
 const std::vector<WordEntry<runtime::FeatureType>>& vocabulary() {
   using T = runtime::FeatureType;
   static const auto rows =
-      from_runtime({T::Point, T::Plane, T::Line, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::ParallelPlanes});
+      from_runtime({T::Point, T::Plane, T::Line, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::ParallelPlanes,
+                    T::GenericSurface, T::GenericCurve});
   return rows;
 }
 

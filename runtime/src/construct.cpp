@@ -81,7 +81,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
         const Feature* f = find_feature(sources[0].label);
         for (const auto& p : f->points) pts.push_back(p);
       } else {
-        for (const auto& s : in) pts.push_back({s.position, nominal.direction, 0.0, 0.0, span});
+        for (const auto& s : in) pts.push_back({s.position, nominal.direction, 0.0, 0.0, span, false, std::nullopt, Vec3::UnitZ()});
       }
       auto fitted = fit_actual(nominal, pts);
       if (!fitted) return fail(fitted.error());

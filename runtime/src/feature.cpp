@@ -14,6 +14,8 @@ const char* dmis_word(FeatureType type) {
     case FeatureType::Cylinder: return "CYLNDR";
     case FeatureType::Cone: return "CONE";
     case FeatureType::ParallelPlanes: return "PARPLN";
+    case FeatureType::GenericSurface: return "GSURF";
+    case FeatureType::GenericCurve: return "GCURVE";
   }
   return "POINT";
 }

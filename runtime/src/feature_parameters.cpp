@@ -13,6 +13,9 @@ std::size_t feature_word_count(FeatureType type) {
   return 2 + (type == FeatureType::Line ? 1 : 0) + (has_side(type) ? 1 : 0);
 }
 
+// GSURF and GCURVE: FEAT/GSURF has no numbers (its points are its nominal); metron reports the
+// centroid of the points and the mean normal as x,y,z,i,j,k (the GCURVE form).
+
 std::vector<FeatureParameter> feature_parameters(const Geometry& g) {
   std::vector<FeatureParameter> out;
   const auto add = [&out](const Vec3& v, ParameterUnit unit) {
@@ -55,6 +58,8 @@ std::vector<FeatureParameter> feature_parameters(const Geometry& g) {
       add(g.direction, ParameterUnit::Cosine);
       length(g.width_mm);
       break;
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: add(g.direction, ParameterUnit::Cosine); break;
   }
   return out;
 }

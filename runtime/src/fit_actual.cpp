@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <Eigen/Eigenvalues>
@@ -25,7 +26,9 @@ fitting::Shape fit_shape(FeatureType type) {
     case FeatureType::Sphere: return fitting::Shape::Sphere;
     case FeatureType::Cylinder: return fitting::Shape::Cylinder;
     case FeatureType::Cone: return fitting::Shape::Cone;
-    case FeatureType::ParallelPlanes: return fitting::Shape::Plane;  // fitted here, below
+    case FeatureType::ParallelPlanes:  // fitted here, below
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: return fitting::Shape::Plane;
   }
   return fitting::Shape::Point;
 }
@@ -85,6 +88,33 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(c
   return std::make_pair(g, figures);
 }
 
+// GSURF, GCURVE: nothing to fit. Each point's deviation is along its own nominal normal from
+// its nominal (the PTMEAS); the actual is the points' centroid and mean nominal normal.
+tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(const Geometry& nominal,
+    const std::vector<MeasuredPoint>& points) {
+  Geometry g = nominal;
+  Vec3 sum = Vec3::Zero(), normals = Vec3::Zero();
+  FitFigures figures;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, squares = 0;
+  for (const auto& p : points) {
+    sum += p.surface_mm();
+    if (!p.nominal_mm)
+      return tl::unexpected(fmt::format("a {} is measured by PTMEAS points, each its own nominal; a scanned or planned "
+                                        "point has none", dmis_word(nominal.type)));
+    normals += p.nominal_normal;
+    const double deviation = (p.surface_mm() - *p.nominal_mm).dot(p.nominal_normal);
+    figures.residuals_mm.push_back(deviation);
+    lo = std::min(lo, deviation);
+    hi = std::max(hi, deviation);
+    squares += deviation * deviation;
+  }
+  g.position = sum / static_cast<double>(points.size());
+  if (normals.norm() > 1e-12) g.direction = normals.normalized();
+  figures.rms_mm = std::sqrt(squares / static_cast<double>(points.size()));
+  figures.form_mm = hi - lo;
+  return std::make_pair(g, figures);
+}
+
 }  // namespace
 
 // Fits the actual of a feature from ball centres with probe compensation (stdlib fitting).
@@ -92,6 +122,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     const std::vector<MeasuredPoint>& points) {
   if (points.empty()) return tl::unexpected(std::string("no points were measured"));
   if (nominal.type == FeatureType::ParallelPlanes) return fit_parallel_planes(nominal, points);
+  if (is_point_set(nominal.type)) return point_set_actual(nominal, points);
   std::vector<Vec3> centres;
   fitting::Compensation comp;
   comp.ball_radius_mm = points.front().ball_radius_mm;
@@ -138,7 +169,9 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
       g.diameter_mm = fit->diameter_mm;
       break;
     }
-    case FeatureType::ParallelPlanes: break;  // fitted above
+    case FeatureType::ParallelPlanes:
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: break;  // above
     case FeatureType::Cone: {
       // Apex from the compensated surface points: rho = (t - t_apex) tan(half angle).
       const Vec3 dir = fit->direction.normalized();

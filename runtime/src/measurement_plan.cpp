@@ -55,6 +55,8 @@ int minimum_points(FeatureType type) {
     case FeatureType::Line: return 2;
     case FeatureType::Plane: return 3;
     case FeatureType::ParallelPlanes: return 4;  // three on one face and one on the other fix both
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: return 1;
     case FeatureType::Circle:
     case FeatureType::Arc: return 3;
     case FeatureType::Sphere: return 4;
@@ -69,7 +71,9 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
   const double sign = g.side == Side::Inner ? -1.0 : 1.0;
   switch (g.type) {
     case FeatureType::Point:
-    case FeatureType::Plane: return axis;
+    case FeatureType::Plane:
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: return axis;
     case FeatureType::ParallelPlanes: {
       // The face on the +normal side of the median plane faces +normal on a tab (OUTER), -normal
       // in a slot (INNER); the other face the opposite way.
@@ -107,6 +111,8 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
     case FeatureType::Point:
       steps.push_back({PlannedStep::Kind::Probe, g.position, axis});
       break;
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: break;  // no nominal shape to plan on: its PTMEAS are its points
     case FeatureType::Plane: {
       const int n = count > 0 ? count : 4;
       const Vec3 u = any_perpendicular(axis);

@@ -358,10 +358,15 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
         // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
         centre += m_characterisation->dynamic_correction_mm(plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s) *
                   r.hit->normal;
-      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s, span_of(i), false});
+      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s, span_of(i), false, std::nullopt, Vec3::UnitZ()});
+      const auto* pt = i < plan.commands.size() ? std::get_if<machine::PtMeas>(&plan.commands[i].body) : nullptr;
+      if (pt) {
+        points.back().nominal_mm = pt->nominal_mm;
+        points.back().nominal_normal = pt->normal;
+      }
       // Issue 11: a surface beyond the nominal tolerance is touched while still accelerating.
-      const auto* pt = m_characterisation && i < plan.commands.size() ? std::get_if<machine::PtMeas>(&plan.commands[i].body) : nullptr;
-      if (const auto early = pt ? m_characterisation->early_contact_mm(*pt, *r.hit) : std::nullopt)
+      const auto early = pt && m_characterisation ? m_characterisation->early_contact_mm(*pt, *r.hit) : std::nullopt;
+      if (early)
         warn(span_of(i), fmt::format("the surface lies about {:.3f} mm above its nominal, beyond the nominal tolerance of {:.3f} mm: "
                                      "the probe touched it before reaching the probing feed and the point may be off "
                                      "(raise the tolerance or SNSET/APPRCH)",
@@ -381,7 +386,7 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
       const double radius_mm = qualified != m_scanning_radius_mm.end() ? qualified->second
                                : tool                                  ? tool->nominal_radius_mm
                                                                        : 0.0;
-      points.push_back({sample.centre_mm, sample.deflection_mm / e, radius_mm, sample.time_s, span_of(i), true});
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, radius_mm, sample.time_s, span_of(i), true, std::nullopt, Vec3::UnitZ()});
     }
   return points;
 }

@@ -84,14 +84,17 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
   const double nan = std::nan("");
   const auto act = [&](auto field) { return actual ? field(*actual) : nan; };
   std::vector<Row> rows;
+  // A GSURF or GCURVE has no nominal of its own (its points do): the centroid and mean normal
+  // of its points are shown without a deviation.
+  const bool point_set = is_point_set(nominal.type);
   const char* axes[] = {"X", "Y", "Z"};
   for (int i = 0; i < 3; ++i)
-    rows.push_back({axes[i], Unit::Millimetre, nominal.position[i],
+    rows.push_back({axes[i], Unit::Millimetre, point_set ? nan : nominal.position[i],
                     act([i](const Geometry& g) { return g.position[i]; })});
   if (has_direction(nominal.type)) {
     const char* cosines[] = {"I", "J", "K"};
     for (int i = 0; i < 3; ++i)
-      rows.push_back({cosines[i], Unit::Cosine, nominal.direction[i],
+      rows.push_back({cosines[i], Unit::Cosine, point_set ? nan : nominal.direction[i],
                       act([i](const Geometry& g) { return g.direction[i]; })});
   }
   if (has_diameter(nominal.type))

@@ -77,6 +77,8 @@ const char* lowercase_name(FeatureType type) {
     case FeatureType::Cylinder: return "cylinder";
     case FeatureType::Cone: return "cone";
     case FeatureType::ParallelPlanes: return "pair of parallel planes";
+    case FeatureType::GenericSurface: return "GSURF";
+    case FeatureType::GenericCurve: return "GCURVE";
   }
   return "point";
 }
@@ -609,8 +611,9 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
 Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                        ToleranceResult result) {
   static constexpr Types k_surfaces = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
-                                       FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone};
-  static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc};
+                                       FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
+                                       FeatureType::GenericSurface};
+  static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc, FeatureType::GenericCurve};
   static constexpr Types k_points = {FeatureType::Point};
   const Types types = spec.kind == ToleranceKind::Profl ? k_lines : spec.kind == ToleranceKind::Profp ? k_points : k_surfaces;
   if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
@@ -631,7 +634,13 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
   double lo = std::numeric_limits<double>::infinity();
   double hi = -lo;
   for (const MeasuredPoint& p : points) {
-    const double dev = profile_deviation(feature.nominal, frame->actual_to_nominal * p.surface_mm());
+    const Vec3 s = frame->actual_to_nominal * p.surface_mm();
+    // A GSURF's or GCURVE's point: along its own nominal normal from its own nominal.
+    if (is_point_set(feature.nominal.type) && !p.nominal_mm)
+      return Error(fmt::format("{} of {}: a point has no nominal (a {} is measured by PTMEAS points)",
+                               dmis_word(spec.kind), feature.label, dmis_word(feature.nominal.type)));
+    const double dev = is_point_set(feature.nominal.type) ? (s - *p.nominal_mm).dot(p.nominal_normal)
+                                                          : profile_deviation(feature.nominal, s);
     lo = std::min(lo, dev);
     hi = std::max(hi, dev);
   }
@@ -644,7 +653,8 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
                                spec.kind == ToleranceKind::Profs ? "surface" : "profile", lo, hi, points.size(),
                                points.size() == 1 ? "" : "s"));
   if (feature.nominal.type != FeatureType::Plane && feature.nominal.type != FeatureType::Line &&
-      feature.nominal.type != FeatureType::Point && feature.nominal.side == Side::None)
+      feature.nominal.type != FeatureType::Point && !is_point_set(feature.nominal.type) &&
+      feature.nominal.side == Side::None)
     add_note(result, "side unknown: treated as OUTER");
   add_note(result, datum_frame_note(*frame, (*actual)->position));
   return result;

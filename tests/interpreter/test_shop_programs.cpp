@@ -276,6 +276,57 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   EXPECT_TRUE(bad.has("shop.dmi:2:") && bad.has("the width of F(S) must be positive")) << bad.text;
 }
 
+// FEAT/GSURF and GCURVE: features known only by the points a program probes on them (CAMIO and
+// PC-DMIS export free-form and edge inspections so). Each point is judged along its own PTMEAS
+// normal. The truth (programs/worlds/block_width.json): TOP is where it was designed, RIGHT
+// lies 0.03 mm and BACK 0.015 mm out of the material.
+TEST(ShopPrograms, GenericSurfacePointsAreJudgedAlongTheirOwnNormals) {
+  const std::string text =
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/100, 50, 60\n"
+      "F(SKIN) = FEAT/GSURF\nMEAS/GSURF, F(SKIN), 5\n"
+      "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 100, 20, 40, 0, 0, 1\n"
+      "  GOTO/175, 50, 60\n  GOTO/175, 50, 20\n  PTMEAS/CART, 160, 50, 20, 1, 0, 0\n  PTMEAS/CART, 160, 80, 30, 1, 0, 0\n"
+      "  GOTO/175, 80, 60\n  GOTO/120, 115, 60\n  GOTO/120, 115, 20\n  PTMEAS/CART, 120, 100, 20, 0, 1, 0\n"
+      "  GOTO/120, 115, 60\nENDMES\n"
+      "F(EDGE) = FEAT/GCURVE, CART, 60, 50, 40, 0, 1, 0\nMEAS/GCURVE, F(EDGE), 3\n"
+      "  PTMEAS/CART, 60, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 50, 40, 0, 0, 1\n  PTMEAS/CART, 60, 80, 40, 0, 0, 1\nENDMES\n"
+      "T(SURF) = TOL/PROFS, -0.02, 0.02\nT(LINE) = TOL/PROFL, -0.005, 0.005\n"
+      "OUTPUT/FA(SKIN), TA(SURF)\nOUTPUT/FA(EDGE), TA(LINE)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_width.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* skin = report(*r.session, "SKIN");
+  ASSERT_TRUE(skin && skin->actual);
+  EXPECT_EQ(skin->point_count, 5U);
+  const auto* surf = tolerance(*r.session, "SURF");
+  ASSERT_TRUE(surf);
+  EXPECT_NEAR(surf->value, 0.03, 1e-3);  // RIGHT, the farthest out
+  EXPECT_FALSE(surf->in_tolerance);
+  // TOP, where it was designed: its points deviate by the probe's noise only.
+  EXPECT_TRUE(surf->note.find("min +0.000") != std::string::npos || surf->note.find("min -0.000") != std::string::npos)
+      << surf->note;
+  const auto* line = tolerance(*r.session, "LINE");
+  ASSERT_TRUE(line);
+  EXPECT_NEAR(line->value, 0.0, 1e-3);
+  EXPECT_TRUE(line->in_tolerance);
+
+  // An EDGEPT is measured as a point on its surface: the TOP face beside the RIGHT edge, where
+  // it was designed.
+  const auto edge = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                        "GOTO/155, 50, 60\nF(E1) = FEAT/EDGEPT, CART, 155, 50, 40, 0, 0, 1, 1, 0, 0\n"
+                        "MEAS/EDGEPT, F(E1), 1\n  PTMEAS/CART, 155, 50, 40, 0, 0, 1\nENDMES\nOUTPUT/FA(E1)\nENDFIL\n",
+                        source_dir / "programs/worlds/block_width.json");
+  ASSERT_EQ(edge.status, ExecStatus::Finished) << edge.diagnostics;
+  const auto* e1 = report(*edge.session, "E1");
+  ASSERT_TRUE(e1 && e1->actual);
+  EXPECT_NEAR(e1->actual->position.z(), 40.0, 1e-3);
+  EXPECT_NE(edge.diagnostics.find("FEAT/EDGEPT is measured as a POINT"), std::string::npos) << edge.diagnostics;
+
+  // check: a GSURF takes no numbers or six; PROFS is its tolerance, DIAM is not.
+  const auto c = check("DMISMN/'p', 5.0\nF(S1) = FEAT/GSURF\nF(S2) = FEAT/GSURF, CART, 1, 2, 3\nENDFIL\n");
+  EXPECT_EQ(c.errors, 1U) << c.text;
+  EXPECT_TRUE(c.has("shop.dmi:3:") && c.has("FEAT/GSURF expects")) << c.text;
+}
+
 // UNITS/INCH and DECPL: the report and the DMIS output statement are in the program's units with
 // the decimals DECPL asks for; the truth is the world's 20 mm bore at part (40, 50, 30) mm.
 TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {

@@ -242,6 +242,21 @@ TEST(VirtualCmm, QualificationFindsTheEffectiveRadius) {
   }
 }
 
+// The qualification ends where it began (over the safe height it left by): the program's next
+// move starts where the program put the probe. Ending over the reference sphere, a straight move
+// from there to the part crossed the boss of the default block.
+TEST(VirtualCmm, QualificationReturnsToWhereItStarted) {
+  Cmm cmm(noiseless(default_world()));
+  cmm.tool(4);
+  const Vec3 start(400, 250, 60);  // over the block (part 100, 50, 60)
+  cmm.go(start);
+  EXPECT_TRUE(cmm.qualify().qualified);
+  EXPECT_LT((cmm.machine().state().position_mm - start).norm(), 1e-9);
+  // And the first point after it, on the top face beside the boss, is reached without a collision.
+  const Hit h = cmm.point({400, 250, 40}, Vec3::UnitZ());
+  EXPECT_NEAR(h.centre_mm.z(), 40 + 2, 0.05);
+}
+
 TEST(VirtualCmm, QualificationAbsorbsBallRadiusError) {
   World w = noiseless(default_world());
   w.truth.probe.ball_radius_error_mm = -0.003;

@@ -33,6 +33,8 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
     case FeatureType::Cylinder: return {7, 8, "x,y,z,i,j,k,diam[,len]"};
     case FeatureType::Cone: return {7, 8, "x,y,z,i,j,k,angle[,len]"};
     case FeatureType::ParallelPlanes: return {7, 7, "x,y,z,i,j,k,width (a point on the median plane, its normal, the width)"};
+    case FeatureType::GenericSurface: return {0, 6, "none, or x,y,z,i,j,k (a point of the surface and its normal)"};
+    case FeatureType::GenericCurve: return {0, 6, "none, or x,y,z,i,j,k (a point of the curve and the normal of its plane)"};
   }
   return {0, 0, ""};
 }
@@ -84,10 +86,25 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const bool reported_actual = upper(s.target->prefix) == "FA";
   if (!expect_params(s, 1, "the feature type")) return;
   const std::string label = upper(s.target->name);
-  const auto& p = s.params;
+  auto p = s.params;
+  // FEAT/EDGEPT,CART,x,y,z,i,j,k,ei,ej,ek[,thickness]: a point on a surface near an edge. metron
+  // measures it as a POINT on the surface (x,y,z along i,j,k); the edge vector does not enter.
+  const bool edge_point = is_word(p[0], "EDGEPT");
+  if (edge_point) {
+    if (p.size() < 11 || p.size() > 12)
+      return error(p.back().span, "sema.feature-arity",
+                   fmt::format("FEAT/EDGEPT expects CART or POL and 9 or 10 numbers (x,y,z,i,j,k,ei,ej,ek[,thickness]), got {} "
+                               "parameters", p.size() - 1));
+    if (!m_edge_points_noted) {
+      note(p[0].span, "sema.edge-point", "FEAT/EDGEPT is measured as a POINT on its surface (x,y,z along i,j,k); the edge vector is not used");
+      m_edge_points_noted = true;
+    }
+    p.resize(8);
+    p[0].text = "POINT";
+  }
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
-    if (is_word(p[0]) && (p[0].text == "GCURVE" || p[0].text == "GSURF" || p[0].text == "EDGEPT" || p[0].text == "TORUS" ||
+    if (is_word(p[0]) && (p[0].text == "TORUS" ||
                           p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS" ||
                           p[0].text == "COMPOUND" || p[0].text == "PATERN" || p[0].text == "OBJECT" ||
                           p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
@@ -105,7 +122,8 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   ir::FeaturePayload payload;
   payload.type = type;
   std::size_t i = 1;
-  const bool sized = type != FeatureType::Point && type != FeatureType::Plane && type != FeatureType::Line;
+  const bool sized = type != FeatureType::Point && type != FeatureType::Plane && type != FeatureType::Line &&
+                     !runtime::is_point_set(type);
   if (sized) {
     if (i >= p.size() || !(is_word(p[i], "INNER") || is_word(p[i], "OUTER")))
       return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-side",
@@ -118,14 +136,16 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     else
       return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-bnd", "expected BND or UNBND after LINE");
   }
-  if (i >= p.size() || !(is_word(p[i], "CART") || is_word(p[i], "POL")))
+  // A GSURF or GCURVE may have no numbers at all: its points carry their nominals.
+  const bool bare = runtime::is_point_set(type) && i >= p.size();
+  if (!bare && (i >= p.size() || !(is_word(p[i], "CART") || is_word(p[i], "POL"))))
     return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-form",
                  fmt::format("expected CART or POL after the feature type {}", word));
-  payload.form = *ir::parse_word<ir::CoordinateForm>(p[i++].text);
+  if (!bare) payload.form = *ir::parse_word<ir::CoordinateForm>(p[i++].text);
   const bool bounded = payload.bounded.value_or(false);
   const FeatureForm form = feature_form(type, bounded);
   const std::size_t n = p.size() - i;
-  if (n < form.min_numbers || n > form.max_numbers)
+  if (n < form.min_numbers || n > form.max_numbers || (runtime::is_point_set(type) && n != 0 && n != 6))
     return error(n > form.max_numbers ? p[i + form.max_numbers].span : p.back().span, "sema.feature-arity",
                  fmt::format("FEAT/{} expects {} numbers ({}), got {}", word,
                              form.min_numbers == form.max_numbers ? fmt::format("{}", form.min_numbers)
@@ -177,7 +197,7 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const ir::
     error(s.params[s.params.size() - n + k].span, code, std::move(message));
     return false;
   };
-  if (type != FeatureType::Sphere || n == 7) {
+  if ((type != FeatureType::Sphere || n == 7) && n > 0) {
     const std::size_t d = (type == FeatureType::Line && form.bounded.value_or(false)) ? 6 : 3;
     if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
       return fail(d, "sema.zero-vector", "the direction vector i,j,k is zero");

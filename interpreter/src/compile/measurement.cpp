@@ -18,6 +18,8 @@ int minimum_points(runtime::FeatureType type) {
     case runtime::FeatureType::Point: return 1;
     case runtime::FeatureType::Line: return 2;
     case runtime::FeatureType::ParallelPlanes: return 4;  // three on one face and one on the other fix both
+    case runtime::FeatureType::GenericSurface:
+    case runtime::FeatureType::GenericCurve: return 1;
     case runtime::FeatureType::Plane:
     case runtime::FeatureType::Circle:
     case runtime::FeatureType::Arc: return 3;

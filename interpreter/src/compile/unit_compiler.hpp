@@ -187,6 +187,7 @@ class UnitCompiler {
   std::optional<runtime::FeatureType> feature_type(const std::string& name) const;
   /// A feature type word parameter (MEAS/, CONST/), or nullopt.
   static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
+    if (is_word(e, "EDGEPT")) return runtime::FeatureType::Point;  // measured as a point (FEAT/EDGEPT)
     return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
   }
   void statement(const grammar::Statement& s);
@@ -285,6 +286,7 @@ class UnitCompiler {
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;
   bool m_reported_results_noted = false;  // one note per unit for reported results
+  bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
 };
 
 }  // namespace metron::interpreter::detail

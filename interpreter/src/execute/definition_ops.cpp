@@ -48,7 +48,7 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
   const auto form = words.form.value_or(ir::CoordinateForm::Cart);
   const auto point = [&](std::size_t i) { return ir::position_mm(form, nums[i], nums[i + 1], nums[i + 2], len, deg); };
   const auto vec = [&](std::size_t i) { return Vec3(nums[i], nums[i + 1], nums[i + 2]); };
-  g.position = point(0);
+  if (!nums.empty()) g.position = point(0);  // a bare GSURF or GCURVE has no numbers
   switch (g.type) {
     case FeatureType::Point:
     case FeatureType::Plane: g.direction = vec(3); break;
@@ -87,6 +87,10 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
     case FeatureType::ParallelPlanes:
       g.direction = vec(3);
       g.width_mm = nums[6] * len;
+      break;
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve:
+      if (nums.size() == 6) g.direction = vec(3);
       break;
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");

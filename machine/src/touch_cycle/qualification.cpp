@@ -56,6 +56,17 @@ tl::expected<ToolInfo, Fault> Controller::qualify() {
     return *f;
   };
 
+  // Back where the qualification started when it is done, over the safe height: the program's
+  // next move starts where the program left the probe, not over the reference sphere (a straight
+  // move from there to the part may cross it).
+  const Vec3 start = position;
+  const auto return_to_start = [&]() -> tl::expected<void, Fault> {
+    if (auto ok = move_to({start.x(), start.y(), std::max(position.z(), start.z())}, positioning_feed); !ok)
+      return tl::unexpected(ok.error());
+    if (auto ok = move_to(start, positioning_feed); !ok) return tl::unexpected(ok.error());
+    return {};
+  };
+
   // First pass: 5 points about the nominal centre, generous search, to find the sphere.
   std::vector<Vec3> dirs = {Vec3::UnitZ(), direction(0, 0), direction(90, 0), direction(180, 0), direction(270, 0)};
   auto rough = probe_all(config.reference_sphere.nominal_centre_mm, dirs, 5, 5);
@@ -80,6 +91,7 @@ tl::expected<ToolInfo, Fault> Controller::qualify() {
   tool->info.qualification_form_mm = result->form_mm;
   tool->info.qualification_centres_mm = *fine;
   tool->info.reference_diameter_mm = config.reference_sphere.certified_diameter_mm;
+  if (auto back = return_to_start(); !back) return tl::unexpected(back.error());
   return tool->info;
 }
 

@@ -11,11 +11,17 @@ namespace metron::runtime {
 
 /// DMIS feature types metron measures and constructs.
 enum class FeatureType { Point, Plane, Line, Circle, Arc, Sphere, Cylinder, Cone,
-                         ParallelPlanes };  ///< PARPLN: a slot (INNER) or tab (OUTER) between two parallel faces
+                         ParallelPlanes,   ///< PARPLN: a slot (INNER) or tab (OUTER) between two parallel faces
+                         GenericSurface,   ///< GSURF: a surface known by the points the program probes on it
+                         GenericCurve };   ///< GCURVE: a curve known the same way
+/// GSURF and GCURVE: no analytic nominal; each probed point carries its own nominal (the PTMEAS).
+inline bool is_point_set(FeatureType type) {
+  return type == FeatureType::GenericSurface || type == FeatureType::GenericCurve;
+}
 /// Material side of a feature of size: INNER (a bore) or OUTER (a boss); None for others.
 enum class Side { None, Inner, Outer };
 
-const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE, PARPLN
+const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE, PARPLN, GSURF, GCURVE
 const char* dmis_word(Side side);         ///< INNER, OUTER, or ""
 
 /// The geometry of a feature (nominal or actual), always in machine coordinates (MCS), mm.
@@ -42,6 +48,10 @@ struct MeasuredPoint {
   double time_s = 0;               ///< simulated time of the trigger
   Span origin;                     ///< the PTMEAS (or MEAS in AUTO mode, or PAMEAS) that took it
   bool scanned = false;            ///< a scanning sample: `normal` is the deflection direction
+  /// The PTMEAS's nominal surface point and its unit normal out of the material (MCS), when the
+  /// point was taken by a PTMEAS (not a scan): the nominal of each point of a GSURF or GCURVE.
+  std::optional<Vec3> nominal_mm;
+  Vec3 nominal_normal = Vec3::UnitZ();
   [[nodiscard]] Vec3 surface_mm() const { return centre_mm - ball_radius_mm * normal; }
 };
 
