@@ -130,3 +130,28 @@ TEST(IppClient, FaultsComeBackAsMachineFaults) {
   server.stop();
   thread.join();
 }
+
+// A server that goes away mid-program: the next command is a communication fault naming the
+// lost link, not a crash and not a "bad command".
+TEST(IppClient, ALostServerIsACommunicationFault) {
+  const World world = machine::default_world();
+  VirtualCmm served(world, 1);
+  ipp::SessionOptions so;
+  so.home_mm = world.machine.home_mm;
+  ipp::ServerOptions o;
+  o.port = 0;
+  ipp::Server server(served, so, o);
+  server.listen();
+  std::thread thread([&] { server.run(false); });
+  ipp::ClientMachine client("127.0.0.1", server.port());
+  EXPECT_EQ(run(client, {GoTo{Vec3(100, 100, 400), std::nullopt}})[0].status, Response::Status::Done);
+  server.stop();
+  thread.join();
+  const auto r = run(client, {GoTo{Vec3(120, 100, 400), std::nullopt}, GoTo{Vec3(140, 100, 400), std::nullopt}});
+  ASSERT_EQ(r.size(), 2u);
+  ASSERT_TRUE(r[0].fault);
+  EXPECT_EQ(r[0].fault->kind, FaultKind::Communication) << r[0].fault->message;
+  EXPECT_STREQ(to_string(r[0].fault->kind), "communication");
+  ASSERT_TRUE(r[1].fault);
+  EXPECT_EQ(r[1].fault->kind, FaultKind::Aborted);
+}

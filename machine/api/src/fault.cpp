@@ -14,6 +14,7 @@ const char* to_string(FaultKind kind) {
     case FaultKind::BadCommand: return "bad command";
     case FaultKind::Aborted: return "aborted";
     case FaultKind::Stalled: return "stalled";
+    case FaultKind::Communication: return "communication";
   }
   return "unknown fault";
 }

@@ -43,6 +43,7 @@ FaultKind fault_kind(int error_number) {
     case 1503: return FaultKind::UnknownTool;
     case 6: return FaultKind::Aborted;
     case 511: return FaultKind::Stalled;
+    case 503: return FaultKind::Communication;
     default: return FaultKind::BadCommand;
   }
 }
@@ -481,7 +482,7 @@ std::vector<Response> ClientMachine::execute() {
       Response r;
       r.tag = c.tag;
       r.status = Response::Status::Fault;
-      r.fault = Fault{FaultKind::BadCommand, e.what(), m_impl->last_position, 0};
+      r.fault = Fault{FaultKind::Communication, e.what(), m_impl->last_position, 0};
       out.push_back(std::move(r));
     }
     ++m_impl->executed;

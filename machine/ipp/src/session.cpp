@@ -233,6 +233,7 @@ struct Session::Impl {
         case FaultKind::BadCommand: code = ErrorCode::BadArgument; break;
         case FaultKind::Aborted: code = ErrorCode::TransactionAborted; break;
         case FaultKind::Stalled: code = ErrorCode::ErrorProcessingMethod; break;
+        case FaultKind::Communication: code = ErrorCode::ControllerCommunicationsFailure; break;
       }
       throw CommandError{code, r.fault->message};
     }

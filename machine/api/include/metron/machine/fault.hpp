@@ -17,6 +17,7 @@ enum class FaultKind {
   BadCommand,      ///< a command with invalid parameters (zero direction, negative distance ...)
   Aborted,         ///< a queued command not executed because an earlier one faulted
   Stalled,         ///< a scan made no progress along its path (e.g. a correction term opposing the path velocity)
+  Communication,   ///< the link to the machine (an I++ DME server) was lost or answered what cannot be read
 };
 
 const char* to_string(FaultKind kind);
