@@ -30,6 +30,37 @@ std::vector<Response> run(Machine& m, std::vector<Body> bodies) {
   return m.execute();
 }
 
+/// `metron serve` of the default world on a loopback port, in a thread of its own.
+class LoopbackServer {
+ public:
+  LoopbackServer() : m_served(machine::default_world(), 1), m_server(m_served, session_options(), server_options()) {
+    m_server.listen();
+    m_thread = std::thread([this] { m_server.run(false); });
+  }
+  ~LoopbackServer() { stop(); }
+  [[nodiscard]] std::uint16_t port() const { return m_server.port(); }
+  void stop() {
+    if (!m_thread.joinable()) return;
+    m_server.stop();
+    m_thread.join();
+  }
+
+ private:
+  static ipp::SessionOptions session_options() {
+    ipp::SessionOptions so;
+    so.home_mm = machine::default_world().machine.home_mm;
+    return so;
+  }
+  static ipp::ServerOptions server_options() {
+    ipp::ServerOptions o;
+    o.port = 0;
+    return o;
+  }
+  VirtualCmm m_served;
+  ipp::Server m_server;
+  std::thread m_thread;
+};
+
 }  // namespace
 
 TEST(IppClient, ParsesUrls) {
@@ -103,15 +134,7 @@ TEST(IppClient, SameHitsDirectAndThroughTheServer) {
 }
 
 TEST(IppClient, FaultsComeBackAsMachineFaults) {
-  const World world = machine::default_world();
-  VirtualCmm served(world, 1);
-  ipp::SessionOptions so;
-  so.home_mm = world.machine.home_mm;
-  ipp::ServerOptions o;
-  o.port = 0;
-  ipp::Server server(served, so, o);
-  server.listen();
-  std::thread thread([&] { server.run(false); });
+  LoopbackServer server;
   {
     ipp::ClientMachine client("127.0.0.1", server.port());
     const auto r = run(client, {SelectTool{"Probe1"}, GoTo{Vec3(5000, 0, 0), std::nullopt}, GoTo{Vec3(0, 0, 400), std::nullopt}});
@@ -127,26 +150,15 @@ TEST(IppClient, FaultsComeBackAsMachineFaults) {
     const auto unknown = run(client, {SelectTool{"T9"}});
     EXPECT_EQ(unknown[0].fault->kind, FaultKind::UnknownTool);
   }
-  server.stop();
-  thread.join();
 }
 
 // A server that goes away mid-program: the next command is a communication fault naming the
 // lost link, not a crash and not a "bad command".
 TEST(IppClient, ALostServerIsACommunicationFault) {
-  const World world = machine::default_world();
-  VirtualCmm served(world, 1);
-  ipp::SessionOptions so;
-  so.home_mm = world.machine.home_mm;
-  ipp::ServerOptions o;
-  o.port = 0;
-  ipp::Server server(served, so, o);
-  server.listen();
-  std::thread thread([&] { server.run(false); });
+  LoopbackServer server;
   ipp::ClientMachine client("127.0.0.1", server.port());
   EXPECT_EQ(run(client, {GoTo{Vec3(100, 100, 400), std::nullopt}})[0].status, Response::Status::Done);
   server.stop();
-  thread.join();
   const auto r = run(client, {GoTo{Vec3(120, 100, 400), std::nullopt}, GoTo{Vec3(140, 100, 400), std::nullopt}});
   ASSERT_EQ(r.size(), 2u);
   ASSERT_TRUE(r[0].fault);
