@@ -148,7 +148,7 @@ std::string feature_list(const std::vector<std::string>& labels) {
 bool is_deviation_kind(ToleranceKind kind) {
   return kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::DistB ||
          kind == ToleranceKind::Anglb || kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt ||
-         kind == ToleranceKind::Cortol;
+         kind == ToleranceKind::Cortol || kind == ToleranceKind::Width;
 }
 
 std::string kind_words(const ToleranceResult& result) {

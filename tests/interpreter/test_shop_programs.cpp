@@ -252,6 +252,10 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   ASSERT_TRUE(wx);
   EXPECT_NEAR(wx->value, 0.02, 1e-3);
   EXPECT_FALSE(wx->in_tolerance);
+  // Reported like a DIAM: the nominal, the actual and the deviation against its limits.
+  const std::string line = metron::runtime::format_tolerance_result(*wx);
+  EXPECT_NE(line.find("nominal 160.0000  actual 160.0"), std::string::npos) << line;
+  EXPECT_NE(line.find("limits [-0.0100, +0.0100]  OUT"), std::string::npos) << line;
   const auto* y = report(*r.session, "YPAIR");
   ASSERT_TRUE(y && y->actual);
   EXPECT_EQ(y->point_count, 6U);
