@@ -59,15 +59,16 @@ void print_truth(const machine::World& w, const runtime::MachineCharacterisation
                            c.pre_travel_mm);
   // Worst-case stop distance at the maximum feed along each axis, from the true parameters, for a
   // trigger anywhere on the ramp (docs/touch-trigger.md: S(F) = pre-travel + F (delay + period +
-  // dt) + F Td(F); braking from F takes F Td/2, and a contact while still accelerating first
-  // ramps the acceleration down, another F Td/2 at most).
+  // dt) + F (Ta + Tb)/2; braking from F takes F Tb/2, and a contact while still accelerating
+  // first ramps the acceleration down, another F Ta/2 at most).
   for (int i = 0; i < 3; ++i) {
     const Vec3 e = Vec3::Unit(i);
     const double f = c.max_feed_mm_s(e);
     const double jitter = s.kind == machine::SkipInput::Kind::Scanned ? s.period_s : 0;
     const double stop = std::max(w.truth.probe.pre_travel.horizontal_mm, w.truth.probe.pre_travel.vertical_mm) +
                         w.truth.probe.repeatability_mm * 4 + f * (delay + jitter + w.machine.dt_s) +
-                        f * machine::ramp_time_s(w.machine, w.truth.axes, e, f);
+                        f * (machine::ramp_time_s(w.machine, w.truth.axes, e, f) +
+                             machine::braking_time_s(w.machine, w.truth.axes, e, f)) / 2;
     std::cout << fmt::format("  {} axis: max feed {:.1f} mm/s, true worst stop distance {:.3f} mm of {:.3f} mm over-travel\n",
                              "xyz"[i], f, stop, w.truth.probe.over_travel_mm);
   }

@@ -67,6 +67,7 @@ struct Controller {
   [[nodiscard]] double now() const { return static_cast<double>(cycle) * config.dt_s; }
   [[nodiscard]] std::int64_t cycles_for(double t_s) const;
   [[nodiscard]] MotionLimits limits(const Vec3& u, double feed) const;
+  [[nodiscard]] std::optional<BrakingLimits> braking(const Vec3& u, double feed) const;
   [[nodiscard]] MotionLimits braking_limits(const Vec3& u, double speed) const;
   [[nodiscard]] Tool* active_tool();
   void emit(double t_abs, const Vec3& p, double speed) const {

@@ -46,6 +46,26 @@ void check_limits(const MotionLimits& l) {
     throw std::invalid_argument("motion limits must be positive");
 }
 
+// The limits every slow-down uses: the braking ones where given, else the acceleration's.
+MotionLimits slowing(const MotionLimits& l, const std::optional<BrakingLimits>& b) {
+  if (!b) return l;
+  MotionLimits d = l;
+  d.acceleration_mm_s2 = b->deceleration_mm_s2;
+  d.jerk_mm_s3 = b->jerk_mm_s3;
+  check_limits(d);
+  return d;
+}
+
+// The peak speed of a rest-to-rest move that brakes by other limits than it accelerates: each
+// ramp is symmetric in time, so the two cover v (T_up + T_down) / 2; that grows with v.
+double peak_speed(double distance, const MotionLimits& up, const MotionLimits& down) {
+  const auto ramps = [&](double v) { return v * (ramp_to(v, up).duration_s() + ramp_to(v, down).duration_s()) / 2; };
+  if (ramps(up.speed_mm_s) <= distance) return up.speed_mm_s;
+  double lo = 0, hi = up.speed_mm_s;
+  for (int i = 0; i < 200 && hi - lo > 1e-15 * up.speed_mm_s; ++i) (ramps((lo + hi) / 2) <= distance ? lo : hi) = (lo + hi) / 2;
+  return lo;
+}
+
 }  // namespace
 
 MotionProfile::MotionProfile(MotionState start, std::vector<JerkPhase> phases)
@@ -60,9 +80,21 @@ MotionProfile::MotionProfile(MotionState start, std::vector<JerkPhase> phases)
   }
 }
 
-MotionProfile MotionProfile::rest_to_rest(double distance_mm, const MotionLimits& limits) {
+MotionProfile MotionProfile::rest_to_rest(double distance_mm, const MotionLimits& limits,
+                                          const std::optional<BrakingLimits>& braking) {
   check_limits(limits);
   if (!(distance_mm > 0)) return {};
+  if (braking) {
+    const MotionLimits down = slowing(limits, braking);
+    const double v = peak_speed(distance_mm, limits, down);
+    const Ramp up = ramp_to(v, limits), dn = ramp_to(v, down);
+    const double cruise_s = std::max(0.0, (distance_mm - v * (up.duration_s() + dn.duration_s()) / 2) / v);
+    const double j = limits.jerk_mm_s3, jb = down.jerk_mm_s3;
+    MotionProfile p({}, {{up.jerk_time_s, j}, {up.const_time_s, 0}, {up.jerk_time_s, -j}, {cruise_s, 0},
+                         {dn.jerk_time_s, -jb}, {dn.const_time_s, 0}, {dn.jerk_time_s, jb}});
+    p.m_end = {distance_mm, 0, 0};
+    return p;
+  }
   const double v = peak_speed(distance_mm, limits);
   const Ramp r = ramp_to(v, limits);
   const double cruise_s = std::max(0.0, (distance_mm - v * r.duration_s()) / v);
@@ -83,10 +115,11 @@ struct SpeedChange {
   std::vector<JerkPhase> phases;
   double duration_s = 0;
 };
-SpeedChange speed_change(double dv, const MotionLimits& l) {
+SpeedChange speed_change(double dv, const MotionLimits& limits, const std::optional<BrakingLimits>& braking) {
   SpeedChange c;
   const double sign = dv < 0 ? -1 : 1, m = std::abs(dv);
   if (m <= 0) return c;
+  const MotionLimits l = dv < 0 ? slowing(limits, braking) : limits;
   const double a = l.acceleration_mm_s2, j = l.jerk_mm_s3;
   if (m * j >= a * a) {
     c.phases = {{a / j, sign * j}, {m / a - a / j, 0}, {a / j, -sign * j}};
@@ -97,21 +130,22 @@ SpeedChange speed_change(double dv, const MotionLimits& l) {
   c.duration_s = jerk_limited_ramp_time_s(m, a, j);
   return c;
 }
-double change_distance(double v0, double v1, const MotionLimits& l) {
-  return (v0 + v1) / 2 * speed_change(v1 - v0, l).duration_s;
+double change_distance(double v0, double v1, const MotionLimits& l, const std::optional<BrakingLimits>& b) {
+  return (v0 + v1) / 2 * speed_change(v1 - v0, l, b).duration_s;
 }
 
 }  // namespace
 
-MotionProfile MotionProfile::reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits) {
+MotionProfile MotionProfile::reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits,
+                                        const std::optional<BrakingLimits>& braking) {
   const double feed = std::min(feed_mm_s, limits.speed_mm_s);
-  const auto two_ramps = [&](double v) { return change_distance(0, v, limits) + change_distance(v, feed, limits); };
+  const auto two_ramps = [&](double v) { return change_distance(0, v, limits, braking) + change_distance(v, feed, limits, braking); };
   std::vector<JerkPhase> phases;
   const auto append = [&](const std::vector<JerkPhase>& p) { phases.insert(phases.end(), p.begin(), p.end()); };
   double covered = 0;
-  if (change_distance(0, feed, limits) >= reach_mm) {
-    append(speed_change(feed, limits).phases);  // too close: ramp straight to the feed
-    covered = change_distance(0, feed, limits);
+  if (change_distance(0, feed, limits, braking) >= reach_mm) {
+    append(speed_change(feed, limits, braking).phases);  // too close: ramp straight to the feed
+    covered = change_distance(0, feed, limits, braking);
   } else {
     double peak = limits.speed_mm_s;
     if (two_ramps(peak) > reach_mm) {
@@ -119,19 +153,36 @@ MotionProfile MotionProfile::reach_feed(double reach_mm, double distance_mm, dou
       for (int i = 0; i < 100; ++i) (two_ramps((lo + hi) / 2) < reach_mm ? lo : hi) = (lo + hi) / 2;
       peak = lo;
     }
-    append(speed_change(peak, limits).phases);
+    append(speed_change(peak, limits, braking).phases);
     phases.push_back({(reach_mm - two_ramps(peak)) / peak, 0});  // cruise at the peak (0 when bisected)
-    append(speed_change(feed - peak, limits).phases);
+    append(speed_change(feed - peak, limits, braking).phases);
     covered = reach_mm;
   }
-  const double stop = change_distance(feed, 0, limits);
+  const double stop = change_distance(feed, 0, limits, braking);
   phases.push_back({std::max(0.0, distance_mm - covered - stop) / feed, 0});
-  append(speed_change(-feed, limits).phases);
+  append(speed_change(-feed, limits, braking).phases);
   return MotionProfile({}, std::move(phases));
 }
 
-MotionProfile MotionProfile::stop(const MotionState& from, const MotionLimits& limits) {
+MotionProfile MotionProfile::stop(const MotionState& from, const MotionLimits& limits,
+                                  const std::optional<BrakingLimits>& braking) {
   check_limits(limits);
+  if (braking && from.speed_mm_s > 0) {
+    // The controller ends a rising speed as its ramp would (at the ramp's jerk), then brakes by
+    // the braking limits from zero acceleration: so the speed never exceeds the ramp's target.
+    const MotionLimits down = slowing(limits, braking);
+    if (!(from.acceleration_mm_s2 > 0)) return stop(from, down);
+    const double t = from.acceleration_mm_s2 / limits.jerk_mm_s3;
+    MotionState flat = advance(from, -limits.jerk_mm_s3, t);
+    flat.acceleration_mm_s2 = 0;
+    std::vector<JerkPhase> phases{{t, -limits.jerk_mm_s3}};
+    const MotionProfile rest = stop(flat, down);
+    phases.insert(phases.end(), rest.phases().begin(), rest.phases().end());
+    MotionProfile p(from, phases);
+    p.m_end.speed_mm_s = 0;
+    p.m_end.acceleration_mm_s2 = 0;
+    return p;
+  }
   const double v0 = from.speed_mm_s, a0 = from.acceleration_mm_s2;
   const double a = limits.acceleration_mm_s2, j = limits.jerk_mm_s3;
   if (v0 <= 0) {
@@ -181,9 +232,15 @@ double MotionProfile::time_at(double position_mm) const {
   return hi;
 }
 
-double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits) {
+double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits, const std::optional<BrakingLimits>& braking) {
   check_limits(limits);
   if (!(distance_mm > 0)) return 0;
+  if (braking) {
+    const MotionLimits down = slowing(limits, braking);
+    const double v = peak_speed(distance_mm, limits, down);
+    const double ramps_s = ramp_to(v, limits).duration_s() + ramp_to(v, down).duration_s();
+    return ramps_s + std::max(0.0, (distance_mm - v * ramps_s / 2) / v);
+  }
   const double v = peak_speed(distance_mm, limits);
   const Ramp r = ramp_to(v, limits);
   return 2 * r.duration_s() + std::max(0.0, (distance_mm - v * r.duration_s()) / v);

@@ -24,6 +24,11 @@ MotionLimits Controller::limits(const Vec3& u, double feed) const {
   return sim.motion_limits(config, u, feed, acceleration, acceleration_cap);
 }
 
+// An axis with its own braking law (docs/world.md) slows every move down by it.
+std::optional<BrakingLimits> Controller::braking(const Vec3& u, double feed) const {
+  return sim.motion_braking(config, u, feed, acceleration_cap);
+}
+
 // Braking from `speed` along u: the axes decelerate as they accelerate (a constant-time axis
 // stops from any speed in its time).
 MotionLimits Controller::braking_limits(const Vec3& u, double speed) const {
@@ -60,7 +65,7 @@ tl::expected<void, Fault> Controller::move_to(const Vec3& target, double feed) {
     return {};
   }
   const Vec3 u = (target - a) / len;
-  const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(u, feed));
+  const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(u, feed), braking(u, feed));
   const double t_end = profile.duration_s();
   const std::int64_t n = cycles_for(t_end), c0 = cycle;
   double s_prev = 0;

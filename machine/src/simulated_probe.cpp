@@ -116,6 +116,11 @@ MotionLimits SimulatedProbe::motion_limits(const MachineConfig& config, const Ve
   return path_limits(config, m_truth.axes, u, feed_mm_s, acceleration_mm_s2, cap_mm_s2);
 }
 
+std::optional<BrakingLimits> SimulatedProbe::motion_braking(const MachineConfig& config, const Vec3& u, double feed_mm_s,
+                                                            std::optional<double> cap_mm_s2) const {
+  return path_braking(config, m_truth.axes, u, feed_mm_s, cap_mm_s2);
+}
+
 ScanSetup SimulatedProbe::scan_setup(double nominal_radius_mm, const MachineConfig& config) {
   if (!m_scan_solid) {
     m_scan_solid = make_probed_solid(m_truth, m_stylus_offset_mm);

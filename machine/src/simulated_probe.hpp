@@ -67,6 +67,9 @@ class SimulatedProbe {
   /// How the axes move for a commanded straight move (their true acceleration behaviour).
   [[nodiscard]] MotionLimits motion_limits(const MachineConfig& config, const Vec3& u, double feed_mm_s,
                                            double acceleration_mm_s2, std::optional<double> cap_mm_s2) const;
+  /// Braking limits of the same move when an axis involved brakes by its own law.
+  [[nodiscard]] std::optional<BrakingLimits> motion_braking(const MachineConfig& config, const Vec3& u, double feed_mm_s,
+                                                            std::optional<double> cap_mm_s2) const;
   [[nodiscard]] bool has_axis_dynamics() const { return m_truth.axes.has_value(); }
 
   /// The simulation side of a scan with a stylus of `nominal_radius_mm` under controller

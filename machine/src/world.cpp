@@ -33,6 +33,46 @@ using sj::string;
 using sj::unit;
 using sj::vec3;
 
+// One axis law, exactly one of its three forms in `o` (an axis record or its braking); a
+// constant-rate law's missing limits stay -1 (the path limits, filled in later).
+void parse_ramp_law(Object& o, RampLaw& law) {
+  const json* rate = o.find("constant_rate");
+  const json* time = o.find("constant_time");
+  const json* table = o.find("tabulated");
+  if ((rate != nullptr) + (time != nullptr) + (table != nullptr) != 1)
+    fail(o.pointer(), "expected exactly one of 'constant_rate', 'constant_time' or 'tabulated'");
+  if (rate) {
+    Object r(*rate, o.at("constant_rate"));
+    law.mode = RampLaw::Mode::ConstantRate;
+    r.positive("acceleration_mm_s2", law.acceleration_mm_s2);
+    r.positive("jerk_mm_s3", law.jerk_mm_s3);
+    r.finish();
+  } else if (time) {
+    Object t(*time, o.at("constant_time"));
+    law.mode = RampLaw::Mode::ConstantTime;
+    t.positive("time_s", law.time_s);
+    t.finish();
+  } else {
+    // {"feed_mm_s": [v0, v1, ...], "ramp_time_s": [t0, t1, ...]}: feeds strictly increasing.
+    Object t(*table, o.at("tabulated"));
+    law.mode = RampLaw::Mode::Tabulated;
+    const std::vector<double> feeds = sj::numbers(t.required("feed_mm_s"), t.at("feed_mm_s"));
+    const std::vector<double> times = sj::numbers(t.required("ramp_time_s"), t.at("ramp_time_s"));
+    if (feeds.size() < 2) fail(t.at("feed_mm_s"), "expected at least two feeds");
+    if (times.size() != feeds.size())
+      fail(t.at("ramp_time_s"), fmt::format("expected {} ramp times, one per feed", feeds.size()));
+    for (std::size_t k = 0; k < feeds.size(); ++k) {
+      const std::string fp = t.at("feed_mm_s") + "/" + std::to_string(k), tp = t.at("ramp_time_s") + "/" + std::to_string(k);
+      if (!(feeds[k] > 0)) fail(fp, "expected a positive feed");
+      if (k > 0 && !(feeds[k] > feeds[k - 1])) fail(fp, "expected feeds in increasing order");
+      // A ramp of over a minute is a typo (a time in ms), and would stall every move.
+      if (!(times[k] > 0 && times[k] <= 60)) fail(tp, "expected a ramp time from 0 to 60 s");
+      law.table.push_back({feeds[k], times[k]});
+    }
+    t.finish();
+  }
+}
+
 void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, WorldTruth& truth) {
   Object o(j, ptr);
   o.read("travel_mm", [&](const json& tj, const std::string& tp) {
@@ -86,21 +126,15 @@ void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, Worl
     for (int i = 0; i < 3; ++i)
       a.read(names[i], [&](const json& xj, const std::string& xp) {
         Object x(xj, xp);
-        const json* rate = x.find("constant_rate");
-        const json* time = x.find("constant_time");
-        if ((rate != nullptr) == (time != nullptr)) fail(xp, "expected exactly one of 'constant_rate' or 'constant_time'");
-        if (rate) {
-          Object r(*rate, x.at("constant_rate"));
-          axes[i].mode = AxisDynamics::Mode::ConstantRate;
-          r.positive("acceleration_mm_s2", axes[i].acceleration_mm_s2);
-          r.positive("jerk_mm_s3", axes[i].jerk_mm_s3);
-          r.finish();
-        } else {
-          Object t(*time, x.at("constant_time"));
-          axes[i].mode = AxisDynamics::Mode::ConstantTime;
-          t.positive("time_s", axes[i].time_s);
-          t.finish();
-        }
+        parse_ramp_law(x, axes[i]);
+        x.read("braking", [&](const json& bj, const std::string& bp) {
+          RampLaw braking;
+          braking.acceleration_mm_s2 = braking.jerk_mm_s3 = -1;
+          Object b(bj, bp);
+          parse_ramp_law(b, braking);
+          b.finish();
+          axes[i].braking = braking;
+        });
         x.finish();
       });
     a.finish();
@@ -116,11 +150,12 @@ void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, Worl
   });
   o.finish();
   if (truth.axes)
-    for (auto& a : *truth.axes) {
-      if (a.mode != AxisDynamics::Mode::ConstantRate) continue;
-      if (a.acceleration_mm_s2 < 0) a.acceleration_mm_s2 = m.max_acceleration_mm_s2;
-      if (a.jerk_mm_s3 < 0) a.jerk_mm_s3 = m.max_jerk_mm_s3;
-    }
+    for (auto& a : *truth.axes)
+      for (RampLaw* law : {static_cast<RampLaw*>(&a), a.braking ? &*a.braking : nullptr}) {
+        if (!law || law->mode != RampLaw::Mode::ConstantRate) continue;
+        if (law->acceleration_mm_s2 < 0) law->acceleration_mm_s2 = m.max_acceleration_mm_s2;
+        if (law->jerk_mm_s3 < 0) law->jerk_mm_s3 = m.max_jerk_mm_s3;
+      }
   for (int i = 0; i < 3; ++i) {
     if (m.home_mm[i] < m.travel[i].min_mm || m.home_mm[i] > m.travel[i].max_mm)
       fail(o.at("home_mm"), "outside the axis travel");

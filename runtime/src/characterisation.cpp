@@ -6,12 +6,14 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <sstream>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/jerk_limited_ramp.hpp"
 #include "metron/stdlib/json_reader.hpp"
 
@@ -33,10 +35,120 @@ double rms_relative(const std::vector<RampSample>& s, const std::function<double
   return std::sqrt(sum / static_cast<double>(std::max<std::size_t>(1, s.size())));
 }
 
-// Fits both acceleration models to the timed moves; the constant-time model is chosen when it
-// explains the data within 0.5 % (a constant-rate fit can imitate it only with an unbounded
-// acceleration).
-AxisAcceleration fit_axis(std::vector<RampSample> samples) {
+// Tangents of the monotone cubic through the samples (Td over feed): the weighted harmonic mean
+// of the neighbouring secants, zero where the data turn (Fritsch and Butland 1984, as PCHIP),
+// one-sided secants at the ends; then every interval's pair is limited to the region where its
+// Hermite cubic stays monotone (Fritsch and Carlson, SIAM J. Numer. Anal. 17 (1980), alpha^2 +
+// beta^2 <= 9), so the curve never overshoots the measurements.
+std::vector<double> monotone_tangents(const std::vector<RampSample>& p) {
+  const std::size_t n = p.size();
+  std::vector<double> h(n - 1), d(n - 1), m(n);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    h[k] = p[k + 1].feed_mm_s - p[k].feed_mm_s;
+    d[k] = (p[k + 1].ramp_time_s - p[k].ramp_time_s) / h[k];
+  }
+  m.front() = d.front();
+  m.back() = d.back();
+  for (std::size_t k = 1; k + 1 < n; ++k)
+    m[k] = d[k - 1] * d[k] <= 0 ? 0
+                                : 3 * (h[k - 1] + h[k]) / ((2 * h[k] + h[k - 1]) / d[k - 1] + (h[k] + 2 * h[k - 1]) / d[k]);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    if (d[k] == 0) {
+      m[k] = m[k + 1] = 0;
+      continue;
+    }
+    double alpha = m[k] / d[k], beta = m[k + 1] / d[k];
+    if (alpha < 0) m[k] = alpha = 0;
+    if (beta < 0) m[k + 1] = beta = 0;
+    if (alpha * alpha + beta * beta > 9) {
+      const double tau = 3 / std::hypot(alpha, beta);
+      m[k] = tau * alpha * d[k];
+      m[k + 1] = tau * beta * d[k];
+    }
+  }
+  return m;
+}
+
+// The model-free Td(V): the monotone cubic between the first and last timed feed. Beyond them
+// the rule never shortens the acceleration distance of a machine whose ramp time does not grow
+// as the feed falls and whose mean acceleration V / Td does not fall as the feed grows (both
+// families and the tabulated ramps of docs/world.md): Td held below the slowest feed, Td growing
+// in proportion to the feed above the fastest (D1 with its square).
+double interpolated_ramp_s(const std::vector<RampSample>& p, double feed) {
+  if (p.empty()) return 0;
+  if (feed <= p.front().feed_mm_s || p.size() == 1) return p.front().ramp_time_s;
+  if (feed >= p.back().feed_mm_s) return p.back().ramp_time_s * feed / p.back().feed_mm_s;
+  const std::vector<double> m = monotone_tangents(p);
+  const auto hi = std::upper_bound(p.begin(), p.end(), feed, [](double v, const RampSample& s) { return v < s.feed_mm_s; });
+  const std::size_t k = static_cast<std::size_t>(hi - p.begin()) - 1;
+  const double h = p[k + 1].feed_mm_s - p[k].feed_mm_s, t = (feed - p[k].feed_mm_s) / h;
+  // Cubic Hermite basis on [0, 1].
+  const double h00 = (1 + 2 * t) * (1 - t) * (1 - t), h10 = t * (1 - t) * (1 - t), h01 = t * t * (3 - 2 * t),
+               h11 = t * t * (t - 1);
+  return h00 * p[k].ramp_time_s + h10 * h * m[k] + h01 * p[k + 1].ramp_time_s + h11 * h * m[k + 1];
+}
+
+// How well the interpolation predicts what it did not see: each inner sample from the others
+// (an interpolant passes through every sample, so its own residual says nothing). Noise or
+// inconsistent timings, and shapes the feeds sample too coarsely, make it large.
+double leave_one_out_rms(const std::vector<RampSample>& s) {
+  if (s.size() < 3) return inf;
+  double sum = 0;
+  for (std::size_t k = 1; k + 1 < s.size(); ++k) {
+    std::vector<RampSample> rest = s;
+    rest.erase(rest.begin() + static_cast<std::ptrdiff_t>(k));
+    const double r = (interpolated_ramp_s(rest, s[k].feed_mm_s) - s[k].ramp_time_s) / s[k].ramp_time_s;
+    sum += r * r;
+  }
+  return std::sqrt(sum / static_cast<double>(s.size() - 2));
+}
+
+// Tb / Td at `feed` from the timed stops: linear between them, held beyond them.
+double braking_share(const AxisAcceleration& a, double feed) {
+  const auto share = [&](const RampSample& s) { return s.ramp_time_s / a.ramp_time_s(s.feed_mm_s); };
+  const auto& st = a.stops;
+  if (feed <= st.front().feed_mm_s) return share(st.front());
+  if (feed >= st.back().feed_mm_s) return share(st.back());
+  const auto hi = std::upper_bound(st.begin(), st.end(), feed, [](double v, const RampSample& s) { return v < s.feed_mm_s; });
+  const auto lo = hi - 1;
+  const double t = (feed - lo->feed_mm_s) / (hi->feed_mm_s - lo->feed_mm_s);
+  return share(*lo) + t * (share(*hi) - share(*lo));
+}
+
+const char* mode_name(AxisAcceleration::Mode m) {
+  return m == AxisAcceleration::Mode::ConstantTime ? "constant_time"
+         : m == AxisAcceleration::Mode::ConstantRate ? "constant_rate"
+                                                      : "interpolated";
+}
+
+std::string fault_text(const machine::Response& r) {
+  return r.fault ? fmt::format("{}: {}", machine::to_string(r.fault->kind), r.fault->message) : "fault";
+}
+
+// Executes one command and returns its response (a fault is returned as a response too).
+machine::Response run1(machine::Machine& m, machine::Command c) {
+  m.submit(std::move(c));
+  auto rs = m.execute();
+  return rs.empty() ? machine::Response{} : rs.front();
+}
+
+double mean_of(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); }
+
+const char* axis_name(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
+
+}  // namespace
+
+tl::expected<AxisAcceleration, std::string> fit_acceleration(std::vector<RampSample> samples, const RampFitSettings& settings) {
+  std::sort(samples.begin(), samples.end(), [](const RampSample& a, const RampSample& b) { return a.feed_mm_s < b.feed_mm_s; });
+  if (samples.size() < 3) return tl::unexpected(fmt::format("{} timed feeds, at least 3 needed", samples.size()));
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const RampSample& x = samples[k];
+    if (!(x.feed_mm_s > 0 && std::isfinite(x.feed_mm_s) && x.ramp_time_s > 0 && std::isfinite(x.ramp_time_s)))
+      return tl::unexpected(fmt::format("sample {}: expected a positive feed and ramp time, got {:g} mm/s, {:g} s", k,
+                                        x.feed_mm_s, x.ramp_time_s));
+    if (k > 0 && !(x.feed_mm_s > samples[k - 1].feed_mm_s))
+      return tl::unexpected(fmt::format("two samples at {:g} mm/s", x.feed_mm_s));
+  }
   AxisAcceleration a;
   a.samples = std::move(samples);
   double mean = 0;
@@ -62,78 +174,111 @@ AxisAcceleration fit_axis(std::vector<RampSample> samples) {
   a.acceleration_mm_s2 = std::pow(10, la_best);
   a.jerk_mm_s3 = std::pow(10, lj_best);
   a.time_s = mean;
-  if (rms_time < 0.005 && rms_time <= best * 1.5 + 0.002) {
-    a.mode = AxisAcceleration::Mode::ConstantTime;
-    a.fit_rms_relative = rms_time;
-  } else {
-    a.mode = AxisAcceleration::Mode::ConstantRate;
-    a.fit_rms_relative = best;
-  }
-  return a;
+  const double loo = leave_one_out_rms(a.samples);
+  const auto use = [&](AxisAcceleration::Mode m) {
+    a.mode = m;
+    a.fit_rms_relative = m == AxisAcceleration::Mode::ConstantTime ? rms_time : m == AxisAcceleration::Mode::ConstantRate ? best : loo;
+    return a;
+  };
+  if (settings.only) return use(*settings.only);
+  // The simplest model within its threshold. Constant time yields to constant rate when that fits
+  // markedly better (a constant-rate fit can imitate constant time only with an unbounded
+  // acceleration, so near-flat data stay constant time).
+  const double family = settings.family_rms_relative;
+  if (rms_time <= family && rms_time <= best * 1.5 + 0.002) return use(AxisAcceleration::Mode::ConstantTime);
+  if (best <= family) return use(AxisAcceleration::Mode::ConstantRate);
+  if (loo <= settings.interpolation_rms_relative) return use(AxisAcceleration::Mode::Interpolated);
+  return tl::unexpected(fmt::format(
+      "the timed moves fit no acceleration model: constant time {:.2f} %, constant rate {:.2f} % (threshold {:.2f} %), "
+      "interpolation {:.2f} % leave-one-out (threshold {:.2f} %): noisy or inconsistent timings",
+      100 * rms_time, 100 * best, 100 * family, 100 * loo, 100 * settings.interpolation_rms_relative));
 }
-
-std::string fault_text(const machine::Response& r) {
-  return r.fault ? fmt::format("{}: {}", machine::to_string(r.fault->kind), r.fault->message) : "fault";
-}
-
-// Executes one command and returns its response (a fault is returned as a response too).
-machine::Response run1(machine::Machine& m, machine::Command c) {
-  m.submit(std::move(c));
-  auto rs = m.execute();
-  return rs.empty() ? machine::Response{} : rs.front();
-}
-
-double mean_of(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); }
-
-const char* axis_name(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
-
-}  // namespace
 
 double AxisAcceleration::ramp_time_s(double feed_mm_s) const {
   if (mode == Mode::ConstantTime) return time_s;
+  if (mode == Mode::Interpolated) return interpolated_ramp_s(samples, feed_mm_s);
   return constant_rate_ramp_s(std::max(feed_mm_s, 1e-9), acceleration_mm_s2, jerk_mm_s3);
 }
 
-double MachineCharacterisation::ramp_time_s(const Vec3& direction, double feed_mm_s) const {
-  // The path's ramp is set by its most restrictive axis, as the controller plans it: per axis
-  // the path acceleration and jerk limits a_i/|u_i|, j_i/|u_i| (constant rate) or the axis's
-  // ramp time (constant time).
+double AxisAcceleration::acceleration_time_s(double feed_mm_s) const {
+  // A rest-to-rest move's Td is the mean of accelerating and braking: Ta = 2 Td - Tb.
+  if (!asymmetric || stops.empty()) return ramp_time_s(feed_mm_s);
+  return (2 - braking_share(*this, feed_mm_s)) * ramp_time_s(feed_mm_s);
+}
+
+double AxisAcceleration::braking_time_s(double feed_mm_s) const {
+  if (!asymmetric || stops.empty()) return ramp_time_s(feed_mm_s);
+  return braking_share(*this, feed_mm_s) * ramp_time_s(feed_mm_s);
+}
+
+namespace {
+
+// A path time along `direction` at path feed `feed`: the slowest axis involved dominates. Axes
+// of the two families with symmetric braking combine as the controller plans them: per axis the
+// path acceleration and jerk limits a_i/|u_i|, j_i/|u_i| (constant rate) or the axis's ramp time
+// (constant time). Any other axis contributes its own time at its own feed |u_i| V (`time`: its
+// acceleration or braking time).
+double path_time_s(const std::array<AxisAcceleration, 3>& axes, const Vec3& direction, double feed,
+                   double (AxisAcceleration::*time)(double) const) {
   double a = inf, j = inf, t = 0;
   for (int i = 0; i < 3; ++i) {
     const double c = std::abs(direction[i]);
     if (c < 1e-9) continue;
     const AxisAcceleration& ax = axes[static_cast<std::size_t>(i)];
-    if (ax.mode == AxisAcceleration::Mode::ConstantTime) t = std::max(t, ax.time_s);
+    if (ax.asymmetric || ax.mode == AxisAcceleration::Mode::Interpolated) t = std::max(t, (ax.*time)(c * feed));
+    else if (ax.mode == AxisAcceleration::Mode::ConstantTime) t = std::max(t, ax.time_s);
     else a = std::min(a, ax.acceleration_mm_s2 / c), j = std::min(j, ax.jerk_mm_s3 / c);
   }
-  const double rate = std::isfinite(a) ? constant_rate_ramp_s(std::max(feed_mm_s, 1e-9), a, j) : 0;
+  const double rate = std::isfinite(a) ? constant_rate_ramp_s(std::max(feed, 1e-9), a, j) : 0;
   return std::max(rate, t);
 }
 
+bool any_asymmetric(const std::array<AxisAcceleration, 3>& axes, const Vec3& direction) {
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(direction[i]) >= 1e-9 && axes[static_cast<std::size_t>(i)].asymmetric) return true;
+  return false;
+}
+
+}  // namespace
+
+double MachineCharacterisation::ramp_time_s(const Vec3& direction, double feed_mm_s) const {
+  return path_time_s(axes, direction, feed_mm_s, &AxisAcceleration::acceleration_time_s);
+}
+
+double MachineCharacterisation::braking_time_s(const Vec3& direction, double feed_mm_s) const {
+  return path_time_s(axes, direction, feed_mm_s, &AxisAcceleration::braking_time_s);
+}
+
 double MachineCharacterisation::acceleration_distance_mm(const Vec3& direction, double feed_mm_s) const {
-  return feed_mm_s * ramp_time_s(direction, feed_mm_s) / 2;  // SEEDS.md 3: D1 = V * Td / 2
+  return feed_mm_s * ramp_time_s(direction, feed_mm_s) / 2;  // SEEDS.md 3: D1 = V * Td / 2 (Ta when asymmetric)
 }
 
 double MachineCharacterisation::stop_distance_mm(const Vec3& direction, double feed_mm_s) const {
   // SEEDS.md 3: pre-travel + feed x (interface + controller delays, worst-case latency and the
   // interpolator's next cycle) + the braking distance. The speed never exceeds the feed on the
-  // way to it, so the delay term holds for a contact anywhere on the ramp. Braking mirrors the
-  // ramp (V * Td / 2 from the feed); a contact while still accelerating must first ramp the
-  // acceleration down, which a jerk-limited ramp does in at most half its time (the ramp's
-  // acceleration rises and falls), at a speed still at most V: at most V * Td / 2 more.
-  // Hence V * Td in all, whatever the ramp's family (docs/touch-trigger.md).
-  return pre_travel_mm + feed_mm_s * (response.delay_s + response.jitter_s + dt_s) +
-         2 * acceleration_distance_mm(direction, feed_mm_s);
+  // way to it, so the delay term holds for a contact anywhere on the ramp. Braking from the feed
+  // covers V * Tb / 2; a contact while still accelerating must first ramp the acceleration down
+  // (at the ramp's own jerk, docs/world.md), which takes at most half the ramp's time Ta at a
+  // speed still at most V: at most V * Ta / 2 more. Hence V (Ta + Tb) / 2 in all, whatever the
+  // ramp's family; it is V * Td, what timed rest-to-rest moves measure, so it stays an upper
+  // bound when braking was not timed (docs/touch-trigger.md).
+  const double delays = pre_travel_mm + feed_mm_s * (response.delay_s + response.jitter_s + dt_s);
+  if (!any_asymmetric(axes, direction)) return delays + 2 * acceleration_distance_mm(direction, feed_mm_s);
+  return delays + feed_mm_s * (ramp_time_s(direction, feed_mm_s) + braking_time_s(direction, feed_mm_s)) / 2;
 }
 
 double MachineCharacterisation::move_time_s(const Vec3& direction, double length_mm, double feed_mm_s) const {
   if (!(length_mm > 0)) return 0;
-  // Accelerating to v and braking from it covers v * Td(v) (two ramps of D1 = v Td / 2 each).
-  const auto ramps_mm = [&](double v) { return v * ramp_time_s(direction, v); };
-  if (ramps_mm(feed_mm_s) <= length_mm) return length_mm / feed_mm_s + ramp_time_s(direction, feed_mm_s);
+  // The mean ramp Td = (Ta + Tb) / 2: accelerating to v and braking from it covers v * Td(v).
+  const auto td = [&](double v) {
+    return any_asymmetric(axes, direction) ? (ramp_time_s(direction, v) + braking_time_s(direction, v)) / 2
+                                           : ramp_time_s(direction, v);
+  };
+  const auto ramps_mm = [&](double v) { return v * td(v); };
+  if (ramps_mm(feed_mm_s) <= length_mm) return length_mm / feed_mm_s + td(feed_mm_s);
   double lo = 0, hi = feed_mm_s;
   for (int i = 0; i < 60; ++i) (ramps_mm((lo + hi) / 2) < length_mm ? lo : hi) = (lo + hi) / 2;
-  return 2 * ramp_time_s(direction, hi);
+  return 2 * td(hi);
 }
 
 double MachineCharacterisation::max_feed_mm_s(const Vec3& direction) const {
@@ -222,7 +367,7 @@ TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double
 
 tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::Machine& machine, int axis,
                                                                      const std::vector<double>& feeds, int dither,
-                                                                     double* clock_resolution_s) {
+                                                                     double* clock_resolution_s, const RampFitSettings& fit) {
   const Vec3 e = Vec3::Unit(axis);
   std::uint64_t tag = 1u << 20;
   double sign = 1;
@@ -261,8 +406,8 @@ tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::M
   if (!std::isfinite(dt)) dt = 0;
   if (clock_resolution_s) *clock_resolution_s = dt;
 
-  std::vector<RampSample> samples;
-  for (double feed : feeds) {
+  // One feed: Td from dithered out-and-back moves; none when the machine clamps the feed.
+  const auto time_feed = [&](double feed) -> tl::expected<std::optional<RampSample>, std::string> {
     // Long enough to cruise (the ramp is well under half a second at any feed of interest).
     const double base = feed * 0.6 + 5;
     std::vector<double> td;
@@ -277,16 +422,40 @@ tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::M
     }
     const double ramp = mean_of(td) - dt / 2;
     // A feed above the machine's speed limit is clamped by the controller: the apparent Td then
-    // grows with the length (Dc (1/Vmax - 1/V)). One move of twice the length tells; such feeds
-    // (and faster ones) are dropped.
+    // grows with the length (Dc (1/Vmax - 1/V)). One move of twice the length tells.
     auto check = timed(2 * base, feed);
     if (!check) return tl::unexpected(check.error());
     const double ramp2 = mean_of({(*check)[0] - 2 * base / feed, (*check)[1] - 2 * base / feed});
-    if (std::abs(ramp2 - ramp) > 0.01 * ramp + 1.5 * dt) break;
-    samples.push_back({feed, ramp});
+    if (std::abs(ramp2 - ramp) > 0.01 * ramp + 1.5 * dt) return std::optional<RampSample>{};
+    return std::optional<RampSample>{RampSample{feed, ramp}};
+  };
+
+  std::vector<RampSample> samples;
+  for (double feed : feeds) {
+    auto s = time_feed(feed);
+    if (!s) return tl::unexpected(s.error());
+    if (!*s) break;  // clamped: this feed and faster ones are dropped
+    samples.push_back(**s);
   }
   if (samples.size() < 3) return tl::unexpected(fmt::format("too few usable timing feeds on the {} axis", axis_name(axis)));
-  return fit_axis(std::move(samples));
+  auto fitted = fit_acceleration(samples, fit);
+  // No family fits: the model-free interpolation is only as good as the feeds sample the shape,
+  // so feeds halfway (geometrically) between the timed ones are timed too, at most twice.
+  for (int round = 0; round < 2 && !fit.only; ++round) {
+    const bool family = fitted && fitted->mode != AxisAcceleration::Mode::Interpolated;
+    if (family || (fitted && fitted->fit_rms_relative <= fit.family_rms_relative)) break;
+    std::sort(samples.begin(), samples.end(), [](const RampSample& a, const RampSample& b) { return a.feed_mm_s < b.feed_mm_s; });
+    std::vector<RampSample> more;
+    for (std::size_t k = 0; k + 1 < samples.size(); ++k) {
+      auto s = time_feed(std::sqrt(samples[k].feed_mm_s * samples[k + 1].feed_mm_s));
+      if (!s) return tl::unexpected(s.error());
+      if (*s) more.push_back(**s);
+    }
+    samples.insert(samples.end(), more.begin(), more.end());
+    fitted = fit_acceleration(samples, fit);
+  }
+  if (!fitted) return tl::unexpected(fmt::format("{} axis: {}", axis_name(axis), fitted.error()));
+  return fitted;
 }
 
 namespace {
@@ -313,7 +482,7 @@ tl::expected<void, std::string> measure_axes(machine::Machine& machine, const Ch
                                              const Say& say, MachineCharacterisation& c) {
   for (int i = 0; i < 3; ++i) {
     say(fmt::format("timing moves on the {} axis ...", axis_name(i)));
-    auto a = measure_axis_acceleration(machine, i, settings.timing_feeds_mm_s, settings.dither, &c.dt_s);
+    auto a = measure_axis_acceleration(machine, i, settings.timing_feeds_mm_s, settings.dither, &c.dt_s, settings.ramp_fit);
     if (!a) return tl::unexpected(a.error());
     c.axes[static_cast<std::size_t>(i)] = *a;
   }
@@ -453,6 +622,128 @@ tl::expected<void, std::string> measure_touch_response(Bench& bench, const Chara
   return {};
 }
 
+// One timed stop from constant feed `v` (docs/touch-trigger.md, "braking"): a touch along -n on
+// `surface` whose contact comes after its ramp, the controller clock from the latch to the end of
+// the retract, and a reference move along n timed like the retract. The controller brakes at its
+// next cycle after the latch (a lag delta the clock's cycle gives), covers V delta + V Tb / 2
+// (a stop's speed falls point-symmetrically) and retracts L = that + retract:
+//   tau = delta + Tb + T(L),  T(L) - T(Lref) = (L - Lref) / Vp  (both cruise at Vp),
+// the stop, the retract and the reference each rounded up to whole cycles (dt / 2 net on average).
+tl::expected<double, std::string> timed_stop(Bench& bench, const MachineCharacterisation& c, const AxisAcceleration& ax,
+                                             const Vec3& surface, const Vec3& n, double v, double retract_mm,
+                                             double positioning_mm_s, double dither) {
+  machine::PtMeas p;
+  p.nominal_mm = surface;
+  p.normal = n;
+  // Ta <= 2 Td whatever the braking: the contact comes at the feed.
+  p.approach_mm = 1.5 * v * ax.ramp_time_s(v) + 0.3;
+  p.search_mm = v * ax.ramp_time_s(v) + c.over_travel_mm + 0.5;
+  p.retract_mm = retract_mm;
+  p.speed_mm_s = v;
+  const auto r = run1(bench.machine, {bench.tag++, p});
+  if (r.status == machine::Response::Status::Fault || !r.hit)
+    return tl::unexpected(fmt::format("timed stop at {:.1f} mm/s: {}", v, fault_text(r)));
+  const double dt = c.dt_s, latch = r.hit->time_s;
+  const double delta = std::ceil(latch / dt - 1e-9) * dt - latch;
+  const double tau = r.end_time_s - latch;
+  const Vec3 at = bench.machine.state().position_mm;
+  const double lref = retract_mm + v * (delta + ax.ramp_time_s(v) / 2) + positioning_mm_s * dt * dither;
+  double t_ref = 0;
+  for (const Vec3& to : {Vec3(at + lref * n), at}) {
+    const auto m = run1(bench.machine, {bench.tag++, machine::GoTo{to, std::nullopt}});
+    if (m.status == machine::Response::Status::Fault) return tl::unexpected("timed stop reference: " + fault_text(m));
+    t_ref += (m.end_time_s - m.start_time_s) / 2;
+  }
+  const double vp = positioning_mm_s;
+  return (tau - delta - t_ref - (v * delta + retract_mm - lref) / vp - dt / 2) / (1 + v / (2 * vp));
+}
+
+// 3b. Braking per axis (docs/touch-trigger.md, "braking"): stops timed after touches along each
+// axis on the reference sphere (its qualification points give the sphere), at feeds up to the
+// preliminary maximum. An axis whose stops differ from the timed moves' mean ramp Td by more
+// than their timing uncertainty brakes by its own law: Tb measured, Ta = 2 Td - Tb.
+tl::expected<void, std::string> time_stops(Bench& bench, MachineCharacterisation& c) {
+  const machine::MachineState st = bench.machine.state();
+  if (!st.tool || st.tool->qualification_centres_mm.size() < 4) {
+    bench.say("no qualification points: braking not timed (taken to mirror the acceleration)");
+    return {};
+  }
+  fitting::FitOptions options;
+  options.inner = false;
+  const auto sphere = fitting::fit(fitting::Shape::Sphere, st.tool->qualification_centres_mm, options);
+  if (!sphere) {
+    bench.say("no sphere through the qualification points: braking not timed");
+    return {};
+  }
+  const Vec3 centre = sphere->position, home = st.position_mm;
+  const double centres_mm = sphere->diameter_mm / 2, r = st.tool->effective_radius_mm;
+  const double vp = st.positioning_feed_mm_s, safe_z = centre.z() + centres_mm + 10;
+  const auto go = [&](const Vec3& to) -> tl::expected<void, std::string> {
+    const auto m = run1(bench.machine, {bench.tag++, machine::GoTo{to, std::nullopt}});
+    if (m.status == machine::Response::Status::Fault) return tl::unexpected("timed stops: " + fault_text(m));
+    return {};
+  };
+  // Over the sphere, across, and down: every point here lies on or above its equator.
+  const auto route = [&](const Vec3& to) -> tl::expected<void, std::string> {
+    const Vec3 at = bench.machine.state().position_mm;
+    if (auto ok = go({at.x(), at.y(), std::max(safe_z, at.z())}); !ok) return ok;
+    if (auto ok = go({to.x(), to.y(), std::max(safe_z, at.z())}); !ok) return ok;
+    return go(to);
+  };
+  constexpr int bins = 4, per_bin = 6;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 n = Vec3::Unit(i);
+    AxisAcceleration& ax = c.axes[static_cast<std::size_t>(i)];
+    // A qualification point within 5 degrees of the axis tells that the sphere was probed there.
+    const bool probed = std::any_of(st.tool->qualification_centres_mm.begin(), st.tool->qualification_centres_mm.end(),
+                                    [&](const Vec3& q) { return (q - centre).normalized().dot(n) > std::cos(5 * std::numbers::pi / 180); });
+    const double top = 0.95 * c.max_feed_mm_s(-n);
+    if (!probed || !(top > 0)) continue;
+    bench.say(fmt::format("timing stops on the {} axis ...", axis_name(i)));
+    const Vec3 surface = centre + (centres_mm - r) * n;
+    // Long enough that the retract cruises at the positioning feed (its ramps cover Vp Td).
+    const double retract = vp * ax.ramp_time_s(vp) + 2;
+    // Within the timed moves' feeds where the protected ones allow: the comparison with Td holds
+    // only where Td was measured (below it Td is an upper bound).
+    const double lowest = std::min(std::max(ax.samples.front().feed_mm_s, 0.1 * top), top / 2);
+    if (auto ok = route(surface + (r + 1.5 * lowest * ax.ramp_time_s(lowest) + 0.3) * n); !ok) return ok;
+    ax.stops.clear();
+    for (int b = 0; b < bins; ++b) {
+      const double mid = lowest * std::pow(top / lowest, static_cast<double>(b) / (bins - 1));
+      // Feeds spread by +-5 % (and reference lengths over a cycle) spread the roundings.
+      double sum_v = 0, sum_t = 0;
+      for (int k = 0; k < per_bin; ++k) {
+        const double v = mid * (0.95 + 0.1 * k / (per_bin - 1));
+        auto tb = timed_stop(bench, c, ax, surface, n, v, retract, vp, static_cast<double>(k) / per_bin);
+        if (!tb) return tl::unexpected(tb.error());
+        sum_v += v, sum_t += *tb;
+      }
+      ax.stops.push_back({sum_v / per_bin, sum_t / per_bin});
+    }
+    if (auto ok = go({bench.machine.state().position_mm.x(), bench.machine.state().position_mm.y(),
+                      std::max(safe_z, bench.machine.state().position_mm.z())});
+        !ok)
+      return ok;
+    // The stops' uncertainty: the roundings (a cycle and a half at worst) and 3 % of Td.
+    ax.asymmetric = false;
+    for (const RampSample& sp : ax.stops) {
+      const double td = ax.ramp_time_s(sp.feed_mm_s);
+      if (sp.feed_mm_s >= ax.samples.front().feed_mm_s && std::abs(sp.ramp_time_s - td) > 1.5 * c.dt_s + 0.03 * td)
+        ax.asymmetric = true;
+    }
+    if (!ax.asymmetric) continue;
+    for (const RampSample& sp : ax.stops) {
+      // Ta = 2 Td - Tb must stay positive (and Tb too): else the stops contradict the moves.
+      const double share = sp.ramp_time_s / ax.ramp_time_s(sp.feed_mm_s);
+      if (!(share > 0.05 && share < 1.95))
+        return tl::unexpected(fmt::format("{} axis: a stop from {:.1f} mm/s took {:.1f} ms against a mean ramp of {:.1f} ms: "
+                                          "inconsistent timings",
+                                          axis_name(i), sp.feed_mm_s, 1e3 * sp.ramp_time_s, 1e3 * ax.ramp_time_s(sp.feed_mm_s)));
+    }
+  }
+  return route(home);
+}
+
 // 4. Limits and strategy.
 tl::expected<void, std::string> choose_limits_and_strategy(MachineCharacterisation& c) {
   c.max_probe_feed_mm_s = inf;
@@ -555,6 +846,8 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
   auto target = qualify_touch_point(bench, ball_diameter_mm, c);
   if (!target) return tl::unexpected(target.error());
   if (auto ok = measure_touch_response(bench, settings, *target, c); !ok) return tl::unexpected(ok.error());
+  if (settings.time_stops)
+    if (auto ok = time_stops(bench, c); !ok) return tl::unexpected(ok.error());
   if (auto ok = choose_limits_and_strategy(c); !ok) return tl::unexpected(ok.error());
   if (auto ok = choose_cycle_by_timing(bench, settings, *target, c); !ok) return tl::unexpected(ok.error());
   return c;
@@ -568,12 +861,17 @@ json to_json(const MachineCharacterisation& c) {
     const auto& a = c.axes[static_cast<std::size_t>(i)];
     json samples = json::array();
     for (const auto& s : a.samples) samples.push_back({{"feed_mm_s", s.feed_mm_s}, {"ramp_time_s", s.ramp_time_s}});
-    json ax = {{"mode", a.mode == AxisAcceleration::Mode::ConstantTime ? "constant_time" : "constant_rate"},
+    json ax = {{"mode", mode_name(a.mode)},
                {"time_s", a.time_s},
                {"acceleration_mm_s2", a.acceleration_mm_s2},
                {"jerk_mm_s3", a.jerk_mm_s3},
                {"fit_rms_relative", a.fit_rms_relative},
                {"samples", samples}};
+    if (!a.stops.empty()) {
+      json stops = json::array();
+      for (const auto& s : a.stops) stops.push_back({{"feed_mm_s", s.feed_mm_s}, {"stop_time_s", s.ramp_time_s}});
+      ax["braking"] = {{"asymmetric", a.asymmetric}, {"stops", stops}};
+    }
     axes[axis_name(i)] = ax;
   }
   json touches = json::array();
@@ -582,7 +880,7 @@ json to_json(const MachineCharacterisation& c) {
                        {"range_mm", s.range_mm}, {"midrange_mm", s.midrange_mm}, {"stddev_mm", s.stddev_mm}});
   return {
       {"format", "metron-touch-characterisation"},
-      {"version", 1},
+      {"version", 2},
       {"world", c.world},
       {"dt_s", c.dt_s},
       {"axes", axes},
@@ -634,16 +932,20 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     MachineCharacterisation c;
     sj::Object o(j, "");
     o.get("format", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"metron-touch-characterisation"}); });
-    o.read("version", [](const json& v, const std::string& p) { sj::integer(v, p, 1, 1); });
+    // Version 1 files (before the interpolated model and timed stops) read as they are.
+    o.read("version", [](const json& v, const std::string& p) { sj::integer(v, p, 1, 2); });
     o.read("world", [&](const json& v, const std::string& p) { c.world = sj::string(v, p); });
     c.dt_s = o.get("dt_s", sj::positive);
     sj::Object axes(o.required("axes"), o.at("axes"));
     for (int i = 0; i < 3; ++i) {
       sj::Object ax(axes.required(axis_name(i)), axes.at(axis_name(i)));
       auto& a = c.axes[static_cast<std::size_t>(i)];
-      const std::string mode =
-          ax.get("mode", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"constant_time", "constant_rate"}); });
-      a.mode = mode == "constant_time" ? AxisAcceleration::Mode::ConstantTime : AxisAcceleration::Mode::ConstantRate;
+      const std::string mode = ax.get("mode", [](const json& v, const std::string& p) {
+        return sj::one_of(v, p, {"constant_time", "constant_rate", "interpolated"});
+      });
+      a.mode = mode == "constant_time"   ? AxisAcceleration::Mode::ConstantTime
+               : mode == "constant_rate" ? AxisAcceleration::Mode::ConstantRate
+                                         : AxisAcceleration::Mode::Interpolated;
       a.time_s = ax.get("time_s", sj::positive);
       a.acceleration_mm_s2 = ax.get("acceleration_mm_s2", sj::positive);
       a.jerk_mm_s3 = ax.get("jerk_mm_s3", sj::positive);
@@ -655,6 +957,36 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
           a.samples.push_back({s.get("feed_mm_s", sj::positive), s.get("ramp_time_s", sj::number)});
           s.finish();
         }
+      });
+      // The interpolation is its samples: increasing feeds, positive times.
+      if (a.mode == AxisAcceleration::Mode::Interpolated) {
+        const std::string p = ax.at("samples");
+        if (a.samples.size() < 2) sj::fail(p, "an interpolated axis needs at least two samples");
+        for (std::size_t k = 0; k < a.samples.size(); ++k) {
+          if (!(a.samples[k].ramp_time_s > 0)) sj::fail(p + "/" + std::to_string(k) + "/ramp_time_s", "expected a positive number");
+          if (k > 0 && !(a.samples[k].feed_mm_s > a.samples[k - 1].feed_mm_s))
+            sj::fail(p + "/" + std::to_string(k) + "/feed_mm_s", "expected feeds in increasing order");
+        }
+      }
+      ax.read("braking", [&](const json& v, const std::string& p) {
+        sj::Object b(v, p);
+        b.read("asymmetric", [&](const json& x, const std::string& q) { a.asymmetric = sj::boolean(x, q); });
+        const json& stops = b.required("stops");
+        if (!stops.is_array()) sj::fail(b.at("stops"), "expected an array");
+        for (std::size_t k = 0; k < stops.size(); ++k) {
+          const std::string q = b.at("stops") + "/" + std::to_string(k);
+          sj::Object st(stops[k], q);
+          a.stops.push_back({st.get("feed_mm_s", sj::positive), st.get("stop_time_s", sj::positive)});
+          st.finish();
+          if (k > 0 && !(a.stops[k].feed_mm_s > a.stops[k - 1].feed_mm_s)) sj::fail(q + "/feed_mm_s", "expected feeds in increasing order");
+          // Ta = 2 Td - Tb must stay positive, and Tb too.
+          const double share = a.stops[k].ramp_time_s / a.ramp_time_s(a.stops[k].feed_mm_s);
+          if (a.asymmetric && !(share > 0.05 && share < 1.95))
+            sj::fail(q + "/stop_time_s", fmt::format("a stop of {:g} s against a mean ramp of {:g} s: inconsistent",
+                                                     a.stops[k].ramp_time_s, a.ramp_time_s(a.stops[k].feed_mm_s)));
+        }
+        if (a.asymmetric && a.stops.empty()) sj::fail(b.at("stops"), "an asymmetric axis needs its timed stops");
+        b.finish();
       });
       ax.finish();
     }
@@ -728,9 +1060,18 @@ std::string format_characterisation(const MachineCharacterisation& c) {
     const auto& a = c.axes[static_cast<std::size_t>(i)];
     if (a.mode == AxisAcceleration::Mode::ConstantTime)
       o << fmt::format("  {}: constant time, Td = {:.4f} s (fit rms {:.2f} %)\n", axis_name(i), a.time_s, 100 * a.fit_rms_relative);
-    else
+    else if (a.mode == AxisAcceleration::Mode::ConstantRate)
       o << fmt::format("  {}: constant rate, a = {:.0f} mm/s^2, j = {:.0f} mm/s^3 (fit rms {:.2f} %)\n", axis_name(i),
                        a.acceleration_mm_s2, a.jerk_mm_s3, 100 * a.fit_rms_relative);
+    else
+      o << fmt::format("  {}: interpolated (no family fits), monotone cubic through {} feeds (leave-one-out rms {:.2f} %)\n",
+                       axis_name(i), a.samples.size(), 100 * a.fit_rms_relative);
+    if (a.asymmetric) {
+      o << "     braking differs (timed stops): feed mm/s  Tb ms  Td ms  Ta ms\n";
+      for (const auto& s : a.stops)
+        o << fmt::format("     {:28.1f} {:6.2f} {:6.2f} {:6.2f}\n", s.feed_mm_s, 1e3 * s.ramp_time_s,
+                         1e3 * a.ramp_time_s(s.feed_mm_s), 1e3 * a.acceleration_time_s(s.feed_mm_s));
+    }
     o << "     feed mm/s  Td ms   D1 mm\n";
     for (const auto& s : a.samples)
       o << fmt::format("     {:9.1f} {:6.2f} {:7.4f}\n", s.feed_mm_s, 1e3 * s.ramp_time_s, s.feed_mm_s * s.ramp_time_s / 2);

@@ -473,7 +473,7 @@ TEST_P(RampProtection, MaximumFeedIsSafeAnywhereOnTheRamp) {
 
 INSTANTIATE_TEST_SUITE_P(Worlds, RampProtection,
                          ::testing::Values("touch_scanned_4ms.json", "touch_const_time.json", "touch_mixed.json",
-                                           "touch_latched.json"));
+                                           "touch_latched.json", "touch_tabulated.json", "touch_braking.json"));
 
 }  // namespace
 

@@ -14,9 +14,12 @@ namespace metron::machine::detail {
 // the probe's over-travel switch is checked.
 tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, const Vec3& u, double len, double feed, double search_mm,
                                                          std::optional<double> reach_mm) {
+  const double move_feed = reach_mm ? positioning_feed : feed;
+  const MotionLimits move_limits = limits(u, move_feed);
   const MotionProfile profile =
-      reach_mm ? MotionProfile::reach_feed(*reach_mm, len, std::min(feed, config.max_speed_mm_s), limits(u, positioning_feed))
-               : MotionProfile::rest_to_rest(len, limits(u, feed));
+      reach_mm ? MotionProfile::reach_feed(*reach_mm, len, std::min(feed, config.max_speed_mm_s), move_limits,
+                                           braking(u, move_feed))
+               : MotionProfile::rest_to_rest(len, move_limits, braking(u, move_feed));
   const double t_end = profile.duration_s();
   const std::int64_t n_cycles = cycles_for(t_end), c0 = cycle;
   const double t0_abs = now();
@@ -52,7 +55,11 @@ tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, cons
   double stop_s = len, stop_t = t_end;
   if (brake < t_end) {
     const MotionState at_brake = profile.at(brake);
-    const MotionProfile stop = MotionProfile::stop(at_brake, braking_limits(u, at_brake.speed_mm_s));
+    // An axis with its own braking law stops by it (at the machine's limits, as braking_limits),
+    // after ending a rising speed at the move's jerk.
+    const auto own = sim.motion_braking(config, u, at_brake.speed_mm_s, std::nullopt);
+    const MotionProfile stop = own ? MotionProfile::stop(at_brake, move_limits, own)
+                                   : MotionProfile::stop(at_brake, braking_limits(u, at_brake.speed_mm_s));
     stop_s = std::min(stop.end_position_mm(), len);
     stop_t = brake + stop.duration_s();
     for (std::int64_t k = cycles_for(*signal); static_cast<double>(k) * config.dt_s < stop_t; ++k) {

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <optional>
 #include <vector>
 
 namespace metron::machine {
@@ -9,6 +10,13 @@ struct MotionLimits {
   double speed_mm_s = 300;            ///< maximum path speed
   double acceleration_mm_s2 = 1000;   ///< maximum |acceleration|
   double jerk_mm_s3 = 10000;          ///< maximum |jerk|
+};
+
+/// Braking limits of a motion whose braking differs from its acceleration (an axis with its own
+/// braking law, docs/world.md); where none is given, braking mirrors the acceleration.
+struct BrakingLimits {
+  double deceleration_mm_s2 = 1000;   ///< maximum |deceleration|
+  double jerk_mm_s3 = 10000;          ///< maximum |jerk| while braking
 };
 
 /// Kinematic state along the path.
@@ -27,7 +35,8 @@ struct JerkPhase {
 /// A 1-D jerk-limited motion: a start state followed by phases of constant jerk, so position,
 /// speed and acceleration are exact polynomials in time (no integration error). The acceleration
 /// mode is "constant rate" (SEEDS.md 3): the acceleration ramps at the jerk limit up to the
-/// acceleration limit, so the acceleration distance grows with the square of the feed.
+/// acceleration limit, so the acceleration distance grows with the square of the feed. With
+/// `braking` limits every slow-down uses them instead (asymmetric axes).
 class MotionProfile {
  public:
   MotionProfile() = default;
@@ -36,17 +45,24 @@ class MotionProfile {
 
   /// Time-optimal rest-to-rest move over `distance_mm` (>= 0): the symmetric 7-phase S-curve
   /// (jerk up, constant acceleration, jerk down, cruise, and mirrored), with the peak speed
-  /// lowered when the distance is too short to reach `limits.speed_mm_s`.
-  static MotionProfile rest_to_rest(double distance_mm, const MotionLimits& limits);
+  /// lowered when the distance is too short to reach `limits.speed_mm_s`. With `braking` the
+  /// second half brakes by those limits.
+  static MotionProfile rest_to_rest(double distance_mm, const MotionLimits& limits,
+                                    const std::optional<BrakingLimits>& braking = std::nullopt);
 
   /// A probing move that blends the approach into the probing feed: from rest, as fast as
   /// `limits` allow (up to limits.speed_mm_s), slowing to `feed_mm_s` with zero acceleration
   /// exactly `reach_mm` from the start, at `feed_mm_s` from there on, and to rest at
   /// `distance_mm`. When `reach_mm` is too short to reach the feed, the feed is reached later.
-  static MotionProfile reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits);
+  /// Slowing down (to the feed, to rest) uses `braking` when given.
+  static MotionProfile reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits,
+                                  const std::optional<BrakingLimits>& braking = std::nullopt);
 
-  /// Shortest jerk-limited stop from `from` (speed >= 0, |acceleration| <= limit).
-  static MotionProfile stop(const MotionState& from, const MotionLimits& limits);
+  /// Shortest jerk-limited stop from `from` (speed >= 0, |acceleration| <= limit). With
+  /// `braking`, a rising speed is first ended at the jerk of `limits` (the ramp's own law), then
+  /// the stop uses the braking limits.
+  static MotionProfile stop(const MotionState& from, const MotionLimits& limits,
+                            const std::optional<BrakingLimits>& braking = std::nullopt);
 
   /// Total time of all phases.
   [[nodiscard]] double duration_s() const { return m_duration_s; }
@@ -73,6 +89,7 @@ class MotionProfile {
 };
 
 /// Duration of the rest-to-rest move (closed form, for planning and tests).
-double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits);
+double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits,
+                           const std::optional<BrakingLimits>& braking = std::nullopt);
 
 }  // namespace metron::machine

@@ -46,17 +46,32 @@ struct SkipInput {
   double period_s = 0.002;            ///< Scanned: scan period
 };
 
-/// How one axis accelerates to a programmed feed (SEEDS.md 3, acceleration zone). Simulated
-/// truth: the runtime never reads it, it measures it with timed moves (runtime/characterisation).
-struct AxisDynamics {
+/// One point of a tabulated ramp: the axis reaches `feed_mm_s` from rest in `ramp_time_s`.
+struct RampTimePoint {
+  double feed_mm_s = 0;               ///< axis feed
+  double ramp_time_s = 0;             ///< time from rest to that feed
+};
+
+/// A law by which one axis changes its speed (SEEDS.md 3, acceleration zone). Simulated truth:
+/// the runtime never reads it, it measures it with timed moves (runtime/characterisation).
+struct RampLaw {
   enum class Mode {
     ConstantRate,  ///< acceleration ramps at the jerk limit up to a fixed rate: ramp time grows with feed
     ConstantTime,  ///< the programmed feed is reached in a fixed time: ramp distance grows linearly with feed
+    Tabulated,     ///< the ramp time is a table over the axis feed, linear between its points, held beyond them
   };
-  Mode mode = Mode::ConstantRate;     ///< which of the two
-  double acceleration_mm_s2 = 1000;   ///< ConstantRate: acceleration limit of the axis
+  Mode mode = Mode::ConstantRate;     ///< which of the three
+  double acceleration_mm_s2 = 1000;   ///< ConstantRate: acceleration (or deceleration) limit of the axis
   double jerk_mm_s3 = 10000;          ///< ConstantRate: jerk limit of the axis
   double time_s = 0.06;               ///< ConstantTime: time to reach any programmed feed from rest
+  std::vector<RampTimePoint> table;   ///< Tabulated: feeds strictly increasing, at least two points
+};
+
+/// How one axis accelerates to a programmed feed and brakes from it.
+struct AxisDynamics : RampLaw {
+  /// Braking (every slow-down: the end of a move, the stop after a trigger) when it differs from
+  /// the acceleration; none: braking mirrors the acceleration (the original behaviour).
+  std::optional<RampLaw> braking;
 };
 
 /// Per-axis acceleration behaviour (x, y, z); none: every axis at the path limits (constant rate).

@@ -18,26 +18,64 @@
 /// positions), and the touch strategy it derives from that. Nothing here reads the world.
 namespace metron::runtime {
 
-/// One timed move: the ramp time Td = Ta - Dc/V at feed V (SEEDS.md 3).
+/// One timed move: the ramp time Td = Ta - Dc/V at feed V (SEEDS.md 3); or one timed stop: the
+/// time from feed V to rest.
 struct RampSample {
   double feed_mm_s = 0;               ///< commanded feed
-  double ramp_time_s = 0;             ///< Td, averaged over dithered lengths
+  double ramp_time_s = 0;             ///< Td, averaged over dithered lengths (a stop: its time Tb)
 };
 
-/// The acceleration characteristic of one axis, fitted over feed for lookup.
+/// The acceleration characteristic of one axis, fitted over feed for lookup. Timed rest-to-rest
+/// moves give the mean ramp time Td = (Ta + Tb) / 2 of accelerating (Ta) and braking (Tb);
+/// timed stops give Tb, so Ta = 2 Td - Tb (docs/touch-trigger.md, "braking").
 struct AxisAcceleration {
-  enum class Mode { ConstantRate, ConstantTime };
-  Mode mode = Mode::ConstantRate;     ///< the model that fits the timed moves best
-  double time_s = 0;                  ///< ConstantTime: the ramp time
-  double acceleration_mm_s2 = 0;      ///< ConstantRate: fitted acceleration limit
-  double jerk_mm_s3 = 0;              ///< ConstantRate: fitted jerk limit
-  double fit_rms_relative = 0;        ///< RMS relative residual of Td of the chosen model
-  std::vector<RampSample> samples;    ///< the measurements
-  /// Ramp time Td at `feed_mm_s` from the fitted model.
+  enum class Mode {
+    ConstantRate,                     ///< jerk-limited ramp to a fixed acceleration: Td = V/a + a/j (SEEDS.md 3)
+    ConstantTime,                     ///< any feed in a fixed time: Td = T (SEEDS.md 3)
+    Interpolated,                     ///< no family: monotone cubic through the samples (Fritsch-Carlson)
+  };
+  Mode mode = Mode::ConstantRate;     ///< the simplest model that fits the timed moves within its threshold
+  double time_s = 0;                  ///< ConstantTime: the ramp time (informative for the others: best constant)
+  double acceleration_mm_s2 = 0;      ///< ConstantRate: fitted acceleration limit (informative for the others)
+  double jerk_mm_s3 = 0;              ///< ConstantRate: fitted jerk limit (informative for the others)
+  /// RMS relative residual of Td of the chosen model; Interpolated: its leave-one-out residual
+  /// (each inner sample predicted from the others), since it passes through every sample.
+  double fit_rms_relative = 0;
+  std::vector<RampSample> samples;    ///< the timed moves, by increasing feed (Interpolated: its knots)
+  /// Timed stops from constant speed (feed, stop time Tb), by increasing feed; empty: braking
+  /// not measured (it is then taken to mirror the acceleration).
+  std::vector<RampSample> stops;
+  /// The stops differ from Td beyond their timing uncertainty: braking is the measured share
+  /// Tb / Td (interpolated over feed, held beyond the timed stops), accelerating the rest.
+  bool asymmetric = false;
+
+  /// Mean ramp time Td at `feed_mm_s` from the fitted model: what a timed rest-to-rest move sees.
   [[nodiscard]] double ramp_time_s(double feed_mm_s) const;
-  /// SEEDS.md 3: acceleration distance D1 = V * Td / 2.
-  [[nodiscard]] double distance_mm(double feed_mm_s) const { return feed_mm_s * ramp_time_s(feed_mm_s) / 2; }
+  /// Time of the acceleration from rest to `feed_mm_s`: Td, or 2 Td - Tb when asymmetric.
+  [[nodiscard]] double acceleration_time_s(double feed_mm_s) const;
+  /// Time of a stop from `feed_mm_s` at constant speed: Td, or the measured Tb when asymmetric.
+  [[nodiscard]] double braking_time_s(double feed_mm_s) const;
+  /// SEEDS.md 3: acceleration distance D1 = V * Ta / 2 (V * Td / 2 for a symmetric ramp).
+  [[nodiscard]] double distance_mm(double feed_mm_s) const { return feed_mm_s * acceleration_time_s(feed_mm_s) / 2; }
 };
+
+/// How the model of an axis's ramp time over feed is chosen (docs/touch-trigger.md): the
+/// simplest that fits the samples within its threshold, else the characterisation is refused.
+struct RampFitSettings {
+  /// A family (constant time, else constant rate) is used when its RMS relative residual is
+  /// within this; constant time yields to constant rate when that fits markedly better.
+  double family_rms_relative = 0.01;
+  /// Else the interpolation, when its leave-one-out RMS relative residual is within this; else
+  /// the samples fit no model (noisy or inconsistent timings) and are refused.
+  double interpolation_rms_relative = 0.03;
+  /// Fit only this model and accept it whatever its residual (comparisons and tests).
+  std::optional<AxisAcceleration::Mode> only;
+};
+
+/// Fits the ramp-time samples of one axis (at least three distinct positive feeds, positive
+/// times) by RampFitSettings; the error says which models were tried and their residuals.
+tl::expected<AxisAcceleration, std::string> fit_acceleration(std::vector<RampSample> samples,
+                                                             const RampFitSettings& settings = {});
 
 /// Repeated touches on one point at one feed (same standoff).
 struct TouchSample {
@@ -78,6 +116,8 @@ struct CharacterisationSettings {
   int touches_per_feed = 60;          ///< repeated touches per feed
   int dither = 10;                    ///< timed moves per feed, lengths spread over one cycle
   std::vector<double> timing_feeds_mm_s{2, 5, 10, 20, 50, 100, 150};  ///< feeds of the timed moves
+  RampFitSettings ramp_fit;           ///< model choice and rejection of the acceleration characteristic
+  bool time_stops = true;             ///< time stops after touches on the reference sphere (braking per axis)
   bool blend = false;                 ///< beyond the seed: blended one-touch cycles (TouchPlan::blend_mm)
   bool optimise_first_feed = false;   ///< beyond the seed: first-touch feed from timed trial cycles
   bool fastest = false;               ///< beyond the seed: the fastest cycle meeting the threshold, by timed trials
@@ -130,17 +170,20 @@ struct MachineCharacterisation {
   /// (with zero acceleration) the nominal tolerance + D3 before the nominal surface.
   bool blend = false;
 
-  /// Ramp time along unit `direction` at `feed_mm_s` (the slowest axis involved dominates).
+  /// Acceleration ramp time Ta along unit `direction` from rest to `feed_mm_s` (the slowest axis
+  /// involved dominates).
   [[nodiscard]] double ramp_time_s(const Vec3& direction, double feed_mm_s) const;
-  /// D1 along `direction` (SEEDS.md 3: V * Td / 2).
+  /// Braking time Tb along `direction` from `feed_mm_s` at constant speed to rest.
+  [[nodiscard]] double braking_time_s(const Vec3& direction, double feed_mm_s) const;
+  /// D1 along `direction` (SEEDS.md 3: V * Ta / 2).
   [[nodiscard]] double acceleration_distance_mm(const Vec3& direction, double feed_mm_s) const;
   /// Upper bound of the distance from contact to standstill for a contact anywhere on the ramp
-  /// to `feed_mm_s` or at that feed: pre-travel + feed * (delay + jitter + dt) + feed * Td
-  /// (docs/touch-trigger.md, "maximum protected feed").
+  /// to `feed_mm_s` or at that feed: pre-travel + feed * (delay + jitter + dt) + feed * (Ta + Tb) / 2
+  /// (docs/touch-trigger.md, "maximum protected feed"; Ta = Tb = Td for a symmetric ramp).
   [[nodiscard]] double stop_distance_mm(const Vec3& direction, double feed_mm_s) const;
   /// Time of a rest-to-rest move of `length_mm` along `direction` at `feed_mm_s`, from the
-  /// acceleration characteristic (braking mirrors the ramp): L / V + Td(V), or 2 Td(v) where
-  /// the move never reaches V (v Td(v) = L).
+  /// acceleration characteristic: L / V + Td(V), or 2 Td(v) where the move never reaches V
+  /// (v Td(v) = L), with Td = (Ta + Tb) / 2.
   [[nodiscard]] double move_time_s(const Vec3& direction, double length_mm, double feed_mm_s) const;
   /// Fastest feed along `direction` whose stop distance stays within margin * over-travel.
   [[nodiscard]] double max_feed_mm_s(const Vec3& direction) const;
@@ -179,9 +222,12 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
 
 /// Only the acceleration characteristic of one axis (0..2) from timed moves; the controller
 /// clock's resolution (its cycle) is stored in `clock_resolution_s` when given.
+/// When no family fits, feeds halfway (geometrically) between the timed ones are timed as well,
+/// up to twice, before the interpolation is judged.
 tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::Machine& machine, int axis,
                                                                      const std::vector<double>& feeds_mm_s, int dither,
-                                                                     double* clock_resolution_s = nullptr);
+                                                                     double* clock_resolution_s = nullptr,
+                                                                     const RampFitSettings& fit = {});
 
 /// The characterisation file (docs/touch-trigger.md).
 nlohmann::json to_json(const MachineCharacterisation& c);
