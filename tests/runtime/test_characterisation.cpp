@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "direct_machine.hpp"
 #include "fixtures.hpp"
 #include "metron/machine/touch_cycle/axis_dynamics.hpp"
 #include "metron/machine/touch_cycle/cycle_limit.hpp"
@@ -176,14 +177,8 @@ TEST(Characterisation, AFileCannotClaimFeedsItsMeasurementsDoNotProtect) {
 TEST(Characterisation, MaximumFeedIsSafeOnTheMachine) {
   for (const char* name : {"touch_scanned_4ms.json", "touch_mixed.json"}) {
     const auto [w, c] = run(name);
-    machine::VirtualCmm cmm(w, 5);
-    std::uint64_t tag = 1;
-    const auto one = [&](decltype(machine::Command::body) b) {
-      cmm.submit({tag++, std::move(b)});
-      return cmm.execute().front();
-    };
-    one(machine::DefineTool{"T", 4.0, -Vec3::UnitZ(), 50});
-    one(machine::SelectTool{"T"});
+    test_support::DirectMachine direct(w, 5);
+    const auto one = [&](decltype(machine::Command::body) b) { return direct.exec(std::move(b)); };
     // The top of the test block (z = 40), probed straight down at the maximum feed.
     const auto touch = [&](double feed) {
       machine::PtMeas p;
@@ -222,14 +217,8 @@ TEST(Characterisation, OptimalStandoffRemovesTheAccelerationZoneError) {
     ASSERT_TRUE(got) << got.error();
     c = *got;
   }
-  machine::VirtualCmm cmm(w, 2);
-  std::uint64_t tag = 1;
-  const auto exec = [&](decltype(machine::Command::body) b) {
-    cmm.submit({tag++, std::move(b)});
-    return cmm.execute().front();
-  };
-  exec(machine::DefineTool{"T", 4.0, -Vec3::UnitZ(), 50});
-  exec(machine::SelectTool{"T"});
+  test_support::DirectMachine direct(w, 2);
+  const auto exec = [&](decltype(machine::Command::body) b) { return direct.exec(std::move(b)); };
   const Vec3 nominal(380, 250, 40), n = Vec3::UnitZ();
   const auto hit = [&](const TouchPlan& plan) {
     exec(machine::GoTo{nominal + Vec3(0, 0, 12), {}});

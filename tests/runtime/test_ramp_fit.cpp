@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "direct_machine.hpp"
 #include "fixtures.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/characterisation.hpp"
@@ -290,14 +291,9 @@ TEST(Braking, StandoffFromTheTimedStopsMeasuresAtTheFeed) {
     return *c;
   };
   const MachineCharacterisation timed = characterised(true), seed = characterised(false);
-  machine::VirtualCmm cmm(w, 2);
-  std::uint64_t tag = 1;
-  const auto exec = [&](decltype(machine::Command::body) b) {
-    cmm.submit({tag++, std::move(b)});
-    return cmm.execute().front();
-  };
-  exec(machine::DefineTool{"T", 4.0, -Vec3::UnitZ(), 50});
-  exec(machine::SelectTool{"T"});
+  test_support::DirectMachine direct(w, 2);
+  auto& cmm = direct.cmm;
+  const auto exec = [&](decltype(machine::Command::body) b) { return direct.exec(std::move(b)); };
   // The block's LEFT (x = 300) and FRONT (y = 200) faces at mid height, probed along +x and +y.
   for (const auto& [nominal, n] :
        {std::pair{Vec3(300, 250, 20), Vec3(-1, 0, 0)}, std::pair{Vec3(380, 200, 20), Vec3(0, -1, 0)}}) {
@@ -348,14 +344,8 @@ TEST(Braking, MaximumFeedNeverOverTravels) {
                        f * (delay + w.machine.dt_s) + f * (law_ramp_s(z, f) + law_ramp_s(*z.braking, f)) / 2;
   EXPECT_LT(worst, w.truth.probe.over_travel_mm) << "max feed " << f;
   RecordProperty("max_feed_z", std::to_string(f));
-  machine::VirtualCmm cmm(w, 5);
-  std::uint64_t tag = 1;
-  const auto exec = [&](decltype(machine::Command::body) b) {
-    cmm.submit({tag++, std::move(b)});
-    return cmm.execute().front();
-  };
-  exec(machine::DefineTool{"T", 4.0, -Vec3::UnitZ(), 50});
-  exec(machine::SelectTool{"T"});
+  test_support::DirectMachine direct(w, 5);
+  const auto exec = [&](decltype(machine::Command::body) b) { return direct.exec(std::move(b)); };
   const Vec3 top(380, 250, 40);
   const double d1 = c->acceleration_distance_mm(down, f), start = 1.2 * d1 + 0.3;
   int touches = 0;
