@@ -89,8 +89,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   auto p = s.params;
   // FEAT/EDGEPT,CART,x,y,z,i,j,k,ei,ej,ek[,thickness]: a point on a surface near an edge. metron
   // measures it as a POINT on the surface (x,y,z along i,j,k); the edge vector does not enter.
-  const bool edge_point = is_word(p[0], "EDGEPT");
-  if (edge_point) {
+  if (is_word(p[0], "EDGEPT")) {
     if (p.size() < 11 || p.size() > 12)
       return error(p.back().span, "sema.feature-arity",
                    fmt::format("FEAT/EDGEPT expects CART or POL and 9 or 10 numbers (x,y,z,i,j,k,ei,ej,ek[,thickness]), got {} "
@@ -160,7 +159,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   if (!ok) return;
-  if (!check_feature_numbers(s, payload, literal)) return;
+  if (!check_feature_numbers(s, p, payload, literal)) return;
   if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl && !reported_actual) {
     const Location loc = m_sources.locate(it->second.span);
     warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
@@ -187,14 +186,14 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// Static checks on the literal numbers of a FEAT (NaN where computed at run time): a zero
+// Static checks on the literal numbers of a FEAT (the last of `params`; NaN where computed at run time): a zero
 // direction, a non-positive size, a cone angle outside (0, 180).
-bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const ir::FeaturePayload& form,
-                                         const std::vector<double>& literal) {
+bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std::vector<grammar::Expr>& params,
+                                         const ir::FeaturePayload& form, const std::vector<double>& literal) {
   const FeatureType type = form.type;
   const std::size_t n = literal.size();
   const auto fail = [&](std::size_t k, const char* code, std::string message) {
-    error(s.params[s.params.size() - n + k].span, code, std::move(message));
+    error(params[params.size() - n + k].span, code, std::move(message));
     return false;
   };
   if ((type != FeatureType::Sphere || n == 7) && n > 0) {

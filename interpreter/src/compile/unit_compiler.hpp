@@ -211,7 +211,8 @@ class UnitCompiler {
 
   // ---- definitions: FEAT, SNSDEF, TOL, DATDEF, PATH, DECL (compile/definitions.cpp) ---------
   void feat(const grammar::Statement& s);
-  bool check_feature_numbers(const grammar::Statement& s, const ir::FeaturePayload& form, const std::vector<double>& literal);
+  bool check_feature_numbers(const grammar::Statement& s, const std::vector<grammar::Expr>& params,
+                             const ir::FeaturePayload& form, const std::vector<double>& literal);
   void snsdef(const grammar::Statement& s);
   void tol(const grammar::Statement& s);
   void datdef(const grammar::Statement& s);
