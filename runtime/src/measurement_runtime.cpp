@@ -490,6 +490,12 @@ Result<void> MeasurementRuntime::datset(const std::string& label, const DatsetRe
   }
   std::vector<DatsetClause> clauses;
   for (const auto& c : request.clauses) {
+    if (c.feature) {
+      auto g = resolve(*c.feature, span);
+      if (!g) return tl::unexpected(g.error());
+      clauses.push_back({*g, c.direction, c.minus, c.origins});
+      continue;
+    }
     auto d = datum(c.datum, span);
     if (!d) return tl::unexpected(d.error());
     clauses.push_back({(*d)->geometry, c.direction, c.minus, c.origins});

@@ -331,6 +331,35 @@ TEST(ShopPrograms, GenericSurfacePointsAreJudgedAlongTheirOwnNormals) {
   EXPECT_TRUE(c.has("shop.dmi:3:") && c.has("FEAT/GSURF expects")) << c.text;
 }
 
+// DATSET/FA(x),... (CAMIO and PC-DMIS write the feature in place of a datum label): the same frame
+// as DATDEF + DATSET/DAT. Truth: TOP is the plane z = 40 of the part, so after the alignment the
+// bottom of BORE1 (z = 15) is at z = -25.
+TEST(ShopPrograms, DatsetWithAFeatureInPlaceOfADatum) {
+  const auto program = [](const std::string& datset) {
+    return "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+           "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/100, 50, 60\n"
+           "F(TOPPL) = FEAT/PLANE, CART, 100, 40, 40, 0, 0, 1\nMEAS/PLANE, F(TOPPL), 3\n"
+           "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 100, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 40, 40, 0, 0, 1\n"
+           "  GOTO/60, 40, 60\nENDMES\nDATDEF/FA(TOPPL), DAT(A)\n" + datset +
+           "GOTO/40, 50, 20\nF(FLOOR) = FEAT/POINT, CART, 40, 50, -25, 0, 0, 1\nMEAS/POINT, F(FLOOR), 1\n"
+           "  PTMEAS/CART, 40, 50, -25, 0, 0, 1\nENDMES\nGOTO/40, 50, 20\nOUTPUT/FA(FLOOR)\nENDFIL\n";
+  };
+  // TOP of block_deviations is tilted 0.05 deg about x through its point (80, 50, 40): its actual,
+  // not its nominal, must set the frame (the nominal moves FLOOR by about 0.6 um: caught below).
+  const fs::path world = source_dir / "programs/worlds/block_deviations.json";
+  const auto by_feature = run(program("D(A1) = DATSET/FA(TOPPL), ZDIR, ZORIG\n"), world);
+  const auto by_datum = run(program("D(A1) = DATSET/DAT(A), ZDIR, ZORIG\n"), world);
+  ASSERT_EQ(by_feature.status, ExecStatus::Finished) << by_feature.diagnostics;
+  ASSERT_EQ(by_datum.status, ExecStatus::Finished) << by_datum.diagnostics;
+  const auto* f = report(*by_feature.session, "FLOOR");
+  const auto* d = report(*by_datum.session, "FLOOR");
+  ASSERT_TRUE(f && f->actual && d && d->actual);
+  EXPECT_NEAR(f->actual->position.z(), -25.0, 2e-3);
+  EXPECT_NEAR(f->actual->position.z(), d->actual->position.z(), 1e-9);
+  const auto before = check("DMISMN/'p', 5.0\nD(A1) = DATSET/ZDIR, FA(X)\nENDFIL\n");
+  EXPECT_TRUE(before.has("expected DAT(label) or FA(label) before ZDIR")) << before.text;
+}
+
 // UNITS/INCH and DECPL: the report and the DMIS output statement are in the program's units with
 // the decimals DECPL asks for; the truth is the world's 20 mm bore at part (40, 50, 30) mm.
 TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {

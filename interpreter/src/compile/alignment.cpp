@@ -47,7 +47,8 @@ void UnitCompiler::add_alignment(StatementTable& t) {
   });
 }
 
-// D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...   (-ZDIR = ZMINUS)
+// D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...   (-ZDIR = ZMINUS; FA(x) in
+// place of DAT(A), as CAMIO and PC-DMIS write it: the feature's actual)
 void UnitCompiler::datset(const grammar::Statement& s) {
   if (!require_target(s, {"D"}, "D(label)=DATSET/...")) return;
   if (!expect_params(s, 1, "MCS or datums")) return;
@@ -74,11 +75,15 @@ void UnitCompiler::datset(const grammar::Statement& s) {
           return error(p.span, "sema.undefined-datum", fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
         in.operands.push_back(label_op(p));
         have_datum = true;
+      } else if (is_label(p, {"FA", "F"})) {
+        if (!check_feature(p)) return;
+        in.operands.push_back(label_op(p));
+        have_datum = true;
       } else if (is_word(p) && words.count(p.text)) {
-        if (!have_datum) return error(p.span, "sema.expected-datum", fmt::format("expected DAT(label) before {}", p.text));
+        if (!have_datum) return error(p.span, "sema.expected-datum", fmt::format("expected DAT(label) or FA(label) before {}", p.text));
         in.operands.push_back(word_operand(p));
       } else {
-        return error(p.span, "sema.bad-datset", "expected DAT(label) or XDIR, YDIR, ZDIR, XMINUS, ..., XORIG, YORIG, ZORIG");
+        return error(p.span, "sema.bad-datset", "expected DAT(label), FA(label) or XDIR, YDIR, ZDIR, XMINUS, ..., XORIG, YORIG, ZORIG");
       }
     }
   }

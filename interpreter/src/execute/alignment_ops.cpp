@@ -55,7 +55,10 @@ ExecStatus Execute::datset(Interpreter& vm, const ir::Instruction& in, CallFrame
   runtime::DatsetRequest req;
   for (const auto& o : in.operands) {
     if (o.kind == Operand::Kind::Word && o.word == "MCS") req.mcs = true;
-    else if (o.kind == Operand::Kind::Label) req.clauses.push_back({vm.label_name(o.label), std::nullopt, false, {}});
+    else if (o.kind == Operand::Kind::Label && o.label.prefix == "DAT")
+      req.clauses.push_back({vm.label_name(o.label), std::nullopt, std::nullopt, false, {}});
+    else if (o.kind == Operand::Kind::Label)  // DATSET/FA(x),...: the feature itself
+      req.clauses.push_back({{}, feature_ref(vm, o.label), std::nullopt, false, {}});
     else if (o.kind == Operand::Kind::Word && !req.clauses.empty()) {
       auto& c = req.clauses.back();
       const auto axis = axis_of(o.word);

@@ -61,7 +61,8 @@ struct MeasBlock {
 /// DATSET/... with datum labels.
 struct DatsetRequest {
   struct Clause {
-    std::string datum;
+    std::string datum;                 ///< DAT(datum), or
+    std::optional<FeatureRef> feature; ///< a feature written in its place (DATSET/FA(x),...)
     std::optional<Axis> direction;
     bool minus = false;
     std::vector<Axis> origins;
