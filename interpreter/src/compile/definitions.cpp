@@ -94,10 +94,8 @@ void UnitCompiler::feat(const grammar::Statement& s) {
       return error(p.back().span, "sema.feature-arity",
                    fmt::format("FEAT/EDGEPT expects CART or POL and 9 or 10 numbers (x,y,z,i,j,k,ei,ej,ek[,thickness]), got {} "
                                "parameters", p.size() - 1));
-    if (!m_edge_points_noted) {
-      note(p[0].span, "sema.edge-point", "FEAT/EDGEPT is measured as a POINT on its surface (x,y,z along i,j,k); the edge vector is not used");
-      m_edge_points_noted = true;
-    }
+    note_once(m_edge_points_noted, p[0].span, "sema.edge-point",
+              "FEAT/EDGEPT is measured as a POINT on its surface (x,y,z along i,j,k); the edge vector is not used");
     p.resize(8);
     p[0].text = "POINT";
   }
@@ -170,13 +168,10 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   if (reported_actual) {
     in.count = 1;  // the actual, not the nominal
-    if (!m_reported_results_noted) {
-      note(s.target->span, "sema.reported-actual",
-           fmt::format("FA({})=FEAT/... states a measured actual, as a DMIS output file does: it becomes the feature's "
-                       "actual (the nominal too when the feature has none)",
-                       s.target->name));
-      m_reported_results_noted = true;
-    }
+    note_once(m_reported_results_noted, s.target->span, "sema.reported-actual",
+              fmt::format("FA({})=FEAT/... states a measured actual, as a DMIS output file does: it becomes the "
+                          "feature's actual (the nominal too when the feature has none)",
+                          s.target->name));
     if (!m_symbols.features.count(label)) m_symbols.features[label] = {type, s.span};
   } else {
     m_symbols.features[label] = {type, s.span};
@@ -245,13 +240,10 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!require_target(s, {"T", "TA"}, "T(label)=TOL/...")) return;
   if (upper(s.target->prefix) == "TA") {
     // TA(l)=TOL/kind,value,INTOL|OUTOL: a tolerance result a DMIS output file reports.
-    if (!m_reported_results_noted) {
-      note(s.target->span, "sema.reported-tolerance",
-           fmt::format("TA({})=TOL/... is a reported tolerance result (a DMIS output file's line): kept as it is, "
-                       "not evaluated",
-                       s.target->name));
-      m_reported_results_noted = true;
-    }
+    note_once(m_reported_results_noted, s.target->span, "sema.reported-tolerance",
+              fmt::format("TA({})=TOL/... is a reported tolerance result (a DMIS output file's line): kept as it is, "
+                          "not evaluated",
+                          s.target->name));
     emit(make(Op::Nop, s, "TOL"));
     return;
   }

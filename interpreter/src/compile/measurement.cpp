@@ -4,33 +4,12 @@
 #include <cmath>
 
 #include "compile/unit_compiler.hpp"
+#include "metron/runtime/measurement_plan.hpp"
 
 namespace metron::interpreter::detail {
 
 using grammar::ExprKind;
 using ir::Op;
-
-namespace {
-
-// The fewest points that define a feature of each type.
-int minimum_points(runtime::FeatureType type) {
-  switch (type) {
-    case runtime::FeatureType::Point: return 1;
-    case runtime::FeatureType::Line: return 2;
-    case runtime::FeatureType::ParallelPlanes: return 4;  // three on one face and one on the other fix both
-    case runtime::FeatureType::GenericSurface:
-    case runtime::FeatureType::GenericCurve: return 1;
-    case runtime::FeatureType::Plane:
-    case runtime::FeatureType::Circle:
-    case runtime::FeatureType::Arc: return 3;
-    case runtime::FeatureType::Sphere: return 4;
-    case runtime::FeatureType::Cylinder: return 5;
-    case runtime::FeatureType::Cone: return 6;
-  }
-  return 1;
-}
-
-}  // namespace
 
 void UnitCompiler::add_measurement(StatementTable& t) {
   t.insert({
@@ -237,7 +216,7 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
     // the DME): a warning, and the block's points are used.
     warn(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS; the {} are used", b.declared, b.ptmeas, b.ptmeas));
   const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
-  const int minimum = minimum_points(b.type);
+  const int minimum = runtime::minimum_points(b.type);
   if (!b.control && !b.scanned && n > 0 && n < minimum)
     error(b.span, "sema.too-few-points", fmt::format("a {} needs at least {} points, the block has {}", ir::word_of(b.type), minimum, n));
   const std::size_t end = emit(make(Op::MeasEnd, s));

@@ -95,7 +95,13 @@ class UnitCompiler {
   void warn(Span span, const char* code, std::string message) { m_sink.warning(code, span, std::move(message)); }
   void note(Span span, const char* code, std::string message) {
     m_sink.report({Severity::Note, code, span, std::move(message), {}});
+  }  /// One note per unit for what `noted` stands for (the later statements of the kind are quiet).
+  void note_once(bool& noted, Span span, const char* code, std::string message) {
+    if (noted) return;
+    note(span, code, std::move(message));
+    noted = true;
   }
+
   /// A sensor the program does not define: taken from the machine's probe library at run
   /// (docs/language.md "Sensors from the probe library"); one note per name.
   void library_sensor(const grammar::Expr& label);
