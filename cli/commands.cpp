@@ -36,6 +36,7 @@ struct RunArgs {
   std::string out_dir = ".";
   bool quiet = false;
   std::optional<std::string> characterisation;
+  std::optional<std::string> touch_baseline;
   std::optional<std::string> machine_url;
   std::optional<std::string> compensation;
   bool strict = false;
@@ -71,6 +72,14 @@ int run(const RunArgs& args) {
   options.seed = args.seed;
   options.out_dir = args.out_dir;
   options.characterisation_path = args.characterisation;
+  if (args.touch_baseline) {
+    auto b = runtime::parse_touch_baseline(*args.touch_baseline);
+    if (!b) {
+      std::cerr << "error: --touch-baseline " << b.error() << "\n";
+      return static_cast<int>(interpreter::RunExit::BadInput);
+    }
+    options.touch_baseline = *b;
+  }
   options.strict = args.strict;
   options.include_dirs = args.include_dirs;
   if (args.answers) {
@@ -267,6 +276,9 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   add_seed_option(*run_cmd, run_args->seed);
   run_cmd->add_option("--characterisation", run_args->characterisation,
                       "machine characterisation file from `metron characterise`: PTMEAS uses its touch strategy");
+  run_cmd->add_option("--touch-baseline", run_args->touch_baseline,
+                      "PTMEAS uses a conventional cycle instead of the characterised one, at the same measuring feed, to "
+                      "compare program times: one-touch | two-touch:BACKOFF_MM[:FIRST_FEED_MM_S] (docs/touch-trigger.md)");
   run_cmd->add_option("--machine", run_args->machine_url,
                       "run on an I++ DME server instead of the virtual CMM: ipp://host[:port] (docs/ipp-dme.md)")
       ->excludes(run_cmd->get_option("--world"));

@@ -126,6 +126,25 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
     }
     s.runtime().set_characterisation(std::move(*c));
   }
+  std::string baseline_note;  // said in the diagnostics and results.json: the run's times are the baseline's
+  if (options.touch_baseline) {
+    // Refused before any motion: a baseline the controller could not run safely or at all.
+    const runtime::MachineCharacterisation* c = s.runtime().characterisation();
+    const auto& b = *options.touch_baseline;
+    std::string why;
+    if (b.two_touch && !b.first_feed_mm_s && !c)
+      why = "--touch-baseline two-touch needs a first-touch feed (two-touch:BACKOFF:FEED) or --characterisation";
+    else if (b.two_touch && b.first_feed_mm_s && c && *b.first_feed_mm_s > c->max_probe_feed_mm_s)
+      why = fmt::format("--touch-baseline: first-touch feed {:.3f} mm/s exceeds the maximum protected feed {:.3f} mm/s",
+                        *b.first_feed_mm_s, c->max_probe_feed_mm_s);
+    if (!why.empty()) {
+      outcome.record = s.record();
+      write_refusal(outcome, options, RunExit::BadInput, "error: " + why + "\n");
+      return outcome;
+    }
+    s.runtime().set_touch_baseline(b);
+    baseline_note = "note: PTMEAS used the baseline touch cycle: " + runtime::describe(b, c);
+  }
   s.compiler().set_parse_options(grammar::ParseOptions{options.strict});
   s.interpreter().set_prompt_answers(options.prompt_answers);
   s.compiler().set_include_dirs(options.include_dirs);
@@ -150,7 +169,9 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
   record.diagnostics.clear();
   for (const auto& d : s.sink().items()) record.diagnostics.push_back(format_diagnostic(d, s.sources()));
   outcome.diagnostics = s.take_diagnostics();
-  for (const auto& w : runtime_warnings) {
+  std::vector<std::string> notes = runtime_warnings;
+  if (!baseline_note.empty()) notes.push_back(baseline_note);
+  for (const auto& w : notes) {
     record.diagnostics.push_back(w);
     outcome.diagnostics += w + "\n";
   }

@@ -28,7 +28,7 @@ class PlanBuilder {
     annotate(span, 0);
   }
 
-  void ptmeas(const Vec3& nominal, const Vec3& normal, Span span) {
+  Result<void> ptmeas(const Vec3& nominal, const Vec3& normal, Span span) {
     const ProbeSettings& probe = m_context.probe;
     machine::PtMeas p;
     p.nominal_mm = nominal;
@@ -36,9 +36,22 @@ class PlanBuilder {
     p.approach_mm = probe.approach_mm;
     p.search_mm = probe.search_mm;
     p.retract_mm = probe.retract_mm;
-    if (m_context.characterisation) {
+    const MachineCharacterisation* c = m_context.characterisation;
+    if (m_context.touch_baseline) {
+      // The conventional cycle at the same measuring feed as the characterised one would use.
+      const TouchBaseline& b = *m_context.touch_baseline;
+      if (const auto feed = m_context.measuring_feed_mm_s ? m_context.measuring_feed_mm_s
+                            : c                            ? std::optional(c->measuring_feed_mm_s)
+                                                           : std::nullopt)
+        p.speed_mm_s = *feed;
+      if (b.two_touch) {
+        const auto first = b.first_feed_mm_s ? b.first_feed_mm_s : c ? std::optional(c->first_feed_mm_s) : std::nullopt;
+        if (!first) return program_error(span, "the two-touch baseline needs a first-touch feed (two-touch:B:F) or a characterisation");
+        p.two_touch = machine::PtMeas::TwoTouch{*first, b.backoff_mm};
+      }
+    } else if (c) {
       // SEEDS.md 3: the characterised cycle; SNSET/APPRCH and FEDRAT/MESVEL override.
-      const TouchPlan plan = m_context.characterisation->plan(
+      const TouchPlan plan = c->plan(
           p.normal, m_context.measuring_feed_mm_s,
           probe.approach_explicit ? std::optional<double>(probe.approach_mm) : std::nullopt, resting(p));
       apply_touch_plan(plan, p);
@@ -48,6 +61,7 @@ class PlanBuilder {
     // Where the retract ends (the latched centre is near nominal + effective radius).
     m_at = m_context.state.tool ? std::optional<Vec3>(p.nominal_mm + (m_context.state.tool->effective_radius_mm + p.retract_mm) * p.normal)
                                 : std::nullopt;
+    return {};
   }
 
   // A scan longer than the machine's command buffer goes as measurement commands (SEEDS.md 2),
@@ -106,7 +120,7 @@ Result<void> plan_steps(const MeasBlock& block, const Geometry& nominal, const B
       const Vec3 n = step.normal ? alignment.to_machine_vector(*step.normal) : nominal_normal_at(nominal, p);
       if (n.norm() < 1e-12) return program_error(step.span, "the PTMEAS direction i,j,k is a zero vector");
       if (!context.scan.scan_mode) {
-        plan.ptmeas(p, n, step.span);
+        if (auto ok = plan.ptmeas(p, n, step.span); !ok) return ok;
       } else if (!scan_start) {
         scan_start = step;
       } else {
@@ -148,8 +162,8 @@ Result<void> plan_auto(const MeasBlock& block, const Geometry& nominal, const Bl
   for (const auto& s : steps) {
     if (s.kind == PlannedStep::Kind::GoTo)
       plan.go_to(s.point, block.span);
-    else
-      plan.ptmeas(s.point, s.normal, block.span);
+    else if (auto ok = plan.ptmeas(s.point, s.normal, block.span); !ok)
+      return ok;
   }
   return {};
 }

@@ -1111,4 +1111,43 @@ std::string format_characterisation(const MachineCharacterisation& c) {
   return o.str();
 }
 
+tl::expected<TouchBaseline, std::string> parse_touch_baseline(const std::string& text) {
+  const auto number = [](const std::string& field, const char* what) -> tl::expected<double, std::string> {
+    double v = 0;
+    std::size_t used = 0;
+    try {
+      v = std::stod(field, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != field.size() || !std::isfinite(v) || !(v > 0))
+      return tl::unexpected(fmt::format("the {} '{}' is not a positive number", what, field));
+    return v;
+  };
+  if (text == "one-touch") return TouchBaseline{};
+  const std::string prefix = "two-touch:";
+  if (text.rfind(prefix, 0) != 0)
+    return tl::unexpected(fmt::format("'{}': expected one-touch or two-touch:BACKOFF_MM[:FIRST_FEED_MM_S]", text));
+  const std::string rest = text.substr(prefix.size());
+  const std::size_t colon = rest.find(':');
+  TouchBaseline b;
+  b.two_touch = true;
+  auto backoff = number(rest.substr(0, colon), "back-off");
+  if (!backoff) return tl::unexpected(backoff.error());
+  b.backoff_mm = *backoff;
+  if (colon != std::string::npos) {
+    auto feed = number(rest.substr(colon + 1), "first-touch feed");
+    if (!feed) return tl::unexpected(feed.error());
+    b.first_feed_mm_s = *feed;
+  }
+  return b;
+}
+
+std::string describe(const TouchBaseline& b, const MachineCharacterisation* c) {
+  if (!b.two_touch) return "one-touch from the approach distance at the measuring feed";
+  const std::optional<double> first = b.first_feed_mm_s ? b.first_feed_mm_s : c ? std::optional(c->first_feed_mm_s) : std::nullopt;
+  return fmt::format("two-touch, {:.3f} mm back-off, first touch at {}", b.backoff_mm,
+                     first ? fmt::format("{:.3f} mm/s", *first) : std::string("(no feed: needs a characterisation)"));
+}
+
 }  // namespace metron::runtime

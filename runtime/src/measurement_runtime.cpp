@@ -305,6 +305,7 @@ BlockPlanContext MeasurementRuntime::plan_context() const {
   context.mode = m_mode;
   context.paths = &m_paths;
   context.characterisation = characterisation();
+  context.touch_baseline = m_touch_baseline;
   context.measuring_feed_mm_s = m_measuring_feed_explicit;
   context.state = m_machine.state();
   return context;

@@ -3,12 +3,15 @@
 // fast probing feed, and the characterisation called from a program (docs/touch-trigger.md).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include <unistd.h>
+
+#include <fmt/format.h>
 
 #include "cli/virtual_cmm_backend.hpp"
 #include "fixtures.hpp"
@@ -54,12 +57,14 @@ std::string characterise(const std::string& world_name, const fs::path& out) {
 }
 
 metron::interpreter::RunOutcome run(const fs::path& program, const std::string& world_name, const std::string& out,
-                                    std::optional<fs::path> characterisation) {
+                                    std::optional<fs::path> characterisation,
+                                    std::optional<metron::runtime::TouchBaseline> baseline = std::nullopt) {
   RunOptions o;
   o.program = program.string();
   o.world_path = world(world_name).string();
   o.out_dir = out_dir(out).string();
   if (characterisation) o.characterisation_path = characterisation->string();
+  o.touch_baseline = baseline;
   return run_program(o, metron::cli::virtual_cmm_backend);
 }
 
@@ -165,6 +170,71 @@ TEST(Touch, CharacteriseCompareShowsTheBaselines) {
   EXPECT_GT(limit, 0);
   EXPECT_LT(limit, blend);
   EXPECT_EQ(text.find("outside the threshold"), std::string::npos) << text;
+}
+
+// Issue 11 item 11: a program run with the conventional cycles an installer would set
+// (`metron run --touch-baseline`) on the 4 ms scanned-skip world. The characterised run is the
+// seed's two-touch; the baselines run the same 14 points at the same measuring feed. Expected:
+// every run measures the true block (top z = 40, BORE1 20 mm at (40, 50)) within the strategy's
+// threshold, the characterised run is faster than both baselines by at least half of what the
+// cycle benchmark measures per point, and each baseline run says which cycle it used.
+TEST(Touch, BaselineCyclesRunTheSameProgramForComparison) {
+  const fs::path file = out_dir("baseline") / "c.json";
+  characterise("touch_scanned_4ms.json", file);
+  auto c = metron::runtime::load_characterisation(file.string());
+  ASSERT_TRUE(c) << c.error();
+  ASSERT_FALSE(c->one_touch);  // the seed chooses two touches on this controller
+  const auto one_touch = metron::runtime::parse_touch_baseline("one-touch");
+  const auto two_touch = metron::runtime::parse_touch_baseline("two-touch:1.0");
+  ASSERT_TRUE(one_touch && two_touch);
+  const auto seed = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_seed", file);
+  const auto plain = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_one", file, *one_touch);
+  const auto two = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_two", file, *two_touch);
+  for (const auto* o : {&seed, &plain, &two}) {
+    ASSERT_EQ(o->exit, RunExit::Completed) << o->diagnostics;
+    const FeatureReport* top = report(o->record, "TOP");
+    const FeatureReport* bore = report(o->record, "BORE1");
+    ASSERT_TRUE(top && bore && top->actual && bore->actual);
+    EXPECT_NEAR(top->actual->position.z(), 40, 2 * point_sigma_mm);
+    EXPECT_NEAR(bore->actual->diameter_mm, 20, 3 * point_sigma_mm);
+  }
+  EXPECT_EQ(seed.diagnostics.find("baseline touch cycle"), std::string::npos) << seed.diagnostics;
+  EXPECT_NE(plain.diagnostics.find("baseline touch cycle: one-touch"), std::string::npos) << plain.diagnostics;
+  EXPECT_NE(two.diagnostics.find(fmt::format("baseline touch cycle: two-touch, 1.000 mm back-off, first touch at {:.3f} mm/s",
+                                             c->first_feed_mm_s)),
+            std::string::npos)
+      << two.diagnostics;
+  const double t_seed = seed.record.simulated_time_s, t_one = plain.record.simulated_time_s, t_two = two.record.simulated_time_s;
+  std::printf("[figures] simulated s: characterised %.3f, one-touch baseline %.3f, two-touch 1 mm baseline %.3f\n", t_seed,
+              t_one, t_two);
+  // bench_touch_cycle (docs/touch-trigger.md) times these cycles apart on this world: the seed's
+  // two-touch 0.687 s, the plain one-touch 1.042 s, the 1 mm two-touch 1.074 s per point. Over 14
+  // points the characterised run must be faster than each baseline by at least half of that.
+  EXPECT_GT(t_one - t_seed, 14 * 0.5 * (1.042 - 0.687));
+  EXPECT_GT(t_two - t_seed, 14 * 0.5 * (1.074 - 0.687));
+  // And the two baselines are different cycles (the back-off and the fast first touch).
+  EXPECT_GT(std::abs(t_two - t_one), 0.1);
+  // Refused before motion: a two-touch without a first feed and without a characterisation, and
+  // a first feed above the maximum protected feed.
+  metron::runtime::TouchBaseline too_fast = *two_touch;
+  too_fast.first_feed_mm_s = 2 * c->max_probe_feed_mm_s;
+  const auto refused = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_fast", file, too_fast);
+  EXPECT_EQ(refused.exit, RunExit::BadInput);
+  EXPECT_NE(refused.diagnostics.find("exceeds the maximum protected feed"), std::string::npos) << refused.diagnostics;
+  const auto no_feed = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_nofeed", std::nullopt, *two_touch);
+  EXPECT_EQ(no_feed.exit, RunExit::BadInput);
+  EXPECT_NE(no_feed.diagnostics.find("needs a first-touch feed"), std::string::npos) << no_feed.diagnostics;
+}
+
+TEST(Touch, TouchBaselineTextIsParsedOrRefused) {
+  const auto two = metron::runtime::parse_touch_baseline("two-touch:0.5:20");
+  ASSERT_TRUE(two);
+  EXPECT_TRUE(two->two_touch);
+  EXPECT_DOUBLE_EQ(two->backoff_mm, 0.5);
+  EXPECT_DOUBLE_EQ(two->first_feed_mm_s.value_or(0), 20);
+  EXPECT_FALSE(metron::runtime::parse_touch_baseline("one-touch")->two_touch);
+  for (const char* bad : {"", "two-touch", "two-touch:", "two-touch:-1", "two-touch:1:x", "two-touch:1:20:3", "three-touch"})
+    EXPECT_FALSE(metron::runtime::parse_touch_baseline(bad)) << bad;
 }
 
 }  // namespace

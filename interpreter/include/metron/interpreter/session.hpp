@@ -40,6 +40,8 @@ struct RunOptions {
   std::function<void(const runtime::RunEvent&)> on_event;  ///< live report
   /// A machine characterisation file (docs/touch-trigger.md); PTMEAS uses its touch strategy.
   std::optional<std::string> characterisation_path;
+  /// A conventional touch cycle for PTMEAS instead of the characterised one (`--touch-baseline`).
+  std::optional<runtime::TouchBaseline> touch_baseline;
   /// Strict reading: a line that is not a DMIS statement is an error, not a warning.
   bool strict = false;
   /// Scripted operator answers for PROMPT, in order (`--answers FILE`, one per line).

@@ -29,6 +29,7 @@ struct BlockPlanContext {
   Mode mode = Mode::Auto;                ///< MODE
   const std::map<std::string, PathDefinition>* paths = nullptr;  ///< P(label) definitions (MCS); null: none
   const MachineCharacterisation* characterisation = nullptr;     ///< null: the machine is not characterised
+  std::optional<TouchBaseline> touch_baseline;  ///< `run --touch-baseline`: this cycle instead of the characterised one
   std::optional<double> measuring_feed_mm_s;  ///< FEDRAT/MESVEL as the program gave it (overrides the characterisation)
   machine::MachineState state;           ///< position, active tool, feeds and scan buffer size
 };

@@ -151,6 +151,18 @@ struct RestingHead {
   double positioning_feed_mm_s = 50;  ///< feed of a move to a closer standoff
 };
 
+/// A conventional touch cycle, set the way an installer sets one without measuring the machine
+/// (issue 11, `metron run --touch-baseline`): PTMEAS uses it instead of the characterised plan,
+/// at the same measuring feed, so that a program's time can be compared under both.
+struct TouchBaseline {
+  bool two_touch = false;                 ///< else one touch from SNSET/APPRCH at the measuring feed
+  double backoff_mm = 0;                  ///< two-touch: from the first latched centre to the second start
+  std::optional<double> first_feed_mm_s;  ///< two-touch: none = the characterisation's first-touch feed
+};
+
+/// Reads `one-touch` or `two-touch:BACKOFF_MM[:FIRST_FEED_MM_S]`; the error says what is wrong.
+tl::expected<TouchBaseline, std::string> parse_touch_baseline(const std::string& text);
+
 /// Everything a characterisation found, and the strategy derived from it.
 struct MachineCharacterisation {
   std::string world;                  ///< informative: the machine it was measured on
@@ -238,5 +250,8 @@ tl::expected<void, std::string> save_characterisation(const MachineCharacterisat
 tl::expected<MachineCharacterisation, std::string> load_characterisation(const std::string& path);
 /// A human-readable report.
 std::string format_characterisation(const MachineCharacterisation& c);
+/// How a baseline reads in a report ("two-touch, 1.000 mm back-off, first touch at 26.000 mm/s");
+/// `c` gives the default first-touch feed (may be null).
+std::string describe(const TouchBaseline& baseline, const MachineCharacterisation* c);
 
 }  // namespace metron::runtime

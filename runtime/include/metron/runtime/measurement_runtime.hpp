@@ -92,6 +92,8 @@ class MeasurementRuntime {
   [[nodiscard]] const MachineCharacterisation* characterisation() const {
     return m_characterisation ? &*m_characterisation : nullptr;
   }
+  /// A conventional touch cycle instead of the characterised one (`run --touch-baseline`).
+  void set_touch_baseline(std::optional<TouchBaseline> baseline) { m_touch_baseline = baseline; }
   /// Characterises the machine now (CALL/EXTERN,SYS,'CHARACTERISE [file]'): the routines of
   /// characterisation.hpp with default settings; the result is used from here on and written to
   /// `path` (relative to the output directory) when given; a report goes to the live events.
@@ -220,6 +222,7 @@ class MeasurementRuntime {
   std::map<std::string, PathDefinition> m_paths;
   std::map<std::string, geometry::Mesh> m_models;  ///< CAD models loaded by PATH/SECTION, by path
   std::optional<MachineCharacterisation> m_characterisation;
+  std::optional<TouchBaseline> m_touch_baseline;
   std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
   Mode m_mode = Mode::Auto;
