@@ -266,10 +266,10 @@ int main(int argc, char** argv) {
                                     {"meander", tight_meander(segments, 0.5)}};
   const ControllerConfig base;
   std::printf("segmented scanning bench: limits v=%.0f mm/s a=%.0f mm/s2 j=%.0f mm/s3 a_n=%.0f mm/s2, dt=%.0f ms, "
-              "low region L=%.0f mm at %.0f mm/s, Tp=%.1f*%.2f ms*P, retract %.0f mm, settle %.2f s\n",
+              "low region L=%.0f mm at %.0f mm/s, Tp=%.1f*%.2f us*P, retract %.0f mm, settle %.2f s\n",
               base.limits.path.speed_mm_s, base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3,
               base.limits.normal_acceleration_mm_s2, base.dt_s * 1e3, base.low.length_mm, base.low.speed_mm_s,
-              base.planning_margin, base.planning_s_per_segment * 1e3, base.retract_mm, base.contact_settle_s);
+              base.planning_margin, base.planning_s_per_segment * 1e6, base.retract_mm, base.contact_settle_s);
   std::printf("/limit: scan time over the reference (metron's interpolator, whole path buffered); /topp: over the\n"
               "independent time-optimal bound (speed, acceleration, centripetal limits, no jerk); /bound: over sum(length/v_limit);\n"
               "dNear/dNmax/dFar: stylus deflection error mean/max within 2 mm of a boundary, mean elsewhere;\n"

@@ -41,7 +41,8 @@ TEST(TimeOptimalBound, CircleRunsAtTheCentripetalSpeed) {
 }
 
 // No jerk-limited motion under the same limits can be faster: metron's reference (the whole
-// path buffered, jerk-limited) must not beat the bound.
+// path buffered, jerk-limited) must not beat the bound; with the jerk out of the way it comes
+// within 6 % of it.
 TEST(TimeOptimalBound, BelowTheJerkLimitedReferenceOnTheBenchPaths) {
   const ScanLimits limits;
   const BoundLimits lim{limits.path.speed_mm_s, limits.path.acceleration_mm_s2, limits.normal_acceleration_mm_s2};
@@ -54,6 +55,10 @@ TEST(TimeOptimalBound, BelowTheJerkLimitedReferenceOnTheBenchPaths) {
     ScanLimits stiff = limits;
     stiff.path.jerk_mm_s3 *= 1000;
     const auto ref_stiff = test_support::reference_profile(path, stiff, 0.001);
+    // Issue 11 item 5: where jerk is not what costs the time, the reference is close to the
+    // bound: the planner gives each quarter of a segment its own curvature limit (one limit per
+    // segment, the sharpest point's, left the meander 17.9 % above the bound).
+    EXPECT_LT(ref_stiff.time_s, 1.06 * b.time_s);
     std::printf("[figures] %.1f mm: bound %.3f s, reference %.3f s (+%.1f %%), with 1000x the jerk %.3f s (+%.1f %%), "
                 "sum(l/v) %.3f s\n",
                 b.length_mm, b.time_s, ref.time_s, 100 * (ref.time_s / b.time_s - 1), ref_stiff.time_s,

@@ -155,6 +155,43 @@ SegmentLimit segment_limit(const geometry::PccSegment& seg, const ScanLimits& li
   return out;
 }
 
+namespace {
+
+// The curvature limit at the samples of one parameter range (the planner's resolution).
+double curvature_limit(const geometry::PccSegment& seg, double u0, double u1, const ScanLimits& limits, double path_speed_mm_s) {
+  double kappa = 0;
+  for (double u : {u0, 0.5 * (u0 + u1), u1}) kappa = std::max(kappa, seg.curvature(u));
+  double v = limits.path.speed_mm_s;
+  if (kappa > 0) v = std::min(v, std::sqrt(limits.normal_acceleration_mm_s2 / kappa));
+  if (path_speed_mm_s > 0) v = std::min(v, path_speed_mm_s);
+  return v;
+}
+
+// Issue 11 item 5: one limit for a whole segment holds all of it at the speed its sharpest point
+// allows. A segment is split at quarters of its parameter into pieces with limits of their own;
+// neighbouring quarters whose limits agree within 0.1 % stay one piece (a straight segment is one).
+void append_segment_pieces(std::vector<LimitPiece>& pieces, const geometry::PccSegment& seg, double start_mm,
+                           double path_speed_mm_s, const ScanLimits& limits, std::size_t command_index) {
+  constexpr int parts = 4;
+  const double length = seg.length();
+  const std::size_t first = pieces.size();
+  double at = start_mm;
+  for (int k = 0; k < parts; ++k) {
+    const double u0 = seg.d_mm * k / parts, u1 = seg.d_mm * (k + 1) / parts;
+    const double v = curvature_limit(seg, u0, u1, limits, path_speed_mm_s);
+    const double end = k + 1 == parts ? start_mm + length : start_mm + seg.arc_length(u1);
+    if (pieces.size() > first && std::abs(pieces.back().limit_mm_s - v) <= 1e-3 * v) {
+      pieces.back().end_mm = end;
+      pieces.back().limit_mm_s = std::min(pieces.back().limit_mm_s, v);
+    } else {
+      pieces.push_back({at, end, v, k_inf, seg, start_mm, length, command_index});
+    }
+    at = end;
+  }
+}
+
+}  // namespace
+
 SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
                        std::span<const double> path_speed, std::size_t command_index,
                        double start_mm, PlanKind kind, const ScanLimits& limits,
@@ -168,10 +205,8 @@ SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
   plan.pieces.reserve(segments.size() + 1);
   double s = start_mm;
   for (std::size_t i = 0; i < segments.size(); ++i) {
-    const SegmentLimit sl =
-        segment_limit(segments[i], limits, i < path_speed.size() ? path_speed[i] : 0.0);
-    plan.pieces.push_back({s, s + sl.length_mm, sl.limit_mm_s, k_inf, segments[i], s, sl.length_mm, command_index});
-    s += sl.length_mm;
+    append_segment_pieces(plan.pieces, segments[i], s, i < path_speed.size() ? path_speed[i] : 0.0, limits, command_index);
+    s = plan.pieces.back().end_mm;
   }
   plan.end_mm = s;
   plan.low_speed_from_mm = s;

@@ -59,9 +59,10 @@ struct SegmentedScanSpec {
   std::size_t buffer_segments = 1'000'000;  ///< P: one buffer's capacity (large: every usual scan fits)
   segmented::SegmentedMode mode = segmented::SegmentedMode::Seed;  ///< boundary behaviour
   /// Net simulated planning time per segment. Default: the planner's measured cost on the build
-  /// host (bench_segmented: median 0.47 us per segment wall, p99 0.53 us CPU, for P = 1000),
-  /// rounded up to 1 us; a constant, so simulated results never depend on the wall clock.
-  double planning_s_per_segment = 1e-6;
+  /// host (bench_segmented, P = 1000, with a piece per quarter segment since issue 11: min 1.44,
+  /// median 1.47, p99 1.51 us per segment), rounded up to 2 us; a constant, so simulated results
+  /// never depend on the wall clock.
+  double planning_s_per_segment = 2e-6;
   double planning_fixed_s = 0;             ///< plus this per command
   double planning_margin = 1.3;            ///< Tp = margin * net planning time
   double low_speed_mm_s = 3;               ///< the seed's low speed (1-5 mm/s)

@@ -33,9 +33,10 @@ struct ControllerConfig {
   double dt_s = 0.001;                     ///< control cycle
   std::size_t buffer_segments = 1000;      ///< P: one buffer's capacity in segments
   /// Net simulated planning time per segment. Default: the planner's measured cost on the build
-  /// host (bench_segmented: median 0.47 us per segment wall, p99 0.53 us CPU, for P = 1000),
-  /// rounded up to 1 us; a constant, so simulated results never depend on the wall clock.
-  double planning_s_per_segment = 1e-6;
+  /// host (bench_segmented, P = 1000, with a piece per quarter segment since issue 11: min 1.44,
+  /// median 1.47, p99 1.51 us per segment), rounded up to 2 us; a constant, so simulated results
+  /// never depend on the wall clock.
+  double planning_s_per_segment = 2e-6;
   double planning_fixed_s = 0.0;           ///< plus this per command
   double planning_margin = 1.3;            ///< Tp = margin * net planning time (SEEDS.md 2 step 4)
   /// Actual planning time / net planning time for command i (default 1: plans take the net
