@@ -123,6 +123,7 @@ std::vector<std::string> payload_words(const Payload& payload) {
                    add(p.type);
                    if (p.side) w.emplace_back(runtime::dmis_word(*p.side));
                    if (p.bounded) w.emplace_back(*p.bounded ? "BND" : "UNBND");
+                   if (p.slot_ends) w.emplace_back(runtime::dmis_word(*p.slot_ends));
                    if (p.form) add(*p.form);
                  },
                  [&](const TolerancePayload& p) { add(p.kind); },

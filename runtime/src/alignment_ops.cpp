@@ -101,6 +101,7 @@ Geometry to_frame(const Geometry& g, const Frame& part_to_machine) {
   out.position = inv * g.position;
   out.direction = inv.linear() * g.direction;
   out.normal2 = inv.linear() * g.normal2;
+  out.slot_axis = inv.linear() * g.slot_axis;
   return out;
 }
 
@@ -109,6 +110,7 @@ Geometry to_machine(const Geometry& g, const Frame& part_to_machine) {
   out.position = part_to_machine * g.position;
   out.direction = part_to_machine.linear() * g.direction;
   out.normal2 = part_to_machine.linear() * g.normal2;
+  out.slot_axis = part_to_machine.linear() * g.slot_axis;
   return out;
 }
 

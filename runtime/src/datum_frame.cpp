@@ -27,6 +27,7 @@ Eigen::MatrixXd fixed_translations(const Geometry& nominal) {
     case FeatureType::Line:
     case FeatureType::Circle:
     case FeatureType::Arc:
+    case FeatureType::ClosedSlot:  // its centre, in its plane
     case FeatureType::Cylinder: {
       const Vec3 u = n.unitOrthogonal();
       Eigen::MatrixXd rows(2, 3);

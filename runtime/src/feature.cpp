@@ -16,6 +16,7 @@ const char* dmis_word(FeatureType type) {
     case FeatureType::ParallelPlanes: return "PARPLN";
     case FeatureType::GenericSurface: return "GSURF";
     case FeatureType::GenericCurve: return "GCURVE";
+    case FeatureType::ClosedSlot: return "CPARLN";
   }
   return "POINT";
 }
@@ -28,5 +29,7 @@ const char* dmis_word(Side side) {
   }
   return "";
 }
+
+const char* dmis_word(SlotEnds ends) { return ends == SlotEnds::Flat ? "FLAT" : "ROUND"; }
 
 }  // namespace metron::runtime

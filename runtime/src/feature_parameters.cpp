@@ -6,11 +6,14 @@ namespace metron::runtime {
 
 bool has_side(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
-         type == FeatureType::Cylinder || type == FeatureType::Cone || type == FeatureType::ParallelPlanes;
+         type == FeatureType::Cylinder || type == FeatureType::Cone || type == FeatureType::ParallelPlanes ||
+         type == FeatureType::ClosedSlot;
 }
 
 std::size_t feature_word_count(FeatureType type) {
-  return 2 + (type == FeatureType::Line ? 1 : 0) + (has_side(type) ? 1 : 0);
+  // LINE: BND|UNBND; CPARLN: ROUND|FLAT.
+  const bool extra_word = type == FeatureType::Line || type == FeatureType::ClosedSlot;
+  return 2 + (extra_word ? 1 : 0) + (has_side(type) ? 1 : 0);
 }
 
 // GSURF and GCURVE: FEAT/GSURF has no numbers (its points are its nominal); metron reports the
@@ -60,6 +63,13 @@ std::vector<FeatureParameter> feature_parameters(const Geometry& g) {
       break;
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: add(g.direction, ParameterUnit::Cosine); break;
+    case FeatureType::ClosedSlot:
+      // The normal of its plane, then its long axis (as the CPARLN statements of CMM programs).
+      add(g.direction, ParameterUnit::Cosine);
+      add(g.slot_axis, ParameterUnit::Cosine);
+      length(g.length_mm);
+      length(g.width_mm);
+      break;
   }
   return out;
 }

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "metron/stdlib/fitting/fit.hpp"
+#include "metron/stdlib/fitting/slot_fit.hpp"
 
 namespace metron::runtime {
 namespace {
@@ -27,6 +28,7 @@ fitting::Shape fit_shape(FeatureType type) {
     case FeatureType::Cylinder: return fitting::Shape::Cylinder;
     case FeatureType::Cone: return fitting::Shape::Cone;
     case FeatureType::ParallelPlanes:  // fitted here, below
+    case FeatureType::ClosedSlot:
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: return fitting::Shape::Plane;
   }
@@ -88,6 +90,47 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(c
   return std::make_pair(g, figures);
 }
 
+// CPARLN: the slot's outline fitted in its nominal plane (stdlib fitting/slot_fit.hpp) from the
+// ball centres projected onto it; the normal and the plane's height stay nominal (a 2-D feature,
+// as a circle's plane when its points are all at one depth).
+tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const Geometry& nominal,
+    const std::vector<MeasuredPoint>& points) {
+  const Vec3 n = nominal.direction.normalized();
+  const Vec3 u = (nominal.slot_axis - nominal.slot_axis.dot(n) * n).normalized();
+  const Vec3 v = n.cross(u);
+  std::vector<Eigen::Vector2d> centres;
+  for (const auto& p : points) {
+    const Vec3 d = p.centre_mm - nominal.position;
+    centres.emplace_back(d.dot(u), d.dot(v));
+  }
+  fitting::SlotOutline start;
+  start.length_mm = nominal.length_mm;
+  start.width_mm = nominal.width_mm;
+  start.round_ends = nominal.slot_ends == SlotEnds::Round;
+  const auto fit = fitting::fit_slot(centres, points.front().ball_radius_mm, nominal.side != Side::Outer, start);
+  if (!fit) {
+    int on[4] = {0, 0, 0, 0};
+    for (const auto& c : centres) ++on[static_cast<int>(fitting::nearest_part(start, c))];
+    if (fit.error() == fitting::FitFailure::TooFewPoints)
+      return tl::unexpected(fmt::format(
+          "cannot fit a CPARLN to {} point{}: it needs 5, with points on both sides ({} and {}) and both ends ({} "
+          "toward +axis, {} toward -axis)",
+          points.size(), points.size() == 1 ? "" : "s", on[static_cast<int>(fitting::SlotPart::PlusSide)],
+          on[static_cast<int>(fitting::SlotPart::MinusSide)], on[static_cast<int>(fitting::SlotPart::PlusEnd)],
+          on[static_cast<int>(fitting::SlotPart::MinusEnd)]));
+    return tl::unexpected(
+        fmt::format("cannot fit a CPARLN to {} points: {}", points.size(), fitting::to_string(fit.error())));
+  }
+  const fitting::SlotOutline& s = fit->outline;
+  Geometry g = nominal;
+  g.position = nominal.position + s.centre.x() * u + s.centre.y() * v;
+  g.direction = n;
+  g.slot_axis = std::cos(s.angle_rad) * u + std::sin(s.angle_rad) * v;
+  g.length_mm = s.length_mm;
+  g.width_mm = s.width_mm;
+  return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
+}
+
 // GSURF, GCURVE: nothing to fit. Each point's deviation is along its own nominal normal from
 // its nominal (the PTMEAS); the actual is the points' centroid and mean nominal normal.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(const Geometry& nominal,
@@ -122,6 +165,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     const std::vector<MeasuredPoint>& points) {
   if (points.empty()) return tl::unexpected(std::string("no points were measured"));
   if (nominal.type == FeatureType::ParallelPlanes) return fit_parallel_planes(nominal, points);
+  if (nominal.type == FeatureType::ClosedSlot) return fit_closed_slot(nominal, points);
   if (is_point_set(nominal.type)) return point_set_actual(nominal, points);
   std::vector<Vec3> centres;
   fitting::Compensation comp;
@@ -170,6 +214,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
       break;
     }
     case FeatureType::ParallelPlanes:
+    case FeatureType::ClosedSlot:
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: break;  // above
     case FeatureType::Cone: {

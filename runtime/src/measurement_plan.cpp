@@ -47,6 +47,34 @@ Vec3 line_surface_normal(const Geometry& g) {
   return n.norm() < 1e-12 ? any_perpendicular(g.direction) : Vec3(n.normalized());
 }
 
+// A CPARLN's frame: its long axis `a` made normal to the plane normal `n`, and b = n x a.
+struct SlotFrame {
+  Vec3 n, a, b;
+};
+SlotFrame slot_frame(const Geometry& g) {
+  const Vec3 n = g.direction.normalized();
+  Vec3 a = g.slot_axis - g.slot_axis.dot(n) * n;
+  a = a.norm() < 1e-12 ? any_perpendicular(n) : Vec3(a.normalized());
+  return {n, a, n.cross(a)};
+}
+
+// The outline's normal out of the slot's region nearest `point` (its plane's in-plane part):
+// ROUND ends beyond the straight part are semicircles; FLAT ends are the nearer of side and end.
+Vec3 slot_outward(const Geometry& g, const Vec3& point) {
+  const SlotFrame f = slot_frame(g);
+  const Vec3 d = point - g.position;
+  const double x = d.dot(f.a), y = d.dot(f.b);
+  const double sx = x < 0 ? -1.0 : 1.0, sy = y < 0 ? -1.0 : 1.0;
+  if (g.slot_ends == SlotEnds::Round) {
+    const double h = std::max(0.0, 0.5 * (g.length_mm - g.width_mm));
+    if (std::abs(x) <= h) return sy * f.b;
+    const Vec3 r = (x - sx * h) * f.a + y * f.b;
+    return r.norm() < 1e-12 ? Vec3(sx * f.a) : Vec3(r.normalized());
+  }
+  const bool end = std::abs(std::abs(x) - 0.5 * g.length_mm) < std::abs(std::abs(y) - 0.5 * g.width_mm);
+  return end ? Vec3(sx * f.a) : Vec3(sy * f.b);
+}
+
 }  // namespace
 
 int minimum_points(FeatureType type) {
@@ -55,6 +83,7 @@ int minimum_points(FeatureType type) {
     case FeatureType::Line: return 2;
     case FeatureType::Plane: return 3;
     case FeatureType::ParallelPlanes: return 4;  // three on one face and one on the other fix both
+    case FeatureType::ClosedSlot: return 5;      // centre, angle, length, width: two on a side, one on each other part
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: return 1;
     case FeatureType::Circle:
@@ -81,6 +110,7 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
       return (g.side == Side::Inner ? -face : face) * axis;
     }
     case FeatureType::Line: return line_surface_normal(g);
+    case FeatureType::ClosedSlot: return sign * slot_outward(g, point);
     case FeatureType::Circle:
     case FeatureType::Arc:
     case FeatureType::Cylinder: return sign * radial(point, g.position, axis);
@@ -150,6 +180,60 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       steps.push_back(over(faces[0].back()));
       steps.push_back(over(faces[1].front()));
       steps.insert(steps.end(), faces[1].begin(), faces[1].end());
+      break;
+    }
+    case FeatureType::ClosedSlot: {
+      // Like a circle, DEPTH below the nominal centre; in order around the outline: the -b side
+      // toward +a, the +a end, the +b side back, the -a end. An inner slot is convex, so the
+      // probe goes straight from one approach point to the next; around a tab it walks outside,
+      // through the corners of a rectangle beyond the approach distance.
+      const SlotFrame f = slot_frame(g);
+      const Vec3 c = g.position - probe.depth_mm * (f.n.dot(up) >= 0 ? up : Vec3(-up));
+      const bool round = g.slot_ends == SlotEnds::Round;
+      const int n = std::max(count > 0 ? count : (round ? 10 : 8), minimum_points(g.type));
+      const int per_end = round ? (n >= 10 ? 3 : 1) : (n >= 8 ? 2 : 1);
+      const int on_sides = n - 2 * per_end;
+      const double half_w = 0.5 * g.width_mm, half_l = 0.5 * g.length_mm;
+      // Side points spread over 70 % of the straight part (clear of a flat end's corners by a ball
+      // and a millimetre); flat-end points over 60 % of what the ball leaves of the width.
+      const double straight = round ? std::max(0.0, half_l - half_w) : std::max(0.0, half_l - ball_radius_mm - 1.0);
+      const double across_end = std::max(0.0, half_w - ball_radius_mm - 0.5);
+      const auto spread = [](int k, int m) { return m == 1 ? 0.0 : -1.0 + 2.0 * k / (m - 1); };
+      std::vector<std::vector<Vec3>> parts(4);  // -b side, +a end, +b side, -a end, each in walking order
+      const int minus_side = (on_sides + 1) / 2, plus_side = on_sides / 2;
+      for (int k = 0; k < minus_side; ++k)
+        parts[0].push_back(c + 0.7 * straight * spread(k, minus_side) * f.a - half_w * f.b);
+      for (int k = 0; k < plus_side; ++k)
+        parts[2].push_back(c - 0.7 * straight * spread(k, plus_side) * f.a + half_w * f.b);
+      for (int end = 0; end < 2; ++end) {
+        const double s_end = end == 0 ? 1.0 : -1.0;
+        for (int k = 0; k < per_end; ++k) {
+          const double t = spread(k, per_end);
+          const Vec3 p = round ? Vec3(c + s_end * (std::max(0.0, half_l - half_w) * f.a +
+                                                   half_w * (std::cos(t * std::numbers::pi / 4) * f.a +
+                                                             std::sin(t * std::numbers::pi / 4) * f.b)))
+                               : Vec3(c + s_end * (half_l * f.a + 0.6 * across_end * t * f.b));
+          parts[end == 0 ? 1 : 3].push_back(p);
+        }
+      }
+      const double out_x = half_l + probe.approach_mm + 1.0, out_y = half_w + probe.approach_mm + 1.0;
+      const Vec3 corners[4] = {c + out_x * f.a - out_y * f.b, c + out_x * f.a + out_y * f.b,
+                               c - out_x * f.a + out_y * f.b, c - out_x * f.a - out_y * f.b};
+      for (int part = 0; part < 4; ++part) {
+        if (!inner && !steps.empty())
+          steps.push_back({PlannedStep::Kind::GoTo, corners[(part + 3) % 4], Vec3::UnitZ()});
+        for (std::size_t k = 0; k < parts[part].size(); ++k) {
+          const Vec3& p = parts[part][k];
+          if (!inner && round && (part == 1 || part == 3) && k > 0) {
+            // Around a round end at the walk radius, between the two approach directions.
+            const Vec3 centre = c + (part == 1 ? 1.0 : -1.0) * std::max(0.0, half_l - half_w) * f.a;
+            const Vec3 mid = (p - centre).normalized() + (parts[part][k - 1] - centre).normalized();
+            const Vec3 walk = centre + (half_w + probe.approach_mm + 1.0) * mid.normalized();
+            steps.push_back({PlannedStep::Kind::GoTo, walk, Vec3::UnitZ()});
+          }
+          steps.push_back({PlannedStep::Kind::Probe, p, nominal_normal_at(g, p)});
+        }
+      }
       break;
     }
     case FeatureType::Line: {

@@ -42,6 +42,7 @@ Result<void> MeasurementRuntime::define_feature(const std::string& label, const 
   f.nominal_frame = m_alignment.part_to_machine;
   f.nominal.direction.normalize();
   if (f.nominal.normal2.norm() > 0) f.nominal.normal2.normalize();
+  if (f.nominal.slot_axis.norm() > 0) f.nominal.slot_axis.normalize();
   f.defined_at = span;
   if (!m_features.count(label)) m_feature_order.push_back(label);
   m_features[label] = std::move(f);
@@ -57,6 +58,7 @@ Result<void> MeasurementRuntime::define_reported_actual(const std::string& label
   Geometry actual = to_machine(actual_current, m_alignment.part_to_machine);
   actual.direction.normalize();
   if (actual.normal2.norm() > 0) actual.normal2.normalize();
+  if (actual.slot_axis.norm() > 0) actual.slot_axis.normalize();
   f.actual = actual;
   f.source = ActualSource::Measured;
   f.points.clear();

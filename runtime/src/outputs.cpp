@@ -31,7 +31,7 @@ bool has_diameter(FeatureType type) {
          type == FeatureType::Cylinder;
 }
 bool has_length(const Geometry& g) {
-  return g.type == FeatureType::Cylinder || g.type == FeatureType::Cone ||
+  return g.type == FeatureType::Cylinder || g.type == FeatureType::Cone || g.type == FeatureType::ClosedSlot ||
          (g.type == FeatureType::Line && g.bounded);
 }
 
@@ -100,7 +100,13 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
   if (has_diameter(nominal.type))
     rows.push_back(
         {"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
-  if (nominal.type == FeatureType::ParallelPlanes)
+  if (nominal.type == FeatureType::ClosedSlot) {
+    const char* axis_cosines[] = {"AI", "AJ", "AK"};  // the long axis
+    for (int i = 0; i < 3; ++i)
+      rows.push_back({axis_cosines[i], Unit::Cosine, nominal.slot_axis[i],
+                      act([i](const Geometry& g) { return g.slot_axis[i]; })});
+  }
+  if (nominal.type == FeatureType::ParallelPlanes || nominal.type == FeatureType::ClosedSlot)
     rows.push_back({"W", Unit::Millimetre, nominal.width_mm, act([](const Geometry& g) { return g.width_mm; })});
   if (nominal.type == FeatureType::Arc) {
     rows.push_back({"START", Unit::Degree, nominal.start_angle_deg,
@@ -211,7 +217,11 @@ json geometry_json(const Geometry& g) {
     j["bounded"] = g.bounded;
   }
   if (has_diameter(g.type)) j["diameter_mm"] = number(g.diameter_mm);
-  if (g.type == FeatureType::ParallelPlanes) j["width_mm"] = number(g.width_mm);
+  if (g.type == FeatureType::ClosedSlot) {
+    j["slot_axis"] = vector(g.slot_axis);
+    j["ends"] = dmis_word(g.slot_ends);
+  }
+  if (g.type == FeatureType::ParallelPlanes || g.type == FeatureType::ClosedSlot) j["width_mm"] = number(g.width_mm);
   if (has_length(g)) j["length_mm"] = number(g.length_mm);
   if (g.type == FeatureType::Cone) j["apex_angle_deg"] = number(g.apex_angle_deg);
   if (g.type == FeatureType::Arc) {
@@ -227,7 +237,9 @@ json deviation_json(const Geometry& nominal, const Geometry& actual) {
   if (has_direction(nominal.type)) j["direction"] = vector(actual.direction - nominal.direction);
   if (nominal.type == FeatureType::Line) j["normal2"] = vector(actual.normal2 - nominal.normal2);
   if (has_diameter(nominal.type)) j["diameter_mm"] = number(actual.diameter_mm - nominal.diameter_mm);
-  if (nominal.type == FeatureType::ParallelPlanes) j["width_mm"] = number(actual.width_mm - nominal.width_mm);
+  if (nominal.type == FeatureType::ClosedSlot) j["slot_axis"] = vector(actual.slot_axis - nominal.slot_axis);
+  if (nominal.type == FeatureType::ParallelPlanes || nominal.type == FeatureType::ClosedSlot)
+    j["width_mm"] = number(actual.width_mm - nominal.width_mm);
   if (has_length(nominal)) j["length_mm"] = number(actual.length_mm - nominal.length_mm);
   if (nominal.type == FeatureType::Cone)
     j["apex_angle_deg"] = number(actual.apex_angle_deg - nominal.apex_angle_deg);
@@ -395,6 +407,7 @@ std::string dmis_feature_line(const FeatureReport& report) {
       fmt::format("{}({}) = FEAT/{}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
   if (g.type == FeatureType::Line) head += g.bounded ? ", BND" : ", UNBND";
   if (has_side(g.type)) head += fmt::format(", {}", side_word(g));
+  if (g.type == FeatureType::ClosedSlot) head += fmt::format(", {}", dmis_word(g.slot_ends));
   head += ", CART";
   std::vector<std::string> fields;
   for (const auto& p : feature_parameters(g)) fields.push_back(dmis_number(p.value, p.unit, report.units));

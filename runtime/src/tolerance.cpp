@@ -79,6 +79,7 @@ const char* lowercase_name(FeatureType type) {
     case FeatureType::ParallelPlanes: return "pair of parallel planes";
     case FeatureType::GenericSurface: return "GSURF";
     case FeatureType::GenericCurve: return "GCURVE";
+    case FeatureType::ClosedSlot: return "closed slot (CPARLN)";
   }
   return "point";
 }
@@ -174,6 +175,11 @@ tl::expected<Vec3, std::string> unit(const Vec3& v, const std::string& what) {
   return Vec3(v / n);
 }
 
+/// The direction an orientation tolerance measures: a CPARLN's long axis, else `direction`.
+const Vec3& oriented_direction(const Geometry& g) {
+  return g.type == FeatureType::ClosedSlot ? g.slot_axis : g.direction;
+}
+
 bool has_axis(FeatureType type) {
   return type == FeatureType::Line || type == FeatureType::Cylinder || type == FeatureType::Cone;
 }
@@ -183,15 +189,22 @@ bool has_axis(FeatureType type) {
 Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
                                     FeatureType::Cylinder};
-  static constexpr Types k_widths = {FeatureType::ParallelPlanes};
+  static constexpr Types k_widths = {FeatureType::ParallelPlanes, FeatureType::ClosedSlot};
+  static constexpr Types k_lengths = {FeatureType::ClosedSlot};
   const bool width = spec.kind == ToleranceKind::Width;
-  if (!is_one_of(feature.nominal.type, width ? k_widths : k_types))
-    return wrong_type(spec.kind, width ? k_widths : k_types, feature.nominal.type);
+  // DMIS TOL/WIDTH,...,LONG: the long side of a CPARLN, its length; SHORT (the default) its width.
+  const bool length = width && spec.long_side;
+  const Types& types = length ? k_lengths : width ? k_widths : k_types;
+  if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
   const double scale = spec.kind == ToleranceKind::Rad ? 0.5 : 1.0;
-  result.actual = width ? (*actual)->width_mm : scale * (*actual)->diameter_mm;
-  result.nominal = width ? feature.nominal.width_mm : scale * feature.nominal.diameter_mm;
+  const auto size_of = [&](const Geometry& g) {
+    return length ? g.length_mm : width ? g.width_mm : scale * g.diameter_mm;
+  };
+  result.actual = size_of(**actual);
+  result.nominal = size_of(feature.nominal);
+  if (length) add_note(result, "LONG: the length of the slot, end to end");
   result.value = result.actual - result.nominal;
   set_limits(result, spec.lower, spec.upper);
   return result;
@@ -283,7 +296,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
                      ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
                                     FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                    FeatureType::Line};
+                                    FeatureType::Line,   FeatureType::ClosedSlot};
   const Geometry& nominal = feature.nominal;
   if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
   const auto actual_or = actual_of(feature);
@@ -453,7 +466,8 @@ double axis_length_mm(const Feature& feature, const Geometry& actual, const Vec3
 
 Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
                              const ToleranceContext& context, ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder};
+  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder,
+                                    FeatureType::ClosedSlot};  // a CPARLN: its long axis
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual_or = actual_of(feature);
   if (!actual_or) return Error(actual_or.error());
@@ -461,7 +475,7 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
   const auto datum = primary_datum(spec, context);
   if (!datum) return Error(datum.error());
   const Vec3& d = datum->direction;
-  const auto own = unit(actual.direction, "the actual of " + feature.label);
+  const auto own = unit(oriented_direction(actual), "the actual of " + feature.label);
   if (!own) return Error(own.error());
   const bool perp = spec.kind == ToleranceKind::Perp;
 
@@ -538,12 +552,13 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
 Outcome evaluate_anglb(const ToleranceSpec& spec, const std::vector<const Feature*>& features,
                        const ToleranceContext& context, ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line,   FeatureType::Cylinder,
-                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc};
+                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc,
+                                    FeatureType::ClosedSlot};  // a CPARLN: its long axis
   const Feature& feature = *features.front();
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
-  const auto own = unit((*actual)->direction, "the actual of " + feature.label);
+  const auto own = unit(oriented_direction(**actual), "the actual of " + feature.label);
   if (!own) return Error(own.error());
 
   tl::expected<Reference, std::string> reference = Error("");

@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <Eigen/Core>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -278,6 +281,171 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
       << one_side.diagnostics;
   const auto bad = check("DMISMN/'p', 5.0\nF(S) = FEAT/PARPLN, INNER, CART, 0, 0, 0, 1, 0, 0, -2\nENDFIL\n");
   EXPECT_TRUE(bad.has("shop.dmi:2:") && bad.has("the width of F(S) must be positive")) << bad.text;
+}
+
+// ---- FEAT/CPARLN: closed slots -----------------------------------------------------------------
+
+/// The hidden truth of a slot of programs/worlds/block_slot.json, read from the file's design
+/// and deviations (not from a run): the side and end planes where the deviations put them, the
+/// end circles likewise. PART coordinates.
+struct SlotTruth {
+  double centre_x = 0, centre_y = 0, length_mm = 0, width_mm = 0;
+};
+
+/// Every primitive of a CSG node, depth first.
+void primitives(const nlohmann::json& node, std::vector<nlohmann::json>& out) {
+  if (node.contains("type")) return out.push_back(node);
+  for (const auto& item : node.items())
+    for (const auto& child : item.value()) primitives(child, out);
+}
+
+SlotTruth slot_truth(const std::string& slot) {
+  std::ifstream in(source_dir / "programs/worlds/block_slot.json");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto world = nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/true);
+  const auto& deviations = world["part"]["deviations"];
+  std::vector<nlohmann::json> all;
+  primitives(world["part"]["design"], all);
+  const auto deviation = [&](const std::string& name, const char* key, std::size_t i) {
+    if (!deviations.contains(name) || !deviations[name].contains(key)) return 0.0;
+    const auto& v = deviations[name][key];
+    return v.is_array() ? v[i].get<double>() : v.get<double>();
+  };
+  // Extent of the slot toward +x, -x, +y, -y: a half-space's plane n.p + size + n.offset along
+  // its normal; a cylinder's centre (with its offset) plus or minus its radius (with its size).
+  double extent[4] = {-1e9, -1e9, -1e9, -1e9};
+  for (const auto& p : all) {
+    const std::string name = p.value("name", "");
+    if (name.rfind(slot + "_", 0) != 0 || name.find("FLOOR") != std::string::npos) continue;
+    const Eigen::Vector3d offset(deviation(name, "offset_mm", 0), deviation(name, "offset_mm", 1), deviation(name, "offset_mm", 2));
+    if (p["type"] == "half_space") {
+      const auto vec = [&](const char* key) {
+        return Eigen::Vector3d(p[key][0].get<double>(), p[key][1].get<double>(), p[key][2].get<double>());
+      };
+      const Eigen::Vector3d point = vec("point"), n = vec("normal");
+      if (name.find("CAP") != std::string::npos) continue;  // inside the end circles
+      const double along = n.dot(point + offset) + deviation(name, "size_mm", 0);
+      extent[n.x() > 0.5 ? 0 : n.x() < -0.5 ? 1 : n.y() > 0.5 ? 2 : 3] = along;
+    } else {
+      const double r = 0.5 * (p["diameter_mm"].get<double>() + deviation(name, "diameter_mm", 0));
+      const double x = p["point"][0].get<double>() + offset.x();
+      extent[0] = std::max(extent[0], x + r);
+      extent[1] = std::max(extent[1], -(x - r));
+    }
+  }
+  const bool along_x = slot == "SLOT1";
+  SlotTruth t;
+  t.centre_x = 0.5 * (extent[0] - extent[1]);
+  t.centre_y = 0.5 * (extent[2] - extent[3]);
+  t.length_mm = along_x ? extent[0] + extent[1] : extent[2] + extent[3];
+  t.width_mm = along_x ? extent[2] + extent[3] : extent[0] + extent[1];
+  return t;
+}
+
+// FEAT/CPARLN on the slots of programs/worlds/block_slot.json: the ROUND slot measured once with
+// PTMEAS (on both sides and around both ends) and once planned by metron (MODE/AUTO), the FLAT
+// one planned; WIDTH (SHORT: the width, LONG: the length) and POS against the world's truth.
+TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
+  const SlotTruth round = slot_truth("SLOT1"), flat = slot_truth("SLOT2");
+  // The truth as the world file's comment states it, so a misread file does not pass unseen.
+  EXPECT_NEAR(round.width_mm, 10.03, 1e-12);
+  EXPECT_NEAR(round.length_mm, 30.05, 1e-12);
+  EXPECT_NEAR(flat.length_mm, 30.03, 1e-12);
+  EXPECT_NEAR(flat.centre_y, 49.995, 1e-12);
+  const std::string slot1 = "F(SLOT1) = FEAT/CPARLN, INNER, ROUND, CART, 80, 25, 35, 0, 0, 1, 1, 0, 0, 30, 10\n";
+  const std::string text =
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/80, 25, 80\n" + slot1 +
+      "MEAS/CPARLN, F(SLOT1), 8\n  GOTO/80, 25, 35\n"
+      "  PTMEAS/CART, 73, 20, 35, 0, 1, 0\n  PTMEAS/CART, 87, 20, 35, 0, 1, 0\n"
+      "  PTMEAS/CART, 95, 25, 35, -1, 0, 0\n  PTMEAS/CART, 93.53553, 28.53553, 35, -0.70711, -0.70711, 0\n"
+      "  PTMEAS/CART, 87, 30, 35, 0, -1, 0\n  PTMEAS/CART, 73, 30, 35, 0, -1, 0\n"
+      "  PTMEAS/CART, 65, 25, 35, 1, 0, 0\n  PTMEAS/CART, 66.46447, 21.46447, 35, 0.70711, 0.70711, 0\n"
+      "  GOTO/80, 25, 35\n  GOTO/80, 25, 80\nENDMES\n"
+      "MODE/AUTO\nF(SLOT1A) = FEAT/CPARLN, INNER, ROUND, CART, 80, 25, 35, 0, 0, 1, 1, 0, 0, 30, 10\n"
+      "MEAS/CPARLN, F(SLOT1A), 10\nENDMES\n"
+      "F(SLOT2) = FEAT/CPARLN, INNER, FLAT, CART, 145, 50, 35, 0, 0, 1, 0, 1, 0, 30, 10\nMEAS/CPARLN, F(SLOT2), 8\nENDMES\n"
+      "T(W) = TOL/WIDTH, -0.01, 0.01\nT(L) = TOL/WIDTH, -0.02, 0.02, LONG\nT(P2) = TOL/POS, 2D, 0.05\n"
+      "T(P3) = TOL/POS, 3D, 0.05\n"
+      "OUTPUT/FA(SLOT1), TA(W), TA(L), TA(P2), TA(P3)\nOUTPUT/FA(SLOT1A), TA(W), TA(L), TA(P2)\n"
+      "OUTPUT/FA(SLOT2), TA(W), TA(L), TA(P2)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_slot.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  // The probe's noise and pre-travel left after qualification: a micrometre.
+  constexpr double tol_mm = 1e-3;
+  // One OUTPUT's tolerance results in order (the labels repeat over the OUTPUTs).
+  std::vector<const metron::runtime::ToleranceResult*> results;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) results.push_back(t);
+  ASSERT_EQ(results.size(), 10U);
+  const struct {
+    const char* label;
+    SlotTruth truth;
+    double nominal_x, nominal_y;
+    std::size_t first_result;
+    std::size_t points;
+  } cases[] = {{"SLOT1", round, 80, 25, 0, 8}, {"SLOT1A", round, 80, 25, 4, 10}, {"SLOT2", flat, 145, 50, 7, 8}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.label);
+    const auto* f = report(*r.session, c.label);
+    ASSERT_TRUE(f && f->actual);
+    EXPECT_EQ(f->point_count, c.points);
+    EXPECT_NEAR(f->actual->position.x(), c.truth.centre_x, tol_mm);
+    EXPECT_NEAR(f->actual->position.y(), c.truth.centre_y, tol_mm);
+    EXPECT_NEAR(f->actual->width_mm, c.truth.width_mm, tol_mm);
+    EXPECT_NEAR(f->actual->length_mm, c.truth.length_mm, tol_mm);
+    EXPECT_LT(f->fit->form_mm, tol_mm);
+    const auto& width = *results[c.first_result];
+    const auto& length = *results[c.first_result + 1];
+    const auto& pos = *results[c.first_result + 2];
+    EXPECT_NEAR(width.value, c.truth.width_mm - 10, tol_mm);
+    EXPECT_NEAR(length.value, c.truth.length_mm - 30, tol_mm);
+    EXPECT_NEAR(pos.value, 2 * std::hypot(c.truth.centre_x - c.nominal_x, c.truth.centre_y - c.nominal_y), 2 * tol_mm);
+    EXPECT_FALSE(width.in_tolerance);
+    EXPECT_FALSE(length.in_tolerance);
+    EXPECT_TRUE(pos.in_tolerance);
+  }
+  EXPECT_NEAR(results[3]->value, results[2]->value, 1e-9);  // 3D: the centre stays in the nominal's plane
+
+  // Points on the sides only: an error that says which parts have none.
+  const auto sides_only = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                              "GOTO/80, 25, 80\n" + slot1 + "MEAS/CPARLN, F(SLOT1), 6\n  GOTO/80, 25, 35\n"
+                              "  PTMEAS/CART, 73, 20, 35, 0, 1, 0\n  PTMEAS/CART, 80, 20, 35, 0, 1, 0\n"
+                              "  PTMEAS/CART, 87, 20, 35, 0, 1, 0\n  PTMEAS/CART, 87, 30, 35, 0, -1, 0\n"
+                              "  PTMEAS/CART, 80, 30, 35, 0, -1, 0\n  PTMEAS/CART, 73, 30, 35, 0, -1, 0\n"
+                              "  GOTO/80, 25, 80\nENDMES\nENDFIL\n",
+                              source_dir / "programs/worlds/block_slot.json");
+  EXPECT_NE(sides_only.diagnostics.find("run.dmi:6:"), std::string::npos) << sides_only.diagnostics;
+  EXPECT_NE(sides_only.diagnostics.find("cannot fit a CPARLN to 6 points: it needs 5, with points on both sides (3 and 3) "
+                                        "and both ends (0 toward +axis, 0 toward -axis)"),
+            std::string::npos)
+      << sides_only.diagnostics;
+}
+
+// Bad CPARLN statements: positioned errors that say what is wrong.
+TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
+  const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, " + rest + "\nENDFIL\n"); };
+  const auto arity = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30");
+  EXPECT_TRUE(arity.has("shop.dmi:2:") && arity.has("FEAT/CPARLN expects 11 numbers (x,y,z,i1,j1,k1,i2,j2,k2,len,wid")) << arity.text;
+  const auto ends = feat("INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 10");
+  EXPECT_TRUE(ends.has("shop.dmi:2:28: error: expected ROUND or FLAT after CPARLN,INNER|OUTER")) << ends.text;
+  const auto zero = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 0, 0, 0, 30, 10");
+  EXPECT_TRUE(zero.has("shop.dmi:2:") && zero.has("the long axis i2,j2,k2 is zero")) << zero.text;
+  const auto slanted = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 1, 30, 10");
+  EXPECT_TRUE(slanted.has("shop.dmi:2:") &&
+              slanted.has("the long axis i2,j2,k2 of F(S) is not perpendicular to the normal i1,j1,k1 of its plane (at 45.000 deg to it, not 90)"))
+      << slanted.text;
+  const auto wide = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 10, 12");
+  EXPECT_TRUE(wide.has("shop.dmi:2:") && wide.has("the width 12 of F(S) is not less than its length 10")) << wide.text;
+  EXPECT_EQ(feat("INNER, FLAT, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 10, 12").errors, 0U);  // a FLAT slot may be square-ish
+  const auto negative = feat("OUTER, FLAT, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, -1");
+  EXPECT_TRUE(negative.has("the width of F(S) must be positive")) << negative.text;
+  // WIDTH applies to a CPARLN; SYMMTY does not.
+  const auto symmetry = check("DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 10\n"
+                              "F(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nDATDEF/FA(P), DAT(A)\n"
+                              "T(W) = TOL/WIDTH, -0.1, 0.1, LONG\nT(S) = TOL/SYMMTY, 0.1, DAT(A)\nOUTPUT/FA(S), TA(W)\n"
+                              "OUTPUT/FA(S), TA(S)\nENDFIL\n");
+  EXPECT_EQ(symmetry.errors, 1U) << symmetry.text;
+  EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
 }
 
 // FEAT/GSURF and GCURVE: features known only by the points a program probes on them (CAMIO and

@@ -299,7 +299,7 @@ TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
       << r->note;
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(s, {&pl}).error(),
-            "POS applies to a point, circle, arc, sphere, cylinder, cone or line, not to a PLANE");
+            "POS applies to a point, circle, arc, sphere, cylinder, cone, line or closed slot (CPARLN), not to a PLANE");
 }
 
 // ------------------------------------------------------------------ DISTB
@@ -513,7 +513,7 @@ TEST(ToleranceOrientation, DatumErrors) {
             "datum A is a POINT: it has no direction to measure PERP against");
   const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
                             round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
-  EXPECT_EQ(evaluate(s, {&c}, context).error(), "PERP applies to a plane, line or cylinder, not to a CIRCLE");
+  EXPECT_EQ(evaluate(s, {&c}, context).error(), "PERP applies to a plane, line, cylinder or closed slot (CPARLN), not to a CIRCLE");
 }
 
 // ------------------------------------------------------------------ ANGLB
@@ -557,7 +557,7 @@ TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
   EXPECT_EQ(r->note, "angle between the axis of L1 and the axis of L2");
   const Feature p = feature("P1", point({0, 0, 0}), point({0, 0, 0}));
   EXPECT_EQ(evaluate(s, {&p}, context).error(),
-            "ANGLB applies to a plane, line, cylinder, cone, circle or arc, not to a POINT");
+            "ANGLB applies to a plane, line, cylinder, cone, circle, arc or closed slot (CPARLN), not to a POINT");
 }
 
 // ------------------------------------------------------------------ PROFL, PROFP
@@ -911,6 +911,66 @@ TEST(ToleranceSymmetry, TwiceTheFarthestMedianPointFromTheDatumMedianPlane) {
             "datum A is not a plane: SYMMTY needs a datum median plane (a PARPLN) or a PLANE");
   s.datums.clear();
   EXPECT_FALSE(evaluate(s, {&slot}));
+}
+
+// ------------------------------------------------------------------ CPARLN
+
+/// A closed slot along `axis` in the plane normal to z, 30 x 10, centre `centre`.
+Geometry closed_slot(const Vec3& centre, const Vec3& axis, double length_mm = 30, double width_mm = 10) {
+  Geometry g;
+  g.type = FeatureType::ClosedSlot;
+  g.side = Side::Inner;
+  g.position = centre;
+  g.direction = Vec3::UnitZ();
+  g.slot_axis = axis.normalized();
+  g.length_mm = length_mm;
+  g.width_mm = width_mm;
+  return g;
+}
+
+// WIDTH (SHORT) is the width, WIDTH,LONG the length; POS its centre; PARLEL and ANGLB its long
+// axis (analytic answers: the axis turned 0.1 deg in its plane over a 30.05 mm slot).
+TEST(ToleranceWidth, ClosedSlotWidthLengthCentreAndAxis) {
+  const double a = 0.1 * k_pi / 180;
+  const Feature slot = feature("SLOT", closed_slot({0, 0, 0}, Vec3::UnitX()),
+                               closed_slot({0.02, 0.01, 0}, {std::cos(a), std::sin(a), 0}, 30.05, 10.03));
+  ToleranceSpec w = spec(ToleranceKind::Width);
+  w.lower = -0.01;
+  w.upper = 0.01;
+  const auto width = evaluate(w, {&slot});
+  ASSERT_TRUE(width) << width.error();
+  EXPECT_NEAR(width->value, 0.03, k_tight);
+  EXPECT_FALSE(width->in_tolerance);
+  w.long_side = true;
+  const auto length = evaluate(w, {&slot});
+  ASSERT_TRUE(length) << length.error();
+  EXPECT_NEAR(length->value, 0.05, k_tight);
+  ToleranceSpec pos = spec(ToleranceKind::Pos);
+  pos.zone = 0.05;
+  const auto p = evaluate(pos, {&slot});
+  ASSERT_TRUE(p) << p.error();
+  EXPECT_NEAR(p->value, 2 * std::hypot(0.02, 0.01), k_tight);
+  const Datum x_axis = datum("A", line({0, 0, 0}, Vec3::UnitX(), 100));
+  ToleranceContext context;
+  context.datums = {&x_axis};
+  ToleranceSpec parallel = spec(ToleranceKind::Parlel);
+  parallel.zone = 0.1;
+  parallel.datums = {"A"};
+  const auto par = evaluate(parallel, {&slot}, context);
+  ASSERT_TRUE(par) << par.error();
+  EXPECT_NEAR(par->value, 30.05 * std::sin(a), 1e-9);
+  ToleranceSpec angle = spec(ToleranceKind::Anglb);
+  angle.datums = {"A"};
+  angle.upper = 1;
+  const auto ang = evaluate(angle, {&slot}, context);
+  ASSERT_TRUE(ang) << ang.error();
+  EXPECT_NEAR(ang->actual, 0.1, 1e-9);
+  // LONG has no meaning on a PARPLN (no length): an error that says what it applies to.
+  Geometry pair;
+  pair.type = FeatureType::ParallelPlanes;
+  pair.width_mm = 10;
+  const Feature planes = feature("PAIR", pair, pair);
+  EXPECT_EQ(evaluate(w, {&planes}).error(), "WIDTH applies to a closed slot (CPARLN), not to a PARPLN");
 }
 
 TEST(ToleranceWords, DmisWords) {

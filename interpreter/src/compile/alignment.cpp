@@ -30,7 +30,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Pos: return !in({T::Plane, T::Line, T::ParallelPlanes, T::GenericSurface, T::GenericCurve});
     case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface});
     case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
-    case ToleranceKind::Width:
+    case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
     case ToleranceKind::Symmty: return in({T::ParallelPlanes});
     case ToleranceKind::Profp: return in({T::Point});
     default: return true;

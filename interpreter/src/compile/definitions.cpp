@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 
 #include "compile/unit_compiler.hpp"
 
@@ -35,6 +36,9 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
     case FeatureType::ParallelPlanes: return {7, 7, "x,y,z,i,j,k,width (a point on the median plane, its normal, the width)"};
     case FeatureType::GenericSurface: return {0, 6, "none, or x,y,z,i,j,k (a point of the surface and its normal)"};
     case FeatureType::GenericCurve: return {0, 6, "none, or x,y,z,i,j,k (a point of the curve and the normal of its plane)"};
+    case FeatureType::ClosedSlot:
+      return {11, 11, "x,y,z,i1,j1,k1,i2,j2,k2,len,wid (the centre, the normal of its plane, its long axis, the length end to "
+                      "end, the width)"};
   }
   return {0, 0, ""};
 }
@@ -79,6 +83,7 @@ void UnitCompiler::add_definitions(StatementTable& t) {
 }
 
 // F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE, PARPLN; CART|POL)
+// F(l)=FEAT/CPARLN,INNER|OUTER,ROUND|FLAT,CART,x,y,z,i1,j1,k1,i2,j2,k2,len,wid
 void UnitCompiler::feat(const grammar::Statement& s) {
   if (!require_target(s, {"F", "FA"}, "F(label)=FEAT/...")) return;
   // FA(l)=FEAT/... states a feature's actual, as DMIS output files report it: metron takes it as
@@ -102,7 +107,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
     if (is_word(p[0]) && (p[0].text == "TORUS" ||
-                          p[0].text == "RCTNGL" || p[0].text == "CPARLN" || p[0].text == "ELLIPS" ||
+                          p[0].text == "RCTNGL" || p[0].text == "ELLIPS" ||
                           p[0].text == "COMPOUND" || p[0].text == "PATERN" || p[0].text == "OBJECT" ||
                           p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
@@ -126,6 +131,13 @@ void UnitCompiler::feat(const grammar::Statement& s) {
       return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-side",
                    fmt::format("expected INNER or OUTER after the feature type {}", word));
     payload.side = p[i++].text == "INNER" ? runtime::Side::Inner : runtime::Side::Outer;
+  }
+  if (type == FeatureType::ClosedSlot) {
+    if (i < p.size() && (is_word(p[i], "ROUND") || is_word(p[i], "FLAT")))
+      payload.slot_ends = p[i++].text == "FLAT" ? runtime::SlotEnds::Flat : runtime::SlotEnds::Round;
+    else
+      return error(i < p.size() ? p[i].span : p.back().span, "sema.expected-slot-ends",
+                   "expected ROUND or FLAT after CPARLN,INNER|OUTER");
   }
   if (type == FeatureType::Line) {
     if (i < p.size() && (is_word(p[i], "BND") || is_word(p[i], "UNBND")))
@@ -195,6 +207,28 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
     const std::size_t d = (type == FeatureType::Line && form.bounded.value_or(false)) ? 6 : 3;
     if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
       return fail(d, "sema.zero-vector", "the direction vector i,j,k is zero");
+  }
+  if (type == FeatureType::ClosedSlot) {
+    // x,y,z,i1,j1,k1,i2,j2,k2,len,wid: the long axis lies in the plane (normal to i1,j1,k1).
+    if (literal[6] == 0 && literal[7] == 0 && literal[8] == 0)
+      return fail(6, "sema.zero-vector", "the long axis i2,j2,k2 is zero");
+    const Vec3 normal(literal[3], literal[4], literal[5]), axis(literal[6], literal[7], literal[8]);
+    const double cos_angle = normal.normalized().dot(axis.normalized());
+    if (std::isfinite(cos_angle) && std::abs(cos_angle) > 1e-3)
+      return fail(6, "sema.slot-axis",
+                  fmt::format("the long axis i2,j2,k2 of F({}) is not perpendicular to the normal i1,j1,k1 of its plane "
+                              "(at {:.3f} deg to it, not 90)",
+                              s.target->name, std::acos(std::clamp(cos_angle, -1.0, 1.0)) * 180 / std::numbers::pi));
+    for (std::size_t k : {9, 10})
+      if (!std::isnan(literal[k]) && literal[k] <= 0)
+        return fail(k, "sema.bad-size",
+                    fmt::format("the {} of F({}) must be positive", k == 9 ? "length" : "width", s.target->name));
+    if (form.slot_ends == runtime::SlotEnds::Round && literal[10] >= literal[9])
+      return fail(10, "sema.bad-size",
+                  fmt::format("the width {} of F({}) is not less than its length {}: a ROUND slot's ends are semicircles "
+                              "of its width, so the length (end to end) must exceed it",
+                              literal[10], s.target->name, literal[9]));
+    return true;
   }
   if (form.side && type != FeatureType::Cone) {
     const bool arc = type == FeatureType::Arc;

@@ -92,8 +92,28 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
     case FeatureType::GenericCurve:
       if (nums.size() == 6) g.direction = vec(3);
       break;
+    case FeatureType::ClosedSlot:
+      g.direction = vec(3);
+      g.slot_axis = vec(6);
+      g.length_mm = nums[9] * len;
+      g.width_mm = nums[10] * len;
+      g.slot_ends = words.slot_ends.value_or(runtime::SlotEnds::Round);
+      break;
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
+  if (g.type == FeatureType::ClosedSlot) {
+    // Computed numbers get the compiler's checks here (compile/definitions.cpp).
+    if (g.slot_axis.norm() < 1e-12) return vm.fail(in.span, "the long axis i2,j2,k2 is zero");
+    const Vec3 n = g.direction.normalized();
+    if (std::abs(n.dot(g.slot_axis.normalized())) > 1e-3)
+      return vm.fail(in.span, "the long axis i2,j2,k2 is not perpendicular to the normal i1,j1,k1");
+    if (!(g.width_mm > 0) || !(g.length_mm > 0))
+      return vm.fail(in.span, "the length and width of a CPARLN must be positive");
+    if (g.slot_ends == runtime::SlotEnds::Round && g.width_mm >= g.length_mm)
+      return vm.fail(in.span,
+                     "the width of a ROUND CPARLN must be less than its length (its ends are semicircles of the width)");
+    g.slot_axis = (g.slot_axis - g.slot_axis.dot(n) * n).normalized();  // within the rounding of the program's numbers
+  }
   if (g.type == FeatureType::Line && g.normal2.norm() < 1e-12) g.normal2 = any_perpendicular(g.direction);
   // count 1: FA(l)=FEAT/..., a stated actual (a DMIS output file's line).
   const auto r = in.count == 1 ? vm.m_runtime.define_reported_actual(vm.name_of(in), g, in.span)
@@ -114,6 +134,7 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
   t.kind = std::get<ir::TolerancePayload>(in.payload).kind;
   for (const auto& word : words(in)) {  // the modifiers
     if (word == "3D") t.three_d = true;
+    if (word == "LONG") t.long_side = true;  // TOL/WIDTH,lo,hi,LONG
     if (word == "MMC") t.condition = runtime::MaterialCondition::Mmc;
     if (word == "LMC") t.condition = runtime::MaterialCondition::Lmc;
     if (word == "XAXIS") t.axis = runtime::DistanceAxis::XAxis;

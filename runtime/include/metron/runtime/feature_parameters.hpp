@@ -27,10 +27,11 @@ struct FeatureParameter {
 ///   CIRCLE  x,y,z,i,j,k,d                          the normal of the line's plane)
 ///   ARC  x,y,z,i,j,k,r,start,included    LINE UNBND  x,y,z,i,j,k,i2,j2,k2
 ///   SPHERE  x,y,z,d                      CYLNDR  x,y,z,i,j,k,d,len     CONE  x,y,z,i,j,k,angle
+///   CPARLN  x,y,z,i1,j1,k1,i2,j2,k2,len,wid (centre, normal of its plane, long axis, length, width)
 std::vector<FeatureParameter> feature_parameters(const Geometry& g);
 
 /// The words before the numbers of a feature statement: the type, BND|UNBND (LINE), INNER|OUTER
-/// (features of size) and CART.
+/// (features of size), ROUND|FLAT (CPARLN) and CART.
 std::size_t feature_word_count(FeatureType type);
 
 /// Features of size carry a material side (INNER|OUTER) in their statements.

@@ -41,6 +41,7 @@ struct ToleranceSpec {
   double upper = 0;              ///< upper deviation limit
   double zone = 0;               ///< tolerance zone (POS, form, PERP, PARLEL)
   bool three_d = false;          ///< POS 3D (else 2D)
+  bool long_side = false;        ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
   DistanceAxis axis = DistanceAxis::PointToPoint;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced

@@ -93,6 +93,7 @@ struct FeaturePayload {
   runtime::FeatureType type = runtime::FeatureType::Point;
   std::optional<runtime::Side> side;    ///< INNER|OUTER, for features of size
   std::optional<bool> bounded;          ///< LINE: BND (true) or UNBND
+  std::optional<runtime::SlotEnds> slot_ends;  ///< CPARLN: ROUND|FLAT
   std::optional<CoordinateForm> form;   ///< CART|POL (FEAT; absent for MEAS)
 };
 /// TOL: the tolerance kind (its modifier words stay operands, in source order).
