@@ -28,6 +28,7 @@ const char* to_string(Op op) {
     case Op::PtMeas: return "PTMEAS";
     case Op::MeasEnd: return "MEAS_END";
     case Op::Output: return "OUTPUT";
+    case Op::Evaluate: return "EVAL";
     case Op::DatDef: return "DATDEF";
     case Op::DatSet: return "DATSET";
     case Op::Trans: return "TRANS";

@@ -559,6 +559,14 @@ void MeasurementRuntime::write_device_line(const std::string& line) {
 }
 
 Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Span span) {
+  return output_or_evaluate(items, span, true);
+}
+
+Result<void> MeasurementRuntime::evaluate(const std::vector<OutputItem>& items, Span span) {
+  return output_or_evaluate(items, span, false);
+}
+
+Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them) {
   std::vector<const Feature*> features;
   std::vector<std::string> tolerances;
   for (const auto& item : items) {
@@ -570,6 +578,7 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
     const Feature* f = find_feature(item.feature.label);
     if (!f) return program_error(span, fmt::format("feature F({}) is not defined", item.feature.label));
     features.push_back(f);
+    if (!report_them) continue;
     FeatureReport report;
     report.label = f->label;
     report.frame = m_alignment.label;
@@ -585,35 +594,63 @@ Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Sp
     emit(report);
   }
   for (const auto& t : tolerances) {
-    const ToleranceSpec& spec = m_tolerances.at(t);
-    ToleranceContext context;
-    context.alignment = &m_alignment;
-    for (const auto& d : spec.datums) {
-      auto dd = datum(d, span);
-      if (!dd) return tl::unexpected(dd.error());
-      context.datums.push_back(*dd);
-    }
-    // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
-    // feature is evaluated against it. CORTOL applies to each output feature.
-    std::vector<std::vector<const Feature*>> evaluations;
-    if (!spec.reference_feature.empty()) {
-      const Feature* reference = find_feature(spec.reference_feature);
-      if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", spec.reference_feature));
-      for (const Feature* f : features) evaluations.push_back({f, reference});
-    } else if (spec.kind == ToleranceKind::Cortol) {
-      for (const Feature* f : features) evaluations.push_back({f});
+    std::vector<ToleranceResult> results;
+    if (features.empty()) {
+      // OUTPUT/TA(t) alone: what the last EVAL of it found (DMIS EVAL ... OUTPUT).
+      auto kept = m_evaluated.find(t);
+      if (kept == m_evaluated.end())
+        return program_error(span, fmt::format("T({}) is output without a feature and was not evaluated before "
+                                               "(EVAL/FA(x),TA({}) or OUTPUT/FA(x),TA({}))",
+                                               t, t, t));
+      results = kept->second;
     } else {
-      evaluations.push_back(features);
+      auto evaluated = evaluate_tolerance(t, features, span);
+      if (!evaluated) return tl::unexpected(evaluated.error());
+      results = std::move(*evaluated);
     }
-    for (const auto& operands : evaluations) {
-      auto result = evaluate_tolerance(spec, operands, context);
-      if (!result) return program_error(span, result.error());
-      result->units = m_report_units;
-      write_device_line(dmis_tolerance_line(*result));
-      emit(*result);
+    if (!report_them) {
+      m_evaluated[t] = std::move(results);
+      continue;
+    }
+    for (auto& result : results) {
+      result.units = m_report_units;
+      write_device_line(dmis_tolerance_line(result));
+      emit(result);
     }
   }
   return {};
+}
+
+Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(const std::string& t,
+                                                                            const std::vector<const Feature*>& features,
+                                                                            Span span) {
+  const ToleranceSpec& spec = m_tolerances.at(t);
+  ToleranceContext context;
+  context.alignment = &m_alignment;
+  for (const auto& d : spec.datums) {
+    auto dd = datum(d, span);
+    if (!dd) return tl::unexpected(dd.error());
+    context.datums.push_back(*dd);
+  }
+  // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
+  // feature is evaluated against it. CORTOL applies to each output feature.
+  std::vector<std::vector<const Feature*>> evaluations;
+  if (!spec.reference_feature.empty()) {
+    const Feature* reference = find_feature(spec.reference_feature);
+    if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", spec.reference_feature));
+    for (const Feature* f : features) evaluations.push_back({f, reference});
+  } else if (spec.kind == ToleranceKind::Cortol) {
+    for (const Feature* f : features) evaluations.push_back({f});
+  } else {
+    evaluations.push_back(features);
+  }
+  std::vector<ToleranceResult> results;
+  for (const auto& operands : evaluations) {
+    auto result = runtime::evaluate_tolerance(spec, operands, context);
+    if (!result) return program_error(span, result.error());
+    results.push_back(std::move(*result));
+  }
+  return results;
 }
 
 namespace {

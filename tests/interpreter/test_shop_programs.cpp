@@ -530,6 +530,39 @@ TEST(ShopPrograms, DatsetWithAFeatureInPlaceOfADatum) {
 
 // UNITS/INCH and DECPL: the report and the DMIS output statement are in the program's units with
 // the decimals DECPL asks for; the truth is the world's 20 mm bore at part (40, 50, 30) mm.
+// EVAL/FA(x),TA(t) evaluates a tolerance and keeps the result without reporting it; a later
+// OUTPUT/TA(t) alone reports what it found (DMIS 5.x EVAL). block_deviations machines BORE1
+// 20.012 (its hidden truth): the kept DIAM value is +0.012, OUT of +-0.005, reported once.
+TEST(ShopPrograms, EvalKeepsAToleranceResultForALaterOutput) {
+  const std::string head =
+      "DMISMN/'eval', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 8\nENDMES\n"
+      "T(D) = TOL/DIAM, -0.005, 0.005\n";
+  const auto r = run(head + "EVAL/FA(BORE1), TA(D)\nTEXT/OPER, 'between'\nOUTPUT/TA(D)\nENDFIL\n",
+                     source_dir / "programs/worlds/block_deviations.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::size_t results = 0, text_at = 0, result_at = 0, k = 0;
+  for (const auto& e : r.session->record().events) {
+    ++k;
+    if (std::holds_alternative<metron::runtime::ToleranceResult>(e)) ++results, result_at = k;
+    if (std::holds_alternative<metron::runtime::TextReport>(e)) text_at = k;
+  }
+  EXPECT_EQ(results, 1u);         // EVAL reports nothing, OUTPUT/TA(D) once
+  EXPECT_GT(result_at, text_at);  // ... and the report comes with the OUTPUT
+  const auto* d = tolerance(*r.session, "D");
+  ASSERT_NE(d, nullptr);
+  EXPECT_NEAR(d->value, 0.012, 0.002);
+  EXPECT_FALSE(d->in_tolerance);
+  // A tolerance alone that nothing evaluated, and an EVAL without a tolerance, are errors.
+  const Checked alone = check(head + "OUTPUT/TA(D)\nENDFIL\n");
+  EXPECT_TRUE(alone.has("shop.dmi:12:8: error: T(D) is output without a feature")) << alone.text;
+  const Checked no_tol = check(head + "EVAL/FA(BORE1)\nENDFIL\n");
+  EXPECT_TRUE(no_tol.has("shop.dmi:12:1: error: EVAL evaluates tolerances")) << no_tol.text;
+  const Checked ok = check(head + "EVAL/FA(BORE1), TA(D)\nOUTPUT/TA(D)\nENDFIL\n");
+  EXPECT_EQ(ok.errors + ok.warnings, 0u) << ok.text;
+}
+
 TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   const auto inch = [](double mm) { return fmt::format("{:.6f}", mm / 25.4); };
   const std::string text =

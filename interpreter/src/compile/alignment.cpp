@@ -43,7 +43,7 @@ void UnitCompiler::add_alignment(StatementTable& t) {
   t.insert({
       {"DATSET", &UnitCompiler::datset}, {"TRANS", &UnitCompiler::trans}, {"ROTATE", &UnitCompiler::rotate},
       {"SAVE", &UnitCompiler::save}, {"RECALL", &UnitCompiler::recall}, {"CONST", &UnitCompiler::construct},
-      {"OUTPUT", &UnitCompiler::output}
+      {"OUTPUT", &UnitCompiler::output}, {"EVAL", &UnitCompiler::evaluate}
   });
 }
 
@@ -227,8 +227,38 @@ void UnitCompiler::construct(const grammar::Statement& s) {
 void UnitCompiler::output(const grammar::Statement& s) {
   if (!expect_params(s, 1, "feature or tolerance labels")) return;
   auto in = make(Op::Output, s);
-  std::vector<std::optional<FeatureType>> types;
   std::size_t echoed = 0;
+  if (!output_labels(s, in, echoed)) return;
+  if (in.operands.empty() && echoed > 0) {
+    emit(make(Op::Nop, s, "OUTPUT"));
+    return;
+  }
+  emit(std::move(in));
+}
+
+// EVAL/FA(x)[,FA(y)],TA(t)[,TA(u)]: the tolerances evaluated against the features and kept for a
+// later OUTPUT/TA(t); nothing is reported here (DMIS 5.x EVAL).
+void UnitCompiler::evaluate(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "features and tolerances: EVAL/FA(x),TA(t)")) return;
+  auto in = make(Op::Evaluate, s);
+  std::size_t echoed = 0;
+  if (!output_labels(s, in, echoed)) return;
+  bool any_tolerance = false;
+  for (const auto& o : in.operands) {
+    if (o.label.prefix != "T" && o.label.prefix != "TA") continue;
+    any_tolerance = true;
+    m_symbols.evaluated_tolerances.insert(upper(o.label.name));
+  }
+  if (!any_tolerance) return error(s.span, "sema.eval-without-tolerance", "EVAL evaluates tolerances: EVAL/FA(x),TA(t)");
+  emit(std::move(in));
+}
+
+bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& in, std::size_t& echoed) {
+  const auto fail = [this](Span span, const char* code, std::string message) {
+    error(span, code, std::move(message));
+    return false;
+  };
+  std::vector<std::optional<FeatureType>> types;
   for (const auto& p : s.params) {
     // In a DMIS output file each OUTPUT is followed by the result lines it produced: an OUTPUT of
     // a result stated below (and not defined before) echoes it.
@@ -240,7 +270,7 @@ void UnitCompiler::output(const grammar::Statement& s) {
       continue;
     }
     if (is_label(p, {"F", "FA"})) {
-      if (!check_feature(p)) return;
+      if (!check_feature(p)) return false;
       types.push_back(feature_type(upper(p.label.name)));
     } else if (is_label(p, {"T", "TA"})) {
       const std::string t = upper(p.label.name);
@@ -251,35 +281,36 @@ void UnitCompiler::output(const grammar::Statement& s) {
           continue;
         }
         if (it == m_symbols.tolerances.end())
-          return error(p.span, m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
+          return fail(p.span, m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
                        m_symbols.skipped.count("T:" + t) ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
                                                          : fmt::format("tolerance T({}) is not defined", p.label.name));
         const ToleranceKind kind = it->second;
+        if (types.empty() && in.op == Op::Output && m_symbols.evaluated_tolerances.count(t)) {
+          in.operands.push_back(label_op(p));  // OUTPUT/TA(t) alone: what an EVAL of it found
+          continue;
+        }
         if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Cortol) && types.empty())
-          return error(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
+          return fail(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
         if (kind == ToleranceKind::DistB && types.size() != 2)
-          return error(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
+          return fail(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
         if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
-          return error(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
+          return fail(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
         for (const auto& type : types)
           if (type && !tolerance_applies(kind, *type))
-            return error(p.span, "sema.tolerance-type",
+            return fail(p.span, "sema.tolerance-type",
                          fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name, ir::word_of(*type)));
-        if (types.empty()) return error(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
+        if (types.empty())
+          return fail(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
       }
     } else if (p.kind == ExprKind::Label) {
       warn(p.span, "sema.unsupported-output", fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
       continue;
     } else {
-      return error(p.span, "sema.expected-label", "expected F(), FA(), T() or TA() labels after OUTPUT/");
+      return fail(p.span, "sema.expected-label", fmt::format("expected F(), FA(), T() or TA() labels after {}/", s.major));
     }
     in.operands.push_back(label_op(p));
   }
-  if (in.operands.empty() && echoed > 0) {
-    emit(make(Op::Nop, s, "OUTPUT"));
-    return;
-  }
-  emit(std::move(in));
+  return true;
 }
 
 }  // namespace metron::interpreter::detail

@@ -248,6 +248,9 @@ class UnitCompiler {
   void recall(const grammar::Statement& s);
   void construct(const grammar::Statement& s);
   void output(const grammar::Statement& s);
+  void evaluate(const grammar::Statement& s);
+  /// OUTPUT and EVAL: the labels checked and put on `in`; false after an error.
+  bool output_labels(const grammar::Statement& s, ir::Instruction& in, std::size_t& echoed);
 
   // ---- control: assignment, IF, DO, JUMPTO, macros, CALL (compile/control.cpp) --------------
   void endfil(const grammar::Statement& s);

@@ -28,13 +28,13 @@ std::optional<runtime::Axis> axis_of(const std::string& w) {
 
 void Execute::add_alignment(ExecuteTable& t) {
   add_rows(t, {
-      {Op::Output, &output}, {Op::DatSet, &datset}, {Op::Trans, &trans}, {Op::Rotate, &rotate},
+      {Op::Output, &output}, {Op::Evaluate, &evaluate}, {Op::DatSet, &datset}, {Op::Trans, &trans}, {Op::Rotate, &rotate},
       {Op::Save, &save}, {Op::Recall, &recall}, {Op::Construct, &construct}
   });
 }
 
-// Op::Output
-ExecStatus Execute::output(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+// The items of an OUTPUT or EVAL, in order.
+std::vector<runtime::OutputItem> Execute::output_items(Interpreter& vm, const ir::Instruction& in) {
   std::vector<runtime::OutputItem> items;
   for (const auto& o : in.operands) {
     runtime::OutputItem item;
@@ -46,7 +46,18 @@ ExecStatus Execute::output(Interpreter& vm, const ir::Instruction& in, CallFrame
     }
     items.push_back(item);
   }
-  if (auto r = vm.m_runtime.output(items, in.span); !r) return vm.from_runtime(r.error());
+  return items;
+}
+
+// Op::Output
+ExecStatus Execute::output(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.output(output_items(vm, in), in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Evaluate
+ExecStatus Execute::evaluate(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.evaluate(output_items(vm, in), in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

@@ -40,6 +40,7 @@ struct SymbolTable {
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
   std::set<std::string> tolerance_datums;          ///< tolerances defined with datum references
+  std::set<std::string> evaluated_tolerances;      ///< tolerances an EVAL has evaluated (OUTPUT/TA(t) alone reports them)
   /// Sensors the program takes from the machine's probe library (RECALL/SA, SNSLCT without SNSDEF).
   std::set<std::string> library_sensors;
   /// Tolerances of a DMIS type metron parses but does not evaluate (CONCEN, RUNOUT, ...): label -> type.

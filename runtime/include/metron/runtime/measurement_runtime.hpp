@@ -152,7 +152,12 @@ class MeasurementRuntime {
   Result<void> construct_moved_point(const std::string& label, const FeatureRef& source, const Vec3& offset_current, Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
                          const std::vector<FeatureRef>& sources, Span span);
+  /// OUTPUT: reports the features and evaluates and reports the tolerances (against the features
+  /// of the same OUTPUT; a tolerance alone reports what the last EVAL of it found).
   Result<void> output(const std::vector<OutputItem>& items, Span span);
+  /// EVAL/FA(x),TA(t): evaluates the tolerances and keeps the results for a later OUTPUT/TA(t);
+  /// nothing is reported.
+  Result<void> evaluate(const std::vector<OutputItem>& items, Span span);
   Result<void> define_device(const std::string& label, const std::string& path, Span span);
   Result<void> open_device(const std::string& label, Span span);
   Result<void> close_device(const std::string& label, Span span);
@@ -170,6 +175,10 @@ class MeasurementRuntime {
   [[nodiscard]] machine::Machine& machine() { return m_machine; }
 
  private:
+  Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
+  /// Tolerance `t` against `features` (one result; DISTWRT, ANGWRT and CORTOL: one per feature).
+  Result<std::vector<ToleranceResult>> evaluate_tolerance(const std::string& t, const std::vector<const Feature*>& features,
+                                                          Span span);
   struct Execution {
     std::vector<machine::Response> responses;
     std::optional<RuntimeError> error;
@@ -210,6 +219,7 @@ class MeasurementRuntime {
   std::map<std::string, Feature> m_features;
   std::vector<std::string> m_feature_order;
   std::map<std::string, ToleranceSpec> m_tolerances;
+  std::map<std::string, std::vector<ToleranceResult>> m_evaluated;  ///< EVAL results, for OUTPUT/TA(t) alone
   std::map<std::string, Datum> m_datums;
   std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
   std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()

@@ -43,6 +43,7 @@ enum class Op {
   PtMeas,       ///< payload: FormPayload; exprs: x,y,z[,i,j,k]; [label: RMEAS reference]
   MeasEnd,      ///< ENDMES: runs the collected block on the machine
   Output,       ///< labels: F/FA/T/TA in order
+  Evaluate,     ///< EVAL: labels F/FA then T/TA; the tolerances are evaluated and kept, not reported
   DatDef,       ///< labels: feature, DAT(x)
   DatSet,       ///< `name` = D label; operands: MCS | (DAT label, words...)...
   Trans,        ///< `name` = D label; operands: (axis word, expr | feature label)...
