@@ -11,6 +11,15 @@
 namespace metron::machine::segmented {
 namespace {
 constexpr double k_inf = std::numeric_limits<double>::infinity();
+
+// The speed limit at curvature `kappa`: centripetal acceleration v^2 kappa <= a_n, the path speed
+// limit and the path's own (0: none).
+double limit_for_curvature(double kappa, const ScanLimits& limits, double path_speed_mm_s) {
+  double v = limits.path.speed_mm_s;
+  if (kappa > 0) v = std::min(v, std::sqrt(limits.normal_acceleration_mm_s2 / kappa));
+  if (path_speed_mm_s > 0) v = std::min(v, path_speed_mm_s);
+  return v;
+}
 }  // namespace
 
 double ramp_time_s(double dv, const MotionLimits& l) {
@@ -147,11 +156,7 @@ SegmentLimit segment_limit(const geometry::PccSegment& seg, const ScanLimits& li
   out.length_mm = seg.length();
   double kappa = 0;
   for (int i = 0; i <= 4; ++i) kappa = std::max(kappa, seg.curvature(seg.d_mm * i / 4.0));
-  double v = limits.path.speed_mm_s;
-  // Centripetal acceleration v^2 * kappa <= a_n.
-  if (kappa > 0) v = std::min(v, std::sqrt(limits.normal_acceleration_mm_s2 / kappa));
-  if (path_speed_mm_s > 0) v = std::min(v, path_speed_mm_s);
-  out.limit_mm_s = v;
+  out.limit_mm_s = limit_for_curvature(kappa, limits, path_speed_mm_s);
   return out;
 }
 
@@ -161,10 +166,7 @@ namespace {
 double curvature_limit(const geometry::PccSegment& seg, double u0, double u1, const ScanLimits& limits, double path_speed_mm_s) {
   double kappa = 0;
   for (double u : {u0, 0.5 * (u0 + u1), u1}) kappa = std::max(kappa, seg.curvature(u));
-  double v = limits.path.speed_mm_s;
-  if (kappa > 0) v = std::min(v, std::sqrt(limits.normal_acceleration_mm_s2 / kappa));
-  if (path_speed_mm_s > 0) v = std::min(v, path_speed_mm_s);
-  return v;
+  return limit_for_curvature(kappa, limits, path_speed_mm_s);
 }
 
 // Issue 11 item 5: one limit for a whole segment holds all of it at the speed its sharpest point
