@@ -13,6 +13,7 @@
 #include <tl/expected.hpp>
 
 #include "metron/machine/command.hpp"
+#include "metron/machine/motion_profile.hpp"
 #include "metron/machine/segmented_scanning/probe_scan_driver.hpp"
 #include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
@@ -45,6 +46,19 @@ struct SegmentedSession {
   std::size_t reported = 0;         ///< samples already answered
 };
 
+/// A positioning move that ended without fault, kept so that a stop request can cut it afterwards
+/// (Machine::stop_last_motion).
+struct PositioningMove {
+  std::uint64_t tag = 0;            ///< the command's tag (GoTo), 0 inside other commands
+  Vec3 start_mm = Vec3::Zero();
+  Vec3 direction = Vec3::UnitX();   ///< unit, start to target
+  double length_mm = 0;
+  MotionProfile profile;
+  MotionLimits limits;
+  std::optional<BrakingLimits> braking;
+  std::int64_t start_cycle = 0;
+};
+
 /// The controller's state and its cycles.
 struct Controller {
   SimulatedProbe sim;               ///< the world, through its sensors
@@ -59,7 +73,10 @@ struct Controller {
   std::optional<Hit> last_hit;
   std::size_t executed = 0;
   std::function<void(const TraceSample&)> trace;
+  std::function<void(double, const Vec3&)> motion_observer;  ///< Machine::set_motion_observer
   std::unique_ptr<SegmentedSession> segmented_scan;
+  std::optional<PositioningMove> last_move;       ///< set by move_to
+  std::optional<PositioningMove> stoppable_move;  ///< the last command was this completed GoTo
 
   Controller(MachineConfig known, WorldTruth truth, std::uint64_t seed);
 
@@ -72,9 +89,11 @@ struct Controller {
   [[nodiscard]] Tool* active_tool();
   void emit(double t_abs, const Vec3& p, double speed) const {
     if (trace) trace({t_abs, p, speed});
+    if (motion_observer) motion_observer(t_abs, p);
   }
   tl::expected<void, Fault> check_travel(const Vec3& p, const char* what) const;
   tl::expected<void, Fault> move_to(const Vec3& target, double feed);
+  std::optional<Response> stop_move(double after_s);
 
   // touch_cycle/touch_cycle.cpp
   struct Touch {

@@ -65,7 +65,9 @@ tl::expected<void, Fault> Controller::move_to(const Vec3& target, double feed) {
     return {};
   }
   const Vec3 u = (target - a) / len;
-  const MotionProfile profile = MotionProfile::rest_to_rest(len, limits(u, feed), braking(u, feed));
+  const MotionLimits move_limits = limits(u, feed);
+  const std::optional<BrakingLimits> move_braking = braking(u, feed);
+  const MotionProfile profile = MotionProfile::rest_to_rest(len, move_limits, move_braking);
   const double t_end = profile.duration_s();
   const std::int64_t n = cycles_for(t_end), c0 = cycle;
   double s_prev = 0;
@@ -89,7 +91,33 @@ tl::expected<void, Fault> Controller::move_to(const Vec3& target, double feed) {
   }
   cycle = c0 + n;
   position = target;
+  last_move = PositioningMove{0, a, u, len, profile, move_limits, move_braking, c0};
   return {};
+}
+
+// A stop request `after_s` into the last GoTo: the move as it was until then (its sweep found the
+// whole line free, so the part of it before the stop is free too), then the shortest jerk-limited
+// stop at the move's own limits (braking law included). Nothing else changes while the machine
+// only positions, so cutting the move afterwards gives what stopping it then would have.
+std::optional<Response> Controller::stop_move(double after_s) {
+  if (!stoppable_move || !(after_s >= 0) || !(after_s < stoppable_move->profile.duration_s())) return std::nullopt;
+  const PositioningMove m = *stoppable_move;
+  stoppable_move.reset();
+  const MotionProfile stop = MotionProfile::stop(m.profile.at(after_s), m.limits, m.braking);
+  const double s_end = std::min(stop.end_position_mm(), m.length_mm);
+  position = m.start_mm + s_end * m.direction;
+  cycle = m.start_cycle + cycles_for(after_s + stop.duration_s());
+  sim.set_time(now());
+  Response r;
+  r.tag = m.tag;
+  r.status = Response::Status::Fault;
+  r.fault = Fault{FaultKind::Aborted,
+                  fmt::format("move to {} stopped at {} on request, {:.3f} s after its start",
+                              xyz(m.start_mm + m.length_mm * m.direction), xyz(position), after_s),
+                  position, now()};
+  r.start_time_s = static_cast<double>(m.start_cycle) * config.dt_s;
+  r.end_time_s = now();
+  return r;
 }
 
 }  // namespace metron::machine::detail

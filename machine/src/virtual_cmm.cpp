@@ -73,6 +73,7 @@ Response Controller::run(const Command& command) {
   Response response;
   response.tag = command.tag;
   response.start_time_s = now();
+  stoppable_move.reset();
   const auto fail = [&](Fault f) {
     response.status = Response::Status::Fault;
     response.fault = std::move(f);
@@ -88,7 +89,12 @@ Response Controller::run(const Command& command) {
       const double feed = body.speed_mm_s.value_or(positioning_feed);
       if (!(feed > 0) || !body.target_mm.allFinite())
         return fail({FaultKind::BadCommand, "goto needs a finite target and a positive speed", position, now()});
+      last_move.reset();
       if (auto ok = move_to(body.target_mm, feed); !ok) fail(ok.error());
+      else if (last_move) {
+        stoppable_move = last_move;
+        stoppable_move->tag = command.tag;
+      }
     } else if constexpr (std::is_same_v<T, PtMeas>) {
       auto hit = measure_point(body);
       if (hit) response.hit = *hit;
@@ -181,6 +187,11 @@ MachineState VirtualCmm::state() const {
 }
 
 std::vector<Command> VirtualCmm::queued() const { return {m_impl->queue.begin(), m_impl->queue.end()}; }
+std::optional<Response> VirtualCmm::stop_last_motion(double after_s) { return m_impl->stop_move(after_s); }
+bool VirtualCmm::set_motion_observer(std::function<void(double, const Vec3&)> observer) {
+  m_impl->motion_observer = std::move(observer);
+  return true;
+}
 double VirtualCmm::simulated_time_s() const { return m_impl->now(); }
 void VirtualCmm::set_trace(std::function<void(const TraceSample&)> trace) { m_impl->trace = std::move(trace); }
 std::uint64_t VirtualCmm::seed() const { return m_seed; }

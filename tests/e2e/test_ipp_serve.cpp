@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -25,8 +26,10 @@
 
 #include "metron/machine/ipp/command_line.hpp"
 #include "metron/machine/ipp/response_line.hpp"
+#include "metron/stdlib/geometry/vec.hpp"
 
 using namespace metron::machine::ipp;
+using metron::Vec3;
 namespace fs = std::filesystem;
 
 namespace {
@@ -256,5 +259,74 @@ TEST(IppServe, RealtimePacesTheCompletion) {
   EXPECT_LT(ack_s, 0.25);
   EXPECT_GE(done_s, 0.5);
   EXPECT_LT(done_s, 5.0);
+  EXPECT_EQ(server.terminate(SIGTERM), 0);
+}
+
+// --realtime and AbortE during the motion: AbortE_TestWhileMoving.prg of the NIST suite as its
+// client sent it (the AbortE while the GoTo runs), compared line kind by line kind with the NIST
+// server's AbortE_TestWhileMoving.res: the GoTo is answered 0006 and completes before the AbortE
+// does. The machine must then stand on the GoTo's line where the move was: a stop from the cruise
+// at the move's limits ends v*tau from the start (VirtualCmm.AStopRequestCutsAGoToWhereTheMachineWas),
+// and the server's tau lies between what the client can see: from its AbortE back to the GoTo's
+// acknowledgement, and from the AbortE's completion back to the GoTo's sending.
+TEST(IppServe, RealtimeAbortEStopsTheMoveWhereItWas) {
+  ServerProcess server({"--realtime"});
+  Client a(server.port());
+  const auto kinds = [](const std::vector<std::string>& lines) {
+    std::vector<std::string> out;
+    for (const auto& l : lines)
+      if (l.size() >= 7 && l[6] != '#') out.push_back(l.substr(0, 7));
+    return out;
+  };
+  for (const char* c : {"00010 StartSession()", "00020 Home()", "00030 ChangeTool(\"Probe1\")",
+                        "00040 SetProp(Tool.GoToPar.Accel(50.0))", "00050 SetProp(Tool.GoToPar.Speed(5.0))",
+                        "E0060 OnMoveReportE(Dis(1), X(), Y(), Z())"})
+    ASSERT_EQ(a.exchange(c).back().substr(6), "%") << c;
+  const auto home_line = a.exchange("00065 Get(X(), Y(), Z())");
+  ASSERT_EQ(home_line.size(), 3u);
+  const Vec3 home(item(home_line[1], "X"), item(home_line[1], "Y"), item(home_line[1], "Z"));
+  const Vec3 target(20, 40, 60);
+
+  using clock = std::chrono::steady_clock;
+  const auto sent_goto = clock::now();
+  a.send_raw("00070 GoTo(X(20), Y(40), Z(60))\r\n");
+  ASSERT_EQ(a.line(), "00070 &");
+  const auto acknowledged = clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+  const auto sent_abort = clock::now();
+  a.send_raw("E0090 AbortE()\r\n");
+  std::vector<std::string> answer;
+  for (std::string l = a.line(); !l.empty(); l = a.line()) {
+    answer.push_back(l);
+    if (l == "E0090 %") break;
+  }
+  const auto completed = clock::now();
+  EXPECT_EQ(kinds(answer), (std::vector<std::string>{"E0090 &", "00070 !", "00070 %", "E0090 %"}));
+  ASSERT_GE(answer.size(), 2u);
+  const auto error = parse_response_line(answer[answer.size() == 4 ? 1 : 0]);
+  ASSERT_TRUE(error);
+  EXPECT_EQ(error->error_number, 6);
+  EXPECT_EQ(error->error_cause, "00070 GoTo(X(20), Y(40), Z(60))");
+
+  const auto at = a.exchange("00095 Get(X(), Y(), Z())");
+  ASSERT_EQ(at.size(), 3u);
+  const Vec3 p(item(at[1], "X"), item(at[1], "Y"), item(at[1], "Z"));
+  const Vec3 u = (target - home).normalized();
+  const double along = (p - home).dot(u);
+  EXPECT_NEAR(((p - home) - along * u).norm(), 0, 1e-3);
+  const double seconds = [](auto d) { return std::chrono::duration<double>(d).count(); }(sent_abort - acknowledged);
+  const double at_most = std::chrono::duration<double>(completed - sent_goto).count();
+  std::cout << "[figures] stopped " << along << " mm along the GoTo (" << along / 5.0 << " s at 5 mm/s); client bounds "
+            << seconds << " .. " << at_most << " s\n";
+  EXPECT_GE(along, 5.0 * seconds - 1e-3) << "stopped after " << along / 5.0 << " s of the move";
+  EXPECT_LE(along, 5.0 * at_most + 1e-3) << "stopped after " << along / 5.0 << " s of the move";
+
+  // The rest of the NIST file, as its .res answers it.
+  std::vector<std::string> rest;
+  for (const char* c : {"00100 ClearAllErrors()", "E0110 OnMoveReportE(Dis(1), X(), Y(), Z())", "00120 Home()",
+                        "00130 StopAllDaemons()", "09999 EndSession()"})
+    for (const auto& l : a.exchange(c)) rest.push_back(l);
+  EXPECT_EQ(kinds(rest), (std::vector<std::string>{"00100 &", "00100 %", "E0110 &", "E0110 %", "00120 &", "00120 %",
+                                                   "00130 &", "00130 %", "09999 &", "09999 %"}));
   EXPECT_EQ(server.terminate(SIGTERM), 0);
 }

@@ -237,6 +237,49 @@ TEST(IppSession, DaemonsReportMotionUnderTheirTag) {
   EXPECT_EQ(f.error("00050 StopAllDaemons()"), 512);
 }
 
+// AbortE while a GoTo's answer is paced (Session::interrupt, what `metron serve --realtime` calls):
+// the GoTo is answered 0006 before the AbortE completes (the NIST server's
+// AbortE_TestWhileMoving.res), and the machine stands where the move was stopped: a stop from the
+// cruise at the move's own limits ends v*tau from the start (the ramps are point-symmetric; see
+// VirtualCmm.AStopRequestCutsAGoToWhereTheMachineWas).
+TEST(IppSession, AbortEStopsAPacedGoToWhereItWas) {
+  Fixture f;
+  f.start();
+  ASSERT_EQ(f.error("00040 SetProp(Tool.GoToPar.Accel(50.0))"), 0);
+  ASSERT_EQ(f.error("00050 SetProp(Tool.GoToPar.Speed(5.0))"), 0);
+  const Vec3 home = f.world.machine.home_mm;
+  const auto go = f.session.handle("00070 GoTo(X(" + std::to_string(home.x() + 100) + "), Y(" + std::to_string(home.y()) +
+                                   "), Z(" + std::to_string(home.z()) + "))");
+  ASSERT_EQ(go.lines.back(), "00070 %");
+  EXPECT_NEAR(go.motion_s, 20.1, 0.01);
+  const auto abort = f.session.interrupt("E0090 AbortE()", 3.0);
+  EXPECT_TRUE(abort.interrupted);
+  ASSERT_EQ(abort.lines.size(), 4u);
+  EXPECT_EQ(abort.lines[0], "E0090 &");
+  const auto err = parse_response_line(abort.lines[1]);
+  ASSERT_TRUE(err);
+  EXPECT_EQ(err->tag.number, 70u);
+  EXPECT_EQ(err->error_number, 6);
+  EXPECT_EQ(abort.lines[2], "00070 %");
+  EXPECT_EQ(abort.lines[3], "E0090 %");
+  const std::string pos = f.data("00080 Get(X(), Y(), Z())");
+  EXPECT_NEAR(item(pos, "X"), home.x() + 15.0, 1e-4);
+  EXPECT_NEAR(item(pos, "Z"), home.z(), 1e-4);
+  // 0006 is an error of the command, not of the session: the next commands run.
+  EXPECT_EQ(f.error("00100 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00120 Home()"), 0);
+  // Another E-command during the pacing leaves the command running; AbortE with nothing paced is
+  // acknowledged and stops nothing.
+  f.send("00130 GoTo(X(" + std::to_string(home.x() + 10) + "), Y(" + std::to_string(home.y()) + "), Z(" +
+         std::to_string(home.z()) + "))");
+  EXPECT_FALSE(f.session.interrupt("E0140 GetErrStatusE()", 0.5).interrupted);
+  EXPECT_TRUE(f.session.interrupt("E0150 AbortE()", 1.0).interrupted);
+  EXPECT_NEAR(item(f.data("00160 Get(X(), Y(), Z())"), "X"), home.x() + 5.0, 1e-4);
+  const auto idle = f.session.interrupt("E0170 AbortE()", 0.1);
+  EXPECT_FALSE(idle.interrupted);
+  EXPECT_EQ(idle.lines, (std::vector<std::string>{"E0170 &", "E0170 %"}));
+}
+
 // Arguments that would make the server allocate without bound are refused, not attempted.
 TEST(IppSession, HugeScansAndNumbersAreRefused) {
   Fixture f;

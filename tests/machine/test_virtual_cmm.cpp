@@ -674,3 +674,42 @@ TEST(VirtualCmm, DcxStepCylinderAndSphereAreExact) {
   EXPECT_LT(g.form_mm, 1e-4);
   std::printf("  STEP DCX sphere: %.7f mm, centre error %.2g mm\n", g.diameter_mm, (g.position - c).norm());
 }
+
+// A stop request during a GoTo (Machine::stop_last_motion, I++ DME AbortE). Expected values are
+// kinematic, not the profile's code: a jerk-limited ramp's speed curve is point-symmetric about
+// its middle, so in the cruise the move lags v*T/2 behind v*t (T the ramp time), and a stop from
+// the cruise at the same limits travels v*T/2 more: the machine comes to rest at exactly v*tau
+// from the start, T after the request. T = 2*sqrt(v/j) when v < a^2/j (no constant-acceleration
+// phase), v/a + a/j otherwise.
+TEST(VirtualCmm, AStopRequestCutsAGoToWhereTheMachineWas) {
+  const World world = world_file("perfect.json");
+  Cmm cmm(world);
+  const Vec3 start = world.machine.home_mm, target = start + Vec3(100, 0, 0);
+  const double v = 20, a = world.machine.max_acceleration_mm_s2, j = world.machine.max_jerk_mm_s3;
+  const double ramp_s = v < a * a / j ? 2 * std::sqrt(v / j) : v / a + a / j;
+  const double t0 = cmm.machine().simulated_time_s();
+  ASSERT_EQ(cmm.run(GoTo{target, v}).status, Response::Status::Done);
+  EXPECT_NEAR(cmm.machine().state().position_mm.x(), target.x(), 1e-12);
+
+  const double tau = 2.0;
+  const auto stopped = cmm.machine().stop_last_motion(tau);
+  ASSERT_TRUE(stopped);
+  EXPECT_EQ(stopped->tag, 1u);
+  EXPECT_EQ(stopped->status, Response::Status::Fault);
+  ASSERT_TRUE(stopped->fault);
+  EXPECT_EQ(stopped->fault->kind, FaultKind::Aborted);
+  const Vec3 p = cmm.machine().state().position_mm;
+  EXPECT_NEAR(p.x(), start.x() + v * tau, 1e-9);
+  EXPECT_NEAR((p - Vec3(p.x(), start.y(), start.z())).norm(), 0, 1e-12);
+  EXPECT_NEAR(cmm.machine().simulated_time_s() - t0, tau + ramp_s, world.machine.dt_s + 1e-9);
+  EXPECT_NEAR(stopped->end_time_s - stopped->start_time_s, tau + ramp_s, world.machine.dt_s + 1e-9);
+
+  // Only once, only a GoTo, only while it moved; the machine goes on from where it stopped.
+  EXPECT_FALSE(cmm.machine().stop_last_motion(tau / 2));
+  cmm.go(target);
+  EXPECT_FALSE(cmm.machine().stop_last_motion(1e3));  // the 2 s move was over by then
+  EXPECT_FALSE(cmm.machine().stop_last_motion(-1));
+  cmm.ok(SetFeeds{40, 0, 0});
+  EXPECT_FALSE(cmm.machine().stop_last_motion(0.01));  // the last command was no move
+  EXPECT_NEAR(cmm.machine().state().position_mm.x(), target.x(), 1e-12);
+}

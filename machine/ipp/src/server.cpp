@@ -81,16 +81,28 @@ struct ServerCore {
   void active_close();
 };
 
-/// One client connection with its session.
+/// One client connection with its session. Lines are handled in order; in real time the lines
+/// of an answer after its acknowledgement are held back for the simulated motion time, and
+/// meanwhile the connection keeps reading: an E-command (AbortE) is handled at once, other
+/// commands wait for the answer to complete.
 struct Connection : std::enable_shared_from_this<Connection> {
+  static constexpr std::size_t k_max_waiting = 1024;  ///< commands queued behind a paced answer
+
   ServerCore& server;
   tcp::socket socket;
   asio::streambuf input;
   asio::steady_timer pacing;
   Session session;
   std::string peer;
-  std::deque<std::string> pending;        ///< lines still to write for the current command
-  double pending_delay_s = 0;             ///< real-time pause before the lines after the first
+  std::deque<std::string> outbox;         ///< lines to write, in order
+  std::deque<std::string> paced;          ///< the current answer's lines held back (real time)
+  std::deque<std::string> waiting;        ///< commands received while an answer is paced
+  std::chrono::steady_clock::time_point acknowledged_at;  ///< when the paced command was acknowledged
+  std::uint64_t pace_id = 0;              ///< which pacing a timer belongs to
+  bool pacing_now = false;
+  bool reading = false;
+  bool writing = false;
+  bool input_closed = false;              ///< the client closed its side: finish, then close
   bool closed = false;
 
   Connection(ServerCore& s, tcp::socket sock)
@@ -103,12 +115,19 @@ struct Connection : std::enable_shared_from_this<Connection> {
 
   void start() {
     server.log.write("connected", peer);
-    read();
+    maybe_read();
   }
 
-  void read() {
+  // Reads while an answer is paced (to see an AbortE), otherwise only once everything is
+  // written: a client that does not read its answers stops being read.
+  void maybe_read() {
+    if (reading || closed || input_closed || session.ended()) return;
+    if (pacing_now ? waiting.size() >= k_max_waiting : (writing || !outbox.empty() || !waiting.empty())) return;
+    reading = true;
     auto self = shared_from_this();
     asio::async_read_until(socket, input, '\n', [self](const asio::error_code& ec, std::size_t n) {
+      self->reading = false;
+      if (self->closed) return;
       if (ec) {
         if (ec == asio::error::not_found) {  // longer than max_line_bytes
           const std::string line = format_error(Tag{true, 0}, ErrorCode::ProtocolError, "line too long");
@@ -116,50 +135,114 @@ struct Connection : std::enable_shared_from_this<Connection> {
           asio::error_code ignored;
           asio::write(self->socket, asio::buffer(line + "\r\n"), ignored);
         }
-        self->close(ec == asio::error::eof ? "disconnected" : "closed: " + ec.message());
+        if (ec == asio::error::eof) {
+          self->input_closed = true;
+          self->maybe_close();
+        } else {
+          self->close("closed: " + ec.message());
+        }
         return;
       }
       std::string line(asio::buffers_begin(self->input.data()), asio::buffers_begin(self->input.data()) + static_cast<std::ptrdiff_t>(n));
       self->input.consume(n);
       while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
-      if (line.empty()) {  // a blank line is no command: nothing to answer
-        self->read();
-        return;
+      if (!line.empty()) {  // a blank line is no command: nothing to answer
+        self->server.log.write("received", line);
+        self->received(std::move(line));
       }
-      self->server.log.write("received", line);
-      SessionReply reply = self->session.handle(line);
-      self->pending.assign(reply.lines.begin(), reply.lines.end());
-      self->pending_delay_s = self->server.options.realtime ? reply.motion_s : 0;
-      self->write_next(true);
+      self->maybe_read();
     });
   }
 
-  // Writes the pending lines one by one; in real time the lines after the acknowledgement wait
-  // for the simulated motion time.
-  void write_next(bool first) {
-    if (closed) return;
-    if (pending.empty()) {
-      if (session.ended()) close("session ended");
-      else read();
+  void received(std::string line) {
+    if (!pacing_now) return handle(line);
+    if (line.front() != 'E') {
+      waiting.push_back(std::move(line));
       return;
     }
-    auto self = shared_from_this();
-    if (!first && pending_delay_s > 0) {
-      const auto delay = std::chrono::duration<double>(pending_delay_s);
-      pending_delay_s = 0;
-      pacing.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(delay));
-      pacing.async_wait([self](const asio::error_code& ec) {
-        if (!ec) self->write_next(false);
+    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - acknowledged_at).count();
+    SessionReply reply = session.interrupt(line, elapsed_s);
+    if (reply.interrupted) {  // the paced answer is replaced
+      pacing_now = false;
+      ++pace_id;
+      pacing.cancel();
+      paced.clear();
+    }
+    for (auto& l : reply.lines) send(std::move(l));
+    if (!pacing_now) answered();
+  }
+
+  void handle(const std::string& line) {
+    SessionReply reply = session.handle(line);
+    if (server.options.realtime && reply.motion_s > 0 && reply.lines.size() > 1) {
+      send(std::move(reply.lines.front()));
+      acknowledged_at = std::chrono::steady_clock::now();
+      paced.assign(std::make_move_iterator(reply.lines.begin() + 1), std::make_move_iterator(reply.lines.end()));
+      pacing_now = true;
+      const std::uint64_t id = ++pace_id;
+      pacing.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::duration<double>(reply.motion_s)));
+      auto self = shared_from_this();
+      pacing.async_wait([self, id](const asio::error_code& ec) {
+        if (ec || self->closed || id != self->pace_id || !self->pacing_now) return;
+        self->pacing_now = false;
+        while (!self->paced.empty()) {
+          self->send(std::move(self->paced.front()));
+          self->paced.pop_front();
+        }
+        self->answered();
+        self->maybe_read();
       });
       return;
     }
-    auto line = std::make_shared<std::string>(pending.front() + "\r\n");
-    server.log.write("sent", pending.front());
-    pending.pop_front();
-    asio::async_write(socket, asio::buffer(*line), [self, line](const asio::error_code& ec, std::size_t) {
-      if (ec) self->close("write failed: " + ec.message());
-      else self->write_next(false);
+    for (auto& l : reply.lines) send(std::move(l));
+    answered();
+  }
+
+  // A command's answer is complete: the commands that waited for it follow.
+  void answered() {
+    if (session.ended()) {
+      waiting.clear();
+      maybe_close();
+      return;
+    }
+    while (!pacing_now && !waiting.empty() && !closed) {
+      const std::string line = std::move(waiting.front());
+      waiting.pop_front();
+      handle(line);
+    }
+    maybe_close();
+  }
+
+  void send(std::string line) {
+    server.log.write("sent", line);
+    outbox.push_back(std::move(line) + "\r\n");
+    if (!writing) write_front();
+  }
+
+  void write_front() {
+    if (closed) return;
+    if (outbox.empty()) {
+      writing = false;
+      maybe_close();
+      maybe_read();
+      return;
+    }
+    writing = true;
+    auto self = shared_from_this();
+    asio::async_write(socket, asio::buffer(outbox.front()), [self](const asio::error_code& ec, std::size_t) {
+      if (self->closed) return;
+      if (ec) return self->close("write failed: " + ec.message());
+      self->outbox.pop_front();
+      self->write_front();
     });
+  }
+
+  // Closes once the session ended (or the client stopped sending) and every answer is written.
+  void maybe_close() {
+    if (closed || writing || !outbox.empty() || pacing_now) return;
+    if (session.ended()) close("session ended");
+    else if (input_closed && waiting.empty()) close("disconnected");
   }
 
   void close(const std::string& why) {

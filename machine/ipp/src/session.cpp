@@ -107,6 +107,13 @@ struct Session::Impl {
   /// limits untouched, so a client that never sets Accel moves exactly as a direct run.
   double sent_acceleration = -1;
   double motion_s = 0;
+  /// The last command, when it moved the machine and ended without error: an AbortE received
+  /// while its answer is still paced stops it (interrupt()).
+  struct Running {
+    Tag tag;
+    std::string text;
+  };
+  std::optional<Running> running;
 
   // The reply under construction.
   Tag tag;
@@ -852,13 +859,43 @@ struct Session::Impl {
     tag = parsed->tag;
     command_text = parsed->text;
     out->push_back(format_ack(tag));
+    running.reset();
+    bool failed = false;
     try {
       dispatch(*parsed);
     } catch (const CommandError& e) {
       error_line(tag, e.code, e.cause.empty() ? command_text : e.cause);
+      failed = true;
     }
     out->push_back(format_complete(tag));
     reply.motion_s = motion_s;
+    if (!failed && motion_s > 0) running = Running{tag, command_text};
+    return reply;
+  }
+
+  // AbortE while the last command's answer is paced: the machine stops that command where it
+  // was `elapsed_s` into its motion (a GoTo exactly; a probing cycle or scan keeps its end
+  // position but loses its result), and the command is answered 0006 before the AbortE completes,
+  // as the NIST server answers AbortE_TestWhileMoving.prg.
+  SessionReply interrupt(std::string_view line, double elapsed_s) {
+    auto parsed = parse_command_line(line);
+    if (!running || !parsed || parsed->name != "AbortE" || !parsed->tag.event || !parsed->args.empty() || !started) {
+      const auto keep = running;  // another E-command leaves the paced command running
+      SessionReply reply = handle(line);
+      if (parsed && parsed->tag.event) running = keep;
+      return reply;
+    }
+    SessionReply reply;
+    out = &reply.lines;
+    motion_s = 0;
+    out->push_back(format_ack(parsed->tag));
+    const Running stopped = *running;
+    running.reset();
+    machine.stop_last_motion(elapsed_s);
+    error_line(stopped.tag, ErrorCode::TransactionAborted, stopped.text);
+    out->push_back(format_complete(stopped.tag));
+    out->push_back(format_complete(parsed->tag));
+    reply.interrupted = true;
     return reply;
   }
 };
@@ -866,6 +903,7 @@ struct Session::Impl {
 Session::Session(Machine& machine, SessionOptions options) : m_impl(std::make_unique<Impl>(machine, std::move(options))) {}
 Session::~Session() = default;
 SessionReply Session::handle(std::string_view line) { return m_impl->handle(line); }
+SessionReply Session::interrupt(std::string_view line, double elapsed_s) { return m_impl->interrupt(line, elapsed_s); }
 bool Session::ended() const { return m_impl->ended; }
 
 }  // namespace metron::machine::ipp

@@ -40,6 +40,8 @@ class VirtualCmm final : public Machine {
   std::vector<Response> execute() override;
   [[nodiscard]] MachineState state() const override;
   [[nodiscard]] std::vector<Command> queued() const override;
+  std::optional<Response> stop_last_motion(double after_s) override;
+  bool set_motion_observer(std::function<void(double time_s, const Vec3& position_mm)> observer) override;
 
   /// The controller's clock: cycles executed times dt.
   [[nodiscard]] double simulated_time_s() const;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,6 +41,19 @@ class Machine {
   [[nodiscard]] virtual MachineState state() const = 0;
   /// Commands waiting in the queue (for the debugger).
   [[nodiscard]] virtual std::vector<Command> queued() const = 0;
+  /// Stops the last executed command as a stop request `after_s` into it would have (I++ DME
+  /// AbortE during a motion, docs/ipp-dme.md). A simulated machine runs every command at once, so
+  /// the stop comes afterwards: a positioning move (GoTo) that ended without fault is cut at
+  /// `after_s` and braked to rest at the machine's limits; position and clock become the stop's,
+  /// and the answer returned (FaultKind::Aborted) replaces the move's. nullopt: nothing to stop
+  /// (the last command was no GoTo, or it was over by then), or a backend that cannot.
+  virtual std::optional<Response> stop_last_motion(double /*after_s*/) { return std::nullopt; }
+  /// Called with the controller clock and the ball centre (machine coordinates) every control
+  /// cycle while the machine moves, for position reports along a motion (I++ DME
+  /// OnMoveReportE); nullptr removes it. false: this backend cannot report its motion.
+  virtual bool set_motion_observer(std::function<void(double time_s, const Vec3& position_mm)> /*observer*/) {
+    return false;
+  }
 };
 
 }  // namespace metron::machine

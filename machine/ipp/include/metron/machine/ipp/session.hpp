@@ -26,12 +26,15 @@ struct SessionOptions {
 struct SessionReply {
   std::vector<std::string> lines;          ///< response lines in order, without line terminators
   double motion_s = 0;                     ///< simulated time the machine moved (for real-time pacing)
+  /// interrupt() stopped the paced command: these lines replace what is left of its answer.
+  bool interrupted = false;
 };
 
 /// The server side of one I++ DME session, without any networking: command lines in, response
 /// lines out, the machine driven through machine::Machine. One Session per client connection.
-/// Commands run to completion before handle() returns (the machine is simulated), so an
-/// E-command such as AbortE finds nothing moving.
+/// Commands run to completion before handle() returns (the machine is simulated); a server that
+/// paces the answers in real time passes lines received meanwhile to interrupt(), so that an
+/// AbortE stops the motion where it would have been.
 class Session {
  public:
   explicit Session(Machine& machine, SessionOptions options = {});
@@ -41,6 +44,11 @@ class Session {
 
   /// Handles one received line (a trailing CR/LF is ignored).
   SessionReply handle(std::string_view line);
+  /// Handles a line received `elapsed_s` after the last command's acknowledgement while its
+  /// answer is still paced: an AbortE stops that command on the machine at that point of its
+  /// motion (Machine::stop_last_motion) and answers it 0006 (reply.interrupted); any other line
+  /// is handled as handle() does.
+  SessionReply interrupt(std::string_view line, double elapsed_s);
   /// EndSession was answered: the connection should close.
   [[nodiscard]] bool ended() const;
 
