@@ -13,6 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -244,7 +245,8 @@ TEST(IppServe, OverlongLineEndsOnlyThatConnection) {
 }
 
 // --realtime: the acknowledgement comes at once, the completion after the simulated motion
-// time (here at least the 100 mm path at 200 mm/s, 0.5 s).
+// time (here at least the 100 mm path at 200 mm/s, 0.5 s); a command sent meanwhile is
+// acknowledged at once and answered after the motion, at its end position.
 TEST(IppServe, RealtimePacesTheCompletion) {
   ServerProcess server({"--realtime"});
   Client a(server.port());
@@ -254,11 +256,19 @@ TEST(IppServe, RealtimePacesTheCompletion) {
   a.send_raw("00004 GoTo(X(100), Y(0), Z(500))\r\n");
   EXPECT_EQ(a.line(), "00004 &");
   const double ack_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // A command sent during the motion is acknowledged when it arrives and executed after it.
+  a.send_raw("00005 Get(X(), Y(), Z())\r\n");
+  EXPECT_EQ(a.line(), "00005 &");
+  const double queued_ack_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(a.line(), "00004 %");
   const double done_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(ack_s, 0.25);
+  EXPECT_LT(queued_ack_s, 0.25);
   EXPECT_GE(done_s, 0.5);
   EXPECT_LT(done_s, 5.0);
+  const std::string position = a.line();
+  EXPECT_NEAR(item(position, "X"), 100, 1e-6);
+  EXPECT_EQ(a.line(), "00005 %");
   EXPECT_EQ(server.terminate(SIGTERM), 0);
 }
 
@@ -302,11 +312,20 @@ TEST(IppServe, RealtimeAbortEStopsTheMoveWhereItWas) {
   }
   const auto completed = clock::now();
   EXPECT_EQ(kinds(answer), (std::vector<std::string>{"E0090 &", "00070 !", "00070 %", "E0090 %"}));
-  ASSERT_GE(answer.size(), 2u);
-  const auto error = parse_response_line(answer[answer.size() == 4 ? 1 : 0]);
+  const auto error_line = std::find_if(answer.begin(), answer.end(), [](const auto& l) { return l.rfind("00070 !", 0) == 0; });
+  ASSERT_NE(error_line, answer.end());
+  const auto error = parse_response_line(*error_line);
   ASSERT_TRUE(error);
   EXPECT_EQ(error->error_number, 6);
   EXPECT_EQ(error->error_cause, "00070 GoTo(X(20), Y(40), Z(60))");
+  // The daemon (Dis(1)) reported along the move while it ran, as the NIST server did: before the
+  // AbortE, at least 1 mm apart (and at most a control cycle's travel more), on the line.
+  std::vector<Vec3> reports;
+  for (const auto& l : answer) {
+    if (l == "E0090 &") break;
+    if (l.rfind("E0060 #", 0) == 0) reports.emplace_back(item(l, "X"), item(l, "Y"), item(l, "Z"));
+  }
+  EXPECT_GE(reports.size(), 4u);
 
   const auto at = a.exchange("00095 Get(X(), Y(), Z())");
   ASSERT_EQ(at.size(), 3u);
@@ -320,6 +339,14 @@ TEST(IppServe, RealtimeAbortEStopsTheMoveWhereItWas) {
             << seconds << " .. " << at_most << " s\n";
   EXPECT_GE(along, 5.0 * seconds - 1e-3) << "stopped after " << along / 5.0 << " s of the move";
   EXPECT_LE(along, 5.0 * at_most + 1e-3) << "stopped after " << along / 5.0 << " s of the move";
+  Vec3 previous = home;
+  for (const Vec3& r : reports) {
+    EXPECT_NEAR(((r - home) - (r - home).dot(u) * u).norm(), 0, 1e-3);
+    EXPECT_GE((r - previous).norm(), 1.0 - 1e-4);
+    EXPECT_LE((r - previous).norm(), 1.0 + 5.0 * 0.001 + 1e-4);
+    EXPECT_LE((r - home).dot(u), along + 1e-4);
+    previous = r;
+  }
 
   // The rest of the NIST file, as its .res answers it.
   std::vector<std::string> rest;

@@ -229,9 +229,29 @@ TEST(IppSession, DaemonsReportMotionUnderTheirTag) {
   EXPECT_EQ(f.error("E0010 OnMoveReportE(Time(1), X(), Z())"), 0);
   EXPECT_EQ(f.error("E0010 OnMoveReportE(Time(1), X())"), 515);
   EXPECT_EQ(f.error("00015 ClearAllErrors()"), 0);
-  const auto r = f.send("00020 GoTo(X(400), Y(250), Z(100))");
-  ASSERT_EQ(r.size(), 3u);
-  EXPECT_EQ(r[1], "E0010 # X(400), Z(100)");
+  // Time(1): a report every second of the motion, on the move's line, due at its time.
+  const Vec3 from = f.cmm.state().position_mm, to(400, 250, 100);
+  const auto r = f.session.handle("00020 GoTo(X(400), Y(250), Z(100))");
+  ASSERT_GT(r.motion_s, 3.0);
+  const auto reports = static_cast<std::size_t>(std::floor(r.motion_s + 1e-9));
+  ASSERT_EQ(r.lines.size(), 2 + reports);
+  ASSERT_EQ(r.due_s.size(), r.lines.size());
+  for (std::size_t k = 1; k <= reports; ++k) {
+    ASSERT_EQ(r.lines[k].rfind("E0010 # X(", 0), 0u) << r.lines[k];
+    EXPECT_NEAR(r.due_s[k], static_cast<double>(k), 1e-6);
+    const auto body = r.lines[k].substr(8);
+    const double x = item(body, "X"), z = item(body, "Z");
+    const double s = (x - from.x()) / (to.x() - from.x());  // on the line: z follows x
+    EXPECT_NEAR(z, from.z() + s * (to.z() - from.z()), 1e-3) << r.lines[k];
+    EXPECT_GT(s, 0);
+    EXPECT_LT(s, 1);
+  }
+  EXPECT_NEAR(r.due_s.back(), r.motion_s, 1e-12);
+  EXPECT_EQ(f.error("00025 StopDaemon(E0010)"), 0);
+  // Without Time and Dis: once, where the motion ended.
+  EXPECT_EQ(f.error("E0010 OnMoveReportE(X(), Z())"), 0);
+  const auto back = f.send("00027 GoTo(X(400), Y(250), Z(150))");
+  EXPECT_EQ(back, (std::vector<std::string>{"00027 &", "E0010 # X(400), Z(150)", "00027 %"}));
   EXPECT_EQ(f.error("00030 StopDaemon(E0011)"), 513);
   EXPECT_EQ(f.error("00040 StopDaemon(E0010)"), 0);
   EXPECT_EQ(f.error("00050 StopAllDaemons()"), 512);

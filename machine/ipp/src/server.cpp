@@ -10,10 +10,12 @@
 #include <deque>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 
 #include <asio.hpp>
 
+#include "metron/machine/ipp/command_line.hpp"
 #include "metron/machine/ipp/error_code.hpp"
 #include "metron/machine/ipp/response_line.hpp"
 
@@ -95,8 +97,14 @@ struct Connection : std::enable_shared_from_this<Connection> {
   Session session;
   std::string peer;
   std::deque<std::string> outbox;         ///< lines to write, in order
-  std::deque<std::string> paced;          ///< the current answer's lines held back (real time)
-  std::deque<std::string> waiting;        ///< commands received while an answer is paced
+  std::deque<std::pair<double, std::string>> paced;  ///< the current answer's lines held back, with their due time
+  /// A command received while an answer is paced: acknowledged at once when its tag is readable
+  /// (`&` says the server has it queued), executed after the answer.
+  struct Waiting {
+    std::string line;
+    std::optional<Tag> acknowledged;
+  };
+  std::deque<Waiting> waiting;
   std::chrono::steady_clock::time_point acknowledged_at;  ///< when the paced command was acknowledged
   std::uint64_t pace_id = 0;              ///< which pacing a timer belongs to
   bool pacing_now = false;
@@ -157,7 +165,10 @@ struct Connection : std::enable_shared_from_this<Connection> {
   void received(std::string line) {
     if (!pacing_now) return handle(line);
     if (line.front() != 'E') {
-      waiting.push_back(std::move(line));
+      const auto parsed = parse_command_line(line);
+      const std::optional<Tag> tag = parsed ? std::optional<Tag>(parsed->tag) : parsed.error().tag;
+      if (tag) send(format_ack(*tag));
+      waiting.push_back({std::move(line), tag});
       return;
     }
     const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - acknowledged_at).count();
@@ -172,31 +183,57 @@ struct Connection : std::enable_shared_from_this<Connection> {
     if (!pacing_now) answered();
   }
 
-  void handle(const std::string& line) {
+  void handle(const std::string& line, std::optional<Tag> acknowledged = std::nullopt) {
     SessionReply reply = session.handle(line);
-    if (server.options.realtime && reply.motion_s > 0 && reply.lines.size() > 1) {
+    if (acknowledged && !reply.lines.empty() && reply.lines.front() == format_ack(*acknowledged)) {
+      reply.lines.erase(reply.lines.begin());  // its `&` went out when it arrived
+      if (!reply.due_s.empty()) reply.due_s.erase(reply.due_s.begin());
+      if (server.options.realtime && reply.motion_s > 0 && !reply.lines.empty()) {
+        acknowledged_at = std::chrono::steady_clock::now();
+        pace(std::move(reply), 0);
+        return;
+      }
+    } else if (server.options.realtime && reply.motion_s > 0 && reply.lines.size() > 1) {
       send(std::move(reply.lines.front()));
       acknowledged_at = std::chrono::steady_clock::now();
-      paced.assign(std::make_move_iterator(reply.lines.begin() + 1), std::make_move_iterator(reply.lines.end()));
-      pacing_now = true;
-      const std::uint64_t id = ++pace_id;
-      pacing.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-          std::chrono::duration<double>(reply.motion_s)));
-      auto self = shared_from_this();
-      pacing.async_wait([self, id](const asio::error_code& ec) {
-        if (ec || self->closed || id != self->pace_id || !self->pacing_now) return;
-        self->pacing_now = false;
-        while (!self->paced.empty()) {
-          self->send(std::move(self->paced.front()));
-          self->paced.pop_front();
-        }
-        self->answered();
-        self->maybe_read();
-      });
+      pace(std::move(reply), 1);
       return;
     }
     for (auto& l : reply.lines) send(std::move(l));
     answered();
+  }
+
+  // Holds the reply's lines from `first` on until they are due (the motion starts now).
+  void pace(SessionReply reply, std::size_t first) {
+    paced.clear();
+    for (std::size_t i = first; i < reply.lines.size(); ++i)
+      paced.emplace_back(i < reply.due_s.size() ? reply.due_s[i] : reply.motion_s, std::move(reply.lines[i]));
+    pacing_now = true;
+    ++pace_id;
+    release_due();
+  }
+
+  // Sends the paced lines that are due (in order) and waits for the next; the last ends the pacing.
+  void release_due() {
+    const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - acknowledged_at).count();
+    while (!paced.empty() && paced.front().first <= elapsed_s) {
+      send(std::move(paced.front().second));
+      paced.pop_front();
+    }
+    if (paced.empty()) {
+      pacing_now = false;
+      answered();
+      maybe_read();
+      return;
+    }
+    pacing.expires_at(acknowledged_at + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                            std::chrono::duration<double>(paced.front().first)));
+    auto self = shared_from_this();
+    const std::uint64_t id = pace_id;
+    pacing.async_wait([self, id](const asio::error_code& ec) {
+      if (ec || self->closed || id != self->pace_id || !self->pacing_now) return;
+      self->release_due();
+    });
   }
 
   // A command's answer is complete: the commands that waited for it follow.
@@ -207,9 +244,9 @@ struct Connection : std::enable_shared_from_this<Connection> {
       return;
     }
     while (!pacing_now && !waiting.empty() && !closed) {
-      const std::string line = std::move(waiting.front());
+      Waiting next = std::move(waiting.front());
       waiting.pop_front();
-      handle(line);
+      handle(next.line, next.acknowledged);
     }
     maybe_close();
   }

@@ -57,9 +57,16 @@ const std::vector<std::string> k_csy_names{"MachineCsy", "MoveableMachineCsy", "
 const std::vector<std::string> k_transform_names{"PartCsy", "MoveableMachineCsy", "MultipleArmCsy", "JogDisplayCsy",
                                                  "JogMoveCsy", "SensorCsy"};
 
-/// A daemon started by OnMoveReportE.
+/// A daemon started by OnMoveReportE. With Time and/or Dis it reports along the motion whenever
+/// both given conditions hold since its last report (I++ DME 1.4: Time the least time between
+/// reports, Dis the least distance); with neither, once at the end of each motion.
 struct Daemon {
   std::vector<std::string> items;         ///< "X", "Y", "Z", "R", "Tool.A", ...
+  std::optional<double> every_s;          ///< Time(s)
+  std::optional<double> every_mm;         ///< Dis(d)
+  double last_s = 0;                      ///< controller clock of the last report (or the command's start)
+  Vec3 last_mm = Vec3::Zero();            ///< machine position then
+  [[nodiscard]] bool along_motion() const { return every_s || every_mm; }
 };
 
 /// Thrown inside a command handler to answer it with an error; never leaves the Session.
@@ -107,6 +114,10 @@ struct Session::Impl {
   /// limits untouched, so a client that never sets Accel moves exactly as a direct run.
   double sent_acceleration = -1;
   double motion_s = 0;
+  bool observing = false;                   ///< the machine reports its motion (daemons along it)
+  std::shared_ptr<int> lifetime = std::make_shared<int>(0);  ///< the motion observer's token
+  double command_start_s = 0;               ///< controller clock when the command started
+  std::map<std::size_t, double> line_due_s; ///< reply lines due before the command's end (reports)
   /// The last command, when it moved the machine and ended without error: an AbortE received
   /// while its answer is still paced stops it (interrupt()).
   struct Running {
@@ -121,6 +132,11 @@ struct Session::Impl {
   std::vector<std::string>* out = nullptr;
 
   Impl(Machine& m, SessionOptions o) : machine(m), options(std::move(o)) {
+    // The machine outlives sessions (one per connection, the next may start before the last is
+    // gone): the observer checks that its session still lives instead of being removed by it.
+    observing = machine.set_motion_observer([this, alive = std::weak_ptr<int>(lifetime)](double t, const Vec3& p) {
+      if (alive.lock()) on_motion(t, p);
+    });
     homed = options.start_homed;
     sent_acceleration = options.max_acceleration_mm_s2;
     const auto s = machine.state();
@@ -263,17 +279,37 @@ struct Session::Impl {
     }
     run(SelectTool{t.name});
   }
+  // The end of a command's motion: the daemons that do not report along it report where it ended.
   void move_reports() {
-    for (const auto& [daemon_tag, d] : daemons) {
-      std::string body;
-      const Vec3 p = to_csy(machine.state().position_mm);
-      for (const char* item : {"R", "X", "Y", "Z", "Tool.A", "Tool.B", "Tool.C"}) {
-        if (std::find(d.items.begin(), d.items.end(), item) == d.items.end()) continue;
-        const std::string s = item;
-        const double v = s == "X" ? p.x() : s == "Y" ? p.y() : s == "Z" ? p.z() : 0.0;
-        body += (body.empty() ? "" : ", ") + s + "(" + format_number(v) + ")";
-      }
-      if (!body.empty()) out->push_back(daemon_tag + " # " + body);
+    const Vec3 p = machine.state().position_mm;
+    for (const auto& [daemon_tag, d] : daemons)
+      if (!observing || !d.along_motion()) move_report(daemon_tag, d, p, std::nullopt);
+  }
+  /// A daemon's report; `due_s`: its time after the command's start (none: with the command's end).
+  void move_report(const std::string& daemon_tag, const Daemon& d, const Vec3& machine_mm, std::optional<double> due_s) {
+    std::string body;
+    const Vec3 p = to_csy(machine_mm);
+    for (const char* item : {"R", "X", "Y", "Z", "Tool.A", "Tool.B", "Tool.C"}) {
+      if (std::find(d.items.begin(), d.items.end(), item) == d.items.end()) continue;
+      const std::string s = item;
+      const double v = s == "X" ? p.x() : s == "Y" ? p.y() : s == "Z" ? p.z() : 0.0;
+      body += (body.empty() ? "" : ", ") + s + "(" + format_number(v) + ")";
+    }
+    if (body.empty()) return;
+    if (due_s) line_due_s[out->size()] = *due_s;
+    out->push_back(daemon_tag + " # " + body);
+  }
+  // Every control cycle of a motion (Machine::set_motion_observer): the daemons with Time or Dis
+  // report when their conditions hold, due at that time of the command.
+  void on_motion(double time_s, const Vec3& position_mm) {
+    if (!out) return;
+    for (auto& [daemon_tag, d] : daemons) {
+      if (!d.along_motion()) continue;
+      if (d.every_s && time_s - d.last_s < *d.every_s - 1e-9) continue;
+      if (d.every_mm && (position_mm - d.last_mm).norm() < *d.every_mm) continue;
+      d.last_s = time_s;
+      d.last_mm = position_mm;
+      move_report(daemon_tag, d, position_mm, std::max(0.0, time_s - command_start_s));
     }
   }
 
@@ -708,6 +744,7 @@ struct Session::Impl {
         if (x.kind != Argument::Kind::Call || !seen.insert(x.text).second) fail(ErrorCode::IncorrectArguments);
         if (x.text == "Time" || x.text == "Dis") {
           if (!x.call_number() || *x.call_number() < 0) fail(ErrorCode::BadArgument);
+          (x.text == "Time" ? d.every_s : d.every_mm) = *x.call_number();
         } else if (x.args.empty() && (x.text == "X" || x.text == "Y" || x.text == "Z" || x.text == "R" ||
                                       x.text == "Tool.A" || x.text == "Tool.B" || x.text == "Tool.C")) {
           d.items.push_back(x.text);
@@ -843,9 +880,27 @@ struct Session::Impl {
   }
 
   SessionReply handle(std::string_view line) {
+    SessionReply reply = handle_line(line);
+    finish(reply);
+    return reply;
+  }
+  // Every line is due at once except what waits for the motion: reports along it at their time,
+  // everything after the acknowledgement at the motion's end.
+  void finish(SessionReply& reply) {
+    reply.due_s.assign(reply.lines.size(), 0.0);
+    for (std::size_t i = 1; i < reply.lines.size(); ++i) {
+      const auto it = line_due_s.find(i);
+      reply.due_s[i] = it != line_due_s.end() ? std::min(it->second, reply.motion_s) : reply.motion_s;
+    }
+    line_due_s.clear();
+    out = nullptr;
+  }
+
+  SessionReply handle_line(std::string_view line) {
     SessionReply reply;
     out = &reply.lines;
     motion_s = 0;
+    line_due_s.clear();
     while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.remove_suffix(1);
     auto parsed = parse_command_line(line);
     if (!parsed) {
@@ -860,6 +915,11 @@ struct Session::Impl {
     command_text = parsed->text;
     out->push_back(format_ack(tag));
     running.reset();
+    if (observing && std::any_of(daemons.begin(), daemons.end(), [](const auto& d) { return d.second.along_motion(); })) {
+      const MachineState s = machine.state();
+      command_start_s = s.time_s;
+      for (auto& [daemon_tag, d] : daemons) d.last_s = s.time_s, d.last_mm = s.position_mm;
+    }
     bool failed = false;
     try {
       dispatch(*parsed);
@@ -896,6 +956,8 @@ struct Session::Impl {
     out->push_back(format_complete(stopped.tag));
     out->push_back(format_complete(parsed->tag));
     reply.interrupted = true;
+    line_due_s.clear();
+    finish(reply);
     return reply;
   }
 };

@@ -26,6 +26,9 @@ struct SessionOptions {
 struct SessionReply {
   std::vector<std::string> lines;          ///< response lines in order, without line terminators
   double motion_s = 0;                     ///< simulated time the machine moved (for real-time pacing)
+  /// When each line is due, in seconds of simulated motion after the acknowledgement (real-time
+  /// pacing): daemon reports along the motion at their time, the rest at the motion's end.
+  std::vector<double> due_s;
   /// interrupt() stopped the paced command: these lines replace what is left of its answer.
   bool interrupted = false;
 };
