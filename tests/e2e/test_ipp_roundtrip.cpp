@@ -323,6 +323,9 @@ TEST(IppRoundTrip, ScansEqualTheDirectRunWithinHalfAMicrometre) {
     for (const auto& f : b["features"]) if (f["label"] == label) fb = &f;
     ASSERT_TRUE(fa && fb) << label;
     EXPECT_GE((*fb)["points"].size(), 30u) << label;  // scanned, not probed
+    // The program's point density reaches the server (ScanOnCurveDensity): as many points.
+    EXPECT_NEAR(static_cast<double>((*fb)["points"].size()), static_cast<double>((*fa)["points"].size()),
+                0.02 * static_cast<double>((*fa)["points"].size()) + 2) << label;
     EXPECT_NEAR((*fa)["actual"]["diameter_mm"].get<double>(), (*fb)["actual"]["diameter_mm"].get<double>(), 5e-4) << label;
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR((*fa)["actual"]["position"][i].get<double>(), (*fb)["actual"]["position"][i].get<double>(), 5e-4) << label;

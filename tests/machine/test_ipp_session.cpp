@@ -419,3 +419,50 @@ TEST(IppSession, FuzzedSessionNeverCrashes) {
     for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
   }
 }
+
+// ScanOnCurveDensity: Dis bounds the distance between reported points, Angle the turn between
+// consecutive chords (checked on the reported points themselves, round the bore of radius 10
+// with the 2 mm ball: centres on radius 9); AtNominals(1) is not offered.
+TEST(IppSession, ScanOnCurveDensityBoundsTheReportedPoints) {
+  Fixture f;
+  f.start();
+  ASSERT_EQ(f.error("00010 GoTo(X(340), Y(250), Z(60))"), 0);
+  ASSERT_EQ(f.error("00011 GoTo(X(340), Y(250), Z(30))"), 0);
+  std::string data;
+  const int n = 24;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * std::numbers::pi * k / n;
+    const double c = std::cos(t), s = std::sin(t);
+    data += (k ? ", " : "") + std::to_string(340 + 9 * c) + ", " + std::to_string(250 + 9 * s) + ", 30, " +
+            std::to_string(-c) + ", " + std::to_string(-s) + ", 0";
+  }
+  const std::string scan = "ScanOnCurve(Closed(1), Format(X(), Y(), Z(), IJK()), Data(" + data + "))";
+  const auto points = [&](const std::string& tag) {
+    const auto v = csv_numbers(f.data(tag + " " + scan));
+    std::vector<Vec3> p;
+    for (std::size_t k = 0; k + 2 < v.size(); k += 3) p.emplace_back(v[k], v[k + 1], v[k + 2]);
+    return p;
+  };
+  const auto server_choice = points("00020");
+  ASSERT_EQ(f.error("00030 ScanOnCurveDensity(Dis(0.25))"), 0);
+  const auto dense = points("00031");
+  EXPECT_GT(dense.size(), 3 * server_choice.size());
+  EXPECT_GE(dense.size(), static_cast<std::size_t>(2 * std::numbers::pi * 9 / 0.25) - 2);
+  double widest = 0;
+  for (std::size_t k = 1; k < dense.size(); ++k) widest = std::max(widest, (dense[k] - dense[k - 1]).norm());
+  EXPECT_LE(widest, 0.25 + 1e-3);
+  ASSERT_EQ(f.error("00040 ScanOnCurveDensity(Dis(5), Angle(1.5), AngleBaseLength(1))"), 0);
+  const auto turned = points("00041");
+  double sharpest = 0;
+  for (std::size_t k = 2; k < turned.size(); ++k) {
+    const Vec3 a = turned[k - 1] - turned[k - 2], b = turned[k] - turned[k - 1];
+    sharpest = std::max(sharpest, std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi);
+  }
+  EXPECT_GT(sharpest, 0.75);  // not denser than it needs
+  EXPECT_LE(sharpest, 1.5);
+  EXPECT_EQ(f.error("00050 ScanOnCurveDensity(AtNominals(1))"), static_cast<int>(ErrorCode::ArgumentNotSupported));
+  EXPECT_EQ(f.error("00051 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00052 ScanOnCurveDensity(Dis(0))"), static_cast<int>(ErrorCode::BadArgument));
+  EXPECT_EQ(f.error("00053 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00054 ScanOnCurveDensity()"), static_cast<int>(ErrorCode::IncorrectArguments));
+}

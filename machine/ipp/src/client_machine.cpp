@@ -122,6 +122,7 @@ struct ClientMachine::Impl {
   double positioning_feed = 0, measuring_feed = 0;
   std::size_t executed = 0;
   std::optional<std::string> lost;        ///< why the connection is gone (then every command faults)
+  bool density_supported = true;          ///< the server answered ScanOnCurveDensity (or was not asked yet)
   Vec3 last_position = Vec3::Zero();      ///< the last position the server answered
 
   std::string read_line() {
@@ -295,6 +296,15 @@ struct ClientMachine::Impl {
     if (speed > 0)
       if (auto f = fault_of(call("SetProp(Tool.PtMeasPar.Speed(" + number(speed) + "))"))) return *f;
     if (auto f = fault_of(call("OnScanReport(X(), Y(), Z(), IJK())"))) return *f;
+    // The program's point density (SCNSET): at most this far apart, if the server takes it.
+    if (body.sample_spacing_mm > 0 && density_supported) {
+      const Answer d = call("ScanOnCurveDensity(Dis(" + number(body.sample_spacing_mm) + "))");
+      if (d.error) {
+        density_supported = false;
+        warn("the I++ server does not take ScanOnCurveDensity (" + d.error->error_text +
+             "): scanned points are as dense as the server chooses, not every " + number(body.sample_spacing_mm) + " mm");
+      }
+    }
     const Answer a = call(std::string("ScanOnCurve(Closed(") + (closed ? "1" : "0") + "), Format(X(), Y(), Z(), IJK()), Data(" + data + "))");
     if (auto f = fault_of(a)) return *f;
     std::vector<double> v;

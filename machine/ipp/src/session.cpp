@@ -80,7 +80,7 @@ const std::set<std::string> k_unsupported{"AlignPart",         "CenterPart",    
                                           "TiltCenterPart",    "LockAxis",
                                           "ScanInCylEndIsPlane", "ScanInCylEndIsSphere", "ScanInPlaneEndIsCyl",
                                           "ScanInPlaneEndIsPlane", "ScanInPlaneEndIsSphere", "ScanOnCircleHint",
-                                          "ScanOnLineHint",    "ScanOnCurveHint",     "ScanOnCurveDensity",
+                                          "ScanOnLineHint",    "ScanOnCurveHint",
                                           "OnScanReportE"};
 
 bool is_event_command(std::string_view name) {
@@ -110,6 +110,9 @@ struct Session::Impl {
   std::vector<std::string> scan_report{"X", "Y", "Z"};
   std::map<std::string, Daemon> daemons;    ///< by tag text
   double scan_hint_min_radius_mm = 0;
+  /// ScanOnCurveDensity: at most this far between reported points (Dis), at most this angle in
+  /// degrees between the chords of three consecutive points (Angle); none: the server's choice.
+  std::optional<double> curve_density_mm, curve_density_deg;
   /// The acceleration last sent to the machine; the default (Accel.Def) leaves the machine's own
   /// limits untouched, so a client that never sets Accel moves exactly as a direct run.
   double sent_acceleration = -1;
@@ -650,9 +653,9 @@ struct Session::Impl {
       if (d < 1e-9) fail(ErrorCode::BadArgument);  // two equal points: no direction
       length += d;
     }
-    // Samples at the points' mean spacing, at least every millimetre.
-    const double step = std::min(1.0, length / static_cast<double>(segments));
-    if (length / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
+    // Samples at the points' mean spacing, at least every millimetre, or as ScanOnCurveDensity
+    // asked (below, once the path's curvature is known).
+    double step = curve_density_mm ? *curve_density_mm : std::min(1.0, length / static_cast<double>(segments));
     // Catmull-Rom tangents (central differences; one-sided at the ends of an open curve).
     auto tangent = [&](std::size_t k) {
       const Vec3 prev = loop ? q[(k + n - 1) % n] : q[k == 0 ? 0 : k - 1];
@@ -668,8 +671,50 @@ struct Session::Impl {
     }
     sp.path.normals.push_back(normal[loop ? 0 : n - 1]);
     sp.approach_normal = normal[0];
+    if (curve_density_deg) {
+      // Three samples a step apart on a curve of curvature k turn their chords by about step*k:
+      // the step at the path's sharpest point keeps every turn within the angle. The measured
+      // points scatter about the path (the surface, the probe's noise), which turns their chords
+      // further, so the step aims at three quarters of the angle.
+      double k_max = 0;
+      for (const auto& seg : sp.path.segments)
+        for (int i = 0; i <= 16; ++i) k_max = std::max(k_max, seg.curvature(seg.d_mm * i / 16.0));
+      if (k_max > 0) step = std::min(step, 0.75 * *curve_density_deg * std::numbers::pi / 180 / k_max);
+    }
+    if (length / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
     sp.sample_spacing_mm = step;
     run_scan(sp);
+  }
+
+  // ScanOnCurveDensity(Dis(d), Angle(a), AngleBaseLength(b), AtNominals(0|1)), any of them, for
+  // the following ScanOnCurve commands. The angle is held through the path's curvature, so the
+  // base length is accepted and not needed; points at the nominals (AtNominals(1)) are not
+  // offered: 0506.
+  void scan_on_curve_density(const Args& a) {
+    if (a.empty()) fail(ErrorCode::IncorrectArguments);
+    std::set<std::string> seen;
+    std::optional<double> dis, angle;
+    for (const auto& x : a) {
+      if (x.kind != Argument::Kind::Call || !seen.insert(x.text).second) fail(ErrorCode::IncorrectArguments);
+      const auto v = x.call_number();
+      if (!v) fail(ErrorCode::IncorrectArguments);
+      if (x.text == "Dis") {
+        if (!(*v > 0)) fail(ErrorCode::BadArgument);
+        dis = *v;
+      } else if (x.text == "Angle") {
+        if (!(*v > 0 && *v < 180)) fail(ErrorCode::BadArgument);
+        angle = *v;
+      } else if (x.text == "AngleBaseLength") {
+        if (*v < 0) fail(ErrorCode::BadArgument);
+      } else if (x.text == "AtNominals") {
+        if (*v != 0 && *v != 1) fail(ErrorCode::BadArgument);
+        if (*v == 1) fail(ErrorCode::ArgumentNotSupported);
+      } else {
+        fail(ErrorCode::IncorrectArguments);
+      }
+    }
+    curve_density_mm = dis;
+    curve_density_deg = angle;
   }
 
   // ---- dispatch
@@ -856,6 +901,8 @@ struct Session::Impl {
       if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
       if (!a[0].is_number() || a[0].number <= 0) fail(ErrorCode::BadArgument);
       scan_hint_min_radius_mm = a[0].number;
+    } else if (n == "ScanOnCurveDensity") {
+      scan_on_curve_density(a);
     } else if (n == "ScanOnLine" || n == "ScanOnCircle") {
       scan(n, a);
     } else if (n == "ScanOnCurve") {
