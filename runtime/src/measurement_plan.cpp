@@ -8,6 +8,22 @@
 namespace metron::runtime {
 namespace {
 
+// The height (along `up`) that AUTO moves rise to over `at`: the highest step plus the clearance
+// distance (SNSET/CLRSRF,d), and at least the clearance surface (SNSET/CLRSRF,F(plane),d) with the
+// ball (radius `ball_mm`, whose centre the moves position) above it. A surface steeper than 60
+// degrees to `up` gives no height (the runtime refuses one when it is set).
+double clearance_height(double top, const ProbeSettings& probe, double ball_mm, const Vec3& up, const Vec3& at) {
+  double h = top + probe.clearance_mm;
+  if (const auto& c = probe.clearance_plane) {
+    const double facing = c->normal.dot(up);
+    if (std::abs(facing) >= 0.5) {
+      const double t = (c->point_mm - at).dot(c->normal) / facing;  // along up from `at` to the plane
+      h = std::max(h, at.dot(up) + t + ball_mm);
+    }
+  }
+  return h;
+}
+
 // Unit radial direction of `p` about the axis through `c` along `axis` (any when on the axis).
 Vec3 radial(const Vec3& p, const Vec3& c, const Vec3& axis) {
   Vec3 d = p - c;
@@ -171,7 +187,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       double top = current_position.dot(up);
       for (const auto& face : faces)
         for (const auto& s : face) top = std::max(top, (s.point + probe.approach_mm * s.normal).dot(up));
-      const double clear = top + probe.clearance_mm;
+      const double clear = clearance_height(top, probe, ball_radius_mm, up, g.position);
       const auto over = [&](const PlannedStep& s) {
         const Vec3 a = s.point + probe.approach_mm * s.normal;
         return PlannedStep{PlannedStep::Kind::GoTo, Vec3(a + (clear - a.dot(up)) * up), Vec3::UnitZ()};
@@ -312,7 +328,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
   const auto approach_of = [&](const PlannedStep& s) { return s.point + probe.approach_mm * s.normal; };
   double top = current_position.dot(up);
   for (const auto& s : steps) top = std::max(top, (s.kind == PlannedStep::Kind::Probe ? approach_of(s) : s.point).dot(up));
-  const double clear = top + probe.clearance_mm;
+  const double clear = clearance_height(top, probe, ball_radius_mm, up, g.position);
   const Vec3 first = steps.front().kind == PlannedStep::Kind::Probe ? approach_of(steps.front()) : steps.front().point;
   std::vector<PlannedStep> out;
   out.push_back({PlannedStep::Kind::GoTo, current_position + (clear - current_position.dot(up)) * up, Vec3::UnitZ()});

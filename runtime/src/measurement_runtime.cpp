@@ -509,6 +509,21 @@ Result<void> MeasurementRuntime::datset(const std::string& label, const DatsetRe
   return {};
 }
 
+Result<void> MeasurementRuntime::set_clearance_surface(const FeatureRef& plane, double offset_mm, Span span) {
+  auto g = resolve(plane, span);
+  if (!g) return tl::unexpected(g.error());
+  if (g->type != FeatureType::Plane)
+    return program_error(span, fmt::format("SNSET/CLRSRF: {}({}) is {}; a clearance surface is a plane",
+                                           plane.actual ? "FA" : "F", plane.label, dmis_word(g->type)));
+  const Vec3 n = g->direction.normalized();
+  if (std::abs(n.dot(m_alignment.to_machine_vector(Vec3::UnitZ()))) < 0.5)
+    return program_error(span, fmt::format("SNSET/CLRSRF: {}({}) is steeper than 60 degrees to the part's Z axis; "
+                                           "AUTO moves rise along Z to a clearance surface",
+                                           plane.actual ? "FA" : "F", plane.label));
+  m_probe.clearance_plane = ProbeSettings::ClearancePlane{g->position + offset_mm * n, n};
+  return {};
+}
+
 Result<void> MeasurementRuntime::trans(const std::string& label, const TransRequest& request, Span span) {
   std::optional<double> origin[3];
   for (int k = 0; k < 3; ++k) {

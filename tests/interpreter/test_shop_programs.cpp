@@ -227,6 +227,52 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
   EXPECT_NEAR(cy->value, 0.0, 2e-3);
 }
 
+// SNSET/CLRSRF,F(plane),d: a clearance surface for AUTO moves. Planned from low down (z = 10),
+// the y pair's move between its faces rises only to its own points plus the clearance distance
+// (about z = 45) and hits what stands on the block's top (the world's truth: SPHERE1 reaches
+// z = 58, BOSS1 z = 55). With the clearance surface 25 mm over F(TOP) (z = 65) it goes over the
+// part and measures the moved faces (block_width.json: width 100.015).
+TEST(ShopPrograms, ClearanceSurfaceLiftsAutoMovesOverThePart) {
+  const auto program = [](const std::string& clearance) {
+    return "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+           "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nSNSET/CLRSRF, 10\n"
+           "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\n" + clearance +
+           "GOTO/80, -15, 80\nGOTO/80, -15, 10\nMODE/AUTO\n"
+           "F(YPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 0, 1, 0, 100\nMEAS/PARPLN, F(YPAIR), 6\nENDMES\n"
+           "OUTPUT/FA(YPAIR)\nENDFIL\n";
+  };
+  const auto world = source_dir / "programs/worlds/block_width.json";
+  const auto low = run(program(""), world);
+  EXPECT_EQ(low.status, ExecStatus::Faulted) << low.diagnostics;
+  const auto collided = [](const Ran& r) {
+    for (const auto& e : r.session->record().events)
+      if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e)) return f->message.find("collision") != std::string::npos;
+    return false;
+  };
+  EXPECT_TRUE(collided(low));
+  const auto lifted = run(program("SNSET/CLRSRF, F(TOP), 25\n"), world);
+  ASSERT_EQ(lifted.status, ExecStatus::Finished) << lifted.diagnostics;
+  const auto* y = report(*lifted.session, "YPAIR");
+  ASSERT_TRUE(y && y->actual);
+  EXPECT_NEAR(y->actual->width_mm, 100.015, 1e-3);
+  // A later distance alone removes the surface again: the same collision.
+  const auto removed = run(program("SNSET/CLRSRF, F(TOP), 25\nSNSET/CLRSRF, 10\n"), world);
+  EXPECT_EQ(removed.status, ExecStatus::Faulted) << removed.diagnostics;
+  EXPECT_TRUE(collided(removed));
+  // Only a plane facing up is a clearance surface; the distance is required.
+  const auto bore = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+                        "SNSET/CLRSRF, F(B), 5\nENDFIL\n");
+  EXPECT_EQ(bore.status, ExecStatus::Error);
+  EXPECT_NE(bore.diagnostics.find("a clearance surface is a plane"), std::string::npos) << bore.diagnostics;
+  const auto side = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(S) = FEAT/PLANE, CART, 0, 50, 20, -1, 0, 0\n"
+                        "SNSET/CLRSRF, F(S), 5\nENDFIL\n");
+  EXPECT_EQ(side.status, ExecStatus::Error);
+  EXPECT_NE(side.diagnostics.find("steeper than 60 degrees"), std::string::npos) << side.diagnostics;
+  const auto no_distance = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(T) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\n"
+                               "SNSET/CLRSRF, F(T)\nENDFIL\n");
+  EXPECT_NE(no_distance.diagnostics.find("expected the clearance distance"), std::string::npos) << no_distance.diagnostics;
+}
+
 // FEAT/PARPLN with TOL/WIDTH on a block whose side faces were moved (programs/worlds/
 // block_width.json states the truth): the x pair measured with PTMEAS, the y pair planned by
 // metron (MODE/AUTO, no PTMEAS), which must go over the part between the faces.

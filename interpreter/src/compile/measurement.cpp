@@ -46,7 +46,8 @@ void UnitCompiler::library_sensor(const grammar::Expr& label) {
                    label.label.prefix, label.label.name));
 }
 
-// SNSET/APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH,dist[, ...]
+// SNSET/APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH,dist[, ...]; SNSET/CLRSRF,F(plane)|FA(plane),dist (a
+// clearance surface: the plane moved dist along its normal)
 void UnitCompiler::snset(const grammar::Statement& s) {
   static const std::set<std::string> words = {"APPRCH", "RETRCT", "SEARCH", "CLRSRF", "DEPTH"};
   if (!expect_params(s, 2, "a setting (APPRCH, RETRCT, SEARCH, CLRSRF, DEPTH) and a distance")) return;
@@ -60,6 +61,19 @@ void UnitCompiler::snset(const grammar::Statement& s) {
       return error(s.params[i].span, "sema.bad-setting", "expected APPRCH, RETRCT, SEARCH, CLRSRF or DEPTH");
     }
     if (i + 1 >= s.params.size()) return error(s.params[i].span, "sema.missing-parameter", fmt::format("expected a distance after {}", s.params[i].text));
+    if (s.params[i].text == "CLRSRF" && is_label(s.params[i + 1], {"F", "FA"})) {
+      if (i + 2 >= s.params.size())
+        return error(s.params[i + 1].span, "sema.missing-parameter", "expected the clearance distance from the plane after its label");
+      auto d = numeric(s.params[i + 2], "a distance");
+      if (!d) return;
+      auto in = make(Op::ProbeSet, s);
+      in.operands.push_back(word_operand(s.params[i]));
+      in.operands.push_back(label_op(s.params[i + 1]));
+      in.operands.push_back(expr_operand(std::move(*d)));
+      emit(std::move(in));
+      ++i;  // the label; the loop steps over the distance
+      continue;
+    }
     auto e = numeric(s.params[i + 1], "a distance");
     if (!e) return;
     if (e->op == ir::ExprOp::Constant && e->value.number < 0 && s.params[i].text != "DEPTH")

@@ -29,11 +29,17 @@ ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, Ca
 // Op::ProbeSet
 ExecStatus Execute::probe_set(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   const double len = vm.m_length_mm;
-  auto v = vm.number(in.operands[1].expr);
+  auto v = vm.number(in.operands.back().expr);
   if (!v) return vm.fail(in.span, v.error());
   auto& p = vm.m_runtime.probe_settings();
   const std::string& w = in.operands[0].word;
   const double d = *v * len;
+  if (in.operands.size() == 3) {  // SNSET/CLRSRF,F(plane),d
+    if (auto r = vm.m_runtime.set_clearance_surface(feature_ref(vm, in.operands[1].label), d, in.span); !r)
+      return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
+  if (w == "CLRSRF") p.clearance_plane.reset();
   if (w == "APPRCH") p.approach_mm = d, p.approach_explicit = true;
   else if (w == "RETRCT") p.retract_mm = d;
   else if (w == "SEARCH") p.search_mm = d;

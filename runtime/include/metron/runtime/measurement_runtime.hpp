@@ -143,6 +143,9 @@ class MeasurementRuntime {
   Result<void> define_datum(const FeatureRef& feature, const std::string& datum, Span span);
   Result<void> datset(const std::string& label, const DatsetRequest& request, Span span);
   Result<void> trans(const std::string& label, const TransRequest& request, Span span);
+  /// SNSET/CLRSRF,F(label),offset: the plane feature moved `offset_mm` along its normal becomes
+  /// the clearance surface of AUTO moves (an error for a feature that is no plane).
+  Result<void> set_clearance_surface(const FeatureRef& plane, double offset_mm, Span span);
   Result<void> rotate(const std::string& label, const RotateRequest& request, Span span);
   Result<void> save(const std::string& label, Span span);
   Result<void> recall(const std::string& label, Span span);

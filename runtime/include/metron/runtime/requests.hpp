@@ -22,6 +22,13 @@ struct ProbeSettings {
   double retract_mm = 2.0;     ///< SNSET/RETRCT
   double search_mm = 5.0;      ///< SNSET/SEARCH
   double clearance_mm = 10.0;  ///< SNSET/CLRSRF: clearance above the feature for AUTO moves
+  /// SNSET/CLRSRF,F(plane),d: a clearance surface, the plane moved d along its normal (MCS);
+  /// AUTO moves rise at least to it. A later SNSET/CLRSRF,d without a feature removes it.
+  struct ClearancePlane {
+    Vec3 point_mm = Vec3::Zero();
+    Vec3 normal = Vec3::UnitZ();
+  };
+  std::optional<ClearancePlane> clearance_plane;
   double depth_mm = 0.0;       ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
   bool approach_explicit = false;  ///< SNSET/APPRCH was given: it overrides a characterisation's approach
 };
