@@ -162,12 +162,23 @@ struct Connection : std::enable_shared_from_this<Connection> {
     });
   }
 
+  // `&` says the server has the command: it goes out before the command runs (a long scan
+  // computes for a while), and before a paced answer completes.
+  std::optional<Tag> acknowledge(const std::string& line) {
+    const auto parsed = parse_command_line(line);
+    const std::optional<Tag> tag = parsed ? std::optional<Tag>(parsed->tag) : parsed.error().tag;
+    if (tag) send(format_ack(*tag));
+    return tag;
+  }
+
   void received(std::string line) {
-    if (!pacing_now) return handle(line);
+    if (!pacing_now) {  // the motion starts with the acknowledgement, not after the computing
+      const auto started = std::chrono::steady_clock::now();
+      const auto tag = acknowledge(line);
+      return handle(line, tag, started);
+    }
     if (line.front() != 'E') {
-      const auto parsed = parse_command_line(line);
-      const std::optional<Tag> tag = parsed ? std::optional<Tag>(parsed->tag) : parsed.error().tag;
-      if (tag) send(format_ack(*tag));
+      const auto tag = acknowledge(line);
       waiting.push_back({std::move(line), tag});
       return;
     }
@@ -183,19 +194,21 @@ struct Connection : std::enable_shared_from_this<Connection> {
     if (!pacing_now) answered();
   }
 
-  void handle(const std::string& line, std::optional<Tag> acknowledged = std::nullopt) {
+  /// Runs a command whose motion starts at `started` (its `&` already sent when `acknowledged`).
+  void handle(const std::string& line, std::optional<Tag> acknowledged,
+              std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now()) {
     SessionReply reply = session.handle(line);
     if (acknowledged && !reply.lines.empty() && reply.lines.front() == format_ack(*acknowledged)) {
-      reply.lines.erase(reply.lines.begin());  // its `&` went out when it arrived
+      reply.lines.erase(reply.lines.begin());
       if (!reply.due_s.empty()) reply.due_s.erase(reply.due_s.begin());
       if (server.options.realtime && reply.motion_s > 0 && !reply.lines.empty()) {
-        acknowledged_at = std::chrono::steady_clock::now();
+        acknowledged_at = started;
         pace(std::move(reply), 0);
         return;
       }
     } else if (server.options.realtime && reply.motion_s > 0 && reply.lines.size() > 1) {
       send(std::move(reply.lines.front()));
-      acknowledged_at = std::chrono::steady_clock::now();
+      acknowledged_at = started;
       pace(std::move(reply), 1);
       return;
     }

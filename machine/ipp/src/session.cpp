@@ -788,7 +788,10 @@ struct Session::Impl {
       for (const auto& x : a) {
         if (x.kind != Argument::Kind::Call || !seen.insert(x.text).second) fail(ErrorCode::IncorrectArguments);
         if (x.text == "Time" || x.text == "Dis") {
-          if (!x.call_number() || *x.call_number() < 0) fail(ErrorCode::BadArgument);
+          if (!x.call_number()) fail(ErrorCode::BadArgument);
+          // As the NIST server (checkerCmdErrors.res): reports at most ten a second, no negative
+          // distance, else 0510.
+          if (*x.call_number() < (x.text == "Time" ? 0.1 : 0.0)) fail(ErrorCode::BadProperty);
           (x.text == "Time" ? d.every_s : d.every_mm) = *x.call_number();
         } else if (x.args.empty() && (x.text == "X" || x.text == "Y" || x.text == "Z" || x.text == "R" ||
                                       x.text == "Tool.A" || x.text == "Tool.B" || x.text == "Tool.C")) {
