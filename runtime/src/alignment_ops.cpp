@@ -8,7 +8,12 @@ namespace metron::runtime {
 namespace {
 
 // The direction a datum feature gives: a plane's normal, an axis's direction, a line's direction.
-Vec3 datum_direction(const Geometry& g) { return g.direction.normalized(); }
+// A closed slot (CPARLN) has two: as the first (primary) direction its plane's normal, after it
+// its long axis, which is what a slot orients when a plane already set the primary axis.
+Vec3 datum_direction(const Geometry& g, bool primary) {
+  if (g.type == FeatureType::ClosedSlot && !primary) return g.slot_axis.normalized();
+  return g.direction.normalized();
+}
 
 }  // namespace
 
@@ -19,7 +24,7 @@ tl::expected<Frame, std::string> datset(const Frame& current, const std::vector<
   for (const auto& c : clauses) {
     if (!c.direction) continue;
     const int k = static_cast<int>(*c.direction);
-    Vec3 d = datum_direction(c.datum) * (c.minus ? -1.0 : 1.0);
+    Vec3 d = datum_direction(c.datum, !primary) * (c.minus ? -1.0 : 1.0);
     if (!primary) {
       primary = k;
       axes.col(k) = d;

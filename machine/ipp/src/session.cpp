@@ -118,7 +118,6 @@ struct Session::Impl {
   double sent_acceleration = -1;
   double motion_s = 0;
   bool observing = false;                   ///< the machine reports its motion (daemons along it)
-  std::shared_ptr<int> lifetime = std::make_shared<int>(0);  ///< the motion observer's token
   double command_start_s = 0;               ///< controller clock when the command started
   std::map<std::size_t, double> line_due_s; ///< reply lines due before the command's end (reports)
   /// The last command, when it moved the machine and ended without error: an AbortE received
@@ -135,11 +134,7 @@ struct Session::Impl {
   std::vector<std::string>* out = nullptr;
 
   Impl(Machine& m, SessionOptions o) : machine(m), options(std::move(o)) {
-    // The machine outlives sessions (one per connection, the next may start before the last is
-    // gone): the observer checks that its session still lives instead of being removed by it.
-    observing = machine.set_motion_observer([this, alive = std::weak_ptr<int>(lifetime)](double t, const Vec3& p) {
-      if (alive.lock()) on_motion(t, p);
-    });
+    observing = machine.set_motion_observer(nullptr);  // can the machine report its motion?
     homed = options.start_homed;
     sent_acceleration = options.max_acceleration_mm_s2;
     const auto s = machine.state();
@@ -243,6 +238,16 @@ struct Session::Impl {
   Response run(decltype(Command::body) body) {
     Command c{next_machine_tag++, std::move(body)};
     machine.submit(std::move(c));
+    // The daemons that report along the motion watch it while it runs, and only then (the
+    // machine outlives the session, and a cycle without a watcher costs nothing).
+    const bool watch = observing && std::any_of(daemons.begin(), daemons.end(), [](const auto& d) { return d.second.along_motion(); });
+    struct Watching {
+      Machine* m;
+      ~Watching() {
+        if (m) m->set_motion_observer(nullptr);
+      }
+    } watching{watch ? &machine : nullptr};
+    if (watch) machine.set_motion_observer([this](double t, const Vec3& p) { on_motion(t, p); });
     auto responses = machine.execute();
     if (responses.empty()) fail(ErrorCode::ControllerCommunicationsFailure);
     const Response r = responses.back();
