@@ -340,6 +340,20 @@ std::vector<double> csv_numbers(const std::string& body) {
   }
   return values;
 }
+
+/// ScanOnCurve Data: 24 ball-centre points on a circle of radius 9 inside BORE1 at z = 30, their
+/// normals toward the axis, and with `tagged` a tag column (the point's number).
+std::string bore_curve_data(bool tagged) {
+  std::string data;
+  const int n = 24;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * std::numbers::pi * k / n;
+    const double c = std::cos(t), s = std::sin(t);
+    data += (k ? ", " : "") + std::to_string(340 + 9 * c) + ", " + std::to_string(250 + 9 * s) + ", 30, " +
+            std::to_string(-c) + ", " + std::to_string(-s) + ", 0" + (tagged ? ", " + std::to_string(k) : "");
+  }
+  return data;
+}
 }  // namespace
 
 // ScanOnCurve, closed: 24 ball-centre points on a circle of radius 9 inside BORE1 (perfect world:
@@ -351,14 +365,7 @@ TEST(IppSession, ScanOnCurveFollowsAClosedCurveInABore) {
   f.start();
   ASSERT_EQ(f.error("00010 GoTo(X(340), Y(250), Z(60))"), 0);
   ASSERT_EQ(f.error("00011 GoTo(X(340), Y(250), Z(30))"), 0);
-  std::string data;
-  const int n = 24;
-  for (int k = 0; k < n; ++k) {
-    const double t = 2 * std::numbers::pi * k / n;
-    const double c = std::cos(t), s = std::sin(t);
-    data += (k ? ", " : "") + std::to_string(340 + 9 * c) + ", " + std::to_string(250 + 9 * s) + ", 30, " +
-            std::to_string(-c) + ", " + std::to_string(-s) + ", 0, " + std::to_string(k);
-  }
+  const std::string data = bore_curve_data(true);
   const auto body = f.data("00020 ScanOnCurve(Closed(1), Format(X(), Y(), Z(), IJK(), tag), Data(" + data + "))");
   const auto v = csv_numbers(body);
   ASSERT_GE(v.size(), 3u * 20);
@@ -428,14 +435,7 @@ TEST(IppSession, ScanOnCurveDensityBoundsTheReportedPoints) {
   f.start();
   ASSERT_EQ(f.error("00010 GoTo(X(340), Y(250), Z(60))"), 0);
   ASSERT_EQ(f.error("00011 GoTo(X(340), Y(250), Z(30))"), 0);
-  std::string data;
-  const int n = 24;
-  for (int k = 0; k < n; ++k) {
-    const double t = 2 * std::numbers::pi * k / n;
-    const double c = std::cos(t), s = std::sin(t);
-    data += (k ? ", " : "") + std::to_string(340 + 9 * c) + ", " + std::to_string(250 + 9 * s) + ", 30, " +
-            std::to_string(-c) + ", " + std::to_string(-s) + ", 0";
-  }
+  const std::string data = bore_curve_data(false);
   const std::string scan = "ScanOnCurve(Closed(1), Format(X(), Y(), Z(), IJK()), Data(" + data + "))";
   const auto points = [&](const std::string& tag) {
     const auto v = csv_numbers(f.data(tag + " " + scan));
