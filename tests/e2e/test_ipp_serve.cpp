@@ -256,9 +256,12 @@ TEST(IppServe, RealtimePacesTheCompletion) {
   a.send_raw("00004 GoTo(X(100), Y(0), Z(500))\r\n");
   EXPECT_EQ(a.line(), "00004 &");
   const double ack_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  // A command sent during the motion is acknowledged when it arrives and executed after it.
-  a.send_raw("00005 Get(X(), Y(), Z())\r\n");
+  // Commands sent during the motion are acknowledged when they arrive and executed after it, in
+  // order.
+  a.send_raw("00005 Get(X(), Y(), Z())\r\n00006 IsHomed()\r\n00007 Get(X(), Y(), Z())\r\n");
   EXPECT_EQ(a.line(), "00005 &");
+  EXPECT_EQ(a.line(), "00006 &");
+  EXPECT_EQ(a.line(), "00007 &");
   const double queued_ack_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(a.line(), "00004 %");
   const double done_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -269,6 +272,10 @@ TEST(IppServe, RealtimePacesTheCompletion) {
   const std::string position = a.line();
   EXPECT_NEAR(item(position, "X"), 100, 1e-6);
   EXPECT_EQ(a.line(), "00005 %");
+  EXPECT_EQ(a.line(), "00006 # IsHomed(1)");
+  EXPECT_EQ(a.line(), "00006 %");
+  EXPECT_EQ(a.line().substr(0, 7), "00007 #");
+  EXPECT_EQ(a.line(), "00007 %");
   EXPECT_EQ(server.terminate(SIGTERM), 0);
 }
 

@@ -108,6 +108,7 @@ struct Connection : std::enable_shared_from_this<Connection> {
   std::chrono::steady_clock::time_point acknowledged_at;  ///< when the paced command was acknowledged
   std::uint64_t pace_id = 0;              ///< which pacing a timer belongs to
   bool pacing_now = false;
+  bool draining = false;                  ///< answered() is running the waiting commands
   bool reading = false;
   bool writing = false;
   bool input_closed = false;              ///< the client closed its side: finish, then close
@@ -256,11 +257,14 @@ struct Connection : std::enable_shared_from_this<Connection> {
       maybe_close();
       return;
     }
+    if (draining) return;  // the loop below goes on (no recursion per waiting command)
+    draining = true;
     while (!pacing_now && !waiting.empty() && !closed) {
       Waiting next = std::move(waiting.front());
       waiting.pop_front();
       handle(next.line, next.acknowledged);
     }
+    draining = false;
     maybe_close();
   }
 
