@@ -27,7 +27,7 @@ Eigen::MatrixXd fixed_translations(const Geometry& nominal) {
     case FeatureType::Line:
     case FeatureType::Circle:
     case FeatureType::Arc:
-    case FeatureType::ClosedSlot:  // its centre, in its plane
+    case FeatureType::ClosedSlot:  // its centre, in its plane (its long axis orients: fit_datum_frame)
     case FeatureType::Cylinder: {
       const Vec3 u = n.unitOrthogonal();
       Eigen::MatrixXd rows(2, 3);
@@ -97,8 +97,16 @@ tl::expected<DatumFrame, std::string> fit_datum_frame(const std::vector<const Da
         frame.rotations_fixed += 2;
         oriented = true;
       } else if (rotation == Rotation::AboutAxis) {
-        const Vec3 pa = across(da, axis);
-        const Vec3 pn = across(dn, axis);
+        Vec3 pa = across(da, axis);
+        Vec3 pn = across(dn, axis);
+        if (nominal.type == FeatureType::ClosedSlot && (pa.norm() <= k_min_sine || pn.norm() <= k_min_sine)) {
+          // A slot in the primary plane: its long axis (no sense, like an axis) turns the frame.
+          const Vec3 sn = nominal.slot_axis.normalized();
+          Vec3 sa = actual.slot_axis.normalized();
+          if (sa.dot(sn) < 0) sa = -sa;
+          pa = across(sa, axis);
+          pn = across(sn, axis);
+        }
         if (pa.norm() > k_min_sine && pn.norm() > k_min_sine) {
           const double angle = std::atan2(axis.dot(pa.cross(pn)), pa.dot(pn));
           motion = rotation_about(axis_point, Eigen::AngleAxisd(angle, axis).toRotationMatrix()) * motion;

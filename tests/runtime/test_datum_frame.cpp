@@ -129,6 +129,32 @@ TEST(DatumFrame, PlaneThenTwoHolesFixesTheRotationByTheThirdHole) {
   EXPECT_NE(r->note.find("3 of 3 rotations and 3 of 3 translations fixed"), std::string::npos) << r->note;
 }
 
+// Plane A primary, closed slot B secondary (CPARLN): the slot fixes its centre in A and, by its
+// long axis, the rotation about A's normal, so the frame is complete with two datums, and the
+// hole's position error in the part frame is recovered exactly (the misplacement turns the part
+// about a skew axis, so about A's normal too).
+TEST(DatumFrame, PlaneThenClosedSlotFixesTheRotationByTheSlotsAxis) {
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  Geometry slot;
+  slot.type = FeatureType::ClosedSlot;
+  slot.side = Side::Inner;
+  slot.position = {0, 0, -5};
+  slot.direction = Vec3::UnitZ();
+  slot.slot_axis = Vec3::UnitX();
+  slot.length_mm = 40;
+  slot.width_mm = 10;
+  const Datum b = datum("B", slot, slot);
+  const Geometry nominal = bore(FeatureType::Circle, {40, 30, -5}, Vec3::UnitZ(), 8);
+  const Geometry truth = bore(FeatureType::Circle, {40.015, 30.02, -5}, Vec3::UnitZ(), 8);
+  const Feature hole = feature(nominal, truth);
+  ToleranceContext context;
+  context.datums = {&a, &b};
+  const auto r = evaluate_tolerance(position({"A", "B"}), {&hole}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 2.0 * std::hypot(0.015, 0.02), k_tight);
+  EXPECT_NE(r->note.find("3 of 3 rotations and 3 of 3 translations fixed"), std::string::npos) << r->note;
+}
+
 TEST(DatumFrame, PrimaryAxisThenFaceThenHole) {
   // A shaft-like part: primary cylinder A along z, secondary face B (fixes z), tertiary hole C.
   const Datum a = datum("A", bore(FeatureType::Cylinder, {0, 0, 10}, Vec3::UnitZ(), 30),
