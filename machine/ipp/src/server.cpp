@@ -202,25 +202,20 @@ struct Connection : std::enable_shared_from_this<Connection> {
     if (acknowledged && !reply.lines.empty() && reply.lines.front() == format_ack(*acknowledged)) {
       reply.lines.erase(reply.lines.begin());
       if (!reply.due_s.empty()) reply.due_s.erase(reply.due_s.begin());
-      if (server.options.realtime && reply.motion_s > 0 && !reply.lines.empty()) {
-        acknowledged_at = started;
-        pace(std::move(reply), 0);
-        return;
-      }
-    } else if (server.options.realtime && reply.motion_s > 0 && reply.lines.size() > 1) {
-      send(std::move(reply.lines.front()));
+    }
+    if (server.options.realtime && reply.motion_s > 0 && !reply.lines.empty()) {
       acknowledged_at = started;
-      pace(std::move(reply), 1);
+      pace(std::move(reply));  // a `&` still in it is due at once
       return;
     }
     for (auto& l : reply.lines) send(std::move(l));
     answered();
   }
 
-  // Holds the reply's lines from `first` on until they are due (the motion starts now).
-  void pace(SessionReply reply, std::size_t first) {
+  // Holds the reply's lines until they are due (the motion started at `acknowledged_at`).
+  void pace(SessionReply reply) {
     paced.clear();
-    for (std::size_t i = first; i < reply.lines.size(); ++i)
+    for (std::size_t i = 0; i < reply.lines.size(); ++i)
       paced.emplace_back(i < reply.due_s.size() ? reply.due_s[i] : reply.motion_s, std::move(reply.lines[i]));
     pacing_now = true;
     ++pace_id;

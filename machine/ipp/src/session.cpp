@@ -289,6 +289,7 @@ struct Session::Impl {
   }
   // The end of a command's motion: the daemons that do not report along it report where it ended.
   void move_reports() {
+    if (daemons.empty()) return;
     const Vec3 p = machine.state().position_mm;
     for (const auto& [daemon_tag, d] : daemons)
       if (!observing || !d.along_motion()) move_report(daemon_tag, d, p, std::nullopt);
