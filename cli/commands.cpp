@@ -38,6 +38,7 @@ struct RunArgs {
   std::optional<std::string> characterisation;
   std::optional<std::string> touch_baseline;
   std::optional<std::string> machine_url;
+  bool dry_run = false;
   std::optional<std::string> compensation;
   bool strict = false;
   std::optional<std::string> answers;
@@ -100,9 +101,10 @@ int run(const RunArgs& args) {
   // SIGINT/SIGTERM stop the run at the next statement; the results so far are written.
   interpreter::install_stop_signal_handlers();
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
+  std::string last_fault_kind;
   options.on_event = [&](const runtime::RunEvent& e) {
     if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) (t->in_tolerance ? in_tol : out_tol)++;
-    if (std::holds_alternative<runtime::FaultReport>(e)) ++faults;
+    if (const auto* f = std::get_if<runtime::FaultReport>(&e)) ++faults, last_fault_kind = f->kind;
     if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << interpreter::event_text(e) << std::flush;
   };
   // --compensation: the controller's error map as a decorator at the machine API, over any backend
@@ -117,7 +119,9 @@ int run(const RunArgs& args) {
     map = std::move(*loaded);
   }
   const interpreter::BackendFactory factory = [&](const std::optional<std::string>& world, std::optional<std::uint64_t> seed) {
-    auto backend = args.machine_url ? ipp_backend(*args.machine_url) : virtual_cmm_backend(world, seed);
+    auto backend = args.machine_url ? ipp_backend(*args.machine_url)
+                   : args.dry_run   ? nominal_backend(world)
+                                    : virtual_cmm_backend(world, seed);
     if (!backend) return backend;
     if (auto* compensated = dynamic_cast<machine::CompensatedMachine*>(backend->machine.get()))
       compensated->set_map(map);
@@ -135,6 +139,12 @@ int run(const RunArgs& args) {
   std::cout << fmt::format("\nrun {}: {} features, {} tolerances in, {} out, {} faults, {:.3f} s simulated\n", status,
                            outcome.record.features.size(), in_tol, out_tol, faults, outcome.record.simulated_time_s);
   if (!outcome.results_path.empty()) std::cout << "results: " << outcome.results_path << "\n";
+  // A program written for a part or a machine the world does not hold stops at its first touch
+  // or move: say how to follow it to its end anyway.
+  if (outcome.exit == interpreter::RunExit::Faulted && !args.dry_run && !args.machine_url &&
+      (last_fault_kind == "no contact" || last_fault_kind == "axis limit"))
+    std::cout << "hint: if the world does not hold this program's part or machine, `metron run --dry-run` takes every "
+                 "point at its nominal and follows the program to its end\n";
   return static_cast<int>(outcome.exit);
 }
 
@@ -282,6 +292,10 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   run_cmd->add_option("--machine", run_args->machine_url,
                       "run on an I++ DME server instead of the virtual CMM: ipp://host[:port] (docs/ipp-dme.md)")
       ->excludes(run_cmd->get_option("--world"));
+  run_cmd->add_flag("--dry-run", run_args->dry_run,
+                    "every touch lands on its nominal point and every scan on its path: runs a program whose part the "
+                    "world does not hold to its end; the world gives the sensors (docs/language.md \"Dry runs\")")
+      ->excludes(run_cmd->get_option("--machine"));
   run_cmd->add_option("--compensation", run_args->compensation,
                       "error-space file (`metron calibrate error-space --out`): the controller corrects commanded and "
                       "measured positions by it (docs/error-space.md)");

@@ -9,6 +9,7 @@
 #include "metron/interpreter/session.hpp"
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/error_space/calibration.hpp"
+#include "metron/machine/nominal_machine.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/wavefront/simulated_wavefront_machine.hpp"
 
@@ -70,6 +71,15 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
     }
   };
   return b;
+}
+
+/// `metron run --dry-run`: the dry-run machine (every touch at its nominal) with the world's
+/// probe library and feeds (none: the embedded default world's).
+inline tl::expected<interpreter::Backend, std::string> nominal_backend(const std::optional<std::string>& world_path) {
+  auto world = machine::load_world_or_default(world_path);
+  if (!world) return tl::unexpected(world.error().message);
+  return interpreter::Backend{std::make_unique<machine::NominalMachine>(world->machine),
+                              (world_path ? *world_path : std::string("<default>")) + " (dry run)", 0, {}, {}};
 }
 
 }  // namespace metron::cli

@@ -70,10 +70,12 @@ bool looks_like_statement(std::string_view line) {
   std::size_t i = 0;
   while (i < line.size() && is_blank(line[i])) ++i;
   if (i == line.size() || line[i] == '(') return true;
-  // `=FEAT/PLANE`, `12=...`: a statement with an error, not a note.
-  if (line.find_first_of("/=") != std::string_view::npos) return true;
   const auto alpha = [](char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'); };
   const auto alnum = [&](char c) { return alpha(c) || (c >= '0' && c <= '9') || c == '_'; };
+  // A separator of symbols only (`//////`, `=====`, `-----`) is a note, whatever its symbols.
+  if (std::none_of(line.begin() + static_cast<std::ptrdiff_t>(i), line.end(), alnum)) return false;
+  // `=FEAT/PLANE`, `12=...`: a statement with an error, not a note.
+  if (line.find_first_of("/=") != std::string_view::npos) return true;
   if (!alpha(line[i])) return false;
   const std::size_t word_begin = i;
   while (i < line.size() && alnum(line[i])) ++i;

@@ -24,6 +24,7 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, unit,
                   [this](const std::string& p, const std::string& written, Span from) { return compile_file(p, from, written); });
   uc.set_included(unit > 0);
+  uc.set_strict(m_parse_options.strict);
   uc.set_read_policy(&m_policy);
   uc.compile(program, kind == UnitKind::ReplEntry);
   return unit;

@@ -82,6 +82,8 @@ std::string to_string(const Expr& e) {
       return s + ")";
     }
     case ExprOp::Obtain: return fmt::format("OBTAIN({}({}),{})", e.label.prefix, e.label.name, to_string(e.args.at(0)));
+    case ExprOp::Query:
+      return fmt::format("VALUE({}({}),{},{})", e.label.prefix, e.label.name, e.name, to_string(e.args.at(0)));
     case ExprOp::Unary: {
       std::string s = e.name;
       s += to_string(e.args.at(0));

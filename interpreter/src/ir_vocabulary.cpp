@@ -86,7 +86,8 @@ const std::vector<WordEntry<ConstructionMethod>>& vocabulary() {
   using M = ConstructionMethod;
   static const std::vector<WordEntry<M>> rows = {{M::Bf, "BF"},         {M::Intof, "INTOF"},   {M::Midpt, "MIDPT"},
                                                  {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"},
-                                                 {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"}};
+                                                 {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"},
+                                                 {M::Parto, "PARTO"}, {M::Perpto, "PERPTO"}};
   return rows;
 }
 

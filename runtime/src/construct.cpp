@@ -122,6 +122,29 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       }
       break;
     }
+    case ConstructMethod::ParallelThrough:
+    case ConstructMethod::PerpendicularThrough: {
+      // DMIS CONST PARTO/PERPTO: a PLANE or LINE through the second feature's point, its direction
+      // the reference's (PARTO) or normal to it (PERPTO). A plane's direction is its normal, a
+      // line's (or an axis's) its direction: PARTO keeps the reference's kind, PERPTO swaps it.
+      if (in.size() != 2) return fail("PARTO and PERPTO need a reference and a point");
+      const Geometry& ref = in[0];
+      const bool parallel = method == ConstructMethod::ParallelThrough;
+      const bool wants_plane_ref = (type == FeatureType::Plane) == parallel;
+      if (wants_plane_ref ? !is_planar(ref) : !is_linear(ref))
+        return fail(fmt::format("{} a {} needs a {} as its reference, got a {}", parallel ? "PARTO" : "PERPTO",
+                                dmis_word(type), wants_plane_ref ? "PLANE" : "LINE, CYLNDR or CONE", dmis_word(ref.type)));
+      g.position = in[1].position;
+      g.direction = ref.direction.normalized();
+      if (it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
+      if (type == FeatureType::Line) {
+        g.bounded = false;
+        // The plane a LINE lies in (DMIS i2,j2,k2): the nominal's where it is normal to the line.
+        const Vec3 n2 = g.normal2 - g.normal2.dot(g.direction) * g.direction;
+        g.normal2 = n2.norm() > 1e-9 ? Vec3(n2.normalized()) : g.direction.unitOrthogonal();
+      }
+      break;
+    }
     case ConstructMethod::Projection: {
       if (in.size() != 2) return fail("PROJPT needs a feature and a plane");
       const Geometry& plane = in[1];

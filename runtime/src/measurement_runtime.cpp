@@ -623,6 +623,7 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
       if (!evaluated) return tl::unexpected(evaluated.error());
       results = std::move(*evaluated);
     }
+    m_last_results[t] = results;
     if (!report_them) {
       m_evaluated[t] = std::move(results);
       continue;
@@ -634,6 +635,11 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     }
   }
   return {};
+}
+
+const std::vector<ToleranceResult>* MeasurementRuntime::last_tolerance_results(const std::string& label) const {
+  auto it = m_last_results.find(label);
+  return it == m_last_results.end() ? nullptr : &it->second;
 }
 
 Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(const std::string& t,

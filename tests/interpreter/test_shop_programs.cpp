@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "cli/virtual_cmm_backend.hpp"
+#include "metron/machine/nominal_machine.hpp"
 #include "metron/grammar/parser.hpp"
 #include "metron/runtime/outputs.hpp"
 #include "metron/interpreter/compiler.hpp"
@@ -609,6 +610,46 @@ TEST(ShopPrograms, EvalKeepsAToleranceResultForALaterOutput) {
   EXPECT_EQ(ok.errors + ok.warnings, 0u) << ok.text;
 }
 
+// VALUE/FA(x),SIZE and VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL: what a program reads back to decide
+// (DMIS 5 VALUE; SIR 97-8 for the tolerance words). block_deviations.json hides BORE1 0.012 mm
+// oversize: the expected values are that truth, not metron's output.
+TEST(ShopPrograms, ValueReadsAFeaturesSizeAndAToleranceResult) {
+  const std::string head =
+      "DMISMN/'value', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 8\nENDMES\n"
+      "T(D) = TOL/DIAM, -0.005, 0.005\nDECL/REAL, SZ, NOM, ACTV, DEVV, AMTV\nDECL/BOOL, IN, OUT\n";
+  const std::string reads =
+      "SZ = VALUE/FA(BORE1), SIZE\nNOM = VALUE/F(BORE1), SIZE, 1\nOUTPUT/FA(BORE1), TA(D)\n"
+      "ACTV = VALUE/TA(D), ACT\nDEVV = VALUE/TA(D), DEV\nAMTV = VALUE/TA(D), AMT\n"
+      "IN = VALUE/TA(D), INTOL\nOUT = VALUE/TA(D), OUTOL\n";
+  const auto r = run(head + reads + "UNITS/INCH, ANGDEC\nSZ = VALUE/FA(BORE1), SIZE\nENDFIL\n",
+                     source_dir / "programs/worlds/block_deviations.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  auto& vm = r.session->interpreter();
+  const auto num = [&](const char* v) { return vm.variable(v).value().number; };
+  EXPECT_NEAR(num("NOM"), 20.0, 1e-12);
+  EXPECT_NEAR(num("ACTV"), 20.012, 0.002);
+  EXPECT_NEAR(num("DEVV"), 0.012, 0.002);
+  EXPECT_NEAR(num("AMTV"), 0.012 - 0.005, 0.002);
+  EXPECT_NEAR(num("DEVV") - num("AMTV"), 0.005, 1e-12);  // beyond the upper limit by AMT
+  EXPECT_FALSE(vm.variable("IN").value().boolean);
+  EXPECT_TRUE(vm.variable("OUT").value().boolean);
+  EXPECT_NEAR(num("SZ"), num("ACTV") / 25.4, 1e-12);  // in the program's units at the VALUE
+  // Forms and order: a size a feature has not, a tolerance read before any evaluation, a word
+  // that is no VALUE word, a VALUE form metron does not answer.
+  const auto no_length = run(head + "SZ = VALUE/FA(BORE1), SIZE, 2\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
+  EXPECT_TRUE(no_length.diagnostics.find("VALUE/FA(BORE1),SIZE,2: a CIRCLE has no size 2") != std::string::npos) << no_length.diagnostics;
+  const auto early = run(head + "ACTV = VALUE/TA(D), ACT\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
+  EXPECT_TRUE(early.diagnostics.find("VALUE/TA(D) before T(D) was evaluated") != std::string::npos) << early.diagnostics;
+  const Checked bad = check(head + "SZ = VALUE/FA(BORE1), DIAM\nACTV = VALUE/TA(NONE), ACT\nENDFIL\n");
+  EXPECT_TRUE(bad.has("VALUE/FA(x),DIAM: expected SIZE")) << bad.text;
+  EXPECT_TRUE(bad.has("tolerance T(NONE) is not defined")) << bad.text;
+  const Checked other = check(head + "SZ = VALUE/SNSET, APPRCH\nENDFIL\n");
+  EXPECT_EQ(other.errors, 0u) << other.text;
+  EXPECT_TRUE(other.has("this VALUE form is not answered")) << other.text;
+}
+
 TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   const auto inch = [](double mm) { return fmt::format("{:.6f}", mm / 25.4); };
   const std::string text =
@@ -735,6 +776,20 @@ TEST(ShopPrograms, DmisOutputFilesCheckAndTheirActualsCanBeJudged) {
   const auto results = check("DMISMN/'out', 5.0\nOUTPUT/FA(C1),TA(D1)\nFA(C1)=FEAT/CIRCLE,INNER,CART,1,2,3,0,0,1,10.01\n"
                              "TA(D1)=TOL/DIAM,0.01000,INTOL\nENDFIL\n");
   EXPECT_EQ(results.errors, 0u) << results.text;
+  // A CAMIO output file echoes the program's DATDEF and DATSET without restating their features,
+  // and reports the alignment as DA(l)=DATSET/TRMATX,...: notes, not errors.
+  const auto camio = check("$$ Version Camio 8.6\nUNITS/MM,ANGDEC\nDATDEF/FA(PLN_Décalé),DAT(A)\n"
+                           "D(Réf)=DATSET/DAT(A),-YDIR,YORIG\n"
+                           "DA(Réf)=DATSET/TRMATX,-1,0,0,0,1,0,0,0,-1,1251.254,155.056,-0.034\n"
+                           "OUTPUT/FA(P1),TA(A1)\nFA(P1)=FEAT/POINT,CART,1062.026,-7.805,373.053,0,-1,0\n"
+                           "TA(A1)=TOL/DISTWRT,OUTOL,NOMINL,7.805,7.805,7.805,FA(PLN_Décalé),YAXIS,AVG\n");
+  EXPECT_EQ(camio.errors, 0u) << camio.text;
+  EXPECT_TRUE(camio.has("3:1: note: an echo of the measuring program's line")) << camio.text;
+  EXPECT_TRUE(camio.has("5:1: note: DA(Réf)=DATSET/... is a reported alignment")) << camio.text;
+  // In a program that measures, the same DATDEF stays an error.
+  const auto program = check("DMISMN/'p', 5.0\nDATDEF/FA(PLN_Décalé),DAT(A)\nFA(P1)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+                             "GOTO/0,0,10\nENDFIL\n");
+  EXPECT_TRUE(program.has("2:8: error: feature FA(PLN_Décalé) is not defined")) << program.text;
   const auto r = run("DMISMN/'judge', 5.0\nF(C1)=FEAT/CIRCLE,INNER,CART,50,50,40,0,0,1,50\n"
                      "FA(C1)=FEAT/CIRCLE,INNER,CART,50.01,50,40,0,0,1,50.02\nT(D)=TOL/DIAM,-0.01,0.01\n"
                      "OUTPUT/FA(C1),TA(D)\nENDFIL\n");
@@ -747,6 +802,78 @@ TEST(ShopPrograms, DmisOutputFilesCheckAndTheirActualsCanBeJudged) {
   ASSERT_TRUE(c1 && c1->actual);
   EXPECT_NEAR(c1->actual->position.x(), 50.01, 1e-9);
   EXPECT_NEAR(c1->nominal.position.x(), 50.0, 1e-9);
+}
+
+// A CAMIO program opens its CAD model (DID(l)=DEVICE/STOR,'...sab' then OPEN/DID(l),CAD,...): the
+// model is not read, and no file is made for it (an empty Ladder.sab was written into --out).
+TEST(ShopPrograms, OpenOfACadModelMakesNoFile) {
+  const fs::path out = temp_dir() / "cad_out";
+  fs::create_directories(out);
+  const std::string text = "DMISMN/'cad', 5.2\nDID(Ladder)=DEVICE/STOR,'C:\\LK\\CAO\\Ladder_model.sab'\n"
+                           "OPEN/DID(Ladder),CAD,VENDOR,'ACIS'\nTEXT/OPER,'after'\nENDFIL\n";
+  const auto c = check(text);
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  EXPECT_TRUE(c.has("3:18: note: OPEN of a CAD model: the part is the world's, the model is not read")) << c.text;
+  const fs::path p = write("cad.dmi", text);
+  auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
+  ASSERT_TRUE(backend.has_value());
+  auto session = Session::create(std::move(*backend));
+  session->runtime().set_output_directory(out.string());
+  ASSERT_TRUE(session->load(p.string()));
+  EXPECT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  EXPECT_TRUE(fs::is_empty(out)) << fs::directory_iterator(out)->path();
+}
+
+// `metron run --dry-run`: a program written for another machine's coordinates and a part the
+// world does not hold (here a bore at machine x = -1063, outside the default travel) runs to its
+// end, every touch on its nominal and every scan on its path. The expected values are the
+// nominals themselves: the points lie exactly on them, so the fits give them back.
+TEST(ShopPrograms, DryRunTakesEveryPointAtItsNominal) {
+  const std::string text =
+      "DMISMN/'dry', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "F(TOP) = FEAT/PLANE, CART, -1063, -20, 200, 0, 0.6, 0.8\nMEAS/PLANE, F(TOP), 3\n"
+      "PTMEAS/CART, -1063, -20, 200, 0, 0.6, 0.8\nPTMEAS/CART, -1053, -20, 200, 0, 0.6, 0.8\n"
+      "PTMEAS/CART, -1063, -28, 206, 0, 0.6, 0.8\nENDMES\n"
+      "F(B1) = FEAT/CIRCLE, INNER, CART, -1063, -20, 150, 0, 0, 1, 12\nMEAS/CIRCLE, F(B1), 4\n"
+      "PTMEAS/CART, -1057, -20, 150, -1, 0, 0\nPTMEAS/CART, -1063, -14, 150, 0, -1, 0\n"
+      "PTMEAS/CART, -1069, -20, 150, 1, 0, 0\nPTMEAS/CART, -1063, -26, 150, 0, 1, 0\nENDMES\n"
+      "FEDRAT/SCNVEL, MMPS, 10\nSCNSET/DRAG, 0.1, DEFLEC, 0.3, LAW, VC2\n"
+      "F(B2) = FEAT/CIRCLE, INNER, CART, -1063, -20, 140, 0, 0, 1, 12\nSCNMOD/ON\nMEAS/CIRCLE, F(B2), 0\nENDMES\nSCNMOD/OFF\n"
+      "T(D) = TOL/DIAM, -0.001, 0.001\nT(F) = TOL/FLAT, 0.001\nOUTPUT/FA(TOP), TA(F)\nOUTPUT/FA(B1), TA(D)\nOUTPUT/FA(B2), TA(D)\nENDFIL\n";
+  auto world = metron::machine::load_world_or_default(std::nullopt);
+  ASSERT_TRUE(world.has_value());
+  const fs::path p = write("dry.dmi", text);
+  auto session = Session::create(metron::interpreter::Backend{
+      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
+  ASSERT_TRUE(session->load(p.string()));
+  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const auto* top = report(*session, "TOP");
+  ASSERT_TRUE(top && top->actual);
+  EXPECT_NEAR(top->actual->direction.dot(Eigen::Vector3d(0, 0.6, 0.8)), 1.0, 1e-12);
+  EXPECT_NEAR((top->actual->position - Eigen::Vector3d(-1063, -20, 200)).dot(Eigen::Vector3d(0, 0.6, 0.8)), 0.0, 1e-9);
+  // Touches exactly; a scan within the chord error of its PCC path (cubic segments between
+  // points of the exact offset contour, docs/scanning-paths.md), here under a micrometre.
+  for (const auto& [bore, within] : {std::pair{"B1", 1e-9}, std::pair{"B2", 1e-3}}) {
+    const auto* b = report(*session, bore);
+    ASSERT_TRUE(b && b->actual) << bore;
+    EXPECT_NEAR(b->actual->diameter_mm, 12.0, within) << bore;
+    EXPECT_NEAR(b->actual->position.x(), -1063.0, within) << bore;
+    EXPECT_NEAR(b->actual->position.y(), -20.0, within) << bore;
+  }
+  // A scan: the ball centres' circle, radius 6 - (2 - 0.3) mm, every 0.1 mm.
+  EXPECT_GT(report(*session, "B2")->point_count, static_cast<std::size_t>(2 * M_PI * 4.3 / 0.1) - 5);
+  std::size_t in = 0;
+  for (const auto& e : session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) in += t->in_tolerance;
+  EXPECT_EQ(in, 3u);
+  // On the virtual CMM the same program stops at the first move: x = -1063 is outside its travel.
+  const auto real = run(text);
+  EXPECT_EQ(real.status, ExecStatus::Faulted);
+  const auto& events = real.session->record().events;
+  ASSERT_FALSE(events.empty());
+  const auto* fault = std::get_if<metron::runtime::FaultReport>(&events.back());
+  ASSERT_NE(fault, nullptr);
+  EXPECT_NE(fault->message.find("outside the x travel"), std::string::npos) << fault->message;
 }
 
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
@@ -795,15 +922,18 @@ TEST(ShopPrograms, ContinuationInsideALabelSkipsTheLeadingBlanks) {
 }
 
 TEST(ShopPrograms, NonStatementLinesAreOneWarningEachLenientAndErrorsStrict) {
-  const std::string text = "DMISMN/'p', 5.1\n-------------------------\nOperator: turn the part over\nFEAT PLANE\nENDFIL\n";
+  const std::string text = "DMISMN/'p', 5.1\n-------------------------\nOperator: turn the part over\nFEAT PLANE\n"
+                           "//////////////////////////////////////\nENDFIL\n";
   const auto lenient = check(text);
-  EXPECT_EQ(lenient.warnings, 2u) << lenient.text;
+  EXPECT_EQ(lenient.warnings, 3u) << lenient.text;
+  // CAMIO writes separators of slashes around operator notes: a line of symbols only is a note.
+  EXPECT_TRUE(lenient.has("5:1: warning: this line is not a DMIS statement")) << lenient.text;
   EXPECT_TRUE(lenient.has("2:1: warning: this line is not a DMIS statement and is skipped")) << lenient.text;
   EXPECT_TRUE(lenient.has("3:1: warning: this line is not a DMIS statement")) << lenient.text;
   EXPECT_EQ(lenient.errors, 1u) << lenient.text;  // FEAT PLANE is a statement with an error
   EXPECT_TRUE(lenient.has("4:6: error: expected '/' after the major word 'FEAT'")) << lenient.text;
   const auto strict = check(text, true);
-  EXPECT_EQ(strict.errors, 3u) << strict.text;
+  EXPECT_EQ(strict.errors, 4u) << strict.text;
 }
 
 TEST(ShopPrograms, TextAfterEndfilIsReportedOnceAsASecondProgram) {
@@ -816,10 +946,75 @@ TEST(ShopPrograms, TextAfterEndfilIsReportedOnceAsASecondProgram) {
 // ---- defects found as a new user --------------------------------------------------------------
 
 TEST(ShopPrograms, NeverDefinedFeatureIsNotDefinedNotUsedBeforeItsDefinition) {
-  EXPECT_TRUE(check("DMISMN/'p', 5.1\nOUTPUT/FA(NOWHERE)\nENDFIL\n")
+  EXPECT_TRUE(check("DMISMN/'p', 5.1\nDATDEF/FA(NOWHERE),DAT(A)\nENDFIL\n")
                   .has("feature FA(NOWHERE) is not defined: define it with F(NOWHERE)=FEAT/..."));
   EXPECT_TRUE(check("DMISMN/'p', 5.1\nOUTPUT/FA(LATER)\nF(LATER)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n")
                   .has("feature FA(LATER) is used before its definition at line 3"));
+}
+
+// A CAMIO program generated for a ladder of modules outputs the features of inserts it never
+// measured (OUTPUT/FA(PNTC06F1),TA(C06F1) with no F(PNTC06F1) anywhere), and ran on the machine.
+// Read leniently, such an item is left out with a warning, and a tolerance left without a
+// feature goes with it; --strict keeps the error. A feature defined later stays an error.
+TEST(ShopPrograms, OutputOfAFeatureTheProgramNeverDefinesIsLeftOutLeniently) {
+  const std::string text =
+      "DMISMN/'p', 5.1\nF(P1)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(P1)=FEAT/POINT,CART,0,0,0.004,0,0,1\n"
+      "T(Z)=TOL/CORTOL,ZAXIS,-0.01,0.01\nOUTPUT/FA(NEVER),TA(Z)\nOUTPUT/FA(P1),FA(NEVER2),TA(Z)\nENDFIL\n";
+  const auto lenient = check(text);
+  EXPECT_EQ(lenient.errors, 0u) << lenient.text;
+  EXPECT_TRUE(lenient.has("5:8: warning: feature FA(NEVER) is never defined in this program: left out of this OUTPUT")) << lenient.text;
+  EXPECT_TRUE(lenient.has("5:18: note: T(Z) is left out with the feature")) << lenient.text;
+  EXPECT_TRUE(lenient.has("6:15: warning: feature FA(NEVER2) is never defined")) << lenient.text;
+  const auto strict = check(text, true);
+  EXPECT_TRUE(strict.has("5:8: error: feature FA(NEVER) is not defined")) << strict.text;
+  // The run reports the defined feature's tolerance, and only it.
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::size_t results = 0;
+  for (const auto& e : r.session->record().events) results += std::holds_alternative<metron::runtime::ToleranceResult>(e);
+  EXPECT_EQ(results, 1u);
+  const auto* z = tolerance(*r.session, "Z");
+  ASSERT_NE(z, nullptr);
+  EXPECT_NEAR(z->value, 0.004, 1e-12);
+}
+
+// CONST PARTO/PERPTO (a CAMIO lab program builds its datum plane with
+// CONST/PLANE,F(..),PARTO,FA(plane),THRU,FA(point)). Stated actuals make the expected geometry
+// analytic: a plane with normal (0, 0.6, 0.8) and the point (10, 20, 30).
+TEST(ShopPrograms, PartoAndPerptoConstructThroughAPoint) {
+  const std::string head =
+      "DMISMN/'p', 5.1\nF(A)=FEAT/PLANE,CART,0,0,0,0,0.6,0.8\nFA(A)=FEAT/PLANE,CART,1,2,-1.25,0,0.6,0.8\n"
+      "F(P)=FEAT/POINT,CART,10,20,30,0,0,1\nFA(P)=FEAT/POINT,CART,10,20,30,0,0,1\n"
+      "F(L)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,0,1\nFA(L)=FEAT/LINE,UNBND,CART,5,5,5,-1,0,0,0,0,1\n"
+      "F(B)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(N)=FEAT/LINE,UNBND,CART,0,0,0,0,0,1,1,0,0\nF(Q)=FEAT/PLANE,CART,0,0,0,1,0,0\n";
+  const std::string text = head +
+      "CONST/PLANE,F(B),PARTO,FA(A),THRU,FA(P)\nCONST/LINE,F(N),PERPTO,FA(A),THRU,FA(P)\n"
+      "CONST/PLANE,F(Q),PERPTO,FA(L),THRU,FA(P)\nCONST/LINE,F(M),PARTO,FA(L),THRU,FA(P)\n"
+      "OUTPUT/FA(B),FA(N),FA(Q),FA(M)\nENDFIL\n";
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const Eigen::Vector3d p(10, 20, 30), n(0, 0.6, 0.8), x(1, 0, 0);
+  const auto expect = [&](const char* label, const Eigen::Vector3d& dir) {
+    const auto* f = report(*r.session, label);
+    ASSERT_NE(f, nullptr) << label;
+    ASSERT_TRUE(f->actual.has_value()) << label;
+    // Through the point: for a plane the point lies in it, for a line on it.
+    const Eigen::Vector3d d = f->actual->position - p;
+    if (f->actual->type == metron::runtime::FeatureType::Plane) EXPECT_NEAR(d.dot(dir), 0.0, 1e-12) << label;
+    else EXPECT_NEAR(d.cross(dir).norm(), 0.0, 1e-12) << label;
+    EXPECT_NEAR(f->actual->direction.dot(dir), 1.0, 1e-12) << label;  // the nominal's sense
+  };
+  expect("B", n);  // parallel to A
+  expect("N", n);  // along A's normal
+  expect("Q", x);  // normal to L (L runs along -x; Q's nominal says +x)
+  expect("M", -x);  // parallel to L; M has no nominal, so L's actual sense (-x) stays
+  // Wrong references and forms are positioned errors.
+  const auto bad_ref = run(head + "CONST/PLANE,F(B),PARTO,FA(L),THRU,FA(P)\nENDFIL\n");
+  EXPECT_NE(bad_ref.diagnostics.find("PARTO a PLANE needs a PLANE as its reference, got a LINE"), std::string::npos) << bad_ref.diagnostics;
+  const auto no_thru = check(head + "CONST/PLANE,F(B),PARTO,FA(A),FA(P)\nENDFIL\n");
+  EXPECT_TRUE(no_thru.has("PARTO takes a reference and a point: PARTO,FA(ref),THRU,FA(point)")) << no_thru.text;
+  const auto circle = check(head + "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,5\nCONST/CIRCLE,F(C),PERPTO,FA(A),THRU,FA(P)\nENDFIL\n");
+  EXPECT_TRUE(circle.has("PERPTO constructs a PLANE or a LINE")) << circle.text;
 }
 
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
@@ -888,4 +1083,10 @@ TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtR
   const auto r = run(text);
   EXPECT_EQ(r.status, ExecStatus::Error);
   EXPECT_NE(r.diagnostics.find("was not found (give its folder with --include DIR)"), std::string::npos) << r.diagnostics;
+  // CAMIO writes a label after the file (CALL/EXTERN,DMIS,'...',PLNA02): a warning on it, and
+  // the file is still the string.
+  const auto labelled = check("DMISMN/'p', 5.1\nCALL/EXTERN,DMIS,'Z:\\CMM\\SUB_PART.dmi',PLNA02\nENDFIL\n");
+  EXPECT_EQ(labelled.errors, 0u) << labelled.text;
+  EXPECT_TRUE(labelled.has("2:40: warning: CALL/EXTERN,DMIS passes nothing but the file")) << labelled.text;
+  EXPECT_TRUE(labelled.has("SUB_PART.dmi is not in")) << labelled.text;
 }

@@ -50,8 +50,23 @@ void UnitCompiler::add_alignment(StatementTable& t) {
 // D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...   (-ZDIR = ZMINUS; FA(x) in
 // place of DAT(A), as CAMIO and PC-DMIS write it: the feature's actual)
 void UnitCompiler::datset(const grammar::Statement& s) {
+  if (s.target && upper(s.target->prefix) == "DA") {
+    // DA(l)=DATSET/TRMATX,...: the alignment a DMIS output file reports.
+    note_once(m_reported_results_noted, s.target->span, "sema.reported-alignment",
+              fmt::format("DA({})=DATSET/... is a reported alignment (a DMIS output file's line): kept as it is", s.target->name));
+    emit(make(Op::Nop, s, "DATSET"));
+    return;
+  }
   if (!require_target(s, {"D"}, "D(label)=DATSET/...")) return;
   if (!expect_params(s, 1, "MCS or datums")) return;
+  if (m_output_file && std::any_of(s.params.begin(), s.params.end(), [&](const grammar::Expr& p) {
+        return is_label(p, {"DAT"}) && m_echoed_datums.count(upper(p.label.name));
+      })) {
+    note_once(m_echo_noted, s.span, "sema.echoed-line",
+              "an echo of the measuring program's line: this output file does not state its feature; kept as it is");
+    emit(make(Op::Nop, s, "DATSET"));
+    return;
+  }
   auto in = make(Op::DatSet, s, upper(s.target->name));
   static const std::set<std::string> words = {"XDIR", "YDIR", "ZDIR", "XMINUS", "YMINUS", "ZMINUS", "XORIG", "YORIG", "ZORIG"};
   if (is_word(s.params[0], "MCS")) {
@@ -175,7 +190,8 @@ void UnitCompiler::recall(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// CONST/type,F(l),BF|INTOF|MIDPT|PROJPT|PROJLN,FA(a),FA(b),...
+// CONST/type,F(l),BF|INTOF|MIDPT|PROJPT|PROJLN|PIERCE,FA(a),FA(b),...
+// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz; CONST/PLANE|LINE,F(l),PARTO|PERPTO,FA(ref),THRU,FA(point)
 void UnitCompiler::construct(const grammar::Statement& s) {
   if (!expect_params(s, 4, "the type, F(label), the method and the source features")) return;
   const auto& p = s.params;
@@ -211,6 +227,21 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     emit(std::move(in));
     return;
   }
+  if (*method == ir::ConstructionMethod::Parto || *method == ir::ConstructionMethod::Perpto) {
+    // CONST/PLANE|LINE,F(l),PARTO|PERPTO,FA(ref),THRU,FA(point)
+    if (*const_type != FeatureType::Plane && *const_type != FeatureType::Line)
+      return error(p[0].span, "sema.const-type", fmt::format("{} constructs a PLANE or a LINE", p[2].text));
+    if (p.size() != 6 || !is_label(p[3], {"FA", "F"}) || !is_word(p[4], "THRU") || !is_label(p[5], {"FA", "F"}))
+      return error(p.back().span, "sema.construction-arity",
+                   fmt::format("{} takes a reference and a point: {},FA(ref),THRU,FA(point)", p[2].text, p[2].text));
+    for (std::size_t i : {3, 5}) {
+      if (!check_feature(p[i])) return;
+      in.operands.push_back(label_op(p[i]));
+    }
+    if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+    emit(std::move(in));
+    return;
+  }
   for (std::size_t i = 3; i < p.size(); ++i) {
     if (!is_label(p[i], {"FA", "F"})) return error(p[i].span, "sema.expected-feature", "expected FA(label) source features");
     if (!check_feature(p[i])) return;
@@ -229,7 +260,7 @@ void UnitCompiler::output(const grammar::Statement& s) {
   auto in = make(Op::Output, s);
   std::size_t echoed = 0;
   if (!output_labels(s, in, echoed)) return;
-  if (in.operands.empty() && echoed > 0) {
+  if (in.operands.empty()) {  // every item echoed a stated result or was left out
     emit(make(Op::Nop, s, "OUTPUT"));
     return;
   }
@@ -243,6 +274,10 @@ void UnitCompiler::evaluate(const grammar::Statement& s) {
   auto in = make(Op::Evaluate, s);
   std::size_t echoed = 0;
   if (!output_labels(s, in, echoed)) return;
+  if (in.operands.empty() && (echoed > 0 || !m_strict)) {  // its features never defined: left out
+    emit(make(Op::Nop, s, "EVAL"));
+    return;
+  }
   bool any_tolerance = false;
   for (const auto& o : in.operands) {
     if (o.label.prefix != "T" && o.label.prefix != "TA") continue;
@@ -259,6 +294,7 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
     return false;
   };
   std::vector<std::optional<FeatureType>> types;
+  bool left_out = false;  // a feature the program never defines was left out (lenient reading)
   for (const auto& p : s.params) {
     // In a DMIS output file each OUTPUT is followed by the result lines it produced: an OUTPUT of
     // a result stated below (and not defined before) echoes it.
@@ -270,6 +306,15 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       continue;
     }
     if (is_label(p, {"F", "FA"})) {
+      // Shop software runs a program whose OUTPUT names a feature it never measured (a
+      // generator's leftover): read leniently, the item is left out with a warning.
+      if (!m_strict && !m_repl && never_defined(upper(p.label.name))) {
+        warn(p.span, "sema.output-undefined-feature",
+             fmt::format("feature {}({}) is never defined in this program: left out of this {} (--strict makes it an error)",
+                         p.label.prefix, p.label.name, s.major));
+        left_out = true;
+        continue;
+      }
       if (!check_feature(p)) return false;
       types.push_back(feature_type(upper(p.label.name)));
     } else if (is_label(p, {"T", "TA"})) {
@@ -285,6 +330,10 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
                        m_symbols.skipped.count("T:" + t) ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
                                                          : fmt::format("tolerance T({}) is not defined", p.label.name));
         const ToleranceKind kind = it->second;
+        if (types.empty() && left_out) {
+          note(p.span, "sema.output-undefined-feature", fmt::format("T({}) is left out with the feature", p.label.name));
+          continue;
+        }
         if (types.empty() && in.op == Op::Output && m_symbols.evaluated_tolerances.count(t)) {
           in.operands.push_back(label_op(p));  // OUTPUT/TA(t) alone: what an EVAL of it found
           continue;

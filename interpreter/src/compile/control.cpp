@@ -40,7 +40,7 @@ tl::expected<std::pair<std::string, std::string>, std::string> calibrate_wavefro
 void UnitCompiler::add_control(StatementTable& t) {
   t.insert({
       {std::string(assignment_row), &UnitCompiler::assignment}, {"ASSIGN", &UnitCompiler::bad_assign},
-      {"OBTAIN", &UnitCompiler::bad_assign}, {"ENDFIL", &UnitCompiler::endfil}, {"IF", &UnitCompiler::if_},
+      {"OBTAIN", &UnitCompiler::bad_assign}, {"VALUE", &UnitCompiler::bad_assign}, {"ENDFIL", &UnitCompiler::endfil}, {"IF", &UnitCompiler::if_},
       {"ELSE", &UnitCompiler::else_}, {"ENDIF", &UnitCompiler::endif}, {"DO", &UnitCompiler::do_},
       {"ENDDO", &UnitCompiler::enddo}, {"JUMPTO", &UnitCompiler::jumpto}, {"MACRO", &UnitCompiler::macro},
       {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}
@@ -53,11 +53,11 @@ void UnitCompiler::endfil(const grammar::Statement& s) {
   m_ended = true;
 }
 
-// V=ASSIGN/expr | V[i]=ASSIGN/expr | V=OBTAIN/FA(x),n
+// V=ASSIGN/expr | V[i]=ASSIGN/expr | V=OBTAIN/FA(x),n | V=VALUE/FA(x)|TA(t),word[,n]
 void UnitCompiler::assignment(const grammar::Statement& s) {
   const grammar::Expr& v = *s.variable;
   const std::string name = v.text;
-  if (s.major != "ASSIGN" && s.major != "OBTAIN" && s.major != "PROMPT") {
+  if (s.major != "ASSIGN" && s.major != "OBTAIN" && s.major != "PROMPT" && s.major != "VALUE") {
     // Vendor statements of the form V=XXX/...: warn and skip.
     warn(s.major_span, "sema.unknown-statement", fmt::format("unknown statement {} is skipped", s.major));
     emit(make(Op::Nop, s, s.major));
@@ -91,6 +91,14 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     value.label = label_operand(s.params[0].label);
     value.type = ValueType::Real;
     value.args.push_back(std::move(*idx));
+  } else if (s.major == "VALUE") {
+    auto query = value_query(s);
+    if (!query) return;
+    if (query->op == ir::ExprOp::Constant) {  // a VALUE form metron does not answer
+      emit(make(Op::Nop, s, s.major));
+      return;
+    }
+    value = std::move(*query);
   } else if (s.major == "PROMPT") {
     // V=PROMPT/'text'[,maxlen]: the operator's answer, typed as V (scripted or a default at run).
     value.op = ir::ExprOp::Call;
@@ -118,6 +126,69 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
   }
   in.operands.push_back(expr_operand(std::move(value)));
   emit(std::move(in));
+}
+
+// VALUE/FA(x)|F(x),SIZE[,n]: the feature's n-th size (1: diameter, ARC radius, CONE angle, slot
+// width; 2: CYLNDR or CPARLN length). VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL[,n]: what the last
+// OUTPUT or EVAL of T(t) found, for its n-th output feature (DMIS 5 VALUE; the index n as in DMIS
+// SIR 97-8). Other VALUE forms (settings such as VALUE/SNSET) are one warning, and the variable
+// keeps its value; the result is a Constant then.
+std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
+  static const char* const size_words[] = {"SIZE"};
+  static const char* const tolerance_words[] = {"ACT", "DEV", "AMT", "INTOL", "OUTOL"};
+  const auto listed = [](const auto& words, const std::string& w) {
+    return std::any_of(std::begin(words), std::end(words), [&](const char* k) { return w == k; });
+  };
+  ir::Expr q;
+  q.span = s.span;
+  if (s.params.empty() || !(is_label(s.params[0], {"FA", "F", "TA"}))) {
+    warn(s.params.empty() ? s.major_span : s.params[0].span, "sema.value-form",
+         "this VALUE form is not answered (metron answers VALUE/FA(x),SIZE and VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL); "
+         "the variable keeps its value");
+    return q;
+  }
+  const grammar::Expr& target = s.params[0];
+  const bool tolerance = target.label.prefix == "TA";
+  if (s.params.size() < 2 || s.params.size() > 3 || !is_word(s.params[1])) {
+    error(s.params.size() < 2 ? target.span : s.params[1].span, "sema.value",
+          tolerance ? "VALUE/TA(t) expects ACT, DEV, AMT, INTOL or OUTOL[,n]" : "VALUE/FA(x) expects SIZE[,n]");
+    return std::nullopt;
+  }
+  const std::string word = s.params[1].text;
+  if (tolerance ? !listed(tolerance_words, word) : !listed(size_words, word)) {
+    error(s.params[1].span, "sema.value",
+          tolerance ? fmt::format("VALUE/TA(t),{}: expected ACT, DEV, AMT, INTOL or OUTOL", word)
+                    : fmt::format("VALUE/{}(x),{}: expected SIZE", target.label.prefix, word));
+    return std::nullopt;
+  }
+  if (tolerance) {
+    const std::string t = upper(target.label.name);
+    if (!macro_param(t) && !m_symbols.tolerances.count(t)) {
+      error(target.span, "sema.undefined-tolerance",
+            m_symbols.unevaluated_tolerances.count(t)
+                ? fmt::format("T({}) is a tolerance metron does not evaluate; VALUE has nothing to read", target.label.name)
+                : fmt::format("tolerance T({}) is not defined", target.label.name));
+      return std::nullopt;
+    }
+  } else if (!check_feature(target)) {
+    return std::nullopt;
+  }
+  if (s.params.size() == 3) {
+    auto n = numeric(s.params[2], "an index n");
+    if (!n) return std::nullopt;
+    q.args.push_back(std::move(*n));
+  } else {
+    ir::Expr one;
+    one.op = ir::ExprOp::Constant;
+    one.type = ValueType::Integer;
+    one.value = Value::integer(1);
+    q.args.push_back(std::move(one));
+  }
+  q.op = ir::ExprOp::Query;
+  q.label = label_operand(target.label);
+  q.name = word;
+  q.type = word == "INTOL" || word == "OUTOL" ? ValueType::Bool : ValueType::Real;
+  return q;
 }
 
 void UnitCompiler::bad_assign(const grammar::Statement& s) {
@@ -365,8 +436,16 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
     emit(make(Op::Nop, s, "CALL"));
     return;
   }
-  const grammar::Expr& f = s.params.back();
-  if (f.kind != ExprKind::String) return error(f.span, "sema.expected-file", "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
+  // The file is the first string after DMIS. What follows it (CAMIO writes
+  // `CALL/EXTERN,DMIS,'sub.dmi',PLNA02`) is not passed: a called file takes no arguments here.
+  const auto file_param = std::find_if(s.params.begin() + 2, s.params.end(),
+                                       [](const grammar::Expr& e) { return e.kind == ExprKind::String; });
+  if (file_param == s.params.end())
+    return error(s.params[2].span, "sema.expected-file", "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
+  const grammar::Expr& f = *file_param;
+  if (file_param != s.params.begin() + 2 || file_param + 1 != s.params.end())
+    warn(file_param + 1 != s.params.end() ? (file_param + 1)->span : s.params[2].span, "sema.call-arguments",
+         "CALL/EXTERN,DMIS passes nothing but the file: the other parameters of this call are ignored");
   // A path written on another machine (`Z:\progs\sub.dmi`, `\\server\...`) is looked up by its
   // base name beside the calling file and in the --include folders; not found, it is a warning
   // here and an error when the call runs (docs/language.md "CALL/EXTERN").

@@ -379,6 +379,14 @@ void UnitCompiler::tol(const grammar::Statement& s) {
 void UnitCompiler::datdef(const grammar::Statement& s) {
   if (!expect_params(s, 2, "a feature FA(x) and a datum DAT(y)")) return;
   if (!is_label(s.params[0], {"F", "FA"})) return error(s.params[0].span, "sema.expected-feature", "expected FA(label) after DATDEF/");
+  if (m_output_file && is_label(s.params[1], {"DAT"}) && never_defined(upper(s.params[0].label.name))) {
+    // An output file echoes the program's DATDEF without restating the feature.
+    note_once(m_echo_noted, s.span, "sema.echoed-line",
+              "an echo of the measuring program's line: this output file does not state its feature; kept as it is");
+    m_echoed_datums.insert(upper(s.params[1].label.name));
+    emit(make(Op::Nop, s, "DATDEF"));
+    return;
+  }
   if (!check_feature(s.params[0])) return;
   if (!is_label(s.params[1], {"DAT"})) return error(s.params[1].span, "sema.expected-datum", "expected DAT(label) after the feature");
   // A second DATDEF of one datum silently replaced the first (issue 15): say so.

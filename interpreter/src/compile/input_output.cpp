@@ -141,6 +141,13 @@ bool UnitCompiler::check_device(const grammar::Statement& s) {
 // OPEN/DID(l),FDATA|DIRECT,DMIS|V(...),OUTPUT|INPUT|APPEND|OVERWR
 void UnitCompiler::open(const grammar::Statement& s) {
   if (!check_device(s)) return;
+  if (s.params.size() > 1 && is_word(s.params[1], "CAD")) {
+    // OPEN/DID(l),CAD,...: the part's CAD model for the CMM software's display and nominals. The
+    // virtual CMM's part is the world's; the model is not read, and no file is opened or made.
+    note(s.params[1].span, "sema.cad-model", "OPEN of a CAD model: the part is the world's, the model is not read");
+    emit(make(Op::Nop, s, "OPEN"));
+    return;
+  }
   auto in = make(Op::DeviceOpen, s);
   in.operands.push_back(label_op(s.params[0]));
   for (const auto& p : s.params)

@@ -22,6 +22,9 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
     if (s.target && ((upper(s.target->prefix) == "FA" && s.major == "FEAT") || (upper(s.target->prefix) == "TA" && s.major == "TOL")))
       m_reported_results.emplace(upper(s.target->prefix) + ":" + upper(s.target->name), s.span);
   }
+  static const std::set<std::string> measuring = {"MEAS", "RMEAS", "PTMEAS", "PAMEAS", "GOTO", "SNSLCT", "CALL"};
+  m_output_file = !repl && !m_reported_results.empty() &&
+                  std::none_of(st.begin(), st.end(), [](const grammar::Statement& s) { return measuring.count(s.major) > 0; });
   for (std::size_t i = 0; i < st.size(); ++i) {
     const auto& s = st[i];
     if (m_ended) {
@@ -85,6 +88,12 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   error(e.span, "sema.undefined-feature",
         fmt::format("feature {}({}) is not defined: define it with F({})=FEAT/...", e.label.prefix, e.label.name, e.label.name));
   return false;
+}
+
+// A feature label no statement of the program defines, before or after (nor a skipped one).
+bool UnitCompiler::never_defined(const std::string& name) const {
+  return !macro_param(name) && !m_symbols.features.count(name) && !m_symbols.skipped.count("F:" + name) &&
+         !m_later_features.count(name);
 }
 
 std::optional<runtime::FeatureType> UnitCompiler::feature_type(const std::string& name) const {

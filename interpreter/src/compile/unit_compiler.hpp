@@ -44,6 +44,8 @@ class UnitCompiler {
   /// Compiles a parsed program into this unit; `repl` relaxes the checks that suit whole files.
   void compile(const grammar::Program& program, bool repl);
   void set_included(bool v) { m_included = v; }
+  /// Strict reading (`--strict`): what the lenient reader forgives is an error.
+  void set_strict(bool v) { m_strict = v; }
   void set_runtime_names(const std::set<std::string>& names) { m_runtime_names = names; }
   /// The run's read policy (docs/security.md): files the program names are checked against it
   /// at compile time, so that `check` warns where the run will refuse.
@@ -190,6 +192,7 @@ class UnitCompiler {
 
   // ---- name checks and the dispatcher (compile/unit_compiler.cpp) ---------------------------
   bool check_feature(const grammar::Expr& e);
+  bool never_defined(const std::string& name) const;
   std::optional<runtime::FeatureType> feature_type(const std::string& name) const;
   /// A feature type word parameter (MEAS/, CONST/), or nullopt.
   static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
@@ -256,6 +259,7 @@ class UnitCompiler {
   void endfil(const grammar::Statement& s);
   void assignment(const grammar::Statement& s);
   void bad_assign(const grammar::Statement& s);
+  std::optional<ir::Expr> value_query(const grammar::Statement& s);
   void mark_control();
   void if_(const grammar::Statement& s);
   void else_(const grammar::Statement& s);
@@ -289,6 +293,7 @@ class UnitCompiler {
   void warn_if_unreadable(Span span, const std::string& what, const std::string& path);
   const FileAccessPolicy* m_read_policy = nullptr;
   bool m_included = false;
+  bool m_strict = false;
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
@@ -296,6 +301,11 @@ class UnitCompiler {
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;
   bool m_reported_results_noted = false;  // one note per unit for reported results
+  /// A DMIS output file: it states results (FA(x)=FEAT, TA(t)=TOL) and measures nothing. Its
+  /// echoed DATDEF and DATSET lines name features it does not restate.
+  bool m_output_file = false;
+  std::set<std::string> m_echoed_datums;  ///< DATDEFs of an output file whose feature it does not state
+  bool m_echo_noted = false;
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
 };
 

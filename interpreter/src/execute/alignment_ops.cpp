@@ -149,6 +149,8 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
   const auto method = words.method == M::Bf      ? runtime::ConstructMethod::BestFit
                       : words.method == M::Intof || words.method == M::Pierce ? runtime::ConstructMethod::Intersection
                       : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint
+                      : words.method == M::Parto ? runtime::ConstructMethod::ParallelThrough
+                      : words.method == M::Perpto ? runtime::ConstructMethod::PerpendicularThrough
                                                  : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
   std::vector<runtime::FeatureRef> sources;
   for (const auto& o : in.operands) sources.push_back(feature_ref(vm, o.label));

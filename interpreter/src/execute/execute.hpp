@@ -42,6 +42,7 @@ struct Execute {
 
   // ---- expressions (expressions.cpp) ---------------------------------------------------------
   static tl::expected<Value, std::string> obtain(Interpreter& vm, const ir::Expr& e);
+  static tl::expected<Value, std::string> query(Interpreter& vm, const ir::Expr& e);
   static tl::expected<Value, std::string> binary(Interpreter& vm, const ir::Expr& e);
 
   // ---- families: each adds its rows ----------------------------------------------------------

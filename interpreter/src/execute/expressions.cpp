@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Expressions at run time: variables, array elements, intrinsic calls, OBTAIN, operators.
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
 
 #include "execute/execute.hpp"
 #include "metron/runtime/feature_parameters.hpp"
+#include "metron/runtime/tolerance.hpp"
 #include "metron/stdlib/builtins.hpp"
 
 namespace metron::interpreter {
@@ -45,6 +47,8 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
     }
     case ir::ExprOp::Obtain:
       return detail::Execute::obtain(*this, e);
+    case ir::ExprOp::Query:
+      return detail::Execute::query(*this, e);
     case ir::ExprOp::Unary: {
       auto v = evaluate(e.args.at(0));
       if (!v) return v;
@@ -111,6 +115,70 @@ tl::expected<Value, std::string> Execute::obtain(Interpreter& vm, const ir::Expr
   // Lengths go back to program units; direction cosines and angles do not.
   const double v = p.unit == runtime::ParameterUnit::Length ? p.value / vm.m_length_mm : p.value;
   return Value::real(v);
+}
+
+namespace {
+/// A feature's n-th size for VALUE/FA(x),SIZE,n, and whether it is a length (else an angle).
+std::optional<std::pair<double, bool>> feature_size(const runtime::Geometry& g, long n) {
+  using runtime::FeatureType;
+  switch (g.type) {
+    case FeatureType::Circle:
+    case FeatureType::Sphere:
+      if (n == 1) return std::pair{g.diameter_mm, true};
+      break;
+    case FeatureType::Arc:
+      if (n == 1) return std::pair{g.diameter_mm / 2, true};  // FEAT/ARC carries its radius
+      break;
+    case FeatureType::Cylinder:
+      if (n == 1) return std::pair{g.diameter_mm, true};
+      if (n == 2) return std::pair{g.length_mm, true};
+      break;
+    case FeatureType::Cone:
+      if (n == 1) return std::pair{g.apex_angle_deg, false};
+      break;
+    case FeatureType::ParallelPlanes:
+      if (n == 1) return std::pair{g.width_mm, true};
+      break;
+    case FeatureType::ClosedSlot:
+      if (n == 1) return std::pair{g.width_mm, true};
+      if (n == 2) return std::pair{g.length_mm, true};
+      break;
+    default: break;
+  }
+  return std::nullopt;
+}
+}  // namespace
+
+// VALUE/FA(x),SIZE,n and VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL,n as a value.
+tl::expected<Value, std::string> Execute::query(Interpreter& vm, const ir::Expr& e) {
+  auto index = vm.number(e.args.at(0));
+  if (!index) return tl::unexpected(index.error());
+  const long n = std::lround(*index);
+  const std::string label = vm.label_name(e.label);
+  if (e.label.prefix == "TA") {
+    const auto* results = vm.m_runtime.last_tolerance_results(label);
+    if (!results)
+      return tl::unexpected(fmt::format("VALUE/TA({}) before T({}) was evaluated (OUTPUT or EVAL with a feature)", label, label));
+    if (n < 1 || n > static_cast<long>(results->size()))
+      return tl::unexpected(fmt::format("VALUE/TA({}),{},{}: its last evaluation has {} result{}", label, e.name, n,
+                                        results->size(), results->size() == 1 ? "" : "s"));
+    const runtime::ToleranceResult& r = (*results)[static_cast<std::size_t>(n - 1)];
+    if (e.name == "INTOL") return Value::boolean_value(r.in_tolerance);
+    if (e.name == "OUTOL") return Value::boolean_value(!r.in_tolerance);
+    const bool angle = r.kind == runtime::ToleranceKind::Anglb || r.kind == runtime::ToleranceKind::AngWrt;
+    double v = 0;
+    if (e.name == "ACT") v = r.actual;
+    else if (e.name == "DEV") v = r.value;
+    else v = r.in_tolerance ? 0.0 : std::max(r.lower - r.value, r.value - r.upper);  // AMT: beyond the nearer limit
+    return Value::real(angle ? v : v / vm.m_length_mm);
+  }
+  auto g = vm.m_runtime.feature_geometry({label, e.label.prefix == "FA"}, e.span);
+  if (!g) return tl::unexpected(g.error().message);
+  const auto size = feature_size(*g, n);
+  if (!size)
+    return tl::unexpected(fmt::format("VALUE/{}({}),SIZE,{}: a {} has no size {}", e.label.prefix, label, n,
+                                      runtime::dmis_word(g->type), n));
+  return Value::real(size->second ? size->first / vm.m_length_mm : size->first);
 }
 
 // a op b: arithmetic (+ - * / **), comparisons (.EQ. ... .GE.), .AND. and .OR. (short-circuit).

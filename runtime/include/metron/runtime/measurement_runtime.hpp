@@ -161,6 +161,9 @@ class MeasurementRuntime {
   /// EVAL/FA(x),TA(t): evaluates the tolerances and keeps the results for a later OUTPUT/TA(t);
   /// nothing is reported.
   Result<void> evaluate(const std::vector<OutputItem>& items, Span span);
+  /// What the last OUTPUT or EVAL of T(label) found (VALUE/TA(label),...), one result per
+  /// evaluation; null before the first.
+  [[nodiscard]] const std::vector<ToleranceResult>* last_tolerance_results(const std::string& label) const;
   Result<void> define_device(const std::string& label, const std::string& path, Span span);
   Result<void> open_device(const std::string& label, Span span);
   Result<void> close_device(const std::string& label, Span span);
@@ -223,6 +226,7 @@ class MeasurementRuntime {
   std::vector<std::string> m_feature_order;
   std::map<std::string, ToleranceSpec> m_tolerances;
   std::map<std::string, std::vector<ToleranceResult>> m_evaluated;  ///< EVAL results, for OUTPUT/TA(t) alone
+  std::map<std::string, std::vector<ToleranceResult>> m_last_results;  ///< last OUTPUT or EVAL, for VALUE/TA(t)
   std::map<std::string, Datum> m_datums;
   std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
   std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()

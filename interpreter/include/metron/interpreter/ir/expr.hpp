@@ -23,6 +23,7 @@ enum class ExprOp {
   Element,    ///< `name`[args...]
   Call,       ///< intrinsic `name`(args...)
   Obtain,     ///< OBTAIN/FA(x),n as a value: `label`, args[0] = parameter index
+  Query,      ///< VALUE/FA(x),SIZE,n | VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL,n: `label`, `name` = the word, args[0] = n
   Unary,      ///< `name` = "-", "+", ".NOT."; args[0]
   Binary,     ///< `name` = operator; args[0], args[1]
 };

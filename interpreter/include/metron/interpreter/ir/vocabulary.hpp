@@ -26,7 +26,9 @@ enum class CoordinateForm { Cart, Pol, Incr };
 /// CONST methods.
 enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
                                 Pierce,   ///< a line-like feature through a surface: INTOF's point
-                                Movept }; ///< a feature's point moved by dx, dy, dz
+                                Movept,   ///< a feature's point moved by dx, dy, dz
+                                Parto,    ///< PARTO,FA(ref),THRU,FA(point): parallel to ref through the point
+                                Perpto }; ///< PERPTO,FA(ref),THRU,FA(point): perpendicular to ref through the point
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>
