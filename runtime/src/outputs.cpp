@@ -154,7 +154,7 @@ std::string feature_list(const std::vector<std::string>& labels) {
 bool is_deviation_kind(ToleranceKind kind) {
   return kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::DistB ||
          kind == ToleranceKind::Anglb || kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt ||
-         kind == ToleranceKind::Cortol || kind == ToleranceKind::Width;
+         kind == ToleranceKind::Cortol || kind == ToleranceKind::Width || kind == ToleranceKind::Angl;
 }
 
 std::string kind_words(const ToleranceResult& result) {
@@ -365,8 +365,7 @@ std::string format_feature_report(const FeatureReport& report) {
 std::string format_tolerance_result(const ToleranceResult& result) {
   std::string out =
       fmt::format("T({})  {}  {}  ", result.label, kind_words(result), feature_list(result.features));
-  const Unit unit = result.kind == ToleranceKind::Anglb || result.kind == ToleranceKind::AngWrt ? Unit::Degree
-                                                                                               : Unit::Millimetre;
+  const Unit unit = is_angle_kind(result.kind) ? Unit::Degree : Unit::Millimetre;
   const auto mm = [&](double v, bool sign) { return fixed(v, unit, sign, result.units); };
   if (is_deviation_kind(result.kind)) {
     // The nominal the deviation is taken from (DISTB: the tolerance's, not the features').
@@ -417,7 +416,7 @@ std::string dmis_feature_line(const FeatureReport& report) {
 std::string dmis_tolerance_line(const ToleranceResult& result) {
   std::vector<std::string> fields;
   if (result.kind == ToleranceKind::Pos) fields.emplace_back(result.three_d ? "3D" : "2D");
-  const bool angle = result.kind == ToleranceKind::Anglb || result.kind == ToleranceKind::AngWrt;
+  const bool angle = is_angle_kind(result.kind);
   fields.push_back(dmis_number(result.value, angle ? ParameterUnit::Angle : ParameterUnit::Length, result.units));
   fields.emplace_back(result.in_tolerance ? "INTOL" : "OUTOL");
   const std::string head = fmt::format("TA({}) = TOL/{}", result.label, dmis_word(result.kind));

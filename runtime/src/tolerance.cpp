@@ -30,6 +30,7 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::Perp: return "PERP";
     case ToleranceKind::Parlel: return "PARLEL";
     case ToleranceKind::Anglb: return "ANGLB";
+    case ToleranceKind::Angl: return "ANGL";
     case ToleranceKind::Profs: return "PROFS";
     case ToleranceKind::DistWrt: return "DISTWRT";
     case ToleranceKind::AngWrt: return "ANGWRT";
@@ -205,6 +206,21 @@ Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, Toleran
   result.actual = size_of(**actual);
   result.nominal = size_of(feature.nominal);
   if (length) add_note(result, "LONG: the length of the slot, end to end");
+  result.value = result.actual - result.nominal;
+  set_limits(result, spec.lower, spec.upper);
+  return result;
+}
+
+// ---------------------------------------------------------------- ANGL
+
+// TOL/ANGL,lo,up: the included (apex) angle of a cone against its nominal, in degrees.
+Outcome evaluate_cone_angle(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
+  static constexpr Types k_types = {FeatureType::Cone};
+  if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  result.actual = (*actual)->apex_angle_deg;
+  result.nominal = feature.nominal.apex_angle_deg;
   result.value = result.actual - result.nominal;
   set_limits(result, spec.lower, spec.upper);
   return result;
@@ -982,6 +998,7 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Profp: return evaluate_profs(spec, feature, context, std::move(result));
     case ToleranceKind::Width: return evaluate_size(spec, feature, std::move(result));
     case ToleranceKind::Symmty: return evaluate_symmetry(spec, feature, context, std::move(result));
+    case ToleranceKind::Angl: return evaluate_cone_angle(spec, feature, std::move(result));
   }
   return Error(fmt::format("{} is not evaluated", word));
 }

@@ -650,6 +650,39 @@ TEST(ShopPrograms, ValueReadsAFeaturesSizeAndAToleranceResult) {
   EXPECT_TRUE(other.has("this VALUE form is not answered")) << other.text;
 }
 
+// TOL/ANGL,lo,up: a cone's included angle against its nominal (it was left out of OUTPUT). A
+// stated actual of 91.2 deg against 90 makes the deviation analytic; the default world's
+// countersink is a true 90 deg cone (CONE1, half angle 45), measured.
+TEST(ShopPrograms, AnglJudgesAConesIncludedAngle) {
+  const auto stated = run("DMISMN/'angl', 5.0\nF(C)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,90\n"
+                          "FA(C)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,91.2\nT(A)=TOL/ANGL,-0.5,0.5\n"
+                          "UNITS/MM,ANGRAD\nT(R)=TOL/ANGL,-0.05,0.05\nDECL/REAL,DEV\n"
+                          "OUTPUT/FA(C),TA(A),TA(R)\nDEV=VALUE/TA(R),DEV\nENDFIL\n");
+  ASSERT_EQ(stated.status, ExecStatus::Finished) << stated.diagnostics;
+  const auto* a = tolerance(*stated.session, "A");
+  ASSERT_NE(a, nullptr);
+  EXPECT_NEAR(a->value, 1.2, 1e-9);
+  EXPECT_FALSE(a->in_tolerance);
+  const auto* r = tolerance(*stated.session, "R");  // +-0.05 rad is +-2.86 deg: in
+  ASSERT_NE(r, nullptr);
+  EXPECT_NEAR(r->upper, 0.05 * 180 / M_PI, 1e-9);
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_NEAR(stated.session->interpreter().variable("DEV")->number, 1.2 * M_PI / 180, 1e-12);  // in ANGRAD
+  const auto measured = run("DMISMN/'angl', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+                            "SNSLCT/S(P4)\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 20, 80\n"
+                            "F(CSINK) = FEAT/CONE, INNER, CART, 40, 20, 32, 0, 0, 1, 90, 8\nMEAS/CONE, F(CSINK), 8\nENDMES\n"
+                            "T(A)=TOL/ANGL,-0.05,0.05\nOUTPUT/FA(CSINK),TA(A)\nENDFIL\n");
+  ASSERT_EQ(measured.status, ExecStatus::Finished) << measured.diagnostics;
+  const auto* m = tolerance(*measured.session, "A");
+  ASSERT_NE(m, nullptr);
+  EXPECT_NEAR(m->value, 0.0, 0.01);
+  EXPECT_TRUE(m->in_tolerance);
+  const auto circle = check("DMISMN/'angl', 5.0\nF(B)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(A)=TOL/ANGL,-0.5,0.5\n"
+                            "OUTPUT/FA(B),TA(A)\nT(W)=TOL/ANGL,0.5,-0.5\nENDFIL\n");
+  EXPECT_TRUE(circle.has("TOL/ANGL of T(A) does not apply to a CIRCLE")) << circle.text;
+  EXPECT_TRUE(circle.has("the lower tolerance 0.5 is above the upper tolerance -0.5")) << circle.text;
+}
+
 TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   const auto inch = [](double mm) { return fmt::format("{:.6f}", mm / 25.4); };
   const std::string text =

@@ -2,6 +2,7 @@
 // Syntax error messages, one per rule that a `must<>` requires, and the PEGTL control that
 // raises them (plus a nesting guard against stack exhaustion).
 #pragma once
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <type_traits>
@@ -16,11 +17,18 @@ struct tag {};
 
 inline bool is_printable(char c) { return c > ' ' && c < 0x7f; }
 
-/// `'%'` for a printable byte, `'\x00'` for anything else.
-inline std::string describe_char(char c) {
-  if (is_printable(c)) return std::string("'") + c + "'";
+/// `'%'` for a printable byte, `'é'` for a whole UTF-8 character (files are decoded to UTF-8 when
+/// read), `'\x00'` for anything else.
+inline std::string describe_char(std::string_view rest) {
+  const auto c = static_cast<unsigned char>(rest.front());
+  if (is_printable(rest.front())) return std::string("'") + rest.front() + "'";
+  const std::size_t length = c >= 0xF0 && c < 0xF5 ? 4 : c >= 0xE0 ? 3 : c >= 0xC2 && c < 0xE0 ? 2 : 0;
+  if (length > 1 && length <= 4 && rest.size() >= length &&
+      std::all_of(rest.begin() + 1, rest.begin() + static_cast<std::ptrdiff_t>(length),
+                  [](char k) { return (static_cast<unsigned char>(k) & 0xC0) == 0x80; }))
+    return "'" + std::string(rest.substr(0, length)) + "'";
   char buf[8];
-  std::snprintf(buf, sizeof buf, "'\\x%02x'", static_cast<unsigned>(static_cast<unsigned char>(c)));
+  std::snprintf(buf, sizeof buf, "'\\x%02x'", static_cast<unsigned>(c));
   return buf;
 }
 
@@ -52,7 +60,7 @@ inline SyntaxError unexpected(const Builder& b, const char* at, const std::strin
     }
   }
   return expected(b, at, "parse.unexpected-character",
-                  "unexpected character " + describe_char(*at) + " after " + what);
+                  "unexpected character " + describe_char(rest) + " after " + what);
 }
 
 // ---- one message per required rule ----------------------------------------------------------

@@ -33,6 +33,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
     case ToleranceKind::Symmty: return in({T::ParallelPlanes});
     case ToleranceKind::Profp: return in({T::Point});
+    case ToleranceKind::Angl: return in({T::Cone});
     default: return true;
   }
 }

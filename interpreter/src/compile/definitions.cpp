@@ -64,6 +64,7 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
     case ToleranceKind::Profl:
     case ToleranceKind::Profp:
     case ToleranceKind::Width: return {2, "lower and upper tolerance", false};
+    case ToleranceKind::Angl: return {2, "lower and upper angle tolerance", false};
     case ToleranceKind::DistB:
     case ToleranceKind::DistWrt: return {3, "nominal distance, lower and upper tolerance", false};
     case ToleranceKind::AngWrt: return {3, "nominal angle, lower and upper tolerance", false};
@@ -295,7 +296,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
-    static const std::set<std::string> standard = {"PROFT", "CPARLN", "USETOL", "ANGL", "COMPOS", "GAP", "PNTDEF"};
+    static const std::set<std::string> standard = {"PROFT", "CPARLN", "USETOL", "COMPOS", "GAP", "PNTDEF"};
     if (is_word(p[0]) && standard.count(p[0].text)) {
       warn(p[0].span, "sema.unevaluated-tolerance",
            fmt::format("tolerance type {} is not evaluated by metron; the OUTPUT of T({}) will be left out", p[0].text, s.target->name));
@@ -351,7 +352,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
        kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
-       kind == ToleranceKind::Width) &&
+       kind == ToleranceKind::Width || kind == ToleranceKind::Angl) &&
       numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
   if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||

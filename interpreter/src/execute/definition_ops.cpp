@@ -159,6 +159,7 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     case K::Cortol: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
     case K::AngWrt:
     case K::Anglb: t.nominal = nums[0] * deg; t.lower = nums[1] * deg; t.upper = nums[2] * deg; break;
+    case K::Angl: t.lower = nums[0] * deg; t.upper = nums[1] * deg; break;
     default: t.zone = nums[0] * len; break;
   }
   if (auto r = vm.m_runtime.define_tolerance(t); !r) return vm.from_runtime(r.error());

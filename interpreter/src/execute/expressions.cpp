@@ -165,12 +165,12 @@ tl::expected<Value, std::string> Execute::query(Interpreter& vm, const ir::Expr&
     const runtime::ToleranceResult& r = (*results)[static_cast<std::size_t>(n - 1)];
     if (e.name == "INTOL") return Value::boolean_value(r.in_tolerance);
     if (e.name == "OUTOL") return Value::boolean_value(!r.in_tolerance);
-    const bool angle = r.kind == runtime::ToleranceKind::Anglb || r.kind == runtime::ToleranceKind::AngWrt;
+    const bool angle = runtime::is_angle_kind(r.kind);
     double v = 0;
     if (e.name == "ACT") v = r.actual;
     else if (e.name == "DEV") v = r.value;
     else v = r.in_tolerance ? 0.0 : std::max(r.lower - r.value, r.value - r.upper);  // AMT: beyond the nearer limit
-    return Value::real(angle ? v : v / vm.m_length_mm);
+    return Value::real(angle ? v / degrees(vm) : v / vm.m_length_mm);  // program units
   }
   auto g = vm.m_runtime.feature_geometry({label, e.label.prefix == "FA"}, e.span);
   if (!g) return tl::unexpected(g.error().message);
@@ -178,7 +178,7 @@ tl::expected<Value, std::string> Execute::query(Interpreter& vm, const ir::Expr&
   if (!size)
     return tl::unexpected(fmt::format("VALUE/{}({}),SIZE,{}: a {} has no size {}", e.label.prefix, label, n,
                                       runtime::dmis_word(g->type), n));
-  return Value::real(size->second ? size->first / vm.m_length_mm : size->first);
+  return Value::real(size->second ? size->first / vm.m_length_mm : size->first / degrees(vm));
 }
 
 // a op b: arithmetic (+ - * / **), comparisons (.EQ. ... .GE.), .AND. and .OR. (short-circuit).

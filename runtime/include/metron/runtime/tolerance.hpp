@@ -24,8 +24,13 @@ enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, 
                            Profl,    ///< line profile: PROFS on a line, circle or arc
                            Profp,    ///< point profile: a point's deviation along its nominal normal
                            Width,    ///< size of a PARPLN (slot or tab): its width's deviation
-                           Symmty }; ///< symmetry: a PARPLN's median plane about a datum plane
+                           Symmty,   ///< symmetry: a PARPLN's median plane about a datum plane
+                           Angl };   ///< a CONE's included angle: its deviation (DMIS TOL/ANGL,lo,up)
 const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
+/// Kinds whose value is an angle (degrees), not a length.
+inline bool is_angle_kind(ToleranceKind kind) {
+  return kind == ToleranceKind::Anglb || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Angl;
+}
 
 /// Distance direction for DISTB (and the coordinate of CORTOL).
 enum class DistanceAxis { PointToPoint, XAxis, YAxis, ZAxis };
