@@ -628,10 +628,13 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
       m_evaluated[t] = std::move(results);
       continue;
     }
-    for (auto& result : results) {
-      result.units = m_report_units;
-      write_device_line(dmis_tolerance_line(result));
-      emit(result);
+    for (auto& result : results) result.units = m_report_units;
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      if (results[i].kind == ToleranceKind::Compos && results[i].tier == "PATERN" && i + 1 < results.size())
+        write_device_line(dmis_composite_line(results[i], results[i + 1]));
+      else if (results[i].kind != ToleranceKind::Compos)
+        write_device_line(dmis_tolerance_line(results[i]));
+      emit(results[i]);
     }
   }
   return {};
@@ -652,6 +655,17 @@ Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(cons
     auto dd = datum(d, span);
     if (!dd) return tl::unexpected(dd.error());
     context.datums.push_back(*dd);
+  }
+  if (spec.kind == ToleranceKind::Compos) {
+    // The pattern is every output feature together: two results, the PATERN and FEATUR tiers.
+    for (const auto& d : spec.feature_datums) {
+      auto dd = datum(d, span);
+      if (!dd) return tl::unexpected(dd.error());
+      context.feature_datums.push_back(*dd);
+    }
+    auto tiers = runtime::evaluate_composite(spec, features, context);
+    if (!tiers) return program_error(span, tiers.error());
+    return std::move(*tiers);
   }
   // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
   // feature is evaluated against it. CORTOL applies to each output feature.

@@ -160,6 +160,7 @@ bool is_deviation_kind(ToleranceKind kind) {
 std::string kind_words(const ToleranceResult& result) {
   std::string out = dmis_word(result.kind);
   if (result.kind == ToleranceKind::Pos) out += result.three_d ? " 3D" : " 2D";
+  if (!result.tier.empty()) out += " " + result.tier;
   return out;
 }
 
@@ -294,7 +295,8 @@ json tolerance_json(const ToleranceResult& r) {
             {"upper", number(r.upper)},
             {"status", r.in_tolerance ? "IN" : "OUT"},
             {"note", r.note}};
-  if (r.kind == ToleranceKind::Pos) j["three_d"] = r.three_d;
+  if (r.kind == ToleranceKind::Pos || r.kind == ToleranceKind::Compos) j["three_d"] = r.three_d;
+  if (!r.tier.empty()) j["tier"] = r.tier;
   return j;
 }
 
@@ -421,6 +423,16 @@ std::string dmis_tolerance_line(const ToleranceResult& result) {
   fields.emplace_back(result.in_tolerance ? "INTOL" : "OUTOL");
   const std::string head = fmt::format("TA({}) = TOL/{}", result.label, dmis_word(result.kind));
   return dmis_statement(head, fields);
+}
+
+std::string dmis_composite_line(const ToleranceResult& pattern, const ToleranceResult& feature) {
+  std::vector<std::string> fields;
+  for (const ToleranceResult* tier : {&pattern, &feature}) {
+    fields.push_back(tier->tier);
+    fields.push_back(dmis_number(tier->value, ParameterUnit::Length, tier->units));
+    fields.emplace_back(tier->in_tolerance ? "INTOL" : "OUTOL");
+  }
+  return dmis_statement(fmt::format("TA({}) = TOL/COMPOS", pattern.label), fields);
 }
 
 nlohmann::json results_json(const RunRecord& record) {

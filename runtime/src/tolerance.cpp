@@ -31,6 +31,7 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::Parlel: return "PARLEL";
     case ToleranceKind::Anglb: return "ANGLB";
     case ToleranceKind::Angl: return "ANGL";
+    case ToleranceKind::Compos: return "COMPOS";
     case ToleranceKind::Profs: return "PROFS";
     case ToleranceKind::DistWrt: return "DISTWRT";
     case ToleranceKind::AngWrt: return "ANGWRT";
@@ -308,6 +309,44 @@ Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Fe
 
 // ---------------------------------------------------------------- POS
 
+// The point of `actual` whose offset from the nominal position is its position deviation: 2D, an
+// axis where it crosses the plane through the nominal position normal to the nominal axis (else
+// the actual position); 3D, the actual position.
+tl::expected<Vec3, std::string> position_point(const Geometry& nominal, const Geometry& actual, bool three_d,
+                                               const std::string& label) {
+  if (three_d || !has_axis(nominal.type)) return actual.position;
+  const auto n = unit(nominal.direction, "the nominal of " + label);
+  if (!n) return Error(n.error());
+  const auto axis = unit(actual.direction, "the actual of " + label);
+  if (!axis) return Error(axis.error());
+  const double cos_a = axis->dot(*n);
+  if (std::abs(cos_a) < k_parallel_cos)
+    return Error(fmt::format("POS 2D of {}: the actual axis is perpendicular to the nominal axis", label));
+  return Vec3(actual.position + (n->dot(nominal.position - actual.position) / cos_a) * *axis);
+}
+
+// The MMC or LMC bonus of a position zone: the actual size's departure from that material
+// condition, taken at the nominal diameter (the spec carries no size limits).
+tl::expected<double, std::string> material_bonus(MaterialCondition condition, const Geometry& nominal,
+                                                 const Geometry& actual, ToleranceResult& result) {
+  if (condition == MaterialCondition::Rfs) return 0.0;
+  static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
+  const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
+  if (!is_one_of(nominal.type, k_sized))
+    return Error(fmt::format("{} applies to {}, not to {} {}", modifier, type_list(k_sized),
+                             article(dmis_word(nominal.type)), dmis_word(nominal.type)));
+  // A hole grows away from MMC, a boss shrinks; a feature beyond that size earns no bonus.
+  const bool inner = nominal.side == Side::Inner;
+  const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
+  const double away_from_mmc = inner ? growth_mm : -growth_mm;
+  const double bonus_mm = std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
+  add_note(result, fmt::format("{} bonus {:.4f}: actual diameter {:.4f} against the {} size, taken "
+                               "as the nominal diameter {:.4f} (the tolerance has no size limits)",
+                               modifier, bonus_mm, actual.diameter_mm, modifier, nominal.diameter_mm));
+  if (nominal.side == Side::None) add_note(result, "side unknown: treated as OUTER");
+  return bonus_mm;
+}
+
 Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                      ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
@@ -321,48 +360,20 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   if (!frame) return Error(frame.error());
   const Geometry actual = to_machine(**actual_or, frame->actual_to_nominal);
 
-  Vec3 deviation = actual.position - nominal.position;
+  const auto at = position_point(nominal, actual, spec.three_d, feature.label);
+  if (!at) return Error(at.error());
+  Vec3 deviation = *at - nominal.position;
   if (!spec.three_d) {
     const auto n = unit(nominal.direction, "the nominal of " + feature.label);
     if (!n) return Error(n.error());
-    if (has_axis(nominal.type)) {
-      // The actual axis where it crosses the plane through the nominal position normal to the
-      // nominal axis: its offset there is the 2D position deviation.
-      const auto axis = unit(actual.direction, "the actual of " + feature.label);
-      if (!axis) return Error(axis.error());
-      const double cos_a = axis->dot(*n);
-      if (std::abs(cos_a) < k_parallel_cos)
-        return Error(
-            fmt::format("POS 2D of {}: the actual axis is perpendicular to the nominal axis", feature.label));
-      const Vec3 crossing = actual.position + (n->dot(nominal.position - actual.position) / cos_a) * *axis;
-      deviation = crossing - nominal.position;
-    }
     deviation -= deviation.dot(*n) * *n;
   }
   result.value = 2.0 * deviation.norm();
   result.actual = result.value;
   result.nominal = 0;
-
-  double bonus_mm = 0;
-  if (spec.condition != MaterialCondition::Rfs) {
-    static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
-                                      FeatureType::Cylinder};
-    const char* modifier = spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC";
-    if (!is_one_of(nominal.type, k_sized))
-      return Error(fmt::format("{} applies to {}, not to {} {}", modifier, type_list(k_sized),
-                               article(dmis_word(nominal.type)), dmis_word(nominal.type)));
-    // The spec carries no size limits, so the MMC (and LMC) size is the nominal diameter.
-    // A hole grows away from MMC, a boss shrinks; a feature beyond that size earns no bonus.
-    const bool inner = nominal.side == Side::Inner;
-    const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
-    const double away_from_mmc = inner ? growth_mm : -growth_mm;
-    bonus_mm = std::max(0.0, spec.condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
-    add_note(result, fmt::format("{} bonus {:.4f}: actual diameter {:.4f} against the {} size, taken "
-                                 "as the nominal diameter {:.4f} (the tolerance has no size limits)",
-                                 modifier, bonus_mm, actual.diameter_mm, modifier, nominal.diameter_mm));
-    if (nominal.side == Side::None) add_note(result, "side unknown: treated as OUTER");
-  }
-  set_limits(result, 0, spec.zone + bonus_mm);
+  const auto bonus_mm = material_bonus(spec.condition, nominal, actual, result);
+  if (!bonus_mm) return Error(bonus_mm.error());
+  set_limits(result, 0, spec.zone + *bonus_mm);
   add_note(result, datum_frame_note(*frame, (*actual_or)->position));
   return result;
 }
@@ -999,8 +1010,139 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Width: return evaluate_size(spec, feature, std::move(result));
     case ToleranceKind::Symmty: return evaluate_symmetry(spec, feature, context, std::move(result));
     case ToleranceKind::Angl: return evaluate_cone_angle(spec, feature, std::move(result));
+    case ToleranceKind::Compos: return Error("COMPOS has two tiers: evaluate_composite");
   }
   return Error(fmt::format("{} is not evaluated", word));
+}
+
+// ---------------------------------------------------------------- COMPOS
+
+// Composite position (ASME Y14.5-2018 10.5.1). The PATERN tier (pattern-locating zone framework)
+// is POS of each feature in its datums' frame. The FEATUR tier (feature-relating zone framework)
+// lets the pattern move as one rigid group: its datums orient it and never locate it. So the
+// actual positions are brought into the FEATUR datums' frame, and the pattern's remaining
+// freedom (any translation; the rotation about the axis those datums leave free, if any) is
+// taken by a least-squares fit onto the true positions: the residuals are the deviations. A
+// least-squares group fit never gives a smaller zone than the minimax one, so a pattern it
+// accepts is accepted by minimax too.
+tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const ToleranceSpec& spec,
+    const std::vector<const Feature*>& features, const ToleranceContext& context) {
+  if (features.empty()) return Error("COMPOS applies to a pattern of one or more features, got none");
+  ToleranceResult pattern;
+  pattern.label = spec.label;
+  pattern.kind = ToleranceKind::Compos;
+  pattern.tier = "PATERN";
+  pattern.three_d = spec.three_d;
+  for (const Feature* f : features) pattern.features.push_back(f->label);
+  ToleranceResult relating = pattern;
+  relating.tier = "FEATUR";
+
+  // PATERN: each feature's POS in the pattern datums' frame; the worst margin is reported.
+  ToleranceSpec pos = spec;
+  pos.kind = ToleranceKind::Pos;
+  bool first = true;
+  std::string per_feature;
+  for (const Feature* f : features) {
+    auto r = evaluate_tolerance(pos, {f}, context);
+    if (!r) return Error(r.error());
+    per_feature += fmt::format("{}{} {:.4f}", per_feature.empty() ? "" : ", ", f->label, r->value);
+    if (first || r->value - r->upper > pattern.value - pattern.upper) {
+      pattern.value = r->value;
+      pattern.lower = r->lower;
+      pattern.upper = r->upper;
+      pattern.note = r->note;
+    }
+    pattern.in_tolerance = first ? r->in_tolerance : pattern.in_tolerance && r->in_tolerance;
+    first = false;
+  }
+  pattern.actual = pattern.value;
+  add_note(pattern, "each feature's zone: " + per_feature);
+
+  // FEATUR: the actual positions in the FEATUR datums' frame (orientation only matters: the
+  // translation is refitted below).
+  DatumFrame oriented;
+  if (!spec.feature_datums.empty()) {
+    for (std::size_t i = 0; i < spec.feature_datums.size(); ++i)
+      if (i >= context.feature_datums.size() || !context.feature_datums[i])
+        return Error(fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.feature_datums[i],
+                                 spec.feature_datums[i]));
+    auto frame = fit_datum_frame(context.feature_datums, features.front()->nominal_frame, DatumNominals::AsDefined);
+    if (!frame) return Error(frame.error());
+    oriented = *frame;
+  }
+  const std::size_t n = features.size();
+  std::vector<Vec3> nominal(n), actual(n), normal(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Feature& f = *features[i];
+    const auto a = actual_of(f);
+    if (!a) return Error(a.error());
+    const Geometry moved = to_machine(**a, oriented.actual_to_nominal);
+    const auto at = position_point(f.nominal, moved, spec.three_d, f.label);
+    if (!at) return Error(at.error());
+    const auto dir = unit(f.nominal.direction, "the nominal of " + f.label);
+    if (!dir) return Error(dir.error());
+    nominal[i] = f.nominal.position;
+    actual[i] = *at;
+    normal[i] = *dir;
+  }
+  // The rotation left free: none when the FEATUR datums fix all three; else about the first
+  // FEATUR datum's direction, or without datums about the pattern's axis direction.
+  std::optional<Vec3> free_axis;
+  if (oriented.rotations_fixed < 3) {
+    const Vec3 a = spec.feature_datums.empty() ? normal.front() : context.feature_datums.front()->nominal.direction;
+    if (a.norm() > 1e-12) free_axis = a.normalized();
+  }
+  // Linearised least squares for the translation t and the small rotation angle w about the free
+  // axis through the pattern's centroid, iterated with the exact rotation: residual
+  // r_i = P_i (R(w) (q_i - c) + c + t - p_i), P_i the projection normal to the feature's axis (2D).
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& q : actual) centroid += q;
+  centroid /= static_cast<double>(n);
+  const auto project = [&](std::size_t i, const Vec3& v) {
+    return spec.three_d ? v : Vec3(v - v.dot(normal[i]) * normal[i]);
+  };
+  std::vector<Vec3> fitted = actual;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    const int unknowns = free_axis ? 4 : 3;
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(3 * n), unknowns);
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * n));
+    Vec3 c = Vec3::Zero();
+    for (const Vec3& q : fitted) c += q;
+    c /= static_cast<double>(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto row = static_cast<Eigen::Index>(3 * i);
+      for (int k = 0; k < 3; ++k) a.block(row, k, 3, 1) = project(i, Vec3::Unit(k));
+      if (free_axis) a.block(row, 3, 3, 1) = project(i, free_axis->cross(fitted[i] - c));
+      b.segment(row, 3) = project(i, nominal[i] - fitted[i]);
+    }
+    const Eigen::VectorXd x = a.completeOrthogonalDecomposition().solve(b);
+    const Vec3 t(x(0), x(1), x(2));
+    const Eigen::Matrix3d r = free_axis ? Eigen::AngleAxisd(x(3), *free_axis).toRotationMatrix() : Eigen::Matrix3d::Identity();
+    for (Vec3& q : fitted) q = r * (q - c) + c + t;
+  }
+  first = true;
+  per_feature.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Feature& f = *features[i];
+    ToleranceResult r = relating;
+    r.value = 2.0 * project(i, fitted[i] - nominal[i]).norm();
+    const auto bonus = material_bonus(spec.feature_condition, f.nominal, *f.actual, r);
+    if (!bonus) return Error(bonus.error());
+    set_limits(r, 0, spec.feature_zone + *bonus);
+    per_feature += fmt::format("{}{} {:.4f}", per_feature.empty() ? "" : ", ", f.label, r.value);
+    if (first || r.value - r.upper > relating.value - relating.upper) {
+      relating.value = r.value;
+      relating.lower = r.lower;
+      relating.upper = r.upper;
+      relating.note = r.note;
+    }
+    relating.in_tolerance = first ? r.in_tolerance : relating.in_tolerance && r.in_tolerance;
+    first = false;
+  }
+  relating.actual = relating.value;
+  add_note(relating, fmt::format("the pattern fitted as a group (least squares: translation{}); each feature's zone: {}",
+                                 free_axis ? ", and rotation about the axis its datums leave free" : " only", per_feature));
+  return std::vector<ToleranceResult>{pattern, relating};
 }
 
 }  // namespace metron::runtime

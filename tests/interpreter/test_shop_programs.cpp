@@ -683,6 +683,77 @@ TEST(ShopPrograms, AnglJudgesAConesIncludedAngle) {
   EXPECT_TRUE(circle.has("the lower tolerance 0.5 is above the upper tolerance -0.5")) << circle.text;
 }
 
+// TOL/COMPOS: a pattern of four holes 40 mm apart, moved as a group by (0.2, 0.1) mm and turned
+// 0.002 rad about its centre, two holes off by (+-0.01, +-0.01) along their diagonal. The
+// expected zones are analytic: PATERN (datums A, B, C locate) sees every motion; FEATUR with
+// only A may translate and turn the pattern, and the individual offsets have no mean and no
+// moment, so they remain exactly: 2 |(0.01, 0.01)|; FEATUR with A and B may not turn it, so the
+// turn remains (translation only: the turn's displacements have no mean on this square).
+TEST(ShopPrograms, CompositePositionJudgesThePatternAndItsFeatures) {
+  const std::string text =
+      "DMISMN/'compos', 5.0\n"
+      "F(A)=FEAT/PLANE,CART,0,0,0,0,0,1\nFA(A)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(A),DAT(A)\n"
+      "F(B)=FEAT/PLANE,CART,-50,0,0,-1,0,0\nFA(B)=FEAT/PLANE,CART,-50,0,0,-1,0,0\nDATDEF/FA(B),DAT(B)\n"
+      "F(C)=FEAT/PLANE,CART,0,-50,0,0,-1,0\nFA(C)=FEAT/PLANE,CART,0,-50,0,0,-1,0\nDATDEF/FA(C),DAT(C)\n"
+      "F(H1)=FEAT/CIRCLE,INNER,CART,20,20,0,0,0,1,10\nFA(H1)=FEAT/CIRCLE,INNER,CART,20.169960026680,20.149959973347,0,0,0,1,10\n"
+      "F(H2)=FEAT/CIRCLE,INNER,CART,-20,20,0,0,0,1,10\nFA(H2)=FEAT/CIRCLE,INNER,CART,-19.839959973347,20.059960026680,0,0,0,1,10\n"
+      "F(H3)=FEAT/CIRCLE,INNER,CART,-20,-20,0,0,0,1,10\nFA(H3)=FEAT/CIRCLE,INNER,CART,-19.769960026680,-19.949959973347,0,0,0,1,10\n"
+      "F(H4)=FEAT/CIRCLE,INNER,CART,20,-20,0,0,0,1,10\nFA(H4)=FEAT/CIRCLE,INNER,CART,20.239959973347,-19.859960026680,0,0,0,1,10\n"
+      "T(CP)=TOL/COMPOS,PATERN,0.5,DAT(A),DAT(B),DAT(C),FEATUR,0.05,DAT(A)\n"
+      "T(CQ)=TOL/COMPOS,2D,PATERN,0.5,MMC,DAT(A),DAT(B),DAT(C),FEATUR,0.05,DAT(A),DAT(B)\n"
+      "DECL/REAL,PAT,FEA\n"
+      "OUTPUT/FA(H1),FA(H2),FA(H3),FA(H4),TA(CP),TA(CQ)\nPAT=VALUE/TA(CP),ACT,1\nFEA=VALUE/TA(CP),ACT,2\nENDFIL\n";
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<const metron::runtime::ToleranceResult*> tiers;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) tiers.push_back(t);
+  ASSERT_EQ(tiers.size(), 4u);
+  const Eigen::Vector2d shift(0.2, 0.1);
+  const double turn = 0.002;
+  const Eigen::Vector2d p[4] = {Eigen::Vector2d(20, 20), Eigen::Vector2d(-20, 20), Eigen::Vector2d(-20, -20),
+                                Eigen::Vector2d(20, -20)};
+  const Eigen::Vector2d e[4] = {Eigen::Vector2d(0.01, 0.01), Eigen::Vector2d(0, 0), Eigen::Vector2d(-0.01, -0.01),
+                                Eigen::Vector2d(0, 0)};
+  double pattern = 0, turned = 0;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d rotated = Eigen::Rotation2Dd(turn) * p[i] - p[i];
+    pattern = std::max(pattern, 2 * (shift + rotated + e[i]).norm());
+    turned = std::max(turned, 2 * (rotated + e[i]).norm());
+  }
+  EXPECT_EQ(tiers[0]->tier, "PATERN");
+  EXPECT_NEAR(tiers[0]->value, pattern, 1e-9);
+  EXPECT_FALSE(tiers[0]->in_tolerance);  // about 0.55 against 0.5
+  // FEATUR with A: the closed-form 2-D Procrustes fit (rotation angle atan2 of the summed cross
+  // and dot products of the centred point sets) of the actual centres onto the nominal ones.
+  Eigen::Vector2d q[4], qc(0, 0);
+  for (int i = 0; i < 4; ++i) qc += (q[i] = shift + Eigen::Rotation2Dd(turn) * p[i] + e[i]) / 4;
+  double cross = 0, dot = 0;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d a = q[i] - qc;
+    cross += a.x() * p[i].y() - a.y() * p[i].x();
+    dot += a.dot(p[i]);
+  }
+  double procrustes = 0;
+  for (int i = 0; i < 4; ++i)
+    procrustes = std::max(procrustes, 2 * (Eigen::Rotation2Dd(std::atan2(cross, dot)) * (q[i] - qc) - p[i]).norm());
+  EXPECT_NEAR(procrustes, 2 * std::hypot(0.01, 0.01), 1e-7);  // the offsets remain, to second order
+  EXPECT_EQ(tiers[1]->tier, "FEATUR");
+  EXPECT_NEAR(tiers[1]->value, procrustes, 1e-12);
+  EXPECT_TRUE(tiers[1]->in_tolerance);
+  EXPECT_EQ(tiers[3]->tier, "FEATUR");
+  EXPECT_NEAR(tiers[3]->value, turned, 1e-9);
+  EXPECT_FALSE(tiers[3]->in_tolerance);
+  EXPECT_NEAR(r.session->interpreter().variable("PAT")->number, pattern, 1e-9);
+  EXPECT_NEAR(r.session->interpreter().variable("FEA")->number, procrustes, 1e-12);
+  // Forms: a tier without exactly one zone is an error; another layout is left out with a warning.
+  const auto two = check("DMISMN/'c', 5.0\nT(X)=TOL/COMPOS,PATERN,0.5,0.2,FEATUR,0.05\nENDFIL\n");
+  EXPECT_TRUE(two.has("each tier of TOL/COMPOS takes one zone, got 2 in the PATERN tier")) << two.text;
+  const auto other = check("DMISMN/'c', 5.0\nT(X)=TOL/COMPOS,POS,0.5,0.05\nENDFIL\n");
+  EXPECT_EQ(other.errors, 0u) << other.text;
+  EXPECT_TRUE(other.has("tolerance type COMPOS is not evaluated")) << other.text;
+}
+
 TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   const auto inch = [](double mm) { return fmt::format("{:.6f}", mm / 25.4); };
   const std::string text =

@@ -27,7 +27,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Cylcty: return in({T::Cylinder});
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line});
-    case ToleranceKind::Pos: return !in({T::Plane, T::Line, T::ParallelPlanes, T::GenericSurface, T::GenericCurve});
+    case ToleranceKind::Pos:
+    case ToleranceKind::Compos: return !in({T::Plane, T::Line, T::ParallelPlanes, T::GenericSurface, T::GenericCurve});
     case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface});
     case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});

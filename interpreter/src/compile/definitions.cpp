@@ -65,6 +65,7 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
     case ToleranceKind::Profp:
     case ToleranceKind::Width: return {2, "lower and upper tolerance", false};
     case ToleranceKind::Angl: return {2, "lower and upper angle tolerance", false};
+    case ToleranceKind::Compos: return {2, "the PATERN and FEATUR zones", true};
     case ToleranceKind::DistB:
     case ToleranceKind::DistWrt: return {3, "nominal distance, lower and upper tolerance", false};
     case ToleranceKind::AngWrt: return {3, "nominal angle, lower and upper tolerance", false};
@@ -293,6 +294,14 @@ void UnitCompiler::tol(const grammar::Statement& s) {
                  : ToleranceKind::Crnout;
   if (!parsed && is_word(p[0], "TRNOUT")) parsed = ToleranceKind::Totrun;
   if (!parsed && (is_word(p[0], "SYMMETRY") || is_word(p[0], "SYM"))) parsed = ToleranceKind::Symmty;
+  // TOL/COMPOS[,2D|3D],PATERN,zone[,MMC|LMC|RFS][,DAT()...],FEATUR,zone[,MMC|LMC|RFS][,DAT()...]
+  // (composite position). Another layout is read as before: not evaluated, with a warning.
+  if (parsed == ToleranceKind::Compos) {
+    const std::size_t tier1 = p.size() > 1 && (is_word(p[1], "2D") || is_word(p[1], "3D")) ? 2 : 1;
+    const auto featur = std::find_if(p.begin() + static_cast<std::ptrdiff_t>(std::min(tier1, p.size())), p.end(),
+                                     [](const grammar::Expr& e) { return is_word(e, "FEATUR"); });
+    if (p.size() <= tier1 || !is_word(p[tier1], "PATERN") || featur == p.end()) parsed.reset();
+  }
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
@@ -360,6 +369,21 @@ void UnitCompiler::tol(const grammar::Statement& s) {
        kind == ToleranceKind::Symmty) &&
       std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
     return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
+  if (kind == ToleranceKind::Compos) {
+    // One zone in each tier.
+    std::size_t in_tier = 0;
+    for (std::size_t i = 1; i <= p.size(); ++i) {
+      if (i == p.size() || is_word(p[i], "FEATUR")) {
+        if (in_tier != 1)
+          return error(p[i - 1].span, "sema.tolerance-arity",
+                       fmt::format("each tier of TOL/COMPOS takes one zone, got {} in the {} tier", in_tier,
+                                   i == p.size() ? "FEATUR" : "PATERN"));
+        in_tier = 0;
+        continue;
+      }
+      if (!is_word(p[i]) && p[i].kind != ExprKind::Label) ++in_tier;
+    }
+  }
   if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)

@@ -141,10 +141,23 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (word == "YAXIS") t.axis = runtime::DistanceAxis::YAxis;
     if (word == "ZAXIS") t.axis = runtime::DistanceAxis::ZAxis;
   }
+  bool feature_tier = false;  // COMPOS: after FEATUR, the modifier and datums are the second tier's
   for (const auto& o : in.operands) {
+    if (o.kind == Operand::Kind::Word && o.word == "FEATUR") feature_tier = true;
+    if (feature_tier && o.kind == Operand::Kind::Word && (o.word == "MMC" || o.word == "LMC"))
+      t.feature_condition = o.word == "MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
     if (o.kind != Operand::Kind::Label) continue;
     if (o.label.prefix == "F" || o.label.prefix == "FA") t.reference_feature = vm.label_name(o.label);  // DISTWRT, ANGWRT
-    else t.datums.push_back(vm.label_name(o.label));
+    else (feature_tier ? t.feature_datums : t.datums).push_back(vm.label_name(o.label));
+  }
+  if (t.kind == runtime::ToleranceKind::Compos) {
+    // The PATERN tier's modifier is the one before FEATUR.
+    t.condition = runtime::MaterialCondition::Rfs;
+    for (const auto& o : in.operands) {
+      if (o.kind == Operand::Kind::Word && o.word == "FEATUR") break;
+      if (o.kind == Operand::Kind::Word && (o.word == "MMC" || o.word == "LMC"))
+        t.condition = o.word == "MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
+    }
   }
   using K = runtime::ToleranceKind;
   switch (t.kind) {
@@ -160,6 +173,7 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     case K::AngWrt:
     case K::Anglb: t.nominal = nums[0] * deg; t.lower = nums[1] * deg; t.upper = nums[2] * deg; break;
     case K::Angl: t.lower = nums[0] * deg; t.upper = nums[1] * deg; break;
+    case K::Compos: t.zone = nums[0] * len; t.feature_zone = nums[1] * len; break;
     default: t.zone = nums[0] * len; break;
   }
   if (auto r = vm.m_runtime.define_tolerance(t); !r) return vm.from_runtime(r.error());

@@ -20,6 +20,8 @@ std::string format_fault(const FaultReport& fault);
 std::string dmis_feature_line(const FeatureReport& report);
 /// DMIS output statement `TA(label)=TOL/...,value,INTOL|OUTOL`.
 std::string dmis_tolerance_line(const ToleranceResult& result);
+/// `TA(l) = TOL/COMPOS,PATERN,v1,INTOL|OUTOL,FEATUR,v2,INTOL|OUTOL`: a composite's two tiers on one line.
+std::string dmis_composite_line(const ToleranceResult& pattern, const ToleranceResult& feature);
 
 /// results.json (schema documented in docs/results-json.md).
 nlohmann::json results_json(const RunRecord& record);

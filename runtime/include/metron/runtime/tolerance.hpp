@@ -25,7 +25,8 @@ enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, 
                            Profp,    ///< point profile: a point's deviation along its nominal normal
                            Width,    ///< size of a PARPLN (slot or tab): its width's deviation
                            Symmty,   ///< symmetry: a PARPLN's median plane about a datum plane
-                           Angl };   ///< a CONE's included angle: its deviation (DMIS TOL/ANGL,lo,up)
+                           Angl,     ///< a CONE's included angle: its deviation (DMIS TOL/ANGL,lo,up)
+                           Compos }; ///< composite position: a pattern's PATERN tier and its FEATUR tier
 const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
 /// Kinds whose value is an angle (degrees), not a length.
 inline bool is_angle_kind(ToleranceKind kind) {
@@ -49,7 +50,12 @@ struct ToleranceSpec {
   bool long_side = false;        ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
   DistanceAxis axis = DistanceAxis::PointToPoint;
   MaterialCondition condition = MaterialCondition::Rfs;
-  std::vector<std::string> datums;  ///< DAT() labels referenced
+  std::vector<std::string> datums;  ///< DAT() labels referenced (COMPOS: the PATERN tier's)
+  /// COMPOS: the FEATUR tier (the feature-relating zone), its modifier and its datums, which
+  /// orient the pattern and never locate it (ASME Y14.5-2018 10.5.1).
+  double feature_zone = 0;
+  MaterialCondition feature_condition = MaterialCondition::Rfs;
+  std::vector<std::string> feature_datums;
   std::string reference_feature;   ///< DISTWRT, ANGWRT: the FA() the distance or angle is taken to
   Span defined_at;
 };
@@ -67,6 +73,7 @@ struct Datum {
 struct ToleranceResult {
   std::string label;
   ToleranceKind kind = ToleranceKind::Diam;
+  std::string tier;                    ///< COMPOS: "PATERN" or "FEATUR" (empty otherwise)
   std::vector<std::string> features;   ///< feature labels it was applied to
   double value = 0;              ///< the measured quantity: deviation (DIAM, RAD, DISTB, ANGLB), zone used (POS, form ...)
   double actual = 0;             ///< the actual size/distance/angle where meaningful (DIAM: actual diameter)
@@ -83,11 +90,20 @@ struct ToleranceResult {
 struct ToleranceContext {
   const Alignment* alignment = nullptr;            ///< the current coordinate system (reporting frame)
   std::vector<const Datum*> datums;                ///< resolved datums of spec.datums, same order
+  std::vector<const Datum*> feature_datums;        ///< resolved datums of spec.feature_datums (COMPOS)
 };
 
 /// Evaluates `spec` on `features` (one feature, or two for DISTB). Returns an error message
 /// (lowercase) when the tolerance does not apply, e.g. "DIAM needs a feature of size, got PLANE".
 tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpec& spec,
+    const std::vector<const Feature*>& features, const ToleranceContext& context);
+
+/// TOL/COMPOS on a pattern of features (one or more): the PATERN tier is POS of each feature in
+/// the PATERN datums' frame (the largest zone used is reported); the FEATUR tier is the same after
+/// the pattern, as a rigid group, is moved onto its true positions by least squares: free to
+/// translate, turned only about what the FEATUR datums leave free (docs/tolerances.md). Two
+/// results, PATERN then FEATUR.
+tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const ToleranceSpec& spec,
     const std::vector<const Feature*>& features, const ToleranceContext& context);
 
 }  // namespace metron::runtime
