@@ -8,15 +8,12 @@
 #include <nlohmann/json.hpp>
 
 #include "metron/stdlib/json_reader.hpp"
+#include "metron/stdlib/text_encoding.hpp"
 
 namespace metron::machine {
 namespace {
 
-std::string upper(std::string_view s) {
-  std::string u(s);
-  for (auto& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return u;
-}
+std::string upper(std::string_view s) { return upper_utf8(s); }
 
 }  // namespace
 

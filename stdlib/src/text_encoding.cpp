@@ -81,4 +81,30 @@ std::string to_utf8(std::string bytes, TextEncoding* detected) {
   return out;
 }
 
+std::string upper_utf8(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c >= 'a' && c <= 'z') {
+      out += static_cast<char>(c - 'a' + 'A');
+      continue;
+    }
+    if ((c == 0xC3 || c == 0xC4 || c == 0xC5) && i + 1 < text.size() &&
+        (static_cast<unsigned char>(text[i + 1]) & 0xC0) == 0x80) {
+      unsigned cp = ((c & 0x1Fu) << 6) | (static_cast<unsigned char>(text[i + 1]) & 0x3Fu);
+      if (cp >= 0xE0 && cp <= 0xFE && cp != 0xF7) cp -= 0x20;  // à..þ (not ÷)
+      else if (cp == 0xFF) cp = 0x178;                          // ÿ
+      else if (((cp >= 0x100 && cp <= 0x137) || (cp >= 0x14A && cp <= 0x177)) && (cp & 1u)) cp -= 1;
+      else if (((cp >= 0x139 && cp <= 0x148) || (cp >= 0x179 && cp <= 0x17E)) && !(cp & 1u)) cp -= 1;
+      out += static_cast<char>(0xC0 | (cp >> 6));
+      out += static_cast<char>(0x80 | (cp & 0x3Fu));
+      ++i;
+      continue;
+    }
+    out += static_cast<char>(c);
+  }
+  return out;
+}
+
 }  // namespace metron

@@ -168,6 +168,23 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 0u) << c.text;
   EXPECT_EQ(c.notes, 1u) << c.text;  // PAUSE, once
+  // Statements accepted without their effect warn once per kind: a program may rely on them.
+  const auto once = check("DMISMN/'p', 5.1\nMFGDEV/'M1'\nGEOALG/CIRCLE,LSTSQR\nGEOALG/CIRCLE,MINMAX\nGEOALG/PLANE,MINMAX\n"
+                          "ERROR/(EH),ALL\nRESUME/NEXT\nGOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
+  EXPECT_EQ(once.errors, 0u) << once.text;
+  EXPECT_EQ(once.warnings, 3u) << once.text;
+  EXPECT_TRUE(once.has("4:1: warning: GEOALG: metron fits features by least squares")) << once.text;
+  EXPECT_TRUE(once.has("6:1: warning: ERROR/RESUME error handlers are not run: a machine fault stops the run")) << once.text;
+  EXPECT_TRUE(once.has("8:1: warning: GOHOME does not move the virtual CMM")) << once.text;
+}
+
+// Labels compare in upper case, accented letters included: F(Alésage) is FA(ALÉSAGE) (French
+// exports write both).
+TEST(ShopPrograms, AccentedLabelsCompareWithoutCase) {
+  const auto c = check("DMISMN/'p', 5.1\nF(Alésage_Ø)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(ALÉSAGE_Ø)=FEAT/POINT,CART,0,0,0.001,0,0,1\n"
+                       "OUTPUT/FA(alésage_ø)\nF(Œil)=FEAT/POINT,CART,0,0,0,0,0,1\nF(Łódź)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+                       "OUTPUT/F(œil),F(ŁÓDŹ)\nENDFIL\n");
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
 }
 
 TEST(ShopPrograms, MeasPointCountMismatchIsAWarning) {
@@ -183,6 +200,17 @@ TEST(ShopPrograms, UnevaluatedToleranceTypesWarnAndTheirOutputIsLeftOut) {
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_TRUE(c.has("tolerance type PROFT is not evaluated by metron")) << c.text;
   EXPECT_TRUE(c.has("T(PT) (TOL/PROFT) is not evaluated: left out of this OUTPUT")) << c.text;
+  // A type metron does not know at all (angularity ANGLR, a vendor's) is left out alike: it
+  // stopped the whole program before. DMIS's spellings ANGLWRT and COAXL are ANGWRT and COAXIAL.
+  const auto unknown = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(AR)=TOL/ANGLR,0.05,90,DAT(A)\n"
+                             "OUTPUT/FA(C1),TA(AR)\nENDFIL\n");
+  EXPECT_EQ(unknown.errors, 0u) << unknown.text;
+  EXPECT_TRUE(unknown.has("tolerance type ANGLR is not one metron knows; the OUTPUT of T(AR) will be left out")) << unknown.text;
+  EXPECT_TRUE(unknown.has("T(AR) (TOL/ANGLR) is not evaluated: left out of this OUTPUT")) << unknown.text;
+  const auto spelled = check("DMISMN/'p', 5.1\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(C1)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
+                             "DATDEF/FA(C1),DAT(D)\nT(AW)=TOL/ANGLWRT,90,-0.1,0.1,FA(P)\nT(CX)=TOL/COAXL,0.05,DAT(D)\n"
+                             "OUTPUT/FA(C1),TA(AW),TA(CX)\nENDFIL\n");
+  EXPECT_EQ(spelled.errors + spelled.warnings, 0u) << spelled.text;
 }
 
 TEST(ShopPrograms, CoaxialityAndRunoutTolerancesAreCheckedAndNeedADatum) {

@@ -294,6 +294,9 @@ void UnitCompiler::tol(const grammar::Statement& s) {
                  : ToleranceKind::Crnout;
   if (!parsed && is_word(p[0], "TRNOUT")) parsed = ToleranceKind::Totrun;
   if (!parsed && (is_word(p[0], "SYMMETRY") || is_word(p[0], "SYM"))) parsed = ToleranceKind::Symmty;
+  // DMIS spells the angle to a reference ANGLWRT and coaxiality COAXL in places.
+  if (!parsed && is_word(p[0], "ANGLWRT")) parsed = ToleranceKind::AngWrt;
+  if (!parsed && is_word(p[0], "COAXL")) parsed = ToleranceKind::Coaxial;
   // TOL/COMPOS[,2D|3D],PATERN,zone[,MMC|LMC|RFS][,DAT()...],FEATUR,zone[,MMC|LMC|RFS][,DAT()...]
   // (composite position). Another layout is read as before: not evaluated, with a warning.
   if (parsed == ToleranceKind::Compos) {
@@ -305,18 +308,15 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
+    // A type metron does not know (a vendor's, or one of another DMIS version: ANGLR, CPROFS ...)
+    // is treated alike: one program's unknown tolerance must not stop the rest of it.
     static const std::set<std::string> standard = {"PROFT", "CPARLN", "USETOL", "COMPOS", "GAP", "PNTDEF"};
-    if (is_word(p[0]) && standard.count(p[0].text)) {
+    if (is_word(p[0])) {
       warn(p[0].span, "sema.unevaluated-tolerance",
-           fmt::format("tolerance type {} is not evaluated by metron; the OUTPUT of T({}) will be left out", p[0].text, s.target->name));
+           fmt::format("tolerance type {} {}; the OUTPUT of T({}) will be left out", p[0].text,
+                       standard.count(p[0].text) ? "is not evaluated by metron" : "is not one metron knows", s.target->name));
       m_symbols.unevaluated_tolerances[upper(s.target->name)] = p[0].text;
       m_symbols.tolerances.erase(upper(s.target->name));
-      emit(make(Op::Nop, s, "TOL"));
-      return;
-    }
-    if (is_word(p[0])) {
-      warn(p[0].span, "sema.unsupported-tolerance", fmt::format("tolerance type {} is not supported; T({}) is skipped", p[0].text, s.target->name));
-      m_symbols.skipped["T:" + upper(s.target->name)] = s.span;
       emit(make(Op::Nop, s, "TOL"));
       return;
     }

@@ -13,15 +13,15 @@ using ir::Op;
 namespace {
 // Statements metron accepts with no run-time effect (settings a virtual CMM does not need).
 const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "WKPLAN", "VFORM",
-                                       "ERROR", "DMEHW", "DMESW", "FINPOS", "CLMPID", "CLMPSN", "PREVOP",
+                                       "DMEHW", "DMESW", "FINPOS", "CLMPID", "CLMPSN", "PREVOP", "MFGDEV",
                                        "OPERID", "PLANID", "PARTID", "PARTRV", "PARTSN", "PROCID", "QISDEF",
-                                       "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT", "RESUME",
+                                       "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT",
                                        // DMIS 5.x statements shop programs carry that change nothing on a
                                        // virtual CMM: vendor switches, fly mode.
                                        "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN",
                                        // Report layout and fitting-algorithm choices: metron's reports
                                        // and fits are its own (least squares, minimum zone for form).
-                                       "REPORT", "GEOALG", "CZONE"};
+                                       "REPORT", "CZONE"};
 }  // namespace
 
 void UnitCompiler::add_input_output(StatementTable& t) {
@@ -30,7 +30,9 @@ void UnitCompiler::add_input_output(StatementTable& t) {
       {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
       {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
       {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
-      {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write}
+      {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
+      {"ERROR", &UnitCompiler::noted_once}, {"RESUME", &UnitCompiler::noted_once},
+      {"GEOALG", &UnitCompiler::noted_once}, {"GOHOME", &UnitCompiler::noted_once}
   });
 }
 
@@ -50,6 +52,27 @@ void UnitCompiler::decpl(const grammar::Statement& s) {
 }
 
 void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }
+
+// Statements accepted without their effect, which a program may rely on: one warning per kind
+// and program says what happens instead.
+void UnitCompiler::noted_once(const grammar::Statement& s) {
+  const bool error_handling = s.major == "ERROR" || s.major == "RESUME";
+  const std::string key = error_handling ? "ERROR" : s.major;
+  if (s.major == "GEOALG" && (s.params.size() < 2 || is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT"))) {
+    emit(make(Op::Nop, s, s.major));  // least squares: what metron does
+    return;
+  }
+  if (m_noted_kinds.insert(key).second) {
+    const std::string message =
+        error_handling ? "ERROR/RESUME error handlers are not run: a machine fault stops the run (noted once)"
+        : s.major == "GEOALG"
+            ? "GEOALG: metron fits features by least squares (form tolerances by minimum zone); this fitting algorithm "
+              "is not applied (noted once)"
+            : "GOHOME does not move the virtual CMM: the next move starts where the probe is (noted once)";
+    warn(s.span, "sema.not-applied", message);
+  }
+  emit(make(Op::Nop, s, s.major));
+}
 
 // UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC]
 void UnitCompiler::units(const grammar::Statement& s) {

@@ -74,7 +74,17 @@ void UnitCompiler::snset(const grammar::Statement& s) {
       ++i;  // the label; the loop steps over the distance
       continue;
     }
-    auto e = numeric(s.params[i + 1], "a distance");
+    std::optional<ir::Expr> e;
+    if (is_word(s.params[i + 1], "OFF") && !is_variable("OFF") && (s.params[i].text == "CLRSRF" || s.params[i].text == "DEPTH")) {
+      // SNSET/CLRSRF,OFF: no clearance surface (AUTO moves keep metron's default clearance, 10
+      // mm above the feature); SNSET/DEPTH,OFF: no depth.
+      e.emplace();
+      e->op = ir::ExprOp::Constant;
+      e->value = Value::real(s.params[i].text == "CLRSRF" ? runtime::ProbeSettings{}.clearance_mm : 0.0);
+      e->span = s.params[i + 1].span;
+    } else {
+      e = numeric(s.params[i + 1], "a distance");
+    }
     if (!e) return;
     if (e->op == ir::ExprOp::Constant && e->value.number < 0 && s.params[i].text != "DEPTH")
       return error(s.params[i + 1].span, "sema.negative-distance", fmt::format("the {} distance must not be negative", s.params[i].text));

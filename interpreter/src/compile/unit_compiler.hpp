@@ -16,15 +16,15 @@
 
 #include <fmt/format.h>
 
+#include "metron/stdlib/text_encoding.hpp"
+
 #include "metron/grammar/ast.hpp"
 #include "metron/interpreter/compiler.hpp"
 
 namespace metron::interpreter::detail {
 
-inline std::string upper(std::string s) {
-  for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return s;
-}
+/// Labels and words compare in upper case, accented letters included (F(Alésage) is FA(ALÉSAGE)).
+inline std::string upper(const std::string& s) { return upper_utf8(s); }
 
 class UnitCompiler;
 using StatementHandler = void (UnitCompiler::*)(const grammar::Statement&);
@@ -206,6 +206,7 @@ class UnitCompiler {
 
   // ---- input/output: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (compile/input_output.cpp) ------
   void no_effect(const grammar::Statement& s);
+  void noted_once(const grammar::Statement& s);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
   void pause(const grammar::Statement& s);
@@ -296,6 +297,7 @@ class UnitCompiler {
   bool m_strict = false;
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once
+  std::set<std::string> m_noted_kinds;  // ERROR, GEOALG, GOHOME: noted once each
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.

@@ -24,4 +24,9 @@ bool is_valid_utf8(std::string_view bytes);
 /// Latin-1 control characters of the same value, so no byte is lost).
 std::string to_utf8(std::string bytes, TextEncoding* detected = nullptr);
 
+/// Upper case of UTF-8 text for comparing labels: ASCII letters, and the letters of Latin-1 and
+/// Latin Extended-A (é -> É, ö -> Ö, ł -> Ł), which French, German and Polish programs use; other
+/// characters pass through (ß stays ß).
+std::string upper_utf8(std::string_view text);
+
 }  // namespace metron
