@@ -178,6 +178,29 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   EXPECT_TRUE(once.has("8:1: warning: GOHOME does not move the virtual CMM")) << once.text;
 }
 
+// SELECT/CASE (DMIS 5.x): it was skipped as an unknown statement, so every case ran.
+TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
+  const std::string text =
+      "DMISMN/'select', 5.1\nDECL/INTGR,I\nDECL/CHAR,20,W\nDO/I,1,4\nSELECT/I\n"
+      "CASE/1\nTEXT/OPER,'one'\nENDCAS\nCASE/2,3\nTEXT/OPER,CONCAT('two or three:',STR(I))\nENDCAS\n"
+      "DFTCAS\nTEXT/OPER,'other'\nENDCAS\nENDSEL\nENDDO\n"
+      "W=ASSIGN/'B'\nSELECT/W\nCASE/'A'\nTEXT/OPER,'a'\nENDCAS\nCASE/'B'\nTEXT/OPER,'b'\nENDCAS\nENDSEL\n"
+      "SELECT/I\nCASE/1\nTEXT/OPER,'none runs'\nENDCAS\nENDSEL\nENDFIL\n";
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> said;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  const std::vector<std::string> expected = {"one", "two or three:2", "two or three:3", "other", "b"};
+  EXPECT_EQ(said, expected);
+  const auto bad = check("DMISMN/'s', 5.1\nDECL/INTGR,I\nCASE/1\nSELECT/I\nCASE/1\nENDSEL\nSELECT/I\nDFTCAS\nENDCAS\n"
+                         "CASE/2\nENDCAS\nENDSEL\nSELECT/I\nENDFIL\n");
+  EXPECT_TRUE(bad.has("3:1: error: CASE without a matching SELECT")) << bad.text;
+  EXPECT_TRUE(bad.has("6:1: error: ENDSEL before the ENDCAS of the last case")) << bad.text;
+  EXPECT_TRUE(bad.has("10:1: error: CASE after DFTCAS: the default case comes last")) << bad.text;
+  EXPECT_TRUE(bad.has("SELECT is never closed: expected ENDSEL before the end of the file")) << bad.text;
+}
+
 // Labels compare in upper case, accented letters included: F(Alésage) is FA(ALÉSAGE) (French
 // exports write both).
 TEST(ShopPrograms, AccentedLabelsCompareWithoutCase) {

@@ -41,7 +41,9 @@ void UnitCompiler::add_control(StatementTable& t) {
   t.insert({
       {std::string(assignment_row), &UnitCompiler::assignment}, {"ASSIGN", &UnitCompiler::bad_assign},
       {"OBTAIN", &UnitCompiler::bad_assign}, {"VALUE", &UnitCompiler::bad_assign}, {"ENDFIL", &UnitCompiler::endfil}, {"IF", &UnitCompiler::if_},
-      {"ELSE", &UnitCompiler::else_}, {"ENDIF", &UnitCompiler::endif}, {"DO", &UnitCompiler::do_},
+      {"ELSE", &UnitCompiler::else_}, {"ENDIF", &UnitCompiler::endif}, {"SELECT", &UnitCompiler::select},
+      {"CASE", &UnitCompiler::case_}, {"DFTCAS", &UnitCompiler::case_}, {"ENDCAS", &UnitCompiler::endcas},
+      {"ENDSEL", &UnitCompiler::endsel}, {"DO", &UnitCompiler::do_},
       {"ENDDO", &UnitCompiler::enddo}, {"JUMPTO", &UnitCompiler::jumpto}, {"MACRO", &UnitCompiler::macro},
       {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}
   });
@@ -234,6 +236,82 @@ void UnitCompiler::endif(const grammar::Statement& s) {
   m_blocks.pop_back();
   const std::size_t end = emit(make(Op::Nop, s, "ENDIF"));
   if (b.branch) code()[*b.branch].target = static_cast<std::int64_t>(end);
+  for (auto e : b.exits) code()[e].target = static_cast<std::int64_t>(end);
+}
+
+// SELECT/expr, then CASE/v1[,v2...] ... ENDCAS for each case and DFTCAS ... ENDCAS for the rest,
+// ENDSEL (DMIS 5.x). One case runs, the first whose value equals the selector; none falls
+// through. Each CASE is a conditional jump over its block, each ENDCAS a jump to the ENDSEL.
+void UnitCompiler::select(const grammar::Statement& s) {
+  Block b = block(Block::Kind::Select, s.span);
+  if (s.params.size() != 1) {
+    m_blocks.push_back(b);
+    return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.select", "SELECT expects one value, e.g. SELECT/V1");
+  }
+  auto e = expression(s.params[0]);
+  if (e) b.selector = std::move(e->e);
+  mark_control();
+  m_blocks.push_back(std::move(b));
+  emit(make(Op::Nop, s, "SELECT"));
+}
+
+void UnitCompiler::case_(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Select)
+    return error(s.major_span, "sema.unmatched", fmt::format("{} without a matching SELECT", s.major));
+  Block& b = m_blocks.back();
+  if (b.in_case) return error(s.major_span, "sema.unmatched", fmt::format("{} before the ENDCAS of the previous case", s.major));
+  if (b.has_default) return error(s.major_span, "sema.unmatched", fmt::format("{} after DFTCAS: the default case comes last", s.major));
+  b.in_case = true;
+  if (s.major == "DFTCAS") {
+    b.has_default = true;
+    return;
+  }
+  if (s.params.empty()) return error(s.major_span, "sema.select", "CASE expects the values it runs for, e.g. CASE/1");
+  if (!b.selector) return;  // the SELECT's own error was reported
+  ir::Expr condition;
+  for (std::size_t i = 0; i < s.params.size(); ++i) {
+    auto v = expression(s.params[i]);
+    if (!v) return;
+    ir::Expr equal;
+    equal.op = ir::ExprOp::Binary;
+    equal.name = ".EQ.";
+    equal.type = ValueType::Bool;
+    equal.span = s.params[i].span;
+    equal.args = {*b.selector, std::move(v->e)};
+    if (i == 0) {
+      condition = std::move(equal);
+    } else {
+      ir::Expr either;
+      either.op = ir::ExprOp::Binary;
+      either.name = ".OR.";
+      either.type = ValueType::Bool;
+      either.span = s.span;
+      either.args = {std::move(condition), std::move(equal)};
+      condition = std::move(either);
+    }
+  }
+  auto in = make(Op::JumpIfFalse, s);
+  in.operands.push_back(expr_operand(std::move(condition)));
+  b.branch = emit(std::move(in));
+}
+
+void UnitCompiler::endcas(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Select || !m_blocks.back().in_case)
+    return error(s.major_span, "sema.unmatched", "ENDCAS without a matching CASE or DFTCAS");
+  Block& b = m_blocks.back();
+  b.in_case = false;
+  b.exits.push_back(emit(make(Op::Jump, s)));
+  if (b.branch) code()[*b.branch].target = static_cast<std::int64_t>(code().size());
+  b.branch.reset();
+}
+
+void UnitCompiler::endsel(const grammar::Statement& s) {
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Select)
+    return error(s.major_span, "sema.unmatched", "ENDSEL without a matching SELECT");
+  if (m_blocks.back().in_case) return error(s.major_span, "sema.unmatched", "ENDSEL before the ENDCAS of the last case");
+  Block b = m_blocks.back();
+  m_blocks.pop_back();
+  const std::size_t end = emit(make(Op::Nop, s, "ENDSEL"));
   for (auto e : b.exits) code()[e].target = static_cast<std::int64_t>(end);
 }
 

@@ -38,8 +38,8 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
     statement(s);
   }
   for (auto it = m_blocks.rbegin(); it != m_blocks.rend(); ++it) {
-    static const char* closers[] = {"ENDMES", "ENDIF", "ENDDO", "ENDMAC"};
-    static const char* openers[] = {"MEAS", "IF", "DO", "MACRO"};
+    static const char* closers[] = {"ENDMES", "ENDIF", "ENDDO", "ENDMAC", "ENDSEL"};
+    static const char* openers[] = {"MEAS", "IF", "DO", "MACRO", "SELECT"};
     error(it->span, "sema.unclosed-block",
           fmt::format("{} is never closed: expected {} before the end of the file",
                       openers[static_cast<int>(it->kind)], closers[static_cast<int>(it->kind)]));

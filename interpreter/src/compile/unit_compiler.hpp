@@ -67,7 +67,7 @@ class UnitCompiler {
   static void add_control(StatementTable& t);
 
   struct Block {
-    enum class Kind { Meas, If, Do, Macro } kind = Kind::Meas;
+    enum class Kind { Meas, If, Do, Macro, Select } kind = Kind::Meas;
     Span span;
     std::size_t start = 0;
     std::vector<std::size_t> exits;      // jumps to patch to the end
@@ -78,6 +78,9 @@ class UnitCompiler {
     bool control = false;                // control flow inside a MEAS: counts are not static
     bool scanned = false;                // PAMEAS inside: the point count is the machine's
     std::string feature;                 // MEAS: the feature label; DO: the loop variable
+    std::optional<ir::Expr> selector;    // SELECT: the value CASE compares with (evaluated at each CASE)
+    bool in_case = false;                // SELECT: inside CASE or DFTCAS, before its ENDCAS
+    bool has_default = false;            // SELECT: DFTCAS seen
     runtime::FeatureType type = runtime::FeatureType::Point;  // MEAS
   };
   static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
@@ -265,6 +268,10 @@ class UnitCompiler {
   void if_(const grammar::Statement& s);
   void else_(const grammar::Statement& s);
   void endif(const grammar::Statement& s);
+  void select(const grammar::Statement& s);
+  void case_(const grammar::Statement& s);
+  void endcas(const grammar::Statement& s);
+  void endsel(const grammar::Statement& s);
   void do_(const grammar::Statement& s);
   void enddo(const grammar::Statement& s);
   void jumpto(const grammar::Statement& s);
