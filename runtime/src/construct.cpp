@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // CONST/...: features constructed from other features' actuals.
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -77,9 +78,18 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
   switch (method) {
     case ConstructMethod::BestFit: {
       std::vector<MeasuredPoint> pts;
-      if (sources.size() == 1) {
-        const Feature* f = find_feature(sources[0].label);
-        for (const auto& p : f->points) pts.push_back(p);
+      // A cylinder or cone from circles (sections of one bore at several heights, PC-DMIS's
+      // CONST/CYLNDR,BF,FA(C1),FA(C2)): the circles' measured points together, not their centres.
+      const bool from_sections =
+          sources.size() > 1 && (type == FeatureType::Cylinder || type == FeatureType::Cone) &&
+          std::all_of(sources.begin(), sources.end(), [&](const FeatureRef& s) {
+            const Feature* f = find_feature(s.label);
+            return f && !f->points.empty() &&
+                   (f->nominal.type == FeatureType::Circle || f->nominal.type == FeatureType::Arc);
+          });
+      if (sources.size() == 1 || from_sections) {
+        for (const auto& s : sources)
+          for (const auto& p : find_feature(s.label)->points) pts.push_back(p);
       } else {
         for (const auto& s : in) pts.push_back({s.position, nominal.direction, 0.0, 0.0, span, false, std::nullopt, Vec3::UnitZ()});
       }
@@ -107,8 +117,32 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
         else if (is_linear(a) && is_linear(b)) p = line_line(a, b);
         if (!p) return fail(p.error());
         g.position = *p;
+      } else if (type == FeatureType::Circle) {
+        // A cylinder or cone cut by a plane normal to its axis (a countersink's gauge diameter):
+        // the centre where the axis pierces the plane; the diameter the cylinder's, or the cone's
+        // there, 2 |t| tan(half angle) at the distance t from its apex.
+        const bool a_round = a.type == FeatureType::Cylinder || a.type == FeatureType::Cone;
+        const Geometry& solid = a_round ? a : b;
+        const Geometry& plane = a_round ? b : a;
+        if (!(solid.type == FeatureType::Cylinder || solid.type == FeatureType::Cone) || !is_planar(plane))
+          return fail("a circle is the intersection of a CYLNDR or CONE and a PLANE");
+        const Vec3 axis = solid.direction.normalized();
+        const double cos_tilt = std::abs(axis.dot(plane.direction.normalized()));
+        if (cos_tilt < std::cos(1.0 * M_PI / 180))
+          return fail(fmt::format("the plane is {:.2f} deg off normal to the axis: the section is an ellipse, not a circle",
+                                  std::acos(std::min(1.0, cos_tilt)) * 180 / M_PI));
+        auto centre = line_plane(solid, plane);
+        if (!centre) return fail(centre.error());
+        g.position = *centre;
+        g.direction = it != m_features.end() && nominal.direction.dot(axis) < 0 ? Vec3(-axis) : axis;
+        if (solid.type == FeatureType::Cylinder) {
+          g.diameter_mm = solid.diameter_mm;
+        } else {
+          const double t = (*centre - solid.position).dot(axis);
+          g.diameter_mm = 2 * std::abs(t) * std::tan(solid.apex_angle_deg * M_PI / 360);
+        }
       } else {
-        return fail("INTOF constructs a LINE or a POINT");
+        return fail("INTOF constructs a LINE, a POINT or a CIRCLE (a CYLNDR or CONE and a PLANE)");
       }
       break;
     }

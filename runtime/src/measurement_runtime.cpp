@@ -356,6 +356,18 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
     if (r.hit) {
       const std::size_t i = static_cast<std::size_t>(r.tag - execution.first_tag);
       Vec3 centre = r.hit->centre_mm;
+      if (!m_characterisation && !m_feed_change_warned && i < plan.measuring_feed_mm_s.size() &&
+          m_qualification_feed_mm_s > 0 &&
+          std::abs(plan.measuring_feed_mm_s[i] - m_qualification_feed_mm_s) > 0.01 * m_qualification_feed_mm_s) {
+        // The effective radius absorbs the pre-travel and trigger delays at the qualification
+        // feed only: at another feed every point moves by the delay times the feed difference.
+        m_feed_change_warned = true;
+        warn(span_of(i), fmt::format("probing at {:.3f} mm/s, but the probe was qualified at {:.3f} mm/s: its effective "
+                                     "radius holds the trigger delay at that feed only, so points move along their "
+                                     "normals (set FEDRAT/MESVEL before the sensor's first SNSLCT, which qualifies it, or "
+                                     "characterise the machine, docs/touch-trigger.md); told once",
+                                     plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s));
+      }
       if (m_characterisation && i < plan.measuring_feed_mm_s.size())
         // The effective radius holds the delay distance at the qualification feed; a hit at
         // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
@@ -570,7 +582,7 @@ Result<void> MeasurementRuntime::recall(const std::string& label, Span span) {
 
 void MeasurementRuntime::write_device_line(const std::string& line) {
   for (auto& [label, device] : m_devices)
-    if (device.open && device.stream) *device.stream << line << "\n";
+    if (device.open && device.stream && !device.direct) *device.stream << line << "\n";
 }
 
 Result<void> MeasurementRuntime::output(const std::vector<OutputItem>& items, Span span) {
@@ -584,6 +596,15 @@ Result<void> MeasurementRuntime::evaluate(const std::vector<OutputItem>& items, 
 Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them) {
   std::vector<const Feature*> features;
   std::vector<std::string> tolerances;
+  if (report_them) {
+    // The OUTPUT itself, then the result lines it produced (the DMIS output file's layout).
+    std::string echo = "OUTPUT/";
+    for (std::size_t i = 0; i < items.size(); ++i)
+      echo += (i ? ", " : "") + (items[i].kind == OutputItem::Kind::Tolerance
+                                     ? fmt::format("TA({})", items[i].tolerance)
+                                     : fmt::format("{}({})", items[i].feature.actual ? "FA" : "F", items[i].feature.label));
+    write_device_line(echo);
+  }
   for (const auto& item : items) {
     if (item.kind == OutputItem::Kind::Tolerance) {
       if (!find_tolerance(item.tolerance)) return program_error(span, fmt::format("tolerance T({}) is not defined", item.tolerance));
@@ -719,6 +740,7 @@ Result<void> MeasurementRuntime::define_device(const std::string& label, const s
 
 bool MeasurementRuntime::commit_device(Device& device) {
   if (!device.stream) return true;
+  if (!device.direct) *device.stream << "ENDFIL\n";  // a DMIS output file ends as a program does
   device.stream->flush();
   const bool written = static_cast<bool>(*device.stream);
   device.stream->close();
@@ -740,7 +762,7 @@ bool MeasurementRuntime::commit_device(Device& device) {
   return true;
 }
 
-Result<void> MeasurementRuntime::open_device(const std::string& label, Span span) {
+Result<void> MeasurementRuntime::open_device(const std::string& label, Span span, bool direct) {
   auto it = m_devices.find(label);
   if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));
   if (it->second.open) commit_device(it->second);
@@ -754,6 +776,14 @@ Result<void> MeasurementRuntime::open_device(const std::string& label, Span span
   if (!*stream) return program_error(span, fmt::format("cannot open output file {}", full));
   it->second.stream = stream;
   it->second.open = true;
+  it->second.direct = direct;
+  if (!direct) {
+    // A DMIS output file starts with its name and units (as NIST's output.dms): a reader knows
+    // what the numbers after it are in.
+    const std::string stem = std::filesystem::path(name).stem().string();
+    *stream << "FILNAM/'" << stem << "'\nUNITS/" << m_report_units.length << ", "
+            << (m_report_units.radians ? "ANGRAD" : "ANGDEC") << "\n";
+  }
   it->second.path = full;
   it->second.temp_path = temp;
   return {};

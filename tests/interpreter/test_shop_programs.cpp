@@ -1031,6 +1031,72 @@ TEST(ShopPrograms, DryRunTakesEveryPointAtItsNominal) {
   EXPECT_NE(fault->message.find("outside the x travel"), std::string::npos) << fault->message;
 }
 
+// A DIRECT file (a CSV a program WRITEs) receives its WRITE lines only; OUTPUT and TEXT/OUTFIL
+// lines go to the FDATA (DMIS output) files. Every OUTPUT went into every open file before.
+TEST(ShopPrograms, DirectFilesGetOnlyTheirWriteLines) {
+  const fs::path out = temp_dir() / "direct_out";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  const std::string text = "DMISMN/'direct', 5.1\nDID(CSV)=DEVICE/STOR,'table.csv'\nDID(DMO)=DEVICE/STOR,'part.dmo'\n"
+                           "OPEN/DID(CSV),DIRECT,OUTPUT,OVERWR\nOPEN/DID(DMO),FDATA,V(1),OUTPUT,OVERWR\n"
+                           "F(P1)=FEAT/POINT,CART,1,2,3,0,0,1\nFA(P1)=FEAT/POINT,CART,1,2,3.5,0,0,1\n"
+                           "WRITE/DID(CSV),'x,y,z'\nOUTPUT/FA(P1)\nTEXT/OUTFIL,'note'\nCLOSE/DID(CSV)\nCLOSE/DID(DMO)\nENDFIL\n";
+  const fs::path p = write("direct.dmi", text);
+  auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
+  ASSERT_TRUE(backend.has_value());
+  auto session = Session::create(std::move(*backend));
+  session->runtime().set_output_directory(out.string());
+  ASSERT_TRUE(session->load(p.string()));
+  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const auto read = [](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  EXPECT_EQ(read(out / "table.csv"), "x,y,z\n");
+  const std::string dmo = read(out / "part.dmo");
+  EXPECT_NE(dmo.find("FA(P1) = FEAT/POINT"), std::string::npos) << dmo;
+  EXPECT_NE(dmo.find("note"), std::string::npos) << dmo;
+  EXPECT_EQ(dmo.find("x,y,z"), std::string::npos) << dmo;
+  // Framed as a DMIS output file (NIST's output.dms): name and units first, each OUTPUT echoed
+  // before its results, ENDFIL last; metron reads it back without an error or a warning.
+  EXPECT_EQ(dmo.rfind("FILNAM/'part'\nUNITS/MM, ANGDEC\n", 0), 0u) << dmo;
+  EXPECT_LT(dmo.find("OUTPUT/FA(P1)\n"), dmo.find("FA(P1) = FEAT/POINT")) << dmo;
+  EXPECT_EQ(dmo.substr(dmo.size() - 7), "ENDFIL\n") << dmo;
+  const auto reread = check(dmo);
+  EXPECT_EQ(reread.errors + reread.warnings, 0u) << reread.text;
+}
+
+// Constructions vendor exports write: a countersink's gauge circle (CONST/CIRCLE,INTOF of a cone
+// and a plane) and a bore's cylinder from two measured sections (CONST/CYLNDR,BF,FA(C1),FA(C2)).
+TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {
+  const std::string stated =
+      "DMISMN/'k', 5.1\nFA(CN)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,90\nFA(CY)=FEAT/CYLNDR,INNER,CART,1,2,0,0,0,1,12,20\n"
+      "FA(PL)=FEAT/PLANE,CART,0,0,14,0,0,1\nFA(TL)=FEAT/PLANE,CART,0,0,14,0,0.0872,0.9962\n";
+  const auto r = run(stated + "CONST/CIRCLE,F(K),INTOF,FA(CN),FA(PL)\nCONST/CIRCLE,F(L),INTOF,FA(PL),FA(CY)\nOUTPUT/FA(K),FA(L)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* k = report(*r.session, "K");
+  ASSERT_TRUE(k && k->actual);
+  EXPECT_NEAR(k->actual->diameter_mm, 2 * 4 * std::tan(M_PI / 4), 1e-9);  // 4 mm above a 90 deg apex
+  EXPECT_NEAR((k->actual->position - Eigen::Vector3d(1, 2, 14)).norm(), 0.0, 1e-9);
+  const auto* l = report(*r.session, "L");
+  ASSERT_TRUE(l && l->actual);
+  EXPECT_NEAR(l->actual->diameter_mm, 12.0, 1e-12);
+  const auto tilted = run(stated + "CONST/CIRCLE,F(K),INTOF,FA(CN),FA(TL)\nENDFIL\n");
+  EXPECT_NE(tilted.diagnostics.find("deg off normal to the axis: the section is an ellipse"), std::string::npos) << tilted.diagnostics;
+  // The default block's BORE1 (a 20 mm bore, its axis along Z) from two measured sections.
+  const auto bore = run("DMISMN/'sections', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+                        "SNSLCT/S(P4)\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
+                        "F(C1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(C1), 8\nENDMES\n"
+                        "F(C2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\nMEAS/CIRCLE, F(C2), 8\nENDMES\n"
+                        "GOTO/40, 50, 80\nF(CY) = FEAT/CYLNDR, INNER, CART, 40, 50, 30, 0, 0, 1, 20, 10\n"
+                        "CONST/CYLNDR, F(CY), BF, FA(C1), FA(C2)\nOUTPUT/FA(CY)\nENDFIL\n");
+  ASSERT_EQ(bore.status, ExecStatus::Finished) << bore.diagnostics;
+  const auto* cy = report(*bore.session, "CY");
+  ASSERT_TRUE(cy && cy->actual);
+  EXPECT_NEAR(cy->actual->diameter_mm, 20.0, 0.002);
+  EXPECT_GT(std::abs(cy->actual->direction.z()), 1 - 1e-6);
+}
+
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   const std::string text =
       "DMISMN/'p', 5.0\nDECL/COMMON,CHAR,40,PARTNO\nDECL/COMMON,REAL,LIM\nDECL/COMMON,REAL,LIM2\n"

@@ -174,7 +174,7 @@ void UnitCompiler::open(const grammar::Statement& s) {
   auto in = make(Op::DeviceOpen, s);
   in.operands.push_back(label_op(s.params[0]));
   for (const auto& p : s.params)
-    if (is_word(p, "INPUT")) in.operands.push_back(word_operand(p));
+    if (is_word(p, "INPUT") || is_word(p, "DIRECT")) in.operands.push_back(word_operand(p));
   emit(std::move(in));
 }
 

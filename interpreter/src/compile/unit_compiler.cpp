@@ -14,8 +14,6 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   if (!repl && !m_included && st.empty())
     warn(Span{program.file, 0, 0}, "sema.empty-program",
          "the program has no statements: it does not start with DMISMN nor end with ENDFIL, and measures nothing");
-  if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN")
-    warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
   // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
   for (const auto& s : st) {
     if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT") m_later_features.emplace(upper(s.target->name), s.span);
@@ -25,6 +23,9 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   static const std::set<std::string> measuring = {"MEAS", "RMEAS", "PTMEAS", "PAMEAS", "GOTO", "SNSLCT", "CALL"};
   m_output_file = !repl && !m_reported_results.empty() &&
                   std::none_of(st.begin(), st.end(), [](const grammar::Statement& s) { return measuring.count(s.major) > 0; });
+  // A DMIS output file starts with FILNAM (NIST's output.dms, metron's own).
+  if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN" && !(m_output_file && st.front().major == "FILNAM"))
+    warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
   for (std::size_t i = 0; i < st.size(); ++i) {
     const auto& s = st[i];
     if (m_ended) {

@@ -118,7 +118,8 @@ ExecStatus Execute::device_open(Interpreter& vm, const ir::Instruction& in, Call
     vm.m_inputs[label] = std::move(file);
     return ExecStatus::Running;
   }
-  if (auto r = vm.m_runtime.open_device(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
+  const bool direct = std::find(w.begin(), w.end(), "DIRECT") != w.end();
+  if (auto r = vm.m_runtime.open_device(vm.label_name(in.operands[0].label), in.span, direct); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

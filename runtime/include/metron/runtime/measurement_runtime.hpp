@@ -165,7 +165,9 @@ class MeasurementRuntime {
   /// evaluation; null before the first.
   [[nodiscard]] const std::vector<ToleranceResult>* last_tolerance_results(const std::string& label) const;
   Result<void> define_device(const std::string& label, const std::string& path, Span span);
-  Result<void> open_device(const std::string& label, Span span);
+  /// OPEN/DID(l),FDATA|DIRECT,...,OUTPUT: an output file in the run's directory. A DIRECT file
+  /// receives WRITE lines only; the others (FDATA, DMIS output files) OUTPUT and TEXT/OUTFIL too.
+  Result<void> open_device(const std::string& label, Span span, bool direct = false);
   Result<void> close_device(const std::string& label, Span span);
   /// OPEN/DID(l),...,INPUT: the text of the device's file, found as written (absolute) or in the
   /// program's folders (the read policy's folders, in order), read under the read policy.
@@ -242,6 +244,7 @@ class MeasurementRuntime {
   std::optional<TouchBaseline> m_touch_baseline;
   std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
+  bool m_feed_change_warned = false;                ///< a probing feed other than the qualification's, told once
   Mode m_mode = Mode::Auto;
   ReportUnits m_report_units;
   struct Device {
@@ -249,6 +252,7 @@ class MeasurementRuntime {
     bool open = false;
     std::shared_ptr<std::ofstream> stream;
     std::string temp_path;  ///< written while open; renamed to `path` when closed (atomic output)
+    bool direct = false;    ///< OPEN/...,DIRECT: a text file for WRITE only, no OUTPUT or TEXT/OUTFIL lines
   };
   /// Closes a device's stream and moves its temporary file into place; false (and an entry in
   /// m_output_errors) when a write failed.
