@@ -1097,6 +1097,35 @@ TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {
   EXPECT_GT(std::abs(cy->actual->direction.z()), 1 - 1e-6);
 }
 
+// A probing feed other than the qualification's moves every point along its normal by the
+// trigger delay times the feed difference, which the effective radius does not hold: told once.
+// The block's -X face is at machine x = 300 exactly (the world's truth).
+TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
+  const auto program = [](const std::string& before, const std::string& after) {
+    return "DMISMN/'feed', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n" + before +
+           "SNSLCT/S(P4)\n" + after +
+           "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nF(P1) = FEAT/POINT, CART, 0, 50, 30, -1, 0, 0\n"
+           "F(P2) = FEAT/POINT, CART, 0, 60, 30, -1, 0, 0\nGOTO/-10, 50, 80\nGOTO/-10, 50, 30\n"
+           "MEAS/POINT, F(P1), 1\nPTMEAS/CART, 0, 50, 30, -1, 0, 0\nENDMES\n"
+           "MEAS/POINT, F(P2), 1\nPTMEAS/CART, 0, 60, 30, -1, 0, 0\nENDMES\nOUTPUT/FA(P1)\nENDFIL\n";
+  };
+  const std::string slow = "FEDRAT/MESVEL, PCENT, 20\n";
+  const auto after = run(program("", slow));
+  ASSERT_EQ(after.status, ExecStatus::Finished) << after.diagnostics;
+  EXPECT_NE(after.diagnostics.find("12:1: warning: probing at 0.600 mm/s, but the probe was qualified at 3.000 mm/s"),
+            std::string::npos) << after.diagnostics;
+  EXPECT_EQ(after.diagnostics.find("probing at", after.diagnostics.find("probing at") + 1), std::string::npos);  // once
+  const auto* off = report(*after.session, "P1");
+  ASSERT_TRUE(off && off->actual);
+  EXPECT_GT(std::abs(off->actual->position.x()), 0.005);  // the delay's displacement, part frame
+  const auto before = run(program(slow, ""));
+  ASSERT_EQ(before.status, ExecStatus::Finished) << before.diagnostics;
+  EXPECT_EQ(before.diagnostics.find("probing at"), std::string::npos) << before.diagnostics;
+  const auto* on = report(*before.session, "P1");
+  ASSERT_TRUE(on && on->actual);
+  EXPECT_LT(std::abs(on->actual->position.x()), 0.001);
+}
+
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   const std::string text =
       "DMISMN/'p', 5.0\nDECL/COMMON,CHAR,40,PARTNO\nDECL/COMMON,REAL,LIM\nDECL/COMMON,REAL,LIM2\n"
