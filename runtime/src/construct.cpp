@@ -179,6 +179,36 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       }
       break;
     }
+    case ConstructMethod::Cast: {
+      // DMIS CONST CAST: the source's geometry read as another type. A POINT is any feature's
+      // position (a cone's apex); a LINE the axis of a CYLNDR, CONE or LINE; a PLANE the plane
+      // of a PLANE, CIRCLE, ARC or CPARLN; a CIRCLE a cylinder's (or circle's) section at its
+      // position.
+      const Geometry& x = in.front();
+      g.position = x.position;
+      if (type == FeatureType::Point) {
+        if (it == m_features.end()) g.direction = x.direction;
+      } else if (type == FeatureType::Line) {
+        if (!is_linear(x)) return fail(fmt::format("CAST to a LINE needs a CYLNDR, CONE or LINE, got a {}", dmis_word(x.type)));
+        g.direction = x.direction.normalized();
+        g.bounded = false;
+        const Vec3 n2 = g.normal2 - g.normal2.dot(g.direction) * g.direction;
+        g.normal2 = n2.norm() > 1e-9 ? Vec3(n2.normalized()) : g.direction.unitOrthogonal();
+      } else if (type == FeatureType::Plane) {
+        if (!(is_planar(x) || x.type == FeatureType::Circle || x.type == FeatureType::Arc || x.type == FeatureType::ClosedSlot))
+          return fail(fmt::format("CAST to a PLANE needs a PLANE, CIRCLE, ARC or CPARLN, got a {}", dmis_word(x.type)));
+        g.direction = x.direction.normalized();
+      } else if (type == FeatureType::Circle) {
+        if (!(x.type == FeatureType::Cylinder || x.type == FeatureType::Circle || x.type == FeatureType::Arc))
+          return fail(fmt::format("CAST to a CIRCLE needs a CYLNDR, CIRCLE or ARC, got a {}", dmis_word(x.type)));
+        g.direction = x.direction.normalized();
+        g.diameter_mm = x.diameter_mm;
+      } else {
+        return fail("CAST constructs a POINT, LINE, PLANE or CIRCLE");
+      }
+      if (type != FeatureType::Point && it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
+      break;
+    }
     case ConstructMethod::Projection: {
       if (in.size() != 2) return fail("PROJPT needs a feature and a plane");
       const Geometry& plane = in[1];

@@ -1126,6 +1126,49 @@ TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
   EXPECT_LT(std::abs(on->actual->position.x()), 0.001);
 }
 
+// RMEAS/type,F(l),n,FA(ref) ... ENDMES (the block form Modus writes): each PTMEAS of the block is
+// moved by the reference's deviation, as RMEAS/CART,...,FA(ref) is. In a dry run the touch lands
+// where it is commanded, so the point shows the shift: the stated reference lies (0.5, -0.2, 0)
+// off its nominal. CAST reads a cylinder's axis as a LINE and its centre as a POINT.
+TEST(ShopPrograms, RmeasBlockAndCastConstructions) {
+  const std::string text =
+      "DMISMN/'rmeas', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "F(REF)=FEAT/CIRCLE,INNER,CART,10,20,0,0,0,1,8\nFA(REF)=FEAT/CIRCLE,INNER,CART,10.5,19.8,0,0,0,1,8\n"
+      "F(P)=FEAT/POINT,CART,30,20,-5,0,0,1\nRMEAS/POINT,F(P),1,FA(REF)\nPTMEAS/CART,30,20,-5,0,0,1\nENDMES\n"
+      "F(Q)=FEAT/POINT,CART,40,20,-5,0,0,1\nRMEAS/POINT,F(Q),1,VECBLD,2,3\nPTMEAS/CART,40,20,-5,0,0,1\nENDMES\n"
+      "FA(CY)=FEAT/CYLNDR,INNER,CART,5,6,7,0,0.6,0.8,12,20\nCONST/LINE,F(AX),CAST,FA(CY)\nCONST/POINT,F(CT),CAST,FA(CY)\n"
+      "CONST/CIRCLE,F(SEC),CAST,FA(CY)\nOUTPUT/FA(P),FA(Q),FA(AX),FA(CT),FA(SEC)\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("this RMEAS names no reference feature")) << c.text;
+  auto world = metron::machine::load_world_or_default(std::nullopt);
+  ASSERT_TRUE(world.has_value());
+  const fs::path p = write("rmeas.dmi", text);
+  auto session = Session::create(metron::interpreter::Backend{
+      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
+  ASSERT_TRUE(session->load(p.string()));
+  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const auto* pt = report(*session, "P");
+  ASSERT_TRUE(pt && pt->actual);
+  EXPECT_NEAR((pt->actual->position - Eigen::Vector3d(30.5, 19.8, -5)).norm(), 0.0, 1e-9);
+  const auto* q = report(*session, "Q");
+  ASSERT_TRUE(q && q->actual);
+  EXPECT_NEAR((q->actual->position - Eigen::Vector3d(40, 20, -5)).norm(), 0.0, 1e-9);
+  const auto* ax = report(*session, "AX");
+  ASSERT_TRUE(ax && ax->actual);
+  EXPECT_NEAR(std::abs(ax->actual->direction.dot(Eigen::Vector3d(0, 0.6, 0.8))), 1.0, 1e-12);
+  EXPECT_NEAR((ax->actual->position - Eigen::Vector3d(5, 6, 7)).cross(Eigen::Vector3d(0, 0.6, 0.8)).norm(), 0.0, 1e-9);
+  const auto* ct = report(*session, "CT");
+  ASSERT_TRUE(ct && ct->actual);
+  EXPECT_NEAR((ct->actual->position - Eigen::Vector3d(5, 6, 7)).norm(), 0.0, 1e-9);
+  const auto* sec = report(*session, "SEC");
+  ASSERT_TRUE(sec && sec->actual);
+  EXPECT_NEAR(sec->actual->diameter_mm, 12.0, 1e-12);
+  const Checked bad = check("DMISMN/'c', 5.0\nFA(A)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(B)=FEAT/POINT,CART,1,0,0,0,0,1\n"
+                            "CONST/LINE,F(L),CAST,FA(A),FA(B)\nENDFIL\n");
+  EXPECT_TRUE(bad.has("CAST takes one source feature, got 2")) << bad.text;
+}
+
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   const std::string text =
       "DMISMN/'p', 5.0\nDECL/COMMON,CHAR,40,PARTNO\nDECL/COMMON,REAL,LIM\nDECL/COMMON,REAL,LIM2\n"

@@ -250,7 +250,9 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     in.operands.push_back(label_op(p[i]));
   }
   const std::size_t sources = p.size() - 3;
-  if (*method != ir::ConstructionMethod::Bf && sources != 2)
+  if (*method == ir::ConstructionMethod::Cast && sources != 1)
+    return error(p.back().span, "sema.construction-arity", fmt::format("CAST takes one source feature, got {}", sources));
+  if (*method != ir::ConstructionMethod::Bf && *method != ir::ConstructionMethod::Cast && sources != 2)
     return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", p[2].text, sources));
   if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
   emit(std::move(in));

@@ -247,8 +247,30 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
   code()[b.start].target = static_cast<std::int64_t>(end);
 }
 
+// RMEAS/type,F(l),n,FA(ref) ... ENDMES: a MEAS whose PTMEAS are taken relative to FA(ref), each
+// moved by how far the reference's actual lies from its nominal (as RMEAS/CART,...,FA(ref)).
+// RMEAS/type,F(l),n,VECBLD,r,m builds the approach from m points at radius r: it is measured as a
+// MEAS, with a note.
+void UnitCompiler::rmeas_block(const grammar::Statement& s) {
+  grammar::Statement as_meas = s;
+  as_meas.major = "MEAS";
+  as_meas.params.resize(3);
+  meas(as_meas);
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Meas || m_blocks.back().start == invalid) return;
+  for (std::size_t i = 3; i < s.params.size(); ++i) {
+    if (is_label(s.params[i], {"FA", "F"})) {
+      if (!check_feature(s.params[i])) return;
+      m_blocks.back().reference = label_op(s.params[i]);
+      return;
+    }
+  }
+  note(s.params.size() > 3 ? s.params[3].span : s.major_span, "sema.rmeas-vecbld",
+       "this RMEAS names no reference feature (VECBLD builds the approach from probed points): measured as a MEAS");
+}
+
 // PTMEAS/CART,x,y,z[,i,j,k]  |  RMEAS/CART,x,y,z,i,j,k[,FA(ref)]
 void UnitCompiler::ptmeas(const grammar::Statement& s) {
+  if (s.major == "RMEAS" && s.params.size() >= 3 && is_label(s.params[1], {"F"})) return rmeas_block(s);
   if (m_blocks.empty() || std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
     return error(s.major_span, "sema.ptmeas-outside", fmt::format("{} outside a MEAS block", s.major));
   if (!expect_params(s, 1, "CART or POL")) return;
@@ -272,7 +294,13 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   if (n == 6 && v[3] == 0 && v[4] == 0 && v[5] == 0) return error(s.params[4].span, "sema.zero-vector", "the approach vector i,j,k is zero");
-  if (end < s.params.size()) in.operands.push_back(label_op(s.params[end]));
+  if (end < s.params.size()) {
+    in.operands.push_back(label_op(s.params[end]));
+  } else {
+    // Inside an RMEAS block a PTMEAS is relative to the block's reference.
+    const auto meas = std::find_if(m_blocks.rbegin(), m_blocks.rend(), [](const Block& b) { return b.kind == Block::Kind::Meas; });
+    if (meas != m_blocks.rend() && meas->reference) in.operands.push_back(*meas->reference);
+  }
   for (auto& b : m_blocks)
     if (b.kind == Block::Kind::Meas) ++b.ptmeas;
   emit(std::move(in));

@@ -81,6 +81,7 @@ class UnitCompiler {
     std::optional<ir::Expr> selector;    // SELECT: the value CASE compares with (evaluated at each CASE)
     bool in_case = false;                // SELECT: inside CASE or DFTCAS, before its ENDCAS
     bool has_default = false;            // SELECT: DFTCAS seen
+    std::optional<ir::Operand> reference;  // RMEAS block: the feature its points are relative to
     runtime::FeatureType type = runtime::FeatureType::Point;  // MEAS
   };
   static constexpr std::size_t invalid = static_cast<std::size_t>(-1);
@@ -243,6 +244,7 @@ class UnitCompiler {
   void meas(const grammar::Statement& s);
   void endmes(const grammar::Statement& s);
   void ptmeas(const grammar::Statement& s);
+  void rmeas_block(const grammar::Statement& s);
   void pameas(const grammar::Statement& s);
   void scnmod(const grammar::Statement& s);
   void scnset(const grammar::Statement& s);

@@ -151,6 +151,7 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
                       : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint
                       : words.method == M::Parto ? runtime::ConstructMethod::ParallelThrough
                       : words.method == M::Perpto ? runtime::ConstructMethod::PerpendicularThrough
+                      : words.method == M::Cast ? runtime::ConstructMethod::Cast
                                                  : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
   std::vector<runtime::FeatureRef> sources;
   for (const auto& o : in.operands) sources.push_back(feature_ref(vm, o.label));

@@ -95,7 +95,8 @@ struct RotateRequest {
 /// CONST/type,F(x),method,sources...
 enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection,
                              ParallelThrough,        ///< PARTO: the reference's direction, through a point
-                             PerpendicularThrough }; ///< PERPTO: normal to the reference, through a point
+                             PerpendicularThrough,   ///< PERPTO: normal to the reference, through a point
+                             Cast };                 ///< CAST: one feature's geometry as another type
 
 /// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
 struct OutputItem {

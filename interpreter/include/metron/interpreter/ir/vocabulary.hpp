@@ -28,7 +28,8 @@ enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
                                 Pierce,   ///< a line-like feature through a surface: INTOF's point
                                 Movept,   ///< a feature's point moved by dx, dy, dz
                                 Parto,    ///< PARTO,FA(ref),THRU,FA(point): parallel to ref through the point
-                                Perpto }; ///< PERPTO,FA(ref),THRU,FA(point): perpendicular to ref through the point
+                                Perpto,   ///< PERPTO,FA(ref),THRU,FA(point): perpendicular to ref through the point
+                                Cast };   ///< CAST,FA(x): x's geometry as another type (a cylinder's axis as a LINE ...)
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>
