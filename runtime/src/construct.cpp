@@ -97,6 +97,17 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       if (!fitted) return fail(fitted.error());
       g = fitted->first;
       figures = fitted->second;
+      if (type == FeatureType::Line && sources.size() > 1 && !from_sections) {
+        // A line through features runs from the first toward the last (the construction order,
+        // as CMM software builds it), whatever sense its nominal has: an alignment's XDIR on it
+        // follows. CAMIO's exports carry a placeholder nominal (1, 0, 0) for every line.
+        const Vec3 run = in.back().position - in.front().position;
+        if (run.norm() > 1e-9 && g.direction.dot(run) < 0) g.direction = -g.direction;
+        if (it != m_features.end() && nominal.direction.norm() > 0 && g.direction.dot(nominal.direction) < 0)
+          warn(span, fmt::format("F({}) runs from FA({}) to FA({}), against its nominal direction: the construction "
+                                 "order gives its sense",
+                                 label, sources.front().label, sources.back().label));
+      }
       break;
     }
     case ConstructMethod::Intersection: {

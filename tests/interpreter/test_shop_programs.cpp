@@ -1169,6 +1169,22 @@ TEST(ShopPrograms, RmeasBlockAndCastConstructions) {
   EXPECT_TRUE(bad.has("CAST takes one source feature, got 2")) << bad.text;
 }
 
+// A line built through features runs from the first toward the last, as CMM software builds it:
+// a CAMIO program aligns X on CONST/LINE,F(LINE001),BF,FA(PNT002),FA(PNT003) whose placeholder
+// nominal says (1, 0, 0) while PNT002 lies at the larger X. Its real CMM reported the alignment
+// with X along -X of the machine (DA(..)=DATSET/TRMATX,-1,...). The nominal's sense made metron's
+// X the opposite, and every distance along X to a point then came out 1680 mm off the machine's.
+TEST(ShopPrograms, ALineThroughFeaturesRunsFromTheFirstToTheLast) {
+  const auto r = run("DMISMN/'line', 5.0\nFA(P2)=FEAT/POINT,CART,1257,145,-514,0,0,-1\nFA(P3)=FEAT/POINT,CART,408,146,-514,0,0,-1\n"
+                     "F(L)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,1,0\nCONST/LINE,F(L),BF,FA(P2),FA(P3)\nOUTPUT/FA(L)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* l = report(*r.session, "L");
+  ASSERT_TRUE(l && l->actual);
+  const Eigen::Vector3d run_dir = Eigen::Vector3d(408 - 1257, 1, 0).normalized();
+  EXPECT_NEAR(l->actual->direction.dot(run_dir), 1.0, 1e-9);
+  EXPECT_NE(r.diagnostics.find("F(L) runs from FA(P2) to FA(P3), against its nominal direction"), std::string::npos) << r.diagnostics;
+}
+
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   const std::string text =
       "DMISMN/'p', 5.0\nDECL/COMMON,CHAR,40,PARTNO\nDECL/COMMON,REAL,LIM\nDECL/COMMON,REAL,LIM2\n"
