@@ -272,6 +272,26 @@ TEST(Cli, CheckPrintsPositionedDiagnosticsWithACaret) {
   EXPECT_EQ(ok, 0) << good;
 }
 
+// A program for another machine's coordinates: the virtual CMM stops at its first move with a
+// hint; `--dry-run` follows it to its end with every point at its nominal.
+TEST(Cli, DryRunFollowsAProgramTheWorldDoesNotHold) {
+  const fs::path dir = out_dir("cli_dry");
+  const fs::path prog = dir / "far.dmi";
+  std::ofstream(prog) << "DMISMN/'far', 5.0\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+                         "F(B1) = FEAT/CIRCLE, INNER, CART, -1063, -20, 150, 0, 0, 1, 12\nMEAS/CIRCLE, F(B1), 4\n"
+                         "PTMEAS/CART, -1057, -20, 150, -1, 0, 0\nPTMEAS/CART, -1063, -14, 150, 0, -1, 0\n"
+                         "PTMEAS/CART, -1069, -20, 150, 1, 0, 0\nPTMEAS/CART, -1063, -26, 150, 0, 1, 0\nENDMES\n"
+                         "T(D) = TOL/DIAM, -0.001, 0.001\nOUTPUT/FA(B1), TA(D)\nENDFIL\n";
+  const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + prog.string() + " --out " + dir.string());
+  EXPECT_EQ(code, 3) << out;
+  EXPECT_NE(out.find("hint: if the world does not hold this program's part or machine, `metron run --dry-run`"),
+            std::string::npos) << out;
+  const auto [dry, dry_out] = shell(std::string(METRON_BINARY) + " run " + prog.string() + " --dry-run --out " + dir.string());
+  EXPECT_EQ(dry, 0) << dry_out;
+  EXPECT_NE(dry_out.find("run completed: 1 features, 1 tolerances in, 0 out, 0 faults"), std::string::npos) << dry_out;
+  EXPECT_EQ(dry_out.find("hint:"), std::string::npos) << dry_out;
+}
+
 TEST(Cli, RunReportsAndWritesTheDmisOutputFile) {
   const fs::path dir = out_dir("cli_run");
   const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + program("02_block_inspection.dmi").string() + " --out " + dir.string());
