@@ -52,6 +52,13 @@ tl::expected<Vec3, std::string> line_line(const Geometry& a, const Geometry& b) 
   return Vec3(0.5 * ((a.position + s * a.direction) + (b.position + t * b.direction)));
 }
 
+// The plane a constructed LINE lies in (DMIS i2,j2,k2): its nominal's where that is normal to
+// the line, else any normal.
+Vec3 line_plane_normal(const Geometry& line) {
+  const Vec3 n2 = line.normal2 - line.normal2.dot(line.direction) * line.direction;
+  return n2.norm() > 1e-9 ? Vec3(n2.normalized()) : Vec3(line.direction.unitOrthogonal());
+}
+
 }  // namespace
 
 Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType type, ConstructMethod method,
@@ -184,9 +191,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       if (it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
       if (type == FeatureType::Line) {
         g.bounded = false;
-        // The plane a LINE lies in (DMIS i2,j2,k2): the nominal's where it is normal to the line.
-        const Vec3 n2 = g.normal2 - g.normal2.dot(g.direction) * g.direction;
-        g.normal2 = n2.norm() > 1e-9 ? Vec3(n2.normalized()) : g.direction.unitOrthogonal();
+        g.normal2 = line_plane_normal(g);
       }
       break;
     }
@@ -203,8 +208,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
         if (!is_linear(x)) return fail(fmt::format("CAST to a LINE needs a CYLNDR, CONE or LINE, got a {}", dmis_word(x.type)));
         g.direction = x.direction.normalized();
         g.bounded = false;
-        const Vec3 n2 = g.normal2 - g.normal2.dot(g.direction) * g.direction;
-        g.normal2 = n2.norm() > 1e-9 ? Vec3(n2.normalized()) : g.direction.unitOrthogonal();
+        g.normal2 = line_plane_normal(g);
       } else if (type == FeatureType::Plane) {
         if (!(is_planar(x) || x.type == FeatureType::Circle || x.type == FeatureType::Arc || x.type == FeatureType::ClosedSlot))
           return fail(fmt::format("CAST to a PLANE needs a PLANE, CIRCLE, ARC or CPARLN, got a {}", dmis_word(x.type)));

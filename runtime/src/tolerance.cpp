@@ -1017,6 +1017,20 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
 
 // ---------------------------------------------------------------- COMPOS
 
+// One feature's zone into a COMPOS tier: the tier reports its worst margin, and is in tolerance
+// when every feature is.
+static void merge_into_tier(ToleranceResult& tier, const ToleranceResult& feature, const std::string& label, bool first,
+                     std::string& per_feature) {
+  per_feature += fmt::format("{}{} {:.4f}", per_feature.empty() ? "" : ", ", label, feature.value);
+  if (first || feature.value - feature.upper > tier.value - tier.upper) {
+    tier.value = feature.value;
+    tier.lower = feature.lower;
+    tier.upper = feature.upper;
+    tier.note = feature.note;
+  }
+  tier.in_tolerance = first ? feature.in_tolerance : tier.in_tolerance && feature.in_tolerance;
+}
+
 // Composite position (ASME Y14.5-2018 10.5.1). The PATERN tier (pattern-locating zone framework)
 // is POS of each feature in its datums' frame. The FEATUR tier (feature-relating zone framework)
 // lets the pattern move as one rigid group: its datums orient it and never locate it. So the
@@ -1045,14 +1059,7 @@ tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const
   for (const Feature* f : features) {
     auto r = evaluate_tolerance(pos, {f}, context);
     if (!r) return Error(r.error());
-    per_feature += fmt::format("{}{} {:.4f}", per_feature.empty() ? "" : ", ", f->label, r->value);
-    if (first || r->value - r->upper > pattern.value - pattern.upper) {
-      pattern.value = r->value;
-      pattern.lower = r->lower;
-      pattern.upper = r->upper;
-      pattern.note = r->note;
-    }
-    pattern.in_tolerance = first ? r->in_tolerance : pattern.in_tolerance && r->in_tolerance;
+    merge_into_tier(pattern, *r, f->label, first, per_feature);
     first = false;
   }
   pattern.actual = pattern.value;
@@ -1129,14 +1136,7 @@ tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const
     const auto bonus = material_bonus(spec.feature_condition, f.nominal, *f.actual, r);
     if (!bonus) return Error(bonus.error());
     set_limits(r, 0, spec.feature_zone + *bonus);
-    per_feature += fmt::format("{}{} {:.4f}", per_feature.empty() ? "" : ", ", f.label, r.value);
-    if (first || r.value - r.upper > relating.value - relating.upper) {
-      relating.value = r.value;
-      relating.lower = r.lower;
-      relating.upper = r.upper;
-      relating.note = r.note;
-    }
-    relating.in_tolerance = first ? r.in_tolerance : relating.in_tolerance && r.in_tolerance;
+    merge_into_tier(relating, r, f.label, first, per_feature);
     first = false;
   }
   relating.actual = relating.value;
