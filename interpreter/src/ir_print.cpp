@@ -150,7 +150,12 @@ namespace {
 
 std::string operand_text(const Operand& o) {
   switch (o.kind) {
-    case Operand::Kind::Expr: return to_string(o.expr);
+    case Operand::Kind::Expr: {
+      std::string text = to_string(o.expr);
+      for (int field : {o.width, o.decimals})
+        if (field >= 0) text += fmt::format(":{}", field);
+      return text;
+    }
     case Operand::Kind::Word: return o.word;
     case Operand::Kind::Label: return o.label.prefix + "(" + (o.label.param ? "$" : "") + o.label.name + ")";
   }

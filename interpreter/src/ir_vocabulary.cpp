@@ -87,7 +87,9 @@ const std::vector<WordEntry<ConstructionMethod>>& vocabulary() {
   static const std::vector<WordEntry<M>> rows = {{M::Bf, "BF"},         {M::Intof, "INTOF"},   {M::Midpt, "MIDPT"},
                                                  {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"},
                                                  {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"},
-                                                 {M::Parto, "PARTO"}, {M::Perpto, "PERPTO"}, {M::Cast, "CAST"}};
+                                                 {M::Parto, "PARTO"}, {M::Perpto, "PERPTO"}, {M::Cast, "CAST"},
+                                                 {M::Midpl, "MIDPL"},   {M::Midli, "MIDLI"},   {M::Copy, "COPY"},
+                                                 {M::Vertex, "VERTEX"}};
   return rows;
 }
 

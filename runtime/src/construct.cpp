@@ -165,13 +165,44 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       break;
     }
     case ConstructMethod::Midpoint: {
-      if (in.size() != 2) return fail("MIDPT needs two features");
+      // MIDPT of two features; MIDPL (a PLANE) of two planes and MIDLI (a LINE) of two lines: the
+      // bisecting direction (the second's sense turned to the first's) through the midpoint.
+      if (in.size() != 2) return fail("MIDPT, MIDPL and MIDLI need two features");
       g.position = 0.5 * (in[0].position + in[1].position);
-      if (type == FeatureType::Plane) {
-        const Vec3 d2 = in[1].direction.dot(in[0].direction) < 0 ? Vec3(-in[1].direction) : in[1].direction;
-        g.direction = (in[0].direction + d2).normalized();
+      if (type == FeatureType::Plane || type == FeatureType::Line) {
+        const bool plane = type == FeatureType::Plane;
+        for (const Geometry& x : in)
+          if (plane ? !is_planar(x) : !is_linear(x))
+            return fail(fmt::format("the mid {} of two {}, got a {}", plane ? "plane" : "line",
+                                    plane ? "PLANEs" : "LINEs (or axes)", dmis_word(x.type)));
+        const Vec3 d1 = in[0].direction.normalized();
+        const Vec3 d2 = in[1].direction.dot(d1) < 0 ? Vec3(-in[1].direction.normalized()) : Vec3(in[1].direction.normalized());
+        g.direction = (d1 + d2).normalized();
         if (it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
+        if (!plane) {
+          // Midway between the first line's point and the nearest point of the second line: its
+          // position along the lines is not the measured points' arbitrary centroids.
+          const Vec3 v = in[0].position - in[1].position;
+          g.position = 0.5 * (in[0].position + in[1].position + v.dot(d2) * d2);
+          g.bounded = false;
+          g.normal2 = line_plane_normal(g);
+        }
       }
+      break;
+    }
+    case ConstructMethod::Copy: {
+      // COPY: the source's geometry under this label; a type other than the source's is CAST's.
+      if (in.front().type != type)
+        return fail(fmt::format("COPY keeps the type: FA({}) is a {} (CAST makes another type)", sources.front().label,
+                                dmis_word(in.front().type)));
+      g = in.front();
+      break;
+    }
+    case ConstructMethod::Vertex: {
+      if (in.front().type != FeatureType::Cone)
+        return fail(fmt::format("VERTEX is the apex of a CONE, got a {}", dmis_word(in.front().type)));
+      g.position = in.front().position;  // a cone's position is its apex
+      if (it == m_features.end()) g.direction = in.front().direction;
       break;
     }
     case ConstructMethod::ParallelThrough:

@@ -239,28 +239,43 @@ const char* axis_word(DistanceAxis axis) {
   return "PT2PT";
 }
 
-double distance_from_axis(const Vec3& point, const Geometry& line) {
-  const Vec3 a = line.direction.normalized();
-  const Vec3 v = point - line.position;
-  return (v - v.dot(a) * a).norm();
-}
+/// A DISTB distance and the unit direction (MCS) it is measured along.
+struct DirectedDistance {
+  double distance = 0;
+  Vec3 direction = Vec3::UnitX();
+};
+
+Vec3 unit_or(const Vec3& v, const Vec3& fallback) { return v.norm() > 1e-12 ? Vec3(v.normalized()) : fallback; }
 
 /// The DISTB distance between two geometries (both actual or both nominal), see docs/tolerances.md.
-tl::expected<double, std::string> distance_between(const Geometry& first, const Geometry& second,
-                                                   const std::string& first_label,
-                                                   const std::string& second_label, DistanceAxis axis,
-                                                   const Alignment& frame) {
+tl::expected<DirectedDistance, std::string> distance_between(const Geometry& first, const Geometry& second,
+                                                             const std::string& first_label,
+                                                             const std::string& second_label, DistanceAxis axis,
+                                                             const Alignment& frame) {
   const bool first_plane = first.type == FeatureType::Plane;
   const bool second_plane = second.type == FeatureType::Plane;
   if (axis == DistanceAxis::PointToPoint) {
-    if (first_plane) return std::abs(first.direction.normalized().dot(second.position - first.position));
-    if (second_plane) return std::abs(second.direction.normalized().dot(first.position - second.position));
+    if (first_plane) {
+      const Vec3 n = first.direction.normalized();
+      return DirectedDistance{std::abs(n.dot(second.position - first.position)), n};
+    }
+    if (second_plane) {
+      const Vec3 n = second.direction.normalized();
+      return DirectedDistance{std::abs(n.dot(first.position - second.position)), n};
+    }
     const auto is_line = [](const Geometry& g) {
       return g.type == FeatureType::Line || g.type == FeatureType::Cylinder;
     };
-    if (is_line(first)) return distance_from_axis(second.position, first);
-    if (is_line(second)) return distance_from_axis(first.position, second);
-    return (second.position - first.position).norm();
+    if (is_line(first) || is_line(second)) {
+      const Geometry& line = is_line(first) ? first : second;
+      const Vec3& point = is_line(first) ? second.position : first.position;
+      const Vec3 a = line.direction.normalized();
+      const Vec3 v = point - line.position;
+      const Vec3 across = v - v.dot(a) * a;
+      return DirectedDistance{across.norm(), unit_or(across, any_perpendicular(a))};
+    }
+    const Vec3 d = second.position - first.position;
+    return DirectedDistance{d.norm(), unit_or(d, Vec3::UnitX())};
   }
   const Vec3 part_axis = axis == DistanceAxis::XAxis   ? Vec3::UnitX()
                          : axis == DistanceAxis::YAxis ? Vec3::UnitY()
@@ -276,9 +291,40 @@ tl::expected<double, std::string> distance_between(const Geometry& first, const 
     if (std::abs(cos_e) < k_parallel_cos)
       return Error(fmt::format("DISTB along {}: plane {} is parallel to that axis", axis_word(axis),
                                first_plane ? first_label : second_label));
-    return std::abs(n.dot(plane.position - other.position) / cos_e);
+    return DirectedDistance{std::abs(n.dot(plane.position - other.position) / cos_e), e};
   }
-  return std::abs(e.dot(second.position - first.position));
+  return DirectedDistance{std::abs(e.dot(second.position - first.position)), e};
+}
+
+/// How far a feature of size reaches from its position along the unit direction u: a circle's or
+/// arc's radius projected into its plane, a cylinder's across its axis, a sphere's radius, half a
+/// PARPLN's width along its normal; 0 for features without a size. MINIM and MAXIM take it off or
+/// add it (the "subtract radius" and "add radius" distances of CMM software).
+double half_extent(const Geometry& g, const Vec3& u) {
+  const double r = g.diameter_mm / 2;
+  const auto across = [&](const Vec3& axis) {
+    const double c = axis.normalized().dot(u);
+    return std::sqrt(std::max(0.0, 1 - c * c));
+  };
+  switch (g.type) {
+    case FeatureType::Circle:
+    case FeatureType::Arc: return r * across(g.direction);
+    case FeatureType::Cylinder: return r * across(g.direction);
+    case FeatureType::Sphere: return r;
+    case FeatureType::ParallelPlanes: return g.width_mm / 2 * std::abs(g.direction.normalized().dot(u));
+    default: return 0;
+  }
+}
+
+/// The distance between two geometries with the spec's extent (AVG: between their positions).
+tl::expected<double, std::string> extent_distance(const Geometry& first, const Geometry& second,
+                                                  const std::string& first_label, const std::string& second_label,
+                                                  const ToleranceSpec& spec, const Alignment& frame) {
+  const auto d = distance_between(first, second, first_label, second_label, spec.axis, frame);
+  if (!d) return Error(d.error());
+  if (spec.extent == DistanceExtent::Average) return d->distance;
+  const double reach = half_extent(first, d->direction) + half_extent(second, d->direction);
+  return spec.extent == DistanceExtent::Minimum ? d->distance - reach : d->distance + reach;
 }
 
 Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Feature& second,
@@ -289,16 +335,25 @@ Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Fe
   if (!b) return Error(b.error());
   const Alignment mcs;
   const Alignment& frame = context.alignment ? *context.alignment : mcs;
-  const auto actual = distance_between(**a, **b, first.label, second.label, spec.axis, frame);
+  const auto actual = extent_distance(**a, **b, first.label, second.label, spec, frame);
   if (!actual) return Error(actual.error());
-  const auto nominal =
-      distance_between(first.nominal, second.nominal, first.label, second.label, spec.axis, frame);
+  const auto nominal = extent_distance(first.nominal, second.nominal, first.label, second.label, spec, frame);
   result.actual = *actual;
   result.nominal = nominal ? *nominal : std::numeric_limits<double>::quiet_NaN();
   result.value = *actual - spec.nominal;
   set_limits(result, spec.lower, spec.upper);
   if (spec.axis != DistanceAxis::PointToPoint)
     add_note(result, fmt::format("along {} of {}", axis_word(spec.axis), frame.label));
+  if (spec.extent != DistanceExtent::Average) {
+    const auto sized = [](const Geometry& g) {
+      return g.type == FeatureType::Circle || g.type == FeatureType::Arc || g.type == FeatureType::Cylinder ||
+             g.type == FeatureType::Sphere || g.type == FeatureType::ParallelPlanes;
+    };
+    const bool any_sized = sized(**a) || sized(**b);
+    add_note(result, any_sized ? (spec.extent == DistanceExtent::Minimum ? "MINIM: between the near sides"
+                                                                      : "MAXIM: between the far sides")
+                           : "MINIM/MAXIM: neither feature has a size, the distance is between their positions");
+  }
   if (!nominal)
     add_note(result, "no nominal distance from the feature nominals: " + nominal.error());
   else if (std::abs(*nominal - spec.nominal) > 1e-4)

@@ -1326,6 +1326,94 @@ TEST(ShopPrograms, PartoAndPerptoConstructThroughAPoint) {
   EXPECT_TRUE(circle.has("PERPTO constructs a PLANE or a LINE")) << circle.text;
 }
 
+// MIDPL, MIDLI, COPY and VERTEX: hand-computed answers from stated actuals.
+TEST(ShopPrograms, MidPlaneMidLineCopyAndVertexConstructions) {
+  const std::string head =
+      "DMISMN/'mid', 5.1\nFA(P1)=FEAT/PLANE,CART,0,0,0,0,0,1\nFA(P2)=FEAT/PLANE,CART,5,5,10,0,0.6,-0.8\n"
+      "FA(L1)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,0,1\nFA(L2)=FEAT/LINE,UNBND,CART,7,10,0,-1,0,0,0,0,1\n"
+      "FA(C)=FEAT/CIRCLE,INNER,CART,1,2,3,0,0,1,8\nFA(K)=FEAT/CONE,INNER,CART,4,5,6,0,0,1,60\n";
+  const auto r = run(head +
+                     "CONST/PLANE,F(MP),MIDPL,FA(P1),FA(P2)\nCONST/LINE,F(ML),MIDLI,FA(L1),FA(L2)\n"
+                     "CONST/CIRCLE,F(CC),COPY,FA(C)\nCONST/POINT,F(V),VERTEX,FA(K)\n"
+                     "OUTPUT/FA(MP),FA(ML),FA(CC),FA(V)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto actual = [&](const char* label) {
+    const auto* f = report(*r.session, label);
+    EXPECT_TRUE(f && f->actual) << label;
+    return f && f->actual ? *f->actual : metron::runtime::Geometry{};
+  };
+  // The mid-plane bisects the normals (0,0,1) and (0,-0.6,0.8), P2's turned to P1's sense, and
+  // passes midway between the planes' points.
+  const auto mp = actual("MP");
+  const Eigen::Vector3d bisector = Eigen::Vector3d(0, -0.6, 1.8).normalized();
+  EXPECT_NEAR(mp.direction.dot(bisector), 1.0, 1e-12);
+  EXPECT_NEAR((mp.position - Eigen::Vector3d(2.5, 2.5, 5)).dot(bisector), 0.0, 1e-12);
+  // The mid-line of y = 0 and y = 10 (opposite senses) is y = 5 along +x.
+  const auto ml = actual("ML");
+  EXPECT_NEAR(ml.direction.dot(Eigen::Vector3d::UnitX()), 1.0, 1e-12);
+  EXPECT_NEAR((ml.position - Eigen::Vector3d(0, 5, 0)).cross(Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-12);
+  const auto cc = actual("CC");
+  EXPECT_EQ(cc.type, metron::runtime::FeatureType::Circle);
+  EXPECT_NEAR((cc.position - Eigen::Vector3d(1, 2, 3)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(cc.diameter_mm, 8.0, 1e-12);
+  EXPECT_NEAR((actual("V").position - Eigen::Vector3d(4, 5, 6)).norm(), 0.0, 1e-12);  // the apex
+  // Wrong types are errors: at check where the words say so, at run where the sources do.
+  const Checked wrong = check(head + "CONST/LINE,F(X),MIDPL,FA(P1),FA(P2)\nENDFIL\n");
+  EXPECT_TRUE(wrong.has("MIDPL constructs a PLANE")) << wrong.text;
+  const auto not_cone = run(head + "CONST/POINT,F(V),VERTEX,FA(C)\nENDFIL\n");
+  EXPECT_NE(not_cone.diagnostics.find("VERTEX is the apex of a CONE, got a CIRCLE"), std::string::npos) << not_cone.diagnostics;
+  const auto retype = run(head + "CONST/POINT,F(X),COPY,FA(C)\nENDFIL\n");
+  EXPECT_NE(retype.diagnostics.find("COPY keeps the type"), std::string::npos) << retype.diagnostics;
+  const auto lines = run(head + "CONST/LINE,F(X),MIDLI,FA(L1),FA(P1)\nENDFIL\n");
+  EXPECT_NE(lines.diagnostics.find("the mid line of two LINEs (or axes), got a PLANE"), std::string::npos) << lines.diagnostics;
+}
+
+// TOL/DISTB and DISTWRT with MINIM and MAXIM: between the near or far sides of features of size.
+TEST(ShopPrograms, DistanceBetweenTheSidesOfHoles) {
+  const std::string text =
+      "DMISMN/'sides', 5.1\nDECL/REAL,WALL,SPAN,AXIAL\n"
+      "F(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
+      "F(C2)=FEAT/CIRCLE,INNER,CART,50,0,0,0,0,1,6\nFA(C2)=FEAT/CIRCLE,INNER,CART,50.02,0,0,0,0,1,6.04\n"
+      "T(WALL)=TOL/DISTB,NOMINL,42,-0.1,0.1,MINIM\nT(SPAN)=TOL/DISTB,NOMINL,58,-0.1,0.1,XAXIS,MAXIM\n"
+      "T(REF)=TOL/DISTWRT,NOMINL,58,-0.1,0.1,FA(C1),XAXIS,MAXIM\n"
+      "OUTPUT/FA(C1),FA(C2),TA(WALL)\nOUTPUT/FA(C1),FA(C2),TA(SPAN)\nOUTPUT/FA(C2),TA(REF)\n"
+      "WALL=VALUE/TA(WALL),ACT\nSPAN=VALUE/TA(SPAN),ACT\nAXIAL=VALUE/TA(REF),ACT\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0u);
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  // 50.02 - 5 - 3.02 and 50.02 + 5 + 3.02.
+  EXPECT_NEAR(r.session->interpreter().variable("WALL")->number, 42.0, 1e-9);
+  EXPECT_NEAR(r.session->interpreter().variable("SPAN")->number, 58.04, 1e-9);
+  EXPECT_NEAR(r.session->interpreter().variable("AXIAL")->number, 58.04, 1e-9);
+}
+
+// WRITE/DID(x),V:w:d lays a value out Fortran-like: a number with d decimals right-aligned in w
+// characters, a text left-aligned; a value wider than its field is written whole.
+TEST(ShopPrograms, WriteLaysOutValuesInTheirFields) {
+  const fs::path out = temp_dir() / "write_format_out";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  const std::string text = "DMISMN/'fmt', 5.1\nDECL/REAL,X\nDECL/INTGR,N\nX=ASSIGN/-12.34567\nN=ASSIGN/42\n"
+                           "DID(T)=DEVICE/STOR,'table.txt'\nOPEN/DID(T),DIRECT,OUTPUT,OVERWR\n"
+                           "WRITE/DID(T),'D':4,X:10:3,N:5,'|',X:3:1,N:6:2\nCLOSE/DID(T)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0u);
+  const fs::path p = write("write_format.dmi", text);
+  auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
+  ASSERT_TRUE(backend.has_value());
+  auto session = Session::create(std::move(*backend));
+  session->runtime().set_output_directory(out.string());
+  ASSERT_TRUE(session->load(p.string()));
+  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  std::ifstream in(out / "table.txt", std::ios::binary);
+  const std::string written((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(written, "D      -12.346   42|-12.3 42.00\n");
+  // A layout outside WRITE, and a field without its width, are positioned errors.
+  const Checked outside = check("DMISMN/'fmt', 5.1\nDECL/REAL,X\nX=ASSIGN/1:3\nENDFIL\n");
+  EXPECT_TRUE(outside.has("a layout ':width:decimals' belongs to the values of WRITE only")) << outside.text;
+  const Checked no_width = check("DMISMN/'fmt', 5.1\nDECL/REAL,X\nDID(T)=DEVICE/STOR,'t'\nWRITE/DID(T),X:\nENDFIL\n");
+  EXPECT_TRUE(no_width.has("expected a field width after ':'")) << no_width.text;
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;

@@ -387,6 +387,50 @@ TEST(ToleranceDistance, PointsAxesAndCounts) {
             "the feature nominals give 10.0000, the tolerance nominal is 9.5000");
 }
 
+TEST(ToleranceDistance, MinimAndMaximTakeTheSizesOffOrAddThem) {
+  // Two holes of 10 and 6 mm, centres 50 mm apart along X (actual 50.02): the wall between
+  // them (MINIM) is 50.02 - 5 - 3 and the span over them (MAXIM) 50.02 + 5 + 3.
+  const Feature big = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
+                              round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
+  const Feature small = feature("C2", round(FeatureType::Circle, Side::Inner, {50, 0, 0}, Vec3::UnitZ(), 6),
+                                round(FeatureType::Circle, Side::Inner, {50.02, 0, 0}, Vec3::UnitZ(), 6));
+  ToleranceSpec s = spec(ToleranceKind::DistB);
+  s.nominal = 42;
+  s.lower = -0.1;
+  s.upper = 0.1;
+  s.extent = DistanceExtent::Minimum;
+  auto r = evaluate(s, {&big, &small});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->actual, 42.02, 1e-9);
+  EXPECT_NEAR(r->nominal, 42.0, 1e-9);
+  EXPECT_EQ(r->note, "MINIM: between the near sides");
+  s.extent = DistanceExtent::Maximum;
+  s.nominal = 58;
+  EXPECT_NEAR(evaluate(s, {&big, &small})->actual, 58.02, 1e-9);
+  // Along Z the circles (in XY planes) have no extent: MAXIM is the centre distance along Z.
+  s.axis = DistanceAxis::ZAxis;
+  EXPECT_NEAR(evaluate(s, {&big, &small})->actual, 0.0, 1e-9);
+  // Along X each circle reaches its radius.
+  s.axis = DistanceAxis::XAxis;
+  EXPECT_NEAR(evaluate(s, {&big, &small})->actual, 58.02, 1e-9);
+  // A sphere of 20 mm 30 mm above a plane: its lowest point is 20 mm above it, its top 40 mm.
+  const Feature floor = feature("PL", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  const Feature ball = feature("SPH", round(FeatureType::Sphere, Side::Outer, {3, 4, 30}, Vec3::UnitZ(), 20),
+                               round(FeatureType::Sphere, Side::Outer, {3, 4, 30}, Vec3::UnitZ(), 20));
+  s.axis = DistanceAxis::PointToPoint;
+  s.extent = DistanceExtent::Minimum;
+  EXPECT_NEAR(evaluate(s, {&floor, &ball})->actual, 20.0, 1e-9);
+  s.extent = DistanceExtent::Maximum;
+  EXPECT_NEAR(evaluate(s, {&floor, &ball})->actual, 40.0, 1e-9);
+  // Two points have no size: MINIM is their distance, and the note says so.
+  const Feature a = feature("A", point({0, 0, 0}), point({0, 0, 0}));
+  const Feature b = feature("B", point({3, 4, 0}), point({3, 4, 0}));
+  s.extent = DistanceExtent::Minimum;
+  r = evaluate(s, {&a, &b});
+  EXPECT_NEAR(r->actual, 5.0, 1e-9);
+  EXPECT_NE(r->note.find("neither feature has a size"), std::string::npos);
+}
+
 // ------------------------------------------------------------------ PERP / PARLEL
 
 constexpr double k_tilt = 0.001;  // tan of the tilt of the measured surfaces

@@ -284,6 +284,38 @@ struct action<rules::param> {
   }
 };
 
+// e:width[:decimals]   a WRITE value's layout: the value on the stack is wrapped in a Format
+template <>
+struct action<rules::format_width> {
+  template <typename In>
+  static void apply(const In& in, Builder& b) {
+    Expr value = b.pop();
+    Expr width;
+    width.kind = ExprKind::Number;
+    width.span = b.span(in.begin(), in.end());
+    width.number = std::strtod(in.string().c_str(), nullptr);
+    Expr f;
+    f.kind = ExprKind::Format;
+    f.span = Span{value.span.file, value.span.begin, width.span.end};
+    f.args.push_back(std::move(value));
+    f.args.push_back(std::move(width));
+    b.stack.push_back(std::move(f));
+  }
+};
+template <>
+struct action<rules::format_decimals> {
+  template <typename In>
+  static void apply(const In& in, Builder& b) {
+    Expr decimals;
+    decimals.kind = ExprKind::Number;
+    decimals.span = b.span(in.begin(), in.end());
+    decimals.number = std::strtod(in.string().c_str(), nullptr);
+    Expr& f = b.stack.back();
+    f.span.end = decimals.span.end;
+    f.args.push_back(std::move(decimals));
+  }
+};
+
 // MAJOR/p1,,p3   an empty parameter between two commas: a Word with empty text
 template <>
 struct action<rules::empty_param> {

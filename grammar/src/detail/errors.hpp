@@ -71,6 +71,12 @@ inline SyntaxError error_for(tag<rules::string_close>, const Builder& b, const c
 inline SyntaxError error_for(tag<rules::bad_number_suffix>, const Builder& b, const char* at) {
   return unexpected(b, at, "a number");
 }
+inline SyntaxError error_for(tag<rules::format_width>, const Builder& b, const char* at) {
+  return expected(b, at, "parse.expected-format", "expected a field width after ':' (WRITE/DID(x),V:10:3)");
+}
+inline SyntaxError error_for(tag<rules::format_decimals>, const Builder& b, const char* at) {
+  return expected(b, at, "parse.expected-format", "expected the number of decimals after the second ':' (WRITE/DID(x),V:10:3)");
+}
 inline SyntaxError error_for(tag<rules::paren_inner>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-expression", "expected an expression after '('");
 }

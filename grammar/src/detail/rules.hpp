@@ -142,7 +142,11 @@ struct index_next : expr {};
 
 // ---- statements -----------------------------------------------------------------------------
 // params -> / param { , param }      (a param may be empty between two commas: `A/1,,2`)
-struct param : expr {};
+// A WRITE value may carry its layout, Fortran-like: `V:10:3` (width 10, 3 decimals), `T:20`.
+struct format_width : digits {};
+struct format_decimals : digits {};
+struct format_suffix : seq<one<':'>, ws, must<format_width>, opt<ws, one<':'>, ws, must<format_decimals>>> {};
+struct param : seq<expr, opt<ws, format_suffix>> {};
 struct empty_param : at<one<','>> {};
 struct first_param : sor<empty_param, param> {};
 struct next_param : sor<empty_param, param> {};

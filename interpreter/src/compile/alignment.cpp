@@ -211,8 +211,15 @@ void UnitCompiler::construct(const grammar::Statement& s) {
       emit(make(Op::Nop, s, "CONST"));
       return;
     }
-    return error(p[2].span, "sema.bad-construction", "expected a construction method (BF, INTOF, MIDPT, PROJPT) after the feature");
+    return error(p[2].span, "sema.bad-construction", "expected a construction method (BF, INTOF, MIDPT, PROJPT, ...) after the feature");
   }
+  // The methods that make one type only.
+  const std::optional<FeatureType> makes = *method == ir::ConstructionMethod::Midpl   ? FeatureType::Plane
+                                           : *method == ir::ConstructionMethod::Midli ? FeatureType::Line
+                                           : *method == ir::ConstructionMethod::Vertex ? FeatureType::Point
+                                                                                      : std::optional<FeatureType>{};
+  if (makes && *makes != *const_type)
+    return error(p[0].span, "sema.const-type", fmt::format("{} constructs a {}", p[2].text, ir::word_of(*makes)));
   auto in = make(Op::Construct, s, label);
   in.name_is_param = macro_param(label).has_value();
   in.payload = ir::ConstructPayload{*const_type, *method};
@@ -250,9 +257,11 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     in.operands.push_back(label_op(p[i]));
   }
   const std::size_t sources = p.size() - 3;
-  if (*method == ir::ConstructionMethod::Cast && sources != 1)
-    return error(p.back().span, "sema.construction-arity", fmt::format("CAST takes one source feature, got {}", sources));
-  if (*method != ir::ConstructionMethod::Bf && *method != ir::ConstructionMethod::Cast && sources != 2)
+  using M = ir::ConstructionMethod;
+  const bool one_source = *method == M::Cast || *method == M::Copy || *method == M::Vertex;
+  if (one_source && sources != 1)
+    return error(p.back().span, "sema.construction-arity", fmt::format("{} takes one source feature, got {}", p[2].text, sources));
+  if (*method != M::Bf && !one_source && sources != 2)
     return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", p[2].text, sources));
   if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
   emit(std::move(in));

@@ -43,6 +43,9 @@ std::optional<UnitCompiler::Typed> UnitCompiler::expression(const grammar::Expr&
       return g.args.empty() ? std::nullopt : expression(g.args[0], allow_labels);
     case ExprKind::Index:
       return element_expression(g);
+    case ExprKind::Format:
+      error(g.span, "sema.format-outside-write", "a layout ':width:decimals' belongs to the values of WRITE only");
+      return std::nullopt;
     case ExprKind::Call:
       return call_expression(g);
     case ExprKind::Unary:

@@ -179,15 +179,29 @@ void UnitCompiler::open(const grammar::Statement& s) {
 }
 
 // WRITE/DID(l),e1,e2,...: one line of the values (text as it is, numbers as TEXT shows them) into
-// an output file open for OUTPUT.
+// an output file open for OUTPUT. A value may carry its layout, `e:width[:decimals]`.
+constexpr double k_max_write_field = 1000;
 void UnitCompiler::write(const grammar::Statement& s) {
   if (!check_device(s)) return;
   auto in = make(Op::Write, s);
   in.operands.push_back(label_op(s.params[0]));
   for (std::size_t i = 1; i < s.params.size(); ++i) {
-    auto e = standalone_expression(s.params[i]);
+    const grammar::Expr& p = s.params[i];
+    const bool laid_out = p.kind == ExprKind::Format;
+    auto e = standalone_expression(laid_out ? p.args[0] : p);
     if (!e) return;
-    in.operands.push_back(expr_operand(std::move(*e)));
+    auto o = expr_operand(std::move(*e));
+    if (laid_out) {
+      // Widths beyond a line's worth are a typing error, not a layout.
+      for (std::size_t k = 1; k < p.args.size(); ++k)
+        if (p.args[k].number > k_max_write_field)
+          return error(p.args[k].span, "sema.write-format",
+                       fmt::format("a WRITE field of {} characters is more than the {} metron allows", p.args[k].number,
+                                   k_max_write_field));
+      o.width = static_cast<int>(p.args[1].number);
+      if (p.args.size() > 2) o.decimals = static_cast<int>(p.args[2].number);
+    }
+    in.operands.push_back(std::move(o));
   }
   emit(std::move(in));
 }

@@ -151,7 +151,10 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
                       : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint
                       : words.method == M::Parto ? runtime::ConstructMethod::ParallelThrough
                       : words.method == M::Perpto ? runtime::ConstructMethod::PerpendicularThrough
+                      : words.method == M::Midpl || words.method == M::Midli ? runtime::ConstructMethod::Midpoint
                       : words.method == M::Cast ? runtime::ConstructMethod::Cast
+                      : words.method == M::Copy ? runtime::ConstructMethod::Copy
+                      : words.method == M::Vertex ? runtime::ConstructMethod::Vertex
                                                  : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
   std::vector<runtime::FeatureRef> sources;
   for (const auto& o : in.operands) sources.push_back(feature_ref(vm, o.label));

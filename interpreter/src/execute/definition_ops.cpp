@@ -140,6 +140,8 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (word == "XAXIS") t.axis = runtime::DistanceAxis::XAxis;
     if (word == "YAXIS") t.axis = runtime::DistanceAxis::YAxis;
     if (word == "ZAXIS") t.axis = runtime::DistanceAxis::ZAxis;
+    if (word == "MINIM") t.extent = runtime::DistanceExtent::Minimum;
+    if (word == "MAXIM") t.extent = runtime::DistanceExtent::Maximum;
   }
   bool feature_tier = false;  // COMPOS: after FEATUR, the modifier and datums are the second tier's
   for (const auto& o : in.operands) {

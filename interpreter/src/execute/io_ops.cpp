@@ -160,13 +160,24 @@ ExecStatus Execute::read(Interpreter& vm, const ir::Instruction& in, CallFrame&)
   return ExecStatus::Running;
 }
 
+// A WRITE value in its layout `e:width[:decimals]` (Fortran's Fw.d and Aw): a number with the
+// decimals asked for, right-aligned in the width; text left-aligned. A value wider than its field
+// is written whole (Fortran writes asterisks: a lost result).
+static std::string laid_out(const Value& v, int width, int decimals) {
+  std::string text = decimals >= 0 && v.is_number() ? fmt::format("{:.{}f}", v.number, decimals) : v.to_display();
+  if (width < 0 || static_cast<int>(text.size()) >= width) return text;
+  const std::string pad(static_cast<std::size_t>(width) - text.size(), ' ');
+  return v.is_number() ? pad + text : text + pad;
+}
+
 // Op::Write
 ExecStatus Execute::write(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   std::string line;
   for (std::size_t i = 1; i < in.operands.size(); ++i) {
-    auto v = vm.evaluate(in.operands[i].expr);
+    const ir::Operand& o = in.operands[i];
+    auto v = vm.evaluate(o.expr);
     if (!v) return vm.fail(in.span, v.error());
-    line += v->to_display();
+    line += laid_out(*v, o.width, o.decimals);
   }
   if (auto r = vm.m_runtime.write_device(vm.label_name(in.operands[0].label), line, in.span); !r)
     return vm.from_runtime(r.error());

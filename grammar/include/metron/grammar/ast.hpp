@@ -26,6 +26,7 @@ enum class ExprKind {
   Binary,  ///< `text` = operator ("+","-","*","/","**",".EQ.",".NE.",".LT.",".LE.",".GT.",".GE.",".AND.",".OR."), two operands
   Paren,   ///< a parenthesised expression `( e )`, one operand in `args` (kept: JUMPTO/(L1) and IF/(c) need it)
   Index,   ///< array element `name[i]` or `name[i,j]`: `text` = upper-case variable name, indices in `args`
+  Format,  ///< a WRITE value with its layout `e:width[:decimals]`: args = {e, width, [decimals]} (numbers)
 };
 
 /// An expression or a statement parameter (DMIS parameters are expressions).

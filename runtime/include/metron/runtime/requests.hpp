@@ -96,7 +96,9 @@ struct RotateRequest {
 enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection,
                              ParallelThrough,        ///< PARTO: the reference's direction, through a point
                              PerpendicularThrough,   ///< PERPTO: normal to the reference, through a point
-                             Cast };                 ///< CAST: one feature's geometry as another type
+                             Cast,                   ///< CAST: one feature's geometry as another type
+                             Copy,                   ///< COPY: one feature's geometry, the same type
+                             Vertex };               ///< VERTEX: a cone's apex as a POINT
 
 /// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
 struct OutputItem {

@@ -35,6 +35,9 @@ inline bool is_angle_kind(ToleranceKind kind) {
 
 /// Distance direction for DISTB (and the coordinate of CORTOL).
 enum class DistanceAxis { PointToPoint, XAxis, YAxis, ZAxis };
+/// DISTB and DISTWRT: the distance between centres (AVG, the default) or between the near (MINIM)
+/// or far (MAXIM) sides of features of size.
+enum class DistanceExtent { Average, Minimum, Maximum };
 /// Material condition modifier of POS.
 enum class MaterialCondition { Rfs, Mmc, Lmc };
 
@@ -49,6 +52,7 @@ struct ToleranceSpec {
   bool three_d = false;          ///< POS 3D (else 2D)
   bool long_side = false;        ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
   DistanceAxis axis = DistanceAxis::PointToPoint;
+  DistanceExtent extent = DistanceExtent::Average;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced (COMPOS: the PATERN tier's)
   /// COMPOS: the FEATUR tier (the feature-relating zone), its modifier and its datums, which

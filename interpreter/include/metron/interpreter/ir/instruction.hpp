@@ -20,6 +20,8 @@ struct Operand {
   std::string word;                ///< upper-case minor word
   LabelOperand label;
   Span span;
+  int width = -1;     ///< WRITE: the field width of `e:width[:decimals]` (-1: as TEXT shows it)
+  int decimals = -1;  ///< WRITE: the decimals of a number (-1: as TEXT shows it)
 };
 
 /// IR operations. Operand layouts are documented per operation in docs/ir.md; the compiler has

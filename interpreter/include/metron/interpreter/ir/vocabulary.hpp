@@ -29,7 +29,11 @@ enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
                                 Movept,   ///< a feature's point moved by dx, dy, dz
                                 Parto,    ///< PARTO,FA(ref),THRU,FA(point): parallel to ref through the point
                                 Perpto,   ///< PERPTO,FA(ref),THRU,FA(point): perpendicular to ref through the point
-                                Cast };   ///< CAST,FA(x): x's geometry as another type (a cylinder's axis as a LINE ...)
+                                Cast,     ///< CAST,FA(x): x's geometry as another type (a cylinder's axis as a LINE ...)
+                                Midpl,    ///< MIDPL,FA(a),FA(b): the plane midway between two planes
+                                Midli,    ///< MIDLI,FA(a),FA(b): the line midway between two lines
+                                Copy,     ///< COPY,FA(x): x's geometry under another label
+                                Vertex }; ///< VERTEX,FA(cone): the cone's apex
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>
