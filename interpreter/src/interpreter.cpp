@@ -158,8 +158,24 @@ tl::expected<void, std::string> Interpreter::set_variable(const std::string& nam
   return {};
 }
 
+// An indexed label's name with its index's value (`HOLE[I]` -> `HOLE[3]`); a name that holds no
+// index as it is. An index that cannot be evaluated here keeps its text (the use then fails
+// naming it).
+std::string Interpreter::indexed(const std::string& name) const {
+  const auto open = name.find('[');
+  if (open == std::string::npos || name.back() != ']') return name;
+  const std::string text = name.substr(open + 1, name.size() - open - 2);
+  const auto e = m_module.label_indices.find(text);
+  if (e == m_module.label_indices.end()) return name;
+  const auto v = const_cast<Interpreter*>(this)->evaluate(e->second);  // an index reads variables only
+  if (!v || !v->is_number()) return name;
+  const double i = v->number;
+  return name.substr(0, open + 1) + (i == std::floor(i) && std::abs(i) < 1e15 ? fmt::format("{}", static_cast<long long>(i))
+                                                                              : v->to_display()) + "]";
+}
+
 std::string Interpreter::label_name(const ir::LabelOperand& l) const {
-  if (!l.param || m_frames.empty()) return l.name;
+  if (!l.param || m_frames.empty()) return indexed(l.name);
   // A macro parameter standing for a label: the caller passed a label or a name.
   for (auto it = m_frames.rbegin(); it != m_frames.rend(); ++it) {
     if (auto v = it->locals.find(l.name); v != it->locals.end() && !v->second.empty()) {
@@ -173,7 +189,7 @@ std::string Interpreter::label_name(const ir::LabelOperand& l) const {
 }
 
 std::string Interpreter::name_of(const ir::Instruction& in) const {
-  return in.name_is_param ? label_name({"", in.name, 0, in.span}) : in.name;
+  return in.name_is_param ? label_name({"", in.name, 0, in.span}) : indexed(in.name);
 }
 
 tl::expected<double, std::string> Interpreter::number(const ir::Expr& e) {

@@ -73,6 +73,11 @@ std::string sexpr(const Expr& e) {
     case ExprKind::Paren:
       os << "(paren " << sexpr(e.args.at(0)) << ")";
       break;
+    case ExprKind::Format:
+      os << "(layout";
+      for (const auto& a : e.args) os << " " << sexpr(a);
+      os << ")";
+      break;
   }
   return os.str();
 }
@@ -148,6 +153,23 @@ TEST(ParserForms, LabelTarget) {
   EXPECT_EQ(s.major, "FEAT");
   EXPECT_EQ(s.params.size(), 8u);
   EXPECT_EQ(sexpr(s.params[0]), "PLANE");
+}
+
+// DMIS 5.x indexed labels: the name keeps the index's text, the index its expression.
+TEST(ParserForms, IndexedLabels) {
+  const Statement s = one("F(HOLE[ i+1 ])=FEAT/POINT,CART,0,0,0,0,0,1");
+  ASSERT_TRUE(s.target.has_value());
+  EXPECT_EQ(s.target->name, "HOLE[I+1]");
+  ASSERT_EQ(s.target->index.size(), 1u);
+  EXPECT_EQ(sexpr(s.target->index[0]), "(+ I 1)");
+  EXPECT_EQ(expr_of("FA(H[N[2]])"), "FA(H[N[2]])");
+  EXPECT_EQ(expr_of("FA(P1)"), "FA(P1)");
+}
+
+// WRITE values with their layout `e:width[:decimals]`.
+TEST(ParserForms, WriteLayouts) {
+  const Statement s = one("WRITE/DID(F),'X=':6,X*2 : 10 : 3,N:4");
+  EXPECT_EQ(params_of(s), "DID(F) | (layout 'X=' 6) | (layout (* X 2) 10 3) | (layout N 4)");
 }
 
 TEST(ParserForms, VariableTargets) {

@@ -1414,6 +1414,36 @@ TEST(ShopPrograms, WriteLaysOutValuesInTheirFields) {
   EXPECT_TRUE(no_width.has("expected a field width after ':'")) << no_width.text;
 }
 
+// Indexed labels (DMIS 5.x): F(H[I]) in a loop defines H[1], H[2], H[3]; FA(H[2]) and FA(H[I-1])
+// name them afterwards. check reads the family H[] as one feature.
+TEST(ShopPrograms, IndexedLabelsNameOneFeaturePerIndex) {
+  const std::string text =
+      "DMISMN/'indexed', 5.0\nUNITS/MM,ANGDEC\nDECL/INTGR,I\nDECL/REAL,D\nT(DIA)=TOL/DIAM,-0.05,0.05\n"
+      "DO/I,1,3\n  F(H[I])=FEAT/CIRCLE,INNER,CART,100+20*I,100,-5,0,0,1,10\n"
+      "  FA(H[ I ])=FEAT/CIRCLE,INNER,CART,100+20*I,100,-5,0,0,1,10+I/100\n  OUTPUT/FA(H[I]),TA(DIA)\nENDDO\n"
+      "D=VALUE/FA(H[2]),SIZE\nCONST/POINT,F(M),MIDPT,FA(H[1]),FA(H[I-1])\nOUTPUT/FA(M)\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  for (int i = 1; i <= 3; ++i) {
+    const auto* h = report(*r.session, fmt::format("H[{}]", i).c_str());
+    ASSERT_TRUE(h && h->actual) << i;
+    EXPECT_NEAR(h->actual->position.x(), 100 + 20 * i, 1e-12);
+    EXPECT_NEAR(h->actual->diameter_mm, 10 + i / 100.0, 1e-12);
+  }
+  EXPECT_NEAR(r.session->interpreter().variable("D")->number, 10.02, 1e-12);
+  const auto* m = report(*r.session, "M");  // after the loop I is 4: between H[1] and H[3]
+  ASSERT_TRUE(m && m->actual);
+  EXPECT_NEAR(m->actual->position.x(), 140.0, 1e-12);
+  // An index that is no number, a family never defined and a missing ']' are positioned errors.
+  const Checked bad = check("DMISMN/'i', 5.0\nDECL/CHAR,8,S\nF(H[S])=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA(G[1])\n"
+                            "F(K[1)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n");
+  EXPECT_TRUE(bad.has("a label's index")) << bad.text;
+  EXPECT_TRUE(bad.has("G[1]")) << bad.text;
+  EXPECT_TRUE(bad.has("expected ']' after the label's index")) << bad.text;
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;

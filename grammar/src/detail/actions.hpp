@@ -113,7 +113,20 @@ template <>
 struct action<rules::label_ref_name> {
   template <typename In>
   static void apply(const In& in, Builder& b) {
-    b.label_name = in.string();
+    b.labels.push_back({in.string(), {}});
+  }
+};
+
+// F(HOLE[I])   an indexed label: the name keeps the index's text (upper-case, no blanks)
+template <>
+struct action<rules::label_index_expr> {
+  template <typename In>
+  static void apply(const In& in, Builder& b) {
+    std::string text;
+    for (char c : upper(in.string_view()))
+      if (c != ' ' && c != '\t') text += c;
+    b.labels.back().name += "[" + text + "]";
+    b.labels.back().index.push_back(b.pop());
   }
 };
 
@@ -122,10 +135,12 @@ struct action<rules::label_tail> {
   template <typename In>
   static void apply(const In& in, Builder& b) {
     PendingIdent id = b.pop_ident();
+    Builder::PendingLabel label = std::move(b.labels.back());
+    b.labels.pop_back();
     Expr e;
     e.kind = ExprKind::Label;
     e.span = Span::join(id.span, b.span(in.begin(), in.end()));
-    e.label = LabelRef{std::move(id.upper), std::move(b.label_name), e.span};
+    e.label = LabelRef{std::move(id.upper), std::move(label.name), e.span, std::move(label.index)};
     b.stack.push_back(std::move(e));
   }
 };

@@ -50,7 +50,12 @@ struct Builder {
   std::vector<PendingOp> ops;         ///< operators awaiting their right operand
   std::vector<PendingIdent> idents;   ///< identifiers awaiting '(' / '[' / nothing
   std::vector<std::size_t> marks;     ///< stack size at each open call or index list
-  std::string label_name;             ///< the name of the label reference just read
+  /// The label references being read (an index may hold another): the name, its index.
+  struct PendingLabel {
+    std::string name;
+    std::vector<Expr> index;
+  };
+  std::vector<PendingLabel> labels;
   const char* string_open = nullptr;  ///< the opening quote of the string being read
   int depth = 0;
   int operators = 0;                  ///< binary and sign operators read so far (max_operators)

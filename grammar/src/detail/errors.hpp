@@ -86,6 +86,12 @@ inline SyntaxError error_for(tag<rules::paren_close>, const Builder& b, const ch
 inline SyntaxError error_for(tag<rules::label_ref_name>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-label-name", "expected a label name after '" + last_ident(b) + "('");
 }
+inline SyntaxError error_for(tag<rules::label_index_expr>, const Builder& b, const char* at) {
+  return expected(b, at, "parse.expected-expression", "expected the label's index after '[' (F(HOLE[I]))");
+}
+inline SyntaxError error_for(tag<rules::label_index_close>, const Builder& b, const char* at) {
+  return expected(b, at, "parse.expected-close", "expected ']' after the label's index");
+}
 inline SyntaxError error_for(tag<rules::label_close>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-close", "expected ')' after the label name");
 }

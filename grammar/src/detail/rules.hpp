@@ -85,7 +85,11 @@ struct ident_tok : ident {};
 struct label_open : one<'('> {};
 struct label_ref_name : label_name {};
 struct label_close : one<')'> {};
-struct label_tail : seq<if_label_prefix, label_open, ws, must<label_ref_name>, ws, must<label_close>> {};
+struct label_index_open : one<'['> {};
+struct label_index_expr;
+struct label_index_close : one<']'> {};
+struct label_index : seq<label_index_open, ws, must<label_index_expr>, ws, must<label_index_close>> {};
+struct label_tail : seq<if_label_prefix, label_open, ws, must<label_ref_name>, ws, opt<label_index>, ws, must<label_close>> {};
 struct call_open : one<'('> {};
 struct call_arg;
 struct call_next_arg;
@@ -138,6 +142,7 @@ struct paren_inner : expr {};
 struct call_arg : expr {};
 struct call_next_arg : expr {};
 struct index_first : expr {};
+struct label_index_expr : expr {};
 struct index_next : expr {};
 
 // ---- statements -----------------------------------------------------------------------------

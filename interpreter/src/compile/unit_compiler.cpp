@@ -119,7 +119,26 @@ void UnitCompiler::warn_if_unreadable(Span span, const std::string& what, const 
     warn(span, "io.read-outside", fmt::format("{}: {}; the run will refuse it", what, *refused));
 }
 
+// Indexed labels (`F(HOLE[I])`): each index is compiled once, as a number, and kept with the text
+// the label's name holds; the interpreter evaluates it where the label is used.
+bool UnitCompiler::label_indices(const grammar::LabelRef& label) {
+  if (label.index.empty()) return true;
+  const auto open = label.name.find('[');
+  const std::string text = label.name.substr(open + 1, label.name.size() - open - 2);
+  auto e = numeric(label.index.front(), "a label's index");
+  if (!e) return false;
+  m_module.label_indices.emplace(text, std::move(*e));
+  return true;
+}
+bool UnitCompiler::label_indices(const grammar::Expr& e) {
+  if (e.kind == grammar::ExprKind::Label && !label_indices(e.label)) return false;
+  return std::all_of(e.args.begin(), e.args.end(), [&](const grammar::Expr& a) { return label_indices(a); });
+}
+
 void UnitCompiler::statement(const grammar::Statement& s) {
+  if ((s.target && !label_indices(*s.target)) ||
+      !std::all_of(s.params.begin(), s.params.end(), [&](const grammar::Expr& p) { return label_indices(p); }))
+    return;
   if (s.jump_label) {
     const std::string name = upper(*s.jump_label);
     if (auto prior = jumps().labels.find(name); prior != jumps().labels.end() && prior->second < code().size()) {

@@ -204,6 +204,8 @@ class UnitCompiler {
     return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
   }
   void statement(const grammar::Statement& s);
+  bool label_indices(const grammar::LabelRef& label);
+  bool label_indices(const grammar::Expr& e);
   void unknown(const grammar::Statement& s);
   bool expect_params(const grammar::Statement& s, std::size_t n, const char* what);
   bool require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example);

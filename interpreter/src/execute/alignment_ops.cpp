@@ -80,7 +80,7 @@ ExecStatus Execute::datset(Interpreter& vm, const ir::Instruction& in, CallFrame
       }
     }
   }
-  if (auto r = vm.m_runtime.datset(in.name, req, in.span); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.datset(vm.name_of(in), req, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 
@@ -99,7 +99,7 @@ ExecStatus Execute::trans(Interpreter& vm, const ir::Instruction& in, CallFrame&
       req.value[k] = *x * len;
     }
   }
-  if (auto r = vm.m_runtime.trans(in.name, req, in.span); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.trans(vm.name_of(in), req, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 
@@ -116,7 +116,7 @@ ExecStatus Execute::rotate(Interpreter& vm, const ir::Instruction& in, CallFrame
     if (!a) return vm.fail(in.span, a.error());
     req.angle_deg = *a * deg;
   }
-  if (auto r = vm.m_runtime.rotate(in.name, req, in.span); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.rotate(vm.name_of(in), req, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

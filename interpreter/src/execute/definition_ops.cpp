@@ -190,7 +190,7 @@ ExecStatus Execute::sensor_def(Interpreter& vm, const ir::Instruction& in, CallF
   const auto w = words(in);
   const bool polar = std::find(w.begin(), w.end(), "POL") != w.end();
   runtime::SensorDefinition s;
-  s.label = in.name;
+  s.label = vm.name_of(in);
   s.ball_diameter_mm = nums.back() * len;
   // INDEX,POL: tilt, rotation, i, j, k, length, diameter; CART: x, y, z, i, j, k, diameter.
   if (nums.size() >= 7) {

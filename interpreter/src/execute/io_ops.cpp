@@ -86,7 +86,7 @@ ExecStatus Execute::device_def(Interpreter& vm, const ir::Instruction& in, CallF
     if (!v) return vm.fail(in.span, v.error());
     path = v->to_display();
   }
-  if (auto r = vm.m_runtime.define_device(in.name, path, in.span); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.define_device(vm.name_of(in), path, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

@@ -167,23 +167,23 @@ tl::expected<std::vector<Argument>, ParseError> parse_arguments(std::string_view
   return args;
 }
 
+std::optional<Tag> read_tag(std::string_view line) {
+  // Tag: columns 1-5.
+  if (line.size() < 5) return std::nullopt;
+  Tag t;
+  t.event = line[0] == 'E';
+  for (std::size_t k = t.event ? 1 : 0; k < 5; ++k)
+    if (!is_digit(line[k])) return std::nullopt;
+  std::from_chars(line.data() + (t.event ? 1 : 0), line.data() + 5, t.number);
+  return t;
+}
+
 tl::expected<CommandLine, ParseError> parse_command_line(std::string_view line) {
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.remove_suffix(1);
   auto fail = [](ErrorCode code, std::string message, std::optional<Tag> tag) {
     return tl::unexpected(ParseError{code, std::move(message), tag});
   };
-  // Tag: columns 1-5.
-  std::optional<Tag> tag;
-  if (line.size() >= 5) {
-    Tag t;
-    t.event = line[0] == 'E';
-    bool digits = true;
-    for (std::size_t k = t.event ? 1 : 0; k < 5; ++k) digits = digits && is_digit(line[k]);
-    if (digits) {
-      std::from_chars(line.data() + (t.event ? 1 : 0), line.data() + 5, t.number);
-      tag = t;
-    }
-  }
+  const std::optional<Tag> tag = read_tag(line);
   for (unsigned char c : line)
     if (c < 0x20 || c > 0x7e) return fail(ErrorCode::IllegalCharacter, "a character outside printable ASCII", tag);
   if (!tag) return fail(ErrorCode::IllegalTag, "a tag is five digits, or E and four digits", std::nullopt);

@@ -165,9 +165,9 @@ struct Connection : std::enable_shared_from_this<Connection> {
 
   // `&` says the server has the command: it goes out before the command runs (a long scan
   // computes for a while), and before a paced answer completes.
+  // Only the tag is read here; the session parses the line once, when it runs it.
   std::optional<Tag> acknowledge(const std::string& line) {
-    const auto parsed = parse_command_line(line);
-    const std::optional<Tag> tag = parsed ? std::optional<Tag>(parsed->tag) : parsed.error().tag;
+    const std::optional<Tag> tag = read_tag(line);
     if (tag) send(format_ack(*tag));
     return tag;
   }

@@ -9,11 +9,15 @@
 
 namespace metron::grammar {
 
-/// A DMIS label reference such as `FA(PLN1)`, `DAT(A)`, `D(CALN1_b)`, `S(PROBE.6)`.
+struct Expr;
+
+/// A DMIS label reference such as `FA(PLN1)`, `DAT(A)`, `D(CALN1_b)`, `S(PROBE.6)`, or an indexed
+/// label `F(HOLE[I])` (DMIS 5.x): one label per value of the index.
 struct LabelRef {
   std::string prefix;  ///< upper-case label prefix: F, FA, T, TA, D, DA, DAT, DID, S, SA, M, ...
-  std::string name;    ///< the name between the parentheses, exactly as written
+  std::string name;    ///< the name between the parentheses as written; indexed: `HOLE[I]`, the index upper-case without blanks
   Span span;           ///< the whole reference, prefix to closing parenthesis
+  std::vector<Expr> index;  ///< an indexed label's index expression (one), else empty
 };
 
 enum class ExprKind {

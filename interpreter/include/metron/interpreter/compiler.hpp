@@ -17,6 +17,25 @@
 
 namespace metron::interpreter {
 
+/// Orders labels with the index of an indexed label left out: `HOLE[I]`, `HOLE[2]` and `HOLE[J+1]`
+/// are one family, which the compiler checks as one name (the index is known at run time only).
+struct LabelLess {
+  static std::string family(const std::string& label) {
+    std::string out;
+    int depth = 0;
+    for (char c : label) {
+      if (c == ']' && depth > 0) --depth;
+      if (depth == 0) out += c;
+      if (c == '[') ++depth;
+    }
+    return out;
+  }
+  bool operator()(const std::string& a, const std::string& b) const {
+    if (a.find('[') == std::string::npos && b.find('[') == std::string::npos) return a < b;
+    return family(a) < family(b);
+  }
+};
+
 /// What the compiler knows about the names a program defines (kept across REPL entries).
 struct SymbolTable {
   struct FeatureInfo {
@@ -28,23 +47,23 @@ struct SymbolTable {
     int size = 0;       ///< array size, 0 for a scalar
     Span span;
   };
-  std::map<std::string, FeatureInfo> features;
-  std::map<std::string, runtime::ToleranceKind> tolerances;   ///< label -> kind
-  std::set<std::string> datums, sensors, alignments, devices, saved, paths;
+  std::map<std::string, FeatureInfo, LabelLess> features;
+  std::map<std::string, runtime::ToleranceKind, LabelLess> tolerances;   ///< label -> kind
+  std::set<std::string, LabelLess> datums, sensors, alignments, devices, saved, paths;
   std::map<std::string, VariableInfo> variables;   ///< globals
   std::map<std::string, int> macros;               ///< name -> index in Module::macros
   /// Macro name -> (parameter index -> feature type) for FEAT statements whose label is a parameter:
   /// a call defines the feature named by its argument.
   std::map<std::string, std::map<int, runtime::FeatureType>> macro_features;
-  std::map<std::string, Span> skipped;             ///< labels defined by skipped vendor statements
+  std::map<std::string, Span, LabelLess> skipped; ///< labels defined by skipped vendor statements
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
-  std::set<std::string> tolerance_datums;          ///< tolerances defined with datum references
-  std::set<std::string> evaluated_tolerances;      ///< tolerances an EVAL has evaluated (OUTPUT/TA(t) alone reports them)
+  std::set<std::string, LabelLess> tolerance_datums;      ///< tolerances defined with datum references
+  std::set<std::string, LabelLess> evaluated_tolerances;  ///< tolerances an EVAL has evaluated (OUTPUT/TA(t) alone reports them)
   /// Sensors the program takes from the machine's probe library (RECALL/SA, SNSLCT without SNSDEF).
-  std::set<std::string> library_sensors;
-  /// Tolerances of a DMIS type metron parses but does not evaluate (CONCEN, RUNOUT, ...): label -> type.
-  std::map<std::string, std::string> unevaluated_tolerances;
+  std::set<std::string, LabelLess> library_sensors;
+  /// Tolerances of a DMIS type metron parses but does not evaluate (ANGLR, CPROFS, ...): label -> type.
+  std::map<std::string, std::string, LabelLess> unevaluated_tolerances;
   /// Folders searched for CALL/EXTERN,DMIS files written with another machine's path (--include).
   std::vector<std::string> include_dirs;
 };

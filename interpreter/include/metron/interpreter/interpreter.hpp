@@ -92,6 +92,7 @@ class Interpreter {
   ExecStatus fail(Span span, std::string message);
   ExecStatus from_runtime(const runtime::RuntimeError& e);
   std::string label_name(const ir::LabelOperand& l) const;
+  std::string indexed(const std::string& name) const;  ///< `HOLE[I]` with I's value: `HOLE[3]`
   std::string name_of(const ir::Instruction& in) const;  ///< the instruction's label, resolved through macro parameters
   tl::expected<double, std::string> number(const ir::Expr& e);
   std::vector<Value>* find_variable(const std::string& name);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <variant>
@@ -156,6 +157,9 @@ struct Unit {
 struct Module {
   std::vector<Unit> units;
   std::vector<Macro> macros;
+  /// Indexed labels (`F(HOLE[I])`): the index as the label's name holds it (`I`) -> its
+  /// expression, evaluated when the label is used (DMIS 5.x indexed labels).
+  std::map<std::string, Expr> label_indices;
 };
 
 /// Human-readable listing of the whole module (`metron compile --emit-ir`).

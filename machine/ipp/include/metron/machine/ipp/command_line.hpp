@@ -59,6 +59,10 @@ struct ParseError {
   std::optional<Tag> tag;             ///< the tag, when it could be read
 };
 
+/// The tag of a line (columns 1-5), when it has one: what a server needs to acknowledge a line
+/// before it parses the rest; parse_command_line reads the same tag.
+std::optional<Tag> read_tag(std::string_view line);
+
 /// Parses one line (CR/LF already removed or present at the end). Any byte sequence is accepted
 /// as input; malformed lines give a ParseError, never an exception.
 tl::expected<CommandLine, ParseError> parse_command_line(std::string_view line);
