@@ -1351,7 +1351,9 @@ TEST(ShopPrograms, MidPlaneMidLineCopyAndVertexConstructions) {
   // The mid-line of y = 0 and y = 10 (opposite senses) is y = 5 along +x.
   const auto ml = actual("ML");
   EXPECT_NEAR(ml.direction.dot(Eigen::Vector3d::UnitX()), 1.0, 1e-12);
-  EXPECT_NEAR((ml.position - Eigen::Vector3d(0, 5, 0)).cross(Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-12);
+  // Its point is midway between L1's point and the nearest point of L2 (not the points' midpoint
+  // (3.5, 5, 0), which slides along the line with where each line's point happened to be).
+  EXPECT_NEAR((ml.position - Eigen::Vector3d(0, 5, 0)).norm(), 0.0, 1e-12);
   const auto cc = actual("CC");
   EXPECT_EQ(cc.type, metron::runtime::FeatureType::Circle);
   EXPECT_NEAR((cc.position - Eigen::Vector3d(1, 2, 3)).norm(), 0.0, 1e-12);
