@@ -191,10 +191,17 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     case FeatureType::Point:
       g.position = fit->position;
       break;
-    case FeatureType::Line:
-      g.position = fit->position;
+    case FeatureType::Line: {
+      // The point of the fitted line nearest the nominal's (a BND line's start), as for a
+      // cylinder: the points' centroid slides along the line with where they were taken, and a
+      // perfect line probed at 10, 50 and 90 showed its start 40 mm off. A BND line ends at the
+      // foot of its nominal end.
       g.direction = axis;
+      g.position = fit->position + (nominal.position - fit->position).dot(axis) * axis;
+      if (nominal.bounded && nominal.length_mm > 0)
+        g.length_mm = (nominal.position + nominal.length_mm * nominal.direction.normalized() - g.position).dot(axis);
       break;
+    }
     case FeatureType::Plane:
       g.position = fit->position;
       g.direction = axis;

@@ -1446,6 +1446,35 @@ TEST(ShopPrograms, IndexedLabelsNameOneFeaturePerIndex) {
   EXPECT_TRUE(bad.has("expected ']' after the label's index")) << bad.text;
 }
 
+// A measured line is reported at the point of the fitted line nearest its nominal's (a BND
+// line's start and end), as a cylinder's axis is: the points' centroid put a perfect line probed
+// at x = 10, 50 and 90 at x = 50, 40 mm off its start, and CORTOL said OUT.
+TEST(ShopPrograms, AMeasuredLineIsReportedFromItsNominalsPoint) {
+  const std::string text =
+      "DMISMN/'line', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "DECL/REAL,DX,DU\nF(LB)=FEAT/LINE,BND,CART,10,5,-3,90,5,-3,0,0,1\nMEAS/LINE,F(LB),3\n"
+      "PTMEAS/CART,10,5,-3,0,-1,0\nPTMEAS/CART,50,5,-3,0,-1,0\nPTMEAS/CART,90,5,-3,0,-1,0\nENDMES\n"
+      "F(LU)=FEAT/LINE,UNBND,CART,20,5,-6,1,0,0,0,0,1\nMEAS/LINE,F(LU),2\n"
+      "PTMEAS/CART,60,5,-6,0,-1,0\nPTMEAS/CART,80,5,-6,0,-1,0\nENDMES\n"
+      "T(LX)=TOL/CORTOL,XAXIS,-0.1,0.1\nOUTPUT/FA(LB),FA(LU),TA(LX)\nDX=VALUE/TA(LX),DEV,1\nDU=VALUE/TA(LX),DEV,2\nENDFIL\n";
+  auto world = metron::machine::load_world_or_default(std::nullopt);
+  ASSERT_TRUE(world.has_value());
+  const fs::path p = write("line_point.dmi", text);
+  auto session = Session::create(metron::interpreter::Backend{
+      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
+  ASSERT_TRUE(session->load(p.string()));
+  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const auto* lb = report(*session, "LB");
+  ASSERT_TRUE(lb && lb->actual);
+  EXPECT_NEAR((lb->actual->position - Eigen::Vector3d(10, 5, -3)).norm(), 0.0, 1e-6);
+  EXPECT_NEAR(lb->actual->length_mm, 80.0, 1e-6);
+  const auto* lu = report(*session, "LU");
+  ASSERT_TRUE(lu && lu->actual);
+  EXPECT_NEAR((lu->actual->position - Eigen::Vector3d(20, 5, -6)).norm(), 0.0, 1e-6);
+  EXPECT_NEAR(session->interpreter().variable("DX")->number, 0.0, 1e-6);
+  EXPECT_NEAR(session->interpreter().variable("DU")->number, 0.0, 1e-6);
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
