@@ -22,8 +22,8 @@ namespace {
 namespace pegtl = tao::pegtl;
 
 // DMIS label prefixes (sorted for binary search).
-constexpr std::array<std::string_view, 62> label_prefixes = {
-    "A",  "CR", "CS", "CZ", "D",  "DA", "DAT", "DATT", "DI", "DID", "DME", "DR", "DS", "DV", "F",  "FA",
+constexpr std::array<std::string_view, 63> label_prefixes = {
+    "A",  "CI", "CR", "CS", "CZ", "D",  "DA", "DAT", "DATT", "DI", "DID", "DME", "DR", "DS", "DV", "F",  "FA",
     "FI", "FS", "G",  "GS", "K",  "KC", "KV",  "L",    "LI", "M",   "MA",  "MD", "ML", "OP", "P",  "PC",
     "PL", "PN", "PR", "PS", "PV", "Q",  "QIS", "R",    "RM", "RT",  "S",   "SA", "SE", "SG", "SS", "ST",
     "SW", "SX", "T",  "TA", "TL", "TP", "U",   "V",    "VA", "VF",  "VL",  "VR", "VS", "VW"};
@@ -32,7 +32,7 @@ static_assert(std::is_sorted(label_prefixes.begin(), label_prefixes.end()));
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
 // Parses one logical line; returns false after reporting a syntax error.
-bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sink, Statement& out) {
+bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sink, Statement& out, bool lenient) {
   detail::Builder b;
   b.file = file;
   b.line = &line;
@@ -45,7 +45,12 @@ bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sin
       return false;
     }
   } catch (const detail::SyntaxError& e) {
-    sink.error(e.code, e.span, e.message);
+    // `XX(name)=MAJOR/...` with a label prefix metron does not know (a vendor's, a newer DMIS's):
+    // read leniently, the statement is skipped as an unknown statement is.
+    if (lenient && e.code == "parse.unknown-label-prefix")
+      sink.warning("parse.unknown-label-prefix", e.span, e.message + ": the statement is skipped (--strict makes it an error)");
+    else
+      sink.error(e.code, e.span, e.message);
     return false;
   } catch (const std::exception& e) {
     sink.error("parse.internal", b.point(b.base), std::string("internal parser error: ") + e.what());
@@ -107,7 +112,7 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
       continue;
     }
     Statement stmt;
-    if (parse_line(line, file, ended ? after_endfil : sink, stmt)) {
+    if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict)) {
       if (stmt.major == "ENDFIL") ended = true;
       program.statements.push_back(std::move(stmt));
     }

@@ -75,7 +75,7 @@ INSTANTIATE_TEST_SUITE_P(Grammar, BadStatement, ::testing::Values(
   BadCase{"V1[2] X", "parse.expected-equals", "expected '=' after the array element 'V1[...]'", "1:7"},
   BadCase{"F(X)=", "parse.expected-major", "expected a major word after '='", "1:6"},
   BadCase{"V1 = 3", "parse.expected-major", "expected a major word after '='", "1:6"},
-  BadCase{"XYZ(A)=FEAT/PLANE", "parse.unknown-label-prefix", "unknown label prefix 'XYZ' before '('", "1:1"},
+  BadCase{"XYZ(A)=FEAT/PLANE", "parse.unknown-label-prefix", "unknown label prefix 'XYZ' before '(': the statement is skipped (--strict makes it an error)", "1:1"},
   BadCase{"A/SIN(1", "parse.expected-close", "expected ')' after the arguments of 'SIN'", "1:8"},
   BadCase{"A/SIN(", "parse.expected-argument", "expected an argument or ')' after 'SIN('", "1:7"},
   BadCase{"A/MAX(1,)", "parse.expected-argument", "expected an argument after ','", "1:9"},
@@ -93,6 +93,22 @@ INSTANTIATE_TEST_SUITE_P(Grammar, BadStatement, ::testing::Values(
   BadCase{"$$ c\nF(CLIN1)=FEAT/LINE,UNBND,$\n  CART,(1,2\n", "parse.expected-close", "expected ')' after the expression in parentheses", "3:10"}
 ));
 // clang-format on
+
+// A label prefix metron does not know (a vendor's, a newer DMIS's) skips its statement with a
+// warning, as an unknown statement is; --strict keeps it an error. CI is CLMPID's.
+TEST(ParserErrors, AnUnknownLabelPrefixSkipsItsStatementLeniently) {
+  SourceManager sources;
+  const auto file = sources.add("prefix.dmi", "DH(X)=DMEHW/'controller'\nCI(CL1)=CLMPID/'CLAMP-A'\nENDFIL\n");
+  DiagnosticSink lenient;
+  const Program p = parse_program(sources, file, lenient);
+  EXPECT_EQ(p.statements.size(), 2u);
+  EXPECT_EQ(lenient.error_count(), 0u);
+  ASSERT_EQ(lenient.items().size(), 1u);
+  EXPECT_EQ(lenient.items()[0].severity, Severity::Warning);
+  DiagnosticSink strict;
+  parse_program(sources, file, strict, ParseOptions{true});
+  EXPECT_EQ(strict.error_count(), 1u);
+}
 
 TEST(ParserErrors, DeepNestingIsAnErrorNotACrash) {
   const std::string deep = "A/" + std::string(100000, '(') + "1";

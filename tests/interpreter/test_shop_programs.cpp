@@ -1475,6 +1475,27 @@ TEST(ShopPrograms, AMeasuredLineIsReportedFromItsNominalsPoint) {
   EXPECT_NEAR(session->interpreter().variable("DU")->number, 0.0, 1e-6);
 }
 
+// A stylus's tip shape after its diameter (`SNSDEF/PROBE,FIXED,POL,...,115,12,DISC,3`): the tip
+// diameter is 12, not the disc's thickness 3 (the last number), and the shape is told once.
+TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
+  const std::string text = "DMISMN/'s', 5.0\nS(DISK1)=SNSDEF/PROBE,FIXED,POL,0,0,0,0,1,115,12,DISC,3\n"
+                           "S(B)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,SPHERE\nCI(CL1)=CLMPID/'CLAMP-A'\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 1u) << c.text;
+  EXPECT_TRUE(c.has("S(DISK1) has a DISC tip")) << c.text;
+  SourceManager sources;
+  DiagnosticSink sink;
+  Compiler compiler(sources, sink);
+  compiler.compile_text("shop.dmi", text);
+  std::vector<double> tips;
+  for (const auto& in : compiler.module().units.at(0).code)
+    if (in.op == metron::interpreter::ir::Op::SensorDef) tips.push_back(in.operands.back().expr.value.number);
+  EXPECT_EQ(tips, (std::vector<double>{12, 2}));
+  const Checked other = check("DMISMN/'s', 5.0\nS(C)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,FOO,3\nENDFIL\n");
+  EXPECT_TRUE(other.has("or the tip's shape (SPHERE, CYLNDR, DISC), got the word FOO")) << other.text;
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;

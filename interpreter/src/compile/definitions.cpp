@@ -264,6 +264,19 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   const std::size_t n = s.params.size() - i;
   if (n < 4) return error(s.params.back().span, "sema.sensor-arity", "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
   for (; i < s.params.size(); ++i) {
+    // The tip's shape after its diameter (`...,115,12,DISC,3`): the virtual CMM's tips are balls.
+    if (is_word(s.params[i]) && !is_variable(s.params[i].text)) {
+      const std::string& shape = s.params[i].text;
+      static const std::set<std::string> shapes = {"SPHERE", "CYLNDR", "DISC", "DISK", "POINT", "OPTIC"};
+      if (!shapes.count(shape))
+        return error(s.params[i].span, "sema.sensor-shape",
+                     fmt::format("expected a sensor parameter (a number) or the tip's shape (SPHERE, CYLNDR, DISC), got the word {}", shape));
+      if (shape != "SPHERE")
+        warn(s.params[i].span, "sema.sensor-shape",
+             fmt::format("S({}) has a {} tip: the virtual CMM probes with a ball of its diameter; the shape's other sizes are not used",
+                         s.target->name, shape));
+      break;
+    }
     if (!push_number(in, s.params[i], "a sensor parameter")) return;
   }
   note_definition("S", upper(s.target->name), s.span);

@@ -24,7 +24,9 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   m_output_file = !repl && !m_reported_results.empty() &&
                   std::none_of(st.begin(), st.end(), [](const grammar::Statement& s) { return measuring.count(s.major) > 0; });
   // A DMIS output file starts with FILNAM (NIST's output.dms, metron's own).
-  if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN" && !(m_output_file && st.front().major == "FILNAM"))
+  // A DMIS module (DMISMD, as MODUS's helper tools write) starts as a program does.
+  if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN" && st.front().major != "DMISMD" &&
+      !(m_output_file && st.front().major == "FILNAM"))
     warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
   for (std::size_t i = 0; i < st.size(); ++i) {
     const auto& s = st[i];
