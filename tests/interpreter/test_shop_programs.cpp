@@ -1496,6 +1496,28 @@ TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
   EXPECT_TRUE(other.has("or the tip's shape (SPHERE, CYLNDR, DISC), got the word FOO")) << other.text;
 }
 
+// A material modifier after a datum (`DAT(B),MMC`) is the datum's: it must not make an RFS
+// feature's position MMC (it did: every MMC word set the feature's condition, and a bonus
+// appeared). Datums are evaluated RFS, which the warning says.
+TEST(ShopPrograms, DatumModifiersDoNotChangeTheFeaturesCondition) {
+  const std::string text = "DMISMN/'s', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\nDATDEF/FA(P),DAT(B)\n"
+                           "T(TP)=TOL/POS,2D,0.010,RFS,DAT(A),DAT(B),MMC\nT(TQ)=TOL/POS,2D,0.010,MMC,DAT(A),DAT(B),RFS\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 1u) << c.text;
+  EXPECT_TRUE(c.has("DAT(B) at MMC: datums are evaluated RFS, metron applies no datum shift")) << c.text;
+  SourceManager sources;
+  DiagnosticSink sink;
+  Compiler compiler(sources, sink);
+  compiler.compile_text("shop.dmi", text);
+  std::vector<std::string> conditions;
+  for (const auto& in : compiler.module().units.at(0).code)
+    if (in.op == metron::interpreter::ir::Op::ToleranceDef)
+      for (const auto& o : in.operands)
+        if (o.word == "MMC" || o.word == "LMC" || o.word == "RFS") conditions.push_back(in.name + ":" + o.word);
+  EXPECT_EQ(conditions, (std::vector<std::string>{"TP:RFS", "TQ:MMC"}));
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;

@@ -343,6 +343,15 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   std::vector<double> numbers;
   bool has_reference = false;
   for (std::size_t i = 1; i < p.size(); ++i) {
+    // A material modifier right after a datum is the datum's (`DAT(B),MMC`), not the feature's:
+    // it is not passed on, so it cannot change the feature's condition, and it is told.
+    if (i > 1 && is_label(p[i - 1], {"DAT", "DATT"}) && (is_word(p[i], "MMC") || is_word(p[i], "LMC") || is_word(p[i], "RFS"))) {
+      if (!is_word(p[i], "RFS"))
+        warn(p[i].span, "sema.datum-modifier",
+             fmt::format("DAT({}) at {}: datums are evaluated RFS, metron applies no datum shift", p[i - 1].label.name,
+                         p[i].text));
+      continue;
+    }
     if (p[i].kind == ExprKind::Label && (kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) &&
         is_label(p[i], {"F", "FA"})) {
       // TOL/DISTWRT,NOMINL,d,lo,hi,FA(ref),XAXIS,AVG: the reference feature is part of the tolerance.
