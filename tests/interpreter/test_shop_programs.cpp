@@ -1203,6 +1203,25 @@ TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
       << r.diagnostics;
 }
 
+// TEXT/QUERY,(V),len,AN|N,L|R,'question' (older and MCOSMOS-style programs ask the serial number
+// so) is a PROMPT into V: it displayed V and dropped the question and the answer.
+TEST(ShopPrograms, TextQueryReadsTheAnswerIntoItsVariable) {
+  const std::string text = "DMISMN/'q', 5.0\nDECL/CHAR,20,AA\nDECL/REAL,X\nAA=ASSIGN/'none'\n"
+                           "TEXT/QUERY,(AA),20,AN,L,'Enter serial number'\nTEXT/QUERY,(X),8,N,R,'Temperature?'\n"
+                           "TEXT/OPER,CONCAT('SN=',AA)\nTEXT/OPER,STR(X*2)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0u);
+  const auto r = run(text, std::nullopt, {"SN123", "21.5"});
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> texts;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  ASSERT_EQ(texts.size(), 2u);
+  EXPECT_EQ(texts[0], "SN=SN123");
+  EXPECT_EQ(std::stod(texts[1]), 43.0);
+  const Checked bad = check("DMISMN/'q', 5.0\nTEXT/QUERY,(NOPE),20,AN,L,'x'\nENDFIL\n");
+  EXPECT_TRUE(bad.has("TEXT/QUERY takes the variable that receives the answer")) << bad.text;
+}
+
 // ---- the lenient reader -----------------------------------------------------------------------
 
 TEST(ShopPrograms, LabelsWithAccentsPlusAndPlusMinusInEveryEncoding) {

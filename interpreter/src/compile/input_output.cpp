@@ -123,11 +123,43 @@ void UnitCompiler::pause(const grammar::Statement& s) {
 // TEXT/OPER|OUTFIL|MAN|DISPLY,'text'
 void UnitCompiler::text(const grammar::Statement& s) {
   if (!expect_params(s, 2, "the text kind (OPER, OUTFIL, MAN) and the text")) return;
+  if (is_word(s.params[0], "QUERY")) return text_query(s);
   auto in = make(Op::Text, s);
   in.operands.push_back(word_operand(s.params[0]));
   auto e = expression(s.params[1]);
   if (!e) return;
   in.operands.push_back(expr_operand(std::move(e->e)));
+  emit(std::move(in));
+}
+
+// TEXT/QUERY,(V),length,AN|N|...,L|R,'question': the operator's answer into V, as V=PROMPT/'question'
+// (scripted with --answers at run, else the default with a warning); the field length, kind and
+// justification are a terminal's layout.
+void UnitCompiler::text_query(const grammar::Statement& s) {
+  const grammar::Expr* v = &s.params[1];
+  if (v->kind == ExprKind::Paren && !v->args.empty()) v = &v->args[0];
+  if (v->kind != ExprKind::Word || !is_variable(v->text))
+    return error(s.params[1].span, "sema.text-query",
+                 "TEXT/QUERY takes the variable that receives the answer: TEXT/QUERY,(V),20,AN,L,'question'");
+  const std::string name = v->text;
+  const SymbolTable::VariableInfo* info = nullptr;
+  if (auto it = m_locals.find(name); it != m_locals.end()) info = &it->second;
+  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end()) info = &jt->second;
+  if (info && info->size > 0) return error(v->span, "sema.array-without-index", fmt::format("array {} needs an index", name));
+  ir::Expr value;
+  value.op = ir::ExprOp::Call;
+  value.name = "PROMPT";
+  value.span = s.span;
+  value.type = info ? info->type : ValueType::Real;
+  for (std::size_t i = 2; i < s.params.size(); ++i)
+    if (s.params[i].kind == ExprKind::String) {
+      auto q = expression(s.params[i]);
+      if (!q) return;
+      value.args.push_back(std::move(q->e));
+      break;
+    }
+  auto in = make(Op::Assign, s, name);
+  in.operands.push_back(expr_operand(std::move(value)));
   emit(std::move(in));
 }
 

@@ -220,6 +220,7 @@ class UnitCompiler {
   void read(const grammar::Statement& s);
   void write(const grammar::Statement& s);
   void text(const grammar::Statement& s);
+  void text_query(const grammar::Statement& s);
   void device(const grammar::Statement& s);
   bool check_device(const grammar::Statement& s);
   void open(const grammar::Statement& s);
