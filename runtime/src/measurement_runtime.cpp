@@ -689,13 +689,15 @@ Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(cons
     return std::move(*tiers);
   }
   // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
-  // feature is evaluated against it. CORTOL applies to each output feature.
+  // feature is evaluated against it.
   std::vector<std::vector<const Feature*>> evaluations;
   if (!spec.reference_feature.empty()) {
     const Feature* reference = find_feature(spec.reference_feature);
     if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", spec.reference_feature));
     for (const Feature* f : features) evaluations.push_back({f, reference});
-  } else if (spec.kind == ToleranceKind::Cortol) {
+  } else if (spec.kind != ToleranceKind::DistB && spec.kind != ToleranceKind::Anglb) {
+    // A tolerance of one feature (CORTOL, DIAM, FLAT, POS, PERP ...) output with several applies
+    // to each: OUTPUT/FA(C1),FA(C2),TA(DIA).
     for (const Feature* f : features) evaluations.push_back({f});
   } else {
     evaluations.push_back(features);

@@ -1537,6 +1537,24 @@ TEST(ShopPrograms, DatumModifiersDoNotChangeTheFeaturesCondition) {
   EXPECT_EQ(conditions, (std::vector<std::string>{"TP:RFS", "TQ:MMC"}));
 }
 
+// A tolerance of one feature output with several applies to each (it stopped the run: "DIAM
+// applies to one feature, got 2"), and check refuses what run would: PERP of a CIRCLE.
+TEST(ShopPrograms, OneFeatureTolerancesApplyToEachOutputFeatureAndCheckAgreesWithRun) {
+  const std::string text = "DMISMN/'each', 5.0\nDECL/REAL,D1,D2\n"
+                           "F(H1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(H1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10.02\n"
+                           "F(H2)=FEAT/CIRCLE,INNER,CART,20,0,0,0,0,1,10\nFA(H2)=FEAT/CIRCLE,INNER,CART,20,0,0,0,0,1,9.9\n"
+                           "T(DD)=TOL/DIAM,-0.05,0.05\nOUTPUT/FA(H1),FA(H2),TA(DD)\n"
+                           "D1=VALUE/TA(DD),DEV,1\nD2=VALUE/TA(DD),DEV,2\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0u);
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_NEAR(r.session->interpreter().variable("D1")->number, 0.02, 1e-9);
+  EXPECT_NEAR(r.session->interpreter().variable("D2")->number, -0.1, 1e-9);
+  const Checked perp = check("DMISMN/'p', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\n"
+                             "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(PR)=TOL/PERP,0.02,DAT(A)\nOUTPUT/FA(C),TA(PR)\nENDFIL\n");
+  EXPECT_TRUE(perp.has("TOL/PERP of T(PR) does not apply to a CIRCLE")) << perp.text;
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;

@@ -27,8 +27,16 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Cylcty: return in({T::Cylinder});
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line});
+    // The lists of runtime/src/tolerance.cpp's evaluators, so that check and run agree.
     case ToleranceKind::Pos:
-    case ToleranceKind::Compos: return !in({T::Plane, T::Line, T::ParallelPlanes, T::GenericSurface, T::GenericCurve});
+    case ToleranceKind::Compos: return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot});
+    case ToleranceKind::Perp:
+    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
+    case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
+    case ToleranceKind::Concen:
+    case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
+    case ToleranceKind::Crnout:
+    case ToleranceKind::Totrun: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere, T::Plane});
     case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface});
     case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
