@@ -97,7 +97,11 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
       rows.push_back({cosines[i], Unit::Cosine, point_set ? nan : nominal.direction[i],
                       act([i](const Geometry& g) { return g.direction[i]; })});
   }
-  if (has_diameter(nominal.type))
+  // An arc is sized by its radius (FEAT/ARC), the others by their diameter.
+  if (nominal.type == FeatureType::Arc)
+    rows.push_back(
+        {"R", Unit::Millimetre, nominal.diameter_mm / 2, act([](const Geometry& g) { return g.diameter_mm / 2; })});
+  else if (has_diameter(nominal.type))
     rows.push_back(
         {"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
   if (nominal.type == FeatureType::ClosedSlot) {

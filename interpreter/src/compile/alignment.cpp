@@ -216,6 +216,7 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   if (!method) {
     if (is_word(p[2])) {
       warn(p[2].span, "sema.unsupported-construction", fmt::format("construction method {} is not supported; F({}) gets no actual", p[2].text, p[1].label.name));
+      m_symbols.unconstructed[label] = p[2].text;
       emit(make(Op::Nop, s, "CONST"));
       return;
     }
@@ -228,6 +229,7 @@ void UnitCompiler::construct(const grammar::Statement& s) {
                                                                                       : std::optional<FeatureType>{};
   if (makes && *makes != *const_type)
     return error(p[0].span, "sema.const-type", fmt::format("{} constructs a {}", p[2].text, ir::word_of(*makes)));
+  m_symbols.unconstructed.erase(label);
   auto in = make(Op::Construct, s, label);
   in.name_is_param = macro_param(label).has_value();
   in.payload = ir::ConstructPayload{*const_type, *method};
@@ -333,6 +335,14 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         warn(p.span, "sema.output-undefined-feature",
              fmt::format("feature {}({}) is never defined in this program: left out of this {} (--strict makes it an error)",
                          p.label.prefix, p.label.name, s.major));
+        left_out = true;
+        continue;
+      }
+      if (auto u = m_symbols.unconstructed.find(upper(p.label.name)); !m_strict && !m_repl && u != m_symbols.unconstructed.end()) {
+        warn(p.span, "sema.output-unconstructed-feature",
+             fmt::format("{}({}) has no actual: its CONST method {} is not supported; left out of this {} (--strict makes it "
+                         "an error)",
+                         p.label.prefix, p.label.name, u->second, s.major));
         left_out = true;
         continue;
       }

@@ -335,6 +335,26 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     }
     return error(p[0].span, "sema.bad-tolerance", "expected a tolerance type (DIAM, RAD, DISTB, POS, FLAT, ...) after TOL/");
   }
+  // Forms of known types metron does not evaluate (polar CORTOL, DISTB's LIMIT form): left out
+  // as an unknown type is, with the form named.
+  const auto any_word = [&](std::initializer_list<const char*> ws) {
+    return std::any_of(p.begin() + 1, p.end(), [&](const grammar::Expr& e) {
+      return std::any_of(ws.begin(), ws.end(), [&](const char* w) { return is_word(e, w); });
+    });
+  };
+  std::string form;
+  if (*parsed == ToleranceKind::Cortol && !any_word({"XAXIS", "YAXIS", "ZAXIS"}))
+    for (std::size_t i = 1; i < p.size() && form.empty(); ++i)
+      if (is_word(p[i]) && !is_variable(p[i].text)) form = p[0].text + "," + p[i].text;
+  if (*parsed == ToleranceKind::DistB && any_word({"LIMIT"})) form = p[0].text + ",LIMIT";
+  if (!form.empty()) {
+    warn(p[0].span, "sema.unevaluated-tolerance",
+         fmt::format("TOL/{} is not evaluated by metron; the OUTPUT of T({}) will be left out", form, s.target->name));
+    m_symbols.unevaluated_tolerances[upper(s.target->name)] = form;
+    m_symbols.tolerances.erase(upper(s.target->name));
+    emit(make(Op::Nop, s, "TOL"));
+    return;
+  }
   const ToleranceKind kind = *parsed;
   const std::string& word = p[0].text;
   auto in = make(Op::ToleranceDef, s, upper(s.target->name));

@@ -212,6 +212,7 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   if (!count) return;
   Block b = block(Block::Kind::Meas, s.span);
   b.feature = label;
+  m_symbols.unconstructed.erase(label);
   b.type = *meas_type;
   if (count->op == ir::ExprOp::Constant) {
     b.declared = static_cast<int>(count->value.number);
@@ -319,6 +320,16 @@ void UnitCompiler::pameas(const grammar::Statement& s) {
       return error(s.params[0].span, "sema.skipped-definition", fmt::format("path P({}) was defined by a skipped statement", s.params[0].label.name));
     return error(s.params[0].span, "sema.undefined-path", fmt::format("path P({}) is not defined: define it with P({})=PATH/...", s.params[0].label.name, s.params[0].label.name));
   }
+  // A GSURF or GCURVE is known only by its PTMEAS points, each its own nominal (run refused a
+  // scan of one; check now says so).
+  for (const auto& b : m_blocks)
+    if (b.kind == Block::Kind::Meas) {
+      const auto type = feature_type(b.feature);
+      if (type == FeatureType::GenericSurface || type == FeatureType::GenericCurve)
+        return error(s.major_span, "sema.scanned-generic",
+                     fmt::format("F({}) is a {}: it is measured by PTMEAS points, each its own nominal, not by a scan",
+                                 b.feature, type == FeatureType::GenericSurface ? "GSURF" : "GCURVE"));
+    }
   auto in = make(Op::PaMeas, s);
   in.operands.push_back(label_op(s.params[0]));
   for (auto& b : m_blocks)

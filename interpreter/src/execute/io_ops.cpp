@@ -165,6 +165,8 @@ ExecStatus Execute::read(Interpreter& vm, const ir::Instruction& in, CallFrame&)
 // is written whole (Fortran writes asterisks: a lost result).
 static std::string laid_out(const Value& v, int width, int decimals) {
   std::string text = decimals >= 0 && v.is_number() ? fmt::format("{:.{}f}", v.number, decimals) : v.to_display();
+  // -0.0004 to 3 decimals is 0.000, not -0.000.
+  if (text.size() > 1 && text.front() == '-' && text.find_first_not_of("0.", 1) == std::string::npos) text.erase(0, 1);
   if (width < 0 || static_cast<int>(text.size()) >= width) return text;
   const std::string pad(static_cast<std::size_t>(width) - text.size(), ' ');
   return v.is_number() ? pad + text : text + pad;

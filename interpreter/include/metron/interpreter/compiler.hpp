@@ -56,6 +56,9 @@ struct SymbolTable {
   /// a call defines the feature named by its argument.
   std::map<std::string, std::map<int, runtime::FeatureType>> macro_features;
   std::map<std::string, Span, LabelLess> skipped; ///< labels defined by skipped vendor statements
+  /// Features whose last CONST used a method metron does not evaluate (OFFSET, TANTO ...): label ->
+  /// the method word. Read leniently, their OUTPUT is left out with a warning.
+  std::map<std::string, std::string, LabelLess> unconstructed;
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
   std::set<std::string, LabelLess> tolerance_datums;      ///< tolerances defined with datum references
