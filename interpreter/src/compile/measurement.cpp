@@ -325,10 +325,10 @@ void UnitCompiler::pameas(const grammar::Statement& s) {
   for (const auto& b : m_blocks)
     if (b.kind == Block::Kind::Meas) {
       const auto type = feature_type(b.feature);
-      if (type == FeatureType::GenericSurface || type == FeatureType::GenericCurve)
+      if (type == runtime::FeatureType::GenericSurface || type == runtime::FeatureType::GenericCurve)
         return error(s.major_span, "sema.scanned-generic",
                      fmt::format("F({}) is a {}: it is measured by PTMEAS points, each its own nominal, not by a scan",
-                                 b.feature, type == FeatureType::GenericSurface ? "GSURF" : "GCURVE"));
+                                 b.feature, type == runtime::FeatureType::GenericSurface ? "GSURF" : "GCURVE"));
     }
   auto in = make(Op::PaMeas, s);
   in.operands.push_back(label_op(s.params[0]));
