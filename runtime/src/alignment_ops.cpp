@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/runtime/alignment_ops.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -17,6 +18,10 @@ Vec3 datum_direction(const Geometry& g, bool primary) {
 
 }  // namespace
 
+bool point_like(FeatureType t) {
+  return t == FeatureType::Point || t == FeatureType::Circle || t == FeatureType::Arc || t == FeatureType::Sphere;
+}
+
 tl::expected<Frame, std::string> datset(const Frame& current, const std::vector<DatsetClause>& clauses) {
   Mat3 axes = current.linear();  // columns: X, Y, Z of the current frame in MCS
   std::optional<int> primary;
@@ -32,6 +37,20 @@ tl::expected<Frame, std::string> datset(const Frame& current, const std::vector<
       if (k == *primary) return tl::unexpected(std::string("two datums orient the same axis"));
       const Vec3 p = axes.col(*primary);
       d = d - d.dot(p) * p;
+      if (d.norm() < 1e-9 && point_like(c.datum.type)) {
+        // A hole (or point) whose axis is the primary's orients the secondary axis from the origin
+        // toward its centre: the plane-hole-hole alignment, `DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG,
+        // DAT(C),XDIR`. The origin is the position of the other datum that fixes an origin across
+        // the primary axis (else the current origin).
+        Vec3 pivot = current.translation();
+        for (const auto& o : clauses)
+          if (&o != &c && std::any_of(o.origins.begin(), o.origins.end(), [&](Axis a) { return static_cast<int>(a) != *primary; }))
+            pivot = o.datum.position;
+        d = (c.datum.position - pivot) * (c.minus ? -1.0 : 1.0);
+        d = d - d.dot(p) * p;
+        if (d.norm() < 1e-9)
+          return tl::unexpected(std::string("the secondary datum lies on the origin across the primary axis: it gives no direction"));
+      }
       if (d.norm() < 1e-9)
         return tl::unexpected(std::string("the secondary datum is parallel to the primary datum"));
       secondary = k;

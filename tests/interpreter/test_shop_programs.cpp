@@ -1578,6 +1578,27 @@ TEST(ShopPrograms, OneFeatureTolerancesApplyToEachOutputFeatureAndCheckAgreesWit
   EXPECT_TRUE(perp.has("TOL/PERP of T(PR) does not apply to a CIRCLE")) << perp.text;
 }
 
+// The plane-hole-hole alignment, the commonest of shop programs: a hole whose axis is the
+// primary's orients X from the origin hole toward its centre. It stopped the run ("the secondary
+// datum is parallel to the primary datum").
+TEST(ShopPrograms, PlaneHoleHoleAlignsXFromTheOriginHoleToTheOther) {
+  const std::string text = "DMISMN/'phh', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
+                           "FA(B)=FEAT/CIRCLE,INNER,CART,10,20,5,0,0,1,8\nFA(C)=FEAT/CIRCLE,INNER,CART,70,100,5,0,0,1,8\n"
+                           "FA(E)=FEAT/POINT,CART,10,120,5,0,0,1\n"
+                           "DATDEF/FA(PA),DAT(A)\nDATDEF/FA(B),DAT(B)\nDATDEF/FA(C),DAT(C)\n"
+                           "D(A1)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG,DAT(C),XDIR\nOUTPUT/FA(C),FA(E)\nENDFIL\n";
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  // B at the origin, C on +X at |BC| = 100; E (0, 100) from B is at 3-4-5 angles: (80, 60) in the part.
+  const auto part = [&](const char* label) {
+    const auto* f = report(*r.session, label);
+    EXPECT_TRUE(f && f->actual) << label;
+    return f && f->actual ? f->actual->position : Eigen::Vector3d(NAN, NAN, NAN);
+  };
+  EXPECT_NEAR((part("C") - Eigen::Vector3d(100, 0, 0)).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((part("E") - Eigen::Vector3d(80, 60, 0)).norm(), 0.0, 1e-9);
+}
+
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
   const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
