@@ -16,11 +16,11 @@ Vec3 datum_direction(const Geometry& g, bool primary) {
   return g.direction.normalized();
 }
 
-}  // namespace
-
 bool point_like(FeatureType t) {
   return t == FeatureType::Point || t == FeatureType::Circle || t == FeatureType::Arc || t == FeatureType::Sphere;
 }
+
+}  // namespace
 
 tl::expected<Frame, std::string> datset(const Frame& current, const std::vector<DatsetClause>& clauses) {
   Mat3 axes = current.linear();  // columns: X, Y, Z of the current frame in MCS
