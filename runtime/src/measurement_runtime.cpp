@@ -153,7 +153,7 @@ Result<void> MeasurementRuntime::define_sensor(const SensorDefinition& sensor, S
   return {};
 }
 
-Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span span) {
+Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span span, bool requalify) {
   if (!m_sensors.count(label)) {
     // Not defined by the program: a sensor of the machine's probe library (docs/language.md).
     if (auto r = select_library_sensor(label, span); !r) return r;
@@ -162,8 +162,10 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
   if (!r) return tl::unexpected(r.error());
   m_active_sensor = label;
   const auto& tool = r->front().tool;
-  if (tool && !tool->qualified) m_qualification_feed_mm_s = m_machine.state().measuring_feed_mm_s;
-  if (tool && !tool->qualified) {
+  if (tool && (!tool->qualified || requalify)) {
+    m_qualification_feed_mm_s = m_machine.state().measuring_feed_mm_s;
+    m_feed_change_warned = false;
+    m_scanning_radius_mm.erase(label);  // a scan qualifies it again too
     // Qualify on the reference sphere before the first use: the effective radius absorbs the
     // pre-travel and trigger delays at the measuring feed.
     auto q = run_commands({machine::Command{0, machine::QualifyTool{}}}, {span});

@@ -1124,6 +1124,14 @@ TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
   const auto* on = report(*before.session, "P1");
   ASSERT_TRUE(on && on->actual);
   EXPECT_LT(std::abs(on->actual->position.x()), 0.001);
+  // CALIB/SENS after the change of feed qualifies the probe again at it: no warning, no offset.
+  const auto calibrated = run(program("", slow + "CALIB/SENS,S(P4),F(REFSPH),9\n"));
+  ASSERT_EQ(calibrated.status, ExecStatus::Finished) << calibrated.diagnostics;
+  EXPECT_EQ(calibrated.diagnostics.find("probing at"), std::string::npos) << calibrated.diagnostics;
+  const auto* again = report(*calibrated.session, "P1");
+  ASSERT_TRUE(again && again->actual);
+  EXPECT_LT(std::abs(again->actual->position.x()), 0.001);
+  EXPECT_TRUE(check(program("", slow + "CALIB/SENS,S(P4),F(REFSPH),9\n")).has("F(REFSPH) is not measured"));
 }
 
 // RMEAS/type,F(l),n,FA(ref) ... ENDMES (the block form Modus writes): each PTMEAS of the block is

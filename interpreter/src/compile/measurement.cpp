@@ -13,7 +13,7 @@ using ir::Op;
 
 void UnitCompiler::add_measurement(StatementTable& t) {
   t.insert({
-      {"SNSMNT", &UnitCompiler::snsmnt}, {"SNSLCT", &UnitCompiler::snslct}, {"SNSET", &UnitCompiler::snset},
+      {"SNSMNT", &UnitCompiler::snsmnt}, {"SNSLCT", &UnitCompiler::snslct}, {"CALIB", &UnitCompiler::calib}, {"SNSET", &UnitCompiler::snset},
       {"FEDRAT", &UnitCompiler::fedrat}, {"ACLRAT", &UnitCompiler::aclrat},
       {"SCNMOD", &UnitCompiler::scnmod}, {"SCNSET", &UnitCompiler::scnset}, {"GOTO", &UnitCompiler::go_to},
       {"MEAS", &UnitCompiler::meas}, {"ENDMES", &UnitCompiler::endmes}, {"PTMEAS", &UnitCompiler::ptmeas},
@@ -35,6 +35,34 @@ void UnitCompiler::snslct(const grammar::Statement& s) {
     library_sensor(s.params[0]);
   }
   emit(make(Op::SensorSelect, s, name));
+}
+
+// CALIB/SENS,S(x)[,F(artifact)][,n...]: qualifies sensor x now (again, when it was) on the
+// world's reference sphere, at the current measuring feed, and selects it as a real calibration
+// leaves it. Other CALIB forms (RTAB, MASTER ...) are skipped with a warning.
+void UnitCompiler::calib(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "SENS and a sensor label S(...)")) return;
+  if (!is_word(s.params[0], "SENS")) {
+    warn(s.params[0].span, "sema.unsupported-calibration",
+         fmt::format("CALIB/{} is not supported and is skipped", is_word(s.params[0]) ? s.params[0].text : std::string("...")));
+    emit(make(Op::Nop, s, "CALIB"));
+    return;
+  }
+  if (s.params.size() < 2 || !is_label(s.params[1], {"S", "SA"}))
+    return error(s.params.size() < 2 ? s.params[0].span : s.params[1].span, "sema.expected-sensor",
+                 "expected a sensor label S(...) after CALIB/SENS");
+  const std::string name = upper(s.params[1].label.name);
+  if (!m_symbols.sensors.count(name)) {
+    if (m_symbols.skipped.count("S:" + name))
+      return error(s.params[1].span, "sema.skipped-definition", fmt::format("sensor S({}) was defined by a skipped statement", s.params[1].label.name));
+    library_sensor(s.params[1]);
+  }
+  if (s.params.size() > 2 && is_label(s.params[2], {"F", "FA"}))
+    note_once(m_calib_artifact_noted, s.params[2].span, "sema.calibration-artifact",
+              fmt::format("CALIB/SENS qualifies on the world's reference sphere; F({}) is not measured", s.params[2].label.name));
+  auto in = make(Op::SensorSelect, s, name);
+  in.count = 1;  // qualify again
+  emit(std::move(in));
 }
 
 void UnitCompiler::library_sensor(const grammar::Expr& label) {

@@ -240,6 +240,7 @@ class UnitCompiler {
   // ---- measurement: SNSLCT ... SCNSET, GOTO, MEAS, PTMEAS, PAMEAS (compile/measurement.cpp) --
   void snsmnt(const grammar::Statement& s);
   void snslct(const grammar::Statement& s);
+  void calib(const grammar::Statement& s);
   void snset(const grammar::Statement& s);
   void fedrat(const grammar::Statement& s);
   void aclrat(const grammar::Statement& s);
@@ -320,6 +321,7 @@ class UnitCompiler {
   bool m_output_file = false;
   std::set<std::string> m_echoed_datums;  ///< DATDEFs of an output file whose feature it does not state
   bool m_echo_noted = false;
+  bool m_calib_artifact_noted = false;   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
 };
 

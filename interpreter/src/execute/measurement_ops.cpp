@@ -22,7 +22,7 @@ void Execute::add_measurement(ExecuteTable& t) {
 
 // Op::SensorSelect
 ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
-  if (auto r = vm.m_runtime.select_sensor(vm.name_of(in), in.span); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.select_sensor(vm.name_of(in), in.span, in.count == 1); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

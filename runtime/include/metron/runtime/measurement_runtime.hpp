@@ -76,7 +76,9 @@ class MeasurementRuntime {
 
   // Sensors, settings and motion.
   Result<void> define_sensor(const SensorDefinition& sensor, Span span);
-  Result<void> select_sensor(const std::string& label, Span span);
+  /// SNSLCT: selects the sensor, qualifying it at its first use; `requalify` (CALIB/SENS)
+  /// qualifies it again at the current measuring feed.
+  Result<void> select_sensor(const std::string& label, Span span, bool requalify = false);
   /// A sensor the program did not define, from the machine's probe library (a 4 mm default
   /// tip, with a warning, for a name the library does not hold).
   Result<void> select_library_sensor(const std::string& label, Span span);
