@@ -22,6 +22,7 @@ const char* to_string(Op op) {
     case Op::DecimalPlaces: return "DECPL";
     case Op::Read: return "READ";
     case Op::Write: return "WRITE";
+    case Op::FitAlgorithm: return "FIT_ALGORITHM";
     case Op::Accel: return "ACCEL";
     case Op::GoTo: return "GOTO";
     case Op::MeasBegin: return "MEAS_BEGIN";

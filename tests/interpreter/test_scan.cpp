@@ -221,6 +221,28 @@ double line_form(const std::vector<Vec2>& p) {
   return (hi - lo) / std::sqrt(1 + slope * slope);
 }
 
+// GEOALG/CIRCLE,MAXINS|MINCIR: a bore of radius 10 with 3 lobes of 5 um, scanned, is 20 mm by
+// least squares, 2 (10 - 0.005) by its maximum inscribed circle (a pin gauge's size: the three
+// troughs, 120 degrees apart) and 2 (10 + 0.005) by its minimum circumscribed circle (the peaks).
+TEST(Scanning, GeoalgSizesACircleByItsInscribedOrCircumscribedCircle) {
+  const Vec3 c(340, 250, 30);
+  const std::string scan = "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n";
+  const auto diameter = [&](const std::string& geoalg) {
+    auto r = run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                 "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" + geoalg + scan,
+                 lobed_bore(c, Vec3::Zero(), 0.005, 2.0));
+    EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+    const auto& b1 = r->runtime->features().at("B1");
+    EXPECT_TRUE(b1.actual.has_value());
+    if (b1.actual) EXPECT_LT((b1.actual->position - c).norm(), 2e-4) << geoalg;
+    return b1.actual ? b1.actual->diameter_mm : 0.0;
+  };
+  EXPECT_NEAR(diameter(""), 20.0, 2e-4);
+  EXPECT_NEAR(diameter("GEOALG/CIRCLE, MAXINS\n"), 19.99, 2e-4);
+  EXPECT_NEAR(diameter("GEOALG/CIRCLE, MINCIR\n"), 20.01, 2e-4);
+  EXPECT_NEAR(diameter("GEOALG/CIRCLE, MAXINS\nGEOALG/CIRCLE, LSTSQR\n"), 20.0, 2e-4);
+}
+
 TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   const Vec3 c(40, 50, 25);
   // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.

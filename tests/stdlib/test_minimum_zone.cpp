@@ -109,3 +109,37 @@ TEST(MinimumZone, FlatnessIsNotBeatenByAGridOfNormals) {
       EXPECT_GE(hi - lo, mz->form_mm - 1e-10) << "normal offset " << i << ", " << j;
     }
 }
+
+// Maximum inscribed and minimum circumscribed circles (ISO 12181-1 MIC, MCC) against circles known
+// exactly: three points on a circle of radius 10 about c, at 0, 100 and 230 degrees (an acute
+// triangle, so that circle is the set's MCC when every other point lies inside it, and its MIC
+// when every other point lies outside it). The other points cluster on one side, so least squares
+// is pulled off c.
+TEST(ExtremeCircle, InscribedAndCircumscribedCirclesOfThreeContacts) {
+  const Vec3 c(3, -2, 5);
+  std::vector<Vec3> inside, outside;
+  for (double a : {0.0, 100.0, 230.0}) {
+    inside.push_back(c + polar(10, a));
+    outside.push_back(c + polar(10, a));
+  }
+  for (int i = 0; i < 30; ++i) {
+    inside.push_back(c + polar(6 + 0.1 * i, 20 + 2 * i));     // within the circle, on one side
+    outside.push_back(c + polar(14 + 0.1 * i, 15 + 11 * i));  // beyond it, all round
+  }
+  const auto mcc = metron::fitting::extreme_circle(inside, false, Vec3::UnitZ());
+  ASSERT_TRUE(mcc);
+  EXPECT_NEAR(mcc->diameter_mm, 20.0, 1e-6);
+  EXPECT_NEAR((mcc->centre - c).norm(), 0.0, 1e-6);
+  const auto mic = metron::fitting::extreme_circle(outside, true, Vec3::UnitZ());
+  ASSERT_TRUE(mic);
+  EXPECT_NEAR(mic->diameter_mm, 20.0, 1e-6);
+  EXPECT_NEAR((mic->centre - c).norm(), 0.0, 1e-6);
+  // Least squares gives neither (the baseline these replace).
+  const auto ls = metron::fitting::fit(Shape::Circle, inside, {});
+  ASSERT_TRUE(ls);
+  EXPECT_GT(std::abs(ls->diameter_mm - 20.0), 0.5);
+  // Points on a 90-degree arc do not enclose an inscribed circle.
+  std::vector<Vec3> arc;
+  for (int i = 0; i <= 9; ++i) arc.push_back(c + polar(10, 10.0 * i));
+  EXPECT_FALSE(metron::fitting::extreme_circle(arc, true, Vec3::UnitZ()));
+}

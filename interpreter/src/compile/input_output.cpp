@@ -58,6 +58,16 @@ void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s
 void UnitCompiler::noted_once(const grammar::Statement& s) {
   const bool error_handling = s.major == "ERROR" || s.major == "RESUME";
   const std::string key = error_handling ? "ERROR" : s.major;
+  if (s.major == "GEOALG" && s.params.size() >= 2 && is_word(s.params[0], "CIRCLE") &&
+      (is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT") || is_word(s.params[1], "MAXINS") ||
+       is_word(s.params[1], "MINCIR"))) {
+    // GEOALG/CIRCLE: the circles measured from here on (MAXINS a hole's pin-gauge size, MINCIR a
+    // boss's ring-gauge size; LSTSQR, DEFALT back to least squares).
+    auto in = make(Op::FitAlgorithm, s);
+    in.operands.push_back(word_operand(is_word(s.params[1], "DEFALT") ? std::string("LSTSQR") : s.params[1].text, s.params[1].span));
+    emit(std::move(in));
+    return;
+  }
   if (s.major == "GEOALG" && (s.params.size() < 2 || is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT"))) {
     emit(make(Op::Nop, s, s.major));  // least squares: what metron does
     return;

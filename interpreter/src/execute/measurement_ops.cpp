@@ -15,7 +15,7 @@ using runtime::FeatureType;
 
 void Execute::add_measurement(ExecuteTable& t) {
   add_rows(t, {
-      {Op::SensorSelect, &sensor_select}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
+      {Op::SensorSelect, &sensor_select}, {Op::FitAlgorithm, &fit_algorithm}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
       {Op::GoTo, &go_to}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
   });
 }
@@ -23,6 +23,14 @@ void Execute::add_measurement(ExecuteTable& t) {
 // Op::SensorSelect
 ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   if (auto r = vm.m_runtime.select_sensor(vm.name_of(in), in.span, in.count == 1); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::FitAlgorithm: GEOALG/CIRCLE
+ExecStatus Execute::fit_algorithm(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  using F = runtime::MeasurementRuntime::CircleFit;
+  const std::string& word = in.operands.at(0).word;
+  vm.m_runtime.set_circle_fit(word == "MAXINS" ? F::MaximumInscribed : word == "MINCIR" ? F::MinimumCircumscribed : F::LeastSquares);
   return ExecStatus::Running;
 }
 

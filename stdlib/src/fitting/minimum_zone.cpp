@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <numbers>
 
 namespace metron::fitting {
 namespace {
@@ -217,6 +218,52 @@ tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vecto
     default: return tl::unexpected(FitFailure::Degenerate);  // point, cone: no MZ form here
   }
   return mz;
+}
+
+tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& points, bool inscribed,
+                                                       const std::optional<Vec3>& plane_normal) {
+  FitOptions ls_options;
+  ls_options.direction_hint = plane_normal;
+  ls_options.circle_in_plane_of_hint = plane_normal.has_value();
+  auto ls = fit(Shape::Circle, points, ls_options);
+  if (!ls) return tl::unexpected(ls.error());
+  const Vec3 n = ls->direction.normalized();
+  const auto [e1, e2] = frame_of(n);
+  const auto radius = [&](const Vec3& c, const Vec3& p) {
+    const Vec3 d = p - c;
+    return (d - d.dot(n) * n).norm();
+  };
+  // MCC: the smallest largest radius (convex in the centre); MIC: the largest smallest radius.
+  const auto objective = [&](const std::vector<double>& x) {
+    const Vec3 c = ls->position + x[0] * e1 + x[1] * e2;
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (const auto& p : points) {
+      const double r = radius(c, p);
+      lo = std::min(lo, r);
+      hi = std::max(hi, r);
+    }
+    return inscribed ? -lo : hi;
+  };
+  int evaluations = 0;
+  const auto x = nelder_mead(objective, {0, 0}, 1e-3 * extent(points), evaluations);
+  ExtremeCircle out;
+  out.centre = ls->position + x[0] * e1 + x[1] * e2;
+  out.normal = n;
+  out.diameter_mm = 2 * std::abs(objective(x));
+  // The centre must lie inside the points' hull (no angular gap of 180 degrees or more around
+  // it), or the inscribed circle could grow without bound away from the points.
+  if (inscribed) {
+    std::vector<double> angles;
+    for (const auto& p : points) {
+      const Vec3 d = p - out.centre;
+      angles.push_back(std::atan2(d.dot(e2), d.dot(e1)));
+    }
+    std::sort(angles.begin(), angles.end());
+    double gap = angles.front() + 2 * std::numbers::pi - angles.back();
+    for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
+    if (gap >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
+  }
+  return out;
 }
 
 }  // namespace metron::fitting

@@ -79,6 +79,9 @@ class MeasurementRuntime {
   /// SNSLCT: selects the sensor, qualifying it at its first use; `requalify` (CALIB/SENS)
   /// qualifies it again at the current measuring feed.
   Result<void> select_sensor(const std::string& label, Span span, bool requalify = false);
+  /// GEOALG/CIRCLE: how the circles measured from now on are sized and located.
+  enum class CircleFit { LeastSquares, MaximumInscribed, MinimumCircumscribed };
+  void set_circle_fit(CircleFit fit) { m_circle_fit = fit; }
   /// A sensor the program did not define, from the machine's probe library (a 4 mm default
   /// tip, with a warning, for a name the library does not hold).
   Result<void> select_library_sensor(const std::string& label, Span span);
@@ -246,6 +249,7 @@ class MeasurementRuntime {
   std::optional<TouchBaseline> m_touch_baseline;
   std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
+  CircleFit m_circle_fit = CircleFit::LeastSquares;  ///< GEOALG/CIRCLE
   bool m_feed_change_warned = false;                ///< a probing feed other than the qualification's, told once
   Mode m_mode = Mode::Auto;
   ReportUnits m_report_units;

@@ -34,4 +34,18 @@ struct MinimumZone {
 tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vector<Vec3>& points,
                                                    const std::optional<Vec3>& plane_normal = std::nullopt);
 
+/// A circle that bounds a point set from one side: the maximum inscribed circle (MIC: a hole's
+/// size as a pin gauge finds it) or the minimum circumscribed circle (MCC: a boss's size as a
+/// ring gauge finds it), ISO 12181-1 reference circles, in the plane normal to `plane_normal`
+/// (else the points' least-squares plane). Nelder-Mead on the centre from the least-squares
+/// centre; the MIC fails (Degenerate) when the points do not surround their centre, as points
+/// on a short arc do not.
+struct ExtremeCircle {
+  Vec3 centre = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  double diameter_mm = 0;
+};
+tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& points, bool inscribed,
+                                                       const std::optional<Vec3>& plane_normal = std::nullopt);
+
 }  // namespace metron::fitting
