@@ -90,6 +90,19 @@ Ran run(const std::string& text, const std::optional<fs::path>& world = std::nul
   return r;
 }
 
+/// `text` run on the dry-run machine (every touch at its nominal) of the default world.
+Ran dry_run(const std::string& text) {
+  const fs::path p = write("dry_run.dmi", text);
+  auto world = metron::machine::load_world_or_default(std::nullopt);
+  EXPECT_TRUE(world.has_value());
+  Ran r;
+  r.session = Session::create(metron::interpreter::Backend{
+      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
+  if (r.session->load(p.string())) r.status = r.session->interpreter().run();
+  r.diagnostics = r.session->take_diagnostics();
+  return r;
+}
+
 const metron::runtime::FeatureReport* report(Session& s, const std::string& label) {
   const metron::runtime::FeatureReport* found = nullptr;
   for (const auto& e : s.record().events)
@@ -995,13 +1008,9 @@ TEST(ShopPrograms, DryRunTakesEveryPointAtItsNominal) {
       "FEDRAT/SCNVEL, MMPS, 10\nSCNSET/DRAG, 0.1, DEFLEC, 0.3, LAW, VC2\n"
       "F(B2) = FEAT/CIRCLE, INNER, CART, -1063, -20, 140, 0, 0, 1, 12\nSCNMOD/ON\nMEAS/CIRCLE, F(B2), 0\nENDMES\nSCNMOD/OFF\n"
       "T(D) = TOL/DIAM, -0.001, 0.001\nT(F) = TOL/FLAT, 0.001\nOUTPUT/FA(TOP), TA(F)\nOUTPUT/FA(B1), TA(D)\nOUTPUT/FA(B2), TA(D)\nENDFIL\n";
-  auto world = metron::machine::load_world_or_default(std::nullopt);
-  ASSERT_TRUE(world.has_value());
-  const fs::path p = write("dry.dmi", text);
-  auto session = Session::create(metron::interpreter::Backend{
-      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
-  ASSERT_TRUE(session->load(p.string()));
-  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const Ran dry = dry_run(text);
+  ASSERT_EQ(dry.status, ExecStatus::Finished) << dry.diagnostics;
+  Session* session = dry.session.get();
   const auto* top = report(*session, "TOP");
   ASSERT_TRUE(top && top->actual);
   EXPECT_NEAR(top->actual->direction.dot(Eigen::Vector3d(0, 0.6, 0.8)), 1.0, 1e-12);
@@ -1149,13 +1158,9 @@ TEST(ShopPrograms, RmeasBlockAndCastConstructions) {
   const Checked c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_TRUE(c.has("this RMEAS names no reference feature")) << c.text;
-  auto world = metron::machine::load_world_or_default(std::nullopt);
-  ASSERT_TRUE(world.has_value());
-  const fs::path p = write("rmeas.dmi", text);
-  auto session = Session::create(metron::interpreter::Backend{
-      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
-  ASSERT_TRUE(session->load(p.string()));
-  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const Ran dry = dry_run(text);
+  ASSERT_EQ(dry.status, ExecStatus::Finished) << dry.diagnostics;
+  Session* session = dry.session.get();
   const auto* pt = report(*session, "P");
   ASSERT_TRUE(pt && pt->actual);
   EXPECT_NEAR((pt->actual->position - Eigen::Vector3d(30.5, 19.8, -5)).norm(), 0.0, 1e-9);
@@ -1507,13 +1512,9 @@ TEST(ShopPrograms, AMeasuredLineIsReportedFromItsNominalsPoint) {
       "F(LU)=FEAT/LINE,UNBND,CART,20,5,-6,1,0,0,0,0,1\nMEAS/LINE,F(LU),2\n"
       "PTMEAS/CART,60,5,-6,0,-1,0\nPTMEAS/CART,80,5,-6,0,-1,0\nENDMES\n"
       "T(LX)=TOL/CORTOL,XAXIS,-0.1,0.1\nOUTPUT/FA(LB),FA(LU),TA(LX)\nDX=VALUE/TA(LX),DEV,1\nDU=VALUE/TA(LX),DEV,2\nENDFIL\n";
-  auto world = metron::machine::load_world_or_default(std::nullopt);
-  ASSERT_TRUE(world.has_value());
-  const fs::path p = write("line_point.dmi", text);
-  auto session = Session::create(metron::interpreter::Backend{
-      std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
-  ASSERT_TRUE(session->load(p.string()));
-  ASSERT_EQ(session->interpreter().run(), ExecStatus::Finished) << session->take_diagnostics();
+  const Ran dry = dry_run(text);
+  ASSERT_EQ(dry.status, ExecStatus::Finished) << dry.diagnostics;
+  Session* session = dry.session.get();
   const auto* lb = report(*session, "LB");
   ASSERT_TRUE(lb && lb->actual);
   EXPECT_NEAR((lb->actual->position - Eigen::Vector3d(10, 5, -3)).norm(), 0.0, 1e-6);
