@@ -37,7 +37,8 @@ tl::expected<Frame, std::string> datset(const Frame& current, const std::vector<
       if (k == *primary) return tl::unexpected(std::string("two datums orient the same axis"));
       const Vec3 p = axes.col(*primary);
       d = d - d.dot(p) * p;
-      if (d.norm() < 1e-9 && point_like(c.datum.type)) {
+      // A sphere has no direction of its own: it always orients from the origin toward it.
+      if ((d.norm() < 1e-9 && point_like(c.datum.type)) || c.datum.type == FeatureType::Sphere) {
         // A hole (or point) whose axis is the primary's orients the secondary axis from the origin
         // toward its centre: the plane-hole-hole alignment, `DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG,
         // DAT(C),XDIR`. The origin is the position of the other datum that fixes an origin across

@@ -1606,6 +1606,16 @@ TEST(ShopPrograms, PlaneHoleHoleAlignsXFromTheOriginHoleToTheOther) {
   };
   EXPECT_NEAR((part("C") - Eigen::Vector3d(100, 0, 0)).norm(), 0.0, 1e-9);
   EXPECT_NEAR((part("E") - Eigen::Vector3d(80, 60, 0)).norm(), 0.0, 1e-9);
+  // Spheres have no direction of their own: a sphere orients from the origin sphere toward it,
+  // whatever the primary (here a wall x = 0, so Y runs from S1 to S2 along (0, 0.6, 0.8)).
+  const auto balls = run("DMISMN/'balls', 5.0\nFA(W)=FEAT/PLANE,CART,0,0,0,1,0,0\n"
+                         "FA(S1)=FEAT/SPHERE,OUTER,CART,0,10,10,25\nFA(S2)=FEAT/SPHERE,OUTER,CART,0,40,50,25\n"
+                         "DATDEF/FA(W),DAT(A)\nDATDEF/FA(S1),DAT(B)\nDATDEF/FA(S2),DAT(C)\n"
+                         "D(A2)=DATSET/DAT(A),XDIR,XORIG,DAT(B),YORIG,ZORIG,DAT(C),YDIR\nOUTPUT/FA(S2)\nENDFIL\n");
+  ASSERT_EQ(balls.status, ExecStatus::Finished) << balls.diagnostics;
+  const auto* s2 = report(*balls.session, "S2");
+  ASSERT_TRUE(s2 && s2->actual);
+  EXPECT_NEAR((s2->actual->position - Eigen::Vector3d(0, 50, 0)).norm(), 0.0, 1e-9);
 }
 
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
