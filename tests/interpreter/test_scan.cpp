@@ -234,7 +234,9 @@ TEST(Scanning, GeoalgSizesACircleByItsInscribedOrCircumscribedCircle) {
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     const auto& b1 = r->runtime->features().at("B1");
     EXPECT_TRUE(b1.actual.has_value());
-    if (b1.actual) EXPECT_LT((b1.actual->position - c).norm(), 2e-4) << geoalg;
+    if (b1.actual) {
+      EXPECT_LT((b1.actual->position - c).norm(), 2e-4) << geoalg;
+    }
     return b1.actual ? b1.actual->diameter_mm : 0.0;
   };
   EXPECT_NEAR(diameter(""), 20.0, 2e-4);
