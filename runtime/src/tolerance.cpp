@@ -308,7 +308,7 @@ double half_extent(const Geometry& g, const Vec3& u) {
   };
   switch (g.type) {
     case FeatureType::Circle:
-    case FeatureType::Arc: return r * across(g.direction);
+    case FeatureType::Arc:
     case FeatureType::Cylinder: return r * across(g.direction);
     case FeatureType::Sphere: return r;
     case FeatureType::ParallelPlanes: return g.width_mm / 2 * std::abs(g.direction.normalized().dot(u));
@@ -1016,6 +1016,37 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
                                  feature.label, line_angle_deg(*n, datum->direction)));
   set_limits(result, 0, spec.zone);
   return result;
+}
+
+// The type lists of the evaluators above, in one table (test ToleranceTypes.TheTableIsTheEvaluators).
+bool tolerance_applies(ToleranceKind kind, FeatureType type) {
+  using T = FeatureType;
+  const auto in = [&](std::initializer_list<T> ts) { return std::find(ts.begin(), ts.end(), type) != ts.end(); };
+  switch (kind) {
+    case ToleranceKind::Diam:
+    case ToleranceKind::Rad: return in({T::Circle, T::Arc, T::Sphere, T::Cylinder});
+    case ToleranceKind::Flat: return in({T::Plane});
+    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc});
+    case ToleranceKind::Cylcty: return in({T::Cylinder});
+    case ToleranceKind::Sphcty: return in({T::Sphere});
+    case ToleranceKind::Strght: return in({T::Line});
+    case ToleranceKind::Pos:
+    case ToleranceKind::Compos: return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot});
+    case ToleranceKind::Perp:
+    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
+    case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
+    case ToleranceKind::Concen:
+    case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
+    case ToleranceKind::Crnout:
+    case ToleranceKind::Totrun: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere, T::Plane});
+    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface});
+    case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
+    case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
+    case ToleranceKind::Symmty: return in({T::ParallelPlanes});
+    case ToleranceKind::Profp: return in({T::Point});
+    case ToleranceKind::Angl: return in({T::Cone});
+    default: return true;
+  }
 }
 
 tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpec& spec,

@@ -1526,6 +1526,13 @@ TEST(ShopPrograms, AMeasuredLineIsReportedFromItsNominalsPoint) {
   EXPECT_NEAR(session->interpreter().variable("DU")->number, 0.0, 1e-6);
 }
 
+// A DMIS module (DMISMD, as MODUS's helper tools write) starts a file as DMISMN does.
+TEST(ShopPrograms, AModuleHeaderStartsAFile) {
+  const Checked c = check("DMISMD/'PerpendicularPoints', 5.0\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n");
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  EXPECT_TRUE(check("F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n").has("does not start with DMISMN"));
+}
+
 // A stylus's tip shape after its diameter (`SNSDEF/PROBE,FIXED,POL,...,115,12,DISC,3`): the tip
 // diameter is 12, not the disc's thickness 3 (the last number), and the shape is told once.
 TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {

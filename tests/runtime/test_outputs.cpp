@@ -168,6 +168,14 @@ TEST(HumanReport, FeatureBlock) {
             "  Y             2.0000\n"
             "  Z             3.0000\n"
             "  D            25.4000\n");
+
+  // An arc is sized by its radius, as FEAT/ARC writes it.
+  FeatureReport arc;
+  arc.label = "A1";
+  arc.nominal = geometry(FeatureType::Arc, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 30);
+  const std::string a = format_feature_report(arc);
+  EXPECT_NE(a.find("  R            15.0000\n"), std::string::npos) << a;
+  EXPECT_EQ(a.find("  D "), std::string::npos) << a;
 }
 
 TEST(HumanReport, ToleranceLine) {

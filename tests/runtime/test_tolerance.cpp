@@ -1026,3 +1026,45 @@ TEST(ToleranceWords, DmisWords) {
 
 }  // namespace
 }  // namespace metron::runtime
+
+namespace metron::runtime {
+namespace {
+
+// The compiler's check (tolerance_applies) and the evaluators must agree: for every one-feature
+// kind and every type, the evaluator refuses the type ("... applies to ...") exactly when the
+// table says it does not apply.
+TEST(ToleranceTypes, TheTableIsTheEvaluators) {
+  const FeatureType types[] = {FeatureType::Point,    FeatureType::Plane,          FeatureType::Line,
+                               FeatureType::Circle,   FeatureType::Arc,            FeatureType::Sphere,
+                               FeatureType::Cylinder, FeatureType::Cone,           FeatureType::ParallelPlanes,
+                               FeatureType::GenericSurface, FeatureType::GenericCurve, FeatureType::ClosedSlot};
+  const ToleranceKind kinds[] = {ToleranceKind::Diam,   ToleranceKind::Rad,    ToleranceKind::Flat,
+                                 ToleranceKind::Cirlty, ToleranceKind::Cylcty, ToleranceKind::Sphcty,
+                                 ToleranceKind::Strght, ToleranceKind::Pos,    ToleranceKind::Perp,
+                                 ToleranceKind::Parlel, ToleranceKind::Concen, ToleranceKind::Coaxial,
+                                 ToleranceKind::Crnout, ToleranceKind::Totrun, ToleranceKind::Profs,
+                                 ToleranceKind::Profl,  ToleranceKind::Width,  ToleranceKind::Symmty,
+                                 ToleranceKind::Profp,  ToleranceKind::Angl};
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitX()));
+  ToleranceContext context;
+  context.datums = {&a};
+  for (const ToleranceKind kind : kinds)
+    for (const FeatureType type : types) {
+      Geometry g = round(type, Side::Inner, {1, 2, 3}, Vec3(0, 0.6, 0.8), 10, 20);
+      g.slot_axis = Vec3::UnitX();
+      g.width_mm = 5;
+      g.apex_angle_deg = 60;
+      const Feature f = feature("F", g, g);
+      ToleranceSpec s = spec(kind);
+      s.zone = 0.1;
+      s.upper = 0.1;
+      s.datums = {"A"};
+      const auto r = evaluate(s, {&f}, context);
+      const bool refused = !r && r.error().find(" applies to ") != std::string::npos;
+      EXPECT_EQ(refused, !tolerance_applies(kind, type))
+          << dmis_word(kind) << " of a " << dmis_word(type) << ": " << (r ? "evaluated" : r.error());
+    }
+}
+
+}  // namespace
+}  // namespace metron::runtime

@@ -12,43 +12,6 @@ using ir::Op;
 using runtime::FeatureType;
 using runtime::ToleranceKind;
 
-namespace {
-
-
-// Which tolerance kinds apply to which feature types (checked at OUTPUT when both are known).
-bool tolerance_applies(ToleranceKind kind, FeatureType type) {
-  using T = FeatureType;
-  const auto in = [&](std::initializer_list<T> ts) { return std::find(ts.begin(), ts.end(), type) != ts.end(); };
-  switch (kind) {
-    case ToleranceKind::Diam:
-    case ToleranceKind::Rad: return in({T::Circle, T::Arc, T::Sphere, T::Cylinder});
-    case ToleranceKind::Flat: return in({T::Plane});
-    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc});
-    case ToleranceKind::Cylcty: return in({T::Cylinder});
-    case ToleranceKind::Sphcty: return in({T::Sphere});
-    case ToleranceKind::Strght: return in({T::Line});
-    // The lists of runtime/src/tolerance.cpp's evaluators, so that check and run agree.
-    case ToleranceKind::Pos:
-    case ToleranceKind::Compos: return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot});
-    case ToleranceKind::Perp:
-    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
-    case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
-    case ToleranceKind::Concen:
-    case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
-    case ToleranceKind::Crnout:
-    case ToleranceKind::Totrun: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere, T::Plane});
-    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface});
-    case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
-    case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
-    case ToleranceKind::Symmty: return in({T::ParallelPlanes});
-    case ToleranceKind::Profp: return in({T::Point});
-    case ToleranceKind::Angl: return in({T::Cone});
-    default: return true;
-  }
-}
-
-}  // namespace
-
 void UnitCompiler::add_alignment(StatementTable& t) {
   t.insert({
       {"DATSET", &UnitCompiler::datset}, {"TRANS", &UnitCompiler::trans}, {"ROTATE", &UnitCompiler::rotate},
@@ -376,7 +339,7 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
           return fail(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
         for (const auto& type : types)
-          if (type && !tolerance_applies(kind, *type))
+          if (type && !runtime::tolerance_applies(kind, *type))
             return fail(p.span, "sema.tolerance-type",
                          fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name, ir::word_of(*type)));
         if (types.empty())

@@ -33,6 +33,10 @@ inline bool is_angle_kind(ToleranceKind kind) {
   return kind == ToleranceKind::Anglb || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Angl;
 }
 
+/// Whether a tolerance kind applies to a feature type: the types its evaluator accepts (the
+/// compiler checks OUTPUT with it, so that check and run agree).
+bool tolerance_applies(ToleranceKind kind, FeatureType type);
+
 /// Distance direction for DISTB (and the coordinate of CORTOL).
 enum class DistanceAxis { PointToPoint, XAxis, YAxis, ZAxis };
 /// DISTB and DISTWRT: the distance between centres (AVG, the default) or between the near (MINIM)
