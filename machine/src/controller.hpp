@@ -4,10 +4,12 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <tl/expected.hpp>
@@ -46,10 +48,9 @@ struct SegmentedSession {
   std::size_t reported = 0;         ///< samples already answered
 };
 
-/// A positioning move that ended without fault, kept so that a stop request can cut it afterwards
+/// A straight move of the running command, kept so that a stop request can cut it afterwards
 /// (Machine::stop_last_motion).
 struct PositioningMove {
-  std::uint64_t tag = 0;            ///< the command's tag (GoTo), 0 inside other commands
   Vec3 start_mm = Vec3::Zero();
   Vec3 direction = Vec3::UnitX();   ///< unit, start to target
   double length_mm = 0;
@@ -57,6 +58,31 @@ struct PositioningMove {
   MotionLimits limits;
   std::optional<BrakingLimits> braking;
   std::int64_t start_cycle = 0;
+  /// Into the move, the time after which it is already stopping on its own (a probing move's
+  /// trigger acted on): a stop request then changes nothing.
+  double cuttable_s = std::numeric_limits<double>::infinity();
+  double end_s = 0;                 ///< absolute time it came to rest
+  Vec3 end_mm = Vec3::Zero();       ///< where it came to rest
+};
+
+/// One cycle of an active scan's head, for a stop request during the scan.
+struct ScanHeadSample {
+  double time_s = 0;                ///< absolute, at the end of the cycle
+  Vec3 head_mm = Vec3::Zero();
+  Vec3 velocity_mm_s = Vec3::Zero();
+};
+
+/// The motion of one command (GoTo, PtMeas, ScanPath) as it ran, so that a stop request
+/// `after_s` into it can put the machine where it would have come to rest.
+struct CommandMotion {
+  std::uint64_t tag = 0;
+  std::string what;                 ///< "move to (x, y, z)", "point measurement", "scan"
+  Vec3 start_mm = Vec3::Zero();
+  std::int64_t start_cycle = 0;
+  double end_s = 0;                 ///< absolute, when the command ended
+  std::vector<PositioningMove> moves;   ///< its straight moves, in order
+  std::vector<ScanHeadSample> scan;     ///< its scanning cycles, in order
+  std::optional<Hit> hit_before;    ///< the last hit before the command, which a stop restores
 };
 
 /// The controller's state and its cycles.
@@ -75,8 +101,8 @@ struct Controller {
   std::function<void(const TraceSample&)> trace;
   std::function<void(double, const Vec3&)> motion_observer;  ///< Machine::set_motion_observer
   std::unique_ptr<SegmentedSession> segmented_scan;
-  std::optional<PositioningMove> last_move;       ///< set by move_to
-  std::optional<PositioningMove> stoppable_move;  ///< the last command was this completed GoTo
+  CommandMotion motion;                       ///< the running command's motion, as it runs
+  std::optional<CommandMotion> stoppable;     ///< the last command, which ended without fault
 
   Controller(MachineConfig known, WorldTruth truth, std::uint64_t seed);
 

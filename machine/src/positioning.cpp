@@ -91,31 +91,67 @@ tl::expected<void, Fault> Controller::move_to(const Vec3& target, double feed) {
   }
   cycle = c0 + n;
   position = target;
-  last_move = PositioningMove{0, a, u, len, profile, move_limits, move_braking, c0};
+  motion.moves.push_back(PositioningMove{a, u, len, profile, move_limits, move_braking, c0,
+                                        std::numeric_limits<double>::infinity(), now(), target});
   return {};
 }
 
-// A stop request `after_s` into the last GoTo: the move as it was until then (its sweep found the
-// whole line free, so the part of it before the stop is free too), then the shortest jerk-limited
-// stop at the move's own limits (braking law included). Nothing else changes while the machine
-// only positions, so cutting the move afterwards gives what stopping it then would have.
+// A stop request `after_s` into the last command. Its motion was kept as it ran (its sweeps
+// found it free, so the part before the stop is free too); nothing else changes while the machine
+// moves, so cutting the motion afterwards gives what stopping it then would have:
+// - in a straight move (a GoTo, a point measurement's approach, probing move or retract), the
+//   shortest jerk-limited stop at the move's own limits, braking law included;
+// - in an active scan, the same stop from the head's speed, along its velocity at that cycle;
+// - at rest between moves, or after a probing move's trigger (the move is stopping already),
+//   where that move came to rest.
+// The command's result is lost: a point measurement's hit, a scan's samples.
 std::optional<Response> Controller::stop_move(double after_s) {
-  if (!stoppable_move || !(after_s >= 0) || !(after_s < stoppable_move->profile.duration_s())) return std::nullopt;
-  const PositioningMove m = *stoppable_move;
-  stoppable_move.reset();
-  const MotionProfile stop = MotionProfile::stop(m.profile.at(after_s), m.limits, m.braking);
-  const double s_end = std::min(stop.end_position_mm(), m.length_mm);
-  position = m.start_mm + s_end * m.direction;
-  cycle = m.start_cycle + cycles_for(after_s + stop.duration_s());
+  if (!stoppable || !(after_s >= 0)) return std::nullopt;
+  const double t_start = static_cast<double>(stoppable->start_cycle) * config.dt_s, t = t_start + after_s;
+  if (!(t < stoppable->end_s)) return std::nullopt;
+  const CommandMotion m = std::move(*stoppable);
+  stoppable.reset();
+
+  Vec3 rest = m.start_mm;
+  double rest_s = t;
+  const auto in_scan = std::find_if(m.scan.begin(), m.scan.end(), [&](const ScanHeadSample& c) { return c.time_s >= t; });
+  if (!m.scan.empty() && m.scan.front().time_s - config.dt_s <= t && in_scan != m.scan.end()) {
+    const double v = in_scan->velocity_mm_s.norm();
+    rest = in_scan->head_mm;
+    rest_s = in_scan->time_s;
+    if (v > 1e-9) {
+      const Vec3 u = in_scan->velocity_mm_s / v;
+      const MotionProfile stop = MotionProfile::stop(MotionState{0, v, 0}, braking_limits(u, v));
+      rest += stop.end_position_mm() * u;
+      rest_s += stop.duration_s();
+    }
+  } else {
+    const auto started = [&](const PositioningMove& mv) { return static_cast<double>(mv.start_cycle) * config.dt_s <= t; };
+    const auto last = std::find_if(m.moves.rbegin(), m.moves.rend(), started);
+    if (last != m.moves.rend()) {
+      const PositioningMove& mv = *last;
+      const double into = t - static_cast<double>(mv.start_cycle) * config.dt_s;
+      if (into < std::min(mv.cuttable_s, mv.profile.duration_s())) {
+        const MotionProfile stop = MotionProfile::stop(mv.profile.at(into), mv.limits, mv.braking);
+        rest = mv.start_mm + std::min(stop.end_position_mm(), mv.length_mm) * mv.direction;
+        rest_s = t + stop.duration_s();
+      } else {
+        rest = mv.end_mm;
+        rest_s = std::max(t, mv.end_s);
+      }
+    }
+  }
+  position = rest;
+  cycle = m.start_cycle + cycles_for(rest_s - t_start);
   sim.set_time(now());
+  last_hit = m.hit_before;
   Response r;
   r.tag = m.tag;
   r.status = Response::Status::Fault;
   r.fault = Fault{FaultKind::Aborted,
-                  fmt::format("move to {} stopped at {} on request, {:.3f} s after its start",
-                              xyz(m.start_mm + m.length_mm * m.direction), xyz(position), after_s),
+                  fmt::format("{} stopped at {} on request, {:.3f} s after its start", m.what, xyz(position), after_s),
                   position, now()};
-  r.start_time_s = static_cast<double>(m.start_cycle) * config.dt_s;
+  r.start_time_s = t_start;
   r.end_time_s = now();
   return r;
 }

@@ -61,6 +61,7 @@ void Controller::scan(const ScanPath& body, Response& response) {
   const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
   ScanOutcome out = run_scan(body, setup, position, now(), [&](const ScanCycle& c) {
     emit(c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s.norm());
+    motion.scan.push_back({c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s});
   });
   position = out.end_position_mm;
   cycle += cycles_for(out.end_time_s - now());
@@ -73,7 +74,8 @@ Response Controller::run(const Command& command) {
   Response response;
   response.tag = command.tag;
   response.start_time_s = now();
-  stoppable_move.reset();
+  stoppable.reset();
+  motion = CommandMotion{command.tag, {}, position, cycle, 0, {}, {}, last_hit};
   const auto fail = [&](Fault f) {
     response.status = Response::Status::Fault;
     response.fault = std::move(f);
@@ -89,16 +91,13 @@ Response Controller::run(const Command& command) {
       const double feed = body.speed_mm_s.value_or(positioning_feed);
       if (!(feed > 0) || !body.target_mm.allFinite())
         return fail({FaultKind::BadCommand, "goto needs a finite target and a positive speed", position, now()});
-      last_move.reset();
       if (auto ok = move_to(body.target_mm, feed); !ok) fail(ok.error());
-      else if (last_move) {
-        stoppable_move = last_move;
-        stoppable_move->tag = command.tag;
-      }
+      motion.what = fmt::format("move to {}", xyz(body.target_mm));
     } else if constexpr (std::is_same_v<T, PtMeas>) {
       auto hit = measure_point(body);
       if (hit) response.hit = *hit;
       else fail(hit.error());
+      motion.what = fmt::format("point measurement at {}", xyz(body.nominal_mm));
     } else if constexpr (std::is_same_v<T, DefineTool>) {
       define_tool(body, response);
     } else if constexpr (std::is_same_v<T, SelectTool>) {
@@ -132,11 +131,17 @@ Response Controller::run(const Command& command) {
       }
     } else if constexpr (std::is_same_v<T, ScanPath>) {
       scan(body, response);
+      motion.what = "scan";
     } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
       write_scan_buffer(body, response);
     }
   }, command.body);
   response.end_time_s = now();
+  // A command that moved and ended without fault can be stopped afterwards (stop_move).
+  if (response.status == Response::Status::Done && !motion.what.empty() && (!motion.moves.empty() || !motion.scan.empty())) {
+    motion.end_s = now();
+    stoppable = std::move(motion);
+  }
   return response;
 }
 

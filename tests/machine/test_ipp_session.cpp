@@ -4,6 +4,7 @@
 // corner at (300, 200, 0), an ideal probe), error numbers from the specification's table.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -298,6 +299,36 @@ TEST(IppSession, AbortEStopsAPacedGoToWhereItWas) {
   const auto idle = f.session.interrupt("E0170 AbortE()", 0.1);
   EXPECT_FALSE(idle.interrupted);
   EXPECT_EQ(idle.lines, (std::vector<std::string>{"E0170 &", "E0170 %"}));
+}
+
+// AbortE while a scan's answer is paced: the machine stops on the scan, where the head was at
+// that moment plus its stopping distance, in contact with the top, not at the scan's end; the
+// scan's samples are not answered. A jerk-limited stop from cruise at speed v takes
+// T = 2*sqrt(v/j) (v < a^2/j) and, its speed curve being point-symmetric, covers v*T/2.
+TEST(IppSession, AbortEStopsAPacedScanOnTheScan) {
+  Fixture f;
+  f.start();
+  std::vector<TraceSample> path;
+  f.cmm.set_trace([&](const TraceSample& s) { path.push_back(s); });
+  const double t0 = f.cmm.simulated_time_s();
+  const auto scan = f.session.handle("00010 ScanOnLine(310, 206, 41, 450, 206, 41, 0, 0, 1, 1)");
+  ASSERT_EQ(scan.lines.back(), "00010 %");
+  ASSERT_GT(scan.motion_s, 1.0);
+  const double at = scan.motion_s / 2;
+  const auto abort = f.session.interrupt("E0020 AbortE()", at);
+  ASSERT_TRUE(abort.interrupted);
+  for (const auto& l : abort.lines) EXPECT_EQ(l.find('#'), std::string::npos) << l;
+  const auto head = std::find_if(path.begin(), path.end(), [&](const TraceSample& s) { return s.time_s >= t0 + at; });
+  ASSERT_NE(head, path.end());
+  const Vec3 p = f.cmm.state().position_mm;
+  const double v = head->speed_mm_s, j = f.world.machine.max_jerk_mm_s3;
+  ASSERT_LT(v, std::pow(f.world.machine.max_acceleration_mm_s2, 2) / j);
+  EXPECT_NEAR((p - head->position_mm).norm(), v * std::sqrt(v / j), 1e-6);
+  EXPECT_GT(p.x(), 320);
+  EXPECT_LT(p.x(), 440);
+  EXPECT_NEAR(p.z(), 41, 0.5);
+  EXPECT_EQ(f.error("00030 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00040 GoTo(Z(60))"), 0);
 }
 
 // Arguments that would make the server allocate without bound are refused, not attempted.

@@ -713,3 +713,82 @@ TEST(VirtualCmm, AStopRequestCutsAGoToWhereTheMachineWas) {
   EXPECT_FALSE(cmm.machine().stop_last_motion(0.01));  // the last command was no move
   EXPECT_NEAR(cmm.machine().state().position_mm.x(), target.x(), 1e-12);
 }
+
+// A stop request during a point measurement: the machine stops where it was, by the same
+// kinematics as a GoTo (above): in the cruise of a move at speed v, it comes to rest v*tau from
+// that move's start. The hit is lost (the last hit is the one before). Geometry from perfect.json:
+// the block's top at z = 40, a 4 mm ball.
+TEST(VirtualCmm, AStopRequestCutsAPointMeasurementWhereTheMachineWas) {
+  const World world = world_file("perfect.json");
+  const double a = world.machine.max_acceleration_mm_s2, j = world.machine.max_jerk_mm_s3;
+  const auto ramp_s = [&](double v) { return v < a * a / j ? 2 * std::sqrt(v / j) : v / a + a / j; };
+  const Vec3 top = part_origin + Vec3(100, 50, 40);
+  const auto ptmeas = [&](double approach, double speed) {
+    PtMeas m;
+    m.nominal_mm = top;
+    m.approach_mm = approach;
+    m.search_mm = 5;
+    m.speed_mm_s = speed;
+    return m;
+  };
+
+  // In its approach: 100 mm down at the positioning feed, stopped 2 s in.
+  {
+    Cmm cmm(world);
+    cmm.tool(4);
+    cmm.ok(SetFeeds{20, 0, 0});
+    const Hit before = cmm.point(part_origin + Vec3(10, 10, 40), Vec3::UnitZ());
+    cmm.go(top + Vec3(0, 0, 144));
+    const double t0 = cmm.machine().simulated_time_s();
+    const Response r = cmm.run(ptmeas(2, 2));
+    ASSERT_EQ(r.status, Response::Status::Done);
+    const auto stopped = cmm.machine().stop_last_motion(2.0);
+    ASSERT_TRUE(stopped);
+    EXPECT_EQ(stopped->tag, r.tag);
+    ASSERT_TRUE(stopped->fault);
+    EXPECT_EQ(stopped->fault->kind, FaultKind::Aborted);
+    EXPECT_NE(stopped->fault->message.find("point measurement"), std::string::npos) << stopped->fault->message;
+    const MachineState s = cmm.machine().state();
+    EXPECT_NEAR(s.position_mm.z(), top.z() + 144 - 20 * 2.0, 1e-9);
+    EXPECT_NEAR((s.position_mm - Vec3(top.x(), top.y(), s.position_mm.z())).norm(), 0, 1e-9);
+    EXPECT_NEAR(s.time_s - t0, 2.0 + ramp_s(20), world.machine.dt_s + 1e-9);
+    ASSERT_TRUE(s.last_hit);
+    EXPECT_EQ(s.last_hit->time_s, before.time_s);
+  }
+  // In its probing move, before the contact: from rest at the approach point, 10 mm above the
+  // surface, at 2 mm/s, stopped 2 s in.
+  {
+    Cmm cmm(world);
+    cmm.tool(4);
+    const Vec3 approach = top + Vec3(0, 0, 2 + 10);
+    cmm.go(approach);
+    const double t0 = cmm.machine().simulated_time_s();
+    ASSERT_EQ(cmm.run(ptmeas(10, 2)).status, Response::Status::Done);
+    ASSERT_TRUE(cmm.machine().stop_last_motion(2.0));
+    const MachineState s = cmm.machine().state();
+    EXPECT_NEAR(s.position_mm.z(), approach.z() - 2 * 2.0, 1e-9);
+    EXPECT_NEAR(s.time_s - t0, 2.0 + ramp_s(2), world.machine.dt_s + 1e-9);
+    EXPECT_FALSE(s.last_hit);
+  }
+  // After its trigger: the probing move was stopping already (from v at the next cycle, over
+  // v*sqrt(v/j), as above), and the stop request changes nothing: the machine rests where the
+  // touch stopped, the ball in contact, not retracted. No retract, so that the request falls
+  // in that stop; the machine then moves off the surface.
+  {
+    Cmm cmm(world);
+    cmm.tool(4);
+    cmm.go(top + Vec3(0, 0, 12));
+    const double t0 = cmm.machine().simulated_time_s();
+    PtMeas m = ptmeas(10, 2);
+    m.retract_mm = 0;
+    const Response r = cmm.run(m);
+    ASSERT_TRUE(r.hit);
+    const double stop_mm = 2 * std::sqrt(2 / j), latched_z = r.hit->centre_mm.z();
+    ASSERT_TRUE(cmm.machine().stop_last_motion(r.hit->time_s - t0 + 0.02));
+    const double z = cmm.machine().state().position_mm.z();
+    EXPECT_LT(z, top.z() + 2);
+    EXPECT_LE(z, latched_z - stop_mm + 1e-9);
+    EXPECT_GE(z, latched_z - stop_mm - 2 * world.machine.dt_s - 1e-9);
+    cmm.go(top + Vec3(0, 0, 20));
+  }
+}

@@ -990,8 +990,8 @@ struct Session::Impl {
   }
 
   // AbortE while the last command's answer is paced: the machine stops that command where it
-  // was `elapsed_s` into its motion (a GoTo exactly; a probing cycle or scan keeps its end
-  // position but loses its result), and the command is answered 0006 before the AbortE completes,
+  // was `elapsed_s` into its motion (a GoTo, a probing cycle's moves, an active scan; the
+  // command's result is lost), and the command is answered 0006 before the AbortE completes,
   // as the NIST server answers AbortE_TestWhileMoving.prg.
   SessionReply interrupt(std::string_view line, double elapsed_s) {
     auto parsed = parse_command_line(line);

@@ -70,6 +70,8 @@ tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, cons
   }
   cycle = c0 + cycles_for(stop_t);
   position = start + stop_s * u;
+  motion.moves.push_back(PositioningMove{start, u, len, profile, move_limits, braking(u, move_feed), c0, brake,
+                                        now(), position});
   if (const auto past = sim.over_travel(stop_s))
     return fault(FaultKind::OverTravel,
                  fmt::format("probe over-travel: stopped {:.3f} mm past contact, limit {:.3f} mm", *past,
