@@ -23,6 +23,7 @@ const char* to_string(Op op) {
     case Op::Read: return "READ";
     case Op::Write: return "WRITE";
     case Op::FitAlgorithm: return "FIT_ALGORITHM";
+    case Op::GoHome: return "GOHOME";
     case Op::Accel: return "ACCEL";
     case Op::GoTo: return "GOTO";
     case Op::MeasBegin: return "MEAS_BEGIN";

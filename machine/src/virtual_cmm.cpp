@@ -188,6 +188,7 @@ MachineState VirtualCmm::state() const {
   s.executed_commands = m_impl->executed;
   s.scan_buffer_segments = m_impl->config.scanning.segmented.buffer_segments;
   s.temperature_c = m_impl->sim.thermometer_c(m_impl->now());
+  s.home_mm = m_impl->config.home_mm;
   return s;
 }
 

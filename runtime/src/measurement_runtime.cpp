@@ -302,6 +302,17 @@ Result<void> MeasurementRuntime::go_to(const Vec3& point, Span span) {
   return {};
 }
 
+Result<void> MeasurementRuntime::go_home(Span span) {
+  const auto home = m_machine.state().home_mm;
+  if (!home) {
+    warn(span, "GOHOME: this machine does not say where its home is; the probe stays where it is");
+    return {};
+  }
+  auto r = run_commands({machine::Command{0, machine::GoTo{*home, {}}}}, {span});
+  if (!r) return tl::unexpected(r.error());
+  return {};
+}
+
 BlockPlanContext MeasurementRuntime::plan_context() const {
   BlockPlanContext context;
   context.alignment = m_alignment;

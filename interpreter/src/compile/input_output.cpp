@@ -32,7 +32,7 @@ void UnitCompiler::add_input_output(StatementTable& t) {
       {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
       {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
       {"ERROR", &UnitCompiler::noted_once}, {"RESUME", &UnitCompiler::noted_once},
-      {"GEOALG", &UnitCompiler::noted_once}, {"GOHOME", &UnitCompiler::noted_once}
+      {"GEOALG", &UnitCompiler::noted_once}, {"GOHOME", &UnitCompiler::go_home}
   });
 }
 
@@ -75,13 +75,18 @@ void UnitCompiler::noted_once(const grammar::Statement& s) {
   if (m_noted_kinds.insert(key).second) {
     const std::string message =
         error_handling ? "ERROR/RESUME error handlers are not run: a machine fault stops the run (noted once)"
-        : s.major == "GEOALG"
-            ? "GEOALG: metron fits features by least squares (form tolerances by minimum zone); this fitting algorithm "
-              "is not applied (noted once)"
-            : "GOHOME does not move the virtual CMM: the next move starts where the probe is (noted once)";
+        : "GEOALG: metron fits features by least squares (form tolerances by minimum zone); this fitting algorithm "
+          "is not applied (noted once)";
     warn(s.span, "sema.not-applied", message);
   }
   emit(make(Op::Nop, s, s.major));
+}
+
+// GOHOME: the machine's home, straight at the positioning feed (a program lifts the probe
+// clear first, as it would on the machine).
+void UnitCompiler::go_home(const grammar::Statement& s) {
+  if (!s.params.empty()) warn(s.params.front().span, "sema.extra-params", "GOHOME takes no parameters: ignored");
+  emit(make(Op::GoHome, s));
 }
 
 // UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC]

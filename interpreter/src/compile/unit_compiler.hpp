@@ -213,6 +213,7 @@ class UnitCompiler {
   // ---- input/output: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (compile/input_output.cpp) ------
   void no_effect(const grammar::Statement& s);
   void noted_once(const grammar::Statement& s);
+  void go_home(const grammar::Statement& s);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
   void pause(const grammar::Statement& s);
@@ -310,7 +311,7 @@ class UnitCompiler {
   bool m_strict = false;
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once
-  std::set<std::string> m_noted_kinds;  // ERROR, GEOALG, GOHOME: noted once each
+  std::set<std::string> m_noted_kinds;  // ERROR, GEOALG: noted once each
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.

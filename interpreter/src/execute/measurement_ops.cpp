@@ -16,7 +16,7 @@ using runtime::FeatureType;
 void Execute::add_measurement(ExecuteTable& t) {
   add_rows(t, {
       {Op::SensorSelect, &sensor_select}, {Op::FitAlgorithm, &fit_algorithm}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
-      {Op::GoTo, &go_to}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
+      {Op::GoTo, &go_to}, {Op::GoHome, &go_home}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
   });
 }
 
@@ -110,6 +110,13 @@ ExecStatus Execute::go_to(Interpreter& vm, const ir::Instruction& in, CallFrame&
     return ExecStatus::Running;
   }
   if (auto r = vm.m_runtime.go_to(target, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::GoHome
+ExecStatus Execute::go_home(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (vm.m_block) return vm.fail(in.span, "GOHOME is not allowed inside a MEAS block");  // check refuses it first
+  if (auto r = vm.m_runtime.go_home(in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

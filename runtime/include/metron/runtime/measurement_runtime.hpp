@@ -133,6 +133,8 @@ class MeasurementRuntime {
   [[nodiscard]] const ReportUnits& report_units() const { return m_report_units; }
   [[nodiscard]] Mode mode() const { return m_mode; }
   Result<void> go_to(const Vec3& point_current, Span span);
+  /// GOHOME: straight to the machine's home; a warning when the backend does not say where it is.
+  Result<void> go_home(Span span);
   /// Current ball-centre position in the current frame.
   [[nodiscard]] Vec3 position_current() const;
   Result<void> measure(const MeasBlock& block);

@@ -76,10 +76,11 @@ enum class Op {
   Read,         ///< READ/DID(x),v1,v2,...: labels: DID; `names`: the variables, in order
   Write,        ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
   FitAlgorithm, ///< GEOALG/CIRCLE,...: words: the algorithm (LSTSQR, MAXINS, MINCIR)
+  GoHome,       ///< GOHOME: no operands
 };
 
-/// The number of operations (FitAlgorithm is the last).
-inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::FitAlgorithm) + 1;
+/// The number of operations (GoHome is the last).
+inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::GoHome) + 1;
 
 /// Upper-case mnemonic of an operation (for --emit-ir).
 const char* to_string(Op op);

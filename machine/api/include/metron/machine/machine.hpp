@@ -27,6 +27,8 @@ struct MachineState {
   /// The machine's thermometer (its scales' temperature, C, to 0.01 K) when it has one: the
   /// controller interpolates a compensation map calibrated at several temperatures by it.
   std::optional<double> temperature_c;
+  /// Where the machine goes home to (DMIS GOHOME), machine coordinates, when the backend knows.
+  std::optional<Vec3> home_mm;
 };
 
 /// A machine backend: the virtual CMM, or a real controller behind the same interface.
@@ -43,10 +45,11 @@ class Machine {
   [[nodiscard]] virtual std::vector<Command> queued() const = 0;
   /// Stops the last executed command as a stop request `after_s` into it would have (I++ DME
   /// AbortE during a motion, docs/ipp-dme.md). A simulated machine runs every command at once, so
-  /// the stop comes afterwards: a positioning move (GoTo) that ended without fault is cut at
-  /// `after_s` and braked to rest at the machine's limits; position and clock become the stop's,
-  /// and the answer returned (FaultKind::Aborted) replaces the move's. nullopt: nothing to stop
-  /// (the last command was no GoTo, or it was over by then), or a backend that cannot.
+  /// the stop comes afterwards: a motion (GoTo, PtMeas, an active scan) that ended without fault
+  /// is cut at `after_s` and braked to rest at the machine's limits; position and clock become
+  /// the stop's, and the answer returned (FaultKind::Aborted) replaces the command's. nullopt:
+  /// nothing to stop (the last command did not move, or it was over by then), or a backend that
+  /// cannot.
   virtual std::optional<Response> stop_last_motion(double /*after_s*/) { return std::nullopt; }
   /// Called with the controller clock and the ball centre (machine coordinates) every control
   /// cycle while the machine moves, for position reports along a motion (I++ DME
