@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "execute/execute.hpp"
+#include "metron/stdlib/text_encoding.hpp"
 
 namespace metron::interpreter {
 namespace {
@@ -162,6 +163,17 @@ tl::expected<void, std::string> Interpreter::set_variable(const std::string& nam
 // index as it is. An index that cannot be evaluated here keeps its text (the use then fails
 // naming it).
 std::string Interpreter::indexed(const std::string& name) const {
+  if (name.size() > 1 && name.front() == '@') {
+    // An indirect reference (DMIS 5.x 5.1.2.4): the CHAR variable holds the label's name, one
+    // level only. A variable that holds none keeps the text (the use then fails naming it).
+    auto* v = const_cast<Interpreter*>(this)->find_variable(name.substr(1));
+    if (!v || v->empty() || v->front().type != ValueType::String) return name;
+    std::string held = v->front().text;
+    held.erase(held.find_last_not_of(' ') + 1);
+    held.erase(0, std::min(held.size(), held.find_first_not_of(' ')));
+    if (held.empty() || held.front() == '@') return name;
+    return upper_utf8(held);
+  }
   const auto open = name.find('[');
   if (open == std::string::npos || name.back() != ']') return name;
   const std::string text = name.substr(open + 1, name.size() - open - 2);

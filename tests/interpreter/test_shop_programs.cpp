@@ -1518,6 +1518,31 @@ TEST(ShopPrograms, IndexedLabelsNameOneFeaturePerIndex) {
   EXPECT_TRUE(bad.has("expected ']' after the label's index")) << bad.text;
 }
 
+// Indirect labels (DMIS 5.x 5.1.2.4): F(@V) names the feature whose label the CHAR variable V
+// holds, at the moment of use, one level deep. check cannot know the name and accepts it.
+TEST(ShopPrograms, IndirectLabelsNameTheFeatureTheVariableHolds) {
+  const std::string text =
+      "DMISMN/'indirect', 5.0\nUNITS/MM,ANGDEC\nDECL/INTGR,I\nDECL/CHAR,20,NAME\nT(DIA)=TOL/DIAM,-0.05,0.05\n"
+      "DO/I,1,3\n  NAME=ASSIGN/CONCAT('h',STR(I))\n"
+      "  F(@NAME)=FEAT/CIRCLE,INNER,CART,100+20*I,100,-5,0,0,1,10\n"
+      "  FA(@NAME)=FEAT/CIRCLE,INNER,CART,100+20*I,100,-5,0,0,1,10+I/100\nENDDO\n"
+      "NAME=ASSIGN/' H2 '\nOUTPUT/FA(@NAME),TA(DIA)\nOUTPUT/FA(H3)\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  for (int i : {2, 3}) {
+    const auto* h = report(*r.session, fmt::format("H{}", i));
+    ASSERT_TRUE(h && h->actual) << i;
+    EXPECT_NEAR(h->actual->position.x(), 100 + 20 * i, 1e-12);
+    EXPECT_NEAR(h->actual->diameter_mm, 10 + i / 100.0, 1e-12);
+  }
+  EXPECT_FALSE(report(*r.session, "H1"));  // defined, not output
+  // A variable holding a name that no statement defined fails at run, naming that feature.
+  const auto bad = run("DMISMN/'i', 5.0\nDECL/CHAR,8,V\nV=ASSIGN/'NOPE'\nOUTPUT/FA(@V)\nENDFIL\n");
+  EXPECT_NE(bad.diagnostics.find("NOPE"), std::string::npos) << bad.diagnostics;
+}
+
 // A measured line is reported at the point of the fitted line nearest its nominal's (a BND
 // line's start and end), as a cylinder's axis is: the points' centroid put a perfect line probed
 // at x = 10, 50 and 90 at x = 50, 40 mm off its start, and CORTOL said OUT.

@@ -59,7 +59,7 @@ void UnitCompiler::datset(const grammar::Statement& s) {
       const grammar::Expr& p = is_signed ? signed_word : param;
       if (is_label(p, {"DAT"})) {
         const std::string d = upper(p.label.name);
-        if (!m_symbols.datums.count(d) && !macro_param(d))
+        if (!m_symbols.datums.count(d) && !named_at_run(d))
           return error(p.span, "sema.undefined-datum", fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
         in.operands.push_back(label_op(p));
         have_datum = true;
@@ -313,7 +313,7 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       types.push_back(feature_type(upper(p.label.name)));
     } else if (is_label(p, {"T", "TA"})) {
       const std::string t = upper(p.label.name);
-      if (!macro_param(t)) {
+      if (!named_at_run(t)) {
         auto it = m_symbols.tolerances.find(t);
         if (auto u = m_symbols.unevaluated_tolerances.find(t); it == m_symbols.tolerances.end() && u != m_symbols.unevaluated_tolerances.end()) {
           note(p.span, "sema.unevaluated-output", fmt::format("T({}) (TOL/{}) is not evaluated: left out of this OUTPUT", p.label.name, u->second));

@@ -165,7 +165,7 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   }
   if (tolerance) {
     const std::string t = upper(target.label.name);
-    if (!macro_param(t) && !m_symbols.tolerances.count(t)) {
+    if (!named_at_run(t) && !m_symbols.tolerances.count(t)) {
       error(target.span, "sema.undefined-tolerance",
             m_symbols.unevaluated_tolerances.count(t)
                 ? fmt::format("T({}) is a tolerance metron does not evaluate; VALUE has nothing to read", target.label.name)

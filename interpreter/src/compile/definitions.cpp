@@ -381,7 +381,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     } else if (p[i].kind == ExprKind::Label) {
       if (!is_label(p[i], {"DAT", "DATT"})) return error(p[i].span, "sema.expected-datum", "expected a datum DAT(x)");
       const std::string d = upper(p[i].label.name);
-      if (!m_symbols.datums.count(d) && !macro_param(d))
+      if (!m_symbols.datums.count(d) && !named_at_run(d))
         warn(p[i].span, "sema.datum-later", fmt::format("datum DAT({}) is not defined yet; it must be defined by DATDEF before the OUTPUT", p[i].label.name));
       in.operands.push_back(label_op(p[i]));
     } else if (is_word(p[i]) && !is_variable(p[i].text)) {

@@ -343,7 +343,7 @@ void UnitCompiler::pameas(const grammar::Statement& s) {
   if (s.params.size() != 1 || !is_label(s.params[0], {"P"}))
     return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.expected-path", "expected a single P(label) after PAMEAS/");
   const std::string name = upper(s.params[0].label.name);
-  if (!m_symbols.paths.count(name) && !macro_param(name)) {
+  if (!m_symbols.paths.count(name) && !named_at_run(name)) {
     if (auto it = m_symbols.skipped.find("P:" + name); it != m_symbols.skipped.end())
       return error(s.params[0].span, "sema.skipped-definition", fmt::format("path P({}) was defined by a skipped statement", s.params[0].label.name));
     return error(s.params[0].span, "sema.undefined-path", fmt::format("path P({}) is not defined: define it with P({})=PATH/...", s.params[0].label.name, s.params[0].label.name));

@@ -72,7 +72,7 @@ void UnitCompiler::resolve_jumps(JumpScope& scope, std::vector<ir::Instruction>&
 // A feature label must be defined before use; FA() needs it measured or constructed at run time.
 bool UnitCompiler::check_feature(const grammar::Expr& e) {
   const std::string name = upper(e.label.name);
-  if (macro_param(name)) return true;
+  if (named_at_run(name) || defines_indirectly()) return true;
   if (m_symbols.features.count(name)) return true;
   if (auto it = m_symbols.skipped.find("F:" + name); it != m_symbols.skipped.end()) {
     Diagnostic d{Severity::Error, "sema.skipped-definition", e.span,
@@ -93,9 +93,19 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   return false;
 }
 
+// Whether this unit defines a feature through an indirect label (F(@V)=FEAT/...): then any name
+// may be defined at run, and check cannot call one undefined.
+bool UnitCompiler::defines_indirectly() const {
+  const auto indirect = [](const auto& table) {
+    const auto it = table.lower_bound("@");
+    return it != table.end() && it->first.rfind('@', 0) == 0;
+  };
+  return indirect(m_later_features) || indirect(m_symbols.features);
+}
+
 // A feature label no statement of the program defines, before or after (nor a skipped one).
 bool UnitCompiler::never_defined(const std::string& name) const {
-  return !macro_param(name) && !m_symbols.features.count(name) && !m_symbols.skipped.count("F:" + name) &&
+  return !named_at_run(name) && !defines_indirectly() && !m_symbols.features.count(name) && !m_symbols.skipped.count("F:" + name) &&
          !m_later_features.count(name);
 }
 

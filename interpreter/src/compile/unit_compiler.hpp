@@ -147,6 +147,11 @@ class UnitCompiler {
     if (it == params.end()) return std::nullopt;
     return static_cast<int>(it - params.begin());
   }
+  /// A label whose name is known only at run time: a macro parameter, or an indirect reference
+  /// `F(@V)` (DMIS 5.x 5.1.2.4: the CHAR variable V holds the name). `check` cannot say whether
+  /// it is defined; `run` resolves it where it is used.
+  bool defines_indirectly() const;
+  bool named_at_run(const std::string& name) const { return macro_param(name).has_value() || name.rfind('@', 0) == 0; }
   ir::LabelOperand label_operand(const grammar::LabelRef& l) {
     ir::LabelOperand out{upper(l.prefix), upper(l.name), std::nullopt, l.span};
     out.param = macro_param(out.name);
