@@ -273,20 +273,28 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       break;
     }
   }
+  store_constructed(label, g, figures, span);
+  return {};
+}
+
+// A construction's result: the feature's actual; a feature with no FEAT nominal takes it as its
+// nominal too (construct warned).
+void MeasurementRuntime::store_constructed(const std::string& label, const Geometry& actual,
+                                           const std::optional<FitFigures>& figures, Span span) {
+  auto it = m_features.find(label);
   if (it == m_features.end()) {
     Feature f;
     f.label = label;
-    f.nominal = g;
+    f.nominal = actual;
     f.nominal_frame = m_alignment.part_to_machine;
     f.defined_at = span;
     m_feature_order.push_back(label);
     it = m_features.emplace(label, f).first;
   }
-  it->second.actual = g;
+  it->second.actual = actual;
   it->second.source = ActualSource::Constructed;
   it->second.fit = figures;
   it->second.measured_at = span;
-  return {};
 }
 
 // CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: the point of FA(x) moved by an offset in the current
@@ -295,27 +303,72 @@ Result<void> MeasurementRuntime::construct_moved_point(const std::string& label,
                                                        const Vec3& offset_current, Span span) {
   auto g = resolve(source, span);
   if (!g) return tl::unexpected(g.error());
-  auto it = m_features.find(label);
+  const auto it = m_features.find(label);
   Geometry moved = it != m_features.end() ? it->second.nominal : Geometry{};
   moved.type = FeatureType::Point;
   moved.position = g->position + m_alignment.to_machine_vector(offset_current);
   if (it == m_features.end()) {
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
     moved.direction = g->direction;
-    Feature f;
-    f.label = label;
-    f.nominal = moved;
-    f.nominal_frame = m_alignment.part_to_machine;
-    f.defined_at = span;
-    m_feature_order.push_back(label);
-    it = m_features.emplace(label, f).first;
-  } else {
-    moved.direction = it->second.nominal.direction;
   }
-  it->second.actual = moved;
-  it->second.source = ActualSource::Constructed;
-  it->second.fit.reset();
-  it->second.measured_at = span;
+  store_constructed(label, moved, std::nullopt, span);
+  return {};
+}
+
+// CONST/POINT,F(l),EXTREM: among FA(x)'s measured points (surface points, the probe radius
+// compensated), the one a plane coming from far along the direction touches first (QIF 3
+// PointFeatureExtreme; PC-DMIS's extreme point on hits). Its direction: the nominal's, else the
+// point's surface normal.
+Result<void> MeasurementRuntime::construct_extreme_point(const std::string& label, const FeatureRef& source,
+                                                         const std::optional<FeatureRef>& axis,
+                                                         const Vec3& direction_current, bool minimum, Span span) {
+  const auto fail = [&](const std::string& why) {
+    return program_error(span, fmt::format("cannot construct POINT F({}): {}", label, why));
+  };
+  const Feature* f = find_feature(source.label);
+  if (!f) return program_error(span, fmt::format("feature {} is not defined", source.label));
+  if (f->points.empty())
+    return fail(fmt::format("EXTREM picks one of the measured points of FA({}), which has none (it was constructed or stated)",
+                            source.label));
+  Vec3 d = m_alignment.to_machine_vector(direction_current);
+  if (axis) {
+    auto a = resolve(*axis, span);
+    if (!a) return tl::unexpected(a.error());
+    if (a->type == FeatureType::Point || a->type == FeatureType::Sphere)
+      return fail(fmt::format("FA({}) is a {}: it has no axis to give the direction", axis->label, dmis_word(a->type)));
+    d = a->direction;
+  }
+  if (!(d.norm() > 1e-12)) return fail("the direction is a zero vector");
+  d = (minimum ? -1.0 : 1.0) * d.normalized();
+  const auto far = std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
+    return a.surface_mm().dot(d) < b.surface_mm().dot(d);
+  });
+  const auto it = m_features.find(label);
+  Geometry g = it != m_features.end() ? it->second.nominal : Geometry{};
+  g.type = FeatureType::Point;
+  g.position = far->surface_mm();
+  if (it == m_features.end()) {
+    warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
+    g.direction = far->normal;
+  }
+  store_constructed(label, g, std::nullopt, span);
+  return {};
+}
+
+// CONST/PLANE,F(l),OFFSET,FA(plane),d: the plane translated d along its own normal (QIF 3
+// PlaneOffset; a negative d goes against the normal).
+Result<void> MeasurementRuntime::construct_offset_plane(const std::string& label, const FeatureRef& source,
+                                                        double distance_mm, Span span) {
+  auto g = resolve(source, span);
+  if (!g) return tl::unexpected(g.error());
+  if (g->type != FeatureType::Plane)
+    return program_error(span, fmt::format("cannot construct PLANE F({}): OFFSET moves a PLANE, FA({}) is a {}", label,
+                                           source.label, dmis_word(g->type)));
+  Geometry moved = *g;
+  moved.position = g->position + distance_mm * g->direction.normalized();
+  if (m_features.find(label) == m_features.end())
+    warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
+  store_constructed(label, moved, std::nullopt, span);
   return {};
 }
 

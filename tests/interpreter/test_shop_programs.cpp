@@ -1433,13 +1433,13 @@ TEST(ShopPrograms, UnevaluatedToleranceFormsAreLeftOut) {
                              "MEAS/GCURVE,F(GC1),20\nPAMEAS/P(PTH1)\nENDMES\nENDFIL\n");
   EXPECT_TRUE(scan.has("F(GC1) is a GCURVE: it is measured by PTMEAS points, each its own nominal, not by a scan")) << scan.text;
   // A feature constructed by a method metron does not evaluate: its OUTPUT is left out with its
-  // tolerance (the run stopped at "OUTPUT of FA(OFFP) before it was measured").
-  const std::string offset = "DMISMN/'o', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(OFFP)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
-                             "CONST/PLANE,F(OFFP),OFFSET,FA(PA),5\nT(FL)=TOL/FLAT,0.01\nOUTPUT/FA(OFFP),TA(FL)\nOUTPUT/FA(PA)\nENDFIL\n";
-  const Checked o = check(offset);
+  // tolerance (the run stopped at "OUTPUT of FA(TANP) before it was measured").
+  const std::string tangent = "DMISMN/'o', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(TANP)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
+                              "CONST/PLANE,F(TANP),TANTO,FA(PA),FA(PA)\nT(FL)=TOL/FLAT,0.01\nOUTPUT/FA(TANP),TA(FL)\nOUTPUT/FA(PA)\nENDFIL\n";
+  const Checked o = check(tangent);
   EXPECT_EQ(o.errors, 0u) << o.text;
-  EXPECT_TRUE(o.has("FA(OFFP) has no actual: its CONST method OFFSET is not supported; left out of this OUTPUT")) << o.text;
-  const auto r = run(offset);
+  EXPECT_TRUE(o.has("FA(TANP) has no actual: its CONST method TANTO is not supported; left out of this OUTPUT")) << o.text;
+  const auto r = run(tangent);
   EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
 }
 
@@ -1541,6 +1541,50 @@ TEST(ShopPrograms, IndirectLabelsNameTheFeatureTheVariableHolds) {
   // A variable holding a name that no statement defined fails at run, naming that feature.
   const auto bad = run("DMISMN/'i', 5.0\nDECL/CHAR,8,V\nV=ASSIGN/'NOPE'\nOUTPUT/FA(@V)\nENDFIL\n");
   EXPECT_NE(bad.diagnostics.find("NOPE"), std::string::npos) << bad.diagnostics;
+}
+
+// CONST/POINT,EXTREM picks the measured point furthest along a direction of the current
+// coordinate system (or least far), CONST/PLANE,OFFSET moves a plane along its normal. Expected
+// values: the design of perfect.json's block (BORE1 20 mm at part 40, 50; the top at z = 40),
+// which an ideal probe measures exactly.
+TEST(ShopPrograms, ExtremePointsAndOffsetPlanes) {
+  std::string text = bore_program("");
+  const std::string more =
+      "F(E1)=FEAT/POINT,CART,50,50,30,1,0,0\nCONST/POINT,F(E1),EXTREM,FA(BORE1),XDIR\n"
+      "CONST/POINT,F(E2),EXTREM,MIN,FA(BORE1),YDIR\nCONST/POINT,F(E3),EXTREM,FA(BORE1),-XDIR\n"
+      "CONST/POINT,F(E4),EXTREM,MAX,FA(BORE1),VEC,1,2,0\n"
+      "F(TOP)=FEAT/PLANE,CART,80,50,40,0,0,1\nMEAS/PLANE,F(TOP),3\nGOTO/80,50,60\n"
+      "PTMEAS/CART,20,20,40,0,0,1\nPTMEAS/CART,140,20,40,0,0,1\nPTMEAS/CART,80,90,40,0,0,1\nENDMES\n"
+      "F(LOW)=FEAT/PLANE,CART,80,50,35,0,0,1\nCONST/PLANE,F(LOW),OFFSET,FA(TOP),-5\n"
+      "OUTPUT/FA(E1),FA(E2),FA(E3),FA(E4),FA(LOW)\n"
+      "D(TURNED)=ROTATE/ZAXIS,90\nCONST/POINT,F(E5),EXTREM,FA(BORE1),XDIR\nOUTPUT/FA(E5)\n";
+  text.insert(text.find("OUTPUT/FA(BORE1)"), more);
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  const auto r = run(text, source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto at = [&](const char* label) {
+    const auto* f = report(*r.session, label);
+    EXPECT_TRUE(f && f->actual) << label;
+    return f && f->actual ? f->actual->position : Eigen::Vector3d(NAN, NAN, NAN);
+  };
+  EXPECT_LT((at("E1") - Eigen::Vector3d(50, 50, 30)).norm(), 1e-4);
+  EXPECT_LT((at("E2") - Eigen::Vector3d(40, 40, 30)).norm(), 1e-4);
+  EXPECT_LT((at("E3") - Eigen::Vector3d(30, 50, 30)).norm(), 1e-4);
+  EXPECT_LT((at("E4") - Eigen::Vector3d(40, 60, 30)).norm(), 1e-4);  // 40 + 2*60 beats 50 + 2*50
+  EXPECT_NEAR(at("LOW").z(), 35, 1e-4);
+  // After ROTATE/ZAXIS,90 the current X is the part's Y: the extreme is part (40, 60), reported
+  // in the rotated frame (x' = y).
+  const Eigen::Vector3d e5 = at("E5");
+  EXPECT_NEAR(e5.x(), 60, 1e-4);
+  EXPECT_NEAR(std::abs(e5.y()), 40, 1e-4);
+  // A construction with no measured points, and OFFSET of what is not a plane, are errors at run.
+  const auto none = run("DMISMN/'e', 5.0\nF(A)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(A)=FEAT/POINT,CART,1,2,3,0,0,1\n"
+                        "CONST/POINT,F(B),EXTREM,FA(A),ZDIR\nENDFIL\n");
+  EXPECT_NE(none.diagnostics.find("EXTREM picks one of the measured points of FA(A), which has none"), std::string::npos)
+      << none.diagnostics;
+  EXPECT_TRUE(check("DMISMN/'e', 5.0\nF(A)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(B),EXTREM,FA(A)\nENDFIL\n")
+                  .has("EXTREM takes a feature and a direction"));
 }
 
 // A measured line is reported at the point of the fitted line nearest its nominal's (a BND

@@ -209,6 +209,26 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     emit(std::move(in));
     return;
   }
+  if (*method == ir::ConstructionMethod::Extrem) return extreme_point(s, std::move(in));
+  if (*method == ir::ConstructionMethod::Offset) {
+    // CONST/PLANE,F(l),OFFSET,FA(plane),d
+    if (*const_type != FeatureType::Plane) {
+      warn(p[2].span, "sema.unsupported-construction",
+           fmt::format("OFFSET constructs a PLANE here (OFFSET,FA(plane),d); an offset {} is not supported: F({}) gets no actual",
+                       p[0].text, p[1].label.name));
+      m_symbols.unconstructed[label] = p[2].text;
+      emit(make(Op::Nop, s, "CONST"));
+      return;
+    }
+    if (p.size() != 5 || !is_label(p[3], {"FA", "F"}))
+      return error(p.back().span, "sema.construction-arity", "OFFSET takes a plane and a distance: OFFSET,FA(plane),d");
+    if (!check_feature(p[3])) return;
+    in.operands.push_back(label_op(p[3]));
+    if (!push_number(in, p[4], "the offset distance")) return;
+    if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+    emit(std::move(in));
+    return;
+  }
   if (*method == ir::ConstructionMethod::Parto || *method == ir::ConstructionMethod::Perpto) {
     // CONST/PLANE|LINE,F(l),PARTO|PERPTO,FA(ref),THRU,FA(point)
     if (*const_type != FeatureType::Plane && *const_type != FeatureType::Line)
@@ -237,6 +257,59 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   if (*method != M::Bf && !one_source && sources != 2)
     return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", p[2].text, sources));
   if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+  emit(std::move(in));
+}
+
+// CONST/POINT,F(l),EXTREM,[MIN|MAX|MINUS|PLUS,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)[,MIN|MAX]
+// (DMIS SIR 96-10; the directions as QIF's PointFeatureExtreme): the measured point of FA(x)
+// furthest along the direction (MIN: least far). Operands: the source, a word MAX or MIN, then the
+// direction: a word (XDIR, XMINUS, ...), a label (an axis feature's direction) or i, j, k.
+void UnitCompiler::extreme_point(const grammar::Statement& s, ir::Instruction in) {
+  const auto& p = s.params;
+  if (type_word(p[0]) != FeatureType::Point) return error(p[0].span, "sema.const-type", "EXTREM constructs a POINT");
+  const char* usage = "EXTREM takes a feature and a direction: EXTREM,[MIN|MAX,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)";
+  std::optional<grammar::Expr> source, axis_feature, axis_word;
+  std::vector<const grammar::Expr*> vec;
+  bool minimum = false;
+  for (std::size_t i = 3; i < p.size(); ++i) {
+    const grammar::Expr& q = p[i];
+    if (is_word(q, "MIN") || is_word(q, "MINUS")) minimum = true;
+    else if (is_word(q, "MAX") || is_word(q, "PLUS")) minimum = false;
+    else if (is_label(q, {"FA", "F"})) (source ? axis_feature : source) = q;
+    else if (is_word(q, "XDIR") || is_word(q, "YDIR") || is_word(q, "ZDIR") || is_word(q, "XMINUS") ||
+             is_word(q, "YMINUS") || is_word(q, "ZMINUS")) {
+      axis_word = q;
+    } else if (q.kind == ExprKind::Unary && q.args.size() == 1 && (q.text == "-" || q.text == "+") &&
+               (is_word(q.args[0], "XDIR") || is_word(q.args[0], "YDIR") || is_word(q.args[0], "ZDIR"))) {
+      axis_word = q.args[0];
+      if (q.text == "-") axis_word->text = std::string(1, q.args[0].text[0]) + "MINUS";
+      axis_word->span = q.span;
+    } else if (is_word(q, "VEC") || is_word(q, "VECTOR")) {
+      if (i + 3 >= p.size()) return error(q.span, "sema.construction-arity", "VEC takes i, j, k");
+      for (std::size_t k = 1; k <= 3; ++k) vec.push_back(&p[i + k]);
+      i += 3;
+    } else if (is_word(q, "RADIAL")) {
+      return error(q.span, "sema.unsupported-construction", "EXTREM,...,RADIAL is not supported: give a direction");
+    } else {
+      return error(q.span, "sema.construction-arity", usage);
+    }
+  }
+  const int directions = (axis_feature ? 1 : 0) + (axis_word ? 1 : 0) + (vec.empty() ? 0 : 1);
+  if (!source || directions != 1) return error(p.back().span, "sema.construction-arity", usage);
+  if (!check_feature(*source)) return;
+  in.operands.push_back(label_op(*source));
+  in.operands.push_back(word_operand(minimum ? "MIN" : "MAX", source->span));
+  if (axis_word) {
+    in.operands.push_back(word_operand(axis_word->text, axis_word->span));
+  } else if (axis_feature) {
+    if (!check_feature(*axis_feature)) return;
+    in.operands.push_back(label_op(*axis_feature));
+  } else {
+    for (const auto* e : vec)
+      if (!push_number(in, *e, "a direction component")) return;
+  }
+  const std::string label = upper(p[1].label.name);
+  if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {FeatureType::Point, s.span};
   emit(std::move(in));
 }
 

@@ -219,6 +219,7 @@ class UnitCompiler {
   void no_effect(const grammar::Statement& s);
   void noted_once(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
+  void extreme_point(const grammar::Statement& s, ir::Instruction in);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
   void pause(const grammar::Statement& s);

@@ -146,6 +146,36 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
+  if (words.method == M::Extrem) {
+    // operands: the source, MIN|MAX, then a direction word, an axis feature or i, j, k
+    Vec3 direction = Vec3::Zero();
+    std::optional<runtime::FeatureRef> axis;
+    const auto& d = in.operands.at(2);
+    if (d.kind == Operand::Kind::Label) {
+      axis = feature_ref(vm, d.label);
+    } else if (d.kind == Operand::Kind::Word) {
+      const bool minus = d.word.find("MINUS") != std::string::npos;
+      direction[d.word[0] - 'X'] = minus ? -1 : 1;
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        auto v = vm.number(in.operands.at(2 + static_cast<std::size_t>(k)).expr);
+        if (!v) return vm.fail(in.span, v.error());
+        direction[k] = *v;
+      }
+    }
+    if (auto r = vm.m_runtime.construct_extreme_point(vm.name_of(in), feature_ref(vm, in.operands[0].label), axis, direction,
+                                                      in.operands[1].word == "MIN", in.span); !r)
+      return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
+  if (words.method == M::Offset) {
+    auto d = vm.number(in.operands.at(1).expr);
+    if (!d) return vm.fail(in.span, d.error());
+    if (auto r = vm.m_runtime.construct_offset_plane(vm.name_of(in), feature_ref(vm, in.operands[0].label), *d * vm.m_length_mm,
+                                                     in.span); !r)
+      return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
   const auto method = words.method == M::Bf      ? runtime::ConstructMethod::BestFit
                       : words.method == M::Intof || words.method == M::Pierce ? runtime::ConstructMethod::Intersection
                       : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint

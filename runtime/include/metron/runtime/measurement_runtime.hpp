@@ -160,6 +160,12 @@ class MeasurementRuntime {
   // Constructions and outputs.
   /// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: FA(x)'s position moved by an offset (current frame, mm).
   Result<void> construct_moved_point(const std::string& label, const FeatureRef& source, const Vec3& offset_current, Span span);
+  /// CONST/POINT,F(l),EXTREM: the measured (compensated) point of FA(x) furthest along a
+  /// direction, least far with `minimum`: `axis`'s direction, else `direction_current`.
+  Result<void> construct_extreme_point(const std::string& label, const FeatureRef& source, const std::optional<FeatureRef>& axis,
+                                       const Vec3& direction_current, bool minimum, Span span);
+  /// CONST/PLANE,F(l),OFFSET,FA(plane),d: the plane moved d (mm) along its normal.
+  Result<void> construct_offset_plane(const std::string& label, const FeatureRef& source, double distance_mm, Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
                          const std::vector<FeatureRef>& sources, Span span);
   /// OUTPUT: reports the features and evaluates and reports the tolerances (against the features
@@ -190,6 +196,7 @@ class MeasurementRuntime {
   [[nodiscard]] machine::Machine& machine() { return m_machine; }
 
  private:
+  void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures, Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
   /// Tolerance `t` against `features` (one result; DISTWRT, ANGWRT and CORTOL: one per feature).
   Result<std::vector<ToleranceResult>> evaluate_tolerance(const std::string& t, const std::vector<const Feature*>& features,

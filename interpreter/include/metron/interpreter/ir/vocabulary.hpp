@@ -33,7 +33,9 @@ enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
                                 Midpl,    ///< MIDPL,FA(a),FA(b): the plane midway between two planes
                                 Midli,    ///< MIDLI,FA(a),FA(b): the line midway between two lines
                                 Copy,     ///< COPY,FA(x): x's geometry under another label
-                                Vertex }; ///< VERTEX,FA(cone): the cone's apex
+                                Vertex,   ///< VERTEX,FA(cone): the cone's apex
+                                Extrem,   ///< EXTREM,[MIN|MAX,]FA(x),direction: x's measured point furthest along it
+                                Offset }; ///< OFFSET,FA(plane),d: the plane moved d along its normal
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>
