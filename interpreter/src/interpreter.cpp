@@ -59,10 +59,55 @@ ExecStatus Interpreter::step() {
   const ir::Instruction& in = code_of(frame)[frame.pc];
   if (auto stop = check_limits(in)) return *stop;
   m_executing = in.span;
+  const std::size_t depth = m_frames.size() - 1, failed = frame.pc;
   ++frame.pc;
   detail::ExecuteFn* handler = detail::Execute::table()[detail::index(in.op)];
   if (!handler) return fail(in.span, "unknown instruction");
-  return handler(*this, in, frame);
+  const ExecStatus status = handler(*this, in, frame);
+  if (status == ExecStatus::Faulted && m_on_error) return handle_fault(depth, failed);
+  return status;
+}
+
+// A machine fault under ERROR/... (DMIS 5.x): when the condition covers it, the run goes on, at
+// the handler label (kept: where RESUME goes on) or, with AUTO, after the failing statement. The
+// fault stays in the record, and a warning says it was handled.
+ExecStatus Interpreter::handle_fault(std::size_t depth, std::size_t failed) {
+  const ErrorHandling h = *m_on_error;
+  using K = machine::FaultKind;
+  const K kind = m_last_fault ? m_last_fault->kind : K::BadCommand;
+  const bool covered = h.condition == "ALL" || (h.condition == "NOTOUCH" && kind == K::NoContact) ||
+                       (h.condition == "ILLEGALTOUCH" && (kind == K::Collision || kind == K::OverTravel));
+  // The handler's frame must still be the one ERROR was set in (a macro's handler ends with it).
+  const bool live = h.frame < m_frames.size() && m_frames[h.frame].kind == h.kind && m_frames[h.frame].index == h.index;
+  if (!covered || !live || depth >= m_frames.size()) return ExecStatus::Faulted;
+  const auto& code = code_of(m_frames[depth]);
+  const Span span = code[failed].span;
+  // A program whose handler takes it back to the same failing measurement forever.
+  constexpr std::size_t max_handled = 1000;
+  if (++m_handled_faults > max_handled) {
+    m_runtime.warning(span, fmt::format("{} machine faults were handled by ERROR/...: the run stops here", max_handled));
+    return ExecStatus::Faulted;
+  }
+  std::size_t measurement = failed;
+  if (code[failed].op == ir::Op::MeasEnd)
+    for (std::size_t i = failed; i-- > 0;)
+      if (code[i].op == ir::Op::MeasBegin && code[i].target == static_cast<std::int64_t>(failed)) {
+        measurement = i;
+        break;
+      }
+  m_block.reset();
+  m_runtime.warning(span, fmt::format("the machine fault ({}) is handled by ERROR/{}: the run goes on {}",
+                                      m_last_fault ? m_last_fault->message : "unknown", h.automatic ? "AUTO" : "(label)",
+                                      h.automatic ? "after this statement" : "at the handler"));
+  if (h.automatic) {
+    m_frames.resize(depth + 1);
+    m_frames.back().pc = failed + 1;
+    return ExecStatus::Running;
+  }
+  m_handled = HandledFault{depth, failed, measurement};
+  m_frames.resize(h.frame + 1);
+  m_frames.back().pc = h.target;
+  return ExecStatus::Running;
 }
 
 std::optional<ExecStatus> Interpreter::check_limits(const ir::Instruction& in) {
@@ -102,7 +147,10 @@ ExecStatus Interpreter::fail(Span span, std::string message) {
 }
 
 ExecStatus Interpreter::from_runtime(const runtime::RuntimeError& e) {
-  if (e.kind == runtime::RuntimeError::Kind::Fault) return ExecStatus::Faulted;
+  if (e.kind == runtime::RuntimeError::Kind::Fault) {
+    m_last_fault = e.fault;
+    return ExecStatus::Faulted;
+  }
   return fail(e.span, e.message);
 }
 

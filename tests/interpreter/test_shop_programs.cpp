@@ -183,11 +183,10 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   EXPECT_EQ(c.notes, 1u) << c.text;  // PAUSE, once
   // Statements accepted without their effect warn once per kind: a program may rely on them.
   const auto once = check("DMISMN/'p', 5.1\nMFGDEV/'M1'\nGEOALG/CIRCLE,LSTSQR\nGEOALG/CIRCLE,MINMAX\nGEOALG/PLANE,MINMAX\n"
-                          "ERROR/(EH),ALL\nRESUME/NEXT\nGOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
+                          "GOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
   EXPECT_EQ(once.errors, 0u) << once.text;
-  EXPECT_EQ(once.warnings, 2u) << once.text;
+  EXPECT_EQ(once.warnings, 1u) << once.text;
   EXPECT_TRUE(once.has("4:1: warning: GEOALG: metron fits features by least squares")) << once.text;
-  EXPECT_TRUE(once.has("6:1: warning: ERROR/RESUME error handlers are not run: a machine fault stops the run")) << once.text;
   EXPECT_FALSE(once.has("GOHOME")) << once.text;
 }
 
@@ -1585,6 +1584,57 @@ TEST(ShopPrograms, ExtremePointsAndOffsetPlanes) {
       << none.diagnostics;
   EXPECT_TRUE(check("DMISMN/'e', 5.0\nF(A)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(B),EXTREM,FA(A)\nENDFIL\n")
                   .has("EXTREM takes a feature and a direction"));
+}
+
+// ERROR/(label),cond: a machine fault the condition covers goes to the handler, which goes on
+// with RESUME; ERROR/AUTO goes on after the failing statement; a fault the condition does not
+// cover stops the run, as without ERROR. The air point: nothing of the block (x 0..160) is
+// within the probing move at x = 200.
+TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
+  const std::string air = "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
+                          "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nGOTO/220,50,60\nGOTO/40,50,80\n";
+  const auto program = [&](const std::string& handling, const std::string& handler) {
+    std::string text = bore_program("");
+    text.insert(text.find("F(BORE1)"), "DECL/INTGR,N\n" + handling + air);
+    text.insert(text.find("ENDFIL"), "JUMPTO/(DONE)\n(EH)\n" + handler + "(DONE)\n");
+    return text;
+  };
+  // The handler lifts the probe clear (it stopped at the end of its search, beside the block),
+  // counts, retries the measurement once (CURMEAS), then goes on after it.
+  const std::string retry = program("ERROR/(EH),ALL\n",
+                                    "GOTO/220,50,60\nN=ASSIGN/N+1\nIF/(N.LT.2)\nRESUME/CURMEAS\nENDIF\nRESUME/NEXTMEAS\n");
+  const Checked c = check(retry);
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  const auto r = run(retry);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.session->interpreter().variable("N")->number, 2);  // the air point failed twice
+  EXPECT_NE(r.diagnostics.find("is handled by ERROR/(label): the run goes on at the handler"), std::string::npos) << r.diagnostics;
+  const auto* bore = report(*r.session, "BORE1");
+  ASSERT_TRUE(bore && bore->actual);
+  EXPECT_NEAR(bore->actual->diameter_mm, 20.0, 2e-3);
+  // AUTO: on after the failing measurement from where the machine stopped (the program lifts the
+  // probe), no handler.
+  const auto automatic = run(program("ERROR/AUTO,NOTOUCH\n", ""));
+  ASSERT_EQ(automatic.status, ExecStatus::Finished) << automatic.diagnostics;
+  EXPECT_EQ(automatic.session->interpreter().variable("N")->number, 0);
+  EXPECT_TRUE(report(*automatic.session, "BORE1"));
+  // NOTOUCH does not cover a collision, ILLEGALTOUCH does not cover a missed contact; OFF ends
+  // the handling.
+  std::string crash = program("ERROR/(EH),NOTOUCH\nGOTO/80,50,20\n", "GOTO/220,50,60\nRESUME/NEXTLINE\n");
+  const auto not_covered = run(crash);
+  EXPECT_EQ(not_covered.status, ExecStatus::Faulted);
+  EXPECT_EQ(not_covered.diagnostics.find("(collision"), std::string::npos) << not_covered.diagnostics;
+  crash.replace(crash.find("NOTOUCH"), 7, "ILLEGALTOUCH");
+  const auto covered = run(crash);  // the collision handled; then the air point's missed contact stops it
+  EXPECT_NE(covered.diagnostics.find("(collision with TOP"), std::string::npos) << covered.diagnostics;
+  EXPECT_EQ(covered.status, ExecStatus::Faulted);
+  EXPECT_EQ(run(program("ERROR/(EH),ILLEGALTOUCH\n", "RESUME/NEXTLINE\n")).status, ExecStatus::Faulted);
+  EXPECT_EQ(run(program("ERROR/(EH),ALL\nERROR/OFF\n", "RESUME/NEXTLINE\n")).status, ExecStatus::Faulted);
+  // RESUME with no fault being handled is an error; ERROR needs its label in parentheses.
+  const auto stray = run("DMISMN/'r', 5.0\nRESUME/NEXTLINE\nENDFIL\n");
+  EXPECT_NE(stray.diagnostics.find("RESUME outside an error handler"), std::string::npos) << stray.diagnostics;
+  EXPECT_TRUE(check("DMISMN/'r', 5.0\nERROR/EH,ALL\nENDFIL\n").has("expected the handler's label in parentheses"));
+  EXPECT_TRUE(check("DMISMN/'r', 5.0\nERROR/(NOWHERE),ALL\nENDFIL\n").has("(NOWHERE) is not defined"));
 }
 
 // A measured line is reported at the point of the fitted line nearest its nominal's (a BND

@@ -353,7 +353,16 @@ void UnitCompiler::enddo(const grammar::Statement& s) {
 // JUMPTO/(label)
 void UnitCompiler::jumpto(const grammar::Statement& s) {
   if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.jumpto", "JUMPTO expects one label, e.g. JUMPTO/(L1)");
-  const grammar::Expr* p = &s.params[0];
+  const auto [name, span] = jump_label_name(s.params[0]);
+  if (name.empty()) return error(span, "sema.jumpto", "expected a label name after JUMPTO/");
+  mark_control();
+  const std::size_t pc = emit(make(Op::Jump, s, name));
+  jumps().pending.push_back({pc, {name, span}});
+}
+
+// The jump label a parameter `(label)` names (empty when it names none) and its span.
+std::pair<std::string, Span> UnitCompiler::jump_label_name(const grammar::Expr& param) const {
+  const grammar::Expr* p = &param;
   std::string name;
   if (p->kind == ExprKind::Paren && !p->args.empty()) {
     // A jump label may hold '-', '.' ...: `JUMPTO/(L-1)` parses as the expression L-1, so the
@@ -370,10 +379,7 @@ void UnitCompiler::jumpto(const grammar::Statement& s) {
     p = &p->args[0];
   }
   if (name.empty() && p->kind == ExprKind::Word) name = p->text;
-  if (name.empty()) return error(p->span, "sema.jumpto", "expected a label name after JUMPTO/");
-  mark_control();
-  const std::size_t pc = emit(make(Op::Jump, s, name));
-  jumps().pending.push_back({pc, {name, p->span}});
+  return {name, p->span};
 }
 
 // M(name)=MACRO/'P1','P2' | M(name)=MACRO/P1,P2

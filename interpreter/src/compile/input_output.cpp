@@ -31,8 +31,8 @@ void UnitCompiler::add_input_output(StatementTable& t) {
       {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
       {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
       {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
-      {"ERROR", &UnitCompiler::noted_once}, {"RESUME", &UnitCompiler::noted_once},
-      {"GEOALG", &UnitCompiler::noted_once}, {"GOHOME", &UnitCompiler::go_home}
+      {"ERROR", &UnitCompiler::on_error}, {"RESUME", &UnitCompiler::resume},
+      {"GEOALG", &UnitCompiler::geometry_algorithm}, {"GOHOME", &UnitCompiler::go_home}
   });
 }
 
@@ -53,11 +53,10 @@ void UnitCompiler::decpl(const grammar::Statement& s) {
 
 void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }
 
-// Statements accepted without their effect, which a program may rely on: one warning per kind
-// and program says what happens instead.
-void UnitCompiler::noted_once(const grammar::Statement& s) {
-  const bool error_handling = s.major == "ERROR" || s.major == "RESUME";
-  const std::string key = error_handling ? "ERROR" : s.major;
+// GEOALG/...: CIRCLE's MAXINS, MINCIR and LSTSQR are applied; the other algorithms are accepted
+// without their effect, which a program may rely on: one warning per program says so.
+void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
+  const std::string key = s.major;
   if (s.major == "GEOALG" && s.params.size() >= 2 && is_word(s.params[0], "CIRCLE") &&
       (is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT") || is_word(s.params[1], "MAXINS") ||
        is_word(s.params[1], "MINCIR"))) {
@@ -74,12 +73,65 @@ void UnitCompiler::noted_once(const grammar::Statement& s) {
   }
   if (m_noted_kinds.insert(key).second) {
     const std::string message =
-        error_handling ? "ERROR/RESUME error handlers are not run: a machine fault stops the run (noted once)"
-        : "GEOALG: metron fits features by least squares (form tolerances by minimum zone); this fitting algorithm "
-          "is not applied (noted once)";
+        "GEOALG: metron fits features by least squares (form tolerances by minimum zone); this fitting algorithm "
+        "is not applied (noted once)";
     warn(s.span, "sema.not-applied", message);
   }
   emit(make(Op::Nop, s, s.major));
+}
+
+// ERROR/(label),cond | ERROR/AUTO,cond | ERROR/OFF (DMIS 5.x): from here on, a machine fault the
+// condition covers (ALL; NOTOUCH: no contact; ILLEGALTOUCH: a contact where none was expected,
+// a probe over-travel; a DME error code: any) goes to the handler label, or with AUTO skips the
+// failing statement; OFF stops handling. docs/language.md.
+void UnitCompiler::on_error(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "(label), AUTO or OFF, then ALL, NOTOUCH or ILLEGALTOUCH")) return;
+  auto in = make(Op::OnError, s);
+  const auto& p = s.params;
+  if (is_word(p[0], "OFF")) {
+    in.operands.push_back(word_operand(p[0]));
+    emit(std::move(in));
+    return;
+  }
+  std::string condition = "ALL";
+  if (p.size() > 1) {
+    if (is_word(p[1], "ALL") || is_word(p[1], "NOTOUCH") || is_word(p[1], "ILLEGALTOUCH")) condition = p[1].text;
+    else if (p[1].kind == ExprKind::Number) condition = "ALL";  // a DME's error code: metron's faults have none
+    else return error(p[1].span, "sema.bad-error-condition", "expected ALL, NOTOUCH, ILLEGALTOUCH or an error code");
+  }
+  if (is_word(p[0], "AUTO")) {
+    in.operands.push_back(word_operand(p[0]));
+    in.operands.push_back(word_operand(condition, p.size() > 1 ? p[1].span : p[0].span));
+    emit(std::move(in));
+    return;
+  }
+  const auto [name, span] = jump_label_name(p[0]);
+  if (name.empty() || p[0].kind != ExprKind::Paren)
+    return error(p[0].span, "sema.bad-error-handler", "expected the handler's label in parentheses, AUTO or OFF after ERROR/");
+  in.operands.push_back(word_operand("JUMP", p[0].span));
+  in.operands.push_back(word_operand(condition, p.size() > 1 ? p[1].span : p[0].span));
+  mark_control();
+  const std::size_t pc = emit(std::move(in));
+  jumps().pending.push_back({pc, {name, span}});
+}
+
+// RESUME/(label) | NEXTLINE | NEXTMEAS | CURMEAS | END: where a handler goes on.
+void UnitCompiler::resume(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "(label), NEXTLINE, NEXTMEAS, CURMEAS or END")) return;
+  auto in = make(Op::Resume, s);
+  const auto& p = s.params[0];
+  if (is_word(p, "NEXTLINE") || is_word(p, "NEXTMEAS") || is_word(p, "CURMEAS") || is_word(p, "END")) {
+    in.operands.push_back(word_operand(p));
+    emit(std::move(in));
+    return;
+  }
+  const auto [name, span] = jump_label_name(p);
+  if (name.empty() || p.kind != ExprKind::Paren)
+    return error(p.span, "sema.bad-resume", "expected (label), NEXTLINE, NEXTMEAS, CURMEAS or END after RESUME/");
+  in.operands.push_back(word_operand("JUMP", p.span));
+  mark_control();
+  const std::size_t pc = emit(std::move(in));
+  jumps().pending.push_back({pc, {name, span}});
 }
 
 // GOHOME: the machine's home, straight at the positioning feed (a program lifts the probe

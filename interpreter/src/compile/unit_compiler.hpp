@@ -217,8 +217,11 @@ class UnitCompiler {
 
   // ---- input/output: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (compile/input_output.cpp) ------
   void no_effect(const grammar::Statement& s);
-  void noted_once(const grammar::Statement& s);
+  void geometry_algorithm(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
+  void on_error(const grammar::Statement& s);
+  void resume(const grammar::Statement& s);
+  std::pair<std::string, Span> jump_label_name(const grammar::Expr& param) const;
   void extreme_point(const grammar::Statement& s, ir::Instruction in);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);

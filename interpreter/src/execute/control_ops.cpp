@@ -18,8 +18,47 @@ void Execute::add_control(ExecuteTable& t) {
       {Op::Nop, &nothing}, {Op::JumpLabel, &nothing}, {Op::System, &system}, {Op::End, &end},
       {Op::Assign, &assign}, {Op::Jump, &jump}, {Op::JumpIfFalse, &jump_if_false}, {Op::DoInit, &do_init},
       {Op::DoNext, &do_next}, {Op::CallMacro, &call_macro}, {Op::Return, &return_},
-      {Op::CallUnit, &call_unit}
+      {Op::CallUnit, &call_unit}, {Op::OnError, &on_error}, {Op::Resume, &resume}
   });
+}
+
+// Op::OnError: ERROR/(label)|AUTO,condition or ERROR/OFF
+ExecStatus Execute::on_error(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  const std::string& how = in.operands.at(0).word;
+  if (how == "OFF") {
+    vm.m_on_error.reset();
+    return ExecStatus::Running;
+  }
+  Interpreter::ErrorHandling h;
+  h.automatic = how == "AUTO";
+  h.condition = in.operands.at(1).word;
+  h.frame = vm.m_frames.size() - 1;
+  h.kind = frame.kind;
+  h.index = frame.index;
+  h.target = h.automatic ? 0 : static_cast<std::size_t>(in.target);
+  vm.m_on_error = h;
+  return ExecStatus::Running;
+}
+
+// Op::Resume: where the handler of a machine fault goes on.
+ExecStatus Execute::resume(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  if (!vm.m_handled) return vm.fail(in.span, "RESUME outside an error handler: no machine fault is being handled");
+  const Interpreter::HandledFault h = *vm.m_handled;
+  vm.m_handled.reset();
+  const std::string& where = in.operands.at(0).word;
+  if (where == "JUMP") {
+    frame.pc = static_cast<std::size_t>(in.target);
+    return ExecStatus::Running;
+  }
+  if (where == "END") {
+    vm.m_finished = true;
+    return ExecStatus::Finished;
+  }
+  if (h.frame >= vm.m_frames.size()) return vm.fail(in.span, "RESUME: the statement that faulted is no longer running");
+  vm.m_frames.resize(h.frame + 1);
+  // metron runs a MEAS block at its ENDMES, so the next line and the next measurement are one.
+  vm.m_frames.back().pc = where == "CURMEAS" ? h.measurement : h.failed + 1;
+  return ExecStatus::Running;
 }
 
 // Op::Nop, Op::JumpLabel

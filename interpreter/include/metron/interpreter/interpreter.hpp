@@ -107,6 +107,26 @@ class Interpreter {
   std::map<std::string, ValueType> m_types;
   std::set<std::string> m_intgr;  ///< variables declared INTGR (32-bit) rather than LONG
   std::optional<runtime::MeasBlock> m_block;
+  /// ERROR/...: which machine faults the program handles from here on, and how.
+  struct ErrorHandling {
+    bool automatic = false;          ///< AUTO: go on after the failing statement
+    std::string condition;           ///< ALL, NOTOUCH or ILLEGALTOUCH
+    std::size_t frame = 0;           ///< the frame ERROR was set in (the handler's code is there)
+    CallFrame::Kind kind = CallFrame::Kind::Unit;
+    std::size_t index = 0;           ///< that frame's unit or macro
+    std::size_t target = 0;          ///< the handler label's instruction
+  };
+  std::optional<ErrorHandling> m_on_error;
+  /// The fault a handler is handling: where RESUME goes on.
+  struct HandledFault {
+    std::size_t frame = 0;
+    std::size_t failed = 0;          ///< the failing instruction
+    std::size_t measurement = 0;     ///< its MEAS when it is an ENDMES, else the failing instruction
+  };
+  std::optional<HandledFault> m_handled;
+  std::optional<machine::Fault> m_last_fault;  ///< the last machine fault a statement stopped on
+  std::size_t m_handled_faults = 0;
+  ExecStatus handle_fault(std::size_t frame, std::size_t failed);
   Vec3 m_block_position = Vec3::Zero();
   double m_length_mm = 1.0;   ///< UNITS: mm per program length unit
   bool m_degrees = true;      ///< UNITS: ANGDEC (else ANGRAD)

@@ -77,10 +77,12 @@ enum class Op {
   Write,        ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
   FitAlgorithm, ///< GEOALG/CIRCLE,...: words: the algorithm (LSTSQR, MAXINS, MINCIR)
   GoHome,       ///< GOHOME: no operands
+  OnError,      ///< ERROR/...: words: JUMP (`target` = the handler label's index), AUTO or OFF, then the condition
+  Resume,       ///< RESUME/...: word NEXTLINE, NEXTMEAS, CURMEAS, END or JUMP (`target` = the label's index)
 };
 
-/// The number of operations (GoHome is the last).
-inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::GoHome) + 1;
+/// The number of operations (Resume is the last).
+inline constexpr std::size_t op_count = static_cast<std::size_t>(Op::Resume) + 1;
 
 /// Upper-case mnemonic of an operation (for --emit-ir).
 const char* to_string(Op op);
