@@ -359,22 +359,26 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (!fitted) return program_error(block.span, fitted.error());
   feature.actual = fitted->first;
   feature.fit = fitted->second;
-  if (feature.nominal.type == FeatureType::Circle && m_circle_fit != CircleFit::LeastSquares) {
-    // GEOALG/CIRCLE,MAXINS|MINCIR: the circle a pin (ring) gauge would find, from the compensated
-    // surface points in the least-squares circle's plane; form stays the least-squares figure.
-    const bool inscribed = m_circle_fit == CircleFit::MaximumInscribed;
-    std::vector<Vec3> surface;
-    for (const auto& p : points) surface.push_back(p.surface_mm());
-    const auto extreme = fitting::extreme_circle(surface, inscribed, feature.actual->direction);
-    if (!extreme) {
-      warn(block.span, fmt::format("GEOALG {}: the points of F({}) do not surround their centre; its least-squares circle is kept",
-                                   inscribed ? "MAXINS" : "MINCIR", feature.label));
-    } else {
-      feature.actual->position = extreme->centre;
-      feature.actual->diameter_mm = extreme->diameter_mm;
-    }
-  }
+  if (feature.nominal.type == FeatureType::Circle) apply_circle_fit(*feature.actual, points, feature.label, block.span);
   return {};
+}
+
+// GEOALG/CIRCLE,MAXINS|MINCIR: the circle a pin (ring) gauge would find, from the compensated
+// surface points in the least-squares circle's plane; form stays the least-squares figure.
+void MeasurementRuntime::apply_circle_fit(Geometry& circle, const std::vector<MeasuredPoint>& points, const std::string& label,
+                                          Span span) {
+  if (m_circle_fit == CircleFit::LeastSquares) return;
+  const bool inscribed = m_circle_fit == CircleFit::MaximumInscribed;
+  std::vector<Vec3> surface;
+  for (const auto& p : points) surface.push_back(p.surface_mm());
+  const auto extreme = fitting::extreme_circle(surface, inscribed, circle.direction);
+  if (!extreme) {
+    warn(span, fmt::format("GEOALG {}: the points of F({}) do not surround their centre; its least-squares circle is kept",
+                           inscribed ? "MAXINS" : "MINCIR", label));
+    return;
+  }
+  circle.position = extreme->centre;
+  circle.diameter_mm = extreme->diameter_mm;
 }
 
 std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& plan, const Execution& execution,

@@ -226,7 +226,9 @@ double line_form(const std::vector<Vec2>& p) {
 // troughs, 120 degrees apart) and 2 (10 + 0.005) by its minimum circumscribed circle (the peaks).
 TEST(Scanning, GeoalgSizesACircleByItsInscribedOrCircumscribedCircle) {
   const Vec3 c(340, 250, 30);
-  const std::string scan = "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n";
+  // B2, a circle constructed from B1's points, is sized by the same algorithm.
+  const std::string scan = "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n"
+                           "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nCONST/CIRCLE, F(B2), BF, FA(B1)\n";
   const auto diameter = [&](const std::string& geoalg) {
     auto r = run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
                  "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" + geoalg + scan,
@@ -236,6 +238,8 @@ TEST(Scanning, GeoalgSizesACircleByItsInscribedOrCircumscribedCircle) {
     EXPECT_TRUE(b1.actual.has_value());
     if (b1.actual) {
       EXPECT_LT((b1.actual->position - c).norm(), 2e-4) << geoalg;
+      const auto& b2 = r->runtime->features().at("B2");
+      EXPECT_TRUE(b2.actual && std::abs(b2.actual->diameter_mm - b1.actual->diameter_mm) < 1e-9) << geoalg;
     }
     return b1.actual ? b1.actual->diameter_mm : 0.0;
   };

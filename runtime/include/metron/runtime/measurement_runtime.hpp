@@ -196,6 +196,7 @@ class MeasurementRuntime {
   [[nodiscard]] machine::Machine& machine() { return m_machine; }
 
  private:
+  void apply_circle_fit(Geometry& circle, const std::vector<MeasuredPoint>& points, const std::string& label, Span span);
   void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures, Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
   /// Tolerance `t` against `features` (one result; DISTWRT, ANGWRT and CORTOL: one per feature).
