@@ -146,6 +146,7 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
     baseline_note = "note: PTMEAS used the baseline touch cycle: " + runtime::describe(b, c);
   }
   s.compiler().set_parse_options(grammar::ParseOptions{options.strict});
+  s.runtime().set_strict(options.strict);
   s.interpreter().set_prompt_answers(options.prompt_answers);
   s.compiler().set_include_dirs(options.include_dirs);
   bool loaded = false;

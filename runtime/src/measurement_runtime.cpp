@@ -674,7 +674,15 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
       results = kept->second;
     } else {
       auto evaluated = evaluate_tolerance(t, features, span);
-      if (!evaluated) return tl::unexpected(evaluated.error());
+      if (!evaluated && (m_strict || evaluated.error().kind != RuntimeError::Kind::Program))
+        return tl::unexpected(evaluated.error());
+      if (!evaluated) {
+        warn(span, fmt::format("T({}) is not evaluated: {}; it is left out of this {} (--strict makes it an error)", t,
+                               evaluated.error().message, report_them ? "OUTPUT" : "EVAL"));
+        m_last_results.erase(t);
+        m_evaluated.erase(t);
+        continue;
+      }
       results = std::move(*evaluated);
     }
     m_last_results[t] = results;

@@ -1637,6 +1637,33 @@ TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
   EXPECT_TRUE(check("DMISMN/'r', 5.0\nERROR/(NOWHERE),ALL\nENDFIL\n").has("(NOWHERE) is not defined"));
 }
 
+// A tolerance that cannot be evaluated (here: its feature was never measured) is left out
+// of its OUTPUT with a warning, and the run goes on to report the rest, as shop software does;
+// --strict (Runtime::set_strict) keeps it an error that stops the run.
+TEST(ShopPrograms, AToleranceThatCannotBeEvaluatedIsLeftOutLeniently) {
+  std::string text = bore_program("");
+  text.insert(text.find("OUTPUT/FA(BORE1)"),
+              "F(SIDE)=FEAT/PLANE,CART,0,50,20,-1,0,0\nT(PAR)=TOL/FLAT,0.05\n"
+              "F(TOP)=FEAT/PLANE,CART,80,50,40,0,0,1\nMEAS/PLANE,F(TOP),3\nGOTO/80,50,60\n"
+              "PTMEAS/CART,20,20,40,0,0,1\nPTMEAS/CART,140,20,40,0,0,1\nPTMEAS/CART,80,90,40,0,0,1\nENDMES\n"
+              "OUTPUT/FA(TOP)\nOUTPUT/FA(SIDE),TA(PAR)\n");
+  const auto lenient = run(text);
+  ASSERT_EQ(lenient.status, ExecStatus::Finished) << lenient.diagnostics;
+  EXPECT_NE(lenient.diagnostics.find("T(PAR) is not evaluated: "), std::string::npos) << lenient.diagnostics;
+  EXPECT_FALSE(tolerance(*lenient.session, "PAR"));
+  EXPECT_TRUE(report(*lenient.session, "TOP"));
+  EXPECT_TRUE(report(*lenient.session, "BORE1"));  // the OUTPUT after it
+
+  const fs::path p = write("strict.dmi", text);
+  auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
+  ASSERT_TRUE(backend.has_value());
+  auto strict = Session::create(std::move(*backend));
+  strict->runtime().set_strict(true);
+  ASSERT_TRUE(strict->load(p.string()));
+  EXPECT_EQ(strict->interpreter().run(), ExecStatus::Error);
+  EXPECT_FALSE(report(*strict, "BORE1"));
+}
+
 // A measured line is reported at the point of the fitted line nearest its nominal's (a BND
 // line's start and end), as a cylinder's axis is: the points' centroid put a perfect line probed
 // at x = 10, 50 and 90 at x = 50, 40 mm off its start, and CORTOL said OUT.

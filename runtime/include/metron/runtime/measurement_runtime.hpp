@@ -130,6 +130,9 @@ class MeasurementRuntime {
   void set_mode(Mode mode) { m_mode = mode; }
   /// UNITS and DECPL: what OUTPUT reports and DMIS output files are written in.
   void set_report_units(ReportUnits units) { m_report_units = std::move(units); }
+  /// Strict reading (`--strict`): a tolerance that cannot be evaluated stops the run; read
+  /// leniently (the default) it is left out of its OUTPUT with a warning, as shop software goes on.
+  void set_strict(bool strict) { m_strict = strict; }
   [[nodiscard]] const ReportUnits& report_units() const { return m_report_units; }
   [[nodiscard]] Mode mode() const { return m_mode; }
   Result<void> go_to(const Vec3& point_current, Span span);
@@ -260,6 +263,7 @@ class MeasurementRuntime {
   std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
   CircleFit m_circle_fit = CircleFit::LeastSquares;  ///< GEOALG/CIRCLE
+  bool m_strict = false;                             ///< set_strict
   bool m_feed_change_warned = false;                ///< a probing feed other than the qualification's, told once
   Mode m_mode = Mode::Auto;
   ReportUnits m_report_units;
