@@ -22,8 +22,12 @@ std::optional<std::pair<std::string, std::uint16_t>> parse_ipp_url(std::string_v
 /// DefineTool (SNSDEF) -> the server's tool of the same name, else the one with the same ball
 /// diameter and stylus direction (EnumTools, FindTool, FoundTool.AvrRadius/.Alignment; with a
 /// warning), else a fault naming the sensor; SelectTool -> ChangeTool of that tool;
-/// QualifyTool -> ReQualify; SetFeeds -> SetProp(Tool.GoToPar/PtMeasPar.Speed, .Accel). Scans
-/// are not mapped (answered BadCommand). Errors come back as faults, and the client clears them.
+/// QualifyTool -> ReQualify; SetFeeds -> SetProp(Tool.GoToPar/PtMeasPar.Speed, .Accel);
+/// ScanPath -> ScanOnCurve through the ends of its segments (ball centres at the contact, with
+/// their normals; ScanOnCurveDensity when the program sets a spacing and the server takes it).
+/// ScanBufferWrite (a segmented scan) is not mapped: answered BadCommand. Errors come back as
+/// faults, and the client clears them. GOHOME: the server's home is not part of the protocol
+/// (MachineState::home_mm stays empty).
 /// The controller's clock is not part of the protocol: times in responses are 0.
 class ClientMachine final : public Machine {
  public:
