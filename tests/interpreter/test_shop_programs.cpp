@@ -188,6 +188,11 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   EXPECT_EQ(once.warnings, 1u) << once.text;
   EXPECT_TRUE(once.has("4:1: warning: GEOALG: metron fits features by least squares")) << once.text;
   EXPECT_FALSE(once.has("GOHOME")) << once.text;
+  // A REPORT layout named in OUTPUT: one note, not a warning per OUTPUT.
+  const auto layout = check("DMISMN/'p', 5.1\nR(R1)=REPORT/ALGOR,DATE\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+                            "OUTPUT/F(P),R(R1)\nOUTPUT/F(P),R(R1)\nENDFIL\n");
+  EXPECT_EQ(layout.errors + layout.warnings, 0u) << layout.text;
+  EXPECT_EQ(layout.notes, 1u) << layout.text;
 }
 
 // GOHOME moves the machine to its home (it was accepted without moving, so a program that lifts

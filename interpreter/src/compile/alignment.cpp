@@ -418,6 +418,10 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         if (types.empty())
           return fail(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
       }
+    } else if (is_label(p, {"R"})) {
+      // A REPORT layout (R(x)=REPORT/...) for the features beside it: metron's reports are its own.
+      note_once(m_report_layout_noted, p.span, "sema.report-layout",
+                "R() report layouts are not applied: metron reports every output feature and tolerance its own way");
     } else if (p.kind == ExprKind::Label) {
       warn(p.span, "sema.unsupported-output", fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
       continue;

@@ -331,7 +331,8 @@ class UnitCompiler {
   bool m_output_file = false;
   std::set<std::string> m_echoed_datums;  ///< DATDEFs of an output file whose feature it does not state
   bool m_echo_noted = false;
-  bool m_calib_artifact_noted = false;   // one note per unit: CALIB/SENS uses the world's sphere
+  bool m_calib_artifact_noted = false;
+  bool m_report_layout_noted = false;     // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
 };
 
