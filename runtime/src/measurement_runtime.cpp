@@ -713,6 +713,7 @@ Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(cons
   const ToleranceSpec& spec = m_tolerances.at(t);
   ToleranceContext context;
   context.alignment = &m_alignment;
+  context.units = m_report_units;
   for (const auto& d : spec.datums) {
     auto dd = datum(d, span);
     if (!dd) return tl::unexpected(dd.error());

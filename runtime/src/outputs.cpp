@@ -42,12 +42,6 @@ const char* side_word(const Geometry& g) { return g.side == Side::Inner ? "INNER
 
 enum class Unit { Millimetre, Cosine, Degree };
 
-/// Default decimals of a length in `units` on reports: 4 in mm (0.1 um), and as many more as the
-/// unit is larger (CM 5, INCH 5, FEET 6, M 7), so the resolution stays about 0.1 um.
-int default_length_decimals(const ReportUnits& units, int mm_decimals) {
-  return mm_decimals + static_cast<int>(std::lround(std::log10(std::max(units.mm_per_length, 1.0))));
-}
-
 /// `v` (mm or degrees) in the report's units, and the decimals to write it with.
 std::pair<double, int> in_units(double v, Unit unit, const ReportUnits& units, int mm_decimals) {
   switch (unit) {

@@ -357,8 +357,8 @@ Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Fe
   if (!nominal)
     add_note(result, "no nominal distance from the feature nominals: " + nominal.error());
   else if (std::abs(*nominal - spec.nominal) > 1e-4)
-    add_note(result, fmt::format("the feature nominals give {:.4f}, the tolerance nominal is {:.4f}",
-                                 *nominal, spec.nominal));
+    add_note(result, fmt::format("the feature nominals give {}, the tolerance nominal is {}",
+                                 length_text(*nominal, context.units), length_text(spec.nominal, context.units)));
   return result;
 }
 
@@ -383,7 +383,7 @@ tl::expected<Vec3, std::string> position_point(const Geometry& nominal, const Ge
 // The MMC or LMC bonus of a position zone: the actual size's departure from that material
 // condition, taken at the nominal diameter (the spec carries no size limits).
 tl::expected<double, std::string> material_bonus(MaterialCondition condition, const Geometry& nominal,
-                                                 const Geometry& actual, ToleranceResult& result) {
+                                                 const Geometry& actual, const ReportUnits& units, ToleranceResult& result) {
   if (condition == MaterialCondition::Rfs) return 0.0;
   static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
   const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
@@ -395,9 +395,10 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
   const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
   const double away_from_mmc = inner ? growth_mm : -growth_mm;
   const double bonus_mm = std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
-  add_note(result, fmt::format("{} bonus {:.4f}: actual diameter {:.4f} against the {} size, taken "
-                               "as the nominal diameter {:.4f} (the tolerance has no size limits)",
-                               modifier, bonus_mm, actual.diameter_mm, modifier, nominal.diameter_mm));
+  add_note(result, fmt::format("{} bonus {}: actual diameter {} against the {} size, taken "
+                               "as the nominal diameter {} (the tolerance has no size limits)",
+                               modifier, length_text(bonus_mm, units), length_text(actual.diameter_mm, units), modifier,
+                               length_text(nominal.diameter_mm, units)));
   if (nominal.side == Side::None) add_note(result, "side unknown: treated as OUTER");
   return bonus_mm;
 }
@@ -426,7 +427,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   result.value = 2.0 * deviation.norm();
   result.actual = result.value;
   result.nominal = 0;
-  const auto bonus_mm = material_bonus(spec.condition, nominal, actual, result);
+  const auto bonus_mm = material_bonus(spec.condition, nominal, actual, context.units, result);
   if (!bonus_mm) return Error(bonus_mm.error());
   set_limits(result, 0, spec.zone + *bonus_mm);
   add_note(result, datum_frame_note(*frame, (*actual_or)->position));
@@ -435,7 +436,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
 
 // ---------------------------------------------------------------- form
 
-Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
+Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ReportUnits& units, ToleranceResult result) {
   static constexpr Types k_flat = {FeatureType::Plane};
   static constexpr Types k_round = {FeatureType::Circle, FeatureType::Arc};
   static constexpr Types k_cylinder = {FeatureType::Cylinder};
@@ -473,8 +474,8 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, Toleran
                                   : fitting::minimum_zone(shape, surface, plane);
   if (mz && mz->form_mm <= feature.fit->form_mm + 1e-9) {
     result.value = mz->form_mm;
-    add_note(result, fmt::format("minimum zone (ISO 1101) over {} points; least squares gives {:.6f}", surface.size(),
-                                 feature.fit->form_mm));
+    add_note(result, fmt::format("minimum zone (ISO 1101) over {} points; least squares gives {}", surface.size(),
+                                 length_text(feature.fit->form_mm, units, 6)));
   } else {
     add_note(result, "least-squares form (no minimum zone for these points)");
   }
@@ -1079,7 +1080,7 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Cirlty:
     case ToleranceKind::Cylcty:
     case ToleranceKind::Sphcty:
-    case ToleranceKind::Strght: return evaluate_form(spec, feature, std::move(result));
+    case ToleranceKind::Strght: return evaluate_form(spec, feature, context.units, std::move(result));
     case ToleranceKind::Perp:
     case ToleranceKind::Parlel: return evaluate_orientation(spec, feature, context, std::move(result));
     case ToleranceKind::Anglb: return evaluate_anglb(spec, features, context, std::move(result));
@@ -1219,7 +1220,7 @@ tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const
     const Feature& f = *features[i];
     ToleranceResult r = relating;
     r.value = 2.0 * project(i, fitted[i] - nominal[i]).norm();
-    const auto bonus = material_bonus(spec.feature_condition, f.nominal, *f.actual, r);
+    const auto bonus = material_bonus(spec.feature_condition, f.nominal, *f.actual, context.units, r);
     if (!bonus) return Error(bonus.error());
     set_limits(r, 0, spec.feature_zone + *bonus);
     merge_into_tier(relating, r, f.label, first, per_feature);

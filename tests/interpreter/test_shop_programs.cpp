@@ -665,6 +665,23 @@ TEST(ShopPrograms, DatsetWithAFeatureInPlaceOfADatum) {
 // EVAL/FA(x),TA(t) evaluates a tolerance and keeps the result without reporting it; a later
 // OUTPUT/TA(t) alone reports what it found (DMIS 5.x EVAL). block_deviations machines BORE1
 // 20.012 (its hidden truth): the kept DIAM value is +0.012, OUT of +-0.005, reported once.
+// The lengths in a tolerance's note are in the program's units too: block_deviations machines
+// BORE1 20.012 mm; its MMC bonus note, output under UNITS/INCH, gives the nominal 20 mm as
+// 0.78740 (20 / 25.4, INCH's 5 decimals) and the actual as 0.78787.
+TEST(ShopPrograms, ToleranceNotesAreInTheProgramsUnits) {
+  const std::string text =
+      "DMISMN/'inch', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 8\nENDMES\n"
+      "T(P) = TOL/POS, 2D, 0.05, MMC\nUNITS/INCH, ANGDEC\nOUTPUT/FA(BORE1), TA(P)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_deviations.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* p = tolerance(*r.session, "P");
+  ASSERT_NE(p, nullptr);
+  EXPECT_NE(p->note.find("nominal diameter 0.78740"), std::string::npos) << p->note;
+  EXPECT_NE(p->note.find("actual diameter 0.7878"), std::string::npos) << p->note;
+}
+
 TEST(ShopPrograms, EvalKeepsAToleranceResultForALaterOutput) {
   const std::string head =
       "DMISMN/'eval', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"

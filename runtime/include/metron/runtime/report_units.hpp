@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <string>
+
+#include <fmt/format.h>
 
 namespace metron::runtime {
 
@@ -17,5 +21,17 @@ struct ReportUnits {
     return mm_per_length == 1 && !radians && length_decimals < 0 && angle_decimals < 0;
   }
 };
+
+/// Default decimals of a length in `units` on reports: `mm_decimals` in mm, and as many more as
+/// the unit is larger (CM 5, INCH 5, FEET 6, M 7 from 4), so the resolution stays the same.
+inline int default_length_decimals(const ReportUnits& units, int mm_decimals) {
+  return mm_decimals + static_cast<int>(std::lround(std::log10(std::max(units.mm_per_length, 1.0))));
+}
+
+/// A length given in mm, written in `units` with their decimals (for the notes of a report).
+inline std::string length_text(double mm, const ReportUnits& units, int mm_decimals = 4) {
+  const int decimals = units.length_decimals >= 0 ? units.length_decimals : default_length_decimals(units, mm_decimals);
+  return fmt::format("{:.{}f}", mm / units.mm_per_length, decimals);
+}
 
 }  // namespace metron::runtime

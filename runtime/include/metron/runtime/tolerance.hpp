@@ -99,6 +99,7 @@ struct ToleranceContext {
   const Alignment* alignment = nullptr;            ///< the current coordinate system (reporting frame)
   std::vector<const Datum*> datums;                ///< resolved datums of spec.datums, same order
   std::vector<const Datum*> feature_datums;        ///< resolved datums of spec.feature_datums (COMPOS)
+  ReportUnits units;                               ///< the program's UNITS and DECPL: the notes' lengths
 };
 
 /// Evaluates `spec` on `features` (one feature, or two for DISTB). Returns an error message
