@@ -304,16 +304,23 @@ Result<void> MeasurementRuntime::construct_moved_point(const std::string& label,
                                                        const Vec3& offset_current, Span span) {
   auto g = resolve(source, span);
   if (!g) return tl::unexpected(g.error());
+  store_constructed_point(label, g->position + m_alignment.to_machine_vector(offset_current), g->direction, span);
+  return {};
+}
+
+// A constructed POINT: its nominal's direction, or `direction` for one without a FEAT nominal
+// (whose nominal is then taken from the actual, with a warning).
+void MeasurementRuntime::store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction,
+                                                 Span span) {
   const auto it = m_features.find(label);
-  Geometry moved = it != m_features.end() ? it->second.nominal : Geometry{};
-  moved.type = FeatureType::Point;
-  moved.position = g->position + m_alignment.to_machine_vector(offset_current);
+  Geometry point = it != m_features.end() ? it->second.nominal : Geometry{};
+  point.type = FeatureType::Point;
+  point.position = position;
   if (it == m_features.end()) {
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
-    moved.direction = g->direction;
+    point.direction = direction;
   }
-  store_constructed(label, moved, std::nullopt, span);
-  return {};
+  store_constructed(label, point, std::nullopt, span);
 }
 
 // CONST/POINT,F(l),EXTREM: among FA(x)'s measured points (surface points, the probe radius
@@ -344,15 +351,7 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
   const auto far = std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
     return a.surface_mm().dot(d) < b.surface_mm().dot(d);
   });
-  const auto it = m_features.find(label);
-  Geometry g = it != m_features.end() ? it->second.nominal : Geometry{};
-  g.type = FeatureType::Point;
-  g.position = far->surface_mm();
-  if (it == m_features.end()) {
-    warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
-    g.direction = far->normal;
-  }
-  store_constructed(label, g, std::nullopt, span);
+  store_constructed_point(label, far->surface_mm(), far->normal, span);
   return {};
 }
 

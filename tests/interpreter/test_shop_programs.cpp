@@ -1509,6 +1509,18 @@ TEST(ShopPrograms, WriteLaysOutValuesInTheirFields) {
   EXPECT_TRUE(no_width.has("expected a field width after ':'")) << no_width.text;
 }
 
+namespace {
+// The holes a DO loop stated (FA(...)=FEAT): hole i at x = 100 + 20 i, 10 + i/100 mm across.
+void expect_stated_holes(Session& s, const std::vector<std::string>& labels, const std::vector<int>& indices) {
+  for (std::size_t k = 0; k < labels.size(); ++k) {
+    const auto* h = report(s, labels[k]);
+    ASSERT_TRUE(h && h->actual) << labels[k];
+    EXPECT_NEAR(h->actual->position.x(), 100 + 20 * indices[k], 1e-12);
+    EXPECT_NEAR(h->actual->diameter_mm, 10 + indices[k] / 100.0, 1e-12);
+  }
+}
+}  // namespace
+
 // Indexed labels (DMIS 5.x): F(H[I]) in a loop defines H[1], H[2], H[3]; FA(H[2]) and FA(H[I-1])
 // name them afterwards. check reads the family H[] as one feature.
 TEST(ShopPrograms, IndexedLabelsNameOneFeaturePerIndex) {
@@ -1521,12 +1533,7 @@ TEST(ShopPrograms, IndexedLabelsNameOneFeaturePerIndex) {
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  for (int i = 1; i <= 3; ++i) {
-    const auto* h = report(*r.session, fmt::format("H[{}]", i).c_str());
-    ASSERT_TRUE(h && h->actual) << i;
-    EXPECT_NEAR(h->actual->position.x(), 100 + 20 * i, 1e-12);
-    EXPECT_NEAR(h->actual->diameter_mm, 10 + i / 100.0, 1e-12);
-  }
+  expect_stated_holes(*r.session, {"H[1]", "H[2]", "H[3]"}, {1, 2, 3});
   EXPECT_NEAR(r.session->interpreter().variable("D")->number, 10.02, 1e-12);
   const auto* m = report(*r.session, "M");  // after the loop I is 4: between H[1] and H[3]
   ASSERT_TRUE(m && m->actual);
@@ -1552,12 +1559,7 @@ TEST(ShopPrograms, IndirectLabelsNameTheFeatureTheVariableHolds) {
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  for (int i : {2, 3}) {
-    const auto* h = report(*r.session, fmt::format("H{}", i));
-    ASSERT_TRUE(h && h->actual) << i;
-    EXPECT_NEAR(h->actual->position.x(), 100 + 20 * i, 1e-12);
-    EXPECT_NEAR(h->actual->diameter_mm, 10 + i / 100.0, 1e-12);
-  }
+  expect_stated_holes(*r.session, {"H2", "H3"}, {2, 3});
   EXPECT_FALSE(report(*r.session, "H1"));  // defined, not output
   // A variable holding a name that no statement defined fails at run, naming that feature.
   const auto bad = run("DMISMN/'i', 5.0\nDECL/CHAR,8,V\nV=ASSIGN/'NOPE'\nOUTPUT/FA(@V)\nENDFIL\n");

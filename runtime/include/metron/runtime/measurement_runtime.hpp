@@ -201,6 +201,7 @@ class MeasurementRuntime {
  private:
   void apply_circle_fit(Geometry& circle, const std::vector<MeasuredPoint>& points, const std::string& label, Span span);
   void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures, Span span);
+  void store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction, Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
   /// Tolerance `t` against `features` (one result; DISTWRT, ANGWRT and CORTOL: one per feature).
   Result<std::vector<ToleranceResult>> evaluate_tolerance(const std::string& t, const std::vector<const Feature*>& features,
