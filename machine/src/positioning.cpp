@@ -114,13 +114,15 @@ std::optional<Response> Controller::stop_move(double after_s) {
 
   Vec3 rest = m.start_mm;
   double rest_s = t;
-  const auto in_scan = std::find_if(m.scan.begin(), m.scan.end(), [&](const ScanHeadSample& c) { return c.time_s >= t; });
-  if (!m.scan.empty() && m.scan.front().time_s - config.dt_s <= t && in_scan != m.scan.end()) {
-    const double v = in_scan->velocity_mm_s.norm();
-    rest = in_scan->head_mm;
-    rest_s = in_scan->time_s;
+  if (!m.scan.empty() && m.scan.front().time_s - config.dt_s <= t) {
+    // The cycle the request falls in (past the last one, the scan had ended: rest there).
+    const auto found = std::find_if(m.scan.begin(), m.scan.end(), [&](const ScanHeadSample& c) { return c.time_s >= t; });
+    const ScanHeadSample& at = found != m.scan.end() ? *found : m.scan.back();
+    const double v = found != m.scan.end() ? at.velocity_mm_s.norm() : 0.0;
+    rest = at.head_mm;
+    rest_s = std::max(t, at.time_s);
     if (v > 1e-9) {
-      const Vec3 u = in_scan->velocity_mm_s / v;
+      const Vec3 u = at.velocity_mm_s / v;
       const MotionProfile stop = MotionProfile::stop(MotionState{0, v, 0}, braking_limits(u, v));
       rest += stop.end_position_mm() * u;
       rest_s += stop.duration_s();
