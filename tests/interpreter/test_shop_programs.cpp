@@ -1658,6 +1658,11 @@ TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
   const auto stray = run("DMISMN/'r', 5.0\nRESUME/NEXTLINE\nENDFIL\n");
   EXPECT_NE(stray.diagnostics.find("RESUME outside an error handler"), std::string::npos) << stray.diagnostics;
   EXPECT_TRUE(check("DMISMN/'r', 5.0\nERROR/EH,ALL\nENDFIL\n").has("expected the handler's label in parentheses"));
+  // The condition first, IGNORE for AUTO, a macro handler (not run: one warning).
+  const Checked orders = check("DMISMN/'r', 5.0\nERROR/ALL,IGNORE\nERROR/NOTOUCH,(EH)\nERROR/ILLEGALTOUCH,M(EH)\n(EH)\nENDFIL\n");
+  EXPECT_EQ(orders.errors, 0u) << orders.text;
+  EXPECT_EQ(orders.warnings, 1u) << orders.text;
+  EXPECT_TRUE(orders.has("ERROR with the macro M(EH) as its handler is not run")) << orders.text;
   EXPECT_TRUE(check("DMISMN/'r', 5.0\nERROR/(NOWHERE),ALL\nENDFIL\n").has("(NOWHERE) is not defined"));
 }
 

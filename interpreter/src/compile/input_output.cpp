@@ -2,6 +2,7 @@
 // Input/output statements: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (and the statements with no run-time effect).
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "compile/unit_compiler.hpp"
 
@@ -80,10 +81,12 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   emit(make(Op::Nop, s, s.major));
 }
 
-// ERROR/(label),cond | ERROR/AUTO,cond | ERROR/OFF (DMIS 5.x): from here on, a machine fault the
+// ERROR/(label),cond | ERROR/AUTO,cond | ERROR/OFF (DMIS 5.x; the handler and the condition are
+// read in either order, as shop software writes both): from here on, a machine fault the
 // condition covers (ALL; NOTOUCH: no contact; ILLEGALTOUCH: a contact where none was expected,
-// a probe over-travel; a DME error code: any) goes to the handler label, or with AUTO skips the
-// failing statement; OFF stops handling. docs/language.md.
+// a probe over-travel; a DME error code: any) goes to the handler label, or with AUTO (IGNORE)
+// goes on after the failing statement; OFF stops handling. A macro as the handler, M(x), is not
+// run: a warning. docs/language.md.
 void UnitCompiler::on_error(const grammar::Statement& s) {
   if (!expect_params(s, 1, "(label), AUTO or OFF, then ALL, NOTOUCH or ILLEGALTOUCH")) return;
   auto in = make(Op::OnError, s);
@@ -93,26 +96,41 @@ void UnitCompiler::on_error(const grammar::Statement& s) {
     emit(std::move(in));
     return;
   }
-  std::string condition = "ALL";
-  if (p.size() > 1) {
-    if (is_word(p[1], "ALL") || is_word(p[1], "NOTOUCH") || is_word(p[1], "ILLEGALTOUCH")) condition = p[1].text;
-    else if (p[1].kind == ExprKind::Number) condition = "ALL";  // a DME's error code: metron's faults have none
-    else return error(p[1].span, "sema.bad-error-condition", "expected ALL, NOTOUCH, ILLEGALTOUCH or an error code");
+  std::optional<ir::Operand> condition, how;
+  std::string jump_name;
+  Span jump_span;
+  for (const auto& q : p) {
+    if (is_word(q, "ALL") || is_word(q, "NOTOUCH") || is_word(q, "ILLEGALTOUCH")) {
+      condition = word_operand(q);
+    } else if (q.kind == ExprKind::Number) {
+      condition = word_operand("ALL", q.span);  // a DME's error code: metron's faults have none
+    } else if (is_word(q, "AUTO") || is_word(q, "IGNORE")) {
+      how = word_operand("AUTO", q.span);
+    } else if (q.kind == ExprKind::Paren) {
+      std::tie(jump_name, jump_span) = jump_label_name(q);
+      if (jump_name.empty()) return error(q.span, "sema.bad-error-handler", "expected the handler's label in parentheses");
+      how = word_operand("JUMP", q.span);
+    } else if (is_label(q, {"M"})) {
+      warn(q.span, "sema.not-applied",
+           fmt::format("ERROR with the macro M({}) as its handler is not run: a machine fault stops the run", q.label.name));
+      emit(make(Op::Nop, s, s.major));
+      return;
+    } else {
+      return error(q.span, "sema.bad-error-handler",
+                   "expected the handler's label in parentheses, AUTO or OFF, and ALL, NOTOUCH, ILLEGALTOUCH or an error code");
+    }
   }
-  if (is_word(p[0], "AUTO")) {
-    in.operands.push_back(word_operand(p[0]));
-    in.operands.push_back(word_operand(condition, p.size() > 1 ? p[1].span : p[0].span));
+  if (!how)
+    return error(p[0].span, "sema.bad-error-handler", "expected the handler's label in parentheses, AUTO or OFF after ERROR/");
+  in.operands.push_back(*how);
+  in.operands.push_back(condition.value_or(word_operand("ALL", p[0].span)));
+  if (jump_name.empty()) {
     emit(std::move(in));
     return;
   }
-  const auto [name, span] = jump_label_name(p[0]);
-  if (name.empty() || p[0].kind != ExprKind::Paren)
-    return error(p[0].span, "sema.bad-error-handler", "expected the handler's label in parentheses, AUTO or OFF after ERROR/");
-  in.operands.push_back(word_operand("JUMP", p[0].span));
-  in.operands.push_back(word_operand(condition, p.size() > 1 ? p[1].span : p[0].span));
   mark_control();
   const std::size_t pc = emit(std::move(in));
-  jumps().pending.push_back({pc, {name, span}});
+  jumps().pending.push_back({pc, {jump_name, jump_span}});
 }
 
 // RESUME/(label) | NEXTLINE | NEXTMEAS | CURMEAS | END: where a handler goes on.
