@@ -1726,10 +1726,12 @@ TEST(ShopPrograms, AModuleHeaderStartsAFile) {
 }
 
 // A stylus's tip shape after its diameter (`SNSDEF/PROBE,FIXED,POL,...,115,12,DISC,3`): the tip
-// diameter is 12, not the disc's thickness 3 (the last number), and the shape is told once.
+// diameter is 12, not the disc's thickness 3 (the last number), and the shape is told once. A
+// `VEC` word before the stylus vector (`POL,0,0,VEC,0,0,1,50,4`) was an error.
 TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
   const std::string text = "DMISMN/'s', 5.0\nS(DISK1)=SNSDEF/PROBE,FIXED,POL,0,0,0,0,1,115,12,DISC,3\n"
-                           "S(B)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,SPHERE\nCI(CL1)=CLMPID/'CLAMP-A'\nENDFIL\n";
+                           "S(B)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,SPHERE\nCI(CL1)=CLMPID/'CLAMP-A'\n"
+                           "S(V)=SNSDEF/PROBE,INDEX,POL,0,0,VEC,0,0,1,50,4\nENDFIL\n";
   const Checked c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 1u) << c.text;
@@ -1739,9 +1741,14 @@ TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
   Compiler compiler(sources, sink);
   compiler.compile_text("shop.dmi", text);
   std::vector<double> tips;
+  std::vector<std::size_t> counts;
   for (const auto& in : compiler.module().units.at(0).code)
-    if (in.op == metron::interpreter::ir::Op::SensorDef) tips.push_back(in.operands.back().expr.value.number);
-  EXPECT_EQ(tips, (std::vector<double>{12, 2}));
+    if (in.op == metron::interpreter::ir::Op::SensorDef) {
+      tips.push_back(in.operands.back().expr.value.number);
+      counts.push_back(in.operands.size());
+    }
+  EXPECT_EQ(tips, (std::vector<double>{12, 2, 4}));
+  EXPECT_EQ(counts.back(), counts[1]);  // VEC's three numbers read as the POL form's i, j, k
   const Checked other = check("DMISMN/'s', 5.0\nS(C)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,FOO,3\nENDFIL\n");
   EXPECT_TRUE(other.has("or the tip's shape (SPHERE, CYLNDR, DISC), got the word FOO")) << other.text;
 }

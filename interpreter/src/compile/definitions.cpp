@@ -264,6 +264,9 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   const std::size_t n = s.params.size() - i;
   if (n < 4) return error(s.params.back().span, "sema.sensor-arity", "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
   for (; i < s.params.size(); ++i) {
+    // `VEC,i,j,k` (`...,POL,0,0,VEC,0,0,1,50,4`, as DMIS 5.x programs write the stylus vector):
+    // the word names the three numbers that follow.
+    if (is_word(s.params[i], "VEC") && s.params.size() - i > 3) continue;
     // The tip's shape after its diameter (`...,115,12,DISC,3`): the virtual CMM's tips are balls.
     if (is_word(s.params[i]) && !is_variable(s.params[i].text)) {
       const std::string& shape = s.params[i].text;
