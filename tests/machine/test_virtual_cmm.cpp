@@ -788,7 +788,7 @@ TEST(VirtualCmm, AStopRequestCutsAPointMeasurementWhereTheMachineWas) {
     const double z = cmm.machine().state().position_mm.z();
     EXPECT_LT(z, top.z() + 2);
     EXPECT_LE(z, latched_z - stop_mm + 1e-9);
-    EXPECT_GE(z, latched_z - stop_mm - 2 * world.machine.dt_s - 1e-9);
+    EXPECT_GE(z, latched_z - stop_mm - 2 * world.machine.dt_s - 1e-9);  // v*dt: the brake waits up to a cycle
     cmm.go(top + Vec3(0, 0, 20));
   }
 }
