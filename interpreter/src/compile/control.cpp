@@ -355,9 +355,14 @@ void UnitCompiler::jumpto(const grammar::Statement& s) {
   if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.jumpto", "JUMPTO expects one label, e.g. JUMPTO/(L1)");
   const auto [name, span] = jump_label_name(s.params[0]);
   if (name.empty()) return error(span, "sema.jumpto", "expected a label name after JUMPTO/");
+  emit_jump(make(Op::Jump, s, name), name, span);
+}
+
+// An instruction whose `target` is a jump label's, resolved when its scope ends.
+void UnitCompiler::emit_jump(ir::Instruction in, const std::string& label, Span span) {
   mark_control();
-  const std::size_t pc = emit(make(Op::Jump, s, name));
-  jumps().pending.push_back({pc, {name, span}});
+  const std::size_t pc = emit(std::move(in));
+  jumps().pending.push_back({pc, {label, span}});
 }
 
 // The jump label a parameter `(label)` names (empty when it names none) and its span.

@@ -128,9 +128,7 @@ void UnitCompiler::on_error(const grammar::Statement& s) {
     emit(std::move(in));
     return;
   }
-  mark_control();
-  const std::size_t pc = emit(std::move(in));
-  jumps().pending.push_back({pc, {jump_name, jump_span}});
+  emit_jump(std::move(in), jump_name, jump_span);
 }
 
 // RESUME/(label) | NEXTLINE | NEXTMEAS | CURMEAS | END: where a handler goes on.
@@ -147,9 +145,7 @@ void UnitCompiler::resume(const grammar::Statement& s) {
   if (name.empty() || p.kind != ExprKind::Paren)
     return error(p.span, "sema.bad-resume", "expected (label), NEXTLINE, NEXTMEAS, CURMEAS or END after RESUME/");
   in.operands.push_back(word_operand("JUMP", p.span));
-  mark_control();
-  const std::size_t pc = emit(std::move(in));
-  jumps().pending.push_back({pc, {name, span}});
+  emit_jump(std::move(in), name, span);
 }
 
 // GOHOME: the machine's home, straight at the positioning feed (a program lifts the probe

@@ -222,6 +222,7 @@ class UnitCompiler {
   void on_error(const grammar::Statement& s);
   void resume(const grammar::Statement& s);
   std::pair<std::string, Span> jump_label_name(const grammar::Expr& param) const;
+  void emit_jump(ir::Instruction in, const std::string& label, Span span);
   void extreme_point(const grammar::Statement& s, ir::Instruction in);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
