@@ -13,14 +13,15 @@ namespace {
 
 constexpr double deg = std::numbers::pi / 180.0;
 
-enum class Kind { HalfSpace, Cylinder, CappedCylinder, Sphere, Cone };
+enum class Kind { HalfSpace, Cylinder, CappedCylinder, Sphere, Cone, Torus };
 
 // A primitive ready to evaluate: distances are computed in its (deviated) local frame.
 struct Prim {
   std::string name;
   Kind kind = Kind::HalfSpace;
   Frame part_to_local = Frame::Identity();
-  double radius = 0;          // cylinder, sphere
+  double radius = 0;          // cylinder, sphere; torus: the centre circle's
+  double tube_radius = 0;     // torus
   double length = 0;          // capped cylinder
   double sin_a = 0, cos_a = 1, tan_a = 0;  // cone
   double size_term = 0;       // subtracted from the distance
@@ -48,6 +49,7 @@ struct Prim {
         d = along_generator < 0 ? q.norm() : rho * cos_a - q.z() * sin_a;
         break;
       }
+      case Kind::Torus: d = std::hypot(rho - radius, q.z()) - tube_radius; break;  // exact
     }
     d -= size_term;
     if (lobe_amplitude != 0) d -= lobing(q, rho);
@@ -97,6 +99,11 @@ Prim compile_primitive(const csg::Primitive& p, const csg::Deviation* dev, doubl
     } else if constexpr (std::is_same_v<T, csg::Sphere>) {
       out.kind = Kind::Sphere;
       out.radius = s.diameter_mm / 2;
+      out.size_term = size / 2;
+    } else if constexpr (std::is_same_v<T, csg::Torus>) {
+      out.kind = Kind::Torus;
+      out.radius = s.major_diameter_mm / 2;
+      out.tube_radius = s.minor_diameter_mm / 2;
       out.size_term = size / 2;
     } else {
       out.kind = Kind::Cone;
@@ -204,6 +211,7 @@ Frame csg::local_frame(const Primitive& primitive) {
     if constexpr (std::is_same_v<T, HalfSpace>) origin = s.point, z = s.normal;
     else if constexpr (std::is_same_v<T, Cylinder>) origin = s.point, z = s.axis;
     else if constexpr (std::is_same_v<T, Sphere>) origin = s.centre;
+    else if constexpr (std::is_same_v<T, Torus>) origin = s.centre, z = s.axis;
     else origin = s.apex, z = s.axis;
   }, primitive.shape);
   z.normalize();

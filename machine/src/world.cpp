@@ -261,8 +261,17 @@ csg::Node parse_node(const json& j, const std::string& ptr) {
     c.half_angle_deg = number(o.required("half_angle_deg"), o.at("half_angle_deg"));
     if (!(c.half_angle_deg > 0 && c.half_angle_deg < 90)) fail(o.at("half_angle_deg"), "expected an angle in (0, 90) degrees");
     n.primitive.shape = c;
+  } else if (type == "torus") {
+    csg::Torus t;
+    t.centre = vec3(o.required("centre"), o.at("centre"));
+    t.axis = unit(o.required("axis"), o.at("axis"));
+    t.major_diameter_mm = positive(o.required("major_diameter_mm"), o.at("major_diameter_mm"));
+    t.minor_diameter_mm = positive(o.required("minor_diameter_mm"), o.at("minor_diameter_mm"));
+    if (t.minor_diameter_mm >= t.major_diameter_mm)
+      fail(o.at("minor_diameter_mm"), "the tube's diameter must be less than the centre circle's (a ring with a hole)");
+    n.primitive.shape = t;
   } else {
-    fail(o.at("type"), fmt::format("unknown primitive type '{}' (expected half_space, cylinder, sphere or cone)", type));
+    fail(o.at("type"), fmt::format("unknown primitive type '{}' (expected half_space, cylinder, sphere, cone or torus)", type));
   }
   o.finish();
   return n;

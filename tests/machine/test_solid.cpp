@@ -19,7 +19,7 @@ using namespace metron::machine;
 
 namespace {
 
-csg::Node leaf(std::string name, std::variant<csg::HalfSpace, csg::Cylinder, csg::Sphere, csg::Cone> shape) {
+csg::Node leaf(std::string name, std::variant<csg::HalfSpace, csg::Cylinder, csg::Sphere, csg::Cone, csg::Torus> shape) {
   csg::Node n;
   n.primitive = {std::move(name), std::move(shape)};
   return n;
@@ -68,6 +68,21 @@ TEST(Solid, PrimitiveDistancesAreExact) {
     // Cone: distance to the generator in the point's half-plane, or to the apex.
     const double along = rho * std::sin(a) + p.z() * std::cos(a);
     EXPECT_NEAR(cone.signed_distance(p), along < 0 ? p.norm() : rho * std::cos(a) - p.z() * std::sin(a), 1e-12);
+  }
+}
+
+TEST(Solid, TorusDistanceIsTheDistanceFromItsCentreCircleLessTheTube) {
+  // A ring about a tilted axis; the oracle samples the centre circle densely (no closed form).
+  const Vec3 centre(1, 2, 3), axis = Vec3(0.3, -0.2, 1).normalized();
+  const CsgSolid ring(leaf("T", csg::Torus{centre, axis, 24, 6}), Frame::Identity());
+  const Vec3 e1 = axis.cross(Vec3::UnitX()).normalized(), e2 = axis.cross(e1);
+  for (const Vec3& p : random_points(200, Vec3(-25, -25, -25), Vec3(25, 25, 25))) {
+    double nearest = 1e300;
+    for (int i = 0; i < 200000; ++i) {
+      const double u = 2 * std::numbers::pi * i / 200000;
+      nearest = std::min(nearest, (p - centre - 12 * (std::cos(u) * e1 + std::sin(u) * e2)).norm());
+    }
+    EXPECT_NEAR(ring.signed_distance(p), nearest - 3, 1e-6) << p.transpose();
   }
 }
 

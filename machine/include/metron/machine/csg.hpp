@@ -39,10 +39,19 @@ struct Cone {
   double half_angle_deg = 45;         ///< in (0, 90)
 };
 
+/// A ring: material within minor_diameter/2 of the circle of major_diameter about `axis`
+/// through `centre` (the solid torus).
+struct Torus {
+  Vec3 centre = Vec3::Zero();         ///< of the centre circle
+  Vec3 axis = Vec3::UnitZ();          ///< unit, normal to the centre circle's plane
+  double major_diameter_mm = 40;      ///< of the centre circle
+  double minor_diameter_mm = 10;      ///< of the tube, < major_diameter_mm
+};
+
 /// A primitive with the name of the feature it belongs to (empty: unnamed).
 struct Primitive {
   std::string name;                   ///< feature name for deviations and messages (may be empty)
-  std::variant<HalfSpace, Cylinder, Sphere, Cone> shape;  ///< the geometry, part coordinates
+  std::variant<HalfSpace, Cylinder, Sphere, Cone, Torus> shape;  ///< the geometry, part coordinates
 };
 
 /// A node of the tree: a primitive or a boolean operation on the children.
@@ -78,10 +87,10 @@ struct Waviness {
 struct Deviation {
   Vec3 offset_mm = Vec3::Zero();      ///< translation, in PART coordinates
   Vec2 tilt_deg = Vec2::Zero();       ///< rotations about the local x then the local y axis, about the local origin
-  /// Size: diameter change for cylinders, spheres and cones; material added along the outward
-  /// normal for half-spaces.
+  /// Size: diameter change for cylinders, spheres and cones, the tube's diameter change for a
+  /// torus; material added along the outward normal for half-spaces.
   double size_mm = 0;
-  std::optional<Lobing> lobing;       ///< cylinders, spheres, cones
+  std::optional<Lobing> lobing;       ///< cylinders, spheres, cones, tori (about the axis)
   std::optional<Waviness> waviness;   ///< half-spaces
 };
 
