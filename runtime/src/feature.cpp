@@ -17,6 +17,7 @@ const char* dmis_word(FeatureType type) {
     case FeatureType::GenericSurface: return "GSURF";
     case FeatureType::GenericCurve: return "GCURVE";
     case FeatureType::ClosedSlot: return "CPARLN";
+    case FeatureType::Torus: return "TORUS";
   }
   return "POINT";
 }

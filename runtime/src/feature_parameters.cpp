@@ -7,7 +7,7 @@ namespace metron::runtime {
 bool has_side(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
          type == FeatureType::Cylinder || type == FeatureType::Cone || type == FeatureType::ParallelPlanes ||
-         type == FeatureType::ClosedSlot;
+         type == FeatureType::ClosedSlot || type == FeatureType::Torus;
 }
 
 std::size_t feature_word_count(FeatureType type) {
@@ -69,6 +69,11 @@ std::vector<FeatureParameter> feature_parameters(const Geometry& g) {
       add(g.slot_axis, ParameterUnit::Cosine);
       length(g.length_mm);
       length(g.width_mm);
+      break;
+    case FeatureType::Torus:
+      add(g.direction, ParameterUnit::Cosine);
+      length(g.diameter_mm);
+      length(g.minor_diameter_mm);
       break;
   }
   return out;

@@ -13,6 +13,7 @@
 
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/slot_fit.hpp"
+#include "metron/stdlib/fitting/torus_fit.hpp"
 
 namespace metron::runtime {
 namespace {
@@ -29,6 +30,7 @@ fitting::Shape fit_shape(FeatureType type) {
     case FeatureType::Cone: return fitting::Shape::Cone;
     case FeatureType::ParallelPlanes:  // fitted here, below
     case FeatureType::ClosedSlot:
+    case FeatureType::Torus:
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: return fitting::Shape::Plane;
   }
@@ -131,6 +133,27 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const
   return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
 }
 
+// TORUS: all seven parameters from the ball centres (stdlib fitting/torus_fit.hpp), started
+// from the nominal.
+tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_torus(const Geometry& nominal,
+    const std::vector<MeasuredPoint>& points) {
+  std::vector<Vec3> centres;
+  for (const auto& p : points) centres.push_back(p.centre_mm);
+  const fitting::Torus start{nominal.position, nominal.direction.normalized(), nominal.diameter_mm,
+                             nominal.minor_diameter_mm};
+  const auto fit = fitting::fit_torus(centres, points.front().ball_radius_mm, nominal.side == Side::Inner, start);
+  if (!fit)
+    return tl::unexpected(fmt::format("cannot fit a TORUS to {} point{}: {}{}", points.size(),
+                                      points.size() == 1 ? "" : "s", fitting::to_string(fit.error()),
+                                      fit.error() == fitting::FitFailure::TooFewPoints ? " (it needs 7)" : ""));
+  Geometry g = nominal;
+  g.position = fit->torus.centre;
+  g.direction = fit->torus.axis;
+  g.diameter_mm = fit->torus.major_diameter_mm;
+  g.minor_diameter_mm = fit->torus.minor_diameter_mm;
+  return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
+}
+
 // GSURF, GCURVE: nothing to fit. Each point's deviation is along its own nominal normal from
 // its nominal (the PTMEAS); the actual is the points' centroid and mean nominal normal.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(const Geometry& nominal,
@@ -166,6 +189,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
   if (points.empty()) return tl::unexpected(std::string("no points were measured"));
   if (nominal.type == FeatureType::ParallelPlanes) return fit_parallel_planes(nominal, points);
   if (nominal.type == FeatureType::ClosedSlot) return fit_closed_slot(nominal, points);
+  if (nominal.type == FeatureType::Torus) return fit_torus(nominal, points);
   if (is_point_set(nominal.type)) return point_set_actual(nominal, points);
   std::vector<Vec3> centres;
   fitting::Compensation comp;
@@ -222,6 +246,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     }
     case FeatureType::ParallelPlanes:
     case FeatureType::ClosedSlot:
+    case FeatureType::Torus:
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: break;  // above
     case FeatureType::Cone: {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace metron::runtime {
@@ -107,6 +108,7 @@ int minimum_points(FeatureType type) {
     case FeatureType::Sphere: return 4;
     case FeatureType::Cylinder: return 5;
     case FeatureType::Cone: return 6;
+    case FeatureType::Torus: return 7;  // centre, axis (2), two diameters
   }
   return 1;
 }
@@ -139,6 +141,12 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
       const double half = g.apex_angle_deg * std::numbers::pi / 360.0;
       const Vec3 r = radial(point, g.position, axis);
       return sign * (std::cos(half) * r - std::sin(half) * axis).normalized();
+    }
+    case FeatureType::Torus: {
+      // Away from the tube's centre: the nearest point of the centre circle to `point`.
+      const Vec3 r = radial(point, g.position, axis);
+      const Vec3 tube = point - g.position - 0.5 * g.diameter_mm * r;
+      return sign * (tube.norm() < 1e-12 ? r : Vec3(tube.normalized()));
     }
   }
   return axis;
@@ -300,6 +308,51 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
           steps.push_back({PlannedStep::Kind::GoTo, outside + (approach - g.position).dot(up) * up, Vec3::UnitZ()});
         }
         steps.push_back({PlannedStep::Kind::Probe, g.position + r * d, s * d});
+      }
+      break;
+    }
+    case FeatureType::Torus: {
+      // Three tube angles round the azimuth in turn, on the tube's side toward `up`: a ring
+      // (OUTER) from its outer equator over its top (0, 45, 90 deg), reached like a sphere's
+      // points, from outside at the approach height; a groove (INNER) across its bottom (200, 270,
+      // 340 deg), reached from above. Other parts of a torus, and a fillet (whose 340 deg is not
+      // there), need PTMEAS.
+      const int n = std::max(count > 0 ? count : 12, minimum_points(g.type));
+      const Vec3 a = axis.dot(up) >= 0 ? axis : Vec3(-axis);
+      const Vec3 u = any_perpendicular(a);
+      const Vec3 v = a.cross(u);
+      const double tube = 0.5 * g.minor_diameter_mm;
+      static constexpr double k_ring_deg[3] = {0, 45, 90}, k_groove_deg[3] = {200, 270, 340};
+      std::vector<PlannedStep> probes;
+      double top = -std::numeric_limits<double>::infinity();
+      for (int i = 0; i < n; ++i) {
+        const double az = 2.0 * std::numbers::pi * i / n;
+        const double t = (inner ? k_groove_deg : k_ring_deg)[i % 3] * std::numbers::pi / 180.0;
+        const Vec3 radial_dir = std::cos(az) * u + std::sin(az) * v;
+        const Vec3 out_of_tube = std::cos(t) * radial_dir + std::sin(t) * a;
+        const Vec3 p = g.position + r * radial_dir + tube * out_of_tube;
+        probes.push_back({PlannedStep::Kind::Probe, p, inner ? Vec3(-out_of_tube) : out_of_tube});
+        top = std::max(top, (p + probe.approach_mm * probes.back().normal).dot(up));
+      }
+      top = std::max(top, (g.position + (tube + probe.approach_mm) * a).dot(up)) + probe.clearance_mm;
+      for (std::size_t i = 0; i < probes.size(); ++i) {
+        const PlannedStep& s = probes[i];
+        const Vec3 approach = s.point + probe.approach_mm * s.normal;
+        const auto at_height = [&](const Vec3& q, double h) { return Vec3(q + (h - q.dot(up)) * up); };
+        if (inner) {
+          steps.push_back({PlannedStep::Kind::GoTo, at_height(approach, top), Vec3::UnitZ()});
+        } else {
+          // Up, over to beyond the ring's outside at this azimuth, down to the approach height.
+          const Vec3 radial_dir = radial(s.point, g.position, a);
+          const Vec3 outside = g.position + (r + tube + probe.approach_mm + 5.0) * radial_dir;
+          if (i > 0) {  // from where the last point retracted to
+            const Vec3 last = probes[i - 1].point + probe.approach_mm * probes[i - 1].normal;
+            steps.push_back({PlannedStep::Kind::GoTo, at_height(last, top), Vec3::UnitZ()});
+          }
+          steps.push_back({PlannedStep::Kind::GoTo, at_height(outside, top), Vec3::UnitZ()});
+          steps.push_back({PlannedStep::Kind::GoTo, at_height(outside, approach.dot(up)), Vec3::UnitZ()});
+        }
+        steps.push_back(s);
       }
       break;
     }

@@ -82,6 +82,7 @@ const char* lowercase_name(FeatureType type) {
     case FeatureType::GenericSurface: return "GSURF";
     case FeatureType::GenericCurve: return "GCURVE";
     case FeatureType::ClosedSlot: return "closed slot (CPARLN)";
+    case FeatureType::Torus: return "torus";
   }
   return "point";
 }
@@ -407,7 +408,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
                      ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
                                     FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                    FeatureType::Line,   FeatureType::ClosedSlot};
+                                    FeatureType::Line,   FeatureType::ClosedSlot, FeatureType::Torus};
   const Geometry& nominal = feature.nominal;
   if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
   const auto actual_or = actual_of(feature);
@@ -700,6 +701,12 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
       outward = rho * std::cos(half) - std::abs(h) * std::sin(half);
       break;
     }
+    case FeatureType::Torus: {
+      // From the centre circle, less the tube's radius (+ away from the tube's centre).
+      const double h = v.dot(n);
+      outward = std::hypot((v - h * n).norm() - radius_mm, h) - 0.5 * nominal.minor_diameter_mm;
+      break;
+    }
     default: break;
   }
   // Outside the material of a bore is toward its axis.
@@ -710,7 +717,7 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
                        ToleranceResult result) {
   static constexpr Types k_surfaces = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
                                        FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                       FeatureType::GenericSurface};
+                                       FeatureType::GenericSurface, FeatureType::Torus};
   static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc, FeatureType::GenericCurve};
   static constexpr Types k_points = {FeatureType::Point};
   const Types types = spec.kind == ToleranceKind::Profl ? k_lines : spec.kind == ToleranceKind::Profp ? k_points : k_surfaces;
@@ -1032,7 +1039,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line});
     case ToleranceKind::Pos:
-    case ToleranceKind::Compos: return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot});
+    case ToleranceKind::Compos: return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus});
     case ToleranceKind::Perp:
     case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
     case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
@@ -1040,7 +1047,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
     case ToleranceKind::Crnout:
     case ToleranceKind::Totrun: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere, T::Plane});
-    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface});
+    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface, T::Torus});
     case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
     case ToleranceKind::Symmty: return in({T::ParallelPlanes});

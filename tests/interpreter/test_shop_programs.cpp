@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -578,6 +579,71 @@ TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
                               "OUTPUT/FA(S), TA(S)\nENDFIL\n");
   EXPECT_EQ(symmetry.errors, 1U) << symmetry.text;
   EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
+}
+
+// FEAT/TORUS on programs/worlds/block_torus.json, planned by metron (MODE/AUTO): a ring standing
+// on the top face and a round-bottomed groove cut into it, each machined off its nominal (the
+// world's hidden deviations). The fit must find the machined torus; POS and PROFS are checked
+// against values derived from the deviations by hand (for a torus moved by o and its tube grown
+// by s, a surface point at tube direction n lies s/2 + o.n off the nominal surface, + out of the
+// tube).
+TEST(ShopPrograms, ToriAgainstTheMachinedRingAndGroove) {
+  const std::string text =
+      "DMISMN/'torus', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+      "S(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 1.0\nSNSLCT/S(P1)\nMODE/AUTO\n"
+      "F(RING) = FEAT/TORUS, OUTER, CART, 80, 30, 43, 0, 0, 1, 30, 6\nMEAS/TORUS, F(RING), 12\nENDMES\n"
+      "F(GROOVE) = FEAT/TORUS, INNER, CART, 140, 18, 40, 0, 0, 1, 24, 8\nMEAS/TORUS, F(GROOVE), 12\nENDMES\n"
+      "T(P) = TOL/POS, 3D, 0.05\nT(S) = TOL/PROFS, -0.02, 0.02\n"
+      "OUTPUT/FA(RING), TA(P), TA(S)\nOUTPUT/FA(GROOVE), TA(P), TA(S)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_torus.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  constexpr double tol_mm = 1e-3;  // the probe's noise and pre-travel left after qualification
+  const auto* ring = report(*r.session, "RING");
+  ASSERT_TRUE(ring && ring->actual);
+  EXPECT_EQ(ring->point_count, 12U);
+  EXPECT_NEAR(ring->actual->position.x(), 80.03, tol_mm);
+  EXPECT_NEAR(ring->actual->position.y(), 29.98, tol_mm);
+  EXPECT_NEAR(ring->actual->position.z(), 43, tol_mm);
+  EXPECT_NEAR(ring->actual->diameter_mm, 30, tol_mm);
+  EXPECT_NEAR(ring->actual->minor_diameter_mm, 6.04, tol_mm);
+  EXPECT_GT(ring->actual->direction.z(), 1 - 1e-6);
+  const auto* groove = report(*r.session, "GROOVE");
+  ASSERT_TRUE(groove && groove->actual);
+  EXPECT_NEAR(groove->actual->position.x(), 140, tol_mm);
+  EXPECT_NEAR(groove->actual->position.y(), 18, tol_mm);
+  EXPECT_NEAR(groove->actual->position.z(), 39.98, tol_mm);
+  EXPECT_NEAR(groove->actual->diameter_mm, 24, tol_mm);
+  EXPECT_NEAR(groove->actual->minor_diameter_mm, 7.97, tol_mm);
+  std::vector<const metron::runtime::ToleranceResult*> results;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) results.push_back(t);
+  ASSERT_EQ(results.size(), 4U);
+  EXPECT_NEAR(results[0]->value, 2 * std::hypot(0.03, 0.02), 2 * tol_mm);  // POS 3D of the ring
+  EXPECT_FALSE(results[0]->in_tolerance);
+  // The ring: 0.02 + 0.036 cos(v) cos(azimuth - that of the offset); its four equator points lie
+  // 90 deg apart, so the largest is at least 0.02 + 0.036 cos 45 and at most 0.02 + 0.036.
+  EXPECT_GT(results[1]->value, 0.02 + std::hypot(0.03, 0.02) * std::cos(std::numbers::pi / 4) - tol_mm);
+  EXPECT_LT(results[1]->value, 0.02 + std::hypot(0.03, 0.02) + tol_mm);
+  EXPECT_FALSE(results[1]->in_tolerance);
+  EXPECT_NEAR(results[2]->value, 2 * 0.02, 2 * tol_mm);  // POS 3D of the groove
+  EXPECT_TRUE(results[2]->in_tolerance);
+  // The groove (+ toward the tube's centre): 0.015 + 0.02 sin v at the tube angles 200, 270 and
+  // 340 deg; the largest is at 200 and 340 deg.
+  EXPECT_NEAR(results[3]->value, 0.015 + 0.02 * std::sin(200 * std::numbers::pi / 180), tol_mm);
+  EXPECT_TRUE(results[3]->in_tolerance);
+
+  // A torus needs seven points; its tube must be thinner than its centre circle.
+  const auto few = run("DMISMN/'torus', 5.0\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
+                       "F(RING) = FEAT/TORUS, OUTER, CART, 80, 30, 43, 0, 0, 1, 30, 6\nMEAS/TORUS, F(RING), 6\nENDMES\nENDFIL\n",
+                       source_dir / "programs/worlds/block_torus.json");
+  EXPECT_NE(few.diagnostics.find("run.dmi:5:"), std::string::npos) << few.diagnostics;
+  const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(T) = FEAT/TORUS, " + rest + "\nENDFIL\n"); };
+  EXPECT_EQ(feat("OUTER, CART, 0, 0, 0, 0, 0, 1, 30, 6").errors, 0U);
+  const auto fat = feat("OUTER, CART, 0, 0, 0, 0, 0, 1, 30, 30");
+  EXPECT_TRUE(fat.has("shop.dmi:2:") && fat.has("the tube's diameter 30 of F(T) is not less than its major diameter 30")) << fat.text;
+  const auto arity = feat("INNER, CART, 0, 0, 0, 0, 0, 1, 30");
+  EXPECT_TRUE(arity.has("FEAT/TORUS expects 8 numbers (x,y,z,i,j,k,majdiam,mindiam")) << arity.text;
+  EXPECT_TRUE(feat("CART, 0, 0, 0, 0, 0, 1, 30, 6").has("expected INNER or OUTER after the feature type TORUS"));
 }
 
 // FEAT/GSURF and GCURVE: features known only by the points a program probes on them (CAMIO and

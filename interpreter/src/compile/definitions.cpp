@@ -36,6 +36,7 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
     case FeatureType::ParallelPlanes: return {7, 7, "x,y,z,i,j,k,width (a point on the median plane, its normal, the width)"};
     case FeatureType::GenericSurface: return {0, 6, "none, or x,y,z,i,j,k (a point of the surface and its normal)"};
     case FeatureType::GenericCurve: return {0, 6, "none, or x,y,z,i,j,k (a point of the curve and the normal of its plane)"};
+    case FeatureType::Torus: return {8, 8, "x,y,z,i,j,k,majdiam,mindiam (the centre, the axis, the centre circle's and the tube's diameters)"};
     case FeatureType::ClosedSlot:
       return {11, 11, "x,y,z,i1,j1,k1,i2,j2,k2,len,wid (the centre, the normal of its plane, its long axis, the length end to "
                       "end, the width)"};
@@ -108,8 +109,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
-    if (is_word(p[0]) && (p[0].text == "TORUS" ||
-                          p[0].text == "RCTNGL" || p[0].text == "ELLIPS" ||
+    if (is_word(p[0]) && (p[0].text == "RCTNGL" || p[0].text == "ELLIPS" ||
                           p[0].text == "COMPOUND" || p[0].text == "PATERN" || p[0].text == "OBJECT" ||
                           p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
@@ -230,6 +230,18 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
                   fmt::format("the width {} of F({}) is not less than its length {}: a ROUND slot's ends are semicircles "
                               "of its width, so the length (end to end) must exceed it",
                               literal[10], s.target->name, literal[9]));
+    return true;
+  }
+  if (type == FeatureType::Torus) {
+    for (std::size_t k : {6, 7})
+      if (!std::isnan(literal[k]) && literal[k] <= 0)
+        return fail(k, "sema.bad-size", fmt::format("the {} diameter of F({}) must be positive", k == 6 ? "major" : "minor",
+                                                    s.target->name));
+    if (literal[7] >= literal[6])
+      return fail(7, "sema.bad-size",
+                  fmt::format("the tube's diameter {} of F({}) is not less than its major diameter {}: a torus's tube "
+                              "circles round its axis",
+                              literal[7], s.target->name, literal[6]));
     return true;
   }
   if (form.side && type != FeatureType::Cone) {

@@ -99,6 +99,11 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
       g.width_mm = nums[10] * len;
       g.slot_ends = words.slot_ends.value_or(runtime::SlotEnds::Round);
       break;
+    case FeatureType::Torus:
+      g.direction = vec(3);
+      g.diameter_mm = nums[6] * len;
+      g.minor_diameter_mm = nums[7] * len;
+      break;
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
   if (g.type == FeatureType::ClosedSlot) {
@@ -114,6 +119,8 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
                      "the width of a ROUND CPARLN must be less than its length (its ends are semicircles of the width)");
     g.slot_axis = (g.slot_axis - g.slot_axis.dot(n) * n).normalized();  // within the rounding of the program's numbers
   }
+  if (g.type == FeatureType::Torus && !(g.minor_diameter_mm > 0 && g.minor_diameter_mm < g.diameter_mm))
+    return vm.fail(in.span, "a TORUS's tube diameter (mindiam) must be positive and less than its major diameter");
   if (g.type == FeatureType::Line && g.normal2.norm() < 1e-12) g.normal2 = any_perpendicular(g.direction);
   // count 1: FA(l)=FEAT/..., a stated actual (a DMIS output file's line).
   const auto r = in.count == 1 ? vm.m_runtime.define_reported_actual(vm.name_of(in), g, in.span)

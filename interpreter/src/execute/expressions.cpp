@@ -143,6 +143,10 @@ std::optional<std::pair<double, bool>> feature_size(const runtime::Geometry& g, 
       if (n == 1) return std::pair{g.width_mm, true};
       if (n == 2) return std::pair{g.length_mm, true};
       break;
+    case FeatureType::Torus:
+      if (n == 1) return std::pair{g.diameter_mm, true};
+      if (n == 2) return std::pair{g.minor_diameter_mm, true};
+      break;
     default: break;
   }
   return std::nullopt;
