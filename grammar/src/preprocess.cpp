@@ -50,8 +50,12 @@ class Joiner {
     }
     // The blanks that start a continued line are not part of the statement: shop software
     // splits long lines anywhere, even inside a label (`FA(CIR_$` / `   1)` is FA(CIR_1)).
-    if (m_continued && !m_in_string)
+    if (m_continued && !m_in_string) {
       while (begin < end && is_blank(m_src[begin])) ++begin;
+      // A blank line after a `$` does not end the statement: the continuation goes on to the
+      // next line with text (web pages and mail double-space pasted programs).
+      if (begin == end) return;
+    }
     m_continued = false;
     // Find where a `$$` comment starts; `$$` inside a quoted string is text. The string state
     // carries over continuation lines because a continuation may split a string.

@@ -83,6 +83,22 @@ const ToleranceSpec* MeasurementRuntime::find_tolerance(const std::string& label
   return it == m_tolerances.end() ? nullptr : &it->second;
 }
 
+bool MeasurementRuntime::label_exists(const std::string& prefix, const std::string& label) const {
+  if (prefix == "F") return m_features.count(label) > 0;
+  if (prefix == "FA") {
+    const auto it = m_features.find(label);
+    return it != m_features.end() && it->second.actual.has_value();
+  }
+  if (prefix == "D") return m_alignments.count(label) > 0 || label == "MCS";
+  if (prefix == "DA") return m_alignments.count(label) > 0 || m_saved.count(label) > 0 || label == "MCS";
+  if (prefix == "T") return m_tolerances.count(label) > 0;
+  if (prefix == "TA") return last_tolerance_results(label) != nullptr;
+  if (prefix == "S") return m_sensors.count(label) > 0;
+  if (prefix == "SA") return m_sensors.count(label) > 0;
+  if (prefix == "DID") return m_devices.count(label) > 0;
+  return false;
+}
+
 Result<Geometry> MeasurementRuntime::resolve(const FeatureRef& ref, Span span) const {
   const Feature* f = find_feature(ref.label);
   if (!f) return program_error(span, fmt::format("feature {} is not defined", ref.label));

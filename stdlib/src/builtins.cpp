@@ -104,6 +104,9 @@ const std::vector<Builtin>& builtins() {
       {"SDATE", 0, 0, ValueType::String, false},   {"STIME", 0, 0, ValueType::String, false},
       {"SDATETIME", 0, 0, ValueType::String, false}, {"SELAPSETIME", 0, 0, ValueType::Real, false},
       {"EOF", 1, 1, ValueType::Bool, true},        {"PTDATA", 1, 1, ValueType::Integer, true},
+      // EXIST(F(x)|FA(x)|D(x)|...): whether the label is defined (measured, saved, evaluated);
+      // DMESYS('key'): what the measuring system says about `key` (docs/language.md).
+      {"EXIST", 1, 1, ValueType::Bool, true},      {"DMESYS", 1, 1, ValueType::String, true},
       // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as
       // the POL coordinates of FEAT/POINT), combined (VCROSS, VDOT, VMAG, VUNIT), and turned
       // between the part and machine systems (VMCS, VPCS: the interpreter answers those, they

@@ -104,6 +104,16 @@ TEST(Preprocess, SeveralContinuationsInARow) {
   expect_map_exact(src, lines[0]);
 }
 
+TEST(Preprocess, BlankLinesAfterAContinuationAreSkipped) {
+  // A program pasted into a web page or a mail comes back double-spaced.
+  const std::string src = "F(P)=FEAT/POINT,CART,1,2,3,$\n\n   \r\n0,0,1\nENDFIL\n";
+  const auto lines = join_continuations(src);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].text, "F(P)=FEAT/POINT,CART,1,2,3,0,0,1");
+  EXPECT_EQ(lines[1].text, "ENDFIL");
+  for (const auto& l : lines) expect_map_exact(src, l);
+}
+
 TEST(Preprocess, CommentsAreRemovedAndCommentLinesDropped) {
   const std::string src = "$$ a comment\nGOTO/1,2,3 $$ trailing note\n   \n\nENDFIL";
   const auto lines = join_continuations(src);

@@ -236,6 +236,91 @@ TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
   EXPECT_TRUE(bad.has("SELECT is never closed: expected ENDSEL before the end of the file")) << bad.text;
 }
 
+/// The TEXT/OPER lines a run said, in order.
+std::vector<std::string> operator_texts(const Ran& r) {
+  std::vector<std::string> said;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  return said;
+}
+
+// What a macro library as MODUS writes it needs (B. Capuana's public CommonMacros, GPL-3.0): a
+// macro's label parameter naming a coordinate system, EXTFIL and CALL/EXTERN,DMIS,M(name),
+// EXIST and DMESYS, a module that starts with FILNAM then DMISMD.
+TEST(ShopPrograms, MacroLibrariesAsModusWritesThem) {
+  // RECALL/DA(param) and SAVE/DA(param): "coordinate system D(ALN) is not defined" at check.
+  const auto frames = run("DMISMN/'t', 05.2\nM(TOFRAME)=MACRO/'ALN'\nRECALL/DA(ALN)\nENDMAC\n"
+                          "M(KEEP)=MACRO/'ALN'\nSAVE/DA(ALN)\nENDMAC\nD(D1)=TRANS/XORIG,5\nCALL/M(KEEP),DA(D1)\n"
+                          "D(D2)=TRANS/XORIG,50\nCALL/M(TOFRAME),DA(D1)\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/F(P)\n"
+                          "ENDFIL\n");
+  ASSERT_EQ(frames.status, ExecStatus::Finished) << frames.diagnostics;
+  const auto* p = report(*frames.session, "P");
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->frame, "D1");
+  EXPECT_TRUE(check("DMISMN/'t', 05.2\nRECALL/DA(NOWHERE)\nENDFIL\n").has("coordinate system DA(NOWHERE) is not defined"));
+
+  // A library file (FILNAM then DMISMD: no "does not start with DMISMN") declared by EXTFIL, its
+  // macro called both ways; the file named in the call itself also works.
+  write("modus_lib.dmi", "FILNAM/'modus_lib',05.2\nDMISMD/'modus_lib'\nM(GREET)=MACRO/'WHO'\n"
+                         "TEXT/OPER,CONCAT('hello ',WHO)\nENDMAC\nENDFIL\n");
+  const auto lib = check("FILNAM/'modus_lib',05.2\nDMISMD/'modus_lib'\nM(GREET)=MACRO/'WHO'\nENDMAC\nENDFIL\n");
+  EXPECT_EQ(lib.errors + lib.warnings, 0U) << lib.text;
+  const auto called = run("DMISMN/'t', 05.2\nEXTFIL/DMIS,'modus_lib.dmi'\nCALL/EXTERN,DMIS,M(GREET),'world'\n"
+                          "CALL/M(GREET),'again'\nENDFIL\n");
+  ASSERT_EQ(called.status, ExecStatus::Finished) << called.diagnostics;
+  EXPECT_EQ(operator_texts(called), (std::vector<std::string>{"hello world", "hello again"}));
+  const auto named = run("DMISMN/'t', 05.2\nCALL/EXTERN,DMIS,M(GREET),'modus_lib.dmi','there'\nENDFIL\n");
+  ASSERT_EQ(named.status, ExecStatus::Finished) << named.diagnostics;
+  EXPECT_EQ(operator_texts(named), (std::vector<std::string>{"hello there"}));
+  // Not declared: the error says how (it took 'a', an argument, for the file before).
+  const auto undeclared = check("DMISMN/'t', 05.2\nCALL/EXTERN,DMIS,M(HELLO),1,'a'\nENDFIL\n");
+  EXPECT_TRUE(undeclared.has("2:18: error: macro M(HELLO) is not defined: declare the file that holds it with "
+                             "EXTFIL/DMIS,'file'")) << undeclared.text;
+
+  // EXIST of labels of every kind; DMESYS: the running file's folder, an unknown key ''.
+  const auto exist = run("DMISMN/'t', 05.2\nDECL/CHAR,200,P\nDECL/CHAR,20,Q\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+                         "IF/(EXIST(F(P)) .AND. .NOT. EXIST(FA(P)) .AND. .NOT. EXIST(F(NONE)) .AND. EXIST(D(MCS)))\n"
+                         "TEXT/OPER,'exist'\nENDIF\nP=ASSIGN/DMESYS('CURRENT_DMIS_MODULE_PATH')\nTEXT/OPER,P\n"
+                         "Q=ASSIGN/DMESYS('COLOUR')\nTEXT/OPER,CONCAT('[',Q,']')\nENDFIL\n");
+  ASSERT_EQ(exist.status, ExecStatus::Finished) << exist.diagnostics;
+  EXPECT_EQ(operator_texts(exist), (std::vector<std::string>{"exist", temp_dir().string() + "/", "[]"}));
+  EXPECT_NE(exist.diagnostics.find("DMESYS('COLOUR'): metron does not know this key"), std::string::npos) << exist.diagnostics;
+  EXPECT_TRUE(check("DMISMN/'t', 05.2\nDECL/BOOL,B\nB=ASSIGN/EXIST(3)\nENDFIL\n").has("EXIST takes a label"));
+
+  // SAVE/SA: a note; other SAVE forms: a warning, skipped (an error before).
+  const auto saves = check("DMISMN/'t', 05.2\nS(P1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,4\nSAVE/SA(P1)\n"
+                           "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nSAVE/F(P)\nENDFIL\n");
+  EXPECT_EQ(saves.errors, 0U) << saves.text;
+  EXPECT_EQ(saves.notes, 1U) << saves.text;
+  EXPECT_TRUE(saves.has("5:6: warning: SAVE of F() is not supported and is ignored")) << saves.text;
+}
+
+// A function metron does not know is a vendor's: read leniently it stops a run only where it is
+// evaluated (it stopped the whole check before); --strict keeps the error.
+TEST(ShopPrograms, AnUnknownFunctionStopsOnlyTheRunThatEvaluatesIt) {
+  const std::string text = "DMISMN/'t', 05.2\nDECL/REAL,X\nDECL/BOOL,B\nB=ASSIGN/.FALSE.\nIF/(B)\n"
+                           "X=ASSIGN/VENDORFN(1)\nENDIF\nTEXT/OPER,'after'\nX=ASSIGN/VENDORFN(2)\nTEXT/OPER,'never'\nENDFIL\n";
+  const auto lenient = check(text);
+  EXPECT_EQ(lenient.errors, 0U) << lenient.text;
+  EXPECT_TRUE(lenient.has("6:10: warning: unknown function VENDORFN: a run that evaluates it stops there")) << lenient.text;
+  EXPECT_TRUE(check(text, true).has("6:10: error: unknown function VENDORFN")) << check(text, true).text;
+  const auto r = run(text);
+  EXPECT_NE(r.status, ExecStatus::Finished);
+  EXPECT_EQ(operator_texts(r), (std::vector<std::string>{"after"}));
+  EXPECT_NE(r.diagnostics.find("run.dmi:9:"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("unknown function VENDORFN"), std::string::npos) << r.diagnostics;
+}
+
+// A FEAT that was rejected is named as such where the feature is used (it was "used before its
+// definition at line N", the use being after line N).
+TEST(ShopPrograms, AUseOfARejectedDefinitionSaysSo) {
+  const auto c = check("DMISMN/'t', 05.2\nF(L)=FEAT/LINE,CART,50,0,15,1,0,0,0,-1,0\nMEAS/LINE,F(L),2\nENDMES\n"
+                       "MEAS/CIRCLE,F(C),4\nENDMES\nF(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nENDFIL\n");
+  EXPECT_TRUE(c.has("2:16: error: expected BND or UNBND after LINE")) << c.text;
+  EXPECT_TRUE(c.has("3:11: error: feature F(L) has no definition: its FEAT at line 2 was rejected")) << c.text;
+  EXPECT_TRUE(c.has("5:13: error: feature F(C) is used before its definition at line 7")) << c.text;
+}
+
 // Labels compare in upper case, accented letters included: F(Alésage) is FA(ALÉSAGE) (French
 // exports write both).
 TEST(ShopPrograms, AccentedLabelsCompareWithoutCase) {

@@ -126,16 +126,32 @@ void UnitCompiler::rotate(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// SAVE/DA(l)
+// SAVE/DA(l); SAVE/SA(l) (a sensor: the probe library keeps it); other SAVE forms are skipped
+// with a warning.
 void UnitCompiler::save(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a coordinate system DA(label)")) return;
-  if (!is_label(s.params[0], {"DA", "D"})) return error(s.params[0].span, "sema.expected-alignment", "expected DA(label) after SAVE/");
-  const std::string name = upper(s.params[0].label.name);
-  if (!m_symbols.alignments.count(name))
-    return error(s.params[0].span, "sema.undefined-alignment", fmt::format("coordinate system D({}) is not defined", s.params[0].label.name));
+  const auto& p = s.params[0];
+  if (is_label(p, {"SA", "S"})) {
+    note_once(m_sensor_saves_noted, p.span, "sema.save-sensor",
+              "SAVE/SA(): the probe library keeps the qualified sensors (docs/language.md, \"Sensors\"); nothing to do");
+    emit(make(Op::Nop, s, "SAVE"));
+    return;
+  }
+  if (!is_label(p, {"DA", "D"})) {
+    if (p.kind == ExprKind::Label) {
+      warn(p.span, "sema.unsupported-save", fmt::format("SAVE of {}() is not supported and is ignored", p.label.prefix));
+      emit(make(Op::Nop, s, "SAVE"));
+      return;
+    }
+    return error(p.span, "sema.expected-alignment", "expected DA(label) after SAVE/");
+  }
+  const std::string name = upper(p.label.name);
+  if (!m_symbols.alignments.count(name) && !named_at_run(name))
+    return error(p.span, "sema.undefined-alignment",
+                 fmt::format("coordinate system {}({}) is not defined", upper(p.label.prefix), p.label.name));
   m_symbols.saved.insert(name);
   auto in = make(Op::Save, s);
-  in.operands.push_back(label_op(s.params[0]));
+  in.operands.push_back(label_op(p));
   emit(std::move(in));
 }
 
@@ -156,8 +172,10 @@ void UnitCompiler::recall(const grammar::Statement& s) {
     return error(s.params[0].span, "sema.expected-alignment", "expected D(label) or DA(label) after RECALL/");
   }
   const std::string name = upper(s.params[0].label.name);
-  if (!m_symbols.alignments.count(name) && !m_symbols.saved.count(name) && name != "MCS")
-    return error(s.params[0].span, "sema.undefined-alignment", fmt::format("coordinate system D({}) is not defined", s.params[0].label.name));
+  // A macro's parameter or an indirect name (DA(@V)) is known only at run.
+  if (!m_symbols.alignments.count(name) && !m_symbols.saved.count(name) && name != "MCS" && !named_at_run(name))
+    return error(s.params[0].span, "sema.undefined-alignment",
+                 fmt::format("coordinate system {}({}) is not defined", upper(s.params[0].label.prefix), s.params[0].label.name));
   auto in = make(Op::Recall, s);
   in.operands.push_back(label_op(s.params[0]));
   emit(std::move(in));

@@ -45,7 +45,7 @@ void UnitCompiler::add_control(StatementTable& t) {
       {"CASE", &UnitCompiler::case_}, {"DFTCAS", &UnitCompiler::case_}, {"ENDCAS", &UnitCompiler::endcas},
       {"ENDSEL", &UnitCompiler::endsel}, {"DO", &UnitCompiler::do_},
       {"ENDDO", &UnitCompiler::enddo}, {"JUMPTO", &UnitCompiler::jumpto}, {"MACRO", &UnitCompiler::macro},
-      {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}
+      {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}, {"EXTFIL", &UnitCompiler::extfil}
   });
 }
 
@@ -525,6 +525,9 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
     emit(make(Op::Nop, s, "CALL"));
     return;
   }
+  // CALL/EXTERN,DMIS,M(name)[,args...]: a macro of a file EXTFIL declared (MODUS's macro
+  // libraries), or of the file named among the arguments.
+  if (is_label(s.params[2], {"M"})) return call_external_macro(s);
   // The file is the first string after DMIS. What follows it (CAMIO writes
   // `CALL/EXTERN,DMIS,'sub.dmi',PLNA02`) is not passed: a called file takes no arguments here.
   const auto file_param = std::find_if(s.params.begin() + 2, s.params.end(),
@@ -535,42 +538,85 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
   if (file_param != s.params.begin() + 2 || file_param + 1 != s.params.end())
     warn(file_param + 1 != s.params.end() ? (file_param + 1)->span : s.params[2].span, "sema.call-arguments",
          "CALL/EXTERN,DMIS passes nothing but the file: the other parameters of this call are ignored");
-  // A path written on another machine (`Z:\progs\sub.dmi`, `\\server\...`) is looked up by its
-  // base name beside the calling file and in the --include folders; not found, it is a warning
-  // here and an error when the call runs (docs/language.md "CALL/EXTERN").
+  const auto path = called_file(f);
+  if (!path) {
+    auto in = make(Op::CallUnit, s, f.text);
+    in.target = -1;
+    emit(std::move(in));
+    return;
+  }
+  auto unit = m_include(path->string(), f.text, f.span);
+  if (!unit) return;
+  auto in = make(Op::CallUnit, s, path->string());
+  in.target = static_cast<std::int64_t>(*unit);
+  emit(std::move(in));
+}
+
+// Where a file CALL/EXTERN,DMIS or EXTFIL names is: beside the calling file when relative. A path
+// written on another machine (`Z:\progs\sub.dmi`, `\\server\...`) is looked up by its base name
+// beside the calling file and in the --include folders; not found, it is a warning here (nullopt)
+// and an error when the call runs (docs/language.md "CALL/EXTERN").
+std::optional<std::filesystem::path> UnitCompiler::called_file(const grammar::Expr& f) {
   const bool foreign = f.text.find('\\') != std::string::npos ||
                        (f.text.size() > 1 && std::isalpha(static_cast<unsigned char>(f.text[0])) && f.text[1] == ':');
   std::filesystem::path path(f.text);
-  if (foreign) {
-    const std::string base = f.text.substr(f.text.find_last_of("\\/:") + 1);
-    std::vector<std::filesystem::path> where = {std::filesystem::path(m_module.units[m_unit].path).parent_path()};
-    for (const auto& d : m_symbols.include_dirs) where.emplace_back(d);
-    std::optional<std::filesystem::path> found;
-    std::string searched;
-    for (const auto& d : where) {
-      std::error_code ec;
-      if (std::filesystem::is_regular_file(d / base, ec)) { found = d / base; break; }
-      searched += (searched.empty() ? "" : ", ") + (d.empty() ? std::string(".") : d.string());
-    }
-    if (!found) {
-      warn(f.span, "sema.foreign-path",
-           fmt::format("'{}' was written on another machine and {} is not in {}: give its folder with --include DIR; the "
-                       "run stops at this call", f.text, base, searched));
-      auto in = make(Op::CallUnit, s, f.text);
-      in.target = -1;
-      emit(std::move(in));
-      return;
-    }
-    path = *found;
-  } else if (path.is_relative()) {
-    path = std::filesystem::path(m_module.units[m_unit].path).parent_path() / path;
+  if (!foreign)
+    return path.is_relative() ? std::filesystem::path(m_module.units[m_unit].path).parent_path() / path : path;
+  const std::string base = f.text.substr(f.text.find_last_of("\\/:") + 1);
+  std::vector<std::filesystem::path> where = {std::filesystem::path(m_module.units[m_unit].path).parent_path()};
+  for (const auto& d : m_symbols.include_dirs) where.emplace_back(d);
+  std::string searched;
+  for (const auto& d : where) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(d / base, ec)) return d / base;
+    searched += (searched.empty() ? "" : ", ") + (d.empty() ? std::string(".") : d.string());
   }
-  auto unit = m_include(path.string(), f.text, f.span);
-  if (!unit) return;
-  auto in = make(Op::CallUnit, s, path.string());
-  in.target = static_cast<std::int64_t>(*unit);
-  emit(std::move(in));
-  return;
+  warn(f.span, "sema.foreign-path",
+       fmt::format("'{}' was written on another machine and {} is not in {}: give its folder with --include DIR; the "
+                   "run stops at this call", f.text, base, searched));
+  return std::nullopt;
+}
+
+// EXTFIL/DMIS,'file': the file's macros may be called (CALL/M(name) or CALL/EXTERN,DMIS,M(name));
+// its statements outside macros are not run. EXTFIL/DME,'file' is the CMM's own: a note.
+void UnitCompiler::extfil(const grammar::Statement& s) {
+  if (!expect_params(s, 2, "DMIS or DME and the file name")) return;
+  if (is_word(s.params[0], "DME")) {
+    note(s.params[0].span, "sema.unsupported-call", "EXTFIL/DME declares a file of the CMM's own software; nothing to do");
+    emit(make(Op::Nop, s, "EXTFIL"));
+    return;
+  }
+  if (!is_word(s.params[0], "DMIS")) return error(s.params[0].span, "sema.expected-word", "expected DMIS or DME after EXTFIL/");
+  if (s.params[1].kind != ExprKind::String)
+    return error(s.params[1].span, "sema.expected-file", "expected the file name as a string, e.g. EXTFIL/DMIS,'macros.dmi'");
+  emit(make(Op::Nop, s, "EXTFIL"));
+  const auto path = called_file(s.params[1]);
+  if (path) m_include(path->string(), s.params[1].text, s.params[1].span);
+}
+
+// CALL/EXTERN,DMIS,M(name)[,args...]: the macro M(name) with the arguments, read from an EXTFIL
+// file; when M(name) is not defined yet, a string argument that names a readable file is taken
+// as its file (and not passed).
+void UnitCompiler::call_external_macro(const grammar::Statement& s) {
+  grammar::Statement m = s;
+  m.params.erase(m.params.begin(), m.params.begin() + 2);  // EXTERN, DMIS
+  const std::string name = upper(m.params[0].label.name);
+  if (!m_symbols.macros.count(name)) {
+    for (auto it = m.params.begin() + 1; it != m.params.end(); ++it) {
+      if (it->kind != ExprKind::String) continue;
+      const auto path = called_file(*it);
+      std::error_code ec;
+      if (!path || !std::filesystem::is_regular_file(*path, ec)) continue;
+      m_include(path->string(), it->text, it->span);
+      m.params.erase(it);
+      break;
+    }
+    if (!m_symbols.macros.count(name))
+      return error(m.params[0].span, "sema.undefined-macro",
+                   fmt::format("macro M({}) is not defined: declare the file that holds it with EXTFIL/DMIS,'file' before "
+                               "this call", m.params[0].label.name));
+  }
+  call(m);
 }
 
 }  // namespace metron::interpreter::detail

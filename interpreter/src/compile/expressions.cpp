@@ -129,8 +129,17 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
   t.e.span = g.span;
   const Builtin* fn = find_builtin(g.text);
   if (!fn) {
-    error(g.span, "sema.unknown-function", fmt::format("unknown function {}", g.text));
-    return std::nullopt;
+    if (m_strict || m_repl) {
+      error(g.span, "sema.unknown-function", fmt::format("unknown function {}", g.text));
+      return std::nullopt;
+    }
+    // A vendor's function (MODUS, CAMIO ...): read leniently, it stops a run only where evaluated.
+    warn(g.span, "sema.unknown-function",
+         fmt::format("unknown function {}: a run that evaluates it stops there (--strict makes it an error)", g.text));
+    t.e.op = ir::ExprOp::Call;
+    t.e.name = g.text;
+    t.dynamic = true;
+    return t;
   }
   const int n = static_cast<int>(g.args.size());
   if (n < fn->min_args || n > fn->max_args) {
@@ -143,10 +152,16 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
   t.e.op = ir::ExprOp::Call;
   t.e.name = g.text;
   t.e.type = fn->result;
-  // EOF(DID(x)) and PTDATA(FA(x)) take a label.
-  const char* label_kind = g.text == "EOF" ? "DID" : g.text == "PTDATA" ? "FA" : nullptr;
+  // EOF(DID(x)) and PTDATA(FA(x)) take a label; EXIST any label.
+  const bool exist = g.text == "EXIST";
+  const char* label_kind = g.text == "EOF" ? "DID" : g.text == "PTDATA" ? "FA" : exist ? "F" : nullptr;
   for (const auto& a : g.args) {
-    if (label_kind && !(a.kind == ExprKind::Label && (is_label(a, {label_kind}) || (g.text == "PTDATA" && is_label(a, {"F"}))))) {
+    if (exist && a.kind != ExprKind::Label) {
+      error(a.span, "sema.type", "EXIST takes a label: F(x), FA(x), D(x), DA(x), T(x), TA(x), S(x), SA(x) or DID(x)");
+      return std::nullopt;
+    }
+    if (label_kind && !exist &&
+        !(a.kind == ExprKind::Label && (is_label(a, {label_kind}) || (g.text == "PTDATA" && is_label(a, {"F"}))))) {
       error(a.span, "sema.type", fmt::format("{} takes {}(label)", g.text, label_kind));
       return std::nullopt;
     }

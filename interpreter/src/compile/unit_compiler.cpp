@@ -24,10 +24,12 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   m_output_file = !repl && !m_reported_results.empty() &&
                   std::none_of(st.begin(), st.end(), [](const grammar::Statement& s) { return measuring.count(s.major) > 0; });
   // A DMIS output file starts with FILNAM (NIST's output.dms, metron's own).
-  // A DMIS module (DMISMD, as MODUS's helper tools write) starts as a program does.
+  // A DMIS module (DMISMD, as MODUS's helper tools write) starts as a program does, or with
+  // FILNAM followed by DMISMD (MODUS's macro libraries).
+  const bool module_after_filnam = st.size() > 1 && st.front().major == "FILNAM" && st[1].major == "DMISMD";
   if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN" && st.front().major != "DMISMD" &&
-      !(m_output_file && st.front().major == "FILNAM"))
-    warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN");
+      !(m_output_file && st.front().major == "FILNAM") && !module_after_filnam)
+    warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN (or DMISMD, a module)");
   for (std::size_t i = 0; i < st.size(); ++i) {
     const auto& s = st[i];
     if (m_ended) {
@@ -84,8 +86,13 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   }
   if (auto later = m_later_features.find(name); later != m_later_features.end()) {
     const Location loc = m_sources.locate(later->second);
+    // A definition above the use that did not define the feature was rejected (its error is above).
+    const bool rejected = later->second.file == e.span.file && later->second.begin < e.span.begin;
     error(e.span, "sema.undefined-feature",
-          fmt::format("feature {}({}) is used before its definition at line {}", e.label.prefix, e.label.name, loc.line));
+          rejected ? fmt::format("feature {}({}) has no definition: its FEAT at line {} was rejected (see the error there)",
+                                 e.label.prefix, e.label.name, loc.line)
+                   : fmt::format("feature {}({}) is used before its definition at line {}", e.label.prefix, e.label.name,
+                                 loc.line));
     return false;
   }
   error(e.span, "sema.undefined-feature",

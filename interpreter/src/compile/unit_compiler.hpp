@@ -8,6 +8,7 @@
 #include <cctype>
 #include <functional>
 #include <map>
+#include <filesystem>
 #include <optional>
 #include <set>
 #include <string>
@@ -296,6 +297,9 @@ class UnitCompiler {
   void endmac(const grammar::Statement& s);
   void call(const grammar::Statement& s);
   void call_extern(const grammar::Statement& s);
+  void call_external_macro(const grammar::Statement& s);
+  void extfil(const grammar::Statement& s);
+  std::optional<std::filesystem::path> called_file(const grammar::Expr& f);
 
   SymbolTable& m_symbols;
   ir::Module& m_module;
@@ -335,6 +339,7 @@ class UnitCompiler {
   bool m_calib_artifact_noted = false;
   bool m_report_layout_noted = false;     // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
+  bool m_sensor_saves_noted = false;     // one note per unit for SAVE/SA()
 };
 
 }  // namespace metron::interpreter::detail

@@ -2,10 +2,13 @@
 // The intrinsics that need the run rather than their arguments: the run's date and time, the
 // simulated seconds since the start, the end of an input file, a feature's number of points, and
 // vectors turned between the part and machine systems.
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 
 #include <fmt/format.h>
 
@@ -64,6 +67,29 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     const Vec3 u(v->components[0], v->components[1], v->components[2]);
     const Vec3 w = name == "VMCS" ? a.to_machine_vector(u) : a.to_part_vector(u);
     return Value::vector(w.x(), w.y(), w.z());
+  }
+  if (name == "EXIST") {
+    const ir::LabelOperand& l = e.args.at(0).label;
+    const std::string label = label_name(l);
+    if (l.prefix == "DID") return Value::boolean_value(m_inputs.count(label) > 0 || m_runtime.label_exists("DID", label));
+    return Value::boolean_value(m_runtime.label_exists(l.prefix, label));
+  }
+  if (name == "DMESYS") {
+    // The measuring system's answers (docs/language.md, "DMESYS"): the folder of the running
+    // file (MODUS's key), the system's name; any other key an empty string, with a warning.
+    auto key = evaluate(e.args.at(0));
+    if (!key) return key;
+    if (key->type != ValueType::String) return tl::unexpected(std::string("DMESYS takes a string"));
+    std::string k = key->text;
+    std::transform(k.begin(), k.end(), k.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    if (k == "CURRENT_DMIS_MODULE_PATH" || k == "PROGRAM_PATH") {
+      std::string folder = std::filesystem::path(m_sources.file(e.span.file).path).parent_path().string();
+      if (!folder.empty() && folder.back() != '/') folder += '/';
+      return Value::string(folder);
+    }
+    if (k == "DME" || k == "SYSTEM" || k == "NAME") return Value::string("metron");
+    m_runtime.warning(e.span, fmt::format("DMESYS('{}'): metron does not know this key; answered ''", key->text));
+    return Value::string("");
   }
   if (name == "PTDATA") {
     const std::string label = label_name(e.args.at(0).label);

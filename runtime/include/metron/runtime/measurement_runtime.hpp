@@ -70,6 +70,10 @@ class MeasurementRuntime {
   Result<void> define_tolerance(ToleranceSpec spec);
   [[nodiscard]] const Feature* find_feature(const std::string& label) const;
   [[nodiscard]] const ToleranceSpec* find_tolerance(const std::string& label) const;
+  /// EXIST(prefix(label)): F, D, T, S, DID defined; FA measured or constructed; DA saved or
+  /// defined; TA evaluated; SA a sensor defined or already taken from the probe library. False
+  /// for other prefixes.
+  [[nodiscard]] bool label_exists(const std::string& prefix, const std::string& label) const;
   [[nodiscard]] const std::map<std::string, Feature>& features() const { return m_features; }
   /// A feature's nominal or actual in the current frame (for OBTAIN, the debugger).
   Result<Geometry> feature_geometry(const FeatureRef& ref, Span span) const;
