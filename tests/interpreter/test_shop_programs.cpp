@@ -295,6 +295,36 @@ TEST(ShopPrograms, MacroLibrariesAsModusWritesThem) {
   EXPECT_TRUE(saves.has("5:6: warning: SAVE of F() is not supported and is ignored")) << saves.text;
 }
 
+// Two public MODUS macro libraries (programs/real/modus, third-party, GPL-3.0): no error; each
+// warning is one the README names.
+TEST(ShopPrograms, PublicModusMacroLibrariesCheck) {
+  const auto check_file = [](const fs::path& path) {
+    SourceManager sources;
+    DiagnosticSink sink;
+    Compiler compiler(sources, sink);
+    compiler.compile_file(path.string());
+    Checked c;
+    for (const auto& d : sink.items()) {
+      c.text += metron::format_diagnostic(d, sources);
+      if (d.severity == Severity::Error) ++c.errors;
+      else if (d.severity == Severity::Warning) ++c.warnings;
+      else ++c.notes;
+    }
+    return c;
+  };
+  const auto backup = check_file(source_dir / "programs/real/modus/ModusDatabaseBackup_CommonMacros.dmi");
+  EXPECT_EQ(backup.errors + backup.warnings, 0U) << backup.text;
+  EXPECT_TRUE(backup.has("47:17: note: CALL/EXTERN,SYS is for the CMM's own software")) << backup.text;
+  const auto points = check_file(source_dir / "programs/real/modus/OutputModusActualPoints_CommonMacros.dmi");
+  EXPECT_EQ(points.errors, 0U) << points.text;
+  EXPECT_EQ(points.warnings, 2U) << points.text;
+  EXPECT_TRUE(points.has("127:14: warning: the points [...] of FA(featureName) are not reported one by one")) << points.text;
+  EXPECT_TRUE(points.has("127:14: warning: feature FA(featureName) is never defined in this program")) << points.text;
+  // A point range is OUTPUT's only.
+  EXPECT_TRUE(check("DMISMN/'t', 05.2\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(Q),MOVEPT,FA(P)[1,2],0,0,1\nENDFIL\n")
+                  .has("3:25: error: a point range FA(P)[...] is read only in OUTPUT"));
+}
+
 // A function metron does not know is a vendor's: read leniently it stops a run only where it is
 // evaluated (it stopped the whole check before); --strict keeps the error.
 TEST(ShopPrograms, AnUnknownFunctionStopsOnlyTheRunThatEvaluatesIt) {

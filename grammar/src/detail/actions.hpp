@@ -130,6 +130,15 @@ struct action<rules::label_index_expr> {
   }
 };
 
+// FA(x)[1,n]   a point range after a label
+template <>
+struct action<rules::label_point_expr> {
+  template <typename In>
+  static void apply(const In&, Builder& b) {
+    b.labels.back().points.push_back(b.pop());
+  }
+};
+
 template <>
 struct action<rules::label_tail> {
   template <typename In>
@@ -140,7 +149,7 @@ struct action<rules::label_tail> {
     Expr e;
     e.kind = ExprKind::Label;
     e.span = Span::join(id.span, b.span(in.begin(), in.end()));
-    e.label = LabelRef{std::move(id.upper), std::move(label.name), e.span, std::move(label.index)};
+    e.label = LabelRef{std::move(id.upper), std::move(label.name), e.span, std::move(label.index), std::move(label.points)};
     b.stack.push_back(std::move(e));
   }
 };

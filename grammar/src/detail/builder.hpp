@@ -54,6 +54,7 @@ struct Builder {
   struct PendingLabel {
     std::string name;
     std::vector<Expr> index;
+    std::vector<Expr> points;
   };
   std::vector<PendingLabel> labels;
   const char* string_open = nullptr;  ///< the opening quote of the string being read

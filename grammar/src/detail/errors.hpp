@@ -92,6 +92,12 @@ inline SyntaxError error_for(tag<rules::label_index_expr>, const Builder& b, con
 inline SyntaxError error_for(tag<rules::label_index_close>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-close", "expected ']' after the label's index");
 }
+inline SyntaxError error_for(tag<rules::label_point_expr>, const Builder& b, const char* at) {
+  return expected(b, at, "parse.expected-expression", "expected a point number after '[' (FA(x)[1,N])");
+}
+inline SyntaxError error_for(tag<rules::label_points_close>, const Builder& b, const char* at) {
+  return expected(b, at, "parse.expected-close", "expected ']' after the point range");
+}
 inline SyntaxError error_for(tag<rules::label_close>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-close", "expected ')' after the label name");
 }

@@ -89,7 +89,13 @@ struct label_index_open : one<'['> {};
 struct label_index_expr;
 struct label_index_close : one<']'> {};
 struct label_index : seq<label_index_open, ws, must<label_index_expr>, ws, must<label_index_close>> {};
-struct label_tail : seq<if_label_prefix, label_open, ws, must<label_ref_name>, ws, opt<label_index>, ws, must<label_close>> {};
+struct label_points_open : one<'['> {};
+struct label_point_expr;
+struct label_points_close : one<']'> {};
+struct label_points : seq<label_points_open, ws, must<label_point_expr>, opt<ws, one<','>, ws, must<label_point_expr>>, ws,
+                          must<label_points_close>> {};
+struct label_tail : seq<if_label_prefix, label_open, ws, must<label_ref_name>, ws, opt<label_index>, ws, must<label_close>,
+                        opt<label_points>> {};
 struct call_open : one<'('> {};
 struct call_arg;
 struct call_next_arg;
@@ -143,6 +149,7 @@ struct call_arg : expr {};
 struct call_next_arg : expr {};
 struct index_first : expr {};
 struct label_index_expr : expr {};
+struct label_point_expr : expr {};
 struct index_next : expr {};
 
 // ---- statements -----------------------------------------------------------------------------

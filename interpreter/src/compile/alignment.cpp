@@ -373,6 +373,10 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
   std::vector<std::optional<FeatureType>> types;
   bool left_out = false;  // a feature the program never defines was left out (lenient reading)
   for (const auto& p : s.params) {
+    if (p.kind == ExprKind::Label && !p.label.points.empty())
+      warn(p.span, "sema.point-range",
+           fmt::format("the points [...] of {}({}) are not reported one by one: the feature is reported whole", p.label.prefix,
+                       p.label.name));
     // In a DMIS output file each OUTPUT is followed by the result lines it produced: an OUTPUT of
     // a result stated below (and not defined before) echoes it.
     const bool feature_label = is_label(p, {"F", "FA"});

@@ -185,6 +185,10 @@ void UnitCompiler::statement(const grammar::Statement& s) {
   const auto& rows = statements();
   auto it = rows.find(s.variable ? std::string_view(assignment_row) : std::string_view(m));
   if (it == rows.end()) return unknown(s);
+  // A point range FA(x)[i,j] is OUTPUT's (MODUS); elsewhere it would be dropped unseen.
+  for (const auto& p : s.params)
+    if (p.kind == grammar::ExprKind::Label && !p.label.points.empty() && m != "OUTPUT")
+      return error(p.span, "sema.point-range", fmt::format("a point range {}({})[...] is read only in OUTPUT", p.label.prefix, p.label.name));
   (this->*(it->second))(s);
 }
 

@@ -18,6 +18,9 @@ struct LabelRef {
   std::string name;    ///< the name between the parentheses as written; indexed: `HOLE[I]`, the index upper-case without blanks
   Span span;           ///< the whole reference, prefix to closing parenthesis
   std::vector<Expr> index;  ///< an indexed label's index expression (one), else empty
+  /// A point range after the label, `FA(x)[first,last]` or `FA(x)[n]` (MODUS writes OUTPUT of a
+  /// feature's points so): one or two expressions, else empty.
+  std::vector<Expr> points;
 };
 
 enum class ExprKind {
