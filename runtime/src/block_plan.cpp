@@ -137,16 +137,19 @@ Result<void> plan_steps(const MeasBlock& block, const Geometry& nominal, const B
   return {};
 }
 
+// Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
+Vec3 arc_reference(const Alignment& alignment, const Geometry& nominal) {
+  const bool along_x = std::abs(alignment.to_part_vector(nominal.direction).normalized().x()) >= 0.99;
+  return alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
+}
+
 // SCNMOD/ON without points: a scan of the nominal feature instead of touching points.
 Result<void> plan_nominal_scan(const MeasBlock& block, const Geometry& nominal, const BlockPlanContext& context,
                                PlanBuilder& plan) {
   const Alignment& alignment = context.alignment;
   const Vec3 up = alignment.to_machine_vector(Vec3::UnitZ());
-  // Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
-  const bool along_x = std::abs(alignment.to_part_vector(nominal.direction).normalized().x()) >= 0.99;
-  const Vec3 reference = alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
-  auto contour = nominal_contour(nominal, context.state.position_mm, context.probe.depth_mm, up, reference,
-                                 contour_step_mm);
+  auto contour = nominal_contour(nominal, context.state.position_mm, context.probe.depth_mm, up,
+                                 arc_reference(alignment, nominal), contour_step_mm);
   if (!contour) return program_error(block.span, contour.error());
   return plan.scan(*contour, block.span);
 }
@@ -157,7 +160,8 @@ Result<void> plan_auto(const MeasBlock& block, const Geometry& nominal, const Bl
                        PlanBuilder& plan) {
   const Vec3 up = context.alignment.to_machine_vector(Vec3::UnitZ());
   const double ball = context.state.tool ? context.state.tool->effective_radius_mm : 0.0;
-  const auto steps = plan_auto_points(nominal, block.point_count, context.probe, ball, up, context.state.position_mm);
+  const auto steps = plan_auto_points(nominal, block.point_count, context.probe, ball, up, context.state.position_mm,
+                                      arc_reference(context.alignment, nominal));
   if (steps.empty()) return program_error(block.span, "cannot plan automatic points for this feature");
   for (const auto& s : steps) {
     if (s.kind == PlannedStep::Kind::GoTo)

@@ -35,13 +35,10 @@ Vec3 radial(const Vec3& p, const Vec3& c, const Vec3& axis) {
 // Appends a ring of probes around an axis. An OUTER ring walks around outside the material
 // (a straight chord between two approach points would cut through a boss); `last_angle` carries
 // the angle of the previous probe of the same feature so ring-to-ring moves walk around too.
-void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis, double radius,
-          int count, bool inner, double approach_mm, double phase_rad, std::optional<double>& last_angle) {
-  const Vec3 u = any_perpendicular(axis);
-  const Vec3 v = axis.cross(u);
+void ring_at(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& u, const Vec3& v, double radius,
+             const std::vector<double>& angles_rad, bool inner, double approach_mm, std::optional<double>& last_angle) {
   const double walk_radius = (radius + approach_mm) / std::cos(std::numbers::pi / 16) + 0.5;
-  for (int i = 0; i < count; ++i) {
-    const double a = phase_rad + 2.0 * std::numbers::pi * i / count;
+  for (const double a : angles_rad) {
     const Vec3 dir = std::cos(a) * u + std::sin(a) * v;
     if (!inner && last_angle) {
       const double prev = *last_angle;
@@ -55,6 +52,14 @@ void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis,
     steps.push_back({PlannedStep::Kind::Probe, surface, inner ? Vec3(-dir) : dir});
     last_angle = a;
   }
+}
+
+void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis, double radius,
+          int count, bool inner, double approach_mm, double phase_rad, std::optional<double>& last_angle) {
+  const Vec3 u = any_perpendicular(axis);
+  std::vector<double> angles;
+  for (int i = 0; i < count; ++i) angles.push_back(phase_rad + 2.0 * std::numbers::pi * i / count);
+  ring_at(steps, centre, u, axis.cross(u), radius, angles, inner, approach_mm, last_angle);
 }
 
 // A line lies in the plane normal to its i2,j2,k2 (DMIS); the surface it is probed on is normal
@@ -153,7 +158,8 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
 }
 
 std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const ProbeSettings& settings,
-                                          double ball_radius_mm, const Vec3& up, const Vec3& current_position) {
+                                          double ball_radius_mm, const Vec3& up, const Vec3& current_position,
+                                          const Vec3& arc_reference) {
   // Ball-centre stand-off: the machine's PtMeas starts its ball surface APPRCH off the surface.
   ProbeSettings probe = settings;
   probe.approach_mm += ball_radius_mm;
@@ -269,12 +275,25 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       }
       break;
     }
-    case FeatureType::Circle:
-    case FeatureType::Arc: {
+    case FeatureType::Circle: {
       // The circle lies DEPTH below its nominal centre, measured against the axis direction.
       const Vec3 c = g.position - probe.depth_mm * (axis.dot(up) >= 0 ? up : Vec3(-up));
       std::optional<double> last;
       ring(steps, c, axis, r, count > 0 ? count : 4, inner, probe.approach_mm, 0.0, last);
+      break;
+    }
+    case FeatureType::Arc: {
+      // Within the arc only: its span from the start angle (counted from `arc_reference` about the
+      // axis, as a scan of it), the points at the middles of equal parts, clear of its ends.
+      const Vec3 c = g.position - probe.depth_mm * (axis.dot(up) >= 0 ? up : Vec3(-up));
+      Vec3 u = arc_reference - arc_reference.dot(axis) * axis;
+      u = u.norm() > 1e-12 ? Vec3(u.normalized()) : any_perpendicular(axis);
+      const int n = count > 0 ? count : 4;
+      std::vector<double> angles;
+      for (int i = 0; i < n; ++i)
+        angles.push_back((g.start_angle_deg + g.included_angle_deg * (i + 0.5) / n) * std::numbers::pi / 180.0);
+      std::optional<double> last;
+      ring_at(steps, c, u, axis.cross(u), r, angles, inner, probe.approach_mm, last);
       break;
     }
     case FeatureType::Cylinder: {

@@ -317,9 +317,17 @@ TEST(ShopPrograms, PublicModusMacroLibrariesCheck) {
   EXPECT_TRUE(backup.has("47:17: note: CALL/EXTERN,SYS is for the CMM's own software")) << backup.text;
   const auto points = check_file(source_dir / "programs/real/modus/OutputModusActualPoints_CommonMacros.dmi");
   EXPECT_EQ(points.errors, 0U) << points.text;
-  EXPECT_EQ(points.warnings, 2U) << points.text;
-  EXPECT_TRUE(points.has("127:14: warning: the points [...] of FA(featureName) are not reported one by one")) << points.text;
-  EXPECT_TRUE(points.has("127:14: warning: feature FA(featureName) is never defined in this program")) << points.text;
+  EXPECT_EQ(points.warnings, 1U) << points.text;
+  EXPECT_TRUE(points.has("127:14: warning: the points [...] of FA(@featureName) are not reported one by one")) << points.text;
+  EXPECT_TRUE(points.has("121:15: note: FA(featureName): featureName is a CHAR variable and no feature has its name")) << points.text;
+  // FA(V), V a CHAR variable naming no feature: the value names the feature, as FA(@V).
+  const auto named = run("DMISMN/'t', 05.2\nDECL/CHAR,20,N\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nN=ASSIGN/'P'\n"
+                         "IF/(EXIST(F(N)))\nOUTPUT/F(N)\nENDIF\nENDFIL\n");
+  ASSERT_EQ(named.status, ExecStatus::Finished) << named.diagnostics;
+  ASSERT_TRUE(report(*named.session, "P"));
+  // A feature of that name keeps its own: no rewriting.
+  const auto own = check("DMISMN/'t', 05.2\nDECL/CHAR,20,N\nF(N)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/F(N)\nENDFIL\n");
+  EXPECT_EQ(own.errors + own.warnings + own.notes, 0U) << own.text;
   // A point range is OUTPUT's only.
   EXPECT_TRUE(check("DMISMN/'t', 05.2\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(Q),MOVEPT,FA(P)[1,2],0,0,1\nENDFIL\n")
                   .has("3:25: error: a point range FA(P)[...] is read only in OUTPUT"));
@@ -334,6 +342,9 @@ TEST(ShopPrograms, AnUnknownFunctionStopsOnlyTheRunThatEvaluatesIt) {
   EXPECT_EQ(lenient.errors, 0U) << lenient.text;
   EXPECT_TRUE(lenient.has("6:10: warning: unknown function VENDORFN: a run that evaluates it stops there")) << lenient.text;
   EXPECT_TRUE(check(text, true).has("6:10: error: unknown function VENDORFN")) << check(text, true).text;
+  // One letter off an intrinsic is a typo: an error either way.
+  EXPECT_TRUE(check("DMISMN/'t', 05.2\nDECL/REAL,X\nX=ASSIGN/CONCT('a','b')\nENDFIL\n")
+                  .has("3:10: error: unknown function CONCT (did you mean CONCAT?)"));
   const auto r = run(text);
   EXPECT_NE(r.status, ExecStatus::Finished);
   EXPECT_EQ(operator_texts(r), (std::vector<std::string>{"after"}));
@@ -694,6 +705,28 @@ TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
                               "OUTPUT/FA(S), TA(S)\nENDFIL\n");
   EXPECT_EQ(symmetry.errors, 1U) << symmetry.text;
   EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
+}
+
+// An ARC measured in MODE/AUTO: its points lie within its span (they went round the whole circle,
+// into the air beside a real arc). perfect.json's BORE1 (20 mm at part 40, 50) holds the arc, so
+// each touched point shows where it was planned: angles from the part's X axis.
+TEST(ShopPrograms, AnArcIsProbedWithinItsSpan) {
+  const auto r = run("DMISMN/'arc', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                     "GOTO/40, 50, 60\nMODE/AUTO\nF(A) = FEAT/ARC, INNER, CART, 40, 50, 40, 0, 0, 1, 10, 30, 90\n"
+                     "MEAS/ARC, F(A), 4\nENDMES\nENDFIL\n",
+                     source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* f = r.session->runtime().find_feature("A");
+  ASSERT_TRUE(f && f->actual);
+  ASSERT_EQ(f->points.size(), 4U);
+  std::vector<double> angles;
+  for (const auto& p : f->points) {
+    const metron::Vec3 s = p.surface_mm() - metron::Vec3(340, 250, 0);  // machine to part: the TRANS above
+    angles.push_back(std::atan2(s.y(), s.x()) * 180 / std::numbers::pi);
+  }
+  const std::vector<double> expected = {41.25, 63.75, 86.25, 108.75};  // 30 + 90 (i + 0.5) / 4
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(angles[i], expected[i], 0.01) << i;
+  EXPECT_NEAR(f->actual->diameter_mm, 20, 0.002);
 }
 
 // FEAT/TORUS on programs/worlds/block_torus.json, planned by metron (MODE/AUTO): a ring standing

@@ -299,7 +299,7 @@ TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
       << r->note;
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(s, {&pl}).error(),
-            "POS applies to a point, circle, arc, sphere, cylinder, cone, line or closed slot (CPARLN), not to a PLANE");
+            "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN) or torus, not to a PLANE");
 }
 
 // ------------------------------------------------------------------ DISTB
@@ -844,7 +844,7 @@ TEST(ToleranceProfile, SignIsPositiveOutsideTheMaterial) {
 TEST(ToleranceProfile, Errors) {
   const Feature l = feature("L1", line({0, 0, 0}, Vec3::UnitX()), line({0, 0, 0}, Vec3::UnitX()));
   EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&l}).error(),
-            "PROFS applies to a plane, circle, arc, sphere, cylinder, cone or GSURF, not to a LINE");
+            "PROFS applies to a plane, circle, arc, sphere, cylinder, cone, GSURF or torus, not to a LINE");
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&pl}).error(),
             "PROFS of PL1 needs measured points: it has none");

@@ -9,6 +9,18 @@
 
 namespace metron::interpreter::detail {
 
+namespace {
+/// Whether `a` becomes `b` by one insertion, deletion or substitution (Levenshtein distance 1).
+bool one_edit_apart(std::string_view a, std::string_view b) {
+  if (a.size() > b.size()) std::swap(a, b);
+  if (b.size() - a.size() > 1) return false;
+  std::size_t i = 0;
+  while (i < a.size() && a[i] == b[i]) ++i;
+  if (a.size() == b.size()) return i < a.size() && a.substr(i + 1) == b.substr(i + 1);
+  return a.substr(i) == b.substr(i + 1);
+}
+}  // namespace
+
 using grammar::ExprKind;
 using ir::Op;
 
@@ -129,8 +141,13 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
   t.e.span = g.span;
   const Builtin* fn = find_builtin(g.text);
   if (!fn) {
-    if (m_strict || m_repl) {
-      error(g.span, "sema.unknown-function", fmt::format("unknown function {}", g.text));
+    // One letter off an intrinsic (SQRTT, CONCT) is a typo, not a vendor's function: an error.
+    const auto near = std::find_if(builtins().begin(), builtins().end(),
+                                   [&](const Builtin& b) { return one_edit_apart(b.name, g.text); });
+    if (m_strict || m_repl || near != builtins().end()) {
+      error(g.span, "sema.unknown-function",
+            near != builtins().end() ? fmt::format("unknown function {} (did you mean {}?)", g.text, near->name)
+                                     : fmt::format("unknown function {}", g.text));
       return std::nullopt;
     }
     // A vendor's function (MODUS, CAMIO ...): read leniently, it stops a run only where evaluated.

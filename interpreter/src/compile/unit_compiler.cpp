@@ -154,7 +154,46 @@ bool UnitCompiler::label_indices(const grammar::Expr& e) {
   return std::all_of(e.args.begin(), e.args.end(), [&](const grammar::Expr& a) { return label_indices(a); });
 }
 
-void UnitCompiler::statement(const grammar::Statement& s) {
+// FA(V) where V is a CHAR variable and no feature is named V: MODUS reads the variable's value as
+// the feature's name, as DMIS writes FA(@V). Rewritten to the `@` form, with one note per unit.
+bool UnitCompiler::names_feature_by_variable(const grammar::LabelRef& l) const {
+  if ((l.prefix != "F" && l.prefix != "FA") || !l.index.empty()) return false;
+  const std::string name = upper(l.name);
+  const auto local = m_locals.find(name);
+  const auto global = m_symbols.variables.find(name);
+  const bool char_variable = (local != m_locals.end() && local->second.type == ValueType::String) ||
+                             (global != m_symbols.variables.end() && global->second.type == ValueType::String);
+  return char_variable && !m_symbols.features.count(name);
+}
+
+bool UnitCompiler::names_by_variable(const grammar::Expr& e) const {
+  if (e.kind == grammar::ExprKind::Label && names_feature_by_variable(e.label)) return true;
+  return std::any_of(e.args.begin(), e.args.end(), [&](const grammar::Expr& a) { return names_by_variable(a); });
+}
+
+bool UnitCompiler::variable_label_names(grammar::Expr& e) {
+  bool changed = false;
+  if (e.kind == grammar::ExprKind::Label && names_feature_by_variable(e.label)) {
+    note_once(m_variable_labels_noted, e.span, "sema.variable-label",
+              fmt::format("{}({}): {} is a CHAR variable and no feature has its name, so its value names the feature, as "
+                          "{}(@{}) (MODUS reads it so)", e.label.prefix, e.label.name, e.label.name, e.label.prefix,
+                          e.label.name));
+    e.label.name = "@" + e.label.name;
+    changed = true;
+  }
+  for (auto& a : e.args) changed |= variable_label_names(a);
+  return changed;
+}
+
+void UnitCompiler::statement(const grammar::Statement& given) {
+  grammar::Statement rewritten;
+  bool changed = false;
+  if (!m_repl && std::any_of(given.params.begin(), given.params.end(),
+                             [&](const grammar::Expr& p) { return names_by_variable(p); })) {
+    rewritten = given;
+    for (auto& p : rewritten.params) changed |= variable_label_names(p);
+  }
+  const grammar::Statement& s = changed ? rewritten : given;
   if ((s.target && !label_indices(*s.target)) ||
       !std::all_of(s.params.begin(), s.params.end(), [&](const grammar::Expr& p) { return label_indices(p); }))
     return;

@@ -210,6 +210,9 @@ class UnitCompiler {
     return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
   }
   void statement(const grammar::Statement& s);
+  bool names_feature_by_variable(const grammar::LabelRef& l) const;
+  bool names_by_variable(const grammar::Expr& e) const;
+  bool variable_label_names(grammar::Expr& e);
   bool label_indices(const grammar::LabelRef& label);
   bool label_indices(const grammar::Expr& e);
   void unknown(const grammar::Statement& s);
@@ -340,6 +343,7 @@ class UnitCompiler {
   bool m_report_layout_noted = false;     // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
   bool m_sensor_saves_noted = false;     // one note per unit for SAVE/SA()
+  bool m_variable_labels_noted = false;  // one note per unit for FA(V), V a CHAR variable
 };
 
 }  // namespace metron::interpreter::detail

@@ -21,9 +21,11 @@ Vec3 nominal_normal_at(const Geometry& nominal, const Vec3& point);
 /// Points for a MEAS block with no PTMEAS (AUTO mode): `count` points (0 = a sensible default for
 /// the type) spread over the nominal feature (MCS), with clearance moves along `up` so that the
 /// ball (radius `ball_radius_mm`, whose centre the GoTo steps position) does not cut through the
-/// part between points. Empty when the type cannot be planned.
+/// part between points. An ARC's points lie within its span, its angles counted from
+/// `arc_reference` about its axis. Empty when the type cannot be planned.
 std::vector<PlannedStep> plan_auto_points(const Geometry& nominal, int count, const ProbeSettings& probe,
-                                          double ball_radius_mm, const Vec3& up, const Vec3& current_position);
+                                          double ball_radius_mm, const Vec3& up, const Vec3& current_position,
+                                          const Vec3& arc_reference = Vec3::UnitX());
 
 /// Fewest points that determine a feature of this type.
 int minimum_points(FeatureType type);
