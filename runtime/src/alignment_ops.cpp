@@ -127,6 +127,7 @@ Geometry to_frame(const Geometry& g, const Frame& part_to_machine) {
   out.direction = inv.linear() * g.direction;
   out.normal2 = inv.linear() * g.normal2;
   out.slot_axis = inv.linear() * g.slot_axis;
+  out.arc_reference = inv.linear() * g.arc_reference;
   return out;
 }
 
@@ -136,6 +137,7 @@ Geometry to_machine(const Geometry& g, const Frame& part_to_machine) {
   out.direction = part_to_machine.linear() * g.direction;
   out.normal2 = part_to_machine.linear() * g.normal2;
   out.slot_axis = part_to_machine.linear() * g.slot_axis;
+  out.arc_reference = part_to_machine.linear() * g.arc_reference;
   return out;
 }
 

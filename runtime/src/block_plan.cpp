@@ -137,8 +137,10 @@ Result<void> plan_steps(const MeasBlock& block, const Geometry& nominal, const B
   return {};
 }
 
-// Arc angles count from the part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
+// Arc angles count from the arc's own reference direction when its FEAT gave one, else from the
+// part's X axis (its Y when the arc's axis is X), as in PATH/ARC.
 Vec3 arc_reference(const Alignment& alignment, const Geometry& nominal) {
+  if (nominal.arc_reference.norm() > 0) return nominal.arc_reference;
   const bool along_x = std::abs(alignment.to_part_vector(nominal.direction).normalized().x()) >= 0.99;
   return alignment.to_machine_vector(along_x ? Vec3::UnitY() : Vec3::UnitX());
 }

@@ -727,6 +727,23 @@ TEST(ShopPrograms, AnArcIsProbedWithinItsSpan) {
   const std::vector<double> expected = {41.25, 63.75, 86.25, 108.75};  // 30 + 90 (i + 0.5) / 4
   for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(angles[i], expected[i], 0.01) << i;
   EXPECT_NEAR(f->actual->diameter_mm, 20, 0.002);
+
+  // RationalDMIS writes the direction the angles count from after them (12 numbers): here the
+  // part's Y, so every point turns 90 deg on.
+  const auto y = run("DMISMN/'arc', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                     "GOTO/40, 50, 60\nMODE/AUTO\nF(A) = FEAT/ARC, INNER, CART, 40, 50, 40, 0, 0, 1, 10, 30, 90, 0, 1, 0\n"
+                     "MEAS/ARC, F(A), 4\nENDMES\nENDFIL\n",
+                     source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(y.status, ExecStatus::Finished) << y.diagnostics;
+  const auto* g = y.session->runtime().find_feature("A");
+  ASSERT_TRUE(g && g->actual && g->points.size() == 4U);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const metron::Vec3 s = g->points[i].surface_mm() - metron::Vec3(340, 250, 0);
+    const double turned = std::remainder(std::atan2(s.y(), s.x()) * 180 / std::numbers::pi - (expected[i] + 90), 360.0);
+    EXPECT_NEAR(turned, 0, 0.01) << i;
+  }
+  const auto bad = check("DMISMN/'arc', 5.0\nF(A) = FEAT/ARC, INNER, CART, 0, 0, 0, 0, 0, 1, 10, 30, 90, 1, 0\nENDFIL\n");
+  EXPECT_TRUE(bad.has("FEAT/ARC expects 9 or 12 numbers (x,y,z,i,j,k,rad,ang1,ang2[,i2,j2,k2]), got 11")) << bad.text;
 }
 
 // FEAT/TORUS on programs/worlds/block_torus.json, planned by metron (MODE/AUTO): a ring standing

@@ -29,7 +29,7 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
     case FeatureType::Plane: return {6, 6, "x,y,z,i,j,k"};
     case FeatureType::Line: return bounded ? FeatureForm{9, 9, "x1,y1,z1,x2,y2,z2,i,j,k"} : FeatureForm{9, 9, "x,y,z,i,j,k,i2,j2,k2"};
     case FeatureType::Circle: return {7, 7, "x,y,z,i,j,k,diam"};
-    case FeatureType::Arc: return {9, 9, "x,y,z,i,j,k,rad,ang1,ang2"};
+    case FeatureType::Arc: return {9, 12, "x,y,z,i,j,k,rad,ang1,ang2[,i2,j2,k2]"};
     case FeatureType::Sphere: return {4, 7, "x,y,z,diam (or x,y,z,i,j,k,diam)"};
     case FeatureType::Cylinder: return {7, 8, "x,y,z,i,j,k,diam[,len]"};
     case FeatureType::Cone: return {7, 8, "x,y,z,i,j,k,angle[,len]"};
@@ -156,10 +156,13 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const bool bounded = payload.bounded.value_or(false);
   const FeatureForm form = feature_form(type, bounded);
   const std::size_t n = p.size() - i;
-  if (n < form.min_numbers || n > form.max_numbers || (runtime::is_point_set(type) && n != 0 && n != 6))
+  // An ARC's reference direction comes whole (three numbers) or not at all.
+  if (n < form.min_numbers || n > form.max_numbers || (runtime::is_point_set(type) && n != 0 && n != 6) ||
+      (type == FeatureType::Arc && n != 9 && n != 12))
     return error(n > form.max_numbers ? p[i + form.max_numbers].span : p.back().span, "sema.feature-arity",
                  fmt::format("FEAT/{} expects {} numbers ({}), got {}", word,
                              form.min_numbers == form.max_numbers ? fmt::format("{}", form.min_numbers)
+                             : type == FeatureType::Arc           ? std::string("9 or 12")
                                                                   : fmt::format("{} to {}", form.min_numbers, form.max_numbers),
                              form.meaning, n));
   bool ok = true;

@@ -69,6 +69,13 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
       g.diameter_mm = 2 * nums[6] * len;
       g.start_angle_deg = nums[7] * deg;
       g.included_angle_deg = nums[8] * deg;
+      if (nums.size() == 12) {
+        g.arc_reference = vec(9);
+        const Vec3 n = g.direction.normalized();
+        g.arc_reference -= g.arc_reference.dot(n) * n;  // in the arc's plane
+        if (g.arc_reference.norm() < 1e-9)
+          return vm.fail(in.span, "the arc's reference direction i2,j2,k2 is zero or along its axis");
+      }
       break;
     case FeatureType::Sphere:
       if (nums.size() == 7) g.direction = vec(3);

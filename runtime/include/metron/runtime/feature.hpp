@@ -45,6 +45,9 @@ struct Geometry {
   double apex_angle_deg = 0;      ///< cone full apex angle
   double start_angle_deg = 0;     ///< arc
   double included_angle_deg = 0;  ///< arc
+  /// ARC: the direction its angles count from when its FEAT gave one (RationalDMIS writes it after
+  /// the angles); zero: the part's X axis (its Y when the arc's axis is X).
+  Vec3 arc_reference = Vec3::Zero();
   bool bounded = false;           ///< line BND vs UNBND
 };
 
