@@ -404,6 +404,52 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
   return bonus_mm;
 }
 
+// Datum shift (ASME Y14.5-2018 7.11.7, ISO 2692:2021 annex on the maximum material requirement
+// applied to datums): a datum feature of size referenced at MMC (LMC) that departs from that size
+// lets the datum reference frame move by half the departure, here a translation normal to the
+// datum's axis. For one feature the best shift takes up to that much off the deviation's
+// component across the datum's axis: |d_perp| -> max(0, |d_perp| - departure / 2). Only the first
+// datum of size with a modifier shifts; the rotation a further one would allow is not taken.
+void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& context, Vec3& deviation,
+                       ToleranceResult& result) {
+  static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
+  bool shifted = false;
+  for (std::size_t i = 0; i < spec.datum_conditions.size() && i < context.datums.size(); ++i) {
+    const MaterialCondition condition = spec.datum_conditions[i];
+    if (condition == MaterialCondition::Rfs || !context.datums[i]) continue;
+    const Datum& datum = *context.datums[i];
+    const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
+    if (!is_one_of(datum.nominal.type, k_sized)) {
+      add_note(result, fmt::format("DAT({}) at {}: a {} has no size, so no datum shift", datum.label, modifier,
+                                   dmis_word(datum.nominal.type)));
+      continue;
+    }
+    if (shifted) {
+      add_note(result, fmt::format("DAT({}) at {}: the rotation its departure allows is not applied", datum.label, modifier));
+      continue;
+    }
+    shifted = true;
+    // A hole grows away from MMC, a boss shrinks (the nominal size taken as both limits, as for
+    // the feature's own bonus).
+    const double growth = datum.geometry.diameter_mm - datum.nominal.diameter_mm;
+    const double away_from_mmc = datum.nominal.side == Side::Inner ? growth : -growth;
+    const double departure = std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
+    const double allowed = departure / 2;
+    Vec3 across = deviation;
+    if (datum.nominal.type != FeatureType::Sphere) {
+      const Vec3 axis = datum.nominal.direction.normalized();
+      across -= across.dot(axis) * axis;
+    }
+    const double before = 2.0 * deviation.norm();
+    const double taken = std::min(allowed, across.norm());
+    if (across.norm() > 0) deviation -= taken * across.normalized();
+    add_note(result, fmt::format("datum shift: DAT({}) at {} departs {} from that size, the frame may move {}; "
+                                 "without the shift {}",
+                                 datum.label, modifier, length_text(departure, context.units),
+                                 length_text(allowed, context.units), length_text(before, context.units)));
+  }
+}
+
 Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                      ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
@@ -425,6 +471,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
     if (!n) return Error(n.error());
     deviation -= deviation.dot(*n) * *n;
   }
+  apply_datum_shift(spec, context, deviation, result);
   result.value = 2.0 * deviation.norm();
   result.actual = result.value;
   result.nominal = 0;

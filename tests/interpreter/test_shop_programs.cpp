@@ -1986,14 +1986,17 @@ TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
 
 // A material modifier after a datum (`DAT(B),MMC`) is the datum's: it must not make an RFS
 // feature's position MMC (it did: every MMC word set the feature's condition, and a bonus
-// appeared). Datums are evaluated RFS, which the warning says.
+// appeared). POS takes it as the datum's (a datum shift, TolerancePosition.ADatumHoleAtMmcLetsTheFrameShift);
+// other tolerances evaluate their datums RFS, which a warning says.
 TEST(ShopPrograms, DatumModifiersDoNotChangeTheFeaturesCondition) {
   const std::string text = "DMISMN/'s', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\nDATDEF/FA(P),DAT(B)\n"
-                           "T(TP)=TOL/POS,2D,0.010,RFS,DAT(A),DAT(B),MMC\nT(TQ)=TOL/POS,2D,0.010,MMC,DAT(A),DAT(B),RFS\nENDFIL\n";
+                           "T(TP)=TOL/POS,2D,0.010,RFS,DAT(A),DAT(B),MMC\nT(TQ)=TOL/POS,2D,0.010,MMC,DAT(A),DAT(B),RFS\n"
+                           "T(TR)=TOL/PERP,0.010,DAT(A),MMC\nENDFIL\n";
   const Checked c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 1u) << c.text;
-  EXPECT_TRUE(c.has("DAT(B) at MMC: datums are evaluated RFS, metron applies no datum shift")) << c.text;
+  EXPECT_TRUE(c.has("7:29: warning: DAT(A) at MMC: the datums of TOL/PERP are evaluated RFS, metron applies no datum shift"))
+      << c.text;
   SourceManager sources;
   DiagnosticSink sink;
   Compiler compiler(sources, sink);
@@ -2002,8 +2005,9 @@ TEST(ShopPrograms, DatumModifiersDoNotChangeTheFeaturesCondition) {
   for (const auto& in : compiler.module().units.at(0).code)
     if (in.op == metron::interpreter::ir::Op::ToleranceDef)
       for (const auto& o : in.operands)
-        if (o.word == "MMC" || o.word == "LMC" || o.word == "RFS") conditions.push_back(in.name + ":" + o.word);
-  EXPECT_EQ(conditions, (std::vector<std::string>{"TP:RFS", "TQ:MMC"}));
+        if (o.word == "MMC" || o.word == "LMC" || o.word == "RFS" || o.word.rfind("DATUM-", 0) == 0)
+          conditions.push_back(in.name + ":" + o.word);
+  EXPECT_EQ(conditions, (std::vector<std::string>{"TP:RFS", "TP:DATUM-MMC", "TQ:MMC"}));
 }
 
 // A tolerance of one feature output with several applies to each (it stopped the run: "DIAM

@@ -278,6 +278,47 @@ TEST(TolerancePosition, MaterialConditionBonus) {
   EXPECT_EQ(evaluate(s, {&p}).error(), "MMC applies to a circle, arc, sphere or cylinder, not to a POINT");
 }
 
+// Datum shift: plane A, then hole B at MMC, 10 mm nominal, 10.04 as made (0.04 from its MMC
+// size): the frame may move 0.02, taken off the feature's 0.05 deviation. Expected values by hand.
+TEST(TolerancePosition, ADatumHoleAtMmcLetsTheFrameShift) {
+  const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {30, 0, 0}, Vec3::UnitZ(), 6),
+                            round(FeatureType::Circle, Side::Inner, {30.05, 0, 0}, Vec3::UnitZ(), 6));
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  Datum b = datum("B", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
+  b.geometry.diameter_mm = 10.04;
+  ToleranceContext context;
+  context.datums = {&a, &b};
+  ToleranceSpec s = spec(ToleranceKind::Pos);
+  s.zone = 0.08;
+  s.datums = {"A", "B"};
+  s.datum_conditions = {MaterialCondition::Rfs, MaterialCondition::Rfs};
+  const auto rfs = evaluate(s, {&c}, context);
+  ASSERT_TRUE(rfs) << rfs.error();
+  EXPECT_NEAR(rfs->value, 0.10, k_tight);
+  EXPECT_FALSE(rfs->in_tolerance);
+  s.datum_conditions[1] = MaterialCondition::Mmc;
+  const auto mmc = evaluate(s, {&c}, context);
+  ASSERT_TRUE(mmc) << mmc.error();
+  EXPECT_NEAR(mmc->value, 2 * (0.05 - 0.02), k_tight);
+  EXPECT_TRUE(mmc->in_tolerance);
+  EXPECT_NE(mmc->note.find("datum shift: DAT(B) at MMC departs 0.0400 from that size, the frame may move 0.0200; "
+                           "without the shift 0.1000"),
+            std::string::npos) << mmc->note;
+  // LMC: a hole larger than nominal is nearer its LMC, no departure, no shift.
+  s.datum_conditions[1] = MaterialCondition::Lmc;
+  EXPECT_NEAR(evaluate(s, {&c}, context)->value, 0.10, k_tight);
+  // A deviation smaller than the shift is taken up whole.
+  const Feature near = feature("C2", round(FeatureType::Circle, Side::Inner, {30, 0, 0}, Vec3::UnitZ(), 6),
+                               round(FeatureType::Circle, Side::Inner, {30.012, 0.009, 0}, Vec3::UnitZ(), 6));
+  s.datum_conditions[1] = MaterialCondition::Mmc;
+  EXPECT_NEAR(evaluate(s, {&near}, context)->value, 0, k_tight);
+  // A plane at MMC has no size: a note, no shift.
+  s.datum_conditions = {MaterialCondition::Mmc, MaterialCondition::Rfs};
+  const auto plane_mmc = evaluate(s, {&c}, context);
+  EXPECT_NEAR(plane_mmc->value, 0.10, k_tight);
+  EXPECT_NE(plane_mmc->note.find("DAT(A) at MMC: a PLANE has no size, so no datum shift"), std::string::npos);
+}
+
 TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
   const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
                             round(FeatureType::Circle, Side::Inner, {0.01, 0, 0}, Vec3::UnitZ(), 10));

@@ -384,10 +384,14 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     // A material modifier right after a datum is the datum's (`DAT(B),MMC`), not the feature's:
     // it is not passed on, so it cannot change the feature's condition, and it is told.
     if (i > 1 && is_label(p[i - 1], {"DAT", "DATT"}) && (is_word(p[i], "MMC") || is_word(p[i], "LMC") || is_word(p[i], "RFS"))) {
-      if (!is_word(p[i], "RFS"))
-        warn(p[i].span, "sema.datum-modifier",
-             fmt::format("DAT({}) at {}: datums are evaluated RFS, metron applies no datum shift", p[i - 1].label.name,
-                         p[i].text));
+      if (is_word(p[i], "RFS")) continue;
+      if (kind == ToleranceKind::Pos) {  // the datum shift of POS (docs/tolerances.md "Datum shift")
+        in.operands.push_back(word_operand("DATUM-" + p[i].text, p[i].span));
+        continue;
+      }
+      warn(p[i].span, "sema.datum-modifier",
+           fmt::format("DAT({}) at {}: the datums of TOL/{} are evaluated RFS, metron applies no datum shift",
+                       p[i - 1].label.name, p[i].text, p[0].text));
       continue;
     }
     if (p[i].kind == ExprKind::Label && (kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) &&

@@ -162,9 +162,17 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (o.kind == Operand::Kind::Word && o.word == "FEATUR") feature_tier = true;
     if (feature_tier && o.kind == Operand::Kind::Word && (o.word == "MMC" || o.word == "LMC"))
       t.feature_condition = o.word == "MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
+    if (o.kind == Operand::Kind::Word && (o.word == "DATUM-MMC" || o.word == "DATUM-LMC") && !t.datum_conditions.empty())
+      t.datum_conditions.back() = o.word == "DATUM-MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
     if (o.kind != Operand::Kind::Label) continue;
-    if (o.label.prefix == "F" || o.label.prefix == "FA") t.reference_feature = vm.label_name(o.label);  // DISTWRT, ANGWRT
-    else (feature_tier ? t.feature_datums : t.datums).push_back(vm.label_name(o.label));
+    if (o.label.prefix == "F" || o.label.prefix == "FA") {
+      t.reference_feature = vm.label_name(o.label);  // DISTWRT, ANGWRT
+    } else if (feature_tier) {
+      t.feature_datums.push_back(vm.label_name(o.label));
+    } else {
+      t.datums.push_back(vm.label_name(o.label));
+      t.datum_conditions.push_back(runtime::MaterialCondition::Rfs);
+    }
   }
   if (t.kind == runtime::ToleranceKind::Compos) {
     // The PATERN tier's modifier is the one before FEATUR.

@@ -59,6 +59,9 @@ struct ToleranceSpec {
   DistanceExtent extent = DistanceExtent::Average;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced (COMPOS: the PATERN tier's)
+  /// POS: each datum's material condition (`DAT(B),MMC`), one per `datums`; empty: all RFS. A
+  /// datum feature of size at MMC or LMC lets the frame shift (docs/tolerances.md "Datum shift").
+  std::vector<MaterialCondition> datum_conditions;
   /// COMPOS: the FEATUR tier (the feature-relating zone), its modifier and its datums, which
   /// orient the pattern and never locate it (ASME Y14.5-2018 10.5.1).
   double feature_zone = 0;
