@@ -404,8 +404,8 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
   return bonus_mm;
 }
 
-// Datum shift (ASME Y14.5-2018 7.11.7, ISO 2692:2021 annex on the maximum material requirement
-// applied to datums): a datum feature of size referenced at MMC (LMC) that departs from that size
+// Datum shift (ASME Y14.5: a datum feature referenced at its maximum material boundary; ISO 2692:
+// the maximum material requirement applied to a datum feature): a datum feature of size referenced at MMC (LMC) that departs from that size
 // lets the datum reference frame move by half the departure, here a translation normal to the
 // datum's axis. For one feature the best shift takes up to that much off the deviation's
 // component across the datum's axis: |d_perp| -> max(0, |d_perp| - departure / 2). Only the first
