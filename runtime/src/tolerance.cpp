@@ -381,21 +381,28 @@ tl::expected<Vec3, std::string> position_point(const Geometry& nominal, const Ge
   return Vec3(actual.position + (n->dot(nominal.position - actual.position) / cos_a) * *axis);
 }
 
+/// The features of size a material condition applies to (POS's bonus, a datum's shift).
+constexpr Types k_material_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
+
+/// How far a feature of size as made departs from its MMC (LMC) size, taken as the nominal
+/// diameter (a tolerance carries no size limits): a hole grows away from MMC, a boss shrinks; 0
+/// beyond that size.
+double departure_from(MaterialCondition condition, const Geometry& nominal, const Geometry& actual) {
+  const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
+  const double away_from_mmc = nominal.side == Side::Inner ? growth_mm : -growth_mm;
+  return std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
+}
+
 // The MMC or LMC bonus of a position zone: the actual size's departure from that material
 // condition, taken at the nominal diameter (the spec carries no size limits).
 tl::expected<double, std::string> material_bonus(MaterialCondition condition, const Geometry& nominal,
                                                  const Geometry& actual, const ReportUnits& units, ToleranceResult& result) {
   if (condition == MaterialCondition::Rfs) return 0.0;
-  static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
   const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
-  if (!is_one_of(nominal.type, k_sized))
-    return Error(fmt::format("{} applies to {}, not to {} {}", modifier, type_list(k_sized),
+  if (!is_one_of(nominal.type, k_material_sized))
+    return Error(fmt::format("{} applies to {}, not to {} {}", modifier, type_list(k_material_sized),
                              article(dmis_word(nominal.type)), dmis_word(nominal.type)));
-  // A hole grows away from MMC, a boss shrinks; a feature beyond that size earns no bonus.
-  const bool inner = nominal.side == Side::Inner;
-  const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
-  const double away_from_mmc = inner ? growth_mm : -growth_mm;
-  const double bonus_mm = std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
+  const double bonus_mm = departure_from(condition, nominal, actual);
   add_note(result, fmt::format("{} bonus {}: actual diameter {} against the {} size, taken "
                                "as the nominal diameter {} (the tolerance has no size limits)",
                                modifier, length_text(bonus_mm, units), length_text(actual.diameter_mm, units), modifier,
@@ -412,14 +419,13 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
 // datum of size with a modifier shifts; the rotation a further one would allow is not taken.
 void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& context, Vec3& deviation,
                        ToleranceResult& result) {
-  static constexpr Types k_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
   bool shifted = false;
   for (std::size_t i = 0; i < spec.datum_conditions.size() && i < context.datums.size(); ++i) {
     const MaterialCondition condition = spec.datum_conditions[i];
     if (condition == MaterialCondition::Rfs || !context.datums[i]) continue;
     const Datum& datum = *context.datums[i];
     const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
-    if (!is_one_of(datum.nominal.type, k_sized)) {
+    if (!is_one_of(datum.nominal.type, k_material_sized)) {
       add_note(result, fmt::format("DAT({}) at {}: a {} has no size, so no datum shift", datum.label, modifier,
                                    dmis_word(datum.nominal.type)));
       continue;
@@ -429,11 +435,7 @@ void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& contex
       continue;
     }
     shifted = true;
-    // A hole grows away from MMC, a boss shrinks (the nominal size taken as both limits, as for
-    // the feature's own bonus).
-    const double growth = datum.geometry.diameter_mm - datum.nominal.diameter_mm;
-    const double away_from_mmc = datum.nominal.side == Side::Inner ? growth : -growth;
-    const double departure = std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
+    const double departure = departure_from(condition, datum.nominal, datum.geometry);
     const double allowed = departure / 2;
     Vec3 across = deviation;
     if (datum.nominal.type != FeatureType::Sphere) {
