@@ -257,7 +257,15 @@ TEST(ShopPrograms, MacroLibrariesAsModusWritesThem) {
   const auto* p = report(*frames.session, "P");
   ASSERT_TRUE(p);
   EXPECT_EQ(p->frame, "D1");
-  EXPECT_TRUE(check("DMISMN/'t', 05.2\nRECALL/DA(NOWHERE)\nENDFIL\n").has("coordinate system DA(NOWHERE) is not defined"));
+  // A system nothing in the program defines may be the CMM software's (RationalDMIS recalls
+  // D(MAC)): a warning leniently, the run stopping at it; --strict: an error.
+  const std::string recall_unknown = "DMISMN/'t', 05.2\nTEXT/OPER,'before'\nRECALL/D(MAC)\nTEXT/OPER,'after'\nENDFIL\n";
+  EXPECT_TRUE(check(recall_unknown).has("3:8: warning: coordinate system D(MAC) is not defined in this program"));
+  EXPECT_TRUE(check(recall_unknown, true).has("3:8: error: coordinate system D(MAC) is not defined"));
+  const auto stopped = run(recall_unknown);
+  EXPECT_NE(stopped.status, ExecStatus::Finished);
+  EXPECT_EQ(operator_texts(stopped), (std::vector<std::string>{"before"}));
+  EXPECT_NE(stopped.diagnostics.find("run.dmi:3:"), std::string::npos) << stopped.diagnostics;
 
   // A library file (FILNAM then DMISMD: no "does not start with DMISMN") declared by EXTFIL, its
   // macro called both ways; the file named in the call itself also works.
