@@ -138,17 +138,13 @@ tl::expected<SlotFit, FitFailure> fit_slot(const std::vector<Eigen::Vector2d>& b
   SlotFit fit;
   fit.outline = s;
   fit.iterations = out.iterations;
-  double lo = 0, hi = 0, squares = 0;
-  for (std::size_t i = 0; i < ball_centres.size(); ++i) {
-    const double e = distance(s, ball_centres[i]).value - model.offset_mm;
-    const double residual = inner ? -e : e;
-    fit.residuals_mm.push_back(residual);
-    lo = i == 0 ? residual : std::min(lo, residual);
-    hi = i == 0 ? residual : std::max(hi, residual);
-    squares += residual * residual;
+  for (const auto& c : ball_centres) {
+    const double e = distance(s, c).value - model.offset_mm;
+    fit.residuals_mm.push_back(inner ? -e : e);
   }
-  fit.rms_mm = std::sqrt(squares / static_cast<double>(ball_centres.size()));
-  fit.form_mm = hi - lo;
+  const auto figures = detail::residual_figures(fit.residuals_mm);
+  fit.rms_mm = figures.rms_mm;
+  fit.form_mm = figures.form_mm;
   return fit;
 }
 

@@ -105,17 +105,13 @@ tl::expected<TorusFit, FitFailure> fit_torus(const std::vector<Vec3>& ball_centr
   TorusFit fit;
   fit.torus = t;
   fit.iterations = out.iterations;
-  double lo = 0, hi = 0, squares = 0;
-  for (std::size_t i = 0; i < ball_centres.size(); ++i) {
-    const double e = distance_from_centre_circle(t, ball_centres[i]) - 0.5 * t.minor_diameter_mm - model.offset_mm;
-    const double residual = inner ? -e : e;
-    fit.residuals_mm.push_back(residual);
-    lo = i == 0 ? residual : std::min(lo, residual);
-    hi = i == 0 ? residual : std::max(hi, residual);
-    squares += residual * residual;
+  for (const Vec3& c : ball_centres) {
+    const double e = distance_from_centre_circle(t, c) - 0.5 * t.minor_diameter_mm - model.offset_mm;
+    fit.residuals_mm.push_back(inner ? -e : e);
   }
-  fit.rms_mm = std::sqrt(squares / static_cast<double>(ball_centres.size()));
-  fit.form_mm = hi - lo;
+  const auto figures = detail::residual_figures(fit.residuals_mm);
+  fit.rms_mm = figures.rms_mm;
+  fit.form_mm = figures.form_mm;
   return fit;
 }
 

@@ -4,10 +4,27 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <Eigen/Dense>
 
 namespace metron::fitting::detail {
+
+/// The root mean square and the range (max - min: the form) of a fit's residuals.
+struct ResidualFigures {
+  double rms_mm = 0;
+  double form_mm = 0;
+};
+inline ResidualFigures residual_figures(const std::vector<double>& residuals_mm) {
+  if (residuals_mm.empty()) return {};
+  double lo = residuals_mm.front(), hi = lo, squares = 0;
+  for (const double r : residuals_mm) {
+    lo = std::min(lo, r);
+    hi = std::max(hi, r);
+    squares += r * r;
+  }
+  return {std::sqrt(squares / static_cast<double>(residuals_mm.size())), hi - lo};
+}
 
 /// Result of one Levenberg-Marquardt run.
 struct LmOutcome {
