@@ -342,11 +342,12 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       const Vec3 v = a.cross(u);
       const double tube = 0.5 * g.minor_diameter_mm;
       static constexpr double k_ring_deg[3] = {0, 45, 90}, k_groove_deg[3] = {200, 270, 340};
+      const double* tube_angles_deg = inner ? k_groove_deg : k_ring_deg;
       std::vector<PlannedStep> probes;
       double top = -std::numeric_limits<double>::infinity();
       for (int i = 0; i < n; ++i) {
         const double az = 2.0 * std::numbers::pi * i / n;
-        const double t = (inner ? k_groove_deg : k_ring_deg)[i % 3] * std::numbers::pi / 180.0;
+        const double t = tube_angles_deg[i % 3] * std::numbers::pi / 180.0;
         const Vec3 radial_dir = std::cos(az) * u + std::sin(az) * v;
         const Vec3 out_of_tube = std::cos(t) * radial_dir + std::sin(t) * a;
         const Vec3 p = g.position + r * radial_dir + tube * out_of_tube;

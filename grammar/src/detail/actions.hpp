@@ -113,7 +113,7 @@ template <>
 struct action<rules::label_ref_name> {
   template <typename In>
   static void apply(const In& in, Builder& b) {
-    b.labels.push_back({in.string(), {}});
+    b.labels.push_back({in.string(), {}, {}});
   }
 };
 
