@@ -138,13 +138,8 @@ tl::expected<SlotFit, FitFailure> fit_slot(const std::vector<Eigen::Vector2d>& b
   SlotFit fit;
   fit.outline = s;
   fit.iterations = out.iterations;
-  for (const auto& c : ball_centres) {
-    const double e = distance(s, c).value - model.offset_mm;
-    fit.residuals_mm.push_back(inner ? -e : e);
-  }
-  const auto figures = detail::residual_figures(fit.residuals_mm);
-  fit.rms_mm = figures.rms_mm;
-  fit.form_mm = figures.form_mm;
+  detail::fill_residuals(fit, ball_centres, inner,
+                         [&](const Eigen::Vector2d& c) { return distance(s, c).value - model.offset_mm; });
   return fit;
 }
 

@@ -105,13 +105,9 @@ tl::expected<TorusFit, FitFailure> fit_torus(const std::vector<Vec3>& ball_centr
   TorusFit fit;
   fit.torus = t;
   fit.iterations = out.iterations;
-  for (const Vec3& c : ball_centres) {
-    const double e = distance_from_centre_circle(t, c) - 0.5 * t.minor_diameter_mm - model.offset_mm;
-    fit.residuals_mm.push_back(inner ? -e : e);
-  }
-  const auto figures = detail::residual_figures(fit.residuals_mm);
-  fit.rms_mm = figures.rms_mm;
-  fit.form_mm = figures.form_mm;
+  detail::fill_residuals(fit, ball_centres, inner, [&](const Vec3& c) {
+    return distance_from_centre_circle(t, c) - 0.5 * t.minor_diameter_mm - model.offset_mm;
+  });
   return fit;
 }
 

@@ -26,6 +26,19 @@ inline ResidualFigures residual_figures(const std::vector<double>& residuals_mm)
   return {std::sqrt(squares / static_cast<double>(residuals_mm.size())), hi - lo};
 }
 
+/// Fills a fit's residuals (+ outside the material: `offset_distance(c)` is the ball centre's
+/// distance beyond its offset surface, negated for an inner feature) and its RMS and form.
+template <class Fit, class Point, class OffsetDistance>
+void fill_residuals(Fit& fit, const std::vector<Point>& ball_centres, bool inner, OffsetDistance offset_distance) {
+  for (const Point& c : ball_centres) {
+    const double e = offset_distance(c);
+    fit.residuals_mm.push_back(inner ? -e : e);
+  }
+  const ResidualFigures figures = residual_figures(fit.residuals_mm);
+  fit.rms_mm = figures.rms_mm;
+  fit.form_mm = figures.form_mm;
+}
+
 /// Result of one Levenberg-Marquardt run.
 struct LmOutcome {
   bool converged = false;  ///< reached a minimum to the step tolerance (or to machine precision)
