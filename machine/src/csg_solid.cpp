@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/machine/csg_solid.hpp"
 
+#include "metron/stdlib/geometry/ellipse.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -13,7 +15,7 @@ namespace {
 
 constexpr double deg = std::numbers::pi / 180.0;
 
-enum class Kind { HalfSpace, Cylinder, CappedCylinder, Sphere, Cone, Torus };
+enum class Kind { HalfSpace, Cylinder, CappedCylinder, Sphere, Cone, Torus, EllipticCylinder };
 
 // A primitive ready to evaluate: distances are computed in its (deviated) local frame.
 struct Prim {
@@ -22,7 +24,8 @@ struct Prim {
   Frame part_to_local = Frame::Identity();
   double radius = 0;          // cylinder, sphere; torus: the centre circle's
   double tube_radius = 0;     // torus
-  double length = 0;          // capped cylinder
+  double length = 0;          // capped cylinder, capped elliptic cylinder (0: infinite)
+  double semi_major = 0, semi_minor = 0;  // elliptic cylinder, along local x and y
   double sin_a = 0, cos_a = 1, tan_a = 0;  // cone
   double size_term = 0;       // subtracted from the distance
   int lobes = 0;
@@ -50,6 +53,17 @@ struct Prim {
         break;
       }
       case Kind::Torus: d = std::hypot(rho - radius, q.z()) - tube_radius; break;  // exact
+      case Kind::EllipticCylinder: {
+        // The exact section distance, extruded and capped as the capped cylinder above.
+        const double dr = geometry::ellipse_foot(semi_major, semi_minor, {q.x(), q.y()}).signed_distance;
+        if (length == 0) {
+          d = dr;
+          break;
+        }
+        const double dz = std::abs(q.z() - length / 2) - length / 2;
+        d = std::min(std::max(dr, dz), 0.0) + std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+        break;
+      }
     }
     d -= size_term;
     if (lobe_amplitude != 0) d -= lobing(q, rho);
@@ -105,6 +119,13 @@ Prim compile_primitive(const csg::Primitive& p, const csg::Deviation* dev, doubl
       out.radius = s.major_diameter_mm / 2;
       out.tube_radius = s.minor_diameter_mm / 2;
       out.size_term = size / 2;
+    } else if constexpr (std::is_same_v<T, csg::EllipticCylinder>) {
+      // A size deviation changes both diameters: the machined section stays an ellipse.
+      out.kind = Kind::EllipticCylinder;
+      out.semi_major = (s.major_diameter_mm + size) / 2;
+      out.semi_minor = (s.minor_diameter_mm + size) / 2;
+      out.radius = out.semi_minor;  // lobing's reference
+      out.length = s.length_mm.value_or(0);
     } else {
       out.kind = Kind::Cone;
       const double a = s.half_angle_deg * deg;
@@ -206,16 +227,19 @@ std::string CsgSolid::feature_at(const Vec3& p) const {
 
 Frame csg::local_frame(const Primitive& primitive) {
   Vec3 origin = Vec3::Zero(), z = Vec3::UnitZ();
+  std::optional<Vec3> major;
   std::visit([&](const auto& s) {
     using T = std::decay_t<decltype(s)>;
     if constexpr (std::is_same_v<T, HalfSpace>) origin = s.point, z = s.normal;
     else if constexpr (std::is_same_v<T, Cylinder>) origin = s.point, z = s.axis;
     else if constexpr (std::is_same_v<T, Sphere>) origin = s.centre;
     else if constexpr (std::is_same_v<T, Torus>) origin = s.centre, z = s.axis;
+    else if constexpr (std::is_same_v<T, EllipticCylinder>) origin = s.point, z = s.axis, major = s.major_axis;
     else origin = s.apex, z = s.axis;
   }, primitive.shape);
   z.normalize();
-  const Vec3 ref = std::abs(z.x()) <= 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  // Local x: an elliptic cylinder's major axis; otherwise any direction normal to z.
+  const Vec3 ref = major ? *major : std::abs(z.x()) <= 0.9 ? Vec3::UnitX() : Vec3::UnitY();
   const Vec3 x = (ref - ref.dot(z) * z).normalized();
   Frame f = Frame::Identity();
   f.linear().col(0) = x;

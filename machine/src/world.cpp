@@ -270,8 +270,21 @@ csg::Node parse_node(const json& j, const std::string& ptr) {
     if (t.minor_diameter_mm >= t.major_diameter_mm)
       fail(o.at("minor_diameter_mm"), "the tube's diameter must be less than the centre circle's (a ring with a hole)");
     n.primitive.shape = t;
+  } else if (type == "elliptic_cylinder") {
+    csg::EllipticCylinder e;
+    e.point = vec3(o.required("point"), o.at("point"));
+    e.axis = unit(o.required("axis"), o.at("axis"));
+    e.major_axis = unit(o.required("major_axis"), o.at("major_axis"));
+    if (std::abs(e.major_axis.dot(e.axis)) > 1e-6) fail(o.at("major_axis"), "the major axis must be normal to the axis");
+    e.major_diameter_mm = positive(o.required("major_diameter_mm"), o.at("major_diameter_mm"));
+    e.minor_diameter_mm = positive(o.required("minor_diameter_mm"), o.at("minor_diameter_mm"));
+    if (e.minor_diameter_mm > e.major_diameter_mm)
+      fail(o.at("minor_diameter_mm"), "the minor diameter must not exceed the major diameter");
+    o.read("length_mm", [&](const json& lj, const std::string& lp) { e.length_mm = positive(lj, lp); });
+    n.primitive.shape = e;
   } else {
-    fail(o.at("type"), fmt::format("unknown primitive type '{}' (expected half_space, cylinder, sphere, cone or torus)", type));
+    fail(o.at("type"), fmt::format("unknown primitive type '{}' (expected half_space, cylinder, sphere, cone, torus or "
+                                   "elliptic_cylinder)", type));
   }
   o.finish();
   return n;

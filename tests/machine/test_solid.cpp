@@ -19,7 +19,8 @@ using namespace metron::machine;
 
 namespace {
 
-csg::Node leaf(std::string name, std::variant<csg::HalfSpace, csg::Cylinder, csg::Sphere, csg::Cone, csg::Torus> shape) {
+csg::Node leaf(std::string name,
+               std::variant<csg::HalfSpace, csg::Cylinder, csg::Sphere, csg::Cone, csg::Torus, csg::EllipticCylinder> shape) {
   csg::Node n;
   n.primitive = {std::move(name), std::move(shape)};
   return n;
@@ -83,6 +84,30 @@ TEST(Solid, TorusDistanceIsTheDistanceFromItsCentreCircleLessTheTube) {
       nearest = std::min(nearest, (p - centre - 12 * (std::cos(u) * e1 + std::sin(u) * e2)).norm());
     }
     EXPECT_NEAR(ring.signed_distance(p), nearest - 3, 1e-6) << p.transpose();
+  }
+}
+
+TEST(Solid, EllipticCylinderDistanceIsTheDistanceFromItsSection) {
+  // An elliptic boss, capped, on a tilted axis with its major axis along a chosen direction; the
+  // oracle samples the section densely, and the caps as the capped cylinder's.
+  const Vec3 point(1, 2, 3), axis = Vec3(0.2, -0.1, 1).normalized();
+  const Vec3 major = axis.cross(Vec3::UnitY()).normalized(), minor = axis.cross(major);
+  const CsgSolid boss(leaf("E", csg::EllipticCylinder{point, axis, major, 30, 16, 10.0}), Frame::Identity());
+  const CsgSolid shaft(leaf("E", csg::EllipticCylinder{point, axis, major, 30, 16, std::nullopt}), Frame::Identity());
+  for (const Vec3& p : random_points(200, Vec3(-25, -25, -20), Vec3(25, 25, 25))) {
+    const Vec3 q = p - point;
+    const double x = q.dot(major), y = q.dot(minor), z = q.dot(axis);
+    double nearest = 1e300;
+    for (int i = 0; i < 200000; ++i) {
+      const double t = 2 * std::numbers::pi * i / 200000;
+      nearest = std::min(nearest, std::hypot(x - 15 * std::cos(t), y - 8 * std::sin(t)));
+    }
+    const double section = (x / 15) * (x / 15) + (y / 8) * (y / 8) < 1 ? -nearest : nearest;
+    EXPECT_NEAR(shaft.signed_distance(p), section, 1e-6) << p.transpose();
+    const double dz = std::abs(z - 5) - 5;
+    EXPECT_NEAR(boss.signed_distance(p),
+                std::min(std::max(section, dz), 0.0) + std::hypot(std::max(section, 0.0), std::max(dz, 0.0)), 1e-6)
+        << p.transpose();
   }
 }
 

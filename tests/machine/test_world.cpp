@@ -118,7 +118,8 @@ TEST(World, ErrorsNameTheFileAndTheJsonPath) {
   EXPECT_EQ(error_of(R"({"machine": {"home_mm": [0, 0, 5000]}})"), "world.json: /machine/home_mm: outside the axis travel");
   EXPECT_EQ(error_of(R"({"machine": {"skip": {}}})"), "world.json: /machine/skip: expected exactly one of 'latched' or 'scanned'");
   EXPECT_EQ(error_of(R"({"part": {"design": {"type": "cylindre"}}})"),
-            "world.json: /part/design/type: unknown primitive type 'cylindre' (expected half_space, cylinder, sphere, cone or torus)");
+            "world.json: /part/design/type: unknown primitive type 'cylindre' (expected half_space, cylinder, sphere, cone, torus or "
+            "elliptic_cylinder)");
   EXPECT_EQ(error_of(R"({"part": {"design": {"union": [{"type": "sphere", "centre": [0, 0, 0]}]}}})"),
             "world.json: /part/design/union/0: missing key 'diameter_mm'");
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"deviations": {"BORE3": {}}}})"),

@@ -48,10 +48,22 @@ struct Torus {
   double minor_diameter_mm = 10;      ///< of the tube, < major_diameter_mm
 };
 
+/// Material within the ellipse of major_diameter along `major_axis` and minor_diameter across
+/// it, swept along `axis` through `point`; infinite, or capped from `point` to
+/// point + length * axis (an elliptic hole or boss).
+struct EllipticCylinder {
+  Vec3 point = Vec3::Zero();          ///< on the axis (the start of the capped cylinder)
+  Vec3 axis = Vec3::UnitZ();          ///< unit
+  Vec3 major_axis = Vec3::UnitX();    ///< unit, normal to `axis`
+  double major_diameter_mm = 20;      ///< along `major_axis`
+  double minor_diameter_mm = 10;      ///< across it, <= major_diameter_mm
+  std::optional<double> length_mm;    ///< capped when set
+};
+
 /// A primitive with the name of the feature it belongs to (empty: unnamed).
 struct Primitive {
   std::string name;                   ///< feature name for deviations and messages (may be empty)
-  std::variant<HalfSpace, Cylinder, Sphere, Cone, Torus> shape;  ///< the geometry, part coordinates
+  std::variant<HalfSpace, Cylinder, Sphere, Cone, Torus, EllipticCylinder> shape;  ///< the geometry, part coordinates
 };
 
 /// A node of the tree: a primitive or a boolean operation on the children.
@@ -88,7 +100,8 @@ struct Deviation {
   Vec3 offset_mm = Vec3::Zero();      ///< translation, in PART coordinates
   Vec2 tilt_deg = Vec2::Zero();       ///< rotations about the local x then the local y axis, about the local origin
   /// Size: diameter change for cylinders, spheres and cones, the tube's diameter change for a
-  /// torus; material added along the outward normal for half-spaces.
+  /// torus, the change of both diameters of an elliptic cylinder; material added along the
+  /// outward normal for half-spaces.
   double size_mm = 0;
   std::optional<Lobing> lobing;       ///< cylinders, spheres, cones, tori (about the axis)
   std::optional<Waviness> waviness;   ///< half-spaces
