@@ -23,7 +23,7 @@ const std::vector<WordEntry<runtime::FeatureType>>& vocabulary() {
   using T = runtime::FeatureType;
   static const auto rows =
       from_runtime({T::Point, T::Plane, T::Line, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::ParallelPlanes,
-                    T::GenericSurface, T::GenericCurve, T::ClosedSlot, T::Torus});
+                    T::GenericSurface, T::GenericCurve, T::ClosedSlot, T::Torus, T::Ellipse});
   return rows;
 }
 

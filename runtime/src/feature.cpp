@@ -18,6 +18,7 @@ const char* dmis_word(FeatureType type) {
     case FeatureType::GenericCurve: return "GCURVE";
     case FeatureType::ClosedSlot: return "CPARLN";
     case FeatureType::Torus: return "TORUS";
+    case FeatureType::Ellipse: return "ELLIPS";
   }
   return "POINT";
 }

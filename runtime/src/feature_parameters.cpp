@@ -7,7 +7,7 @@ namespace metron::runtime {
 bool has_side(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
          type == FeatureType::Cylinder || type == FeatureType::Cone || type == FeatureType::ParallelPlanes ||
-         type == FeatureType::ClosedSlot || type == FeatureType::Torus;
+         type == FeatureType::ClosedSlot || type == FeatureType::Torus || type == FeatureType::Ellipse;
 }
 
 std::size_t feature_word_count(FeatureType type) {
@@ -72,6 +72,13 @@ std::vector<FeatureParameter> feature_parameters(const Geometry& g) {
       break;
     case FeatureType::Torus:
       add(g.direction, ParameterUnit::Cosine);
+      length(g.diameter_mm);
+      length(g.minor_diameter_mm);
+      break;
+    case FeatureType::Ellipse:
+      // As its FEAT: the normal of its plane, its major axis, the major and minor diameters.
+      add(g.direction, ParameterUnit::Cosine);
+      add(g.slot_axis, ParameterUnit::Cosine);
       length(g.diameter_mm);
       length(g.minor_diameter_mm);
       break;

@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
+#include "metron/stdlib/fitting/ellipse_fit.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/slot_fit.hpp"
 #include "metron/stdlib/fitting/torus_fit.hpp"
@@ -31,6 +32,7 @@ fitting::Shape fit_shape(FeatureType type) {
     case FeatureType::ParallelPlanes:  // fitted here, below
     case FeatureType::ClosedSlot:
     case FeatureType::Torus:
+    case FeatureType::Ellipse:
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: return fitting::Shape::Plane;
   }
@@ -133,6 +135,36 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const
   return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
 }
 
+// ELLIPS: the ellipse fitted in its nominal plane (stdlib fitting/ellipse_fit.hpp) from the ball
+// centres projected onto it; the normal and the plane's height stay nominal, as a CPARLN's.
+tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_ellipse(const Geometry& nominal,
+    const std::vector<MeasuredPoint>& points) {
+  const Vec3 n = nominal.direction.normalized();
+  const Vec3 u = (nominal.slot_axis - nominal.slot_axis.dot(n) * n).normalized();
+  const Vec3 v = n.cross(u);
+  std::vector<Eigen::Vector2d> centres;
+  for (const auto& p : points) {
+    const Vec3 d = p.centre_mm - nominal.position;
+    centres.emplace_back(d.dot(u), d.dot(v));
+  }
+  fitting::EllipseOutline start;
+  start.major_diameter_mm = nominal.diameter_mm;
+  start.minor_diameter_mm = nominal.minor_diameter_mm;
+  const auto fit = fitting::fit_ellipse(centres, points.front().ball_radius_mm, nominal.side != Side::Outer, start);
+  if (!fit)
+    return tl::unexpected(fmt::format("cannot fit an ELLIPS to {} point{}: {}{}", points.size(),
+                                      points.size() == 1 ? "" : "s", fitting::to_string(fit.error()),
+                                      fit.error() == fitting::FitFailure::TooFewPoints ? " (it needs 5)" : ""));
+  const fitting::EllipseOutline& e = fit->outline;
+  Geometry g = nominal;
+  g.position = nominal.position + e.centre.x() * u + e.centre.y() * v;
+  g.direction = n;
+  g.slot_axis = std::cos(e.angle_rad) * u + std::sin(e.angle_rad) * v;
+  g.diameter_mm = e.major_diameter_mm;
+  g.minor_diameter_mm = e.minor_diameter_mm;
+  return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
+}
+
 // TORUS: all seven parameters from the ball centres (stdlib fitting/torus_fit.hpp), started
 // from the nominal.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_torus(const Geometry& nominal,
@@ -190,6 +222,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
   if (nominal.type == FeatureType::ParallelPlanes) return fit_parallel_planes(nominal, points);
   if (nominal.type == FeatureType::ClosedSlot) return fit_closed_slot(nominal, points);
   if (nominal.type == FeatureType::Torus) return fit_torus(nominal, points);
+  if (nominal.type == FeatureType::Ellipse) return fit_ellipse(nominal, points);
   if (is_point_set(nominal.type)) return point_set_actual(nominal, points);
   std::vector<Vec3> centres;
   fitting::Compensation comp;
@@ -247,6 +280,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     case FeatureType::ParallelPlanes:
     case FeatureType::ClosedSlot:
     case FeatureType::Torus:
+    case FeatureType::Ellipse:
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: break;  // above
     case FeatureType::Cone: {

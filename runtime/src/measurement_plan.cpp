@@ -6,6 +6,8 @@
 #include <limits>
 #include <numbers>
 
+#include "metron/stdlib/geometry/ellipse.hpp"
+
 namespace metron::runtime {
 namespace {
 
@@ -35,19 +37,23 @@ Vec3 radial(const Vec3& p, const Vec3& c, const Vec3& axis) {
 // Appends a ring of probes around an axis. An OUTER ring walks around outside the material
 // (a straight chord between two approach points would cut through a boss); `last_angle` carries
 // the angle of the previous probe of the same feature so ring-to-ring moves walk around too.
+// Walks round a boss from angle `from` to angle `to` on a polygon of legs at most 22.5 deg whose
+// sides stay beyond `radius` (the walk radius is the polygon's, enlarged by 1/cos(11.25 deg)).
+void walk_around(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& u, const Vec3& v, double radius,
+                 double from, double to) {
+  const double walk_radius = radius / std::cos(std::numbers::pi / 16) + 0.5;
+  const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(to - from) / (std::numbers::pi / 8))));
+  for (int k = 0; k <= legs; ++k) {
+    const double b = from + (to - from) * k / legs;
+    steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), Vec3::UnitZ()});
+  }
+}
+
 void ring_at(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& u, const Vec3& v, double radius,
              const std::vector<double>& angles_rad, bool inner, double approach_mm, std::optional<double>& last_angle) {
-  const double walk_radius = (radius + approach_mm) / std::cos(std::numbers::pi / 16) + 0.5;
   for (const double a : angles_rad) {
     const Vec3 dir = std::cos(a) * u + std::sin(a) * v;
-    if (!inner && last_angle) {
-      const double prev = *last_angle;
-      const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(a - prev) / (std::numbers::pi / 8))));
-      for (int k = 0; k <= legs; ++k) {
-        const double b = prev + (a - prev) * k / legs;
-        steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), Vec3::UnitZ()});
-      }
-    }
+    if (!inner && last_angle) walk_around(steps, centre, u, v, radius + approach_mm, *last_angle, a);
     const Vec3 surface = centre + radius * dir;
     steps.push_back({PlannedStep::Kind::Probe, surface, inner ? Vec3(-dir) : dir});
     last_angle = a;
@@ -114,6 +120,7 @@ int minimum_points(FeatureType type) {
     case FeatureType::Cylinder: return 5;
     case FeatureType::Cone: return 6;
     case FeatureType::Torus: return 7;  // centre, axis (2), two diameters
+    case FeatureType::Ellipse: return 5;  // centre (2), angle, two diameters
   }
   return 1;
 }
@@ -134,6 +141,14 @@ Vec3 nominal_normal_at(const Geometry& g, const Vec3& point) {
     }
     case FeatureType::Line: return line_surface_normal(g);
     case FeatureType::ClosedSlot: return sign * slot_outward(g, point);
+    case FeatureType::Ellipse: {
+      // The in-plane normal of the nominal ellipse at the foot of `point`.
+      const SlotFrame f = slot_frame(g);
+      const Vec3 d = point - g.position;
+      const Eigen::Vector2d m =
+          geometry::ellipse_foot(0.5 * g.diameter_mm, 0.5 * g.minor_diameter_mm, {d.dot(f.a), d.dot(f.b)}).normal;
+      return sign * (m.x() * f.a + m.y() * f.b);
+    }
     case FeatureType::Circle:
     case FeatureType::Arc:
     case FeatureType::Cylinder: return sign * radial(point, g.position, axis);
@@ -263,6 +278,31 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
           }
           steps.push_back({PlannedStep::Kind::Probe, p, nominal_normal_at(g, p)});
         }
+      }
+      break;
+    }
+    case FeatureType::Ellipse: {
+      // Like a circle, DEPTH below the nominal centre, at equal steps of the ellipse's parameter
+      // (x = a cos t along the major axis, y = b sin t), half a step off the axes; round a boss
+      // the probe walks outside the circle about its major diameter.
+      const SlotFrame f = slot_frame(g);
+      const Vec3 c = g.position - probe.depth_mm * (f.n.dot(up) >= 0 ? up : Vec3(-up));
+      const int n = std::max(count > 0 ? count : 8, minimum_points(g.type));
+      const double a = 0.5 * g.diameter_mm, b = 0.5 * g.minor_diameter_mm;
+      std::optional<double> last;
+      for (int i = 0; i < n; ++i) {
+        const double t = 2.0 * std::numbers::pi * (i + 0.5) / n;
+        const Vec3 p = c + a * std::cos(t) * f.a + b * std::sin(t) * f.b;
+        const Vec3 m = (b * std::cos(t) * f.a + a * std::sin(t) * f.b).normalized();
+        if (!inner) {
+          // The polar angle of the approach point, unwrapped to increase with t.
+          const Vec3 q = p + probe.approach_mm * m - c;
+          double phi = std::atan2(q.dot(f.b), q.dot(f.a));
+          if (last) phi = *last + std::remainder(phi - *last, 2.0 * std::numbers::pi);
+          if (last) walk_around(steps, c, f.a, f.b, a + probe.approach_mm, *last, phi);
+          last = phi;
+        }
+        steps.push_back({PlannedStep::Kind::Probe, p, inner ? Vec3(-m) : m});
       }
       break;
     }

@@ -28,7 +28,13 @@ using nlohmann::json;
 bool has_direction(FeatureType type) { return type != FeatureType::Sphere; }
 bool has_diameter(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
-         type == FeatureType::Cylinder || type == FeatureType::Torus;  // a torus: its major diameter
+         type == FeatureType::Cylinder || type == FeatureType::Torus ||  // a torus: its major diameter
+         type == FeatureType::Ellipse;                                      // an ellipse: its major diameter
+}
+bool has_minor_diameter(FeatureType type) { return type == FeatureType::Torus || type == FeatureType::Ellipse; }
+/// CPARLN: its long axis; ELLIPS: its major axis.
+bool has_in_plane_axis(FeatureType type) {
+  return type == FeatureType::ClosedSlot || type == FeatureType::Ellipse;
 }
 bool has_length(const Geometry& g) {
   return g.type == FeatureType::Cylinder || g.type == FeatureType::Cone || g.type == FeatureType::ClosedSlot ||
@@ -98,11 +104,11 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
   else if (has_diameter(nominal.type))
     rows.push_back(
         {"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
-  if (nominal.type == FeatureType::Torus)
+  if (has_minor_diameter(nominal.type))
     rows.push_back({"MD", Unit::Millimetre, nominal.minor_diameter_mm,
                     act([](const Geometry& g) { return g.minor_diameter_mm; })});
-  if (nominal.type == FeatureType::ClosedSlot) {
-    const char* axis_cosines[] = {"AI", "AJ", "AK"};  // the long axis
+  if (has_in_plane_axis(nominal.type)) {
+    const char* axis_cosines[] = {"AI", "AJ", "AK"};  // the long (major) axis
     for (int i = 0; i < 3; ++i)
       rows.push_back({axis_cosines[i], Unit::Cosine, nominal.slot_axis[i],
                       act([i](const Geometry& g) { return g.slot_axis[i]; })});
@@ -219,7 +225,8 @@ json geometry_json(const Geometry& g) {
     j["bounded"] = g.bounded;
   }
   if (has_diameter(g.type)) j["diameter_mm"] = number(g.diameter_mm);
-  if (g.type == FeatureType::Torus) j["minor_diameter_mm"] = number(g.minor_diameter_mm);
+  if (has_minor_diameter(g.type)) j["minor_diameter_mm"] = number(g.minor_diameter_mm);
+  if (g.type == FeatureType::Ellipse) j["major_axis"] = vector(g.slot_axis);
   if (g.type == FeatureType::ClosedSlot) {
     j["slot_axis"] = vector(g.slot_axis);
     j["ends"] = dmis_word(g.slot_ends);
@@ -240,8 +247,9 @@ json deviation_json(const Geometry& nominal, const Geometry& actual) {
   if (has_direction(nominal.type)) j["direction"] = vector(actual.direction - nominal.direction);
   if (nominal.type == FeatureType::Line) j["normal2"] = vector(actual.normal2 - nominal.normal2);
   if (has_diameter(nominal.type)) j["diameter_mm"] = number(actual.diameter_mm - nominal.diameter_mm);
-  if (nominal.type == FeatureType::Torus)
+  if (has_minor_diameter(nominal.type))
     j["minor_diameter_mm"] = number(actual.minor_diameter_mm - nominal.minor_diameter_mm);
+  if (nominal.type == FeatureType::Ellipse) j["major_axis"] = vector(actual.slot_axis - nominal.slot_axis);
   if (nominal.type == FeatureType::ClosedSlot) j["slot_axis"] = vector(actual.slot_axis - nominal.slot_axis);
   if (nominal.type == FeatureType::ParallelPlanes || nominal.type == FeatureType::ClosedSlot)
     j["width_mm"] = number(actual.width_mm - nominal.width_mm);

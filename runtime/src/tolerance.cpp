@@ -13,6 +13,7 @@
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/datum_frame.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
+#include "metron/stdlib/geometry/ellipse.hpp"
 
 namespace metron::runtime {
 
@@ -83,6 +84,7 @@ const char* lowercase_name(FeatureType type) {
     case FeatureType::GenericCurve: return "GCURVE";
     case FeatureType::ClosedSlot: return "closed slot (CPARLN)";
     case FeatureType::Torus: return "torus";
+    case FeatureType::Ellipse: return "ellipse";
   }
   return "point";
 }
@@ -456,7 +458,8 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
                      ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
                                     FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                    FeatureType::Line,   FeatureType::ClosedSlot, FeatureType::Torus};
+                                    FeatureType::Line,   FeatureType::ClosedSlot, FeatureType::Torus,
+                                    FeatureType::Ellipse};
   const Geometry& nominal = feature.nominal;
   if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
   const auto actual_or = actual_of(feature);
@@ -756,6 +759,15 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
       outward = std::hypot((v - h * n).norm() - radius_mm, h) - 0.5 * nominal.minor_diameter_mm;
       break;
     }
+    case FeatureType::Ellipse: {
+      // In the ellipse's plane (the point projected along its normal): the exact distance from
+      // the nominal ellipse, + outside it.
+      const Vec3 major = (nominal.slot_axis - nominal.slot_axis.dot(n) * n).normalized();
+      outward = geometry::ellipse_foot(radius_mm, 0.5 * nominal.minor_diameter_mm,
+                                       {v.dot(major), v.dot(n.cross(major))})
+                    .signed_distance;
+      break;
+    }
     default: break;
   }
   // Outside the material of a bore is toward its axis.
@@ -766,8 +778,9 @@ Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const 
                        ToleranceResult result) {
   static constexpr Types k_surfaces = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
                                        FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                       FeatureType::GenericSurface, FeatureType::Torus};
-  static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc, FeatureType::GenericCurve};
+                                       FeatureType::GenericSurface, FeatureType::Torus, FeatureType::Ellipse};
+  static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc, FeatureType::GenericCurve,
+                                    FeatureType::Ellipse};
   static constexpr Types k_points = {FeatureType::Point};
   const Types types = spec.kind == ToleranceKind::Profl ? k_lines : spec.kind == ToleranceKind::Profp ? k_points : k_surfaces;
   if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
@@ -1088,7 +1101,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line});
     case ToleranceKind::Pos:
-    case ToleranceKind::Compos: return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus});
+    case ToleranceKind::Compos:
+      return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});
     case ToleranceKind::Perp:
     case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
     case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
@@ -1096,8 +1110,9 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
     case ToleranceKind::Crnout:
     case ToleranceKind::Totrun: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere, T::Plane});
-    case ToleranceKind::Profs: return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface, T::Torus});
-    case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve});
+    case ToleranceKind::Profs:
+      return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface, T::Torus, T::Ellipse});
+    case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve, T::Ellipse});
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
     case ToleranceKind::Symmty: return in({T::ParallelPlanes});
     case ToleranceKind::Profp: return in({T::Point});

@@ -819,6 +819,103 @@ TEST(ShopPrograms, ToriAgainstTheMachinedRingAndGroove) {
   EXPECT_TRUE(feat("CART, 0, 0, 0, 0, 0, 1, 30, 6").has("expected INNER or OUTER after the feature type TORUS"));
 }
 
+// FEAT/ELLIPS and FEAT/RCTNGL on programs/worlds/block_ellipse.json, planned by metron (MODE/AUTO):
+// an elliptic pocket, an elliptic boss and a rectangular pocket, each machined off its nominal
+// (the world's hidden deviations). The fits must find the machined shapes; POS and PROFL are
+// checked against values derived by hand: an ellipse moved by o with both semi-axes grown by d
+// moves the point of parameter t (x = a cos t, y = b sin t) by d (cos t, sin t) + o, whose part
+// along the outward normal (b cos t, a sin t) / N is d (b cos^2 t + a sin^2 t) / N + o . n, to
+// first order (+ out of the material: negated in a pocket).
+double ellipse_profile_extreme(double a, double b, double grow, Eigen::Vector2d offset, double angle_deg, int points,
+                               bool inner) {
+  const double angle = angle_deg * std::numbers::pi / 180;
+  const Eigen::Vector2d u(std::cos(angle), std::sin(angle)), v(-u.y(), u.x());
+  double extreme = 0;
+  for (int i = 0; i < points; ++i) {
+    const double t = 2 * std::numbers::pi * (i + 0.5) / points;  // where the plan probes (docs/language.md)
+    const double norm = std::hypot(b * std::cos(t), a * std::sin(t));
+    const Eigen::Vector2d n = (b * std::cos(t) * u + a * std::sin(t) * v) / norm;
+    const double out = grow * (b * std::cos(t) * std::cos(t) + a * std::sin(t) * std::sin(t)) / norm + offset.dot(n);
+    const double deviation = inner ? -out : out;
+    if (std::abs(deviation) > std::abs(extreme)) extreme = deviation;
+  }
+  return extreme;
+}
+
+TEST(ShopPrograms, EllipsesAndRectanglesAgainstTheMachinedPocketsAndBoss) {
+  const std::string text =
+      "DMISMN/'ellipse', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+      "S(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nSNSLCT/S(P1)\nMODE/AUTO\n"
+      "F(POCKET) = FEAT/ELLIPS, INNER, CART, 95, 30, 40, 0, 0, 1, 0.9396926, 0.3420201, 0, 30, 16\n"
+      "MEAS/ELLIPS, F(POCKET), 8\nENDMES\n"
+      "F(EBOSS) = FEAT/ELLIPS, OUTER, CART, 30, 82, 52, 0, 0, 1, 1, 0, 0, 24, 14\nMEAS/ELLIPS, F(EBOSS), 10\nENDMES\n"
+      "F(RECT) = FEAT/RCTNGL, INNER, CART, 145, 50, 40, 0, 0, 1, 0, 1, 0, 20, 12, 10\nMEAS/RCTNGL, F(RECT), 8\nENDMES\n"
+      "T(P) = TOL/POS, 2D, 0.05\nT(L) = TOL/PROFL, -0.02, 0.02\n"
+      "DECL/REAL, V1\nV1 = VALUE/FA(POCKET), SIZE, 2\n"
+      "OUTPUT/FA(POCKET), TA(P), TA(L)\nOUTPUT/FA(EBOSS), TA(P), TA(L)\nOUTPUT/FA(RECT), TA(P)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_ellipse.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  constexpr double tol_mm = 1e-3;  // the probe's noise and pre-travel left after qualification
+  const auto* pocket = report(*r.session, "POCKET");
+  ASSERT_TRUE(pocket && pocket->actual);
+  EXPECT_EQ(pocket->point_count, 8U);
+  EXPECT_NEAR(pocket->actual->position.x(), 95.025, tol_mm);
+  EXPECT_NEAR(pocket->actual->position.y(), 29.985, tol_mm);
+  EXPECT_NEAR(pocket->actual->diameter_mm, 30.03, tol_mm);
+  EXPECT_NEAR(pocket->actual->minor_diameter_mm, 16.03, tol_mm);
+  EXPECT_NEAR(std::atan2(pocket->actual->slot_axis.y(), pocket->actual->slot_axis.x()) * 180 / std::numbers::pi, 20, 0.01);
+  const auto* boss = report(*r.session, "EBOSS");
+  ASSERT_TRUE(boss && boss->actual);
+  EXPECT_NEAR(boss->actual->position.x(), 29.98, tol_mm);
+  EXPECT_NEAR(boss->actual->position.y(), 82.01, tol_mm);
+  EXPECT_NEAR(boss->actual->diameter_mm, 23.98, tol_mm);
+  EXPECT_NEAR(boss->actual->minor_diameter_mm, 13.98, tol_mm);
+  // RCTNGL: a CPARLN with FLAT ends, its east wall 0.02 out.
+  const auto* rect = report(*r.session, "RECT");
+  ASSERT_TRUE(rect && rect->actual);
+  EXPECT_EQ(rect->actual->type, metron::runtime::FeatureType::ClosedSlot);
+  EXPECT_EQ(rect->actual->slot_ends, metron::runtime::SlotEnds::Flat);
+  EXPECT_NEAR(rect->actual->position.x(), 145.01, tol_mm);
+  EXPECT_NEAR(rect->actual->position.y(), 50, tol_mm);
+  EXPECT_NEAR(rect->actual->width_mm, 12.02, tol_mm);
+  EXPECT_NEAR(rect->actual->length_mm, 20, tol_mm);
+  std::vector<const metron::runtime::ToleranceResult*> results;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) results.push_back(t);
+  ASSERT_EQ(results.size(), 5U);
+  EXPECT_NEAR(results[0]->value, 2 * std::hypot(0.025, 0.015), 2 * tol_mm);  // POS 2D of the pocket
+  EXPECT_FALSE(results[0]->in_tolerance);
+  EXPECT_NEAR(results[1]->value, ellipse_profile_extreme(15, 8, 0.015, {0.025, -0.015}, 20, 8, true), tol_mm);
+  EXPECT_NEAR(results[2]->value, 2 * std::hypot(0.02, 0.01), 2 * tol_mm);  // POS 2D of the boss
+  EXPECT_TRUE(results[2]->in_tolerance);
+  EXPECT_NEAR(results[3]->value, ellipse_profile_extreme(12, 7, -0.01, {-0.02, 0.01}, 0, 10, false), tol_mm);
+  EXPECT_NEAR(results[4]->value, 2 * 0.01, 2 * tol_mm);  // POS 2D of the rectangle
+  EXPECT_NE(r.diagnostics.find("FEAT/RCTNGL is measured and reported as a CPARLN with FLAT ends"), std::string::npos)
+      << r.diagnostics;
+
+  // An ellipse needs five points.
+  const auto few = run("DMISMN/'e', 5.0\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
+                       "F(E) = FEAT/ELLIPS, INNER, CART, 95, 30, 40, 0, 0, 1, 0.9396926, 0.3420201, 0, 30, 16\n"
+                       "MEAS/ELLIPS, F(E), 4\nENDMES\nENDFIL\n",
+                       source_dir / "programs/worlds/block_ellipse.json");
+  EXPECT_NE(few.status, ExecStatus::Finished);
+  EXPECT_NE(few.diagnostics.find("run.dmi:5:"), std::string::npos) << few.diagnostics;
+  // check: the numbers of ELLIPS and RCTNGL.
+  const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(E) = FEAT/" + rest + "\nENDFIL\n"); };
+  EXPECT_EQ(feat("ELLIPS, OUTER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 16").errors, 0U);
+  const auto swapped = feat("ELLIPS, OUTER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 16, 30");
+  EXPECT_TRUE(swapped.has("shop.dmi:2:") && swapped.has("the minor diameter 30 of F(E) is more than its major diameter 16"))
+      << swapped.text;
+  const auto slanted = feat("ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 1, 30, 16");
+  EXPECT_TRUE(slanted.has("the major axis i2,j2,k2 of F(E) is not perpendicular")) << slanted.text;
+  EXPECT_TRUE(feat("ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 30, 16").has("FEAT/ELLIPS expects 11 numbers")) << "arity";
+  EXPECT_EQ(feat("RCTNGL, INNER, CART, 0, 0, 0, 0, 0, 1, 0, 1, 0, 20, 12").errors, 0U);
+  EXPECT_TRUE(feat("RCTNGL, INNER, CART, 0, 0, 0, 0, 0, 1, 20, 12").has("FEAT/RCTNGL expects INNER or OUTER, CART or POL and 11 or 12"));
+  const auto mismatch = check("DMISMN/'p', 5.0\nF(E) = FEAT/ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 16\n"
+                              "MEAS/CIRCLE, F(E), 8\nENDMES\nENDFIL\n");
+  EXPECT_TRUE(mismatch.has("MEAS/CIRCLE on F(E), which is FEAT/ELLIPS")) << mismatch.text;
+}
+
 // FEAT/GSURF and GCURVE: features known only by the points a program probes on them (CAMIO and
 // PC-DMIS export free-form and edge inspections so). Each point is judged along its own PTMEAS
 // normal. The truth (programs/worlds/block_width.json): TOP is where it was designed, RIGHT

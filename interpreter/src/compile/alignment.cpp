@@ -199,7 +199,7 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   const std::string label = upper(p[1].label.name);
   const auto type = feature_type(label);
   if (type && *type != *const_type)
-    return error(p[0].span, "sema.const-type", fmt::format("CONST/{} on F({}), which is a {}", p[0].text, p[1].label.name, ir::word_of(*type)));
+    return error(p[0].span, "sema.const-type", fmt::format("CONST/{} on F({}), which is FEAT/{}", p[0].text, p[1].label.name, ir::word_of(*type)));
   const auto method = is_word(p[2]) ? ir::parse_word<ir::ConstructionMethod>(p[2].text) : std::nullopt;
   if (!method) {
     if (is_word(p[2])) {

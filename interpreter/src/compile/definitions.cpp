@@ -40,6 +40,9 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
     case FeatureType::ClosedSlot:
       return {11, 11, "x,y,z,i1,j1,k1,i2,j2,k2,len,wid (the centre, the normal of its plane, its long axis, the length end to "
                       "end, the width)"};
+    case FeatureType::Ellipse:
+      return {11, 11, "x,y,z,i1,j1,k1,i2,j2,k2,majdiam,mindiam (the centre, the normal of its plane, its major axis, the "
+                      "major and minor diameters)"};
   }
   return {0, 0, ""};
 }
@@ -107,10 +110,30 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     p.resize(8);
     p[0].text = "POINT";
   }
+  // FEAT/RCTNGL,INNER|OUTER,CART|POL,x,y,z,i1,j1,k1,i2,j2,k2,len,wid[,depth]: a rectangular
+  // pocket or block outline in its plane, which is a closed slot with square ends: metron
+  // measures and reports it as CPARLN,FLAT (the same numbers in the same order).
+  if (is_word(p[0], "RCTNGL")) {
+    const std::size_t numbers = p.size() > 3 ? p.size() - 3 : 0;
+    if (numbers != 11 && numbers != 12)
+      return error(p.back().span, "sema.feature-arity",
+                   fmt::format("FEAT/RCTNGL expects INNER or OUTER, CART or POL and 11 or 12 numbers "
+                               "(x,y,z,i1,j1,k1,i2,j2,k2,len,wid[,depth]: the centre, the normal of its plane, the "
+                               "direction of its length, the length, the width), got {} parameters",
+                               p.size() - 1));
+    note_once(m_rectangles_noted, p[0].span, "sema.rectangle",
+              "FEAT/RCTNGL is measured and reported as a CPARLN with FLAT ends (a rectangle's outline in its plane)"
+              "; a depth after the width is not used");
+    if (numbers == 12) p.pop_back();
+    p[0].text = "CPARLN";
+    grammar::Expr flat = p[1];
+    flat.text = "FLAT";
+    p.insert(p.begin() + 2, flat);
+  }
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
-    if (is_word(p[0]) && (p[0].text == "RCTNGL" || p[0].text == "ELLIPS" ||
-                          p[0].text == "COMPOUND" || p[0].text == "PATERN" || p[0].text == "OBJECT" ||
+    if (is_word(p[0]) && (p[0].text == "COMPOUND" ||
+                          p[0].text == "PATERN" || p[0].text == "OBJECT" ||
                           p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["F:" + label] = s.span;
@@ -213,17 +236,32 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
     if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
       return fail(d, "sema.zero-vector", "the direction vector i,j,k is zero");
   }
-  if (type == FeatureType::ClosedSlot) {
-    // x,y,z,i1,j1,k1,i2,j2,k2,len,wid: the long axis lies in the plane (normal to i1,j1,k1).
+  if (type == FeatureType::ClosedSlot || type == FeatureType::Ellipse) {
+    // x,y,z,i1,j1,k1,i2,j2,k2,...: the long (major) axis lies in the plane (normal to i1,j1,k1).
+    const char* axis_name = type == FeatureType::Ellipse ? "major axis" : "long axis";
     if (literal[6] == 0 && literal[7] == 0 && literal[8] == 0)
-      return fail(6, "sema.zero-vector", "the long axis i2,j2,k2 is zero");
+      return fail(6, "sema.zero-vector", fmt::format("the {} i2,j2,k2 is zero", axis_name));
     const Vec3 normal(literal[3], literal[4], literal[5]), axis(literal[6], literal[7], literal[8]);
     const double cos_angle = normal.normalized().dot(axis.normalized());
     if (std::isfinite(cos_angle) && std::abs(cos_angle) > 1e-3)
       return fail(6, "sema.slot-axis",
-                  fmt::format("the long axis i2,j2,k2 of F({}) is not perpendicular to the normal i1,j1,k1 of its plane "
+                  fmt::format("the {} i2,j2,k2 of F({}) is not perpendicular to the normal i1,j1,k1 of its plane "
                               "(at {:.3f} deg to it, not 90)",
-                              s.target->name, std::acos(std::clamp(cos_angle, -1.0, 1.0)) * 180 / std::numbers::pi));
+                              axis_name, s.target->name, std::acos(std::clamp(cos_angle, -1.0, 1.0)) * 180 / std::numbers::pi));
+  }
+  if (type == FeatureType::Ellipse) {
+    for (std::size_t k : {9, 10})
+      if (!std::isnan(literal[k]) && literal[k] <= 0)
+        return fail(k, "sema.bad-size", fmt::format("the {} diameter of F({}) must be positive", k == 9 ? "major" : "minor",
+                                                    s.target->name));
+    if (literal[10] > literal[9])
+      return fail(10, "sema.bad-size",
+                  fmt::format("the minor diameter {} of F({}) is more than its major diameter {} (the major diameter "
+                              "comes first, along i2,j2,k2)",
+                              literal[10], s.target->name, literal[9]));
+    return true;
+  }
+  if (type == FeatureType::ClosedSlot) {
     for (std::size_t k : {9, 10})
       if (!std::isnan(literal[k]) && literal[k] <= 0)
         return fail(k, "sema.bad-size",

@@ -235,7 +235,7 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   const std::string label = upper(s.params[1].label.name);
   const auto type = feature_type(label);
   if (type && *type != *meas_type)
-    return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is a {}", s.params[0].text, s.params[1].label.name, ir::word_of(*type)));
+    return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is FEAT/{}", s.params[0].text, s.params[1].label.name, ir::word_of(*type)));
   auto count = numeric(s.params[2], "the number of points");
   if (!count) return;
   Block b = block(Block::Kind::Meas, s.span);

@@ -207,6 +207,7 @@ class UnitCompiler {
   /// A feature type word parameter (MEAS/, CONST/), or nullopt.
   static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
     if (is_word(e, "EDGEPT")) return runtime::FeatureType::Point;  // measured as a point (FEAT/EDGEPT)
+    if (is_word(e, "RCTNGL")) return runtime::FeatureType::ClosedSlot;  // measured as CPARLN,FLAT (FEAT/RCTNGL)
     return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
   }
   void statement(const grammar::Statement& s);
@@ -342,6 +343,7 @@ class UnitCompiler {
   bool m_calib_artifact_noted = false;
   bool m_report_layout_noted = false;     // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
+  bool m_rectangles_noted = false;        // one note per unit for FEAT/RCTNGL
   bool m_sensor_saves_noted = false;     // one note per unit for SAVE/SA()
   bool m_variable_labels_noted = false;  // one note per unit for FA(V), V a CHAR variable
 };

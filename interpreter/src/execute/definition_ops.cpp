@@ -111,6 +111,12 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
       g.diameter_mm = nums[6] * len;
       g.minor_diameter_mm = nums[7] * len;
       break;
+    case FeatureType::Ellipse:
+      g.direction = vec(3);
+      g.slot_axis = vec(6);
+      g.diameter_mm = nums[9] * len;
+      g.minor_diameter_mm = nums[10] * len;
+      break;
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
   if (g.type == FeatureType::ClosedSlot) {
@@ -125,6 +131,16 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
       return vm.fail(in.span,
                      "the width of a ROUND CPARLN must be less than its length (its ends are semicircles of the width)");
     g.slot_axis = (g.slot_axis - g.slot_axis.dot(n) * n).normalized();  // within the rounding of the program's numbers
+  }
+  if (g.type == FeatureType::Ellipse) {
+    // Computed numbers get the compiler's checks here (compile/definitions.cpp).
+    const Vec3 n = g.direction.normalized();
+    if (g.slot_axis.norm() < 1e-12) return vm.fail(in.span, "the major axis i2,j2,k2 is zero");
+    if (std::abs(n.dot(g.slot_axis.normalized())) > 1e-3)
+      return vm.fail(in.span, "the major axis i2,j2,k2 is not perpendicular to the normal i1,j1,k1");
+    if (!(g.minor_diameter_mm > 0 && g.minor_diameter_mm <= g.diameter_mm))
+      return vm.fail(in.span, "an ELLIPS's minor diameter must be positive and not more than its major diameter");
+    g.slot_axis = (g.slot_axis - g.slot_axis.dot(n) * n).normalized();
   }
   if (g.type == FeatureType::Torus && !(g.minor_diameter_mm > 0 && g.minor_diameter_mm < g.diameter_mm))
     return vm.fail(in.span, "a TORUS's tube diameter (mindiam) must be positive and less than its major diameter");

@@ -144,6 +144,7 @@ std::optional<std::pair<double, bool>> feature_size(const runtime::Geometry& g, 
       if (n == 2) return std::pair{g.length_mm, true};
       break;
     case FeatureType::Torus:
+    case FeatureType::Ellipse:
       if (n == 1) return std::pair{g.diameter_mm, true};
       if (n == 2) return std::pair{g.minor_diameter_mm, true};
       break;

@@ -15,7 +15,8 @@ enum class FeatureType { Point, Plane, Line, Circle, Arc, Sphere, Cylinder, Cone
                          GenericSurface,   ///< GSURF: a surface known by the points the program probes on it
                          GenericCurve,     ///< GCURVE: a curve known the same way
                          ClosedSlot,       ///< CPARLN: closed-ended parallel lines, a slot (INNER) or tab (OUTER) outline in a plane
-                         Torus };          ///< TORUS: a ring (OUTER) or a toroidal groove or fillet (INNER)
+                         Torus,            ///< TORUS: a ring (OUTER) or a toroidal groove or fillet (INNER)
+                         Ellipse };        ///< ELLIPS: an elliptic hole (INNER) or boss (OUTER) outline in a plane
 /// GSURF and GCURVE: no analytic nominal; each probed point carries its own nominal (the PTMEAS).
 inline bool is_point_set(FeatureType type) {
   return type == FeatureType::GenericSurface || type == FeatureType::GenericCurve;
@@ -25,7 +26,7 @@ enum class Side { None, Inner, Outer };
 /// The ends of a CPARLN: ROUND (semicircles of the width's diameter) or FLAT (square).
 enum class SlotEnds { Round, Flat };
 
-const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE, PARPLN, GSURF, GCURVE, CPARLN, TORUS
+const char* dmis_word(FeatureType type);  ///< POINT, PLANE, LINE, CIRCLE, ARC, SPHERE, CYLNDR, CONE, PARPLN, GSURF, GCURVE, CPARLN, TORUS, ELLIPS
 const char* dmis_word(Side side);         ///< INNER, OUTER, or ""
 const char* dmis_word(SlotEnds ends);     ///< ROUND, FLAT
 
@@ -34,11 +35,11 @@ struct Geometry {
   FeatureType type = FeatureType::Point;
   Side side = Side::None;
   Vec3 position = Vec3::Zero();   ///< point; a point on a plane/line; centre; a point on an axis (cone: apex); PARPLN: on the median plane; CPARLN: centre
-  Vec3 direction = Vec3::UnitZ(); ///< point/plane normal, line direction, circle/cylinder/cone/torus axis, PARPLN normal, CPARLN: normal of its plane
+  Vec3 direction = Vec3::UnitZ(); ///< point/plane normal, line direction, circle/cylinder/cone/torus axis, PARPLN normal, CPARLN, ELLIPS: normal of its plane
   Vec3 normal2 = Vec3::UnitZ();   ///< line: the normal of the plane the line lies in (DMIS LINE ... ,i2,j2,k2)
-  double diameter_mm = 0;         ///< circle, arc, sphere, cylinder; torus: its centre circle's (the major diameter)
-  double minor_diameter_mm = 0;   ///< torus: its tube's
-  Vec3 slot_axis = Vec3::UnitX(); ///< CPARLN: its long axis (normal to `direction`)
+  double diameter_mm = 0;         ///< circle, arc, sphere, cylinder; torus: its centre circle's (the major diameter); ellipse: its major diameter
+  double minor_diameter_mm = 0;   ///< torus: its tube's; ellipse: its minor diameter
+  Vec3 slot_axis = Vec3::UnitX(); ///< CPARLN: its long axis; ELLIPS: its major axis (normal to `direction`)
   SlotEnds slot_ends = SlotEnds::Round;  ///< CPARLN
   double width_mm = 0;            ///< PARPLN: the distance between its faces; CPARLN: between its parallel sides
   double length_mm = 0;           ///< cylinder, cone, bounded line; CPARLN: overall, end to end
