@@ -675,6 +675,25 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     report.units = m_report_units;
     if (item.feature.actual && !f->actual)
       warn(span, fmt::format("OUTPUT of FA({}) before it was measured", f->label));
+    if (item.points) {
+      const int count = static_cast<int>(f->points.size());
+      const auto [first, last] = *item.points;
+      if (first < 1 || last < first || last > count)
+        warn(span, fmt::format("FA({})[{},{}] asks for points {} to {}; it has {}: {}", f->label, first, last, first, last,
+                               count, count == 0 ? "none is listed" : fmt::format("points {} to {} are listed",
+                                                                                 std::clamp(first, 1, count),
+                                                                                 std::clamp(last, 1, count))));
+      const bool residuals = f->fit && f->fit->residuals_mm.size() == f->points.size();
+      for (int i = std::max(first, 1); i <= std::min(last, count); ++i) {
+        const MeasuredPoint& p = f->points[static_cast<std::size_t>(i - 1)];
+        ListedPoint listed;
+        listed.index = i;
+        listed.surface_mm = m_alignment.to_part_point(p.surface_mm());
+        listed.approach = m_alignment.to_part_vector(p.normal);
+        if (residuals) listed.residual_mm = f->fit->residuals_mm[static_cast<std::size_t>(i - 1)];
+        report.points.push_back(listed);
+      }
+    }
     write_device_line(dmis_feature_line(report));
     emit(report);
   }

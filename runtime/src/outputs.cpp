@@ -312,6 +312,16 @@ json tolerance_json(const ToleranceResult& r) {
   return j;
 }
 
+json listed_points_json(const std::vector<ListedPoint>& points) {
+  json out = json::array();
+  for (const ListedPoint& p : points)
+    out.push_back({{"index", p.index},
+                   {"surface_mm", vector(p.surface_mm)},
+                   {"approach", vector(p.approach)},
+                   {"residual_mm", p.residual_mm ? number(*p.residual_mm) : json(nullptr)}});
+  return out;
+}
+
 json event_json(const RunEvent& event) {
   if (const auto* f = std::get_if<FeatureReport>(&event)) {
     return {{"kind", "feature"},
@@ -324,7 +334,8 @@ json event_json(const RunEvent& event) {
             {"actual", f->actual ? geometry_json(*f->actual) : json(nullptr)},
             {"deviation", f->actual ? deviation_json(f->nominal, *f->actual) : json(nullptr)},
             {"form_mm", fit_number(f->fit, &FitFigures::form_mm)},
-            {"rms_mm", fit_number(f->fit, &FitFigures::rms_mm)}};
+            {"rms_mm", fit_number(f->fit, &FitFigures::rms_mm)},
+            {"listed_points", listed_points_json(f->points)}};
   }
   if (const auto* t = std::get_if<ToleranceResult>(&event)) return tolerance_json(*t);
   if (const auto* text = std::get_if<TextReport>(&event)) return {{"kind", "text"}, {"text", text->text}};
@@ -372,6 +383,16 @@ std::string format_feature_report(const FeatureReport& report) {
     out += fmt::format("  {:6}{:>14}{:>14}\n", "RMS", "", fixed(report.fit->rms_mm, Unit::Millimetre, false, u));
     out += fmt::format("  {:6}{:>14}{:>14}\n", "FORM", "",
                        fixed(report.fit->form_mm, Unit::Millimetre, false, u));
+  }
+  if (!report.points.empty()) {
+    // OUTPUT/FA(x)[first,last]: the probed points, compensated, with their distances from the fit.
+    out += fmt::format("  {:6}{:>14}{:>14}{:>14}{:>11}{:>11}{:>11}{:>12}\n", "POINT", "X", "Y", "Z", "I", "J", "K", "DEV");
+    for (const ListedPoint& p : report.points) {
+      out += fmt::format("  {:<6}{:>14}{:>14}{:>14}", fmt::format("[{}]", p.index), fixed(p.surface_mm.x(), Unit::Millimetre, false, u),
+                         fixed(p.surface_mm.y(), Unit::Millimetre, false, u), fixed(p.surface_mm.z(), Unit::Millimetre, false, u));
+      for (int k = 0; k < 3; ++k) out += fmt::format("{:>11}", fixed(p.approach[k], Unit::Cosine, false, u));
+      out += fmt::format("{:>12}\n", p.residual_mm ? fixed(*p.residual_mm, Unit::Millimetre, true, u) : std::string("-"));
+    }
   }
   return out;
 }

@@ -325,8 +325,7 @@ TEST(ShopPrograms, PublicModusMacroLibrariesCheck) {
   EXPECT_TRUE(backup.has("47:17: note: CALL/EXTERN,SYS is for the CMM's own software")) << backup.text;
   const auto points = check_file(source_dir / "programs/real/modus/OutputModusActualPoints_CommonMacros.dmi");
   EXPECT_EQ(points.errors, 0U) << points.text;
-  EXPECT_EQ(points.warnings, 1U) << points.text;
-  EXPECT_TRUE(points.has("127:14: warning: the points [...] of FA(@featureName) are not reported one by one")) << points.text;
+  EXPECT_EQ(points.warnings, 0U) << points.text;  // its OUTPUT/FA(@featureName)[1,n] lists the points
   EXPECT_TRUE(points.has("121:15: note: FA(featureName): featureName is a CHAR variable and no feature has its name")) << points.text;
   // FA(V), V a CHAR variable naming no feature: the value names the feature, as FA(@V).
   const auto named = run("DMISMN/'t', 05.2\nDECL/CHAR,20,N\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nN=ASSIGN/'P'\n"
@@ -713,6 +712,43 @@ TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
                               "OUTPUT/FA(S), TA(S)\nENDFIL\n");
   EXPECT_EQ(symmetry.errors, 1U) << symmetry.text;
   EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
+}
+
+// OUTPUT/FA(x)[first,last] (MODUS): the feature is reported with its points first..last listed
+// (compensated surface point, approach, distance from the fit) in the current frame. On
+// perfect.json's BORE1 (20 mm at part 40, 50) the points are where the PTMEAS put them.
+TEST(ShopPrograms, OutputListsAFeaturesPointRange) {
+  const std::string head =
+      "DMISMN/'points', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 60\n"
+      "F(C) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(C), 4\n"
+      "  PTMEAS/CART, 50, 50, 35, -1, 0, 0\n  PTMEAS/CART, 40, 60, 35, 0, -1, 0\n"
+      "  PTMEAS/CART, 30, 50, 35, 1, 0, 0\n  PTMEAS/CART, 40, 40, 35, 0, 1, 0\nENDMES\n";
+  const auto r = run(head + "DECL/INTGR, N\nN = ASSIGN/3\nOUTPUT/FA(C)[2,N]\nOUTPUT/FA(C)[4]\nOUTPUT/FA(C)[3,9]\nENDFIL\n",
+                     source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<const metron::runtime::FeatureReport*> reports;
+  for (const auto& e : r.session->record().events)
+    if (const auto* f = std::get_if<metron::runtime::FeatureReport>(&e)) reports.push_back(f);
+  ASSERT_EQ(reports.size(), 3U);
+  ASSERT_EQ(reports[0]->points.size(), 2U);
+  EXPECT_EQ(reports[0]->points[0].index, 2);
+  EXPECT_NEAR((reports[0]->points[0].surface_mm - metron::Vec3(40, 60, 35)).norm(), 0, 2e-3);
+  EXPECT_NEAR((reports[0]->points[0].approach - metron::Vec3(0, -1, 0)).norm(), 0, 1e-6);
+  EXPECT_NEAR((reports[0]->points[1].surface_mm - metron::Vec3(30, 50, 35)).norm(), 0, 2e-3);
+  ASSERT_TRUE(reports[0]->points[1].residual_mm);
+  EXPECT_NEAR(*reports[0]->points[1].residual_mm, 0, 2e-3);
+  ASSERT_EQ(reports[1]->points.size(), 1U);
+  EXPECT_EQ(reports[1]->points[0].index, 4);
+  EXPECT_NEAR((reports[1]->points[0].surface_mm - metron::Vec3(40, 40, 35)).norm(), 0, 2e-3);
+  // Beyond the points it has: listed as far as it goes, with a warning.
+  ASSERT_EQ(reports[2]->points.size(), 2U);
+  EXPECT_NE(r.diagnostics.find("FA(C)[3,9] asks for points 3 to 9; it has 4: points 3 to 4 are listed"), std::string::npos)
+      << r.diagnostics;
+  const std::string text = metron::runtime::format_feature_report(*reports[1]);
+  EXPECT_NE(text.find("[4]"), std::string::npos) << text;
+  // A point range on a tolerance, or outside OUTPUT, is an error.
+  const auto bad = check(head + "T(D) = TOL/DIAM, -0.1, 0.1\nOUTPUT/FA(C), TA(D)[1,2]\nENDFIL\n");
+  EXPECT_TRUE(bad.has("shop.dmi:13:") && bad.has("a point range TA(D)[...] is read only for a feature in OUTPUT")) << bad.text;
 }
 
 // An ARC measured in MODE/AUTO: its points lie within its span (they went round the whole circle,

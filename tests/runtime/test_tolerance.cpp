@@ -340,7 +340,8 @@ TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
       << r->note;
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(s, {&pl}).error(),
-            "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN) or torus, not to a PLANE");
+            "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN), torus or ellipse, not to a "
+            "PLANE");
 }
 
 // ------------------------------------------------------------------ DISTB
@@ -690,7 +691,7 @@ TEST(ToleranceProfile, LineProfileOfACircleAndOfALine) {
   EXPECT_NEAR(r->value, -0.012, k_tight);
   EXPECT_EQ(r->note.find("side unknown"), std::string::npos) << r->note;
   const Feature pl = feature("PL", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
-  EXPECT_EQ(evaluate(s, {&pl}).error(), "PROFL applies to a line, circle, arc or GCURVE, not to a PLANE");
+  EXPECT_EQ(evaluate(s, {&pl}).error(), "PROFL applies to a line, circle, arc, GCURVE or ellipse, not to a PLANE");
 }
 
 // ------------------------------------------------------------------ CONCEN, COAXIAL, runout
@@ -885,7 +886,7 @@ TEST(ToleranceProfile, SignIsPositiveOutsideTheMaterial) {
 TEST(ToleranceProfile, Errors) {
   const Feature l = feature("L1", line({0, 0, 0}, Vec3::UnitX()), line({0, 0, 0}, Vec3::UnitX()));
   EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&l}).error(),
-            "PROFS applies to a plane, circle, arc, sphere, cylinder, cone, GSURF or torus, not to a LINE");
+            "PROFS applies to a plane, circle, arc, sphere, cylinder, cone, GSURF, torus or ellipse, not to a LINE");
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&pl}).error(),
             "PROFS of PL1 needs measured points: it has none");

@@ -380,10 +380,9 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
   std::vector<std::optional<FeatureType>> types;
   bool left_out = false;  // a feature the program never defines was left out (lenient reading)
   for (const auto& p : s.params) {
-    if (p.kind == ExprKind::Label && !p.label.points.empty())
-      warn(p.span, "sema.point-range",
-           fmt::format("the points [...] of {}({}) are not reported one by one: the feature is reported whole", p.label.prefix,
-                       p.label.name));
+    if (p.kind == ExprKind::Label && !p.label.points.empty() && (!is_label(p, {"F", "FA"}) || s.major != "OUTPUT"))
+      return fail(p.span, "sema.point-range",
+                  fmt::format("a point range {}({})[...] is read only for a feature in OUTPUT", p.label.prefix, p.label.name));
     // In a DMIS output file each OUTPUT is followed by the result lines it produced: an OUTPUT of
     // a result stated below (and not defined before) echoes it.
     const bool feature_label = is_label(p, {"F", "FA"});
@@ -458,6 +457,11 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       return fail(p.span, "sema.expected-label", fmt::format("expected F(), FA(), T() or TA() labels after {}/", s.major));
     }
     in.operands.push_back(label_op(p));
+    for (const auto& bound : p.label.points) {  // OUTPUT/FA(x)[first,last]: the numbers follow the label
+      auto e = numeric(bound, "a point number");
+      if (!e) return false;
+      in.operands.push_back(expr_operand(std::move(*e)));
+    }
   }
   return true;
 }

@@ -36,13 +36,22 @@ void Execute::add_alignment(ExecuteTable& t) {
 // The items of an OUTPUT or EVAL, in order.
 std::vector<runtime::OutputItem> Execute::output_items(Interpreter& vm, const ir::Instruction& in) {
   std::vector<runtime::OutputItem> items;
-  for (const auto& o : in.operands) {
+  for (std::size_t k = 0; k < in.operands.size(); ++k) {
+    const auto& o = in.operands[k];
+    if (o.kind == Operand::Kind::Expr) continue;  // a point range, read with its feature below
     runtime::OutputItem item;
     if (o.label.prefix == "T" || o.label.prefix == "TA") {
       item.kind = runtime::OutputItem::Kind::Tolerance;
       item.tolerance = vm.label_name(o.label);
     } else {
       item.feature = feature_ref(vm, o.label);
+      // FA(x)[first,last] or FA(x)[n]: one or two numbers after the label (docs/ir.md).
+      std::vector<int> range;
+      for (std::size_t j = k + 1; j < in.operands.size() && in.operands[j].kind == Operand::Kind::Expr; ++j) {
+        const auto v = vm.number(in.operands[j].expr);
+        range.push_back(v && std::isfinite(*v) ? static_cast<int>(std::lround(std::clamp(*v, -1e9, 1e9))) : 0);
+      }
+      if (!range.empty()) item.points = std::pair{range.front(), range.back()};
     }
     items.push_back(item);
   }

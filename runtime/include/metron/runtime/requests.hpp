@@ -105,6 +105,8 @@ struct OutputItem {
   enum class Kind { Feature, Tolerance } kind = Kind::Feature;
   FeatureRef feature;
   std::string tolerance;
+  /// OUTPUT/FA(x)[first,last] (MODUS): the feature's points first..last (1-based) are listed.
+  std::optional<std::pair<int, int>> points;
 };
 
 }  // namespace metron::runtime

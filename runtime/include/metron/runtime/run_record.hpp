@@ -13,6 +13,14 @@
 namespace metron::runtime {
 
 /// A feature as reported by OUTPUT: geometry expressed in the reporting coordinate system.
+/// One probed point listed by OUTPUT/FA(x)[first,last], in the report's frame.
+struct ListedPoint {
+  int index = 0;                     ///< 1-based, in the order the points were taken
+  Vec3 surface_mm = Vec3::Zero();    ///< the compensated surface point
+  Vec3 approach = Vec3::UnitZ();     ///< the approach (probing) direction
+  std::optional<double> residual_mm; ///< its distance from the fitted feature (+ out of the material)
+};
+
 struct FeatureReport {
   std::string label;
   std::string frame = "MCS";         ///< label of the alignment the geometry is expressed in
@@ -22,6 +30,7 @@ struct FeatureReport {
   std::size_t point_count = 0;
   ActualSource source = ActualSource::Measured;
   ReportUnits units;                 ///< the program's UNITS and DECPL at the OUTPUT
+  std::vector<ListedPoint> points;   ///< OUTPUT/FA(x)[first,last]: those points; else empty
 };
 
 /// A position in a source file, resolved for reports (file, line, column).
