@@ -210,6 +210,28 @@ Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, Toleran
   result.actual = size_of(**actual);
   result.nominal = size_of(feature.nominal);
   if (length) add_note(result, "LONG: the length of the slot, end to end");
+  if (!width && spec.extent != DistanceExtent::Average) {
+    // DIAM|RAD,lo,up,MAX|MIN: twice the largest (smallest) distance of a measured surface point
+    // from the fitted centre (circle, arc: in its plane; cylinder: from its axis; sphere: from it).
+    const Geometry& g = **actual;
+    const Vec3 axis = g.direction.norm() > 1e-12 ? Vec3(g.direction.normalized()) : Vec3::UnitZ();
+    if (feature.points.empty())
+      return Error(fmt::format("{} of {} at {} needs its measured points: it has none", dmis_word(spec.kind), feature.label,
+                               spec.extent == DistanceExtent::Maximum ? "MAX" : "MIN"));
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (const MeasuredPoint& p : feature.points) {
+      Vec3 v = p.surface_mm() - g.position;
+      if (g.type != FeatureType::Sphere) v -= v.dot(axis) * axis;
+      lo = std::min(lo, v.norm());
+      hi = std::max(hi, v.norm());
+    }
+    const bool maximum = spec.extent == DistanceExtent::Maximum;
+    result.actual = 2 * scale * (maximum ? hi : lo);
+    add_note(result, fmt::format("{}: the {} {} of the {} measured points about the fitted centre (least squares {:.4f})",
+                                 maximum ? "MAX" : "MIN", maximum ? "largest" : "smallest",
+                                 spec.kind == ToleranceKind::Rad ? "radius" : "diameter", feature.points.size(),
+                                 size_of(g)));
+  }
   result.value = result.actual - result.nominal;
   set_limits(result, spec.lower, spec.upper);
   return result;

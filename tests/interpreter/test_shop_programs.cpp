@@ -714,6 +714,38 @@ TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
   EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
 }
 
+// TOL/DIAM,lo,up,AVG|MAX|MIN: the elliptic pocket of block_ellipse.json (30.03 x 16.03 as
+// machined, centre 95.025, 29.985) probed as a CIRCLE at the ends of its axes (PTMEAS along them
+// from the machined centre). The four points are symmetric about both axes, so the least-squares
+// circle is centred on the ellipse's centre with the mean radius, (15.015 + 8.015) / 2: AVG 23.03;
+// the largest and smallest distances from that centre give MAX 30.03 and MIN 16.03.
+TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
+  const std::string text =
+      "DMISMN/'diam', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+      "S(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nSNSLCT/S(P1)\nGOTO/95, 30, 60\n"
+      "F(C) = FEAT/CIRCLE, INNER, CART, 95, 30, 35, 0, 0, 1, 23\nMEAS/CIRCLE, F(C), 4\n"
+      "  PTMEAS/CART, 109.1203893, 35.1153022, 35, -0.9396926, -0.3420201, 0\n"
+      "  PTMEAS/CART, 92.2888392, 37.5025408, 35, 0.3420201, -0.9396926, 0\n"
+      "  PTMEAS/CART, 80.9296107, 24.8546978, 35, 0.9396926, 0.3420201, 0\n"
+      "  PTMEAS/CART, 97.7611608, 22.4674592, 35, -0.3420201, 0.9396926, 0\nENDMES\n"
+      "T(AV) = TOL/DIAM, -0.1, 0.1, AVG\nT(MX) = TOL/DIAM, -0.1, 0.1, MAX\nT(MN) = TOL/DIAM, -0.1, 0.1, MIN\n"
+      "T(RX) = TOL/RAD, -0.1, 0.1, MAX\nT(LP) = TOL/DIAM, -0.1, 0.1, DIAMLP\n"
+      "OUTPUT/FA(C), TA(AV), TA(MX), TA(MN), TA(RX), TA(LP)\nENDFIL\n";
+  const auto r = run(text, source_dir / "programs/worlds/block_ellipse.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  constexpr double tol_mm = 1e-3;
+  EXPECT_NEAR(tolerance(*r.session, "AV")->actual, 23.03, tol_mm);
+  EXPECT_NEAR(tolerance(*r.session, "MX")->actual, 30.03, tol_mm);
+  EXPECT_FALSE(tolerance(*r.session, "MX")->in_tolerance);
+  EXPECT_NEAR(tolerance(*r.session, "MN")->actual, 16.03, tol_mm);
+  EXPECT_NEAR(tolerance(*r.session, "RX")->actual, 15.015, tol_mm);
+  EXPECT_NEAR(tolerance(*r.session, "LP")->actual, 23.03, tol_mm);  // DIAMLP is not applied: AVG
+  EXPECT_NE(r.diagnostics.find("TOL/DIAM takes AVG, MAX or MIN after its limits; DIAMLP is not applied"), std::string::npos)
+      << r.diagnostics;
+  EXPECT_NE(tolerance(*r.session, "MN")->note.find("MIN: the smallest diameter of the 4 measured points"), std::string::npos)
+      << tolerance(*r.session, "MN")->note;
+}
+
 // OUTPUT/FA(x)[first,last] (MODUS): the feature is reported with its points first..last listed
 // (compensated surface point, approach, distance from the fit) in the current frame. On
 // perfect.json's BORE1 (20 mm at part 40, 50) the points are where the PTMEAS put them.

@@ -445,6 +445,16 @@ void UnitCompiler::tol(const grammar::Statement& s) {
         warn(p[i].span, "sema.datum-later", fmt::format("datum DAT({}) is not defined yet; it must be defined by DATDEF before the OUTPUT", p[i].label.name));
       in.operands.push_back(label_op(p[i]));
     } else if (is_word(p[i]) && !is_variable(p[i].text)) {
+      // DIAM and RAD take one word, AVG|MAX|MIN; another (RationalDMIS writes DIAMLP and others)
+      // is not applied, and is told rather than dropped unseen.
+      if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad) &&
+          !(is_word(p[i], "AVG") || is_word(p[i], "MAX") || is_word(p[i], "MIN"))) {
+        warn(p[i].span, "sema.size-modifier",
+             fmt::format("TOL/{} takes AVG, MAX or MIN after its limits; {} is not applied: T({}) is the "
+                         "least-squares size (AVG)",
+                         p[0].text, p[i].text, s.target->name));
+        continue;
+      }
       in.operands.push_back(word_operand(p[i]));
     } else {
       auto e = numeric(p[i], "a tolerance value");

@@ -172,6 +172,10 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (word == "ZAXIS") t.axis = runtime::DistanceAxis::ZAxis;
     if (word == "MINIM") t.extent = runtime::DistanceExtent::Minimum;
     if (word == "MAXIM") t.extent = runtime::DistanceExtent::Maximum;
+    // TOL/DIAM|RAD,lo,up,AVG|MAX|MIN (DMIS 5.x): the least-squares size, or the largest or smallest.
+    const bool size = t.kind == runtime::ToleranceKind::Diam || t.kind == runtime::ToleranceKind::Rad;
+    if (size && word == "MAX") t.extent = runtime::DistanceExtent::Maximum;
+    if (size && word == "MIN") t.extent = runtime::DistanceExtent::Minimum;
   }
   bool feature_tier = false;  // COMPOS: after FEATUR, the modifier and datums are the second tier's
   for (const auto& o : in.operands) {
