@@ -348,6 +348,21 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (it == m_features.end()) return program_error(block.span, fmt::format("feature F({}) is not defined", block.feature));
   Feature& feature = it->second;
   if (auto t = ensure_tool(block.span); !t) return t;
+  if (const auto tool = m_machine.state().tool; tool && feature.nominal.side == Side::Inner) {
+    // A hole the ball cannot enter: a real probe would touch its rim, not its wall.
+    const double ball_mm = 2 * tool->nominal_radius_mm;
+    const bool round = feature.nominal.type == FeatureType::Circle || feature.nominal.type == FeatureType::Arc ||
+                       feature.nominal.type == FeatureType::Cylinder || feature.nominal.type == FeatureType::Sphere;
+    const double opening_mm = round ? feature.nominal.diameter_mm
+                              : feature.nominal.type == FeatureType::ParallelPlanes || feature.nominal.type == FeatureType::ClosedSlot
+                                  ? feature.nominal.width_mm
+                              : feature.nominal.type == FeatureType::Ellipse ? feature.nominal.minor_diameter_mm
+                                                                             : 0.0;
+    if (opening_mm > 0 && ball_mm >= opening_mm)
+      warn(block.span, fmt::format("the ball of {} ({:.3f} mm) is not smaller than F({}) ({:.3f} mm): it cannot reach "
+                                   "the wall",
+                                   tool->name, ball_mm, feature.label, opening_mm));
+  }
   auto plan = plan_block(block, feature.nominal, plan_context());
   if (!plan) return tl::unexpected(plan.error());
   const bool scans = std::any_of(plan->commands.begin(), plan->commands.end(), [](const machine::Command& c) {

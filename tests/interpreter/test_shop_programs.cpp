@@ -746,6 +746,43 @@ TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
       << tolerance(*r.session, "MN")->note;
 }
 
+// Forms found in public programs (RationalDMIS exports, CAMIO lab programs, web tutorials) that
+// metron read without a word or with a misleading one: each is now told for what it is.
+TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
+  const auto c = check(
+      "DMISMN/'t', 5.0\nF(P1) = FEAT/POINT, CART, 0, 0, 0, 0, 0, 1\nF(PL) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\n"
+      "MEAS/POINT, F(P1), 1, CLRSRF, F(PL), 2.00, CLRSRF, F(PL), 20.00\nENDMES\n"
+      "MEAS/POINT, F(P1), 1, BOGUS, 3\nENDMES\n"
+      "F(P1) = FEAT/POINT, CART, 1, 0, 0, 0, 0, 1\nEQUATE/DA(A), DA(B)\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0U) << c.text;
+  EXPECT_TRUE(c.has("4:23: note: CLRSRF on a MEAS (RationalDMIS) is not applied")) << c.text;
+  EXPECT_TRUE(c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
+                    "them are ignored")) << c.text;
+  // DMIS lets a nominal feature label be defined again: a note, not a warning.
+  EXPECT_TRUE(c.has("8:1: note: F(P1) is defined again (first at line 2)")) << c.text;
+  EXPECT_TRUE(c.has("9:1: warning: the DMIS statement EQUATE is not supported by metron and is skipped: the coordinate "
+                    "systems are not equated")) << c.text;
+  EXPECT_EQ(c.warnings, 2U) << c.text;
+  // A typographic quote copied from a document is named.
+  const auto quote = check("DMISMN/\u2019EXAMPLE\u2019, 4.0\nENDFIL\n");
+  EXPECT_TRUE(quote.has("1:8: error: expected a parameter after '/': \u2019 is a typographic quote; a DMIS string is "
+                        "quoted with ' (an apostrophe)")) << quote.text;
+  // A size from a variable never assigned stops the run at the FEAT (it measured a 0 mm circle).
+  const auto unassigned = run("DMISMN/'t', 5.0\nDECL/REAL, DD\nMODE/AUTO\nF(C1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, DD\n"
+                              "MEAS/CIRCLE, F(C1), 4\nENDMES\nENDFIL\n");
+  EXPECT_NE(unassigned.status, ExecStatus::Finished);
+  EXPECT_NE(unassigned.diagnostics.find("4:1: error: the diameter of F(C1) is 0: it must be positive"), std::string::npos)
+      << unassigned.diagnostics;
+  // A hole the ball cannot enter is told before it is probed.
+  const auto small = run("DMISMN/'t', 5.0\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+                         "GOTO/40, 50, 60\nF(H) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 3\n"
+                         "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n"
+                         "  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
+  EXPECT_NE(small.diagnostics.find("6:1: warning: the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"),
+            std::string::npos)
+      << small.diagnostics;
+}
+
 // OUTPUT/FA(x)[first,last] (MODUS): the feature is reported with its points first..last listed
 // (compensated surface point, approach, distance from the fit) in the current frame. On
 // perfect.json's BORE1 (20 mm at part 40, 50) the points are where the PTMEAS put them.

@@ -126,11 +126,20 @@ template <typename Operand>
 SyntaxError error_for(tag<Operand>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-expression", "expected an expression after '" + last_op(b) + "'");
 }
+// A word processor's quote where a string starts (text copied from a document or a web page).
+inline std::string typographic_quote_hint(const Builder& b, const char* at) {
+  if (at_end(b, at)) return {};
+  const std::string_view rest(at, b.line->text.size() - b.offset(at));
+  for (const std::string_view q : {"\u2018", "\u2019", "\u201C", "\u201D", "\u00B4"})
+    if (rest.substr(0, q.size()) == q)
+      return ": " + std::string(q) + " is a typographic quote; a DMIS string is quoted with ' (an apostrophe)";
+  return {};
+}
 inline SyntaxError error_for(tag<rules::first_param>, const Builder& b, const char* at) {
-  return expected(b, at, "parse.expected-parameter", "expected a parameter after '/'");
+  return expected(b, at, "parse.expected-parameter", "expected a parameter after '/'" + typographic_quote_hint(b, at));
 }
 inline SyntaxError error_for(tag<rules::next_param>, const Builder& b, const char* at) {
-  return expected(b, at, "parse.expected-parameter", "expected a parameter after ','");
+  return expected(b, at, "parse.expected-parameter", "expected a parameter after ','" + typographic_quote_hint(b, at));
 }
 inline SyntaxError error_for(tag<rules::end_after_params>, const Builder& b, const char* at) {
   return unexpected(b, at, "parameter " + std::to_string(b.stmt.params.size()) + " of '" + b.stmt.major + "'");

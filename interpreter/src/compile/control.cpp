@@ -61,7 +61,7 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
   const std::string name = v.text;
   if (s.major != "ASSIGN" && s.major != "OBTAIN" && s.major != "PROMPT" && s.major != "VALUE") {
     // Vendor statements of the form V=XXX/...: warn and skip.
-    warn(s.major_span, "sema.unknown-statement", fmt::format("unknown statement {} is skipped", s.major));
+    warn(s.major_span, "sema.unknown-statement", skipped_statement_message(s.major));
     emit(make(Op::Nop, s, s.major));
     return;
   }

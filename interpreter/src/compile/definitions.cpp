@@ -200,7 +200,9 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   if (!check_feature_numbers(s, p, payload, literal)) return;
   if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl && !reported_actual) {
     const Location loc = m_sources.locate(it->second.span);
-    warn(s.target->span, "sema.redefined-feature", fmt::format("F({}) is redefined (first defined at line {})", s.target->name, loc.line));
+    // DMIS lets a feature's nominal label be defined again (only other labels are unique): a note.
+    note(s.target->span, "sema.redefined-feature",
+         fmt::format("F({}) is defined again (first at line {}): the new nominal holds from here", s.target->name, loc.line));
   }
   if (auto param = macro_param(label)) {
     in.name_is_param = true;

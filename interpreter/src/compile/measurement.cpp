@@ -238,6 +238,18 @@ void UnitCompiler::meas(const grammar::Statement& s) {
     return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is FEAT/{}", s.params[0].text, s.params[1].label.name, ir::word_of(*type)));
   auto count = numeric(s.params[2], "the number of points");
   if (!count) return;
+  if (s.params.size() > 3) {
+    // RationalDMIS writes clearance surfaces on the MEAS (MEAS/POINT,F(P),1,CLRSRF,F(PL),2,...);
+    // metron's clearance is SNSET/CLRSRF's. Anything else after the count is not DMIS.
+    if (is_word(s.params[3], "CLRSRF"))
+      note_once(m_meas_clearance_noted, s.params[3].span, "sema.meas-clearance",
+                "CLRSRF on a MEAS (RationalDMIS) is not applied: the clearance is SNSET/CLRSRF's");
+    else
+      warn(s.params[3].span, "sema.meas-extra",
+           fmt::format("MEAS takes the feature type, F(label) and the number of points; the {} parameter{} after them "
+                       "{} ignored",
+                       s.params.size() - 3, s.params.size() == 4 ? "" : "s", s.params.size() == 4 ? "is" : "are"));
+  }
   Block b = block(Block::Kind::Meas, s.span);
   b.feature = label;
   m_symbols.unconstructed.erase(label);

@@ -3,6 +3,8 @@
 
 #include "compile/unit_compiler.hpp"
 
+#include "metron/grammar/parser.hpp"
+
 namespace metron::interpreter::detail {
 
 using grammar::ExprKind;
@@ -246,9 +248,18 @@ const StatementTable& UnitCompiler::statements() {
 
 // A vendor or unsupported statement: warn and skip; remember labels it would have defined.
 void UnitCompiler::unknown(const grammar::Statement& s) {
-  warn(s.major_span, "sema.unknown-statement", fmt::format("unknown statement {} is skipped", s.major.empty() ? "?" : s.major));
+  warn(s.major_span, "sema.unknown-statement", skipped_statement_message(s.major));
   if (s.target) m_symbols.skipped[(s.target->prefix == "F" ? "F:" : s.target->prefix + ":") + upper(s.target->name)] = s.span;
   emit(make(Op::Nop, s, s.major));
+}
+
+// A DMIS 5.3 statement metron does not carry out is named so; anything else is unknown.
+std::string UnitCompiler::skipped_statement_message(const std::string& major) {
+  if (major.empty()) return "unknown statement ? is skipped";
+  if (!grammar::is_major_word(major)) return fmt::format("unknown statement {} is skipped", major);
+  std::string message = fmt::format("the DMIS statement {} is not supported by metron and is skipped", major);
+  if (major == "EQUATE") message += ": the coordinate systems are not equated, so results in them may be in another frame";
+  return message;
 }
 
 bool UnitCompiler::expect_params(const grammar::Statement& s, std::size_t n, const char* what) {

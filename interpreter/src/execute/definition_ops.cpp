@@ -119,6 +119,16 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
       break;
   }
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
+  // Sizes the compiler could not check (computed: a variable never assigned is 0).
+  const bool diameter = g.type == FeatureType::Circle || g.type == FeatureType::Arc || g.type == FeatureType::Sphere ||
+                        g.type == FeatureType::Cylinder || g.type == FeatureType::Torus || g.type == FeatureType::Ellipse;
+  if (diameter && !(g.diameter_mm > 0))
+    return vm.fail(in.span, fmt::format("the {} of F({}) is {}: it must be positive (a variable never assigned?)",
+                                        g.type == FeatureType::Arc ? "radius" : "diameter", vm.name_of(in),
+                                        g.type == FeatureType::Arc ? g.diameter_mm / 2 : g.diameter_mm));
+  if (g.type == FeatureType::ParallelPlanes && !(g.width_mm > 0))
+    return vm.fail(in.span, fmt::format("the width of F({}) is {}: it must be positive (a variable never assigned?)",
+                                        vm.name_of(in), g.width_mm));
   if (g.type == FeatureType::ClosedSlot) {
     // Computed numbers get the compiler's checks here (compile/definitions.cpp).
     if (g.slot_axis.norm() < 1e-12) return vm.fail(in.span, "the long axis i2,j2,k2 is zero");
