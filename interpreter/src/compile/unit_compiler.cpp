@@ -86,10 +86,27 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
     m_sink.report(std::move(d));
     return false;
   }
-  if (auto later = m_later_features.find(name); later != m_later_features.end()) {
+  // Shop software keeps the actuals of its last run: a program may use FA(x) that it measures
+  // only further on, or never (CAMIO). Read leniently that is a warning, and the run stops at the
+  // use unless x has an actual by then.
+  const auto later = m_later_features.find(name);
+  const bool rejected = later != m_later_features.end() && later->second.file == e.span.file &&
+                        later->second.begin < e.span.begin;
+  if (upper(e.label.prefix) == "FA" && !m_strict && !m_repl && !rejected) {
+    warn(e.span, "sema.actual-from-before",
+         later != m_later_features.end()
+             ? fmt::format("feature FA({}) is used before its definition at line {}: CMM software may keep its actual from "
+                           "an earlier run, metron does not; a run stops here unless it has one (--strict makes it an "
+                           "error)",
+                           e.label.name, m_sources.locate(later->second).line)
+             : fmt::format("feature FA({}) is not defined in this program: CMM software may keep its actual from an "
+                           "earlier run, metron does not; a run stops here (--strict makes it an error)",
+                           e.label.name));
+    return true;
+  }
+  if (later != m_later_features.end()) {
     const Location loc = m_sources.locate(later->second);
     // A definition above the use that did not define the feature was rejected (its error is above).
-    const bool rejected = later->second.file == e.span.file && later->second.begin < e.span.begin;
     error(e.span, "sema.undefined-feature",
           rejected ? fmt::format("feature {}({}) has no definition: its FEAT at line {} was rejected (see the error there)",
                                  e.label.prefix, e.label.name, loc.line)
