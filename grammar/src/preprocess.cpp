@@ -2,6 +2,9 @@
 // Logical lines: `$` continuations joined, `$$` comments (and continued comments) removed.
 #include "metron/grammar/preprocess.hpp"
 
+#include <utility>
+#include <vector>
+
 namespace metron::grammar {
 namespace {
 
@@ -30,10 +33,11 @@ class Joiner {
     std::size_t pos = m_src.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
     const std::size_t n = m_src.size();
     while (pos < n) {
-      const std::size_t nl = m_src.find('\n', pos);
-      const std::size_t next = nl == std::string::npos ? n : nl + 1;
-      std::size_t end = nl == std::string::npos ? n : nl;
-      if (end > pos && m_src[end - 1] == '\r') --end;
+      const auto [end, next] = physical_line(pos);
+      if (!m_continued && !m_comment_continues && text_statement(pos, end)) {
+        pos = text_block(pos, end, next);
+        continue;
+      }
       line(pos, end);
       pos = next;
     }
@@ -42,6 +46,76 @@ class Joiner {
   }
 
  private:
+  /// The end of the physical line starting at `pos` (without its terminator) and where the next starts.
+  std::pair<std::size_t, std::size_t> physical_line(std::size_t pos) const {
+    const std::size_t nl = m_src.find('\n', pos);
+    const std::size_t next = nl == std::string::npos ? m_src.size() : nl + 1;
+    std::size_t end = nl == std::string::npos ? m_src.size() : nl;
+    if (end > pos && m_src[end - 1] == '\r') --end;
+    return {end, next};
+  }
+
+  /// A TEXT statement's line: `TEXT/...,'` with its string last, not continued by `$`.
+  bool text_statement(std::size_t begin, std::size_t end) const {
+    while (begin < end && is_blank(m_src[begin])) ++begin;
+    if (end - begin < 6) return false;
+    std::string head = m_src.substr(begin, 5);
+    for (char& c : head) c = static_cast<char>(c >= 'a' && c <= 'z' ? c - 32 : c);
+    if (head != "TEXT/") return false;
+    const std::size_t quote = m_src.find('\'', begin);
+    const std::size_t last = last_non_blank(m_src, begin, end);
+    return quote < end && last != end && m_src[last] != '$' && m_src.find("$$", begin) >= end;
+  }
+
+  /// CMM software writes an operator's text as it was typed: apostrophes inside it, over several
+  /// lines (CAMIO: `TEXT/OPER,'Mettre l'échelle en place;` ... `et en butée vers la gauche'`).
+  /// The string of a TEXT is its last parameter, so it runs from its first quote to the last
+  /// quote of the statement: the lines up to one ending in a quote (10 at most) are joined with a
+  /// blank, and the quotes inside are doubled (DMIS's quote in a string). Without such a line the
+  /// statement is left as it is. Returns where the next statement starts.
+  std::size_t text_block(std::size_t begin, std::size_t end, std::size_t next) {
+    std::vector<std::pair<std::size_t, std::size_t>> lines{{begin, end}};
+    std::size_t after = next;
+    auto ends_in_quote = [&](std::size_t b, std::size_t e) {
+      const std::size_t last = last_non_blank(m_src, b, e);
+      return last != e && m_src[last] == '\'' && last > m_src.find('\'', begin);
+    };
+    while (!ends_in_quote(lines.back().first, lines.back().second)) {
+      if (after >= m_src.size() || lines.size() > 10) {  // no closing line: as it is
+        line(begin, end);
+        return next;
+      }
+      const auto [e, n] = physical_line(after);
+      lines.push_back({after, e});
+      after = n;
+    }
+    for (std::size_t k = 0; k < lines.size(); ++k) {
+      if (k > 0) {  // the line break becomes a blank, placed at the break
+        m_cur.text.push_back(' ');
+        m_cur.physical.push_back(static_cast<std::uint32_t>(lines[k - 1].second));
+      }
+      append(lines[k].first, lines[k].second);
+    }
+    const std::size_t first = m_cur.text.find('\'');
+    const std::size_t last = m_cur.text.rfind('\'');
+    LogicalLine out;
+    for (std::size_t i = 0; i < m_cur.text.size(); ++i) {
+      out.text.push_back(m_cur.text[i]);
+      out.physical.push_back(m_cur.physical[i]);
+      if (m_cur.text[i] != '\'' || i == first || i == last) continue;
+      if (i + 1 < last && m_cur.text[i + 1] == '\'') {  // already doubled
+        out.text.push_back('\'');
+        out.physical.push_back(m_cur.physical[++i]);
+        continue;
+      }
+      out.text.push_back('\'');  // a lone quote inside: doubled
+      out.physical.push_back(m_cur.physical[i]);
+    }
+    m_cur = std::move(out);
+    flush();
+    return after;
+  }
+
   // One physical line [begin, end) without its line terminator.
   void line(std::size_t begin, std::size_t end) {
     if (m_comment_continues) {  // the previous line was a comment ending in a single `$`

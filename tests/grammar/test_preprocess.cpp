@@ -114,6 +114,28 @@ TEST(Preprocess, BlankLinesAfterAContinuationAreSkipped) {
   for (const auto& l : lines) expect_map_exact(src, l);
 }
 
+// CAMIO writes an operator's text as it was typed: an apostrophe inside, over several lines
+// (flatness_meas, Test_Emery-1.dmi). The string of a TEXT is its last parameter: it runs from its
+// first quote to the last, the lines joined with a blank and the quotes inside doubled.
+TEST(Preprocess, ATextsStringRunsToItsLastQuote) {
+  const std::string src = "TEXT/OPER,'Mettre l'\xC3\xA9" "chelle en place;\r\nplans paires vers vous,\r\n"
+                          "et en but\xC3\xA9" "e vers la gauche'\r\nENDFIL\n";
+  const auto lines = join_continuations(src);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].text,
+            "TEXT/OPER,'Mettre l''\xC3\xA9" "chelle en place; plans paires vers vous, et en but\xC3\xA9" "e vers la gauche'");
+  EXPECT_EQ(lines[1].text, "ENDFIL");
+  ASSERT_EQ(lines[0].physical.size(), lines[0].text.size() + 1);
+  for (std::size_t i = 1; i < lines[0].text.size(); ++i) EXPECT_LE(lines[0].physical[i - 1], lines[0].physical[i]);
+  // One line with an apostrophe; a string already doubled stays; a plain TEXT is untouched.
+  EXPECT_EQ(texts(join_continuations("TEXT/OPER,'l'outil'\n")), (std::vector<std::string>{"TEXT/OPER,'l''outil'"}));
+  EXPECT_EQ(texts(join_continuations("TEXT/OPER,'it''s'\n")), (std::vector<std::string>{"TEXT/OPER,'it''s'"}));
+  EXPECT_EQ(texts(join_continuations("TEXT/OUTFIL,'done'\n")), (std::vector<std::string>{"TEXT/OUTFIL,'done'"}));
+  // No line ending in a quote follows: the statement is left as it is (the parser reports it).
+  EXPECT_EQ(texts(join_continuations("TEXT/OPER,'open\nGOTO/1,2,3\n")),
+            (std::vector<std::string>{"TEXT/OPER,'open", "GOTO/1,2,3"}));
+}
+
 TEST(Preprocess, CommentsAreRemovedAndCommentLinesDropped) {
   const std::string src = "$$ a comment\nGOTO/1,2,3 $$ trailing note\n   \n\nENDFIL";
   const auto lines = join_continuations(src);
