@@ -94,19 +94,35 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(c
   return std::make_pair(g, figures);
 }
 
+// The nominal plane of a 2-D feature (CPARLN, ELLIPS): its normal n, its in-plane axis u and
+// v = n x u, and the ball centres in (u, v) about the nominal position.
+struct InPlane {
+  Vec3 origin, n, u, v;
+  std::vector<Eigen::Vector2d> centres;
+  [[nodiscard]] Vec3 point(const Eigen::Vector2d& q) const { return origin + q.x() * u + q.y() * v; }
+  [[nodiscard]] Vec3 axis(double angle_rad) const { return std::cos(angle_rad) * u + std::sin(angle_rad) * v; }
+};
+
+InPlane in_plane(const Geometry& nominal, const std::vector<MeasuredPoint>& points) {
+  InPlane plane;
+  plane.origin = nominal.position;
+  plane.n = nominal.direction.normalized();
+  plane.u = (nominal.slot_axis - nominal.slot_axis.dot(plane.n) * plane.n).normalized();
+  plane.v = plane.n.cross(plane.u);
+  for (const auto& p : points) {
+    const Vec3 d = p.centre_mm - nominal.position;
+    plane.centres.emplace_back(d.dot(plane.u), d.dot(plane.v));
+  }
+  return plane;
+}
+
 // CPARLN: the slot's outline fitted in its nominal plane (stdlib fitting/slot_fit.hpp) from the
 // ball centres projected onto it; the normal and the plane's height stay nominal (a 2-D feature,
 // as a circle's plane when its points are all at one depth).
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const Geometry& nominal,
     const std::vector<MeasuredPoint>& points) {
-  const Vec3 n = nominal.direction.normalized();
-  const Vec3 u = (nominal.slot_axis - nominal.slot_axis.dot(n) * n).normalized();
-  const Vec3 v = n.cross(u);
-  std::vector<Eigen::Vector2d> centres;
-  for (const auto& p : points) {
-    const Vec3 d = p.centre_mm - nominal.position;
-    centres.emplace_back(d.dot(u), d.dot(v));
-  }
+  const InPlane plane = in_plane(nominal, points);
+  const std::vector<Eigen::Vector2d>& centres = plane.centres;
   fitting::SlotOutline start;
   start.length_mm = nominal.length_mm;
   start.width_mm = nominal.width_mm;
@@ -127,9 +143,9 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const
   }
   const fitting::SlotOutline& s = fit->outline;
   Geometry g = nominal;
-  g.position = nominal.position + s.centre.x() * u + s.centre.y() * v;
-  g.direction = n;
-  g.slot_axis = std::cos(s.angle_rad) * u + std::sin(s.angle_rad) * v;
+  g.position = plane.point(s.centre);
+  g.direction = plane.n;
+  g.slot_axis = plane.axis(s.angle_rad);
   g.length_mm = s.length_mm;
   g.width_mm = s.width_mm;
   return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
@@ -139,27 +155,20 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const
 // centres projected onto it; the normal and the plane's height stay nominal, as a CPARLN's.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_ellipse(const Geometry& nominal,
     const std::vector<MeasuredPoint>& points) {
-  const Vec3 n = nominal.direction.normalized();
-  const Vec3 u = (nominal.slot_axis - nominal.slot_axis.dot(n) * n).normalized();
-  const Vec3 v = n.cross(u);
-  std::vector<Eigen::Vector2d> centres;
-  for (const auto& p : points) {
-    const Vec3 d = p.centre_mm - nominal.position;
-    centres.emplace_back(d.dot(u), d.dot(v));
-  }
+  const InPlane plane = in_plane(nominal, points);
   fitting::EllipseOutline start;
   start.major_diameter_mm = nominal.diameter_mm;
   start.minor_diameter_mm = nominal.minor_diameter_mm;
-  const auto fit = fitting::fit_ellipse(centres, points.front().ball_radius_mm, nominal.side != Side::Outer, start);
+  const auto fit = fitting::fit_ellipse(plane.centres, points.front().ball_radius_mm, nominal.side != Side::Outer, start);
   if (!fit)
     return tl::unexpected(fmt::format("cannot fit an ELLIPS to {} point{}: {}{}", points.size(),
                                       points.size() == 1 ? "" : "s", fitting::to_string(fit.error()),
                                       fit.error() == fitting::FitFailure::TooFewPoints ? " (it needs 5)" : ""));
   const fitting::EllipseOutline& e = fit->outline;
   Geometry g = nominal;
-  g.position = nominal.position + e.centre.x() * u + e.centre.y() * v;
-  g.direction = n;
-  g.slot_axis = std::cos(e.angle_rad) * u + std::sin(e.angle_rad) * v;
+  g.position = plane.point(e.centre);
+  g.direction = plane.n;
+  g.slot_axis = plane.axis(e.angle_rad);
   g.diameter_mm = e.major_diameter_mm;
   g.minor_diameter_mm = e.minor_diameter_mm;
   return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
