@@ -746,6 +746,39 @@ TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
       << tolerance(*r.session, "MN")->note;
 }
 
+// F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features. OUTPUT/FA(p) is the OUTPUT of its
+// features, in order (a composite position judges them together); elsewhere it is an error.
+TEST(ShopPrograms, APatternIsOutputAsItsFeatures) {
+  const std::string head =
+      "DMISMN/'pattern', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
+      "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(B1), 4\nENDMES\n"
+      "F(B2) = FEAT/CIRCLE, INNER, CART, 120, 30, 35, 0, 0, 1, 12\nMEAS/CIRCLE, F(B2), 4\nENDMES\n"
+      "T(C) = TOL/COMPOS, PATERN, 0.2, FEATUR, 0.05\n";
+  const auto events = [](const Ran& r) {
+    std::vector<std::string> out;
+    for (const auto& e : r.session->record().events) {
+      if (const auto* f = std::get_if<metron::runtime::FeatureReport>(&e)) out.push_back("F " + f->label);
+      if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e))
+        out.push_back(fmt::format("T {} {:.6f} {}", t->label, t->value, t->in_tolerance));
+    }
+    return out;
+  };
+  const auto listed = run(head + "OUTPUT/FA(B1), FA(B2), TA(C)\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
+  const auto pattern = run(head + "F(HOLES) = FEAT/PATERN, F(B1), F(B2)\nOUTPUT/FA(HOLES), TA(C)\nENDFIL\n",
+                           source_dir / "programs/worlds/block_deviations.json");
+  ASSERT_EQ(listed.status, ExecStatus::Finished) << listed.diagnostics;
+  ASSERT_EQ(pattern.status, ExecStatus::Finished) << pattern.diagnostics;
+  EXPECT_EQ(events(pattern), events(listed));
+  EXPECT_EQ(events(pattern).size(), 4U);  // two features, two tiers
+  EXPECT_NE(pattern.diagnostics.find("F(HOLES) is a pattern of 2 features"), std::string::npos) << pattern.diagnostics;
+  // Elsewhere a pattern is not a feature; its members must be features defined before.
+  const auto c = check("DMISMN/'p', 5.0\nF(A) = FEAT/POINT, CART, 0, 0, 0, 0, 0, 1\nF(P) = FEAT/PATERN, F(A), F(NOPE)\n"
+                       "F(B) = FEAT/POINT, CART, 1, 0, 0, 0, 0, 1\nF(Q) = FEAT/PATERN, F(A), F(B)\nDATDEF/FA(Q), DAT(A)\nF(R) = FEAT/PATERN, F(A), 3\nENDFIL\n");
+  EXPECT_TRUE(c.has("3:27: error: feature F(NOPE) is not defined")) << c.text;
+  EXPECT_TRUE(c.has("6:8: error: FA(Q) is a pattern (FEAT/PATERN): OUTPUT takes it")) << c.text;
+  EXPECT_TRUE(c.has("7:27: error: FEAT/PATERN lists the pattern's features")) << c.text;
+}
+
 // Forms found in public programs (RationalDMIS exports, CAMIO lab programs, web tutorials) that
 // metron read without a word or with a misleading one: each is now told for what it is.
 TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {

@@ -392,6 +392,17 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       ++echoed;
       continue;
     }
+    if (is_label(p, {"F", "FA"}) && m_symbols.patterns.count(upper(p.label.name)) && p.label.points.empty()) {
+      // A pattern: its features, in order, as if listed here.
+      for (const std::string& member : m_symbols.patterns.at(upper(p.label.name))) {
+        ir::Operand o = label_op(p);
+        o.label.name = member;
+        o.label.param.reset();
+        types.push_back(feature_type(member));
+        in.operands.push_back(std::move(o));
+      }
+      continue;
+    }
     if (is_label(p, {"F", "FA"})) {
       // Shop software runs a program whose OUTPUT names a feature it never measured (a
       // generator's leftover): read leniently, the item is left out with a warning.

@@ -110,6 +110,9 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     p.resize(8);
     p[0].text = "POINT";
   }
+  // F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features (a bolt circle) that an OUTPUT reports
+  // and judges together (docs/tolerances.md "Composite position").
+  if (is_word(p[0], "PATERN")) return pattern(s);
   // FEAT/RCTNGL,INNER|OUTER,CART|POL,x,y,z,i1,j1,k1,i2,j2,k2,len,wid[,depth]: a rectangular
   // pocket or block outline in its plane, which is a closed slot with square ends: metron
   // measures and reports it as CPARLN,FLAT (the same numbers in the same order).
@@ -132,8 +135,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
-    if (is_word(p[0]) && (p[0].text == "COMPOUND" ||
-                          p[0].text == "PATERN" || p[0].text == "OBJECT" ||
+    if (is_word(p[0]) && (p[0].text == "COMPOUND" || p[0].text == "OBJECT" ||
                           p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
       warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["F:" + label] = s.span;
@@ -221,6 +223,32 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   m_symbols.skipped.erase("F:" + label);
   in.payload = payload;
   emit(std::move(in));
+}
+
+// F(p)=FEAT/PATERN,F(a),F(b)[,...]: the members must be features defined before.
+void UnitCompiler::pattern(const grammar::Statement& s) {
+  const std::string label = upper(s.target->name);
+  if (s.params.size() < 3)
+    return error(s.params.back().span, "sema.pattern-members",
+                 "FEAT/PATERN lists the pattern's features: F(p)=FEAT/PATERN,F(a),F(b)[,...]");
+  std::vector<std::string> members;
+  for (std::size_t i = 1; i < s.params.size(); ++i) {
+    const grammar::Expr& e = s.params[i];
+    if (!is_label(e, {"F", "FA"}))
+      return error(e.span, "sema.pattern-members",
+                   "FEAT/PATERN lists the pattern's features: F(p)=FEAT/PATERN,F(a),F(b)[,...]");
+    if (m_symbols.patterns.count(upper(e.label.name)))
+      return error(e.span, "sema.pattern-members", fmt::format("F({}) is a pattern: a pattern lists features", e.label.name));
+    if (!check_feature(e)) return;
+    members.push_back(upper(e.label.name));
+  }
+  note_once(m_patterns_noted, s.target->span, "sema.pattern",
+            fmt::format("F({}) is a pattern of {} features: OUTPUT/FA({}) reports them and judges its tolerances on them "
+                        "together; other statements take its features one by one",
+                        s.target->name, members.size(), s.target->name));
+  m_symbols.patterns[label] = std::move(members);
+  m_symbols.skipped.erase("F:" + label);
+  emit(make(Op::Nop, s, "FEAT"));
 }
 
 // Static checks on the literal numbers of a FEAT (the last of `params`; NaN where computed at run time): a zero

@@ -78,6 +78,12 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   const std::string name = upper(e.label.name);
   if (named_at_run(name) || defines_indirectly()) return true;
   if (m_symbols.features.count(name)) return true;
+  if (m_symbols.patterns.count(name)) {
+    error(e.span, "sema.pattern-use",
+          fmt::format("{}({}) is a pattern (FEAT/PATERN): OUTPUT takes it; here name its features one by one", e.label.prefix,
+                      e.label.name));
+    return false;
+  }
   if (auto it = m_symbols.skipped.find("F:" + name); it != m_symbols.skipped.end()) {
     Diagnostic d{Severity::Error, "sema.skipped-definition", e.span,
                  fmt::format("feature {}({}) is defined only by a statement metron skipped", e.label.prefix, e.label.name), {}};

@@ -217,6 +217,7 @@ class UnitCompiler {
   bool label_indices(const grammar::LabelRef& label);
   bool label_indices(const grammar::Expr& e);
   void unknown(const grammar::Statement& s);
+  void pattern(const grammar::Statement& s);
   static std::string skipped_statement_message(const std::string& major);
   bool expect_params(const grammar::Statement& s, std::size_t n, const char* what);
   bool require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example);
@@ -345,6 +346,7 @@ class UnitCompiler {
   bool m_report_layout_noted = false;     // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
   bool m_rectangles_noted = false;        // one note per unit for FEAT/RCTNGL
+  bool m_patterns_noted = false;          // one note per unit for FEAT/PATERN
   bool m_meas_clearance_noted = false;    // one note per unit for MEAS/...,CLRSRF (RationalDMIS)
   bool m_sensor_saves_noted = false;     // one note per unit for SAVE/SA()
   bool m_variable_labels_noted = false;  // one note per unit for FA(V), V a CHAR variable

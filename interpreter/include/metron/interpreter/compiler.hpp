@@ -59,6 +59,8 @@ struct SymbolTable {
   /// Features whose last CONST used a method metron does not evaluate (OFFSET, TANTO ...): label ->
   /// the method word. Read leniently, their OUTPUT is left out with a warning.
   std::map<std::string, std::string, LabelLess> unconstructed;
+  /// F(p)=FEAT/PATERN,F(a),F(b),...: pattern label -> its features' labels (upper case), in order.
+  std::map<std::string, std::vector<std::string>, LabelLess> patterns;
   std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
   std::set<std::string, LabelLess> tolerance_datums;      ///< tolerances defined with datum references
