@@ -334,7 +334,7 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
     return program_error(span, fmt::format("cannot construct POINT F({}): {}", label, why));
   };
   const Feature* f = find_feature(source.label);
-  if (!f) return program_error(span, fmt::format("feature {} is not defined", source.label));
+  if (!f) return program_error(span, fmt::format("feature F({}) is not defined", source.label));
   if (f->points.empty())
     return fail(fmt::format("EXTREM picks one of the measured points of FA({}), which has none (it was constructed or stated)",
                             source.label));

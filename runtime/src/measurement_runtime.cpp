@@ -101,7 +101,11 @@ bool MeasurementRuntime::label_exists(const std::string& prefix, const std::stri
 
 Result<Geometry> MeasurementRuntime::resolve(const FeatureRef& ref, Span span) const {
   const Feature* f = find_feature(ref.label);
-  if (!f) return program_error(span, fmt::format("feature {} is not defined", ref.label));
+  if (!f)
+    return program_error(span, ref.actual ? fmt::format("FA({}) is not defined yet: it has no actual (one from an earlier run "
+                                                        "of the CMM software is not kept)",
+                                                        ref.label)
+                                          : fmt::format("feature F({}) is not defined", ref.label));
   if (!ref.actual) return f->nominal;
   if (!f->actual)
     return program_error(span, fmt::format("FA({}) has no actual: measure or construct it first", ref.label));
