@@ -670,7 +670,10 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     for (std::size_t i = 0; i < items.size(); ++i)
       echo += (i ? ", " : "") + (items[i].kind == OutputItem::Kind::Tolerance
                                      ? fmt::format("TA({})", items[i].tolerance)
-                                     : fmt::format("{}({})", items[i].feature.actual ? "FA" : "F", items[i].feature.label));
+                                     : fmt::format("{}({}){}", items[i].feature.actual ? "FA" : "F", items[i].feature.label,
+                                                   items[i].points ? fmt::format("[{},{}]", items[i].points->first,
+                                                                                 items[i].points->second)
+                                                                   : std::string()));
     write_device_line(echo);
   }
   for (const auto& item : items) {
