@@ -55,24 +55,57 @@ class Joiner {
     return {end, next};
   }
 
-  /// A TEXT statement's line: `TEXT/...,'` with its string last, not continued by `$`.
+  /// A letter, digit or byte of a UTF-8 character: a quote between two of them is an apostrophe.
+  static bool word_byte(char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u >= 0x80 || (c >= '0' && c <= '9') || (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+  }
+
+  /// Scans [begin, end) for strings, an apostrophe staying inside one: whether the line has an
+  /// apostrophe, and whether a string is still open at its end.
+  struct Quotes {
+    bool apostrophe = false;
+    bool open_at_end = false;
+  };
+  Quotes scan_quotes(std::size_t begin, std::size_t end) const {
+    Quotes q;
+    bool in_string = false;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (m_src[i] != '\'') continue;
+      if (!in_string) {
+        in_string = true;
+      } else if (i + 1 < end && m_src[i + 1] == '\'') {
+        ++i;  // a doubled quote
+      } else if (i > begin && i + 1 < end && word_byte(m_src[i - 1]) && word_byte(m_src[i + 1])) {
+        q.apostrophe = true;
+      } else {
+        in_string = false;
+      }
+    }
+    q.open_at_end = in_string;
+    return q;
+  }
+
+  /// A TEXT statement's line, not continued by `$`, with an apostrophe in its string or a string
+  /// still open at the end of the line.
   bool text_statement(std::size_t begin, std::size_t end) const {
     while (begin < end && is_blank(m_src[begin])) ++begin;
     if (end - begin < 6) return false;
     std::string head = m_src.substr(begin, 5);
     for (char& c : head) c = static_cast<char>(c >= 'a' && c <= 'z' ? c - 32 : c);
     if (head != "TEXT/") return false;
-    const std::size_t quote = m_src.find('\'', begin);
     const std::size_t last = last_non_blank(m_src, begin, end);
-    return quote < end && last != end && m_src[last] != '$' && m_src.find("$$", begin) >= end;
+    if (last == end || m_src[last] == '$' || m_src.find("$$", begin) < end) return false;
+    const Quotes q = scan_quotes(begin, end);
+    return q.apostrophe || q.open_at_end;
   }
 
   /// CMM software writes an operator's text as it was typed: apostrophes inside it, over several
   /// lines (CAMIO: `TEXT/OPER,'Mettre l'échelle en place;` ... `et en butée vers la gauche'`).
-  /// The string of a TEXT is its last parameter, so it runs from its first quote to the last
-  /// quote of the statement: the lines up to one ending in a quote (10 at most) are joined with a
-  /// blank, and the quotes inside are doubled (DMIS's quote in a string). Without such a line the
-  /// statement is left as it is. Returns where the next statement starts.
+  /// When a TEXT line does not end in a quote and one of the next lines (10 at most) does, the
+  /// lines are one statement, their line breaks kept inside the string. A quote between two
+  /// letters or digits (l'échelle) is an apostrophe: it is doubled, DMIS's quote in a string.
+  /// Returns where the next statement starts.
   std::size_t text_block(std::size_t begin, std::size_t end, std::size_t next) {
     std::vector<std::pair<std::size_t, std::size_t>> lines{{begin, end}};
     std::size_t after = next;
@@ -80,36 +113,30 @@ class Joiner {
       const std::size_t last = last_non_blank(m_src, b, e);
       return last != e && m_src[last] == '\'' && last > m_src.find('\'', begin);
     };
-    while (!ends_in_quote(lines.back().first, lines.back().second)) {
+    const bool open = scan_quotes(begin, end).open_at_end;
+    while (open && !ends_in_quote(lines.back().first, lines.back().second)) {
       if (after >= m_src.size() || lines.size() > 10) {  // no closing line: as it is
-        line(begin, end);
-        return next;
+        lines.resize(1);
+        after = next;
+        break;
       }
       const auto [e, n] = physical_line(after);
       lines.push_back({after, e});
       after = n;
     }
     for (std::size_t k = 0; k < lines.size(); ++k) {
-      if (k > 0) {  // the line break becomes a blank, placed at the break
-        m_cur.text.push_back(' ');
-        m_cur.physical.push_back(static_cast<std::uint32_t>(lines[k - 1].second));
-      }
+      if (k > 0) append(lines[k - 1].second, lines[k].first);  // the line break, inside the string
       append(lines[k].first, lines[k].second);
     }
-    const std::size_t first = m_cur.text.find('\'');
-    const std::size_t last = m_cur.text.rfind('\'');
     LogicalLine out;
     for (std::size_t i = 0; i < m_cur.text.size(); ++i) {
       out.text.push_back(m_cur.text[i]);
       out.physical.push_back(m_cur.physical[i]);
-      if (m_cur.text[i] != '\'' || i == first || i == last) continue;
-      if (i + 1 < last && m_cur.text[i + 1] == '\'') {  // already doubled
-        out.text.push_back('\'');
-        out.physical.push_back(m_cur.physical[++i]);
-        continue;
+      if (m_cur.text[i] == '\'' && i > 0 && i + 1 < m_cur.text.size() && word_byte(m_cur.text[i - 1]) &&
+          word_byte(m_cur.text[i + 1])) {
+        out.text.push_back('\'');  // an apostrophe: doubled
+        out.physical.push_back(m_cur.physical[i]);
       }
-      out.text.push_back('\'');  // a lone quote inside: doubled
-      out.physical.push_back(m_cur.physical[i]);
     }
     m_cur = std::move(out);
     flush();

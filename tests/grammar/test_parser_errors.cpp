@@ -63,8 +63,6 @@ INSTANTIATE_TEST_SUITE_P(Grammar, BadStatement, ::testing::Values(
   BadCase{"A/(1+2", "parse.expected-close", "expected ')' after the expression in parentheses", "1:7"},
   BadCase{"GOTO/1,2,3 %", "parse.unexpected-character", "unexpected character '%' after parameter 3 of 'GOTO'", "1:12"},
   BadCase{"GOTO/1 $ 2", "parse.unexpected-character", "unexpected character '$' after parameter 1 of 'GOTO'", "1:8"},
-  // A whole UTF-8 character (an unescaped apostrophe in a CAMIO text: 'Mettre l'échelle'), not its lead byte.
-  BadCase{"TEXT/OPER,'Mettre l'échelle'", "parse.unexpected-character", "unexpected character 'é' after parameter 2 of 'TEXT'", "1:21"},
   BadCase{"GOTO/1,2,3 \x01", "parse.unexpected-character", "unexpected character '\\x01' after parameter 3 of 'GOTO'", "1:12"},
   BadCase{"A/1 .XOR. 2", "parse.unknown-operator", "unknown operator '.XOR.' after parameter 1 of 'A'", "1:5"},
   BadCase{"A/1.5D", "parse.unexpected-character", "unexpected character 'D' after a number", "1:6"},

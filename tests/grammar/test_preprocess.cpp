@@ -115,22 +115,26 @@ TEST(Preprocess, BlankLinesAfterAContinuationAreSkipped) {
 }
 
 // CAMIO writes an operator's text as it was typed: an apostrophe inside, over several lines
-// (flatness_meas, Test_Emery-1.dmi). The string of a TEXT is its last parameter: it runs from its
-// first quote to the last, the lines joined with a blank and the quotes inside doubled.
+// (flatness_meas, Test_Emery-1.dmi). A TEXT line that does not end in a quote goes on to the line
+// that does, its line breaks inside the string; an apostrophe (a quote between letters) is doubled.
 TEST(Preprocess, ATextsStringRunsToItsLastQuote) {
   const std::string src = "TEXT/OPER,'Mettre l'\xC3\xA9" "chelle en place;\r\nplans paires vers vous,\r\n"
                           "et en but\xC3\xA9" "e vers la gauche'\r\nENDFIL\n";
   const auto lines = join_continuations(src);
   ASSERT_EQ(lines.size(), 2u);
-  EXPECT_EQ(lines[0].text,
-            "TEXT/OPER,'Mettre l''\xC3\xA9" "chelle en place; plans paires vers vous, et en but\xC3\xA9" "e vers la gauche'");
+  EXPECT_EQ(lines[0].text, "TEXT/OPER,'Mettre l''\xC3\xA9" "chelle en place;\r\nplans paires vers vous,\r\net en but\xC3\xA9"
+                           "e vers la gauche'");
   EXPECT_EQ(lines[1].text, "ENDFIL");
   ASSERT_EQ(lines[0].physical.size(), lines[0].text.size() + 1);
-  for (std::size_t i = 1; i < lines[0].text.size(); ++i) EXPECT_LE(lines[0].physical[i - 1], lines[0].physical[i]);
-  // One line with an apostrophe; a string already doubled stays; a plain TEXT is untouched.
+  for (std::size_t i = 0; i < lines[0].text.size(); ++i) EXPECT_EQ(src[lines[0].physical[i]], lines[0].text[i]) << i;
+  // One line with an apostrophe; quotes next to commas or doubled stay as they are.
   EXPECT_EQ(texts(join_continuations("TEXT/OPER,'l'outil'\n")), (std::vector<std::string>{"TEXT/OPER,'l''outil'"}));
-  EXPECT_EQ(texts(join_continuations("TEXT/OPER,'it''s'\n")), (std::vector<std::string>{"TEXT/OPER,'it''s'"}));
+  EXPECT_EQ(texts(join_continuations("TEXT/OPER,'it''s', '', 'C:\\x'\n")),
+            (std::vector<std::string>{"TEXT/OPER,'it''s', '', 'C:\\x'"}));
   EXPECT_EQ(texts(join_continuations("TEXT/OUTFIL,'done'\n")), (std::vector<std::string>{"TEXT/OUTFIL,'done'"}));
+  // A TEXT whose strings are closed is one line, whatever follows.
+  EXPECT_EQ(texts(join_continuations("TEXT/OPER,CONCAT('two:',STR(I))\nENDCAS\nTEXT/OPER,'x'\n")),
+            (std::vector<std::string>{"TEXT/OPER,CONCAT('two:',STR(I))", "ENDCAS", "TEXT/OPER,'x'"}));
   // No line ending in a quote follows: the statement is left as it is (the parser reports it).
   EXPECT_EQ(texts(join_continuations("TEXT/OPER,'open\nGOTO/1,2,3\n")),
             (std::vector<std::string>{"TEXT/OPER,'open", "GOTO/1,2,3"}));
