@@ -101,6 +101,14 @@ struct InPlane {
   std::vector<Eigen::Vector2d> centres;
   [[nodiscard]] Vec3 point(const Eigen::Vector2d& q) const { return origin + q.x() * u + q.y() * v; }
   [[nodiscard]] Vec3 axis(double angle_rad) const { return std::cos(angle_rad) * u + std::sin(angle_rad) * v; }
+  /// The nominal placed where the fit found it: centre and in-plane axis; the normal stays nominal.
+  [[nodiscard]] Geometry placed(const Geometry& nominal, const Eigen::Vector2d& centre, double angle_rad) const {
+    Geometry g = nominal;
+    g.position = point(centre);
+    g.direction = n;
+    g.slot_axis = axis(angle_rad);
+    return g;
+  }
 };
 
 InPlane in_plane(const Geometry& nominal, const std::vector<MeasuredPoint>& points) {
@@ -142,10 +150,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const
         fmt::format("cannot fit a CPARLN to {} points: {}", points.size(), fitting::to_string(fit.error())));
   }
   const fitting::SlotOutline& s = fit->outline;
-  Geometry g = nominal;
-  g.position = plane.point(s.centre);
-  g.direction = plane.n;
-  g.slot_axis = plane.axis(s.angle_rad);
+  Geometry g = plane.placed(nominal, s.centre, s.angle_rad);
   g.length_mm = s.length_mm;
   g.width_mm = s.width_mm;
   return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
@@ -165,10 +170,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_ellipse(const Geo
                                       points.size() == 1 ? "" : "s", fitting::to_string(fit.error()),
                                       fit.error() == fitting::FitFailure::TooFewPoints ? " (it needs 5)" : ""));
   const fitting::EllipseOutline& e = fit->outline;
-  Geometry g = nominal;
-  g.position = plane.point(e.centre);
-  g.direction = plane.n;
-  g.slot_axis = plane.axis(e.angle_rad);
+  Geometry g = plane.placed(nominal, e.centre, e.angle_rad);
   g.diameter_mm = e.major_diameter_mm;
   g.minor_diameter_mm = e.minor_diameter_mm;
   return std::make_pair(g, FitFigures{fit->residuals_mm, fit->rms_mm, fit->form_mm});
