@@ -139,6 +139,7 @@ struct Controller {
   // virtual_cmm.cpp
   void define_tool(const DefineTool& body, Response& response);
   void scan(const ScanPath& body, Response& response);
+  void contour_scan(const ContourScan& body, Response& response);
   Response run(const Command& command);
 };
 

@@ -160,6 +160,8 @@ Response NominalMachine::run(const Command& command) {
       response.scan_log.push_back(fmt::format("dry run: {} samples along the nominal path, {} mm apart", response.scan.size(), spacing));
     } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
       fail(FaultKind::BadCommand, "a dry run scans whole paths only");
+    } else if constexpr (std::is_same_v<T, ContourScan>) {
+      fail(FaultKind::BadCommand, "a dry run has no surface to follow: an unknown-contour scan needs a machine");
     }
   }, command.body);
   response.end_time_s = m_time_s;

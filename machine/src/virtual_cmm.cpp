@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "controller.hpp"
+#include "metron/machine/active_scanning/contour_scan.hpp"
 #include "metron/machine/aborted_response.hpp"
 
 namespace metron::machine {
@@ -60,6 +61,30 @@ void Controller::scan(const ScanPath& body, Response& response) {
   sim.set_time(now());
   const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
   ScanOutcome out = run_scan(body, setup, position, now(), [&](const ScanCycle& c) {
+    emit(c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s.norm());
+    motion.scan.push_back({c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s});
+  });
+  position = out.end_position_mm;
+  cycle += cycles_for(out.end_time_s - now());
+  response.scan = std::move(out.samples);
+  response.scan_log = std::move(out.log);
+  if (out.fault) fail(*out.fault);
+}
+
+// An unknown-contour scan (docs/scanning.md, "Unknown contours"): position to the approach
+// point, then the contour-following controller.
+void Controller::contour_scan(const ContourScan& body, Response& response) {
+  const auto fail = [&](Fault f) {
+    response.status = Response::Status::Fault;
+    response.fault = std::move(f);
+  };
+  const Tool* tool = active_tool();
+  if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
+  if (const std::string bad = validate_contour_scan(body); !bad.empty()) return fail({FaultKind::BadCommand, bad, position, now()});
+  if (auto ok = move_to(contour_approach_point(body), positioning_feed); !ok) return fail(ok.error());
+  sim.set_time(now());
+  const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
+  ScanOutcome out = run_contour_scan(body, setup, position, now(), [&](const ScanCycle& c) {
     emit(c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s.norm());
     motion.scan.push_back({c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s});
   });
@@ -134,6 +159,9 @@ Response Controller::run(const Command& command) {
       motion.what = "scan";
     } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
       write_scan_buffer(body, response);
+    } else if constexpr (std::is_same_v<T, ContourScan>) {
+      contour_scan(body, response);
+      motion.what = "unknown-contour scan";
     }
   }, command.body);
   response.end_time_s = now();

@@ -167,3 +167,38 @@ TEST(IppClient, ALostServerIsACommunicationFault) {
   ASSERT_TRUE(r[1].fault);
   EXPECT_EQ(r[1].fault->kind, FaultKind::Aborted);
 }
+
+// An unknown-contour scan goes to the server as its I++ command (ScanInPlaneEndIsSphere) and
+// comes back as the same samples the virtual CMM gives directly: BORE1 followed round.
+TEST(IppClient, AnUnknownContourScanThroughTheServerEqualsTheDirectOne) {
+  LoopbackServer server;
+  ContourScan c;
+  c.start_mm = Vec3(349, 250, 30);
+  c.start_normal = -Vec3::UnitX();
+  c.direction = Vec3::UnitY();
+  c.section = {ContourSection::Kind::Plane, c.start_mm, Vec3::UnitZ()};
+  c.end = {ContourEnd::Kind::Sphere, c.start_mm, Vec3::UnitZ(), 1.0, 1};
+  c.sample_spacing_mm = 0.5;
+  c.speed_mm_s = 10;
+  const std::vector<Body> program{SelectTool{"Probe1"}, GoTo{Vec3(340, 250, 60), std::nullopt},
+                                  GoTo{Vec3(340, 250, 30), std::nullopt}, c};
+  std::vector<Response> via;
+  {
+    ipp::ClientMachine client("127.0.0.1", server.port());
+    via = run(client, program);
+  }
+  server.stop();
+  VirtualCmm direct(machine::default_world(), 1);
+  run(direct, {DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0}, GoTo{machine::default_world().machine.home_mm, std::nullopt}});
+  const auto expected = run(direct, program);
+  ASSERT_EQ(via.size(), 4u);
+  ASSERT_EQ(via[3].status, Response::Status::Done) << via[3].fault->message;
+  ASSERT_EQ(expected[3].status, Response::Status::Done) << expected[3].fault->message;
+  const auto& a = via[3].scan;
+  const auto& b = expected[3].scan;
+  ASSERT_GT(a.size(), 100u);
+  EXPECT_NEAR(static_cast<double>(a.size()), static_cast<double>(b.size()), 2);
+  for (std::size_t k = 0; k < std::min(a.size(), b.size()); k += 10)
+    EXPECT_NEAR((a[k].centre_mm - b[k].centre_mm).norm(), 0, 0.01) << k;
+  for (const auto& s : a) EXPECT_NEAR(std::hypot(s.centre_mm.x() - 340, s.centre_mm.y() - 250), 9, 0.02);
+}

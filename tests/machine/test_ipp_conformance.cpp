@@ -191,9 +191,10 @@ TEST(IppConformance, NistFilesReplay) {
   if (const char* out = std::getenv("METRON_IPP_CONFORMANCE_TABLE")) std::ofstream(out) << table.str() << "\n" << details.str();
   RecordProperty("commands", static_cast<int>(commands));
   RecordProperty("matched", static_cast<int>(matched));
-  // Regression floor (900 of 1213 measured 2026-11-25; most differences are the class-3 error
-  // state, docs/ipp-dme.md); the files below match completely.
-  EXPECT_GE(matched, 900u) << matched << " of " << commands;
+  // Regression floor (950 of 1213 measured 2026-11-30, 918 before the ScanIn... commands' argument
+  // checks; most differences are the class-3 error state, docs/ipp-dme.md); the files below match
+  // completely.
+  EXPECT_GE(matched, 945u) << matched << " of " << commands;
   for (const char* f : {"StartSession", "EndSession", "ClearAllErrors", "GetDMEVersion", "IsHomed", "Home",
                         "GetErrStatusE", "GetXtdErrStatus", "EnableUser", "DisableUser", "IsUserEnabled",
                         "GetCoordSystem", "SetCoordSystem", "StopDaemon", "AbortE", "ChangeTool", "FindTool", "SetTool",

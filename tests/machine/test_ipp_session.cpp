@@ -456,6 +456,19 @@ TEST(IppSession, FuzzedSessionNeverCrashes) {
     ASSERT_FALSE(reply.lines.empty()) << s;
     for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
   }
+  // The unknown-contour scans, mutated the same way.
+  const std::vector<std::string> contour_seeds{
+      "00100 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)",
+      "00110 ScanInCylEndIsSphere(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 325, 250, 41, 2, 0, 0, 1)",
+      "00120 GoTo(X(450), Y(250), Z(60))", "00130 ClearAllErrors()"};
+  for (int i = 0; i < 300; ++i) {
+    std::string s = contour_seeds[rng() % contour_seeds.size()];
+    const int edits = static_cast<int>(rng() % 3);
+    for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = "0123456789(),.-EXYZ\""[rng() % 20];
+    const auto reply = f.session.handle(s);
+    ASSERT_FALSE(reply.lines.empty()) << s;
+    for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
+  }
 }
 
 // ScanOnCurveDensity: Dis bounds the distance between reported points, Angle the turn between
@@ -496,4 +509,85 @@ TEST(IppSession, ScanOnCurveDensityBoundsTheReportedPoints) {
   EXPECT_EQ(f.error("00052 ScanOnCurveDensity(Dis(0))"), static_cast<int>(ErrorCode::BadArgument));
   EXPECT_EQ(f.error("00053 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00054 ScanOnCurveDensity()"), static_cast<int>(ErrorCode::IncorrectArguments));
+}
+
+// The unknown-contour scans (ScanIn...): the server's probe follows surfaces the client did not
+// describe. Expected values are the perfect world's true surfaces (a 2 mm ball: centres 1 mm off).
+TEST(IppSession, ScanInPlaneEndIsSphereFollowsABoreRoundToItsStart) {
+  Fixture f;
+  f.start();
+  ASSERT_EQ(f.error("00010 GoTo(X(340), Y(250), Z(60))"), 0);
+  ASSERT_EQ(f.error("00011 GoTo(X(340), Y(250), Z(30))"), 0);
+  // BORE1 (diameter 20 at (340, 250)): in the plane z = 30, setting off along +y, ending back in
+  // a 1 mm sphere about the start.
+  const auto v = csv_numbers(f.data("00020 ScanInPlaneEndIsSphere(349, 250, 30, -1, 0, 0, 349, 251, 30, 0.5, 349, 250, 30, 1, -1, 0, 0)"));
+  ASSERT_GE(v.size(), 3u * 100);
+  double worst = 0, turned = 0, last = 0;
+  for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
+    worst = std::max(worst, std::abs(std::hypot(v[k] - 340, v[k + 1] - 250) - 9));
+    EXPECT_NEAR(v[k + 2], 30, 0.01) << k;
+    const double a = std::atan2(v[k + 1] - 250, v[k] - 340);
+    if (k > 0) turned += std::remainder(a - last, 2 * std::numbers::pi);
+    last = a;
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_NEAR(turned, 2 * std::numbers::pi, 0.2);
+  const std::size_t end = v.size() / 3 * 3 - 3;
+  EXPECT_LT(std::hypot(v[end] - 349, v[end + 1] - 250), 0.5 + 0.02);
+}
+
+TEST(IppSession, ScanInPlaneEndIsPlaneGoesOverAnEdgeAndDown) {
+  Fixture f;
+  f.start();
+  ASSERT_EQ(f.error("00010 GoTo(X(450), Y(250), Z(60))"), 0);
+  // Along the top toward the right face (x = 460), round its edge and down the face until the
+  // ball centre crosses z = 30.
+  const auto v = csv_numbers(f.data("00020 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)"));
+  ASSERT_GE(v.size(), 3u * 30);
+  double worst = 0;
+  int on_face = 0;
+  for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
+    // Beyond the edge itself the world's CSG block is a sharp box (docs/world.md): not checked.
+    const double dx = std::max(0.0, v[k] - 460), dz = std::max(0.0, v[k + 2] - 40);
+    if (dx == 0 || dz == 0) worst = std::max(worst, std::abs(std::hypot(dx, dz) - 1));
+    EXPECT_NEAR(v[k + 1], 250, 0.01) << k;
+    on_face += v[k + 2] < 39;
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_GT(on_face, 10);
+  EXPECT_NEAR(v[v.size() / 3 * 3 - 1], 30, 0.3);
+}
+
+TEST(IppSession, ScanInCylEndIsPlaneCirclesTheTopFaceAboutAnAxis) {
+  Fixture f;
+  f.start();
+  ASSERT_EQ(f.error("00010 GoTo(X(355), Y(250), Z(60))"), 0);
+  // The top face about BORE1's axis at 15 mm, until the ball centre crosses the plane y = 250
+  // again: half a turn.
+  const auto v = csv_numbers(
+      f.data("00020 ScanInCylEndIsPlane(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 340, 250, 0, 0, 1, 0, 1, 0, 0, 1)"));
+  ASSERT_GE(v.size(), 3u * 40);
+  for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
+    EXPECT_NEAR(std::hypot(v[k] - 340, v[k + 1] - 250), 15, 0.01) << k;
+    EXPECT_NEAR(v[k + 2], 41, 0.01) << k;
+  }
+  const std::size_t end = v.size() / 3 * 3 - 3;
+  EXPECT_NEAR(v[end], 325, 0.1);
+  EXPECT_NEAR(v[end + 1], 250, 1.1);
+}
+
+// The NIST checker's cases (checkerCmdErrors.res): a zero vector is 1010, a direction point at the
+// start or a start on the section cylinder's axis 0502, a wrong count 0502.
+TEST(IppSession, ScanInArgumentErrors) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00010 ScanInPlaneEndIsSphere(1,2,3,0,0,0,7,8,9,10,1,2,3,4,5,6,7)"), 1010);
+  EXPECT_EQ(f.error("00011 ScanInPlaneEndIsSphere(1,2,3,4,5,6,7,8,9,10,1,2,3,4,0,0,0)"), 1010);
+  EXPECT_EQ(f.error("00012 ScanInCylEndIsPlane(1,2,3,4,5,6,7,8,9,0,1,2,7,8,9,6,7,8,9,0,1,2,3,4,5,6)"), 502);
+  EXPECT_EQ(f.error("00013 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00014 ScanInCylEndIsSphere(1,2,3,4,5,6,1,2,3,10,1,2,3,4,5,6,7,8,9,10,1,2,3)"), 502);
+  EXPECT_EQ(f.error("00015 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00016 ScanInPlaneEndIsPlane(1,2,3,4,5,6,7,8,9,10)"), 502);
+  EXPECT_EQ(f.error("00017 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00018 ScanInPlaneEndIsCyl(1,2,3,4,5,6,1,2,3,10,1,2,3,4,5,6,7,8,9,10,1)"), 502);
 }

@@ -288,7 +288,51 @@ struct ClientMachine::Impl {
       data += (k ? ", " : "") + number(p.x()) + ", " + number(p.y()) + ", " + number(p.z()) + ", " + number(n.x()) + ", " +
               number(n.y()) + ", " + number(n.z());
     }
-    const double speed = body.speed_mm_s.value_or(measuring_feed);
+    return scan_command(command_tag, std::string("ScanOnCurve(Closed(") + (closed ? "1" : "0") + "), Format(X(), Y(), Z(), IJK()), Data(" + data + "))",
+                        e0, body.speed_mm_s.value_or(measuring_feed), body.sample_spacing_mm, true);
+  }
+
+  // An unknown-contour scan is the I++ DME ScanIn... command of its section and end (docs/ipp-dme.md).
+  Response contour_scan(std::uint64_t command_tag, const ContourScan& body) {
+    const auto v3 = [](const Vec3& p) { return number(p.x()) + ", " + number(p.y()) + ", " + number(p.z()); };
+    const Vec3 n = body.start_normal.normalized();
+    const double step = body.sample_spacing_mm > 0 ? body.sample_spacing_mm : 0.1;
+    // I++ gives the direction as a point D: the start plus the direction.
+    const std::string start = v3(body.start_mm) + ", " + v3(n) + ", " + v3(body.start_mm + body.direction.normalized()) + ", " + number(step);
+    std::string end;
+    const Vec3 ed = body.end.direction.normalized();
+    switch (body.end.kind) {
+      case ContourEnd::Kind::Sphere: end = "EndIsSphere"; break;
+      case ContourEnd::Kind::Plane: end = "EndIsPlane"; break;
+      case ContourEnd::Kind::Cylinder: end = "EndIsCyl"; break;
+    }
+    std::string end_args = v3(body.end.point_mm);
+    if (body.end.kind == ContourEnd::Kind::Sphere) end_args += ", " + number(body.end.diameter_mm);
+    else if (body.end.kind == ContourEnd::Kind::Plane) end_args += ", " + v3(ed) + ", " + std::to_string(body.end.crossings);
+    else end_args += ", " + v3(ed) + ", " + number(body.end.diameter_mm) + ", " + std::to_string(body.end.crossings);
+    end_args += ", " + v3(n);  // the surface normal at the end: not known ahead, the start's stands for it
+    std::string text;
+    if (body.section.kind == ContourSection::Kind::Plane) {
+      text = "ScanInPlane" + end + "(" + start + ", " + end_args + ")";
+    } else {
+      if (body.end.kind == ContourEnd::Kind::Cylinder) {
+        Response r;
+        r.tag = command_tag;
+        r.status = Response::Status::Fault;
+        r.fault = Fault{FaultKind::BadCommand, "I++ DME has no cylinder section with a cylinder end (ScanInCylEndIsCyl)", last_position, 0};
+        return r;
+      }
+      text = "ScanInCyl" + end + "(" + v3(body.section.point_mm) + ", " + v3(body.section.direction.normalized()) + ", " + start + ", " + end_args + ")";
+    }
+    return scan_command(command_tag, text, body.reference_deflection_mm.value_or(0.3), body.speed_mm_s.value_or(measuring_feed),
+                        body.sample_spacing_mm, false);
+  }
+
+  /// Sends a scan command with its speed and report format and reads its samples (X, Y, Z, IJK).
+  Response scan_command(std::uint64_t command_tag, const std::string& text, double e0, double speed, double spacing_mm,
+                        bool density_applies) {
+    Response done;
+    done.tag = command_tag;
     auto fault_of = [&](const Answer& a) -> std::optional<Response> {
       if (a.error && a.error->severity >= 2) return fault(command_tag, *a.error);
       return std::nullopt;
@@ -297,15 +341,15 @@ struct ClientMachine::Impl {
       if (auto f = fault_of(call("SetProp(Tool.PtMeasPar.Speed(" + number(speed) + "))"))) return *f;
     if (auto f = fault_of(call("OnScanReport(X(), Y(), Z(), IJK())"))) return *f;
     // The program's point density (SCNSET): at most this far apart, if the server takes it.
-    if (body.sample_spacing_mm > 0 && density_supported) {
-      const Answer d = call("ScanOnCurveDensity(Dis(" + number(body.sample_spacing_mm) + "))");
+    if (density_applies && spacing_mm > 0 && density_supported) {
+      const Answer d = call("ScanOnCurveDensity(Dis(" + number(spacing_mm) + "))");
       if (d.error) {
         density_supported = false;
         warn("the I++ server does not take ScanOnCurveDensity (" + d.error->error_text +
-             "): scanned points are as dense as the server chooses, not every " + number(body.sample_spacing_mm) + " mm");
+             "): scanned points are as dense as the server chooses, not every " + number(spacing_mm) + " mm");
       }
     }
-    const Answer a = call(std::string("ScanOnCurve(Closed(") + (closed ? "1" : "0") + "), Format(X(), Y(), Z(), IJK()), Data(" + data + "))");
+    const Answer a = call(text);
     if (auto f = fault_of(a)) return *f;
     std::vector<double> v;
     for (const auto& body_line : a.data) {
@@ -441,6 +485,8 @@ struct ClientMachine::Impl {
             return done;
           } else if constexpr (std::is_same_v<T, ScanPath>) {
             return scan(c.tag, body);
+          } else if constexpr (std::is_same_v<T, ContourScan>) {
+            return contour_scan(c.tag, body);
           } else {
             Response r;
             r.tag = c.tag;

@@ -78,8 +78,7 @@ struct CommandError {
 // Commands the standard defines that this server answers with 0501 "Unsupported command".
 const std::set<std::string> k_unsupported{"AlignPart",         "CenterPart",          "TiltPart",
                                           "TiltCenterPart",    "LockAxis",
-                                          "ScanInCylEndIsPlane", "ScanInCylEndIsSphere", "ScanInPlaneEndIsCyl",
-                                          "ScanInPlaneEndIsPlane", "ScanInPlaneEndIsSphere", "ScanOnCircleHint",
+                                          "ScanOnCircleHint",
                                           "ScanOnLineHint",    "ScanOnCurveHint",
                                           "OnScanReportE"};
 
@@ -593,6 +592,11 @@ struct Session::Impl {
     sp.speed_mm_s = tool().numbers.at("PtMeasPar.Speed").act;
     const Response resp = run(sp);
     move_reports();
+    report_scan(resp);
+  }
+
+  /// Answers a scan's samples in the OnScanReport format.
+  void report_scan(const Response& resp) {
     std::string body;
     for (const auto& sample : resp.scan) {
       const Vec3 p = to_csy(sample.centre_mm);
@@ -690,6 +694,82 @@ struct Session::Impl {
     if (length / step > k_max_scan_samples) fail(ErrorCode::ArgumentOutOfRange);
     sp.sample_spacing_mm = step;
     run_scan(sp);
+  }
+
+  // The unknown-contour scans (I++ DME 1.5): the probe follows the surface it feels, its ball
+  // centre held in a plane or on a cylinder, from a start until an end condition.
+  //   ScanInPlaneEndIsSphere(S, Sijk, D, StepW, E, Dia, Eijk)
+  //   ScanInPlaneEndIsPlane(S, Sijk, D, StepW, P, Pijk, Num, Eijk)
+  //   ScanInPlaneEndIsCyl(S, Sijk, D, StepW, C, Cijk, Dia, Num, Eijk)
+  //   ScanInCylEndIsSphere(C, Cijk, S, Sijk, D, StepW, E, Dia, Eijk)
+  //   ScanInCylEndIsPlane(C, Cijk, S, Sijk, D, StepW, P, Pijk, Num, Eijk)
+  // S: the ball centre at the nominal contact (as PtMeas), Sijk the surface normal there; D a
+  // point the scan sets off toward; the plane section contains S, Sijk and D; the cylinder
+  // section is about the axis C, Cijk through S. The scan ends when the ball centre enters the
+  // sphere of diameter Dia about E, or has crossed the plane (P, Pijk) or the cylinder (C, Cijk,
+  // Dia) Num times. Eijk, the normal at the end, is read: the retract follows the normal felt.
+  void scan_in(const std::string& name, const Args& a) {
+    require_motion_ready();
+    const auto v = numbers(a);
+    const bool in_cyl = name.rfind("ScanInCyl", 0) == 0;
+    const std::string end_kind = name.substr(name.find("EndIs") + 5);
+    const std::size_t head = in_cyl ? 6 : 0;  // the section cylinder's axis comes first
+    const std::size_t end_size = end_kind == "Sphere" ? 7 : end_kind == "Plane" ? 10 : 11;
+    if (v.size() != head + 10 + end_size) fail(ErrorCode::IncorrectArguments);
+    const auto vec = [&](std::size_t i) { return Vec3(v[i], v[i + 1], v[i + 2]); };
+    const auto unit = [&](std::size_t i) {
+      const Vec3 d = vec(i);
+      if (d.norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);
+      return Vec3(dir_to_machine(d.normalized()));
+    };
+    ContourScan c;
+    const std::size_t s = head, e = head + 10;
+    if (in_cyl) {
+      c.section.kind = ContourSection::Kind::Cylinder;
+      c.section.point_mm = to_machine(vec(0));
+      c.section.direction = unit(3);
+    }
+    c.start_mm = to_machine(vec(s));
+    c.start_normal = unit(s + 3);
+    const Vec3 toward = to_machine(vec(s + 6)) - c.start_mm;
+    const double step = v[s + 9];
+    (void)unit(e + end_size - 3);  // Eijk: must be a direction
+    if (end_kind == "Sphere") {
+      c.end.kind = ContourEnd::Kind::Sphere;
+      c.end.point_mm = to_machine(vec(e));
+      c.end.diameter_mm = v[e + 3];
+    } else {
+      c.end.kind = end_kind == "Plane" ? ContourEnd::Kind::Plane : ContourEnd::Kind::Cylinder;
+      c.end.point_mm = to_machine(vec(e));
+      c.end.direction = unit(e + 3);
+      if (end_kind == "Cyl") c.end.diameter_mm = v[e + 6];
+      const double num = v[e + (end_kind == "Cyl" ? 7 : 6)];
+      if (num < 1 || num != std::floor(num) || num > 1000) fail(ErrorCode::BadArgument);
+      c.end.crossings = static_cast<int>(num);
+    }
+    // NIST: D at S (no direction), or S on the section cylinder's axis, is 0502.
+    const Vec3 across = toward - toward.dot(c.start_normal) * c.start_normal;
+    if (toward.norm() < 1e-9 || across.norm() < 1e-9 * std::max(1.0, toward.norm())) fail(ErrorCode::IncorrectArguments);
+    if (in_cyl) {
+      const Vec3 r = c.start_mm - c.section.point_mm;
+      if ((r - r.dot(c.section.direction) * c.section.direction).norm() < 1e-9) fail(ErrorCode::IncorrectArguments);
+    } else {
+      c.section.point_mm = c.start_mm;
+      c.section.direction = c.start_normal.cross(across).normalized();
+    }
+    c.direction = across.normalized();
+    if (!(step > 0)) fail(ErrorCode::BadArgument);
+    if (end_kind != "Plane" && !(c.end.diameter_mm > 0)) fail(ErrorCode::BadArgument);
+    require_probing_tool();
+    c.reference_deflection_mm = options.scan_reference_deflection_mm;
+    c.sample_spacing_mm = step;
+    // At most k_max_scan_samples samples: a client cannot make the server allocate without bound.
+    c.max_length_mm = std::min(c.max_length_mm, step * k_max_scan_samples);
+    if (scan_hint_min_radius_mm > 0) c.min_radius_mm = scan_hint_min_radius_mm;
+    c.speed_mm_s = tool().numbers.at("PtMeasPar.Speed").act;
+    const Response resp = run(c);
+    move_reports();
+    report_scan(resp);
   }
 
   // ScanOnCurveDensity(Dis(d), Angle(a), AngleBaseLength(b), AtNominals(0|1)), any of them, for
@@ -916,6 +996,9 @@ struct Session::Impl {
       scan(n, a);
     } else if (n == "ScanOnCurve") {
       scan_on_curve(a);
+    } else if (n.rfind("ScanIn", 0) == 0 && (n == "ScanInPlaneEndIsSphere" || n == "ScanInPlaneEndIsPlane" || n == "ScanInPlaneEndIsCyl" ||
+                                              n == "ScanInCylEndIsSphere" || n == "ScanInCylEndIsPlane")) {
+      scan_in(n, a);
     } else if (k_unsupported.count(n)) {
       // Commands that would move the machine need Home first, supported or not (NIST: 0507).
       if (n != "OnScanReportE" && n.rfind("Scan", 0) == 0 && n.find("Hint") == std::string::npos) require_motion_ready();

@@ -61,6 +61,12 @@ void CompensatedMachine::submit(Command command) {
         const Vec3 start = s->path.segments.front().start();
         shift(s->path.segments, command_for(start) - start);
       }
+    } else if (auto* c = std::get_if<ContourScan>(&command.body)) {
+      // One shift for the whole scan (its start), as for a path: the section and the end move with it.
+      const Vec3 shift_mm = command_for(c->start_mm) - c->start_mm;
+      c->start_mm += shift_mm;
+      c->section.point_mm += shift_mm;
+      c->end.point_mm += shift_mm;
     } else if (auto* w = std::get_if<ScanBufferWrite>(&command.body)) {
       // One shift for the whole scan (its first command's start), so the pieces still join.
       if (w->command.index == 0 && !w->command.segments.empty()) {

@@ -104,10 +104,49 @@ struct ScanBufferWrite {
   segmented::MeasurementCommand command;  ///< Ci: index, first segment, segments, normals, last
 };
 
+/// Where an unknown-contour scan keeps the ball centre: in a plane, or on a cylinder about an axis
+/// at the start's distance from it.
+struct ContourSection {
+  enum class Kind { Plane, Cylinder } kind = Kind::Plane;
+  Vec3 point_mm = Vec3::Zero();       ///< Plane: a point of it; Cylinder: a point of the axis
+  Vec3 direction = Vec3::UnitZ();     ///< Plane: its normal; Cylinder: the axis (unit)
+};
+
+/// When an unknown-contour scan ends: the ball centre enters a sphere, or crosses a plane or a
+/// cylinder (unbounded) a number of times.
+struct ContourEnd {
+  enum class Kind { Sphere, Plane, Cylinder } kind = Kind::Sphere;
+  Vec3 point_mm = Vec3::Zero();       ///< Sphere: its centre; Plane: a point of it; Cylinder: a point of the axis
+  Vec3 direction = Vec3::UnitZ();     ///< Plane: its normal; Cylinder: the axis (unit); Sphere: unused
+  double diameter_mm = 0;             ///< Sphere and Cylinder
+  int crossings = 1;                  ///< Plane and Cylinder: stop at this crossing
+};
+
+/// Unknown-contour scan with the scanning probe (I++ DME ScanInPlaneEndIs..., ScanInCylEndIs...):
+/// approach `start_mm` (the ball centre at the nominal contact) along -start_normal until the
+/// deflection reaches E0, then follow the surface the probe feels, the ball centre held in
+/// `section`, setting off along `direction`, until `end`; retract along the last deflection.
+struct ContourScan {
+  Vec3 start_mm = Vec3::Zero();       ///< ball centre at the nominal contact
+  Vec3 start_normal = Vec3::UnitZ();  ///< surface normal there (approach from here)
+  Vec3 direction = Vec3::UnitX();     ///< first direction of travel (unit, across the normal)
+  ContourSection section;
+  ContourEnd end;
+  std::optional<double> speed_mm_s;   ///< scan feed; default: the machine's scanning feed
+  std::optional<double> reference_deflection_mm;  ///< E0; default: the probe's
+  double sample_spacing_mm = 0.1;     ///< record a sample every this much travel (0: every cycle)
+  double approach_mm = 2.0;           ///< start distance before the surface
+  double retract_mm = 2.0;            ///< retract distance after the end
+  double max_length_mm = 5000;        ///< travel after which a scan that did not end is stopped (a fault)
+  /// The smallest radius of curvature the contour is expected to have (I++ DME ScanUnknownHint):
+  /// the feed keeps within the centripetal limit for it from the start.
+  std::optional<double> min_radius_mm;
+};
+
 /// A command with the client's tag (the runtime uses it to find the originating statement).
 struct Command {
   std::uint64_t tag = 0;
-  std::variant<GoTo, PtMeas, DefineTool, SelectTool, QualifyTool, SetFeeds, ScanPath, ScanBufferWrite> body;
+  std::variant<GoTo, PtMeas, DefineTool, SelectTool, QualifyTool, SetFeeds, ScanPath, ScanBufferWrite, ContourScan> body;
 };
 
 /// A probed point as the controller reports it.
@@ -155,7 +194,7 @@ struct Response {
   std::optional<Hit> hit;             ///< for PtMeas
   std::optional<ToolInfo> tool;       ///< for DefineTool, SelectTool, QualifyTool
   std::optional<Fault> fault;         ///< when status == Fault
-  std::vector<ScanSample> scan;       ///< for ScanPath (ScanBufferWrite): the samples up to the end or the fault (since the last write)
+  std::vector<ScanSample> scan;       ///< for ScanPath (ScanBufferWrite, ContourScan): the samples up to the end or the fault (since the last write)
   std::vector<std::string> scan_log;  ///< for ScanPath: which speed limit bound where, and the scan's figures
   double start_time_s = 0;            ///< the controller clock when the command started (a sensor)
   double end_time_s = 0;              ///< the controller clock when it ended (the machine at rest)
