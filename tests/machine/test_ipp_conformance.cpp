@@ -237,7 +237,7 @@ TEST(IppConformance, NistParserErrorNumbers) {
   RecordProperty("parser_cases", cases);
   RecordProperty("parser_same", same);
   EXPECT_GT(cases, 150);
-  EXPECT_GE(same, 188) << same << " of " << cases;  // measured 2026-11-25
+  EXPECT_GE(same, 215) << same << " of " << cases;  // 219 measured 2026-11-30 (188 before the ScanIn... and hint commands)
 }
 
 namespace {

@@ -179,7 +179,9 @@ TEST(IppSession, NistContextErrors) {
   EXPECT_EQ(f.error("00001 StartSession()"), 0);
   EXPECT_EQ(f.error("00002 StartSession()"), 507);
   EXPECT_EQ(f.error("00003 ClearAllErrors()"), 0);
-  EXPECT_EQ(f.error("00004 ScanOnCircleHint(10, 1)"), 501);  // no motion: unsupported, homed or not
+  EXPECT_EQ(f.error("00004 ScanOnCircleHint(10, 1)"), 0);  // a hint: no motion, homed or not
+  EXPECT_EQ(f.error("00041 ScanOnLineHint(1)"), 502);      // NIST parserCmdErrors 04301
+  EXPECT_EQ(f.error("00042 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00005 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00006 Home()"), 0);
   EXPECT_EQ(f.error("00007 AlignPart(1,0,0,0,1,0,30)"), 501);

@@ -76,10 +76,7 @@ struct CommandError {
 };
 
 // Commands the standard defines that this server answers with 0501 "Unsupported command".
-const std::set<std::string> k_unsupported{"AlignPart",         "CenterPart",          "TiltPart",
-                                          "TiltCenterPart",    "LockAxis",
-                                          "ScanOnCircleHint",
-                                          "ScanOnLineHint",    "ScanOnCurveHint",
+const std::set<std::string> k_unsupported{"AlignPart", "CenterPart", "TiltPart", "TiltCenterPart", "LockAxis",
                                           "OnScanReportE"};
 
 bool is_event_command(std::string_view name) {
@@ -990,6 +987,13 @@ struct Session::Impl {
       if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
       if (!a[0].is_number() || a[0].number <= 0) fail(ErrorCode::BadArgument);
       scan_hint_min_radius_mm = a[0].number;
+    } else if (n == "ScanOnCircleHint" || n == "ScanOnLineHint" || n == "ScanOnCurveHint") {
+      // Hints (I++ DME 1.5, 4.3.2.2.1.1): the expected deviations from the nominal (circle:
+      // displacement and form; line: angle and form; curve: deviation and least radius of
+      // curvature), which "the DME must be able to execute without". The scans here follow the
+      // surface they feel: the hints are checked, and not needed.
+      if (a.size() != 2 || !a[0].is_number() || !a[1].is_number()) fail(ErrorCode::IncorrectArguments);
+      if (a[0].number < 0 || a[1].number < 0) fail(ErrorCode::BadArgument);
     } else if (n == "ScanOnCurveDensity") {
       scan_on_curve_density(a);
     } else if (n == "ScanOnLine" || n == "ScanOnCircle") {
