@@ -700,13 +700,13 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     if (item.points) {
       const int count = static_cast<int>(f->points.size());
       const auto [first, last] = *item.points;
+      const int from = std::max(first, 1), to = std::min(last, count);  // what the feature has of the range
       if (first < 1 || last < first || last > count)
         warn(span, fmt::format("FA({})[{},{}] asks for points {} to {}; it has {}: {}", f->label, first, last, first, last,
-                               count, count == 0 ? "none is listed" : fmt::format("points {} to {} are listed",
-                                                                                 std::clamp(first, 1, count),
-                                                                                 std::clamp(last, 1, count))));
+                               count, from > to ? std::string("none is listed")
+                                                : fmt::format("points {} to {} are listed", from, to)));
       const bool residuals = f->fit && f->fit->residuals_mm.size() == f->points.size();
-      for (int i = std::max(first, 1); i <= std::min(last, count); ++i) {
+      for (int i = from; i <= to; ++i) {
         const MeasuredPoint& p = f->points[static_cast<std::size_t>(i - 1)];
         ListedPoint listed;
         listed.index = i;

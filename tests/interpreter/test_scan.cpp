@@ -77,6 +77,10 @@ class FakeScanMachine : public machine::Machine {
     r.status = machine::Response::Status::Fault;
     r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine has no command buffers", m_position, m_time};
   }
+  void answer(const machine::ContourScan&, machine::Response& r) {
+    r.status = machine::Response::Status::Fault;
+    r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine follows no unknown contour", m_position, m_time};
+  }
   void answer(const machine::ScanPath& s, machine::Response& r) {
     scans.push_back(s);
     const double length = s.path.length();

@@ -825,13 +825,14 @@ TEST(ShopPrograms, OutputListsAFeaturesPointRange) {
       "F(C) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(C), 4\n"
       "  PTMEAS/CART, 50, 50, 35, -1, 0, 0\n  PTMEAS/CART, 40, 60, 35, 0, -1, 0\n"
       "  PTMEAS/CART, 30, 50, 35, 1, 0, 0\n  PTMEAS/CART, 40, 40, 35, 0, 1, 0\nENDMES\n";
-  const auto r = run(head + "DECL/INTGR, N\nN = ASSIGN/3\nOUTPUT/FA(C)[2,N]\nOUTPUT/FA(C)[4]\nOUTPUT/FA(C)[3,9]\nENDFIL\n",
+  const auto r = run(head + "DECL/INTGR, N\nN = ASSIGN/3\nOUTPUT/FA(C)[2,N]\nOUTPUT/FA(C)[4]\nOUTPUT/FA(C)[3,9]\n"
+                            "OUTPUT/FA(C)[3,2]\nOUTPUT/FA(C)[6,7]\nENDFIL\n",
                      source_dir / "programs/worlds/perfect.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::vector<const metron::runtime::FeatureReport*> reports;
   for (const auto& e : r.session->record().events)
     if (const auto* f = std::get_if<metron::runtime::FeatureReport>(&e)) reports.push_back(f);
-  ASSERT_EQ(reports.size(), 3U);
+  ASSERT_EQ(reports.size(), 5U);
   ASSERT_EQ(reports[0]->points.size(), 2U);
   EXPECT_EQ(reports[0]->points[0].index, 2);
   EXPECT_NEAR((reports[0]->points[0].surface_mm - metron::Vec3(40, 60, 35)).norm(), 0, 2e-3);
@@ -846,6 +847,11 @@ TEST(ShopPrograms, OutputListsAFeaturesPointRange) {
   ASSERT_EQ(reports[2]->points.size(), 2U);
   EXPECT_NE(r.diagnostics.find("FA(C)[3,9] asks for points 3 to 9; it has 4: points 3 to 4 are listed"), std::string::npos)
       << r.diagnostics;
+  // A range backwards, or past the last point: nothing is listed, and the warning says so.
+  EXPECT_TRUE(reports[3]->points.empty());
+  EXPECT_TRUE(reports[4]->points.empty());
+  EXPECT_NE(r.diagnostics.find("FA(C)[3,2] asks for points 3 to 2; it has 4: none is listed"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("FA(C)[6,7] asks for points 6 to 7; it has 4: none is listed"), std::string::npos) << r.diagnostics;
   const std::string text = metron::runtime::format_feature_report(*reports[1]);
   EXPECT_NE(text.find("[4]"), std::string::npos) << text;
   // A point range on a tolerance, or outside OUTPUT, is an error.
