@@ -183,6 +183,7 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
   if (!r) return tl::unexpected(r.error());
   m_active_sensor = label;
   const auto& tool = r->front().tool;
+  if (tool) m_tools[label] = *tool;
   if (tool && (!tool->qualified || requalify)) {
     m_qualification_feed_mm_s = m_machine.state().measuring_feed_mm_s;
     m_feed_change_warned = false;
@@ -191,6 +192,7 @@ Result<void> MeasurementRuntime::select_sensor(const std::string& label, Span sp
     // pre-travel and trigger delays at the measuring feed.
     auto q = run_commands({machine::Command{0, machine::QualifyTool{}}}, {span});
     if (!q) return tl::unexpected(q.error());
+    if (!q->empty() && q->front().tool) m_tools[label] = *q->front().tool;
   }
   return {};
 }
@@ -648,6 +650,36 @@ Result<void> MeasurementRuntime::recall(const std::string& label, Span span) {
   return {};
 }
 
+// OUTPUT/S(x), OUTPUT/SA(x): a sensor's definition or its qualification, as a report line and a
+// DMIS comment line ($$) in the output file (metron reads its own output file back).
+void MeasurementRuntime::output_sensor(const std::string& label, bool actual, Span span) {
+  const auto def = m_sensors.find(label);
+  const auto tool = m_tools.find(label);
+  if (def == m_sensors.end() || tool == m_tools.end()) {
+    warn(span, fmt::format("{}({}) is not defined or selected yet: nothing to output", actual ? "SA" : "S", label));
+    return;
+  }
+  const ReportUnits& u = m_report_units;
+  const int decimals = u.length_decimals >= 0 ? u.length_decimals : (u.mm_per_length == 1 ? 4 : 5);
+  const auto length = [&](double mm) { return fmt::format("{:.{}f} {}", mm / u.mm_per_length, decimals, u.length == "MM" ? "mm" : u.length); };
+  std::string text;
+  if (!actual) {
+    const Vec3 d = def->second.direction;
+    text = fmt::format("S({}): probe tip {} diameter, stylus {} along ({:.4f}, {:.4f}, {:.4f})", label,
+                       length(def->second.ball_diameter_mm), length(def->second.length_mm), d.x(), d.y(), d.z());
+  } else {
+    const machine::ToolInfo& t = tool->second;
+    text = fmt::format("SA({}): tip {} nominal diameter, ", label, length(2 * t.nominal_radius_mm));
+    text += t.qualified ? fmt::format("{} effective (qualified on the reference sphere, form {})", length(2 * t.effective_radius_mm),
+                                      length(t.qualification_form_mm))
+                        : std::string("not qualified yet");
+    if (const auto sc = m_scanning_radius_mm.find(label); sc != m_scanning_radius_mm.end())
+      text += fmt::format("; scanning {} effective", length(2 * sc->second));
+  }
+  write_device_line("$$ " + text);
+  emit(TextReport{text});
+}
+
 void MeasurementRuntime::write_device_line(const std::string& line) {
   for (auto& [label, device] : m_devices)
     if (device.open && device.stream && !device.direct) *device.stream << line << "\n";
@@ -670,6 +702,8 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     for (std::size_t i = 0; i < items.size(); ++i)
       echo += (i ? ", " : "") + (items[i].kind == OutputItem::Kind::Tolerance
                                      ? fmt::format("TA({})", items[i].tolerance)
+                                 : items[i].kind == OutputItem::Kind::Sensor
+                                     ? fmt::format("{}({})", items[i].sensor_actual ? "SA" : "S", items[i].sensor)
                                      : fmt::format("{}({}){}", items[i].feature.actual ? "FA" : "F", items[i].feature.label,
                                                    items[i].points ? fmt::format("[{},{}]", items[i].points->first,
                                                                                  items[i].points->second)
@@ -677,6 +711,10 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     write_device_line(echo);
   }
   for (const auto& item : items) {
+    if (item.kind == OutputItem::Kind::Sensor) {
+      if (report_them) output_sensor(item.sensor, item.sensor_actual, span);
+      continue;
+    }
     if (item.kind == OutputItem::Kind::Tolerance) {
       if (!find_tolerance(item.tolerance)) return program_error(span, fmt::format("tolerance T({}) is not defined", item.tolerance));
       tolerances.push_back(item.tolerance);

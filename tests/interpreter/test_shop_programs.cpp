@@ -2413,3 +2413,37 @@ TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtR
   EXPECT_TRUE(labelled.has("2:40: warning: CALL/EXTERN,DMIS passes nothing but the file")) << labelled.text;
   EXPECT_TRUE(labelled.has("SUB_PART.dmi is not in")) << labelled.text;
 }
+
+// OUTPUT/S(x) and OUTPUT/SA(x): a sensor's definition and its qualification on the reference
+// sphere, as report lines and comment lines of the DMIS output file. In the perfect world (no
+// pre-travel, no delays, a true ball) the qualified diameter is the ball's own, 2 mm; in the
+// default world the tip qualifies smaller by its pre-travel and trigger delays.
+TEST(ShopPrograms, SensorsAreOutputWithTheirQualification) {
+  const std::string program =
+      "DMISMN/'sensors', 5.0\nUNITS/MM, ANGDEC\n"
+      "S(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nOUTPUT/S(P1), SA(P1)\nSNSLCT/S(P1)\n"
+      "OUTPUT/S(P1), SA(P1)\nENDFIL\n";
+  auto texts = [](const auto& r) {
+    std::vector<std::string> out;
+    for (const auto& e : r.session->record().events)
+      if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) out.push_back(t->text);
+    return out;
+  };
+  const auto perfect = run(program, source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(perfect.status, ExecStatus::Finished) << perfect.diagnostics;
+  const auto p = texts(perfect);
+  ASSERT_EQ(p.size(), 4U) << perfect.diagnostics;
+  EXPECT_EQ(p[0], "S(P1): probe tip 2.0000 mm diameter, stylus 50.0000 mm along (0.0000, 0.0000, -1.0000)");
+  EXPECT_EQ(p[1], "SA(P1): tip 2.0000 mm nominal diameter, not qualified yet");
+  EXPECT_EQ(p[3].rfind("SA(P1): tip 2.0000 mm nominal diameter, 2.0000 mm effective (qualified on the reference sphere, form 0.0000 mm)", 0), 0U)
+      << p[3];
+  const auto plain = run(program, source_dir / "programs/worlds/default.json");
+  ASSERT_EQ(plain.status, ExecStatus::Finished) << plain.diagnostics;
+  const auto d = texts(plain);
+  ASSERT_EQ(d.size(), 4U);
+  const auto at = d[3].find(" mm effective");
+  ASSERT_NE(at, std::string::npos) << d[3];
+  const double effective = std::stod(d[3].substr(d[3].rfind(", ", at) + 2));
+  // 10 um of pre-travel and 4 ms of delays at the 3 mm/s measuring feed: 2 * (10 + 12) um smaller.
+  EXPECT_NEAR(effective, 2.0 - 2 * (0.010 + 0.012), 0.006) << d[3];
+}

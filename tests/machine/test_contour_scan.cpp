@@ -209,6 +209,36 @@ TEST(ContourScan, HoldsItsSectionWhereTheSurfaceLeansOutOfIt) {
   EXPECT_NEAR(r.out.samples.back().centre_mm.x(), origin.x(), 0.25);
 }
 
+// I++ DME's ScanUnknownHint(minRadius): a contour expected to bend as tightly as 0.05 mm is
+// scanned no faster than sqrt(a_c * 0.05) = 5 mm/s (a_c = 500 mm/s^2) from its start, where the
+// same bore without the hint runs at the 10 mm/s feed.
+TEST(ContourScan, TheLeastRadiusHintSlowsTheFeedFromTheStart) {
+  csg::Node ring, bore, part;
+  ring.primitive = {"RING", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 80.0, 30.0}};
+  bore.primitive = {"BORE", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 36.0, std::nullopt}};
+  part.op = csg::Node::Op::Difference;
+  part.children = {ring, bore};
+  const World w = world_with(part);
+  ContourScan c;
+  c.start_mm = origin + Vec3(16, 0, 15);
+  c.start_normal = -Vec3::UnitX();
+  c.direction = Vec3::UnitY();
+  c.section = {ContourSection::Kind::Plane, c.start_mm, Vec3::UnitZ()};
+  c.end = {ContourEnd::Kind::Plane, origin, Vec3::UnitX(), 0, 1};  // the plane x = 100: a quarter turn
+  auto fastest = [&](std::optional<double> hint) {
+    c.min_radius_mm = hint;
+    const ContourRun r = contour(w, c);
+    EXPECT_TRUE(r.out.completed);
+    double v = 0;
+    for (const ScanCycle& k : r.cycles) v = std::max(v, k.tangential_speed_mm_s);
+    return v;
+  };
+  const double free_run = fastest(std::nullopt), hinted = fastest(0.05);
+  std::printf("[figures] least-radius hint: fastest %.3f mm/s without, %.3f mm/s with ScanUnknownHint(0.05)\n", free_run, hinted);
+  EXPECT_GT(free_run, 9);
+  EXPECT_LT(hinted, 5.0 * 1.05);
+}
+
 // What cannot be scanned is said, not attempted: no surface at the start, an end that never
 // comes, a section that lies in the surface.
 TEST(ContourScan, FaultsAreNamed) {

@@ -461,6 +461,13 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       // A REPORT layout (R(x)=REPORT/...) for the features beside it: metron's reports are its own.
       note_once(m_report_layout_noted, p.span, "sema.report-layout",
                 "R() report layouts are not applied: metron reports every output feature and tolerance its own way");
+    } else if (is_label(p, {"S", "SA"}) && in.op == Op::Output) {
+      // A sensor: its definition (S) or its qualification (SA), as a report line. One the
+      // program never defines may come from the probe library (RECALL/SA): the run tells.
+      if (!m_symbols.sensors.count(upper(p.label.name)) && !m_symbols.library_sensors.count(upper(p.label.name)))
+        note(p.span, "sema.output-library-sensor",
+             fmt::format("{}({}) is not defined in this program: its output is what the machine's probe library holds at run",
+                         p.label.prefix, p.label.name));
     } else if (p.kind == ExprKind::Label) {
       warn(p.span, "sema.unsupported-output", fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
       continue;

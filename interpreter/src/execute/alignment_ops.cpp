@@ -43,6 +43,10 @@ std::vector<runtime::OutputItem> Execute::output_items(Interpreter& vm, const ir
     if (o.label.prefix == "T" || o.label.prefix == "TA") {
       item.kind = runtime::OutputItem::Kind::Tolerance;
       item.tolerance = vm.label_name(o.label);
+    } else if (o.label.prefix == "S" || o.label.prefix == "SA") {
+      item.kind = runtime::OutputItem::Kind::Sensor;
+      item.sensor = vm.label_name(o.label);
+      item.sensor_actual = o.label.prefix == "SA";
     } else {
       item.feature = feature_ref(vm, o.label);
       // FA(x)[first,last] or FA(x)[n]: one or two numbers after the label (docs/ir.md).

@@ -235,6 +235,7 @@ class MeasurementRuntime {
   void emit(RunEvent event);
   void warn(Span span, const std::string& message);  ///< a positioned run-time warning in the record
   void write_device_line(const std::string& line);
+  void output_sensor(const std::string& label, bool actual, Span span);
   void set_alignment(const std::string& label, const Frame& frame);
 
   machine::Machine& m_machine;

@@ -102,9 +102,12 @@ enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection,
 
 /// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
 struct OutputItem {
-  enum class Kind { Feature, Tolerance } kind = Kind::Feature;
+  enum class Kind { Feature, Tolerance, Sensor } kind = Kind::Feature;
   FeatureRef feature;
   std::string tolerance;
+  /// OUTPUT/S(x) (its definition) or SA(x) (its qualification): the sensor's label.
+  std::string sensor;
+  bool sensor_actual = false;
   /// OUTPUT/FA(x)[first,last] (MODUS): the feature's points first..last (1-based) are listed.
   std::optional<std::pair<int, int>> points;
 };

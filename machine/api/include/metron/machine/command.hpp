@@ -104,6 +104,14 @@ struct ScanBufferWrite {
   segmented::MeasurementCommand command;  ///< Ci: index, first segment, segments, normals, last
 };
 
+// GCC 12 warns that the implicit copies of these structs inside the Command variant "may use"
+// members that every constructor initialises (-Wmaybe-uninitialized, a known false positive
+// of std::variant copies at -O2); the members all have initialisers below.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
 /// Where an unknown-contour scan keeps the ball centre: in a plane, or on a cylinder about an axis
 /// at the start's distance from it.
 struct ContourSection {
@@ -142,6 +150,10 @@ struct ContourScan {
   /// the feed keeps within the centripetal limit for it from the start.
   std::optional<double> min_radius_mm;
 };
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 /// A command with the client's tag (the runtime uses it to find the originating statement).
 struct Command {
