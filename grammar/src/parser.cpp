@@ -111,6 +111,12 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
                    "--strict makes it an error)");
       continue;
     }
+    if (program.first_word.empty()) {
+      std::size_t i = 0;
+      while (i < line.text.size() && is_blank(line.text[i])) ++i;
+      while (i < line.text.size() && std::isalnum(static_cast<unsigned char>(line.text[i])))
+        program.first_word += static_cast<char>(std::toupper(static_cast<unsigned char>(line.text[i++])));
+    }
     Statement stmt;
     if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict)) {
       if (stmt.major == "ENDFIL") ended = true;

@@ -2235,6 +2235,11 @@ TEST(ShopPrograms, AModuleHeaderStartsAFile) {
   const Checked c = check("DMISMD/'PerpendicularPoints', 5.0\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n");
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
   EXPECT_TRUE(check("F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n").has("does not start with DMISMN"));
+  // A DMISMN the parser cannot read has its error, at its place; the next line is not blamed.
+  const Checked unread = check("DMISMN/'p' 5.0\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n");
+  EXPECT_EQ(unread.errors, 1u) << unread.text;
+  EXPECT_TRUE(unread.has("shop.dmi:1:")) << unread.text;
+  EXPECT_FALSE(unread.has("does not start with DMISMN")) << unread.text;
 }
 
 // A stylus's tip shape after its diameter (`SNSDEF/PROBE,FIXED,POL,...,115,12,DISC,3`): the tip

@@ -270,6 +270,19 @@ TEST(ContourScan, FaultsAreNamed) {
   EXPECT_EQ(r.out.fault->kind, FaultKind::AxisLimit) << r.out.fault->message;
   EXPECT_NEAR(r.out.fault->position_mm.x(), -100, 0.1);
 
-  c.section.direction = Vec3::UnitZ();  // the section plane is the table's own plane
+  // Round the block's four sides at z = 10 with the end sphere elsewhere: a closed contour that
+  // never meets its end is stopped after its second round, not scanned 5000 mm.
+  c.start_mm = Vec3(140 + ball_r, 115, 10);
+  c.start_normal = Vec3::UnitX();
+  c.direction = Vec3::UnitY();
+  c.section = {ContourSection::Kind::Plane, c.start_mm, Vec3::UnitZ()};
+  c.end = {ContourEnd::Kind::Sphere, Vec3(0, 0, 300), Vec3::UnitZ(), 1.0, 1};
+  r = contour(w, c);
+  ASSERT_TRUE(r.out.fault);
+  EXPECT_EQ(r.out.fault->kind, FaultKind::Stalled) << r.out.fault->message;
+  EXPECT_NE(r.out.fault->message.find("went round a closed contour 2 times"), std::string::npos) << r.out.fault->message;
+  EXPECT_LT(r.out.stats.reached_mm, 3 * 2 * (40 + 30 + 2 * std::numbers::pi * ball_r));
+
+  c.section.direction = Vec3::UnitX();  // the section plane is the side face's own plane
   EXPECT_NE(validate_contour_scan(c).find("parallel"), std::string::npos);
 }

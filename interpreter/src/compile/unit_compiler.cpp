@@ -29,8 +29,10 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   // A DMIS module (DMISMD, as MODUS's helper tools write) starts as a program does, or with
   // FILNAM followed by DMISMD (MODUS's macro libraries).
   const bool module_after_filnam = st.size() > 1 && st.front().major == "FILNAM" && st[1].major == "DMISMD";
+  // A first line DMISMN the parser could not read has its own error: no second message about it.
+  const bool unread_start = program.first_word == "DMISMN" || program.first_word == "DMISMD";
   if (!repl && !m_included && !st.empty() && st.front().major != "DMISMN" && st.front().major != "DMISMD" &&
-      !(m_output_file && st.front().major == "FILNAM") && !module_after_filnam)
+      !(m_output_file && st.front().major == "FILNAM") && !module_after_filnam && !unread_start)
     warn(st.front().span, "sema.no-dmismn", "the program does not start with DMISMN (or DMISMD, a module)");
   for (std::size_t i = 0; i < st.size(); ++i) {
     const auto& s = st[i];

@@ -63,6 +63,9 @@ struct Statement {
 struct Program {
   std::uint32_t file = 0;             ///< SourceManager id
   std::vector<Statement> statements;
+  /// The leading word of the file's first statement line, upper case, read or not (a DMISMN the
+  /// parser could not read is still the program's start).
+  std::string first_word;
 };
 
 }  // namespace metron::grammar
