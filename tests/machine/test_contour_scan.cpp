@@ -176,37 +176,40 @@ TEST(ContourScan, ClimbsAnUndescribedStepAndFindsItsHiddenPosition) {
   EXPECT_NEAR(r.out.samples.back().centre_mm.z(), hi.z() + ball_r, 0.005);
 }
 
-// A sphere cut by a plane 5 mm from its centre: every felt normal leans out of the section, so
-// the deflection pushes the ball sideways all the way; the section term holds it in the plane,
-// and the ball centre stays on the sphere of radius R + r about the sphere's hidden centre.
+// A boss cut by a plane tilted 30 deg from its cross-section: the surface normal leans out of the
+// section by 0.5 sin(theta) of the way round, so the deflection pushes the ball out of the plane
+// by up to E0 * 0.5 = 0.15 mm, changing all the way. The section term holds the ball centre in
+// the plane, and the centre stays at R + r from the boss's hidden axis. Half a turn: to the plane
+// y = 100.
 TEST(ContourScan, HoldsItsSectionWhereTheSurfaceLeansOutOfIt) {
-  csg::Node sphere;
-  sphere.primitive = {"SPHERE", csg::Sphere{Vec3(0, 0, 20), 30.0}};
-  const Vec3 offset(0.02, -0.015, 0.01);
-  const World w = world_with(sphere, offset);
-  const Vec3 centre = origin + offset + Vec3(0, 0, 20);
-  const double rho = std::sqrt(std::pow(15 + ball_r, 2) - 25);  // the section circle of ball centres
+  csg::Node boss;
+  boss.primitive = {"BOSS", csg::Cylinder{Vec3::Zero(), Vec3::UnitZ(), 30.0, 40.0}};
+  const Vec3 offset(0.02, -0.015, 0);
+  const World w = world_with(boss, offset);
+  const double a = 30 * deg;
+  const Vec3 m(0, std::sin(a), std::cos(a));  // the section plane's normal
   ContourScan c;
-  c.start_mm = origin + Vec3(rho, 5, 20);
-  c.start_normal = Vec3(rho, 5, 0).normalized();
-  c.direction = Vec3::UnitZ();
-  c.section = {ContourSection::Kind::Plane, c.start_mm, Vec3::UnitY()};
-  c.end = {ContourEnd::Kind::Plane, origin, Vec3::UnitX(), 0, 1};  // over the top to x = 100
+  c.start_mm = origin + Vec3(15 + ball_r, 0, 20);
+  c.start_normal = Vec3::UnitX();
+  c.direction = Vec3(0, std::cos(a), -std::sin(a));
+  c.section = {ContourSection::Kind::Plane, c.start_mm, m};
+  c.end = {ContourEnd::Kind::Plane, origin, Vec3::UnitY(), 0, 1};
   c.sample_spacing_mm = 0.2;
   const ContourRun r = contour(w, c);
   ASSERT_TRUE(r.out.completed) << r.out.fault->message;
-  double worst_y = 0, worst_r = 0;
+  const Vec3 axis = origin + offset;
+  double worst_plane = 0, worst_r = 0;
   for (const ScanSample& s : r.out.samples) {
-    worst_y = std::max(worst_y, std::abs(s.centre_mm.y() - c.start_mm.y()));
-    worst_r = std::max(worst_r, std::abs((s.centre_mm - centre).norm() - (15 + ball_r)));
+    worst_plane = std::max(worst_plane, std::abs((s.centre_mm - c.start_mm).dot(m)));
+    worst_r = std::max(worst_r, std::abs(std::hypot(s.centre_mm.x() - axis.x(), s.centre_mm.y() - axis.y()) - (15 + ball_r)));
   }
-  std::printf("[figures] sphere cut off its centre: %zu samples, ball centre off the section plane at most %.5f mm, "
-              "off the sphere R + r at most %.5f mm\n",
-              r.out.samples.size(), worst_y, worst_r);
-  EXPECT_GT(r.out.samples.size(), 100u);
-  EXPECT_LT(worst_y, 0.01);  // without the section term: E0 * 5/17 = 0.088 mm (the deflection leans out)
+  std::printf("[figures] boss cut by a tilted plane: %zu samples, ball centre off the section plane at most %.5f mm, "
+              "off R + r from the hidden axis at most %.5f mm\n",
+              r.out.samples.size(), worst_plane, worst_r);
+  EXPECT_GT(r.out.samples.size(), 200u);
+  EXPECT_LT(worst_plane, 0.01);  // without the section term: up to E0 * 0.5 = 0.15 mm
   EXPECT_LT(worst_r, 0.003);
-  EXPECT_NEAR(r.out.samples.back().centre_mm.x(), origin.x(), 0.25);
+  EXPECT_NEAR(r.out.samples.back().centre_mm.x(), axis.x() - 15 - ball_r, 0.25);
 }
 
 // I++ DME's ScanUnknownHint(minRadius): a contour expected to bend as tightly as 0.05 mm is
