@@ -140,6 +140,8 @@ struct Controller {
   void define_tool(const DefineTool& body, Response& response);
   void scan(const ScanPath& body, Response& response);
   void contour_scan(const ContourScan& body, Response& response);
+  void run_scanning(const ToolInfo& tool, Response& response,
+                    const std::function<ScanOutcome(const ScanSetup&, const std::function<void(const ScanCycle&)>&)>& scan);
   Response run(const Command& command);
 };
 

@@ -58,9 +58,18 @@ void Controller::scan(const ScanPath& body, Response& response) {
                              body.path.segments.size(), capacity),
                  position, now()});
   if (auto ok = move_to(scan_approach_point(body), positioning_feed); !ok) return fail(ok.error());
+  run_scanning(tool->info, response, [&](const ScanSetup& setup, const auto& observe) {
+    return run_scan(body, setup, position, now(), observe);
+  });
+}
+
+// A scanning controller's run from the approach point: the probe's setup, the position reports
+// and the motion kept for a stop request every cycle, then the machine where the run ended.
+void Controller::run_scanning(const ToolInfo& tool, Response& response,
+                              const std::function<ScanOutcome(const ScanSetup&, const std::function<void(const ScanCycle&)>&)>& scan) {
   sim.set_time(now());
-  const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
-  ScanOutcome out = run_scan(body, setup, position, now(), [&](const ScanCycle& c) {
+  const ScanSetup setup = sim.scan_setup(tool.nominal_radius_mm, config);
+  ScanOutcome out = scan(setup, [&](const ScanCycle& c) {
     emit(c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s.norm());
     motion.scan.push_back({c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s});
   });
@@ -68,7 +77,10 @@ void Controller::scan(const ScanPath& body, Response& response) {
   cycle += cycles_for(out.end_time_s - now());
   response.scan = std::move(out.samples);
   response.scan_log = std::move(out.log);
-  if (out.fault) fail(*out.fault);
+  if (out.fault) {
+    response.status = Response::Status::Fault;
+    response.fault = std::move(*out.fault);
+  }
 }
 
 // An unknown-contour scan (docs/scanning.md, "Unknown contours"): position to the approach
@@ -82,17 +94,9 @@ void Controller::contour_scan(const ContourScan& body, Response& response) {
   if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
   if (const std::string bad = validate_contour_scan(body); !bad.empty()) return fail({FaultKind::BadCommand, bad, position, now()});
   if (auto ok = move_to(contour_approach_point(body), positioning_feed); !ok) return fail(ok.error());
-  sim.set_time(now());
-  const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
-  ScanOutcome out = run_contour_scan(body, setup, position, now(), [&](const ScanCycle& c) {
-    emit(c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s.norm());
-    motion.scan.push_back({c.time_s + config.dt_s, c.head_mm, c.velocity_mm_s});
+  run_scanning(tool->info, response, [&](const ScanSetup& setup, const auto& observe) {
+    return run_contour_scan(body, setup, position, now(), observe);
   });
-  position = out.end_position_mm;
-  cycle += cycles_for(out.end_time_s - now());
-  response.scan = std::move(out.samples);
-  response.scan_log = std::move(out.log);
-  if (out.fault) fail(*out.fault);
 }
 
 Response Controller::run(const Command& command) {

@@ -9,13 +9,12 @@
 #include "metron/machine/rng.hpp"
 #include "metron/machine/active_scanning/axis_servo.hpp"
 #include "metron/machine/active_scanning/scanning_probe.hpp"
+#include "active_scanning/scan_cycle.hpp"
 
 namespace metron::machine {
 namespace {
 
-std::string xyz(const Vec3& p) { return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z()); }
-
-enum class Phase { Approach, Settle, Scan, Retract, Done };
+enum class Phase { Approach, Scan, Retract, Done };  // Approach: the approach and the settling
 
 bool unit_like(const Vec3& v) { return v.allFinite() && v.norm() > 1e-9; }
 
@@ -151,10 +150,11 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
   Vec3 eu_last = n_start;
   Vec3 t_prev = (command.direction - command.direction.dot(n_start) * n_start).normalized();
   Vec3 head_prev = start_mm;
-  double travelled = 0, next_sample_mm = 0, best_mm = 0, progress_t = 0, settle_t = 0, retract_t = 0;
+  double travelled = 0, next_sample_mm = 0, best_mm = 0, progress_t = 0, retract_t = 0;
   double lost_at_mm = -1, lost_at_t = 0, retract_deflection_mm = 0, kappa = 0, vf_smooth = 0;
   const double kappa_hint = command.min_radius_mm && *command.min_radius_mm > 0 ? 1 / *command.min_radius_mm : 0;
-  int settled_cycles = 0, rounds = 0;
+  detail::ApproachAndSettle approach(ctl, e0, range, start_mm, n_start, command.approach_mm);
+  int rounds = 0;
   bool away_from_start = false;
   double sum_sq = 0, lateral_sq = 0;
   std::int64_t k = 0;
@@ -163,14 +163,9 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
   for (; phase != Phase::Done && k < max_cycles; ++k) {
     const double t = start_time_s + static_cast<double>(k) * dt;
     const Vec3 head = servo.position_mm();
-    const Vec3 true_ep = probe.deflection(head);
-    const double true_e = true_ep.norm();
-    out.stats.max_force_n = std::max(out.stats.max_force_n, probe.force_n(true_ep));
-    if (true_e > range) {
-      stop(FaultKind::OverTravel,
-           fmt::format("scanning probe over-range: deflection {:.3f} mm exceeds the measuring range {:.3f} mm at {}",
-                       true_e, range, xyz(head)),
-           head, t);
+    const detail::ProbeReading reading = detail::read_probe(probe, head, range, t, out.stats);
+    if (reading.over_range) {
+      stop(reading.over_range->kind, reading.over_range->message, head, t);
       break;
     }
     // Nothing bounds an unknown contour but its end: the controller's soft limits stop it at the
@@ -178,13 +173,13 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
     if (const int axis = outside_travel(setup.machine, head); axis >= 0) {
       const AxisTravel& tr = setup.machine.travel[static_cast<std::size_t>(axis)];
       stop(FaultKind::AxisLimit,
-           fmt::format("contour scan reached the end of the {} travel [{}, {}] at {}", "xyz"[axis], tr.min_mm, tr.max_mm, xyz(head)),
+           fmt::format("contour scan reached the end of the {} travel [{}, {}] at {}", "xyz"[axis], tr.min_mm, tr.max_mm, detail::scan_xyz(head)),
            head, t);
       break;
     }
-    const Vec3 ep = probe.read(true_ep);
-    const double e = ep.norm();
-    const bool contact = e > 1e-6;
+    const Vec3 ep = reading.ep;
+    const double e = reading.e;
+    const bool contact = reading.contact;
     if (contact) eu_last = ep / e;
 
     ScanCycle rec;
@@ -195,22 +190,14 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
     Vec3 v = Vec3::Zero();
 
     if (phase == Phase::Approach) {
-      if (contact) {
-        phase = Phase::Settle;
-        settle_t = t;
-      } else if ((start_mm - head).dot(n_start) > command.approach_mm + range) {
-        stop(FaultKind::NoContact, fmt::format("no contact within {:.3f} mm of the contour scan's start {}", range, xyz(command.start_mm)),
+      const auto step = approach.step(t, head, reading);
+      if (step.no_contact) {
+        stop(FaultKind::NoContact, fmt::format("no contact within {:.3f} mm of the contour scan's start {}", range, detail::scan_xyz(command.start_mm)),
              head, t);
         break;
-      } else {
-        v = -ctl.approach_feed_mm_s * n_start;
       }
-    }
-    if (phase == Phase::Settle) {
-      // Only Ve until the deflection holds E0, as in the nominal scan.
-      v = ctl.deflection_gain_1_s * (e - e0) * (contact ? Vec3(ep / e) : n_start);
-      settled_cycles = std::abs(e - e0) < 0.005 ? settled_cycles + 1 : 0;
-      if (settled_cycles >= 10 || t - settle_t > 1.0) {
+      v = step.v;
+      if (step.settled) {
         phase = Phase::Scan;
         progress_t = t;
         head_prev = head;
@@ -313,14 +300,13 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
       }
     }
     if (phase == Phase::Retract && !rec.scanning) {
-      const double travel_s = (command.retract_mm + retract_deflection_mm) / ctl.approach_feed_mm_s;
-      if (t - retract_t < travel_s) v = ctl.approach_feed_mm_s * eu_last;
-      else if (servo.velocity_mm_s().norm() < 1e-3 || t - retract_t > travel_s + 0.5) phase = Phase::Done;
+      const auto back = detail::retract_velocity(ctl, t - retract_t, command.retract_mm, retract_deflection_mm, eu_last,
+                                                 servo.velocity_mm_s());
+      if (back) v = *back;
+      else phase = Phase::Done;
     }
 
-    if (const double nv = v.norm(); nv > v_max) v *= v_max / nv;
-    const Vec3 dv = v - v_prev;
-    if (const double nv = dv.norm(); nv > a_max * dt) v = v_prev + dv * (a_max * dt / nv);
+    v = detail::within_machine_limits(v, v_prev, v_max, a_max, dt);
     v_prev = v;
     if (on_cycle) on_cycle(rec);
     servo.step(v, dt);

@@ -10,13 +10,14 @@
 #include "metron/machine/active_scanning/axis_servo.hpp"
 #include "metron/machine/active_scanning/path_cursor.hpp"
 #include "metron/machine/active_scanning/scanning_probe.hpp"
+#include "active_scanning/scan_cycle.hpp"
 
 namespace metron::machine {
 namespace {
 
 std::string xyz(const Vec3& p) { return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z()); }
 
-enum class Phase { Approach, Settle, Scan, Retract, Done };
+enum class Phase { Approach, Scan, Retract, Done };  // Approach: the approach and the settling
 
 }  // namespace
 
@@ -131,14 +132,13 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   const double length = cursor.length_mm();
   out.stats.path_length_mm = length;
 
-  const double k_e = ctl.deflection_gain_1_s;
   const double v_max = setup.machine.max_speed_mm_s, a_max = setup.machine.max_acceleration_mm_s2;
   Phase phase = Phase::Approach;
   Vec3 v_prev = Vec3::Zero();
   Vec3 eu_last = n_app;
-  double next_sample_s = 0, best_s = -1, progress_t = 0, settle_t = 0, retract_t = 0;
+  double next_sample_s = 0, best_s = -1, progress_t = 0, retract_t = 0;
   double lost_at_s = -1, lost_at_t = 0, retract_deflection_mm = 0;
-  int settled_cycles = 0;
+  detail::ApproachAndSettle approach(ctl, e0, range, start_mm, n_app, command.approach_mm);
   constexpr double speed_tau_s = 0.02;
   double vf_smooth[2] = {0, 0};
   double sum_sq = 0, lateral_sq = 0;
@@ -148,19 +148,14 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   for (; phase != Phase::Done && k < max_cycles; ++k) {
     const double t = start_time_s + static_cast<double>(k) * dt;
     const Vec3 head = servo.position_mm();
-    const Vec3 true_ep = probe.deflection(head);
-    const double true_e = true_ep.norm();
-    out.stats.max_force_n = std::max(out.stats.max_force_n, probe.force_n(true_ep));
-    if (true_e > range) {
-      fault_at(FaultKind::OverTravel,
-               fmt::format("scanning probe over-range: deflection {:.3f} mm exceeds the measuring range {:.3f} mm at {}",
-                           true_e, range, xyz(head)),
-               head, t);
+    const detail::ProbeReading reading = detail::read_probe(probe, head, range, t, out.stats);
+    if (reading.over_range) {
+      out.fault = reading.over_range;
       break;
     }
-    const Vec3 ep = probe.read(true_ep);
-    const double e = ep.norm();
-    const bool contact = e > 1e-6;
+    const Vec3 ep = reading.ep;
+    const double e = reading.e;
+    const bool contact = reading.contact;
     if (contact) eu_last = ep / e;
 
     ScanCycle rec;
@@ -171,24 +166,15 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
     Vec3 v = Vec3::Zero();
 
     if (phase == Phase::Approach) {
-      if (contact) {
-        phase = Phase::Settle;
-        settle_t = t;
-      } else if ((start_mm - head).dot(n_app) > command.approach_mm + range) {
+      const auto step = approach.step(t, head, reading);
+      if (step.no_contact) {
         fault_at(FaultKind::NoContact,
                  fmt::format("no contact within {:.3f} mm of the scan start {}", range, xyz(command.path.segments.front().start())),
                  head, t);
         break;
-      } else {
-        v = -ctl.approach_feed_mm_s * n_app;
       }
-    }
-    if (phase == Phase::Settle) {
-      // Only Ve until the deflection holds E0 (SEEDS.md 1: Ve = K*(|Ep| - E0)*eu).
-      const Vec3 eu = contact ? Vec3(ep / e) : n_app;
-      v = k_e * (e - e0) * eu;
-      settled_cycles = std::abs(e - e0) < 0.005 ? settled_cycles + 1 : 0;
-      if (settled_cycles >= 10 || t - settle_t > 1.0) {
+      v = step.v;
+      if (step.settled) {
         phase = Phase::Scan;
         progress_t = t;
       }
@@ -258,18 +244,13 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       }
     }
     if (phase == Phase::Retract && !rec.scanning) {
-      // Back off along the last deflection direction until the ball is retract_mm off the
-      // surface (the deflection, then the distance), then stop.
-      const double feed = ctl.approach_feed_mm_s;
-      const double travel_s = (command.retract_mm + retract_deflection_mm) / feed;
-      if (t - retract_t < travel_s) v = feed * eu_last;
-      else if (servo.velocity_mm_s().norm() < 1e-3 || t - retract_t > travel_s + 0.5) phase = Phase::Done;
+      const auto back = detail::retract_velocity(ctl, t - retract_t, command.retract_mm, retract_deflection_mm, eu_last,
+                                                 servo.velocity_mm_s());
+      if (back) v = *back;
+      else phase = Phase::Done;
     }
 
-    // The machine's limits on the command: path speed and acceleration.
-    if (const double n = v.norm(); n > v_max) v *= v_max / n;
-    const Vec3 dv = v - v_prev;
-    if (const double n = dv.norm(); n > a_max * dt) v = v_prev + dv * (a_max * dt / n);
+    v = detail::within_machine_limits(v, v_prev, v_max, a_max, dt);
     v_prev = v;
     if (on_cycle) on_cycle(rec);
     servo.step(v, dt);
