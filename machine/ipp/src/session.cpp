@@ -1000,8 +1000,8 @@ struct Session::Impl {
       scan(n, a);
     } else if (n == "ScanOnCurve") {
       scan_on_curve(a);
-    } else if (n.rfind("ScanIn", 0) == 0 && (n == "ScanInPlaneEndIsSphere" || n == "ScanInPlaneEndIsPlane" || n == "ScanInPlaneEndIsCyl" ||
-                                              n == "ScanInCylEndIsSphere" || n == "ScanInCylEndIsPlane")) {
+    } else if (n == "ScanInPlaneEndIsSphere" || n == "ScanInPlaneEndIsPlane" || n == "ScanInPlaneEndIsCyl" ||
+               n == "ScanInCylEndIsSphere" || n == "ScanInCylEndIsPlane") {
       scan_in(n, a);
     } else if (k_unsupported.count(n)) {
       // Commands that would move the machine need Home first, supported or not (NIST: 0507).
