@@ -325,7 +325,7 @@ Result<void> MeasurementRuntime::go_to(const Vec3& point, Span span) {
 }
 
 Result<void> MeasurementRuntime::go_home(Span span) {
-  const auto home = m_machine.state().home_mm;
+  const auto home = m_program_home ? m_program_home : m_machine.state().home_mm;
   if (!home) {
     warn(span, "GOHOME: this machine does not say where its home is; the probe stays where it is");
     return {};

@@ -213,6 +213,37 @@ TEST(ShopPrograms, GoHomeMovesTheMachineHome) {
   EXPECT_NE(inside.diagnostics.find("GOHOME is not allowed inside a MEAS block"), std::string::npos) << inside.diagnostics;
 }
 
+// FROM sets the home GOHOME goes to, in the coordinate system current at FROM (it was skipped
+// with a warning, so GOHOME went to the machine's own home).
+TEST(ShopPrograms, FromSetsWhereGoHomeGoes) {
+  std::string from = bore_program("");
+  from.insert(from.find("ENDFIL"), "FROM/10, 20, 90\nD(MOVED) = TRANS/XORIG, -50\nGOTO/100, 20, 60\nGOHOME\n");
+  std::string go_to = bore_program("");
+  go_to.insert(go_to.find("ENDFIL"), "GOTO/10, 20, 90\n");
+  const auto a = run(from);
+  const auto b = run(go_to);
+  ASSERT_EQ(a.status, ExecStatus::Finished) << a.diagnostics;
+  ASSERT_EQ(b.status, ExecStatus::Finished) << b.diagnostics;
+  // Part (10, 20, 90) with D(PART) at machine (300, 200, 0): GOHOME ends where GOTO/10,20,90 did.
+  const auto& ended = a.session->machine().state().position_mm;
+  EXPECT_LT((ended - b.session->machine().state().position_mm).norm(), 1e-9);
+  EXPECT_LT((ended - Eigen::Vector3d(310, 220, 90)).norm(), 1e-9) << ended.transpose();
+  const auto bad = check("DMISMN/'f', 5.1\nFROM/1,2\nENDFIL\n");
+  EXPECT_TRUE(bad.has("2:8: error: FROM expects x,y,z (the home position), got 2 numbers")) << bad.text;
+}
+
+// Statements with nothing to do on a virtual CMM that a reader may want to know of: one note
+// per word, with the reason, and no warning; point buffering and carriage definitions quietly.
+TEST(ShopPrograms, StatementsWithoutEffectAreNotedOnceEach) {
+  const auto c = check("DMISMN/'n', 5.1\nPTBUFF/ON\nRAPID/50\nRAPID/20\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+                       "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nENDFIL\n");
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  EXPECT_EQ(c.notes, 3u) << c.text;
+  EXPECT_TRUE(c.has("3:1: note: RAPID: the next move is made at the positioning feed")) << c.text;
+  EXPECT_TRUE(c.has("6:1: note: DELETE: the labels stay defined")) << c.text;
+  EXPECT_TRUE(c.has("9:1: note: KEYCHAR")) << c.text;
+}
+
 // SELECT/CASE (DMIS 5.x): it was skipped as an unknown statement, so every case ran.
 TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
   const std::string text =

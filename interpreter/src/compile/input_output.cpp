@@ -22,18 +22,42 @@ const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "
                                        "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN",
                                        // Report layout and fitting-algorithm choices: metron's reports
                                        // and fits are its own (least squares, minimum zone for form).
-                                       "REPORT", "CZONE"};
+                                       "REPORT", "CZONE",
+                                       // Point buffering and the carriage definitions of a one-carriage
+                                       // machine: the points reach the runtime the same either way.
+                                       "PTBUFF", "CRGDEF"};
+
+// Statements accepted without their effect, which a reader of the results may want to know: one
+// note per program and word, with the reason.
+struct NotedWord {
+  const char* word;
+  const char* reason;
+};
+const NotedWord noted_words[] = {
+    {"RAPID", "RAPID: the next move is made at the positioning feed (FEDRAT/POSVEL), not at a rapid rate"},
+    {"DELETE", "DELETE: the labels stay defined (a virtual CMM has the memory); a later use of one is not refused"},
+    {"KEYCHAR", "KEYCHAR: key characteristics are not marked in the report"},
+    {"CNFRMRUL", "CNFRMRUL: tolerances are judged IN or OUT on the measured value, without an uncertainty rule"},
+    {"UNCERTALG", "UNCERTALG: no measurement uncertainty is computed or reported"},
+    {"UNCERTSET", "UNCERTSET: no measurement uncertainty is computed or reported"},
+    {"LITDEF", "LITDEF: the virtual CMM has no vision sensor to light"},
+    {"WINDEF", "WINDEF: the virtual CMM has no vision sensor to window"},
+    {"FILDEF", "FILDEF: the virtual CMM has no vision sensor to filter"},
+    {"CROSCL", "CROSCL: the virtual CMM has no vision sensor to scale"},
+};
 }  // namespace
 
 void UnitCompiler::add_input_output(StatementTable& t) {
   for (const char* w : no_effect_words) t.emplace(w, &UnitCompiler::no_effect);
+  for (const auto& w : noted_words) t.emplace(w.word, &UnitCompiler::noted_no_effect);
   t.insert({
       {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
       {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
       {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
       {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
       {"ERROR", &UnitCompiler::on_error}, {"RESUME", &UnitCompiler::resume},
-      {"GEOALG", &UnitCompiler::geometry_algorithm}, {"GOHOME", &UnitCompiler::go_home}
+      {"GEOALG", &UnitCompiler::geometry_algorithm}, {"GOHOME", &UnitCompiler::go_home},
+      {"FROM", &UnitCompiler::from}
   });
 }
 
@@ -53,6 +77,13 @@ void UnitCompiler::decpl(const grammar::Statement& s) {
 }
 
 void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }
+
+void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
+  const auto* w = std::find_if(std::begin(noted_words), std::end(noted_words), [&](const NotedWord& n) { return s.major == n.word; });
+  if (w != std::end(noted_words) && m_noted_kinds.insert(s.major).second)
+    note(s.span, "sema.not-applied", fmt::format("{} (noted once)", w->reason));
+  emit(make(Op::Nop, s, s.major));
+}
 
 // GEOALG/...: CIRCLE's MAXINS, MINCIR and LSTSQR are applied; the other algorithms are accepted
 // without their effect, which a program may rely on: one warning per program says so.
@@ -153,6 +184,23 @@ void UnitCompiler::resume(const grammar::Statement& s) {
 void UnitCompiler::go_home(const grammar::Statement& s) {
   if (!s.params.empty()) warn(s.params.front().span, "sema.extra-params", "GOHOME takes no parameters: ignored");
   emit(make(Op::GoHome, s));
+}
+
+// FROM/[CART|POL,]x,y,z (DMIS 5.3): the program's home position, in the current coordinate
+// system; GOHOME goes there from here on. FROM does not move the machine.
+void UnitCompiler::from(const grammar::Statement& s) {
+  auto in = make(Op::SetHome, s);
+  ir::FormPayload form;
+  std::size_t i = 0;
+  if (!s.params.empty() && (is_word(s.params[0], "CART") || is_word(s.params[0], "POL")))
+    form.form = ir::parse_word<ir::CoordinateForm>(s.params[i++].text);
+  in.payload = form;
+  if (s.params.size() - i != 3)
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.from-arity",
+                 fmt::format("FROM expects x,y,z (the home position), got {} numbers", s.params.size() - i));
+  for (; i < s.params.size(); ++i)
+    if (!push_number(in, s.params[i], "a coordinate")) return;
+  emit(std::move(in));
 }
 
 // UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC]

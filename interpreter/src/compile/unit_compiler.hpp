@@ -226,6 +226,8 @@ class UnitCompiler {
   void no_effect(const grammar::Statement& s);
   void geometry_algorithm(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
+  void from(const grammar::Statement& s);
+  void noted_no_effect(const grammar::Statement& s);
   void on_error(const grammar::Statement& s);
   void resume(const grammar::Statement& s);
   std::pair<std::string, Span> jump_label_name(const grammar::Expr& param) const;

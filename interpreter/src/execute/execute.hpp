@@ -57,6 +57,7 @@ struct Execute {
   static ExecuteFn feature_def, tolerance_def, sensor_def, datdef, declare;
   static ExecuteFn fit_algorithm;
   static ExecuteFn go_home;
+  static ExecuteFn set_home;
   static ExecuteFn on_error;
   static ExecuteFn resume;
   static ExecuteFn sensor_select, probe_set, feed, accel, go_to, meas_begin, ptmeas, meas_end;

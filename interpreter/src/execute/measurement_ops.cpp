@@ -16,7 +16,7 @@ using runtime::FeatureType;
 void Execute::add_measurement(ExecuteTable& t) {
   add_rows(t, {
       {Op::SensorSelect, &sensor_select}, {Op::FitAlgorithm, &fit_algorithm}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
-      {Op::GoTo, &go_to}, {Op::GoHome, &go_home}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
+      {Op::GoTo, &go_to}, {Op::GoHome, &go_home}, {Op::SetHome, &set_home}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
   });
 }
 
@@ -117,6 +117,15 @@ ExecStatus Execute::go_to(Interpreter& vm, const ir::Instruction& in, CallFrame&
 ExecStatus Execute::go_home(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   if (vm.m_block) return vm.fail(in.span, "GOHOME is not allowed inside a MEAS block");  // check refuses it first
   if (auto r = vm.m_runtime.go_home(in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::SetHome (FROM)
+ExecStatus Execute::set_home(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  std::vector<double> nums;
+  if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
+  const auto form = std::get<ir::FormPayload>(in.payload).form.value_or(ir::CoordinateForm::Cart);
+  vm.m_runtime.set_home(ir::position_mm(form, nums[0], nums[1], nums[2], vm.m_length_mm, degrees(vm)));
   return ExecStatus::Running;
 }
 

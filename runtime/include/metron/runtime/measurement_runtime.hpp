@@ -142,6 +142,8 @@ class MeasurementRuntime {
   Result<void> go_to(const Vec3& point_current, Span span);
   /// GOHOME: straight to the machine's home; a warning when the backend does not say where it is.
   Result<void> go_home(Span span);
+  /// FROM: where GOHOME goes from now on (current coordinates, kept as a machine point).
+  void set_home(const Vec3& point_current) { m_program_home = m_alignment.to_machine_point(point_current); }
   /// Current ball-centre position in the current frame.
   [[nodiscard]] Vec3 position_current() const;
   Result<void> measure(const MeasBlock& block);
@@ -257,6 +259,7 @@ class MeasurementRuntime {
   std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
   std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()
   Alignment m_alignment;
+  std::optional<Vec3> m_program_home;  ///< FROM's home, machine coordinates; else the machine's own
   std::map<std::string, SensorDefinition> m_sensors;
   std::map<std::string, machine::ToolInfo> m_tools;  ///< defined on the machine
   std::string m_active_sensor;

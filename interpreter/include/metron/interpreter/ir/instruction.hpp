@@ -77,6 +77,7 @@ enum class Op {
   Write,        ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
   FitAlgorithm, ///< GEOALG/CIRCLE,...: words: the algorithm (LSTSQR, MAXINS, MINCIR)
   GoHome,       ///< GOHOME: no operands
+  SetHome,      ///< FROM/[CART|POL,]x,y,z: payload FormPayload; exprs: the point GOHOME goes to from here on
   OnError,      ///< ERROR/...: words: JUMP (`target` = the handler label's index), AUTO or OFF, then the condition
   Resume,       ///< RESUME/...: word NEXTLINE, NEXTMEAS, CURMEAS, END or JUMP (`target` = the label's index)
 };
