@@ -236,9 +236,10 @@ TEST(ShopPrograms, FromSetsWhereGoHomeGoes) {
 // per word, with the reason, and no warning; point buffering and carriage definitions quietly.
 TEST(ShopPrograms, StatementsWithoutEffectAreNotedOnceEach) {
   const auto c = check("DMISMN/'n', 5.1\nPTBUFF/ON\nRAPID/50\nRAPID/20\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                       "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nENDFIL\n");
+                       "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nBOUND/F(P),F(P)\nENDFIL\n");
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
-  EXPECT_EQ(c.notes, 3u) << c.text;
+  EXPECT_EQ(c.notes, 4u) << c.text;
+  EXPECT_TRUE(c.has("10:1: note: BOUND: features are not bounded")) << c.text;
   EXPECT_TRUE(c.has("3:1: note: RAPID: the next move is made at the positioning feed")) << c.text;
   EXPECT_TRUE(c.has("6:1: note: DELETE: the labels stay defined")) << c.text;
   EXPECT_TRUE(c.has("9:1: note: KEYCHAR")) << c.text;
@@ -1933,10 +1934,52 @@ TEST(ShopPrograms, PartoAndPerptoConstructThroughAPoint) {
   // Wrong references and forms are positioned errors.
   const auto bad_ref = run(head + "CONST/PLANE,F(B),PARTO,FA(L),THRU,FA(P)\nENDFIL\n");
   EXPECT_NE(bad_ref.diagnostics.find("PARTO a PLANE needs a PLANE as its reference, got a LINE"), std::string::npos) << bad_ref.diagnostics;
-  const auto no_thru = check(head + "CONST/PLANE,F(B),PARTO,FA(A),FA(P)\nENDFIL\n");
-  EXPECT_TRUE(no_thru.has("PARTO takes a reference and a point: PARTO,FA(ref),THRU,FA(point)")) << no_thru.text;
+  // THRU may be left out, as shop software (Creo CMM) writes it: the same plane.
+  const auto no_thru = run(head + "CONST/PLANE,F(B),PARTO,FA(A),FA(P)\nOUTPUT/FA(B)\nENDFIL\n");
+  ASSERT_EQ(no_thru.status, ExecStatus::Finished) << no_thru.diagnostics;
+  const auto* b = report(*no_thru.session, "B");
+  ASSERT_TRUE(b != nullptr && b->actual.has_value());
+  EXPECT_NEAR((b->actual->position - p).dot(n), 0.0, 1e-12);
+  EXPECT_NEAR(b->actual->direction.dot(n), 1.0, 1e-12);
+  const auto no_point = check(head + "CONST/PLANE,F(B),PARTO,FA(A),THRU\nENDFIL\n");
+  EXPECT_TRUE(no_point.has("PARTO takes a reference and a point: PARTO,FA(ref),THRU,FA(point)")) << no_point.text;
   const auto circle = check(head + "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,5\nCONST/CIRCLE,F(C),PERPTO,FA(A),THRU,FA(P)\nENDFIL\n");
   EXPECT_TRUE(circle.has("PERPTO constructs a PLANE or a LINE")) << circle.text;
+}
+
+// PROJPT, PROJLN (PROJLI, Creo CMM's word) and PROJCT onto a tilted plane, from stated actuals:
+// the foot of the point, the line's direction less its normal part (0,0,1) - 0.8 n, normalised
+// to (0, -0.8, 0.6), the circle's centre with its diameter.
+TEST(ShopPrograms, ProjectionsOntoAPlane) {
+  const std::string text =
+      "DMISMN/'proj', 5.1\nFA(A)=FEAT/PLANE,CART,1,2,-1.25,0,0.6,0.8\n"
+      "FA(P)=FEAT/POINT,CART,10,20,30,0,0,1\nFA(L)=FEAT/LINE,UNBND,CART,5,5,5,0,0,1,1,0,0\n"
+      "FA(C)=FEAT/CIRCLE,INNER,CART,3,4,9,0,0,1,12\n"
+      "F(PP)=FEAT/POINT,CART,0,0,0,0,0.6,0.8\nF(PL)=FEAT/LINE,UNBND,CART,0,0,0,0,-0.8,0.6,1,0,0\n"
+      "F(PI)=FEAT/LINE,UNBND,CART,0,0,0,0,-0.8,0.6,1,0,0\nF(PC)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0.6,0.8,12\n"
+      "CONST/POINT,F(PP),PROJPT,FA(P),FA(A)\nCONST/LINE,F(PL),PROJLN,FA(L),FA(A)\n"
+      "CONST/LINE,F(PI),PROJLI,FA(L),FA(A)\nCONST/CIRCLE,F(PC),PROJCT,FA(C),FA(A)\n"
+      "OUTPUT/FA(PP),FA(PL),FA(PI),FA(PC)\nENDFIL\n";
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const Eigen::Vector3d a(1, 2, -1.25), n(0, 0.6, 0.8);
+  const auto actual = [&](const char* label) {
+    const auto* f = report(*r.session, label);
+    EXPECT_TRUE(f != nullptr && f->actual.has_value()) << label;
+    return f != nullptr && f->actual ? *f->actual : metron::runtime::Geometry{};
+  };
+  // (P - a).n = 35.8: the foot is P - 35.8 n.
+  EXPECT_LT((actual("PP").position - Eigen::Vector3d(10, 20 - 21.48, 30 - 28.64)).norm(), 1e-12);
+  for (const char* line : {"PL", "PI"}) {
+    const auto g = actual(line);
+    EXPECT_NEAR((g.position - a).dot(n), 0.0, 1e-12) << line;
+    EXPECT_LT((g.position - Eigen::Vector3d(5, 5, 5)).cross(n).norm(), 1e-12) << line;  // the foot of L's point
+    EXPECT_NEAR(g.direction.dot(Eigen::Vector3d(0, -0.8, 0.6)), 1.0, 1e-12) << line;
+  }
+  const auto c = actual("PC");
+  EXPECT_NEAR((c.position - a).dot(n), 0.0, 1e-12);
+  EXPECT_LT((c.position - Eigen::Vector3d(3, 4, 9)).cross(n).norm(), 1e-12);
+  EXPECT_NEAR(c.diameter_mm, 12.0, 1e-12);
 }
 
 // MIDPL, MIDLI, COPY and VERTEX: hand-computed answers from stated actuals.

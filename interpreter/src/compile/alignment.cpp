@@ -255,13 +255,15 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     return;
   }
   if (*method == ir::ConstructionMethod::Parto || *method == ir::ConstructionMethod::Perpto) {
-    // CONST/PLANE|LINE,F(l),PARTO|PERPTO,FA(ref),THRU,FA(point)
+    // CONST/PLANE|LINE,F(l),PARTO|PERPTO,FA(ref),[THRU,]FA(point) (shop software leaves THRU out)
     if (*const_type != FeatureType::Plane && *const_type != FeatureType::Line)
       return error(p[0].span, "sema.const-type", fmt::format("{} constructs a PLANE or a LINE", p[2].text));
-    if (p.size() != 6 || !is_label(p[3], {"FA", "F"}) || !is_word(p[4], "THRU") || !is_label(p[5], {"FA", "F"}))
+    const bool thru = p.size() == 6 && is_word(p[4], "THRU");
+    const std::size_t point = thru ? 5 : 4;
+    if (!(thru || p.size() == 5) || !is_label(p[3], {"FA", "F"}) || !is_label(p[point], {"FA", "F"}))
       return error(p.back().span, "sema.construction-arity",
                    fmt::format("{} takes a reference and a point: {},FA(ref),THRU,FA(point)", p[2].text, p[2].text));
-    for (std::size_t i : {3, 5}) {
+    for (std::size_t i : {std::size_t{3}, point}) {
       if (!check_feature(p[i])) return;
       in.operands.push_back(label_op(p[i]));
     }

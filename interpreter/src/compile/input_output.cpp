@@ -44,6 +44,7 @@ const NotedWord noted_words[] = {
     {"WINDEF", "WINDEF: the virtual CMM has no vision sensor to window"},
     {"FILDEF", "FILDEF: the virtual CMM has no vision sensor to filter"},
     {"CROSCL", "CROSCL: the virtual CMM has no vision sensor to scale"},
+    {"BOUND", "BOUND: features are not bounded by other features; each is fitted and reported over its own points"},
 };
 }  // namespace
 
