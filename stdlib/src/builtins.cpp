@@ -21,7 +21,7 @@ std::string lower(std::string s) {
   return s;
 }
 
-// VCROSS, VDOT, VMAG, VUNIT on VECTOR arguments.
+// VCROSS, VDOT, VMAG, VUNIT, VECX, VECY, VECZ on VECTOR arguments.
 tl::expected<Value, std::string> call_vector_builtin(const std::string& name, const std::vector<Value>& args) {
   for (const auto& a : args)
     if (a.type != ValueType::Vector)
@@ -29,6 +29,7 @@ tl::expected<Value, std::string> call_vector_builtin(const std::string& name, co
   const auto& u = args[0].components;
   const double magnitude = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
   if (name == "VMAG") return Value::real(magnitude);
+  if (name == "VECX" || name == "VECY" || name == "VECZ") return Value::real(u[static_cast<std::size_t>(name[3] - 'X')]);
   if (name == "VUNIT") {
     if (magnitude == 0) return tl::unexpected(std::string("VUNIT of a zero vector"));
     return Value::vector(u[0] / magnitude, u[1] / magnitude, u[2] / magnitude);
@@ -115,6 +116,8 @@ const std::vector<Builtin>& builtins() {
       {"VCROSS", 2, 2, ValueType::Vector, false, true}, {"VDOT", 2, 2, ValueType::Real, false, true},
       {"VMAG", 1, 1, ValueType::Real, false, true},     {"VUNIT", 1, 1, ValueType::Vector, false, true},
       {"VMCS", 1, 1, ValueType::Vector, false, true},   {"VPCS", 1, 1, ValueType::Vector, false, true},
+      {"VECX", 1, 1, ValueType::Real, false, true},     {"VECY", 1, 1, ValueType::Real, false, true},
+      {"VECZ", 1, 1, ValueType::Real, false, true},
   };
   return table;
 }

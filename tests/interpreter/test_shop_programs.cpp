@@ -1445,7 +1445,8 @@ TEST(ShopPrograms, InputFilesAndTheIntrinsicsOfTheRun) {
 
 // DECL/VECTOR and the vector intrinsics (DMIS 5.3 6.5). Expected values by hand: the cross
 // product of x and y is z; |(3,4,12)| = 13; VPOL(2,30,5) = (2 cos 30, 2 sin 30, 5); after a
-// 90 deg turn about z, part x is machine y (VMCS) and machine x is part -y (VPCS).
+// 90 deg turn about z, part x is machine y (VMCS) and machine x is part -y (VPCS); VECX, VECY,
+// VECZ the components read from the file.
 TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
   write("vectors.txt", "1.5, -2, 0.25\n");
   const std::string text =
@@ -1457,14 +1458,15 @@ TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
       "IF/(VCROSS(U,V).EQ.VCART(0,0,1))\n  TEXT/OPER,'cross ok'\nENDIF\n"
       "D(R) = ROTATE/ZAXIS, 90\nTEXT/OPER,STR(VDOT(VMCS(U),VCART(0,1,0)),6)\nTEXT/OPER,STR(VDOT(VPCS(U),VCART(0,-1,0)),6)\n"
       "DID(IN1)=DEVICE/STOR,'vectors.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nREAD/DID(IN1),U\n"
-      "TEXT/OPER,STR(VDOT(U,VCART(100,10,1)),3)\nENDFIL\n";
+      "TEXT/OPER,STR(VDOT(U,VCART(100,10,1)),3)\n"
+      "TEXT/OPER,CONCAT(STR(VECX(U)),' ',STR(VECY(U)),' ',STR(VECZ(U)))\nENDFIL\n";
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::vector<std::string> texts;
   for (const auto& e : r.session->record().events)
     if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
   const std::vector<std::string> expected = {"1", "13", "0,0,-1", "-1.5", "1.732051", "6.000000", "cross ok",
-                                             "1.000000", "1.000000", "130.250"};
+                                             "1.000000", "1.000000", "130.250", "1.5 -2 0.25"};
   EXPECT_EQ(texts, expected);
 
   // Type errors are found by check, with the place.
