@@ -628,7 +628,9 @@ Result<void> MeasurementRuntime::rotate(const std::string& label, const RotateRe
   if (!request.feature) return program_error(span, "ROTATE needs an angle or a feature");
   auto g = resolve(*request.feature, span);
   if (!g) return tl::unexpected(g.error());
-  auto frame = rotate_to(m_alignment.part_to_machine, request.about, g->direction, request.align);
+  // Turning d onto -X is turning -d onto +X.
+  const Vec3 direction = request.align_negative ? Vec3(-g->direction) : g->direction;
+  auto frame = rotate_to(m_alignment.part_to_machine, request.about, direction, request.align);
   if (!frame) return program_error(span, frame.error());
   set_alignment(label, *frame);
   return {};

@@ -176,6 +176,24 @@ TEST(ShopPrograms, ModeCombinationsAndSignedDirections) {
   EXPECT_TRUE(check("DMISMN/'p', 5.1\nMODE/PROG\nENDFIL\n").has("expected AUTO, PROG,MAN or MAN after MODE/"));
 }
 
+// ROTATE/ZAXIS,FA(l),-XDIR turns the line's direction onto the minus X axis (it was refused: only
+// XDIR, YDIR, ZDIR were read). The line's stated actual runs at 10 deg in the machine's XY plane:
+// afterwards VPCS of that direction is (-1, 0, 0); with XDIR it is (1, 0, 0).
+TEST(ShopPrograms, RotateOntoASignedDirection) {
+  const std::string head =
+      "DMISMN/'r', 5.1\nUNITS/MM,ANGDEC\nFA(L)=FEAT/LINE,UNBND,CART,0,0,0,0.984807753,0.173648178,0,0,0,1\n";
+  const std::string show = "TEXT/OPER,STR(VDOT(VPCS(VCART(0.984807753,0.173648178,0)),VCART(1,0,0)),6)\nENDFIL\n";
+  std::vector<std::string> said;
+  for (const char* direction : {"-XDIR", "XDIR", "+XDIR"}) {
+    const auto r = run(head + "D(R)=ROTATE/ZAXIS,FA(L)," + direction + "\n" + show);
+    ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+    for (const auto& e : r.session->record().events)
+      if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  }
+  EXPECT_EQ(said, (std::vector<std::string>{"-1.000000", "1.000000", "1.000000"}));
+  EXPECT_TRUE(check(head + "D(R)=ROTATE/ZAXIS,FA(L),-ZDIR\nENDFIL\n").has("the aligned axis cannot be the rotation axis"));
+}
+
 TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   const auto c = check("DMISMN/'p', 5.1\nDECPL/ALL,DEFALT,4\nDMESWI/'COMM/GOTOPARAMS'\nDMESWV/'NEWSPEED'\nFLY/1.0\n"
                        "PAUSE\nPAUSE\nENDFIL\n");

@@ -47,16 +47,7 @@ void UnitCompiler::datset(const grammar::Statement& s) {
   } else {
     bool have_datum = false;
     for (const auto& param : s.params) {
-      // Signed directions (DMIS 5.x, written by PC-DMIS and CAMIO): -XDIR is XMINUS, +XDIR is XDIR.
-      grammar::Expr signed_word;
-      const bool is_signed = param.kind == ExprKind::Unary && param.args.size() == 1 && (param.text == "-" || param.text == "+") &&
-                             (is_word(param.args[0], "XDIR") || is_word(param.args[0], "YDIR") || is_word(param.args[0], "ZDIR"));
-      if (is_signed) {
-        signed_word = param.args[0];
-        signed_word.span = param.span;
-        if (param.text == "-") signed_word.text = std::string(1, param.args[0].text[0]) + "MINUS";
-      }
-      const grammar::Expr& p = is_signed ? signed_word : param;
+      const grammar::Expr p = unsigned_direction(param);
       if (is_label(p, {"DAT"})) {
         const std::string d = upper(p.label.name);
         if (!m_symbols.datums.count(d) && !named_at_run(d))
@@ -102,7 +93,19 @@ void UnitCompiler::trans(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// D(l)=ROTATE/XAXIS|YAXIS|ZAXIS,angle | ROTATE/ZAXIS,FA(f),XDIR|YDIR|ZDIR
+// Signed directions (DMIS 5.x, written by PC-DMIS and CAMIO): -XDIR is the word XMINUS, +XDIR is
+// XDIR; anything else is returned as it is.
+grammar::Expr UnitCompiler::unsigned_direction(const grammar::Expr& e) {
+  const bool is_signed = e.kind == ExprKind::Unary && e.args.size() == 1 && (e.text == "-" || e.text == "+") &&
+                         (is_word(e.args[0], "XDIR") || is_word(e.args[0], "YDIR") || is_word(e.args[0], "ZDIR"));
+  if (!is_signed) return e;
+  grammar::Expr word = e.args[0];
+  word.span = e.span;
+  if (e.text == "-") word.text = std::string(1, e.args[0].text[0]) + "MINUS";
+  return word;
+}
+
+// D(l)=ROTATE/XAXIS|YAXIS|ZAXIS,angle | ROTATE/ZAXIS,FA(f),XDIR|YDIR|ZDIR|-XDIR|-YDIR|-ZDIR
 void UnitCompiler::rotate(const grammar::Statement& s) {
   if (!require_target(s, {"D"}, "D(label)=ROTATE/...")) return;
   if (!expect_params(s, 2, "an axis (XAXIS, YAXIS, ZAXIS) and an angle or feature")) return;
@@ -112,12 +115,14 @@ void UnitCompiler::rotate(const grammar::Statement& s) {
   in.operands.push_back(word_operand(s.params[0]));
   if (is_label(s.params[1], {"F", "FA"})) {
     if (!check_feature(s.params[1])) return;
-    if (s.params.size() != 3 || !(is_word(s.params[2], "XDIR") || is_word(s.params[2], "YDIR") || is_word(s.params[2], "ZDIR")))
-      return error(s.params.back().span, "sema.bad-rotate", "expected XDIR, YDIR or ZDIR after the feature");
-    if (s.params[2].text[0] == s.params[0].text[0])
+    const grammar::Expr direction = s.params.size() == 3 ? unsigned_direction(s.params[2]) : grammar::Expr{};
+    static const std::set<std::string> directions = {"XDIR", "YDIR", "ZDIR", "XMINUS", "YMINUS", "ZMINUS"};
+    if (s.params.size() != 3 || !is_word(direction) || !directions.count(direction.text))
+      return error(s.params.back().span, "sema.bad-rotate", "expected XDIR, YDIR or ZDIR (or -XDIR, -YDIR, -ZDIR) after the feature");
+    if (direction.text[0] == s.params[0].text[0])
       return error(s.params[2].span, "sema.bad-rotate", "the aligned axis cannot be the rotation axis");
     in.operands.push_back(label_op(s.params[1]));
-    in.operands.push_back(word_operand(s.params[2]));
+    in.operands.push_back(word_operand(direction));
   } else {
     if (s.params.size() != 2) return error(s.params.back().span, "sema.bad-rotate", "ROTATE/axis,angle takes one angle");
     if (!push_number(in, s.params[1], "an angle")) return;

@@ -227,6 +227,7 @@ class UnitCompiler {
   void geometry_algorithm(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
   void from(const grammar::Statement& s);
+  static grammar::Expr unsigned_direction(const grammar::Expr& e);
   void noted_no_effect(const grammar::Statement& s);
   void on_error(const grammar::Statement& s);
   void resume(const grammar::Statement& s);

@@ -124,6 +124,7 @@ ExecStatus Execute::rotate(Interpreter& vm, const ir::Instruction& in, CallFrame
   if (in.operands[1].kind == Operand::Kind::Label) {
     req.feature = feature_ref(vm, in.operands[1].label);
     req.align = *axis_of(in.operands[2].word);
+    req.align_negative = in.operands[2].word.ends_with("MINUS");
   } else {
     auto a = vm.number(in.operands[1].expr);
     if (!a) return vm.fail(in.span, a.error());

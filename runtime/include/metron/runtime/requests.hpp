@@ -90,6 +90,7 @@ struct RotateRequest {
   std::optional<double> angle_deg;
   std::optional<FeatureRef> feature;
   Axis align = Axis::X;
+  bool align_negative = false;  ///< -XDIR ...: the feature's direction is turned onto the axis's minus side
 };
 
 /// CONST/type,F(x),method,sources...
