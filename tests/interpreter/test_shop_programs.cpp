@@ -263,6 +263,21 @@ TEST(ShopPrograms, StatementsWithoutEffectAreNotedOnceEach) {
   EXPECT_TRUE(c.has("9:1: note: KEYCHAR")) << c.text;
 }
 
+// GOTARG/x,y,z ... ENDGO: through the GOTO points between to the target (both words were skipped
+// with a warning, so the machine stayed at the last intermediate point).
+TEST(ShopPrograms, GoTargetMovesThroughItsPointsToTheTarget) {
+  std::string text = bore_program("");
+  text.insert(text.find("ENDFIL"), "GOTARG/10, 20, 90\nGOTO/60, 50, 80\nGOTO/60, 20, 80\nENDGO\n");
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  // D(PART) puts the part origin at machine (300, 200, 0).
+  EXPECT_LT((r.session->machine().state().position_mm - Eigen::Vector3d(310, 220, 90)).norm(), 1e-9);
+  const auto bad = check("DMISMN/'g', 5.1\nENDGO\nGOTARG/1,2,3\nGOTARG/1,2,3\nGOTARG/1\nENDFIL\n");
+  EXPECT_TRUE(bad.has("2:1: error: ENDGO without a GOTARG")) << bad.text;
+  EXPECT_TRUE(bad.has("4:1: error: GOTARG inside the GOTARG of line 3: close it with ENDGO first")) << bad.text;
+  EXPECT_TRUE(bad.has("3:1: error: GOTARG is never closed: expected ENDGO before the end of the file")) << bad.text;
+}
+
 // SELECT/CASE (DMIS 5.x): it was skipped as an unknown statement, so every case ran.
 TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
   const std::string text =

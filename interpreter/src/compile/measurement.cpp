@@ -16,6 +16,7 @@ void UnitCompiler::add_measurement(StatementTable& t) {
       {"SNSMNT", &UnitCompiler::snsmnt}, {"SNSLCT", &UnitCompiler::snslct}, {"CALIB", &UnitCompiler::calib}, {"SNSET", &UnitCompiler::snset},
       {"FEDRAT", &UnitCompiler::fedrat}, {"ACLRAT", &UnitCompiler::aclrat},
       {"SCNMOD", &UnitCompiler::scnmod}, {"SCNSET", &UnitCompiler::scnset}, {"GOTO", &UnitCompiler::go_to},
+      {"GOTARG", &UnitCompiler::go_target}, {"ENDGO", &UnitCompiler::end_go},
       {"MEAS", &UnitCompiler::meas}, {"ENDMES", &UnitCompiler::endmes}, {"PTMEAS", &UnitCompiler::ptmeas},
       {"RMEAS", &UnitCompiler::ptmeas}, {"PAMEAS", &UnitCompiler::pameas}
   });
@@ -218,6 +219,33 @@ void UnitCompiler::go_to(const grammar::Statement& s) {
     if (!push_number(in, s.params[i], "a coordinate")) return;
   }
   emit(std::move(in));
+}
+
+// GOTARG/[CART|POL,]x,y,z ... ENDGO (DMIS 5.3): a move to the target through the GOTO points
+// between. The virtual CMM moves through them as it reads them and goes to the target at ENDGO.
+void UnitCompiler::go_target(const grammar::Statement& s) {
+  if (m_go_target) {
+    const Location at = m_sources.locate(m_go_target->span);
+    return error(s.major_span, "sema.nested-gotarg", fmt::format("GOTARG inside the GOTARG of line {}: close it with ENDGO first", at.line));
+  }
+  auto in = make(Op::GoTo, s);
+  ir::FormPayload form;
+  std::size_t i = 0;
+  if (!s.params.empty() && (is_word(s.params[0], "CART") || is_word(s.params[0], "POL")))
+    form.form = ir::parse_word<ir::CoordinateForm>(s.params[i++].text);
+  in.payload = form;
+  if (s.params.size() - i != 3)
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.goto-arity",
+                 fmt::format("GOTARG expects the target x,y,z, got {} numbers", s.params.size() - i));
+  for (; i < s.params.size(); ++i)
+    if (!push_number(in, s.params[i], "a coordinate")) return;
+  m_go_target = std::move(in);
+}
+
+void UnitCompiler::end_go(const grammar::Statement& s) {
+  if (!m_go_target) return error(s.major_span, "sema.endgo-without-gotarg", "ENDGO without a GOTARG");
+  emit(std::move(*m_go_target));
+  m_go_target.reset();
 }
 
 // MEAS/type,F(l),n

@@ -53,6 +53,7 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
           fmt::format("{} is never closed: expected {} before the end of the file",
                       openers[static_cast<int>(it->kind)], closers[static_cast<int>(it->kind)]));
   }
+  if (m_go_target) error(m_go_target->span, "sema.unclosed-block", "GOTARG is never closed: expected ENDGO before the end of the file");
   resolve_jumps(m_unit_jumps, m_module.units[m_unit].code);
   if (!repl && !m_ended && !st.empty() && !m_included)
     warn(st.back().span, "sema.no-endfil", "the program does not end with ENDFIL");
@@ -240,7 +241,7 @@ void UnitCompiler::statement(const grammar::Statement& given) {
   }
   const std::string& m = s.major;
   if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
-    static const std::set<std::string> allowed = {"GOTO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
+    static const std::set<std::string> allowed = {"GOTO", "GOTARG", "ENDGO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
                                                   "IF", "ELSE", "ENDIF", "DO", "ENDDO", "ASSIGN", "CALL", "DISPLY"};
     if (!allowed.count(m) && !s.variable) {
       error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));

@@ -227,6 +227,8 @@ class UnitCompiler {
   void geometry_algorithm(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
   void from(const grammar::Statement& s);
+  void go_target(const grammar::Statement& s);
+  void end_go(const grammar::Statement& s);
   static grammar::Expr unsigned_direction(const grammar::Expr& e);
   void noted_no_effect(const grammar::Statement& s);
   void on_error(const grammar::Statement& s);
@@ -317,6 +319,7 @@ class UnitCompiler {
   std::size_t m_unit;
   IncludeFile m_include;
   std::vector<Block> m_blocks;
+  std::optional<ir::Instruction> m_go_target;  ///< an open GOTARG: its move, emitted at ENDGO
   std::optional<int> m_macro;
   std::map<std::string, SymbolTable::VariableInfo> m_locals;
   JumpScope m_unit_jumps, m_macro_jumps;
