@@ -682,6 +682,30 @@ void MeasurementRuntime::output_sensor(const std::string& label, bool actual, Sp
   emit(TextReport{text});
 }
 
+// OUTPUT/D(x), OUTPUT/DA(x): where the coordinate system stands in the machine's: its origin and
+// its axes, as a report line and a DMIS comment line ($$) in the output file.
+void MeasurementRuntime::output_coordinate_system(const std::string& label, Span span) {
+  auto it = m_alignments.find(label);
+  if (it == m_alignments.end()) it = m_saved.find(label);
+  if (it == m_saved.end() && label != "MCS") {
+    warn(span, fmt::format("D({}) is not defined yet: nothing to output", label));
+    return;
+  }
+  const Frame frame = label == "MCS" && it == m_saved.end() ? Frame::Identity() : it->second.part_to_machine;
+  const ReportUnits& u = m_report_units;
+  const int decimals = u.length_decimals >= 0 ? u.length_decimals : (u.mm_per_length == 1 ? 4 : 5);
+  const Vec3 o = frame.translation() / u.mm_per_length;
+  const auto axis = [&](int k) {
+    const Vec3 a = frame.linear().col(k);
+    return fmt::format("({:.6f}, {:.6f}, {:.6f})", a.x(), a.y(), a.z());
+  };
+  const std::string text = fmt::format("D({}): origin ({:.{}f}, {:.{}f}, {:.{}f}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
+                                       label, o.x(), decimals, o.y(), decimals, o.z(), decimals,
+                                       u.length == "MM" ? "mm" : u.length, axis(0), axis(1), axis(2));
+  write_device_line("$$ " + text);
+  emit(TextReport{text});
+}
+
 void MeasurementRuntime::write_device_line(const std::string& line) {
   for (auto& [label, device] : m_devices)
     if (device.open && device.stream && !device.direct) *device.stream << line << "\n";
@@ -706,6 +730,8 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
                                      ? fmt::format("TA({})", items[i].tolerance)
                                  : items[i].kind == OutputItem::Kind::Sensor
                                      ? fmt::format("{}({})", items[i].sensor_actual ? "SA" : "S", items[i].sensor)
+                                 : items[i].kind == OutputItem::Kind::CoordinateSystem
+                                     ? fmt::format("D({})", items[i].coordinate_system)
                                      : fmt::format("{}({}){}", items[i].feature.actual ? "FA" : "F", items[i].feature.label,
                                                    items[i].points ? fmt::format("[{},{}]", items[i].points->first,
                                                                                  items[i].points->second)
@@ -715,6 +741,10 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
   for (const auto& item : items) {
     if (item.kind == OutputItem::Kind::Sensor) {
       if (report_them) output_sensor(item.sensor, item.sensor_actual, span);
+      continue;
+    }
+    if (item.kind == OutputItem::Kind::CoordinateSystem) {
+      if (report_them) output_coordinate_system(item.coordinate_system, span);
       continue;
     }
     if (item.kind == OutputItem::Kind::Tolerance) {

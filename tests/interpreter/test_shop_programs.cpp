@@ -2532,6 +2532,29 @@ TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtR
 // sphere, as report lines and comment lines of the DMIS output file. In the perfect world (no
 // pre-travel, no delays, a true ball) the qualified diameter is the ball's own, 2 mm; in the
 // default world the tip qualifies smaller by its pre-travel and trigger delays.
+// OUTPUT/D(x), DA(x): the coordinate system's origin and axes in the machine's (was ignored with
+// a warning). By hand: the part origin at machine (300, 200, 0), turned 90 deg about z, so part x
+// is machine y and part y machine -x; in inches 300 mm is 11.81102.
+TEST(ShopPrograms, CoordinateSystemsAreOutputAsOriginAndAxes) {
+  const auto r = run("DMISMN/'d', 5.1\nUNITS/MM,ANGDEC\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nD(R)=ROTATE/ZAXIS,90\n"
+                     "OUTPUT/D(R)\nUNITS/INCH,ANGDEC\nOUTPUT/DA(PART),D(MCS)\nOUTPUT/D(LATER)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> said;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  const std::vector<std::string> expected = {
+      "D(R): origin (300.0000, 200.0000, 0.0000) mm, X axis (0.000000, 1.000000, 0.000000), Y axis (-1.000000, 0.000000, "
+      "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates",
+      "D(PART): origin (11.81102, 7.87402, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
+      "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates",
+      "D(MCS): origin (0.00000, 0.00000, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
+      "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates"};
+  EXPECT_EQ(said, expected);
+  EXPECT_NE(r.diagnostics.find("D(LATER) is not defined yet: nothing to output"), std::string::npos) << r.diagnostics;
+  const auto c = check("DMISMN/'d', 5.1\nOUTPUT/D(NOPE)\nENDFIL\n");
+  EXPECT_TRUE(c.has("2:8: warning: coordinate system D(NOPE) is not defined in this program")) << c.text;
+}
+
 TEST(ShopPrograms, SensorsAreOutputWithTheirQualification) {
   const std::string program =
       "DMISMN/'sensors', 5.0\nUNITS/MM, ANGDEC\n"

@@ -475,6 +475,11 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         note(p.span, "sema.output-library-sensor",
              fmt::format("{}({}) is not defined in this program: its output is what the machine's probe library holds at run",
                          p.label.prefix, p.label.name));
+    } else if (is_label(p, {"D", "DA"}) && in.op == Op::Output) {
+      // A coordinate system: its origin and axes in the machine's, as a report line.
+      const std::string d = upper(p.label.name);
+      if (!m_symbols.alignments.count(d) && d != "MCS" && !named_at_run(d))
+        warn(p.span, "sema.undefined-datum-set", fmt::format("coordinate system D({}) is not defined in this program", p.label.name));
     } else if (p.kind == ExprKind::Label) {
       warn(p.span, "sema.unsupported-output", fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
       continue;

@@ -47,6 +47,9 @@ std::vector<runtime::OutputItem> Execute::output_items(Interpreter& vm, const ir
       item.kind = runtime::OutputItem::Kind::Sensor;
       item.sensor = vm.label_name(o.label);
       item.sensor_actual = o.label.prefix == "SA";
+    } else if (o.label.prefix == "D" || o.label.prefix == "DA") {
+      item.kind = runtime::OutputItem::Kind::CoordinateSystem;
+      item.coordinate_system = vm.label_name(o.label);
     } else {
       item.feature = feature_ref(vm, o.label);
       // FA(x)[first,last] or FA(x)[n]: one or two numbers after the label (docs/ir.md).

@@ -103,12 +103,14 @@ enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection,
 
 /// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
 struct OutputItem {
-  enum class Kind { Feature, Tolerance, Sensor } kind = Kind::Feature;
+  enum class Kind { Feature, Tolerance, Sensor, CoordinateSystem } kind = Kind::Feature;
   FeatureRef feature;
   std::string tolerance;
   /// OUTPUT/S(x) (its definition) or SA(x) (its qualification): the sensor's label.
   std::string sensor;
   bool sensor_actual = false;
+  /// OUTPUT/D(x) or DA(x): the coordinate system's label.
+  std::string coordinate_system;
   /// OUTPUT/FA(x)[first,last] (MODUS): the feature's points first..last (1-based) are listed.
   std::optional<std::pair<int, int>> points;
 };
