@@ -48,7 +48,7 @@ std::string mutate(std::string s, std::mt19937& rng) {
 
 TEST(CompilerFuzz, MutatedProgramsNeverThrow) {
   std::vector<std::string> seeds;
-  for (const char* dir : {"programs/examples", "programs/regression", "programs/bad"})
+  for (const char* dir : {"programs/examples", "programs/regression", "programs/bad", "programs/real"})
     for (const auto& e : fs::directory_iterator(fs::path(METRON_SOURCE_DIR) / dir))
       if (e.path().extension() == ".dmi") seeds.push_back(slurp(e.path()));
   ASSERT_FALSE(seeds.empty());
