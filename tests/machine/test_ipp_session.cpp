@@ -137,6 +137,45 @@ TEST(IppSession, PartCoordinateSystemTransformsInAndOut) {
   EXPECT_EQ(f.error("00080 SetCsyTransformation(PartCsy, 0, 0, 0, 190, 0, 0)"), 1007);
 }
 
+// What clients metron's authors did not write send (the Rust crate ippdme-core, MIT): the probing
+// direction as I(), J(), K(); SetCoordSystem(MCS|PCS), the shorthands of the specification's
+// dialogs; and the named coordinate systems of I++ DME 1.5 (SaveNamedCsyTransformation,
+// GetNamedCsyTransformation, EnumCoordSystems, DeleteCoordSystem), which were 0500/0501.
+TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00005 OnPtMeasReport(X(), Y(), Z())"), 0);
+  const auto separate = f.data("00010 PtMeas(X(445.0), Y(210.0), Z(41.3), I(0.0), J(0.0), K(1.0))");
+  EXPECT_NEAR(item(separate, "Z"), 41, 1e-4);  // the top face (hidden truth 40) under a 1 mm ball
+  EXPECT_EQ(f.error("00011 PtMeas(X(445), Y(210), Z(41.3), I(0), K(1))"), 502);
+  EXPECT_EQ(f.error("00012 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00013 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1), K(1), I(0), J(0))"), 502);
+  EXPECT_EQ(f.error("00014 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00020 SetCoordSystem(PCS)"), 0);
+  EXPECT_EQ(f.data("00021 GetCoordSystem()"), "CoordSystem(PartCsy)");
+  EXPECT_EQ(f.error("00022 SetCoordSystem(MCS)"), 0);
+  EXPECT_EQ(f.data("00023 GetCoordSystem()"), "CoordSystem(MachineCsy)");
+  EXPECT_EQ(f.error("00030 SaveNamedCsyTransformation(\"Fixture 1\", 300, 200, 0, 0, 90, 0)"), 0);
+  EXPECT_EQ(f.error("00031 SaveActiveCoordSystem(\"Machine\")"), 0);
+  EXPECT_EQ(f.send("00032 EnumCoordSystems()"),
+            (std::vector<std::string>{"00032 &", "00032 # \"Fixture 1\"", "00032 # \"Machine\"", "00032 %"}));
+  EXPECT_EQ(f.data("00033 GetNamedCsyTransformation(\"Fixture 1\")"), "GetNamedCsyTransformation(300, 200, 0, 0, 90, 0)");
+  // Loaded, the named system is the part system: machine (320, 210) is part (10, -20).
+  EXPECT_EQ(f.error("00034 LoadCoordSystem(\"Fixture 1\")"), 0);
+  EXPECT_EQ(f.error("00035 GoTo(X(10), Y(-20), Z(60))"), 0);
+  EXPECT_EQ(f.error("00036 SetCoordSystem(MachineCsy)"), 0);
+  const auto m = f.data("00037 Get(X(), Y())");
+  EXPECT_NEAR(item(m, "X"), 320, 1e-6);
+  EXPECT_NEAR(item(m, "Y"), 210, 1e-6);
+  EXPECT_EQ(f.error("00040 DeleteCoordSystem(\"Fixture 1\")"), 0);
+  EXPECT_EQ(f.send("00041 EnumCoordSystems()"), (std::vector<std::string>{"00041 &", "00041 # \"Machine\"", "00041 %"}));
+  EXPECT_EQ(f.error("00042 GetNamedCsyTransformation(\"Fixture 1\")"), 509);
+  EXPECT_EQ(f.error("00043 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00044 DeleteCoordSystem(\"Fixture 1\")"), 509);
+  EXPECT_EQ(f.error("00045 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00046 SaveNamedCsyTransformation(\"T\", 0, 0, 0, 190, 0, 0)"), 1007);
+}
+
 TEST(IppSession, MachineFaultsBecomeStandardErrors) {
   Fixture f;
   f.start();

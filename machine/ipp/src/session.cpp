@@ -5,6 +5,7 @@
 #include "metron/machine/ipp/session.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -440,12 +441,34 @@ struct Session::Impl {
         if (!v) fail(ErrorCode::IncorrectArguments);
         if (*v != 0) fail(ErrorCode::AngleOutOfRange);  // a fixed probe head: only 0
         any = true;
-      } else if (x.text != "IJK") {
+      } else if (x.text != "IJK" && x.text != "I" && x.text != "J" && x.text != "K") {
         fail(ErrorCode::IncorrectArguments);
       }
     }
     if (!any) fail(ErrorCode::IncorrectArguments);
     return p;
+  }
+
+  // The probing direction: IJK(i, j, k), or I(i), J(j), K(k) as some clients write it (the three
+  // together, and not beside IJK).
+  static std::optional<Vec3> direction_argument(const Args& a) {
+    std::optional<Vec3> ijk;
+    std::array<std::optional<double>, 3> separate;
+    for (const auto& x : a) {
+      if (x.is_call("IJK")) {
+        if (ijk || x.args.size() != 3) fail(ErrorCode::IncorrectArguments);
+        const auto v = numbers(x.args);
+        ijk = Vec3(v[0], v[1], v[2]);
+      } else if (x.kind == Argument::Kind::Call && (x.text == "I" || x.text == "J" || x.text == "K")) {
+        const auto v = x.call_number();
+        if (!v) fail(ErrorCode::IncorrectArguments);
+        separate[static_cast<std::size_t>(x.text[0] - 'I')] = *v;
+      }
+    }
+    const int given = static_cast<int>(std::count_if(separate.begin(), separate.end(), [](const auto& c) { return c.has_value(); }));
+    if (given == 0) return ijk;
+    if (given != 3 || ijk) fail(ErrorCode::IncorrectArguments);
+    return Vec3(*separate[0], *separate[1], *separate[2]);
   }
 
   void go_to(const Args& a) {
@@ -459,13 +482,7 @@ struct Session::Impl {
 
   void pt_meas(const Args& a) {
     require_motion_ready();
-    std::optional<Vec3> ijk;
-    for (const auto& x : a)
-      if (x.is_call("IJK")) {
-        if (ijk || x.args.size() != 3) fail(ErrorCode::IncorrectArguments);
-        const auto v = numbers(x.args);
-        ijk = Vec3(v[0], v[1], v[2]);
-      }
+    const std::optional<Vec3> ijk = direction_argument(a);
     const Vec3 nominal = target(a, false);
     if (ijk && ijk->norm() < 1e-12) fail(ErrorCode::VectorHasNoNorm);  // the arguments first (NIST)
     require_probing_tool();
@@ -943,8 +960,10 @@ struct Session::Impl {
       data("CoordSystem(" + active_csy + ")");
     } else if (n == "SetCoordSystem") {
       if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
-      if (std::find(k_csy_names.begin(), k_csy_names.end(), a[0].text) == k_csy_names.end()) fail(ErrorCode::BadArgument);
-      active_csy = a[0].text;
+      // MCS and PCS: the shorthands of the specification's example dialogs, as clients send them.
+      const std::string csy = a[0].text == "MCS" ? "MachineCsy" : a[0].text == "PCS" ? "PartCsy" : a[0].text;
+      if (std::find(k_csy_names.begin(), k_csy_names.end(), csy) == k_csy_names.end()) fail(ErrorCode::BadArgument);
+      active_csy = csy;
     } else if (n == "GetCsyTransformation") {
       if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
       const auto it = csys.find(a[0].text);
@@ -966,6 +985,23 @@ struct Session::Impl {
       if (it == saved_csys.end()) fail(ErrorCode::BadArgument);
       csys["PartCsy"] = it->second;
       active_csy = "PartCsy";
+    } else if (n == "SaveNamedCsyTransformation") {
+      // I++ DME 1.5: a named part system from its transformation, without making it active.
+      if (a.size() != 7 || a[0].kind != Argument::Kind::String) fail(ErrorCode::IncorrectArguments);
+      const auto v = numbers(Args(a.begin() + 1, a.end()));
+      if (v[3] < 0 || v[3] > 180) fail(ErrorCode::ThetaOutOfRange);
+      saved_csys[a[0].text] = {v[0], v[1], v[2], v[3], v[4], v[5]};
+    } else if (n == "GetNamedCsyTransformation") {
+      const auto it = saved_csys.find(one_string(a));
+      if (it == saved_csys.end()) fail(ErrorCode::BadArgument);
+      const Csy& t = it->second;
+      data("GetNamedCsyTransformation(" + format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) +
+           ", " + format_number(t.theta) + ", " + format_number(t.psi) + ", " + format_number(t.phi) + ")");
+    } else if (n == "DeleteCoordSystem") {
+      if (saved_csys.erase(one_string(a)) == 0) fail(ErrorCode::BadArgument);
+    } else if (n == "EnumCoordSystems") {
+      no_args(a);
+      for (const auto& [name, csy] : saved_csys) data("\"" + name + "\"");
     } else if (n == "GoTo") {
       go_to(a);
     } else if (n == "PtMeas") {
