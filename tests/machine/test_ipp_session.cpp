@@ -137,9 +137,9 @@ TEST(IppSession, PartCoordinateSystemTransformsInAndOut) {
   EXPECT_EQ(f.error("00080 SetCsyTransformation(PartCsy, 0, 0, 0, 190, 0, 0)"), 1007);
 }
 
-// What clients metron's authors did not write send (the Rust crate ippdme-core, MIT): the probing
-// direction as I(), J(), K(); SetCoordSystem(MCS|PCS), the shorthands of the specification's
-// dialogs; and the named coordinate systems of I++ DME 1.5 (SaveNamedCsyTransformation,
+// What clients metron's authors did not write send (the Rust crate ippdme-core, MIT; the C++
+// library libjdme2x, BSL-1.0): the probing direction as I(), J(), K(); SetCoordSystem(MCS|PCS),
+// the shorthands of the specification's dialogs; a system's name quoted; and the named coordinate systems of I++ DME 1.5 (SaveNamedCsyTransformation,
 // GetNamedCsyTransformation, EnumCoordSystems, DeleteCoordSystem), which were 0500/0501.
 TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
   Fixture f;
@@ -155,6 +155,13 @@ TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
   EXPECT_EQ(f.data("00021 GetCoordSystem()"), "CoordSystem(PartCsy)");
   EXPECT_EQ(f.error("00022 SetCoordSystem(MCS)"), 0);
   EXPECT_EQ(f.data("00023 GetCoordSystem()"), "CoordSystem(MachineCsy)");
+  // Quoted, as libjdme2x (an I++ DME 2.5 client library, BSL-1.0) writes the name.
+  EXPECT_EQ(f.error("00024 SetCoordSystem(\"PartCsy\")"), 0);
+  EXPECT_EQ(f.data("00025 GetCoordSystem()"), "CoordSystem(PartCsy)");
+  EXPECT_EQ(f.data("00026 GetCsyTransformation(\"PartCsy\")"), "GetCsyTransformation(0, 0, 0, 0, 0, 0)");
+  EXPECT_EQ(f.error("00027 SetCoordSystem(\"Nowhere\")"), 509);
+  EXPECT_EQ(f.error("00028 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00029 SetCoordSystem(MachineCsy)"), 0);
   EXPECT_EQ(f.error("00030 SaveNamedCsyTransformation(\"Fixture 1\", 300, 200, 0, 0, 90, 0)"), 0);
   EXPECT_EQ(f.error("00031 SaveActiveCoordSystem(\"Machine\")"), 0);
   EXPECT_EQ(f.send("00032 EnumCoordSystems()"),

@@ -182,6 +182,11 @@ struct Session::Impl {
   static void no_args(const Args& a) {
     if (!a.empty()) fail(ErrorCode::IncorrectArguments);
   }
+  // A coordinate system's name: a name (PartCsy), or quoted ("PartCsy") as the I++ DME 2.5
+  // client library libjdme2x writes it.
+  static bool csy_name_argument(const Argument& x) {
+    return x.kind == Argument::Kind::Name || x.kind == Argument::Kind::String;
+  }
   static const std::string& one_string(const Args& a) {
     if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
     if (a[0].kind != Argument::Kind::String) fail(ErrorCode::BadArgument);
@@ -959,20 +964,20 @@ struct Session::Impl {
       no_args(a);
       data("CoordSystem(" + active_csy + ")");
     } else if (n == "SetCoordSystem") {
-      if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      if (a.size() != 1 || !csy_name_argument(a[0])) fail(ErrorCode::IncorrectArguments);
       // MCS and PCS: the shorthands of the specification's example dialogs, as clients send them.
       const std::string csy = a[0].text == "MCS" ? "MachineCsy" : a[0].text == "PCS" ? "PartCsy" : a[0].text;
       if (std::find(k_csy_names.begin(), k_csy_names.end(), csy) == k_csy_names.end()) fail(ErrorCode::BadArgument);
       active_csy = csy;
     } else if (n == "GetCsyTransformation") {
-      if (a.size() != 1 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      if (a.size() != 1 || !csy_name_argument(a[0])) fail(ErrorCode::IncorrectArguments);
       const auto it = csys.find(a[0].text);
       if (it == csys.end()) fail(ErrorCode::BadArgument);
       const Csy& t = it->second;
       data("GetCsyTransformation(" + format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) + ", " +
            format_number(t.theta) + ", " + format_number(t.psi) + ", " + format_number(t.phi) + ")");
     } else if (n == "SetCsyTransformation") {
-      if (a.size() != 7 || a[0].kind != Argument::Kind::Name) fail(ErrorCode::IncorrectArguments);
+      if (a.size() != 7 || !csy_name_argument(a[0])) fail(ErrorCode::IncorrectArguments);
       const auto it = csys.find(a[0].text);
       if (it == csys.end()) fail(ErrorCode::BadArgument);
       const auto v = numbers(Args(a.begin() + 1, a.end()));
