@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -400,14 +401,34 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   return {};
 }
 
-// GEOALG/CIRCLE,MAXINS|MINCIR: the circle a pin (ring) gauge would find, from the compensated
-// surface points in the least-squares circle's plane; form stays the least-squares figure.
+// GEOALG/CIRCLE,MAXINS|MINCIR: the circle a pin (ring) gauge would find; MINMAX: the minimum
+// zone (Chebyshev) circle, ISO 12181-1's MZCI, centred where the annulus holding the points is
+// narrowest, its diameter the annulus's mean (r_max + r_min). From the compensated surface points
+// in the least-squares circle's plane; form stays the least-squares figure.
 void MeasurementRuntime::apply_circle_fit(Geometry& circle, const std::vector<MeasuredPoint>& points, const std::string& label,
                                           Span span) {
   if (m_circle_fit == CircleFit::LeastSquares) return;
-  const bool inscribed = m_circle_fit == CircleFit::MaximumInscribed;
   std::vector<Vec3> surface;
   for (const auto& p : points) surface.push_back(p.surface_mm());
+  if (m_circle_fit == CircleFit::MinimumZone) {
+    const auto zone = fitting::minimum_zone(fitting::Shape::Circle, surface, circle.direction);
+    if (!zone) {
+      warn(span, fmt::format("GEOALG MINMAX: F({}) has no minimum-zone circle; its least-squares circle is kept", label));
+      return;
+    }
+    const Vec3 n = circle.direction.normalized();
+    double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
+    for (const auto& q : surface) {
+      const Vec3 d = q - zone->position;
+      const double r = (d - d.dot(n) * n).norm();
+      r_min = std::min(r_min, r);
+      r_max = std::max(r_max, r);
+    }
+    circle.position = zone->position + (circle.position - zone->position).dot(n) * n;  // kept in the circle's plane
+    circle.diameter_mm = r_min + r_max;
+    return;
+  }
+  const bool inscribed = m_circle_fit == CircleFit::MaximumInscribed;
   const auto extreme = fitting::extreme_circle(surface, inscribed, circle.direction);
   if (!extreme) {
     warn(span, fmt::format("GEOALG {}: the points of F({}) do not surround their centre; its least-squares circle is kept",

@@ -253,6 +253,56 @@ TEST(Scanning, GeoalgSizesACircleByItsInscribedOrCircumscribedCircle) {
   EXPECT_NEAR(diameter("GEOALG/CIRCLE, MAXINS\nGEOALG/CIRCLE, LSTSQR\n"), 20.0, 2e-4);
 }
 
+// GEOALG/CIRCLE,MINMAX: the minimum zone circle of a bore whose hidden profile has 3 and 2 lobes
+// of 5 um, r = 10 + 0.005 cos 3t + 0.005 cos 2t. Its least-squares centre is the axis (no first
+// harmonic); the narrowest annulus is not centred there. The expected centre and diameter come
+// from a brute-force search of the hidden profile itself (a 0.1 um grid of centres, 3600 profile
+// points), independent of metron's minimum-zone search: the centre 3.7 um along +x, the diameter
+// r_max + r_min = 19.99669, where least squares gives 20.0000.
+TEST(Scanning, GeoalgMinmaxCentresACircleInItsNarrowestAnnulus) {
+  const Vec3 c(340, 250, 30);
+  const auto profile = [](double t) { return 10 + 0.005 * std::cos(3 * t) + 0.005 * std::cos(2 * t); };
+  const Truth truth = [=](const Vec3& q) {
+    Vec3 d = q - c;
+    d.z() = 0;
+    const Vec3 u = d.normalized();
+    return Vec3(c + (profile(std::atan2(u.y(), u.x())) - 2.0) * u + Vec3(0, 0, q.z() - c.z()));
+  };
+  // The independent reference: the centre on a grid that makes r_max - r_min least.
+  double best_width = 1e9, best_x = 0, best_y = 0, best_diameter = 0;
+  for (int i = -60; i <= 60; ++i)
+    for (int j = -20; j <= 20; ++j) {
+      double lo = 1e9, hi = 0;
+      for (int k = 0; k < 3600; ++k) {
+        const double t = 2 * std::numbers::pi * k / 3600;
+        const double r = profile(t);
+        const double x = r * std::cos(t) - i * 1e-4, y = r * std::sin(t) - j * 1e-4;
+        const double rr = std::hypot(x, y);
+        lo = std::min(lo, rr);
+        hi = std::max(hi, rr);
+      }
+      if (hi - lo < best_width) best_width = hi - lo, best_x = i * 1e-4, best_y = j * 1e-4, best_diameter = hi + lo;
+    }
+  ASSERT_NEAR(best_x, 0.0037, 1e-4);  // the reference itself, before metron is asked
+  const auto fitted = [&](const std::string& geoalg) {
+    auto r = run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+                 "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" + geoalg +
+                 "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n", truth);
+    EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+    const auto& b1 = r->runtime->features().at("B1");
+    EXPECT_TRUE(b1.actual.has_value());
+    return b1.actual ? *b1.actual : metron::runtime::Geometry{};
+  };
+  const auto mz = fitted("GEOALG/CIRCLE, MINMAX\n");
+  EXPECT_NEAR(mz.position.x() - c.x(), best_x, 5e-4);
+  EXPECT_NEAR(mz.position.y() - c.y(), best_y, 5e-4);
+  EXPECT_NEAR(mz.position.z(), c.z(), 1e-6);
+  EXPECT_NEAR(mz.diameter_mm, best_diameter, 5e-4);
+  const auto ls = fitted("");
+  EXPECT_NEAR(ls.diameter_mm, 20.0, 2e-4);
+  EXPECT_GT(std::abs(ls.diameter_mm - mz.diameter_mm), 2e-3);  // the two algorithms differ here
+}
+
 TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   const Vec3 c(40, 50, 25);
   // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.

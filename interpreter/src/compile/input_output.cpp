@@ -92,9 +92,9 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   const std::string key = s.major;
   if (s.major == "GEOALG" && s.params.size() >= 2 && is_word(s.params[0], "CIRCLE") &&
       (is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT") || is_word(s.params[1], "MAXINS") ||
-       is_word(s.params[1], "MINCIR"))) {
+       is_word(s.params[1], "MINCIR") || is_word(s.params[1], "MINMAX"))) {
     // GEOALG/CIRCLE: the circles measured from here on (MAXINS a hole's pin-gauge size, MINCIR a
-    // boss's ring-gauge size; LSTSQR, DEFALT back to least squares).
+    // boss's ring-gauge size, MINMAX the minimum zone circle; LSTSQR, DEFALT back to least squares).
     auto in = make(Op::FitAlgorithm, s);
     in.operands.push_back(word_operand(is_word(s.params[1], "DEFALT") ? std::string("LSTSQR") : s.params[1].text, s.params[1].span));
     emit(std::move(in));

@@ -30,7 +30,10 @@ ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, Ca
 ExecStatus Execute::fit_algorithm(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   using F = runtime::MeasurementRuntime::CircleFit;
   const std::string& word = in.operands.at(0).word;
-  vm.m_runtime.set_circle_fit(word == "MAXINS" ? F::MaximumInscribed : word == "MINCIR" ? F::MinimumCircumscribed : F::LeastSquares);
+  vm.m_runtime.set_circle_fit(word == "MAXINS"   ? F::MaximumInscribed
+                              : word == "MINCIR" ? F::MinimumCircumscribed
+                              : word == "MINMAX" ? F::MinimumZone
+                                                 : F::LeastSquares);
   return ExecStatus::Running;
 }
 

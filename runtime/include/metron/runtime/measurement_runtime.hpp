@@ -84,7 +84,7 @@ class MeasurementRuntime {
   /// qualifies it again at the current measuring feed.
   Result<void> select_sensor(const std::string& label, Span span, bool requalify = false);
   /// GEOALG/CIRCLE: how the circles measured from now on are sized and located.
-  enum class CircleFit { LeastSquares, MaximumInscribed, MinimumCircumscribed };
+  enum class CircleFit { LeastSquares, MaximumInscribed, MinimumCircumscribed, MinimumZone };
   void set_circle_fit(CircleFit fit) { m_circle_fit = fit; }
   /// A sensor the program did not define, from the machine's probe library (a 4 mm default
   /// tip, with a warning, for a name the library does not hold).
