@@ -205,7 +205,8 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
                           "GOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
   EXPECT_EQ(once.errors, 0u) << once.text;
   EXPECT_EQ(once.warnings, 1u) << once.text;
-  EXPECT_TRUE(once.has("4:1: warning: GEOALG: metron fits features by least squares")) << once.text;
+  // GEOALG/CIRCLE,MINMAX is applied (the minimum zone circle); PLANE,MINMAX is the first that is not.
+  EXPECT_TRUE(once.has("5:1: warning: GEOALG: metron fits features by least squares")) << once.text;
   EXPECT_FALSE(once.has("GOHOME")) << once.text;
   // A REPORT layout named in OUTPUT: one note, not a warning per OUTPUT.
   const auto layout = check("DMISMN/'p', 5.1\nR(R1)=REPORT/ALGOR,DATE\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
@@ -254,9 +255,10 @@ TEST(ShopPrograms, FromSetsWhereGoHomeGoes) {
 // per word, with the reason, and no warning; point buffering and carriage definitions quietly.
 TEST(ShopPrograms, StatementsWithoutEffectAreNotedOnceEach) {
   const auto c = check("DMISMN/'n', 5.1\nPTBUFF/ON\nRAPID/50\nRAPID/20\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                       "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nBOUND/F(P),F(P)\nENDFIL\n");
+                       "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nBOUND/F(P),F(P)\n"
+                       "XTERN\nENDXTN\nPSTHRU/PAUSE,'x'\nENDFIL\n");
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
-  EXPECT_EQ(c.notes, 4u) << c.text;
+  EXPECT_EQ(c.notes, 5u) << c.text;
   EXPECT_TRUE(c.has("10:1: note: BOUND: features are not bounded")) << c.text;
   EXPECT_TRUE(c.has("3:1: note: RAPID: the next move is made at the positioning feed")) << c.text;
   EXPECT_TRUE(c.has("6:1: note: DELETE: the labels stay defined")) << c.text;

@@ -25,7 +25,9 @@ const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "
                                        "REPORT", "CZONE",
                                        // Point buffering and the carriage definitions of a one-carriage
                                        // machine: the points reach the runtime the same either way.
-                                       "PTBUFF", "CRGDEF"};
+                                       "PTBUFF", "CRGDEF",
+                                       // XTERN ... ENDXTN frames the EXTFIL declarations, which do the work.
+                                       "XTERN", "ENDXTN"};
 
 // Statements accepted without their effect, which a reader of the results may want to know: one
 // note per program and word, with the reason.
@@ -45,6 +47,11 @@ const NotedWord noted_words[] = {
     {"FILDEF", "FILDEF: the virtual CMM has no vision sensor to filter"},
     {"CROSCL", "CROSCL: the virtual CMM has no vision sensor to scale"},
     {"BOUND", "BOUND: features are not bounded by other features; each is fitted and reported over its own points"},
+    {"PSTHRU", "PSTHRU: its text is for a real controller; the virtual CMM has none to pass it to"},
+    {"CUTCOM", "CUTCOM: a CMM has no cutter to compensate"},
+    {"TOOLDF", "TOOLDF: machining tools are not used by a CMM"},
+    {"THLDEF", "THLDEF: thread definitions are not evaluated"},
+    {"MATDEF", "MATDEF: part materials are not used (TECOMP is not applied either)"},
 };
 }  // namespace
 
