@@ -197,18 +197,26 @@ void UnitCompiler::go_home(const grammar::Statement& s) {
 // FROM/[CART|POL,]x,y,z (DMIS 5.3): the program's home position, in the current coordinate
 // system; GOHOME goes there from here on. FROM does not move the machine.
 void UnitCompiler::from(const grammar::Statement& s) {
-  auto in = make(Op::SetHome, s);
+  if (auto in = point_instruction(s, Op::SetHome, "the home position")) emit(std::move(*in));
+}
+
+// [CART|POL,]x,y,z of FROM and GOTARG: the instruction with its form and three numbers, or
+// nullopt after an error that says what the point is.
+std::optional<ir::Instruction> UnitCompiler::point_instruction(const grammar::Statement& s, Op op, const char* what) {
+  auto in = make(op, s);
   ir::FormPayload form;
   std::size_t i = 0;
   if (!s.params.empty() && (is_word(s.params[0], "CART") || is_word(s.params[0], "POL")))
     form.form = ir::parse_word<ir::CoordinateForm>(s.params[i++].text);
   in.payload = form;
-  if (s.params.size() - i != 3)
-    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.from-arity",
-                 fmt::format("FROM expects x,y,z (the home position), got {} numbers", s.params.size() - i));
+  if (s.params.size() - i != 3) {
+    error(s.params.empty() ? s.major_span : s.params.back().span, "sema.point-arity",
+          fmt::format("{} expects x,y,z ({}), got {} numbers", s.major, what, s.params.size() - i));
+    return std::nullopt;
+  }
   for (; i < s.params.size(); ++i)
-    if (!push_number(in, s.params[i], "a coordinate")) return;
-  emit(std::move(in));
+    if (!push_number(in, s.params[i], "a coordinate")) return std::nullopt;
+  return in;
 }
 
 // UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC]

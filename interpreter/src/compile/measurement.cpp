@@ -228,18 +228,7 @@ void UnitCompiler::go_target(const grammar::Statement& s) {
     const Location at = m_sources.locate(m_go_target->span);
     return error(s.major_span, "sema.nested-gotarg", fmt::format("GOTARG inside the GOTARG of line {}: close it with ENDGO first", at.line));
   }
-  auto in = make(Op::GoTo, s);
-  ir::FormPayload form;
-  std::size_t i = 0;
-  if (!s.params.empty() && (is_word(s.params[0], "CART") || is_word(s.params[0], "POL")))
-    form.form = ir::parse_word<ir::CoordinateForm>(s.params[i++].text);
-  in.payload = form;
-  if (s.params.size() - i != 3)
-    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.goto-arity",
-                 fmt::format("GOTARG expects the target x,y,z, got {} numbers", s.params.size() - i));
-  for (; i < s.params.size(); ++i)
-    if (!push_number(in, s.params[i], "a coordinate")) return;
-  m_go_target = std::move(in);
+  m_go_target = point_instruction(s, Op::GoTo, "the target");
 }
 
 void UnitCompiler::end_go(const grammar::Statement& s) {

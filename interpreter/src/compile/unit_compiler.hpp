@@ -227,6 +227,7 @@ class UnitCompiler {
   void geometry_algorithm(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
   void from(const grammar::Statement& s);
+  std::optional<ir::Instruction> point_instruction(const grammar::Statement& s, ir::Op op, const char* what);
   void go_target(const grammar::Statement& s);
   void end_go(const grammar::Statement& s);
   static grammar::Expr unsigned_direction(const grammar::Expr& e);
