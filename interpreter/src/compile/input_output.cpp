@@ -93,7 +93,7 @@ void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
   emit(make(Op::Nop, s, s.major));
 }
 
-// GEOALG/...: CIRCLE's MAXINS, MINCIR and LSTSQR are applied; the other algorithms are accepted
+// GEOALG/...: CIRCLE's MAXINS, MINCIR, MINMAX and LSTSQR are applied; the other algorithms are accepted
 // without their effect, which a program may rely on: one warning per program says so.
 void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   const std::string key = s.major;
