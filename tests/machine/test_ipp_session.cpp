@@ -517,6 +517,20 @@ TEST(IppSession, FuzzedSessionNeverCrashes) {
     ASSERT_FALSE(reply.lines.empty()) << s;
     for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
   }
+  // The named coordinate systems and the clients' dialects, mutated the same way.
+  const std::vector<std::string> csy_seeds{
+      "00200 SaveNamedCsyTransformation(\"F1\", 300, 200, 0, 0, 90, 0)", "00210 GetNamedCsyTransformation(\"F1\")",
+      "00220 EnumCoordSystems()", "00230 DeleteCoordSystem(\"F1\")", "00240 SetCoordSystem(\"PartCsy\")",
+      "00250 SetCoordSystem(PCS)", "00260 PtMeas(X(445.0), Y(210.0), Z(41.0), I(0.0), J(0.0), K(1.0))",
+      "00270 LoadCoordSystem(\"F1\")", "00280 ClearAllErrors()"};
+  for (int i = 0; i < 600; ++i) {
+    std::string s = csy_seeds[rng() % csy_seeds.size()];
+    const int edits = static_cast<int>(rng() % 3);
+    for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = "0123456789(),.-EIJKXYZ\""[rng() % 23];
+    const auto reply = f.session.handle(s);
+    ASSERT_FALSE(reply.lines.empty()) << s;
+    for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
+  }
 }
 
 // ScanOnCurveDensity: Dis bounds the distance between reported points, Angle the turn between
