@@ -705,7 +705,7 @@ void MeasurementRuntime::output_sensor(const std::string& label, bool actual, Sp
 
 // OUTPUT/D(x), OUTPUT/DA(x): where the coordinate system stands in the machine's: its origin and
 // its axes, as a report line and a DMIS comment line ($$) in the output file.
-void MeasurementRuntime::output_coordinate_system(const std::string& label, Span span) {
+void MeasurementRuntime::output_coordinate_system(const std::string& label, bool actual, Span span) {
   auto it = m_alignments.find(label);
   if (it == m_alignments.end()) it = m_saved.find(label);
   if (it == m_saved.end() && label != "MCS") {
@@ -720,8 +720,8 @@ void MeasurementRuntime::output_coordinate_system(const std::string& label, Span
     const Vec3 a = frame.linear().col(k);
     return fmt::format("({:.6f}, {:.6f}, {:.6f})", a.x(), a.y(), a.z());
   };
-  const std::string text = fmt::format("D({}): origin ({:.{}f}, {:.{}f}, {:.{}f}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
-                                       label, o.x(), decimals, o.y(), decimals, o.z(), decimals,
+  const std::string text = fmt::format("{}({}): origin ({:.{}f}, {:.{}f}, {:.{}f}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
+                                       actual ? "DA" : "D", label, o.x(), decimals, o.y(), decimals, o.z(), decimals,
                                        u.length == "MM" ? "mm" : u.length, axis(0), axis(1), axis(2));
   write_device_line("$$ " + text);
   emit(TextReport{text});
@@ -752,7 +752,7 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
                                  : items[i].kind == OutputItem::Kind::Sensor
                                      ? fmt::format("{}({})", items[i].sensor_actual ? "SA" : "S", items[i].sensor)
                                  : items[i].kind == OutputItem::Kind::CoordinateSystem
-                                     ? fmt::format("D({})", items[i].coordinate_system)
+                                     ? fmt::format("{}({})", items[i].coordinate_system_actual ? "DA" : "D", items[i].coordinate_system)
                                      : fmt::format("{}({}){}", items[i].feature.actual ? "FA" : "F", items[i].feature.label,
                                                    items[i].points ? fmt::format("[{},{}]", items[i].points->first,
                                                                                  items[i].points->second)
@@ -765,7 +765,7 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
       continue;
     }
     if (item.kind == OutputItem::Kind::CoordinateSystem) {
-      if (report_them) output_coordinate_system(item.coordinate_system, span);
+      if (report_them) output_coordinate_system(item.coordinate_system, item.coordinate_system_actual, span);
       continue;
     }
     if (item.kind == OutputItem::Kind::Tolerance) {

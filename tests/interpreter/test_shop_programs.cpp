@@ -2547,7 +2547,7 @@ TEST(ShopPrograms, CoordinateSystemsAreOutputAsOriginAndAxes) {
   const std::vector<std::string> expected = {
       "D(R): origin (300.0000, 200.0000, 0.0000) mm, X axis (0.000000, 1.000000, 0.000000), Y axis (-1.000000, 0.000000, "
       "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates",
-      "D(PART): origin (11.81102, 7.87402, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
+      "DA(PART): origin (11.81102, 7.87402, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
       "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates",
       "D(MCS): origin (0.00000, 0.00000, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
       "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates"};

@@ -50,6 +50,7 @@ std::vector<runtime::OutputItem> Execute::output_items(Interpreter& vm, const ir
     } else if (o.label.prefix == "D" || o.label.prefix == "DA") {
       item.kind = runtime::OutputItem::Kind::CoordinateSystem;
       item.coordinate_system = vm.label_name(o.label);
+      item.coordinate_system_actual = o.label.prefix == "DA";
     } else {
       item.feature = feature_ref(vm, o.label);
       // FA(x)[first,last] or FA(x)[n]: one or two numbers after the label (docs/ir.md).

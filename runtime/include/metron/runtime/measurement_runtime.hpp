@@ -238,7 +238,7 @@ class MeasurementRuntime {
   void warn(Span span, const std::string& message);  ///< a positioned run-time warning in the record
   void write_device_line(const std::string& line);
   void output_sensor(const std::string& label, bool actual, Span span);
-  void output_coordinate_system(const std::string& label, Span span);
+  void output_coordinate_system(const std::string& label, bool actual, Span span);
   void set_alignment(const std::string& label, const Frame& frame);
 
   machine::Machine& m_machine;

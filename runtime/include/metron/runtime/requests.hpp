@@ -109,8 +109,9 @@ struct OutputItem {
   /// OUTPUT/S(x) (its definition) or SA(x) (its qualification): the sensor's label.
   std::string sensor;
   bool sensor_actual = false;
-  /// OUTPUT/D(x) or DA(x): the coordinate system's label.
+  /// OUTPUT/D(x) or DA(x): the coordinate system's label, and whether it was named DA.
   std::string coordinate_system;
+  bool coordinate_system_actual = false;
   /// OUTPUT/FA(x)[first,last] (MODUS): the feature's points first..last (1-based) are listed.
   std::optional<std::pair<int, int>> points;
 };
