@@ -489,48 +489,35 @@ TEST(IppSession, FuzzedSessionNeverCrashes) {
   Fixture f;
   f.start();
   std::mt19937_64 rng(1294);
-  const std::vector<std::string> seeds{
-      "00012 PtMeas(X(445), Y(210), Z(40), IJK(0,0,1))", "E0005 OnMoveReportE(Time(5), Dis(0.34), X(), Y(), Z())",
-      "00030 SetProp(Tool.PtMeasPar.Speed(5))",        "00020 ChangeTool(\"Probe1\")",
-      "00040 GoTo(X(400), Y(250), Z(100))",            "00050 SetCsyTransformation(PartCsy, 1, 2, 3, 4, 5, 6)",
-      "00060 EnumAllProp(Tool())",                     "00070 ClearAllErrors()",
-      "00080 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 360, 90, 1)",
-      "00090 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK(), tag), Data(320, 210, 41, 0, 0, 1, 5, 360, 230, 41, 0, 0, 1, 6))"};
-  for (int i = 0; i < 3000; ++i) {
-    std::string s = seeds[rng() % seeds.size()];
-    const int edits = static_cast<int>(rng() % 3);
-    for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = "0123456789(),.-EXYZ\""[rng() % 20];
-    const auto reply = f.session.handle(s);
-    ASSERT_FALSE(reply.lines.empty()) << s;
-    for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
-  }
-  // The unknown-contour scans, mutated the same way.
-  const std::vector<std::string> contour_seeds{
-      "00100 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)",
-      "00110 ScanInCylEndIsSphere(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 325, 250, 41, 2, 0, 0, 1)",
-      "00120 GoTo(X(450), Y(250), Z(60))", "00130 ClearAllErrors()"};
-  for (int i = 0; i < 300; ++i) {
-    std::string s = contour_seeds[rng() % contour_seeds.size()];
-    const int edits = static_cast<int>(rng() % 3);
-    for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = "0123456789(),.-EXYZ\""[rng() % 20];
-    const auto reply = f.session.handle(s);
-    ASSERT_FALSE(reply.lines.empty()) << s;
-    for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
-  }
-  // The named coordinate systems and the clients' dialects, mutated the same way.
-  const std::vector<std::string> csy_seeds{
-      "00200 SaveNamedCsyTransformation(\"F1\", 300, 200, 0, 0, 90, 0)", "00210 GetNamedCsyTransformation(\"F1\")",
-      "00220 EnumCoordSystems()", "00230 DeleteCoordSystem(\"F1\")", "00240 SetCoordSystem(\"PartCsy\")",
-      "00250 SetCoordSystem(PCS)", "00260 PtMeas(X(445.0), Y(210.0), Z(41.0), I(0.0), J(0.0), K(1.0))",
-      "00270 LoadCoordSystem(\"F1\")", "00280 ClearAllErrors()"};
-  for (int i = 0; i < 600; ++i) {
-    std::string s = csy_seeds[rng() % csy_seeds.size()];
-    const int edits = static_cast<int>(rng() % 3);
-    for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = "0123456789(),.-EIJKXYZ\""[rng() % 23];
-    const auto reply = f.session.handle(s);
-    ASSERT_FALSE(reply.lines.empty()) << s;
-    for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
-  }
+  // Each round: a seed line with up to two characters replaced from `alphabet`; every answer
+  // must be well formed.
+  const auto fuzz = [&](const std::vector<std::string>& seeds, int rounds, std::string_view alphabet) {
+    for (int i = 0; i < rounds; ++i) {
+      std::string s = seeds[rng() % seeds.size()];
+      const int edits = static_cast<int>(rng() % 3);
+      for (int k = 0; k < edits && !s.empty(); ++k) s[rng() % s.size()] = alphabet[rng() % alphabet.size()];
+      const auto reply = f.session.handle(s);
+      ASSERT_FALSE(reply.lines.empty()) << s;
+      for (const auto& l : reply.lines) ASSERT_TRUE(parse_response_line(l)) << s << " -> " << l;
+    }
+  };
+  fuzz({"00012 PtMeas(X(445), Y(210), Z(40), IJK(0,0,1))", "E0005 OnMoveReportE(Time(5), Dis(0.34), X(), Y(), Z())",
+        "00030 SetProp(Tool.PtMeasPar.Speed(5))", "00020 ChangeTool(\"Probe1\")", "00040 GoTo(X(400), Y(250), Z(100))",
+        "00050 SetCsyTransformation(PartCsy, 1, 2, 3, 4, 5, 6)", "00060 EnumAllProp(Tool())", "00070 ClearAllErrors()",
+        "00080 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 360, 90, 1)",
+        "00090 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK(), tag), Data(320, 210, 41, 0, 0, 1, 5, 360, 230, 41, 0, 0, 1, 6))"},
+       3000, "0123456789(),.-EXYZ\"");
+  // The unknown-contour scans.
+  fuzz({"00100 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)",
+        "00110 ScanInCylEndIsSphere(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 325, 250, 41, 2, 0, 0, 1)",
+        "00120 GoTo(X(450), Y(250), Z(60))", "00130 ClearAllErrors()"},
+       300, "0123456789(),.-EXYZ\"");
+  // The named coordinate systems and the clients' dialects.
+  fuzz({"00200 SaveNamedCsyTransformation(\"F1\", 300, 200, 0, 0, 90, 0)", "00210 GetNamedCsyTransformation(\"F1\")",
+        "00220 EnumCoordSystems()", "00230 DeleteCoordSystem(\"F1\")", "00240 SetCoordSystem(\"PartCsy\")",
+        "00250 SetCoordSystem(PCS)", "00260 PtMeas(X(445.0), Y(210.0), Z(41.0), I(0.0), J(0.0), K(1.0))",
+        "00270 LoadCoordSystem(\"F1\")", "00280 ClearAllErrors()"},
+       600, "0123456789(),.-EIJKXYZ\"");
 }
 
 // ScanOnCurveDensity: Dis bounds the distance between reported points, Angle the turn between
