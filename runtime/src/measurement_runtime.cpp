@@ -682,9 +682,7 @@ void MeasurementRuntime::output_sensor(const std::string& label, bool actual, Sp
     warn(span, fmt::format("{}({}) is not defined or selected yet: nothing to output", actual ? "SA" : "S", label));
     return;
   }
-  const ReportUnits& u = m_report_units;
-  const int decimals = u.length_decimals >= 0 ? u.length_decimals : (u.mm_per_length == 1 ? 4 : 5);
-  const auto length = [&](double mm) { return fmt::format("{:.{}f} {}", mm / u.mm_per_length, decimals, u.length == "MM" ? "mm" : u.length); };
+  const auto length = [&](double mm) { return length_text(mm, m_report_units) + " " + unit_word(m_report_units); };
   std::string text;
   if (!actual) {
     const Vec3 d = def->second.direction;
@@ -706,23 +704,24 @@ void MeasurementRuntime::output_sensor(const std::string& label, bool actual, Sp
 // OUTPUT/D(x), OUTPUT/DA(x): where the coordinate system stands in the machine's: its origin and
 // its axes, as a report line and a DMIS comment line ($$) in the output file.
 void MeasurementRuntime::output_coordinate_system(const std::string& label, bool actual, Span span) {
-  auto it = m_alignments.find(label);
-  if (it == m_alignments.end()) it = m_saved.find(label);
-  if (it == m_saved.end() && label != "MCS") {
+  Frame frame = Frame::Identity();  // D(MCS): the machine's own, unless the program defined one so named
+  if (const auto it = m_alignments.find(label); it != m_alignments.end()) {
+    frame = it->second.part_to_machine;
+  } else if (const auto saved = m_saved.find(label); saved != m_saved.end()) {
+    frame = saved->second.part_to_machine;
+  } else if (label != "MCS") {
     warn(span, fmt::format("D({}) is not defined yet: nothing to output", label));
     return;
   }
-  const Frame frame = label == "MCS" && it == m_saved.end() ? Frame::Identity() : it->second.part_to_machine;
-  const ReportUnits& u = m_report_units;
-  const int decimals = u.length_decimals >= 0 ? u.length_decimals : (u.mm_per_length == 1 ? 4 : 5);
-  const Vec3 o = frame.translation() / u.mm_per_length;
+  const Vec3 o = frame.translation();
   const auto axis = [&](int k) {
     const Vec3 a = frame.linear().col(k);
     return fmt::format("({:.6f}, {:.6f}, {:.6f})", a.x(), a.y(), a.z());
   };
-  const std::string text = fmt::format("{}({}): origin ({:.{}f}, {:.{}f}, {:.{}f}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
-                                       actual ? "DA" : "D", label, o.x(), decimals, o.y(), decimals, o.z(), decimals,
-                                       u.length == "MM" ? "mm" : u.length, axis(0), axis(1), axis(2));
+  const ReportUnits& u = m_report_units;
+  const std::string text = fmt::format("{}({}): origin ({}, {}, {}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
+                                       actual ? "DA" : "D", label, length_text(o.x(), u), length_text(o.y(), u),
+                                       length_text(o.z(), u), unit_word(u), axis(0), axis(1), axis(2));
   write_device_line("$$ " + text);
   emit(TextReport{text});
 }

@@ -187,6 +187,11 @@ struct Session::Impl {
   static bool csy_name_argument(const Argument& x) {
     return x.kind == Argument::Kind::Name || x.kind == Argument::Kind::String;
   }
+  // X0, Y0, Z0, Theta, Psi, Phi as GetCsyTransformation and GetNamedCsyTransformation answer them.
+  static std::string transformation_text(const Csy& t) {
+    return format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) + ", " + format_number(t.theta) +
+           ", " + format_number(t.psi) + ", " + format_number(t.phi);
+  }
   static const std::string& one_string(const Args& a) {
     if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
     if (a[0].kind != Argument::Kind::String) fail(ErrorCode::BadArgument);
@@ -973,9 +978,7 @@ struct Session::Impl {
       if (a.size() != 1 || !csy_name_argument(a[0])) fail(ErrorCode::IncorrectArguments);
       const auto it = csys.find(a[0].text);
       if (it == csys.end()) fail(ErrorCode::BadArgument);
-      const Csy& t = it->second;
-      data("GetCsyTransformation(" + format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) + ", " +
-           format_number(t.theta) + ", " + format_number(t.psi) + ", " + format_number(t.phi) + ")");
+      data("GetCsyTransformation(" + transformation_text(it->second) + ")");
     } else if (n == "SetCsyTransformation") {
       if (a.size() != 7 || !csy_name_argument(a[0])) fail(ErrorCode::IncorrectArguments);
       const auto it = csys.find(a[0].text);
@@ -999,9 +1002,7 @@ struct Session::Impl {
     } else if (n == "GetNamedCsyTransformation") {
       const auto it = saved_csys.find(one_string(a));
       if (it == saved_csys.end()) fail(ErrorCode::BadArgument);
-      const Csy& t = it->second;
-      data("GetNamedCsyTransformation(" + format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) +
-           ", " + format_number(t.theta) + ", " + format_number(t.psi) + ", " + format_number(t.phi) + ")");
+      data("GetNamedCsyTransformation(" + transformation_text(it->second) + ")");
     } else if (n == "DeleteCoordSystem") {
       if (saved_csys.erase(one_string(a)) == 0) fail(ErrorCode::BadArgument);
     } else if (n == "EnumCoordSystems") {

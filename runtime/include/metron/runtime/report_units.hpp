@@ -28,6 +28,9 @@ inline int default_length_decimals(const ReportUnits& units, int mm_decimals) {
   return mm_decimals + static_cast<int>(std::lround(std::log10(std::max(units.mm_per_length, 1.0))));
 }
 
+/// The unit a report line names after a length: "mm", else the UNITS word (INCH, CM ...).
+inline std::string unit_word(const ReportUnits& units) { return units.length == "MM" ? "mm" : units.length; }
+
 /// A length given in mm, written in `units` with their decimals (for the notes of a report).
 inline std::string length_text(double mm, const ReportUnits& units, int mm_decimals = 4) {
   const int decimals = units.length_decimals >= 0 ? units.length_decimals : default_length_decimals(units, mm_decimals);
