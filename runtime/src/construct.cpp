@@ -104,7 +104,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       if (!fitted) return fail(fitted.error());
       g = fitted->first;
       figures = fitted->second;
-      if (type == FeatureType::Circle) apply_circle_fit(g, pts, label, span);
+      apply_fit_algorithm(g, pts, label, span);
       if (type == FeatureType::Line && sources.size() > 1 && !from_sections) {
         // A line through features runs from the first toward the last (the construction order,
         // as CMM software builds it), whatever sense its nominal has: an alignment's XDIR on it

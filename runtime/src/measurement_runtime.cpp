@@ -397,46 +397,75 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (!fitted) return program_error(block.span, fitted.error());
   feature.actual = fitted->first;
   feature.fit = fitted->second;
-  if (feature.nominal.type == FeatureType::Circle) apply_circle_fit(*feature.actual, points, feature.label, block.span);
+  apply_fit_algorithm(*feature.actual, points, feature.label, block.span);
   return {};
 }
 
-// GEOALG/CIRCLE,MAXINS|MINCIR: the circle a pin (ring) gauge would find; MINMAX: the minimum
-// zone (Chebyshev) circle, ISO 12181-1's MZCI, centred where the annulus holding the points is
-// narrowest, its diameter the annulus's mean (r_max + r_min). From the compensated surface points
-// in the least-squares circle's plane; form stays the least-squares figure.
-void MeasurementRuntime::apply_circle_fit(Geometry& circle, const std::vector<MeasuredPoint>& points, const std::string& label,
-                                          Span span) {
-  if (m_circle_fit == CircleFit::LeastSquares) return;
+// GEOALG: MAXINS and MINCIR size and locate a circle, sphere or cylinder as a pin (ring) gauge
+// would find it (ISO 14405-1 GX, GN); MINMAX gives the minimum-zone (Chebyshev) reference
+// feature (ISO 12181-1 MZCI, ISO 12781-1 MZPL, and their sphere, cylinder and line counterparts):
+// centred (or placed) where the zone holding the points is narrowest, a size of the zone's mean
+// r_min + r_max. From the compensated surface points; a circle stays in its least-squares plane.
+// The form figure stays the least-squares one; form tolerances give the minimum zone anyway.
+void MeasurementRuntime::apply_fit_algorithm(Geometry& actual, const std::vector<MeasuredPoint>& points,
+                                             const std::string& label, Span span) {
+  const FeatureType type = actual.type == FeatureType::Arc ? FeatureType::Circle : actual.type;
+  const auto chosen = m_fit_algorithms.find(type);
+  if (chosen == m_fit_algorithms.end() || chosen->second == FitAlgorithm::LeastSquares) return;
+  const FitAlgorithm algorithm = chosen->second;
+  const fitting::Shape shape = type == FeatureType::Circle   ? fitting::Shape::Circle
+                               : type == FeatureType::Sphere ? fitting::Shape::Sphere
+                               : type == FeatureType::Cylinder ? fitting::Shape::Cylinder
+                               : type == FeatureType::Plane  ? fitting::Shape::Plane
+                                                              : fitting::Shape::Line;
   std::vector<Vec3> surface;
   for (const auto& p : points) surface.push_back(p.surface_mm());
-  if (m_circle_fit == CircleFit::MinimumZone) {
-    const auto zone = fitting::minimum_zone(fitting::Shape::Circle, surface, circle.direction);
+  // The least-squares sense of a direction is kept: a reference feature has no sense of its own.
+  const auto same_sense = [&](const Vec3& d) { return d.dot(actual.direction) < 0 ? Vec3(-d) : d; };
+  const std::optional<Vec3> hint = type == FeatureType::Line ? std::optional<Vec3>(actual.normal2)
+                                   : type == FeatureType::Sphere ? std::nullopt
+                                                                 : std::optional<Vec3>(actual.direction);
+  // The reference feature's position where the least-squares one was: a circle stays in its
+  // plane; a line's or cylinder's position slides onto the new axis, a plane's onto the new plane.
+  const auto place_reference = [&](const Vec3& position, const Vec3& direction) {
+    const Vec3 d = same_sense(direction.normalized());
+    switch (type) {
+      case FeatureType::Circle: {
+        const Vec3 n = actual.direction.normalized();
+        actual.position = position + (actual.position - position).dot(n) * n;
+        break;
+      }
+      case FeatureType::Sphere: actual.position = position; break;
+      case FeatureType::Plane:
+        actual.position -= (actual.position - position).dot(d) * d;
+        actual.direction = d;
+        break;
+      default:  // line, cylinder
+        actual.position = position + (actual.position - position).dot(d) * d;
+        actual.direction = d;
+    }
+  };
+  if (algorithm == FitAlgorithm::MinimumZone) {
+    const auto zone = fitting::minimum_zone(shape, surface, hint);
     if (!zone) {
-      warn(span, fmt::format("GEOALG MINMAX: F({}) has no minimum-zone circle; its least-squares circle is kept", label));
+      warn(span, fmt::format("GEOALG MINMAX: F({}) has no minimum-zone {}; its least-squares fit is kept", label,
+                             fitting::to_string(shape)));
       return;
     }
-    const Vec3 n = circle.direction.normalized();
-    double r_min = std::numeric_limits<double>::infinity(), r_max = 0;
-    for (const auto& q : surface) {
-      const Vec3 d = q - zone->position;
-      const double r = (d - d.dot(n) * n).norm();
-      r_min = std::min(r_min, r);
-      r_max = std::max(r_max, r);
-    }
-    circle.position = zone->position + (circle.position - zone->position).dot(n) * n;  // kept in the circle's plane
-    circle.diameter_mm = r_min + r_max;
+    place_reference(zone->position, zone->direction);
+    if (type == FeatureType::Circle || type == FeatureType::Sphere || type == FeatureType::Cylinder)
+      actual.diameter_mm = zone->zone_diameter_mm;
     return;
   }
-  const bool inscribed = m_circle_fit == CircleFit::MaximumInscribed;
-  const auto extreme = fitting::extreme_circle(surface, inscribed, circle.direction);
+  const bool inscribed = algorithm == FitAlgorithm::MaximumInscribed;
+  const auto extreme = fitting::extreme_feature(shape, surface, inscribed, hint);
   if (!extreme) {
-    warn(span, fmt::format("GEOALG {}: the points of F({}) do not surround their centre; its least-squares circle is kept",
-                           inscribed ? "MAXINS" : "MINCIR", label));
+    warn(span, fmt::format("GEOALG {}: the points of F({}) do not surround their {}; its least-squares fit is kept",
+                           inscribed ? "MAXINS" : "MINCIR", label, type == FeatureType::Cylinder ? "axis" : "centre"));
     return;
   }
-  circle.position = extreme->centre;
-  circle.diameter_mm = extreme->diameter_mm;
+  place_reference(extreme->position, extreme->direction);
+  actual.diameter_mm = extreme->diameter_mm;
 }
 
 std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& plan, const Execution& execution,

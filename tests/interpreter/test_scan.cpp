@@ -303,6 +303,113 @@ TEST(Scanning, GeoalgMinmaxCentresACircleInItsNarrowestAnnulus) {
   EXPECT_GT(std::abs(ls.diameter_mm - mz.diameter_mm), 2e-3);  // the two algorithms differ here
 }
 
+// PTMEAS/CART at `p` with normal `n`: the fake machine's touch lands exactly on the commanded
+// surface point, so a feature's points are the ones written here.
+std::string ptmeas(const Vec3& p, const Vec3& n) {
+  char line[160];
+  std::snprintf(line, sizeof line, "PTMEAS/CART, %.9f, %.9f, %.9f, %.9f, %.9f, %.9f\n", p.x(), p.y(), p.z(), n.x(), n.y(),
+                n.z());
+  return line;
+}
+
+// GEOALG/CYLNDR and GEOALG/SPHERE: every algorithm on point sets whose reference features follow
+// by hand. A boss of radius 10 probed on two rings of 8 points (z 20 and 40), the point at 0
+// degrees of each ring 10 um proud. With the axis shifted by s along x (s small), the radii are
+// 10.01 - s at 0 degrees, 10 + s at 180, 10 -+ 0.7071 s at 45 and 135, 10 at 90 and 270:
+//   least squares: s = (2/8) 0.01 = 2.5 um, d = 2 (10 + 0.01/8)        = 20.0025
+//   minimum zone:  width 0.01 - 0.29 s for s < 5 um, 1.71 s beyond:  s = 5 um, d = 10.005 + 10 - 0.7071 0.005 = 20.001464
+//   circumscribed: max(10.01 - s, 10 + s) least at s = 5 um,          d = 20.01
+//   inscribed:     min radius 10 at s = 0 and less anywhere else,     d = 20.00
+// (first order in s; the neglected terms are s^2 / 2R = 1.25e-6). Tilting the axis moves the two
+// rings' centres apart, which only widens each. A sphere of radius 10 probed at its 6 axis points
+// and 8 cube-diagonal points, the +x point 10 um proud: the same reasoning with 0.5774 s at the
+// diagonals gives LS s = (3/14) 0.01, MZ s = 5 um, d = 10.005 + 10 - 0.5774 0.005 = 20.002113,
+// MCC s = 5 um, d = 20.01, MIC s = 0, d = 20.00.
+TEST(Geoalg, CylindersAndSpheresAreSizedByEachAlgorithm) {
+  const Vec3 c(40, 50, 30);
+  std::string cylinder_points;
+  for (const double z : {20.0, 40.0})
+    for (int k = 0; k < 8; ++k) {
+      const double t = k * std::numbers::pi / 4;
+      const Vec3 u(std::cos(t), std::sin(t), 0);
+      cylinder_points += ptmeas(Vec3(c.x(), c.y(), z) + (k == 0 ? 10.01 : 10.0) * u, u);
+    }
+  std::string sphere_points;
+  std::vector<Vec3> directions = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitY(), Vec3::UnitZ(), -Vec3::UnitZ()};
+  for (const double x : {-1.0, 1.0})
+    for (const double y : {-1.0, 1.0})
+      for (const double z : {-1.0, 1.0}) directions.push_back(Vec3(x, y, z).normalized());
+  for (std::size_t i = 0; i < directions.size(); ++i)
+    sphere_points += ptmeas(c + (i == 0 ? 10.01 : 10.0) * directions[i], directions[i]);
+  const auto measured = [&](const std::string& geoalg) {
+    auto r = run(geoalg + "F(BOSS) = FEAT/CYLNDR, OUTER, CART, 40, 50, 20, 0, 0, 1, 20, 20\n"
+                 "MEAS/CYLNDR, F(BOSS), 16\n" + cylinder_points + "ENDMES\n"
+                 "F(BALL) = FEAT/SPHERE, OUTER, CART, 40, 50, 30, 20\n"
+                 "MEAS/SPHERE, F(BALL), 14\n" + sphere_points + "ENDMES\n",
+                 [](const Vec3& q) { return q; });
+    EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+    const auto& features = r->runtime->features();
+    EXPECT_TRUE(features.at("BOSS").actual && features.at("BALL").actual) << geoalg;
+    return std::pair(features.at("BOSS").actual.value_or(runtime::Geometry{}), features.at("BALL").actual.value_or(runtime::Geometry{}));
+  };
+  struct Expected {
+    const char* geoalg;
+    double cylinder_shift_mm, cylinder_diameter_mm, sphere_shift_mm, sphere_diameter_mm;
+  };
+  const Expected cases[] = {
+      {"", 0.0025, 20.0025, 3.0 / 14 * 0.01, 2 * (10 + 0.01 / 14)},
+      {"GEOALG/CYLNDR, MINMAX\nGEOALG/SPHERE, MINMAX\n", 0.005, 20.005 - std::sqrt(0.5) * 0.005,
+       0.005, 20.005 - std::sqrt(1.0 / 3) * 0.005},
+      {"GEOALG/CYLNDR, MINCIR\nGEOALG/SPHERE, MINCIR\n", 0.005, 20.01, 0.005, 20.01},
+      {"GEOALG/CYLNDR, MAXINS\nGEOALG/SPHERE, MAXINS\n", 0.0, 20.0, 0.0, 20.0},
+      // Back to least squares.
+      {"GEOALG/CYLNDR, MAXINS\nGEOALG/SPHERE, MINCIR\nGEOALG/CYLNDR, DEFALT\nGEOALG/SPHERE, LSTSQR\n", 0.0025, 20.0025,
+       3.0 / 14 * 0.01, 2 * (10 + 0.01 / 14)},
+  };
+  for (const auto& e : cases) {
+    const auto [boss, ball] = measured(e.geoalg);
+    EXPECT_NEAR(boss.diameter_mm, e.cylinder_diameter_mm, 1e-5) << e.geoalg;
+    EXPECT_NEAR(boss.position.x() - c.x(), e.cylinder_shift_mm, 1e-5) << e.geoalg;
+    EXPECT_NEAR(boss.position.y() - c.y(), 0, 2e-4) << e.geoalg;  // MCC: flat in y to second order
+    EXPECT_NEAR(boss.position.z(), 20, 1e-3) << e.geoalg;        // at the nominal's height
+    EXPECT_GT(boss.direction.z(), 1 - 1e-8) << e.geoalg;
+    EXPECT_NEAR(ball.diameter_mm, e.sphere_diameter_mm, 1e-5) << e.geoalg;
+    EXPECT_NEAR(ball.position.x() - c.x(), e.sphere_shift_mm, 1e-5) << e.geoalg;
+    EXPECT_NEAR((ball.position - c).tail<2>().norm(), 0, 2e-4) << e.geoalg;
+  }
+}
+
+// GEOALG/PLANE,MINMAX and GEOALG/LINE,MINMAX: four points of a face at z = 0 and one 10 um high
+// in their middle. Least squares puts the plane at their mean height, 2 um; the minimum zone is
+// 10 um wide between z = 0 and z = 0.01 whatever the tilt (the middle point is the corners' mean),
+// so its middle plane is at 5 um. The same for a line probed at x = 0, 10, 15 (high), 20, 30.
+TEST(Geoalg, PlanesAndLinesAreTheMiddleOfTheirMinimumZone) {
+  std::string plane_points, line_points;
+  for (const Vec3& p : {Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(0, 10, 0), Vec3(10, 10, 0), Vec3(5, 5, 0.01)})
+    plane_points += ptmeas(p + Vec3(30, 40, 25), Vec3::UnitZ());
+  for (const double x : {0.0, 10.0, 15.0, 20.0, 30.0})
+    line_points += ptmeas(Vec3(30 + x, 60, x == 15 ? 25.01 : 25), Vec3::UnitZ());
+  const auto measured = [&](const std::string& geoalg) {
+    auto r = run(geoalg + "F(TOP) = FEAT/PLANE, CART, 35, 45, 25, 0, 0, 1\nMEAS/PLANE, F(TOP), 5\n" + plane_points +
+                     "ENDMES\nF(EDGE) = FEAT/LINE, BND, CART, 30, 60, 25, 60, 60, 25, 0, 1, 0\nMEAS/LINE, F(EDGE), 5\n" +
+                     line_points + "ENDMES\n",
+                 [](const Vec3& q) { return q; });
+    EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+    const auto& features = r->runtime->features();
+    return std::pair(features.at("TOP").actual.value_or(runtime::Geometry{}), features.at("EDGE").actual.value_or(runtime::Geometry{}));
+  };
+  const auto [ls_plane, ls_line] = measured("");
+  EXPECT_NEAR(ls_plane.position.z(), 25.002, 1e-9);
+  EXPECT_NEAR(ls_line.position.z(), 25.002, 1e-9);
+  const auto [mz_plane, mz_line] = measured("GEOALG/PLANE, MINMAX\nGEOALG/LINE, MINMAX\n");
+  EXPECT_NEAR(mz_plane.position.z(), 25.005, 1e-7);
+  EXPECT_GT(mz_plane.direction.z(), 1 - 1e-10);
+  EXPECT_NEAR((mz_plane.position - ls_plane.position).head<2>().norm(), 0, 1e-9);  // slid along the normal only
+  EXPECT_NEAR(mz_line.position.z(), 25.005, 1e-7);
+  EXPECT_NEAR(mz_line.position.x(), 30, 1e-6);  // still at the nominal start
+  EXPECT_GT(mz_line.direction.x(), 1 - 1e-10);
+}
+
 TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   const Vec3 c(40, 50, 25);
   // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.

@@ -143,3 +143,48 @@ TEST(ExtremeCircle, InscribedAndCircumscribedCirclesOfThreeContacts) {
   for (int i = 0; i <= 9; ++i) arc.push_back(c + polar(10, 10.0 * i));
   EXPECT_FALSE(metron::fitting::extreme_circle(arc, true, Vec3::UnitZ()));
 }
+
+// The sphere counterparts (ISO 14405-1 GX, GN sizes of a sphere): the four vertices of a regular
+// tetrahedron on a sphere of radius 10 about c hold the centre inside their hull, so that sphere
+// is the set's minimum circumscribed sphere when every other point lies inside it and its maximum
+// inscribed sphere when every other point lies outside it.
+TEST(ExtremeFeature, InscribedAndCircumscribedSpheresOfFourContacts) {
+  const Vec3 c(3, -2, 5);
+  const Vec3 vertices[] = {Vec3(1, 1, 1), Vec3(1, -1, -1), Vec3(-1, 1, -1), Vec3(-1, -1, 1)};
+  std::vector<Vec3> inside, outside;
+  for (const auto& v : vertices) {
+    inside.push_back(c + 10 * v.normalized());
+    outside.push_back(c + 10 * v.normalized());
+  }
+  for (int i = 0; i < 40; ++i) {
+    const double a = 0.7 * i, e = std::asin(-0.95 + 0.0475 * i);  // a spiral over the whole sphere
+    const Vec3 u(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+    inside.push_back(c + Vec3(2, 1, 0) + (5 + 0.05 * i) * u);  // within the sphere, off-centre
+    outside.push_back(c + (10.5 + 0.05 * i) * u);               // beyond it, all round
+  }
+  const auto mcc = metron::fitting::extreme_feature(Shape::Sphere, inside, false);
+  ASSERT_TRUE(mcc);
+  EXPECT_NEAR(mcc->diameter_mm, 20.0, 1e-6);
+  EXPECT_NEAR((mcc->position - c).norm(), 0.0, 1e-6);
+  const auto mic = metron::fitting::extreme_feature(Shape::Sphere, outside, true);
+  ASSERT_TRUE(mic);
+  EXPECT_NEAR(mic->diameter_mm, 20.0, 1e-6);
+  EXPECT_NEAR((mic->position - c).norm(), 0.0, 1e-6);
+  const auto ls = metron::fitting::fit(Shape::Sphere, inside, {});
+  ASSERT_TRUE(ls);
+  EXPECT_GT(std::abs(ls->diameter_mm - 20.0), 0.5);  // least squares gives neither
+  // A cap up to 60 degrees from the pole bounds no inscribed sphere: it grows without end below it.
+  std::vector<Vec3> cap;
+  for (int ring = 0; ring <= 3; ++ring)
+    for (int k = 0; k < 8; ++k) {
+      const double e = std::numbers::pi / 2 - ring * std::numbers::pi / 9, a = k * std::numbers::pi / 4;
+      cap.push_back(c + 10 * Vec3(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e)));
+    }
+  EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Sphere, cap, true));
+  EXPECT_TRUE(metron::fitting::extreme_feature(Shape::Sphere, cap, false));
+  // A cylinder probed over half its circumference bounds no inscribed cylinder either.
+  std::vector<Vec3> half;
+  for (const double z : {0.0, 20.0})
+    for (int k = 0; k <= 6; ++k) half.push_back(c + Vec3(10 * std::cos(k * std::numbers::pi / 6), 10 * std::sin(k * std::numbers::pi / 6), z));
+  EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Cylinder, half, true, Vec3::UnitZ()));
+}

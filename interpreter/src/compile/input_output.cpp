@@ -93,28 +93,34 @@ void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
   emit(make(Op::Nop, s, s.major));
 }
 
-// GEOALG/...: CIRCLE's MAXINS, MINCIR, MINMAX and LSTSQR are applied; the other algorithms are accepted
-// without their effect, which a program may rely on: one warning per program says so.
+// GEOALG/type,algorithm: MAXINS, MINCIR, MINMAX and LSTSQR (DEFALT) are applied to CIRCLE, ARC,
+// SPHERE and CYLNDR, MINMAX and LSTSQR to PLANE and LINE; any other type or algorithm (CONE, an
+// EXTERN or FILTER algorithm ...) is accepted without its effect, which a program may rely on: one
+// warning per program says so.
 void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
-  const std::string key = s.major;
-  if (s.major == "GEOALG" && s.params.size() >= 2 && is_word(s.params[0], "CIRCLE") &&
-      (is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT") || is_word(s.params[1], "MAXINS") ||
-       is_word(s.params[1], "MINCIR") || is_word(s.params[1], "MINMAX"))) {
-    // GEOALG/CIRCLE: the circles measured from here on (MAXINS a hole's pin-gauge size, MINCIR a
-    // boss's ring-gauge size, MINMAX the minimum zone circle; LSTSQR, DEFALT back to least squares).
+  const auto word_at = [&](std::size_t i) { return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string(); };
+  const std::string type = word_at(0), algorithm = word_at(1);
+  const bool sized = type == "CIRCLE" || type == "ARC" || type == "SPHERE" || type == "CYLNDR";
+  const bool flat = type == "PLANE" || type == "LINE";
+  const bool least_squares = s.params.size() < 2 || algorithm == "LSTSQR" || algorithm == "DEFALT";
+  if ((sized || flat) && (least_squares || algorithm == "MINMAX" || (sized && (algorithm == "MAXINS" || algorithm == "MINCIR")))) {
+    // MAXINS a hole's pin-gauge size, MINCIR a boss's ring-gauge size, MINMAX the minimum zone
+    // reference feature; LSTSQR and DEFALT back to least squares.
     auto in = make(Op::FitAlgorithm, s);
-    in.operands.push_back(word_operand(is_word(s.params[1], "DEFALT") ? std::string("LSTSQR") : s.params[1].text, s.params[1].span));
+    in.operands.push_back(word_operand(type == "ARC" ? std::string("CIRCLE") : type, s.params[0].span));
+    in.operands.push_back(word_operand(least_squares ? std::string("LSTSQR") : algorithm, s.params.back().span));
     emit(std::move(in));
     return;
   }
-  if (s.major == "GEOALG" && (s.params.size() < 2 || is_word(s.params[1], "LSTSQR") || is_word(s.params[1], "DEFALT"))) {
+  if (least_squares) {
     emit(make(Op::Nop, s, s.major));  // least squares: what metron does
     return;
   }
-  if (m_noted_kinds.insert(key).second) {
-    const std::string message =
-        "GEOALG: metron fits features by least squares (form tolerances by minimum zone); this fitting algorithm "
-        "is not applied (noted once)";
+  if (m_noted_kinds.insert(s.major).second) {
+    const std::string message = fmt::format(
+        "GEOALG/{},{}: this fitting algorithm is not applied: metron fits {} by least squares (form tolerances by "
+        "minimum zone) (noted once)",
+        type, algorithm, type.empty() ? std::string("them") : type);
     warn(s.span, "sema.not-applied", message);
   }
   emit(make(Op::Nop, s, s.major));

@@ -26,14 +26,21 @@ ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, Ca
   return ExecStatus::Running;
 }
 
-// Op::FitAlgorithm: GEOALG/CIRCLE
+// Op::FitAlgorithm: GEOALG/type,algorithm
 ExecStatus Execute::fit_algorithm(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
-  using F = runtime::MeasurementRuntime::CircleFit;
-  const std::string& word = in.operands.at(0).word;
-  vm.m_runtime.set_circle_fit(word == "MAXINS"   ? F::MaximumInscribed
-                              : word == "MINCIR" ? F::MinimumCircumscribed
-                              : word == "MINMAX" ? F::MinimumZone
-                                                 : F::LeastSquares);
+  using F = runtime::MeasurementRuntime::FitAlgorithm;
+  using runtime::FeatureType;
+  const std::string& type = in.operands.at(0).word;
+  const std::string& word = in.operands.at(1).word;
+  vm.m_runtime.set_fit_algorithm(type == "SPHERE"   ? FeatureType::Sphere
+                                 : type == "CYLNDR" ? FeatureType::Cylinder
+                                 : type == "PLANE"  ? FeatureType::Plane
+                                 : type == "LINE"   ? FeatureType::Line
+                                                    : FeatureType::Circle,
+                                 word == "MAXINS"   ? F::MaximumInscribed
+                                 : word == "MINCIR" ? F::MinimumCircumscribed
+                                 : word == "MINMAX" ? F::MinimumZone
+                                                    : F::LeastSquares);
   return ExecStatus::Running;
 }
 

@@ -196,6 +196,10 @@ tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vecto
         const auto x = nelder_mead(width, {0}, 1e-3, mz.evaluations);
         mz.direction = (d0 * std::cos(x[0]) + across0 * std::sin(x[0])).normalized();
         mz.form_mm = width(x);
+        // The reference line is the zone's middle: `r` holds the offsets across it.
+        const Vec3 across = pn.cross(mz.direction);
+        const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+        mz.position = ls->position + (0.5 * (*mn + *mx) - across.dot(ls->position)) * across;
       } else {
         // Straightness in space: the narrowest cylinder about a line, diameter = 2 max distance.
         const auto width = [&](const std::vector<double>& x) {
@@ -216,6 +220,11 @@ tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vecto
       break;
     }
     default: return tl::unexpected(FitFailure::Degenerate);  // point, cone: no MZ form here
+  }
+  if (shape == Shape::Circle || shape == Shape::Sphere || shape == Shape::Cylinder) {
+    // `r` holds the radii about the optimum: the last width evaluated was there.
+    const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+    mz.zone_diameter_mm = *mn + *mx;
   }
   return mz;
 }
@@ -262,6 +271,71 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
     double gap = angles.front() + 2 * std::numbers::pi - angles.back();
     for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
     if (gap >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
+  }
+  return out;
+}
+
+tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std::vector<Vec3>& points, bool inscribed,
+                                                         const std::optional<Vec3>& direction_hint) {
+  if (shape == Shape::Circle) {
+    auto c = extreme_circle(points, inscribed, direction_hint);
+    if (!c) return tl::unexpected(c.error());
+    return ExtremeFeature{c->centre, c->normal, c->diameter_mm};
+  }
+  if (shape != Shape::Sphere && shape != Shape::Cylinder) return tl::unexpected(FitFailure::Degenerate);
+  FitOptions ls_options;
+  ls_options.direction_hint = direction_hint;
+  ls_options.start_from_hint = direction_hint.has_value();
+  auto ls = fit(shape, points, ls_options);
+  if (!ls) return tl::unexpected(ls.error());
+  const bool cylinder = shape == Shape::Cylinder;
+  const Vec3 n0 = cylinder ? ls->direction.normalized() : Vec3::UnitZ();
+  const auto [e1, e2] = frame_of(n0);
+  // The reference feature of parameters x: a centre (sphere: 3 shifts) or an axis (cylinder: 2
+  // tilts and 2 shifts normal to the least-squares axis).
+  const auto place = [&](const std::vector<double>& x, Vec3& centre) {
+    if (!cylinder) {
+      centre = ls->position + Vec3(x[0], x[1], x[2]);
+      return n0;
+    }
+    centre = ls->position + x[2] * e1 + x[3] * e2;
+    return tilt(n0, e1, e2, x[0], x[1]);
+  };
+  const auto radius = [&](const Vec3& centre, const Vec3& axis, const Vec3& p) {
+    const Vec3 d = p - centre;
+    return cylinder ? (d - d.dot(axis) * axis).norm() : d.norm();
+  };
+  // Inscribed: the largest smallest radius; circumscribed: the smallest largest (convex).
+  const auto objective = [&](const std::vector<double>& x) {
+    Vec3 c;
+    const Vec3 a = place(x, c);
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+    for (const auto& p : points) {
+      const double r = radius(c, a, p);
+      lo = std::min(lo, r);
+      hi = std::max(hi, r);
+    }
+    return inscribed ? -lo : hi;
+  };
+  int evaluations = 0;
+  const auto x = nelder_mead(objective, std::vector<double>(cylinder ? 4 : 3, 0.0), 1e-3 * extent(points), evaluations);
+  ExtremeFeature out;
+  out.direction = place(x, out.position);
+  out.diameter_mm = 2 * std::abs(objective(x));
+  if (inscribed) {
+    if ((out.position - ls->position).norm() > 0.25 * ls->diameter_mm / 2) return tl::unexpected(FitFailure::Degenerate);
+    if (cylinder) {
+      const auto [a1, a2] = frame_of(out.direction);
+      std::vector<double> angles;
+      for (const auto& p : points) {
+        const Vec3 d = p - out.position;
+        angles.push_back(std::atan2(d.dot(a2), d.dot(a1)));
+      }
+      std::sort(angles.begin(), angles.end());
+      double gap = angles.front() + 2 * std::numbers::pi - angles.back();
+      for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
+      if (gap >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
+    }
   }
   return out;
 }

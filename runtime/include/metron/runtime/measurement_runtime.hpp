@@ -83,9 +83,12 @@ class MeasurementRuntime {
   /// SNSLCT: selects the sensor, qualifying it at its first use; `requalify` (CALIB/SENS)
   /// qualifies it again at the current measuring feed.
   Result<void> select_sensor(const std::string& label, Span span, bool requalify = false);
-  /// GEOALG/CIRCLE: how the circles measured from now on are sized and located.
-  enum class CircleFit { LeastSquares, MaximumInscribed, MinimumCircumscribed, MinimumZone };
-  void set_circle_fit(CircleFit fit) { m_circle_fit = fit; }
+  /// GEOALG/type,algorithm: how the features of `type` measured (or fitted by CONST BF) from now
+  /// on are sized and located: least squares, maximum inscribed, minimum circumscribed, minimum
+  /// zone. Circle (and arc), sphere, cylinder: all four; plane and line: least squares or
+  /// minimum zone.
+  enum class FitAlgorithm { LeastSquares, MaximumInscribed, MinimumCircumscribed, MinimumZone };
+  void set_fit_algorithm(FeatureType type, FitAlgorithm algorithm) { m_fit_algorithms[type] = algorithm; }
   /// A sensor the program did not define, from the machine's probe library (a 4 mm default
   /// tip, with a warning, for a name the library does not hold).
   Result<void> select_library_sensor(const std::string& label, Span span);
@@ -205,7 +208,7 @@ class MeasurementRuntime {
   [[nodiscard]] machine::Machine& machine() { return m_machine; }
 
  private:
-  void apply_circle_fit(Geometry& circle, const std::vector<MeasuredPoint>& points, const std::string& label, Span span);
+  void apply_fit_algorithm(Geometry& actual, const std::vector<MeasuredPoint>& points, const std::string& label, Span span);
   void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures, Span span);
   void store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction, Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
@@ -272,7 +275,7 @@ class MeasurementRuntime {
   std::optional<TouchBaseline> m_touch_baseline;
   std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
-  CircleFit m_circle_fit = CircleFit::LeastSquares;  ///< GEOALG/CIRCLE
+  std::map<FeatureType, FitAlgorithm> m_fit_algorithms;  ///< GEOALG: least squares where absent
   bool m_strict = false;                             ///< set_strict
   bool m_feed_change_warned = false;                ///< a probing feed other than the qualification's, told once
   Mode m_mode = Mode::Auto;

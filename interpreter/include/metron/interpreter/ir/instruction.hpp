@@ -75,7 +75,7 @@ enum class Op {
   DecimalPlaces,  ///< DECPL: words ALL|LENGTH|ANGLE|...; exprs: the decimals, paired in order
   Read,         ///< READ/DID(x),v1,v2,...: labels: DID; `names`: the variables, in order
   Write,        ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
-  FitAlgorithm, ///< GEOALG/CIRCLE,...: words: the algorithm (LSTSQR, MAXINS, MINCIR, MINMAX)
+  FitAlgorithm, ///< GEOALG/type,...: words: the type (CIRCLE, SPHERE, CYLNDR, PLANE, LINE) and the algorithm (LSTSQR, MAXINS, MINCIR, MINMAX)
   GoHome,       ///< GOHOME: no operands
   SetHome,      ///< FROM/[CART|POL,]x,y,z: payload FormPayload; exprs: the point GOHOME goes to from here on
   OnError,      ///< ERROR/...: words: JUMP (`target` = the handler label's index), AUTO or OFF, then the condition

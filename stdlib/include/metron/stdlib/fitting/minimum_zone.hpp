@@ -20,6 +20,10 @@ struct MinimumZone {
   Vec3 position = Vec3::Zero();  ///< a point of the MZ reference: plane point, circle/sphere centre, point on the axis or line
   Vec3 direction = Vec3::UnitZ();  ///< plane normal, circle plane normal, cylinder axis, line direction
   double least_squares_form_mm = 0;  ///< the same points' least-squares form (max - min residual), for comparison
+  /// Circle, sphere, cylinder: the zone's mean diameter, r_min + r_max about `position` (and
+  /// `direction`): the size of the minimum-zone reference feature (ISO 12181-1 MZCI and its
+  /// sphere and cylinder counterparts).
+  double zone_diameter_mm = 0;
   int evaluations = 0;       ///< objective evaluations of the search
 };
 
@@ -47,5 +51,22 @@ struct ExtremeCircle {
 };
 tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& points, bool inscribed,
                                                        const std::optional<Vec3>& plane_normal = std::nullopt);
+
+/// A sphere or cylinder (or circle) that bounds a point set from one side: the largest that
+/// holds no point inside (`inscribed`: a hole's size as a pin or plug gauge finds it) or the
+/// smallest that holds every point (a boss's, as a ring gauge finds it); ISO 14405-1's GX and GN
+/// sizes. Cylinder: the axis direction (near `direction_hint`, else the least-squares axis) and
+/// its point in the plane normal to it; sphere: the centre. Nelder-Mead from the least-squares
+/// feature. An inscribed feature fails (Degenerate) when the points do not surround it: a cylinder
+/// whose cross-section has an angular gap of 180 degrees or more, or a search that drifts farther
+/// than a quarter of the least-squares radius (points on a cap no larger than a hemisphere bound
+/// no inscribed sphere).
+struct ExtremeFeature {
+  Vec3 position = Vec3::Zero();   ///< centre; a point on the axis
+  Vec3 direction = Vec3::UnitZ(); ///< circle normal, cylinder axis (the least-squares sense); sphere: +Z
+  double diameter_mm = 0;
+};
+tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std::vector<Vec3>& points, bool inscribed,
+                                                         const std::optional<Vec3>& direction_hint = std::nullopt);
 
 }  // namespace metron::fitting
