@@ -64,8 +64,30 @@ ExecStatus Interpreter::step() {
   detail::ExecuteFn* handler = detail::Execute::table()[detail::index(in.op)];
   if (!handler) return fail(in.span, "unknown instruction");
   const ExecStatus status = handler(*this, in, frame);
+  if (status == ExecStatus::Faulted && m_bad_test && in.op == ir::Op::MeasEnd) return take_bad_measurement(depth, failed);
   if (status == ExecStatus::Faulted && m_on_error) return handle_fault(depth, failed);
   return status;
+}
+
+// A machine fault in a measurement under BADTST/ON: BADPT() answers .TRUE. and the run goes on
+// after the measurement (the machine stays where the fault left it). The fault stays in the
+// record, with a warning.
+ExecStatus Interpreter::take_bad_measurement(std::size_t depth, std::size_t failed) {
+  const auto& code = code_of(m_frames[depth]);
+  constexpr std::size_t max_taken = 1000;  // a program that measures the same missing feature forever
+  if (++m_handled_faults > max_taken) {
+    m_runtime.warning(code[failed].span, fmt::format("{} failed measurements were taken by BADTST/ON: the run stops here", max_taken));
+    return ExecStatus::Faulted;
+  }
+  m_bad_point = true;
+  m_block.reset();
+  m_runtime.warning(code[failed].span,
+                    fmt::format("the machine fault ({}) is taken by BADTST/ON: BADPT() is .TRUE. and the run goes on after "
+                                "this measurement",
+                                m_last_fault ? m_last_fault->message : "unknown"));
+  m_frames.resize(depth + 1);
+  m_frames.back().pc = failed + 1;
+  return ExecStatus::Running;
 }
 
 // A machine fault under ERROR/... (DMIS 5.x): when the condition covers it, the run goes on, at
@@ -150,6 +172,11 @@ ExecStatus Interpreter::from_runtime(const runtime::RuntimeError& e) {
   if (e.kind == runtime::RuntimeError::Kind::Fault) {
     m_last_fault = e.fault;
     return ExecStatus::Faulted;
+  }
+  if (e.bad_geometry && m_bad_test) {
+    m_bad_geometry = true;
+    m_runtime.warning(e.span, fmt::format("{}: taken by BADTST/ON: BADGT() is .TRUE. and the run goes on", e.message));
+    return ExecStatus::Running;
   }
   return fail(e.span, e.message);
 }

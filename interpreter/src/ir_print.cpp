@@ -25,6 +25,7 @@ const char* to_string(Op op) {
     case Op::FitAlgorithm: return "FIT_ALGORITHM";
     case Op::GoHome: return "GOHOME";
     case Op::SetHome: return "FROM";
+    case Op::BadTest: return "BADTST";
     case Op::OnError: return "ON_ERROR";
     case Op::Resume: return "RESUME";
     case Op::Accel: return "ACCEL";

@@ -381,9 +381,11 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   const auto execution = execute_commands(plan->commands, plan->spans);  // a copy: collect_points reads the PtMeas
   std::vector<MeasuredPoint> points = collect_points(*plan, execution, feature.label, block.span);
   if (execution.error) {
-    // Keep every point obtained before the fault; the feature gets no actual.
+    // Keep every point obtained before the fault; the feature gets no actual (not an earlier one).
     feature.points = points;
     feature.measured_at = block.span;
+    feature.actual.reset();
+    feature.fit.reset();
     return tl::unexpected(*execution.error);
   }
   feature.points = points;
@@ -394,7 +396,13 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     warn(block.span, fmt::format("MEAS declared {} points but {} were measured", block.point_count, points.size()));
   }
   auto fitted = fit_actual(feature.nominal, points);
-  if (!fitted) return program_error(block.span, fitted.error());
+  if (!fitted) {
+    feature.actual.reset();
+    feature.fit.reset();
+    auto e = program_error(block.span, fitted.error());
+    e.value().bad_geometry = true;
+    return e;
+  }
   feature.actual = fitted->first;
   feature.fit = fitted->second;
   apply_fit_algorithm(*feature.actual, points, feature.label, block.span);

@@ -108,6 +108,9 @@ const std::vector<Builtin>& builtins() {
       // EXIST(F(x)|FA(x)|D(x)|...): whether the label is defined (measured, saved, evaluated);
       // DMESYS('key'): what the measuring system says about `key` (docs/language.md).
       {"EXIST", 1, 1, ValueType::Bool, true},      {"DMESYS", 1, 1, ValueType::String, true},
+      // BADPT(), BADGT(): whether the last measurement failed under BADTST/ON, with a machine
+      // fault (a missed or unexpected contact) or with points no feature fits.
+      {"BADPT", 0, 0, ValueType::Bool, false},     {"BADGT", 0, 0, ValueType::Bool, false},
       // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as
       // the POL coordinates of FEAT/POINT), combined (VCROSS, VDOT, VMAG, VUNIT), and turned
       // between the part and machine systems (VMCS, VPCS: the interpreter answers those, they

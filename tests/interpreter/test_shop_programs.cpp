@@ -2237,6 +2237,48 @@ TEST(ShopPrograms, ExtremePointsAndOffsetPlanes) {
 // with RESUME; ERROR/AUTO goes on after the failing statement; a fault the condition does not
 // cover stops the run, as without ERROR. The air point: nothing of the block (x 0..160) is
 // within the probing move at x = 200.
+// BADTST/ON: a measurement that fails does not stop the run; BADPT() tells of a machine fault
+// (a point in the air misses), BADGT() of points no feature fits (a circle probed twice at one
+// point and once across: two distinct points), and the
+// next MEAS clears both. With OFF the missed point stops the run as before.
+TEST(ShopPrograms, BadTestTakesAFailedMeasurementAndTellsWhichKind) {
+  const std::string failing =
+      "DECL/BOOL,P1,G1,P2,G2,P3,G3\n"
+      "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
+      "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nP1=ASSIGN/BADPT()\nG1=ASSIGN/BADGT()\n"
+      "GOTO/220,50,60\nGOTO/40,50,80\n"
+      "F(TWO)=FEAT/CIRCLE,INNER,CART,40,50,30,0,0,1,20\nMEAS/CIRCLE,F(TWO),3\nGOTO/40,50,30\n"
+      "PTMEAS/CART,50,50,30,-1,0,0\nPTMEAS/CART,50,50,30,-1,0,0\nPTMEAS/CART,30,50,30,1,0,0\nGOTO/40,50,80\nENDMES\n"
+      "P2=ASSIGN/BADPT()\nG2=ASSIGN/BADGT()\n";
+  const auto program = [&](const std::string& switch_word) {
+    std::string text = bore_program("");
+    text.insert(text.find("F(BORE1)"), "BADTST/" + switch_word + "\n" + failing);
+    text.insert(text.find("ENDFIL"), "P3=ASSIGN/BADPT()\nG3=ASSIGN/BADGT()\n");
+    return text;
+  };
+  const Checked c = check(program("ON"));
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  const auto r = run(program("ON"));
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto value = [&](const char* name) { return r.session->interpreter().variable(name)->boolean; };
+  EXPECT_TRUE(value("P1"));
+  EXPECT_FALSE(value("G1"));
+  EXPECT_FALSE(value("P2"));
+  EXPECT_TRUE(value("G2"));
+  EXPECT_FALSE(value("P3"));  // BORE1 measured well
+  EXPECT_FALSE(value("G3"));
+  EXPECT_NE(r.diagnostics.find("is taken by BADTST/ON: BADPT() is .TRUE."), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("cannot fit a CIRCLE to 3 points: degenerate point set: taken by BADTST/ON"), std::string::npos)
+      << r.diagnostics;
+  const auto* two = report(*r.session, "TWO");
+  EXPECT_TRUE(!two || !two->actual);  // no actual for a failed measurement
+  const auto* bore = report(*r.session, "BORE1");
+  ASSERT_TRUE(bore && bore->actual);
+  EXPECT_NEAR(bore->actual->diameter_mm, 20.0, 2e-3);
+  EXPECT_EQ(run(program("OFF")).status, ExecStatus::Faulted);
+  EXPECT_TRUE(check("DMISMN/'r', 5.0\nBADTST/MAYBE\nENDFIL\n").has("expected ON or OFF after BADTST/"));
+}
+
 TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
   const std::string air = "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
                           "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nGOTO/220,50,60\nGOTO/40,50,80\n";

@@ -65,7 +65,7 @@ void UnitCompiler::add_input_output(StatementTable& t) {
       {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
       {"ERROR", &UnitCompiler::on_error}, {"RESUME", &UnitCompiler::resume},
       {"GEOALG", &UnitCompiler::geometry_algorithm}, {"GOHOME", &UnitCompiler::go_home},
-      {"FROM", &UnitCompiler::from}
+      {"FROM", &UnitCompiler::from}, {"BADTST", &UnitCompiler::bad_test}
   });
 }
 
@@ -124,6 +124,20 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
     warn(s.span, "sema.not-applied", message);
   }
   emit(make(Op::Nop, s, s.major));
+}
+
+// BADTST/ON|OFF (DMIS 5.x): with ON, a measurement that fails (a missed or unexpected contact,
+// or points no feature fits) does not stop the run; the program asks BADPT() and BADGT() about
+// the last measurement and decides (docs/language.md).
+void UnitCompiler::bad_test(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "ON or OFF")) return;
+  if (!is_word(s.params[0], "ON") && !is_word(s.params[0], "OFF")) {
+    error(s.params[0].span, "sema.bad-parameter", "expected ON or OFF after BADTST/");
+    return;
+  }
+  auto in = make(Op::BadTest, s);
+  in.operands.push_back(word_operand(s.params[0]));
+  emit(std::move(in));
 }
 
 // ERROR/(label),cond | ERROR/AUTO,cond | ERROR/OFF (DMIS 5.x; the handler and the condition are

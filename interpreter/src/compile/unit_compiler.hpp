@@ -233,6 +233,7 @@ class UnitCompiler {
   static grammar::Expr unsigned_direction(const grammar::Expr& e);
   void noted_no_effect(const grammar::Statement& s);
   void on_error(const grammar::Statement& s);
+  void bad_test(const grammar::Statement& s);
   void resume(const grammar::Statement& s);
   std::pair<std::string, Span> jump_label_name(const grammar::Expr& param) const;
   void emit_jump(ir::Instruction in, const std::string& label, Span span);

@@ -18,7 +18,8 @@ void Execute::add_control(ExecuteTable& t) {
       {Op::Nop, &nothing}, {Op::JumpLabel, &nothing}, {Op::System, &system}, {Op::End, &end},
       {Op::Assign, &assign}, {Op::Jump, &jump}, {Op::JumpIfFalse, &jump_if_false}, {Op::DoInit, &do_init},
       {Op::DoNext, &do_next}, {Op::CallMacro, &call_macro}, {Op::Return, &return_},
-      {Op::CallUnit, &call_unit}, {Op::OnError, &on_error}, {Op::Resume, &resume}
+      {Op::CallUnit, &call_unit}, {Op::OnError, &on_error}, {Op::Resume, &resume},
+      {Op::BadTest, &bad_test}
   });
 }
 
@@ -37,6 +38,12 @@ ExecStatus Execute::on_error(Interpreter& vm, const ir::Instruction& in, CallFra
   h.index = frame.index;
   h.target = h.automatic ? 0 : static_cast<std::size_t>(in.target);
   vm.m_on_error = h;
+  return ExecStatus::Running;
+}
+
+// Op::BadTest: BADTST/ON|OFF
+ExecStatus Execute::bad_test(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  vm.m_bad_test = in.operands.at(0).word == "ON";
   return ExecStatus::Running;
 }
 

@@ -59,6 +59,7 @@ struct Execute {
   static ExecuteFn go_home;
   static ExecuteFn set_home;
   static ExecuteFn on_error;
+  static ExecuteFn bad_test;
   static ExecuteFn resume;
   static ExecuteFn sensor_select, probe_set, feed, accel, go_to, meas_begin, ptmeas, meas_end;
   static ExecuteFn path_def, scan_mode, scan_set, pameas;

@@ -143,6 +143,7 @@ ExecStatus Execute::set_home(Interpreter& vm, const ir::Instruction& in, CallFra
 ExecStatus Execute::meas_begin(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   auto n = vm.number(in.operands[0].expr);
   if (!n) return vm.fail(in.span, n.error());
+  vm.m_bad_point = vm.m_bad_geometry = false;  // BADPT and BADGT tell of this measurement from here on
   runtime::MeasBlock b;
   b.feature = vm.name_of(in);
   b.type = std::get<ir::FeaturePayload>(in.payload).type;

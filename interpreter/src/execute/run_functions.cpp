@@ -91,6 +91,8 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     m_runtime.warning(e.span, fmt::format("DMESYS('{}'): metron does not know this key; answered ''", key->text));
     return Value::string("");
   }
+  if (name == "BADPT") return Value::boolean_value(m_bad_point);
+  if (name == "BADGT") return Value::boolean_value(m_bad_geometry);
   if (name == "PTDATA") {
     const std::string label = label_name(e.args.at(0).label);
     const runtime::Feature* f = m_runtime.find_feature(label);

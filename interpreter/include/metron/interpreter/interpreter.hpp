@@ -126,6 +126,12 @@ class Interpreter {
   std::optional<HandledFault> m_handled;
   std::optional<machine::Fault> m_last_fault;  ///< the last machine fault a statement stopped on
   std::size_t m_handled_faults = 0;
+  /// BADTST/ON: a failing measurement sets BADPT (a machine fault) or BADGT (no feature fits its
+  /// points) and the run goes on after it; each MEAS clears both.
+  bool m_bad_test = false;
+  bool m_bad_point = false;
+  bool m_bad_geometry = false;
+  ExecStatus take_bad_measurement(std::size_t depth, std::size_t failed);
   ExecStatus handle_fault(std::size_t frame, std::size_t failed);
   Vec3 m_block_position = Vec3::Zero();
   double m_length_mm = 1.0;   ///< UNITS: mm per program length unit

@@ -17,6 +17,7 @@ struct RuntimeError {
   std::string message;
   Span span;                              ///< the statement that caused it
   std::optional<machine::Fault> fault;    ///< when kind == Fault
+  bool bad_geometry = false;              ///< a Program error: a measurement's points fit no feature (BADTST's BADGT)
 };
 
 template <class T>

@@ -78,6 +78,7 @@ enum class Op {
   FitAlgorithm, ///< GEOALG/type,...: words: the type (CIRCLE, SPHERE, CYLNDR, PLANE, LINE) and the algorithm (LSTSQR, MAXINS, MINCIR, MINMAX)
   GoHome,       ///< GOHOME: no operands
   SetHome,      ///< FROM/[CART|POL,]x,y,z: payload FormPayload; exprs: the point GOHOME goes to from here on
+  BadTest,      ///< BADTST/ON|OFF: word ON or OFF
   OnError,      ///< ERROR/...: words: JUMP (`target` = the handler label's index), AUTO or OFF, then the condition
   Resume,       ///< RESUME/...: word NEXTLINE, NEXTMEAS, CURMEAS, END or JUMP (`target` = the label's index)
 };
