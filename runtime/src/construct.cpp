@@ -355,6 +355,39 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
   return {};
 }
 
+// CONST/POINT,F(l),EXTREM,FA(x),RADIAL: the measured point of x farthest from x's actual axis
+// or centre (a bore's deepest point of wear, a boss's high spot); MIN the nearest. Radial
+// distance: from the axis line through `position` along `direction`, from the centre of a sphere.
+Result<void> MeasurementRuntime::construct_radial_extreme_point(const std::string& label, const FeatureRef& source,
+                                                                bool minimum, Span span) {
+  const auto fail = [&](const std::string& why) {
+    return program_error(span, fmt::format("cannot construct POINT F({}): {}", label, why));
+  };
+  const Feature* f = find_feature(source.label);
+  if (!f) return program_error(span, fmt::format("feature F({}) is not defined", source.label));
+  if (f->points.empty())
+    return fail(fmt::format("EXTREM picks one of the measured points of FA({}), which has none (it was constructed or stated)",
+                            source.label));
+  auto g = resolve(source, span);
+  if (!g) return tl::unexpected(g.error());
+  const FeatureType t = g->type;
+  if (t != FeatureType::Circle && t != FeatureType::Arc && t != FeatureType::Cylinder && t != FeatureType::Cone &&
+      t != FeatureType::Sphere)
+    return fail(fmt::format("RADIAL measures from an axis or a centre: FA({}) is a {}, not a CIRCLE, ARC, CYLNDR, CONE or "
+                            "SPHERE",
+                            source.label, dmis_word(t)));
+  const Vec3 axis = g->direction.normalized();
+  const auto radial = [&](const MeasuredPoint& p) {
+    const Vec3 d = p.surface_mm() - g->position;
+    return t == FeatureType::Sphere ? d.norm() : (d - d.dot(axis) * axis).norm();
+  };
+  const auto far = std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
+    return minimum ? radial(a) > radial(b) : radial(a) < radial(b);
+  });
+  store_constructed_point(label, far->surface_mm(), far->normal, span);
+  return {};
+}
+
 // CONST/PLANE,F(l),OFFSET,FA(plane),d: the plane translated d along its own normal (QIF 3
 // PlaneOffset; a negative d goes against the normal).
 Result<void> MeasurementRuntime::construct_offset_plane(const std::string& label, const FeatureRef& source,

@@ -410,6 +410,46 @@ TEST(Geoalg, PlanesAndLinesAreTheMiddleOfTheirMinimumZone) {
   EXPECT_GT(mz_line.direction.x(), 1 - 1e-10);
 }
 
+// CONST/POINT,EXTREM,...,RADIAL: the measured point farthest from (MIN: nearest to) the feature's
+// own axis. Six points of a bore at 60 degree steps, radii 10, 10.02, 10, 9.99, 10, 10: the
+// expected points are chosen by distance from an independent algebraic (Kasa) circle through the
+// same points, not from metron's fit. A plane has no axis: an error at run.
+TEST(Constructions, ExtremeRadialPointsAreFarthestFromAndNearestToTheAxis) {
+  const double radii[] = {10, 10.02, 10, 9.99, 10, 10};
+  std::string points;
+  std::vector<Vec2> plane_points;
+  for (int k = 0; k < 6; ++k) {
+    const double t = k * std::numbers::pi / 3;
+    const Vec3 u(std::cos(t), std::sin(t), 0);
+    points += ptmeas(Vec3(40, 50, 30) + radii[k] * u, -u);
+    plane_points.push_back(radii[k] * Vec2(u.x(), u.y()));
+  }
+  const Kasa reference = kasa(plane_points);
+  std::size_t far = 0, near = 0;
+  for (std::size_t k = 0; k < 6; ++k) {
+    const double r = (plane_points[k] - reference.centre).norm();
+    if (r > (plane_points[far] - reference.centre).norm()) far = k;
+    if (r < (plane_points[near] - reference.centre).norm()) near = k;
+  }
+  ASSERT_EQ(far, 1u);  // the reference itself: 60 degrees, 10.02
+  ASSERT_EQ(near, 0u);  // 0 degrees: the fitted centre moved toward it
+  auto r = run("F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(B1), 6\n" + points +
+                   "ENDMES\nCONST/POINT, F(OUT), EXTREM, FA(B1), RADIAL\nCONST/POINT, F(IN), EXTREM, MIN, FA(B1), RADIAL\n"
+                   "F(TOP) = FEAT/PLANE, CART, 40, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\n" +
+                   ptmeas(Vec3(30, 40, 40), Vec3::UnitZ()) + ptmeas(Vec3(50, 40, 40), Vec3::UnitZ()) +
+                   ptmeas(Vec3(40, 60, 40), Vec3::UnitZ()) + "ENDMES\nCONST/POINT, F(BAD), EXTREM, FA(TOP), RADIAL\n",
+               [](const Vec3& q) { return q; });
+  EXPECT_EQ(r->status, ExecStatus::Error);
+  EXPECT_NE(r->diagnostics.find("RADIAL measures from an axis or a centre: FA(TOP) is a PLANE"), std::string::npos)
+      << r->diagnostics;
+  const auto& features = r->runtime->features();
+  ASSERT_TRUE(features.at("OUT").actual && features.at("IN").actual) << r->diagnostics;
+  const Vec2 out(features.at("OUT").actual->position.x() - 40, features.at("OUT").actual->position.y() - 50);
+  const Vec2 in(features.at("IN").actual->position.x() - 40, features.at("IN").actual->position.y() - 50);
+  EXPECT_LT((out - plane_points[far]).norm(), 1e-9);
+  EXPECT_LT((in - plane_points[near]).norm(), 1e-9);
+}
+
 TEST(Scanning, PameasScansAnArcPathAndALinePath) {
   const Vec3 c(40, 50, 25);
   // A line on the top face z = 40 whose actual surface is 3 um high with a 2 um sine on it.

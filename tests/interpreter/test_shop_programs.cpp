@@ -2233,10 +2233,6 @@ TEST(ShopPrograms, ExtremePointsAndOffsetPlanes) {
                   .has("EXTREM takes a feature and a direction"));
 }
 
-// ERROR/(label),cond: a machine fault the condition covers goes to the handler, which goes on
-// with RESUME; ERROR/AUTO goes on after the failing statement; a fault the condition does not
-// cover stops the run, as without ERROR. The air point: nothing of the block (x 0..160) is
-// within the probing move at x = 200.
 // BADTST/ON: a measurement that fails does not stop the run; BADPT() tells of a machine fault
 // (a point in the air misses), BADGT() of points no feature fits (a circle probed twice at one
 // point and once across: two distinct points), and the
@@ -2279,6 +2275,10 @@ TEST(ShopPrograms, BadTestTakesAFailedMeasurementAndTellsWhichKind) {
   EXPECT_TRUE(check("DMISMN/'r', 5.0\nBADTST/MAYBE\nENDFIL\n").has("expected ON or OFF after BADTST/"));
 }
 
+// ERROR/(label),cond: a machine fault the condition covers goes to the handler, which goes on
+// with RESUME; ERROR/AUTO goes on after the failing statement; a fault the condition does not
+// cover stops the run, as without ERROR. The air point: nothing of the block (x 0..160) is
+// within the probing move at x = 200.
 TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
   const std::string air = "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
                           "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nGOTO/220,50,60\nGOTO/40,50,80\n";

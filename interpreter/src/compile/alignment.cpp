@@ -292,14 +292,15 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// CONST/POINT,F(l),EXTREM,[MIN|MAX|MINUS|PLUS,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)[,MIN|MAX]
+// CONST/POINT,F(l),EXTREM,[MIN|MAX|MINUS|PLUS,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)|RADIAL[,MIN|MAX]
 // (DMIS SIR 96-10; the directions as QIF's PointFeatureExtreme): the measured point of FA(x)
 // furthest along the direction (MIN: least far). Operands: the source, a word MAX or MIN, then the
 // direction: a word (XDIR, XMINUS, ...), a label (an axis feature's direction) or i, j, k.
 void UnitCompiler::extreme_point(const grammar::Statement& s, ir::Instruction in) {
   const auto& p = s.params;
   if (type_word(p[0]) != FeatureType::Point) return error(p[0].span, "sema.const-type", "EXTREM constructs a POINT");
-  const char* usage = "EXTREM takes a feature and a direction: EXTREM,[MIN|MAX,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)";
+  const char* usage =
+      "EXTREM takes a feature and a direction: EXTREM,[MIN|MAX,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)|RADIAL";
   std::optional<grammar::Expr> source, axis_feature, axis_word;
   std::vector<const grammar::Expr*> vec;
   bool minimum = false;
@@ -321,7 +322,7 @@ void UnitCompiler::extreme_point(const grammar::Statement& s, ir::Instruction in
       for (std::size_t k = 1; k <= 3; ++k) vec.push_back(&p[i + k]);
       i += 3;
     } else if (is_word(q, "RADIAL")) {
-      return error(q.span, "sema.unsupported-construction", "EXTREM,...,RADIAL is not supported: give a direction");
+      axis_word = q;  // from the source's own axis or centre
     } else {
       return error(q.span, "sema.construction-arity", usage);
     }

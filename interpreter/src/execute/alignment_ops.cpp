@@ -165,7 +165,14 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
     return ExecStatus::Running;
   }
   if (words.method == M::Extrem) {
-    // operands: the source, MIN|MAX, then a direction word, an axis feature or i, j, k
+    // operands: the source, MIN|MAX, then a direction word (RADIAL: from the source's axis), an
+    // axis feature or i, j, k
+    if (in.operands.at(2).kind == Operand::Kind::Word && in.operands[2].word == "RADIAL") {
+      if (auto r = vm.m_runtime.construct_radial_extreme_point(vm.name_of(in), feature_ref(vm, in.operands[0].label),
+                                                               in.operands[1].word == "MIN", in.span); !r)
+        return vm.from_runtime(r.error());
+      return ExecStatus::Running;
+    }
     Vec3 direction = Vec3::Zero();
     std::optional<runtime::FeatureRef> axis;
     const auto& d = in.operands.at(2);

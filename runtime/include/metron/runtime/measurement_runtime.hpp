@@ -176,6 +176,9 @@ class MeasurementRuntime {
   /// direction, least far with `minimum`: `axis`'s direction, else `direction_current`.
   Result<void> construct_extreme_point(const std::string& label, const FeatureRef& source, const std::optional<FeatureRef>& axis,
                                        const Vec3& direction_current, bool minimum, Span span);
+  /// CONST/POINT,F(l),EXTREM,...,RADIAL: the measured (compensated) point of FA(x) furthest from
+  /// its own axis (circle, arc, cylinder, cone) or centre (sphere), nearest with `minimum`.
+  Result<void> construct_radial_extreme_point(const std::string& label, const FeatureRef& source, bool minimum, Span span);
   /// CONST/PLANE,F(l),OFFSET,FA(plane),d: the plane moved d (mm) along its normal.
   Result<void> construct_offset_plane(const std::string& label, const FeatureRef& source, double distance_mm, Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
