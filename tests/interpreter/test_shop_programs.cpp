@@ -754,6 +754,34 @@ TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
       << sides_only.diagnostics;
 }
 
+// A FEAT with more numbers than its form takes (a cone with two distances, a plane with a size,
+// as longer DMIS 5.3 forms and vendors write them): read leniently with the form's numbers and a
+// warning naming what is ignored; --strict: an error. Fewer numbers stay an error.
+TEST(ShopPrograms, FeaturesWithMoreNumbersThanTheirFormAreReadWithAWarning) {
+  const std::string text = "DMISMN/'p', 5.0\nF(C) = FEAT/CONE, INNER, CART, 10, 20, 0, 0, 0, 1, 60, 5, 10\n"
+                           "F(P) = FEAT/PLANE, CART, 0, 0, 5, 0, 0, 1, 10, 20\nENDFIL\n";
+  const auto lenient = check(text);
+  EXPECT_EQ(lenient.errors, 0u) << lenient.text;
+  EXPECT_EQ(lenient.warnings, 2u) << lenient.text;
+  EXPECT_TRUE(lenient.has("shop.dmi:2:59: warning: FEAT/CONE takes at most 8 numbers (x,y,z,i,j,k,angle[,len]); the 1 "
+                          "after them is ignored"))
+      << lenient.text;
+  EXPECT_TRUE(lenient.has("shop.dmi:3:44: warning: FEAT/PLANE takes at most 6 numbers (x,y,z,i,j,k); the 2 after them are "
+                          "ignored"))
+      << lenient.text;
+  const auto strict = check(text, true);
+  EXPECT_EQ(strict.errors, 2u) << strict.text;
+  EXPECT_TRUE(strict.has("FEAT/CONE expects 7 to 8 numbers")) << strict.text;
+  // The numbers the form takes are the nominal: the cone's axis point, direction, angle and length.
+  const auto r = run(text.substr(0, text.find("ENDFIL")) + "OUTPUT/F(C)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* cone = r.session->runtime().find_feature("C");
+  ASSERT_TRUE(cone);
+  EXPECT_NEAR(cone->nominal.apex_angle_deg, 60, 1e-12);
+  EXPECT_NEAR(cone->nominal.position.x(), 10, 1e-12);
+  EXPECT_NEAR(cone->nominal.length_mm, 5, 1e-12);
+}
+
 // Bad CPARLN statements: positioned errors that say what is wrong.
 TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
   const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, " + rest + "\nENDFIL\n"); };

@@ -180,7 +180,20 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   if (!bare) payload.form = *ir::parse_word<ir::CoordinateForm>(p[i++].text);
   const bool bounded = payload.bounded.value_or(false);
   const FeatureForm form = feature_form(type, bounded);
-  const std::size_t n = p.size() - i;
+  std::size_t n = p.size() - i;
+  // More numbers than the form takes (DMIS 5.3's longer forms, vendors' extra sizes such as a
+  // cone's two distances): read leniently, the form's numbers are used and the rest ignored, with
+  // a warning; --strict: an error below.
+  std::vector<grammar::Expr> trimmed;
+  const std::size_t most = type == FeatureType::Arc ? 12 : runtime::is_point_set(type) ? 6 : form.max_numbers;
+  if (n > most && !m_strict) {
+    warn(p[i + most].span, "sema.feature-arity",
+         fmt::format("FEAT/{} takes at most {} numbers ({}); the {} after them {} ignored (--strict makes this an error)", word,
+                     most, form.meaning, n - most, n - most == 1 ? "is" : "are"));
+    trimmed.assign(p.begin(), p.begin() + static_cast<std::ptrdiff_t>(i + most));
+    n = most;
+  }
+  const std::vector<grammar::Expr>& used = trimmed.empty() ? p : trimmed;
   // An ARC's reference direction comes whole (three numbers) or not at all.
   if (n < form.min_numbers || n > form.max_numbers || (runtime::is_point_set(type) && n != 0 && n != 6) ||
       (type == FeatureType::Arc && n != 9 && n != 12))
@@ -192,14 +205,14 @@ void UnitCompiler::feat(const grammar::Statement& s) {
                              form.meaning, n));
   bool ok = true;
   std::vector<double> literal;
-  for (; i < p.size(); ++i) {
-    auto e = numeric(p[i], "a feature coordinate");
+  for (; i < used.size(); ++i) {
+    auto e = numeric(used[i], "a feature coordinate");
     if (!e) { ok = false; continue; }
     literal.push_back(literal_value(*e));
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   if (!ok) return;
-  if (!check_feature_numbers(s, p, payload, literal)) return;
+  if (!check_feature_numbers(s, used, payload, literal)) return;
   if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl && !reported_actual) {
     const Location loc = m_sources.locate(it->second.span);
     // DMIS lets a feature's nominal label be defined again (only other labels are unique): a note.
