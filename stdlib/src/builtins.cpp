@@ -111,6 +111,8 @@ const std::vector<Builtin>& builtins() {
       // BADPT(), BADGT(): whether the last measurement failed under BADTST/ON, with a machine
       // fault (a missed or unexpected contact) or with points no feature fits.
       {"BADPT", 0, 0, ValueType::Bool, false},     {"BADGT", 0, 0, ValueType::Bool, false},
+      // QTEMP(sensor): a temperature, C (the machine's thermometer; a number or a name).
+      {"QTEMP", 0, 1, ValueType::Real, true},
       // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as
       // the POL coordinates of FEAT/POINT), combined (VCROSS, VDOT, VMAG, VUNIT), and turned
       // between the part and machine systems (VMCS, VPCS: the interpreter answers those, they

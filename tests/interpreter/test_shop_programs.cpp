@@ -2303,6 +2303,25 @@ TEST(ShopPrograms, BadTestTakesAFailedMeasurementAndTellsWhichKind) {
   EXPECT_TRUE(check("DMISMN/'r', 5.0\nBADTST/MAYBE\nENDFIL\n").has("expected ON or OFF after BADTST/"));
 }
 
+// QTEMP(sensor): the machine's thermometer, the world's scale temperature (cmm_errors_at_22c.json:
+// air 22 C, the scales following it without lag); a world with no temperature answers 20 C and
+// says so once.
+TEST(ShopPrograms, QtempReadsTheMachinesThermometer) {
+  const std::string text = "DMISMN/'t', 5.0\nDECL/REAL,T1,T2\nT1=ASSIGN/QTEMP(1)\nT2=ASSIGN/QTEMP('X')\nENDFIL\n";
+  EXPECT_EQ(check(text).errors + check(text).warnings, 0u) << check(text).text;
+  const auto warm = run(text, source_dir / "programs/worlds/cmm_errors_at_22c.json");
+  ASSERT_EQ(warm.status, ExecStatus::Finished) << warm.diagnostics;
+  EXPECT_NEAR(warm.session->interpreter().variable("T1")->number, 22.0, 0.005);
+  EXPECT_NEAR(warm.session->interpreter().variable("T2")->number, 22.0, 0.005);
+  EXPECT_EQ(warm.diagnostics.find("no thermometer"), std::string::npos) << warm.diagnostics;
+  const auto plain = run(text);
+  ASSERT_EQ(plain.status, ExecStatus::Finished) << plain.diagnostics;
+  EXPECT_EQ(plain.session->interpreter().variable("T1")->number, 20.0);
+  const auto told = plain.diagnostics.find("QTEMP: this machine has no thermometer");
+  EXPECT_NE(told, std::string::npos) << plain.diagnostics;
+  EXPECT_EQ(plain.diagnostics.find("QTEMP: this machine has no thermometer", told + 1), std::string::npos) << plain.diagnostics;
+}
+
 // ERROR/(label),cond: a machine fault the condition covers goes to the handler, which goes on
 // with RESUME; ERROR/AUTO goes on after the failing statement; a fault the condition does not
 // cover stops the run, as without ERROR. The air point: nothing of the block (x 0..160) is

@@ -91,6 +91,22 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     m_runtime.warning(e.span, fmt::format("DMESYS('{}'): metron does not know this key; answered ''", key->text));
     return Value::string("");
   }
+  if (name == "QTEMP") {
+    // QTEMP(sensor) (DMIS 5.2): a temperature sensor's reading. Every sensor reads the machine's
+    // thermometer, the one its controller compensates by (the world's scale temperature); a
+    // machine without one answers the reference temperature of ISO 1, 20 C, with a warning once.
+    if (!e.args.empty()) {
+      auto sensor = evaluate(e.args.at(0));
+      if (!sensor) return sensor;
+    }
+    if (const auto t = m_runtime.machine().state().temperature_c) return Value::real(*t);
+    if (!m_no_thermometer_warned) {
+      m_no_thermometer_warned = true;
+      m_runtime.warning(e.span, "QTEMP: this machine has no thermometer (its world models no temperature); answered the "
+                                "reference temperature 20 C (told once)");
+    }
+    return Value::real(20.0);
+  }
   if (name == "BADPT") return Value::boolean_value(m_bad_point);
   if (name == "BADGT") return Value::boolean_value(m_bad_geometry);
   if (name == "PTDATA") {

@@ -152,6 +152,7 @@ class Interpreter {
   /// The run clock's start for SDATE/STIME (seconds since 1970, UTC): SOURCE_DATE_EPOCH when
   /// set (reproducible runs), else the wall clock when the run starts.
   std::int64_t m_clock_start_s = 0;
+  bool m_no_thermometer_warned = false;  ///< QTEMP on a machine without one: told once
   RunLimits m_limits;
   bool m_signals_to_caller = false;
   Span m_executing;
