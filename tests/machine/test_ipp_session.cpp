@@ -183,6 +183,34 @@ TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
   EXPECT_EQ(f.error("00046 SaveNamedCsyTransformation(\"T\", 0, 0, 0, 190, 0, 0)"), 1007);
 }
 
+// The Part object of I++ DME 1.5 (section 6.4, as the ippdme-core crate's method table lists
+// it): Temperature and XpanCoefficient, which a client reads and sets (they were 0509, which
+// stops a client that sets the part's temperature before it measures). Kept and answered; the
+// virtual CMM does not compensate by them (docs/ipp-dme.md), so a PtMeas answers the same.
+TEST(IppSession, PartTemperatureAndExpansionAreKeptProperties) {
+  Fixture f;
+  f.start();
+  EXPECT_EQ(f.error("00005 OnPtMeasReport(X(), Y(), Z())"), 0);
+  const auto before = f.data("00006 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1))");
+  EXPECT_EQ(f.data("00010 GetProp(Part.Temperature())"), "Part.Temperature(20)");
+  EXPECT_EQ(f.data("00011 GetProp(Part.XpanCoefficient())"), "Part.XpanCoefficient(0)");
+  EXPECT_EQ(f.error("00012 SetProp(Part.Temperature(23.5), Part.XpanCoefficient(0.0000115))"), 0);
+  EXPECT_EQ(f.data("00013 GetProp(Part.Temperature(), Part.XpanCoefficient())"),
+            "Part.Temperature(23.5), Part.XpanCoefficient(0.0000115)");
+  EXPECT_EQ(f.send("00014 EnumProp(Part())"),
+            (std::vector<std::string>{"00014 &", "00014 # \"Temperature\", \"Number\"", "00014 # \"XpanCoefficient\", \"Number\"",
+                                      "00014 %"}));
+  const auto after = f.data("00015 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1))");
+  EXPECT_NEAR(item(after, "Z"), item(before, "Z"), 1e-9);
+  EXPECT_EQ(f.error("00020 SetProp(Part.Temperature(-300))"), 509);
+  EXPECT_EQ(f.error("00021 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00022 SetProp(Part.XpanCoefficient(0.5))"), 509);
+  EXPECT_EQ(f.error("00023 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.error("00024 GetProp(Part.Colour())"), 509);
+  EXPECT_EQ(f.error("00025 ClearAllErrors()"), 0);
+  EXPECT_EQ(f.data("00026 GetProp(Part.Temperature())"), "Part.Temperature(23.5)");  // refused values change nothing
+}
+
 TEST(IppSession, MachineFaultsBecomeStandardErrors) {
   Fixture f;
   f.start();

@@ -103,6 +103,11 @@ struct Session::Impl {
   std::map<std::string, Csy> csys;          ///< transformations by name
   std::map<std::string, Csy> saved_csys;
   std::string active_csy = "MachineCsy";
+  /// The Part object's properties (I++ DME 1.5 section 6.4): what the client says of the part's
+  /// temperature (C) and expansion coefficient (1/K). Kept and answered, not applied: the virtual
+  /// CMM does not compensate the part's expansion by them (docs/ipp-dme.md).
+  double part_temperature_c = 20.0;
+  double part_expansion_per_k = 0.0;
   std::vector<std::string> pt_report{"X", "Y", "Z"};
   std::vector<std::string> scan_report{"X", "Y", "Z"};
   std::map<std::string, Daemon> daemons;    ///< by tag text
@@ -354,8 +359,20 @@ struct Session::Impl {
     if (head == "Tool" && ref.tool->name == "NoTool" && ref.path.rfind("PtMeasPar", 0) == 0) fail(ErrorCode::IllegalCommand);
     return ref;
   }
+  /// Part.Temperature, Part.XpanCoefficient; nullptr for another Part. name (0509).
+  double* part_property(const std::string& dotted) {
+    if (dotted == "Part.Temperature") return &part_temperature_c;
+    if (dotted == "Part.XpanCoefficient") return &part_expansion_per_k;
+    return nullptr;
+  }
   std::string get_property(const Argument& a) {
     if (a.kind != Argument::Kind::Call || !a.args.empty()) fail(ErrorCode::IncorrectArguments);
+    if (a.text.rfind("Part.", 0) == 0) {
+      const double* v = part_property(a.text);
+      if (!v) fail(ErrorCode::BadArgument);
+      // An expansion coefficient (1e-5 / K) needs more decimals than a length.
+      return a.text + "(" + format_number(*v, v == &part_expansion_per_k ? 12 : 6) + ")";
+    }
     auto p = property(a.text);
     const Tool& t = *p.tool;
     const std::string& path = p.path;
@@ -382,6 +399,16 @@ struct Session::Impl {
   bool set_property(const Argument& a) {
     if (a.kind != Argument::Kind::Call || a.args.size() != 1) fail(ErrorCode::IncorrectArguments);
     if (!a.args[0].is_number()) fail(ErrorCode::BadArgument);
+    if (a.text.rfind("Part.", 0) == 0) {
+      double* v = part_property(a.text);
+      if (!v || !std::isfinite(a.args[0].number)) fail(ErrorCode::BadArgument);
+      // Below absolute zero is no temperature; a coefficient beyond 1e-3 / K no solid's.
+      if ((v == &part_temperature_c && a.args[0].number < -273.15) ||
+          (v == &part_expansion_per_k && std::abs(a.args[0].number) > 1e-3))
+        fail(ErrorCode::BadArgument);
+      *v = a.args[0].number;
+      return false;
+    }
     auto p = property(a.text);
     for (const auto& name : k_number_properties) {
       if (p.path != name && p.path != name + ".Act") continue;
@@ -394,6 +421,10 @@ struct Session::Impl {
   }
   /// (name, type) of a property node's children, recursively with `all`.
   void enum_properties(const std::string& dotted, bool all) {
+    if (dotted == "Part") {
+      for (const char* name : {"Temperature", "XpanCoefficient"}) data("\"" + std::string(name) + "\", \"Number\"");
+      return;
+    }
     auto p = property(dotted + ".X");  // validates the head
     std::string node = p.path.substr(0, p.path.size() - 1);  // "" or "GoToPar." or "GoToPar.Speed."
     if (!node.empty()) node.pop_back();
