@@ -260,6 +260,16 @@ TEST(IppSession, NistContextErrors) {
   EXPECT_EQ(f.error("00006 Home()"), 0);
   EXPECT_EQ(f.error("00007 AlignPart(1,0,0,0,1,0,30)"), 501);
   EXPECT_EQ(f.error("00008 ClearAllErrors()"), 0);
+  // Methods of later versions (I++ DME 1.5 to 2.5) the server does not carry out: known, 0501;
+  // a name that is no method at all stays 0507.
+  for (const char* later : {"00100 ScanOnHelix(0, 0, 0, 0, 0, 1, 10, 0, 0, 5, 360, 1)", "00101 GetSupportedCommands()",
+                            "00102 ReadAllTemperatures()", "00103 PtMeasSelfCenter(X(0), Y(0), Z(0), IJK(0, 0, 1))",
+                            "00104 EnumToolCollection(\"C\")"}) {
+    EXPECT_EQ(f.error(later), 501) << later;
+    EXPECT_EQ(f.error("00105 ClearAllErrors()"), 0);
+  }
+  EXPECT_EQ(f.error("00106 NoSuchMethod()"), 507);
+  EXPECT_EQ(f.error("00107 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00009 ChangeTool(\"UnDefTool\")"), 1503);
   EXPECT_EQ(f.error("00010 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00011 FindTool(\"UnDefTool\")"), 1503);

@@ -77,8 +77,21 @@ struct CommandError {
 };
 
 // Commands the standard defines that this server answers with 0501 "Unsupported command".
-const std::set<std::string> k_unsupported{"AlignPart", "CenterPart", "TiltPart", "TiltCenterPart", "LockAxis",
-                                          "OnScanReportE"};
+const std::set<std::string> k_unsupported{
+    "AlignPart", "CenterPart", "TiltPart", "TiltCenterPart", "LockAxis", "OnScanReportE",
+    // Methods of the later versions (I++ DME 1.5 to 2.5; the names as the VDMA 8722 client library
+    // libjdme2x lists them) that the server does not carry out: a client that tries one learns
+    // the command is known and unsupported (0501), not that it is no command at all (0507).
+    "LockPosition", "ScanOnHelix", "ScanUnknownDensity", "PtMeasSelfCenter", "PtMeasSelfCenterLocked", "GoToOnCircle",
+    "GoToOnSpiral", "Step", "IsAlignable", "OnMoveReport", "EnumNameSpaces", "EnumerateMoverAxes", "GetSupportedCommands",
+    "GetSupportedArguments", "GetTemperatureSensors", "ReadTemperatureSensor", "ReadAllTemperatures",
+    "GetScaleTemperatures", "SetScaleTemperatures", "UpdateScaleTemperatures", "SetTemperatureCompensationOrigin",
+    "EnumToolCollection", "EnumAllToolCollections", "OpenToolCollection"};
+/// The unsupported commands that would move the machine: they need Home first, as the supported
+/// ones do (NIST: 0507 before 0501).
+const std::set<std::string> k_unsupported_motion{"AlignPart",    "CenterPart",       "TiltPart",
+                                                 "TiltCenterPart", "ScanOnHelix",    "PtMeasSelfCenter",
+                                                 "PtMeasSelfCenterLocked", "GoToOnCircle", "GoToOnSpiral", "Step"};
 
 bool is_event_command(std::string_view name) {
   return name == "AbortE" || name == "GetErrStatusE" || name == "GetPropE" || name == "OnMoveReportE" ||
@@ -1077,9 +1090,7 @@ struct Session::Impl {
                n == "ScanInCylEndIsSphere" || n == "ScanInCylEndIsPlane") {
       scan_in(n, a);
     } else if (k_unsupported.count(n)) {
-      // Commands that would move the machine need Home first, supported or not (NIST: 0507).
-      if (n != "OnScanReportE" && n.rfind("Scan", 0) == 0 && n.find("Hint") == std::string::npos) require_motion_ready();
-      if (n == "AlignPart" || n == "CenterPart" || n == "TiltPart" || n == "TiltCenterPart") require_motion_ready();
+      if (k_unsupported_motion.count(n)) require_motion_ready();
       fail(ErrorCode::UnsupportedCommand);
     } else {
       fail(ErrorCode::IllegalCommand);
