@@ -568,7 +568,9 @@ struct Session::Impl {
       if (item == "X") v = format_number(s.x());
       else if (item == "Y") v = format_number(s.y());
       else if (item == "Z") v = format_number(s.z());
-      else if (item == "IJK") v = format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z());
+      // IJKAct (I++ DME 1.5), the normal the sensor measured: a touch-trigger probe measures none,
+      // so it is the probing direction, as IJK.
+      else if (item == "IJK" || item == "IJKAct") v = format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z());
       else if (item == "ER") v = format_number(r.hit->ball_radius_mm);
       else v = "0";  // R, Tool.A/B/C: no rotary table, a fixed head
       body += (body.empty() ? "" : ", ") + item + "(" + v + ")";
@@ -674,7 +676,8 @@ struct Session::Impl {
         if (item == "X") body += format_number(p.x());
         else if (item == "Y") body += format_number(p.y());
         else if (item == "Z") body += format_number(p.z());
-        else if (item == "IJK") body += format_number(d.x()) + "," + format_number(d.y()) + "," + format_number(d.z());
+        else if (item == "IJK" || item == "IJKAct")  // the deflection's direction: what the probe measured
+          body += format_number(d.x()) + "," + format_number(d.y()) + "," + format_number(d.z());
         else body += "0";
       }
     }
@@ -933,9 +936,9 @@ struct Session::Impl {
       no_args(a);
       user_enabled = n == "EnableUser";
     } else if (n == "OnPtMeasReport") {
-      pt_report = items(a, {"X", "Y", "Z", "IJK", "ER", "R", "Tool.A", "Tool.B", "Tool.C"});
+      pt_report = items(a, {"X", "Y", "Z", "IJK", "IJKAct", "ER", "R", "Tool.A", "Tool.B", "Tool.C"});
     } else if (n == "OnScanReport") {
-      scan_report = items(a, {"X", "Y", "Z", "IJK", "Q", "R", "ER", "Tool.A", "Tool.B", "Tool.C"});
+      scan_report = items(a, {"X", "Y", "Z", "IJK", "IJKAct", "Q", "R", "ER", "Tool.A", "Tool.B", "Tool.C"});
     } else if (n == "OnMoveReportE") {
       Daemon d;
       std::set<std::string> seen;
