@@ -209,8 +209,13 @@ TEST(IppSession, PartTemperatureAndExpansionAreKeptProperties) {
   EXPECT_EQ(f.error("00024 GetProp(Part.Colour())"), 509);
   EXPECT_EQ(f.error("00025 ClearAllErrors()"), 0);
   EXPECT_EQ(f.data("00026 GetProp(Part.Temperature())"), "Part.Temperature(23.5)");  // refused values change nothing
-  // IJKAct (I++ DME 1.5), the normal the sensor measured: a touch-trigger probe's is its probing
-  // direction, the top face's normal here.
+}
+
+// IJKAct (I++ DME 1.5), the normal the sensor measured, as a report item (it was 0502): a
+// touch-trigger probe's is its probing direction, the top face's normal here.
+TEST(IppSession, MeasuredNormalIsAReportItem) {
+  Fixture f;
+  f.start();
   EXPECT_EQ(f.error("00030 OnPtMeasReport(X(), Y(), Z(), IJKAct())"), 0);
   const auto act = f.data("00031 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1))");
   EXPECT_NE(act.find("IJKAct(0, 0, 1)"), std::string::npos) << act;
