@@ -12,6 +12,18 @@
 namespace metron::runtime {
 namespace {
 
+// The source of an EXTREM: a feature with measured points, the only ones EXTREM picks from.
+Result<const Feature*> extreme_source(const MeasurementRuntime& runtime, const std::string& label, const FeatureRef& source,
+                                      Span span) {
+  const Feature* f = runtime.find_feature(source.label);
+  if (!f) return program_error(span, fmt::format("feature F({}) is not defined", source.label));
+  if (f->points.empty())
+    return program_error(span, fmt::format("cannot construct POINT F({}): EXTREM picks one of the measured points of FA({}), "
+                                           "which has none (it was constructed or stated)",
+                                           label, source.label));
+  return f;
+}
+
 bool is_planar(const Geometry& g) { return g.type == FeatureType::Plane; }
 bool is_linear(const Geometry& g) {
   return g.type == FeatureType::Line || g.type == FeatureType::Cylinder || g.type == FeatureType::Cone;
@@ -333,11 +345,9 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
   const auto fail = [&](const std::string& why) {
     return program_error(span, fmt::format("cannot construct POINT F({}): {}", label, why));
   };
-  const Feature* f = find_feature(source.label);
-  if (!f) return program_error(span, fmt::format("feature F({}) is not defined", source.label));
-  if (f->points.empty())
-    return fail(fmt::format("EXTREM picks one of the measured points of FA({}), which has none (it was constructed or stated)",
-                            source.label));
+  auto measured = extreme_source(*this, label, source, span);
+  if (!measured) return tl::unexpected(measured.error());
+  const Feature* f = *measured;
   Vec3 d = m_alignment.to_machine_vector(direction_current);
   if (axis) {
     auto a = resolve(*axis, span);
@@ -363,11 +373,9 @@ Result<void> MeasurementRuntime::construct_radial_extreme_point(const std::strin
   const auto fail = [&](const std::string& why) {
     return program_error(span, fmt::format("cannot construct POINT F({}): {}", label, why));
   };
-  const Feature* f = find_feature(source.label);
-  if (!f) return program_error(span, fmt::format("feature F({}) is not defined", source.label));
-  if (f->points.empty())
-    return fail(fmt::format("EXTREM picks one of the measured points of FA({}), which has none (it was constructed or stated)",
-                            source.label));
+  auto measured = extreme_source(*this, label, source, span);
+  if (!measured) return tl::unexpected(measured.error());
+  const Feature* f = *measured;
   auto g = resolve(source, span);
   if (!g) return tl::unexpected(g.error());
   const FeatureType t = g->type;

@@ -94,6 +94,20 @@ double spread(const std::vector<double>& r) {
   return *mx - *mn;
 }
 
+// The widest angle between neighbouring points seen from `centre` in the plane of e1, e2: an
+// inscribed circle or cylinder is bounded only when no gap reaches 180 degrees.
+double largest_angular_gap(const std::vector<Vec3>& points, const Vec3& centre, const Vec3& e1, const Vec3& e2) {
+  std::vector<double> angles;
+  for (const auto& p : points) {
+    const Vec3 d = p - centre;
+    angles.push_back(std::atan2(d.dot(e2), d.dot(e1)));
+  }
+  std::sort(angles.begin(), angles.end());
+  double gap = angles.front() + 2 * std::numbers::pi - angles.back();
+  for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
+  return gap;
+}
+
 double extent(const std::vector<Vec3>& points) {
   Vec3 lo = points.front(), hi = points.front();
   for (const auto& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -261,17 +275,8 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
   out.diameter_mm = 2 * std::abs(objective(x));
   // The centre must lie inside the points' hull (no angular gap of 180 degrees or more around
   // it), or the inscribed circle could grow without bound away from the points.
-  if (inscribed) {
-    std::vector<double> angles;
-    for (const auto& p : points) {
-      const Vec3 d = p - out.centre;
-      angles.push_back(std::atan2(d.dot(e2), d.dot(e1)));
-    }
-    std::sort(angles.begin(), angles.end());
-    double gap = angles.front() + 2 * std::numbers::pi - angles.back();
-    for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
-    if (gap >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
-  }
+  if (inscribed && largest_angular_gap(points, out.centre, e1, e2) >= std::numbers::pi - 1e-9)
+    return tl::unexpected(FitFailure::Degenerate);
   return out;
 }
 
@@ -326,15 +331,7 @@ tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std:
     if ((out.position - ls->position).norm() > 0.25 * ls->diameter_mm / 2) return tl::unexpected(FitFailure::Degenerate);
     if (cylinder) {
       const auto [a1, a2] = frame_of(out.direction);
-      std::vector<double> angles;
-      for (const auto& p : points) {
-        const Vec3 d = p - out.position;
-        angles.push_back(std::atan2(d.dot(a2), d.dot(a1)));
-      }
-      std::sort(angles.begin(), angles.end());
-      double gap = angles.front() + 2 * std::numbers::pi - angles.back();
-      for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
-      if (gap >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
+      if (largest_angular_gap(points, out.position, a1, a2) >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
     }
   }
   return out;
