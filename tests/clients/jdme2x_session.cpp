@@ -67,6 +67,18 @@ int main(int argc, char** argv) {
       {ServerMethodBuilder::buildClearAllErrors()},
       {ServerMethodBuilder::buildGetErrorInfo(1003), false, "No touch"},
       {point_method("PtMeas", 340, 250, 41, true), true},  // BORE1 is there: no contact, 1003
+      {ServerMethodBuilder::buildClearAllErrors()},
+      // The Part object of I++ DME 1.5 and the measured normal IJKAct, through the library's
+      // property builders.
+      {ServerMethodBuilder::buildSetProp({Property(Name("Part.Temperature")).with(Number(21.5))})},
+      {ServerMethodBuilder::buildGetProp({Name("Part.Temperature")}), false, "Part.Temperature(21.5)"},
+      {Method("OnPtMeasReport").with(Property("X")).with(Property("Y")).with(Property("Z")).with(Property("IJKAct"))},
+      {point_method("GoTo", 340, 250, 100)},  // out of BORE1, where the missed point left the probe
+      {point_method("GoTo", 310, 210, 100)},
+      // The answer carries IJKAct(0, 0, 1) (tests/machine IppSession.MeasuredNormalIsAReportItem);
+      // the library's response parser keeps one number per property and drops it (at commit
+      // 1c3dcc5 its NextPropertyValueState takes no second number), so the step checks the rest.
+      {point_method("PtMeas", 310, 210, 41, true), false, "Z(40.9"},
       {ServerMethodBuilder::buildEndSession()},
   };
 
