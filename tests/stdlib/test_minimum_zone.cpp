@@ -28,6 +28,16 @@ TEST(MinimumZone, StraightnessIsTheHullsMinimumWidth) {
   EXPECT_NEAR(mz->form_mm, 1.0, 1e-9);
   EXPECT_GT(mz->least_squares_form_mm, 1.0 + 1e-3);  // least squares is tilted by the outlier
   EXPECT_NEAR(std::abs(mz->direction.x()), 1.0, 1e-9);
+  // The zone's middle line is y = 0.5 (GEOALG/LINE,MINMAX reports it).
+  EXPECT_NEAR(mz->position.y(), 0.5, 1e-9);
+  // A plane normal along the line holds no plane: the zone is taken in space, the narrowest
+  // cylinder about a line (it was a zero width: the in-plane direction had no length). Points on
+  // the z axis and one 1 off it: the cylinder about x = 0.5, diameter 1.
+  const std::vector<Vec3> up = {{0, 0, 0}, {0, 0, 1}, {0, 0, 2}, {0, 0, 3}, {1, 0, 1.5}};
+  const auto spatial = minimum_zone(Shape::Line, up, Vec3::UnitZ());
+  ASSERT_TRUE(spatial);
+  EXPECT_NEAR(spatial->form_mm, 1.0, 1e-6);
+  EXPECT_NEAR(spatial->position.x(), 0.5, 1e-6);
 }
 
 // Flatness: a 100 mm grid on z = 0 and three points at z = t clustered over one corner. Every

@@ -197,7 +197,10 @@ tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vecto
       break;
     }
     case Shape::Line: {
-      if (plane_normal) {
+      // A plane normal along the line (or none) gives no plane to hold it: straightness in space.
+      const bool in_plane = plane_normal && plane_normal->norm() > 1e-12 &&
+                            (n0 - n0.dot(plane_normal->normalized()) * plane_normal->normalized()).norm() > 1e-6;
+      if (in_plane) {
         // Straightness in a plane: two parallel lines; the direction within the plane (1).
         const Vec3 pn = plane_normal->normalized();
         const Vec3 d0 = (n0 - n0.dot(pn) * pn).normalized();
