@@ -379,6 +379,35 @@ TEST(Geoalg, CylindersAndSpheresAreSizedByEachAlgorithm) {
   }
 }
 
+// GEOALG/ARC shares CIRCLE's setting, and an arc of 120 degrees does not surround its centre:
+// its circumscribed circle would have the chord for a diameter (17.32, not 20), so the
+// least-squares arc is kept with a warning.
+TEST(Geoalg, AShortArcKeepsItsLeastSquaresSize) {
+  std::string points;
+  for (int k = 0; k <= 4; ++k) {
+    const double t = k * std::numbers::pi / 6;  // 0 to 120 degrees
+    const Vec3 u(std::cos(t), std::sin(t), 0);
+    points += ptmeas(Vec3(40, 50, 30) + 10 * u, -u);
+  }
+  const auto measured = [&](const std::string& geoalg) {
+    auto r = run(geoalg + "F(A1) = FEAT/ARC, INNER, CART, 40, 50, 30, 0, 0, 1, 10, 0, 120\nMEAS/ARC, F(A1), 5\n" + points +
+                     "ENDMES\n",
+                 [](const Vec3& q) { return q; });
+    EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+    const auto& a = r->runtime->features().at("A1");
+    EXPECT_TRUE(a.actual.has_value()) << r->diagnostics;
+    std::string said = r->diagnostics;  // compile diagnostics, then the run's warnings
+    for (const auto& line : r->record.diagnostics) said += line + "\n";
+    return std::pair(a.actual ? a.actual->diameter_mm : 0.0, said);
+  };
+  EXPECT_NEAR(measured("").first, 20.0, 1e-6);
+  const auto [mcc, said] = measured("GEOALG/ARC, MINCIR\n");
+  EXPECT_NEAR(mcc, 20.0, 1e-6);
+  EXPECT_NE(said.find("GEOALG MINCIR: the points of F(A1) do not surround their centre; its least-squares fit is kept"),
+            std::string::npos)
+      << said;
+}
+
 // GEOALG/PLANE,MINMAX and GEOALG/LINE,MINMAX: four points of a face at z = 0 and one 10 um high
 // in their middle. Least squares puts the plane at their mean height, 2 um; the minimum zone is
 // 10 um wide between z = 0 and z = 0.01 whatever the tilt (the middle point is the corners' mean),

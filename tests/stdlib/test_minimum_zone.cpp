@@ -148,10 +148,12 @@ TEST(ExtremeCircle, InscribedAndCircumscribedCirclesOfThreeContacts) {
   const auto ls = metron::fitting::fit(Shape::Circle, inside, {});
   ASSERT_TRUE(ls);
   EXPECT_GT(std::abs(ls->diameter_mm - 20.0), 0.5);
-  // Points on a 90-degree arc do not enclose an inscribed circle.
+  // Points on a 90-degree arc do not enclose an inscribed circle, and their circumscribed circle
+  // (the chord for a diameter, 14.1) is not the arc's either.
   std::vector<Vec3> arc;
   for (int i = 0; i <= 9; ++i) arc.push_back(c + polar(10, 10.0 * i));
   EXPECT_FALSE(metron::fitting::extreme_circle(arc, true, Vec3::UnitZ()));
+  EXPECT_FALSE(metron::fitting::extreme_circle(arc, false, Vec3::UnitZ()));
 }
 
 // The sphere counterparts (ISO 14405-1 GX, GN sizes of a sphere): the four vertices of a regular
@@ -191,10 +193,12 @@ TEST(ExtremeFeature, InscribedAndCircumscribedSpheresOfFourContacts) {
       cap.push_back(c + 10 * Vec3(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e)));
     }
   EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Sphere, cap, true));
-  EXPECT_TRUE(metron::fitting::extreme_feature(Shape::Sphere, cap, false));
+  // Nor the circumscribed one: the smallest sphere about a cap is smaller than the cap's sphere.
+  EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Sphere, cap, false));
   // A cylinder probed over half its circumference bounds no inscribed cylinder either.
   std::vector<Vec3> half;
   for (const double z : {0.0, 20.0})
     for (int k = 0; k <= 6; ++k) half.push_back(c + Vec3(10 * std::cos(k * std::numbers::pi / 6), 10 * std::sin(k * std::numbers::pi / 6), z));
   EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Cylinder, half, true, Vec3::UnitZ()));
+  EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Cylinder, half, false, Vec3::UnitZ()));
 }

@@ -255,6 +255,9 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
   if (!ls) return tl::unexpected(ls.error());
   const Vec3 n = ls->direction.normalized();
   const auto [e1, e2] = frame_of(n);
+  // Points on an arc of 180 degrees or less do not surround their centre: neither extreme circle
+  // is the feature's (the circumscribed one of a 120 degree arc has the chord for its diameter).
+  if (largest_angular_gap(points, ls->position, e1, e2) >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
   const auto radius = [&](const Vec3& c, const Vec3& p) {
     const Vec3 d = p - c;
     return (d - d.dot(n) * n).norm();
@@ -299,6 +302,21 @@ tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std:
   const bool cylinder = shape == Shape::Cylinder;
   const Vec3 n0 = cylinder ? ls->direction.normalized() : Vec3::UnitZ();
   const auto [e1, e2] = frame_of(n0);
+  // The points must surround the least-squares feature, or neither extreme one is the feature's:
+  // a cylinder's cross-section with no gap of 180 degrees, a sphere's points not all in one
+  // hemisphere (their mean direction from the centre has points on both sides of it).
+  if (cylinder && largest_angular_gap(points, ls->position, e1, e2) >= std::numbers::pi - 1e-9)
+    return tl::unexpected(FitFailure::Degenerate);
+  if (!cylinder) {
+    Vec3 mean = Vec3::Zero();
+    for (const auto& p : points) mean += (p - ls->position).normalized();
+    if (mean.norm() > 1e-9) {
+      const Vec3 m = mean.normalized();
+      double least = 1;
+      for (const auto& p : points) least = std::min(least, (p - ls->position).normalized().dot(m));
+      if (least > -1e-9) return tl::unexpected(FitFailure::Degenerate);
+    }
+  }
   // The reference feature of parameters x: a centre (sphere: 3 shifts) or an axis (cylinder: 2
   // tilts and 2 shifts normal to the least-squares axis).
   const auto place = [&](const std::vector<double>& x, Vec3& centre) {

@@ -42,8 +42,9 @@ tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vecto
 /// size as a pin gauge finds it) or the minimum circumscribed circle (MCC: a boss's size as a
 /// ring gauge finds it), ISO 12181-1 reference circles, in the plane normal to `plane_normal`
 /// (else the points' least-squares plane). Nelder-Mead on the centre from the least-squares
-/// centre; the MIC fails (Degenerate) when the points do not surround their centre, as points
-/// on a short arc do not.
+/// centre; both fail (Degenerate) when the points do not surround their least-squares centre, as
+/// points on an arc of 180 degrees or less do not (the MCC of a short arc has its chord for a
+/// diameter), and the MIC also when they do not surround its own centre.
 struct ExtremeCircle {
   Vec3 centre = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();
@@ -57,10 +58,10 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
 /// smallest that holds every point (a boss's, as a ring gauge finds it); ISO 14405-1's GX and GN
 /// sizes. Cylinder: the axis direction (near `direction_hint`, else the least-squares axis) and
 /// its point in the plane normal to it; sphere: the centre. Nelder-Mead from the least-squares
-/// feature. An inscribed feature fails (Degenerate) when the points do not surround it: a cylinder
-/// whose cross-section has an angular gap of 180 degrees or more, or a search that drifts farther
-/// than a quarter of the least-squares radius (points on a cap no larger than a hemisphere bound
-/// no inscribed sphere).
+/// feature. Both fail (Degenerate) when the points do not surround the least-squares feature: a
+/// cylinder's cross-section with an angular gap of 180 degrees or more, a sphere's points all in
+/// one hemisphere (a cap); an inscribed one also when its search drifts farther than a quarter of
+/// the least-squares radius.
 struct ExtremeFeature {
   Vec3 position = Vec3::Zero();   ///< centre; a point on the axis
   Vec3 direction = Vec3::UnitZ(); ///< circle normal, cylinder axis (the least-squares sense); sphere: +Z
