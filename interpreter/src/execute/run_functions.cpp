@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The intrinsics that need the run rather than their arguments: the run's date and time, the
-// simulated seconds since the start, the end of an input file, a feature's number of points, and
-// vectors turned between the part and machine systems.
+// simulated seconds since the start, the end of an input file, a feature's number of points,
+// vectors turned between the part and machine systems, the machine's thermometer (QTEMP) and
+// whether the last measurement failed under BADTST (BADPT, BADGT).
 #include <algorithm>
 #include <cctype>
 #include <cerrno>

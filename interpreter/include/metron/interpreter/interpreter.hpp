@@ -140,7 +140,8 @@ class Interpreter {
   std::vector<std::string> m_prompt_answers;  // scripted PROMPT answers
   std::size_t m_next_answer = 0;
   tl::expected<Value, std::string> prompt(const ir::Expr& e);
-  /// The intrinsics that need the run (SDATE, STIME, SDATETIME, SELAPSETIME, EOF, PTDATA);
+  /// The intrinsics that need the run (SDATE, STIME, SDATETIME, SELAPSETIME, EOF, PTDATA, EXIST,
+  /// DMESYS, VMCS, VPCS, QTEMP, BADPT, BADGT);
   /// nullopt for any other function (execute/run_functions.cpp).
   std::optional<tl::expected<Value, std::string>> run_function(const ir::Expr& e);
   /// An input file opened by OPEN/DID(x),...,INPUT: its fields, read in order by READ.
