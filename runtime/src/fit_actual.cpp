@@ -17,7 +17,6 @@
 #include "metron/stdlib/fitting/torus_fit.hpp"
 
 namespace metron::runtime {
-namespace {
 
 fitting::Shape fit_shape(FeatureType type) {
   switch (type) {
@@ -38,6 +37,8 @@ fitting::Shape fit_shape(FeatureType type) {
   }
   return fitting::Shape::Point;
 }
+
+namespace {
 
 Vec3 oriented(const Vec3& d, const Vec3& like) { return d.dot(like) < 0 ? Vec3(-d) : d; }
 

@@ -421,11 +421,7 @@ void MeasurementRuntime::apply_fit_algorithm(Geometry& actual, const std::vector
   const auto chosen = m_fit_algorithms.find(type);
   if (chosen == m_fit_algorithms.end() || chosen->second == FitAlgorithm::LeastSquares) return;
   const FitAlgorithm algorithm = chosen->second;
-  const fitting::Shape shape = type == FeatureType::Circle   ? fitting::Shape::Circle
-                               : type == FeatureType::Sphere ? fitting::Shape::Sphere
-                               : type == FeatureType::Cylinder ? fitting::Shape::Cylinder
-                               : type == FeatureType::Plane  ? fitting::Shape::Plane
-                                                              : fitting::Shape::Line;
+  const fitting::Shape shape = fit_shape(type);
   std::vector<Vec3> surface;
   for (const auto& p : points) surface.push_back(p.surface_mm());
   // The least-squares sense of a direction is kept: a reference feature has no sense of its own.

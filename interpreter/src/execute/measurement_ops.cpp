@@ -29,14 +29,9 @@ ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, Ca
 // Op::FitAlgorithm: GEOALG/type,algorithm
 ExecStatus Execute::fit_algorithm(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   using F = runtime::MeasurementRuntime::FitAlgorithm;
-  using runtime::FeatureType;
-  const std::string& type = in.operands.at(0).word;
   const std::string& word = in.operands.at(1).word;
-  vm.m_runtime.set_fit_algorithm(type == "SPHERE"   ? FeatureType::Sphere
-                                 : type == "CYLNDR" ? FeatureType::Cylinder
-                                 : type == "PLANE"  ? FeatureType::Plane
-                                 : type == "LINE"   ? FeatureType::Line
-                                                    : FeatureType::Circle,
+  // The compiler wrote a feature type word (CIRCLE, SPHERE, CYLNDR, PLANE, LINE).
+  vm.m_runtime.set_fit_algorithm(ir::parse_word<FeatureType>(in.operands.at(0).word).value_or(FeatureType::Circle),
                                  word == "MAXINS"   ? F::MaximumInscribed
                                  : word == "MINCIR" ? F::MinimumCircumscribed
                                  : word == "MINMAX" ? F::MinimumZone

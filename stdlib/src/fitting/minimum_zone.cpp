@@ -94,9 +94,10 @@ double spread(const std::vector<double>& r) {
   return *mx - *mn;
 }
 
-// The widest angle between neighbouring points seen from `centre` in the plane of e1, e2: an
-// inscribed circle or cylinder is bounded only when no gap reaches 180 degrees.
-double largest_angular_gap(const std::vector<Vec3>& points, const Vec3& centre, const Vec3& e1, const Vec3& e2) {
+// Whether the points surround `centre` in the plane of e1, e2: no angle between neighbouring
+// points, seen from it, reaches 180 degrees (else an inscribed circle or cylinder is unbounded, and
+// the extreme ones are not the feature's).
+bool surrounds(const std::vector<Vec3>& points, const Vec3& centre, const Vec3& e1, const Vec3& e2) {
   std::vector<double> angles;
   for (const auto& p : points) {
     const Vec3 d = p - centre;
@@ -105,7 +106,7 @@ double largest_angular_gap(const std::vector<Vec3>& points, const Vec3& centre, 
   std::sort(angles.begin(), angles.end());
   double gap = angles.front() + 2 * std::numbers::pi - angles.back();
   for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
-  return gap;
+  return gap < std::numbers::pi - 1e-9;
 }
 
 double extent(const std::vector<Vec3>& points) {
@@ -257,7 +258,7 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
   const auto [e1, e2] = frame_of(n);
   // Points on an arc of 180 degrees or less do not surround their centre: neither extreme circle
   // is the feature's (the circumscribed one of a 120 degree arc has the chord for its diameter).
-  if (largest_angular_gap(points, ls->position, e1, e2) >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
+  if (!surrounds(points, ls->position, e1, e2)) return tl::unexpected(FitFailure::Degenerate);
   const auto radius = [&](const Vec3& c, const Vec3& p) {
     const Vec3 d = p - c;
     return (d - d.dot(n) * n).norm();
@@ -281,8 +282,7 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
   out.diameter_mm = 2 * std::abs(objective(x));
   // The centre must lie inside the points' hull (no angular gap of 180 degrees or more around
   // it), or the inscribed circle could grow without bound away from the points.
-  if (inscribed && largest_angular_gap(points, out.centre, e1, e2) >= std::numbers::pi - 1e-9)
-    return tl::unexpected(FitFailure::Degenerate);
+  if (inscribed && !surrounds(points, out.centre, e1, e2)) return tl::unexpected(FitFailure::Degenerate);
   return out;
 }
 
@@ -305,8 +305,7 @@ tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std:
   // The points must surround the least-squares feature, or neither extreme one is the feature's:
   // a cylinder's cross-section with no gap of 180 degrees, a sphere's points not all in one
   // hemisphere (their mean direction from the centre has points on both sides of it).
-  if (cylinder && largest_angular_gap(points, ls->position, e1, e2) >= std::numbers::pi - 1e-9)
-    return tl::unexpected(FitFailure::Degenerate);
+  if (cylinder && !surrounds(points, ls->position, e1, e2)) return tl::unexpected(FitFailure::Degenerate);
   if (!cylinder) {
     Vec3 mean = Vec3::Zero();
     for (const auto& p : points) mean += (p - ls->position).normalized();
@@ -352,7 +351,7 @@ tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std:
     if ((out.position - ls->position).norm() > 0.25 * ls->diameter_mm / 2) return tl::unexpected(FitFailure::Degenerate);
     if (cylinder) {
       const auto [a1, a2] = frame_of(out.direction);
-      if (largest_angular_gap(points, out.position, a1, a2) >= std::numbers::pi - 1e-9) return tl::unexpected(FitFailure::Degenerate);
+      if (!surrounds(points, out.position, a1, a2)) return tl::unexpected(FitFailure::Degenerate);
     }
   }
   return out;
