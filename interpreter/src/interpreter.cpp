@@ -203,6 +203,27 @@ void Interpreter::discard_program_state() {
   m_finished = true;
 }
 
+tl::expected<std::size_t, std::string> Interpreter::element_offset(const std::string& name, const std::vector<double>& indices,
+                                                                  std::size_t size) const {
+  const auto dims_of = m_dims.find(name);
+  const std::vector<std::size_t> dims = dims_of != m_dims.end() ? dims_of->second : std::vector<std::size_t>{size};
+  if (indices.size() != dims.size())
+    return tl::unexpected(fmt::format("array {} has {} dimensions, not {}", name, dims.size(), indices.size()));
+  std::size_t offset = 0;
+  std::string shown;
+  for (std::size_t k = 0; k < dims.size(); ++k) shown += fmt::format("{}{:.0f}", k ? "," : "", std::round(indices[k]));
+  std::string range;
+  for (std::size_t k = 0; k < dims.size(); ++k) range += fmt::format("{}1..{}", k ? "," : "", dims[k]);
+  for (std::size_t k = 0; k < dims.size(); ++k) {  // row-major: the last index runs fastest
+    const double i = std::round(indices[k]);
+    if (!(i >= 1 && i <= static_cast<double>(dims[k])))
+      return tl::unexpected(fmt::format("index {} is outside {}[{}]", shown, name, range));
+    offset = offset * dims[k] + static_cast<std::size_t>(i - 1);
+  }
+  if (offset >= size) return tl::unexpected(fmt::format("index {} is outside {}[{}]", shown, name, range));
+  return offset;
+}
+
 tl::expected<Value, std::string> Interpreter::typed_value(const std::string& name, const Value& value) const {
   auto t = m_types.find(name);
   if (t == m_types.end()) return value;

@@ -57,7 +57,7 @@ TEST(HostileCompile, ArraySizesAreCheckedAndCapped) {
   }
   for (const std::string size : {"2.5", "0", "-3"}) {
     const auto c = compile(header + "DECL/REAL, V[" + size + "]\nENDFIL\n");
-    EXPECT_TRUE(c->has("needs a positive whole size")) << size << ": " << c->all;
+    EXPECT_TRUE(c->has("needs positive whole sizes")) << size << ": " << c->all;
   }
   EXPECT_FALSE(compile(header + "DECL/REAL, V[1000000]\nENDFIL\n")->sink.has_errors());
 }

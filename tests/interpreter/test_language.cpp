@@ -113,6 +113,22 @@ TEST(Language, DoLoopsWithStepsAndArrays) {
   EXPECT_EQ(r.texts, (std::vector<std::string>{"35"}));
 }
 
+TEST(Language, ArraysOfSeveralDimensions) {
+  // RationalDMIS's DECL/COMMON,DOUBLE,XX,NUM[3,30]: before, a declaration of two sizes was an
+  // error, and an element V[i,j] of a one-dimensional array read V[i] (its second index ignored).
+  auto r = run(
+      "DECL/COMMON, DOUBLE, XX, NUM[3,30]\nDECL/INTGR, I, J\n"
+      "DO/I, 1, 3\nDO/J, 1, 30\nNUM[I,J] = ASSIGN/I*100 + J\nENDDO\nENDDO\n"
+      "TEXT/OPER, STR(NUM[2,7])\nTEXT/OPER, STR(NUM[3,30] + NUM[1,1])\n"
+      "NUM[1,31] = ASSIGN/0\n");
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"207", "431"}));
+  EXPECT_EQ(r.status, ExecStatus::Error);
+  EXPECT_NE(r.diagnostics.find("index 1,31 is outside NUM[1..3,1..30]"), std::string::npos) << r.diagnostics;
+  const auto rank = run("DECL/REAL, V[4], W[2,2]\nV[1,2] = ASSIGN/1\nV[1] = ASSIGN/W[1]\n");
+  EXPECT_NE(rank.diagnostics.find("array V has 1 dimension: write V[i]"), std::string::npos) << rank.diagnostics;
+  EXPECT_NE(rank.diagnostics.find("array W has 2 dimensions: write W[i,j]"), std::string::npos) << rank.diagnostics;
+}
+
 TEST(Language, JumpToLabels) {
   auto r = run(
       "DECL/INTGR, N\nN = ASSIGN/0\n(AGAIN)\nN = ASSIGN/N + 1\n"

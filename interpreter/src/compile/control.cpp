@@ -73,6 +73,7 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
   auto in = make(Op::Assign, s, name);
   if (v.kind == ExprKind::Index) {
     if (info && info->size == 0) return error(v.span, "sema.not-array", fmt::format("{} is not an array", name));
+    if (info && !check_rank(v, *info)) return;
     for (const auto& a : v.args) {
       if (!push_number(in, a, "an array index")) return;
     }

@@ -685,22 +685,29 @@ void UnitCompiler::decl(const grammar::Statement& s) {
   for (; i < s.params.size(); ++i) {
     const auto& p = s.params[i];
     int size = 0;
+    std::vector<int> dims;
     if (p.kind == ExprKind::Index) {
-      // At most max_array_size elements, a whole number: V[1e9] would allocate gigabytes, a size
-      // of 2^31 or more wrapped to 1 and V[2.5] was taken as 2 (issue 15).
+      // At most max_array_size elements, whole numbers: V[1e9] would allocate gigabytes, a size
+      // of 2^31 or more wrapped to 1 and V[2.5] was taken as 2 (issue 15). DMIS arrays may have
+      // several dimensions (V[3,30], RationalDMIS's DECL/COMMON,DOUBLE,NUM[3,30]).
       constexpr double max_array_size = 1'000'000;
-      if (p.args.size() != 1 || p.args[0].kind != ExprKind::Number || !(p.args[0].number >= 1) ||
-          p.args[0].number != std::floor(p.args[0].number))
-        return error(p.span, "sema.bad-array", "an array declaration needs a positive whole size, e.g. V1[10]");
-      if (p.args[0].number > max_array_size)
-        return error(p.args[0].span, "sema.bad-array",
-                     fmt::format("array size {:g} exceeds the limit of {:g} elements (docs/limits.md)",
-                                 p.args[0].number, max_array_size));
-      size = static_cast<int>(p.args[0].number);
+      double elements = 1;
+      for (const auto& a : p.args) {
+        if (a.kind != ExprKind::Number || !(a.number >= 1) || a.number != std::floor(a.number))
+          return error(a.span, "sema.bad-array", "an array declaration needs positive whole sizes, e.g. V1[10] or V2[3,30]");
+        elements *= a.number;
+        if (elements > max_array_size)
+          return error(a.span, "sema.bad-array",
+                       fmt::format("array {} of {:g} elements exceeds the limit of {:g} elements (docs/limits.md)", p.text,
+                                   elements, max_array_size));
+        dims.push_back(static_cast<int>(a.number));
+      }
+      if (dims.empty()) return error(p.span, "sema.bad-array", "an array declaration needs positive whole sizes, e.g. V1[10] or V2[3,30]");
+      size = static_cast<int>(elements);
     } else if (p.kind != ExprKind::Word || p.text.empty()) {
       return error(p.span, "sema.expected-name", "expected a variable name");
     }
-    SymbolTable::VariableInfo info{*type, size, p.span};
+    SymbolTable::VariableInfo info{*type, size, p.span, dims};
     if (!m_repl) {
       // A second DECL of one name silently replaced the first (its type and size).
       const auto& scope = m_macro ? m_locals : m_symbols.variables;
@@ -717,6 +724,12 @@ void UnitCompiler::decl(const grammar::Statement& s) {
     ir::Operand sz;
     sz.kind = ir::Operand::Kind::Expr;
     sz.expr.value = Value::integer(size);
+    if (dims.size() > 1)  // the run indexes V[i,j] by the dimensions (row-major, the last index fastest)
+      for (int d : dims) {
+        ir::Expr dim;
+        dim.value = Value::integer(d);
+        sz.expr.args.push_back(std::move(dim));
+      }
     in.operands.push_back(sz);
   }
   emit(std::move(in));

@@ -122,6 +122,7 @@ std::optional<UnitCompiler::Typed> UnitCompiler::element_expression(const gramma
     error(g.span, "sema.not-array", fmt::format("{} is not an array", g.text));
     return std::nullopt;
   }
+  if (!check_rank(g, *info)) return std::nullopt;
   t.e.type = info->type;
   for (const auto& a : g.args) {
     auto i = expression(a);
@@ -133,6 +134,17 @@ std::optional<UnitCompiler::Typed> UnitCompiler::element_expression(const gramma
     t.e.args.push_back(std::move(i->e));
   }
   return t;
+}
+
+// V[i,j] of an array declared V[3,30]: as many indices as dimensions (a second index was ignored).
+bool UnitCompiler::check_rank(const grammar::Expr& element, const SymbolTable::VariableInfo& info) {
+  const std::size_t rank = std::max<std::size_t>(1, info.dims.size());
+  if (element.args.size() == rank) return true;
+  std::string form = element.text + "[i";
+  for (std::size_t k = 1; k < rank; ++k) form += fmt::format(",{}", static_cast<char>('i' + k));
+  error(element.span, "sema.array-rank",
+        fmt::format("array {} has {} dimension{}: write {}]", element.text, rank, rank == 1 ? "" : "s", form));
+  return false;
 }
 
 // NAME(args...): an intrinsic function

@@ -188,6 +188,7 @@ class UnitCompiler {
   };
   std::optional<Typed> expression(const grammar::Expr& g, bool allow_labels = false);
   std::optional<Typed> word_expression(const grammar::Expr& g);
+  bool check_rank(const grammar::Expr& element, const SymbolTable::VariableInfo& info);
   std::optional<Typed> element_expression(const grammar::Expr& g);
   std::optional<Typed> call_expression(const grammar::Expr& g);
   std::optional<Typed> unary_expression(const grammar::Expr& g);

@@ -114,12 +114,15 @@ ExecStatus Execute::assign(Interpreter& vm, const ir::Instruction& in, CallFrame
   if (!var) return vm.fail(in.span, fmt::format("variable {} has no storage here", in.name));
   std::size_t index = 0;
   if (in.count > 0) {
-    auto k = vm.number(in.operands[0].expr);
-    if (!k) return vm.fail(in.span, k.error());
-    const auto i = static_cast<long>(std::llround(*k));
-    if (i < 1 || i > static_cast<long>(var->size()))
-      return vm.fail(in.span, fmt::format("index {} is outside {}[1..{}]", i, in.name, var->size()));
-    index = static_cast<std::size_t>(i - 1);
+    std::vector<double> indices;
+    for (int k = 0; k < in.count; ++k) {
+      auto i = vm.number(in.operands[static_cast<std::size_t>(k)].expr);
+      if (!i) return vm.fail(in.span, i.error());
+      indices.push_back(*i);
+    }
+    auto offset = vm.element_offset(in.name, indices, var->size());
+    if (!offset) return vm.fail(in.span, offset.error());
+    index = *offset;
   }
   auto stored = vm.typed_value(in.name, *value);
   if (!stored) return vm.fail(in.span, stored.error());

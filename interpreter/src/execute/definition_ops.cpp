@@ -269,6 +269,13 @@ ExecStatus Execute::declare(Interpreter& vm, const ir::Instruction& in, CallFram
     auto& store = frame.kind == CallFrame::Kind::Macro ? frame.locals : vm.m_globals;
     store[in.names[i]] = std::vector<Value>(size, default_value(t));
     vm.m_types[in.names[i]] = t;
+    if (const auto& dims = in.operands[i + 1].expr.args; dims.size() > 1) {
+      auto& kept = vm.m_dims[in.names[i]];
+      kept.clear();
+      for (const auto& d : dims) kept.push_back(static_cast<std::size_t>(d.value.number));
+    } else {
+      vm.m_dims.erase(in.names[i]);
+    }
     if (in.operands[0].word == "INTGR") vm.m_intgr.insert(in.names[i]);
     else vm.m_intgr.erase(in.names[i]);
   }

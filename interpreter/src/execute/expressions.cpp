@@ -25,12 +25,15 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
     case ir::ExprOp::Element: {
       auto* v = find_variable(e.name);
       if (!v) return tl::unexpected(fmt::format("array {} has no value here", e.name));
-      auto i = number(e.args.at(0));
-      if (!i) return tl::unexpected(i.error());
-      const auto k = static_cast<long>(std::llround(*i));
-      if (k < 1 || k > static_cast<long>(v->size()))
-        return tl::unexpected(fmt::format("index {} is outside {}[1..{}]", k, e.name, v->size()));
-      return (*v)[static_cast<std::size_t>(k - 1)];
+      std::vector<double> indices;
+      for (const auto& a : e.args) {
+        auto i = number(a);
+        if (!i) return tl::unexpected(i.error());
+        indices.push_back(*i);
+      }
+      auto k = element_offset(e.name, indices, v->size());
+      if (!k) return tl::unexpected(k.error());
+      return (*v)[*k];
     }
     case ir::ExprOp::Call: {
       if (e.name == "PROMPT") return prompt(e);

@@ -44,8 +44,9 @@ struct SymbolTable {
   };
   struct VariableInfo {
     ValueType type = ValueType::Real;
-    int size = 0;       ///< array size, 0 for a scalar
+    int size = 0;       ///< array size (all its elements), 0 for a scalar
     Span span;
+    std::vector<int> dims;  ///< an array's dimensions, V[3,30]: {3, 30}; one for V[10]
   };
   std::map<std::string, FeatureInfo, LabelLess> features;
   std::map<std::string, runtime::ToleranceKind, LabelLess> tolerances;   ///< label -> kind

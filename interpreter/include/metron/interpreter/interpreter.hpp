@@ -96,6 +96,10 @@ class Interpreter {
   std::string name_of(const ir::Instruction& in) const;  ///< the instruction's label, resolved through macro parameters
   tl::expected<double, std::string> number(const ir::Expr& e);
   std::vector<Value>* find_variable(const std::string& name);
+  /// The element V[i,j,...] (1-based indices) of array `name` holding `size` values, as an offset
+  /// into its storage; an index outside its dimension is an error naming it.
+  [[nodiscard]] tl::expected<std::size_t, std::string> element_offset(const std::string& name, const std::vector<double>& indices,
+                                                                      std::size_t size) const;
   const std::vector<ir::Instruction>& code_of(const CallFrame& f) const;
 
   const ir::Module& m_module;
@@ -106,6 +110,7 @@ class Interpreter {
   std::map<std::string, std::vector<Value>> m_globals;
   std::map<std::string, ValueType> m_types;
   std::set<std::string> m_intgr;  ///< variables declared INTGR (32-bit) rather than LONG
+  std::map<std::string, std::vector<std::size_t>> m_dims;  ///< arrays of several dimensions: V[3,30] -> {3, 30}
   std::optional<runtime::MeasBlock> m_block;
   /// ERROR/...: which machine faults the program handles from here on, and how.
   struct ErrorHandling {
