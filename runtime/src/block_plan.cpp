@@ -181,6 +181,7 @@ Result<BlockPlan> plan_block(const MeasBlock& block, const Geometry& nominal, co
   if (auto ok = plan_steps(block, nominal, context, plan); !ok) return tl::unexpected(ok.error());
   const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
                                       [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
+  if (!has_points && !block.plan_missing_points) return plan.take();
   if (!has_points && context.scan.scan_mode && context.mode != Mode::Man) {
     if (auto ok = plan_nominal_scan(block, nominal, context, plan); !ok) return tl::unexpected(ok.error());
   } else if (!has_points) {

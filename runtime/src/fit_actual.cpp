@@ -229,8 +229,16 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(cons
 
 // Fits the actual of a feature from ball centres with probe compensation (stdlib fitting).
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
-  if (points.empty()) return tl::unexpected(std::string("no points were measured"));
+    const std::vector<MeasuredPoint>& measured) {
+  if (measured.empty()) return tl::unexpected(std::string("no points were measured"));
+  // The fits compensate every centre by one ball radius. Points taken with several sensors (a
+  // SNSLCT inside the block) have their centres moved along their normals onto the first ball's
+  // offset surface, which keeps each surface point (centre - r n) where it was.
+  std::vector<MeasuredPoint> points = measured;
+  for (auto& p : points) {
+    p.centre_mm -= (p.ball_radius_mm - measured.front().ball_radius_mm) * p.normal;
+    p.ball_radius_mm = measured.front().ball_radius_mm;
+  }
   if (nominal.type == FeatureType::ParallelPlanes) return fit_parallel_planes(nominal, points);
   if (nominal.type == FeatureType::ClosedSlot) return fit_closed_slot(nominal, points);
   if (nominal.type == FeatureType::Torus) return fit_torus(nominal, points);

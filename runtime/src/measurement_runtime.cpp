@@ -350,6 +350,15 @@ BlockPlanContext MeasurementRuntime::plan_context() const {
   return context;
 }
 
+// A measurement that faulted keeps every point obtained before the fault; the feature gets no
+// actual (not an earlier one).
+void MeasurementRuntime::keep_failed_points(Feature& feature, const std::vector<MeasuredPoint>& points, Span span) {
+  feature.points = points;
+  feature.measured_at = span;
+  feature.actual.reset();
+  feature.fit.reset();
+}
+
 Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   auto it = m_features.find(block.feature);
   if (it == m_features.end()) return program_error(block.span, fmt::format("feature F({}) is not defined", block.feature));
@@ -370,23 +379,50 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
                                    "the wall",
                                    tool->name, ball_mm, feature.label, opening_mm));
   }
-  auto plan = plan_block(block, feature.nominal, plan_context());
-  if (!plan) return tl::unexpected(plan.error());
-  const bool scans = std::any_of(plan->commands.begin(), plan->commands.end(), [](const machine::Command& c) {
-    return std::holds_alternative<machine::ScanPath>(c.body) || std::holds_alternative<machine::ScanBufferWrite>(c.body);
-  });
-  if (scans) {
-    if (auto r = scanning_radius(block.span); !r) return tl::unexpected(r.error());
+  // A SNSLCT inside the block (a feature probed with several sensors) switches the sensor between
+  // its points: each run of steps is planned and measured with the sensor selected before it.
+  MeasBlock empty_run = block;
+  empty_run.steps.clear();
+  std::vector<MeasBlock> runs(1, empty_run);
+  std::vector<const MeasStep*> selections(1, nullptr);
+  for (const auto& step : block.steps) {
+    if (step.kind == MeasStep::Kind::SelectSensor) {
+      runs.push_back(empty_run);
+      selections.push_back(&step);
+    } else {
+      runs.back().steps.push_back(step);
+    }
   }
-  const auto execution = execute_commands(plan->commands, plan->spans);  // a copy: collect_points reads the PtMeas
-  std::vector<MeasuredPoint> points = collect_points(*plan, execution, feature.label, block.span);
-  if (execution.error) {
-    // Keep every point obtained before the fault; the feature gets no actual (not an earlier one).
-    feature.points = points;
-    feature.measured_at = block.span;
-    feature.actual.reset();
-    feature.fit.reset();
-    return tl::unexpected(*execution.error);
+  const auto has_points = [](const MeasBlock& run) {
+    return std::any_of(run.steps.begin(), run.steps.end(), [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
+  };
+  // Without PTMEAS anywhere, the last sensor measures the planned points (AUTO, a nominal scan).
+  const bool any_points = std::any_of(runs.begin(), runs.end(), has_points);
+  for (std::size_t k = 0; k < runs.size(); ++k) runs[k].plan_missing_points = !any_points && k + 1 == runs.size();
+  std::vector<MeasuredPoint> points;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (selections[k]) {
+      if (auto r = select_sensor(selections[k]->path, selections[k]->span, selections[k]->requalify); !r) {
+        keep_failed_points(feature, points, block.span);
+        return r;
+      }
+    }
+    if (runs[k].steps.empty() && !runs[k].plan_missing_points) continue;
+    auto plan = plan_block(runs[k], feature.nominal, plan_context());
+    if (!plan) return tl::unexpected(plan.error());
+    const bool scans = std::any_of(plan->commands.begin(), plan->commands.end(), [](const machine::Command& c) {
+      return std::holds_alternative<machine::ScanPath>(c.body) || std::holds_alternative<machine::ScanBufferWrite>(c.body);
+    });
+    if (scans) {
+      if (auto r = scanning_radius(block.span); !r) return tl::unexpected(r.error());
+    }
+    const auto execution = execute_commands(plan->commands, plan->spans);  // a copy: collect_points reads the PtMeas
+    const auto taken = collect_points(*plan, execution, feature.label, block.span);
+    points.insert(points.end(), taken.begin(), taken.end());
+    if (execution.error) {
+      keep_failed_points(feature, points, block.span);
+      return tl::unexpected(*execution.error);
+    }
   }
   feature.points = points;
   feature.measured_at = block.span;

@@ -2675,3 +2675,37 @@ TEST(ShopPrograms, SensorsAreOutputWithTheirQualification) {
   // 10 um of pre-travel and 4 ms of delays at the 3 mm/s measuring feed: 2 * (10 + 12) um smaller.
   EXPECT_NEAR(effective, 2.0 - 2 * (0.010 + 0.012), 0.006) << d[3];
 }
+
+TEST(ShopPrograms, ASensorSelectedInsideABlockTakesTheRestOfItsPoints) {
+  // A bore probed with two sensors: the 4 mm tip takes the first two points, the 2 mm tip the
+  // last two. Before, SNSLCT inside MEAS was an error; carried out when reached, it would have
+  // switched the sensor before any point (the block is measured at ENDMES).
+  std::string text = bore_program(
+      "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "S(P2) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nSNSLCT/S(P4)\n");
+  text.replace(text.find("  PTMEAS/CART, 30, 50"), 0, "  SNSLCT/S(P2)\n");
+  const auto c = check(text);
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* bore = r.session->runtime().find_feature("BORE1");
+  ASSERT_TRUE(bore && bore->actual);
+  ASSERT_EQ(bore->points.size(), 4u);
+  // The effective radius is the qualified one (the pre-travel takes some 22 um off the nominal).
+  EXPECT_NEAR(bore->points[0].ball_radius_mm, 2.0, 0.05);
+  EXPECT_NEAR(bore->points[1].ball_radius_mm, 2.0, 0.05);
+  EXPECT_NEAR(bore->points[2].ball_radius_mm, 1.0, 0.05);
+  EXPECT_NEAR(bore->points[3].ball_radius_mm, 1.0, 0.05);
+  // The perfect world's bore is the design bore: each point compensated by its own ball.
+  EXPECT_NEAR(bore->actual->diameter_mm, 20.0, 2e-3);
+  // The sensor stays selected after the block, as SNSLCT outside one would leave it.
+  ASSERT_TRUE(r.session->runtime().machine().state().tool);
+  EXPECT_EQ(r.session->runtime().machine().state().tool->name, "P2");
+  // Read strictly too: SNSLCT belongs in a block (DMIS measures a feature with several sensors).
+  EXPECT_EQ(check(text, true).errors, 0u);
+  // A setting DMIS does not place in a block is a warning when read leniently, an error strictly.
+  std::string fly = text;
+  fly.replace(fly.find("  SNSLCT/S(P2)\n"), 0, "  FLY/1.0\n");
+  EXPECT_TRUE(check(fly).has("warning: FLY inside a MEAS block is not DMIS")) << check(fly).text;
+  EXPECT_TRUE(check(fly, true).has("error: FLY is not allowed inside a MEAS block"));
+}

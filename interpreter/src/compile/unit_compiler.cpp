@@ -241,11 +241,26 @@ void UnitCompiler::statement(const grammar::Statement& given) {
   }
   const std::string& m = s.major;
   if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
-    static const std::set<std::string> allowed = {"GOTO", "GOTARG", "ENDGO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "TEXT",
-                                                  "IF", "ELSE", "ENDIF", "DO", "ENDDO", "ASSIGN", "CALL", "DISPLY"};
+    // What a measurement block may hold: its motions and points, the probing settings (a SNSLCT
+    // switches the sensor between the block's points), and the flow of control.
+    static const std::set<std::string> allowed = {
+        "GOTO", "GOTARG", "ENDGO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "ACLRAT", "SNSLCT",
+        "WKPLAN", "TEXT", "IF", "ELSE", "ENDIF", "DO", "ENDDO", "SELECT", "CASE", "DFTCAS", "ENDCAS", "ENDSEL", "JUMPTO",
+        "ASSIGN", "CALL", "DISPLY"};
+    // Settings and records shop software writes inside blocks: no motion, no definition.
+    static const std::set<std::string> tolerated = {"FLY", "DMESW", "DMESWI", "DMESWV", "DMEHW", "PTBUFF", "SCNSET", "DECPL",
+                                                    "PAUSE", "TECOMP", "PRCOMP", "CRMODE", "DECL", "WRITE", "READ", "GEOALG",
+                                                    "RECALL", "MODE", "WRIST", "FINPOS", "SNSMNT"};
     if (!allowed.count(m) && !s.variable) {
-      error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
-      return;
+      if (m_strict || !tolerated.count(m)) {
+        error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
+        return;
+      }
+      // Read leniently, they are carried out where they stand, before the points ENDMES measures.
+      warn(s.major_span, "sema.not-in-meas",
+           fmt::format("{} inside a MEAS block is not DMIS: it is carried out where it stands, before the block's points, "
+                       "which are measured at ENDMES (--strict: an error)",
+                       m));
     }
   }
   // V=ASSIGN/... and V=OBTAIN/... are a row of their own (the grammar parsed the variable).

@@ -22,6 +22,15 @@ void Execute::add_measurement(ExecuteTable& t) {
 
 // Op::SensorSelect
 ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (vm.m_block) {  // inside MEAS: the sensor changes between the block's points (measured at ENDMES)
+    runtime::MeasStep step;
+    step.kind = runtime::MeasStep::Kind::SelectSensor;
+    step.path = vm.name_of(in);
+    step.requalify = in.count == 1;
+    step.span = in.span;
+    vm.m_block->steps.push_back(std::move(step));
+    return ExecStatus::Running;
+  }
   if (auto r = vm.m_runtime.select_sensor(vm.name_of(in), in.span, in.count == 1); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
@@ -138,6 +147,9 @@ ExecStatus Execute::set_home(Interpreter& vm, const ir::Instruction& in, CallFra
 ExecStatus Execute::meas_begin(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   auto n = vm.number(in.operands[0].expr);
   if (!n) return vm.fail(in.span, n.error());
+  if (vm.m_block)  // a JUMPTO left the earlier block before its ENDMES
+    return vm.fail(in.span, fmt::format("MEAS of {} while the block of {} is still open (a JUMPTO out of it skipped its ENDMES)",
+                                        vm.name_of(in), vm.m_block->feature));
   vm.m_bad_point = vm.m_bad_geometry = false;  // BADPT and BADGT tell of this measurement from here on
   runtime::MeasBlock b;
   b.feature = vm.name_of(in);

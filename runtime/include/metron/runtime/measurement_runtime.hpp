@@ -212,6 +212,7 @@ class MeasurementRuntime {
 
  private:
   void apply_fit_algorithm(Geometry& actual, const std::vector<MeasuredPoint>& points, const std::string& label, Span span);
+  void keep_failed_points(Feature& feature, const std::vector<MeasuredPoint>& points, Span span);
   void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures, Span span);
   void store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction, Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);

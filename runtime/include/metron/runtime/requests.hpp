@@ -49,11 +49,13 @@ struct FeatureRef {
 
 /// One step of a MEAS block, in current-frame coordinates (already in mm).
 struct MeasStep {
-  enum class Kind { GoTo, PtMeas, Scan } kind = Kind::PtMeas;
+  /// SelectSensor: a SNSLCT inside the block; the points after it are taken with that sensor.
+  enum class Kind { GoTo, PtMeas, Scan, SelectSensor } kind = Kind::PtMeas;
   Vec3 point = Vec3::Zero();
   std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
   Span span;
-  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label
+  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label; SelectSensor: the sensor's
+  bool requalify = false;            ///< SelectSensor: SNSLCT/...,CALIB (qualify it again)
 };
 
 /// MEAS/type,F(label),n ... ENDMES.
@@ -63,6 +65,9 @@ struct MeasBlock {
   int point_count = 0;
   std::vector<MeasStep> steps;
   Span span;                         ///< the MEAS statement
+  /// Without PTMEAS, plan the points (AUTO, a nominal scan); off for the runs of a block that a
+  /// SNSLCT splits when another run has the points.
+  bool plan_missing_points = true;
 };
 
 /// DATSET/... with datum labels.
