@@ -18,6 +18,28 @@ using detail::UnitCompiler;
 Compiler::Compiler(SourceManager& sources, DiagnosticSink& sink) : m_sources(sources), m_sink(sink) {}
 
 std::size_t Compiler::compile_program(std::uint32_t file, const std::string& path, UnitKind kind) {
+  if (kind != UnitKind::ReplEntry) {
+    if (const auto foreign = grammar::recognise_foreign_dialect(m_sources.file(file).text)) {
+      // One clear error, not a syntax error on each of its lines; nothing of it is compiled.
+      std::string_view line = m_sources.line_text(file, foreign->offset);
+      line.remove_prefix(std::min(line.size(), line.find_first_not_of(" \t")));
+      line = line.substr(0, line.find_last_not_of(" \t\r") + 1);
+      const auto width = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(line.size()));
+      const std::string message =
+          foreign->dialect == "I++ DME"
+              ? fmt::format("this file is not DMIS: it reads as an I++ DME command stream, a client's tagged commands ({} "
+                            "here, and no DMISMN). metron answers such commands as a server: `metron serve --world W` "
+                            "(docs/ipp-dme.md)",
+                            foreign->statement)
+              : fmt::format("this file is not DMIS: it reads as a part program in {}'s own language ({} here, and no "
+                            "DMISMN). metron runs DMIS 5.x programs: this one needs {}, or a DMIS export of it",
+                            foreign->dialect, foreign->statement, foreign->dialect);
+      m_sink.error("parse.foreign-language", Span{file, foreign->offset, foreign->offset + width}, message);
+      const std::size_t unit = m_module.units.size();
+      m_module.units.push_back({path, file, {}});
+      return unit;
+    }
+  }
   const grammar::Program program = grammar::parse_program(m_sources, file, m_sink, m_parse_options);
   const std::size_t unit = m_module.units.size();
   m_module.units.push_back({path, file, {}});

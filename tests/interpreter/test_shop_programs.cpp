@@ -2709,3 +2709,39 @@ TEST(ShopPrograms, ASensorSelectedInsideABlockTakesTheRestOfItsPoints) {
   EXPECT_TRUE(check(fly).has("warning: FLY inside a MEAS block is not DMIS")) << check(fly).text;
   EXPECT_TRUE(check(fly, true).has("error: FLY is not allowed inside a MEAS block"));
 }
+
+TEST(ShopPrograms, ProgramsInAPackagesOwnLanguageAreToldOnce) {
+  // A CMM package's own language looks like DMIS but is not: before, each of its lines was a
+  // syntax error (12 for a short MCOSMOS GEOPAK contour program) or a warning (51 for NIST's
+  // I++ DME stream), and nothing said what the file was.
+  const auto geopak = check(
+      "$$ generated contour program\nFILNAM/ \"SURF01\"\nSNSLCT/1\nDATSET/MCS\n"
+      "CNCON / MESVEL = DEFALT, POSVEL = HIGH, APPRCH = 0.3\nCONTOUR/MEAS, \"Scan\", NUMBER=1\n"
+      "ASSIGN/'ZMEAS'=\"10.000000\",FIXP=4\nPTMEAS/CART,10.000,20.000,'ZMEAS',VECCOMP,0,0,-1\nENDMES\nENDFIL\n");
+  EXPECT_EQ(geopak.errors, 1u) << geopak.text;
+  EXPECT_EQ(geopak.warnings, 0u) << geopak.text;
+  EXPECT_TRUE(geopak.has("shop.dmi:5:1: error: this file is not DMIS: it reads as a part program in MCOSMOS GEOPAK's own "
+                         "language (CNCON/ here, and no DMISMN)"))
+      << geopak.text;
+  const auto pcdmis = check(
+      "PART NAME  : BLOCK\n            MODE/DCC\n            LOADPROBE/PROBE1\nPNT2       =FEAT/POINT,RECT\n"
+      "            ENDMEAS/\n            COMMENT/OPER,\"done\"\n");
+  EXPECT_EQ(pcdmis.errors, 1u) << pcdmis.text;
+  EXPECT_TRUE(pcdmis.has("shop.dmi:2:13: error: this file is not DMIS: it reads as a part program in PC-DMIS's own language (MODE/DCC here"))
+      << pcdmis.text;
+  // A real file no one here wrote: NIST's I++ DME command stream of the simple part.
+  std::ifstream in(fs::path(METRON_SHARED_DATA) / "nist-simple-part/simple.prg");
+  ASSERT_TRUE(in);
+  std::stringstream text;
+  text << in.rdbuf();
+  const auto ipp = check(text.str());
+  EXPECT_EQ(ipp.errors, 1u) << ipp.text;
+  EXPECT_EQ(ipp.warnings, 0u);
+  EXPECT_TRUE(ipp.has("shop.dmi:1:1: error: this file is not DMIS: it reads as an I++ DME command stream, a client's tagged "
+                      "commands (StartSession() here"))
+      << ipp.text;
+  // DMIS stays DMIS: a DMISMN makes any program DMIS, whatever vendor words it holds.
+  const auto dmis = check("DMISMN/'p', 5.0\nCONTOUR/MEAS, 'Scan'\nDRIVE/ZAXIS, 10\nENDFIL\n");
+  EXPECT_FALSE(dmis.has("not DMIS")) << dmis.text;
+  EXPECT_EQ(dmis.errors, 0u) << dmis.text;
+}

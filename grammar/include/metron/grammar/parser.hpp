@@ -1,5 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <optional>
+#include <string>
+#include <string_view>
+
 #include "metron/grammar/ast.hpp"
 #include "metron/stdlib/diagnostic.hpp"
 #include "metron/stdlib/source.hpp"
@@ -19,6 +23,16 @@ struct ParseOptions {
 /// Lines after ENDFIL are parsed without diagnostics (the compiler reports them once).
 Program parse_program(const SourceManager& sources, std::uint32_t file, DiagnosticSink& sink,
                       const ParseOptions& options = {});
+
+/// A part program in a CMM package's own language (PC-DMIS's, MCOSMOS GEOPAK's ASCII), which
+/// looks like DMIS but is not: what it reads as and its first line DMIS has no form for.
+struct ForeignDialect {
+  std::string dialect;    ///< "PC-DMIS", "MCOSMOS GEOPAK"
+  std::string statement;  ///< the statement that tells it (`ENDMEAS/`, `CONTOUR/`)
+  std::uint32_t offset = 0;  ///< where that line's statement starts in the text
+};
+/// A file without DMISMN (or DMISMD) holding a statement of one of those languages.
+std::optional<ForeignDialect> recognise_foreign_dialect(std::string_view text);
 
 /// Whether `upper_word` is a DMIS 5.3 major word (FEAT, MEAS, ...).
 bool is_major_word(std::string_view upper_word);
