@@ -32,7 +32,8 @@ static_assert(std::is_sorted(label_prefixes.begin(), label_prefixes.end()));
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
 // Parses one logical line; returns false after reporting a syntax error.
-bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sink, Statement& out, bool lenient) {
+bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sink, Statement& out, bool lenient,
+                bool& blank_label_told) {
   detail::Builder b;
   b.file = file;
   b.line = &line;
@@ -61,6 +62,16 @@ bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sin
   while (first < last && is_blank(line.text[first])) ++first;
   while (last > first && is_blank(line.text[last - 1])) --last;
   b.stmt.span = b.span(b.base + first, b.base + last);
+  if (b.blank_in_label && !lenient) {
+    sink.error("parse.blank-in-label", *b.blank_in_label, "a label name has no blanks");
+    return false;
+  }
+  if (b.blank_in_label && !blank_label_told) {
+    blank_label_told = true;
+    sink.warning("parse.blank-in-label", *b.blank_in_label,
+                 "a label name written with blanks: they are dropped (F(HOLE 1) is F(HOLE1)); told once per file, "
+                 "--strict makes it an error");
+  }
   out = std::move(b.stmt);
   return true;
 }
@@ -99,7 +110,7 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
     return program;
   }
   DiagnosticSink after_endfil;  // what follows ENDFIL is reported once, by the compiler
-  bool ended = false;
+  bool ended = false, blank_label_told = false;
   for (const LogicalLine& line : join_continuations(sources.file(file).text)) {
     if (!ended && !options.strict && !looks_like_statement(line.text)) {
       std::size_t first = 0;
@@ -118,7 +129,7 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
         program.first_word += static_cast<char>(std::toupper(static_cast<unsigned char>(line.text[i++])));
     }
     Statement stmt;
-    if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict)) {
+    if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict, blank_label_told)) {
       if (stmt.major == "ENDFIL") ended = true;
       program.statements.push_back(std::move(stmt));
     }

@@ -49,7 +49,8 @@ INSTANTIATE_TEST_SUITE_P(Grammar, BadStatement, ::testing::Values(
   BadCase{"GOTO/1, $$ comment", "parse.expected-parameter", "expected a parameter after ','", "1:9"},
   BadCase{"A/", "parse.expected-parameter", "expected a parameter after '/'", "1:3"},
   BadCase{"OUTPUT/FA(PLN1", "parse.expected-close", "expected ')' after the label name", "1:15"},
-  BadCase{"OUTPUT/FA(PLN 1)", "parse.expected-close", "expected ')' after the label name", "1:15"},
+  BadCase{"OUTPUT/FA(PLN 1", "parse.expected-close", "expected ')' after the label name", "1:16"},
+  BadCase{"OUTPUT/FA(PLN 1 ,X)", "parse.expected-close", "expected ')' after the label name", "1:17"},
   BadCase{"OUTPUT/FA()", "parse.expected-label-name", "expected a label name after 'FA('", "1:11"},
   BadCase{"TEXT/OPER,'abc", "parse.unterminated-string", "unterminated string", "1:11"},
   BadCase{"TEXT/OPER,'it''", "parse.unterminated-string", "unterminated string", "1:11"},
@@ -106,6 +107,29 @@ TEST(ParserErrors, AnUnknownLabelPrefixSkipsItsStatementLeniently) {
   DiagnosticSink strict;
   parse_program(sources, file, strict, ParseOptions{true});
   EXPECT_EQ(strict.error_count(), 1u);
+}
+
+// Feature names as CMM software shows them, with a blank (`F(HOLE 1)`): read leniently the
+// blanks are dropped, with one warning per file; strictly each is an error. Before: a syntax
+// error "expected ')' after the label name".
+TEST(ParserErrors, BlanksInsideALabelNameAreDroppedLeniently) {
+  SourceManager sources;
+  const auto file = sources.add("blank.dmi", "F(HOLE 1)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA( HOLE 1 ),F(HOLE\t2)\nENDFIL\n");
+  DiagnosticSink lenient;
+  const Program p = parse_program(sources, file, lenient);
+  ASSERT_EQ(p.statements.size(), 3u);
+  ASSERT_TRUE(p.statements[0].target);
+  EXPECT_EQ(p.statements[0].target->name, "HOLE1");
+  ASSERT_EQ(p.statements[1].params.size(), 2u);
+  EXPECT_EQ(p.statements[1].params[0].label.name, "HOLE1");
+  EXPECT_EQ(p.statements[1].params[1].label.name, "HOLE2");
+  EXPECT_EQ(lenient.error_count(), 0u);
+  ASSERT_EQ(lenient.items().size(), 1u);
+  EXPECT_EQ(lenient.items()[0].code, "parse.blank-in-label");
+  EXPECT_EQ(sources.locate(lenient.items()[0].span).column, 3u);
+  DiagnosticSink strict;
+  parse_program(sources, file, strict, ParseOptions{true});
+  EXPECT_EQ(strict.error_count(), 2u);
 }
 
 TEST(ParserErrors, DeepNestingIsAnErrorNotACrash) {

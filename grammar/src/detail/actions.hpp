@@ -113,7 +113,13 @@ template <>
 struct action<rules::label_ref_name> {
   template <typename In>
   static void apply(const In& in, Builder& b) {
-    b.labels.push_back({in.string(), {}, {}});
+    // Blanks inside a name are dropped (DMIS names have none): F(HOLE 1) is F(HOLE1).
+    std::string name = in.string();
+    if (name.find_first_of(" \t") != std::string::npos) {
+      if (!b.blank_in_label) b.blank_in_label = b.span(in.begin(), in.end());
+      std::erase_if(name, [](char c) { return c == ' ' || c == '\t'; });
+    }
+    b.labels.push_back({std::move(name), {}, {}});
   }
 };
 

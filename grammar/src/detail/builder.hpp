@@ -3,6 +3,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -61,6 +62,7 @@ struct Builder {
   int depth = 0;
   int operators = 0;                  ///< binary and sign operators read so far (max_operators)
   Statement stmt;
+  std::optional<Span> blank_in_label;  ///< the first label name written with a blank (`F(HOLE 1)`)
 
   [[nodiscard]] std::size_t offset(const char* p) const { return static_cast<std::size_t>(p - base); }
 

@@ -83,7 +83,8 @@ struct paren_expr : seq<paren_open, ws, must<paren_inner>, ws, must<paren_close>
 
 struct ident_tok : ident {};
 struct label_open : one<'('> {};
-struct label_ref_name : label_name {};
+// CMM software shows feature names with blanks and some exports keep them (`F(HOLE 1)`).
+struct label_ref_name : list<plus<label_char>, plus<blank>> {};
 struct label_close : one<')'> {};
 struct label_index_open : one<'['> {};
 struct label_index_expr;
