@@ -89,7 +89,7 @@ const std::vector<WordEntry<ConstructionMethod>>& vocabulary() {
                                                  {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"},
                                                  {M::Parto, "PARTO"}, {M::Perpto, "PERPTO"}, {M::Cast, "CAST"},
                                                  {M::Midpl, "MIDPL"},   {M::Midli, "MIDLI"},   {M::Copy, "COPY"},
-                                                 {M::Vertex, "VERTEX"}, {M::Extrem, "EXTREM"}, {M::Offset, "OFFSET"},
+                                                 {M::Vertex, "VERTEX"}, {M::Extrem, "EXTREM"}, {M::Offset, "OFFSET"}, {M::Cone, "CONE"},
                                                  {M::Projln, "PROJLI"}};  // PROJLI: Creo CMM's word for PROJLN
   return rows;
 }

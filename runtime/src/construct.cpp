@@ -2,6 +2,7 @@
 // CONST/...: features constructed from other features' actuals.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <fmt/format.h>
 
@@ -410,6 +411,35 @@ Result<void> MeasurementRuntime::construct_offset_plane(const std::string& label
   if (m_features.find(label) == m_features.end())
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
   store_constructed(label, moved, std::nullopt, span);
+  return {};
+}
+
+// A right circular cone of full apex angle a: at h from the vertex along the axis its section is a
+// circle of radius h tan(a/2); the section of diameter d lies at h = (d/2) / tan(a/2).
+Result<void> MeasurementRuntime::construct_cone_section(const std::string& label, const FeatureRef& source,
+                                                        bool by_diameter, double value_mm, Span span) {
+  auto g = resolve(source, span);
+  if (!g) return tl::unexpected(g.error());
+  const auto fail = [&](const std::string& why) {
+    return program_error(span, fmt::format("cannot construct CIRCLE F({}): {}", label, why));
+  };
+  if (g->type != FeatureType::Cone)
+    return fail(fmt::format("CONE cuts a CONE, FA({}) is a {}", source.label, dmis_word(g->type)));
+  if (!(g->apex_angle_deg > 0 && g->apex_angle_deg < 180))
+    return fail(fmt::format("FA({})'s apex angle {:g} deg is not between 0 and 180", source.label, g->apex_angle_deg));
+  if (!(value_mm > 0))
+    return fail(fmt::format("the {} must be positive, got {:g}", by_diameter ? "diameter" : "distance", value_mm));
+  const double tan_half = std::tan(g->apex_angle_deg * std::numbers::pi / 360.0);
+  const double h = by_diameter ? value_mm / 2 / tan_half : value_mm;
+  Geometry circle;
+  circle.type = FeatureType::Circle;
+  circle.side = g->side;
+  circle.direction = g->direction.normalized();
+  circle.position = g->position + h * circle.direction;
+  circle.diameter_mm = by_diameter ? value_mm : 2 * h * tan_half;
+  if (m_features.find(label) == m_features.end())
+    warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
+  store_constructed(label, circle, std::nullopt, span);
   return {};
 }
 

@@ -2745,3 +2745,35 @@ TEST(ShopPrograms, ProgramsInAPackagesOwnLanguageAreToldOnce) {
   EXPECT_FALSE(dmis.has("not DMIS")) << dmis.text;
   EXPECT_EQ(dmis.errors, 0u) << dmis.text;
 }
+
+TEST(ShopPrograms, ACountersinksGaugeCircleIsCutFromItsCone) {
+  // CONST/CIRCLE,F(x),CONE,FA(cone),DIAM,d | DIST,h: the section of the cone (its vertex at x,y,z)
+  // where its diameter is d, or h from the vertex along the axis. Before: a warning, no actual.
+  // Expected by hand: a full apex angle a has radius h tan(a/2) at h.
+  const std::string stated =
+      "DMISMN/'csk', 5.1\nUNITS/MM, ANGDEC\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0.6,0.8,60\n"
+      "F(G)=FEAT/CIRCLE,INNER,CART,1,2,16,0,0,1,8\nF(H)=FEAT/CIRCLE,INNER,CART,1,2,13,0,0,1,6\n"
+      "CONST/CIRCLE,F(G),CONE,FA(CS),DIAM,8\nCONST/CIRCLE,F(H),CONE,FA(CS),DIST,3\nOUTPUT/FA(G),FA(H)\n";
+  EXPECT_EQ(check(stated + "ENDFIL\n").errors, 0u) << check(stated + "ENDFIL\n").text;
+  const auto r = run(stated + "ENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const Eigen::Vector3d vertex(1, 2, 10), axis(0, 0.6, 0.8);
+  const double tan30 = std::tan(M_PI / 6);
+  const auto* g = report(*r.session, "G");
+  ASSERT_TRUE(g && g->actual);
+  EXPECT_NEAR(g->actual->diameter_mm, 8.0, 1e-12);
+  EXPECT_NEAR((g->actual->position - (vertex + 4 / tan30 * axis)).norm(), 0.0, 1e-9);  // 6.93 mm up the axis
+  EXPECT_NEAR((g->actual->direction - axis).norm(), 0.0, 1e-12);
+  const auto* h = report(*r.session, "H");
+  ASSERT_TRUE(h && h->actual);
+  EXPECT_NEAR(h->actual->diameter_mm, 2 * 3 * tan30, 1e-12);
+  EXPECT_NEAR((h->actual->position - (vertex + 3 * axis)).norm(), 0.0, 1e-9);
+  // Only a cone is cut, only a circle is made, and the value is positive.
+  const auto cylinder = run("DMISMN/'c', 5.1\nFA(CY)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
+                            "CONST/CIRCLE,F(G),CONE,FA(CY),DIAM,8\nENDFIL\n");
+  EXPECT_NE(cylinder.diagnostics.find("CONE cuts a CONE, FA(CY) is a CYLNDR"), std::string::npos) << cylinder.diagnostics;
+  EXPECT_TRUE(check("DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/POINT,F(P),CONE,FA(CS),DIAM,8\nENDFIL\n")
+                  .has("CONE constructs a CIRCLE"));
+  const auto negative = run("DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/CIRCLE,F(G),CONE,FA(CS),DIST,-1\nENDFIL\n");
+  EXPECT_NE(negative.diagnostics.find("the distance must be positive"), std::string::npos) << negative.diagnostics;
+}

@@ -240,6 +240,23 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     return;
   }
   if (*method == ir::ConstructionMethod::Extrem) return extreme_point(s, std::move(in));
+  if (*method == ir::ConstructionMethod::Cone) {
+    // CONST/CIRCLE,F(l),CONE,FA(cone),DIAM,d | DIST,h: a countersink's gauge circle
+    if (*const_type != FeatureType::Circle) return error(p[0].span, "sema.const-type", "CONE constructs a CIRCLE");
+    if (p.size() != 6 || !is_label(p[3], {"FA", "F"}) || !(is_word(p[4], "DIAM") || is_word(p[4], "DIST")))
+      return error(p.back().span, "sema.construction-arity",
+                   "CONE takes a cone and where to cut it: CONE,FA(cone),DIAM,diameter or CONE,FA(cone),DIST,distance");
+    if (!check_feature(p[3])) return;
+    in.operands.push_back(label_op(p[3]));
+    ir::Operand how;
+    how.kind = ir::Operand::Kind::Word;
+    how.word = upper(p[4].text);
+    in.operands.push_back(how);
+    if (!push_number(in, p[5], how.word == "DIAM" ? "the diameter" : "the distance")) return;
+    if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+    emit(std::move(in));
+    return;
+  }
   if (*method == ir::ConstructionMethod::Offset) {
     // CONST/PLANE,F(l),OFFSET,FA(plane),d
     if (*const_type != FeatureType::Plane) {

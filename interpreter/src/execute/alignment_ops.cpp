@@ -193,6 +193,14 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
+  if (words.method == M::Cone) {
+    auto v = vm.number(in.operands.at(2).expr);
+    if (!v) return vm.fail(in.span, v.error());
+    if (auto r = vm.m_runtime.construct_cone_section(vm.name_of(in), feature_ref(vm, in.operands[0].label),
+                                                     in.operands[1].word == "DIAM", *v * vm.m_length_mm, in.span); !r)
+      return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
   if (words.method == M::Offset) {
     auto d = vm.number(in.operands.at(1).expr);
     if (!d) return vm.fail(in.span, d.error());

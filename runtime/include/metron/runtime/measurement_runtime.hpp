@@ -181,6 +181,10 @@ class MeasurementRuntime {
   Result<void> construct_radial_extreme_point(const std::string& label, const FeatureRef& source, bool minimum, Span span);
   /// CONST/PLANE,F(l),OFFSET,FA(plane),d: the plane moved d (mm) along its normal.
   Result<void> construct_offset_plane(const std::string& label, const FeatureRef& source, double distance_mm, Span span);
+  /// CONST/CIRCLE,F(x),CONE,FA(cone),DIAM,d | DIST,h: the cone's circle of diameter d (a
+  /// countersink's gauge diameter), or its circle h from the vertex along the axis.
+  Result<void> construct_cone_section(const std::string& label, const FeatureRef& source, bool by_diameter, double value_mm,
+                                      Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
                          const std::vector<FeatureRef>& sources, Span span);
   /// OUTPUT: reports the features and evaluates and reports the tolerances (against the features

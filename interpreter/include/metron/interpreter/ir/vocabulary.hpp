@@ -35,7 +35,8 @@ enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
                                 Copy,     ///< COPY,FA(x): x's geometry under another label
                                 Vertex,   ///< VERTEX,FA(cone): the cone's apex
                                 Extrem,   ///< EXTREM,[MIN|MAX,]FA(x),direction: x's measured point furthest along it
-                                Offset }; ///< OFFSET,FA(plane),d: the plane moved d along its normal
+                                Offset,   ///< OFFSET,FA(plane),d: the plane moved d along its normal
+                                Cone };   ///< CONE,FA(cone),DIAM|DIST,v: the cone's section of diameter v, or v from its vertex
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>
