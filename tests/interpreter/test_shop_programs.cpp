@@ -2777,3 +2777,15 @@ TEST(ShopPrograms, ACountersinksGaugeCircleIsCutFromItsCone) {
   const auto negative = run("DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/CIRCLE,F(G),CONE,FA(CS),DIST,-1\nENDFIL\n");
   EXPECT_NE(negative.diagnostics.find("the distance must be positive"), std::string::npos) << negative.diagnostics;
 }
+
+TEST(ShopPrograms, ASensorsMountIsNotedNotAnError) {
+  // SNSDEF/PROBE,...,SW(x): the wrist (extension, sensor group) a probe hangs from. Before: an
+  // error "expected a value, got the label SW(W1)".
+  const auto c = check("DMISMN/'m', 5.1\nS(P1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,4,SW(W1)\n"
+                       "S(P2)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2,SX(E1)\nSNSLCT/S(P1)\nENDFIL\n");
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  EXPECT_EQ(c.notes, 1u) << c.text;
+  EXPECT_TRUE(c.has("S(P1) names the SW(W1) it is mounted on")) << c.text;
+  // Only last: a label among the numbers is still an error.
+  EXPECT_EQ(check("DMISMN/'m', 5.1\nS(P1)=SNSDEF/PROBE,FIXED,CART,0,0,50,SW(W1),0,-1,2\nENDFIL\n").errors, 1u);
+}

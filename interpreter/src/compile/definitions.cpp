@@ -363,6 +363,15 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
     // `VEC,i,j,k` (`...,POL,0,0,VEC,0,0,1,50,4`, as DMIS 5.x programs write the stylus vector):
     // the word names the three numbers that follow.
     if (is_word(s.params[i], "VEC") && s.params.size() - i > 3) continue;
+    // The wrist, extension or sensor it is mounted on (`...,100,4,SW(W1)`): the virtual CMM's
+    // sensors hang from the head by their own offset.
+    if (s.params[i].kind == ExprKind::Label && i + 1 == s.params.size()) {
+      note_once(m_sensor_mount_noted, s.params[i].span, "sema.sensor-mount",
+                fmt::format("S({}) names the {}({}) it is mounted on: the virtual CMM places a sensor by its own offset and "
+                            "vector, the mount is not used (noted once)",
+                            s.target->name, upper(s.params[i].label.prefix), s.params[i].label.name));
+      break;
+    }
     // The tip's shape after its diameter (`...,115,12,DISC,3`): the virtual CMM's tips are balls.
     if (is_word(s.params[i]) && !is_variable(s.params[i].text)) {
       const std::string& shape = s.params[i].text;

@@ -346,6 +346,7 @@ class UnitCompiler {
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;
   bool m_reported_results_noted = false;  // one note per unit for reported results
+  bool m_sensor_mount_noted = false;  ///< SNSDEF/...,SW(x): the sensor's mount, told once
   /// A DMIS output file: it states results (FA(x)=FEAT, TA(t)=TOL) and measures nothing. Its
   /// echoed DATDEF and DATSET lines name features it does not restate.
   bool m_output_file = false;
