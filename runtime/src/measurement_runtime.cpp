@@ -949,9 +949,17 @@ Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(cons
   // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
   // feature is evaluated against it.
   std::vector<std::vector<const Feature*>> evaluations;
-  if (!spec.reference_feature.empty()) {
-    const Feature* reference = find_feature(spec.reference_feature);
-    if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", spec.reference_feature));
+  std::string reference_feature = spec.reference_feature;
+  if (reference_feature.empty() && (spec.kind == ToleranceKind::DistWrt || spec.kind == ToleranceKind::AngWrt) &&
+      !spec.datums.empty()) {
+    // TOL/DISTWRT,...,DAT(A),...: the distance is taken to the datum's feature.
+    auto d = datum(spec.datums.front(), span);
+    if (!d) return tl::unexpected(d.error());
+    reference_feature = (*d)->feature;
+  }
+  if (!reference_feature.empty()) {
+    const Feature* reference = find_feature(reference_feature);
+    if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", reference_feature));
     for (const Feature* f : features) evaluations.push_back({f, reference});
   } else if (spec.kind != ToleranceKind::DistB && spec.kind != ToleranceKind::Anglb) {
     // A tolerance of one feature (CORTOL, DIAM, FLAT, POS, PERP ...) output with several applies

@@ -497,7 +497,9 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
       "CONST/POINT, F(PNT_MOVED), MOVEPT, FA(BORE1), 5, -3, 0\n"
       "T(DX) = TOL/DISTWRT, NOMINL, 5, -0.01, 0.01, FA(BORE1), XAXIS, AVG\n"
       "T(CY) = TOL/CORTOL, YAXIS, -0.01, 0.01\n"
-      "OUTPUT/FA(PNT_MOVED), TA(DX), TA(CY)\nENDFIL\n";
+      // With respect to a datum: DAT(B)'s feature is the reference (before: an error at check).
+      "DATDEF/FA(BORE1), DAT(B)\nT(DB) = TOL/DISTWRT, NOMINL, 5, -0.01, 0.01, DAT(B), XAXIS, AVG\n"
+      "OUTPUT/FA(PNT_MOVED), TA(DX), TA(CY), TA(DB)\nENDFIL\n";
   const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* p = report(*r.session, "PNT_MOVED");
@@ -512,6 +514,9 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
   ASSERT_TRUE(cy);
   EXPECT_NEAR(cy->actual, 47.0, 2e-3);
   EXPECT_NEAR(cy->value, 0.0, 2e-3);
+  const auto* db = tolerance(*r.session, "DB");
+  ASSERT_TRUE(db);
+  EXPECT_NEAR(db->actual, 5.0, 1e-6);
 }
 
 // SNSET/CLRSRF,F(plane),d: a clearance surface for AUTO moves. Planned from low down (z = 10),

@@ -496,6 +496,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       if (!m_symbols.datums.count(d) && !named_at_run(d))
         warn(p[i].span, "sema.datum-later", fmt::format("datum DAT({}) is not defined yet; it must be defined by DATDEF before the OUTPUT", p[i].label.name));
       in.operands.push_back(label_op(p[i]));
+      // DISTWRT and ANGWRT are taken with respect to a feature or, as written here, a datum's.
+      if (kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) has_reference = true;
     } else if (is_word(p[i]) && !is_variable(p[i].text)) {
       // DIAM and RAD take one word, AVG|MAX|MIN; another (RationalDMIS writes DIAMLP and others)
       // is not applied, and is told rather than dropped unseen.
@@ -519,7 +521,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (numbers.size() < need.count)
     return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count, need.count == 1 ? "" : "s", numbers.size()));
   if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) && !has_reference)
-    return error(p.back().span, "sema.expected-feature", fmt::format("TOL/{} needs the reference feature FA(x)", word));
+    return error(p.back().span, "sema.expected-feature", fmt::format("TOL/{} needs the reference feature FA(x) or datum DAT(x)", word));
   if (kind == ToleranceKind::Cortol &&
       std::none_of(p.begin(), p.end(), [&](const grammar::Expr& e) { return is_word(e, "XAXIS") || is_word(e, "YAXIS") || is_word(e, "ZAXIS"); }))
     return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
