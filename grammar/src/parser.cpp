@@ -7,6 +7,7 @@
 #include <array>
 #include <cctype>
 #include <exception>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -76,6 +77,36 @@ bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sin
   return true;
 }
 
+// `F(A02F1=FEAT/POINT,...`: a generator that left out the `)` of the label being defined (a
+// public lab generator of CAMIO programs writes this). When a label prefix, `(`, a name with no
+// parenthesis, `=`, a DMIS major word and `/` follow each other, the `)` is put back before the
+// `=`; returns the logical offset where it went.
+std::optional<std::size_t> restore_target_close(LogicalLine& line) {
+  const std::string& t = line.text;
+  std::size_t i = 0;
+  while (i < t.size() && is_blank(t[i])) ++i;
+  std::size_t p = i;
+  while (p < t.size() && std::isalpha(static_cast<unsigned char>(t[p]))) ++p;
+  if (p == i || p >= t.size() || t[p] != '(') return std::nullopt;
+  std::string prefix;
+  for (std::size_t k = i; k < p; ++k) prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(t[k])));
+  if (!is_label_prefix(prefix)) return std::nullopt;
+  const std::size_t eq = t.find('=', p + 1);
+  if (eq == std::string::npos || eq == p + 1 || t.find_first_of("()'", p + 1) < eq) return std::nullopt;
+  std::size_t m = eq + 1;
+  while (m < t.size() && is_blank(t[m])) ++m;
+  std::string major;
+  while (m < t.size() && std::isalpha(static_cast<unsigned char>(t[m])))
+    major += static_cast<char>(std::toupper(static_cast<unsigned char>(t[m++])));
+  while (m < t.size() && is_blank(t[m])) ++m;
+  if (m >= t.size() || t[m] != '/' || !is_major_word(major)) return std::nullopt;
+  std::size_t close = eq;
+  while (close > p + 1 && is_blank(t[close - 1])) --close;
+  line.text.insert(close, 1, ')');
+  line.physical.insert(line.physical.begin() + static_cast<std::ptrdiff_t>(close), line.physical[close]);
+  return close;
+}
+
 }  // namespace
 
 bool is_label_prefix(std::string_view word) {
@@ -111,7 +142,7 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
   }
   DiagnosticSink after_endfil;  // what follows ENDFIL is reported once, by the compiler
   bool ended = false, blank_label_told = false;
-  for (const LogicalLine& line : join_continuations(sources.file(file).text)) {
+  for (LogicalLine& line : join_continuations(sources.file(file).text)) {
     if (!ended && !options.strict && !looks_like_statement(line.text)) {
       std::size_t first = 0;
       while (first < line.text.size() && is_blank(line.text[first])) ++first;
@@ -128,6 +159,10 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
       while (i < line.text.size() && std::isalnum(static_cast<unsigned char>(line.text[i])))
         program.first_word += static_cast<char>(std::toupper(static_cast<unsigned char>(line.text[i++])));
     }
+    if (!ended && !options.strict)
+      if (const auto at = restore_target_close(line))
+        sink.warning("parse.missing-close", Span{file, line.physical[*at], line.physical[*at] + 1},
+                     "the label being defined has no ')' before '=': read as if it had one (--strict makes it an error)");
     Statement stmt;
     if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict, blank_label_told)) {
       if (stmt.major == "ENDFIL") ended = true;

@@ -132,6 +132,28 @@ TEST(ParserErrors, BlanksInsideALabelNameAreDroppedLeniently) {
   EXPECT_EQ(strict.error_count(), 2u);
 }
 
+// A public lab generator of CAMIO programs writes `F(A02F1=FEAT/POINT,...` (the `)` left out):
+// read leniently the `)` is put back with a warning; elsewhere, and strictly, it is the error.
+TEST(ParserErrors, ATargetLabelWithoutItsCloseIsRestoredLeniently) {
+  SourceManager sources;
+  const auto file = sources.add("open.dmi", "F(A02F1=FEAT/POINT,CART,0,0,0,0,-1.0,0\nOUTPUT/FA(A02F1\nENDFIL\n");
+  DiagnosticSink lenient;
+  const Program p = parse_program(sources, file, lenient);
+  ASSERT_EQ(p.statements.size(), 2u);  // the OUTPUT is still an error
+  ASSERT_TRUE(p.statements[0].target);
+  EXPECT_EQ(p.statements[0].target->name, "A02F1");
+  EXPECT_EQ(p.statements[0].major, "FEAT");
+  EXPECT_EQ(p.statements[0].params.size(), 8u);
+  ASSERT_EQ(lenient.items().size(), 2u);
+  EXPECT_EQ(lenient.items()[0].code, "parse.missing-close");
+  EXPECT_EQ(lenient.items()[0].severity, Severity::Warning);
+  EXPECT_EQ(sources.locate(lenient.items()[0].span).column, 8u);
+  EXPECT_EQ(lenient.items()[1].code, "parse.expected-close");
+  DiagnosticSink strict;
+  parse_program(sources, file, strict, ParseOptions{true});
+  EXPECT_EQ(strict.error_count(), 2u);
+}
+
 TEST(ParserErrors, DeepNestingIsAnErrorNotACrash) {
   const std::string deep = "A/" + std::string(100000, '(') + "1";
   EXPECT_EQ(diagnose(deep), "parse.too-deep|expression nested too deeply (more than 64 levels)|1:67");
