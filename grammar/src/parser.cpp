@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "detail/actions.hpp"
 #include "detail/builder.hpp"
@@ -107,6 +108,30 @@ std::optional<std::size_t> restore_target_close(LogicalLine& line) {
   return close;
 }
 
+// `FA(E02F4)FA(F02F1)`: a generator that left out the comma between two labels (a public lab
+// generator of CAMIO programs writes this in long CONST lists). Outside strings, a `)` followed
+// by a label prefix and `(` gets its comma back; returns the logical offsets where commas went.
+std::vector<std::size_t> restore_commas_between_labels(LogicalLine& line) {
+  std::vector<std::size_t> restored;
+  bool in_string = false;
+  for (std::size_t i = 0; i < line.text.size(); ++i) {
+    const char c = line.text[i];
+    if (c == '\'') in_string = !in_string;
+    if (in_string || c != ')') continue;
+    std::size_t p = i + 1;
+    while (p < line.text.size() && is_blank(line.text[p])) ++p;
+    std::string prefix;
+    std::size_t q = p;
+    while (q < line.text.size() && std::isalpha(static_cast<unsigned char>(line.text[q])))
+      prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(line.text[q++])));
+    if (prefix.empty() || q >= line.text.size() || line.text[q] != '(' || !is_label_prefix(prefix)) continue;
+    line.text.insert(i + 1, 1, ',');
+    line.physical.insert(line.physical.begin() + static_cast<std::ptrdiff_t>(i + 1), line.physical[i + 1]);
+    restored.push_back(i + 1);
+  }
+  return restored;
+}
+
 }  // namespace
 
 bool is_label_prefix(std::string_view word) {
@@ -159,10 +184,14 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
       while (i < line.text.size() && std::isalnum(static_cast<unsigned char>(line.text[i])))
         program.first_word += static_cast<char>(std::toupper(static_cast<unsigned char>(line.text[i++])));
     }
-    if (!ended && !options.strict)
+    if (!ended && !options.strict) {
       if (const auto at = restore_target_close(line))
         sink.warning("parse.missing-close", Span{file, line.physical[*at], line.physical[*at] + 1},
                      "the label being defined has no ')' before '=': read as if it had one (--strict makes it an error)");
+      for (const std::size_t at : restore_commas_between_labels(line))
+        sink.warning("parse.missing-comma", Span{file, line.physical[at], line.physical[at] + 1},
+                     "no ',' between two labels: read as if it were there (--strict makes it an error)");
+    }
     Statement stmt;
     if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict, blank_label_told)) {
       if (stmt.major == "ENDFIL") ended = true;

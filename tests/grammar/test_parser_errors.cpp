@@ -154,6 +154,27 @@ TEST(ParserErrors, ATargetLabelWithoutItsCloseIsRestoredLeniently) {
   EXPECT_EQ(strict.error_count(), 2u);
 }
 
+// The same generator leaves out commas in long CONST lists (`FA(E02F4)FA(F02F1)`, 12 errors in
+// its mmt_code.dmi): read leniently the comma is put back with a warning, outside strings only.
+TEST(ParserErrors, ACommaMissingBetweenTwoLabelsIsRestoredLeniently) {
+  SourceManager sources;
+  const auto file = sources.add("comma.dmi", "CONST/PLANE,F(P),BF,FA(A1),FA(A2)FA(A3), FA(A4) FA(A5)\nTEXT/OPER,'(x)FA(y)'\n");
+  DiagnosticSink lenient;
+  const Program p = parse_program(sources, file, lenient);
+  ASSERT_EQ(p.statements.size(), 2u);
+  ASSERT_EQ(p.statements[0].params.size(), 8u);
+  EXPECT_EQ(p.statements[0].params[5].label.name, "A3");
+  EXPECT_EQ(p.statements[0].params[7].label.name, "A5");
+  EXPECT_EQ(p.statements[1].params[1].text, "(x)FA(y)");
+  ASSERT_EQ(lenient.items().size(), 2u);
+  EXPECT_EQ(lenient.items()[0].code, "parse.missing-comma");
+  EXPECT_EQ(sources.locate(lenient.items()[0].span).column, 34u);  // where the comma belongs
+  EXPECT_EQ(lenient.error_count(), 0u);
+  DiagnosticSink strict;
+  parse_program(sources, file, strict, ParseOptions{true});
+  EXPECT_EQ(strict.error_count(), 1u);
+}
+
 TEST(ParserErrors, DeepNestingIsAnErrorNotACrash) {
   const std::string deep = "A/" + std::string(100000, '(') + "1";
   EXPECT_EQ(diagnose(deep), "parse.too-deep|expression nested too deeply (more than 64 levels)|1:67");
