@@ -48,7 +48,7 @@ template <>
 const std::vector<WordEntry<FeedUnit>>& vocabulary() {
   static const std::vector<WordEntry<FeedUnit>> rows = {{FeedUnit::Mpm, "MPM"}, {FeedUnit::Mmps, "MMPS"},
                                                         {FeedUnit::Ipm, "IPM"}, {FeedUnit::Ips, "IPS"},
-                                                        {FeedUnit::Pcent, "PCENT"}};
+                                                        {FeedUnit::Pcent, "PCENT"}, {FeedUnit::Defalt, "DEFALT"}};
   return rows;
 }
 
@@ -111,7 +111,8 @@ std::optional<double> feed_mm_s(double value, FeedUnit unit) {
     case FeedUnit::Mmps: return value;
     case FeedUnit::Ipm: return value * 25.4 / 60.0;
     case FeedUnit::Ips: return value * 25.4;
-    case FeedUnit::Pcent: return std::nullopt;
+    case FeedUnit::Pcent:
+    case FeedUnit::Defalt: return std::nullopt;
   }
   return std::nullopt;
 }

@@ -157,6 +157,9 @@ Response Controller::run(const Command& command) {
       if (body.acceleration_mm_s2 > 0) {
         acceleration = std::min(body.acceleration_mm_s2, config.max_acceleration_mm_s2);
         acceleration_cap = acceleration;
+      } else if (body.default_acceleration) {
+        acceleration = config.max_acceleration_mm_s2;  // as the controller starts
+        acceleration_cap.reset();
       }
     } else if constexpr (std::is_same_v<T, ScanPath>) {
       scan(body, response);

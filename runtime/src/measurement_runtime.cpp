@@ -244,6 +244,10 @@ Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, st
     return program_error(span, fmt::format("a feed rate of {:g} mm/s is below the minimum of {:g} mm/s (docs/limits.md)",
                                            positioning && *positioning < min_feed_mm_s ? *positioning : *measuring,
                                            min_feed_mm_s));
+  if (!m_default_feeds) {
+    const auto before = m_machine.state();
+    m_default_feeds = std::make_pair(before.positioning_feed_mm_s, before.measuring_feed_mm_s);
+  }
   if (measuring) {
     if (auto ok = check_probing_feed(*measuring, span); !ok) return ok;
     m_measuring_feed_explicit = *measuring;
@@ -304,6 +308,21 @@ Result<void> MeasurementRuntime::check_probing_feed(double measuring_mm_s, Span 
                                          measuring_mm_s, m_characterisation->max_probe_feed_mm_s,
                                          100 * m_characterisation->over_travel_margin,
                                          m_characterisation->over_travel_mm));
+}
+
+Result<void> MeasurementRuntime::restore_default_feed(bool positioning, Span span) {
+  if (!m_default_feeds) return {};  // no FEDRAT yet: the machine's own feeds hold
+  const double feed = positioning ? m_default_feeds->first : m_default_feeds->second;
+  if (!(feed > 0)) return {};  // a backend that does not tell its feeds
+  return positioning ? set_feeds(feed, std::nullopt, span) : set_feeds(std::nullopt, feed, span);
+}
+
+Result<void> MeasurementRuntime::restore_default_acceleration(Span span) {
+  machine::SetFeeds feeds;
+  feeds.default_acceleration = true;
+  auto r = run_commands({machine::Command{0, feeds}}, {span});
+  if (!r) return tl::unexpected(r.error());
+  return {};
 }
 
 Result<void> MeasurementRuntime::set_acceleration(double acceleration_mm_s2, Span span) {

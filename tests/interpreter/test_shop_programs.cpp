@@ -2794,3 +2794,29 @@ TEST(ShopPrograms, ASensorsMountIsNotedNotAnError) {
   // Only last: a label among the numbers is still an error.
   EXPECT_EQ(check("DMISMN/'m', 5.1\nS(P1)=SNSDEF/PROBE,FIXED,CART,0,0,50,SW(W1),0,-1,2\nENDFIL\n").errors, 1u);
 }
+
+TEST(ShopPrograms, DefaltGivesTheMachinesOwnFeedsAndAccelerationBack) {
+  // FEDRAT/DEFALT, FEDRAT/POSVEL,DEFALT and ACLRAT/...,DEFALT: before, errors at check.
+  const auto feeds_after = [](const std::string& lines) {
+    const auto r = run("DMISMN/'d', 5.0\nUNITS/MM, ANGDEC\n" + lines + "ENDFIL\n");
+    EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+    const auto s = r.session->runtime().machine().state();
+    return std::make_pair(s.positioning_feed_mm_s, s.measuring_feed_mm_s);
+  };
+  const auto own = feeds_after("");
+  EXPECT_NE(feeds_after("FEDRAT/POSVEL, MMPS, 20\nFEDRAT/MESVEL, MMPS, 2\n"), own);
+  EXPECT_EQ(feeds_after("FEDRAT/POSVEL, MMPS, 20\nFEDRAT/MESVEL, MMPS, 2\nFEDRAT/DEFALT\n"), own);
+  const auto one = feeds_after("FEDRAT/POSVEL, MMPS, 20\nFEDRAT/MESVEL, MMPS, 2\nFEDRAT/POSVEL, DEFALT\n");
+  EXPECT_EQ(one.first, own.first);
+  EXPECT_EQ(one.second, 2.0);
+  // A 200 mm move: slower under a programmed acceleration of 10 mm/s^2, as fast again after DEFALT.
+  const auto move_time = [](const std::string& lines) {
+    const auto r = run("DMISMN/'a', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n" + lines + "GOTO/500, 200, 200\nENDFIL\n");
+    EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+    return r.session->runtime().machine().state().time_s;
+  };
+  const double plain = move_time("");
+  EXPECT_GT(move_time("ACLRAT/POSACL, MMPSS, 10\n"), plain + 1.0);
+  EXPECT_NEAR(move_time("ACLRAT/POSACL, MMPSS, 10\nACLRAT/POSACL, DEFALT\n"), plain, 1e-9);
+  EXPECT_NEAR(move_time("ACLRAT/POSACL, MMPSS, 10\nACLRAT/DEFALT\n"), plain, 1e-9);
+}

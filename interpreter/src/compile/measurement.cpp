@@ -126,28 +126,52 @@ void UnitCompiler::snset(const grammar::Statement& s) {
 
 // FEDRAT/MESVEL|POSVEL|SCNVEL,MPM|MMPS|IPM|IPS|PCENT,v   (HEDROT/HEDMVEL... skipped)
 void UnitCompiler::fedrat(const grammar::Statement& s) {
+  // FEDRAT/DEFALT and FEDRAT/MESVEL|POSVEL|SCNVEL,DEFALT: back to the machine's own feeds.
+  const auto default_feed = [&](ir::FeedKind kind) {
+    auto in = make(Op::Feed, s);
+    in.payload = ir::FeedPayload{kind, ir::FeedUnit::Defalt};
+    ir::Expr none;
+    none.value = Value::real(0);
+    in.operands.push_back(expr_operand(std::move(none)));
+    emit(std::move(in));
+  };
+  if (s.params.size() == 1 && is_word(s.params[0], "DEFALT")) {
+    for (auto kind : {ir::FeedKind::Mesvel, ir::FeedKind::Posvel, ir::FeedKind::Scnvel}) default_feed(kind);
+    return;
+  }
+  if (s.params.size() == 2 && is_word(s.params[1], "DEFALT") && is_word(s.params[0])) {
+    if (const auto kind = ir::parse_word<ir::FeedKind>(s.params[0].text)) return default_feed(*kind);
+  }
   if (!expect_params(s, 3, "MESVEL|POSVEL, a unit (MPM, MMPS, IPM, IPS, PCENT) and a value")) return;
   const auto kind = is_word(s.params[0]) ? ir::parse_word<ir::FeedKind>(s.params[0].text) : std::nullopt;
-  const auto unit = is_word(s.params[1]) ? ir::parse_word<ir::FeedUnit>(s.params[1].text) : std::nullopt;
   if (is_word(s.params[0]) && !kind) {
     warn(s.params[0].span, "sema.unsupported-setting", fmt::format("FEDRAT/{} is not supported and is ignored", s.params[0].text));
     emit(make(Op::Nop, s, "FEDRAT"));
     return;
   }
   if (!is_word(s.params[0])) return error(s.params[0].span, "sema.bad-setting", "expected MESVEL, POSVEL or SCNVEL after FEDRAT/");
-  if (!unit)
+  const ir::FeedUnit unit =
+      is_word(s.params[1]) ? ir::parse_word<ir::FeedUnit>(s.params[1].text).value_or(ir::FeedUnit::Defalt) : ir::FeedUnit::Defalt;
+  if (unit == ir::FeedUnit::Defalt)  // DEFALT takes no value (above)
     return error(s.params[1].span, "sema.bad-unit", fmt::format("expected a feed unit ({}) after {}", ir::word_list<ir::FeedUnit>(), s.params[0].text));
   auto e = numeric(s.params[2], "a feed rate");
   if (!e) return;
   if (e->op == ir::ExprOp::Constant && e->value.number <= 0) return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
   auto in = make(Op::Feed, s);
-  in.payload = ir::FeedPayload{*kind, *unit};
+  in.payload = ir::FeedPayload{*kind, unit};
   in.operands.push_back(expr_operand(std::move(*e)));
   emit(std::move(in));
 }
 
 // ACLRAT/MESACL|POSACL,MPMM|MMPSS|IPMM|IPSS|PCENT,v
 void UnitCompiler::aclrat(const grammar::Statement& s) {
+  // ACLRAT/DEFALT, ACLRAT/MESACL|POSACL,DEFALT: the machine's own acceleration again.
+  if ((s.params.size() == 1 && is_word(s.params[0], "DEFALT")) || (s.params.size() == 2 && is_word(s.params[1], "DEFALT"))) {
+    auto in = make(Op::Accel, s);
+    in.operands.push_back(word_operand("DEFALT", s.params.back().span));
+    emit(std::move(in));
+    return;
+  }
   if (!expect_params(s, 3, "MESACL|POSACL, a unit and a value")) return;
   auto e = numeric(s.params[2], "an acceleration");
   if (!e) return;

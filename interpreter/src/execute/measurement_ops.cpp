@@ -75,6 +75,14 @@ ExecStatus Execute::feed(Interpreter& vm, const ir::Instruction& in, CallFrame&)
   auto v = vm.number(in.operands.at(0).expr);
   if (!v) return vm.fail(in.span, v.error());
   const auto [kind, unit] = std::get<ir::FeedPayload>(in.payload);
+  if (unit == ir::FeedUnit::Defalt) {
+    if (kind == ir::FeedKind::Scnvel) {
+      vm.m_runtime.scan_settings().feed_mm_s.reset();  // a scan runs at the measuring feed again
+      return ExecStatus::Running;
+    }
+    if (auto r = vm.m_runtime.restore_default_feed(kind == ir::FeedKind::Posvel, in.span); !r) return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
   const auto state = vm.m_runtime.machine().state();
   // PCENT: of the current positioning feed for POSVEL, of the measuring feed otherwise.
   const double percent_of = kind == ir::FeedKind::Posvel ? state.positioning_feed_mm_s : state.measuring_feed_mm_s;
@@ -90,6 +98,10 @@ ExecStatus Execute::feed(Interpreter& vm, const ir::Instruction& in, CallFrame&)
 
 // Op::Accel
 ExecStatus Execute::accel(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (in.operands.size() == 1) {  // DEFALT
+    if (auto r = vm.m_runtime.restore_default_acceleration(in.span); !r) return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
   auto v = vm.number(in.operands[2].expr);
   if (!v) return vm.fail(in.span, v.error());
   const std::string& unit = in.operands[1].word;

@@ -133,6 +133,11 @@ class MeasurementRuntime {
   /// Checks a probing feed against the characterisation's maximum protected feed.
   Result<void> check_probing_feed(double measuring_mm_s, Span span) const;
   Result<void> set_feeds(std::optional<double> positioning_mm_s, std::optional<double> measuring_mm_s, Span span);
+  /// FEDRAT/POSVEL|MESVEL,DEFALT: the machine's own positioning or measuring feed, as it was
+  /// before the program set one.
+  Result<void> restore_default_feed(bool positioning, Span span);
+  /// ACLRAT/...,DEFALT: the machine's own acceleration again.
+  Result<void> restore_default_acceleration(Span span);
   Result<void> set_acceleration(double acceleration_mm_s2, Span span);
   void set_mode(Mode mode) { m_mode = mode; }
   /// UNITS and DECPL: what OUTPUT reports and DMIS output files are written in.
@@ -275,6 +280,8 @@ class MeasurementRuntime {
   std::map<std::string, SensorDefinition> m_sensors;
   std::map<std::string, machine::ToolInfo> m_tools;  ///< defined on the machine
   std::string m_active_sensor;
+  /// The machine's feeds (positioning, measuring) before the program's first FEDRAT: DEFALT's.
+  std::optional<std::pair<double, double>> m_default_feeds;
   ProbeSettings m_probe;
   ScanSettings m_scan;
   std::map<std::string, PathDefinition> m_paths;

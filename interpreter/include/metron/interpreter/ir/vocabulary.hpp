@@ -13,8 +13,9 @@ namespace metron::interpreter::ir {
 
 /// FEDRAT/kind: which feed a statement sets.
 enum class FeedKind { Mesvel, Posvel, Scnvel };
-/// FEDRAT units: metres per minute, mm per second, inches per minute or second, percent of the machine's.
-enum class FeedUnit { Mpm, Mmps, Ipm, Ips, Pcent };
+/// FEDRAT units: metres per minute, mm per second, inches per minute or second, percent of the
+/// machine's; DEFALT: back to the machine's own feed (no value).
+enum class FeedUnit { Mpm, Mmps, Ipm, Ips, Pcent, Defalt };
 /// UNITS length words.
 enum class LengthUnit { Mm, Inch, Cm, M, Feet };
 /// UNITS angle words (ANGDMS is read as decimal degrees).

@@ -68,6 +68,7 @@ struct SetFeeds {
   double positioning_mm_s = 0;
   double measuring_mm_s = 0;
   double acceleration_mm_s2 = 0;
+  bool default_acceleration = false;  ///< back to the machine's own acceleration (DMIS ACLRAT DEFALT)
 };
 
 /// The trajectory-correction term of the scanning control law V = Gf*Vf + Ge*Ve + Gc*Vc
