@@ -91,7 +91,7 @@ const std::vector<Builtin>& builtins() {
       {"MIN", 2, 16, ValueType::Real, false},  {"MAX", 2, 16, ValueType::Real, false},
       {"DTOR", 1, 1, ValueType::Real, false},  {"RTOD", 1, 1, ValueType::Real, false},
       {"PI", 0, 0, ValueType::Real, false},    {"RL", 1, 1, ValueType::Real, true},
-      {"DBLE", 1, 1, ValueType::Real, false},  {"STR", 1, 2, ValueType::String, false},
+      {"DBLE", 1, 1, ValueType::Real, false},  {"STR", 1, 3, ValueType::String, false},
       {"LEN", 1, 1, ValueType::Integer, true}, {"SUBSTR", 2, 3, ValueType::String, true},
       {"CONCAT", 1, 16, ValueType::String, true}, {"INDX", 2, 2, ValueType::Integer, true},
       {"TRIM", 1, 1, ValueType::String, true}, {"UPC", 1, 1, ValueType::String, true},
@@ -152,6 +152,8 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
       x.push_back(0);
       if (!fn.string_args && name != "STR")
         return tl::unexpected(fmt::format("{} expects numbers, got the string '{}'", name, a.text));
+    } else if (name == "STR" && args.size() == 1) {
+      return Value::string(a.boolean ? ".TRUE." : ".FALSE.");  // as DMIS writes a BOOL
     } else {
       return tl::unexpected(fmt::format("{} does not take a BOOL argument", name));
     }
@@ -207,6 +209,10 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
   if (name == "STR") {
     if (args[0].type == ValueType::String) return Value::string(s[0]);
     if (args.size() == 2) return Value::string(fmt::format("{:.{}f}", x[0], std::clamp(static_cast<int>(x[1]), 0, 15)));
+    // STR(x, width, decimals): right-justified in `width` characters (wider when it needs more).
+    if (args.size() == 3)
+      return Value::string(fmt::format("{:>{}.{}f}", x[0], std::clamp(static_cast<int>(x[1]), 0, 64),
+                                       std::clamp(static_cast<int>(x[2]), 0, 15)));
     return Value::string(args[0].to_display());
   }
   if (name == "LEN") return Value::integer(static_cast<double>(s[0].size()));

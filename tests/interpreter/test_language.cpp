@@ -129,6 +129,16 @@ TEST(Language, ArraysOfSeveralDimensions) {
   EXPECT_NE(rank.diagnostics.find("array W has 2 dimensions: write W[i,j]"), std::string::npos) << rank.diagnostics;
 }
 
+TEST(Language, TextJoinsItsPartsAndStrFormatsAWidth) {
+  // TEXT/OPER,'R=',STR(R) showed only 'R=' (its other parts were dropped unseen); STR(x,w,d)
+  // and STR of a BOOL were errors.
+  auto r = run("DECL/REAL, R\nDECL/BOOL, B\nR = ASSIGN/2.5\nB = ASSIGN/(R .GT. 2)\n"
+               "TEXT/OPER, 'R = ', STR(R), ' mm, ', R, ' B=', B\n"
+               "TEXT/OPER, CONCAT('[', STR(R, 8, 3), ']', STR(B))\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"R = 2.5 mm, 2.5 B=.TRUE.", "[   2.500].TRUE."}));
+}
+
 TEST(Language, JumpToLabels) {
   auto r = run(
       "DECL/INTGR, N\nN = ASSIGN/0\n(AGAIN)\nN = ASSIGN/N + 1\n"

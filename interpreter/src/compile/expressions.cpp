@@ -196,7 +196,7 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
     }
     auto x = expression(a, label_kind != nullptr);
     if (!x) return std::nullopt;
-    if (!x->dynamic && x->e.type == ValueType::Bool) {
+    if (!x->dynamic && x->e.type == ValueType::Bool && !(g.text == "STR" && g.args.size() == 1)) {
       error(a.span, "sema.type", fmt::format("{} does not take a BOOL argument", g.text));
       return std::nullopt;
     }

@@ -293,7 +293,34 @@ void UnitCompiler::text(const grammar::Statement& s) {
   in.operands.push_back(word_operand(s.params[0]));
   auto e = expression(s.params[1]);
   if (!e) return;
-  in.operands.push_back(expr_operand(std::move(e->e)));
+  if (s.params.size() > 2) {
+    // TEXT/OPER,'X = ',STR(X),' mm' (as shop programs write it): the texts one after another; a
+    // number is shown as STR shows it. Only the first was shown, the rest dropped unseen.
+    ir::Expr joined;
+    joined.op = ir::ExprOp::Call;
+    joined.name = "CONCAT";
+    joined.span = s.span;
+    joined.type = ValueType::String;
+    const auto as_text = [&](UnitCompiler::Typed t) {
+      if (!t.dynamic && t.e.type == ValueType::String) return std::move(t.e);
+      ir::Expr shown;
+      shown.op = ir::ExprOp::Call;
+      shown.name = "STR";
+      shown.span = t.e.span;
+      shown.type = ValueType::String;
+      shown.args.push_back(std::move(t.e));
+      return shown;
+    };
+    joined.args.push_back(as_text(std::move(*e)));
+    for (std::size_t i = 2; i < s.params.size(); ++i) {
+      auto more = expression(s.params[i]);
+      if (!more) return;
+      joined.args.push_back(as_text(std::move(*more)));
+    }
+    in.operands.push_back(expr_operand(std::move(joined)));
+  } else {
+    in.operands.push_back(expr_operand(std::move(e->e)));
+  }
   emit(std::move(in));
 }
 
