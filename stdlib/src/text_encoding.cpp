@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "metron/stdlib/text_encoding.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <optional>
 
 namespace metron {
 namespace {
@@ -20,11 +22,53 @@ void append_utf8(std::string& out, std::uint32_t cp) {
   } else if (cp < 0x800) {
     out.push_back(static_cast<char>(0xC0 | (cp >> 6)));
     out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
-  } else {
+  } else if (cp < 0x10000) {
     out.push_back(static_cast<char>(0xE0 | (cp >> 12)));
     out.push_back(static_cast<char>(0x80 | ((cp >> 6) & 0x3F)));
     out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
+  } else {
+    out.push_back(static_cast<char>(0xF0 | (cp >> 18)));
+    out.push_back(static_cast<char>(0x80 | ((cp >> 12) & 0x3F)));
+    out.push_back(static_cast<char>(0x80 | ((cp >> 6) & 0x3F)));
+    out.push_back(static_cast<char>(0x80 | (cp & 0x3F)));
   }
+}
+
+// UTF-16 without a BOM: in its first bytes, the text's ASCII characters put a NUL in every other
+// place (odd places little-endian, even places big-endian) and none in the others.
+std::optional<bool> utf16_by_nuls(std::string_view bytes) {
+  const std::size_t n = std::min<std::size_t>(bytes.size(), 256) & ~std::size_t{1};
+  if (n < 4) return std::nullopt;
+  std::size_t even = 0, odd = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (bytes[i] == '\0') ++(i % 2 == 0 ? even : odd);
+  if (odd * 10 >= n / 2 * 9 && even == 0) return true;   // little-endian
+  if (even * 10 >= n / 2 * 9 && odd == 0) return false;  // big-endian
+  return std::nullopt;
+}
+
+std::string utf16_to_utf8(std::string_view bytes, bool little_endian) {
+  std::string out;
+  out.reserve(bytes.size() / 2);
+  const auto unit = [&](std::size_t i) {
+    const auto a = static_cast<unsigned char>(bytes[i]), b = static_cast<unsigned char>(bytes[i + 1]);
+    return static_cast<std::uint32_t>(little_endian ? a | (b << 8) : (a << 8) | b);
+  };
+  constexpr std::uint32_t replacement = 0xFFFD;
+  for (std::size_t i = 0; i + 1 < bytes.size(); i += 2) {
+    const std::uint32_t u = unit(i);
+    if (u >= 0xD800 && u <= 0xDBFF && i + 3 < bytes.size()) {
+      const std::uint32_t low = unit(i + 2);
+      if (low >= 0xDC00 && low <= 0xDFFF) {
+        append_utf8(out, 0x10000 + ((u - 0xD800) << 10) + (low - 0xDC00));
+        i += 2;
+        continue;
+      }
+    }
+    append_utf8(out, u >= 0xD800 && u <= 0xDFFF ? replacement : u);
+  }
+  if (bytes.size() % 2) append_utf8(out, replacement);  // a lone last byte
+  return out;
 }
 
 }  // namespace
@@ -34,6 +78,8 @@ std::string_view to_string(TextEncoding e) {
     case TextEncoding::Ascii: return "ASCII";
     case TextEncoding::Utf8: return "UTF-8";
     case TextEncoding::Windows1252: return "Windows-1252";
+    case TextEncoding::Utf16Le: return "UTF-16LE";
+    case TextEncoding::Utf16Be: return "UTF-16BE";
   }
   return "?";
 }
@@ -62,6 +108,14 @@ bool is_valid_utf8(std::string_view s) {
 }
 
 std::string to_utf8(std::string bytes, TextEncoding* detected) {
+  const bool bom_le = bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xFE;
+  const bool bom_be = bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFE && static_cast<unsigned char>(bytes[1]) == 0xFF;
+  const std::optional<bool> by_nuls = bom_le || bom_be ? std::nullopt : utf16_by_nuls(bytes);
+  if (bom_le || bom_be || by_nuls) {
+    const bool little = bom_le || (by_nuls && *by_nuls);
+    if (detected) *detected = little ? TextEncoding::Utf16Le : TextEncoding::Utf16Be;
+    return utf16_to_utf8(std::string_view(bytes).substr(bom_le || bom_be ? 2 : 0), little);
+  }
   bool ascii = true;
   for (const char c : bytes)
     if (static_cast<unsigned char>(c) >= 0x80) { ascii = false; break; }

@@ -1882,6 +1882,52 @@ TEST(ShopPrograms, LabelsWithAccentsPlusAndPlusMinusInEveryEncoding) {
   EXPECT_EQ(metron::to_utf8("\x80\x93"), "\xE2\x82\xAC\xE2\x80\x9C");  // U+20AC, U+201C (WHATWG table)
 }
 
+TEST(ShopPrograms, ProgramsSavedAsUtf16AreRead) {
+  // Windows editors save "Unicode" text as UTF-16 (with or without a byte-order mark): before,
+  // "expected a major word" at 1:1 with a NUL after every letter.
+  const std::string text = "DMISMN/'p', 5.1\r\nF(PLN_Sph\xC3\xA8res)=FEAT/PLANE,CART,0,0,0,0,0,1\r\n"
+                           "TEXT/OPER,'\xF0\x9D\x9C\x8B ok'\r\nFEAT PLANE\r\nENDFIL\r\n";  // a 4-byte character: a surrogate pair
+  // UTF-16 from UTF-8, by hand (the test's own encoder: code points, then units).
+  const auto utf16 = [&](bool little, bool bom) {
+    std::u32string cps;
+    for (std::size_t i = 0; i < text.size();) {
+      const auto c = static_cast<unsigned char>(text[i]);
+      const std::size_t n = c < 0x80 ? 1 : c < 0xE0 ? 2 : c < 0xF0 ? 3 : 4;
+      char32_t cp = n == 1 ? c : n == 2 ? (c & 0x1F) : n == 3 ? (c & 0x0F) : (c & 0x07);
+      for (std::size_t k = 1; k < n; ++k) cp = (cp << 6) | (static_cast<unsigned char>(text[i + k]) & 0x3F);
+      cps.push_back(cp);
+      i += n;
+    }
+    std::string out;
+    const auto put = [&](unsigned u) {
+      out += static_cast<char>(little ? u & 0xFF : u >> 8);
+      out += static_cast<char>(little ? u >> 8 : u & 0xFF);
+    };
+    if (bom) put(0xFEFF);
+    for (char32_t cp : cps) {
+      if (cp >= 0x10000) {
+        put(0xD800 + ((cp - 0x10000) >> 10));
+        put(0xDC00 + ((cp - 0x10000) & 0x3FF));
+      } else {
+        put(cp);
+      }
+    }
+    return out;
+  };
+  for (const bool little : {true, false})
+    for (const bool bom : {true, false}) {
+      SourceManager sources;
+      const auto id = sources.add("u16.dmi", utf16(little, bom));
+      EXPECT_EQ(sources.file(id).encoding, little ? metron::TextEncoding::Utf16Le : metron::TextEncoding::Utf16Be);
+      EXPECT_EQ(sources.file(id).text, text) << little << bom;
+      const auto c = check(utf16(little, bom));
+      EXPECT_EQ(c.errors, 1u) << c.text;  // FEAT PLANE, at its own line and column
+      EXPECT_TRUE(c.has("shop.dmi:4:6: error: expected '/' after the major word 'FEAT'")) << c.text;
+    }
+  // A lone surrogate and a lone last byte are U+FFFD, not a crash.
+  EXPECT_EQ(metron::to_utf8(std::string("\xFF\xFE" "A\0\x00\xD8" "B", 7)), "A\xEF\xBF\xBD\xEF\xBF\xBD");
+}
+
 TEST(ShopPrograms, ContinuationInsideALabelSkipsTheLeadingBlanks) {
   const auto c = check("DMISMN/'p', 5.1\nF(CIR_1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
                        "T(D1)=TOL/DIAM,-0.1,0.1\nOUTPUT/FA(CIR_$\n    1),TA(D1)\nENDFIL\n");
