@@ -153,7 +153,8 @@ void UnitCompiler::fedrat(const grammar::Statement& s) {
   const ir::FeedUnit unit =
       is_word(s.params[1]) ? ir::parse_word<ir::FeedUnit>(s.params[1].text).value_or(ir::FeedUnit::Defalt) : ir::FeedUnit::Defalt;
   if (unit == ir::FeedUnit::Defalt)  // DEFALT takes no value (above)
-    return error(s.params[1].span, "sema.bad-unit", fmt::format("expected a feed unit ({}) after {}", ir::word_list<ir::FeedUnit>(), s.params[0].text));
+    return error(s.params[1].span, "sema.bad-unit",
+                 fmt::format("expected a feed unit (MPM, MMPS, IPM, IPS, PCENT) and a value, or DEFALT, after {}", s.params[0].text));
   auto e = numeric(s.params[2], "a feed rate");
   if (!e) return;
   if (e->op == ir::ExprOp::Constant && e->value.number <= 0) return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
