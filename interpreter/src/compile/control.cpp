@@ -152,13 +152,23 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   }
   const grammar::Expr& target = s.params[0];
   const bool tolerance = target.label.prefix == "TA";
-  if (s.params.size() < 2 || s.params.size() > 3 || !is_word(s.params[1])) {
+  if (s.params.size() < 2 || (s.params.size() > 3 && !(is_word(s.params[1]) && s.params[1].text != "SIZE" && !tolerance && !m_strict)) ||
+      !is_word(s.params[1])) {
     error(s.params.size() < 2 ? target.span : s.params[1].span, "sema.value",
           tolerance ? "VALUE/TA(t) expects ACT, DEV, AMT, INTOL or OUTOL[,n]" : "VALUE/FA(x) expects SIZE[,n]");
     return std::nullopt;
   }
   const std::string word = s.params[1].text;
   if (tolerance ? !listed(tolerance_words, word) : !listed(size_words, word)) {
+    // Another word of a feature (VALUE/FA(x),FORM, a vendor's): read leniently, an unanswered form
+    // as the others; strictly, and for a tolerance (whose words DMIS lists), an error.
+    if (!tolerance && !m_strict) {
+      warn(s.params[1].span, "sema.value-form",
+           fmt::format("VALUE/{}(x),{} is not answered (metron answers VALUE/FA(x),SIZE and VALUE/TA(t),"
+                       "ACT|DEV|AMT|INTOL|OUTOL); the variable keeps its value",
+                       target.label.prefix, word));
+      return q;
+    }
     error(s.params[1].span, "sema.value",
           tolerance ? fmt::format("VALUE/TA(t),{}: expected ACT, DEV, AMT, INTOL or OUTOL", word)
                     : fmt::format("VALUE/{}(x),{}: expected SIZE", target.label.prefix, word));
