@@ -886,8 +886,12 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
       "DMISMN/'t', 5.0\nF(P1) = FEAT/POINT, CART, 0, 0, 0, 0, 0, 1\nF(PL) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\n"
       "MEAS/POINT, F(P1), 1, CLRSRF, F(PL), 2.00, CLRSRF, F(PL), 20.00\nENDMES\n"
       "MEAS/POINT, F(P1), 1, BOGUS, 3\nENDMES\n"
-      "F(P1) = FEAT/POINT, CART, 1, 0, 0, 0, 0, 1\nEQUATE/DA(A), DA(B)\nENDFIL\n");
+      "F(P1) = FEAT/POINT, CART, 1, 0, 0, 0, 0, 1\nEQUATE/DA(A), DA(B)\n"
+      "GEOALG/CIRCLE, LSTSQR, FILTER, LAMBDAC, 0.8\nGEOALG/PLANE, LSTSQR, ELIMINATE, STDDEV, 3\nENDFIL\n");
   EXPECT_EQ(c.errors, 0U) << c.text;
+  // A fitting filter was dropped unseen: told once.
+  EXPECT_TRUE(c.has("10:24: warning: GEOALG/CIRCLE,LSTSQR,FILTER: metron does not filter or thin the points")) << c.text;
+  EXPECT_FALSE(c.has("11:22: warning")) << c.text;
   EXPECT_TRUE(c.has("4:23: note: CLRSRF on a MEAS (RationalDMIS) is not applied")) << c.text;
   EXPECT_TRUE(c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
                     "them are ignored")) << c.text;
@@ -895,7 +899,7 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
   EXPECT_TRUE(c.has("8:1: note: F(P1) is defined again (first at line 2)")) << c.text;
   EXPECT_TRUE(c.has("9:1: warning: the DMIS statement EQUATE is not supported by metron and is skipped: the coordinate "
                     "systems are not equated")) << c.text;
-  EXPECT_EQ(c.warnings, 2U) << c.text;
+  EXPECT_EQ(c.warnings, 3U) << c.text;
   // A typographic quote copied from a document is named.
   const auto quote = check("DMISMN/\u2019EXAMPLE\u2019, 4.0\nENDFIL\n");
   EXPECT_TRUE(quote.has("1:8: error: expected a parameter after '/': \u2019 is a typographic quote; a DMIS string is "

@@ -95,14 +95,21 @@ void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
 
 // GEOALG/type,algorithm: MAXINS, MINCIR, MINMAX and LSTSQR (DEFALT) are applied to CIRCLE, ARC,
 // SPHERE and CYLNDR, MINMAX and LSTSQR to PLANE and LINE; any other type or algorithm (CONE, an
-// EXTERN or FILTER algorithm ...) is accepted without its effect, which a program may rely on: one
-// warning per program says so.
+// EXTERN algorithm ...), and a FILTER or ELIMINATE after it, is accepted without its effect, which
+// a program may rely on: one warning per program says so.
 void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   const auto word_at = [&](std::size_t i) { return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string(); };
   const std::string type = word_at(0), algorithm = word_at(1);
   const bool sized = type == "CIRCLE" || type == "ARC" || type == "SPHERE" || type == "CYLNDR";
   const bool flat = type == "PLANE" || type == "LINE";
   const bool least_squares = s.params.size() < 2 || algorithm == "LSTSQR" || algorithm == "DEFALT";
+  // FILTER (a cut-off, a Gaussian ...) or ELIMINATE (outliers) after the algorithm: the points are
+  // fitted as measured; told once, not dropped unseen.
+  if (s.params.size() > 2 && (is_word(s.params[2], "FILTER") || is_word(s.params[2], "ELIMINATE")) &&
+      m_noted_kinds.insert("GEOALG-FILTER").second)
+    warn(s.params[2].span, "sema.not-applied",
+         fmt::format("GEOALG/{},{},{}: metron does not filter or thin the points; they are fitted as measured (noted once)",
+                     type, algorithm, s.params[2].text));
   if ((sized || flat) && (least_squares || algorithm == "MINMAX" || (sized && (algorithm == "MAXINS" || algorithm == "MINCIR")))) {
     // MAXINS a hole's pin-gauge size, MINCIR a boss's ring-gauge size, MINMAX the minimum zone
     // reference feature; LSTSQR and DEFALT back to least squares.
