@@ -126,6 +126,7 @@ std::vector<std::string> payload_words(const Payload& payload) {
                  [&](const UnitsPayload& p) {
                    add(p.length);
                    if (p.angle) add(*p.angle);
+                   if (p.temperature) add(*p.temperature);
                  },
                  [&](const ModePayload& p) { add(p.mode); },
                  [&](const FeaturePayload& p) {

@@ -68,6 +68,13 @@ const std::vector<WordEntry<AngleUnit>>& vocabulary() {
 }
 
 template <>
+const std::vector<WordEntry<TemperatureUnit>>& vocabulary() {
+  static const std::vector<WordEntry<TemperatureUnit>> rows = {{TemperatureUnit::Tempc, "TEMPC"},
+                                                              {TemperatureUnit::Tempf, "TEMPF"}};
+  return rows;
+}
+
+template <>
 const std::vector<WordEntry<RunMode>>& vocabulary() {
   static const std::vector<WordEntry<RunMode>> rows = {
       {RunMode::Auto, "AUTO"}, {RunMode::ProgMan, "PROG MAN"}, {RunMode::Man, "MAN"}};

@@ -2381,6 +2381,15 @@ TEST(ShopPrograms, QtempReadsTheMachinesThermometer) {
   const auto told = plain.diagnostics.find("QTEMP: this machine has no thermometer");
   EXPECT_NE(told, std::string::npos) << plain.diagnostics;
   EXPECT_EQ(plain.diagnostics.find("QTEMP: this machine has no thermometer", told + 1), std::string::npos) << plain.diagnostics;
+  // UNITS/...,TEMPF: QTEMP answers in degrees Fahrenheit (22 C = 71.6 F); TEMPC back to Celsius.
+  // Before, the third word of UNITS was dropped unseen.
+  const std::string fahrenheit = "DMISMN/'t', 5.0\nUNITS/MM,ANGDEC,TEMPF\nDECL/REAL,T1,T2\nT1=ASSIGN/QTEMP(1)\n"
+                                 "UNITS/MM,ANGDEC,TEMPC\nT2=ASSIGN/QTEMP(1)\nENDFIL\n";
+  const auto f = run(fahrenheit, source_dir / "programs/worlds/cmm_errors_at_22c.json");
+  ASSERT_EQ(f.status, ExecStatus::Finished) << f.diagnostics;
+  EXPECT_NEAR(f.session->interpreter().variable("T1")->number, 71.6, 0.01);
+  EXPECT_NEAR(f.session->interpreter().variable("T2")->number, 22.0, 0.005);
+  EXPECT_TRUE(check("DMISMN/'t', 5.0\nUNITS/MM,ANGDEC,KELVIN\nENDFIL\n").has("expected a temperature unit (TEMPC, TEMPF)"));
 }
 
 // ERROR/(label),cond: a machine fault the condition covers goes to the handler, which goes on

@@ -261,6 +261,12 @@ void UnitCompiler::units(const grammar::Statement& s) {
       return error(s.params[1].span, "sema.bad-unit", "expected an angle unit (ANGDEC, ANGRAD) after the length unit");
     if (units.angle == ir::AngleUnit::Angdms) warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
   }
+  if (s.params.size() > 2) {
+    units.temperature = is_word(s.params[2]) ? ir::parse_word<ir::TemperatureUnit>(s.params[2].text) : std::nullopt;
+    if (!units.temperature || s.params.size() > 3)
+      return error(s.params[units.temperature ? 3 : 2].span, "sema.bad-unit",
+                   "expected a temperature unit (TEMPC, TEMPF) after the angle unit, and nothing after it");
+  }
   in.payload = units;
   emit(std::move(in));
 }

@@ -26,6 +26,7 @@ ExecStatus Execute::units(Interpreter& vm, const ir::Instruction& in, CallFrame&
   const auto& units = std::get<ir::UnitsPayload>(in.payload);
   vm.m_length_mm = ir::millimetres_per(units.length);
   if (units.angle) vm.m_degrees = *units.angle != ir::AngleUnit::Angrad;
+  if (units.temperature) vm.m_fahrenheit = *units.temperature == ir::TemperatureUnit::Tempf;
   // Reports and DMIS output files follow the program's units (results.json stays in mm).
   runtime::ReportUnits report = vm.m_runtime.report_units();
   report.mm_per_length = vm.m_length_mm;

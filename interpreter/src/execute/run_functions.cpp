@@ -100,13 +100,15 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
       auto sensor = evaluate(e.args.at(0));
       if (!sensor) return sensor;
     }
-    if (const auto t = m_runtime.machine().state().temperature_c) return Value::real(*t);
+    // In the program's temperature unit (UNITS/...,TEMPC|TEMPF): F = C * 9/5 + 32.
+    const auto shown = [&](double c) { return Value::real(m_fahrenheit ? c * 9.0 / 5.0 + 32.0 : c); };
+    if (const auto t = m_runtime.machine().state().temperature_c) return shown(*t);
     if (!m_no_thermometer_warned) {
       m_no_thermometer_warned = true;
       m_runtime.warning(e.span, "QTEMP: this machine has no thermometer (its world models no temperature); answered the "
                                 "reference temperature 20 C (told once)");
     }
-    return Value::real(20.0);
+    return shown(20.0);
   }
   if (name == "BADPT") return Value::boolean_value(m_bad_point);
   if (name == "BADGT") return Value::boolean_value(m_bad_geometry);

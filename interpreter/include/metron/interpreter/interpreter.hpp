@@ -141,6 +141,7 @@ class Interpreter {
   Vec3 m_block_position = Vec3::Zero();
   double m_length_mm = 1.0;   ///< UNITS: mm per program length unit
   bool m_degrees = true;      ///< UNITS: ANGDEC (else ANGRAD)
+  bool m_fahrenheit = false;  ///< UNITS/...,TEMPF: QTEMP answers in degrees Fahrenheit
   bool m_finished = false;
   std::vector<std::string> m_prompt_answers;  // scripted PROMPT answers
   std::size_t m_next_answer = 0;

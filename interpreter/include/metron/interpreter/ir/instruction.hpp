@@ -93,6 +93,7 @@ const char* to_string(Op op);
 struct UnitsPayload {
   LengthUnit length = LengthUnit::Mm;
   std::optional<AngleUnit> angle;       ///< unchanged when not given
+  std::optional<TemperatureUnit> temperature;  ///< unchanged when not given
 };
 /// MODE.
 struct ModePayload {

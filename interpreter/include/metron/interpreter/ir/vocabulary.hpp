@@ -20,6 +20,8 @@ enum class FeedUnit { Mpm, Mmps, Ipm, Ips, Pcent, Defalt };
 enum class LengthUnit { Mm, Inch, Cm, M, Feet };
 /// UNITS angle words (ANGDMS is read as decimal degrees).
 enum class AngleUnit { Angdec, Angrad, Angdms };
+/// UNITS temperature words (DMIS 5.x: the unit QTEMP answers in).
+enum class TemperatureUnit { Tempc, Tempf };
 /// MODE/AUTO, MODE/PROG,MAN, MODE/MAN.
 enum class RunMode { Auto, ProgMan, Man };
 /// How a statement gives its coordinates: CART x,y,z; POL radius,angle,height; GOTO/INCR distance,i,j,k.
@@ -57,6 +59,7 @@ template <> const std::vector<WordEntry<FeedKind>>& vocabulary();
 template <> const std::vector<WordEntry<FeedUnit>>& vocabulary();
 template <> const std::vector<WordEntry<LengthUnit>>& vocabulary();
 template <> const std::vector<WordEntry<AngleUnit>>& vocabulary();
+template <> const std::vector<WordEntry<TemperatureUnit>>& vocabulary();
 template <> const std::vector<WordEntry<RunMode>>& vocabulary();
 template <> const std::vector<WordEntry<CoordinateForm>>& vocabulary();
 template <> const std::vector<WordEntry<ConstructionMethod>>& vocabulary();
