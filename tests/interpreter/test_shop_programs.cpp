@@ -892,6 +892,15 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
   // A fitting filter was dropped unseen: told once.
   EXPECT_TRUE(c.has("10:24: warning: GEOALG/CIRCLE,LSTSQR,FILTER: metron does not filter or thin the points")) << c.text;
   EXPECT_FALSE(c.has("11:22: warning")) << c.text;
+  // So were a tolerance's numbers past its form's, and DATDEF's second datum.
+  const auto extra = check("DMISMN/'t', 5.0\nF(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nT(A) = TOL/FLAT, 0.1, 0.2\n"
+                           "T(B) = TOL/DIAM, -0.1, 0.1, 0.3, 4\nT(C) = TOL/DIAM, -0.1, 0.1\nDATDEF/FA(P), DAT(A), DAT(B)\nENDFIL\n");
+  EXPECT_EQ(extra.errors, 0u) << extra.text;
+  EXPECT_EQ(extra.warnings, 3u) << extra.text;
+  EXPECT_TRUE(extra.has("3:1: warning: TOL/FLAT takes the tolerance zone (1 number); the 1 number after it is not used")) << extra.text;
+  EXPECT_TRUE(extra.has("4:1: warning: TOL/DIAM takes lower and upper tolerance (2 numbers); the 2 numbers after them are not used"))
+      << extra.text;
+  EXPECT_TRUE(extra.has("6:23: warning: DATDEF names one datum: FA(P) is DAT(A); what follows it is not used")) << extra.text;
   EXPECT_TRUE(c.has("4:23: note: CLRSRF on a MEAS (RationalDMIS) is not applied")) << c.text;
   EXPECT_TRUE(c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
                     "them are ignored")) << c.text;

@@ -554,6 +554,14 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
+  if (kind != ToleranceKind::Compos && numbers.size() > need.count) {
+    // TOL/FLAT,0.1,0.2 (a per-unit zone, a vendor's extra): the numbers past the form's were
+    // dropped unseen.
+    const std::size_t extra = numbers.size() - need.count;
+    warn(s.span, "sema.tolerance-arity",
+         fmt::format("TOL/{} takes {} ({} number{}); the {} number{} after {} not used", word, need.meaning, need.count,
+                     need.count == 1 ? "" : "s", extra, extra == 1 ? "" : "s", extra == 1 ? "it is" : "them are"));
+  }
   note_definition("T", upper(s.target->name), s.span);
   m_symbols.tolerances[upper(s.target->name)] = kind;
   m_symbols.unevaluated_tolerances.erase(upper(s.target->name));
@@ -580,6 +588,10 @@ void UnitCompiler::datdef(const grammar::Statement& s) {
   }
   if (!check_feature(s.params[0])) return;
   if (!is_label(s.params[1], {"DAT"})) return error(s.params[1].span, "sema.expected-datum", "expected DAT(label) after the feature");
+  if (s.params.size() > 2)
+    warn(s.params[2].span, "sema.datdef-arity",
+         fmt::format("DATDEF names one datum: {}({}) is DAT({}); what follows it is not used", upper(s.params[0].label.prefix),
+                     s.params[0].label.name, s.params[1].label.name));
   // A second DATDEF of one datum silently replaced the first (issue 15): say so.
   note_definition("DAT", upper(s.params[1].label.name), s.span);
   m_symbols.datums.insert(upper(s.params[1].label.name));
