@@ -901,6 +901,9 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
   EXPECT_TRUE(extra.has("4:1: warning: TOL/DIAM takes lower and upper tolerance (2 numbers); the 2 numbers after them are not used"))
       << extra.text;
   EXPECT_TRUE(extra.has("6:23: warning: DATDEF names one datum: FA(P) is DAT(A); what follows it is not used")) << extra.text;
+  const auto select = check("DMISMN/'t', 5.0\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P), 0, 90\nENDFIL\n");
+  EXPECT_TRUE(select.has("3:14: warning: SNSLCT selects S(P) as it is defined; the 2 parameters after it are not used"))
+      << select.text;
   EXPECT_TRUE(c.has("4:23: note: CLRSRF on a MEAS (RationalDMIS) is not applied")) << c.text;
   EXPECT_TRUE(c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
                     "them are ignored")) << c.text;

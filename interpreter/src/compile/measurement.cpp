@@ -35,6 +35,11 @@ void UnitCompiler::snslct(const grammar::Statement& s) {
       return error(s.params[0].span, "sema.skipped-definition", fmt::format("sensor S({}) was defined by a skipped statement", s.params[0].label.name));
     library_sensor(s.params[0]);
   }
+  if (s.params.size() > 1)  // a head orientation, a vendor's option: dropped unseen before
+    warn(s.params[1].span, "sema.snslct-arity",
+         fmt::format("SNSLCT selects {}({}) as it is defined; the {} parameter{} after it {} not used",
+                     upper(s.params[0].label.prefix), s.params[0].label.name, s.params.size() - 1,
+                     s.params.size() == 2 ? "" : "s", s.params.size() == 2 ? "is" : "are"));
   emit(make(Op::SensorSelect, s, name));
 }
 
