@@ -2886,14 +2886,32 @@ TEST(ShopPrograms, DefaltGivesTheMachinesOwnFeedsAndAccelerationBack) {
   const auto one = feeds_after("FEDRAT/POSVEL, MMPS, 20\nFEDRAT/MESVEL, MMPS, 2\nFEDRAT/POSVEL, DEFALT\n");
   EXPECT_EQ(one.first, own.first);
   EXPECT_EQ(one.second, 2.0);
-  // A 200 mm move: slower under a programmed acceleration of 10 mm/s^2, as fast again after DEFALT.
-  const auto move_time = [](const std::string& lines) {
-    const auto r = run("DMISMN/'a', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n" + lines + "GOTO/500, 200, 200\nENDFIL\n");
-    EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-    return r.session->runtime().machine().state().time_s;
-  };
-  const double plain = move_time("");
-  EXPECT_GT(move_time("ACLRAT/POSACL, MMPSS, 10\n"), plain + 1.0);
-  EXPECT_NEAR(move_time("ACLRAT/POSACL, MMPSS, 10\nACLRAT/POSACL, DEFALT\n"), plain, 1e-9);
-  EXPECT_NEAR(move_time("ACLRAT/POSACL, MMPSS, 10\nACLRAT/DEFALT\n"), plain, 1e-9);
+  // A 200 mm move: slower under a programmed acceleration of 10 mm/s^2, as fast again after DEFALT;
+  // on the default machine and on one whose axes have their own ramp laws (which the programmed
+  // acceleration caps).
+  for (const std::optional<fs::path> world : {std::optional<fs::path>(), std::optional(source_dir / "programs/worlds/touch_braking.json")}) {
+    const auto move_time = [&](const std::string& lines) {
+      const auto r = run("DMISMN/'a', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n" + lines + "GOTO/500, 200, 200\nENDFIL\n", world);
+      EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+      return r.session->runtime().machine().state().time_s;
+    };
+    const double plain = move_time("");
+    EXPECT_GT(move_time("ACLRAT/POSACL, MMPSS, 10\n"), plain + 1.0);
+    EXPECT_NEAR(move_time("ACLRAT/POSACL, MMPSS, 10\nACLRAT/POSACL, DEFALT\n"), plain, 1e-9);
+    EXPECT_NEAR(move_time("ACLRAT/POSACL, MMPSS, 10\nACLRAT/DEFALT\n"), plain, 1e-9);
+  }
+}
+
+TEST(ShopPrograms, AJumpOutOfABlockStopsTheRunAtTheNextMeas) {
+  // JUMPTO belongs in a block; one that leaves it skips its ENDMES: the next MEAS says so instead
+  // of dropping the open block's points unseen.
+  std::string text = bore_program("S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n");
+  text.replace(text.find("  GOTO/40, 50, 80\nENDMES"), 0, "  JUMPTO/(OUT)\n");
+  text.replace(text.find("OUTPUT/FA(BORE1)"), 0, "(OUT)\nMEAS/CIRCLE, F(BORE1), 4\nENDMES\n");
+  EXPECT_EQ(check(text).errors, 0u) << check(text).text;
+  const auto r = run(text);
+  EXPECT_EQ(r.status, ExecStatus::Error);
+  EXPECT_NE(r.diagnostics.find("MEAS of BORE1 while the block of BORE1 is still open (a JUMPTO out of it skipped its ENDMES)"),
+            std::string::npos)
+      << r.diagnostics;
 }
