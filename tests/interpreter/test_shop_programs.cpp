@@ -2783,6 +2783,30 @@ TEST(ShopPrograms, ASensorSelectedInsideABlockTakesTheRestOfItsPoints) {
   // The sensor stays selected after the block, as SNSLCT outside one would leave it.
   ASSERT_TRUE(r.session->runtime().machine().state().tool);
   EXPECT_EQ(r.session->runtime().machine().state().tool->name, "P2");
+  // A sensor switched after the block's first move: the move alone plans no points of its own
+  // (4 points, all with the 4 mm tip); without PTMEAS (MODE/AUTO) the last sensor takes the planned ones.
+  std::string after_move = text;
+  after_move.erase(after_move.find("  SNSLCT/S(P2)\n"), std::string("  SNSLCT/S(P2)\n").size());
+  after_move.replace(after_move.find("  PTMEAS/CART, 50, 50"), 0, "  SNSLCT/S(P4)\n");
+  after_move.replace(after_move.find("SNSLCT/S(P4)\nD(PART)"), std::string("SNSLCT/S(P4)").size(), "SNSLCT/S(P2)");
+  const auto moved = run(after_move);
+  ASSERT_EQ(moved.status, ExecStatus::Finished) << moved.diagnostics;
+  const auto* again = moved.session->runtime().find_feature("BORE1");
+  ASSERT_TRUE(again && again->actual);
+  ASSERT_EQ(again->points.size(), 4u);
+  for (const auto& p : again->points) EXPECT_NEAR(p.ball_radius_mm, 2.0, 0.05);
+  std::string automatic = bore_program(
+      "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "S(P2) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nSNSLCT/S(P4)\nMODE/AUTO\n");
+  const std::size_t from = automatic.find("  GOTO/40, 50, 30\n"), to = automatic.find("ENDMES");
+  automatic.replace(from, to - from, "  SNSLCT/S(P2)\n");
+  const auto planned = run(automatic);
+  ASSERT_EQ(planned.status, ExecStatus::Finished) << planned.diagnostics;
+  const auto* bore3 = planned.session->runtime().find_feature("BORE1");
+  ASSERT_TRUE(bore3 && bore3->actual);
+  EXPECT_EQ(bore3->points.size(), 4u);
+  for (const auto& p : bore3->points) EXPECT_NEAR(p.ball_radius_mm, 1.0, 0.05);
+  EXPECT_NEAR(bore3->actual->diameter_mm, 20.0, 2e-3);
   // Read strictly too: SNSLCT belongs in a block (DMIS measures a feature with several sensors).
   EXPECT_EQ(check(text, true).errors, 0u);
   // A setting DMIS does not place in a block is a warning when read leniently, an error strictly.
