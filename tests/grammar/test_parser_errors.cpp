@@ -2,6 +2,7 @@
 // Bad statements: exact diagnostic code, message and line:col; recovery at the next line.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <string>
 
 #include "metron/grammar/parser.hpp"
@@ -29,6 +30,20 @@ std::string diagnose(const std::string& source, std::size_t* statements = nullpt
   const Diagnostic& d = sink.items()[0];
   const Location l = sources.locate(d.span);
   return d.code + "|" + d.message + "|" + std::to_string(l.line) + ":" + std::to_string(l.column);
+}
+
+// A text read leniently (the program and its diagnostics) and strictly (the diagnostics).
+struct BothWays {
+  SourceManager sources;
+  DiagnosticSink lenient, strict;
+  Program program;
+};
+std::unique_ptr<BothWays> parse_both_ways(const std::string& name, const std::string& text) {
+  auto r = std::make_unique<BothWays>();
+  const auto file = r->sources.add(name, text);
+  r->program = parse_program(r->sources, file, r->lenient);
+  parse_program(r->sources, file, r->strict, ParseOptions{true});
+  return r;
 }
 
 class BadStatement : public ::testing::TestWithParam<BadCase> {};
@@ -96,83 +111,63 @@ INSTANTIATE_TEST_SUITE_P(Grammar, BadStatement, ::testing::Values(
 // A label prefix metron does not know (a vendor's, a newer DMIS's) skips its statement with a
 // warning, as an unknown statement is; --strict keeps it an error. CI is CLMPID's.
 TEST(ParserErrors, AnUnknownLabelPrefixSkipsItsStatementLeniently) {
-  SourceManager sources;
-  const auto file = sources.add("prefix.dmi", "DH(X)=DMEHW/'controller'\nCI(CL1)=CLMPID/'CLAMP-A'\nENDFIL\n");
-  DiagnosticSink lenient;
-  const Program p = parse_program(sources, file, lenient);
-  EXPECT_EQ(p.statements.size(), 2u);
-  EXPECT_EQ(lenient.error_count(), 0u);
-  ASSERT_EQ(lenient.items().size(), 1u);
-  EXPECT_EQ(lenient.items()[0].severity, Severity::Warning);
-  DiagnosticSink strict;
-  parse_program(sources, file, strict, ParseOptions{true});
-  EXPECT_EQ(strict.error_count(), 1u);
+  const auto r = parse_both_ways("prefix.dmi", "DH(X)=DMEHW/'controller'\nCI(CL1)=CLMPID/'CLAMP-A'\nENDFIL\n");
+  EXPECT_EQ(r->program.statements.size(), 2u);
+  EXPECT_EQ(r->lenient.error_count(), 0u);
+  ASSERT_EQ(r->lenient.items().size(), 1u);
+  EXPECT_EQ(r->lenient.items()[0].severity, Severity::Warning);
+  EXPECT_EQ(r->strict.error_count(), 1u);
 }
 
 // Feature names as CMM software shows them, with a blank (`F(HOLE 1)`): read leniently the
 // blanks are dropped, with one warning per file; strictly each is an error. Before: a syntax
 // error "expected ')' after the label name".
 TEST(ParserErrors, BlanksInsideALabelNameAreDroppedLeniently) {
-  SourceManager sources;
-  const auto file = sources.add("blank.dmi", "F(HOLE 1)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA( HOLE 1 ),F(HOLE\t2)\nENDFIL\n");
-  DiagnosticSink lenient;
-  const Program p = parse_program(sources, file, lenient);
-  ASSERT_EQ(p.statements.size(), 3u);
-  ASSERT_TRUE(p.statements[0].target);
-  EXPECT_EQ(p.statements[0].target->name, "HOLE1");
-  ASSERT_EQ(p.statements[1].params.size(), 2u);
-  EXPECT_EQ(p.statements[1].params[0].label.name, "HOLE1");
-  EXPECT_EQ(p.statements[1].params[1].label.name, "HOLE2");
-  EXPECT_EQ(lenient.error_count(), 0u);
-  ASSERT_EQ(lenient.items().size(), 1u);
-  EXPECT_EQ(lenient.items()[0].code, "parse.blank-in-label");
-  EXPECT_EQ(sources.locate(lenient.items()[0].span).column, 3u);
-  DiagnosticSink strict;
-  parse_program(sources, file, strict, ParseOptions{true});
-  EXPECT_EQ(strict.error_count(), 2u);
+  const auto r = parse_both_ways("blank.dmi", "F(HOLE 1)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA( HOLE 1 ),F(HOLE\t2)\nENDFIL\n");
+  ASSERT_EQ(r->program.statements.size(), 3u);
+  ASSERT_TRUE(r->program.statements[0].target);
+  EXPECT_EQ(r->program.statements[0].target->name, "HOLE1");
+  ASSERT_EQ(r->program.statements[1].params.size(), 2u);
+  EXPECT_EQ(r->program.statements[1].params[0].label.name, "HOLE1");
+  EXPECT_EQ(r->program.statements[1].params[1].label.name, "HOLE2");
+  EXPECT_EQ(r->lenient.error_count(), 0u);
+  ASSERT_EQ(r->lenient.items().size(), 1u);
+  EXPECT_EQ(r->lenient.items()[0].code, "parse.blank-in-label");
+  EXPECT_EQ(r->sources.locate(r->lenient.items()[0].span).column, 3u);
+  EXPECT_EQ(r->strict.error_count(), 2u);
 }
 
 // A public lab generator of CAMIO programs writes `F(A02F1=FEAT/POINT,...` (the `)` left out):
 // read leniently the `)` is put back with a warning; elsewhere, and strictly, it is the error.
 TEST(ParserErrors, ATargetLabelWithoutItsCloseIsRestoredLeniently) {
-  SourceManager sources;
-  const auto file = sources.add("open.dmi", "F(A02F1=FEAT/POINT,CART,0,0,0,0,-1.0,0\nOUTPUT/FA(A02F1\nENDFIL\n");
-  DiagnosticSink lenient;
-  const Program p = parse_program(sources, file, lenient);
-  ASSERT_EQ(p.statements.size(), 2u);  // the OUTPUT is still an error
-  ASSERT_TRUE(p.statements[0].target);
-  EXPECT_EQ(p.statements[0].target->name, "A02F1");
-  EXPECT_EQ(p.statements[0].major, "FEAT");
-  EXPECT_EQ(p.statements[0].params.size(), 8u);
-  ASSERT_EQ(lenient.items().size(), 2u);
-  EXPECT_EQ(lenient.items()[0].code, "parse.missing-close");
-  EXPECT_EQ(lenient.items()[0].severity, Severity::Warning);
-  EXPECT_EQ(sources.locate(lenient.items()[0].span).column, 8u);
-  EXPECT_EQ(lenient.items()[1].code, "parse.expected-close");
-  DiagnosticSink strict;
-  parse_program(sources, file, strict, ParseOptions{true});
-  EXPECT_EQ(strict.error_count(), 2u);
+  const auto r = parse_both_ways("open.dmi", "F(A02F1=FEAT/POINT,CART,0,0,0,0,-1.0,0\nOUTPUT/FA(A02F1\nENDFIL\n");
+  ASSERT_EQ(r->program.statements.size(), 2u);  // the OUTPUT is still an error
+  ASSERT_TRUE(r->program.statements[0].target);
+  EXPECT_EQ(r->program.statements[0].target->name, "A02F1");
+  EXPECT_EQ(r->program.statements[0].major, "FEAT");
+  EXPECT_EQ(r->program.statements[0].params.size(), 8u);
+  ASSERT_EQ(r->lenient.items().size(), 2u);
+  EXPECT_EQ(r->lenient.items()[0].code, "parse.missing-close");
+  EXPECT_EQ(r->lenient.items()[0].severity, Severity::Warning);
+  EXPECT_EQ(r->sources.locate(r->lenient.items()[0].span).column, 8u);
+  EXPECT_EQ(r->lenient.items()[1].code, "parse.expected-close");
+  EXPECT_EQ(r->strict.error_count(), 2u);
 }
 
 // The same generator leaves out commas in long CONST lists (`FA(E02F4)FA(F02F1)`, 12 errors in
 // its mmt_code.dmi): read leniently the comma is put back with a warning, outside strings only.
 TEST(ParserErrors, ACommaMissingBetweenTwoLabelsIsRestoredLeniently) {
-  SourceManager sources;
-  const auto file = sources.add("comma.dmi", "CONST/PLANE,F(P),BF,FA(A1),FA(A2)FA(A3), FA(A4) FA(A5)\nTEXT/OPER,'(x)FA(y)'\n");
-  DiagnosticSink lenient;
-  const Program p = parse_program(sources, file, lenient);
-  ASSERT_EQ(p.statements.size(), 2u);
-  ASSERT_EQ(p.statements[0].params.size(), 8u);
-  EXPECT_EQ(p.statements[0].params[5].label.name, "A3");
-  EXPECT_EQ(p.statements[0].params[7].label.name, "A5");
-  EXPECT_EQ(p.statements[1].params[1].text, "(x)FA(y)");
-  ASSERT_EQ(lenient.items().size(), 2u);
-  EXPECT_EQ(lenient.items()[0].code, "parse.missing-comma");
-  EXPECT_EQ(sources.locate(lenient.items()[0].span).column, 34u);  // where the comma belongs
-  EXPECT_EQ(lenient.error_count(), 0u);
-  DiagnosticSink strict;
-  parse_program(sources, file, strict, ParseOptions{true});
-  EXPECT_EQ(strict.error_count(), 1u);
+  const auto r = parse_both_ways("comma.dmi", "CONST/PLANE,F(P),BF,FA(A1),FA(A2)FA(A3), FA(A4) FA(A5)\nTEXT/OPER,'(x)FA(y)'\n");
+  ASSERT_EQ(r->program.statements.size(), 2u);
+  ASSERT_EQ(r->program.statements[0].params.size(), 8u);
+  EXPECT_EQ(r->program.statements[0].params[5].label.name, "A3");
+  EXPECT_EQ(r->program.statements[0].params[7].label.name, "A5");
+  EXPECT_EQ(r->program.statements[1].params[1].text, "(x)FA(y)");
+  ASSERT_EQ(r->lenient.items().size(), 2u);
+  EXPECT_EQ(r->lenient.items()[0].code, "parse.missing-comma");
+  EXPECT_EQ(r->sources.locate(r->lenient.items()[0].span).column, 34u);  // where the comma belongs
+  EXPECT_EQ(r->lenient.error_count(), 0u);
+  EXPECT_EQ(r->strict.error_count(), 1u);
 }
 
 TEST(ParserErrors, DeepNestingIsAnErrorNotACrash) {
