@@ -12,7 +12,7 @@ namespace metron::grammar {
 namespace {
 
 struct Signature {
-  std::string_view dialect;  ///< index into the dialects below
+  std::string_view dialect;  ///< the package whose language it is
   std::string_view start;    ///< how a line of that language starts (upper case, blanks removed)
   bool anywhere = false;     ///< true: found anywhere in the line, not only at its start
 };

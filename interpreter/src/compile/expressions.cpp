@@ -141,7 +141,8 @@ bool UnitCompiler::check_rank(const grammar::Expr& element, const SymbolTable::V
   const std::size_t rank = std::max<std::size_t>(1, info.dims.size());
   if (element.args.size() == rank) return true;
   std::string form = element.text + "[i";
-  for (std::size_t k = 1; k < rank; ++k) form += fmt::format(",{}", static_cast<char>('i' + k));
+  for (std::size_t k = 1; k < rank; ++k)
+    form += k < 18 ? fmt::format(",{}", static_cast<char>('i' + k)) : fmt::format(",i{}", k + 1);  // i..z, then i19 ...
   error(element.span, "sema.array-rank",
         fmt::format("array {} has {} dimension{}: write {}]", element.text, rank, rank == 1 ? "" : "s", form));
   return false;
