@@ -904,6 +904,13 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
   const auto select = check("DMISMN/'t', 5.0\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P), 0, 90\nENDFIL\n");
   EXPECT_TRUE(select.has("3:14: warning: SNSLCT selects S(P) as it is defined; the 2 parameters after it are not used"))
       << select.text;
+  const auto feeds = check("DMISMN/'t', 5.0\nFEDRAT/MESVEL, MMPS, 3, 4\nACLRAT/POSACL, MMPSS, 100, 5\n"
+                           "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nMEAS/POINT,F(P),1\nPTMEAS/CART,0,0,0,0,0,1,FA(P)\nENDMES\nENDFIL\n");
+  EXPECT_TRUE(feeds.has("2:25: warning: FEDRAT takes a kind, a unit and one value; what follows the value is not used"))
+      << feeds.text;
+  EXPECT_TRUE(feeds.has("3:28: warning: ACLRAT takes a kind, a unit and one value")) << feeds.text;
+  // A reference feature after a PTMEAS is RMEAS's (the message said "got 7 numbers").
+  EXPECT_TRUE(feeds.has("6:25: error: a reference feature after the point belongs to RMEAS")) << feeds.text;
   EXPECT_TRUE(c.has("4:23: note: CLRSRF on a MEAS (RationalDMIS) is not applied")) << c.text;
   EXPECT_TRUE(c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
                     "them are ignored")) << c.text;
@@ -2913,7 +2920,7 @@ TEST(ShopPrograms, DefaltGivesTheMachinesOwnFeedsAndAccelerationBack) {
   // A 200 mm move: slower under a programmed acceleration of 10 mm/s^2, as fast again after DEFALT;
   // on the default machine and on one whose axes have their own ramp laws (which the programmed
   // acceleration caps).
-  for (const std::optional<fs::path> world : {std::optional<fs::path>(), std::optional(source_dir / "programs/worlds/touch_braking.json")}) {
+  for (const std::optional<fs::path>& world : {std::optional<fs::path>(), std::optional(source_dir / "programs/worlds/touch_braking.json")}) {
     const auto move_time = [&](const std::string& lines) {
       const auto r = run("DMISMN/'a', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n" + lines + "GOTO/500, 200, 200\nENDFIL\n", world);
       EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;

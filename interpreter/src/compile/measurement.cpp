@@ -163,6 +163,8 @@ void UnitCompiler::fedrat(const grammar::Statement& s) {
   auto e = numeric(s.params[2], "a feed rate");
   if (!e) return;
   if (e->op == ir::ExprOp::Constant && e->value.number <= 0) return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
+  if (s.params.size() > 3)  // dropped unseen before
+    warn(s.params[3].span, "sema.feed-arity", "FEDRAT takes a kind, a unit and one value; what follows the value is not used");
   auto in = make(Op::Feed, s);
   in.payload = ir::FeedPayload{*kind, unit};
   in.operands.push_back(expr_operand(std::move(*e)));
@@ -181,6 +183,8 @@ void UnitCompiler::aclrat(const grammar::Statement& s) {
   if (!expect_params(s, 3, "MESACL|POSACL, a unit and a value")) return;
   auto e = numeric(s.params[2], "an acceleration");
   if (!e) return;
+  if (s.params.size() > 3)  // dropped unseen before
+    warn(s.params[3].span, "sema.feed-arity", "ACLRAT takes a kind, a unit and one value; what follows the value is not used");
   auto in = make(Op::Accel, s);
   in.operands.push_back(word_operand(s.params[0]));
   in.operands.push_back(word_operand(s.params[1]));
@@ -372,8 +376,13 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
     if (!check_feature(s.params[end - 1])) return;
     --end;
   }
+  if (s.major == "PTMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label)
+    return error(s.params[end - 1].span, "sema.ptmeas-arity",
+                 "a reference feature after the point belongs to RMEAS: RMEAS/CART,x,y,z,i,j,k,FA(ref)");
   const std::size_t n = end - 1;
-  if (n != 3 && n != 6) return error(s.params.back().span, "sema.ptmeas-arity", fmt::format("{} expects x,y,z and optionally i,j,k, got {} numbers", s.major, n));
+  if (n != 3 && n != 6)
+    return error(s.params.back().span, "sema.ptmeas-arity",
+                 fmt::format("{} expects x,y,z and optionally i,j,k, got {} parameters", s.major, n));
   std::vector<double> v;
   for (std::size_t i = 1; i < end; ++i) {
     auto e = numeric(s.params[i], "a coordinate");
