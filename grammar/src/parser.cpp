@@ -78,20 +78,27 @@ bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sin
   return true;
 }
 
+// Where a label starts at `at` (after blanks): the offset of its `(` when a DMIS label prefix
+// (F, FA, DAT ...) and `(` follow.
+std::optional<std::size_t> label_opening(const std::string& t, std::size_t at) {
+  while (at < t.size() && is_blank(t[at])) ++at;
+  std::string prefix;
+  std::size_t p = at;
+  while (p < t.size() && std::isalpha(static_cast<unsigned char>(t[p])))
+    prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(t[p++])));
+  if (prefix.empty() || p >= t.size() || t[p] != '(' || !is_label_prefix(prefix)) return std::nullopt;
+  return p;
+}
+
 // `F(A02F1=FEAT/POINT,...`: a generator that left out the `)` of the label being defined (a
 // public lab generator of CAMIO programs writes this). When a label prefix, `(`, a name with no
 // parenthesis, `=`, a DMIS major word and `/` follow each other, the `)` is put back before the
 // `=`; returns the logical offset where it went.
 std::optional<std::size_t> restore_target_close(LogicalLine& line) {
   const std::string& t = line.text;
-  std::size_t i = 0;
-  while (i < t.size() && is_blank(t[i])) ++i;
-  std::size_t p = i;
-  while (p < t.size() && std::isalpha(static_cast<unsigned char>(t[p]))) ++p;
-  if (p == i || p >= t.size() || t[p] != '(') return std::nullopt;
-  std::string prefix;
-  for (std::size_t k = i; k < p; ++k) prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(t[k])));
-  if (!is_label_prefix(prefix)) return std::nullopt;
+  const auto open = label_opening(t, 0);
+  if (!open) return std::nullopt;
+  const std::size_t p = *open;
   const std::size_t eq = t.find('=', p + 1);
   if (eq == std::string::npos || eq == p + 1 || t.find_first_of("()'", p + 1) < eq) return std::nullopt;
   std::size_t m = eq + 1;
@@ -117,14 +124,7 @@ std::vector<std::size_t> restore_commas_between_labels(LogicalLine& line) {
   for (std::size_t i = 0; i < line.text.size(); ++i) {
     const char c = line.text[i];
     if (c == '\'') in_string = !in_string;
-    if (in_string || c != ')') continue;
-    std::size_t p = i + 1;
-    while (p < line.text.size() && is_blank(line.text[p])) ++p;
-    std::string prefix;
-    std::size_t q = p;
-    while (q < line.text.size() && std::isalpha(static_cast<unsigned char>(line.text[q])))
-      prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(line.text[q++])));
-    if (prefix.empty() || q >= line.text.size() || line.text[q] != '(' || !is_label_prefix(prefix)) continue;
+    if (in_string || c != ')' || !label_opening(line.text, i + 1)) continue;
     line.text.insert(i + 1, 1, ',');
     line.physical.insert(line.physical.begin() + static_cast<std::ptrdiff_t>(i + 1), line.physical[i + 1]);
     restored.push_back(i + 1);

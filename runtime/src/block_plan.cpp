@@ -176,11 +176,14 @@ Result<void> plan_auto(const MeasBlock& block, const Geometry& nominal, const Bl
 
 }  // namespace
 
+bool takes_points(const MeasBlock& block) {
+  return std::any_of(block.steps.begin(), block.steps.end(), [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
+}
+
 Result<BlockPlan> plan_block(const MeasBlock& block, const Geometry& nominal, const BlockPlanContext& context) {
   PlanBuilder plan(context);
   if (auto ok = plan_steps(block, nominal, context, plan); !ok) return tl::unexpected(ok.error());
-  const bool has_points = std::any_of(block.steps.begin(), block.steps.end(),
-                                      [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
+  const bool has_points = takes_points(block);
   if (!has_points && !block.plan_missing_points) return plan.take();
   if (!has_points && context.scan.scan_mode && context.mode != Mode::Man) {
     if (auto ok = plan_nominal_scan(block, nominal, context, plan); !ok) return tl::unexpected(ok.error());

@@ -412,11 +412,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       runs.back().steps.push_back(step);
     }
   }
-  const auto has_points = [](const MeasBlock& run) {
-    return std::any_of(run.steps.begin(), run.steps.end(), [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
-  };
   // Without PTMEAS anywhere, the last sensor measures the planned points (AUTO, a nominal scan).
-  const bool any_points = std::any_of(runs.begin(), runs.end(), has_points);
+  const bool any_points = std::any_of(runs.begin(), runs.end(), takes_points);
   for (std::size_t k = 0; k < runs.size(); ++k) runs[k].plan_missing_points = !any_points && k + 1 == runs.size();
   std::vector<MeasuredPoint> points;
   for (std::size_t k = 0; k < runs.size(); ++k) {

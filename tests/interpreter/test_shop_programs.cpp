@@ -891,7 +891,8 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
   EXPECT_EQ(c.errors, 0U) << c.text;
   // A fitting filter was dropped unseen: told once.
   EXPECT_TRUE(c.has("10:24: warning: GEOALG/CIRCLE,LSTSQR,FILTER: metron does not filter or thin the points")) << c.text;
-  EXPECT_FALSE(c.has("11:22: warning")) << c.text;
+  const auto told = c.text.find("metron does not filter or thin the points");
+  EXPECT_EQ(c.text.find("metron does not filter or thin the points", told + 1), std::string::npos) << c.text;  // once
   // So were a tolerance's numbers past its form's, and DATDEF's second datum.
   const auto extra = check("DMISMN/'t', 5.0\nF(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nT(A) = TOL/FLAT, 0.1, 0.2\n"
                            "T(B) = TOL/DIAM, -0.1, 0.1, 0.3, 4\nT(C) = TOL/DIAM, -0.1, 0.1\nDATDEF/FA(P), DAT(A), DAT(B)\nENDFIL\n");

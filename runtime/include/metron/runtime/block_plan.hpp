@@ -47,6 +47,10 @@ struct BlockPlan {
 /// Errors are the program's (an undefined path, a zero direction, an unpaired scan PTMEAS ...).
 Result<BlockPlan> plan_block(const MeasBlock& block, const Geometry& nominal, const BlockPlanContext& context);
 
+/// Whether the block's steps take points (PTMEAS, a scan), not moves alone: without, plan_block
+/// plans the points (AUTO, a nominal scan) when the block lets it.
+bool takes_points(const MeasBlock& block);
+
 /// The machine command that scans `contour` (MCS) with the context's tool, scan and probe settings.
 Result<machine::ScanPath> scan_command(const geometry::Contour& contour, const BlockPlanContext& context, Span span);
 
