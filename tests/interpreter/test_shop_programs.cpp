@@ -2947,3 +2947,21 @@ TEST(ShopPrograms, AJumpOutOfABlockStopsTheRunAtTheNextMeas) {
             std::string::npos)
       << r.diagnostics;
 }
+
+TEST(ShopPrograms, CheckCountsScanModePtmeasAsScansLikeTheRun) {
+  // RationalDMIS's form: after SCNMOD/ON two PTMEAS are the start and end of a scan, so a circle
+  // with one pair is measured by a scan of many points and MEAS's count is not a PTMEAS count
+  // (Scanning.ScnmodWithPtmeasPairsScansFromStartToEnd runs it). Check said "needs at least 3".
+  const std::string head = "DMISMN/'scan pairs', 05.2\nUNITS/MM, ANGDEC\n"
+                           "F(C1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n";
+  const std::string pair = "PTMEAS/CART, 10, 0, -5, -1, 0, 0\nPTMEAS/CART, -10, 0, -5, 1, 0, 0\n";
+  const auto scanned = check(head + "SCNMOD/ON\nMEAS/CIRCLE, F(C1), 50\n" + pair + "ENDMES\nSCNMOD/OFF\nENDFIL\n");
+  EXPECT_EQ(scanned.errors + scanned.warnings, 0U) << scanned.text;
+  // An odd PTMEAS has no end: the run stops there, and check now says so at that PTMEAS.
+  const auto odd = check(head + "SCNMOD/ON\nMEAS/CIRCLE, F(C1), 3\n" + pair + "PTMEAS/CART, 0, 10, -5, 0, -1, 0\nENDMES\nENDFIL\n");
+  EXPECT_EQ(odd.errors, 1U) << odd.text;
+  EXPECT_TRUE(odd.has("shop.dmi:8:1: error: in scan mode (SCNMOD/ON) PTMEAS come in pairs")) << odd.text;
+  // After SCNMOD/OFF the same block is three touches again: no error, and two are too few.
+  const auto touched = check(head + "SCNMOD/ON\nSCNMOD/OFF\nMEAS/CIRCLE, F(C1), 2\n" + pair + "ENDMES\nENDFIL\n");
+  EXPECT_TRUE(touched.has("a CIRCLE needs at least 3 points, the block has 2")) << touched.text;
+}

@@ -197,6 +197,7 @@ void UnitCompiler::scnmod(const grammar::Statement& s) {
   if (!expect_params(s, 1, "ON or OFF")) return;
   if (s.params.size() != 1 || !(is_word(s.params[0], "ON") || is_word(s.params[0], "OFF")))
     return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.bad-setting", "expected ON or OFF after SCNMOD/");
+  m_scan_mode_on = is_word(s.params[0], "ON");
   auto in = make(Op::ScanMode, s);
   in.operands.push_back(word_operand(s.params[0]));
   emit(std::move(in));
@@ -303,6 +304,7 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   }
   Block b = block(Block::Kind::Meas, s.span);
   b.feature = label;
+  b.scanned = b.scan_pairs = m_scan_mode_on;
   m_symbols.unconstructed.erase(label);
   b.type = *meas_type;
   if (count->op == ir::ExprOp::Constant) {
@@ -331,6 +333,11 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
     // Shop software measures the PTMEAS it has and reports the difference (DMIS 5.3 leaves it to
     // the DME): a warning, and the block's points are used.
     warn(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS; the {} are used", b.declared, b.ptmeas, b.ptmeas));
+  // A macro's body may be called in either mode: only the program's own blocks are judged here.
+  if (b.scan_pairs && !m_macro && !b.control && b.ptmeas % 2 == 1)
+    error(b.last_ptmeas, "sema.scan-pairs",
+          fmt::format("in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: the block has {}, "
+                      "this last one has no end", b.ptmeas));
   const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
   const int minimum = runtime::minimum_points(b.type);
   if (!b.control && !b.scanned && n > 0 && n < minimum)
@@ -399,7 +406,10 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
     if (meas != m_blocks.rend() && meas->reference) in.operands.push_back(*meas->reference);
   }
   for (auto& b : m_blocks)
-    if (b.kind == Block::Kind::Meas) ++b.ptmeas;
+    if (b.kind == Block::Kind::Meas) {
+      ++b.ptmeas;
+      b.last_ptmeas = s.span;
+    }
   emit(std::move(in));
 }
 

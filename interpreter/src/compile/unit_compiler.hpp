@@ -77,7 +77,9 @@ class UnitCompiler {
     int ptmeas = 0;
     int declared = 0;
     bool control = false;                // control flow inside a MEAS: counts are not static
-    bool scanned = false;                // PAMEAS inside: the point count is the machine's
+    bool scanned = false;                // PAMEAS inside, or SCNMOD/ON: the point count is the machine's
+    bool scan_pairs = false;             // SCNMOD/ON before it: its PTMEAS are the ends of scans
+    Span last_ptmeas;                    // MEAS: where its last PTMEAS stands
     std::string feature;                 // MEAS: the feature label; DO: the loop variable
     std::optional<ir::Expr> selector;    // SELECT: the value CASE compares with (evaluated at each CASE)
     bool in_case = false;                // SELECT: inside CASE or DFTCAS, before its ENDCAS
@@ -340,6 +342,9 @@ class UnitCompiler {
   bool m_strict = false;
   std::set<std::string> m_runtime_names;
   bool m_paused = false;  // PAUSE noted once
+  // SCNMOD/ON seen (in program order) and not turned OFF since: a block's PTMEAS then come in pairs,
+  // each the ends of a scan, so its point count is the machine's (as with PAMEAS).
+  bool m_scan_mode_on = false;
   std::set<std::string> m_noted_kinds;  // ERROR, GEOALG: noted once each
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
