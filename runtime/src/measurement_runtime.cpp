@@ -965,17 +965,22 @@ Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(cons
   // DISTWRT and ANGWRT name their reference feature in the TOL statement itself: each output
   // feature is evaluated against it.
   std::vector<std::vector<const Feature*>> evaluations;
-  std::string reference_feature = spec.reference_feature;
-  if (reference_feature.empty() && (spec.kind == ToleranceKind::DistWrt || spec.kind == ToleranceKind::AngWrt) &&
+  std::optional<Feature> datum_reference;
+  if (spec.reference_feature.empty() && (spec.kind == ToleranceKind::DistWrt || spec.kind == ToleranceKind::AngWrt) &&
       !spec.datums.empty()) {
-    // TOL/DISTWRT,...,DAT(A),...: the distance is taken to the datum's feature.
+    // TOL/DISTWRT,...,DAT(A),...: the distance is taken to the datum as DATDEF fixed it (its feature
+    // measured again since does not move the datum, as for the datum reference frames above).
     auto d = datum(spec.datums.front(), span);
     if (!d) return tl::unexpected(d.error());
-    reference_feature = (*d)->feature;
+    const Feature* feature = find_feature((*d)->feature);
+    if (!feature) return program_error(span, fmt::format("feature F({}) is not defined", (*d)->feature));
+    datum_reference = *feature;
+    datum_reference->actual = (*d)->geometry;
+    datum_reference->points.clear();
   }
-  if (!reference_feature.empty()) {
-    const Feature* reference = find_feature(reference_feature);
-    if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", reference_feature));
+  if (!spec.reference_feature.empty() || datum_reference) {
+    const Feature* reference = datum_reference ? &*datum_reference : find_feature(spec.reference_feature);
+    if (!reference) return program_error(span, fmt::format("feature F({}) is not defined", spec.reference_feature));
     for (const Feature* f : features) evaluations.push_back({f, reference});
   } else if (spec.kind != ToleranceKind::DistB && spec.kind != ToleranceKind::Anglb) {
     // A tolerance of one feature (CORTOL, DIAM, FLAT, POS, PERP ...) output with several applies

@@ -499,7 +499,14 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
       "T(CY) = TOL/CORTOL, YAXIS, -0.01, 0.01\n"
       // With respect to a datum: DAT(B)'s feature is the reference (before: an error at check).
       "DATDEF/FA(BORE1), DAT(B)\nT(DB) = TOL/DISTWRT, NOMINL, 5, -0.01, 0.01, DAT(B), XAXIS, AVG\n"
-      "OUTPUT/FA(PNT_MOVED), TA(DX), TA(CY), TA(DB)\nENDFIL\n";
+      "OUTPUT/FA(PNT_MOVED), TA(DX), TA(CY), TA(DB)\n"
+      // A datum is the feature as DATDEF found it: a point made the datum, then constructed 1 mm
+      // further along X, leaves DAT(R) where it was (5 mm from the moved point) and FA(REF) 4 mm.
+      "F(REF) = FEAT/POINT, CART, 40, 47, 30, 0, 0, 1\nCONST/POINT, F(REF), MOVEPT, FA(BORE1), 0, -3, 0\n"
+      "DATDEF/FA(REF), DAT(R)\nCONST/POINT, F(REF), MOVEPT, FA(BORE1), 1, -3, 0\n"
+      "T(DR) = TOL/DISTWRT, NOMINL, 5, -0.01, 0.01, DAT(R), XAXIS, AVG\n"
+      "T(DF) = TOL/DISTWRT, NOMINL, 4, -0.01, 0.01, FA(REF), XAXIS, AVG\n"
+      "OUTPUT/FA(PNT_MOVED), TA(DR), TA(DF)\nENDFIL\n";
   const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* p = report(*r.session, "PNT_MOVED");
@@ -517,6 +524,11 @@ TEST(ShopPrograms, DistwrtCortolMoveptOnThePerfectWorld) {
   const auto* db = tolerance(*r.session, "DB");
   ASSERT_TRUE(db);
   EXPECT_NEAR(db->actual, 5.0, 1e-6);
+  const auto* dr = tolerance(*r.session, "DR");
+  const auto* df = tolerance(*r.session, "DF");
+  ASSERT_TRUE(dr && df);
+  EXPECT_NEAR(dr->actual, 5.0, 1e-6);
+  EXPECT_NEAR(df->actual, 4.0, 1e-6);
 }
 
 // SNSET/CLRSRF,F(plane),d: a clearance surface for AUTO moves. Planned from low down (z = 10),
