@@ -23,6 +23,7 @@ const char* to_string(Op op) {
     case Op::Read: return "READ";
     case Op::Write: return "WRITE";
     case Op::FitAlgorithm: return "FIT_ALGORITHM";
+    case Op::WorkPlane: return "WORK_PLANE";
     case Op::GoHome: return "GOHOME";
     case Op::SetHome: return "FROM";
     case Op::BadTest: return "BADTST";

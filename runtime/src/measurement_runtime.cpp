@@ -946,6 +946,7 @@ Result<std::vector<ToleranceResult>> MeasurementRuntime::evaluate_tolerance(cons
   ToleranceContext context;
   context.alignment = &m_alignment;
   context.units = m_report_units;
+  context.working_plane = m_working_plane;
   for (const auto& d : spec.datums) {
     auto dd = datum(d, span);
     if (!dd) return tl::unexpected(dd.error());

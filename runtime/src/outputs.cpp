@@ -400,7 +400,7 @@ std::string format_feature_report(const FeatureReport& report) {
 std::string format_tolerance_result(const ToleranceResult& result) {
   std::string out =
       fmt::format("T({})  {}  {}  ", result.label, kind_words(result), feature_list(result.features));
-  const Unit unit = is_angle_kind(result.kind) ? Unit::Degree : Unit::Millimetre;
+  const Unit unit = is_angle_result(result) ? Unit::Degree : Unit::Millimetre;
   const auto mm = [&](double v, bool sign) { return fixed(v, unit, sign, result.units); };
   if (is_deviation_kind(result.kind)) {
     // The nominal the deviation is taken from (DISTB: the tolerance's, not the features').
@@ -451,7 +451,7 @@ std::string dmis_feature_line(const FeatureReport& report) {
 std::string dmis_tolerance_line(const ToleranceResult& result) {
   std::vector<std::string> fields;
   if (result.kind == ToleranceKind::Pos) fields.emplace_back(result.three_d ? "3D" : "2D");
-  const bool angle = is_angle_kind(result.kind);
+  const bool angle = is_angle_result(result);
   fields.push_back(dmis_number(result.value, angle ? ParameterUnit::Angle : ParameterUnit::Length, result.units));
   fields.emplace_back(result.in_tolerance ? "INTOL" : "OUTOL");
   const std::string head = fmt::format("TA({}) = TOL/{}", result.label, dmis_word(result.kind));

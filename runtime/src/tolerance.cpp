@@ -6,6 +6,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -379,7 +380,11 @@ Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Fe
                                                                       : "MAXIM: between the far sides")
                            : "MINIM/MAXIM: neither feature has a size, the distance is between their positions");
   }
-  if (!nominal)
+  if (spec.limits)
+    add_note(result, fmt::format("LIMIT form: the distance between {} and {}, deviations from their middle",
+                                 length_text(spec.nominal + spec.lower, context.units),
+                                 length_text(spec.nominal + spec.upper, context.units)));
+  else if (!nominal)
     add_note(result, "no nominal distance from the feature nominals: " + nominal.error());
   else if (std::abs(*nominal - spec.nominal) > 1e-4)
     add_note(result, fmt::format("the feature nominals give {}, the tolerance nominal is {}",
@@ -857,13 +862,54 @@ bool needs_two(ToleranceKind kind) {
 
 // T(l)=TOL/CORTOL,XAXIS|YAXIS|ZAXIS,lo,hi: the deviation of one coordinate of the feature's
 // position from its nominal, in the current coordinate system (DMIS 5.3 6.163 CORTOL).
+// CORTOL,RADIUS|ANGLE: the feature's position in polar coordinates of the working plane (WKPLAN)
+// of the current alignment: the radius from the origin in that plane and the angle from its first
+// axis toward its second (XYPLAN: from X toward Y, as PTMEAS/POL's angle; YZPLAN: from Y toward
+// Z; ZXPLAN: from Z toward X). The angle's deviation is taken the short way round.
+Outcome evaluate_polar_cortol(const ToleranceSpec& spec, const Feature& feature, const Geometry& actual,
+                              const Alignment& frame, const ToleranceContext& context, ToleranceResult result) {
+  const auto in_plane = [&](const Vec3& machine_point) {
+    const Vec3 p = frame.to_part_point(machine_point);
+    switch (context.working_plane) {
+      case WorkingPlane::XY: return Vec2(p.x(), p.y());
+      case WorkingPlane::YZ: return Vec2(p.y(), p.z());
+      case WorkingPlane::ZX: return Vec2(p.z(), p.x());
+    }
+    return Vec2(p.x(), p.y());
+  };
+  const Vec2 a = in_plane(actual.position);
+  const Vec2 n = in_plane(feature.nominal.position);
+  const char* plane = context.working_plane == WorkingPlane::XY ? "XYPLAN"
+                      : context.working_plane == WorkingPlane::YZ ? "YZPLAN" : "ZXPLAN";
+  if (spec.polar == PolarCoordinate::Radius) {
+    result.actual = a.norm();
+    result.nominal = n.norm();
+    result.value = result.actual - result.nominal;
+    add_note(result, fmt::format("polar radius in {} of {}", plane, frame.label));
+  } else {
+    if (a.norm() < 1e-9 || n.norm() < 1e-9)
+      return Error(fmt::format("CORTOL,ANGLE of {}: its {} position is at the origin of {} in {}, where the polar "
+                               "angle is undefined",
+                               feature.label, a.norm() < 1e-9 ? "actual" : "nominal", frame.label, plane));
+    constexpr double deg = 180.0 / std::numbers::pi;
+    result.actual = std::atan2(a.y(), a.x()) * deg;
+    result.nominal = std::atan2(n.y(), n.x()) * deg;
+    result.value = std::remainder(result.actual - result.nominal, 360.0);
+    result.angle_value = true;
+    add_note(result, fmt::format("polar angle in {} of {}", plane, frame.label));
+  }
+  set_limits(result, spec.lower, spec.upper);
+  return result;
+}
+
 Outcome evaluate_cortol(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                         ToleranceResult result) {
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
-  if (spec.axis == DistanceAxis::PointToPoint) return Error("CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
   const Alignment mcs;
   const Alignment& frame = context.alignment ? *context.alignment : mcs;
+  if (spec.polar != PolarCoordinate::None) return evaluate_polar_cortol(spec, feature, **actual, frame, context, std::move(result));
+  if (spec.axis == DistanceAxis::PointToPoint) return Error("CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
   const int k = spec.axis == DistanceAxis::XAxis ? 0 : spec.axis == DistanceAxis::YAxis ? 1 : 2;
   const double a = frame.to_part_point((*actual)->position)[k];
   const double n = frame.to_part_point(feature.nominal.position)[k];
@@ -1109,6 +1155,8 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
   set_limits(result, 0, spec.zone);
   return result;
 }
+
+bool is_angle_result(const ToleranceResult& result) { return is_angle_kind(result.kind) || result.angle_value; }
 
 // The type lists of the evaluators above, in one table (test ToleranceTypes.TheTableIsTheEvaluators).
 bool tolerance_applies(ToleranceKind kind, FeatureType type) {

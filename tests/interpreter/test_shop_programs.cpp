@@ -2185,14 +2185,18 @@ TEST(ShopPrograms, MidPlaneMidLineCopyAndVertexConstructions) {
 }
 
 // TOL/DISTB and DISTWRT with MINIM and MAXIM: between the near or far sides of features of size.
-// Forms metron does not evaluate (polar CORTOL, DISTB,LIMIT) are left out with a warning, as an
-// unknown tolerance type is, instead of stopping check.
+// Forms metron does not evaluate (a CORTOL coordinate other than XAXIS, YAXIS, ZAXIS, RADIUS,
+// ANGLE) are left out with a warning, as an unknown tolerance type is, instead of stopping check.
+// CORTOL,ANGLE and DISTB,LIMIT were such forms; they are evaluated now
+// (ShopPrograms.PolarCoordinatesAndDistanceLimitsAreEvaluated).
 TEST(ShopPrograms, UnevaluatedToleranceFormsAreLeftOut) {
   const Checked c = check("DMISMN/'f', 5.0\nF(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
-                          "T(CA)=TOL/CORTOL,ANGLE,-1,1\nT(DB)=TOL/DISTB,LIMIT,39.9,40.1\nOUTPUT/FA(C),TA(CA)\nENDFIL\n");
+                          "T(CA)=TOL/CORTOL,ANGLE,-1,1\nT(DB)=TOL/DISTB,LIMIT,39.9,40.1\nT(CQ)=TOL/CORTOL,PHI,-1,1\n"
+                          "OUTPUT/FA(C),TA(CA),TA(CQ)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("TOL/CORTOL,ANGLE is not evaluated by metron")) << c.text;
-  EXPECT_TRUE(c.has("TOL/DISTB,LIMIT is not evaluated by metron")) << c.text;
+  EXPECT_FALSE(c.has("TOL/CORTOL,ANGLE is not evaluated by metron")) << c.text;
+  EXPECT_FALSE(c.has("TOL/DISTB,LIMIT is not evaluated by metron")) << c.text;
+  EXPECT_TRUE(c.has("TOL/CORTOL,PHI is not evaluated by metron")) << c.text;
   // A scanned GCURVE: run refused it, check now does.
   const Checked scan = check("DMISMN/'g', 5.0\nP(PTH1)=PATH/LINE,CART,10,50,0,90,50,0,0,-1,0\nF(GC1)=FEAT/GCURVE,CART,10,50,0,0,-1,0\n"
                              "MEAS/GCURVE,F(GC1),20\nPAMEAS/P(PTH1)\nENDMES\nENDFIL\n");
@@ -2976,4 +2980,67 @@ TEST(ShopPrograms, CheckCountsScanModePtmeasAsScansLikeTheRun) {
   // After SCNMOD/OFF the same block is three touches again: no error, and two are too few.
   const auto touched = check(head + "SCNMOD/ON\nSCNMOD/OFF\nMEAS/CIRCLE, F(C1), 2\n" + pair + "ENDMES\nENDFIL\n");
   EXPECT_TRUE(touched.has("a CIRCLE needs at least 3 points, the block has 2")) << touched.text;
+}
+
+// CORTOL's polar coordinates and the LIMIT form of DISTB, against the geometry by hand. The bore's
+// nominal is written 0.5 mm off in X (40.5, 50); the world's bore is at (40, 50), which its four
+// points find. Polar radius and angle in each working plane: XY (40, 50) against (40.5, 50); YZ
+// (50, 30) against (50, 30); ZX (30, 40) against (30, 40.5).
+TEST(ShopPrograms, PolarCoordinatesAndDistanceLimitsAreEvaluated) {
+  const std::string text =
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40.5, 50, 30, 0, 0, 1, 20\n"
+      "MEAS/CIRCLE, F(BORE1), 4\n  GOTO/40.5, 50, 30\n"
+      "  PTMEAS/CART, 50.5, 50, 30, -1, 0, 0\n  PTMEAS/CART, 40.5, 60, 30, 0, -1, 0\n"
+      "  PTMEAS/CART, 30.5, 50, 30, 1, 0, 0\n  PTMEAS/CART, 40.5, 40, 30, 0, 1, 0\n  GOTO/40.5, 50, 80\nENDMES\n"
+      "F(PNT) = FEAT/POINT, CART, 45, 50, 30, 0, 0, 1\nCONST/POINT, F(PNT), MOVEPT, FA(BORE1), 5, 0, 0\n"
+      "T(PR) = TOL/CORTOL, RADIUS, -0.1, 0.1\nT(PA) = TOL/CORTOL, ANGLE, -0.1, 0.1\n"
+      "T(LIM) = TOL/DISTB, LIMIT, 4.99, 5.03, XAXIS\nT(OUT) = TOL/DISTB, LIMIT, 5.01, 5.05, XAXIS\n"
+      "OUTPUT/FA(BORE1), TA(PR), TA(PA)\nOUTPUT/FA(BORE1), FA(PNT), TA(LIM), TA(OUT)\n"
+      "WKPLAN/YZPLAN\nOUTPUT/FA(BORE1), TA(PR), TA(PA)\nWKPLAN/ZXPLAN\nOUTPUT/FA(BORE1), TA(PR), TA(PA)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors + check(text).warnings, 0U) << check(text).text;
+  const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<const metron::runtime::ToleranceResult*> results;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) results.push_back(t);
+  ASSERT_EQ(results.size(), 8U);
+  constexpr double deg = 180.0 / std::numbers::pi;
+  constexpr double tol_mm = 2e-3;
+  const struct {
+    double actual, nominal;
+    bool angle;
+  } want[] = {{std::hypot(40.0, 50.0), std::hypot(40.5, 50.0), false},
+              {std::atan2(50.0, 40.0) * deg, std::atan2(50.0, 40.5) * deg, true},
+              {std::hypot(50.0, 30.0), std::hypot(50.0, 30.0), false},
+              {std::atan2(30.0, 50.0) * deg, std::atan2(30.0, 50.0) * deg, true},
+              {std::hypot(30.0, 40.0), std::hypot(30.0, 40.5), false},
+              {std::atan2(40.0, 30.0) * deg, std::atan2(40.5, 30.0) * deg, true}};
+  const std::size_t polar[] = {0, 1, 4, 5, 6, 7};
+  for (std::size_t i = 0; i < 6; ++i) {
+    SCOPED_TRACE(i);
+    const auto& t = *results[polar[i]];
+    EXPECT_NEAR(t.actual, want[i].actual, want[i].angle ? 3e-3 : tol_mm);
+    EXPECT_NEAR(t.nominal, want[i].nominal, 1e-9);
+    EXPECT_NEAR(t.value, want[i].actual - want[i].nominal, want[i].angle ? 3e-3 : tol_mm);
+    EXPECT_EQ(t.angle_value, want[i].angle);
+    EXPECT_EQ(t.in_tolerance, std::abs(want[i].actual - want[i].nominal) < 0.1);
+  }
+  // LIMIT: the distance 5 (MOVEPT's offset along X exactly) against 4.99..5.03 (IN, 0.01 below the
+  // middle) and 5.01..5.05 (OUT).
+  EXPECT_NEAR(results[2]->actual, 5.0, 1e-9);
+  EXPECT_NEAR(results[2]->value, -0.01, 1e-9);
+  EXPECT_TRUE(results[2]->in_tolerance);
+  EXPECT_NEAR(results[3]->value, -0.03, 1e-9);
+  EXPECT_FALSE(results[3]->in_tolerance);
+  // The report shows the angle in degrees and names the plane.
+  const std::string report = metron::runtime::format_tolerance_result(*results[5]);
+  EXPECT_NE(report.find("polar angle in YZPLAN"), std::string::npos) << report;
+  // Limits the wrong way round, and a coordinate CORTOL does not know.
+  const auto wrong = check("DMISMN/'t', 5.0\nT(L) = TOL/DISTB, LIMIT, 5.05, 5.01, XAXIS\n"
+                           "T(Q) = TOL/CORTOL, PZ, -0.1, 0.1\nWKPLAN/FA(TOP)\nENDFIL\n");
+  EXPECT_TRUE(wrong.has("shop.dmi:2:32: error: the lower limit 5.05 is above the upper limit 5.01")) << wrong.text;
+  EXPECT_TRUE(wrong.has("TOL/CORTOL,PZ is not evaluated by metron")) << wrong.text;
+  EXPECT_TRUE(wrong.has("WKPLAN takes XYPLAN, YZPLAN or ZXPLAN")) << wrong.text;
 }

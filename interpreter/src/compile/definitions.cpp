@@ -443,18 +443,19 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     }
     return error(p[0].span, "sema.bad-tolerance", "expected a tolerance type (DIAM, RAD, DISTB, POS, FLAT, ...) after TOL/");
   }
-  // Forms of known types metron does not evaluate (polar CORTOL, DISTB's LIMIT form): left out
-  // as an unknown type is, with the form named.
+  // Forms of known types metron does not evaluate (CORTOL with a coordinate other than XAXIS,
+  // YAXIS, ZAXIS, RADIUS or ANGLE): left out as an unknown type is, with the form named.
   const auto any_word = [&](std::initializer_list<const char*> ws) {
     return std::any_of(p.begin() + 1, p.end(), [&](const grammar::Expr& e) {
       return std::any_of(ws.begin(), ws.end(), [&](const char* w) { return is_word(e, w); });
     });
   };
   std::string form;
-  if (*parsed == ToleranceKind::Cortol && !any_word({"XAXIS", "YAXIS", "ZAXIS"}))
+  if (*parsed == ToleranceKind::Cortol && !any_word({"XAXIS", "YAXIS", "ZAXIS", "RADIUS", "ANGLE"}))
     for (std::size_t i = 1; i < p.size() && form.empty(); ++i)
       if (is_word(p[i]) && !is_variable(p[i].text)) form = p[0].text + "," + p[i].text;
-  if (*parsed == ToleranceKind::DistB && any_word({"LIMIT"})) form = p[0].text + ",LIMIT";
+  // TOL/DISTB|DISTWRT,LIMIT,lolim,uplim,...: the distance's limits instead of a nominal and tolerances.
+  const bool limit_form = (*parsed == ToleranceKind::DistB || *parsed == ToleranceKind::DistWrt) && any_word({"LIMIT"});
   if (!form.empty()) {
     warn(p[0].span, "sema.unevaluated-tolerance",
          fmt::format("TOL/{} is not evaluated by metron; the OUTPUT of T({}) will be left out", form, s.target->name));
@@ -517,19 +518,22 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       in.operands.push_back(expr_operand(std::move(*e)));
     }
   }
-  const ToleranceNumbers need = tolerance_numbers(kind);
+  const ToleranceNumbers need =
+      limit_form ? ToleranceNumbers{2, "the lower and upper limit of the distance", false} : tolerance_numbers(kind);
   if (numbers.size() < need.count)
     return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count, need.count == 1 ? "" : "s", numbers.size()));
   if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) && !has_reference)
     return error(p.back().span, "sema.expected-feature", fmt::format("TOL/{} needs the reference feature FA(x) or datum DAT(x)", word));
   if (kind == ToleranceKind::Cortol &&
-      std::none_of(p.begin(), p.end(), [&](const grammar::Expr& e) { return is_word(e, "XAXIS") || is_word(e, "YAXIS") || is_word(e, "ZAXIS"); }))
-    return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
+      !any_word({"XAXIS", "YAXIS", "ZAXIS", "RADIUS", "ANGLE"}))
+    return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS, ZAXIS, RADIUS or ANGLE");
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
        kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
        kind == ToleranceKind::Width || kind == ToleranceKind::Angl) &&
       numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
+  if (limit_form && numbers[0] > numbers[1])
+    return error(p[3].span, "sema.tolerance-order", fmt::format("the lower limit {} is above the upper limit {}", numbers[0], numbers[1]));
   if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||
        kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout || kind == ToleranceKind::Totrun ||
        kind == ToleranceKind::Symmty) &&

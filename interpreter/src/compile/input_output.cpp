@@ -13,7 +13,7 @@ using ir::Op;
 
 namespace {
 // Statements metron accepts with no run-time effect (settings a virtual CMM does not need).
-const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "WKPLAN", "VFORM",
+const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "VFORM",
                                        "DMEHW", "DMESW", "FINPOS", "CLMPID", "CLMPSN", "PREVOP", "MFGDEV",
                                        "OPERID", "PLANID", "PARTID", "PARTRV", "PARTSN", "PROCID", "QISDEF",
                                        "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT",
@@ -64,7 +64,7 @@ void UnitCompiler::add_input_output(StatementTable& t) {
       {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
       {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
       {"ERROR", &UnitCompiler::on_error}, {"RESUME", &UnitCompiler::resume},
-      {"GEOALG", &UnitCompiler::geometry_algorithm}, {"GOHOME", &UnitCompiler::go_home},
+      {"GEOALG", &UnitCompiler::geometry_algorithm}, {"WKPLAN", &UnitCompiler::work_plane}, {"GOHOME", &UnitCompiler::go_home},
       {"FROM", &UnitCompiler::from}, {"BADTST", &UnitCompiler::bad_test}
   });
 }
@@ -97,6 +97,22 @@ void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
 // SPHERE and CYLNDR, MINMAX and LSTSQR to PLANE and LINE; any other type or algorithm (CONE, an
 // EXTERN algorithm ...), and a FILTER or ELIMINATE after it, is accepted without its effect, which
 // a program may rely on: one warning per program says so.
+// WKPLAN/XYPLAN|YZPLAN|ZXPLAN: the plane CORTOL's polar coordinates (RADIUS, ANGLE) are taken in.
+// Another form (a feature's plane) is read leniently with a warning: XYPLAN stays.
+void UnitCompiler::work_plane(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "XYPLAN, YZPLAN or ZXPLAN")) return;
+  const auto& w = s.params[0];
+  if (s.params.size() != 1 || !(is_word(w, "XYPLAN") || is_word(w, "YZPLAN") || is_word(w, "ZXPLAN"))) {
+    if (m_strict) return error(w.span, "sema.bad-setting", "expected XYPLAN, YZPLAN or ZXPLAN after WKPLAN/");
+    warn(w.span, "sema.bad-setting", "WKPLAN takes XYPLAN, YZPLAN or ZXPLAN; this form is not applied: the working plane is unchanged");
+    emit(make(Op::Nop, s, "WKPLAN"));
+    return;
+  }
+  auto in = make(Op::WorkPlane, s);
+  in.operands.push_back(word_operand(w));
+  emit(std::move(in));
+}
+
 void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   const auto word_at = [&](std::size_t i) { return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string(); };
   const std::string type = word_at(0), algorithm = word_at(1);

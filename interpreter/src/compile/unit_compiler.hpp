@@ -228,6 +228,7 @@ class UnitCompiler {
   // ---- input/output: UNITS, MODE, TEXT, DEVICE, OPEN, CLOSE (compile/input_output.cpp) ------
   void no_effect(const grammar::Statement& s);
   void geometry_algorithm(const grammar::Statement& s);
+  void work_plane(const grammar::Statement& s);
   void go_home(const grammar::Statement& s);
   void from(const grammar::Statement& s);
   std::optional<ir::Instruction> point_instruction(const grammar::Statement& s, ir::Op op, const char* what);

@@ -180,6 +180,9 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (word == "XAXIS") t.axis = runtime::DistanceAxis::XAxis;
     if (word == "YAXIS") t.axis = runtime::DistanceAxis::YAxis;
     if (word == "ZAXIS") t.axis = runtime::DistanceAxis::ZAxis;
+    if (word == "RADIUS") t.polar = runtime::PolarCoordinate::Radius;  // TOL/CORTOL,RADIUS|ANGLE,lo,up
+    if (word == "ANGLE") t.polar = runtime::PolarCoordinate::Angle;
+    if (word == "LIMIT") t.limits = true;  // TOL/DISTB|DISTWRT,LIMIT,lolim,uplim,...
     if (word == "MINIM") t.extent = runtime::DistanceExtent::Minimum;
     if (word == "MAXIM") t.extent = runtime::DistanceExtent::Maximum;
     // TOL/DIAM|RAD,lo,up,AVG|MAX|MIN (DMIS 5.x): the least-squares size, or the largest or smallest.
@@ -222,8 +225,22 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     case K::Profp: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
     case K::Rad: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
     case K::DistB:
-    case K::DistWrt: t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len; break;
-    case K::Cortol: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
+    case K::DistWrt:
+      if (t.limits) {  // the limits' middle is the nominal the deviations are reported from
+        if (nums[0] > nums[1])
+          return vm.fail(in.span, fmt::format("the lower limit {} is above the upper limit {}", nums[0], nums[1]));
+        t.nominal = (nums[0] + nums[1]) / 2 * len;
+        t.lower = nums[0] * len - t.nominal;
+        t.upper = nums[1] * len - t.nominal;
+      } else {
+        t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len;
+      }
+      break;
+    case K::Cortol: {
+      const double unit = t.polar == runtime::PolarCoordinate::Angle ? deg : len;
+      t.lower = nums[0] * unit; t.upper = nums[1] * unit;
+      break;
+    }
     case K::AngWrt:
     case K::Anglb: t.nominal = nums[0] * deg; t.lower = nums[1] * deg; t.upper = nums[2] * deg; break;
     case K::Angl: t.lower = nums[0] * deg; t.upper = nums[1] * deg; break;

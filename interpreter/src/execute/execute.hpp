@@ -56,6 +56,7 @@ struct Execute {
   static ExecuteFn units, decimal_places, read, write, mode, text, device_def, device_open, device_close;
   static ExecuteFn feature_def, tolerance_def, sensor_def, datdef, declare;
   static ExecuteFn fit_algorithm;
+  static ExecuteFn work_plane;
   static ExecuteFn go_home;
   static ExecuteFn set_home;
   static ExecuteFn on_error;

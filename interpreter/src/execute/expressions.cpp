@@ -173,7 +173,7 @@ tl::expected<Value, std::string> Execute::query(Interpreter& vm, const ir::Expr&
     const runtime::ToleranceResult& r = (*results)[static_cast<std::size_t>(n - 1)];
     if (e.name == "INTOL") return Value::boolean_value(r.in_tolerance);
     if (e.name == "OUTOL") return Value::boolean_value(!r.in_tolerance);
-    const bool angle = runtime::is_angle_kind(r.kind);
+    const bool angle = runtime::is_angle_result(r);
     double v = 0;
     if (e.name == "ACT") v = r.actual;
     else if (e.name == "DEV") v = r.value;

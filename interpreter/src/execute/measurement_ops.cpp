@@ -15,7 +15,7 @@ using runtime::FeatureType;
 
 void Execute::add_measurement(ExecuteTable& t) {
   add_rows(t, {
-      {Op::SensorSelect, &sensor_select}, {Op::FitAlgorithm, &fit_algorithm}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
+      {Op::SensorSelect, &sensor_select}, {Op::FitAlgorithm, &fit_algorithm}, {Op::WorkPlane, &work_plane}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
       {Op::GoTo, &go_to}, {Op::GoHome, &go_home}, {Op::SetHome, &set_home}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
   });
 }
@@ -45,6 +45,15 @@ ExecStatus Execute::fit_algorithm(Interpreter& vm, const ir::Instruction& in, Ca
                                  : word == "MINCIR" ? F::MinimumCircumscribed
                                  : word == "MINMAX" ? F::MinimumZone
                                                     : F::LeastSquares);
+  return ExecStatus::Running;
+}
+
+// Op::WorkPlane: WKPLAN/XYPLAN|YZPLAN|ZXPLAN
+ExecStatus Execute::work_plane(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  const std::string& word = in.operands.at(0).word;
+  vm.m_runtime.set_working_plane(word == "YZPLAN"   ? runtime::WorkingPlane::YZ
+                                 : word == "ZXPLAN" ? runtime::WorkingPlane::ZX
+                                                    : runtime::WorkingPlane::XY);
   return ExecStatus::Running;
 }
 

@@ -142,6 +142,8 @@ class MeasurementRuntime {
   void set_mode(Mode mode) { m_mode = mode; }
   /// UNITS and DECPL: what OUTPUT reports and DMIS output files are written in.
   void set_report_units(ReportUnits units) { m_report_units = std::move(units); }
+  /// WKPLAN: the plane of CORTOL's polar coordinates from here on.
+  void set_working_plane(WorkingPlane plane) { m_working_plane = plane; }
   /// Strict reading (`--strict`): a tolerance that cannot be evaluated stops the run; read
   /// leniently (the default) it is left out of its OUTPUT with a warning, as shop software goes on.
   void set_strict(bool strict) { m_strict = strict; }
@@ -273,6 +275,7 @@ class MeasurementRuntime {
   std::map<std::string, std::vector<ToleranceResult>> m_evaluated;  ///< EVAL results, for OUTPUT/TA(t) alone
   std::map<std::string, std::vector<ToleranceResult>> m_last_results;  ///< last OUTPUT or EVAL, for VALUE/TA(t)
   std::map<std::string, Datum> m_datums;
+  WorkingPlane m_working_plane = WorkingPlane::XY;
   std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
   std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()
   Alignment m_alignment;

@@ -33,12 +33,22 @@ inline bool is_angle_kind(ToleranceKind kind) {
   return kind == ToleranceKind::Anglb || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Angl;
 }
 
+struct ToleranceResult;
+/// Whether a result's value is an angle (degrees): an angle kind's, or CORTOL's polar angle.
+bool is_angle_result(const ToleranceResult& result);
+
 /// Whether a tolerance kind applies to a feature type: the types its evaluator accepts (the
 /// compiler checks OUTPUT with it, so that check and run agree).
 bool tolerance_applies(ToleranceKind kind, FeatureType type);
 
 /// Distance direction for DISTB (and the coordinate of CORTOL).
 enum class DistanceAxis { PointToPoint, XAxis, YAxis, ZAxis };
+/// CORTOL's polar coordinates, in the working plane (WKPLAN): the radius from the origin and the
+/// angle from the plane's first axis.
+enum class PolarCoordinate { None, Radius, Angle };
+/// WKPLAN: the plane polar coordinates are taken in, named by its two axes (the angle turns from
+/// the first toward the second, as the polar angle of XYPLAN turns from X toward Y).
+enum class WorkingPlane { XY, YZ, ZX };
 /// DISTB and DISTWRT: the distance between centres (AVG, the default) or between the near (MINIM)
 /// or far (MAXIM) sides of features of size.
 enum class DistanceExtent { Average, Minimum, Maximum };
@@ -56,6 +66,9 @@ struct ToleranceSpec {
   bool three_d = false;          ///< POS 3D (else 2D)
   bool long_side = false;        ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
   DistanceAxis axis = DistanceAxis::PointToPoint;
+  PolarCoordinate polar = PolarCoordinate::None;  ///< CORTOL,RADIUS|ANGLE (lower, upper: mm or degrees)
+  /// DISTB, DISTWRT: the LIMIT form: `lower` and `upper` bound the distance itself (no nominal).
+  bool limits = false;
   DistanceExtent extent = DistanceExtent::Average;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced (COMPOS: the PATERN tier's)
@@ -94,6 +107,7 @@ struct ToleranceResult {
   bool in_tolerance = false;
   std::string note;              ///< how it was evaluated when not obvious (e.g. the datum reference frame)
   bool three_d = false;          ///< POS: the spec's 3D zone (else 2D); the DMIS output line needs it
+  bool angle_value = false;      ///< the value is an angle (degrees) though the kind is not (CORTOL,ANGLE)
   ReportUnits units;             ///< the program's UNITS and DECPL at the OUTPUT (reports only)
 };
 
@@ -103,6 +117,7 @@ struct ToleranceContext {
   std::vector<const Datum*> datums;                ///< resolved datums of spec.datums, same order
   std::vector<const Datum*> feature_datums;        ///< resolved datums of spec.feature_datums (COMPOS)
   ReportUnits units;                               ///< the program's UNITS and DECPL: the notes' lengths
+  WorkingPlane working_plane = WorkingPlane::XY;   ///< WKPLAN: CORTOL's polar coordinates
 };
 
 /// Evaluates `spec` on `features` (one feature, or two for DISTB). Returns an error message

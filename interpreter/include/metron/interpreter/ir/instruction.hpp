@@ -76,6 +76,7 @@ enum class Op {
   Read,         ///< READ/DID(x),v1,v2,...: labels: DID; `names`: the variables, in order
   Write,        ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
   FitAlgorithm, ///< GEOALG/type,...: words: the type (CIRCLE, SPHERE, CYLNDR, PLANE, LINE) and the algorithm (LSTSQR, MAXINS, MINCIR, MINMAX)
+  WorkPlane,    ///< WKPLAN/XYPLAN|YZPLAN|ZXPLAN: word, the plane of CORTOL's polar coordinates
   GoHome,       ///< GOHOME: no operands
   SetHome,      ///< FROM/[CART|POL,]x,y,z: payload FormPayload; exprs: the point GOHOME goes to from here on
   BadTest,      ///< BADTST/ON|OFF: word ON or OFF
