@@ -492,6 +492,10 @@ void MeasurementRuntime::apply_fit_algorithm(Geometry& actual, const std::vector
         break;
       }
       case FeatureType::Sphere: actual.position = position; break;
+      case FeatureType::Cone:  // its position is its apex
+        actual.position = position;
+        actual.direction = d;
+        break;
       case FeatureType::Plane:
         actual.position -= (actual.position - position).dot(d) * d;
         actual.direction = d;
@@ -511,6 +515,7 @@ void MeasurementRuntime::apply_fit_algorithm(Geometry& actual, const std::vector
     place_reference(zone->position, zone->direction);
     if (type == FeatureType::Circle || type == FeatureType::Sphere || type == FeatureType::Cylinder)
       actual.diameter_mm = zone->zone_diameter_mm;
+    if (type == FeatureType::Cone) actual.apex_angle_deg = zone->apex_angle_deg;
     return;
   }
   const bool inscribed = algorithm == FitAlgorithm::MaximumInscribed;

@@ -439,6 +439,42 @@ TEST(Geoalg, PlanesAndLinesAreTheMiddleOfTheirMinimumZone) {
   EXPECT_GT(mz_line.direction.x(), 1 - 1e-10);
 }
 
+// GEOALG/CONE,MINMAX: a 60 degree boss cone (apex at (40, 50, 0), axis +z) probed in two sections
+// (z 10 and 40) with the alternating contacts of MinimumZone.ConicityOfTwoAlternatingSectionsIs-
+// TheNormalZoneWidth: outer points t = 10 um off the surface at 0 and 180 degrees, inner ones on
+// it at 90 and 270 and in a cluster from 10 to 40 degrees. The minimum-zone cone is the zone's
+// middle, t/2 out: its apex t/2 / sin 30 deg = 10 um below the true apex, its angle 60 degrees;
+// least squares, pulled by the cluster, is elsewhere.
+TEST(Geoalg, AConeIsTheMiddleOfItsMinimumZone) {
+  const Vec3 apex(40, 50, 0);
+  const double half = std::numbers::pi / 6, t = 0.01;
+  std::string points;
+  for (const double z : {10.0, 40.0}) {
+    std::vector<std::pair<double, double>> at = {{0, t}, {90, 0}, {180, t}, {270, 0}};
+    for (double a = 10; a <= 40; a += 5) at.push_back({a, 0});
+    for (const auto& [deg, off] : at) {
+      const double a = deg * std::numbers::pi / 180;
+      const Vec3 u(std::cos(a), std::sin(a), 0);
+      const Vec3 normal = (std::cos(half) * u - std::sin(half) * Vec3::UnitZ()).normalized();
+      points += ptmeas(apex + Vec3(0, 0, z) + (z * std::tan(half) + off / std::cos(half)) * u, normal);
+    }
+  }
+  const auto measured = [&](const std::string& geoalg) {
+    auto r = run(geoalg + "F(CN) = FEAT/CONE, OUTER, CART, 40, 50, 0, 0, 0, 1, 60\nMEAS/CONE, F(CN), 22\n" + points + "ENDMES\n",
+                 [](const Vec3& q) { return q; });
+    EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
+    return r->runtime->features().at("CN").actual.value_or(runtime::Geometry{});
+  };
+  const auto ls = measured("");
+  const auto mz = measured("GEOALG/CONE, MINMAX\n");
+  EXPECT_NEAR((mz.position - (apex - Vec3(0, 0, (t / 2) / std::sin(half)))).norm(), 0, 1e-5);
+  EXPECT_NEAR(mz.apex_angle_deg, 60.0, 1e-4);
+  EXPECT_GT(mz.direction.z(), 1 - 1e-9);
+  EXPECT_GT((ls.position - mz.position).norm(), 1e-3);  // the two algorithms differ here
+  const auto back = measured("GEOALG/CONE, MINMAX\nGEOALG/CONE, LSTSQR\n");
+  EXPECT_NEAR((back.position - ls.position).norm(), 0, 1e-12);
+}
+
 // CONST/POINT,EXTREM,...,RADIAL: the measured point farthest from (MIN: nearest to) the feature's
 // own axis. Six points of a bore at 60 degree steps, radii 10, 10.02, 10, 9.99, 10, 10: the
 // expected points are chosen by distance from an independent algebraic (Kasa) circle through the

@@ -201,12 +201,13 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   EXPECT_EQ(c.warnings, 0u) << c.text;
   EXPECT_EQ(c.notes, 1u) << c.text;  // PAUSE, once
   // Statements accepted without their effect warn once per kind: a program may rely on them.
-  const auto once = check("DMISMN/'p', 5.1\nMFGDEV/'M1'\nGEOALG/CIRCLE,LSTSQR\nGEOALG/CIRCLE,MINMAX\nGEOALG/CONE,MINMAX\n"
-                          "GEOALG/ELLIPS,MINMAX\nGOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
+  const auto once = check("DMISMN/'p', 5.1\nMFGDEV/'M1'\nGEOALG/CIRCLE,LSTSQR\nGEOALG/CIRCLE,MINMAX\nGEOALG/CONE,MAXINS\n"
+                          "GEOALG/ELLIPS,MINMAX\nGEOALG/CONE,MINMAX\nGOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
   EXPECT_EQ(once.errors, 0u) << once.text;
   EXPECT_EQ(once.warnings, 1u) << once.text;
-  // GEOALG/CIRCLE,MINMAX is applied (the minimum zone circle); CONE,MINMAX is the first that is not.
-  EXPECT_TRUE(once.has("5:1: warning: GEOALG/CONE,MINMAX: this fitting algorithm is not applied")) << once.text;
+  // GEOALG/CIRCLE,MINMAX and CONE,MINMAX are applied (minimum zone reference features); a cone
+  // has no size a gauge would find, so CONE,MAXINS is the first that is not.
+  EXPECT_TRUE(once.has("5:1: warning: GEOALG/CONE,MAXINS: this fitting algorithm is not applied")) << once.text;
   EXPECT_FALSE(once.has("GOHOME")) << once.text;
   // A REPORT layout named in OUTPUT: one note, not a warning per OUTPUT.
   const auto layout = check("DMISMN/'p', 5.1\nR(R1)=REPORT/ALGOR,DATE\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"

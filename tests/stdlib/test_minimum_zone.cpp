@@ -96,6 +96,33 @@ TEST(MinimumZone, CylindricityOfTwoAlternatingSectionsIsTheShellWidth) {
   EXPECT_NEAR(std::abs(mz->direction.z()), 1.0, 1e-8);
 }
 
+// Conicity: a 60 degree cone (apex at the origin, axis +z), the roundness configuration in two
+// sections at z = 10 and 40: outer points t off the surface along its normal (t / cos 30 deg out
+// from the axis), inner points on it. Within a section, no axis place gives a narrower spread of
+// radii, and a change of the apex angle or of the apex along the axis moves a section's distances
+// all alike (by an amount growing with z), so no other cone narrows the zone: it is t, about this
+// cone. An inner cluster pulls least squares off.
+TEST(MinimumZone, ConicityOfTwoAlternatingSectionsIsTheNormalZoneWidth) {
+  const double half = 30 * pi / 180, t = 0.01;
+  std::vector<Vec3> pts;
+  for (double z : {10.0, 40.0}) {
+    const double r = z * std::tan(half), out = r + t / std::cos(half);
+    for (const auto& p : {polar(out, 0, z), polar(r, 90, z), polar(out, 180, z), polar(r, 270, z)}) pts.push_back(p);
+    for (double a = 10; a <= 40; a += 5) pts.push_back(polar(r, a, z));
+  }
+  const auto mz = minimum_zone(Shape::Cone, pts);
+  ASSERT_TRUE(mz);
+  EXPECT_NEAR(mz->form_mm, t, 1e-8);
+  EXPECT_GT(mz->least_squares_form_mm, t * 1.05);
+  EXPECT_NEAR(std::abs(mz->direction.z()), 1.0, 1e-8);
+  EXPECT_NEAR(mz->apex_angle_deg, 60.0, 1e-5);
+  // The reference cone is the zone's middle: the surface t/2 out, so its apex t/2 / sin 30 deg
+  // below the origin along the axis.
+  EXPECT_NEAR(mz->position.x(), 0.0, 1e-6);
+  EXPECT_NEAR(mz->position.y(), 0.0, 1e-6);
+  EXPECT_NEAR(mz->position.z(), -(t / 2) / std::sin(half), 1e-6);
+}
+
 // Brute force against the fast path: for random planar data, no normal on a fine grid about the
 // result gives a thinner slab, and the minimum zone is never wider than least squares.
 TEST(MinimumZone, FlatnessIsNotBeatenByAGridOfNormals) {

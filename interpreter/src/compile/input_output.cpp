@@ -117,7 +117,7 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   const auto word_at = [&](std::size_t i) { return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string(); };
   const std::string type = word_at(0), algorithm = word_at(1);
   const bool sized = type == "CIRCLE" || type == "ARC" || type == "SPHERE" || type == "CYLNDR";
-  const bool flat = type == "PLANE" || type == "LINE";
+  const bool unsized = type == "PLANE" || type == "LINE" || type == "CONE";  // no size a gauge would find
   const bool least_squares = s.params.size() < 2 || algorithm == "LSTSQR" || algorithm == "DEFALT";
   // FILTER (a cut-off, a Gaussian ...) or ELIMINATE (outliers) after the algorithm: the points are
   // fitted as measured; told once, not dropped unseen.
@@ -126,7 +126,7 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
     warn(s.params[2].span, "sema.not-applied",
          fmt::format("GEOALG/{},{},{}: metron does not filter or thin the points; they are fitted as measured (noted once)",
                      type, algorithm, s.params[2].text));
-  if ((sized || flat) && (least_squares || algorithm == "MINMAX" || (sized && (algorithm == "MAXINS" || algorithm == "MINCIR")))) {
+  if ((sized || unsized) && (least_squares || algorithm == "MINMAX" || (sized && (algorithm == "MAXINS" || algorithm == "MINCIR")))) {
     // MAXINS a hole's pin-gauge size, MINCIR a boss's ring-gauge size, MINMAX the minimum zone
     // reference feature; LSTSQR and DEFALT back to least squares.
     auto in = make(Op::FitAlgorithm, s);

@@ -237,7 +237,46 @@ tl::expected<MinimumZone, FitFailure> minimum_zone(Shape shape, const std::vecto
       }
       break;
     }
-    default: return tl::unexpected(FitFailure::Degenerate);  // point, cone: no MZ form here
+    case Shape::Cone: {
+      // Conicity: two coaxial cones of one apex angle, the zone measured along the surface normal.
+      // Free: the axis direction (2 tilts), the apex's place across it (2, in units of the points'
+      // extent) and the half angle (1). A point's normal distance from the cone of apex v, unit
+      // axis a and half angle alpha: with h = (p - v).a and rho its distance from the axis,
+      // rho cos(alpha) - h sin(alpha) (positive outside); sliding the apex along the axis adds a
+      // constant, so the apex's place along it is not free.
+      const double half0 = ls->apex_angle_deg * std::numbers::pi / 360.0;
+      if (!(half0 > 0 && half0 < std::numbers::pi / 2)) return tl::unexpected(FitFailure::Degenerate);
+      // The least-squares apex: the axis point `position` lies cone_distance from the surface.
+      const Vec3 apex0 = ls->position - ls->cone_distance_mm / std::sin(half0) * n0;
+      struct Cone {
+        Vec3 apex, axis;
+        double half;
+      };
+      const auto cone = [&](const std::vector<double>& x) {
+        return Cone{apex0 + size * (x[2] * e1 + x[3] * e2), tilt(n0, e1, e2, x[0], x[1]), half0 + x[4]};
+      };
+      const auto width = [&](const std::vector<double>& x) {
+        const Cone c = cone(x);
+        if (!(c.half > 0 && c.half < std::numbers::pi / 2)) return std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          const Vec3 d = points[i] - c.apex;
+          const double h = d.dot(c.axis);
+          r[i] = (d - h * c.axis).norm() * std::cos(c.half) - h * std::sin(c.half);
+        }
+        return spread(r);
+      };
+      const auto x = nelder_mead(width, {0, 0, 0, 0, 0}, 1e-3, mz.evaluations);
+      const Cone best = cone(x);
+      mz.form_mm = width(x);
+      // The reference cone is the zone's middle: the apex slides along the axis until the
+      // distances' mid-range is zero (each moves by t sin(alpha) for a slide of -t).
+      const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
+      mz.position = best.apex - (0.5 * (*mn + *mx) / std::sin(best.half)) * best.axis;
+      mz.direction = best.axis;
+      mz.apex_angle_deg = 2 * best.half * 180.0 / std::numbers::pi;
+      break;
+    }
+    default: return tl::unexpected(FitFailure::Degenerate);  // point: no MZ form
   }
   if (shape == Shape::Circle || shape == Shape::Sphere || shape == Shape::Cylinder) {
     // `r` holds the radii about the optimum: the last width evaluated was there.

@@ -24,6 +24,9 @@ struct MinimumZone {
   /// `direction`): the size of the minimum-zone reference feature (ISO 12181-1 MZCI and its
   /// sphere and cylinder counterparts).
   double zone_diameter_mm = 0;
+  /// Cone: the full apex angle of the minimum-zone reference cone, whose apex is `position` and
+  /// axis `direction` (from the apex toward the opening); its surface is the zone's middle.
+  double apex_angle_deg = 0;
   int evaluations = 0;       ///< objective evaluations of the search
 };
 
@@ -31,7 +34,9 @@ struct MinimumZone {
 /// (flatness), Circle (roundness in the plane normal to `plane_normal` when given, else in the
 /// least-squares plane), Line (straightness: two parallel
 /// lines in the plane normal to `plane_normal` when given, else the diameter of the narrowest
-/// cylinder about a line), Sphere (sphericity) or Cylinder (cylindricity: coaxial cylinders).
+/// cylinder about a line), Sphere (sphericity), Cylinder (cylindricity: coaxial cylinders) or
+/// Cone (conicity: two coaxial cones of one apex angle, the zone measured normal to the surface;
+/// ISO 1101 treats a cone's form as a surface profile, its minimum zone this one).
 /// The search starts at the least-squares feature, so the result is never wider than it
 /// (Nelder-Mead simplex on the reference's free parameters with restarts, J. A. Nelder and
 /// R. Mead, Computer Journal 7(4), 1965; the width is convex near the optimum for these sets).
