@@ -51,6 +51,7 @@ MachineState NominalMachine::state() const {
   s.executed_commands = m_executed;
   s.scan_buffer_segments = 0;  // whole scans: no command buffers to fill
   s.home_mm = m_config.home_mm;
+  s.nominal = true;
   return s;
 }
 

@@ -258,6 +258,13 @@ Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, st
 }
 
 Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::string>& path, Span span) {
+  if (m_machine.state().nominal) {
+    // A dry run's machine has no dynamics to measure (its moves take no ramp, its touches no
+    // delay): the run goes on with the default touch, as it would without the statement.
+    warn(span, "CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise; no file is written "
+               "and PTMEAS keep the default touch");
+    return {};
+  }
   auto c = characterise(m_machine, CharacterisationSettings{});
   // The characterisation used its own tool: give the program's active one back.
   if (!m_active_sensor.empty()) {

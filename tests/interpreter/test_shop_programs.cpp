@@ -3045,3 +3045,20 @@ TEST(ShopPrograms, PolarCoordinatesAndDistanceLimitsAreEvaluated) {
   EXPECT_TRUE(wrong.has("TOL/CORTOL,PZ is not evaluated by metron")) << wrong.text;
   EXPECT_TRUE(wrong.has("WKPLAN takes XYPLAN, YZPLAN or ZXPLAN")) << wrong.text;
 }
+
+// A dry run follows a program to its end: CHARACTERISE there (example 06) stopped it with
+// "characterisation failed: ... a positive feed and ramp time", the nominal machine having no
+// ramps. It is a warning now, and the program's bore is measured after it.
+TEST(ShopPrograms, ADryRunGoesPastCharacterise) {
+  const auto r = dry_run("DMISMN/'dry', 5.0\nUNITS/MM, ANGDEC\nCALL/EXTERN, SYS, 'CHARACTERISE touch.json'\n"
+                         "SNSLCT/SA(T1A0B0)\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+                         "MEAS/CIRCLE, F(B), 4\nENDMES\nOUTPUT/FA(B)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::string said = r.diagnostics;
+  for (const auto& line : r.session->record().diagnostics) said += line + "\n";
+  EXPECT_NE(said.find("CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise"), std::string::npos)
+      << said;
+  const auto* b = report(*r.session, "B");
+  ASSERT_TRUE(b && b->actual);
+  EXPECT_NEAR(b->actual->diameter_mm, 20.0, 1e-9);
+}

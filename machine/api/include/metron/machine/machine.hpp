@@ -29,6 +29,9 @@ struct MachineState {
   std::optional<double> temperature_c;
   /// Where the machine goes home to (DMIS GOHOME), machine coordinates, when the backend knows.
   std::optional<Vec3> home_mm;
+  /// A dry run's machine (every touch on its nominal, moves without ramps): it has no dynamics a
+  /// characterisation could measure.
+  bool nominal = false;
 };
 
 /// A machine backend: the virtual CMM, or a real controller behind the same interface.
