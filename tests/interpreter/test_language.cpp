@@ -225,3 +225,19 @@ TEST(Language, EmitIrKeepsSourcePositions) {
 }
 
 }  // namespace
+
+// SCSNS(), SMODE() and SCFEAT(): the current sensor, mode and feature as strings (read as their
+// names say, beside SDATE and STIME; they were unknown functions that stopped a run).
+TEST(Language, CurrentSensorModeAndFeatureAreStrings) {
+  auto r = run("TEXT/OPER, CONCAT('[', SCSNS(), '] [', SCFEAT(), '] ', SMODE())\n"
+               "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(PROBE4)\n"
+               "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\nMODE/PROG, MAN\n"
+               "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 4\n"
+               "  GOTO/40, 50, 30\n  PTMEAS/CART, 50, 50, 30, -1, 0, 0\n  PTMEAS/CART, 40, 60, 30, 0, -1, 0\n"
+               "  PTMEAS/CART, 30, 50, 30, 1, 0, 0\n  PTMEAS/CART, 40, 40, 30, 0, 1, 0\n  GOTO/40, 50, 80\nENDMES\n"
+               "TEXT/OPER, CONCAT(SCSNS(), ' ', SCFEAT(), ' ', SMODE())\n"
+               "F(MID) = FEAT/POINT, CART, 40, 50, 30, 0, 0, 1\nCONST/POINT, F(MID), MOVEPT, FA(BORE1), 0, 0, 0\n"
+               "MODE/MAN\nTEXT/OPER, CONCAT(SCFEAT(), ' ', SMODE())\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"[] [] AUTO", "PROBE4 BORE1 PROG,MAN", "MID MAN"}));
+}

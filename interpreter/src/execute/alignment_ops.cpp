@@ -153,6 +153,7 @@ ExecStatus Execute::recall(Interpreter& vm, const ir::Instruction& in, CallFrame
 // Op::Construct
 ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   const auto& words = std::get<ir::ConstructPayload>(in.payload);
+  vm.m_current_feature = vm.name_of(in);
   using M = ir::ConstructionMethod;
   if (words.method == M::Movept) {
     std::vector<double> offset;

@@ -174,6 +174,7 @@ ExecStatus Execute::meas_begin(Interpreter& vm, const ir::Instruction& in, CallF
   vm.m_bad_point = vm.m_bad_geometry = false;  // BADPT and BADGT tell of this measurement from here on
   runtime::MeasBlock b;
   b.feature = vm.name_of(in);
+  vm.m_current_feature = b.feature;
   b.type = std::get<ir::FeaturePayload>(in.payload).type;
   b.point_count = static_cast<int>(*n);
   b.span = in.span;

@@ -110,6 +110,15 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     }
     return shown(20.0);
   }
+  if (name == "SCSNS") return Value::string(m_runtime.active_sensor());
+  if (name == "SCFEAT") return Value::string(m_current_feature);
+  if (name == "SMODE") {
+    switch (m_runtime.mode()) {
+      case runtime::Mode::Auto: return Value::string("AUTO");
+      case runtime::Mode::ProgMan: return Value::string("PROG,MAN");
+      case runtime::Mode::Man: return Value::string("MAN");
+    }
+  }
   if (name == "BADPT") return Value::boolean_value(m_bad_point);
   if (name == "BADGT") return Value::boolean_value(m_bad_geometry);
   if (name == "PTDATA") {

@@ -135,6 +135,7 @@ class Interpreter {
   /// points) and the run goes on after it; each MEAS clears both.
   bool m_bad_test = false;
   bool m_bad_point = false;
+  std::string m_current_feature;  ///< SCFEAT(): the feature the last MEAS, RMEAS or CONST named
   bool m_bad_geometry = false;
   ExecStatus take_bad_measurement(std::size_t depth, std::size_t failed);
   ExecStatus handle_fault(std::size_t frame, std::size_t failed);

@@ -149,6 +149,8 @@ class MeasurementRuntime {
   void set_strict(bool strict) { m_strict = strict; }
   [[nodiscard]] const ReportUnits& report_units() const { return m_report_units; }
   [[nodiscard]] Mode mode() const { return m_mode; }
+  /// The sensor the last SNSLCT selected ('' before any).
+  [[nodiscard]] const std::string& active_sensor() const { return m_active_sensor; }
   Result<void> go_to(const Vec3& point_current, Span span);
   /// GOHOME: straight to the machine's home; a warning when the backend does not say where it is.
   Result<void> go_home(Span span);
