@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -16,6 +17,32 @@ namespace metron::interpreter {
 using detail::UnitCompiler;
 
 Compiler::Compiler(SourceManager& sources, DiagnosticSink& sink) : m_sources(sources), m_sink(sink) {}
+
+// A file with no DMISMN whose lines mostly are not DMIS statements (a text, a report, source code,
+// a package's language with no signature recognise_foreign_dialect knows) is told once, not with
+// an error or a warning on each line, and nothing of it is compiled. A DMIS module without DMISMN
+// (a CALL/EXTERN file) reads as DMIS line by line and is compiled as before.
+bool Compiler::reads_as_dmis(std::uint32_t file, const grammar::Program& program, const DiagnosticSink& parsed) {
+  const bool has_start = program.first_word == "DMISMN" ||
+                         std::any_of(program.statements.begin(), program.statements.end(),
+                                     [](const grammar::Statement& s) { return s.major == "DMISMN"; });
+  if (has_start) return true;
+  std::set<std::uint32_t> failed_lines;
+  Span first;
+  for (const auto& d : parsed.items()) {
+    if (d.code.rfind("parse.", 0) != 0 || d.span.file != file || d.severity == Severity::Note) continue;
+    const std::uint32_t line = m_sources.locate(d.span).line;
+    if (failed_lines.insert(line).second && (first.file == 0 || d.span.begin < first.begin)) first = d.span;
+  }
+  constexpr std::size_t k_min_failed_lines = 5;
+  const std::size_t read = program.statements.size();
+  if (failed_lines.size() < k_min_failed_lines || failed_lines.size() < 2 * read) return true;
+  m_sink.error("parse.not-dmis", first,
+               fmt::format("this file does not read as DMIS: {} of its lines are not DMIS statements (this is the first), "
+                           "{} {}, and it has no DMISMN; nothing of it is compiled. metron runs DMIS 5.x programs",
+                           failed_lines.size(), read, read == 1 ? "line reads as one" : "lines read as statements"));
+  return false;
+}
 
 std::size_t Compiler::compile_program(std::uint32_t file, const std::string& path, UnitKind kind) {
   if (kind != UnitKind::ReplEntry) {
@@ -40,7 +67,14 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
       return unit;
     }
   }
-  const grammar::Program program = grammar::parse_program(m_sources, file, m_sink, m_parse_options);
+  DiagnosticSink parsed;
+  const grammar::Program program = grammar::parse_program(m_sources, file, parsed, m_parse_options);
+  if (kind != UnitKind::ReplEntry && !reads_as_dmis(file, program, parsed)) {
+    const std::size_t unit = m_module.units.size();
+    m_module.units.push_back({path, file, {}});
+    return unit;
+  }
+  for (const auto& d : parsed.items()) m_sink.report(d);
   const std::size_t unit = m_module.units.size();
   m_module.units.push_back({path, file, {}});
   UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, unit,

@@ -88,7 +88,12 @@ TEST(HostileCompile, DiagnosticsEscapeControlBytesAndAreCapped) {
     x = x * 1664525u + 1013904223u;
     junk += static_cast<char>(x >> 24);
   }
-  const auto c = compile(junk);
+  // Without DMISMN the junk does not read as DMIS: one error for the file.
+  const auto alone = compile(junk);
+  EXPECT_EQ(alone->sink.error_count(), 1U);
+  EXPECT_TRUE(alone->has("this file does not read as DMIS")) << alone->all.substr(0, 2000);
+  // After a DMISMN it is a program's text: every bad line is told, up to the cap.
+  const auto c = compile(header + junk);
   EXPECT_LE(c->sink.error_count(), metron::DiagnosticSink::max_errors + 1);
   EXPECT_TRUE(c->has("too many errors"));
   EXPECT_LT(c->all.size(), 200'000u);

@@ -3062,3 +3062,24 @@ TEST(ShopPrograms, ADryRunGoesPastCharacterise) {
   ASSERT_TRUE(b && b->actual);
   EXPECT_NEAR(b->actual->diameter_mm, 20.0, 1e-9);
 }
+
+// A file that is not DMIS and whose language metron has no signature for (here a report and a
+// QUINDOS-like listing, written for this test) is told once: before, an error or a warning on each
+// line. A DMIS module without DMISMN (a CALL/EXTERN file) with one bad line keeps its diagnostics.
+TEST(ShopPrograms, AFileThatIsNotDmisIsToldOnce) {
+  const auto report = check("Inspection report  part 4711   operator: K. Meier\n"
+                            "------------------------------------------------\n"
+                            "Feature      Nominal    Actual     Dev      Tol\n"
+                            "Bore 1 D     20.000     20.004    0.004   +-0.010   OK\n"
+                            "Bore 2 D     20.000     19.987   -0.013   +-0.010   NOT OK\n"
+                            "Flatness A    0.000      0.006    0.006    0.020    OK\n"
+                            "MESPLN (NAM=EBENE1, NPT=4)\nMESCIR (NAM=KREIS1, NPT=8)\n");
+  EXPECT_EQ(report.errors, 1U) << report.text;
+  EXPECT_EQ(report.warnings, 0U) << report.text;
+  EXPECT_TRUE(report.has("shop.dmi:1:1: error: this file does not read as DMIS: 8 of its lines are not DMIS statements"))
+      << report.text;
+  const auto module = check("GOTO/10, 10, 60\nF(P1) = FEAT/POINT, CART, 10, 10, 50, 0, 0, 1\nMEAS/POINT, F(P1), 1\n"
+                            "PTMEAS/CART, 10, 10, 50, 0, 0, 1\nENDMES\nthis line is a note\nGOTO/10, 10, 60\n");
+  EXPECT_FALSE(module.has("does not read as DMIS")) << module.text;
+  EXPECT_TRUE(module.has("shop.dmi:6:1: warning: this line is not a DMIS statement")) << module.text;
+}

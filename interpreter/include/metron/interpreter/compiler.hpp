@@ -117,6 +117,8 @@ class Compiler {
 
  private:
   std::size_t compile_program(std::uint32_t file, const std::string& path, UnitKind kind);
+  /// false (and one error said) when `file` has no DMISMN and most of its lines are not DMIS.
+  bool reads_as_dmis(std::uint32_t file, const grammar::Program& program, const DiagnosticSink& parsed);
   SourceManager& m_sources;
   DiagnosticSink& m_sink;
   ir::Module m_module;
