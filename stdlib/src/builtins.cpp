@@ -104,7 +104,7 @@ const std::vector<Builtin>& builtins() {
       // number of points of a feature.
       {"SDATE", 0, 0, ValueType::String, false},   {"STIME", 0, 0, ValueType::String, false},
       {"SDATETIME", 0, 0, ValueType::String, false}, {"SELAPSETIME", 0, 0, ValueType::Real, false},
-      {"EOF", 1, 1, ValueType::Bool, true},        {"PTDATA", 1, 1, ValueType::Integer, true},
+      {"EOF", 1, 1, ValueType::Bool, true},        {"EOLN", 1, 1, ValueType::Bool, true},        {"PTDATA", 1, 1, ValueType::Integer, true},
       // EXIST(F(x)|FA(x)|D(x)|...): whether the label is defined (measured, saved, evaluated);
       // DMESYS('key'): what the measuring system says about `key` (docs/language.md).
       {"EXIST", 1, 1, ValueType::Bool, true},      {"DMESYS", 1, 1, ValueType::String, true},

@@ -3083,3 +3083,20 @@ TEST(ShopPrograms, AFileThatIsNotDmisIsToldOnce) {
   EXPECT_FALSE(module.has("does not read as DMIS")) << module.text;
   EXPECT_TRUE(module.has("shop.dmi:6:1: warning: this line is not a DMIS statement")) << module.text;
 }
+
+// EOLN(DID(x)): .TRUE. once READ has taken the last field of a line (and at the end of the file),
+// so a program can read rows of different lengths field by field: rows of 3, 2 and 1 values.
+TEST(ShopPrograms, EolnEndsEachRowOfAnInputFile) {
+  write("rows.txt", "1, 2, 3\n4 5\n\n6\n");
+  const auto r = run("DMISMN/'p', 5.0\nDECL/REAL,X,S\nDECL/INTGR,N\nDECL/BOOL,B\n"
+                     "DID(IN1)=DEVICE/STOR,'rows.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nB=ASSIGN/EOLN(DID(IN1))\n"
+                     "TEXT/OPER,STR(B)\n(ROW)\nIF/(.NOT.EOF(DID(IN1)))\n  S=ASSIGN/0\n  N=ASSIGN/0\n"
+                     "  (FIELD)\n  READ/DID(IN1),X\n  S=ASSIGN/S+X\n  N=ASSIGN/N+1\n"
+                     "  IF/(.NOT.EOLN(DID(IN1)))\n    JUMPTO/(FIELD)\n  ENDIF\n"
+                     "  TEXT/OPER,CONCAT(STR(N),':',STR(S,1))\n  JUMPTO/(ROW)\nENDIF\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> texts;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  EXPECT_EQ(texts, (std::vector<std::string>{".FALSE.", "3:6.0", "2:9.0", "1:6.0"}));
+}

@@ -182,9 +182,9 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
   t.e.op = ir::ExprOp::Call;
   t.e.name = g.text;
   t.e.type = fn->result;
-  // EOF(DID(x)) and PTDATA(FA(x)) take a label; EXIST any label.
+  // EOF(DID(x)), EOLN(DID(x)) and PTDATA(FA(x)) take a label; EXIST any label.
   const bool exist = g.text == "EXIST";
-  const char* label_kind = g.text == "EOF" ? "DID" : g.text == "PTDATA" ? "FA" : exist ? "F" : nullptr;
+  const char* label_kind = g.text == "EOF" || g.text == "EOLN" ? "DID" : g.text == "PTDATA" ? "FA" : exist ? "F" : nullptr;
   for (const auto& a : g.args) {
     if (exist && a.kind != ExprKind::Label) {
       error(a.span, "sema.type", "EXIST takes a label: F(x), FA(x), D(x), DA(x), T(x), TA(x), S(x), SA(x) or DID(x)");

@@ -102,20 +102,28 @@ ExecStatus Execute::device_open(Interpreter& vm, const ir::Instruction& in, Call
     Interpreter::InputFile file;
     std::string field;
     bool quoted = false, any = false;
+    std::size_t line = 0;
+    const auto keep = [&] {
+      if (any) {
+        file.fields.push_back(field);
+        file.lines.push_back(line);
+      }
+      field.clear();
+      any = false;
+    };
     for (const char c : *text) {
       if (c == '\'') {
         quoted = !quoted;
         any = true;
       } else if (!quoted && (c == ',' || c == ' ' || c == '\t' || c == '\n' || c == '\r')) {
-        if (any) file.fields.push_back(field);
-        field.clear();
-        any = false;
+        keep();
+        if (c == '\n') ++line;
       } else {
         field += c;
         any = true;
       }
     }
-    if (any) file.fields.push_back(field);
+    keep();
     vm.m_inputs[label] = std::move(file);
     return ExecStatus::Running;
   }

@@ -51,12 +51,15 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     if (name == "STIME") return Value::string(time);
     return Value::string(date + " " + time);
   }
-  if (name == "EOF") {
+  if (name == "EOF" || name == "EOLN") {
     const std::string device = label_name(e.args.at(0).label);
     auto it = m_inputs.find(device);
     if (it == m_inputs.end())
-      return tl::unexpected(fmt::format("EOF(DID({})): the device is not open for INPUT", device));
-    return Value::boolean_value(it->second.next >= it->second.fields.size());
+      return tl::unexpected(fmt::format("{}(DID({})): the device is not open for INPUT", name, device));
+    const InputFile& file = it->second;
+    if (file.next >= file.fields.size()) return Value::boolean_value(true);
+    // EOLN: READ has taken the last field of its line (the next one starts a new line).
+    return Value::boolean_value(name == "EOLN" && file.next > 0 && file.lines[file.next] != file.lines[file.next - 1]);
   }
   if (name == "VMCS" || name == "VPCS") {
     // A vector of the current part system in machine coordinates (VMCS), or one of the machine

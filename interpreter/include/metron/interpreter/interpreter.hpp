@@ -154,6 +154,7 @@ class Interpreter {
   /// An input file opened by OPEN/DID(x),...,INPUT: its fields, read in order by READ.
   struct InputFile {
     std::vector<std::string> fields;
+    std::vector<std::size_t> lines;  ///< each field's line (0-based): EOLN
     std::size_t next = 0;
   };
   std::map<std::string, InputFile> m_inputs;
