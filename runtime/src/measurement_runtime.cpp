@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <limits>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -390,8 +391,12 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   if (it == m_features.end()) return program_error(block.span, fmt::format("feature F({}) is not defined", block.feature));
   Feature& feature = it->second;
   if (auto t = ensure_tool(block.span); !t) return t;
-  if (const auto tool = m_machine.state().tool; tool && feature.nominal.side == Side::Inner) {
-    // A hole the ball cannot enter: a real probe would touch its rim, not its wall.
+  // A hole the ball cannot enter: a real probe would touch its rim, not its wall. Told for each
+  // sensor that takes points in the block (SNSLCT inside it switches sensors).
+  std::set<std::string> balls_checked;
+  const auto check_ball = [&] {
+    const auto tool = m_machine.state().tool;
+    if (!tool || feature.nominal.side != Side::Inner || !balls_checked.insert(tool->name).second) return;
     const double ball_mm = 2 * tool->nominal_radius_mm;
     const bool round = feature.nominal.type == FeatureType::Circle || feature.nominal.type == FeatureType::Arc ||
                        feature.nominal.type == FeatureType::Cylinder || feature.nominal.type == FeatureType::Sphere;
@@ -404,7 +409,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       warn(block.span, fmt::format("the ball of {} ({:.3f} mm) is not smaller than F({}) ({:.3f} mm): it cannot reach "
                                    "the wall",
                                    tool->name, ball_mm, feature.label, opening_mm));
-  }
+  };
   // A SNSLCT inside the block (a feature probed with several sensors) switches the sensor between
   // its points: each run of steps is planned and measured with the sensor selected before it.
   MeasBlock empty_run = block;
@@ -431,6 +436,7 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
       }
     }
     if (runs[k].steps.empty() && !runs[k].plan_missing_points) continue;
+    if (takes_points(runs[k]) || runs[k].plan_missing_points) check_ball();
     auto plan = plan_block(runs[k], feature.nominal, plan_context());
     if (!plan) return tl::unexpected(plan.error());
     const bool scans = std::any_of(plan->commands.begin(), plan->commands.end(), [](const machine::Command& c) {

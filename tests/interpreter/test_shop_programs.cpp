@@ -951,6 +951,17 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
   EXPECT_NE(small.diagnostics.find("6:1: warning: the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"),
             std::string::npos)
       << small.diagnostics;
+  // So is one whose ball is selected inside the block (the first sensor's was the only one judged).
+  const auto switched = dry_run("DMISMN/'t', 5.0\nS(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 1.0\n"
+                            "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P1)\n"
+                            "GOTO/40, 50, 60\nF(H) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 3\n"
+                            "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  SNSLCT/S(P4)\n"
+                            "  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
+  ASSERT_EQ(switched.status, ExecStatus::Finished) << switched.diagnostics;
+  std::string said = switched.diagnostics;
+  for (const auto& line : switched.session->record().diagnostics) said += line + "\n";
+  EXPECT_NE(said.find("the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"), std::string::npos) << said;
+  EXPECT_EQ(said.find("the ball of P1"), std::string::npos) << said;
 }
 
 // OUTPUT/FA(x)[first,last] (MODUS): the feature is reported with its points first..last listed
