@@ -226,6 +226,11 @@ TEST(HostileFiles, CrOnlyLineEndsAndEmptyPrograms) {
   write(d / "empty.dmi", "$$ nothing here\n");
   o = run(d / "empty.dmi", d / "out2");
   EXPECT_NE(o.diagnostics.find("the program has no statements"), std::string::npos) << o.diagnostics;
+  // An empty program is an error (it was a warning: `check` said "0 errors" and exited 0).
+  EXPECT_NE(o.exit, RunExit::Completed) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("error: the program has no statements: the file is empty or holds only comments"),
+            std::string::npos)
+      << o.diagnostics;
 }
 
 // ---------------------------------------------------------------- results are never lost

@@ -13,9 +13,16 @@ using ir::Op;
 void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   m_repl = repl;
   const auto& st = program.statements;
-  if (!repl && !m_included && st.empty())
-    warn(Span{program.file, 0, 0}, "sema.empty-program",
-         "the program has no statements: it does not start with DMISMN nor end with ENDFIL, and measures nothing");
+  // An empty file (or one of comments only) is an error, not a clean check: it is never the
+  // program meant. Statements the parser could not read have their own errors.
+  if (!repl && !m_included && st.empty()) {
+    if (program.first_word.empty())
+      error(Span{program.file, 0, 0}, "sema.empty-program",
+            "the program has no statements: the file is empty or holds only comments, and measures nothing");
+    else
+      warn(Span{program.file, 0, 0}, "sema.empty-program",
+           "the program has no statements: it does not start with DMISMN nor end with ENDFIL, and measures nothing");
+  }
   // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
   for (const auto& s : st) {
     if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT") m_later_features.emplace(upper(s.target->name), s.span);
