@@ -442,16 +442,18 @@ TEST(Geoalg, PlanesAndLinesAreTheMiddleOfTheirMinimumZone) {
 // GEOALG/CONE,MINMAX: a 60 degree boss cone (apex at (40, 50, 0), axis +z) probed in two sections
 // (z 10 and 40) with the alternating contacts of MinimumZone.ConicityOfTwoAlternatingSectionsIs-
 // TheNormalZoneWidth: outer points t = 10 um off the surface at 0 and 180 degrees, inner ones on
-// it at 90 and 270 and in a cluster from 10 to 40 degrees. The minimum-zone cone is the zone's
-// middle, t/2 out: its apex t/2 / sin 30 deg = 10 um below the true apex, its angle 60 degrees;
-// least squares, pulled by the cluster, is elsewhere.
+// it at 90 and 270, and in the lower section a cluster of inner ones from 10 to 40 degrees. The
+// alternation in each section keeps the minimum-zone cone the zone's middle, t/2 out: its apex
+// t/2 / sin 30 deg = 10 um below the true apex, its angle 60 degrees; least squares, pulled in at
+// the lower section by the cluster, has another apex and another angle.
 TEST(Geoalg, AConeIsTheMiddleOfItsMinimumZone) {
   const Vec3 apex(40, 50, 0);
   const double half = std::numbers::pi / 6, t = 0.01;
   std::string points;
   for (const double z : {10.0, 40.0}) {
     std::vector<std::pair<double, double>> at = {{0, t}, {90, 0}, {180, t}, {270, 0}};
-    for (double a = 10; a <= 40; a += 5) at.push_back({a, 0});
+    if (z == 10.0)
+      for (double a = 10; a <= 40; a += 5) at.push_back({a, 0});
     for (const auto& [deg, off] : at) {
       const double a = deg * std::numbers::pi / 180;
       const Vec3 u(std::cos(a), std::sin(a), 0);
@@ -460,7 +462,7 @@ TEST(Geoalg, AConeIsTheMiddleOfItsMinimumZone) {
     }
   }
   const auto measured = [&](const std::string& geoalg) {
-    auto r = run(geoalg + "F(CN) = FEAT/CONE, OUTER, CART, 40, 50, 0, 0, 0, 1, 60\nMEAS/CONE, F(CN), 22\n" + points + "ENDMES\n",
+    auto r = run(geoalg + "F(CN) = FEAT/CONE, OUTER, CART, 40, 50, 0, 0, 0, 1, 60\nMEAS/CONE, F(CN), 15\n" + points + "ENDMES\n",
                  [](const Vec3& q) { return q; });
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     return r->runtime->features().at("CN").actual.value_or(runtime::Geometry{});
@@ -471,6 +473,7 @@ TEST(Geoalg, AConeIsTheMiddleOfItsMinimumZone) {
   EXPECT_NEAR(mz.apex_angle_deg, 60.0, 1e-4);
   EXPECT_GT(mz.direction.z(), 1 - 1e-9);
   EXPECT_GT((ls.position - mz.position).norm(), 1e-3);  // the two algorithms differ here
+  EXPECT_GT(std::abs(ls.apex_angle_deg - 60.0), 1e-3) << ls.apex_angle_deg;
   const auto back = measured("GEOALG/CONE, MINMAX\nGEOALG/CONE, LSTSQR\n");
   EXPECT_NEAR((back.position - ls.position).norm(), 0, 1e-12);
 }

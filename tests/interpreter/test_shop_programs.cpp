@@ -3093,6 +3093,12 @@ TEST(ShopPrograms, AFileThatIsNotDmisIsToldOnce) {
                             "PTMEAS/CART, 10, 10, 50, 0, 0, 1\nENDMES\nthis line is a note\nGOTO/10, 10, 60\n");
   EXPECT_FALSE(module.has("does not read as DMIS")) << module.text;
   EXPECT_TRUE(module.has("shop.dmi:6:1: warning: this line is not a DMIS statement")) << module.text;
+  // Five notes in a module of twenty statements: still DMIS (the bad lines are not the most).
+  std::string long_module;
+  for (int k = 0; k < 20; ++k) long_module += (k % 4 == 0 ? "operator note " + std::to_string(k) + "\n" : "") + "GOTO/10, 10, 60\n";
+  const auto noted = check(long_module);
+  EXPECT_FALSE(noted.has("does not read as DMIS")) << noted.text;
+  EXPECT_TRUE(noted.has("shop.dmi:21:1: warning: this line is not a DMIS statement")) << noted.text;
 }
 
 // EOLN(DID(x)): .TRUE. once READ has taken the last field of a line (and at the end of the file),
