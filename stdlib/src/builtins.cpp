@@ -111,11 +111,11 @@ const std::vector<Builtin>& builtins() {
       // BADPT(), BADGT(): whether the last measurement failed under BADTST/ON, with a machine
       // fault (a missed or unexpected contact) or with points no feature fits.
       {"BADPT", 0, 0, ValueType::Bool, false},     {"BADGT", 0, 0, ValueType::Bool, false},
-      // SCSNS(), SMODE(), SCFEAT(): the current sensor's label, the MODE, the current feature's
-      // label, as strings (read as their names say, after SDATE and STIME: no public text of
+      // SCSNS(), SMODE(), SCFEAT(), SERROR(): the current sensor's label, the MODE, the current
+      // feature's label, the last machine fault the run went on after, as strings (read as their names say, after SDATE and STIME: no public text of
       // their definitions was found; docs/language.md).
       {"SCSNS", 0, 0, ValueType::String, false},   {"SMODE", 0, 0, ValueType::String, false},
-      {"SCFEAT", 0, 0, ValueType::String, false},
+      {"SCFEAT", 0, 0, ValueType::String, false},  {"SERROR", 0, 0, ValueType::String, false},
       // QTEMP(sensor): a temperature, C (the machine's thermometer; a number or a name).
       {"QTEMP", 0, 1, ValueType::Real, true},
       // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as

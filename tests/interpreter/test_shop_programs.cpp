@@ -2376,9 +2376,9 @@ TEST(ShopPrograms, ExtremePointsAndOffsetPlanes) {
 // next MEAS clears both. With OFF the missed point stops the run as before.
 TEST(ShopPrograms, BadTestTakesAFailedMeasurementAndTellsWhichKind) {
   const std::string failing =
-      "DECL/BOOL,P1,G1,P2,G2,P3,G3\n"
+      "DECL/BOOL,P1,G1,P2,G2,P3,G3\nDECL/CHAR,20,E0,E1\nE0=ASSIGN/SERROR()\n"
       "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
-      "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nP1=ASSIGN/BADPT()\nG1=ASSIGN/BADGT()\n"
+      "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nP1=ASSIGN/BADPT()\nG1=ASSIGN/BADGT()\nE1=ASSIGN/SERROR()\n"
       "GOTO/220,50,60\nGOTO/40,50,80\n"
       "F(TWO)=FEAT/CIRCLE,INNER,CART,40,50,30,0,0,1,20\nMEAS/CIRCLE,F(TWO),3\nGOTO/40,50,30\n"
       "PTMEAS/CART,50,50,30,-1,0,0\nPTMEAS/CART,50,50,30,-1,0,0\nPTMEAS/CART,30,50,30,1,0,0\nGOTO/40,50,80\nENDMES\n"
@@ -2400,6 +2400,9 @@ TEST(ShopPrograms, BadTestTakesAFailedMeasurementAndTellsWhichKind) {
   EXPECT_TRUE(value("G2"));
   EXPECT_FALSE(value("P3"));  // BORE1 measured well
   EXPECT_FALSE(value("G3"));
+  // SERROR(): the last fault the run went on after, by ERROR's condition word ('' before any).
+  EXPECT_EQ(r.session->interpreter().variable("E0")->text, "");
+  EXPECT_EQ(r.session->interpreter().variable("E1")->text, "NOTOUCH");
   EXPECT_NE(r.diagnostics.find("is taken by BADTST/ON: BADPT() is .TRUE."), std::string::npos) << r.diagnostics;
   EXPECT_NE(r.diagnostics.find("cannot fit a CIRCLE to 3 points: degenerate point set: taken by BADTST/ON"), std::string::npos)
       << r.diagnostics;

@@ -115,6 +115,18 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
   }
   if (name == "SCSNS") return Value::string(m_runtime.active_sensor());
   if (name == "SCFEAT") return Value::string(m_current_feature);
+  if (name == "SERROR") {
+    // The last machine fault the run went on after (ERROR/..., BADTST/ON), by ERROR's condition
+    // words where it has one; '' before any.
+    if (!m_last_fault || m_handled_faults == 0) return Value::string("");
+    using K = machine::FaultKind;
+    const K kind = m_last_fault->kind;
+    if (kind == K::NoContact) return Value::string("NOTOUCH");
+    if (kind == K::Collision || kind == K::OverTravel) return Value::string("ILLEGALTOUCH");
+    std::string word = machine::to_string(kind);
+    std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    return Value::string(word);
+  }
   if (name == "SMODE") {
     switch (m_runtime.mode()) {
       case runtime::Mode::Auto: return Value::string("AUTO");
