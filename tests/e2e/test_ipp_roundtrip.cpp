@@ -7,6 +7,8 @@
 // ctest's output pipe.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -127,7 +129,7 @@ class Child {
 };
 
 fs::path work_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("metron_ipp_rt_" + std::to_string(::getpid())) / name;
+  const fs::path d = metron::test_support::scratch_root("metron_ipp_rt") / name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

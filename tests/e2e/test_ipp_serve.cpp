@@ -5,6 +5,8 @@
 // the first, SIGTERM ending the server with exit code 0 and a complete exchange log.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <signal.h>
@@ -165,7 +167,7 @@ double item(const std::string& line, const std::string& name) {
 }  // namespace
 
 TEST(IppServe, SessionOverLoopback) {
-  const fs::path log = fs::temp_directory_path() / ("metron_ipp_serve_" + std::to_string(::getpid()) + ".log");
+  const fs::path log = metron::test_support::scratch_root("metron_ipp_serve") / "serve.log";
   fs::remove(log);
   ServerProcess server({"--world", std::string(METRON_SOURCE_DIR) + "/programs/worlds/perfect.json", "--log", log.string()});
   {

@@ -2,6 +2,8 @@
 // Real DMIS programs written elsewhere, on worlds built from the parts' STEP models.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -28,7 +30,7 @@ metron::interpreter::RunOutcome run(const std::string& example, const std::strin
   metron::interpreter::RunOptions o;
   o.program = (source_dir / "programs" / "examples" / example).string();
   o.world_path = (source_dir / "programs" / "worlds" / world).string();
-  o.out_dir = (fs::temp_directory_path() / ("metron_nist_" + std::to_string(::getpid())) / out).string();
+  o.out_dir = (metron::test_support::scratch_root("metron_nist") / out).string();
   o.include_dirs = {shared.string()};  // the examples call ../../../shared/data/... (docs/security.md)
   return metron::interpreter::run_program(o, metron::cli::virtual_cmm_backend);
 }

@@ -2,6 +2,8 @@
 // Scripted debugger and REPL sessions through the metron binary (commands from a file).
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,7 +14,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path temp(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("metron_repl_" + std::to_string(::getpid()));
+  const fs::path d = metron::test_support::scratch_root("metron_repl");
   fs::create_directories(d);
   return d / name;
 }

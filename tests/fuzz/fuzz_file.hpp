@@ -7,19 +7,34 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace metron::fuzz {
 
-/// Writes `data` to `name` inside a folder made once per process (mkdtemp); returns its path.
-inline std::string input_file(const std::uint8_t* data, std::size_t size, const char* name) {
-  static const std::string dir = [] {
+/// A folder made once per process (mkdtemp) and removed with what it holds when the process
+/// exits normally (a replay of the corpus, a fuzzing run's end); a crash keeps it for inspection.
+struct InputFolder {
+  std::string path;
+  InputFolder() {
     char pattern[] = "/tmp/metron-fuzz-XXXXXX";
     const char* made = mkdtemp(pattern);
     if (!made) std::abort();
-    return std::string(made);
-  }();
-  const std::string path = dir + "/" + name;
+    path = made;
+  }
+  ~InputFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path, ignored);
+  }
+  InputFolder(const InputFolder&) = delete;
+  InputFolder& operator=(const InputFolder&) = delete;
+};
+
+/// Writes `data` to `name` inside the process's input folder; returns its path.
+inline std::string input_file(const std::uint8_t* data, std::size_t size, const char* name) {
+  static const InputFolder dir;
+  const std::string path = dir.path + "/" + name;
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) std::abort();
   if (size > 0 && std::fwrite(data, 1, size, f) != size) std::abort();

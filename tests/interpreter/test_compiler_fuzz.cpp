@@ -3,6 +3,8 @@
 // never to exceptions. A failing input is printed.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -81,7 +83,7 @@ TEST(CompilerFuzz, MutatedProgramsThatCompileRunWithoutThrowing) {
           e.path().filename().string().rfind("04_", 0) != 0)
         seeds.push_back(slurp(e.path()));
   std::mt19937 rng(7);
-  const fs::path dir = fs::temp_directory_path() / ("metron_fuzz_" + std::to_string(::getpid()));
+  const fs::path dir = metron::test_support::scratch_root("metron_fuzz");
   fs::create_directories(dir);
   int ran = 0;
   for (int i = 0; i < 400 && ran < 60; ++i) {

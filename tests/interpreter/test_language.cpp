@@ -2,6 +2,8 @@
 // The IR interpreter: variables, expressions, control flow, macros, called files, units.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <filesystem>
 #include <fstream>
 
@@ -22,7 +24,7 @@ struct Ran {
 };
 
 fs::path temp_dir() {
-  const fs::path d = fs::temp_directory_path() / ("metron_lang_" + std::to_string(::getpid()));
+  const fs::path d = metron::test_support::scratch_root("metron_lang");
   fs::create_directories(d);
   return d;
 }

@@ -5,6 +5,8 @@
 // is tested in tests/machine.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -116,7 +118,7 @@ struct Run {
 };
 
 std::unique_ptr<Run> run(const std::string& body, Truth truth) {
-  const fs::path dir = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid()));
+  const fs::path dir = metron::test_support::scratch_root("metron_scan");
   fs::create_directories(dir);
   const fs::path file = dir / "scan.dmi";
   std::ofstream(file) << "DMISMN/'scan test', 5.0\nUNITS/MM, ANGDEC\n"
@@ -620,7 +622,7 @@ fs::path boss_stl() {
   }
   auto mesh = geometry::Mesh::from_triangles(v, faces);
   EXPECT_TRUE(mesh);
-  const fs::path stl = fs::temp_directory_path() / ("metron_scan_" + std::to_string(::getpid())) / "boss.stl";
+  const fs::path stl = metron::test_support::scratch_root("metron_scan") / "boss.stl";
   fs::create_directories(stl.parent_path());
   EXPECT_TRUE(mesh && geometry::save_mesh(*mesh, stl.string()));
   return stl;

@@ -4,6 +4,8 @@
 // written for these tests in the dialects' style (the public originals are not ours to copy).
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <Eigen/Core>
@@ -58,7 +60,7 @@ Checked check(const std::string& program, bool strict = false) {
 }
 
 fs::path temp_dir() {
-  const fs::path d = fs::temp_directory_path() / ("metron_shop_" + std::to_string(::getpid()));
+  const fs::path d = metron::test_support::scratch_root("metron_shop");
   fs::create_directories(d);
   return d;
 }

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <filesystem>
 #include <numbers>
 #include <fstream>
@@ -77,7 +79,7 @@ TEST(World, AllWorldFilesLoad) {
 // Issue 15: the wavefront world loader used nlohmann's parser directly: 1e400 threw an uncaught
 // out_of_range (abort), /dev/zero grew memory, and syntax errors printed the library's text.
 TEST(World, WavefrontWorldsAreReadByTheStrictReader) {
-  const auto dir = std::filesystem::temp_directory_path() / ("metron_wavefront_hostile_" + std::to_string(::getpid()));
+  const auto dir = metron::test_support::scratch_root("metron_wavefront_hostile");
   std::filesystem::create_directories(dir);
   const auto file = dir / "station.json";
   std::ofstream(file) << R"({"kind": "wavefront", "seed": 1e400})";

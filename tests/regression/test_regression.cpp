@@ -2,6 +2,8 @@
 // `metron test`: the expected-results format, the comparison, the runner and the CLI.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -22,7 +24,7 @@ namespace fs = std::filesystem;
 namespace rg = metron::regression;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("metron_regression_" + std::to_string(::getpid())) / name;
+  const fs::path d = metron::test_support::scratch_root("metron_regression") / name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

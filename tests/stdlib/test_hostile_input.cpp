@@ -2,6 +2,8 @@
 // The input-file and JSON defences of docs/security.md (issue 15).
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <filesystem>
 #include <fstream>
 
@@ -18,7 +20,7 @@ TEST(HostileInput, ReadInputFileRefusesDevicesDirectoriesAndHugeFiles) {
   EXPECT_NE(metron::read_input_file("/dev/zero").error().find("not a regular file"), std::string::npos);
   EXPECT_NE(metron::read_input_file("/tmp").error().find("is a directory"), std::string::npos);
   EXPECT_NE(metron::read_input_file("/no/such/file").error().find("no such file"), std::string::npos);
-  const fs::path p = fs::temp_directory_path() / ("metron_hostile_big_" + std::to_string(::getpid()));
+  const fs::path p = metron::test_support::scratch_root("metron_hostile_input") / "big";
   std::ofstream(p) << std::string(2000, 'x');
   EXPECT_NE(metron::read_input_file(p.string(), 1000).error().find("exceeds the limit of 1000 bytes"), std::string::npos);
   EXPECT_EQ(metron::read_input_file(p.string(), 2000)->size(), 2000u);
@@ -27,7 +29,7 @@ TEST(HostileInput, ReadInputFileRefusesDevicesDirectoriesAndHugeFiles) {
 
 TEST(HostileInput, CadReadersRefuseDevicesBeforeTheLibraryReadsThem) {
   // Before: CGAL and OCCT read whatever the path named; /dev/zero linked in as part.stl never ended.
-  const fs::path d = fs::temp_directory_path() / ("metron_hostile_cad_" + std::to_string(::getpid()));
+  const fs::path d = metron::test_support::scratch_root("metron_hostile_input") / "cad";
   fs::remove_all(d);
   fs::create_directories(d);
   for (const char* name : {"zero.stl", "zero.off", "zero.step"}) {
@@ -55,7 +57,7 @@ TEST(HostileInput, JsonNumbersOutOfRangeAndDeepNestingAreErrorsNotCrashes) {
 }
 
 TEST(HostileInput, PolicyResolvesDotDotAndSymlinks) {
-  const fs::path d = fs::temp_directory_path() / ("metron_hostile_policy_" + std::to_string(::getpid()));
+  const fs::path d = metron::test_support::scratch_root("metron_hostile_input") / "policy";
   fs::remove_all(d);
   fs::create_directories(d / "prog" / "sub");
   fs::create_directories(d / "out");

@@ -4,6 +4,8 @@
 // programs that inspect them.
 #include <gtest/gtest.h>
 
+#include "scratch.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -370,7 +372,7 @@ TEST(Mesh, TransformedMovesTheQueries) {
 class MeshFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    m_dir = fs::temp_directory_path() / ("metron_test_mesh_" + std::to_string(::getpid()));
+    m_dir = metron::test_support::scratch_root("metron_test_mesh");
     fs::create_directories(m_dir);
   }
   void TearDown() override { fs::remove_all(m_dir); }

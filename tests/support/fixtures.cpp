@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "fixtures.hpp"
 
+#include "scratch.hpp"
+
 #include <time.h>
 #include <unistd.h>
 
@@ -17,8 +19,7 @@ machine::World world_file(const std::string& name) {
 }
 
 std::filesystem::path out_dir(const std::string& prefix, const std::string& name) {
-  const std::filesystem::path d =
-      std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(::getpid())) / name;
+  const std::filesystem::path d = scratch_root(prefix) / name;
   std::filesystem::create_directories(d);
   return d;
 }
