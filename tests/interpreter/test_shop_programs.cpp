@@ -103,6 +103,7 @@ Ran dry_run(const std::string& text) {
       std::make_unique<metron::machine::NominalMachine>(world->machine), "<default> (dry run)", 0, {}, {}});
   if (r.session->load(p.string())) r.status = r.session->interpreter().run();
   r.diagnostics = r.session->take_diagnostics();
+  for (const auto& w : r.session->record().diagnostics) r.diagnostics += w + "\n";
   return r;
 }
 
@@ -960,10 +961,9 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
                             "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  SNSLCT/S(P4)\n"
                             "  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
   ASSERT_EQ(switched.status, ExecStatus::Finished) << switched.diagnostics;
-  std::string said = switched.diagnostics;
-  for (const auto& line : switched.session->record().diagnostics) said += line + "\n";
-  EXPECT_NE(said.find("the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"), std::string::npos) << said;
-  EXPECT_EQ(said.find("the ball of P1"), std::string::npos) << said;
+  EXPECT_NE(switched.diagnostics.find("the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"), std::string::npos)
+      << switched.diagnostics;
+  EXPECT_EQ(switched.diagnostics.find("the ball of P1"), std::string::npos) << switched.diagnostics;
 }
 
 // OUTPUT/FA(x)[first,last] (MODUS): the feature is reported with its points first..last listed
@@ -3070,10 +3070,9 @@ TEST(ShopPrograms, ADryRunGoesPastCharacterise) {
                          "SNSLCT/SA(T1A0B0)\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
                          "MEAS/CIRCLE, F(B), 4\nENDMES\nOUTPUT/FA(B)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::string said = r.diagnostics;
-  for (const auto& line : r.session->record().diagnostics) said += line + "\n";
-  EXPECT_NE(said.find("CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise"), std::string::npos)
-      << said;
+  EXPECT_NE(r.diagnostics.find("CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise"),
+            std::string::npos)
+      << r.diagnostics;
   const auto* b = report(*r.session, "B");
   ASSERT_TRUE(b && b->actual);
   EXPECT_NEAR(b->actual->diameter_mm, 20.0, 1e-9);
