@@ -260,8 +260,9 @@ TEST(ShopPrograms, FromSetsWhereGoHomeGoes) {
 TEST(ShopPrograms, StatementsWithoutEffectAreNotedOnceEach) {
   const auto c = check("DMISMN/'n', 5.1\nPTBUFF/ON\nRAPID/50\nRAPID/20\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
                        "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nBOUND/F(P),F(P)\n"
-                       "XTERN\nENDXTN\nPSTHRU/PAUSE,'x'\nENDFIL\n");
-  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+                       "XTERN\nENDXTN\nPSTHRU/PAUSE,'x'\nCZ(Z1)=CZONE\nCZSLCT/CZ(Z1),ON\n"
+                       "REFMNT/XVEC,1,0,0,ZVEC,0,0,1,MNTLEN,0,0,0\nENDFIL\n");
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;  // clearance zones and reference mounts quietly
   EXPECT_EQ(c.notes, 5u) << c.text;
   EXPECT_TRUE(c.has("10:1: note: BOUND: features are not bounded")) << c.text;
   EXPECT_TRUE(c.has("3:1: note: RAPID: the next move is made at the positioning feed")) << c.text;

@@ -20,12 +20,17 @@ const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "
                                        // DMIS 5.x statements shop programs carry that change nothing on a
                                        // virtual CMM: vendor switches, fly mode.
                                        "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN",
-                                       // Report layout and fitting-algorithm choices: metron's reports
-                                       // and fits are its own (least squares, minimum zone for form).
-                                       "REPORT", "CZONE",
+                                       // Report layouts: metron's reports are its own.
+                                       "REPORT",
+                                       // Clearance zones and their selection: the virtual CMM's moves
+                                       // keep SNSET/CLRSRF's clearance.
+                                       "CZONE", "CZSLCT",
                                        // Point buffering and the carriage definitions of a one-carriage
                                        // machine: the points reach the runtime the same either way.
                                        "PTBUFF", "CRGDEF",
+                                       // A reference mount (REFMNT) places sensors as SNSMNT does: the
+                                       // virtual CMM's sensors are placed by their SNSDEF or library entry.
+                                       "REFMNT",
                                        // XTERN ... ENDXTN frames the EXTFIL declarations, which do the work.
                                        "XTERN", "ENDXTN"};
 
