@@ -23,9 +23,9 @@ Compiler::Compiler(SourceManager& sources, DiagnosticSink& sink) : m_sources(sou
 // an error or a warning on each line, and nothing of it is compiled. A DMIS module without DMISMN
 // (a CALL/EXTERN file) reads as DMIS line by line and is compiled as before.
 bool Compiler::reads_as_dmis(std::uint32_t file, const grammar::Program& program, const DiagnosticSink& parsed) {
-  const bool has_start = program.first_word == "DMISMN" ||
-                         std::any_of(program.statements.begin(), program.statements.end(),
-                                     [](const grammar::Statement& s) { return s.major == "DMISMN"; });
+  const bool has_start =
+      program.first_word == "DMISMN" || std::any_of(program.statements.begin(), program.statements.end(),
+                                                    [](const grammar::Statement& s) { return s.major == "DMISMN"; });
   if (has_start) return true;
   std::set<std::uint32_t> failed_lines;
   Span first;
@@ -37,10 +37,11 @@ bool Compiler::reads_as_dmis(std::uint32_t file, const grammar::Program& program
   constexpr std::size_t k_min_failed_lines = 5;
   const std::size_t read = program.statements.size();
   if (failed_lines.size() < k_min_failed_lines || failed_lines.size() < 2 * read) return true;
-  m_sink.error("parse.not-dmis", first,
-               fmt::format("this file does not read as DMIS: {} of its lines are not DMIS statements (this is the first), "
-                           "{} {}, and it has no DMISMN; nothing of it is compiled. metron runs DMIS 5.x programs",
-                           failed_lines.size(), read, read == 1 ? "line reads as one" : "lines read as statements"));
+  m_sink.error(
+      "parse.not-dmis", first,
+      fmt::format("this file does not read as DMIS: {} of its lines are not DMIS statements (this is the first), "
+                  "{} {}, and it has no DMISMN; nothing of it is compiled. metron runs DMIS 5.x programs",
+                  failed_lines.size(), read, read == 1 ? "line reads as one" : "lines read as statements"));
   return false;
 }
 
@@ -54,13 +55,15 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
       const auto width = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(line.size()));
       const std::string message =
           foreign->dialect == "I++ DME"
-              ? fmt::format("this file is not DMIS: it reads as an I++ DME command stream, a client's tagged commands ({} "
-                            "here, and no DMISMN). metron answers such commands as a server: `metron serve --world W` "
-                            "(docs/ipp-dme.md)",
-                            foreign->statement)
-              : fmt::format("this file is not DMIS: it reads as a part program in {}'s own language ({} here, and no "
-                            "DMISMN). metron runs DMIS 5.x programs: this one needs {}, or a DMIS export of it",
-                            foreign->dialect, foreign->statement, foreign->dialect);
+              ? fmt::format(
+                    "this file is not DMIS: it reads as an I++ DME command stream, a client's tagged commands ({} "
+                    "here, and no DMISMN). metron answers such commands as a server: `metron serve --world W` "
+                    "(docs/ipp-dme.md)",
+                    foreign->statement)
+              : fmt::format(
+                    "this file is not DMIS: it reads as a part program in {}'s own language ({} here, and no "
+                    "DMISMN). metron runs DMIS 5.x programs: this one needs {}, or a DMIS export of it",
+                    foreign->dialect, foreign->statement, foreign->dialect);
       m_sink.error("parse.foreign-language", Span{file, foreign->offset, foreign->offset + width}, message);
       const std::size_t unit = m_module.units.size();
       m_module.units.push_back({path, file, {}});
@@ -77,8 +80,9 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   for (const auto& d : parsed.items()) m_sink.report(d);
   const std::size_t unit = m_module.units.size();
   m_module.units.push_back({path, file, {}});
-  UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, unit,
-                  [this](const std::string& p, const std::string& written, Span from) { return compile_file(p, from, written); });
+  UnitCompiler uc(
+      m_symbols, m_module, m_sources, m_sink, unit,
+      [this](const std::string& p, const std::string& written, Span from) { return compile_file(p, from, written); });
   uc.set_included(unit > 0);
   uc.set_strict(m_parse_options.strict);
   uc.set_read_policy(&m_policy);
@@ -86,21 +90,22 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   return unit;
 }
 
-std::optional<ir::Expr> Compiler::compile_expression(const std::string& text, const std::set<std::string>& runtime_names) {
+std::optional<ir::Expr> Compiler::compile_expression(const std::string& text,
+                                                     const std::set<std::string>& runtime_names) {
   const std::uint32_t file = m_sources.add("<expression>", "EXPR/" + text + "\n");
   const grammar::Program program = grammar::parse_program(m_sources, file, m_sink);
   if (program.statements.size() != 1 || program.statements[0].params.size() != 1) {
     if (!m_sink.has_errors()) m_sink.error("repl.expression", Span{file, 5, 5}, "expected one expression");
     return std::nullopt;
   }
-  UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, 0, [](const std::string&, const std::string&, Span) {
-    return std::optional<std::size_t>();
-  });
+  UnitCompiler uc(m_symbols, m_module, m_sources, m_sink, 0,
+                  [](const std::string&, const std::string&, Span) { return std::optional<std::size_t>(); });
   uc.set_runtime_names(runtime_names);
   return uc.standalone_expression(program.statements[0].params[0]);
 }
 
-std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span included_from, const std::string& written) {
+std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span included_from,
+                                                  const std::string& written) {
   const std::string& shown = written.empty() ? path : written;
   // A pipe (`metron check /dev/stdin`) has no canonical path: the error_code overload does not
   // throw, and the path as given is the key.
@@ -127,7 +132,8 @@ std::optional<std::size_t> Compiler::compile_file(const std::string& path, Span 
   if (!text) {
     const std::string reason = text.error().substr(text.error().rfind(": ") + 2);
     m_sink.error("io.cannot-read", included_from,
-                 reason == "no such file" ? fmt::format("cannot read {}", shown) : fmt::format("cannot read {}: {}", shown, reason));
+                 reason == "no such file" ? fmt::format("cannot read {}", shown)
+                                          : fmt::format("cannot read {}: {}", shown, reason));
     return std::nullopt;
   }
   // CR-only line ends (classic Mac OS) made the whole file one line, a leading comment swallowing

@@ -197,7 +197,8 @@ std::string to_string(const Module& module, const SourceManager& sources) {
   }
   for (std::size_t m = 0; m < module.macros.size(); ++m) {
     std::string params;
-    for (std::size_t i = 0; i < module.macros[m].params.size(); ++i) params += (i ? "," : "") + module.macros[m].params[i];
+    for (std::size_t i = 0; i < module.macros[m].params.size(); ++i)
+      params += (i ? "," : "") + module.macros[m].params[i];
     out += fmt::format("macro {} M({})({})\n", m, module.macros[m].name, params);
     print_code(out, module.macros[m].code, sources);
   }

@@ -38,11 +38,11 @@ std::optional<UnitCompiler::Typed> UnitCompiler::expression(const grammar::Expr&
       t.e.value = Value::string(g.text);
       t.e.type = ValueType::String;
       return t;
-    case ExprKind::Word:
-      return word_expression(g);
+    case ExprKind::Word: return word_expression(g);
     case ExprKind::Label: {
       if (!allow_labels) {
-        error(g.span, "sema.label-not-value", fmt::format("expected a value, got the label {}({})", g.label.prefix, g.label.name));
+        error(g.span, "sema.label-not-value",
+              fmt::format("expected a value, got the label {}({})", g.label.prefix, g.label.name));
         return std::nullopt;
       }
       t.e.op = ir::ExprOp::Constant;
@@ -51,19 +51,14 @@ std::optional<UnitCompiler::Typed> UnitCompiler::expression(const grammar::Expr&
       t.e.type = ValueType::Label;
       return t;
     }
-    case ExprKind::Paren:
-      return g.args.empty() ? std::nullopt : expression(g.args[0], allow_labels);
-    case ExprKind::Index:
-      return element_expression(g);
+    case ExprKind::Paren: return g.args.empty() ? std::nullopt : expression(g.args[0], allow_labels);
+    case ExprKind::Index: return element_expression(g);
     case ExprKind::Format:
       error(g.span, "sema.format-outside-write", "a layout ':width:decimals' belongs to the values of WRITE only");
       return std::nullopt;
-    case ExprKind::Call:
-      return call_expression(g);
-    case ExprKind::Unary:
-      return unary_expression(g);
-    case ExprKind::Binary:
-      return binary_expression(g);
+    case ExprKind::Call: return call_expression(g);
+    case ExprKind::Unary: return unary_expression(g);
+    case ExprKind::Binary: return binary_expression(g);
   }
   return std::nullopt;
 }
@@ -101,7 +96,8 @@ std::optional<UnitCompiler::Typed> UnitCompiler::word_expression(const grammar::
     return std::nullopt;
   }
   error(g.span, "sema.undeclared-variable",
-        fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) before its use", g.text, g.text));
+        fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) before its use", g.text,
+                    g.text));
   return std::nullopt;
 }
 
@@ -113,7 +109,8 @@ std::optional<UnitCompiler::Typed> UnitCompiler::element_expression(const gramma
   t.e.name = g.text;
   auto it = m_symbols.variables.find(g.text);
   auto lt = m_locals.find(g.text);
-  const SymbolTable::VariableInfo* info = lt != m_locals.end() ? &lt->second : (it != m_symbols.variables.end() ? &it->second : nullptr);
+  const SymbolTable::VariableInfo* info =
+      lt != m_locals.end() ? &lt->second : (it != m_symbols.variables.end() ? &it->second : nullptr);
   if (!info) {
     error(g.span, "sema.undeclared-variable", fmt::format("array {} is not declared", g.text));
     return std::nullopt;
@@ -184,7 +181,10 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
   t.e.type = fn->result;
   // EOF(DID(x)), EOLN(DID(x)) and PTDATA(FA(x)) take a label; EXIST any label.
   const bool exist = g.text == "EXIST";
-  const char* label_kind = g.text == "EOF" || g.text == "EOLN" ? "DID" : g.text == "PTDATA" ? "FA" : exist ? "F" : nullptr;
+  const char* label_kind = g.text == "EOF" || g.text == "EOLN" ? "DID"
+                           : g.text == "PTDATA"                ? "FA"
+                           : exist                             ? "F"
+                                                               : nullptr;
   for (const auto& a : g.args) {
     if (exist && a.kind != ExprKind::Label) {
       error(a.span, "sema.type", "EXIST takes a label: F(x), FA(x), D(x), DA(x), T(x), TA(x), S(x), SA(x) or DID(x)");
@@ -233,8 +233,10 @@ std::optional<UnitCompiler::Typed> UnitCompiler::unary_expression(const grammar:
     }
     t.e.type = ValueType::Bool;
   } else {
-    if (!x->dynamic && !(x->e.type == ValueType::Real || x->e.type == ValueType::Integer || x->e.type == ValueType::Vector)) {
-      error(g.span, "sema.type", fmt::format("unary {} needs a number or a VECTOR, got {}", g.text, to_string(x->e.type)));
+    if (!x->dynamic &&
+        !(x->e.type == ValueType::Real || x->e.type == ValueType::Integer || x->e.type == ValueType::Vector)) {
+      error(g.span, "sema.type",
+            fmt::format("unary {} needs a number or a VECTOR, got {}", g.text, to_string(x->e.type)));
       return std::nullopt;
     }
     t.e.type = x->e.type;
@@ -266,7 +268,8 @@ std::optional<UnitCompiler::Typed> UnitCompiler::binary_expression(const grammar
                         (a->e.type == ValueType::String && b->e.type == ValueType::String) ||
                         ((a->e.type == ValueType::Bool || a->e.type == ValueType::Vector) && b->e.type == a->e.type &&
                          (op == ".EQ." || op == ".NE.")))) {
-      error(g.span, "sema.type", fmt::format("{} compares a {} with a {}", op, to_string(a->e.type), to_string(b->e.type)));
+      error(g.span, "sema.type",
+            fmt::format("{} compares a {} with a {}", op, to_string(a->e.type), to_string(b->e.type)));
       return std::nullopt;
     }
     t.e.type = ValueType::Bool;
@@ -278,7 +281,8 @@ std::optional<UnitCompiler::Typed> UnitCompiler::binary_expression(const grammar
     const bool va = a->e.type == ValueType::Vector, vb = b->e.type == ValueType::Vector;
     if (va || vb) {
       // Vector arithmetic: u+v, u-v, s*v, v*s, v/s.
-      const bool fits = ((op == "+" || op == "-") && va && vb) || (op == "*" && (va != vb) && number(va ? b->e.type : a->e.type)) ||
+      const bool fits = ((op == "+" || op == "-") && va && vb) ||
+                        (op == "*" && (va != vb) && number(va ? b->e.type : a->e.type)) ||
                         (op == "/" && va && number(b->e.type));
       if (!t.dynamic && !fits) {
         error(g.span, "sema.type",
@@ -289,11 +293,13 @@ std::optional<UnitCompiler::Typed> UnitCompiler::binary_expression(const grammar
       t.e.type = ValueType::Vector;
     } else {
       if (!t.dynamic && (!number(a->e.type) || !number(b->e.type))) {
-        error(g.span, "sema.type", fmt::format("'{}' needs numbers, got {} and {}", op, to_string(a->e.type), to_string(b->e.type)));
+        error(g.span, "sema.type",
+              fmt::format("'{}' needs numbers, got {} and {}", op, to_string(a->e.type), to_string(b->e.type)));
         return std::nullopt;
       }
       t.e.type = (a->e.type == ValueType::Integer && b->e.type == ValueType::Integer && op != "/" && op != "**")
-                     ? ValueType::Integer : ValueType::Real;
+                     ? ValueType::Integer
+                     : ValueType::Real;
     }
   }
   t.e.args.push_back(std::move(a->e));

@@ -48,10 +48,8 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
       }
       return call_builtin(*fn, args, m_degrees);
     }
-    case ir::ExprOp::Obtain:
-      return detail::Execute::obtain(*this, e);
-    case ir::ExprOp::Query:
-      return detail::Execute::query(*this, e);
+    case ir::ExprOp::Obtain: return detail::Execute::obtain(*this, e);
+    case ir::ExprOp::Query: return detail::Execute::query(*this, e);
     case ir::ExprOp::Unary: {
       auto v = evaluate(e.args.at(0));
       if (!v) return v;
@@ -68,8 +66,7 @@ tl::expected<Value, std::string> Interpreter::evaluate(const ir::Expr& e) {
       if (e.name == "-") v->number = -v->number;
       return v;
     }
-    case ir::ExprOp::Binary:
-      return detail::Execute::binary(*this, e);
+    case ir::ExprOp::Binary: return detail::Execute::binary(*this, e);
   }
   return tl::unexpected(std::string("bad expression"));
 }
@@ -85,14 +82,16 @@ tl::expected<Value, std::string> vector_arithmetic(const std::string& op, const 
   const bool va = a.type == ValueType::Vector, vb = b.type == ValueType::Vector;
   Value r = va ? a : b;
   if ((op == "+" || op == "-") && va && vb) {
-    for (std::size_t i = 0; i < 3; ++i) r.components[i] = op == "+" ? a.components[i] + b.components[i] : a.components[i] - b.components[i];
+    for (std::size_t i = 0; i < 3; ++i)
+      r.components[i] = op == "+" ? a.components[i] + b.components[i] : a.components[i] - b.components[i];
   } else if (op == "*" && va != vb && (va ? b : a).is_number()) {
     for (double& c : r.components) c *= (va ? b : a).number;
   } else if (op == "/" && va && b.is_number()) {
     if (b.number == 0) return tl::unexpected(std::string("division by zero"));
     for (double& c : r.components) c /= b.number;
   } else {
-    return tl::unexpected(fmt::format("'{}' does not apply to a {} and a {}", op, to_string(a.type), to_string(b.type)));
+    return tl::unexpected(
+        fmt::format("'{}' does not apply to a {} and a {}", op, to_string(a.type), to_string(b.type)));
   }
   for (double c : r.components)
     if (!std::isfinite(c)) return tl::unexpected(fmt::format("'{}' gives a vector that is not finite", op));
@@ -113,7 +112,8 @@ tl::expected<Value, std::string> Execute::obtain(Interpreter& vm, const ir::Expr
   const auto words = static_cast<long>(runtime::feature_word_count(g->type));
   const auto k = static_cast<long>(std::llround(*index));
   if (k <= words || k > words + static_cast<long>(params.size()))
-    return tl::unexpected(fmt::format("OBTAIN index {} is not a number of {}({})", k, e.label.prefix, vm.label_name(e.label)));
+    return tl::unexpected(
+        fmt::format("OBTAIN index {} is not a number of {}({})", k, e.label.prefix, vm.label_name(e.label)));
   const runtime::FeatureParameter& p = params[static_cast<std::size_t>(k - words - 1)];
   // Lengths go back to program units; direction cosines and angles do not.
   const double v = p.unit == runtime::ParameterUnit::Length ? p.value / vm.m_length_mm : p.value;
@@ -166,7 +166,8 @@ tl::expected<Value, std::string> Execute::query(Interpreter& vm, const ir::Expr&
   if (e.label.prefix == "TA") {
     const auto* results = vm.m_runtime.last_tolerance_results(label);
     if (!results)
-      return tl::unexpected(fmt::format("VALUE/TA({}) before T({}) was evaluated (OUTPUT or EVAL with a feature)", label, label));
+      return tl::unexpected(
+          fmt::format("VALUE/TA({}) before T({}) was evaluated (OUTPUT or EVAL with a feature)", label, label));
     if (n < 1 || n > static_cast<long>(results->size()))
       return tl::unexpected(fmt::format("VALUE/TA({}),{},{}: its last evaluation has {} result{}", label, e.name, n,
                                         results->size(), results->size() == 1 ? "" : "s"));
@@ -175,10 +176,13 @@ tl::expected<Value, std::string> Execute::query(Interpreter& vm, const ir::Expr&
     if (e.name == "OUTOL") return Value::boolean_value(!r.in_tolerance);
     const bool angle = runtime::is_angle_result(r);
     double v = 0;
-    if (e.name == "ACT") v = r.actual;
-    else if (e.name == "DEV") v = r.value;
-    else v = r.in_tolerance ? 0.0 : std::max(r.lower - r.value, r.value - r.upper);  // AMT: beyond the nearer limit
-    return Value::real(angle ? v / degrees(vm) : v / vm.m_length_mm);  // program units
+    if (e.name == "ACT")
+      v = r.actual;
+    else if (e.name == "DEV")
+      v = r.value;
+    else
+      v = r.in_tolerance ? 0.0 : std::max(r.lower - r.value, r.value - r.upper);  // AMT: beyond the nearer limit
+    return Value::real(angle ? v / degrees(vm) : v / vm.m_length_mm);             // program units
   }
   auto g = vm.m_runtime.feature_geometry({label, e.label.prefix == "FA"}, e.span);
   if (!g) return tl::unexpected(g.error().message);
@@ -207,12 +211,16 @@ tl::expected<Value, std::string> Execute::binary(Interpreter& vm, const ir::Expr
   if (!b) return b;
   if (op[0] == '.') {
     int c = 0;
-    if (a->is_number() && b->is_number()) c = a->number < b->number ? -1 : (a->number > b->number ? 1 : 0);
-    else if (a->type == ValueType::String && b->type == ValueType::String) c = a->text.compare(b->text) < 0 ? -1 : (a->text == b->text ? 0 : 1);
-    else if (a->type == ValueType::Bool && b->type == ValueType::Bool) c = a->boolean == b->boolean ? 0 : 1;
+    if (a->is_number() && b->is_number())
+      c = a->number < b->number ? -1 : (a->number > b->number ? 1 : 0);
+    else if (a->type == ValueType::String && b->type == ValueType::String)
+      c = a->text.compare(b->text) < 0 ? -1 : (a->text == b->text ? 0 : 1);
+    else if (a->type == ValueType::Bool && b->type == ValueType::Bool)
+      c = a->boolean == b->boolean ? 0 : 1;
     else if (a->type == ValueType::Vector && b->type == ValueType::Vector && (op == ".EQ." || op == ".NE."))
       c = a->components == b->components ? 0 : 1;
-    else return tl::unexpected(fmt::format("{} compares a {} with a {}", op, to_string(a->type), to_string(b->type)));
+    else
+      return tl::unexpected(fmt::format("{} compares a {} with a {}", op, to_string(a->type), to_string(b->type)));
     if (op == ".EQ.") return Value::boolean_value(c == 0);
     if (op == ".NE.") return Value::boolean_value(c != 0);
     if (op == ".LT.") return Value::boolean_value(c < 0);
@@ -225,14 +233,19 @@ tl::expected<Value, std::string> Execute::binary(Interpreter& vm, const ir::Expr
   if (!a->is_number() || !b->is_number()) return tl::unexpected(fmt::format("'{}' needs numbers", op));
   const bool integer = a->type == ValueType::Integer && b->type == ValueType::Integer;
   double r = 0;
-  if (op == "+") r = a->number + b->number;
-  else if (op == "-") r = a->number - b->number;
-  else if (op == "*") r = a->number * b->number;
+  if (op == "+")
+    r = a->number + b->number;
+  else if (op == "-")
+    r = a->number - b->number;
+  else if (op == "*")
+    r = a->number * b->number;
   else if (op == "/") {
     if (b->number == 0) return tl::unexpected(std::string("division by zero"));
     r = a->number / b->number;
-  } else if (op == "**") r = std::pow(a->number, b->number);
-  else return tl::unexpected("unknown operator " + op);
+  } else if (op == "**")
+    r = std::pow(a->number, b->number);
+  else
+    return tl::unexpected("unknown operator " + op);
   if (!std::isfinite(r)) return tl::unexpected(fmt::format("'{}' gives a number that is not finite", op));
   return integer && op != "/" && op != "**" ? Value::integer(r) : Value::real(r);
 }

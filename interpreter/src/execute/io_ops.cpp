@@ -15,10 +15,15 @@ using ir::Operand;
 using runtime::FeatureType;
 
 void Execute::add_input_output(ExecuteTable& t) {
-  add_rows(t, {
-      {Op::Units, &units}, {Op::DecimalPlaces, &decimal_places}, {Op::Read, &read}, {Op::Write, &write}, {Op::Mode, &mode}, {Op::Text, &text}, {Op::DeviceDef, &device_def},
-      {Op::DeviceOpen, &device_open}, {Op::DeviceClose, &device_close}
-  });
+  add_rows(t, {{Op::Units, &units},
+               {Op::DecimalPlaces, &decimal_places},
+               {Op::Read, &read},
+               {Op::Write, &write},
+               {Op::Mode, &mode},
+               {Op::Text, &text},
+               {Op::DeviceDef, &device_def},
+               {Op::DeviceOpen, &device_open},
+               {Op::DeviceClose, &device_close}});
 }
 
 // Op::Units
@@ -128,7 +133,8 @@ ExecStatus Execute::device_open(Interpreter& vm, const ir::Instruction& in, Call
     return ExecStatus::Running;
   }
   const bool direct = std::find(w.begin(), w.end(), "DIRECT") != w.end();
-  if (auto r = vm.m_runtime.open_device(vm.label_name(in.operands[0].label), in.span, direct); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.open_device(vm.label_name(in.operands[0].label), in.span, direct); !r)
+    return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 
@@ -142,8 +148,8 @@ ExecStatus Execute::read(Interpreter& vm, const ir::Instruction& in, CallFrame&)
   for (const std::string& name : in.names) {
     auto& file = it->second;
     if (file.next >= file.fields.size())
-      return vm.fail(in.span, fmt::format("READ/DID({}): the file ended before {} (test EOF(DID({})) first)", label,
-                                          name, label));
+      return vm.fail(
+          in.span, fmt::format("READ/DID({}): the file ended before {} (test EOF(DID({})) first)", label, name, label));
     const auto current = vm.variable(name);
     ValueType type = current ? current->type : ValueType::String;
     if (auto declared = vm.m_types.find(name); declared != vm.m_types.end()) type = declared->second;
@@ -198,7 +204,8 @@ ExecStatus Execute::write(Interpreter& vm, const ir::Instruction& in, CallFrame&
 // Op::DeviceClose
 ExecStatus Execute::device_close(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   if (vm.m_inputs.erase(vm.label_name(in.operands[0].label)) > 0) return ExecStatus::Running;
-  if (auto r = vm.m_runtime.close_device(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.close_device(vm.label_name(in.operands[0].label), in.span); !r)
+    return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

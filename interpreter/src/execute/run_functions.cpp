@@ -66,7 +66,8 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     // system in the part system (VPCS): directions turn only, they do not shift.
     auto v = evaluate(e.args.at(0));
     if (!v) return v;
-    if (v->type != ValueType::Vector) return tl::unexpected(fmt::format("{} takes a VECTOR, got a {}", name, to_string(v->type)));
+    if (v->type != ValueType::Vector)
+      return tl::unexpected(fmt::format("{} takes a VECTOR, got a {}", name, to_string(v->type)));
     const runtime::Alignment& a = m_runtime.alignment();
     const Vec3 u(v->components[0], v->components[1], v->components[2]);
     const Vec3 w = name == "VMCS" ? a.to_machine_vector(u) : a.to_part_vector(u);
@@ -75,7 +76,8 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
   if (name == "EXIST") {
     const ir::LabelOperand& l = e.args.at(0).label;
     const std::string label = label_name(l);
-    if (l.prefix == "DID") return Value::boolean_value(m_inputs.count(label) > 0 || m_runtime.label_exists("DID", label));
+    if (l.prefix == "DID")
+      return Value::boolean_value(m_inputs.count(label) > 0 || m_runtime.label_exists("DID", label));
     return Value::boolean_value(m_runtime.label_exists(l.prefix, label));
   }
   if (name == "DMESYS") {
@@ -108,8 +110,9 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     if (const auto t = m_runtime.machine().state().temperature_c) return shown(*t);
     if (!m_no_thermometer_warned) {
       m_no_thermometer_warned = true;
-      m_runtime.warning(e.span, "QTEMP: this machine has no thermometer (its world models no temperature); answered the "
-                                "reference temperature 20 C (told once)");
+      m_runtime.warning(e.span,
+                        "QTEMP: this machine has no thermometer (its world models no temperature); answered the "
+                        "reference temperature 20 C (told once)");
     }
     return shown(20.0);
   }
@@ -124,7 +127,8 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     if (kind == K::NoContact) return Value::string("NOTOUCH");
     if (kind == K::Collision || kind == K::OverTravel) return Value::string("ILLEGALTOUCH");
     std::string word = machine::to_string(kind);
-    std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    std::transform(word.begin(), word.end(), word.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
     return Value::string(word);
   }
   if (name == "SMODE") {

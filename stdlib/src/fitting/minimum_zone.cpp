@@ -48,8 +48,10 @@ std::vector<double> nelder_mead(const Objective& f, std::vector<double> x0, doub
         const auto xe = along(-2.0);
         const double fe = f(xe);
         ++evaluations;
-        if (fe < fr) s[hi] = xe, v[hi] = fe;
-        else s[hi] = xr, v[hi] = fr;
+        if (fe < fr)
+          s[hi] = xe, v[hi] = fe;
+        else
+          s[hi] = xr, v[hi] = fr;
       } else if (fr < v[second]) {
         s[hi] = xr, v[hi] = fr;
       } else {
@@ -87,7 +89,9 @@ std::pair<Vec3, Vec3> frame_of(const Vec3& n) {
 }
 
 // A direction near `n`: n + a e1 + b e2, normalised.
-Vec3 tilt(const Vec3& n, const Vec3& e1, const Vec3& e2, double a, double b) { return (n + a * e1 + b * e2).normalized(); }
+Vec3 tilt(const Vec3& n, const Vec3& e1, const Vec3& e2, double a, double b) {
+  return (n + a * e1 + b * e2).normalized();
+}
 
 double spread(const std::vector<double>& r) {
   const auto [mn, mx] = std::minmax_element(r.begin(), r.end());
@@ -387,7 +391,8 @@ tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std:
   out.direction = place(x, out.position);
   out.diameter_mm = 2 * std::abs(objective(x));
   if (inscribed) {
-    if ((out.position - ls->position).norm() > 0.25 * ls->diameter_mm / 2) return tl::unexpected(FitFailure::Degenerate);
+    if ((out.position - ls->position).norm() > 0.25 * ls->diameter_mm / 2)
+      return tl::unexpected(FitFailure::Degenerate);
     if (cylinder) {
       const auto [a1, a2] = frame_of(out.direction);
       if (!surrounds(points, out.position, a1, a2)) return tl::unexpected(FitFailure::Degenerate);
