@@ -93,12 +93,17 @@ ExecStatus Interpreter::take_bad_measurement(std::size_t depth, std::size_t fail
 // A machine fault under ERROR/... (DMIS 5.x): when the condition covers it, the run goes on, at
 // the handler label (kept: where RESUME goes on) or, with AUTO, after the failing statement. The
 // fault stays in the record, and a warning says it was handled.
+const char* Interpreter::error_condition(machine::FaultKind kind) {
+  using K = machine::FaultKind;
+  if (kind == K::NoContact) return "NOTOUCH";
+  if (kind == K::Collision || kind == K::OverTravel) return "ILLEGALTOUCH";
+  return nullptr;
+}
+
 ExecStatus Interpreter::handle_fault(std::size_t depth, std::size_t failed) {
   const ErrorHandling h = *m_on_error;
-  using K = machine::FaultKind;
-  const K kind = m_last_fault ? m_last_fault->kind : K::BadCommand;
-  const bool covered = h.condition == "ALL" || (h.condition == "NOTOUCH" && kind == K::NoContact) ||
-                       (h.condition == "ILLEGALTOUCH" && (kind == K::Collision || kind == K::OverTravel));
+  const char* condition = error_condition(m_last_fault ? m_last_fault->kind : machine::FaultKind::BadCommand);
+  const bool covered = h.condition == "ALL" || (condition && h.condition == condition);
   // The handler's frame must still be the one ERROR was set in (a macro's handler ends with it).
   const bool live = h.frame < m_frames.size() && m_frames[h.frame].kind == h.kind && m_frames[h.frame].index == h.index;
   if (!covered || !live || depth >= m_frames.size()) return ExecStatus::Faulted;

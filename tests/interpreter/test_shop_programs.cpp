@@ -3017,7 +3017,8 @@ TEST(ShopPrograms, PolarCoordinatesAndDistanceLimitsAreEvaluated) {
       "T(LIM) = TOL/DISTB, LIMIT, 4.99, 5.03, XAXIS\nT(OUT) = TOL/DISTB, LIMIT, 5.01, 5.05, XAXIS\n"
       "OUTPUT/FA(BORE1), TA(PR), TA(PA)\nOUTPUT/FA(BORE1), FA(PNT), TA(LIM), TA(OUT)\n"
       "WKPLAN/YZPLAN\nOUTPUT/FA(BORE1), TA(PR), TA(PA)\nWKPLAN/ZXPLAN\nOUTPUT/FA(BORE1), TA(PR), TA(PA)\nENDFIL\n";
-  EXPECT_EQ(check(text).errors + check(text).warnings, 0U) << check(text).text;
+  const auto checked = check(text);
+  EXPECT_EQ(checked.errors + checked.warnings, 0U) << checked.text;
   const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::vector<const metron::runtime::ToleranceResult*> results;

@@ -122,11 +122,8 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
     // The last machine fault the run went on after (ERROR/..., BADTST/ON), by ERROR's condition
     // words where it has one; '' before any.
     if (!m_last_fault || m_handled_faults == 0) return Value::string("");
-    using K = machine::FaultKind;
-    const K kind = m_last_fault->kind;
-    if (kind == K::NoContact) return Value::string("NOTOUCH");
-    if (kind == K::Collision || kind == K::OverTravel) return Value::string("ILLEGALTOUCH");
-    std::string word = machine::to_string(kind);
+    if (const char* condition = error_condition(m_last_fault->kind)) return Value::string(condition);
+    std::string word = machine::to_string(m_last_fault->kind);
     std::transform(word.begin(), word.end(), word.begin(),
                    [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
     return Value::string(word);

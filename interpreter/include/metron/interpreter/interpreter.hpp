@@ -139,6 +139,9 @@ class Interpreter {
   bool m_bad_geometry = false;
   ExecStatus take_bad_measurement(std::size_t depth, std::size_t failed);
   ExecStatus handle_fault(std::size_t frame, std::size_t failed);
+  /// ERROR/'s condition word for a fault kind (NOTOUCH, ILLEGALTOUCH), nullptr for the others
+  /// (only ALL covers those): ERROR's handling and SERROR() name faults alike.
+  static const char* error_condition(machine::FaultKind kind);
   Vec3 m_block_position = Vec3::Zero();
   double m_length_mm = 1.0;   ///< UNITS: mm per program length unit
   bool m_degrees = true;      ///< UNITS: ANGDEC (else ANGRAD)
