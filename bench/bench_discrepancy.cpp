@@ -31,7 +31,8 @@ dc::MeasuredData positioning_10k() {
     const double x = (d > 0 ? i : 99 - i) * 10.0;
     const double t = 2.0 * r;
     const double dev = 1.5 * std::sin(2 * kPi * x / 130) + 2.0 * d + noise(rng);
-    csv += fmt::format("{},{},{},{:.4f},{:.4f},{:.4f}\n", t, d, x, 20 + 0.5 * std::sin(t / 5000), 20.2 + 0.3 * std::sin(t / 7000), dev);
+    csv += fmt::format("{},{},{},{:.4f},{:.4f},{:.4f}\n", t, d, x, 20 + 0.5 * std::sin(t / 5000),
+                       20.2 + 0.3 * std::sin(t / 7000), dev);
   }
   const json desc = json::parse(R"({"kind": "positioning", "noise_mm": 0.0003, "columns": [
     {"name": "t", "role": "time", "unit": "s"}, {"name": "dir", "role": "direction", "axis": "x"},
@@ -45,12 +46,14 @@ dc::MeasuredData drift_10k() {
   std::normal_distribution<double> noise(0, 0.3);
   std::string csv = "t,t1,t2,t3,t4,dz\n";
   std::vector<double> ts, T;
-  for (int r = 0; r < 10000; ++r) ts.push_back(15.0 * r), T.push_back(20 + 2 * std::sin(15.0 * r / 20000) + (r > 3000 ? 1.5 : 0));
+  for (int r = 0; r < 10000; ++r)
+    ts.push_back(15.0 * r), T.push_back(20 + 2 * std::sin(15.0 * r / 20000) + (r > 3000 ? 1.5 : 0));
   const auto lag = dc::first_order_lag(ts, T, 3000);
   for (int r = 0; r < 10000; ++r)
-    csv += fmt::format("{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", ts[static_cast<std::size_t>(r)], T[static_cast<std::size_t>(r)],
-                       20 + std::cos(ts[static_cast<std::size_t>(r)] / 9000), 21 + 0.2 * std::sin(ts[static_cast<std::size_t>(r)] / 3000),
-                       19 + 0.001 * r / 10, 3.0 * (lag[static_cast<std::size_t>(r)] - 20) + noise(rng));
+    csv += fmt::format("{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f}\n", ts[static_cast<std::size_t>(r)],
+                       T[static_cast<std::size_t>(r)], 20 + std::cos(ts[static_cast<std::size_t>(r)] / 9000),
+                       21 + 0.2 * std::sin(ts[static_cast<std::size_t>(r)] / 3000), 19 + 0.001 * r / 10,
+                       3.0 * (lag[static_cast<std::size_t>(r)] - 20) + noise(rng));
   const json desc = json::parse(R"({"kind": "drift", "noise_mm": 0.0003, "columns": [
     {"name": "t", "role": "time", "unit": "s"}, {"name": "t1", "role": "temperature", "unit": "C"},
     {"name": "t2", "role": "temperature", "unit": "C"}, {"name": "t3", "role": "temperature", "unit": "C"},
@@ -66,7 +69,8 @@ void run(benchmark::State& state, const dc::MeasuredData& data) {
   }
   std::string found;
   for (const auto& e : a.effects) found += e.what + "; ";
-  state.SetLabel(fmt::format("{} rows, claimed: {}CV {:.3f} -> {:.3f} um, fit {:.3f} um", data.rows, found, a.cv_rms_before_mm * 1e3, a.cv_rms_after_mm * 1e3, a.fit_rms_after_mm * 1e3));
+  state.SetLabel(fmt::format("{} rows, claimed: {}CV {:.3f} -> {:.3f} um, fit {:.3f} um", data.rows, found,
+                             a.cv_rms_before_mm * 1e3, a.cv_rms_after_mm * 1e3, a.fit_rms_after_mm * 1e3));
 }
 
 void BM_DiscrepancyPositioning10k(benchmark::State& state) {

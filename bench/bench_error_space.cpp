@@ -22,9 +22,9 @@
 #include "ball_array.hpp"
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/error_space/calibration.hpp"
-#include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/machine_errors/grid_field.hpp"
 #include "metron/machine/machine_errors/rigid_body.hpp"
+#include "metron/machine/virtual_cmm.hpp"
 #include "metron/stdlib/error_space/interpolation.hpp"
 #include "metron/stdlib/error_space/report_svg.hpp"
 
@@ -40,15 +40,17 @@ using Interp = AxisFunction::Interpolation;
 MachineErrorModel bench_machine() {
   std::array<AxisErrors, 3> axes;
   const std::vector<double> at = {0, 100, 200, 300, 400, 500, 600, 700, 800, 900, 1000};
-  axes[0].translation_mm[2] = AxisFunction::table(at, {0, 3e-3, 6e-3, 8e-3, 10e-3, 11e-3, 10e-3, 8e-3, 6.5e-3, 5e-3, 4e-3}, Interp::Cubic);
-  axes[1].translation_mm[2] = AxisFunction::table(at, {0, -2e-3, -4.5e-3, -6e-3, -7e-3, -8e-3, -7.5e-3, -6e-3, -4e-3, -2e-3, 0}, Interp::Cubic);
+  axes[0].translation_mm[2] =
+      AxisFunction::table(at, {0, 3e-3, 6e-3, 8e-3, 10e-3, 11e-3, 10e-3, 8e-3, 6.5e-3, 5e-3, 4e-3}, Interp::Cubic);
+  axes[1].translation_mm[2] =
+      AxisFunction::table(at, {0, -2e-3, -4.5e-3, -6e-3, -7e-3, -8e-3, -7.5e-3, -6e-3, -4e-3, -2e-3, 0}, Interp::Cubic);
   axes[2].translation_mm[2] = AxisFunction::polynomial({0, 8e-6, 2e-8});
   MachineErrorModel m;
   m.add(std::make_shared<RigidBodyTerm>(axes, Squareness{4e-6, -3e-6, 5e-6}));
   error_space::Grid sag;
   sag.axes_mm = {std::vector<double>{0, 500, 1000}, std::vector<double>{0, 500, 1000}, std::vector<double>{-600, -300}};
-  m.add(std::make_shared<GridFieldTerm>(2, sag, std::vector<double>{0, -3e-3, 0, 0, -4e-3, 0, 0, -3.5e-3, 0,
-                                                                    0, -2e-3, 0, 0, -3e-3, 0, 0, -2.5e-3, 0}));
+  m.add(std::make_shared<GridFieldTerm>(
+      2, sag, std::vector<double>{0, -3e-3, 0, 0, -4e-3, 0, 0, -3.5e-3, 0, 0, -2e-3, 0, 0, -3e-3, 0, 0, -2.5e-3, 0}));
   return m;
 }
 
@@ -74,10 +76,14 @@ const std::vector<error_space::SurfaceReadings>& readings() {
     TwoPointRig rig(machine(), plan_plate(plan, 2, 0), plan.head, 1);
     for (int k = 0; k < 10; ++k) {
       const FlatPlate p = plan_plate(plan, 2, k);
-      Vec3 origin(plan.grid.axes_mm[0][0] + plan.head.sensor_offset_mm.x() - 10, plan.grid.axes_mm[1][0] + plan.head.sensor_offset_mm.y() - 10,
-                  plan.grid.axes_mm[2][static_cast<std::size_t>(k)] + plan.head.sensor_offset_mm.z() - plan.head.standoff_mm);
+      Vec3 origin(
+          plan.grid.axes_mm[0][0] + plan.head.sensor_offset_mm.x() - 10,
+          plan.grid.axes_mm[1][0] + plan.head.sensor_offset_mm.y() - 10,
+          plan.grid.axes_mm[2][static_cast<std::size_t>(k)] + plan.head.sensor_offset_mm.z() - plan.head.standoff_mm);
       rig.place_plate(2, p.normal_sign(), origin);
-      out.push_back(rig.measure_surface({plan.grid.axes_mm[0][0], plan.grid.axes_mm[1][0], plan.grid.axes_mm[2][static_cast<std::size_t>(k)]}, 0, 1, 49, 49));
+      out.push_back(rig.measure_surface(
+          {plan.grid.axes_mm[0][0], plan.grid.axes_mm[1][0], plan.grid.axes_mm[2][static_cast<std::size_t>(k)]}, 0, 1,
+          49, 49));
     }
     return out;
   }();
@@ -140,7 +146,8 @@ void query_bench(benchmark::State& state, error_space::InterpolationSpec spec) {
   for (auto _ : state) {
     const double t0 = thread_cpu_ns();
     double sum = 0;
-    for (int q = 0; q < batch; ++q, at = (at + 1) % pts.size()) sum += interp->error_at(pts[at].x(), pts[at].y(), pts[at].z())[2];
+    for (int q = 0; q < batch; ++q, at = (at + 1) % pts.size())
+      sum += interp->error_at(pts[at].x(), pts[at].y(), pts[at].z())[2];
     benchmark::DoNotOptimize(sum);
     per_query_ns.push_back((thread_cpu_ns() - t0) / batch);
   }
@@ -153,12 +160,13 @@ void query_bench(benchmark::State& state, error_space::InterpolationSpec spec) {
 void BM_Query_Trilinear(benchmark::State& s) { query_bench(s, {error_space::Method::Trilinear, {}}); }
 void BM_Query_BSpline(benchmark::State& s) { query_bench(s, {error_space::Method::BSpline, {}}); }
 void BM_Query_LeastSquares_Linear8(benchmark::State& s) { query_bench(s, {error_space::Method::LeastSquares, {1, 1}}); }
-void BM_Query_LeastSquares_Quadratic64(benchmark::State& s) { query_bench(s, {error_space::Method::LeastSquares, {2, 2}}); }
+void BM_Query_LeastSquares_Quadratic64(benchmark::State& s) {
+  query_bench(s, {error_space::Method::LeastSquares, {2, 2}});
+}
 BENCHMARK(BM_Query_Trilinear)->MeasureProcessCPUTime();
 BENCHMARK(BM_Query_BSpline)->MeasureProcessCPUTime();
 BENCHMARK(BM_Query_LeastSquares_Linear8)->MeasureProcessCPUTime();
 BENCHMARK(BM_Query_LeastSquares_Quadratic64)->MeasureProcessCPUTime();
-
 
 // The gain (docs/error-space.md, "The gain of compensation"): length errors of the 20 balls of
 // programs/worlds/cmm_errors_ball_plate.json against their design with no map, calibrated maps and
@@ -193,7 +201,8 @@ World ball_world() {
   return *w;
 }
 
-std::shared_ptr<const ErrorMap> calibrated_map(const World& world, const SpaceCalibrationPlan& plan, double* sim_s = nullptr) {
+std::shared_ptr<const ErrorMap> calibrated_map(const World& world, const SpaceCalibrationPlan& plan,
+                                               double* sim_s = nullptr) {
   const auto run = calibrate_space(world.truth.errors, plan);
   if (sim_s) *sim_s = run.end_time_s;
   error_space::ErrorSpaceFile file;
@@ -222,8 +231,8 @@ void print_gain() {
   row("calibrated, 4 runs per plane, 8 laser cycles", calibrated_map(world, ball_array_plan(4, 8), &t4));
   const auto plan = ball_array_plan(1, 2);
   row("true errors on the 17 x 13 x 3 grid (trilinear)",
-      std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(
-          test_support::truth_error_space(world.truth.errors, plan.grid, Vec3(0, 0, -50), {}))));
+      std::make_shared<const ErrorSpaceMap>(
+          *ErrorSpaceMap::build(test_support::truth_error_space(world.truth.errors, plan.grid, Vec3(0, 0, -50), {}))));
   row("true errors exactly", std::make_shared<const test_support::TruthErrorMap>(world.truth.errors, Vec3(0, 0, -50)));
   std::printf("simulated calibration time: %.0f s (1 run), %.0f s (4 runs)\n\n", t1, t4);
 }
@@ -242,7 +251,8 @@ void compensation_bench(benchmark::State& state, bool command) {
   for (auto _ : state) {
     const double t0 = thread_cpu_ns();
     Vec3 sum = Vec3::Zero();
-    for (int q = 0; q < batch; ++q, at = (at + 1) % pts.size()) sum += command ? cmm.command_for(pts[at]) : cmm.corrected(pts[at]);
+    for (int q = 0; q < batch; ++q, at = (at + 1) % pts.size())
+      sum += command ? cmm.command_for(pts[at]) : cmm.corrected(pts[at]);
     benchmark::DoNotOptimize(sum);
     per_query_ns.push_back((thread_cpu_ns() - t0) / batch);
   }
@@ -278,8 +288,12 @@ void rebuild_bench(benchmark::State& state, error_space::Method method) {
     benchmark::DoNotOptimize(at);
   }
 }
-void BM_Compensation_RebuildAtTemperature_Trilinear(benchmark::State& s) { rebuild_bench(s, error_space::Method::Trilinear); }
-void BM_Compensation_RebuildAtTemperature_BSpline(benchmark::State& s) { rebuild_bench(s, error_space::Method::BSpline); }
+void BM_Compensation_RebuildAtTemperature_Trilinear(benchmark::State& s) {
+  rebuild_bench(s, error_space::Method::Trilinear);
+}
+void BM_Compensation_RebuildAtTemperature_BSpline(benchmark::State& s) {
+  rebuild_bench(s, error_space::Method::BSpline);
+}
 BENCHMARK(BM_Compensation_RebuildAtTemperature_Trilinear)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 BENCHMARK(BM_Compensation_RebuildAtTemperature_BSpline)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 
@@ -290,7 +304,8 @@ void print_validation() {
                                                   {error_space::Method::BSpline, {}},
                                                   {error_space::Method::LeastSquares, {1, 1}},
                                                   {error_space::Method::LeastSquares, {2, 2}}};
-  const char* names[] = {"trilinear", "bspline (cubic, not-a-knot)", "least squares linear, 8 pts", "least squares quadratic, 64 pts"};
+  const char* names[] = {"trilinear", "bspline (cubic, not-a-knot)", "least squares linear, 8 pts",
+                         "least squares quadratic, 64 pts"};
   std::printf("every-second-point validation, e_z on 50 x 50 x 10 (20 mm), fit on 25 x 25 x 5, predict the rest:\n");
   std::printf("%-34s %22s %22s\n", "method", "hidden field RMS/max um", "recovered RMS/max um");
   for (int i = 0; i < 4; ++i) {
@@ -300,11 +315,13 @@ void print_validation() {
       std::printf("%-34s %s\n", names[i], (a ? b.error() : a.error()).c_str());
       continue;
     }
-    std::printf("%-34s %10.4f / %-10.4f %10.4f / %-10.4f\n", names[i], 1e3 * a->rms_mm, 1e3 * a->max_abs_mm, 1e3 * b->rms_mm, 1e3 * b->max_abs_mm);
+    std::printf("%-34s %10.4f / %-10.4f %10.4f / %-10.4f\n", names[i], 1e3 * a->rms_mm, 1e3 * a->max_abs_mm,
+                1e3 * b->rms_mm, 1e3 * b->max_abs_mm);
   }
   double floor2 = 0;
   for (double s : run.space.sd_mm[2]) floor2 += s * s;
-  std::printf("recovered space's noise floor RMS: %.4f um\n\n", 1e3 * std::sqrt(floor2 / static_cast<double>(run.space.sd_mm[2].size())));
+  std::printf("recovered space's noise floor RMS: %.4f um\n\n",
+              1e3 * std::sqrt(floor2 / static_cast<double>(run.space.sd_mm[2].size())));
 }
 
 // The calibration report of the 50 x 50 x 10 run as one offline SVG page (the template for the
@@ -323,10 +340,14 @@ int write_report(const char* path) {
   const double n = static_cast<double>(diff.values_mm[2].size());
   ReportInput in;
   in.title = "Error-space calibration, sequential two-point method (SEEDS.md 4)";
-  in.notes.push_back(fmt::format("grid 50 x 50 x 10, step 20 mm; head d = 20 mm, sensor noise 0.1 um; plate form 5 um; "
-                                 "planes tied by an ISO 230-2 laser run along z ({} cycles)", plan.laser_cycles));
-  in.notes.push_back(fmt::format("recovered e_z vs hidden truth (method's reference): RMS {:.3f} um; noise floor RMS {:.3f} um; "
-                                 "S7 planes to re-measure: {}", 1e3 * std::sqrt(d2 / n), 1e3 * std::sqrt(f2 / n), run.planes_to_remeasure));
+  in.notes.push_back(
+      fmt::format("grid 50 x 50 x 10, step 20 mm; head d = 20 mm, sensor noise 0.1 um; plate form 5 um; "
+                  "planes tied by an ISO 230-2 laser run along z ({} cycles)",
+                  plan.laser_cycles));
+  in.notes.push_back(
+      fmt::format("recovered e_z vs hidden truth (method's reference): RMS {:.3f} um; noise floor RMS {:.3f} um; "
+                  "S7 planes to re-measure: {}",
+                  1e3 * std::sqrt(d2 / n), 1e3 * std::sqrt(f2 / n), run.planes_to_remeasure));
   in.maps.push_back(slice_map(run.space, Component::Z, 0, "recovered e_z, z = -500"));
   in.maps.push_back(slice_map(run.space, Component::Z, 9, "recovered e_z, z = -320"));
   in.maps.push_back(slice_map(diff, Component::Z, 0, "recovered - hidden truth, z = -500"));
@@ -342,17 +363,20 @@ int write_report(const char* path) {
   in.maps.push_back(plate_truth);
   HeatMap sd = slice_map(run.space, Component::Z, 0, "noise floor (sd), z = -500");
   for (std::size_t i = 0; i < 50; ++i)
-    for (std::size_t j = 0; j < 50; ++j) sd.values_mm(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = run.space.sd_mm[2][plan.grid.index(i, j, 0)];
+    for (std::size_t j = 0; j < 50; ++j)
+      sd.values_mm(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+          run.space.sd_mm[2][plan.grid.index(i, j, 0)];
   in.maps.push_back(sd);
-  const std::pair<InterpolationSpec, const char*> methods[] = {{{Method::Trilinear, {}}, "trilinear"},
-                                                                {{Method::BSpline, {}}, "bspline"},
-                                                                {{Method::LeastSquares, {2, 2}}, "least squares (quadratic, 64)"}};
+  const std::pair<InterpolationSpec, const char*> methods[] = {
+      {{Method::Trilinear, {}}, "trilinear"},
+      {{Method::BSpline, {}}, "bspline"},
+      {{Method::LeastSquares, {2, 2}}, "least squares (quadratic, 64)"}};
   for (const auto& [spec, name] : methods) {
     const auto v = validate_every_second(plan.grid, run.space.values_mm[2], spec);
     auto m = validation_map(run.space, Component::Z, 0, spec, fmt::format("validation residual, {}, z = -500", name));
     if (!v || !m) continue;
-    in.notes.push_back(fmt::format("every-second-point validation, {}: RMS {:.3f} um, max {:.3f} um ({} points)", name, 1e3 * v->rms_mm,
-                                   1e3 * v->max_abs_mm, v->points));
+    in.notes.push_back(fmt::format("every-second-point validation, {}: RMS {:.3f} um, max {:.3f} um ({} points)", name,
+                                   1e3 * v->rms_mm, 1e3 * v->max_abs_mm, v->points));
     in.maps.push_back(*m);
   }
   std::ofstream out(path);

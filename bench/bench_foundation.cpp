@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <random>
 
-#include "metron/interpreter/compiler.hpp"
 #include "cli/virtual_cmm_backend.hpp"
+#include "metron/interpreter/compiler.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
@@ -47,7 +47,8 @@ std::vector<metron::Vec3> cylinder_points(std::int64_t n) {
   std::normal_distribution<double> noise(0, 0.001);
   std::vector<metron::Vec3> pts;
   for (std::int64_t i = 0; i < n; ++i) {
-    const double a = 6.283185307179586 * static_cast<double>(i) / 37.0, z = 30.0 * static_cast<double>(i) / static_cast<double>(n);
+    const double a = 6.283185307179586 * static_cast<double>(i) / 37.0,
+                 z = 30.0 * static_cast<double>(i) / static_cast<double>(n);
     pts.emplace_back(10 + 12.5 * std::cos(a) + noise(rng), -4 + 12.5 * std::sin(a) + noise(rng), z);
   }
   return pts;

@@ -70,7 +70,8 @@ struct Loopback {
     char t[16];
     std::snprintf(t, sizeof t, "%05d", tag);
     const std::string line = std::string(t) + " " + command + "\r\n";
-    if (::send(fd, line.data(), line.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(line.size())) throw std::runtime_error("send");
+    if (::send(fd, line.data(), line.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(line.size()))
+      throw std::runtime_error("send");
     for (;;) {
       const auto nl = buffer.find('\n');
       if (nl != std::string::npos) {
@@ -107,7 +108,9 @@ void round_trips(benchmark::State& state, const std::vector<std::string>& cycle)
 
 void BM_IppGet(benchmark::State& state) { round_trips(state, {"Get(X(), Y(), Z())"}); }
 // A 20 mm positioning move back and forth above the block.
-void BM_IppGoTo(benchmark::State& state) { round_trips(state, {"GoTo(X(425), Y(210), Z(60))", "GoTo(X(445), Y(210), Z(60))"}); }
+void BM_IppGoTo(benchmark::State& state) {
+  round_trips(state, {"GoTo(X(425), Y(210), Z(60))", "GoTo(X(445), Y(210), Z(60))"});
+}
 // A touch on the top face (z = 40; X, Y, Z are the ball centre) with the default 2 mm approach.
 void BM_IppPtMeas(benchmark::State& state) { round_trips(state, {"PtMeas(X(445), Y(210), Z(41), IJK(0, 0, 1))"}); }
 

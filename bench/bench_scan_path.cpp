@@ -40,7 +40,8 @@ Mesh free_form_mesh(int n) {
 
 void print_tables() {
   std::printf("Bore R = 10 mm, r = 2, E0 = 0.3 (ball-centre radius 8.3), feed 20 mm/s, a = 200 mm/s^2\n");
-  std::printf("%10s %9s %14s %14s %12s %12s\n", "tol_um", "segments", "fit_dev_um", "true_dev_um", "kappa_err_%", "speed_mm_s");
+  std::printf("%10s %9s %14s %14s %12s %12s\n", "tol_um", "segments", "fit_dev_um", "true_dev_um", "kappa_err_%",
+              "speed_mm_s");
   for (double tol : {1e-2, 1e-3, 1e-4, 1e-5}) {
     ArcSpec bore;
     bore.radius_mm = 10;
@@ -59,8 +60,10 @@ void print_tables() {
                 plan->max_deviation_mm * 1e3, worst * 1e3, kerr, plan->path.speed_mm_s.front());
   }
   const Mesh mesh = free_form_mesh(251);
-  std::printf("\nFree-form mesh: %zu triangles; section x = 7 (plane normal +x), r = 2, E0 = 0.3, a = 200\n", mesh.face_count());
-  std::printf("%10s %9s %14s %12s %12s %12s %12s\n", "tol_um", "segments", "fit_dev_um", "section_ms", "fit_ms", "v_min_mm_s", "v_max_mm_s");
+  std::printf("\nFree-form mesh: %zu triangles; section x = 7 (plane normal +x), r = 2, E0 = 0.3, a = 200\n",
+              mesh.face_count());
+  std::printf("%10s %9s %14s %12s %12s %12s %12s\n", "tol_um", "segments", "fit_dev_um", "section_ms", "fit_ms",
+              "v_min_mm_s", "v_max_mm_s");
   for (double tol : {1e-2, 5e-3, 2e-3}) {
     const auto t0 = std::chrono::steady_clock::now();
     auto contour = nearest_contour(mesh_section_contours(mesh, Vec3(7, 0, 0), Vec3::UnitX(), 0.05), Vec3(7, -50, 0));

@@ -6,14 +6,15 @@
 //  (2) simulation speed of the 1 kHz scanning loop on a CAD mesh of >= 100k triangles.
 //  (1b) cases where the path deviates from the surface across the scan direction: lateral error
 //      for no correction, Vc1, Vc1', Vc2, and a Kc-only sweep per law (--lateral-only);
-// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --lateral-only | --speed-only | --step-only |
+// Build with -DMETRON_BENCH=ON; run ./build/bench/bench_scanning [--table-only | --lateral-only | --speed-only |
+// --step-only |
 // --profile-sphere] [--full-search].
 #include <array>
 #include <chrono>
-#include <limits>
-#include <ctime>
 #include <cmath>
 #include <cstring>
+#include <ctime>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -21,10 +22,10 @@
 #include <fmt/format.h>
 
 #include "fixtures.hpp"
-#include "scan_paths.hpp"
-#include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/active_scanning/scan_controller.hpp"
+#include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/world_solid.hpp"
+#include "scan_paths.hpp"
 
 using namespace metron;
 using namespace metron::machine;
@@ -32,7 +33,7 @@ using namespace metron::machine;
 namespace {
 
 const Vec3 part_origin(100, 100, 0);  // design pose of the ramp part in the machine
-constexpr double ball_radius_mm = 2;   // 4 mm stylus ball
+constexpr double ball_radius_mm = 2;  // 4 mm stylus ball
 
 // RBJ audio-EQ-cookbook second-order Butterworth high-pass, run over a sampled signal.
 std::vector<double> high_pass(const std::vector<double>& x, double cutoff_hz, double rate_hz) {
@@ -50,14 +51,15 @@ std::vector<double> high_pass(const std::vector<double>& x, double cutoff_hz, do
 
 struct Row {
   ScanOutcome outcome;
-  double hf_rms_mm = 0;       // RMS of |Ep| above the cutoff
+  double hf_rms_mm = 0;         // RMS of |Ep| above the cutoff
   double reversals_per_mm = 0;  // sign changes of the high-passed |Ep| per mm of path
 };
 
 Row scan_ramp(ScanLaw law, double angle_deg, const Vec3& offset_mm, double roughness_mm, double cutoff_hz,
               double gain_1_s = 0) {
   World world = default_world();
-  if (gain_1_s > 0) world.machine.scanning.control.deflection_gain_1_s = world.machine.scanning.control.trajectory_gain_1_s = gain_1_s;
+  if (gain_1_s > 0)
+    world.machine.scanning.control.deflection_gain_1_s = world.machine.scanning.control.trajectory_gain_1_s = gain_1_s;
   PartSpec part;
   part.design = scan_test::ramp_design(angle_deg);
   part.pose.translation_mm = part_origin + offset_mm;  // the part as machined sits off its design
@@ -112,13 +114,15 @@ void table() {
   const std::vector<Vec3> offsets = {Vec3(-0.3, 0, 0), Vec3(-1.0, 0, 0), Vec3(1.0, 0, 0.2)};
   const World defaults = default_world();
   const auto& c = defaults.machine.scanning.control;
-  fmt::print("Ramp scans (docs/scanning.md): flat 20 mm, ramp rising 5 mm, plateau; 4 mm ball, E0 {} mm, feed {} mm/s,\n"
-             "K {} /s, Kc {} /s, servo {} Hz / zeta {} / {} cycle delay, roughness {} mm (0.5 mm correlation).\n"
-             "offset = the part as machined minus its design (mm). osc = RMS of |Ep| above {} Hz (2nd-order Butterworth\n"
-             "high-pass), rev/mm = its sign changes per mm of path. dist = largest |P - Pp|. done = the path end was reached.\n\n",
-             defaults.machine.scanning.probe.reference_deflection_mm, c.feed_mm_s, c.deflection_gain_1_s, c.trajectory_gain_1_s,
-             defaults.truth.scanning.servo.natural_frequency_hz, defaults.truth.scanning.servo.damping,
-             defaults.truth.scanning.servo.command_delay_cycles, roughness_mm, cutoff_hz);
+  fmt::print(
+      "Ramp scans (docs/scanning.md): flat 20 mm, ramp rising 5 mm, plateau; 4 mm ball, E0 {} mm, feed {} mm/s,\n"
+      "K {} /s, Kc {} /s, servo {} Hz / zeta {} / {} cycle delay, roughness {} mm (0.5 mm correlation).\n"
+      "offset = the part as machined minus its design (mm). osc = RMS of |Ep| above {} Hz (2nd-order Butterworth\n"
+      "high-pass), rev/mm = its sign changes per mm of path. dist = largest |P - Pp|. done = the path end was "
+      "reached.\n\n",
+      defaults.machine.scanning.probe.reference_deflection_mm, c.feed_mm_s, c.deflection_gain_1_s,
+      c.trajectory_gain_1_s, defaults.truth.scanning.servo.natural_frequency_hz, defaults.truth.scanning.servo.damping,
+      defaults.truth.scanning.servo.command_delay_cycles, roughness_mm, cutoff_hz);
   fmt::print("{:<5} {:<18} {:>5} | {:>9} {:>9} {:>9} {:>7} {:>8} {:>8} | {}\n", "law", "offset", "angle", "rms dE um",
              "peak dE um", "osc um", "rev/mm", "dist mm", "reach mm", "done");
   for (const Vec3& off : offsets)
@@ -126,11 +130,13 @@ void table() {
       for (int a = 0; a <= 60; a += 5) {
         const Row r = scan_ramp(law, a, off, roughness_mm, cutoff_hz);
         const ScanStats& st = r.outcome.stats;
-        fmt::print("{:<5} ({:5.2f},{:4.1f},{:4.1f}) {:>5} | {:>9.2f} {:>9.2f} {:>9.2f} {:>7.2f} {:>8.3f} {:>8.2f} | {}\n",
-                   law_name(law), off.x(), off.y(), off.z(), a, 1000 * st.rms_deflection_error_mm,
-                   1000 * st.peak_deflection_error_mm, 1000 * r.hf_rms_mm, r.reversals_per_mm, st.max_path_distance_mm,
-                   st.reached_mm,
-                   r.outcome.completed ? "yes" : fmt::format("no: {}", r.outcome.fault ? to_string(r.outcome.fault->kind) : "?"));
+        fmt::print(
+            "{:<5} ({:5.2f},{:4.1f},{:4.1f}) {:>5} | {:>9.2f} {:>9.2f} {:>9.2f} {:>7.2f} {:>8.3f} {:>8.2f} | {}\n",
+            law_name(law), off.x(), off.y(), off.z(), a, 1000 * st.rms_deflection_error_mm,
+            1000 * st.peak_deflection_error_mm, 1000 * r.hf_rms_mm, r.reversals_per_mm, st.max_path_distance_mm,
+            st.reached_mm,
+            r.outcome.completed ? "yes"
+                                : fmt::format("no: {}", r.outcome.fault ? to_string(r.outcome.fault->kind) : "?"));
       }
       fmt::print("\n");
     }
@@ -140,8 +146,9 @@ void table() {
 // gain is K + Kc(.eu) instead of K. Raising K = Kc shows where each law starts to ring.
 void gain_sweep() {
   const double roughness_mm = 0.003, cutoff_hz = 25;
-  fmt::print("Gain sweep: K = Kc, 20 degree ramp, offset (-0.30, 0, 0.10), roughness {} mm; osc = RMS of |Ep| above {} Hz\n",
-             roughness_mm, cutoff_hz);
+  fmt::print(
+      "Gain sweep: K = Kc, 20 degree ramp, offset (-0.30, 0, 0.10), roughness {} mm; osc = RMS of |Ep| above {} Hz\n",
+      roughness_mm, cutoff_hz);
   fmt::print("{:>6} | {:>16} {:>16} {:>16}\n", "K 1/s", "Vc1 osc/rms um", "Vc1' osc/rms um", "Vc2 osc/rms um");
   for (double k : {20.0, 40.0, 60.0, 80.0, 100.0, 120.0, 140.0, 160.0}) {
     fmt::print("{:>6.0f} |", k);
@@ -198,9 +205,10 @@ LateralRow scan_lateral(const scan_test::LateralCase& lc, ScanLaw law, double kc
 }
 
 std::vector<scan_test::LateralCase> lateral_cases(double roughness_mm) {
-  std::vector<scan_test::LateralCase> cases = {
-      scan_test::tilted_plane_case(20, 0.3, roughness_mm), scan_test::start_offset_case(0.5, roughness_mm),
-      scan_test::sphere_latitude_case(Vec3(0.3, -0.3, 0.2), 45, roughness_mm), scan_test::free_form_case(0.5, roughness_mm)};
+  std::vector<scan_test::LateralCase> cases = {scan_test::tilted_plane_case(20, 0.3, roughness_mm),
+                                               scan_test::start_offset_case(0.5, roughness_mm),
+                                               scan_test::sphere_latitude_case(Vec3(0.3, -0.3, 0.2), 45, roughness_mm),
+                                               scan_test::free_form_case(0.5, roughness_mm)};
   cases[0].name = "plane tilted 20 deg sideways, +0.3 mm";
   cases[1].name = "flat, start 0.5 mm sideways";
   cases[2].name = "sphere D40 latitude 45, centre (0.3,-0.3,0.2) off";
@@ -214,7 +222,8 @@ std::vector<scan_test::LateralCase> lateral_cases(double roughness_mm) {
   // Keep the part's (0, 0, 10) at the design's place after the tilt about the machine x axis.
   const double a = 15 * scan_test::deg;
   ramp.world.truth.part->pose.translation_mm = part_origin + Vec3(-0.5, 10 * std::sin(a), 10 - 10 * std::cos(a));
-  ramp.command.path = scan_test::profile_path_xz(scan_test::ramp_profile(30), ball_radius_mm - 0.3, ball_radius_mm - 0.3);
+  ramp.command.path =
+      scan_test::profile_path_xz(scan_test::ramp_profile(30), ball_radius_mm - 0.3, ball_radius_mm - 0.3);
   for (auto& seg : ramp.command.path.segments) seg.k.col(0) += part_origin;
   ramp.start_mm = scan_approach_point(ramp.command);
   cases.push_back(ramp);
@@ -222,17 +231,19 @@ std::vector<scan_test::LateralCase> lateral_cases(double roughness_mm) {
 }
 
 std::string done_text(const ScanOutcome& o) {
-  return o.completed ? "yes" : fmt::format("no: {} at {:.1f} mm", o.fault ? to_string(o.fault->kind) : "?", o.stats.reached_mm);
+  return o.completed ? "yes"
+                     : fmt::format("no: {} at {:.1f} mm", o.fault ? to_string(o.fault->kind) : "?", o.stats.reached_mm);
 }
 
 void lateral_table() {
   const double roughness_mm = 0.003;
   const World d = default_world();
   const double kc0 = d.machine.scanning.control.trajectory_gain_1_s;
-  fmt::print("Lateral cases (issue 11, SEEDS.md 1): the path deviates from the actual surface across the scan\n"
-             "direction. lat = (P - Pp) . q, q = eu x t: rms over the scan, peak, and the mean |lat| over the second\n"
-             "half of the path (steady state). K {} /s, Kc {} /s, roughness {} mm; \"none\" = Kc 0 (Vf + Ve only).\n\n",
-             d.machine.scanning.control.deflection_gain_1_s, kc0, roughness_mm);
+  fmt::print(
+      "Lateral cases (issue 11, SEEDS.md 1): the path deviates from the actual surface across the scan\n"
+      "direction. lat = (P - Pp) . q, q = eu x t: rms over the scan, peak, and the mean |lat| over the second\n"
+      "half of the path (steady state). K {} /s, Kc {} /s, roughness {} mm; \"none\" = Kc 0 (Vf + Ve only).\n\n",
+      d.machine.scanning.control.deflection_gain_1_s, kc0, roughness_mm);
   fmt::print("{:<50} {:<5} | {:>8} {:>8} {:>9} | {:>9} {:>9} {:>7} {:>7} | {}\n", "case", "law", "lat rms", "lat pk",
              "lat late", "rms dE um", "pk dE um", "osc um", "dist", "done");
   const auto cases = lateral_cases(roughness_mm);
@@ -240,9 +251,10 @@ void lateral_table() {
     const auto row = [&](const char* name, ScanLaw law, double kc) {
       const LateralRow r = scan_lateral(lc, law, kc);
       const ScanStats& st = r.outcome.stats;
-      fmt::print("{:<50} {:<5} | {:>8.4f} {:>8.4f} {:>9.4f} | {:>9.2f} {:>9.2f} {:>7.2f} {:>7.3f} | {}\n", lc.name, name,
-                 st.rms_lateral_error_mm, st.max_lateral_error_mm, r.late_lateral_mm, 1000 * st.rms_deflection_error_mm,
-                 1000 * st.peak_deflection_error_mm, 1000 * r.hf_rms_mm, st.max_path_distance_mm, done_text(r.outcome));
+      fmt::print("{:<50} {:<5} | {:>8.4f} {:>8.4f} {:>9.4f} | {:>9.2f} {:>9.2f} {:>7.2f} {:>7.3f} | {}\n", lc.name,
+                 name, st.rms_lateral_error_mm, st.max_lateral_error_mm, r.late_lateral_mm,
+                 1000 * st.rms_deflection_error_mm, 1000 * st.peak_deflection_error_mm, 1000 * r.hf_rms_mm,
+                 st.max_path_distance_mm, done_text(r.outcome));
     };
     row("none", ScanLaw::Vc2, 0);
     for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) row(law_name(law), law, kc0);
@@ -255,9 +267,10 @@ void lateral_table() {
 void lateral_kc_sweep() {
   const double roughness_mm = 0.003;
   const std::vector<double> gains = {2.5, 5, 10, 20, 40, 80, 160};
-  fmt::print("Kc-only sweep (K = {} /s fixed): per law, lat rms / rms dE in um (* = not completed); [best] = the\n"
-             "smallest lat rms + rms dE among completed runs.\n\n",
-             default_world().machine.scanning.control.deflection_gain_1_s);
+  fmt::print(
+      "Kc-only sweep (K = {} /s fixed): per law, lat rms / rms dE in um (* = not completed); [best] = the\n"
+      "smallest lat rms + rms dE among completed runs.\n\n",
+      default_world().machine.scanning.control.deflection_gain_1_s);
   for (const auto& lc : lateral_cases(roughness_mm)) {
     fmt::print("{}\n{:>6} |", lc.name, "Kc");
     for (ScanLaw law : {ScanLaw::Vc1, ScanLaw::Vc1Prime, ScanLaw::Vc2}) fmt::print(" {:>18}", law_name(law));
@@ -272,14 +285,16 @@ void lateral_kc_sweep() {
         const ScanStats& st = r.outcome.stats;
         const double score = st.rms_lateral_error_mm + st.rms_deflection_error_mm;
         if (r.outcome.completed && score < best[i]) best[i] = score, best_kc[i] = kc;
-        line[static_cast<std::size_t>(i)] = fmt::format("{:.1f}/{:.1f}{}", 1000 * st.rms_lateral_error_mm,
-                                                        1000 * st.rms_deflection_error_mm, r.outcome.completed ? " " : "*");
+        line[static_cast<std::size_t>(i)] =
+            fmt::format("{:.1f}/{:.1f}{}", 1000 * st.rms_lateral_error_mm, 1000 * st.rms_deflection_error_mm,
+                        r.outcome.completed ? " " : "*");
         ++i;
       }
       fmt::print("{:>6.1f} | {:>18} {:>18} {:>18}\n", kc, line[0], line[1], line[2]);
     }
     fmt::print("  best | {:>18} {:>18} {:>18}\n\n", fmt::format("Kc {} ({:.1f})", best_kc[0], 1000 * best[0]),
-               fmt::format("Kc {} ({:.1f})", best_kc[1], 1000 * best[1]), fmt::format("Kc {} ({:.1f})", best_kc[2], 1000 * best[2]));
+               fmt::format("Kc {} ({:.1f})", best_kc[1], 1000 * best[1]),
+               fmt::format("Kc {} ({:.1f})", best_kc[2], 1000 * best[2]));
   }
 }
 
@@ -338,10 +353,11 @@ std::pair<Timing, Timing> time_scan(const ScanPath& cmd, const ScanSetup& setup,
 void print_timing(const std::pair<Timing, Timing>& t) {
   for (const Timing* m : {&t.first, &t.second}) {
     const double sim = m->out.end_time_s, cycles = static_cast<double>(m->out.stats.cycles);
-    fmt::print("  {:<28} {:>6.0f}x real time by wall clock ({:.2f} us per cycle), {:>6.0f}x by CPU time ({:.2f} us); "
-               "completed: {}\n",
-               m == &t.first ? "full search per query:" : "coherent search (default):", sim / m->wall_s,
-               1e6 * m->wall_s / cycles, sim / m->cpu_s, 1e6 * m->cpu_s / cycles, m->out.completed ? "yes" : "no");
+    fmt::print(
+        "  {:<28} {:>6.0f}x real time by wall clock ({:.2f} us per cycle), {:>6.0f}x by CPU time ({:.2f} us); "
+        "completed: {}\n",
+        m == &t.first ? "full search per query:" : "coherent search (default):", sim / m->wall_s,
+        1e6 * m->wall_s / cycles, sim / m->cpu_s, 1e6 * m->cpu_s / cycles, m->out.completed ? "yes" : "no");
   }
   const auto& a = t.first.out.samples;
   const auto& b = t.second.out.samples;
@@ -371,10 +387,11 @@ void speed_on_step_part() {
   cmd.law = ScanLaw::Vc2;
   ScanSetup setup{solid.get(), ball_radius_mm, world->machine, world->truth.scanning, 3};
   const auto t = time_scan(cmd, setup, 5);
-  fmt::print("Simulation speed on a STEP part: NIST DCX part ({} triangles, exact CAD faces) plus table, a 120 mm\n"
-             "line at 10 mm/s, {} cycles = {:.2f} s simulated (best of 5 runs){}:\n",
-             cad.mesh->face_count(), t.second.out.stats.cycles, t.second.out.end_time_s,
-             t.second.out.fault ? " (" + t.second.out.fault->message + ")" : "");
+  fmt::print(
+      "Simulation speed on a STEP part: NIST DCX part ({} triangles, exact CAD faces) plus table, a 120 mm\n"
+      "line at 10 mm/s, {} cycles = {:.2f} s simulated (best of 5 runs){}:\n",
+      cad.mesh->face_count(), t.second.out.stats.cycles, t.second.out.end_time_s,
+      t.second.out.fault ? " (" + t.second.out.fault->message + ")" : "");
   print_timing(t);
 }
 
@@ -394,7 +411,7 @@ void speed(bool profile_only = false) {
   cmd.speed_mm_s = 10;
   ScanSetup setup{&solid, ball_radius_mm, world.machine, world.truth.scanning, 3};
   (void)solid.signed_distance(centre);  // builds the mesh's search trees (lazy) outside the timing
-  (void)solid.local_view(centre, 1);     // and its grid
+  (void)solid.local_view(centre, 1);    // and its grid
   if (profile_only) {
     const ScanOutcome o = run_scan(cmd, setup, scan_approach_point(cmd), 0);
     fmt::print("one scan of the sphere: {} cycles, completed: {}\n", o.stats.cycles, o.completed ? "yes" : "no");
@@ -402,9 +419,10 @@ void speed(bool profile_only = false) {
   }
   const auto t = time_scan(cmd, setup, 5);
   const ScanOutcome& out = t.second.out;
-  fmt::print("Simulation speed: Vc2 scan of a {:.0f} mm circle on a UV-sphere mesh of {} triangles (MeshSolid), {} control\n"
-             "cycles of {} ms = {:.2f} s simulated (best of 5 runs):\n",
-             2 * radius, mesh->face_count(), out.stats.cycles, 1000 * world.machine.dt_s, out.end_time_s);
+  fmt::print(
+      "Simulation speed: Vc2 scan of a {:.0f} mm circle on a UV-sphere mesh of {} triangles (MeshSolid), {} control\n"
+      "cycles of {} ms = {:.2f} s simulated (best of 5 runs):\n",
+      2 * radius, mesh->face_count(), out.stats.cycles, 1000 * world.machine.dt_s, out.end_time_s);
   print_timing(t);
   for (const auto& line : out.log) fmt::print("  log: {}\n", line);
   {
@@ -422,11 +440,12 @@ void speed(bool profile_only = false) {
     auto t3 = std::chrono::steady_clock::now();
     for (int i = 0; i < n_q; ++i) sum += solid.signed_distance(h + Vec3(0, 1e-5 * i, 0));
     auto t4 = std::chrono::steady_clock::now();
-    fmt::print("  where the time goes: a local view of the mesh (MeshSolid::local_view, renewed every 1 mm) takes {:.1f} us\n"
-               "  to build; a distance query through it {:.3f} us, on the whole mesh {:.3f} us [{}]\n",
-               1e6 * std::chrono::duration<double>(t2 - t1).count() / n_views,
-               1e6 * std::chrono::duration<double>(t3 - t2).count() / n_q,
-               1e6 * std::chrono::duration<double>(t4 - t3).count() / n_q, sum > 0 ? "ok" : "?");
+    fmt::print(
+        "  where the time goes: a local view of the mesh (MeshSolid::local_view, renewed every 1 mm) takes {:.1f} us\n"
+        "  to build; a distance query through it {:.3f} us, on the whole mesh {:.3f} us [{}]\n",
+        1e6 * std::chrono::duration<double>(t2 - t1).count() / n_views,
+        1e6 * std::chrono::duration<double>(t3 - t2).count() / n_q,
+        1e6 * std::chrono::duration<double>(t4 - t3).count() / n_q, sum > 0 ? "ok" : "?");
   }
   {
     // The controller's own cost: the same kind of scan on an analytic surface (CSG plane, table).
@@ -435,14 +454,17 @@ void speed(bool profile_only = false) {
     const auto table = make_world_solid(plain.truth);
     ScanPath line;
     const double z = ball_radius_mm - 0.3;
-    line.path.segments.push_back(geometry::PccSegment::hermite({100, 100, z}, {300, 100, z}, Vec3::UnitX(), Vec3::UnitX()));
+    line.path.segments.push_back(
+        geometry::PccSegment::hermite({100, 100, z}, {300, 100, z}, Vec3::UnitX(), Vec3::UnitX()));
     line.approach_normal = Vec3::UnitZ();
     ScanSetup flat{table.get(), ball_radius_mm, plain.machine, plain.truth.scanning, 3};
     const auto t1 = std::chrono::steady_clock::now();
     const ScanOutcome o = run_scan(line, flat, scan_approach_point(line), 0);
     const double w = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    fmt::print("  the controller alone (a 200 mm line on the table, an analytic plane): {:.0f}x real time ({:.2f} us per cycle)\n",
-               o.end_time_s / w, 1e6 * w / static_cast<double>(o.stats.cycles));
+    fmt::print(
+        "  the controller alone (a 200 mm line on the table, an analytic plane): {:.0f}x real time ({:.2f} us per "
+        "cycle)\n",
+        o.end_time_s / w, 1e6 * w / static_cast<double>(o.stats.cycles));
   }
   speed_on_step_part();
 }

@@ -7,10 +7,10 @@
 // scanning probe (SEEDS.md 1 law, ProbeScanDriver) round a lobed boss in the simulated world.
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <memory>
 #include <span>
 #include <string>
@@ -19,17 +19,17 @@
 #include <numbers>
 
 #include "fixtures.hpp"
-#include "scan_paths.hpp"
 #include "metron/machine/rng.hpp"
 #include "metron/machine/segmented_scanning/probe_scan_driver.hpp"
+#include "metron/machine/segmented_scanning/segmented_controller.hpp"
+#include "metron/machine/segmented_scanning/time_optimal_bound.hpp"
 #include "metron/machine/world_solid.hpp"
+#include "metron/runtime/scan_segmentation.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "reference_planner.hpp"
 #include "sample_paths.hpp"
+#include "scan_paths.hpp"
 #include "stream_commands.hpp"
-#include "metron/machine/segmented_scanning/segmented_controller.hpp"
-#include "metron/machine/segmented_scanning/time_optimal_bound.hpp"
-#include "metron/runtime/scan_segmentation.hpp"
 
 namespace {
 
@@ -126,25 +126,30 @@ Outcome run(const geometry::PccPath& path, double length, const ControllerConfig
 }
 
 void header() {
-  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "path", "P", "mode",
-              "cmds", "stops", "retr", "late", "time_s", "/limit", "/topp", "/bound", "v_junc", "dNear", "dNmax", "dFar",
-              "gapNmed", "gapFmed", "gapNmax", "wall_s");
-  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "", "", "", "", "",
-              "", "", "", "", "", "", "mm/s", "um", "um", "um", "mm", "mm", "mm", "");
+  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "path", "P",
+              "mode", "cmds", "stops", "retr", "late", "time_s", "/limit", "/topp", "/bound", "v_junc", "dNear",
+              "dNmax", "dFar", "gapNmed", "gapFmed", "gapNmax", "wall_s");
+  std::printf("%-8s %5s %-12s %5s %6s %5s %5s %9s %7s %7s %7s %7s | %7s %7s %7s | %8s %8s %8s | %6s\n", "", "", "", "",
+              "", "", "", "", "", "", "", "mm/s", "um", "um", "um", "mm", "mm", "mm", "");
 }
 
 // The independent lower bound (time-optimal, no jerk limit; time_optimal_bound.hpp) for a path.
 double topp_s(const geometry::PccPath& path, const ScanLimits& l) {
-  return time_optimal_bound(path, BoundLimits{l.path.speed_mm_s, l.path.acceleration_mm_s2, l.normal_acceleration_mm_s2}).time_s;
+  return time_optimal_bound(path,
+                            BoundLimits{l.path.speed_mm_s, l.path.acceleration_mm_s2, l.normal_acceleration_mm_s2})
+      .time_s;
 }
 
-void row(const char* path, std::size_t P, const char* mode, const Outcome& o, const ReferenceProfile& ref, double topp) {
+void row(const char* path, std::size_t P, const char* mode, const Outcome& o, const ReferenceProfile& ref,
+         double topp) {
   const double t = o.stats.scan_time_s();
-  std::printf("%-8s %5zu %-12s %5zu %6zu %5zu %5zu %9.2f %7.3f %7.3f %7.3f %7.2f | %7.2f %7.2f %7.2f | %8.4f %8.4f %8.4f | %6.2f%s\n",
-              path, P, mode, o.commands, o.stats.stops, o.stats.retracts, o.stats.late_plans, t, t / ref.time_s, t / topp,
-              t / ref.lower_bound_s, o.mean_junction_mm_s, o.q.defl_near_mean_um, o.q.defl_near_max_um,
-              o.q.defl_far_mean_um, o.q.gap_near_median_mm, o.q.gap_far_median_mm, o.q.gap_near_max_mm, o.wall_s,
-              o.q.continuous ? "" : "  DISCONTINUOUS");
+  std::printf(
+      "%-8s %5zu %-12s %5zu %6zu %5zu %5zu %9.2f %7.3f %7.3f %7.3f %7.2f | %7.2f %7.2f %7.2f | %8.4f %8.4f %8.4f | "
+      "%6.2f%s\n",
+      path, P, mode, o.commands, o.stats.stops, o.stats.retracts, o.stats.late_plans, t, t / ref.time_s, t / topp,
+      t / ref.lower_bound_s, o.mean_junction_mm_s, o.q.defl_near_mean_um, o.q.defl_near_max_um, o.q.defl_far_mean_um,
+      o.q.gap_near_median_mm, o.q.gap_far_median_mm, o.q.gap_near_max_mm, o.wall_s,
+      o.q.continuous ? "" : "  DISCONTINUOUS");
 }
 
 // CPU time of this thread: unlike the wall clock, it does not count time the thread waited for
@@ -172,20 +177,21 @@ void planner_cost(const geometry::PccPath& path) {
     per_segment.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
     if (plan.pieces.empty()) std::abort();
   }
-  std::printf("\nplanner cost (wall clock, this machine): one P=1000 command: min %.3f median %.3f p90 %.3f p99 %.3f ms"
-              " (%zu plans); one segment: median %.2f us, p99 %.2f us (%zu plans)\n",
-              quantile(per_command, 0.0) * 1e3, quantile(per_command, 0.5) * 1e3, quantile(per_command, 0.9) * 1e3,
-              quantile(per_command, 0.99) * 1e3, per_command.size(), quantile(per_segment, 0.5) * 1e6,
-              quantile(per_segment, 0.99) * 1e6, per_segment.size());
-  std::printf("planner cost per segment (P=1000, median wall): %.2f us; the configured net planning time "
-              "(SegmentedScanSpec::planning_s_per_segment) is %.0f us per segment, %.0fx that\n",
-              quantile(per_command, 0.5) * 1e6 / static_cast<double>(P), ControllerConfig{}.planning_s_per_segment * 1e6,
-              ControllerConfig{}.planning_s_per_segment / (quantile(per_command, 0.5) / static_cast<double>(P)));
+  std::printf(
+      "\nplanner cost (wall clock, this machine): one P=1000 command: min %.3f median %.3f p90 %.3f p99 %.3f ms"
+      " (%zu plans); one segment: median %.2f us, p99 %.2f us (%zu plans)\n",
+      quantile(per_command, 0.0) * 1e3, quantile(per_command, 0.5) * 1e3, quantile(per_command, 0.9) * 1e3,
+      quantile(per_command, 0.99) * 1e3, per_command.size(), quantile(per_segment, 0.5) * 1e6,
+      quantile(per_segment, 0.99) * 1e6, per_segment.size());
+  std::printf(
+      "planner cost per segment (P=1000, median wall): %.2f us; the configured net planning time "
+      "(SegmentedScanSpec::planning_s_per_segment) is %.0f us per segment, %.0fx that\n",
+      quantile(per_command, 0.5) * 1e6 / static_cast<double>(P), ControllerConfig{}.planning_s_per_segment * 1e6,
+      ControllerConfig{}.planning_s_per_segment / (quantile(per_command, 0.5) / static_cast<double>(P)));
   std::printf("planner cost (thread CPU time): one P=1000 command: min %.3f median %.3f p90 %.3f p99 %.3f ms\n",
               quantile(per_command_cpu, 0.0) * 1e3, quantile(per_command_cpu, 0.5) * 1e3,
               quantile(per_command_cpu, 0.9) * 1e3, quantile(per_command_cpu, 0.99) * 1e3);
 }
-
 
 // ---- the real probe: segmented plans driving the scanning law round a lobed boss ----
 
@@ -203,12 +209,14 @@ void probe_bench(double turns) {
   base.limits.normal_acceleration_mm_s2 = w.machine.scanning.control.max_centripetal_mm_s2;
   const ReferenceProfile ref = reference_profile(scan.path, base.limits, base.dt_s);
   const double topp = topp_s(scan.path, base.limits);
-  std::printf("real probe: %zu segments (%.1f mm, %.0f turns round a 50 mm boss with a hidden 5 um 3-lobe form), "
-              "feed %.0f mm/s, a %.0f, j %.0f; reference %.2f s, independent time-optimal bound %.2f s\n",
-              scan.path.segments.size(), ref.length_mm, turns, base.limits.path.speed_mm_s,
-              base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3, ref.time_s, topp);
-  std::printf("dNear/dFar: max ||Ep| - E0| within 2 mm of a boundary / elsewhere (scanning cycles); gapMax: largest "
-              "sample spacing (spacing 0.2 mm); form: circle fit of the samples (hidden 5.0 um)\n");
+  std::printf(
+      "real probe: %zu segments (%.1f mm, %.0f turns round a 50 mm boss with a hidden 5 um 3-lobe form), "
+      "feed %.0f mm/s, a %.0f, j %.0f; reference %.2f s, independent time-optimal bound %.2f s\n",
+      scan.path.segments.size(), ref.length_mm, turns, base.limits.path.speed_mm_s, base.limits.path.acceleration_mm_s2,
+      base.limits.path.jerk_mm_s3, ref.time_s, topp);
+  std::printf(
+      "dNear/dFar: max ||Ep| - E0| within 2 mm of a boundary / elsewhere (scanning cycles); gapMax: largest "
+      "sample spacing (spacing 0.2 mm); form: circle fit of the samples (hidden 5.0 um)\n");
   std::printf("%5s %-12s %5s %6s %6s %9s %7s %7s %7s %8s %8s %8s %8s %7s\n", "P", "mode", "stops", "retr", "late",
               "time s", "/limit", "/topp", "samples", "gapMax", "dNear um", "dFar um", "form um", "wall s");
   for (std::size_t P : {std::size_t{1000}, std::size_t{50}, std::size_t{4}}) {
@@ -227,7 +235,9 @@ void probe_bench(double turns) {
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
       if (!ok) {
         std::printf("%5zu %-12s failed: %s\n", P, name(mode),
-                    probe.fault() ? probe.fault()->message.c_str() : stats ? "did not finish" : stats.error().message.c_str());
+                    probe.fault() ? probe.fault()->message.c_str()
+                    : stats       ? "did not finish"
+                                  : stats.error().message.c_str());
         continue;
       }
       double gap = 0;
@@ -243,9 +253,9 @@ void probe_bench(double turns) {
       }
       const auto f = metron::scan_test::fit_scanned_boss(smp, k_ball_mm);
       std::printf("%5zu %-12s %5zu %6zu %6zu %9.2f %7.3f %7.3f %7zu %8.4f %8.2f %8.2f %8.2f %7.2f\n", P, name(mode),
-                  stats->stops, probe.retracts(), stats->late_plans, stats->scan_time_s(), stats->scan_time_s() / ref.time_s,
-                  stats->scan_time_s() / topp,
-                  smp.size(), gap, near * 1000, far * 1000, f ? f->form_mm * 1000 : std::nan(""), wall);
+                  stats->stops, probe.retracts(), stats->late_plans, stats->scan_time_s(),
+                  stats->scan_time_s() / ref.time_s, stats->scan_time_s() / topp, smp.size(), gap, near * 1000,
+                  far * 1000, f ? f->form_mm * 1000 : std::nan(""), wall);
     }
   }
 }
@@ -265,22 +275,26 @@ int main(int argc, char** argv) {
   const std::vector<Named> paths = {{"freeform", freeform_contour(segments, 1.0)},
                                     {"meander", tight_meander(segments, 0.5)}};
   const ControllerConfig base;
-  std::printf("segmented scanning bench: limits v=%.0f mm/s a=%.0f mm/s2 j=%.0f mm/s3 a_n=%.0f mm/s2, dt=%.0f ms, "
-              "low region L=%.0f mm at %.0f mm/s, Tp=%.1f*%.2f us*P, retract %.0f mm, settle %.2f s\n",
-              base.limits.path.speed_mm_s, base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3,
-              base.limits.normal_acceleration_mm_s2, base.dt_s * 1e3, base.low.length_mm, base.low.speed_mm_s,
-              base.planning_margin, base.planning_s_per_segment * 1e6, base.retract_mm, base.contact_settle_s);
-  std::printf("/limit: scan time over the reference (metron's interpolator, whole path buffered); /topp: over the\n"
-              "independent time-optimal bound (speed, acceleration, centripetal limits, no jerk); /bound: over sum(length/v_limit);\n"
-              "dNear/dNmax/dFar: stylus deflection error mean/max within 2 mm of a boundary, mean elsewhere;\n"
-              "gapNmed/gapFmed/gapNmax: point spacing median near/far from boundaries, max near\n\n");
+  std::printf(
+      "segmented scanning bench: limits v=%.0f mm/s a=%.0f mm/s2 j=%.0f mm/s3 a_n=%.0f mm/s2, dt=%.0f ms, "
+      "low region L=%.0f mm at %.0f mm/s, Tp=%.1f*%.2f us*P, retract %.0f mm, settle %.2f s\n",
+      base.limits.path.speed_mm_s, base.limits.path.acceleration_mm_s2, base.limits.path.jerk_mm_s3,
+      base.limits.normal_acceleration_mm_s2, base.dt_s * 1e3, base.low.length_mm, base.low.speed_mm_s,
+      base.planning_margin, base.planning_s_per_segment * 1e6, base.retract_mm, base.contact_settle_s);
+  std::printf(
+      "/limit: scan time over the reference (metron's interpolator, whole path buffered); /topp: over the\n"
+      "independent time-optimal bound (speed, acceleration, centripetal limits, no jerk); /bound: over "
+      "sum(length/v_limit);\n"
+      "dNear/dNmax/dFar: stylus deflection error mean/max within 2 mm of a boundary, mean elsewhere;\n"
+      "gapNmed/gapFmed/gapNmax: point spacing median near/far from boundaries, max near\n\n");
   for (const auto& [pname, path] : paths) {
     const ReferenceProfile ref = reference_profile(path, base.limits, base.dt_s);
     const double topp = topp_s(path, base.limits);
-    std::printf("%s: %zu segments, %.1f mm; reference %.2f s (%zu cycles, +%.1f %% over the bound), independent "
-                "time-optimal bound (no jerk limit) %.2f s, sum(length/v_limit) %.2f s\n",
-                pname, path.segments.size(), ref.length_mm, ref.time_s, ref.cycles, 100 * (ref.time_s / topp - 1), topp,
-                ref.lower_bound_s);
+    std::printf(
+        "%s: %zu segments, %.1f mm; reference %.2f s (%zu cycles, +%.1f %% over the bound), independent "
+        "time-optimal bound (no jerk limit) %.2f s, sum(length/v_limit) %.2f s\n",
+        pname, path.segments.size(), ref.length_mm, ref.time_s, ref.cycles, 100 * (ref.time_s / topp - 1), topp,
+        ref.lower_bound_s);
   }
   std::printf("\n");
   header();

@@ -25,17 +25,17 @@ using namespace metron;
 namespace {
 
 const std::string worlds_dir = std::string(METRON_SOURCE_DIR) + "/programs/worlds/";
-constexpr double clearance_mm = 2.0;     // cycle start and end: 2 mm above the nominal (SNSET/APPRCH default)
-constexpr double tolerance_mm = 0.2;     // the surface lies within +-0.2 mm of its nominal
-constexpr double positioning_mm_s = 200; // positioning feed of every strategy
+constexpr double clearance_mm = 2.0;        // cycle start and end: 2 mm above the nominal (SNSET/APPRCH default)
+constexpr double tolerance_mm = 0.2;        // the surface lies within +-0.2 mm of its nominal
+constexpr double positioning_mm_s = 200;    // positioning feed of every strategy
 constexpr double backoff_default_mm = 1.0;  // the conventional fixed back-off (docs/touch-trigger.md)
-constexpr int points = 40;               // nominal offsets spread over the tolerance band
+constexpr int points = 40;                  // nominal offsets spread over the tolerance band
 
 struct Row {
   std::string name;
-  double time_s = 0;      // mean cycle time
-  double bias_um = 0;     // mean error against constant-speed touches at the measuring feed
-  double spread_um = 0;   // range of the errors
+  double time_s = 0;     // mean cycle time
+  double bias_um = 0;    // mean error against constant-speed touches at the measuring feed
+  double spread_um = 0;  // range of the errors
   bool measured = true;
 };
 
@@ -156,7 +156,8 @@ void table(const std::string& world_name) {
   runtime::MachineCharacterisation two = c;
   two.one_touch = false;
   two.blend = false;
-  rows.push_back(b.run("seed: optimal two-touch (D1+D2+D3)", from_plan(two.plan(b.n, fs, std::nullopt, rest)), reference));
+  rows.push_back(
+      b.run("seed: optimal two-touch (D1+D2+D3)", from_plan(two.plan(b.n, fs, std::nullopt, rest)), reference));
   {
     // Beyond the seed: the first-touch feed chosen by timed trial cycles on the machine.
     machine::VirtualCmm m(*w, 1);
@@ -173,8 +174,8 @@ void table(const std::string& world_name) {
   runtime::MachineCharacterisation one = c;
   one.one_touch = true;
   one.blend = false;
-  rows.push_back(b.run("seed: one-touch (D1+D3+tol, from where it rests)", from_plan(one.plan(b.n, fs, std::nullopt, rest)),
-                       reference));
+  rows.push_back(b.run("seed: one-touch (D1+D3+tol, from where it rests)",
+                       from_plan(one.plan(b.n, fs, std::nullopt, rest)), reference));
   runtime::MachineCharacterisation blend = c;
   blend.blend = true;
   auto bp = blend.plan(b.n, fs, clearance_mm);
@@ -183,8 +184,8 @@ void table(const std::string& world_name) {
   // The physical limit from the hidden truth alone (machine/touch_cycle/cycle_limit.hpp): rest
   // to the feed by the earliest possible contact (clearance - q - tolerance), the band at the
   // feed, the trigger chain, the stop, the return. Controller-cycle rounding is not part of it.
-  const auto lim = machine::touch_cycle_limit(w->machine, w->truth, down, fs, clearance_mm, tolerance_mm, positioning_mm_s,
-                                              c.response.qualification_feed_mm_s);
+  const auto lim = machine::touch_cycle_limit(w->machine, w->truth, down, fs, clearance_mm, tolerance_mm,
+                                              positioning_mm_s, c.response.qualification_feed_mm_s);
   const double t_limit = lim.time_s;
   Row limit{"physical limit (jerk-limited, hidden truth)", t_limit, 0, 0, false};
   Row bound{"lower bound (acceleration limits only)", lim.no_jerk_time_s, 0, 0, false};
@@ -192,12 +193,14 @@ void table(const std::string& world_name) {
   fmt::print("\n== {}: skip {} (jitter {:.1f} ms recovered), max protected feed {:.1f} mm/s, strategy {}\n", world_name,
              c.response.scanned ? "scanned" : "latched", 1e3 * c.response.jitter_s, c.max_probe_feed_mm_s,
              c.one_touch ? "one-touch" : "two-touch");
-  fmt::print("   measuring feed {:.2f} mm/s (spread {:.1f} um <= {:.0f} um), first touch {:.1f} mm/s, nominal +-{:.1f} mm, "
-             "clearance {:.0f} mm, positioning {:.0f} mm/s\n",
-             fs, 1e3 * c.response.spread_mm(fs), 1e3 * c.threshold_mm, ff, tolerance_mm, clearance_mm, positioning_mm_s);
-  fmt::print("   seed standoff D1+D2+D3 = {:.4f} mm (back-off {:.4f} mm), one-touch approach {:.4f} mm, blend {:.4f} mm\n",
-             two.plan(b.n, fs, std::nullopt).standoff_mm, two.plan(b.n, fs, std::nullopt).backoff_mm,
-             one.plan(b.n, fs, std::nullopt).approach_mm, *bp.blend_mm);
+  fmt::print(
+      "   measuring feed {:.2f} mm/s (spread {:.1f} um <= {:.0f} um), first touch {:.1f} mm/s, nominal +-{:.1f} mm, "
+      "clearance {:.0f} mm, positioning {:.0f} mm/s\n",
+      fs, 1e3 * c.response.spread_mm(fs), 1e3 * c.threshold_mm, ff, tolerance_mm, clearance_mm, positioning_mm_s);
+  fmt::print(
+      "   seed standoff D1+D2+D3 = {:.4f} mm (back-off {:.4f} mm), one-touch approach {:.4f} mm, blend {:.4f} mm\n",
+      two.plan(b.n, fs, std::nullopt).standoff_mm, two.plan(b.n, fs, std::nullopt).backoff_mm,
+      one.plan(b.n, fs, std::nullopt).approach_mm, *bp.blend_mm);
   fmt::print("   {:<50} {:>9} {:>9} {:>12} {:>10} {:>10}\n", "cycle", "time s", "/limit", "vs best conv.", "bias um",
              "spread um");
   // The best baseline: the fastest conventional cycle that meets the threshold on every point.
@@ -212,9 +215,11 @@ void table(const std::string& world_name) {
       fmt::print("   {:<50} {:9.4f} {:9.3f} {:11.1f}% {:10.2f} {:10.2f}\n", r.name, r.time_s, r.time_s / t_limit,
                  100 * (1 - r.time_s / conventional), r.bias_um, r.spread_um);
     else
-      fmt::print("   {:<50} {:9.4f} {:9.3f} {:11.1f}%\n", r.name, r.time_s, r.time_s / t_limit, 100 * (1 - r.time_s / conventional));
+      fmt::print("   {:<50} {:9.4f} {:9.3f} {:11.1f}%\n", r.name, r.time_s, r.time_s / t_limit,
+                 100 * (1 - r.time_s / conventional));
   }
-  fmt::print("   limit: feed reached {:.4f} mm from the start (clearance - q - tolerance, q = {:.4f} mm)\n", lim.reach_mm, lim.q_mm);
+  fmt::print("   limit: feed reached {:.4f} mm from the start (clearance - q - tolerance, q = {:.4f} mm)\n",
+             lim.reach_mm, lim.q_mm);
 }
 
 void BM_Characterise(benchmark::State& state) {

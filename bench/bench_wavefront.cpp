@@ -74,7 +74,8 @@ void table_whole(const std::string& name, bool form) {
   for (int s = 0; s < g_seeds; ++s) {
     mw::SimulatedWavefrontMachine m(w, 100 + s);
     std::map<std::string, mw::WavefrontTruth> t;
-    auto rep = rw::calibrate(m, "all", {}, {}, [&](const std::string& tag) { t[tag] = m.truth(); }, g_remove_form);
+    auto rep = rw::calibrate(
+        m, "all", {}, {}, [&](const std::string& tag) { t[tag] = m.truth(); }, g_remove_form);
     if (!rep) {
       std::printf("  seed %d failed: %s\n", 100 + s, rep.error().c_str());
       continue;
@@ -82,7 +83,8 @@ void table_whole(const std::string& name, bool form) {
     const auto& r = *rep;
     add("gauge to A, x [urad]", r.gauge_frame->gauge_to_a_rad.x(), t["gauge-frame"].gauge_to_a_rad.x());
     add("gauge to A, y [urad]", r.gauge_frame->gauge_to_a_rad.y(), t["gauge-frame"].gauge_to_a_rad.y());
-    add("A in gauge (centroid circle), x [um]", r.gauge_frame->a_axis_in_gauge_mm.x(), t["gauge-frame"].focus_to_a_mm.x());
+    add("A in gauge (centroid circle), x [um]", r.gauge_frame->a_axis_in_gauge_mm.x(),
+        t["gauge-frame"].focus_to_a_mm.x());
     add("focus: table at focus, Z [steps]", r.focus->focus_table_z_steps, t["focus:cat"].focus_table_z_steps);
     add("focus to A axis, x [um]", r.focus->focus_to_a_mm.x(), t["focus:pom"].focus_to_a_mm.x());
     add("focus to A axis, y [um]", r.focus->focus_to_a_mm.y(), t["focus:pom"].focus_to_a_mm.y());
@@ -113,9 +115,9 @@ void table_whole(const std::string& name, bool form) {
               g_seeds, iterations);
   std::printf("  %-44s %14s %12s %12s %8s\n", "quantity", "mean truth", "bias", "sd", "|bias|/sd");
   for (const auto& k : order) {
-    const double scale = k.find("urad") != std::string::npos || k.find("um") != std::string::npos   ? 1e6
-                         : k.find("relative") != std::string::npos                                  ? 1e6
-                                                                                                    : 1;
+    const double scale = k.find("urad") != std::string::npos || k.find("um") != std::string::npos ? 1e6
+                         : k.find("relative") != std::string::npos                                ? 1e6
+                                                                                                  : 1;
     const double unit_scale = k.find("[um]") != std::string::npos ? 1e3 : scale;
     print_stat(k.c_str(), st[k], unit_scale, "");
   }
@@ -131,7 +133,8 @@ void table_angles_and_noise() {
   const Vec2 truth = probe.truth().focus_to_a_mm;
   const Vec2 truth_r = probe.truth().part_to_a;
   const int pixels = probe.ideal_map()->valid_count();
-  std::printf("\npart-on-mount on ball_low (sphere, R 12.7 mm, sin_max 0.25, %d pixels), %d seeds per row\n", pixels, g_seeds);
+  std::printf("\npart-on-mount on ball_low (sphere, R 12.7 mm, sin_max 0.25, %d pixels), %d seeds per row\n", pixels,
+              g_seeds);
   std::printf("  %-8s %-8s %14s %14s %14s %10s %14s %14s\n", "angles", "noise", "centre bias", "centre sd", "bound",
               "sd/bound", "radius sd", "geometric sd");
   const auto row = [&](int k, double noise) {
@@ -165,7 +168,8 @@ void table_angles_and_noise() {
 
 void table_az() {
   std::printf("\nA-Z alignment from several starting errors (form-free sphere machine, seed 5)\n");
-  std::printf("  %-10s %-10s %16s %12s %24s\n", "B zero", "C zero", "start [urad]", "iterations", "residual |A-Z| [urad]");
+  std::printf("  %-10s %-10s %16s %12s %24s\n", "B zero", "C zero", "start [urad]", "iterations",
+              "residual |A-Z| [urad]");
   for (double b0 : {-0.03, 0.0, 0.01, 0.05})
     for (double c0 : {0.02, -0.04}) {
       auto w = world("wavefront_sphere_machine.json");
@@ -252,7 +256,8 @@ BENCHMARK(BM_CircleFit)->Unit(benchmark::kMicrosecond);
 void BM_PartOnMount(benchmark::State& state) {
   mw::SimulatedWavefrontMachine m(sized(128), 1);
   auto rep = rw::calibrate(m, "focus");
-  for (auto _ : state) benchmark::DoNotOptimize(rw::part_on_mount(m, rep->knowledge, {{0, 60, 120, 180, 240, 300}, false}));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(rw::part_on_mount(m, rep->knowledge, {{0, 60, 120, 180, 240, 300}, false}));
 }
 BENCHMARK(BM_PartOnMount)->Unit(benchmark::kMillisecond);
 
@@ -274,12 +279,18 @@ int main(int argc, char** argv) {
   std::string only_whole;
   std::vector<char*> rest;
   for (int i = 0; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--no-tables") == 0) tables = false;
-    else if (std::strcmp(argv[i], "--seeds") == 0 && i + 1 < argc) g_seeds = std::atoi(argv[++i]);
-    else if (std::strcmp(argv[i], "--raw-nulls") == 0) g_remove_form = false;
-    else if (std::strcmp(argv[i], "--pixels") == 0 && i + 1 < argc) g_pixels = std::atoi(argv[++i]);
-    else if (std::strcmp(argv[i], "--whole") == 0 && i + 1 < argc) only_whole = argv[++i];
-    else rest.push_back(argv[i]);
+    if (std::strcmp(argv[i], "--no-tables") == 0)
+      tables = false;
+    else if (std::strcmp(argv[i], "--seeds") == 0 && i + 1 < argc)
+      g_seeds = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--raw-nulls") == 0)
+      g_remove_form = false;
+    else if (std::strcmp(argv[i], "--pixels") == 0 && i + 1 < argc)
+      g_pixels = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--whole") == 0 && i + 1 < argc)
+      only_whole = argv[++i];
+    else
+      rest.push_back(argv[i]);
   }
   int n = static_cast<int>(rest.size());
   if (!only_whole.empty()) {  // --whole WORLD: the whole-procedure table of one shipped world, parts with form

@@ -9,8 +9,8 @@
 #include <optional>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
@@ -43,16 +43,20 @@ std::string pair(const Vec2& v, double scale, int digits) {
 // Recovered beside hidden values; the truth was read by the observer at the state each recovered
 // value refers to (the procedure itself never reads it).
 void print_truth(const rw::CalibrationReport& r, const std::map<std::string, mw::WavefrontTruth>& t) {
-  std::cout << "\nrecovered | hidden truth (read by the command at the moment of each measurement, never by the procedure)\n";
+  std::cout
+      << "\nrecovered | hidden truth (read by the command at the moment of each measurement, never by the procedure)\n";
   const auto row = [](const std::string& name, const std::string& rec, const std::string& tru) {
     std::cout << fmt::format("  {:<42} {:>34} | {}\n", name, rec, tru);
   };
   if (r.gauge_frame && t.count("gauge-frame")) {
     const auto& a = t.at("gauge-frame");
     row("gauge to A axis [urad]", pair(r.gauge_frame->gauge_to_a_rad, 1e6, 3), pair(a.gauge_to_a_rad, 1e6, 3));
-    row("A axis in gauge coordinates (centroids) [mm]", pair(r.gauge_frame->a_axis_in_gauge_mm, 1, 5), pair(a.focus_to_a_mm, 1, 5));
+    row("A axis in gauge coordinates (centroids) [mm]", pair(r.gauge_frame->a_axis_in_gauge_mm, 1, 5),
+        pair(a.focus_to_a_mm, 1, 5));
     row("flat's centre from A (centroid radius) [mm]",
-        fmt::format("{:.5f}", r.gauge_frame->before.centroid_circle ? r.gauge_frame->before.centroid_circle->radius_vector.norm() : 0.0),
+        fmt::format("{:.5f}", r.gauge_frame->before.centroid_circle
+                                  ? r.gauge_frame->before.centroid_circle->radius_vector.norm()
+                                  : 0.0),
         fmt::format("{:.5f}", a.flat_centre_mm.norm()));
     if (t.count("gauge-frame:after"))
       row("gauge to A after the correction [urad]", pair(r.gauge_frame->residual_rad, 1e6, 3),
@@ -62,13 +66,16 @@ void print_truth(const rw::CalibrationReport& r, const std::map<std::string, mw:
     row("table at the focus, Z [steps]", fmt::format("{:.2f}", r.focus->focus_table_z_steps),
         fmt::format("{:.2f}", t.at("focus:cat").focus_table_z_steps));
     if (t.count("focus:pom"))
-      row("A axis from the focus [um]", pair(r.focus->focus_to_a_mm, 1e3, 4), pair(t.at("focus:pom").focus_to_a_mm, 1e3, 4));
+      row("A axis from the focus [um]", pair(r.focus->focus_to_a_mm, 1e3, 4),
+          pair(t.at("focus:pom").focus_to_a_mm, 1e3, 4));
     if (t.count("focus:after"))
-      row("A axis from the focus after X/Y [um]", pair(r.focus->residual_mm, 1e3, 4), pair(t.at("focus:after").focus_to_a_mm, 1e3, 4));
+      row("A axis from the focus after X/Y [um]", pair(r.focus->residual_mm, 1e3, 4),
+          pair(t.at("focus:after").focus_to_a_mm, 1e3, 4));
   }
   if (r.axis_response && t.count("axis-response")) {
     const auto& a = t.at("axis-response");
-    row("dx, dy [nm/step]", fmt::format("({:.4f}, {:.4f})", r.axis_response->step_mm.x() * 1e6, r.axis_response->step_mm.y() * 1e6),
+    row("dx, dy [nm/step]",
+        fmt::format("({:.4f}, {:.4f})", r.axis_response->step_mm.x() * 1e6, r.axis_response->step_mm.y() * 1e6),
         fmt::format("({:.4f}, {:.4f})", a.step_mm.x() * 1e6, a.step_mm.y() * 1e6));
     row("gauge clocking [deg]", fmt::format("{:.5f}", r.axis_response->gauge_clocking_rad * 180 / std::numbers::pi),
         fmt::format("{:.5f}", a.gauge_clocking_rad * 180 / std::numbers::pi));
@@ -84,7 +91,8 @@ void print_truth(const rw::CalibrationReport& r, const std::map<std::string, mw:
   if (r.b_rotation && t.count("b-rotation")) {
     const auto& a = t.at("b-rotation");
     const auto& b = *r.b_rotation;
-    row("P, part eccentricity [um]", fmt::format("{:.4f}", b.eccentricity_mm * 1e3), fmt::format("{:.4f}", a.eccentricity_mm * 1e3));
+    row("P, part eccentricity [um]", fmt::format("{:.4f}", b.eccentricity_mm * 1e3),
+        fmt::format("{:.4f}", a.eccentricity_mm * 1e3));
     row("xb, A from B along X [um]", fmt::format("{:.4f}", b.xb_mm * 1e3), fmt::format("{:.4f}", a.xb_mm * 1e3));
     row("zF, B to the centre of curvature [mm]", fmt::format("{:.6f}", b.zf_mm), fmt::format("{:.6f}", a.zf_mm));
     row("dz [nm/step]", fmt::format("{:.4f}", b.dz_mm * 1e6), fmt::format("{:.4f}", a.step_mm.z() * 1e6));
@@ -93,7 +101,8 @@ void print_truth(const rw::CalibrationReport& r, const std::map<std::string, mw:
   }
   if (r.c_rotation && t.count("c-rotation")) {
     const auto& a = t.at("c-rotation");
-    row("yc, A from C along Y [um]", fmt::format("{:.4f}", r.c_rotation->yc_mm * 1e3), fmt::format("{:.4f}", a.yc_mm * 1e3));
+    row("yc, A from C along Y [um]", fmt::format("{:.4f}", r.c_rotation->yc_mm * 1e3),
+        fmt::format("{:.4f}", a.yc_mm * 1e3));
     if (r.c_rotation->zc_mm)
       row("zc, B to C along Z [mm]", fmt::format("{:.6f}", *r.c_rotation->zc_mm), fmt::format("{:.6f}", a.zc_mm));
   }
@@ -132,7 +141,8 @@ int calibrate_wavefront(const CalibrateArgs& args) {
   j["world"] = args.world;
   j["step"] = args.step;
   j["seed"] = args.seed.value_or(world->seed);
-  std::cout << fmt::format("wavefront calibration of {} (step {}, {} gauge maps)\n", args.world, args.step, report->maps);
+  std::cout << fmt::format("wavefront calibration of {} (step {}, {} gauge maps)\n", args.world, args.step,
+                           report->maps);
   std::cout << j.dump(2) << "\n";
   if (args.truth) print_truth(*report, truths);
   if (args.out) {

@@ -3,9 +3,9 @@
 // (SEEDS.md 4, docs/error-space.md) on the simulated rig of a world: the two-sensor head and a
 // commercially flat plate, plane by plane, the planes tied by a laser run. The method sees only the
 // rig's readings; `--truth` prints the world's hidden errors beside them, for checking.
+#include <algorithm>
 #include <array>
 #include <cmath>
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -13,15 +13,15 @@
 #include <optional>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include "commands.hpp"
-#include "virtual_cmm_backend.hpp"
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/world.hpp"
 #include "metron/stdlib/error_space/error_space_file.hpp"
 #include "metron/stdlib/error_space/report_svg.hpp"
+#include "virtual_cmm_backend.hpp"
 
 namespace metron::cli {
 namespace {
@@ -94,7 +94,8 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
     request.size[a] = args.size[a];
     request.origin_mm[a] = args.origin_mm[a];
   }
-  if (args.sensor_offset_mm.size() != 3 || args.runs < 1 || args.runs > 100 || args.laser_cycles < 1 || args.laser_cycles > 100) {
+  if (args.sensor_offset_mm.size() != 3 || args.runs < 1 || args.runs > 100 || args.laser_cycles < 1 ||
+      args.laser_cycles > 100) {
     std::cerr << "error: --sensor-offset takes x,y,z; --runs and --laser-cycles 1 to 100\n";
     return 2;
   }
@@ -117,10 +118,11 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
     return 2;
   }
   const char* names = "xyz";
-  std::cout << fmt::format("error space {} x {} x {} points, step {} mm, components {}; {} planes, {} to re-measure (S7); "
-                           "machine at {:.2f} C\n",
-                           args.size[0], args.size[1], args.size[2], args.step_mm, args.components, run.planes.size(),
-                           run.planes_to_remeasure, run.space.temperature_c);
+  std::cout << fmt::format(
+      "error space {} x {} x {} points, step {} mm, components {}; {} planes, {} to re-measure (S7); "
+      "machine at {:.2f} C\n",
+      args.size[0], args.size[1], args.size[2], args.step_mm, args.components, run.planes.size(),
+      run.planes_to_remeasure, run.space.temperature_c);
   std::optional<error_space::ErrorSpace> truth;
   if (args.truth) truth = machine::truth_in_reference(world.truth.errors, plan);
   for (int c = 0; c < 3; ++c) {
@@ -140,11 +142,13 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
       // Another temperature for the same machine: the spaces must share the grid and components.
       auto earlier = error_space::read_error_space_file(*args.out);
       if (!earlier) {
-        std::cerr << "error: " << *args.out << ": " << earlier.error().pointer << ": " << earlier.error().message << "\n";
+        std::cerr << "error: " << *args.out << ": " << earlier.error().pointer << ": " << earlier.error().message
+                  << "\n";
         return 2;
       }
       file = std::move(*earlier);
-      if (file.sensor_offset_mm != std::array<double, 3>{args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]}) {
+      if (file.sensor_offset_mm !=
+          std::array<double, 3>{args.sensor_offset_mm[0], args.sensor_offset_mm[1], args.sensor_offset_mm[2]}) {
         std::cerr << "error: " << *args.out << " was calibrated with another --sensor-offset\n";
         return 2;
       }
@@ -179,21 +183,25 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
   if (args.report) {
     error_space::ReportInput in;
     in.title = "Error-space calibration, sequential two-point method (SEEDS.md 4)";
-    in.notes.push_back(fmt::format("world {}; grid {} x {} x {}, step {} mm; sensor noise {} um; S7 planes to re-measure: {}",
-                                   args.world.value_or("<default>"), args.size[0], args.size[1], args.size[2], args.step_mm,
-                                   args.sensor_noise_um, run.planes_to_remeasure));
+    in.notes.push_back(
+        fmt::format("world {}; grid {} x {} x {}, step {} mm; sensor noise {} um; S7 planes to re-measure: {}",
+                    args.world.value_or("<default>"), args.size[0], args.size[1], args.size[2], args.step_mm,
+                    args.sensor_noise_um, run.planes_to_remeasure));
     for (int c = 0; c < 3; ++c) {
       const auto comp = static_cast<error_space::Component>(c);
       if (!run.space.has(comp)) continue;
       const double z0 = run.space.grid.axes_mm[2].front();
-      in.maps.push_back(error_space::slice_map(run.space, comp, 0, fmt::format("recovered e_{} at z = {} mm", names[c], z0)));
+      in.maps.push_back(
+          error_space::slice_map(run.space, comp, 0, fmt::format("recovered e_{} at z = {} mm", names[c], z0)));
       if (truth) {
         error_space::ErrorSpace diff = run.space;
         for (std::size_t i = 0; i < diff.values_mm[c].size(); ++i) diff.values_mm[c][i] -= truth->values_mm[c][i];
-        in.maps.push_back(error_space::slice_map(diff, comp, 0, fmt::format("recovered - hidden truth, e_{} at z = {} mm", names[c], z0)));
+        in.maps.push_back(error_space::slice_map(
+            diff, comp, 0, fmt::format("recovered - hidden truth, e_{} at z = {} mm", names[c], z0)));
       }
       const error_space::InterpolationSpec spec;
-      if (auto m = error_space::validation_map(run.space, comp, 0, spec, fmt::format("validation residual, e_{}", names[c])))
+      if (auto m =
+              error_space::validation_map(run.space, comp, 0, spec, fmt::format("validation residual, e_{}", names[c])))
         in.maps.push_back(*m);
     }
     std::ofstream out(*args.report);
@@ -212,19 +220,27 @@ int calibrate_error_space(const ErrorSpaceArgs& args) {
 void add_calibrate_error_space_command(CLI::App& calibrate, std::vector<Command>& commands) {
   auto args = std::make_shared<ErrorSpaceArgs>();
   auto* cmd = calibrate.add_subcommand(
-      "error-space", "error-space calibration of a CMM by the sequential two-point method (SEEDS.md 4, docs/error-space.md)");
-  cmd->add_option("--world", args->world, "world (JSON) whose machine.errors the rig measures; default: the embedded one");
+      "error-space",
+      "error-space calibration of a CMM by the sequential two-point method (SEEDS.md 4, docs/error-space.md)");
+  cmd->add_option("--world", args->world,
+                  "world (JSON) whose machine.errors the rig measures; default: the embedded one");
   cmd->add_option("--step-mm", args->step_mm, "grid step, which is the head's sensor spacing d")->default_val(50);
-  cmd->add_option("--size", args->size, "grid points along x, y, z")->delimiter(',')->expected(3)->default_str("11,11,3");
+  cmd->add_option("--size", args->size, "grid points along x, y, z")
+      ->delimiter(',')
+      ->expected(3)
+      ->default_str("11,11,3");
   cmd->add_option("--origin", args->origin_mm, "ram position of the first grid point, mm")
       ->delimiter(',')
       ->expected(3)
       ->default_str("100,100,0");
-  cmd->add_option("--components", args->components, "error components to measure (plates facing x, y, z): e.g. z or xyz")
+  cmd->add_option("--components", args->components,
+                  "error components to measure (plates facing x, y, z): e.g. z or xyz")
       ->default_val("z")
       ->check(CLI::IsMember({"x", "y", "z", "xy", "xz", "yz", "xyz"}));
-  cmd->add_option("--sensor-noise-um", args->sensor_noise_um, "white noise of each displacement reading")->default_val(0.1);
-  cmd->add_flag("--reversal", args->reversal, "measure Delta by turning the head 180 degrees (keeps each plane's slope)");
+  cmd->add_option("--sensor-noise-um", args->sensor_noise_um, "white noise of each displacement reading")
+      ->default_val(0.1);
+  cmd->add_flag("--reversal", args->reversal,
+                "measure Delta by turning the head 180 degrees (keeps each plane's slope)");
   cmd->add_flag("--angle-instrument", args->angle_instrument,
                 "read the head's rotation with an autocollimator or electronic level at every position and remove "
                 "it from the chain (for machines whose carriages pitch or yaw; beyond the seed)");

@@ -17,13 +17,13 @@
 #include "metron/interpreter/run_events.hpp"
 #include "metron/interpreter/run_limits.hpp"
 #include "metron/interpreter/session.hpp"
+#include "metron/machine/compensation/compensated_machine.hpp"
+#include "metron/machine/ipp/client_machine.hpp"
 #include "metron/runtime/outputs.hpp"
 #include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
 #include "metron/stdlib/fitting/point_file.hpp"
-#include "metron/machine/compensation/compensated_machine.hpp"
-#include "metron/machine/ipp/client_machine.hpp"
 #include "virtual_cmm_backend.hpp"
 
 namespace metron::cli {
@@ -97,7 +97,8 @@ int run(const RunArgs& args) {
     }
   }
   options.limits = args.limits;
-  if (auto failed = interpreter::apply_memory_limit(args.limits.max_memory_mib)) std::cerr << "warning: " << *failed << "\n";
+  if (auto failed = interpreter::apply_memory_limit(args.limits.max_memory_mib))
+    std::cerr << "warning: " << *failed << "\n";
   // SIGINT/SIGTERM stop the run at the next statement; the results so far are written.
   interpreter::install_stop_signal_handlers();
   std::size_t in_tol = 0, out_tol = 0, faults = 0;
@@ -105,7 +106,8 @@ int run(const RunArgs& args) {
   options.on_event = [&](const runtime::RunEvent& e) {
     if (const auto* t = std::get_if<runtime::ToleranceResult>(&e)) (t->in_tolerance ? in_tol : out_tol)++;
     if (const auto* f = std::get_if<runtime::FaultReport>(&e)) ++faults, last_fault_kind = f->kind;
-    if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e)) std::cout << interpreter::event_text(e) << std::flush;
+    if (!args.quiet || std::holds_alternative<runtime::FaultReport>(e))
+      std::cout << interpreter::event_text(e) << std::flush;
   };
   // --compensation: the controller's error map as a decorator at the machine API, over any backend
   // (docs/error-space.md, "Compensation"); without it the backend is used as it is.
@@ -118,7 +120,8 @@ int run(const RunArgs& args) {
     }
     map = std::move(*loaded);
   }
-  const interpreter::BackendFactory factory = [&](const std::optional<std::string>& world, std::optional<std::uint64_t> seed) {
+  const interpreter::BackendFactory factory = [&](const std::optional<std::string>& world,
+                                                  std::optional<std::uint64_t> seed) {
     auto backend = args.machine_url ? ipp_backend(*args.machine_url)
                    : args.dry_run   ? nominal_backend(world)
                                     : virtual_cmm_backend(world, seed);
@@ -131,8 +134,8 @@ int run(const RunArgs& args) {
   };
   const auto outcome = interpreter::run_program(options, factory);
   std::cerr << outcome.diagnostics;
-  const char* status = outcome.exit == interpreter::RunExit::Completed ? "completed"
-                       : outcome.exit == interpreter::RunExit::Faulted ? "stopped by a machine fault"
+  const char* status = outcome.exit == interpreter::RunExit::Completed  ? "completed"
+                       : outcome.exit == interpreter::RunExit::Faulted  ? "stopped by a machine fault"
                        : outcome.exit == interpreter::RunExit::BadInput ? "not started"
                        : outcome.exit == interpreter::RunExit::Stopped  ? "stopped by a limit or a signal"
                                                                         : "stopped by an error";
@@ -162,7 +165,8 @@ int check(const std::string& program, bool strict, const std::vector<std::string
       sink.items().begin(), sink.items().end(), [](const Diagnostic& d) { return d.severity == Severity::Note; }));
   const std::size_t warnings = sink.items().size() - errors - notes;
   std::cout << fmt::format("{}: {} error{}, {} warning{}{}\n", program, errors, errors == 1 ? "" : "s", warnings,
-                           warnings == 1 ? "" : "s", notes ? fmt::format(", {} note{}", notes, notes == 1 ? "" : "s") : "");
+                           warnings == 1 ? "" : "s",
+                           notes ? fmt::format(", {} note{}", notes, notes == 1 ? "" : "s") : "");
   if (!unit) return 2;  // the program cannot be read: bad input
   return errors > 0 ? 1 : 0;
 }
@@ -185,7 +189,8 @@ int compile(const std::string& program, bool emit_ir, const std::vector<std::str
 int fit(const FitArgs& args) {
   const auto shape = fitting::shape_from_name(args.type);
   if (!shape) {
-    std::cerr << fmt::format("error: unknown fit type '{}': expected point, line, plane, circle, sphere, cylinder or cone\n", args.type);
+    std::cerr << fmt::format(
+        "error: unknown fit type '{}': expected point, line, plane, circle, sphere, cylinder or cone\n", args.type);
     return 2;
   }
   auto points = fitting::read_point_file(args.file);
@@ -201,8 +206,9 @@ int fit(const FitArgs& args) {
   }
   const auto& r = *result;
   // ISO 1101 form: the minimum zone beside the least-squares form (plane, circle, line, sphere, cylinder).
-  const bool zoned = r.shape == fitting::Shape::Plane || r.shape == fitting::Shape::Circle || r.shape == fitting::Shape::Line ||
-                     r.shape == fitting::Shape::Sphere || r.shape == fitting::Shape::Cylinder;
+  const bool zoned = r.shape == fitting::Shape::Plane || r.shape == fitting::Shape::Circle ||
+                     r.shape == fitting::Shape::Line || r.shape == fitting::Shape::Sphere ||
+                     r.shape == fitting::Shape::Cylinder;
   const auto mz = zoned ? fitting::minimum_zone(r.shape, *points) : tl::unexpected(fitting::FitFailure::Degenerate);
   if (args.format == "json") {
     nlohmann::json j;
@@ -225,7 +231,8 @@ int fit(const FitArgs& args) {
   std::cout << fmt::format("{} fit of {} points from {}\n", fitting::to_string(r.shape), points->size(), args.file);
   std::cout << fmt::format("  position   {:.9f} {:.9f} {:.9f}\n", r.position.x(), r.position.y(), r.position.z());
   if (r.shape != fitting::Shape::Point)
-    std::cout << fmt::format("  direction  {:.12f} {:.12f} {:.12f}\n", r.direction.x(), r.direction.y(), r.direction.z());
+    std::cout << fmt::format("  direction  {:.12f} {:.12f} {:.12f}\n", r.direction.x(), r.direction.y(),
+                             r.direction.z());
   if (r.diameter_mm > 0) std::cout << fmt::format("  diameter   {:.9f}\n", r.diameter_mm);
   if (r.shape == fitting::Shape::Cone)
     std::cout << fmt::format("  apex angle {:.9f} deg\n  distance   {:.9f}\n", r.apex_angle_deg, r.cone_distance_mm);
@@ -253,7 +260,8 @@ void add_seed_option(CLI::App& cmd, std::optional<std::uint64_t>& seed) {
         errno = 0;
         const unsigned long long v = digits ? std::strtoull(text.c_str(), nullptr, 10) : 0;
         if (!digits || errno == ERANGE)
-          throw CLI::ValidationError("--seed", "expected an integer from 0 to 18446744073709551615, got '" + text + "'");
+          throw CLI::ValidationError("--seed",
+                                     "expected an integer from 0 to 18446744073709551615, got '" + text + "'");
         seed = static_cast<std::uint64_t>(v);
       },
       "random seed of the run, 0 to 2^64-1 (default: the world's)");
@@ -261,7 +269,8 @@ void add_seed_option(CLI::App& cmd, std::optional<std::uint64_t>& seed) {
 
 void add_limit_options(CLI::App& cmd, interpreter::RunLimits& limits) {
   const auto non_negative = CLI::Range(0.0, 1e12);
-  cmd.add_option("--max-steps", limits.max_steps, "stop after this many executed instructions (0: no limit; docs/limits.md)")
+  cmd.add_option("--max-steps", limits.max_steps,
+                 "stop after this many executed instructions (0: no limit; docs/limits.md)")
       ->default_val(limits.max_steps)
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000'000}));
   cmd.add_option("--max-sim-time", limits.max_simulated_s, "stop after this much simulated time, s (0: no limit)")
@@ -273,7 +282,8 @@ void add_limit_options(CLI::App& cmd, interpreter::RunLimits& limits) {
   cmd.add_option("--max-outputs", limits.max_outputs, "stop after this many reported outputs (0: no limit)")
       ->default_val(limits.max_outputs)
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000'000}));
-  cmd.add_option("--max-memory", limits.max_memory_mib, "stop when the heap would grow past this many MiB (0: no limit)")
+  cmd.add_option("--max-memory", limits.max_memory_mib,
+                 "stop when the heap would grow past this many MiB (0: no limit)")
       ->default_val(limits.max_memory_mib)
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{1'000'000'000}));
 }
@@ -286,22 +296,26 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   add_seed_option(*run_cmd, run_args->seed);
   run_cmd->add_option("--characterisation", run_args->characterisation,
                       "machine characterisation file from `metron characterise`: PTMEAS uses its touch strategy");
-  run_cmd->add_option("--touch-baseline", run_args->touch_baseline,
-                      "PTMEAS uses a conventional cycle instead of the characterised one, at the same measuring feed, to "
-                      "compare program times: one-touch | two-touch:BACKOFF_MM[:FIRST_FEED_MM_S] (docs/touch-trigger.md)");
-  run_cmd->add_option("--machine", run_args->machine_url,
-                      "run on an I++ DME server instead of the virtual CMM: ipp://host[:port] (docs/ipp-dme.md)")
+  run_cmd->add_option(
+      "--touch-baseline", run_args->touch_baseline,
+      "PTMEAS uses a conventional cycle instead of the characterised one, at the same measuring feed, to "
+      "compare program times: one-touch | two-touch:BACKOFF_MM[:FIRST_FEED_MM_S] (docs/touch-trigger.md)");
+  run_cmd
+      ->add_option("--machine", run_args->machine_url,
+                   "run on an I++ DME server instead of the virtual CMM: ipp://host[:port] (docs/ipp-dme.md)")
       ->excludes(run_cmd->get_option("--world"));
-  run_cmd->add_flag("--dry-run", run_args->dry_run,
-                    "every touch lands on its nominal point and every scan on its path: runs a program whose part the "
-                    "world does not hold to its end; the world gives the sensors (docs/language.md \"Dry runs\")")
+  run_cmd
+      ->add_flag("--dry-run", run_args->dry_run,
+                 "every touch lands on its nominal point and every scan on its path: runs a program whose part the "
+                 "world does not hold to its end; the world gives the sensors (docs/language.md \"Dry runs\")")
       ->excludes(run_cmd->get_option("--machine"));
   run_cmd->add_option("--compensation", run_args->compensation,
                       "error-space file (`metron calibrate error-space --out`): the controller corrects commanded and "
                       "measured positions by it (docs/error-space.md)");
   run_cmd->add_option("--out", run_args->out_dir, "directory for results.json and DMIS output files")->default_val(".");
   run_cmd->add_flag("--quiet", run_args->quiet, "print only diagnostics, faults and the summary");
-  run_cmd->add_flag("--strict", run_args->strict, "a line that is not a DMIS statement is an error (default: a warning)");
+  run_cmd->add_flag("--strict", run_args->strict,
+                    "a line that is not a DMIS statement is an error (default: a warning)");
   run_cmd->add_option("--answers", run_args->answers, "operator answers for PROMPT, one per line, used in order");
   add_include_option(*run_cmd, run_args->include_dirs);
   add_limit_options(*run_cmd, run_args->limits);
@@ -312,7 +326,8 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   auto* check_cmd = app.add_subcommand("check", "check a program and print diagnostics");
   auto check_strict = std::make_shared<bool>(false);
   check_cmd->add_option("program", *check_program, "the DMIS program")->required();
-  check_cmd->add_flag("--strict", *check_strict, "a line that is not a DMIS statement is an error (default: a warning)");
+  check_cmd->add_flag("--strict", *check_strict,
+                      "a line that is not a DMIS statement is an error (default: a warning)");
   add_include_option(*check_cmd, *check_includes);
   commands.push_back({check_cmd, [check_program, check_strict, check_includes] {
                         return check(*check_program, *check_strict, *check_includes);
@@ -333,7 +348,9 @@ void add_run_commands(CLI::App& app, std::vector<Command>& commands) {
   auto* fit_cmd = app.add_subcommand("fit", "least-squares fit of a point file (NIST .ds or CSV x,y,z)");
   fit_cmd->add_option("type", fit_args->type, "point, line, plane, circle, sphere, cylinder or cone")->required();
   fit_cmd->add_option("file", fit_args->file, "the point file")->required();
-  fit_cmd->add_option("--format", fit_args->format, "text or json")->default_val("text")->check(CLI::IsMember({"text", "json"}));
+  fit_cmd->add_option("--format", fit_args->format, "text or json")
+      ->default_val("text")
+      ->check(CLI::IsMember({"text", "json"}));
   commands.push_back({fit_cmd, [fit_args] { return fit(*fit_args); }});
 }
 

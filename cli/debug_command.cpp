@@ -3,8 +3,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <csignal>
 #include <cctype>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -15,9 +15,9 @@
 #include <sstream>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <editline/readline.h>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include "commands.hpp"
 #include "metron/interpreter/debugger.hpp"
@@ -33,7 +33,7 @@ namespace metron::cli {
 namespace {
 
 struct DebugArgs {
-  std::string program;                 ///< empty for `repl`
+  std::string program;  ///< empty for `repl`
   std::optional<std::string> world;
   std::optional<std::uint64_t> seed;
   std::optional<std::string> commands;  ///< read commands from this file instead of the terminal
@@ -42,8 +42,9 @@ struct DebugArgs {
   interpreter::RunLimits limits;
 };
 
-const std::vector<std::string> command_names = {"break", "delete", "info", "run", "continue", "step", "next",
-                                                "finish", "where", "list", "print", "machine", "set", "help", "quit"};
+const std::vector<std::string> command_names = {"break", "delete",  "info",   "run",   "continue",
+                                                "step",  "next",    "finish", "where", "list",
+                                                "print", "machine", "set",    "help",  "quit"};
 std::string upper(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return s;
@@ -150,7 +151,8 @@ class Repl {
   bool is_command(const std::string& text) const {
     const std::string w = first_word(text);
     if (w.empty()) return false;
-    if (text.size() > w.size() && (text[w.size()] == '(' || text[w.size()] == '/')) return false;  // F(x)=..., MAJOR/...
+    if (text.size() > w.size() && (text[w.size()] == '(' || text[w.size()] == '/'))
+      return false;  // F(x)=..., MAJOR/...
     static const std::set<std::string> aliases = {"c", "s", "n", "bt", "l", "p", "q", "exit", "b", "help"};
     std::string lw = w;
     for (auto& c : lw) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -218,12 +220,14 @@ class Repl {
         break;
       case StopReason::Step: std::cout << stop.detail << "\n"; break;
       case StopReason::Fault:
-        std::cout << fmt::format("machine fault{}: {}\n", stop.breakpoint ? fmt::format(" (breakpoint {})", stop.breakpoint) : "", stop.detail);
+        std::cout << fmt::format("machine fault{}: {}\n",
+                                 stop.breakpoint ? fmt::format(" (breakpoint {})", stop.breakpoint) : "", stop.detail);
         break;
       case StopReason::Error: std::cout << stop.detail << "\n"; break;
       case StopReason::Finished: std::cout << "the program has ended\n"; break;
       case StopReason::Interrupted:
-        std::cout << fmt::format("interrupted by {} before {}\n", stop.signal == SIGTERM ? "SIGTERM" : "SIGINT", stop.detail);
+        std::cout << fmt::format("interrupted by {} before {}\n", stop.signal == SIGTERM ? "SIGTERM" : "SIGINT",
+                                 stop.detail);
         if (stop.signal != SIGTERM) std::cout << "'continue' resumes the program\n";
         break;
     }
@@ -261,7 +265,8 @@ class Repl {
       if (m_debugger.breakpoints().empty()) std::cout << "no breakpoints\n";
       for (const auto& b : m_debugger.breakpoints()) {
         using K = interpreter::Breakpoint::Kind;
-        const std::string what = b.kind == K::Line ? fmt::format("line {}{}", b.file.empty() ? "" : b.file + ":", b.line)
+        const std::string what = b.kind == K::Line
+                                     ? fmt::format("line {}{}", b.file.empty() ? "" : b.file + ":", b.line)
                                  : b.kind == K::Feature ? fmt::format("feature F({}) measured", b.feature)
                                                         : std::string("machine fault");
         std::cout << fmt::format("{:3}  {}  (hit {} time{})\n", b.id, what, b.hits, b.hits == 1 ? "" : "s");
@@ -284,10 +289,14 @@ class Repl {
         // While the program runs, SIGINT (Ctrl-C) pauses it and SIGTERM ends the session cleanly;
         // at the prompt both act as usual (docs/debugger.md).
         const interpreter::StopSignalScope signals;
-        if (word == "run" || word == "continue" || word == "c") stop = m_debugger.resume();
-        else if (word == "step" || word == "s") stop = m_debugger.step();
-        else if (word == "next" || word == "n") stop = m_debugger.next();
-        else stop = m_debugger.finish();
+        if (word == "run" || word == "continue" || word == "c")
+          stop = m_debugger.resume();
+        else if (word == "step" || word == "s")
+          stop = m_debugger.step();
+        else if (word == "next" || word == "n")
+          stop = m_debugger.next();
+        else
+          stop = m_debugger.finish();
       }
       report_stop(stop);
       if (stop.reason == interpreter::StopReason::Interrupted && stop.signal == SIGTERM) {
@@ -313,22 +322,23 @@ class Repl {
   }
 
   bool help() {
-    std::cout << "commands:\n"
-                 "  break LINE | break FILE:LINE | break F(label) | break fault   set a breakpoint\n"
-                 "  delete [ID]            delete one or all breakpoints\n"
-                 "  info breakpoints       list breakpoints\n"
-                 "  run                    start the program\n"
-                 "  continue (c)           run to the next breakpoint\n"
-                 "  step (s)               one statement, into macros and called files\n"
-                 "  next (n)               one statement, over macros and called files\n"
-                 "  finish                 until the current macro or called file returns\n"
-                 "  where (bt)             call stack\n"
-                 "  list (l)               source around the current statement\n"
-                 "  print EXPR | F(x) | FA(x) | T(x) | TA(x) | D   values, features, tolerances, the coordinate system\n"
-                 "  machine                position, feeds, sensor, simulated clock, last hit, queued commands\n"
-                 "  set VAR = EXPR         change a variable\n"
-                 "  quit                   leave\n"
-                 "Any DMIS statement (or a whole MEAS ... ENDMES block) runs in the current context.\n";
+    std::cout
+        << "commands:\n"
+           "  break LINE | break FILE:LINE | break F(label) | break fault   set a breakpoint\n"
+           "  delete [ID]            delete one or all breakpoints\n"
+           "  info breakpoints       list breakpoints\n"
+           "  run                    start the program\n"
+           "  continue (c)           run to the next breakpoint\n"
+           "  step (s)               one statement, into macros and called files\n"
+           "  next (n)               one statement, over macros and called files\n"
+           "  finish                 until the current macro or called file returns\n"
+           "  where (bt)             call stack\n"
+           "  list (l)               source around the current statement\n"
+           "  print EXPR | F(x) | FA(x) | T(x) | TA(x) | D   values, features, tolerances, the coordinate system\n"
+           "  machine                position, feeds, sensor, simulated clock, last hit, queued commands\n"
+           "  set VAR = EXPR         change a variable\n"
+           "  quit                   leave\n"
+           "Any DMIS statement (or a whole MEAS ... ENDMES block) runs in the current context.\n";
     return true;
   }
 
@@ -342,7 +352,8 @@ class Repl {
       std::cout << fmt::format("breakpoint {}: on machine faults\n", id);
     } else if (std::regex_match(rest, m, feature)) {
       const std::string label = upper(m[1].str());
-      if (!m_session.compiler().symbols().features.count(label)) std::cout << fmt::format("warning: F({}) is not defined yet\n", m[1].str());
+      if (!m_session.compiler().symbols().features.count(label))
+        std::cout << fmt::format("warning: F({}) is not defined yet\n", m[1].str());
       id = m_debugger.break_at_feature(label);
       std::cout << fmt::format("breakpoint {}: when F({}) is measured\n", id, label);
     } else if (std::regex_match(rest, m, file_line)) {
@@ -353,7 +364,8 @@ class Repl {
       }
       id = m_debugger.break_at_line(m[1].str(), line);
       std::cout << fmt::format("breakpoint {}: {}:{}\n", id, m[1].str(), m[2].str());
-    } else if (!rest.empty() && std::all_of(rest.begin(), rest.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
+    } else if (!rest.empty() && std::all_of(rest.begin(), rest.end(),
+                                            [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
       if (!line_exists(m_session.record().program, line_number(rest))) {
         std::cout << fmt::format("error: the program has no line {}\n", rest);
         return true;
@@ -390,7 +402,8 @@ class Repl {
       std::cout << "error: print what? (an expression, F(x), FA(x), T(x), TA(x) or D)\n";
       return true;
     }
-    if ((upper(rest) == "D" && !m_session.interpreter().variable("D")) || upper(rest) == "ALIGNMENT") return print_alignment();
+    if ((upper(rest) == "D" && !m_session.interpreter().variable("D")) || upper(rest) == "ALIGNMENT")
+      return print_alignment();
     if (std::regex_match(rest, m, label)) {
       const std::string prefix = upper(m[1].str());
       const std::string name = upper(m[2].str());
@@ -403,8 +416,10 @@ class Repl {
       return true;
     }
     auto v = m_session.interpreter().evaluate(*e);
-    if (!v) std::cout << "error: " << v.error() << "\n";
-    else std::cout << rest << " = " << v->to_display() << "\n";
+    if (!v)
+      std::cout << "error: " << v.error() << "\n";
+    else
+      std::cout << rest << " = " << v->to_display() << "\n";
     return true;
   }
 
@@ -430,8 +445,8 @@ class Repl {
         const Vec3 p = align.to_part_point(f->points[i].surface_mm());
         const Vec3 n = align.to_part_vector(f->points[i].normal);
         const double res = f->fit && i < f->fit->residuals_mm.size() ? f->fit->residuals_mm[i] : 0.0;
-        std::cout << fmt::format("  pt {:2}  {:10.4f} {:10.4f} {:10.4f}   {:9.6f} {:9.6f} {:9.6f}   res {:+.4f}\n", i + 1,
-                                 p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), res);
+        std::cout << fmt::format("  pt {:2}  {:10.4f} {:10.4f} {:10.4f}   {:9.6f} {:9.6f} {:9.6f}   res {:+.4f}\n",
+                                 i + 1, p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), res);
       }
     return true;
   }
@@ -442,8 +457,8 @@ class Repl {
       std::cout << fmt::format("error: tolerance T({}) is not defined\n", name);
       return true;
     }
-    std::cout << fmt::format("T({})  {}  lower {:+.4f}  upper {:+.4f}  zone {:.4f}\n", name, runtime::dmis_word(t->kind),
-                             t->lower, t->upper, t->zone);
+    std::cout << fmt::format("T({})  {}  lower {:+.4f}  upper {:+.4f}  zone {:.4f}\n", name,
+                             runtime::dmis_word(t->kind), t->lower, t->upper, t->zone);
     if (const auto* r = interpreter::last_tolerance_result(m_session.record(), name)) {
       std::cout << "last result: " << runtime::format_tolerance_result(*r);
       return true;
@@ -457,33 +472,39 @@ class Repl {
     const auto& f = a.part_to_machine;
     std::cout << fmt::format("coordinate system D({}), part to machine:\n", a.label);
     for (int r = 0; r < 3; ++r)
-      std::cout << fmt::format("  {:10.6f} {:10.6f} {:10.6f}   {:12.4f}\n", f.linear()(r, 0), f.linear()(r, 1), f.linear()(r, 2), f.translation()[r]);
+      std::cout << fmt::format("  {:10.6f} {:10.6f} {:10.6f}   {:12.4f}\n", f.linear()(r, 0), f.linear()(r, 1),
+                               f.linear()(r, 2), f.translation()[r]);
     return true;
   }
 
   bool machine() {
     const auto s = m_session.machine().state();
     const Vec3 part = m_session.runtime().alignment().to_part_point(s.position_mm);
-    std::cout << fmt::format("position   {:.4f} {:.4f} {:.4f} mm (machine)   {:.4f} {:.4f} {:.4f} (D({}))\n", s.position_mm.x(),
-                             s.position_mm.y(), s.position_mm.z(), part.x(), part.y(), part.z(),
+    std::cout << fmt::format("position   {:.4f} {:.4f} {:.4f} mm (machine)   {:.4f} {:.4f} {:.4f} (D({}))\n",
+                             s.position_mm.x(), s.position_mm.y(), s.position_mm.z(), part.x(), part.y(), part.z(),
                              m_session.runtime().alignment().label);
-    std::cout << fmt::format("velocity   {:.4f} {:.4f} {:.4f} mm/s\n", s.velocity_mm_s.x(), s.velocity_mm_s.y(), s.velocity_mm_s.z());
-    std::cout << fmt::format("feeds      positioning {:.3f} mm/s, measuring {:.3f} mm/s\n", s.positioning_feed_mm_s, s.measuring_feed_mm_s);
+    std::cout << fmt::format("velocity   {:.4f} {:.4f} {:.4f} mm/s\n", s.velocity_mm_s.x(), s.velocity_mm_s.y(),
+                             s.velocity_mm_s.z());
+    std::cout << fmt::format("feeds      positioning {:.3f} mm/s, measuring {:.3f} mm/s\n", s.positioning_feed_mm_s,
+                             s.measuring_feed_mm_s);
     if (s.tool)
-      std::cout << fmt::format("sensor     {} (nominal radius {:.4f}, effective {:.6f} mm, {})\n", s.active_tool, s.tool->nominal_radius_mm,
-                               s.tool->effective_radius_mm, s.tool->qualified ? "qualified" : "not qualified");
+      std::cout << fmt::format("sensor     {} (nominal radius {:.4f}, effective {:.6f} mm, {})\n", s.active_tool,
+                               s.tool->nominal_radius_mm, s.tool->effective_radius_mm,
+                               s.tool->qualified ? "qualified" : "not qualified");
     else
       std::cout << "sensor     none selected\n";
     std::cout << fmt::format("clock      {:.4f} s simulated\n", s.time_s);
     if (s.last_hit)
-      std::cout << fmt::format("last hit   {:.4f} {:.4f} {:.4f} (ball centre)  approach {:.4f} {:.4f} {:.4f}  at {:.4f} s\n",
-                               s.last_hit->centre_mm.x(), s.last_hit->centre_mm.y(), s.last_hit->centre_mm.z(), s.last_hit->normal.x(),
-                               s.last_hit->normal.y(), s.last_hit->normal.z(), s.last_hit->time_s);
+      std::cout << fmt::format(
+          "last hit   {:.4f} {:.4f} {:.4f} (ball centre)  approach {:.4f} {:.4f} {:.4f}  at {:.4f} s\n",
+          s.last_hit->centre_mm.x(), s.last_hit->centre_mm.y(), s.last_hit->centre_mm.z(), s.last_hit->normal.x(),
+          s.last_hit->normal.y(), s.last_hit->normal.z(), s.last_hit->time_s);
     else
       std::cout << "last hit   none\n";
     std::cout << fmt::format("commands   {} executed, {} queued\n", s.executed_commands, s.queued_commands);
     if (m_session.interpreter().in_measurement())
-      std::cout << fmt::format("measuring  F({}): {} steps collected, sent at ENDMES\n", m_session.interpreter().pending_block()->feature,
+      std::cout << fmt::format("measuring  F({}): {} steps collected, sent at ENDMES\n",
+                               m_session.interpreter().pending_block()->feature,
                                m_session.interpreter().pending_block()->steps.size());
     return true;
   }
@@ -491,7 +512,8 @@ class Repl {
   bool set(const std::string& rest) {
     const auto eq = rest.find('=');
     std::string name = upper(trim(eq == std::string::npos ? rest.substr(0, rest.find(' ')) : rest.substr(0, eq)));
-    std::string expr = trim(eq == std::string::npos ? rest.substr(std::min(rest.size(), rest.find(' '))) : rest.substr(eq + 1));
+    std::string expr =
+        trim(eq == std::string::npos ? rest.substr(std::min(rest.size(), rest.find(' '))) : rest.substr(eq + 1));
     if (name.empty() || expr.empty()) {
       std::cout << "error: expected set VAR = EXPR\n";
       return true;
@@ -561,7 +583,8 @@ int debug(const DebugArgs& args) {
   s.runtime().set_output_directory(args.out_dir);
   s.set_include_dirs(args.include_dirs);
   s.interpreter().set_limits(args.limits);
-  if (auto failed = interpreter::apply_memory_limit(args.limits.max_memory_mib)) std::cerr << "warning: " << *failed << "\n";
+  if (auto failed = interpreter::apply_memory_limit(args.limits.max_memory_mib))
+    std::cerr << "warning: " << *failed << "\n";
   if (!args.program.empty()) {
     if (auto text = read_input_file(args.program); !text) {
       std::cerr << "error: " << printable(text.error(), 1000) << "\n";

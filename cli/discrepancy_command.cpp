@@ -13,8 +13,8 @@
 #include <sstream>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include "commands.hpp"
 #include "metron/machine/discrepancy/prediction.hpp"
@@ -49,7 +49,8 @@ std::vector<double> condition_values(const dc::Problem& p, const std::string& co
     for (int a = 0; a < 3 && !done; ++a) {
       if (cond == fmt::format("{} position", kAxis[a])) v[o] = q[static_cast<std::size_t>(a)], done = true;
       for (int b = 0; b < 3 && !done; ++b)
-        if (cond == fmt::format("{}*{} position", kAxis[a], kAxis[b])) v[o] = q[static_cast<std::size_t>(a)] * q[static_cast<std::size_t>(b)], done = true;
+        if (cond == fmt::format("{}*{} position", kAxis[a], kAxis[b]))
+          v[o] = q[static_cast<std::size_t>(a)] * q[static_cast<std::size_t>(b)], done = true;
     }
     if (done) continue;
     if (cond == "approach angle") {
@@ -86,15 +87,19 @@ std::string scatter(const std::string& title, const std::string& xlabel, const s
   y0 -= pad, y1 += pad;
   auto X = [&](double v) { return L + (v - x0) / (x1 - x0) * (W - L - R); };
   auto Y = [&](double v) { return T + (y1 - v) / (y1 - y0) * (H - T - B); };
-  std::string s = fmt::format("<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' style='background:#fff'>", W, H);
+  std::string s =
+      fmt::format("<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' style='background:#fff'>", W, H);
   s += fmt::format("<text x='{}' y='16' font-size='13' font-family='sans-serif'>{}</text>", L, esc(title));
-  s += fmt::format("<rect x='{}' y='{}' width='{}' height='{}' fill='none' stroke='#888'/>", L, T, W - L - R, H - T - B);
+  s +=
+      fmt::format("<rect x='{}' y='{}' width='{}' height='{}' fill='none' stroke='#888'/>", L, T, W - L - R, H - T - B);
   s += fmt::format("<text x='{}' y='{}' font-size='11' font-family='sans-serif'>{}</text>", L, H - 6, esc(xlabel));
   s += fmt::format("<text x='4' y='{}' font-size='10' font-family='sans-serif'>{:.3g}</text>", T + 10, y1);
   s += fmt::format("<text x='4' y='{}' font-size='10' font-family='sans-serif'>{:.3g}</text>", H - B, y0);
   s += fmt::format("<text x='{}' y='{}' font-size='10' font-family='sans-serif'>{:.4g}</text>", L, H - B + 12, x0);
-  s += fmt::format("<text x='{}' y='{}' font-size='10' font-family='sans-serif' text-anchor='end'>{:.4g}</text>", W - R, H - B + 12, x1);
-  if (y0 < 0 && y1 > 0) s += fmt::format("<line x1='{}' x2='{}' y1='{:.1f}' y2='{:.1f}' stroke='#ccc'/>", L, W - R, Y(0), Y(0));
+  s += fmt::format("<text x='{}' y='{}' font-size='10' font-family='sans-serif' text-anchor='end'>{:.4g}</text>", W - R,
+                   H - B + 12, x1);
+  if (y0 < 0 && y1 > 0)
+    s += fmt::format("<line x1='{}' x2='{}' y1='{:.1f}' y2='{:.1f}' stroke='#ccc'/>", L, W - R, Y(0), Y(0));
   const char* colours[3] = {"#d62728", "#1f77b4", "#2ca02c"};
   for (std::size_t k = 0; k < ys.size(); ++k) {
     const auto& y = ys[k].second;
@@ -105,21 +110,26 @@ std::string scatter(const std::string& title, const std::string& xlabel, const s
       s += "'/>";
     } else {
       for (std::size_t i = 0; i < x.size(); i += step)
-        s += fmt::format("<circle cx='{:.1f}' cy='{:.1f}' r='1.8' fill='{}' fill-opacity='0.6'/>", X(x[i]), Y(y[i]), colours[k % 3]);
+        s += fmt::format("<circle cx='{:.1f}' cy='{:.1f}' r='1.8' fill='{}' fill-opacity='0.6'/>", X(x[i]), Y(y[i]),
+                         colours[k % 3]);
     }
-    s += fmt::format("<text x='{}' y='{}' font-size='11' fill='{}' font-family='sans-serif'>{}</text>", W - R - 150, T + 14 + 13 * static_cast<double>(k),
-                     colours[k % 3], esc(ys[k].first));
+    s += fmt::format("<text x='{}' y='{}' font-size='11' fill='{}' font-family='sans-serif'>{}</text>", W - R - 150,
+                     T + 14 + 13 * static_cast<double>(k), colours[k % 3], esc(ys[k].first));
   }
   return s + "</svg>";
 }
 
 std::string report_html(const dc::Analysis& a, const dc::Problem& p, const std::string& text) {
-  std::string h = "<!DOCTYPE html><html><head><meta charset='utf-8'><title>metron discrepancy</title>"
-                  "<style>body{font-family:sans-serif;margin:20px;max-width:1250px} pre{background:#f4f4f4;padding:8px;font-size:12px;white-space:pre-wrap}"
-                  " .g{display:flex;flex-wrap:wrap;gap:8px}</style></head><body>";
+  std::string h =
+      "<!DOCTYPE html><html><head><meta charset='utf-8'><title>metron discrepancy</title>"
+      "<style>body{font-family:sans-serif;margin:20px;max-width:1250px} "
+      "pre{background:#f4f4f4;padding:8px;font-size:12px;white-space:pre-wrap}"
+      " .g{display:flex;flex-wrap:wrap;gap:8px}</style></head><body>";
   h += "<h1>Model discrepancy</h1>";
-  h += fmt::format("<p><b>Cross-validated residual RMS</b>: {:.3f} &micro;m before, {:.3f} &micro;m after; noise {:.3f} &micro;m ({}).</p>",
-                   a.cv_rms_before_mm * 1e3, a.cv_rms_after_mm * 1e3, a.noise_mm * 1e3, esc(a.noise_source));
+  h += fmt::format(
+      "<p><b>Cross-validated residual RMS</b>: {:.3f} &micro;m before, {:.3f} &micro;m after; noise {:.3f} &micro;m "
+      "({}).</p>",
+      a.cv_rms_before_mm * 1e3, a.cv_rms_after_mm * 1e3, a.noise_mm * 1e3, esc(a.noise_source));
   auto um = [](const std::vector<double>& v) {
     std::vector<double> o(v);
     for (double& x : o) x *= 1e3;
@@ -143,15 +153,17 @@ std::string report_html(const dc::Analysis& a, const dc::Problem& p, const std::
   for (std::size_t i = 0; i < std::min<std::size_t>(3, a.unexplained.size()); ++i) {
     const auto& s = a.unexplained[i];
     const auto x = condition_values(p, s.condition);
-    h += scatter(fmt::format("{} residual (um) follows {} ({}, p={:.2g})", kAxis[s.component], s.condition, s.test, s.p_value), s.condition, x,
-                 {{"residual after the effects", um(a.residual_after_mm)}});
+    h += scatter(
+        fmt::format("{} residual (um) follows {} ({}, p={:.2g})", kAxis[s.component], s.condition, s.test, s.p_value),
+        s.condition, x, {{"residual after the effects", um(a.residual_after_mm)}});
   }
   h += "</div><h2>Spectra (fraction of residual variance explained by one period)</h2><div class='g'>";
   for (std::size_t i = 0; i < std::min<std::size_t>(4, a.spectra_before.size()); ++i) {
     const auto& b = a.spectra_before[i];
     std::vector<std::pair<std::string, std::vector<double>>> ys{{"before", b.power}};
     for (const auto& af : a.spectra_after)
-      if (af.against == b.against && af.component == b.component && af.power.size() == b.power.size()) ys.push_back({"after", af.power});
+      if (af.against == b.against && af.component == b.component && af.power.size() == b.power.size())
+        ys.push_back({"after", af.power});
     h += scatter(fmt::format("{} residual against {}", kAxis[b.component], b.against), "period", b.period, ys, true);
   }
   h += "</div><h2>Summary</h2><pre>" + esc(text) + "</pre></body></html>";
@@ -184,7 +196,8 @@ int run_discrepancy(const DiscrepancyArgs& args) {
     std::cout << fmt::format("wrote {} ({} rows predicted by world '{}')\n", *args.predict, data->rows, world->name);
     return 0;
   }
-  const auto problem = dc::make_problem(*data, [&](std::size_t r, int a) { return machine::predicted_deviation_mm(errors, *data, r, a); });
+  const auto problem = dc::make_problem(
+      *data, [&](std::size_t r, int a) { return machine::predicted_deviation_mm(errors, *data, r, a); });
   dc::Options opt;
   opt.max_effects = args.max_effects;
   opt.disabled = args.disable;
@@ -218,13 +231,14 @@ int run_discrepancy(const DiscrepancyArgs& args) {
       std::cerr << "error: the extended world does not load: " << w2.error().message << "\n";
       return 1;
     }
-    const auto p2 = dc::make_problem(*data, [&](std::size_t r, int a) { return machine::predicted_deviation_mm(w2->truth.errors, *data, r, a); });
+    const auto p2 = dc::make_problem(
+        *data, [&](std::size_t r, int a) { return machine::predicted_deviation_mm(w2->truth.errors, *data, r, a); });
     dc::Options o2;
     o2.max_effects = 0;
     const auto a2 = dc::analyse(p2, o2);
     resim_cv = a2.cv_rms_before_mm;
-    text += fmt::format("extended world {}: re-simulated, cross-validated RMS {:.3f} um (base world {:.3f} um)\n", wpath,
-                        a2.cv_rms_before_mm * 1e3, analysis.cv_rms_before_mm * 1e3);
+    text += fmt::format("extended world {}: re-simulated, cross-validated RMS {:.3f} um (base world {:.3f} um)\n",
+                        wpath, a2.cv_rms_before_mm * 1e3, analysis.cv_rms_before_mm * 1e3);
     auto j = dc::to_json(analysis);
     j["data"] = args.data;
     j["world"] = args.world.value_or("default");
@@ -242,12 +256,14 @@ int run_discrepancy(const DiscrepancyArgs& args) {
 
 void add_discrepancy_command(CLI::App& app, std::vector<Command>& commands) {
   auto args = std::make_shared<DiscrepancyArgs>();
-  CLI::App* c = app.add_subcommand("discrepancy", "model-discrepancy analysis: measured data against the world's simulation");
+  CLI::App* c =
+      app.add_subcommand("discrepancy", "model-discrepancy analysis: measured data against the world's simulation");
   c->add_option("data", args->data, "measured data (CSV or whitespace table)")->required();
   c->add_option("--describe", args->describe, "JSON description of the columns (docs/discrepancy.md)")->required();
   c->add_option("--world", args->world, "world file (default: the embedded world)");
   c->add_option("--out", args->out, "directory for results.json, summary.txt, report.html, extended_world.json");
-  c->add_option("--predict", args->predict, "write the world's predictions in place of the measured values to this CSV and stop");
+  c->add_option("--predict", args->predict,
+                "write the world's predictions in place of the measured values to this CSV and stop");
   c->add_option("--noise-um", args->noise_um, "with --predict: add Gaussian noise of this sd (um)");
   c->add_option("--seed", args->seed, "with --predict: noise seed");
   c->add_option("--max-effects", args->max_effects, "most effects to claim (default 4)");

@@ -29,8 +29,8 @@ namespace {
 
 struct ScanCompareArgs {
   std::optional<std::string> world;
-  std::vector<double> line;        // x0 y0 z0 x1 y1 z1: ball centres
-  std::vector<double> circle;      // cx cy cz r: ball centres, in a plane z = cz
+  std::vector<double> line;             // x0 y0 z0 x1 y1 z1: ball centres
+  std::vector<double> circle;           // cx cy cz r: ball centres, in a plane z = cz
   std::vector<double> normal{0, 0, 1};  // approach normal of a line
   std::vector<double> start_offset{0, 0, 0};
   bool bore = false;
@@ -57,11 +57,13 @@ tl::expected<machine::ScanPath, std::string> make_path(const ScanCompareArgs& a)
   if (a.line.size() == 6) {
     const Vec3 p0(a.line[0], a.line[1], a.line[2]), p1(a.line[3], a.line[4], a.line[5]);
     const Vec3 n = Vec3(a.normal[0], a.normal[1], a.normal[2]);
-    if ((p1 - p0).norm() < 1e-6 || n.norm() < 1e-9) return tl::unexpected(std::string("--line needs two distinct points and --normal a direction"));
+    if ((p1 - p0).norm() < 1e-6 || n.norm() < 1e-9)
+      return tl::unexpected(std::string("--line needs two distinct points and --normal a direction"));
     const Vec3 u = (p1 - p0).normalized();
     const int k = std::max(1, static_cast<int>(std::ceil((p1 - p0).norm() / seg)));
     for (int i = 0; i < k; ++i) {
-      c.path.segments.push_back(geometry::PccSegment::hermite(p0 + (p1 - p0) * i / k, p0 + (p1 - p0) * (i + 1) / k, u, u));
+      c.path.segments.push_back(
+          geometry::PccSegment::hermite(p0 + (p1 - p0) * i / k, p0 + (p1 - p0) * (i + 1) / k, u, u));
       c.path.normals.push_back(n.normalized());
     }
     c.path.normals.push_back(n.normalized());
@@ -81,7 +83,8 @@ tl::expected<machine::ScanPath, std::string> make_path(const ScanCompareArgs& a)
     c.path.normals.push_back(sign * radial(0));
     c.approach_normal = sign * radial(0);
   } else {
-    return tl::unexpected(std::string("give the ball-centre path: --line x0 y0 z0 x1 y1 z1 (with --normal) or --circle cx cy cz r"));
+    return tl::unexpected(
+        std::string("give the ball-centre path: --line x0 y0 z0 x1 y1 z1 (with --normal) or --circle cx cy cz r"));
   }
   c.sample_spacing_mm = 0.1;
   return c;
@@ -92,13 +95,13 @@ struct LawRun {
   double late_lateral_mm = 0;  // mean |lateral| over the second half of the path
 };
 
-LawRun run_law(const machine::World& w, const machine::Solid& solid, machine::ScanPath cmd, machine::ScanLaw law, double kc,
-               const ScanCompareArgs& a) {
+LawRun run_law(const machine::World& w, const machine::Solid& solid, machine::ScanPath cmd, machine::ScanLaw law,
+               double kc, const ScanCompareArgs& a) {
   machine::MachineConfig config = w.machine;
   config.scanning.control.trajectory_gain_1_s = kc;
   cmd.law = law;
-  const machine::ScanSetup setup{&solid, a.ball_radius_mm + w.truth.probe.ball_radius_error_mm, config, w.truth.scanning,
-                                 w.seed};
+  const machine::ScanSetup setup{&solid, a.ball_radius_mm + w.truth.probe.ball_radius_error_mm, config,
+                                 w.truth.scanning, w.seed};
   const Vec3 start = machine::scan_approach_point(cmd) + Vec3(a.start_offset[0], a.start_offset[1], a.start_offset[2]);
   double sum = 0, half = 0;
   int n = 0;
@@ -116,7 +119,8 @@ LawRun run_law(const machine::World& w, const machine::Solid& solid, machine::Sc
 
 std::string done_text(const machine::ScanOutcome& o) {
   return o.completed ? "yes"
-                     : fmt::format("no: {} at {:.1f} mm", o.fault ? machine::to_string(o.fault->kind) : "?", o.stats.reached_mm);
+                     : fmt::format("no: {} at {:.1f} mm", o.fault ? machine::to_string(o.fault->kind) : "?",
+                                   o.stats.reached_mm);
 }
 
 void compare_laws(const machine::World& w, const machine::ScanPath& cmd, const ScanCompareArgs& a) {
@@ -126,19 +130,21 @@ void compare_laws(const machine::World& w, const machine::ScanPath& cmd, const S
       "trajectory-correction laws (SEEDS.md 1), K {} /s, Kc {} /s; lat = (P - Pp) . q, the deviation across the scan\n"
       "direction (um): rms, peak, mean over the second half; dE = |Ep| - E0 (um); none = Kc 0\n",
       w.machine.scanning.control.deflection_gain_1_s, kc0);
-  std::cout << fmt::format("{:<5} {:>9} {:>9} {:>9} | {:>9} {:>9} | {}\n", "law", "lat rms", "lat pk", "lat late", "dE rms",
-                           "dE pk", "done");
+  std::cout << fmt::format("{:<5} {:>9} {:>9} {:>9} | {:>9} {:>9} | {}\n", "law", "lat rms", "lat pk", "lat late",
+                           "dE rms", "dE pk", "done");
   const auto row = [&](const char* name, machine::ScanLaw law, double kc) {
     const LawRun r = run_law(w, *solid, cmd, law, kc, a);
     const auto& st = r.out.stats;
-    std::cout << fmt::format("{:<5} {:>9.2f} {:>9.2f} {:>9.2f} | {:>9.2f} {:>9.2f} | {}\n", name, 1000 * st.rms_lateral_error_mm,
-                             1000 * st.max_lateral_error_mm, 1000 * r.late_lateral_mm, 1000 * st.rms_deflection_error_mm,
-                             1000 * st.peak_deflection_error_mm, done_text(r.out));
+    std::cout << fmt::format("{:<5} {:>9.2f} {:>9.2f} {:>9.2f} | {:>9.2f} {:>9.2f} | {}\n", name,
+                             1000 * st.rms_lateral_error_mm, 1000 * st.max_lateral_error_mm, 1000 * r.late_lateral_mm,
+                             1000 * st.rms_deflection_error_mm, 1000 * st.peak_deflection_error_mm, done_text(r.out));
   };
   row("none", machine::ScanLaw::Vc2, 0);
-  for (auto law : {machine::ScanLaw::Vc1, machine::ScanLaw::Vc1Prime, machine::ScanLaw::Vc2}) row(law_name(law), law, kc0);
+  for (auto law : {machine::ScanLaw::Vc1, machine::ScanLaw::Vc1Prime, machine::ScanLaw::Vc2})
+    row(law_name(law), law, kc0);
   if (!a.kc_sweep) return;
-  std::cout << "\nKc-only sweep (K fixed): lat rms / dE rms (um), * = not completed; best = smallest sum among completed\n";
+  std::cout
+      << "\nKc-only sweep (K fixed): lat rms / dE rms (um), * = not completed; best = smallest sum among completed\n";
   const std::vector<double> gains = {2.5, 5, 10, 20, 40, 80};
   std::cout << fmt::format("{:>6} | {:>16} {:>16} {:>16}\n", "Kc", "Vc1", "Vc1'", "Vc2");
   double best[3] = {1e300, 1e300, 1e300}, best_kc[3] = {0, 0, 0};
@@ -151,7 +157,7 @@ void compare_laws(const machine::World& w, const machine::ScanPath& cmd, const S
       const double score = st.rms_lateral_error_mm + st.rms_deflection_error_mm;
       if (r.out.completed && score < best[i]) best[i] = score, best_kc[i] = kc;
       std::cout << fmt::format(" {:>16}", fmt::format("{:.1f}/{:.1f}{}", 1000 * st.rms_lateral_error_mm,
-                                                       1000 * st.rms_deflection_error_mm, r.out.completed ? " " : "*"));
+                                                      1000 * st.rms_deflection_error_mm, r.out.completed ? " " : "*"));
       ++i;
     }
     std::cout << "\n";
@@ -194,7 +200,9 @@ void compare_segmented(const machine::World& w, const machine::ScanPath& cmd, co
       ctl.step();
     }
     const double t = ctl.stats().scan_time_s();
-    const char* name = mode == sg::SegmentedMode::Conventional ? "conventional" : mode == sg::SegmentedMode::Seed ? "seed" : "look-ahead";
+    const char* name = mode == sg::SegmentedMode::Conventional ? "conventional"
+                       : mode == sg::SegmentedMode::Seed       ? "seed"
+                                                               : "look-ahead";
     std::cout << fmt::format("{:<12} {:>5} {:>6} {:>9.3f} {:>8.3f}{}\n", name, cmds.size(), ctl.stats().stops, t,
                              t / bound.time_s, ctl.finished() ? "" : "  (did not finish)");
   }
@@ -221,13 +229,15 @@ int scan_compare_cmd(const ScanCompareArgs& a) {
 
 void add_scan_compare_command(CLI::App& app, std::vector<Command>& commands) {
   auto a = std::make_shared<ScanCompareArgs>();
-  auto* cmd = app.add_subcommand("scan-compare",
-                                 "compare the scanning laws (SEEDS.md 1) and the segmented-scanning modes (SEEDS.md 2) on a "
-                                 "world: lateral and deflection errors, scan time against the time-optimal bound");
+  auto* cmd =
+      app.add_subcommand("scan-compare",
+                         "compare the scanning laws (SEEDS.md 1) and the segmented-scanning modes (SEEDS.md 2) on a "
+                         "world: lateral and deflection errors, scan time against the time-optimal bound");
   cmd->add_option("--world", a->world, "world description (JSON); default: the embedded default world");
   cmd->add_option("--line", a->line, "a straight ball-centre path: x0 y0 z0 x1 y1 z1 (mm)")->expected(6);
   cmd->add_option("--normal", a->normal, "the line's approach normal i j k (default 0 0 1)")->expected(3);
-  cmd->add_option("--circle", a->circle, "a circular ball-centre path in the plane z = cz: cx cy cz r (mm)")->expected(4);
+  cmd->add_option("--circle", a->circle, "a circular ball-centre path in the plane z = cz: cx cy cz r (mm)")
+      ->expected(4);
   cmd->add_flag("--bore", a->bore, "the circle is inside a bore (normals point to the centre)");
   cmd->add_option("--start-offset", a->start_offset, "start the head this far from the approach point: dx dy dz (mm)")
       ->expected(3);

@@ -22,7 +22,7 @@ struct ServeArgs {
   std::optional<std::uint64_t> seed;
   machine::ipp::ServerOptions server;
   double probe_diameter_mm = 2.0;
-  std::vector<std::string> tools;     ///< NAME=DIAMETER, offered beside Probe1
+  std::vector<std::string> tools;  ///< NAME=DIAMETER, offered beside Probe1
 };
 
 int serve_cmd(const ServeArgs& args) {
@@ -61,8 +61,8 @@ int serve_cmd(const ServeArgs& args) {
     return 2;
   }
   // The first line tells scripts and tests the port (--port 0 picks a free one).
-  std::cout << "metron serve: I++ DME on " << args.server.host << ":" << server.port() << " (world "
-            << world.name << (args.server.realtime ? ", real-time pacing" : ", simulated time") << ")" << std::endl;
+  std::cout << "metron serve: I++ DME on " << args.server.host << ":" << server.port() << " (world " << world.name
+            << (args.server.realtime ? ", real-time pacing" : ", simulated time") << ")" << std::endl;
   server.run();
   std::cout << "metron serve: stopped" << std::endl;
   return 0;
@@ -80,7 +80,8 @@ void add_serve_command(CLI::App& app, std::vector<Command>& commands) {
   sub->add_flag("--realtime", args->server.realtime, "pace the answers by the simulated motion time");
   sub->add_option("--log", args->server.log_path, "append every exchange to this file");
   sub->add_flag("--once", args->server.once, "stop when the first client disconnects");
-  sub->add_option("--probe-diameter", args->probe_diameter_mm, "ball diameter of the tool Probe1 [mm]")->capture_default_str();
+  sub->add_option("--probe-diameter", args->probe_diameter_mm, "ball diameter of the tool Probe1 [mm]")
+      ->capture_default_str();
   sub->add_option("--tool", args->tools, "a further probe NAME=DIAMETER [mm] (stylus along -Z), repeatable");
   commands.push_back({sub, [args] { return serve_cmd(*args); }});
 }

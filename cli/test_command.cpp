@@ -94,8 +94,10 @@ void add_test_command(CLI::App& app, std::vector<Command>& commands) {
   cmd->add_flag("--update", args->update, "rewrite the expected files from the current results (review the diff)");
   cmd->add_option("--filter", args->filter, "only programs whose path contains PATTERN (or matches it, with * ? [ ])");
   cmd->add_option("--junit", args->junit, "also write JUnit XML to FILE");
-  cmd->add_option("--jobs,-j", args->jobs, "programs run at once (default: the number of cores)")->check(CLI::PositiveNumber);
-  cmd->add_option("--timeout", args->timeout_s, "wall-clock limit of each program, seconds")->default_val(120)
+  cmd->add_option("--jobs,-j", args->jobs, "programs run at once (default: the number of cores)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--timeout", args->timeout_s, "wall-clock limit of each program, seconds")
+      ->default_val(120)
       ->check(CLI::Validator(
           [](const std::string& text) -> std::string {
             // CLI11's PositiveNumber lets nan through and 1e308 never fires: a finite (0, 1 day].

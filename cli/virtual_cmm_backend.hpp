@@ -46,11 +46,14 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
   // The controller's compensation (docs/error-space.md): none until `--compensation` or a
   // program's CALL/EXTERN,SYS,'COMPENSATION file' gives a map; without one it is the identity.
   interpreter::Backend b{std::make_unique<machine::CompensatedMachine>(std::move(*cmm), nullptr),
-                         world_path ? *world_path : std::string("<default>"), run_seed, {}, {}};
+                         world_path ? *world_path : std::string("<default>"),
+                         run_seed,
+                         {},
+                         {}};
   // CALIBRATE WAVEFRONT: the simulated station of a wavefront world, with the world's own seed
   // (the same run as `metron calibrate wavefront --world W`).
-  b.wavefront_stations = [](const std::string& path)
-      -> tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string> {
+  b.wavefront_stations =
+      [](const std::string& path) -> tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string> {
     auto w = machine::wavefront::load_wavefront_world(path);
     if (!w) return tl::unexpected(w.error());
     const auto world_seed = w->seed;
@@ -58,14 +61,16 @@ inline tl::expected<interpreter::Backend, std::string> virtual_cmm_backend(const
   };
   // CALIBRATE ERROR-SPACE: the two-point rig on this world's machine (its hidden errors, which
   // only the rig's simulated sensors read) with the run's seed, as `metron calibrate error-space`.
-  b.error_space_rig = [world_path, run_seed](const runtime::ErrorSpaceRequest& r)
-      -> tl::expected<runtime::ErrorSpaceOutcome, std::string> {
+  b.error_space_rig =
+      [world_path,
+       run_seed](const runtime::ErrorSpaceRequest& r) -> tl::expected<runtime::ErrorSpaceOutcome, std::string> {
     auto world = machine::load_world_or_default(world_path);
     if (!world) return tl::unexpected(world.error().message);
     const machine::SpaceCalibrationPlan plan = error_space_plan(r, run_seed);
     try {
       machine::SpaceCalibration run = machine::calibrate_space(world->truth.errors, plan);
-      return runtime::ErrorSpaceOutcome{std::move(run.space), static_cast<int>(run.planes.size()), run.planes_to_remeasure};
+      return runtime::ErrorSpaceOutcome{std::move(run.space), static_cast<int>(run.planes.size()),
+                                        run.planes_to_remeasure};
     } catch (const std::invalid_argument& e) {
       return tl::unexpected(std::string(e.what()));
     }
@@ -79,7 +84,10 @@ inline tl::expected<interpreter::Backend, std::string> nominal_backend(const std
   auto world = machine::load_world_or_default(world_path);
   if (!world) return tl::unexpected(world.error().message);
   return interpreter::Backend{std::make_unique<machine::NominalMachine>(world->machine),
-                              (world_path ? *world_path : std::string("<default>")) + " (dry run)", 0, {}, {}};
+                              (world_path ? *world_path : std::string("<default>")) + " (dry run)",
+                              0,
+                              {},
+                              {}};
 }
 
 }  // namespace metron::cli

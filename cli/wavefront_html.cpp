@@ -22,7 +22,7 @@ using nlohmann::json;
 struct Series {
   std::vector<double> x, y;
   std::string colour;
-  bool line = false;   // polyline instead of dots
+  bool line = false;  // polyline instead of dots
   std::string label;
 };
 
@@ -47,17 +47,19 @@ std::string plot(const std::string& title, const std::string& xlabel, const std:
   const double w = 420, h = square ? 420 : 300, l = 70, t = 30;
   const auto px = [&](double v) { return l + (v - x0) / (x1 - x0) * w; };
   const auto py = [&](double v) { return t + h - (ty(v) - y0) / (y1 - y0) * h; };
-  std::string s = fmt::format("<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' font-size='11'>",
-                              w + l + 20, h + t + 45);
+  std::string s = fmt::format(
+      "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' font-size='11'>",
+      w + l + 20, h + t + 45);
   s += fmt::format("<text x='{}' y='18' font-size='13' font-weight='bold'>{}</text>", l, title);
   s += fmt::format("<rect x='{}' y='{}' width='{}' height='{}' fill='none' stroke='#444'/>", l, t, w, h);
   const auto tick = [&](double v) { return log_y ? fmt::format("1e{:.1f}", v) : fmt::format("{:.4g}", v); };
-  s += fmt::format("<text x='{}' y='{}'>{:.4g}</text><text x='{}' y='{}' text-anchor='end'>{:.4g}</text>", l, t + h + 14, x0,
-                   l + w, t + h + 14, x1);
-  s += fmt::format("<text x='{}' y='{}' text-anchor='end'>{}</text><text x='{}' y='{}' text-anchor='end'>{}</text>", l - 4,
-                   t + h, tick(y0), l - 4, t + 10, tick(y1));
+  s += fmt::format("<text x='{}' y='{}'>{:.4g}</text><text x='{}' y='{}' text-anchor='end'>{:.4g}</text>", l,
+                   t + h + 14, x0, l + w, t + h + 14, x1);
+  s += fmt::format("<text x='{}' y='{}' text-anchor='end'>{}</text><text x='{}' y='{}' text-anchor='end'>{}</text>",
+                   l - 4, t + h, tick(y0), l - 4, t + 10, tick(y1));
   s += fmt::format("<text x='{}' y='{}' text-anchor='middle'>{}</text>", l + w / 2, t + h + 32, xlabel);
-  s += fmt::format("<text x='14' y='{}' transform='rotate(-90 14 {})' text-anchor='middle'>{}</text>", t + h / 2, t + h / 2, ylabel);
+  s += fmt::format("<text x='14' y='{}' transform='rotate(-90 14 {})' text-anchor='middle'>{}</text>", t + h / 2,
+                   t + h / 2, ylabel);
   int legend = 0;
   for (const auto& se : series) {
     if (se.line) {
@@ -80,27 +82,30 @@ std::string map_svg(const machine::wavefront::GaugeMap& m, const std::string& ti
   for (double v : m.opd_nm)
     if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
   const double size = 4;
-  std::string s = fmt::format("<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' font-size='11'>",
-                              cells * size + 40, cells * size + 60);
+  std::string s = fmt::format(
+      "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' font-size='11'>",
+      cells * size + 40, cells * size + 60);
   s += fmt::format("<text x='10' y='18' font-size='13' font-weight='bold'>{}</text>", title);
   for (int iy = 0; iy < cells; ++iy)
     for (int ix = 0; ix < cells; ++ix) {
       const double v = m.at(std::min(ix * step, m.pixels - 1), std::min(iy * step, m.pixels - 1));
       if (!std::isfinite(v)) continue;
       const double f = hi > lo ? (v - lo) / (hi - lo) : 0.5;  // blue - white - red
-      const int r = static_cast<int>(255 * std::min(1.0, 2 * f)), b = static_cast<int>(255 * std::min(1.0, 2 * (1 - f)));
+      const int r = static_cast<int>(255 * std::min(1.0, 2 * f)),
+                b = static_cast<int>(255 * std::min(1.0, 2 * (1 - f)));
       const int g = std::min(r, b);
       s += fmt::format("<rect x='{}' y='{}' width='{}' height='{}' fill='rgb({},{},{})'/>", 10 + ix * size,
                        30 + (cells - 1 - iy) * size, size, size, r, g, b);
     }
-  s += fmt::format("<text x='10' y='{}'>OPD {:.1f} nm (blue) to {:.1f} nm (red), {} x {} pixels</text>", 30 + cells * size + 16, lo,
-                   hi, m.pixels, m.pixels);
+  s += fmt::format("<text x='10' y='{}'>OPD {:.1f} nm (blue) to {:.1f} nm (red), {} x {} pixels</text>",
+                   30 + cells * size + 16, lo, hi, m.pixels, m.pixels);
   return s + "</svg>";
 }
 
 std::string circle_plot(const json& pom, const std::string& title, double scale, const std::string& unit) {
   Series pts{{}, {}, "#c0392b", false, "measured tilt per spindle angle"};
-  for (const auto& p : pom["tilts"]) pts.x.push_back(p[0].get<double>() * scale), pts.y.push_back(p[1].get<double>() * scale);
+  for (const auto& p : pom["tilts"])
+    pts.x.push_back(p[0].get<double>() * scale), pts.y.push_back(p[1].get<double>() * scale);
   Series fit{{}, {}, "#2c3e50", true, "phased circle fit"};
   const double cx = pom["centre"][0].get<double>() * scale, cy = pom["centre"][1].get<double>() * scale;
   const double r = pom["radius"].get<double>() * scale;
@@ -150,22 +155,26 @@ std::string wavefront_html(const json& r, const machine::wavefront::GaugeMap* ma
       conv_pts.x.push_back(static_cast<double>(i + 1)), conv_pts.y.push_back(a);
     }
     body += plot("step 5: A axis from the focus against table Z", "table Z [mm]", "offset [um]", sx);
-    body += plot("step 5: convergence of A parallel to Z", "iteration", "|A to Z| [urad], log", {conv, conv_pts}, false, true);
+    body += plot("step 5: convergence of A parallel to Z", "iteration", "|A to Z| [urad], log", {conv, conv_pts}, false,
+                 true);
   }
   if (r.contains("b_rotation")) {
     Series x{{}, {}, "#c0392b", false, "X null - first [um]"}, z{{}, {}, "#2980b9", false, "Z null - first [um]"};
     const auto& n = r["b_rotation"]["nulls"];
     for (const auto& p : n) {
       x.x.push_back(p["b_deg"].get<double>()), z.x.push_back(p["b_deg"].get<double>());
-      x.y.push_back((p["steps"][0].get<double>() - n[0]["steps"][0].get<double>()) * r["knowledge"]["step_mm"][0].get<double>() * 1e3);
-      z.y.push_back((p["steps"][2].get<double>() - n[0]["steps"][2].get<double>()) * r["knowledge"]["step_mm"][2].get<double>() * 1e3);
+      x.y.push_back((p["steps"][0].get<double>() - n[0]["steps"][0].get<double>()) *
+                    r["knowledge"]["step_mm"][0].get<double>() * 1e3);
+      z.y.push_back((p["steps"][2].get<double>() - n[0]["steps"][2].get<double>()) *
+                    r["knowledge"]["step_mm"][2].get<double>() * 1e3);
     }
     body += plot("step 4: nulls against B", "B [deg]", "[um]", {x, z});
   }
   return "<!DOCTYPE html><html><head><meta charset='utf-8'><title>metron: wavefront calibration</title>"
          "<style>body{font-family:sans-serif;margin:16px} svg{margin:6px;border:1px solid #ddd}</style></head><body>"
          "<h2>metron calibrate wavefront: " +
-         r.value("world", std::string()) + " (step " + r.value("step", std::string()) + ")</h2>" + body + "</body></html>\n";
+         r.value("world", std::string()) + " (step " + r.value("step", std::string()) + ")</h2>" + body +
+         "</body></html>\n";
 }
 
 }  // namespace metron::cli

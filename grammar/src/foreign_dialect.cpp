@@ -59,7 +59,9 @@ std::optional<ForeignDialect> recognise_foreign_dialect(std::string_view text) {
     // A DMIS program starts with DMISMN (a module with DMISMD): one is never a foreign program.
     if (line.rfind("DMISMN/", 0) == 0 || line.rfind("DMISMD/", 0) == 0) return std::nullopt;
     // I++ DME: a client's command stream, `00010 StartSession()` (the NIST conformance files).
-    if (!found && line.size() > 6 && std::all_of(line.begin(), line.begin() + 5, [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }) &&
+    if (!found && line.size() > 6 &&
+        std::all_of(line.begin(), line.begin() + 5,
+                    [](char c) { return std::isdigit(static_cast<unsigned char>(c)); }) &&
         std::isalpha(static_cast<unsigned char>(line[5])) && line.find('(') != std::string::npos) {
       const std::size_t indent = text.find_first_not_of(" \t", offset);
       const std::string_view raw = text.substr(indent, end - indent);

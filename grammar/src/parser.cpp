@@ -25,10 +25,10 @@ namespace pegtl = tao::pegtl;
 
 // DMIS label prefixes (sorted for binary search).
 constexpr std::array<std::string_view, 63> label_prefixes = {
-    "A",  "CI", "CR", "CS", "CZ", "D",  "DA", "DAT", "DATT", "DI", "DID", "DME", "DR", "DS", "DV", "F",  "FA",
-    "FI", "FS", "G",  "GS", "K",  "KC", "KV",  "L",    "LI", "M",   "MA",  "MD", "ML", "OP", "P",  "PC",
-    "PL", "PN", "PR", "PS", "PV", "Q",  "QIS", "R",    "RM", "RT",  "S",   "SA", "SE", "SG", "SS", "ST",
-    "SW", "SX", "T",  "TA", "TL", "TP", "U",   "V",    "VA", "VF",  "VL",  "VR", "VS", "VW"};
+    "A",  "CI", "CR", "CS", "CZ", "D",  "DA", "DAT", "DATT", "DI", "DID", "DME", "DR", "DS", "DV", "F",
+    "FA", "FI", "FS", "G",  "GS", "K",  "KC", "KV",  "L",    "LI", "M",   "MA",  "MD", "ML", "OP", "P",
+    "PC", "PL", "PN", "PR", "PS", "PV", "Q",  "QIS", "R",    "RM", "RT",  "S",   "SA", "SE", "SG", "SS",
+    "ST", "SW", "SX", "T",  "TA", "TL", "TP", "U",   "V",    "VA", "VF",  "VL",  "VR", "VS", "VW"};
 static_assert(std::is_sorted(label_prefixes.begin(), label_prefixes.end()));
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
@@ -51,7 +51,8 @@ bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sin
     // `XX(name)=MAJOR/...` with a label prefix metron does not know (a vendor's, a newer DMIS's):
     // read leniently, the statement is skipped as an unknown statement is.
     if (lenient && e.code == "parse.unknown-label-prefix")
-      sink.warning("parse.unknown-label-prefix", e.span, e.message + ": the statement is skipped (--strict makes it an error)");
+      sink.warning("parse.unknown-label-prefix", e.span,
+                   e.message + ": the statement is skipped (--strict makes it an error)");
     else
       sink.error(e.code, e.span, e.message);
     return false;
@@ -158,7 +159,8 @@ bool looks_like_statement(std::string_view line) {
   return is_major_word(word);
 }
 
-Program parse_program(const SourceManager& sources, std::uint32_t file, DiagnosticSink& sink, const ParseOptions& options) {
+Program parse_program(const SourceManager& sources, std::uint32_t file, DiagnosticSink& sink,
+                      const ParseOptions& options) {
   Program program;
   program.file = file;
   if (file == 0 || file > sources.size()) {
@@ -186,8 +188,9 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
     }
     if (!ended && !options.strict) {
       if (const auto at = restore_target_close(line))
-        sink.warning("parse.missing-close", Span{file, line.physical[*at], line.physical[*at] + 1},
-                     "the label being defined has no ')' before '=': read as if it had one (--strict makes it an error)");
+        sink.warning(
+            "parse.missing-close", Span{file, line.physical[*at], line.physical[*at] + 1},
+            "the label being defined has no ')' before '=': read as if it had one (--strict makes it an error)");
       for (const std::size_t at : restore_commas_between_labels(line))
         sink.warning("parse.missing-comma", Span{file, line.physical[at], line.physical[at] + 1},
                      "no ',' between two labels: read as if it were there (--strict makes it an error)");

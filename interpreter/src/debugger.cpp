@@ -39,7 +39,8 @@ int Debugger::break_on_fault() {
 }
 
 bool Debugger::remove(int id) {
-  const auto it = std::remove_if(m_breakpoints.begin(), m_breakpoints.end(), [&](const Breakpoint& b) { return b.id == id; });
+  const auto it =
+      std::remove_if(m_breakpoints.begin(), m_breakpoints.end(), [&](const Breakpoint& b) { return b.id == id; });
   if (it == m_breakpoints.end()) return false;
   m_breakpoints.erase(it, m_breakpoints.end());
   return true;
@@ -57,7 +58,8 @@ std::optional<int> Debugger::line_breakpoint_at(Span span) const {
     if (b.kind != Breakpoint::Kind::Line || b.line != loc.line) continue;
     if (b.file.empty()) return b.id;
     const std::filesystem::path a(b.file), c(loc.path);
-    if (a == c || a.filename() == c.filename() || std::filesystem::weakly_canonical(a) == std::filesystem::weakly_canonical(c))
+    if (a == c || a.filename() == c.filename() ||
+        std::filesystem::weakly_canonical(a) == std::filesystem::weakly_canonical(c))
       return b.id;
   }
   return std::nullopt;
@@ -147,9 +149,10 @@ std::vector<std::string> Debugger::where() const {
   const auto& frames = m_session.interpreter().frames();
   const auto& module = m_session.compiler().module();
   for (auto it = frames.rbegin(); it != frames.rend(); ++it) {
-    const auto& code = it->kind == CallFrame::Kind::Unit ? module.units.at(it->index).code : module.macros.at(it->index).code;
+    const auto& code =
+        it->kind == CallFrame::Kind::Unit ? module.units.at(it->index).code : module.macros.at(it->index).code;
     const std::string where_name = it->kind == CallFrame::Kind::Unit ? module.units.at(it->index).path
-                                                                 : "M(" + module.macros.at(it->index).name + ")";
+                                                                     : "M(" + module.macros.at(it->index).name + ")";
     // Outer frames have already moved past their CALL: show the call itself.
     const std::size_t pc = it == frames.rbegin() || it->pc == 0 ? it->pc : it->pc - 1;
     const Span span = pc < code.size() ? code[pc].span : (code.empty() ? Span{} : code.back().span);
@@ -165,7 +168,8 @@ std::string Debugger::list(int context_lines) const {
   const Location loc = sources.locate(span);
   const auto& file = sources.file(span.file);
   const std::uint32_t first = loc.line > static_cast<std::uint32_t>(context_lines) ? loc.line - context_lines : 1;
-  const std::uint32_t last = std::min<std::uint32_t>(loc.line + context_lines, static_cast<std::uint32_t>(file.line_starts.size()));
+  const std::uint32_t last =
+      std::min<std::uint32_t>(loc.line + context_lines, static_cast<std::uint32_t>(file.line_starts.size()));
   std::string out;
   for (std::uint32_t l = first; l <= last; ++l) {
     const std::string_view text = sources.line_text(span.file, file.line_starts[l - 1]);

@@ -64,7 +64,8 @@ ExecStatus Interpreter::step() {
   detail::ExecuteFn* handler = detail::Execute::table()[detail::index(in.op)];
   if (!handler) return fail(in.span, "unknown instruction");
   const ExecStatus status = handler(*this, in, frame);
-  if (status == ExecStatus::Faulted && m_bad_test && in.op == ir::Op::MeasEnd) return take_bad_measurement(depth, failed);
+  if (status == ExecStatus::Faulted && m_bad_test && in.op == ir::Op::MeasEnd)
+    return take_bad_measurement(depth, failed);
   if (status == ExecStatus::Faulted && m_on_error) return handle_fault(depth, failed);
   return status;
 }
@@ -76,15 +77,17 @@ ExecStatus Interpreter::take_bad_measurement(std::size_t depth, std::size_t fail
   const auto& code = code_of(m_frames[depth]);
   constexpr std::size_t max_taken = 1000;  // a program that measures the same missing feature forever
   if (++m_handled_faults > max_taken) {
-    m_runtime.warning(code[failed].span, fmt::format("{} failed measurements were taken by BADTST/ON: the run stops here", max_taken));
+    m_runtime.warning(code[failed].span,
+                      fmt::format("{} failed measurements were taken by BADTST/ON: the run stops here", max_taken));
     return ExecStatus::Faulted;
   }
   m_bad_point = true;
   m_block.reset();
-  m_runtime.warning(code[failed].span,
-                    fmt::format("the machine fault ({}) is taken by BADTST/ON: BADPT() is .TRUE. and the run goes on after "
-                                "this measurement",
-                                m_last_fault ? m_last_fault->message : "unknown"));
+  m_runtime.warning(
+      code[failed].span,
+      fmt::format("the machine fault ({}) is taken by BADTST/ON: BADPT() is .TRUE. and the run goes on after "
+                  "this measurement",
+                  m_last_fault ? m_last_fault->message : "unknown"));
   m_frames.resize(depth + 1);
   m_frames.back().pc = failed + 1;
   return ExecStatus::Running;
@@ -112,7 +115,8 @@ ExecStatus Interpreter::handle_fault(std::size_t depth, std::size_t failed) {
   // A program whose handler takes it back to the same failing measurement forever.
   constexpr std::size_t max_handled = 1000;
   if (++m_handled_faults > max_handled) {
-    m_runtime.warning(span, fmt::format("{} machine faults were handled by ERROR/...: the run stops here", max_handled));
+    m_runtime.warning(span,
+                      fmt::format("{} machine faults were handled by ERROR/...: the run stops here", max_handled));
     return ExecStatus::Faulted;
   }
   std::size_t measurement = failed;
@@ -123,9 +127,10 @@ ExecStatus Interpreter::handle_fault(std::size_t depth, std::size_t failed) {
         break;
       }
   m_block.reset();
-  m_runtime.warning(span, fmt::format("the machine fault ({}) is handled by ERROR/{}: the run goes on {}",
-                                      m_last_fault ? m_last_fault->message : "unknown", h.automatic ? "AUTO" : "(label)",
-                                      h.automatic ? "after this statement" : "at the handler"));
+  m_runtime.warning(span,
+                    fmt::format("the machine fault ({}) is handled by ERROR/{}: the run goes on {}",
+                                m_last_fault ? m_last_fault->message : "unknown", h.automatic ? "AUTO" : "(label)",
+                                h.automatic ? "after this statement" : "at the handler"));
   if (h.automatic) {
     m_frames.resize(depth + 1);
     m_frames.back().pc = failed + 1;
@@ -208,8 +213,9 @@ void Interpreter::discard_program_state() {
   m_finished = true;
 }
 
-tl::expected<std::size_t, std::string> Interpreter::element_offset(const std::string& name, const std::vector<double>& indices,
-                                                                  std::size_t size) const {
+tl::expected<std::size_t, std::string> Interpreter::element_offset(const std::string& name,
+                                                                   const std::vector<double>& indices,
+                                                                   std::size_t size) const {
   const auto dims_of = m_dims.find(name);
   const std::vector<std::size_t> dims = dims_of != m_dims.end() ? dims_of->second : std::vector<std::size_t>{size};
   if (indices.size() != dims.size())
@@ -283,8 +289,9 @@ std::string Interpreter::indexed(const std::string& name) const {
   const auto v = const_cast<Interpreter*>(this)->evaluate(e->second);  // an index reads variables only
   if (!v || !v->is_number()) return name;
   const double i = v->number;
-  return name.substr(0, open + 1) + (i == std::floor(i) && std::abs(i) < 1e15 ? fmt::format("{}", static_cast<long long>(i))
-                                                                              : v->to_display()) + "]";
+  return name.substr(0, open + 1) +
+         (i == std::floor(i) && std::abs(i) < 1e15 ? fmt::format("{}", static_cast<long long>(i)) : v->to_display()) +
+         "]";
 }
 
 std::string Interpreter::label_name(const ir::LabelOperand& l) const {

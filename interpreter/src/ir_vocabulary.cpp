@@ -30,10 +30,10 @@ const std::vector<WordEntry<runtime::FeatureType>>& vocabulary() {
 template <>
 const std::vector<WordEntry<runtime::ToleranceKind>>& vocabulary() {
   using K = runtime::ToleranceKind;
-  static const auto rows = from_runtime({K::Diam, K::Rad, K::DistB, K::Pos, K::Flat, K::Cirlty, K::Cylcty, K::Sphcty,
-                                         K::Strght, K::Perp, K::Parlel, K::Anglb, K::Profs, K::DistWrt, K::AngWrt,
-                                         K::Cortol, K::Concen, K::Coaxial, K::Crnout, K::Totrun,
-                                         K::Profl, K::Profp, K::Width, K::Symmty, K::Angl, K::Compos});
+  static const auto rows =
+      from_runtime({K::Diam,   K::Rad,    K::DistB, K::Pos,   K::Flat,    K::Cirlty, K::Cylcty, K::Sphcty, K::Strght,
+                    K::Perp,   K::Parlel, K::Anglb, K::Profs, K::DistWrt, K::AngWrt, K::Cortol, K::Concen, K::Coaxial,
+                    K::Crnout, K::Totrun, K::Profl, K::Profp, K::Width,   K::Symmty, K::Angl,   K::Compos});
   return rows;
 }
 
@@ -46,16 +46,18 @@ const std::vector<WordEntry<FeedKind>>& vocabulary() {
 
 template <>
 const std::vector<WordEntry<FeedUnit>>& vocabulary() {
-  static const std::vector<WordEntry<FeedUnit>> rows = {{FeedUnit::Mpm, "MPM"}, {FeedUnit::Mmps, "MMPS"},
-                                                        {FeedUnit::Ipm, "IPM"}, {FeedUnit::Ips, "IPS"},
+  static const std::vector<WordEntry<FeedUnit>> rows = {{FeedUnit::Mpm, "MPM"},     {FeedUnit::Mmps, "MMPS"},
+                                                        {FeedUnit::Ipm, "IPM"},     {FeedUnit::Ips, "IPS"},
                                                         {FeedUnit::Pcent, "PCENT"}, {FeedUnit::Defalt, "DEFALT"}};
   return rows;
 }
 
 template <>
 const std::vector<WordEntry<LengthUnit>>& vocabulary() {
-  static const std::vector<WordEntry<LengthUnit>> rows = {{LengthUnit::Mm, "MM"}, {LengthUnit::Inch, "INCH"},
-                                                          {LengthUnit::Cm, "CM"}, {LengthUnit::M, "M"},
+  static const std::vector<WordEntry<LengthUnit>> rows = {{LengthUnit::Mm, "MM"},
+                                                          {LengthUnit::Inch, "INCH"},
+                                                          {LengthUnit::Cm, "CM"},
+                                                          {LengthUnit::M, "M"},
                                                           {LengthUnit::Feet, "FEET"}};
   return rows;
 }
@@ -70,7 +72,7 @@ const std::vector<WordEntry<AngleUnit>>& vocabulary() {
 template <>
 const std::vector<WordEntry<TemperatureUnit>>& vocabulary() {
   static const std::vector<WordEntry<TemperatureUnit>> rows = {{TemperatureUnit::Tempc, "TEMPC"},
-                                                              {TemperatureUnit::Tempf, "TEMPF"}};
+                                                               {TemperatureUnit::Tempf, "TEMPF"}};
   return rows;
 }
 
@@ -93,10 +95,10 @@ const std::vector<WordEntry<ConstructionMethod>>& vocabulary() {
   using M = ConstructionMethod;
   static const std::vector<WordEntry<M>> rows = {{M::Bf, "BF"},         {M::Intof, "INTOF"},   {M::Midpt, "MIDPT"},
                                                  {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"},
-                                                 {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"},
-                                                 {M::Parto, "PARTO"}, {M::Perpto, "PERPTO"}, {M::Cast, "CAST"},
-                                                 {M::Midpl, "MIDPL"},   {M::Midli, "MIDLI"},   {M::Copy, "COPY"},
-                                                 {M::Vertex, "VERTEX"}, {M::Extrem, "EXTREM"}, {M::Offset, "OFFSET"}, {M::Cone, "CONE"},
+                                                 {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"}, {M::Parto, "PARTO"},
+                                                 {M::Perpto, "PERPTO"}, {M::Cast, "CAST"},     {M::Midpl, "MIDPL"},
+                                                 {M::Midli, "MIDLI"},   {M::Copy, "COPY"},     {M::Vertex, "VERTEX"},
+                                                 {M::Extrem, "EXTREM"}, {M::Offset, "OFFSET"}, {M::Cone, "CONE"},
                                                  {M::Projln, "PROJLI"}};  // PROJLI: Creo CMM's word for PROJLN
   return rows;
 }

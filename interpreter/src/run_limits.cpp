@@ -21,7 +21,7 @@ int stop_requested() noexcept { return g_stop_signal; }
 void clear_stop() noexcept { g_stop_signal = 0; }
 
 void install_stop_signal_handlers() {
-  struct sigaction action{};
+  struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = 0;
@@ -47,7 +47,7 @@ std::optional<std::string> apply_memory_limit(std::uint64_t mib) {
 
 StopSignalScope::StopSignalScope() {
   clear_stop();
-  struct sigaction action{};
+  struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = 0;

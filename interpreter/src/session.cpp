@@ -2,8 +2,8 @@
 #include "metron/interpreter/session.hpp"
 
 #include <filesystem>
-#include <new>
 #include <fstream>
+#include <new>
 
 #include <fmt/format.h>
 
@@ -50,8 +50,8 @@ bool Session::load(const std::string& program) {
 
 ExecStatus Session::execute_text(const std::string& text) {
   const std::size_t before = m_sink.error_count();
-  const std::size_t unit = m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text,
-                                                     UnitKind::ReplEntry);
+  const std::size_t unit =
+      m_compiler.compile_text(fmt::format("<repl:{}>", m_compiler.module().units.size()), text, UnitKind::ReplEntry);
   if (m_sink.error_count() > before) return ExecStatus::Error;
   m_interpreter->start(unit);
   const std::size_t depth = m_interpreter->frames().size();
@@ -79,7 +79,8 @@ void write_refusal(RunOutcome& outcome, const RunOptions& options, RunExit exit,
   record.program = options.program;
   record.status = runtime::RunStatus::Refused;
   if (record.diagnostics.empty())
-    record.diagnostics.push_back(!message.empty() && message.back() == '\n' ? message.substr(0, message.size() - 1) : message);
+    record.diagnostics.push_back(!message.empty() && message.back() == '\n' ? message.substr(0, message.size() - 1)
+                                                                            : message);
   std::error_code ec;
   if (!std::filesystem::is_directory(options.out_dir, ec)) return;
   const std::string path = (std::filesystem::path(options.out_dir) / "results.json").string();
@@ -178,16 +179,25 @@ RunOutcome run_program(const RunOptions& options, const BackendFactory& backend)
   }
   switch (status) {
     case ExecStatus::Finished:
-    case ExecStatus::Running: record.status = runtime::RunStatus::Completed; outcome.exit = RunExit::Completed; break;
-    case ExecStatus::Faulted: record.status = runtime::RunStatus::Faulted; outcome.exit = RunExit::Faulted; break;
-    case ExecStatus::Error: record.status = runtime::RunStatus::Error; outcome.exit = RunExit::ProgramError; break;
+    case ExecStatus::Running:
+      record.status = runtime::RunStatus::Completed;
+      outcome.exit = RunExit::Completed;
+      break;
+    case ExecStatus::Faulted:
+      record.status = runtime::RunStatus::Faulted;
+      outcome.exit = RunExit::Faulted;
+      break;
+    case ExecStatus::Error:
+      record.status = runtime::RunStatus::Error;
+      outcome.exit = RunExit::ProgramError;
+      break;
   }
   if (out_of_memory) {
-    const std::string why = fmt::format("the run ran out of memory{} here (--max-memory; docs/limits.md); the results "
-                                        "obtained so far are kept",
-                                        options.limits.max_memory_mib
-                                            ? fmt::format(" at its limit of {} MiB", options.limits.max_memory_mib)
-                                            : std::string());
+    const std::string why = fmt::format(
+        "the run ran out of memory{} here (--max-memory; docs/limits.md); the results "
+        "obtained so far are kept",
+        options.limits.max_memory_mib ? fmt::format(" at its limit of {} MiB", options.limits.max_memory_mib)
+                                      : std::string());
     const Span at = s.interpreter().executing();
     std::string line = "error: " + why;
     if (at.valid()) {

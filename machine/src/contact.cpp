@@ -5,8 +5,8 @@
 
 namespace metron::machine {
 
-std::optional<double> first_ball_contact(const Solid& solid, const Vec3& a, const Vec3& b,
-                                         double radius_mm, double tol_mm) {
+std::optional<double> first_ball_contact(const Solid& solid, const Vec3& a, const Vec3& b, double radius_mm,
+                                         double tol_mm) {
   const Vec3 d = b - a;
   const double len = d.norm();
   const auto gap = [&](double t) { return solid.signed_distance(a + d * (t / len)) - radius_mm; };

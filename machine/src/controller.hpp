@@ -36,23 +36,23 @@ inline tl::unexpected<Fault> fault(FaultKind kind, std::string message, const Ve
 
 /// A tool the controller was told about.
 struct Tool {
-  ToolInfo info;                    ///< its calibration state
-  DefineTool definition;            ///< as defined
+  ToolInfo info;          ///< its calibration state
+  DefineTool definition;  ///< as defined
 };
 
 /// A segmented scan in progress (SEEDS.md 2): between its measurement commands the machine
 /// answers nothing else.
 struct SegmentedSession {
-  std::unique_ptr<segmented::ProbeScanDriver> probe;          ///< the probe and servo under the controller
-  std::unique_ptr<segmented::SegmentedController> controller; ///< buffers, planner, interpolator
-  std::size_t reported = 0;         ///< samples already answered
+  std::unique_ptr<segmented::ProbeScanDriver> probe;           ///< the probe and servo under the controller
+  std::unique_ptr<segmented::SegmentedController> controller;  ///< buffers, planner, interpolator
+  std::size_t reported = 0;                                    ///< samples already answered
 };
 
 /// A straight move of the running command, kept so that a stop request can cut it afterwards
 /// (Machine::stop_last_motion).
 struct PositioningMove {
   Vec3 start_mm = Vec3::Zero();
-  Vec3 direction = Vec3::UnitX();   ///< unit, start to target
+  Vec3 direction = Vec3::UnitX();  ///< unit, start to target
   double length_mm = 0;
   MotionProfile profile;
   MotionLimits limits;
@@ -61,13 +61,13 @@ struct PositioningMove {
   /// Into the move, the time after which it is already stopping on its own (a probing move's
   /// trigger acted on): a stop request then changes nothing.
   double cuttable_s = std::numeric_limits<double>::infinity();
-  double end_s = 0;                 ///< absolute time it came to rest
-  Vec3 end_mm = Vec3::Zero();       ///< where it came to rest
+  double end_s = 0;            ///< absolute time it came to rest
+  Vec3 end_mm = Vec3::Zero();  ///< where it came to rest
 };
 
 /// One cycle of an active scan's head, for a stop request during the scan.
 struct ScanHeadSample {
-  double time_s = 0;                ///< absolute, at the end of the cycle
+  double time_s = 0;  ///< absolute, at the end of the cycle
   Vec3 head_mm = Vec3::Zero();
   Vec3 velocity_mm_s = Vec3::Zero();
 };
@@ -76,19 +76,19 @@ struct ScanHeadSample {
 /// `after_s` into it can put the machine where it would have come to rest.
 struct CommandMotion {
   std::uint64_t tag = 0;
-  std::string what;                 ///< "move to (x, y, z)", "point measurement", "scan"
+  std::string what;  ///< "move to (x, y, z)", "point measurement", "scan"
   Vec3 start_mm = Vec3::Zero();
   std::int64_t start_cycle = 0;
-  double end_s = 0;                 ///< absolute, when the command ended
-  std::vector<PositioningMove> moves;   ///< its straight moves, in order
-  std::vector<ScanHeadSample> scan;     ///< its scanning cycles, in order
-  std::optional<Hit> hit_before;    ///< the last hit before the command, which a stop restores
+  double end_s = 0;                    ///< absolute, when the command ended
+  std::vector<PositioningMove> moves;  ///< its straight moves, in order
+  std::vector<ScanHeadSample> scan;    ///< its scanning cycles, in order
+  std::optional<Hit> hit_before;       ///< the last hit before the command, which a stop restores
 };
 
 /// The controller's state and its cycles.
 struct Controller {
-  SimulatedProbe sim;               ///< the world, through its sensors
-  MachineConfig config;             ///< what the controller knows
+  SimulatedProbe sim;    ///< the world, through its sensors
+  MachineConfig config;  ///< what the controller knows
   std::deque<Command> queue;
   std::map<std::string, Tool> tools;
   std::string active;
@@ -101,8 +101,8 @@ struct Controller {
   std::function<void(const TraceSample&)> trace;
   std::function<void(double, const Vec3&)> motion_observer;  ///< Machine::set_motion_observer
   std::unique_ptr<SegmentedSession> segmented_scan;
-  CommandMotion motion;                       ///< the running command's motion, as it runs
-  std::optional<CommandMotion> stoppable;     ///< the last command, which ended without fault
+  CommandMotion motion;                    ///< the running command's motion, as it runs
+  std::optional<CommandMotion> stoppable;  ///< the last command, which ended without fault
 
   Controller(MachineConfig known, WorldTruth truth, std::uint64_t seed);
 
@@ -123,8 +123,8 @@ struct Controller {
 
   // touch_cycle/touch_cycle.cpp
   struct Touch {
-    Vec3 latched_mm;                ///< ball centre latched when the controller acted on the trigger
-    double latch_time_s = 0;        ///< absolute
+    Vec3 latched_mm;          ///< ball centre latched when the controller acted on the trigger
+    double latch_time_s = 0;  ///< absolute
   };
   tl::expected<Touch, Fault> touch(const Vec3& start, const Vec3& u, double len, double feed, double search_mm,
                                    std::optional<double> reach_mm = std::nullopt);
@@ -140,8 +140,9 @@ struct Controller {
   void define_tool(const DefineTool& body, Response& response);
   void scan(const ScanPath& body, Response& response);
   void contour_scan(const ContourScan& body, Response& response);
-  void run_scanning(const ToolInfo& tool, Response& response,
-                    const std::function<ScanOutcome(const ScanSetup&, const std::function<void(const ScanCycle&)>&)>& scan);
+  void run_scanning(
+      const ToolInfo& tool, Response& response,
+      const std::function<ScanOutcome(const ScanSetup&, const std::function<void(const ScanCycle&)>&)>& scan);
   Response run(const Command& command);
 };
 

@@ -22,12 +22,12 @@ struct Prim {
   std::string name;
   Kind kind = Kind::HalfSpace;
   Frame part_to_local = Frame::Identity();
-  double radius = 0;          // cylinder, sphere; torus: the centre circle's
-  double tube_radius = 0;     // torus
-  double length = 0;          // capped cylinder, capped elliptic cylinder (0: infinite)
-  double semi_major = 0, semi_minor = 0;  // elliptic cylinder, along local x and y
+  double radius = 0;                       // cylinder, sphere; torus: the centre circle's
+  double tube_radius = 0;                  // torus
+  double length = 0;                       // capped cylinder, capped elliptic cylinder (0: infinite)
+  double semi_major = 0, semi_minor = 0;   // elliptic cylinder, along local x and y
   double sin_a = 0, cos_a = 1, tan_a = 0;  // cone
-  double size_term = 0;       // subtracted from the distance
+  double size_term = 0;                    // subtracted from the distance
   int lobes = 0;
   double lobe_amplitude = 0, lobe_phase = 0;
   double wave_amplitude = 0, wave_number = 0, wave_phase = 0;
@@ -94,45 +94,48 @@ Prim compile_primitive(const csg::Primitive& p, const csg::Deviation* dev, doubl
   if (dev) {
     // Machined frame = translate(offset) * nominal * tilt (tilt about local x, then local y).
     const Eigen::Matrix3d tilt = (Eigen::AngleAxisd(dev->tilt_deg.y() * deg, Vec3::UnitY()) *
-                                  Eigen::AngleAxisd(dev->tilt_deg.x() * deg, Vec3::UnitX())).toRotationMatrix();
+                                  Eigen::AngleAxisd(dev->tilt_deg.x() * deg, Vec3::UnitX()))
+                                     .toRotationMatrix();
     local = Eigen::Translation3d(dev->offset_mm) * nominal;
     local.rotate(tilt);
   }
   out.part_to_local = local.inverse(Eigen::Isometry);
   const double size = dev ? dev->size_mm : 0.0;
-  std::visit([&](const auto& s) {
-    using T = std::decay_t<decltype(s)>;
-    if constexpr (std::is_same_v<T, csg::HalfSpace>) {
-      out.kind = Kind::HalfSpace;
-      out.size_term = size;
-    } else if constexpr (std::is_same_v<T, csg::Cylinder>) {
-      out.kind = s.length_mm ? Kind::CappedCylinder : Kind::Cylinder;
-      out.radius = s.diameter_mm / 2;
-      out.length = s.length_mm.value_or(0);
-      out.size_term = size / 2;
-    } else if constexpr (std::is_same_v<T, csg::Sphere>) {
-      out.kind = Kind::Sphere;
-      out.radius = s.diameter_mm / 2;
-      out.size_term = size / 2;
-    } else if constexpr (std::is_same_v<T, csg::Torus>) {
-      out.kind = Kind::Torus;
-      out.radius = s.major_diameter_mm / 2;
-      out.tube_radius = s.minor_diameter_mm / 2;
-      out.size_term = size / 2;
-    } else if constexpr (std::is_same_v<T, csg::EllipticCylinder>) {
-      // A size deviation changes both diameters: the machined section stays an ellipse.
-      out.kind = Kind::EllipticCylinder;
-      out.semi_major = (s.major_diameter_mm + size) / 2;
-      out.semi_minor = (s.minor_diameter_mm + size) / 2;
-      out.radius = out.semi_minor;  // lobing's reference
-      out.length = s.length_mm.value_or(0);
-    } else {
-      out.kind = Kind::Cone;
-      const double a = s.half_angle_deg * deg;
-      out.sin_a = std::sin(a), out.cos_a = std::cos(a), out.tan_a = std::tan(a);
-      out.size_term = size / 2 * out.cos_a;  // a diameter change at every height
-    }
-  }, p.shape);
+  std::visit(
+      [&](const auto& s) {
+        using T = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<T, csg::HalfSpace>) {
+          out.kind = Kind::HalfSpace;
+          out.size_term = size;
+        } else if constexpr (std::is_same_v<T, csg::Cylinder>) {
+          out.kind = s.length_mm ? Kind::CappedCylinder : Kind::Cylinder;
+          out.radius = s.diameter_mm / 2;
+          out.length = s.length_mm.value_or(0);
+          out.size_term = size / 2;
+        } else if constexpr (std::is_same_v<T, csg::Sphere>) {
+          out.kind = Kind::Sphere;
+          out.radius = s.diameter_mm / 2;
+          out.size_term = size / 2;
+        } else if constexpr (std::is_same_v<T, csg::Torus>) {
+          out.kind = Kind::Torus;
+          out.radius = s.major_diameter_mm / 2;
+          out.tube_radius = s.minor_diameter_mm / 2;
+          out.size_term = size / 2;
+        } else if constexpr (std::is_same_v<T, csg::EllipticCylinder>) {
+          // A size deviation changes both diameters: the machined section stays an ellipse.
+          out.kind = Kind::EllipticCylinder;
+          out.semi_major = (s.major_diameter_mm + size) / 2;
+          out.semi_minor = (s.minor_diameter_mm + size) / 2;
+          out.radius = out.semi_minor;  // lobing's reference
+          out.length = s.length_mm.value_or(0);
+        } else {
+          out.kind = Kind::Cone;
+          const double a = s.half_angle_deg * deg;
+          out.sin_a = std::sin(a), out.cos_a = std::cos(a), out.tan_a = std::tan(a);
+          out.size_term = size / 2 * out.cos_a;  // a diameter change at every height
+        }
+      },
+      p.shape);
   if (dev && dev->lobing && dev->lobing->amplitude_mm != 0) {
     out.lobes = dev->lobing->lobes;
     out.lobe_amplitude = dev->lobing->amplitude_mm;
@@ -168,8 +171,8 @@ struct CsgSolid::Compiled {
   std::vector<Prim> prims;
   CNode root;
 
-  CNode compile(const csg::Node& n, const std::map<std::string, csg::Deviation>& devs,
-                std::set<std::string>& used, double& lipschitz_extra) {
+  CNode compile(const csg::Node& n, const std::map<std::string, csg::Deviation>& devs, std::set<std::string>& used,
+                double& lipschitz_extra) {
     CNode c;
     c.op = n.op;
     if (n.op == csg::Node::Op::Primitive) {
@@ -228,15 +231,23 @@ std::string CsgSolid::feature_at(const Vec3& p) const {
 Frame csg::local_frame(const Primitive& primitive) {
   Vec3 origin = Vec3::Zero(), z = Vec3::UnitZ();
   std::optional<Vec3> major;
-  std::visit([&](const auto& s) {
-    using T = std::decay_t<decltype(s)>;
-    if constexpr (std::is_same_v<T, HalfSpace>) origin = s.point, z = s.normal;
-    else if constexpr (std::is_same_v<T, Cylinder>) origin = s.point, z = s.axis;
-    else if constexpr (std::is_same_v<T, Sphere>) origin = s.centre;
-    else if constexpr (std::is_same_v<T, Torus>) origin = s.centre, z = s.axis;
-    else if constexpr (std::is_same_v<T, EllipticCylinder>) origin = s.point, z = s.axis, major = s.major_axis;
-    else origin = s.apex, z = s.axis;
-  }, primitive.shape);
+  std::visit(
+      [&](const auto& s) {
+        using T = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<T, HalfSpace>)
+          origin = s.point, z = s.normal;
+        else if constexpr (std::is_same_v<T, Cylinder>)
+          origin = s.point, z = s.axis;
+        else if constexpr (std::is_same_v<T, Sphere>)
+          origin = s.centre;
+        else if constexpr (std::is_same_v<T, Torus>)
+          origin = s.centre, z = s.axis;
+        else if constexpr (std::is_same_v<T, EllipticCylinder>)
+          origin = s.point, z = s.axis, major = s.major_axis;
+        else
+          origin = s.apex, z = s.axis;
+      },
+      primitive.shape);
   z.normalize();
   // Local x: an elliptic cylinder's major axis; otherwise any direction normal to z.
   const Vec3 ref = major ? *major : std::abs(z.x()) <= 0.9 ? Vec3::UnitX() : Vec3::UnitY();

@@ -5,8 +5,8 @@
 #include <array>
 #include <atomic>
 #include <cmath>
-#include <numbers>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -20,9 +20,8 @@ constexpr double degenerate_mm = 1e-9;
 
 }  // namespace
 
-MeshSolid::MeshSolid(std::shared_ptr<const geometry::Mesh> mesh, const Frame& part_to_machine,
-                     std::vector<Bump> bumps, const std::vector<geometry::CadFace>& faces,
-                     double chord_tolerance_mm)
+MeshSolid::MeshSolid(std::shared_ptr<const geometry::Mesh> mesh, const Frame& part_to_machine, std::vector<Bump> bumps,
+                     const std::vector<geometry::CadFace>& faces, double chord_tolerance_mm)
     : m_mesh(std::move(mesh)),
       m_part_to_machine(part_to_machine),
       m_machine_to_part(part_to_machine.inverse(Eigen::Isometry)),
@@ -50,7 +49,8 @@ MeshSolid::MeshSolid(std::shared_ptr<const geometry::Mesh> mesh, const Frame& pa
   for (const geometry::CadFace& f : faces)
     for (std::uint32_t t : f.triangles)
       if (t < n_triangles)
-        for (std::uint32_t v : triangles[t]) owner[v] = owner[v] == unowned || owner[v] == f.shape_index ? f.shape_index : shared;
+        for (std::uint32_t v : triangles[t])
+          owner[v] = owner[v] == unowned || owner[v] == f.shape_index ? f.shape_index : shared;
   const double interior_mm = 1e-6, boundary_mm = 10 * chord_tolerance_mm;
   for (const geometry::CadFace& f : faces) {
     for (std::uint32_t t : f.triangles)
@@ -101,16 +101,14 @@ std::optional<MeshSolid::Surface> MeshSolid::surface_of(const geometry::CadFace&
     case Kind::Plane:
     case Kind::Cylinder:
     case Kind::Sphere:
-    case Kind::Torus:
-      return s;
+    case Kind::Torus: return s;
     case Kind::Cone:
       if (!(f.semi_angle_rad > 1e-9 && f.semi_angle_rad < std::numbers::pi / 2 - 1e-9)) return std::nullopt;
       s.cos_a = std::cos(f.semi_angle_rad);
       s.sin_a = std::sin(f.semi_angle_rad);
       s.origin = f.origin - f.radius_mm / std::tan(f.semi_angle_rad) * s.axis;  // the apex
       return s;
-    case Kind::Other:
-      break;
+    case Kind::Other: break;
   }
   return std::nullopt;
 }
@@ -122,9 +120,7 @@ std::optional<MeshSolid::Exact> MeshSolid::exact(const Surface& s, const Vec3& q
   const double rho = radial.norm();
   Exact e{0, Vec3::Zero()};
   switch (s.kind) {
-    case Kind::Plane:
-      e = {h, s.axis};
-      break;
+    case Kind::Plane: e = {h, s.axis}; break;
     case Kind::Cylinder:
       if (rho < degenerate_mm) return std::nullopt;
       e = {rho - s.radius_mm, radial / rho};
@@ -156,8 +152,7 @@ std::optional<MeshSolid::Exact> MeshSolid::exact(const Surface& s, const Vec3& q
       e = {d - s.minor_radius_mm, w / d};
       break;
     }
-    case Kind::Other:
-      return std::nullopt;
+    case Kind::Other: return std::nullopt;
   }
   if (s.inner) e = {-e.distance_mm, -e.normal};
   return e;
@@ -229,7 +224,9 @@ struct MeshSolid::Grid {
     return ((p - origin) / l.cell_mm).array().floor().cast<int>();
   }
   static std::uint64_t key(const Eigen::Vector3i& c) {
-    const auto part = [](int v) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(v + (1 << 20)) & 0x1fffff); };
+    const auto part = [](int v) {
+      return static_cast<std::uint64_t>(static_cast<std::uint32_t>(v + (1 << 20)) & 0x1fffff);
+    };
     return part(c.x()) | part(c.y()) << 21 | part(c.z()) << 42;
   }
   /// Every triangle whose box meets the box [lo, hi], once each.
@@ -261,8 +258,8 @@ const MeshSolid::Grid& MeshSolid::grid() const {
       extent += b.sizes().maxCoeff();
     }
     // The finest level: about two typical triangles across a cell; coarser levels up to the box.
-    double cell = std::max({2 * extent / static_cast<double>(std::max<std::size_t>(1, f.size())),
-                            box.sizes().maxCoeff() / 4000, 1e-3});
+    double cell = std::max(
+        {2 * extent / static_cast<double>(std::max<std::size_t>(1, f.size())), box.sizes().maxCoeff() / 4000, 1e-3});
     g->origin = box.min();
     do {
       g->levels.emplace_back().cell_mm = cell;
@@ -334,8 +331,8 @@ class MeshSolid::Local final : public Solid {
       Tri& t = m_tris.emplace_back(Tri{v[f[0]], v[f[1]], v[f[2]], Vec3::Zero(), 0, mesh.face_normal(i), f, i});
       t.centroid = (t.a + t.b + t.c) / 3;
       // sqrt is monotonic and correctly rounded: the same as the largest of the three norms.
-      t.radius = std::sqrt(std::max({(t.a - t.centroid).squaredNorm(), (t.b - t.centroid).squaredNorm(),
-                                     (t.c - t.centroid).squaredNorm()}));
+      t.radius = std::sqrt(std::max(
+          {(t.a - t.centroid).squaredNorm(), (t.b - t.centroid).squaredNorm(), (t.c - t.centroid).squaredNorm()}));
     });
   }
 
@@ -358,7 +355,8 @@ class MeshSolid::Local final : public Solid {
     // The side cannot change within the distance of the last query decided here: the ball of
     // that radius about it holds no surface.
     const bool coherent = coherent_search_enabled();
-    if (coherent && m_side_radius > 0 && (q - m_side_point).norm() + anchor_slack_mm < m_side_radius) return m_side_inside;
+    if (coherent && m_side_radius > 0 && (q - m_side_point).norm() + anchor_slack_mm < m_side_radius)
+      return m_side_inside;
     const bool in = inside_by_pseudo_normal(q, c);
     if (coherent) m_side_point = q, m_side_radius = c.distance_mm, m_side_inside = in;
     return in;
@@ -379,7 +377,8 @@ class MeshSolid::Local final : public Solid {
       each_candidate([&](const Tri& t) {
         for (int k = 0; k < 3; ++k)
           if (static_cast<int>(t.v[k]) == vertex) {
-            const Vec3 e1 = (v[t.v[(k + 1) % 3]] - v[t.v[k]]).normalized(), e2 = (v[t.v[(k + 2) % 3]] - v[t.v[k]]).normalized();
+            const Vec3 e1 = (v[t.v[(k + 1) % 3]] - v[t.v[k]]).normalized(),
+                       e2 = (v[t.v[(k + 2) % 3]] - v[t.v[k]]).normalized();
             pn += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * mesh.face_normal(t.face);
           }
       });
@@ -405,8 +404,8 @@ class MeshSolid::Local final : public Solid {
   struct Tri {
     Vec3 a, b, c;
     Vec3 centroid;
-    double radius;       ///< of the bounding sphere (and circle) about the centroid
-    Vec3 normal;         ///< unit, of its plane
+    double radius;  ///< of the bounding sphere (and circle) about the centroid
+    Vec3 normal;    ///< unit, of its plane
     geometry::Mesh::Face v;
     std::uint32_t face;
   };
@@ -562,8 +561,8 @@ class MeshSolid::Local final : public Solid {
   Vec3 m_centre;       ///< part coordinates
   double m_reach = 0;  ///< every triangle outside the candidates is farther than this from the centre
   std::vector<Tri> m_tris;
-  mutable std::size_t m_hint = 0;              ///< index of the last answer's triangle
-  mutable std::array<Anchor, 3> m_anchors;     ///< for the head and the ball centre, and one spare
+  mutable std::size_t m_hint = 0;           ///< index of the last answer's triangle
+  mutable std::array<Anchor, 3> m_anchors;  ///< for the head and the ball centre, and one spare
   mutable std::uint64_t m_clock = 0;
   mutable const Anchor* m_last_anchor = nullptr;  ///< the last search's; null: it went over all
   mutable std::size_t m_last_visited = 0;         ///< how many of its triangles it visited

@@ -12,8 +12,7 @@ namespace {
 
 MotionState advance(const MotionState& s, double jerk, double t) {
   return {s.position_mm + s.speed_mm_s * t + s.acceleration_mm_s2 * t * t / 2 + jerk * t * t * t / 6,
-          s.speed_mm_s + s.acceleration_mm_s2 * t + jerk * t * t / 2,
-          s.acceleration_mm_s2 + jerk * t};
+          s.speed_mm_s + s.acceleration_mm_s2 * t + jerk * t * t / 2, s.acceleration_mm_s2 + jerk * t};
 }
 
 struct Ramp {
@@ -62,14 +61,14 @@ double peak_speed(double distance, const MotionLimits& up, const MotionLimits& d
   const auto ramps = [&](double v) { return v * (ramp_to(v, up).duration_s() + ramp_to(v, down).duration_s()) / 2; };
   if (ramps(up.speed_mm_s) <= distance) return up.speed_mm_s;
   double lo = 0, hi = up.speed_mm_s;
-  for (int i = 0; i < 200 && hi - lo > 1e-15 * up.speed_mm_s; ++i) (ramps((lo + hi) / 2) <= distance ? lo : hi) = (lo + hi) / 2;
+  for (int i = 0; i < 200 && hi - lo > 1e-15 * up.speed_mm_s; ++i)
+    (ramps((lo + hi) / 2) <= distance ? lo : hi) = (lo + hi) / 2;
   return lo;
 }
 
 }  // namespace
 
-MotionProfile::MotionProfile(MotionState start, std::vector<JerkPhase> phases)
-    : m_start(start), m_end(start) {
+MotionProfile::MotionProfile(MotionState start, std::vector<JerkPhase> phases) : m_start(start), m_end(start) {
   for (const JerkPhase& p : phases) {
     if (p.duration_s <= 0) continue;
     m_phase_start_s.push_back(m_duration_s);
@@ -90,8 +89,13 @@ MotionProfile MotionProfile::rest_to_rest(double distance_mm, const MotionLimits
     const Ramp up = ramp_to(v, limits), dn = ramp_to(v, down);
     const double cruise_s = std::max(0.0, (distance_mm - v * (up.duration_s() + dn.duration_s()) / 2) / v);
     const double j = limits.jerk_mm_s3, jb = down.jerk_mm_s3;
-    MotionProfile p({}, {{up.jerk_time_s, j}, {up.const_time_s, 0}, {up.jerk_time_s, -j}, {cruise_s, 0},
-                         {dn.jerk_time_s, -jb}, {dn.const_time_s, 0}, {dn.jerk_time_s, jb}});
+    MotionProfile p({}, {{up.jerk_time_s, j},
+                         {up.const_time_s, 0},
+                         {up.jerk_time_s, -j},
+                         {cruise_s, 0},
+                         {dn.jerk_time_s, -jb},
+                         {dn.const_time_s, 0},
+                         {dn.jerk_time_s, jb}});
     p.m_end = {distance_mm, 0, 0};
     return p;
   }
@@ -99,8 +103,13 @@ MotionProfile MotionProfile::rest_to_rest(double distance_mm, const MotionLimits
   const Ramp r = ramp_to(v, limits);
   const double cruise_s = std::max(0.0, (distance_mm - v * r.duration_s()) / v);
   const double j = limits.jerk_mm_s3;
-  MotionProfile p({}, {{r.jerk_time_s, j}, {r.const_time_s, 0}, {r.jerk_time_s, -j}, {cruise_s, 0},
-                       {r.jerk_time_s, -j}, {r.const_time_s, 0}, {r.jerk_time_s, j}});
+  MotionProfile p({}, {{r.jerk_time_s, j},
+                       {r.const_time_s, 0},
+                       {r.jerk_time_s, -j},
+                       {cruise_s, 0},
+                       {r.jerk_time_s, -j},
+                       {r.const_time_s, 0},
+                       {r.jerk_time_s, j}});
   // The polynomials land on the target only to rounding; the controller ends exactly on it.
   p.m_end = {distance_mm, 0, 0};
   return p;
@@ -136,10 +145,12 @@ double change_distance(double v0, double v1, const MotionLimits& l, const std::o
 
 }  // namespace
 
-MotionProfile MotionProfile::reach_feed(double reach_mm, double distance_mm, double feed_mm_s, const MotionLimits& limits,
-                                        const std::optional<BrakingLimits>& braking) {
+MotionProfile MotionProfile::reach_feed(double reach_mm, double distance_mm, double feed_mm_s,
+                                        const MotionLimits& limits, const std::optional<BrakingLimits>& braking) {
   const double feed = std::min(feed_mm_s, limits.speed_mm_s);
-  const auto two_ramps = [&](double v) { return change_distance(0, v, limits, braking) + change_distance(v, feed, limits, braking); };
+  const auto two_ramps = [&](double v) {
+    return change_distance(0, v, limits, braking) + change_distance(v, feed, limits, braking);
+  };
   std::vector<JerkPhase> phases;
   const auto append = [&](const std::vector<JerkPhase>& p) { phases.insert(phases.end(), p.begin(), p.end()); };
   double covered = 0;
@@ -232,7 +243,8 @@ double MotionProfile::time_at(double position_mm) const {
   return hi;
 }
 
-double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits, const std::optional<BrakingLimits>& braking) {
+double rest_to_rest_time_s(double distance_mm, const MotionLimits& limits,
+                           const std::optional<BrakingLimits>& braking) {
   check_limits(limits);
   if (!(distance_mm > 0)) return 0;
   if (braking) {

@@ -85,86 +85,90 @@ Response NominalMachine::run(const Command& command) {
     m_tools[d.name] = info;
     return info;
   };
-  std::visit([&](const auto& body) {
-    using T = std::decay_t<decltype(body)>;
-    if constexpr (std::is_same_v<T, GoTo>) {
-      const double feed = body.speed_mm_s.value_or(m_positioning_feed);
-      if (!(feed > 0) || !body.target_mm.allFinite()) return fail(FaultKind::BadCommand, "goto needs a finite target and a positive speed");
-      move_to(body.target_mm, feed);
-    } else if constexpr (std::is_same_v<T, PtMeas>) {
-      const ToolInfo* tool = active_tool();
-      if (!tool) return fail(FaultKind::NoTool, "no tool selected");
-      if (!body.nominal_mm.allFinite() || !(body.normal.norm() > 0.5))
-        return fail(FaultKind::BadCommand, "ptmeas needs a finite point and a unit normal");
-      const Vec3 n = body.normal.normalized();
-      const double r = tool->effective_radius_mm;
-      // The cycle's moves: to the approach point, probing to contact, the retract.
-      move_to(body.nominal_mm + (r + body.approach_mm) * n, m_positioning_feed);
-      const double feed = body.speed_mm_s.value_or(m_measuring_feed);
-      move_to(body.nominal_mm + r * n, feed > 0 ? feed : m_measuring_feed);
-      Hit hit{m_position, n, r, m_time_s};
-      move_to(m_position + body.retract_mm * n, feed > 0 ? feed : m_measuring_feed);
-      response.hit = hit;
-      m_last_hit = hit;
-    } else if constexpr (std::is_same_v<T, DefineTool>) {
-      response.tool = define(body);
-    } else if constexpr (std::is_same_v<T, SelectTool>) {
-      if (!m_tools.count(body.name)) {
-        const auto sensor = find_library_sensor(m_config.probe_library, body.name);
-        if (!sensor) return fail(FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name));
-        DefineTool d = tool_definition(*sensor);
-        d.name = body.name;
-        define(d);
-      }
-      m_active = body.name;
-      response.tool = m_tools.at(body.name);
-    } else if constexpr (std::is_same_v<T, QualifyTool>) {
-      const ToolInfo* tool = active_tool();
-      if (!tool) return fail(FaultKind::NoTool, "no tool selected");
-      response.tool = *tool;
-    } else if constexpr (std::is_same_v<T, SetFeeds>) {
-      if (body.positioning_mm_s < 0 || body.measuring_mm_s < 0 || body.acceleration_mm_s2 < 0)
-        return fail(FaultKind::BadCommand, "feeds and acceleration must not be negative");
-      if (body.positioning_mm_s > 0) m_positioning_feed = std::min(body.positioning_mm_s, m_config.max_speed_mm_s);
-      if (body.measuring_mm_s > 0) m_measuring_feed = std::min(body.measuring_mm_s, m_config.max_speed_mm_s);
-    } else if constexpr (std::is_same_v<T, ScanPath>) {
-      const ToolInfo* tool = active_tool();
-      if (!tool) return fail(FaultKind::NoTool, "no tool selected");
-      if (body.path.segments.empty()) return fail(FaultKind::BadCommand, "a scan needs a path");
-      // The path holds ball centres at the reference deflection E0, (r - E0) off the surface
-      // (geometry/scan_path.cpp): in contact the ball centre is E0 further out, and the
-      // deflection reading is E0 along the surface normal.
-      const double e0 = body.reference_deflection_mm.value_or(m_config.scanning.probe.reference_deflection_mm);
-      const double feed = body.speed_mm_s.value_or(m_config.scanning.control.feed_mm_s);
-      const double spacing = body.sample_spacing_mm > 0 ? body.sample_spacing_mm : feed * m_config.dt_s;
-      const auto& normals = body.path.normals;
-      const Vec3 start = body.path.segments.front().start();
-      move_to(start + body.approach_mm * body.approach_normal, m_positioning_feed);
-      move_to(start, m_measuring_feed);
-      for (std::size_t i = 0; i < body.path.segments.size(); ++i) {
-        const auto& seg = body.path.segments[i];
-        const int steps = std::max(1, static_cast<int>(std::ceil(seg.length() / spacing)));
-        for (int k = (i == 0 ? 0 : 1); k <= steps; ++k) {
-          const double u = static_cast<double>(k) / steps;
-          Vec3 n = body.approach_normal;
-          if (normals.size() == body.path.segments.size() + 1) {
-            const Vec3 blend = (1 - u) * normals[i] + u * normals[i + 1];
-            if (blend.norm() > 1e-9) n = blend.normalized();
+  std::visit(
+      [&](const auto& body) {
+        using T = std::decay_t<decltype(body)>;
+        if constexpr (std::is_same_v<T, GoTo>) {
+          const double feed = body.speed_mm_s.value_or(m_positioning_feed);
+          if (!(feed > 0) || !body.target_mm.allFinite())
+            return fail(FaultKind::BadCommand, "goto needs a finite target and a positive speed");
+          move_to(body.target_mm, feed);
+        } else if constexpr (std::is_same_v<T, PtMeas>) {
+          const ToolInfo* tool = active_tool();
+          if (!tool) return fail(FaultKind::NoTool, "no tool selected");
+          if (!body.nominal_mm.allFinite() || !(body.normal.norm() > 0.5))
+            return fail(FaultKind::BadCommand, "ptmeas needs a finite point and a unit normal");
+          const Vec3 n = body.normal.normalized();
+          const double r = tool->effective_radius_mm;
+          // The cycle's moves: to the approach point, probing to contact, the retract.
+          move_to(body.nominal_mm + (r + body.approach_mm) * n, m_positioning_feed);
+          const double feed = body.speed_mm_s.value_or(m_measuring_feed);
+          move_to(body.nominal_mm + r * n, feed > 0 ? feed : m_measuring_feed);
+          Hit hit{m_position, n, r, m_time_s};
+          move_to(m_position + body.retract_mm * n, feed > 0 ? feed : m_measuring_feed);
+          response.hit = hit;
+          m_last_hit = hit;
+        } else if constexpr (std::is_same_v<T, DefineTool>) {
+          response.tool = define(body);
+        } else if constexpr (std::is_same_v<T, SelectTool>) {
+          if (!m_tools.count(body.name)) {
+            const auto sensor = find_library_sensor(m_config.probe_library, body.name);
+            if (!sensor) return fail(FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name));
+            DefineTool d = tool_definition(*sensor);
+            d.name = body.name;
+            define(d);
           }
-          const Vec3 at = seg.point(u * seg.d_mm);
-          m_time_s += (at - m_position).norm() / feed;
-          m_position = at;
-          response.scan.push_back({m_time_s, Vec3(at + e0 * n), Vec3(e0 * n), 0.0});
+          m_active = body.name;
+          response.tool = m_tools.at(body.name);
+        } else if constexpr (std::is_same_v<T, QualifyTool>) {
+          const ToolInfo* tool = active_tool();
+          if (!tool) return fail(FaultKind::NoTool, "no tool selected");
+          response.tool = *tool;
+        } else if constexpr (std::is_same_v<T, SetFeeds>) {
+          if (body.positioning_mm_s < 0 || body.measuring_mm_s < 0 || body.acceleration_mm_s2 < 0)
+            return fail(FaultKind::BadCommand, "feeds and acceleration must not be negative");
+          if (body.positioning_mm_s > 0) m_positioning_feed = std::min(body.positioning_mm_s, m_config.max_speed_mm_s);
+          if (body.measuring_mm_s > 0) m_measuring_feed = std::min(body.measuring_mm_s, m_config.max_speed_mm_s);
+        } else if constexpr (std::is_same_v<T, ScanPath>) {
+          const ToolInfo* tool = active_tool();
+          if (!tool) return fail(FaultKind::NoTool, "no tool selected");
+          if (body.path.segments.empty()) return fail(FaultKind::BadCommand, "a scan needs a path");
+          // The path holds ball centres at the reference deflection E0, (r - E0) off the surface
+          // (geometry/scan_path.cpp): in contact the ball centre is E0 further out, and the
+          // deflection reading is E0 along the surface normal.
+          const double e0 = body.reference_deflection_mm.value_or(m_config.scanning.probe.reference_deflection_mm);
+          const double feed = body.speed_mm_s.value_or(m_config.scanning.control.feed_mm_s);
+          const double spacing = body.sample_spacing_mm > 0 ? body.sample_spacing_mm : feed * m_config.dt_s;
+          const auto& normals = body.path.normals;
+          const Vec3 start = body.path.segments.front().start();
+          move_to(start + body.approach_mm * body.approach_normal, m_positioning_feed);
+          move_to(start, m_measuring_feed);
+          for (std::size_t i = 0; i < body.path.segments.size(); ++i) {
+            const auto& seg = body.path.segments[i];
+            const int steps = std::max(1, static_cast<int>(std::ceil(seg.length() / spacing)));
+            for (int k = (i == 0 ? 0 : 1); k <= steps; ++k) {
+              const double u = static_cast<double>(k) / steps;
+              Vec3 n = body.approach_normal;
+              if (normals.size() == body.path.segments.size() + 1) {
+                const Vec3 blend = (1 - u) * normals[i] + u * normals[i + 1];
+                if (blend.norm() > 1e-9) n = blend.normalized();
+              }
+              const Vec3 at = seg.point(u * seg.d_mm);
+              m_time_s += (at - m_position).norm() / feed;
+              m_position = at;
+              response.scan.push_back({m_time_s, Vec3(at + e0 * n), Vec3(e0 * n), 0.0});
+            }
+          }
+          move_to(m_position + body.retract_mm * response.scan.back().deflection_mm.normalized(), m_measuring_feed);
+          response.scan_log.push_back(
+              fmt::format("dry run: {} samples along the nominal path, {} mm apart", response.scan.size(), spacing));
+        } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
+          fail(FaultKind::BadCommand, "a dry run scans whole paths only");
+        } else if constexpr (std::is_same_v<T, ContourScan>) {
+          fail(FaultKind::BadCommand, "a dry run has no surface to follow: an unknown-contour scan needs a machine");
         }
-      }
-      move_to(m_position + body.retract_mm * response.scan.back().deflection_mm.normalized(), m_measuring_feed);
-      response.scan_log.push_back(fmt::format("dry run: {} samples along the nominal path, {} mm apart", response.scan.size(), spacing));
-    } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
-      fail(FaultKind::BadCommand, "a dry run scans whole paths only");
-    } else if constexpr (std::is_same_v<T, ContourScan>) {
-      fail(FaultKind::BadCommand, "a dry run has no surface to follow: an unknown-contour scan needs a machine");
-    }
-  }, command.body);
+      },
+      command.body);
   response.end_time_s = m_time_s;
   return response;
 }

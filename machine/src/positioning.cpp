@@ -92,7 +92,7 @@ tl::expected<void, Fault> Controller::move_to(const Vec3& target, double feed) {
   cycle = c0 + n;
   position = target;
   motion.moves.push_back(PositioningMove{a, u, len, profile, move_limits, move_braking, c0,
-                                        std::numeric_limits<double>::infinity(), now(), target});
+                                         std::numeric_limits<double>::infinity(), now(), target});
   return {};
 }
 
@@ -116,7 +116,8 @@ std::optional<Response> Controller::stop_move(double after_s) {
   double rest_s = t;
   if (!m.scan.empty() && m.scan.front().time_s - config.dt_s <= t) {
     // The cycle the request falls in (past the last one, the scan had ended: rest there).
-    const auto found = std::find_if(m.scan.begin(), m.scan.end(), [&](const ScanHeadSample& c) { return c.time_s >= t; });
+    const auto found =
+        std::find_if(m.scan.begin(), m.scan.end(), [&](const ScanHeadSample& c) { return c.time_s >= t; });
     const ScanHeadSample& at = found != m.scan.end() ? *found : m.scan.back();
     const double v = found != m.scan.end() ? at.velocity_mm_s.norm() : 0.0;
     rest = at.head_mm;
@@ -128,7 +129,9 @@ std::optional<Response> Controller::stop_move(double after_s) {
       rest_s += stop.duration_s();
     }
   } else {
-    const auto started = [&](const PositioningMove& mv) { return static_cast<double>(mv.start_cycle) * config.dt_s <= t; };
+    const auto started = [&](const PositioningMove& mv) {
+      return static_cast<double>(mv.start_cycle) * config.dt_s <= t;
+    };
     const auto last = std::find_if(m.moves.rbegin(), m.moves.rend(), started);
     if (last != m.moves.rend()) {
       const PositioningMove& mv = *last;

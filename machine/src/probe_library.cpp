@@ -19,7 +19,8 @@ std::string upper(std::string_view s) { return upper_utf8(s); }
 
 std::optional<LibrarySensor> find_library_sensor(const std::vector<LibrarySensor>& library, std::string_view name) {
   const std::string want = upper(name);
-  const auto it = std::find_if(library.begin(), library.end(), [&](const LibrarySensor& s) { return upper(s.name) == want; });
+  const auto it =
+      std::find_if(library.begin(), library.end(), [&](const LibrarySensor& s) { return upper(s.name) == want; });
   if (it == library.end()) return std::nullopt;
   return *it;
 }
@@ -38,7 +39,8 @@ DefineTool tool_definition(const LibrarySensor& sensor) {
 
 std::vector<LibrarySensor> parse_probe_library(const nlohmann::json& j, const std::string& ptr) {
   namespace sj = strict_json;
-  if (!j.is_array()) sj::fail(ptr, "expected an array of sensors [{\"name\", \"tip_diameter_mm\", \"offset_mm\"}, ...]");
+  if (!j.is_array())
+    sj::fail(ptr, "expected an array of sensors [{\"name\", \"tip_diameter_mm\", \"offset_mm\"}, ...]");
   std::vector<LibrarySensor> out;
   std::set<std::string> names;
   for (std::size_t i = 0; i < j.size(); ++i) {

@@ -116,8 +116,8 @@ MotionLimits SimulatedProbe::motion_limits(const MachineConfig& config, const Ve
   return path_limits(config, m_truth.axes, u, feed_mm_s, acceleration_mm_s2, cap_mm_s2);
 }
 
-std::optional<BrakingLimits> SimulatedProbe::motion_braking(const MachineConfig& config, const Vec3& u, double feed_mm_s,
-                                                            std::optional<double> cap_mm_s2) const {
+std::optional<BrakingLimits> SimulatedProbe::motion_braking(const MachineConfig& config, const Vec3& u,
+                                                            double feed_mm_s, std::optional<double> cap_mm_s2) const {
   return path_braking(config, m_truth.axes, u, feed_mm_s, cap_mm_s2);
 }
 
@@ -126,8 +126,8 @@ ScanSetup SimulatedProbe::scan_setup(double nominal_radius_mm, const MachineConf
     m_scan_solid = make_probed_solid(m_truth, m_stylus_offset_mm);
     update_error_state();
   }
-  return ScanSetup{m_scan_solid.get(), nominal_radius_mm + m_truth.probe.ball_radius_error_mm, config,
-                   m_truth.scanning, static_cast<std::uint64_t>(scan_phase() * 0x1.0p53)};
+  return ScanSetup{m_scan_solid.get(), nominal_radius_mm + m_truth.probe.ball_radius_error_mm, config, m_truth.scanning,
+                   static_cast<std::uint64_t>(scan_phase() * 0x1.0p53)};
 }
 
 }  // namespace metron::machine::detail

@@ -68,8 +68,8 @@ class SimulatedProbe {
   [[nodiscard]] MotionLimits motion_limits(const MachineConfig& config, const Vec3& u, double feed_mm_s,
                                            double acceleration_mm_s2, std::optional<double> cap_mm_s2) const;
   /// Braking limits of the same move when an axis involved brakes by its own law.
-  [[nodiscard]] std::optional<BrakingLimits> motion_braking(const MachineConfig& config, const Vec3& u, double feed_mm_s,
-                                                            std::optional<double> cap_mm_s2) const;
+  [[nodiscard]] std::optional<BrakingLimits> motion_braking(const MachineConfig& config, const Vec3& u,
+                                                            double feed_mm_s, std::optional<double> cap_mm_s2) const;
   [[nodiscard]] bool has_axis_dynamics() const { return m_truth.axes.has_value(); }
 
   /// The simulation side of a scan with a stylus of `nominal_radius_mm` under controller
@@ -90,8 +90,8 @@ class SimulatedProbe {
   Rng m_rng;
   double m_ball_radius_mm = 0;
   Vec3 m_free_centre = Vec3::Zero();
-  double m_free_radius_mm = -1;  // none
-  double m_error_time_s = 0;     // the machine errors' state: time (a multiple of the step) and
+  double m_free_radius_mm = -1;            // none
+  double m_error_time_s = 0;               // the machine errors' state: time (a multiple of the step) and
   std::array<int, 3> m_approach{0, 0, 0};  // each axis' last direction of motion
   double m_probe_t0_s = 0;
   const MotionProfile* m_profile = nullptr;

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "controller.hpp"
-#include "metron/machine/active_scanning/contour_scan.hpp"
 #include "metron/machine/aborted_response.hpp"
+#include "metron/machine/active_scanning/contour_scan.hpp"
 
 namespace metron::machine {
 namespace detail {
@@ -17,7 +17,7 @@ namespace {
 Vec3 stylus_offset(const DefineTool& tool) {
   const double n = tool.stylus_direction.norm();
   return n > 1e-12 && std::isfinite(tool.stylus_length_mm) ? Vec3(tool.stylus_direction / n * tool.stylus_length_mm)
-                                                            : Vec3(Vec3::Zero());
+                                                           : Vec3(Vec3::Zero());
 }
 
 }  // namespace
@@ -49,7 +49,8 @@ void Controller::scan(const ScanPath& body, Response& response) {
   };
   const Tool* tool = active_tool();
   if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
-  if (const std::string bad = validate_scan(body); !bad.empty()) return fail({FaultKind::BadCommand, bad, position, now()});
+  if (const std::string bad = validate_scan(body); !bad.empty())
+    return fail({FaultKind::BadCommand, bad, position, now()});
   const std::size_t capacity = config.scanning.segmented.buffer_segments;
   if (body.path.segments.size() > capacity)
     return fail({FaultKind::BadCommand,
@@ -65,8 +66,9 @@ void Controller::scan(const ScanPath& body, Response& response) {
 
 // A scanning controller's run from the approach point: the probe's setup, the position reports
 // and the motion kept for a stop request every cycle, then the machine where the run ended.
-void Controller::run_scanning(const ToolInfo& tool, Response& response,
-                              const std::function<ScanOutcome(const ScanSetup&, const std::function<void(const ScanCycle&)>&)>& scan) {
+void Controller::run_scanning(
+    const ToolInfo& tool, Response& response,
+    const std::function<ScanOutcome(const ScanSetup&, const std::function<void(const ScanCycle&)>&)>& scan) {
   sim.set_time(now());
   const ScanSetup setup = sim.scan_setup(tool.nominal_radius_mm, config);
   ScanOutcome out = scan(setup, [&](const ScanCycle& c) {
@@ -92,7 +94,8 @@ void Controller::contour_scan(const ContourScan& body, Response& response) {
   };
   const Tool* tool = active_tool();
   if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
-  if (const std::string bad = validate_contour_scan(body); !bad.empty()) return fail({FaultKind::BadCommand, bad, position, now()});
+  if (const std::string bad = validate_contour_scan(body); !bad.empty())
+    return fail({FaultKind::BadCommand, bad, position, now()});
   if (auto ok = move_to(contour_approach_point(body), positioning_feed); !ok) return fail(ok.error());
   run_scanning(tool->info, response, [&](const ScanSetup& setup, const auto& observe) {
     return run_contour_scan(body, setup, position, now(), observe);
@@ -114,66 +117,74 @@ Response Controller::run(const Command& command) {
           position, now()});
     return response;
   }
-  std::visit([&](const auto& body) {
-    using T = std::decay_t<decltype(body)>;
-    if constexpr (std::is_same_v<T, GoTo>) {
-      const double feed = body.speed_mm_s.value_or(positioning_feed);
-      if (!(feed > 0) || !body.target_mm.allFinite())
-        return fail({FaultKind::BadCommand, "goto needs a finite target and a positive speed", position, now()});
-      if (auto ok = move_to(body.target_mm, feed); !ok) fail(ok.error());
-      motion.what = fmt::format("move to {}", xyz(body.target_mm));
-    } else if constexpr (std::is_same_v<T, PtMeas>) {
-      auto hit = measure_point(body);
-      if (hit) response.hit = *hit;
-      else fail(hit.error());
-      motion.what = fmt::format("point measurement at {}", xyz(body.nominal_mm));
-    } else if constexpr (std::is_same_v<T, DefineTool>) {
-      define_tool(body, response);
-    } else if constexpr (std::is_same_v<T, SelectTool>) {
-      auto it = tools.find(body.name);
-      if (it == tools.end()) {
-        // A sensor of the probe library is defined on its first selection, as a tool changer would.
-        const auto sensor = find_library_sensor(config.probe_library, body.name);
-        if (!sensor) return fail({FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name), position, now()});
-        DefineTool definition = tool_definition(*sensor);
-        definition.name = body.name;
-        define_tool(definition, response);
-        if (response.status != Response::Status::Done) return;
-        it = tools.find(body.name);
-      }
-      active = body.name;
-      sim.mount_stylus(it->second.info.nominal_radius_mm, stylus_offset(it->second.definition));
-      response.tool = it->second.info;
-    } else if constexpr (std::is_same_v<T, QualifyTool>) {
-      auto info = qualify();
-      if (info) response.tool = *info;
-      else fail(info.error());
-    } else if constexpr (std::is_same_v<T, SetFeeds>) {
-      if (body.positioning_mm_s < 0 || body.measuring_mm_s < 0 || body.acceleration_mm_s2 < 0)
-        return fail({FaultKind::BadCommand, "feeds and acceleration must not be negative", position, now()});
-      // Clamped to the machine's limits, as a controller's override would be.
-      if (body.positioning_mm_s > 0) positioning_feed = std::min(body.positioning_mm_s, config.max_speed_mm_s);
-      if (body.measuring_mm_s > 0) measuring_feed = std::min(body.measuring_mm_s, config.max_speed_mm_s);
-      if (body.acceleration_mm_s2 > 0) {
-        acceleration = std::min(body.acceleration_mm_s2, config.max_acceleration_mm_s2);
-        acceleration_cap = acceleration;
-      } else if (body.default_acceleration) {
-        acceleration = config.max_acceleration_mm_s2;  // as the controller starts
-        acceleration_cap.reset();
-      }
-    } else if constexpr (std::is_same_v<T, ScanPath>) {
-      scan(body, response);
-      motion.what = "scan";
-    } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
-      write_scan_buffer(body, response);
-    } else if constexpr (std::is_same_v<T, ContourScan>) {
-      contour_scan(body, response);
-      motion.what = "unknown-contour scan";
-    }
-  }, command.body);
+  std::visit(
+      [&](const auto& body) {
+        using T = std::decay_t<decltype(body)>;
+        if constexpr (std::is_same_v<T, GoTo>) {
+          const double feed = body.speed_mm_s.value_or(positioning_feed);
+          if (!(feed > 0) || !body.target_mm.allFinite())
+            return fail({FaultKind::BadCommand, "goto needs a finite target and a positive speed", position, now()});
+          if (auto ok = move_to(body.target_mm, feed); !ok) fail(ok.error());
+          motion.what = fmt::format("move to {}", xyz(body.target_mm));
+        } else if constexpr (std::is_same_v<T, PtMeas>) {
+          auto hit = measure_point(body);
+          if (hit)
+            response.hit = *hit;
+          else
+            fail(hit.error());
+          motion.what = fmt::format("point measurement at {}", xyz(body.nominal_mm));
+        } else if constexpr (std::is_same_v<T, DefineTool>) {
+          define_tool(body, response);
+        } else if constexpr (std::is_same_v<T, SelectTool>) {
+          auto it = tools.find(body.name);
+          if (it == tools.end()) {
+            // A sensor of the probe library is defined on its first selection, as a tool changer would.
+            const auto sensor = find_library_sensor(config.probe_library, body.name);
+            if (!sensor)
+              return fail({FaultKind::UnknownTool, fmt::format("unknown tool '{}'", body.name), position, now()});
+            DefineTool definition = tool_definition(*sensor);
+            definition.name = body.name;
+            define_tool(definition, response);
+            if (response.status != Response::Status::Done) return;
+            it = tools.find(body.name);
+          }
+          active = body.name;
+          sim.mount_stylus(it->second.info.nominal_radius_mm, stylus_offset(it->second.definition));
+          response.tool = it->second.info;
+        } else if constexpr (std::is_same_v<T, QualifyTool>) {
+          auto info = qualify();
+          if (info)
+            response.tool = *info;
+          else
+            fail(info.error());
+        } else if constexpr (std::is_same_v<T, SetFeeds>) {
+          if (body.positioning_mm_s < 0 || body.measuring_mm_s < 0 || body.acceleration_mm_s2 < 0)
+            return fail({FaultKind::BadCommand, "feeds and acceleration must not be negative", position, now()});
+          // Clamped to the machine's limits, as a controller's override would be.
+          if (body.positioning_mm_s > 0) positioning_feed = std::min(body.positioning_mm_s, config.max_speed_mm_s);
+          if (body.measuring_mm_s > 0) measuring_feed = std::min(body.measuring_mm_s, config.max_speed_mm_s);
+          if (body.acceleration_mm_s2 > 0) {
+            acceleration = std::min(body.acceleration_mm_s2, config.max_acceleration_mm_s2);
+            acceleration_cap = acceleration;
+          } else if (body.default_acceleration) {
+            acceleration = config.max_acceleration_mm_s2;  // as the controller starts
+            acceleration_cap.reset();
+          }
+        } else if constexpr (std::is_same_v<T, ScanPath>) {
+          scan(body, response);
+          motion.what = "scan";
+        } else if constexpr (std::is_same_v<T, ScanBufferWrite>) {
+          write_scan_buffer(body, response);
+        } else if constexpr (std::is_same_v<T, ContourScan>) {
+          contour_scan(body, response);
+          motion.what = "unknown-contour scan";
+        }
+      },
+      command.body);
   response.end_time_s = now();
   // A command that moved and ended without fault can be stopped afterwards (stop_move).
-  if (response.status == Response::Status::Done && !motion.what.empty() && (!motion.moves.empty() || !motion.scan.empty())) {
+  if (response.status == Response::Status::Done && !motion.what.empty() &&
+      (!motion.moves.empty() || !motion.scan.empty())) {
     motion.end_s = now();
     stoppable = std::move(motion);
   }

@@ -62,7 +62,8 @@ void parse_ramp_law(Object& o, RampLaw& law) {
     if (times.size() != feeds.size())
       fail(t.at("ramp_time_s"), fmt::format("expected {} ramp times, one per feed", feeds.size()));
     for (std::size_t k = 0; k < feeds.size(); ++k) {
-      const std::string fp = t.at("feed_mm_s") + "/" + std::to_string(k), tp = t.at("ramp_time_s") + "/" + std::to_string(k);
+      const std::string fp = t.at("feed_mm_s") + "/" + std::to_string(k),
+                        tp = t.at("ramp_time_s") + "/" + std::to_string(k);
       if (!(feeds[k] > 0)) fail(fp, "expected a positive feed");
       if (k > 0 && !(feeds[k] > feeds[k - 1])) fail(fp, "expected feeds in increasing order");
       // A ramp of over a minute is a typo (a time in ms), and would stall every move.
@@ -102,8 +103,7 @@ void parse_machine(const json& j, const std::string& ptr, MachineConfig& m, Worl
     Object s(sj, sp);
     const json* latched = s.find("latched");
     const json* scanned = s.find("scanned");
-    if ((latched != nullptr) == (scanned != nullptr))
-      fail(sp, "expected exactly one of 'latched' or 'scanned'");
+    if ((latched != nullptr) == (scanned != nullptr)) fail(sp, "expected exactly one of 'latched' or 'scanned'");
     if (latched) {
       m.skip.kind = SkipInput::Kind::Latched;
       Object l(*latched, s.at("latched"));
@@ -206,7 +206,8 @@ void parse_reference_sphere(const json& j, const std::string& ptr, ReferenceSphe
     post.unit("direction", r.post_direction);
     post.positive("length_mm", r.post_length_mm);
     post.finish();
-    if (r.post_diameter_mm >= r.true_diameter_mm) fail(post.at("diameter_mm"), "the post must be thinner than the sphere");
+    if (r.post_diameter_mm >= r.true_diameter_mm)
+      fail(post.at("diameter_mm"), "the post must be thinner than the sphere");
   });
   o.finish();
 }
@@ -226,14 +227,12 @@ csg::Node parse_boolean(Object& o, const std::string& key, csg::Node::Op op) {
 
 csg::Node parse_node(const json& j, const std::string& ptr) {
   Object o(j, ptr);
-  static const std::pair<const char*, csg::Node::Op> ops[] = {
-      {"union", csg::Node::Op::Union},
-      {"intersection", csg::Node::Op::Intersection},
-      {"difference", csg::Node::Op::Difference}};
+  static const std::pair<const char*, csg::Node::Op> ops[] = {{"union", csg::Node::Op::Union},
+                                                              {"intersection", csg::Node::Op::Intersection},
+                                                              {"difference", csg::Node::Op::Difference}};
   for (const auto& [key, op] : ops)
     if (j.contains(key)) return parse_boolean(o, key, op);
-  if (!j.contains("type"))
-    fail(ptr, "expected a primitive ('type') or one of 'union', 'intersection', 'difference'");
+  if (!j.contains("type")) fail(ptr, "expected a primitive ('type') or one of 'union', 'intersection', 'difference'");
   const std::string type = string(o.required("type"), o.at("type"));
   csg::Node n;
   o.read("name", [&](const json& nj, const std::string& np) { n.primitive.name = string(nj, np); });
@@ -259,7 +258,8 @@ csg::Node parse_node(const json& j, const std::string& ptr) {
     c.apex = vec3(o.required("apex"), o.at("apex"));
     c.axis = unit(o.required("axis"), o.at("axis"));
     c.half_angle_deg = number(o.required("half_angle_deg"), o.at("half_angle_deg"));
-    if (!(c.half_angle_deg > 0 && c.half_angle_deg < 90)) fail(o.at("half_angle_deg"), "expected an angle in (0, 90) degrees");
+    if (!(c.half_angle_deg > 0 && c.half_angle_deg < 90))
+      fail(o.at("half_angle_deg"), "expected an angle in (0, 90) degrees");
     n.primitive.shape = c;
   } else if (type == "torus") {
     csg::Torus t;
@@ -275,7 +275,8 @@ csg::Node parse_node(const json& j, const std::string& ptr) {
     e.point = vec3(o.required("point"), o.at("point"));
     e.axis = unit(o.required("axis"), o.at("axis"));
     e.major_axis = unit(o.required("major_axis"), o.at("major_axis"));
-    if (std::abs(e.major_axis.dot(e.axis)) > 1e-6) fail(o.at("major_axis"), "the major axis must be normal to the axis");
+    if (std::abs(e.major_axis.dot(e.axis)) > 1e-6)
+      fail(o.at("major_axis"), "the major axis must be normal to the axis");
     e.major_diameter_mm = positive(o.required("major_diameter_mm"), o.at("major_diameter_mm"));
     e.minor_diameter_mm = positive(o.required("minor_diameter_mm"), o.at("minor_diameter_mm"));
     if (e.minor_diameter_mm > e.major_diameter_mm)
@@ -284,7 +285,8 @@ csg::Node parse_node(const json& j, const std::string& ptr) {
     n.primitive.shape = e;
   } else {
     fail(o.at("type"), fmt::format("unknown primitive type '{}' (expected half_space, cylinder, sphere, cone, torus or "
-                                   "elliptic_cylinder)", type));
+                                   "elliptic_cylinder)",
+                                   type));
   }
   o.finish();
   return n;
@@ -318,7 +320,8 @@ csg::Deviation parse_deviation(const json& j, const std::string& ptr, bool plana
       d.waviness = w;
     } else {
       csg::Lobing l;
-      f.read("lobes", [&](const json& lj, const std::string& lp) { l.lobes = static_cast<int>(sj::integer(lj, lp, 1)); });
+      f.read("lobes",
+             [&](const json& lj, const std::string& lp) { l.lobes = static_cast<int>(sj::integer(lj, lp, 1)); });
       f.number("amplitude_mm", l.amplitude_mm);
       f.number("phase_deg", l.phase_deg);
       d.lobing = l;
@@ -332,7 +335,8 @@ csg::Deviation parse_deviation(const json& j, const std::string& ptr, bool plana
 // STEP and IGES keep their analytic faces for exact contact; other formats are plain meshes.
 void load_cad_design(CadDesign& cad, const std::string& ptr) {
   std::string ext = std::filesystem::path(cad.path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".step" || ext == ".stp" || ext == ".iges" || ext == ".igs") {
     const geometry::TessellationOptions options;
     auto model = geometry::load_cad_model(cad.path, options);
@@ -345,7 +349,8 @@ void load_cad_design(CadDesign& cad, const std::string& ptr) {
     if (!mesh) fail(ptr, mesh.error().message);
     cad.mesh = std::make_shared<const geometry::Mesh>(std::move(*mesh));
   }
-  if (!cad.mesh->is_closed()) fail(ptr, fmt::format("'{}' is not a closed (watertight) mesh, so it has no inside", cad.path));
+  if (!cad.mesh->is_closed())
+    fail(ptr, fmt::format("'{}' is not a closed (watertight) mesh, so it has no inside", cad.path));
 }
 
 PartSpec parse_part(const json& j, const std::string& ptr, const std::string& base_dir) {
@@ -385,7 +390,8 @@ PartSpec parse_part(const json& j, const std::string& ptr, const std::string& ba
     for (const auto& item : dj.items()) {
       const json* v = devs.find(item.key());
       const auto it = names.find(item.key());
-      if (it == names.end()) fail(devs.at(item.key()), fmt::format("no primitive named '{}' in the design", item.key()));
+      if (it == names.end())
+        fail(devs.at(item.key()), fmt::format("no primitive named '{}' in the design", item.key()));
       bool planar = false, round = false;
       for (const csg::Primitive* p : it->second)
         (std::holds_alternative<csg::HalfSpace>(p->shape) ? planar : round) = true;
@@ -425,8 +431,9 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
   // Worlds of other machine kinds share the folder (docs/world.md); say which command reads them.
   o.read("kind", [&](const json& kj, const std::string& kp) {
     if (sj::one_of(kj, kp, {"cmm", "wavefront"}) == "wavefront")
-      sj::fail(kp, "a world of kind \"wavefront\" is a wavefront-gauge machine, not a CMM: it is read by "
-                   "`metron calibrate wavefront --world FILE` (docs/wavefront.md)");
+      sj::fail(kp,
+               "a world of kind \"wavefront\" is a wavefront-gauge machine, not a CMM: it is read by "
+               "`metron calibrate wavefront --world FILE` (docs/wavefront.md)");
   });
   o.read("name", [&](const json& nj, const std::string& np) { w.name = string(nj, np); });
   o.read("description", [&](const json& dj, const std::string& dp) { string(dj, dp); });
@@ -440,7 +447,8 @@ World parse_world_or_throw(const json& j, const std::string& base_dir) {
     parse_machine(m, mp, w.machine, w.truth);
   });
   o.read("probe", [&](const json& pj, const std::string& pp) { w.truth.probe = parse_probe(pj, pp); });
-  o.read("probe_library", [&](const json& lj, const std::string& lp) { w.machine.probe_library = parse_probe_library(lj, lp); });
+  o.read("probe_library",
+         [&](const json& lj, const std::string& lp) { w.machine.probe_library = parse_probe_library(lj, lp); });
   o.read("reference_sphere", [&](const json& rj, const std::string& rp) {
     parse_reference_sphere(rj, rp, w.machine.reference_sphere, w.truth.reference_sphere);
   });
@@ -491,8 +499,9 @@ tl::expected<json, WorldError> read_json(const std::string& path) {
   auto text = read_input_file(path);
   if (!text) {
     const std::string reason = text.error().substr(text.error().rfind(": ") + 2);
-    return tl::unexpected(WorldError{reason == "no such file" ? fmt::format("{}: cannot read the file", path)
-                                                              : fmt::format("{}: cannot read the file: {}", path, reason)});
+    return tl::unexpected(WorldError{reason == "no such file"
+                                         ? fmt::format("{}: cannot read the file", path)
+                                         : fmt::format("{}: cannot read the file: {}", path, reason)});
   }
   auto j = sj::parse_document(*text);
   if (!j) return tl::unexpected(WorldError{fmt::format("{}: invalid JSON: {}", path, j.error())});
@@ -535,7 +544,8 @@ tl::expected<json, WorldError> resolve_extends(json j, const std::string& source
   }
   j.erase("extends");
   // One-of choices are replaced, not merged: a scanned skip must not keep the base's latched.
-  for (const auto& [section, key] : {std::pair{"machine", "skip"}, std::pair{"machine", "axes"}, std::pair{"part", "design"}}) {
+  for (const auto& [section, key] :
+       {std::pair{"machine", "skip"}, std::pair{"machine", "axes"}, std::pair{"part", "design"}}) {
     if (j.contains(section) && j[section].is_object() && j[section].contains(key) && base.contains(section) &&
         base[section].is_object())
       base[section].erase(key);
@@ -551,7 +561,8 @@ tl::expected<World, WorldError> parse_world(const nlohmann::json& json_in, const
   auto j = resolve_extends(json_in, source_name, base_dir, 0);
   if (!j) return tl::unexpected(j.error());
   auto w = sj::read([&] { return parse_world_or_throw(*j, base_dir); });
-  if (!w) return tl::unexpected(WorldError{fmt::format("{}: {}: {}", source_name, w.error().pointer, w.error().message)});
+  if (!w)
+    return tl::unexpected(WorldError{fmt::format("{}: {}: {}", source_name, w.error().pointer, w.error().message)});
   w->source = source_name;
   return std::move(*w);
 }

@@ -32,7 +32,8 @@ class RoughSolid final : public Solid {
   }
   [[nodiscard]] std::string feature_at(const Vec3& p) const override { return m_base->feature_at(p); }
   [[nodiscard]] std::unique_ptr<Solid> local_view(const Vec3& centre_mm, double radius_mm) const override {
-    return std::unique_ptr<Solid>(new RoughSolid(m_base->local_view(centre_mm, radius_mm), m_roughness, m_seed, Seeded{}));
+    return std::unique_ptr<Solid>(
+        new RoughSolid(m_base->local_view(centre_mm, radius_mm), m_roughness, m_seed, Seeded{}));
   }
 
  private:

@@ -45,15 +45,16 @@ tl::expected<Frame, std::string> datset(const Frame& current, const std::vector<
         // the primary axis (else the current origin).
         Vec3 pivot = current.translation();
         for (const auto& o : clauses)
-          if (&o != &c && std::any_of(o.origins.begin(), o.origins.end(), [&](Axis a) { return static_cast<int>(a) != *primary; }))
+          if (&o != &c &&
+              std::any_of(o.origins.begin(), o.origins.end(), [&](Axis a) { return static_cast<int>(a) != *primary; }))
             pivot = o.datum.position;
         d = (c.datum.position - pivot) * (c.minus ? -1.0 : 1.0);
         d = d - d.dot(p) * p;
         if (d.norm() < 1e-9)
-          return tl::unexpected(std::string("the secondary datum lies on the origin across the primary axis: it gives no direction"));
+          return tl::unexpected(
+              std::string("the secondary datum lies on the origin across the primary axis: it gives no direction"));
       }
-      if (d.norm() < 1e-9)
-        return tl::unexpected(std::string("the secondary datum is parallel to the primary datum"));
+      if (d.norm() < 1e-9) return tl::unexpected(std::string("the secondary datum is parallel to the primary datum"));
       secondary = k;
       axes.col(k) = d.normalized();
     } else {
@@ -103,7 +104,8 @@ Frame translate_origin(const Frame& current, const std::optional<double> (&origi
 Frame rotate_about(const Frame& current, Axis axis, double angle_deg) {
   const Vec3 local_axis = Vec3::Unit(static_cast<int>(axis));
   Frame f = current;
-  f.linear() = current.linear() * Eigen::AngleAxisd(angle_deg * std::numbers::pi / 180.0, local_axis).toRotationMatrix();
+  f.linear() =
+      current.linear() * Eigen::AngleAxisd(angle_deg * std::numbers::pi / 180.0, local_axis).toRotationMatrix();
   return f;
 }
 

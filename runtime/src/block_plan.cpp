@@ -41,26 +41,30 @@ class PlanBuilder {
       // The conventional cycle at the same measuring feed as the characterised one would use.
       const TouchBaseline& b = *m_context.touch_baseline;
       if (const auto feed = m_context.measuring_feed_mm_s ? m_context.measuring_feed_mm_s
-                            : c                            ? std::optional(c->measuring_feed_mm_s)
-                                                           : std::nullopt)
+                            : c                           ? std::optional(c->measuring_feed_mm_s)
+                                                          : std::nullopt)
         p.speed_mm_s = *feed;
       if (b.two_touch) {
         const auto first = b.first_feed_mm_s ? b.first_feed_mm_s : c ? std::optional(c->first_feed_mm_s) : std::nullopt;
-        if (!first) return program_error(span, "the two-touch baseline needs a first-touch feed (two-touch:B:F) or a characterisation");
+        if (!first)
+          return program_error(span,
+                               "the two-touch baseline needs a first-touch feed (two-touch:B:F) or a characterisation");
         p.two_touch = machine::PtMeas::TwoTouch{*first, b.backoff_mm};
       }
     } else if (c) {
       // SEEDS.md 3: the characterised cycle; SNSET/APPRCH and FEDRAT/MESVEL override.
-      const TouchPlan plan = c->plan(
-          p.normal, m_context.measuring_feed_mm_s,
-          probe.approach_explicit ? std::optional<double>(probe.approach_mm) : std::nullopt, resting(p));
+      const TouchPlan plan =
+          c->plan(p.normal, m_context.measuring_feed_mm_s,
+                  probe.approach_explicit ? std::optional<double>(probe.approach_mm) : std::nullopt, resting(p));
       apply_touch_plan(plan, p);
     }
     m_plan.commands.push_back({0, p});
     annotate(span, p.speed_mm_s.value_or(m_context.state.measuring_feed_mm_s));
     // Where the retract ends (the latched centre is near nominal + effective radius).
-    m_at = m_context.state.tool ? std::optional<Vec3>(p.nominal_mm + (m_context.state.tool->effective_radius_mm + p.retract_mm) * p.normal)
-                                : std::nullopt;
+    m_at =
+        m_context.state.tool
+            ? std::optional<Vec3>(p.nominal_mm + (m_context.state.tool->effective_radius_mm + p.retract_mm) * p.normal)
+            : std::nullopt;
     return {};
   }
 
@@ -133,7 +137,9 @@ Result<void> plan_steps(const MeasBlock& block, const Geometry& nominal, const B
     }
   }
   if (scan_start)
-    return program_error(scan_start->span, "in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: this one has no end");
+    return program_error(
+        scan_start->span,
+        "in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: this one has no end");
   return {};
 }
 
@@ -177,7 +183,8 @@ Result<void> plan_auto(const MeasBlock& block, const Geometry& nominal, const Bl
 }  // namespace
 
 bool takes_points(const MeasBlock& block) {
-  return std::any_of(block.steps.begin(), block.steps.end(), [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
+  return std::any_of(block.steps.begin(), block.steps.end(),
+                     [](const MeasStep& s) { return s.kind != MeasStep::Kind::GoTo; });
 }
 
 Result<BlockPlan> plan_block(const MeasBlock& block, const Geometry& nominal, const BlockPlanContext& context) {
@@ -204,8 +211,8 @@ Result<machine::ScanPath> scan_command(const geometry::Contour& contour, const B
   o.chord_tolerance_mm = settings.chord_tolerance_mm;
   o.centripetal_accel_mm_s2 = settings.centripetal_accel_mm_s2;
   // The segment speeds are capped by the scan feed; without FEDRAT/SCNVEL by the measuring feed.
-  o.feed_mm_s = settings.feed_mm_s ? *settings.feed_mm_s
-                                   : (state.measuring_feed_mm_s > 0 ? state.measuring_feed_mm_s : 10.0);
+  o.feed_mm_s =
+      settings.feed_mm_s ? *settings.feed_mm_s : (state.measuring_feed_mm_s > 0 ? state.measuring_feed_mm_s : 10.0);
   auto plan = geometry::make_scan_path(contour, o);
   if (!plan) return program_error(span, "cannot make a scan path: " + plan.error().message);
   machine::ScanPath scan;

@@ -50,8 +50,9 @@ std::vector<double> monotone_tangents(const std::vector<RampSample>& p) {
   m.front() = d.front();
   m.back() = d.back();
   for (std::size_t k = 1; k + 1 < n; ++k)
-    m[k] = d[k - 1] * d[k] <= 0 ? 0
-                                : 3 * (h[k - 1] + h[k]) / ((2 * h[k] + h[k - 1]) / d[k - 1] + (h[k] + 2 * h[k - 1]) / d[k]);
+    m[k] = d[k - 1] * d[k] <= 0
+               ? 0
+               : 3 * (h[k - 1] + h[k]) / ((2 * h[k] + h[k - 1]) / d[k - 1] + (h[k] + 2 * h[k - 1]) / d[k]);
   for (std::size_t k = 0; k + 1 < n; ++k) {
     if (d[k] == 0) {
       m[k] = m[k + 1] = 0;
@@ -79,7 +80,8 @@ double interpolated_ramp_s(const std::vector<RampSample>& p, double feed) {
   if (feed <= p.front().feed_mm_s || p.size() == 1) return p.front().ramp_time_s;
   if (feed >= p.back().feed_mm_s) return p.back().ramp_time_s * feed / p.back().feed_mm_s;
   const std::vector<double> m = monotone_tangents(p);
-  const auto hi = std::upper_bound(p.begin(), p.end(), feed, [](double v, const RampSample& s) { return v < s.feed_mm_s; });
+  const auto hi =
+      std::upper_bound(p.begin(), p.end(), feed, [](double v, const RampSample& s) { return v < s.feed_mm_s; });
   const std::size_t k = static_cast<std::size_t>(hi - p.begin()) - 1;
   const double h = p[k + 1].feed_mm_s - p[k].feed_mm_s, t = (feed - p[k].feed_mm_s) / h;
   // Cubic Hermite basis on [0, 1].
@@ -109,16 +111,17 @@ double braking_share(const AxisAcceleration& a, double feed) {
   const auto& st = a.stops;
   if (feed <= st.front().feed_mm_s) return share(st.front());
   if (feed >= st.back().feed_mm_s) return share(st.back());
-  const auto hi = std::upper_bound(st.begin(), st.end(), feed, [](double v, const RampSample& s) { return v < s.feed_mm_s; });
+  const auto hi =
+      std::upper_bound(st.begin(), st.end(), feed, [](double v, const RampSample& s) { return v < s.feed_mm_s; });
   const auto lo = hi - 1;
   const double t = (feed - lo->feed_mm_s) / (hi->feed_mm_s - lo->feed_mm_s);
   return share(*lo) + t * (share(*hi) - share(*lo));
 }
 
 const char* mode_name(AxisAcceleration::Mode m) {
-  return m == AxisAcceleration::Mode::ConstantTime ? "constant_time"
+  return m == AxisAcceleration::Mode::ConstantTime   ? "constant_time"
          : m == AxisAcceleration::Mode::ConstantRate ? "constant_rate"
-                                                      : "interpolated";
+                                                     : "interpolated";
 }
 
 std::string fault_text(const machine::Response& r) {
@@ -132,14 +135,18 @@ machine::Response run1(machine::Machine& m, machine::Command c) {
   return rs.empty() ? machine::Response{} : rs.front();
 }
 
-double mean_of(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); }
+double mean_of(const std::vector<double>& v) {
+  return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+}
 
 const char* axis_name(int i) { return i == 0 ? "x" : i == 1 ? "y" : "z"; }
 
 }  // namespace
 
-tl::expected<AxisAcceleration, std::string> fit_acceleration(std::vector<RampSample> samples, const RampFitSettings& settings) {
-  std::sort(samples.begin(), samples.end(), [](const RampSample& a, const RampSample& b) { return a.feed_mm_s < b.feed_mm_s; });
+tl::expected<AxisAcceleration, std::string> fit_acceleration(std::vector<RampSample> samples,
+                                                             const RampFitSettings& settings) {
+  std::sort(samples.begin(), samples.end(),
+            [](const RampSample& a, const RampSample& b) { return a.feed_mm_s < b.feed_mm_s; });
   if (samples.size() < 3) return tl::unexpected(fmt::format("{} timed feeds, at least 3 needed", samples.size()));
   for (std::size_t k = 0; k < samples.size(); ++k) {
     const RampSample& x = samples[k];
@@ -177,7 +184,9 @@ tl::expected<AxisAcceleration, std::string> fit_acceleration(std::vector<RampSam
   const double loo = leave_one_out_rms(a.samples);
   const auto use = [&](AxisAcceleration::Mode m) {
     a.mode = m;
-    a.fit_rms_relative = m == AxisAcceleration::Mode::ConstantTime ? rms_time : m == AxisAcceleration::Mode::ConstantRate ? best : loo;
+    a.fit_rms_relative = m == AxisAcceleration::Mode::ConstantTime   ? rms_time
+                         : m == AxisAcceleration::Mode::ConstantRate ? best
+                                                                     : loo;
     return a;
   };
   if (settings.only) return use(*settings.only);
@@ -225,9 +234,12 @@ double path_time_s(const std::array<AxisAcceleration, 3>& axes, const Vec3& dire
     const double c = std::abs(direction[i]);
     if (c < 1e-9) continue;
     const AxisAcceleration& ax = axes[static_cast<std::size_t>(i)];
-    if (ax.asymmetric || ax.mode == AxisAcceleration::Mode::Interpolated) t = std::max(t, (ax.*time)(c * feed));
-    else if (ax.mode == AxisAcceleration::Mode::ConstantTime) t = std::max(t, ax.time_s);
-    else a = std::min(a, ax.acceleration_mm_s2 / c), j = std::min(j, ax.jerk_mm_s3 / c);
+    if (ax.asymmetric || ax.mode == AxisAcceleration::Mode::Interpolated)
+      t = std::max(t, (ax.*time)(c * feed));
+    else if (ax.mode == AxisAcceleration::Mode::ConstantTime)
+      t = std::max(t, ax.time_s);
+    else
+      a = std::min(a, ax.acceleration_mm_s2 / c), j = std::min(j, ax.jerk_mm_s3 / c);
   }
   const double rate = std::isfinite(a) ? constant_rate_ramp_s(std::max(feed, 1e-9), a, j) : 0;
   return std::max(rate, t);
@@ -295,8 +307,8 @@ double MachineCharacterisation::max_feed_mm_s(const Vec3& direction) const {
 
 double MachineCharacterisation::standoff_mm(const Vec3& direction, double slow_mm_s, double fast_mm_s,
                                             double tolerance_mm) const {
-  const double d1 = acceleration_distance_mm(direction, slow_mm_s);  // SEEDS.md 3: D1, slow feed's ramp
-  const double d2 = fast_mm_s * response.jitter_s;                  // D2: first touch's uncertainty
+  const double d1 = acceleration_distance_mm(direction, slow_mm_s);      // SEEDS.md 3: D1, slow feed's ramp
+  const double d2 = fast_mm_s * response.jitter_s;                       // D2: first touch's uncertainty
   const double d3 = slow_mm_s * (response.delay_s + response.jitter_s);  // D3: dynamic zone
   return d1 + d2 + d3 + tolerance_mm;
 }
@@ -309,7 +321,8 @@ double MachineCharacterisation::dynamic_correction_mm(double feed_mm_s, double q
   return (feed_mm_s - qualification_feed_mm_s) * (response.delay_s + response.jitter_s / 2);
 }
 
-std::optional<double> MachineCharacterisation::early_contact_mm(const machine::PtMeas& p, const machine::Hit& hit) const {
+std::optional<double> MachineCharacterisation::early_contact_mm(const machine::PtMeas& p,
+                                                                const machine::Hit& hit) const {
   if (p.two_touch || !p.speed_mm_s) return std::nullopt;
   const Vec3 n = p.normal.normalized();
   const double feed = *p.speed_mm_s;
@@ -349,15 +362,16 @@ TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double
   }
   if (!p.two_touch) {
     // One touch from rest: at constant speed before the earliest possible contact.
-    p.approach_mm = approach_mm.value_or(from_rest(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm) + qualified_offset_mm(),
-                                                   p.feed_mm_s));
+    p.approach_mm = approach_mm.value_or(
+        from_rest(standoff_mm(u, p.feed_mm_s, 0, nominal_tolerance_mm) + qualified_offset_mm(), p.feed_mm_s));
     return p;
   }
   p.first_feed_mm_s = std::min(first_feed_mm_s, max_feed_mm_s(u));
   // The first touch finds the surface: at its feed before the earliest possible contact (a
   // touch at constant feed; the stop distance bound holds on the ramp as well).
   p.approach_mm = approach_mm.value_or(
-      from_rest(acceleration_distance_mm(u, p.first_feed_mm_s) + nominal_tolerance_mm + qualified_offset_mm(), p.first_feed_mm_s));
+      from_rest(acceleration_distance_mm(u, p.first_feed_mm_s) + nominal_tolerance_mm + qualified_offset_mm(),
+                p.first_feed_mm_s));
   p.standoff_mm = standoff_mm(u, p.feed_mm_s, p.first_feed_mm_s, 0);
   // From the first latched centre back to the surface: pre-travel and the constant-delay part
   // of the first touch's dynamic zone (its jitter part is D2), then the standoff.
@@ -366,8 +380,9 @@ TouchPlan MachineCharacterisation::plan(const Vec3& normal, std::optional<double
 }
 
 tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::Machine& machine, int axis,
-                                                                     const std::vector<double>& feeds, int dither,
-                                                                     double* clock_resolution_s, const RampFitSettings& fit) {
+                                                                      const std::vector<double>& feeds, int dither,
+                                                                      double* clock_resolution_s,
+                                                                      const RampFitSettings& fit) {
   const Vec3 e = Vec3::Unit(axis);
   std::uint64_t tag = 1u << 20;
   double sign = 1;
@@ -437,14 +452,16 @@ tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::M
     if (!*s) break;  // clamped: this feed and faster ones are dropped
     samples.push_back(**s);
   }
-  if (samples.size() < 3) return tl::unexpected(fmt::format("too few usable timing feeds on the {} axis", axis_name(axis)));
+  if (samples.size() < 3)
+    return tl::unexpected(fmt::format("too few usable timing feeds on the {} axis", axis_name(axis)));
   auto fitted = fit_acceleration(samples, fit);
   // No family fits: the model-free interpolation is only as good as the feeds sample the shape,
   // so feeds halfway (geometrically) between the timed ones are timed too, at most twice.
   for (int round = 0; round < 2 && !fit.only; ++round) {
     const bool family = fitted && fitted->mode != AxisAcceleration::Mode::Interpolated;
     if (family || (fitted && fitted->fit_rms_relative <= fit.family_rms_relative)) break;
-    std::sort(samples.begin(), samples.end(), [](const RampSample& a, const RampSample& b) { return a.feed_mm_s < b.feed_mm_s; });
+    std::sort(samples.begin(), samples.end(),
+              [](const RampSample& a, const RampSample& b) { return a.feed_mm_s < b.feed_mm_s; });
     std::vector<RampSample> more;
     for (std::size_t k = 0; k + 1 < samples.size(); ++k) {
       auto s = time_feed(std::sqrt(samples[k].feed_mm_s * samples[k + 1].feed_mm_s));
@@ -482,7 +499,8 @@ tl::expected<void, std::string> measure_axes(machine::Machine& machine, const Ch
                                              const Say& say, MachineCharacterisation& c) {
   for (int i = 0; i < 3; ++i) {
     say(fmt::format("timing moves on the {} axis ...", axis_name(i)));
-    auto a = measure_axis_acceleration(machine, i, settings.timing_feeds_mm_s, settings.dither, &c.dt_s, settings.ramp_fit);
+    auto a =
+        measure_axis_acceleration(machine, i, settings.timing_feeds_mm_s, settings.dither, &c.dt_s, settings.ramp_fit);
     if (!a) return tl::unexpected(a.error());
     c.axes[static_cast<std::size_t>(i)] = *a;
   }
@@ -493,9 +511,10 @@ tl::expected<void, std::string> measure_axes(machine::Machine& machine, const Ch
 tl::expected<TouchTarget, std::string> qualify_touch_point(Bench& bench, double ball_diameter_mm,
                                                            MachineCharacterisation& c) {
   const std::string tool = "METRON_CHAR";
-  for (machine::Command cmd : {machine::Command{bench.tag++, machine::DefineTool{tool, ball_diameter_mm, -Vec3::UnitZ(), 50}},
-                               machine::Command{bench.tag++, machine::SelectTool{tool}},
-                               machine::Command{bench.tag++, machine::QualifyTool{}}}) {
+  for (machine::Command cmd :
+       {machine::Command{bench.tag++, machine::DefineTool{tool, ball_diameter_mm, -Vec3::UnitZ(), 50}},
+        machine::Command{bench.tag++, machine::SelectTool{tool}},
+        machine::Command{bench.tag++, machine::QualifyTool{}}}) {
     auto r = run1(bench.machine, cmd);
     if (r.status == machine::Response::Status::Fault) return tl::unexpected("tool qualification: " + fault_text(r));
   }
@@ -695,8 +714,9 @@ tl::expected<void, std::string> time_stops(Bench& bench, MachineCharacterisation
     const Vec3 n = Vec3::Unit(i);
     AxisAcceleration& ax = c.axes[static_cast<std::size_t>(i)];
     // A qualification point within 5 degrees of the axis tells that the sphere was probed there.
-    const bool probed = std::any_of(st.tool->qualification_centres_mm.begin(), st.tool->qualification_centres_mm.end(),
-                                    [&](const Vec3& q) { return (q - centre).normalized().dot(n) > std::cos(5 * std::numbers::pi / 180); });
+    const bool probed = std::any_of(
+        st.tool->qualification_centres_mm.begin(), st.tool->qualification_centres_mm.end(),
+        [&](const Vec3& q) { return (q - centre).normalized().dot(n) > std::cos(5 * std::numbers::pi / 180); });
     const double top = 0.95 * c.max_feed_mm_s(-n);
     if (!probed || !(top > 0)) continue;
     bench.say(fmt::format("timing stops on the {} axis ...", axis_name(i)));
@@ -736,9 +756,10 @@ tl::expected<void, std::string> time_stops(Bench& bench, MachineCharacterisation
       // Ta = 2 Td - Tb must stay positive (and Tb too): else the stops contradict the moves.
       const double share = sp.ramp_time_s / ax.ramp_time_s(sp.feed_mm_s);
       if (!(share > 0.05 && share < 1.95))
-        return tl::unexpected(fmt::format("{} axis: a stop from {:.1f} mm/s took {:.1f} ms against a mean ramp of {:.1f} ms: "
-                                          "inconsistent timings",
-                                          axis_name(i), sp.feed_mm_s, 1e3 * sp.ramp_time_s, 1e3 * ax.ramp_time_s(sp.feed_mm_s)));
+        return tl::unexpected(
+            fmt::format("{} axis: a stop from {:.1f} mm/s took {:.1f} ms against a mean ramp of {:.1f} ms: "
+                        "inconsistent timings",
+                        axis_name(i), sp.feed_mm_s, 1e3 * sp.ramp_time_s, 1e3 * ax.ramp_time_s(sp.feed_mm_s)));
     }
   }
   return route(home);
@@ -751,7 +772,8 @@ tl::expected<void, std::string> choose_limits_and_strategy(MachineCharacterisati
   // The accurate feed: the spread of repeated touches within the threshold (SEEDS.md 3).
   const double accurate = c.response.jitter_s > 0
                               ? std::sqrt(std::max(std::pow(c.threshold_mm, 2) - std::pow(6 * c.response.noise_mm, 2),
-                                                   std::pow(c.threshold_mm / 2, 2))) / c.response.jitter_s
+                                                   std::pow(c.threshold_mm / 2, 2))) /
+                                    c.response.jitter_s
                               : c.max_probe_feed_mm_s;
   c.first_feed_mm_s = c.max_probe_feed_mm_s;
   // SEEDS.md 3: one-touch cycles when the spread at the fast feed is below the threshold.
@@ -819,7 +841,11 @@ tl::expected<void, std::string> choose_cycle_by_timing(Bench& bench, const Chara
     for (const MachineCharacterisation* cc : {&one, &two, &blend}) {
       auto t = time_trial_cycles(bench, target, *cc);
       if (!t) return tl::unexpected(t.error());
-      bench.say(fmt::format("trial {} cycles: {:.4f} s", cc->blend ? "blended one-touch" : cc->one_touch ? "one-touch" : "two-touch", *t));
+      bench.say(fmt::format("trial {} cycles: {:.4f} s",
+                            cc->blend       ? "blended one-touch"
+                            : cc->one_touch ? "one-touch"
+                                            : "two-touch",
+                            *t));
       if (*t < best) best = *t, c.one_touch = cc->one_touch, c.blend = cc->blend;
     }
   }
@@ -876,30 +902,36 @@ json to_json(const MachineCharacterisation& c) {
   }
   json touches = json::array();
   for (const auto& s : c.response.samples)
-    touches.push_back({{"feed_mm_s", s.feed_mm_s}, {"count", s.count}, {"mean_mm", s.mean_mm},
-                       {"range_mm", s.range_mm}, {"midrange_mm", s.midrange_mm}, {"stddev_mm", s.stddev_mm}});
+    touches.push_back({{"feed_mm_s", s.feed_mm_s},
+                       {"count", s.count},
+                       {"mean_mm", s.mean_mm},
+                       {"range_mm", s.range_mm},
+                       {"midrange_mm", s.midrange_mm},
+                       {"stddev_mm", s.stddev_mm}});
   return {
       {"format", "metron-touch-characterisation"},
       {"version", 2},
       {"world", c.world},
       {"dt_s", c.dt_s},
       {"axes", axes},
-      {"response", {{"skip", c.response.scanned ? "scanned" : "latched"},
-                    {"jitter_s", c.response.jitter_s},
-                    {"delay_s", c.response.delay_s},
-                    {"noise_mm", c.response.noise_mm},
-                    {"qualification_feed_mm_s", c.response.qualification_feed_mm_s},
-                    {"touches", touches}}},
+      {"response",
+       {{"skip", c.response.scanned ? "scanned" : "latched"},
+        {"jitter_s", c.response.jitter_s},
+        {"delay_s", c.response.delay_s},
+        {"noise_mm", c.response.noise_mm},
+        {"qualification_feed_mm_s", c.response.qualification_feed_mm_s},
+        {"touches", touches}}},
       {"over_travel_mm", c.over_travel_mm},
       {"over_travel_margin", c.over_travel_margin},
       {"pre_travel_mm", c.pre_travel_mm},
       {"max_probe_feed_mm_s", c.max_probe_feed_mm_s},
-      {"strategy", {{"threshold_mm", c.threshold_mm},
-                    {"cycle", c.one_touch ? "one_touch" : "two_touch"},
-                    {"blend", c.blend},
-                    {"measuring_feed_mm_s", c.measuring_feed_mm_s},
-                    {"first_feed_mm_s", c.first_feed_mm_s},
-                    {"nominal_tolerance_mm", c.nominal_tolerance_mm}}},
+      {"strategy",
+       {{"threshold_mm", c.threshold_mm},
+        {"cycle", c.one_touch ? "one_touch" : "two_touch"},
+        {"blend", c.blend},
+        {"measuring_feed_mm_s", c.measuring_feed_mm_s},
+        {"first_feed_mm_s", c.first_feed_mm_s},
+        {"nominal_tolerance_mm", c.nominal_tolerance_mm}}},
   };
 }
 
@@ -913,12 +945,13 @@ void check_protected_feeds(const MachineCharacterisation& c) {
   for (int i = 0; i < 3; ++i) protected_mm_s = std::min(protected_mm_s, c.max_feed_mm_s(Vec3::Unit(i)));
   const double allowed = protected_mm_s * (1 + 1e-9);
   if (c.max_probe_feed_mm_s > allowed)
-    sj::fail("/max_probe_feed_mm_s",
-             fmt::format("{:g} mm/s exceeds {:.4g} mm/s, the fastest feed this file's own ramps, delays, pre-travel and "
-                         "over-travel protect (docs/touch-trigger.md, \"maximum protected feed\")",
-                         c.max_probe_feed_mm_s, protected_mm_s));
-  for (const auto& [key, feed] : {std::pair{"measuring_feed_mm_s", c.measuring_feed_mm_s},
-                                  std::pair{"first_feed_mm_s", c.first_feed_mm_s}})
+    sj::fail(
+        "/max_probe_feed_mm_s",
+        fmt::format("{:g} mm/s exceeds {:.4g} mm/s, the fastest feed this file's own ramps, delays, pre-travel and "
+                    "over-travel protect (docs/touch-trigger.md, \"maximum protected feed\")",
+                    c.max_probe_feed_mm_s, protected_mm_s));
+  for (const auto& [key, feed] :
+       {std::pair{"measuring_feed_mm_s", c.measuring_feed_mm_s}, std::pair{"first_feed_mm_s", c.first_feed_mm_s}})
     if (feed > c.max_probe_feed_mm_s * (1 + 1e-9))
       sj::fail(std::string("/strategy/") + key,
                fmt::format("{:g} mm/s exceeds the maximum protected feed {:g} mm/s", feed, c.max_probe_feed_mm_s));
@@ -931,7 +964,8 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
   auto read = sj::read([&] {
     MachineCharacterisation c;
     sj::Object o(j, "");
-    o.get("format", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"metron-touch-characterisation"}); });
+    o.get("format",
+          [](const json& v, const std::string& p) { return sj::one_of(v, p, {"metron-touch-characterisation"}); });
     // Version 1 files (before the interpolated model and timed stops) read as they are.
     o.read("version", [](const json& v, const std::string& p) { sj::integer(v, p, 1, 2); });
     o.read("world", [&](const json& v, const std::string& p) { c.world = sj::string(v, p); });
@@ -963,7 +997,8 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
         const std::string p = ax.at("samples");
         if (a.samples.size() < 2) sj::fail(p, "an interpolated axis needs at least two samples");
         for (std::size_t k = 0; k < a.samples.size(); ++k) {
-          if (!(a.samples[k].ramp_time_s > 0)) sj::fail(p + "/" + std::to_string(k) + "/ramp_time_s", "expected a positive number");
+          if (!(a.samples[k].ramp_time_s > 0))
+            sj::fail(p + "/" + std::to_string(k) + "/ramp_time_s", "expected a positive number");
           if (k > 0 && !(a.samples[k].feed_mm_s > a.samples[k - 1].feed_mm_s))
             sj::fail(p + "/" + std::to_string(k) + "/feed_mm_s", "expected feeds in increasing order");
         }
@@ -978,7 +1013,8 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
           sj::Object st(stops[k], q);
           a.stops.push_back({st.get("feed_mm_s", sj::positive), st.get("stop_time_s", sj::positive)});
           st.finish();
-          if (k > 0 && !(a.stops[k].feed_mm_s > a.stops[k - 1].feed_mm_s)) sj::fail(q + "/feed_mm_s", "expected feeds in increasing order");
+          if (k > 0 && !(a.stops[k].feed_mm_s > a.stops[k - 1].feed_mm_s))
+            sj::fail(q + "/feed_mm_s", "expected feeds in increasing order");
           // Ta = 2 Td - Tb must stay positive, and Tb too.
           const double share = a.stops[k].ramp_time_s / a.ramp_time_s(a.stops[k].feed_mm_s);
           if (a.asymmetric && !(share > 0.05 && share < 1.95))
@@ -992,8 +1028,9 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     }
     axes.finish();
     sj::Object r(o.required("response"), o.at("response"));
-    c.response.scanned = r.get("skip", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"latched", "scanned"}); }) ==
-                         "scanned";
+    c.response.scanned = r.get("skip", [](const json& v, const std::string& p) {
+      return sj::one_of(v, p, {"latched", "scanned"});
+    }) == "scanned";
     c.response.jitter_s = r.get("jitter_s", sj::non_negative);
     c.response.delay_s = r.get("delay_s", sj::non_negative);
     c.response.noise_mm = r.get("noise_mm", sj::non_negative);
@@ -1004,7 +1041,8 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
         sj::Object s(v[k], p + "/" + std::to_string(k));
         TouchSample t;
         t.feed_mm_s = s.get("feed_mm_s", sj::positive);
-        t.count = static_cast<int>(s.get("count", [](const json& n, const std::string& q) { return sj::integer(n, q, 0); }));
+        t.count =
+            static_cast<int>(s.get("count", [](const json& n, const std::string& q) { return sj::integer(n, q, 0); }));
         t.mean_mm = s.get("mean_mm", sj::number);
         t.range_mm = s.get("range_mm", sj::non_negative);
         s.number("midrange_mm", t.midrange_mm);
@@ -1017,14 +1055,16 @@ tl::expected<MachineCharacterisation, std::string> characterisation_from_json(co
     c.over_travel_mm = o.get("over_travel_mm", sj::non_negative);
     o.read("over_travel_margin", [&](const json& v, const std::string& p) {
       c.over_travel_margin = sj::positive(v, p);
-      if (c.over_travel_margin > 1) sj::fail(p, "the stop distance may use at most the whole over-travel (a margin <= 1)");
+      if (c.over_travel_margin > 1)
+        sj::fail(p, "the stop distance may use at most the whole over-travel (a margin <= 1)");
     });
     c.pre_travel_mm = o.get("pre_travel_mm", sj::non_negative);
     c.max_probe_feed_mm_s = o.get("max_probe_feed_mm_s", sj::positive);
     sj::Object s(o.required("strategy"), o.at("strategy"));
     c.threshold_mm = s.get("threshold_mm", sj::non_negative);
-    c.one_touch =
-        s.get("cycle", [](const json& v, const std::string& p) { return sj::one_of(v, p, {"one_touch", "two_touch"}); }) == "one_touch";
+    c.one_touch = s.get("cycle", [](const json& v, const std::string& p) {
+      return sj::one_of(v, p, {"one_touch", "two_touch"});
+    }) == "one_touch";
     s.read("blend", [&](const json& v, const std::string& p) { c.blend = sj::boolean(v, p); });
     c.measuring_feed_mm_s = s.get("measuring_feed_mm_s", sj::positive);
     c.first_feed_mm_s = s.get("first_feed_mm_s", sj::positive);
@@ -1059,13 +1099,15 @@ std::string format_characterisation(const MachineCharacterisation& c) {
   for (int i = 0; i < 3; ++i) {
     const auto& a = c.axes[static_cast<std::size_t>(i)];
     if (a.mode == AxisAcceleration::Mode::ConstantTime)
-      o << fmt::format("  {}: constant time, Td = {:.4f} s (fit rms {:.2f} %)\n", axis_name(i), a.time_s, 100 * a.fit_rms_relative);
+      o << fmt::format("  {}: constant time, Td = {:.4f} s (fit rms {:.2f} %)\n", axis_name(i), a.time_s,
+                       100 * a.fit_rms_relative);
     else if (a.mode == AxisAcceleration::Mode::ConstantRate)
       o << fmt::format("  {}: constant rate, a = {:.0f} mm/s^2, j = {:.0f} mm/s^3 (fit rms {:.2f} %)\n", axis_name(i),
                        a.acceleration_mm_s2, a.jerk_mm_s3, 100 * a.fit_rms_relative);
     else
-      o << fmt::format("  {}: interpolated (no family fits), monotone cubic through {} feeds (leave-one-out rms {:.2f} %)\n",
-                       axis_name(i), a.samples.size(), 100 * a.fit_rms_relative);
+      o << fmt::format(
+          "  {}: interpolated (no family fits), monotone cubic through {} feeds (leave-one-out rms {:.2f} %)\n",
+          axis_name(i), a.samples.size(), 100 * a.fit_rms_relative);
     if (a.asymmetric) {
       o << "     braking differs (timed stops): feed mm/s  Tb ms  Td ms  Ta ms\n";
       for (const auto& s : a.stops)
@@ -1074,7 +1116,8 @@ std::string format_characterisation(const MachineCharacterisation& c) {
     }
     o << "     feed mm/s  Td ms   D1 mm\n";
     for (const auto& s : a.samples)
-      o << fmt::format("     {:9.1f} {:6.2f} {:7.4f}\n", s.feed_mm_s, 1e3 * s.ramp_time_s, s.feed_mm_s * s.ramp_time_s / 2);
+      o << fmt::format("     {:9.1f} {:6.2f} {:7.4f}\n", s.feed_mm_s, 1e3 * s.ramp_time_s,
+                       s.feed_mm_s * s.ramp_time_s / 2);
   }
   o << fmt::format("controller cycle: {:.4f} s\n", c.dt_s);
   o << "trigger response (repeated touches on one point)\n";
@@ -1084,18 +1127,21 @@ std::string format_characterisation(const MachineCharacterisation& c) {
   o << fmt::format("  skip input: {} (jitter {:.2f} ms), constant delay {:.2f} ms, probe noise {:.2f} um (1 sigma)\n",
                    c.response.scanned ? "scanned" : "latched", 1e3 * c.response.jitter_s, 1e3 * c.response.delay_s,
                    1e3 * c.response.noise_mm);
-  o << fmt::format("pre-travel (upper estimate): {:.4f} mm; rated over-travel {:.3f} mm, margin {:.0f} %\n", c.pre_travel_mm,
-                   c.over_travel_mm, 100 * c.over_travel_margin);
-  o << fmt::format("maximum protected probing feed: {:.1f} mm/s (stop distance {:.3f} mm along z)\n", c.max_probe_feed_mm_s,
-                   c.stop_distance_mm(-Vec3::UnitZ(), c.max_probe_feed_mm_s));
+  o << fmt::format("pre-travel (upper estimate): {:.4f} mm; rated over-travel {:.3f} mm, margin {:.0f} %\n",
+                   c.pre_travel_mm, c.over_travel_mm, 100 * c.over_travel_margin);
+  o << fmt::format("maximum protected probing feed: {:.1f} mm/s (stop distance {:.3f} mm along z)\n",
+                   c.max_probe_feed_mm_s, c.stop_distance_mm(-Vec3::UnitZ(), c.max_probe_feed_mm_s));
   o << fmt::format("strategy: {}{} (threshold {:.1f} um; spread at {:.1f} mm/s: {:.1f} um)\n",
-                   c.blend ? "blended one-touch" : c.one_touch ? "one-touch" : "two-touch",
+                   c.blend       ? "blended one-touch"
+                   : c.one_touch ? "one-touch"
+                                 : "two-touch",
                    c.blend ? " (beyond the seed)" : "", 1e3 * c.threshold_mm, c.first_feed_mm_s,
                    1e3 * c.response.spread_mm(c.first_feed_mm_s));
   const Vec3 down = -Vec3::UnitZ();
   if (c.one_touch)
-    o << fmt::format("  measuring feed {:.1f} mm/s, approach {:.3f} mm (D1 + D3 + tolerance {:.3f})\n", c.measuring_feed_mm_s,
-                     c.standoff_mm(down, c.measuring_feed_mm_s, 0, c.nominal_tolerance_mm), c.nominal_tolerance_mm);
+    o << fmt::format("  measuring feed {:.1f} mm/s, approach {:.3f} mm (D1 + D3 + tolerance {:.3f})\n",
+                     c.measuring_feed_mm_s, c.standoff_mm(down, c.measuring_feed_mm_s, 0, c.nominal_tolerance_mm),
+                     c.nominal_tolerance_mm);
   else
     o << fmt::format("  first touch {:.1f} mm/s, second touch {:.2f} mm/s, standoff D1+D2+D3 = {:.4f} mm along z\n",
                      c.first_feed_mm_s, c.measuring_feed_mm_s,
@@ -1145,7 +1191,9 @@ tl::expected<TouchBaseline, std::string> parse_touch_baseline(const std::string&
 
 std::string describe(const TouchBaseline& b, const MachineCharacterisation* c) {
   if (!b.two_touch) return "one-touch from the approach distance at the measuring feed";
-  const std::optional<double> first = b.first_feed_mm_s ? b.first_feed_mm_s : c ? std::optional(c->first_feed_mm_s) : std::nullopt;
+  const std::optional<double> first = b.first_feed_mm_s ? b.first_feed_mm_s
+                                      : c               ? std::optional(c->first_feed_mm_s)
+                                                        : std::nullopt;
   return fmt::format("two-touch, {:.3f} mm back-off, first touch at {}", b.backoff_mm,
                      first ? fmt::format("{:.3f} mm/s", *first) : std::string("(no feed: needs a characterisation)"));
 }

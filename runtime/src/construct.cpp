@@ -14,14 +14,15 @@ namespace metron::runtime {
 namespace {
 
 // The source of an EXTREM: a feature with measured points, the only ones EXTREM picks from.
-Result<const Feature*> extreme_source(const MeasurementRuntime& runtime, const std::string& label, const FeatureRef& source,
-                                      Span span) {
+Result<const Feature*> extreme_source(const MeasurementRuntime& runtime, const std::string& label,
+                                      const FeatureRef& source, Span span) {
   const Feature* f = runtime.find_feature(source.label);
   if (!f) return program_error(span, fmt::format("feature F({}) is not defined", source.label));
   if (f->points.empty())
-    return program_error(span, fmt::format("cannot construct POINT F({}): EXTREM picks one of the measured points of FA({}), "
-                                           "which has none (it was constructed or stated)",
-                                           label, source.label));
+    return program_error(span,
+                         fmt::format("cannot construct POINT F({}): EXTREM picks one of the measured points of FA({}), "
+                                     "which has none (it was constructed or stated)",
+                                     label, source.label));
   return f;
 }
 
@@ -111,7 +112,8 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
         for (const auto& s : sources)
           for (const auto& p : find_feature(s.label)->points) pts.push_back(p);
       } else {
-        for (const auto& s : in) pts.push_back({s.position, nominal.direction, 0.0, 0.0, span, false, std::nullopt, Vec3::UnitZ()});
+        for (const auto& s : in)
+          pts.push_back({s.position, nominal.direction, 0.0, 0.0, span, false, std::nullopt, Vec3::UnitZ()});
       }
       auto fitted = fit_actual(nominal, pts);
       if (!fitted) return fail(fitted.error());
@@ -140,13 +142,18 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
         auto l = plane_plane(a, b, it != m_features.end() ? nominal.position : a.position);
         if (!l) return fail(l.error());
         g.position = l->position;
-        g.direction = it != m_features.end() && l->direction.dot(nominal.direction) < 0 ? Vec3(-l->direction) : l->direction;
+        g.direction =
+            it != m_features.end() && l->direction.dot(nominal.direction) < 0 ? Vec3(-l->direction) : l->direction;
         g.normal2 = a.direction;
       } else if (type == FeatureType::Point) {
-        tl::expected<Vec3, std::string> p = tl::unexpected(std::string("a point is the intersection of a line and a plane, or of two lines"));
-        if (is_linear(a) && is_planar(b)) p = line_plane(a, b);
-        else if (is_planar(a) && is_linear(b)) p = line_plane(b, a);
-        else if (is_linear(a) && is_linear(b)) p = line_line(a, b);
+        tl::expected<Vec3, std::string> p =
+            tl::unexpected(std::string("a point is the intersection of a line and a plane, or of two lines"));
+        if (is_linear(a) && is_planar(b))
+          p = line_plane(a, b);
+        else if (is_planar(a) && is_linear(b))
+          p = line_plane(b, a);
+        else if (is_linear(a) && is_linear(b))
+          p = line_line(a, b);
         if (!p) return fail(p.error());
         g.position = *p;
       } else if (type == FeatureType::Circle) {
@@ -161,8 +168,9 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
         const Vec3 axis = solid.direction.normalized();
         const double cos_tilt = std::abs(axis.dot(plane.direction.normalized()));
         if (cos_tilt < std::cos(1.0 * M_PI / 180))
-          return fail(fmt::format("the plane is {:.2f} deg off normal to the axis: the section is an ellipse, not a circle",
-                                  std::acos(std::min(1.0, cos_tilt)) * 180 / M_PI));
+          return fail(
+              fmt::format("the plane is {:.2f} deg off normal to the axis: the section is an ellipse, not a circle",
+                          std::acos(std::min(1.0, cos_tilt)) * 180 / M_PI));
         auto centre = line_plane(solid, plane);
         if (!centre) return fail(centre.error());
         g.position = *centre;
@@ -190,7 +198,8 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
             return fail(fmt::format("the mid {} of two {}, got a {}", plane ? "plane" : "line",
                                     plane ? "PLANEs" : "LINEs (or axes)", dmis_word(x.type)));
         const Vec3 d1 = in[0].direction.normalized();
-        const Vec3 d2 = in[1].direction.dot(d1) < 0 ? Vec3(-in[1].direction.normalized()) : Vec3(in[1].direction.normalized());
+        const Vec3 d2 =
+            in[1].direction.dot(d1) < 0 ? Vec3(-in[1].direction.normalized()) : Vec3(in[1].direction.normalized());
         g.direction = (d1 + d2).normalized();
         if (it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
         if (!plane) {
@@ -230,7 +239,8 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       const bool wants_plane_ref = (type == FeatureType::Plane) == parallel;
       if (wants_plane_ref ? !is_planar(ref) : !is_linear(ref))
         return fail(fmt::format("{} a {} needs a {} as its reference, got a {}", parallel ? "PARTO" : "PERPTO",
-                                dmis_word(type), wants_plane_ref ? "PLANE" : "LINE, CYLNDR or CONE", dmis_word(ref.type)));
+                                dmis_word(type), wants_plane_ref ? "PLANE" : "LINE, CYLNDR or CONE",
+                                dmis_word(ref.type)));
       g.position = in[1].position;
       g.direction = ref.direction.normalized();
       if (it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
@@ -250,12 +260,14 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       if (type == FeatureType::Point) {
         if (it == m_features.end()) g.direction = x.direction;
       } else if (type == FeatureType::Line) {
-        if (!is_linear(x)) return fail(fmt::format("CAST to a LINE needs a CYLNDR, CONE or LINE, got a {}", dmis_word(x.type)));
+        if (!is_linear(x))
+          return fail(fmt::format("CAST to a LINE needs a CYLNDR, CONE or LINE, got a {}", dmis_word(x.type)));
         g.direction = x.direction.normalized();
         g.bounded = false;
         g.normal2 = line_plane_normal(g);
       } else if (type == FeatureType::Plane) {
-        if (!(is_planar(x) || x.type == FeatureType::Circle || x.type == FeatureType::Arc || x.type == FeatureType::ClosedSlot))
+        if (!(is_planar(x) || x.type == FeatureType::Circle || x.type == FeatureType::Arc ||
+              x.type == FeatureType::ClosedSlot))
           return fail(fmt::format("CAST to a PLANE needs a PLANE, CIRCLE, ARC or CPARLN, got a {}", dmis_word(x.type)));
         g.direction = x.direction.normalized();
       } else if (type == FeatureType::Circle) {
@@ -266,7 +278,8 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       } else {
         return fail("CAST constructs a POINT, LINE, PLANE or CIRCLE");
       }
-      if (type != FeatureType::Point && it != m_features.end() && g.direction.dot(nominal.direction) < 0) g.direction = -g.direction;
+      if (type != FeatureType::Point && it != m_features.end() && g.direction.dot(nominal.direction) < 0)
+        g.direction = -g.direction;
       break;
     }
     case ConstructMethod::Projection: {
@@ -359,9 +372,9 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
   }
   if (!(d.norm() > 1e-12)) return fail("the direction is a zero vector");
   d = (minimum ? -1.0 : 1.0) * d.normalized();
-  const auto far = std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
-    return a.surface_mm().dot(d) < b.surface_mm().dot(d);
-  });
+  const auto far = std::max_element(
+      f->points.begin(), f->points.end(),
+      [&](const MeasuredPoint& a, const MeasuredPoint& b) { return a.surface_mm().dot(d) < b.surface_mm().dot(d); });
   store_constructed_point(label, far->surface_mm(), far->normal, span);
   return {};
 }
@@ -382,17 +395,19 @@ Result<void> MeasurementRuntime::construct_radial_extreme_point(const std::strin
   const FeatureType t = g->type;
   if (t != FeatureType::Circle && t != FeatureType::Arc && t != FeatureType::Cylinder && t != FeatureType::Cone &&
       t != FeatureType::Sphere)
-    return fail(fmt::format("RADIAL measures from an axis or a centre: FA({}) is a {}, not a CIRCLE, ARC, CYLNDR, CONE or "
-                            "SPHERE",
-                            source.label, dmis_word(t)));
+    return fail(
+        fmt::format("RADIAL measures from an axis or a centre: FA({}) is a {}, not a CIRCLE, ARC, CYLNDR, CONE or "
+                    "SPHERE",
+                    source.label, dmis_word(t)));
   const Vec3 axis = g->direction.normalized();
   const auto radial = [&](const MeasuredPoint& p) {
     const Vec3 d = p.surface_mm() - g->position;
     return t == FeatureType::Sphere ? d.norm() : (d - d.dot(axis) * axis).norm();
   };
-  const auto far = std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
-    return minimum ? radial(a) > radial(b) : radial(a) < radial(b);
-  });
+  const auto far =
+      std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
+        return minimum ? radial(a) > radial(b) : radial(a) < radial(b);
+      });
   store_constructed_point(label, far->surface_mm(), far->normal, span);
   return {};
 }

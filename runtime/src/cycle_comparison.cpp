@@ -25,14 +25,14 @@ std::string fault_of(const machine::Response& r) { return r.fault ? r.fault->mes
 }  // namespace
 
 tl::expected<CycleComparison, std::string> compare_cycles(machine::Machine& machine, const MachineCharacterisation& c,
-                                                                          const CycleComparisonSettings& s,
-                                                                          double ball_diameter_mm) {
+                                                          const CycleComparisonSettings& s, double ball_diameter_mm) {
   Runner run{machine};
   // The characterisation's touch point: the last qualification point (a surface point with a
   // known normal; the latched centre lies on it with the effective radius).
-  for (decltype(machine::Command::body) b : {decltype(machine::Command::body){machine::DefineTool{"METRON_CMP", ball_diameter_mm, -Vec3::UnitZ(), 50}},
-                                             decltype(machine::Command::body){machine::SelectTool{"METRON_CMP"}},
-                                             decltype(machine::Command::body){machine::QualifyTool{}}}) {
+  for (decltype(machine::Command::body) b :
+       {decltype(machine::Command::body){machine::DefineTool{"METRON_CMP", ball_diameter_mm, -Vec3::UnitZ(), 50}},
+        decltype(machine::Command::body){machine::SelectTool{"METRON_CMP"}},
+        decltype(machine::Command::body){machine::QualifyTool{}}}) {
     const auto r = run.exec(b);
     if (r.status == machine::Response::Status::Fault) return tl::unexpected("tool qualification: " + fault_of(r));
   }
@@ -73,7 +73,8 @@ tl::expected<CycleComparison, std::string> compare_cycles(machine::Machine& mach
     }
   }
   std::vector<CycleComparisonRow> rows;
-  const auto add = [&](const std::string& name, bool baseline, const machine::PtMeas& p) -> tl::expected<void, std::string> {
+  const auto add = [&](const std::string& name, bool baseline,
+                       const machine::PtMeas& p) -> tl::expected<void, std::string> {
     CycleComparisonRow row{name, baseline};
     std::vector<double> err;
     for (int k = 0; k < s.points; ++k) {
@@ -106,16 +107,20 @@ tl::expected<CycleComparison, std::string> compare_cycles(machine::Machine& mach
     p.approach_mm = s.clearance_mm;
     p.speed_mm_s = fs;
     p.two_touch = machine::PtMeas::TwoTouch{c.first_feed_mm_s, backoff};
-    if (auto ok = add(fmt::format("baseline: two-touch, {:.1f} mm back-off", backoff), true, p); !ok) return tl::unexpected(ok.error());
+    if (auto ok = add(fmt::format("baseline: two-touch, {:.1f} mm back-off", backoff), true, p); !ok)
+      return tl::unexpected(ok.error());
   }
   const RestingHead rest{s.clearance_mm, s.positioning_mm_s};
   MachineCharacterisation two = c, one = c, blend = c;
   two.one_touch = false, two.blend = false;
   one.one_touch = true, one.blend = false;
   blend.blend = true;
-  if (auto ok = add("seed: two-touch (D1+D2+D3)", false, from_plan(two.plan(n, fs, std::nullopt, rest))); !ok) return tl::unexpected(ok.error());
-  if (auto ok = add("seed: one-touch (D1+D3+tol)", false, from_plan(one.plan(n, fs, std::nullopt, rest))); !ok) return tl::unexpected(ok.error());
-  if (auto ok = add("beyond seed: blended one-touch", false, from_plan(blend.plan(n, fs, s.clearance_mm))); !ok) return tl::unexpected(ok.error());
+  if (auto ok = add("seed: two-touch (D1+D2+D3)", false, from_plan(two.plan(n, fs, std::nullopt, rest))); !ok)
+    return tl::unexpected(ok.error());
+  if (auto ok = add("seed: one-touch (D1+D3+tol)", false, from_plan(one.plan(n, fs, std::nullopt, rest))); !ok)
+    return tl::unexpected(ok.error());
+  if (auto ok = add("beyond seed: blended one-touch", false, from_plan(blend.plan(n, fs, s.clearance_mm))); !ok)
+    return tl::unexpected(ok.error());
   return CycleComparison{rows, n};
 }
 
@@ -124,15 +129,17 @@ std::string format_cycle_comparison(const std::vector<CycleComparisonRow>& rows,
   // The best baseline: the fastest conventional cycle whose bias and spread meet the threshold.
   double best = 0;
   for (const auto& r : rows)
-    if (r.baseline && r.spread_um <= 1e3 * threshold_mm && std::abs(r.bias_um) <= 1e3 * threshold_mm && (best == 0 || r.time_s < best))
+    if (r.baseline && r.spread_um <= 1e3 * threshold_mm && std::abs(r.bias_um) <= 1e3 * threshold_mm &&
+        (best == 0 || r.time_s < best))
       best = r.time_s;
   o << fmt::format("  {:<46} {:>8} {:>14} {:>9} {:>10}{}\n", "cycle", "time s", "vs best base.", "bias um", "spread um",
                    limit_s > 0 ? "    /limit" : "");
   for (const auto& r : rows) {
     const bool valid = r.spread_um <= 1e3 * threshold_mm && std::abs(r.bias_um) <= 1e3 * threshold_mm;
     o << fmt::format("  {:<46} {:8.4f} {:>14} {:9.2f} {:10.2f}{}{}\n", r.name, r.time_s,
-                     best > 0 ? fmt::format("{:+.1f} %", 100 * (r.time_s / best - 1)) : std::string("-"), r.bias_um, r.spread_um,
-                     limit_s > 0 ? fmt::format(" {:9.3f}", r.time_s / limit_s) : std::string(), valid ? "" : "  (outside the threshold)");
+                     best > 0 ? fmt::format("{:+.1f} %", 100 * (r.time_s / best - 1)) : std::string("-"), r.bias_um,
+                     r.spread_um, limit_s > 0 ? fmt::format(" {:9.3f}", r.time_s / limit_s) : std::string(),
+                     valid ? "" : "  (outside the threshold)");
   }
   return o.str();
 }

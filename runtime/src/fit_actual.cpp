@@ -8,8 +8,8 @@
 #include <limits>
 #include <numbers>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <Eigen/Eigenvalues>
 
 #include "metron/stdlib/fitting/ellipse_fit.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -48,8 +48,8 @@ Vec3 oriented(const Vec3& d, const Vec3& like) { return d.dot(like) < 0 ? Vec3(-
 // the smallest eigenvalue of the pooled scatter matrix (the orthogonal regression of one plane,
 // ISO 10360-6 / Forbes NPL DITC 140/89, with a centroid per face). The width is the distance
 // between the faces' planes, the median plane lies midway.
-tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
+tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(
+    const Geometry& nominal, const std::vector<MeasuredPoint>& points) {
   const Vec3 axis = nominal.direction.normalized();
   std::vector<Vec3> surface[2];
   std::vector<int> face_of;
@@ -59,9 +59,10 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(c
     surface[face_of.back()].push_back(s);
   }
   if (surface[0].empty() || surface[1].empty() || points.size() < 4)
-    return tl::unexpected(fmt::format("cannot fit a PARPLN to {} point{}: it needs points on both faces ({} on the "
-                                      "+normal side, {} on the other) and 4 in all",
-                                      points.size(), points.size() == 1 ? "" : "s", surface[0].size(), surface[1].size()));
+    return tl::unexpected(
+        fmt::format("cannot fit a PARPLN to {} point{}: it needs points on both faces ({} on the "
+                    "+normal side, {} on the other) and 4 in all",
+                    points.size(), points.size() == 1 ? "" : "s", surface[0].size(), surface[1].size()));
   Vec3 centroid[2];
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (int f = 0; f < 2; ++f) {
@@ -83,8 +84,8 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_parallel_planes(c
   for (std::size_t i = 0; i < points.size(); ++i) {
     const int f = face_of[i];
     // Signed along the face's outward normal: + is material beyond the fitted face.
-    const double r = (n.dot(points[i].surface_mm()) - (f == 0 ? d0 : d1)) *
-                     (nominal.side == Side::Inner ? -1.0 : 1.0) * (f == 0 ? 1.0 : -1.0);
+    const double r = (n.dot(points[i].surface_mm()) - (f == 0 ? d0 : d1)) * (nominal.side == Side::Inner ? -1.0 : 1.0) *
+                     (f == 0 ? 1.0 : -1.0);
     figures.residuals_mm.push_back(r);
     lo[f] = std::min(lo[f], r);
     hi[f] = std::max(hi[f], r);
@@ -129,7 +130,7 @@ InPlane in_plane(const Geometry& nominal, const std::vector<MeasuredPoint>& poin
 // ball centres projected onto it; the normal and the plane's height stay nominal (a 2-D feature,
 // as a circle's plane when its points are all at one depth).
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
+                                                                           const std::vector<MeasuredPoint>& points) {
   const InPlane plane = in_plane(nominal, points);
   const std::vector<Eigen::Vector2d>& centres = plane.centres;
   fitting::SlotOutline start;
@@ -160,12 +161,13 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_closed_slot(const
 // ELLIPS: the ellipse fitted in its nominal plane (stdlib fitting/ellipse_fit.hpp) from the ball
 // centres projected onto it; the normal and the plane's height stay nominal, as a CPARLN's.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_ellipse(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
+                                                                       const std::vector<MeasuredPoint>& points) {
   const InPlane plane = in_plane(nominal, points);
   fitting::EllipseOutline start;
   start.major_diameter_mm = nominal.diameter_mm;
   start.minor_diameter_mm = nominal.minor_diameter_mm;
-  const auto fit = fitting::fit_ellipse(plane.centres, points.front().ball_radius_mm, nominal.side != Side::Outer, start);
+  const auto fit =
+      fitting::fit_ellipse(plane.centres, points.front().ball_radius_mm, nominal.side != Side::Outer, start);
   if (!fit)
     return tl::unexpected(fmt::format("cannot fit an ELLIPS to {} point{}: {}{}", points.size(),
                                       points.size() == 1 ? "" : "s", fitting::to_string(fit.error()),
@@ -180,7 +182,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_ellipse(const Geo
 // TORUS: all seven parameters from the ball centres (stdlib fitting/torus_fit.hpp), started
 // from the nominal.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_torus(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
+                                                                     const std::vector<MeasuredPoint>& points) {
   std::vector<Vec3> centres;
   for (const auto& p : points) centres.push_back(p.centre_mm);
   const fitting::Torus start{nominal.position, nominal.direction.normalized(), nominal.diameter_mm,
@@ -201,7 +203,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_torus(const Geome
 // GSURF, GCURVE: nothing to fit. Each point's deviation is along its own nominal normal from
 // its nominal (the PTMEAS); the actual is the points' centroid and mean nominal normal.
 tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& points) {
+                                                                            const std::vector<MeasuredPoint>& points) {
   Geometry g = nominal;
   Vec3 sum = Vec3::Zero(), normals = Vec3::Zero();
   FitFigures figures;
@@ -209,8 +211,10 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(cons
   for (const auto& p : points) {
     sum += p.surface_mm();
     if (!p.nominal_mm)
-      return tl::unexpected(fmt::format("a {} is measured by PTMEAS points, each its own nominal; a scanned or planned "
-                                        "point has none", dmis_word(nominal.type)));
+      return tl::unexpected(
+          fmt::format("a {} is measured by PTMEAS points, each its own nominal; a scanned or planned "
+                      "point has none",
+                      dmis_word(nominal.type)));
     normals += p.nominal_normal;
     const double deviation = (p.surface_mm() - *p.nominal_mm).dot(p.nominal_normal);
     figures.residuals_mm.push_back(deviation);
@@ -229,7 +233,7 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> point_set_actual(cons
 
 // Fits the actual of a feature from ball centres with probe compensation (stdlib fitting).
 tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geometry& nominal,
-    const std::vector<MeasuredPoint>& measured) {
+                                                                      const std::vector<MeasuredPoint>& measured) {
   if (measured.empty()) return tl::unexpected(std::string("no points were measured"));
   // The fits compensate every centre by one ball radius. Points taken with several sensors (a
   // SNSLCT inside the block) have their centres moved along their normals onto the first ball's
@@ -263,11 +267,10 @@ tl::expected<std::pair<Geometry, FitFigures>, std::string> fit_actual(const Geom
     return tl::unexpected(fmt::format("cannot fit a {} to {} point{}: {}", dmis_word(nominal.type), points.size(),
                                       points.size() == 1 ? "" : "s", fitting::to_string(fit.error())));
   Geometry g = nominal;
-  const Vec3 axis = fit->direction.norm() > 0 ? oriented(fit->direction.normalized(), nominal.direction) : nominal.direction;
+  const Vec3 axis =
+      fit->direction.norm() > 0 ? oriented(fit->direction.normalized(), nominal.direction) : nominal.direction;
   switch (nominal.type) {
-    case FeatureType::Point:
-      g.position = fit->position;
-      break;
+    case FeatureType::Point: g.position = fit->position; break;
     case FeatureType::Line: {
       // The point of the fitted line nearest the nominal's (a BND line's start), as for a
       // cylinder: the points' centroid slides along the line with where they were taken, and a

@@ -45,7 +45,8 @@ void walk_around(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3
   const int legs = std::max(2, static_cast<int>(std::ceil(std::abs(to - from) / (std::numbers::pi / 8))));
   for (int k = 0; k <= legs; ++k) {
     const double b = from + (to - from) * k / legs;
-    steps.push_back({PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), Vec3::UnitZ()});
+    steps.push_back(
+        {PlannedStep::Kind::GoTo, centre + walk_radius * (std::cos(b) * u + std::sin(b) * v), Vec3::UnitZ()});
   }
 }
 
@@ -60,8 +61,8 @@ void ring_at(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& u,
   }
 }
 
-void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis, double radius,
-          int count, bool inner, double approach_mm, double phase_rad, std::optional<double>& last_angle) {
+void ring(std::vector<PlannedStep>& steps, const Vec3& centre, const Vec3& axis, double radius, int count, bool inner,
+          double approach_mm, double phase_rad, std::optional<double>& last_angle) {
   const Vec3 u = any_perpendicular(axis);
   std::vector<double> angles;
   for (int i = 0; i < count; ++i) angles.push_back(phase_rad + 2.0 * std::numbers::pi * i / count);
@@ -119,7 +120,7 @@ int minimum_points(FeatureType type) {
     case FeatureType::Sphere: return 4;
     case FeatureType::Cylinder: return 5;
     case FeatureType::Cone: return 6;
-    case FeatureType::Torus: return 7;  // centre, axis (2), two diameters
+    case FeatureType::Torus: return 7;    // centre, axis (2), two diameters
     case FeatureType::Ellipse: return 5;  // centre (2), angle, two diameters
   }
   return 1;
@@ -183,9 +184,7 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
   const bool inner = g.side != Side::Outer;
   const double r = g.diameter_mm / 2.0;
   switch (g.type) {
-    case FeatureType::Point:
-      steps.push_back({PlannedStep::Kind::Probe, g.position, axis});
-      break;
+    case FeatureType::Point: steps.push_back({PlannedStep::Kind::Probe, g.position, axis}); break;
     case FeatureType::GenericSurface:
     case FeatureType::GenericCurve: break;  // no nominal shape to plan on: its PTMEAS are its points
     case FeatureType::Plane: {
@@ -210,7 +209,8 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
         const int m = face == 0 ? (n + 1) / 2 : n / 2;
         const int k = face == 0 ? i : i - (n + 1) / 2;
         const double a = 2.0 * std::numbers::pi * k / m + std::numbers::pi / 4;
-        const Vec3 p = g.position + (face == 0 ? 0.5 : -0.5) * g.width_mm * axis + 5.0 * (std::cos(a) * u + std::sin(a) * v);
+        const Vec3 p =
+            g.position + (face == 0 ? 0.5 : -0.5) * g.width_mm * axis + 5.0 * (std::cos(a) * u + std::sin(a) * v);
         faces[face].push_back({PlannedStep::Kind::Probe, p, nominal_normal_at(g, p)});
       }
       double top = current_position.dot(up);
@@ -342,7 +342,8 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
       const int first = n / 2;
       std::optional<double> last;
       ring(steps, g.position + 0.25 * len * axis, axis, r, first, inner, probe.approach_mm, 0.0, last);
-      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm, std::numbers::pi / std::max(1, n - first), last);
+      ring(steps, g.position + 0.75 * len * axis, axis, r, n - first, inner, probe.approach_mm,
+           std::numbers::pi / std::max(1, n - first), last);
       break;
     }
     case FeatureType::Sphere: {
@@ -440,7 +441,8 @@ std::vector<PlannedStep> plan_auto_points(const Geometry& g, int count, const Pr
   // Clearance: rise above the feature, move over the first approach point, then descend.
   const auto approach_of = [&](const PlannedStep& s) { return s.point + probe.approach_mm * s.normal; };
   double top = current_position.dot(up);
-  for (const auto& s : steps) top = std::max(top, (s.kind == PlannedStep::Kind::Probe ? approach_of(s) : s.point).dot(up));
+  for (const auto& s : steps)
+    top = std::max(top, (s.kind == PlannedStep::Kind::Probe ? approach_of(s) : s.point).dot(up));
   const double clear = clearance_height(top, probe, ball_radius_mm, up, g.position);
   const Vec3 first = steps.front().kind == PlannedStep::Kind::Probe ? approach_of(steps.front()) : steps.front().point;
   std::vector<PlannedStep> out;

@@ -9,13 +9,13 @@
 #include <fmt/format.h>
 
 #include "detail/fit_actual.hpp"
-#include "metron/stdlib/fitting/minimum_zone.hpp"
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/runtime/block_plan.hpp"
 #include "metron/runtime/outputs.hpp"
 #include "metron/runtime/scan.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
+#include "metron/stdlib/fitting/minimum_zone.hpp"
 
 namespace metron::runtime {
 
@@ -53,7 +53,7 @@ Result<void> MeasurementRuntime::define_feature(const std::string& label, const 
 }
 
 Result<void> MeasurementRuntime::define_reported_actual(const std::string& label, const Geometry& actual_current,
-                                                       Span span) {
+                                                        Span span) {
   if (!m_features.count(label)) {
     if (auto r = define_feature(label, actual_current, span); !r) return r;
   }
@@ -104,10 +104,11 @@ bool MeasurementRuntime::label_exists(const std::string& prefix, const std::stri
 Result<Geometry> MeasurementRuntime::resolve(const FeatureRef& ref, Span span) const {
   const Feature* f = find_feature(ref.label);
   if (!f)
-    return program_error(span, ref.actual ? fmt::format("FA({}) is not defined yet: it has no actual (one from an earlier run "
-                                                        "of the CMM software is not kept)",
-                                                        ref.label)
-                                          : fmt::format("feature F({}) is not defined", ref.label));
+    return program_error(span, ref.actual
+                                   ? fmt::format("FA({}) is not defined yet: it has no actual (one from an earlier run "
+                                                 "of the CMM software is not kept)",
+                                                 ref.label)
+                                   : fmt::format("feature F({}) is not defined", ref.label));
   if (!ref.actual) return f->nominal;
   if (!f->actual)
     return program_error(span, fmt::format("FA({}) has no actual: measure or construct it first", ref.label));
@@ -121,7 +122,7 @@ Result<Geometry> MeasurementRuntime::feature_geometry(const FeatureRef& ref, Spa
 }
 
 MeasurementRuntime::Execution MeasurementRuntime::execute_commands(std::vector<machine::Command> commands,
-                                                                    const std::vector<Span>& spans) {
+                                                                   const std::vector<Span>& spans) {
   const std::uint64_t first = m_next_tag;
   for (auto& c : commands) {
     c.tag = m_next_tag++;
@@ -213,9 +214,11 @@ Result<void> MeasurementRuntime::select_library_sensor(const std::string& label,
     m_tools[label] = tool;
     return {};
   }
-  if (!responses.empty() && responses.front().fault && responses.front().fault->kind != machine::FaultKind::UnknownTool) {
+  if (!responses.empty() && responses.front().fault &&
+      responses.front().fault->kind != machine::FaultKind::UnknownTool) {
     record_fault(*responses.front().fault, span);
-    return tl::unexpected(RuntimeError{RuntimeError::Kind::Fault, responses.front().fault->message, span, responses.front().fault});
+    return tl::unexpected(
+        RuntimeError{RuntimeError::Kind::Fault, responses.front().fault->message, span, responses.front().fault});
   }
   warn(span, fmt::format("sensor {} is not in the machine's probe library; using a 4 mm default tip", label));
   SensorDefinition def;
@@ -232,7 +235,8 @@ Result<void> MeasurementRuntime::ensure_tool(Span span) {
   return select_sensor(def.label, span);
 }
 
-Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, std::optional<double> measuring, Span span) {
+Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, std::optional<double> measuring,
+                                           Span span) {
   machine::SetFeeds feeds;
   if (positioning) feeds.positioning_mm_s = *positioning;
   if (measuring) feeds.measuring_mm_s = *measuring;
@@ -242,9 +246,9 @@ Result<void> MeasurementRuntime::set_feeds(std::optional<double> positioning, st
   // seconds and never finish (issue 15); no CMM moves slower than 10 um/s (docs/limits.md).
   constexpr double min_feed_mm_s = 0.01;
   if ((positioning && *positioning < min_feed_mm_s) || (measuring && *measuring < min_feed_mm_s))
-    return program_error(span, fmt::format("a feed rate of {:g} mm/s is below the minimum of {:g} mm/s (docs/limits.md)",
-                                           positioning && *positioning < min_feed_mm_s ? *positioning : *measuring,
-                                           min_feed_mm_s));
+    return program_error(
+        span, fmt::format("a feed rate of {:g} mm/s is below the minimum of {:g} mm/s (docs/limits.md)",
+                          positioning && *positioning < min_feed_mm_s ? *positioning : *measuring, min_feed_mm_s));
   if (!m_default_feeds) {
     const auto before = m_machine.state();
     m_default_feeds = std::make_pair(before.positioning_feed_mm_s, before.measuring_feed_mm_s);
@@ -262,8 +266,9 @@ Result<void> MeasurementRuntime::characterise_machine(const std::optional<std::s
   if (m_machine.state().nominal) {
     // A dry run's machine has no dynamics to measure (its moves take no ramp, its touches no
     // delay): the run goes on with the default touch, as it would without the statement.
-    warn(span, "CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise; no file is written "
-               "and PTMEAS keep the default touch");
+    warn(span,
+         "CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise; no file is written "
+         "and PTMEAS keep the default touch");
     return {};
   }
   auto c = characterise(m_machine, CharacterisationSettings{});
@@ -310,12 +315,12 @@ Result<void> MeasurementRuntime::use_compensation(const std::string& path, Span 
 
 Result<void> MeasurementRuntime::check_probing_feed(double measuring_mm_s, Span span) const {
   if (!m_characterisation || measuring_mm_s <= m_characterisation->max_probe_feed_mm_s) return {};
-  return program_error(span, fmt::format("probing feed {:.3f} mm/s exceeds the maximum protected feed {:.3f} mm/s of "
-                                         "this machine (its stop distance would exceed {:.0f} % of the probe's "
-                                         "{:.3f} mm over-travel; docs/touch-trigger.md)",
-                                         measuring_mm_s, m_characterisation->max_probe_feed_mm_s,
-                                         100 * m_characterisation->over_travel_margin,
-                                         m_characterisation->over_travel_mm));
+  return program_error(span,
+                       fmt::format("probing feed {:.3f} mm/s exceeds the maximum protected feed {:.3f} mm/s of "
+                                   "this machine (its stop distance would exceed {:.0f} % of the probe's "
+                                   "{:.3f} mm over-travel; docs/touch-trigger.md)",
+                                   measuring_mm_s, m_characterisation->max_probe_feed_mm_s,
+                                   100 * m_characterisation->over_travel_margin, m_characterisation->over_travel_mm));
 }
 
 Result<void> MeasurementRuntime::restore_default_feed(bool positioning, Span span) {
@@ -342,9 +347,7 @@ Result<void> MeasurementRuntime::set_acceleration(double acceleration_mm_s2, Spa
   return {};
 }
 
-Vec3 MeasurementRuntime::position_current() const {
-  return m_alignment.to_part_point(m_machine.state().position_mm);
-}
+Vec3 MeasurementRuntime::position_current() const { return m_alignment.to_part_point(m_machine.state().position_mm); }
 
 Result<void> MeasurementRuntime::go_to(const Vec3& point, Span span) {
   auto r = run_commands({machine::Command{0, machine::GoTo{m_alignment.to_machine_point(point), {}}}}, {span});
@@ -388,7 +391,8 @@ void MeasurementRuntime::keep_failed_points(Feature& feature, const std::vector<
 
 Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   auto it = m_features.find(block.feature);
-  if (it == m_features.end()) return program_error(block.span, fmt::format("feature F({}) is not defined", block.feature));
+  if (it == m_features.end())
+    return program_error(block.span, fmt::format("feature F({}) is not defined", block.feature));
   Feature& feature = it->second;
   if (auto t = ensure_tool(block.span); !t) return t;
   // A hole the ball cannot enter: a real probe would touch its rim, not its wall. Told for each
@@ -400,11 +404,12 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     const double ball_mm = 2 * tool->nominal_radius_mm;
     const bool round = feature.nominal.type == FeatureType::Circle || feature.nominal.type == FeatureType::Arc ||
                        feature.nominal.type == FeatureType::Cylinder || feature.nominal.type == FeatureType::Sphere;
-    const double opening_mm = round ? feature.nominal.diameter_mm
-                              : feature.nominal.type == FeatureType::ParallelPlanes || feature.nominal.type == FeatureType::ClosedSlot
-                                  ? feature.nominal.width_mm
-                              : feature.nominal.type == FeatureType::Ellipse ? feature.nominal.minor_diameter_mm
-                                                                             : 0.0;
+    const double opening_mm =
+        round ? feature.nominal.diameter_mm
+        : feature.nominal.type == FeatureType::ParallelPlanes || feature.nominal.type == FeatureType::ClosedSlot
+            ? feature.nominal.width_mm
+        : feature.nominal.type == FeatureType::Ellipse ? feature.nominal.minor_diameter_mm
+                                                       : 0.0;
     if (opening_mm > 0 && ball_mm >= opening_mm)
       warn(block.span, fmt::format("the ball of {} ({:.3f} mm) is not smaller than F({}) ({:.3f} mm): it cannot reach "
                                    "the wall",
@@ -440,7 +445,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
     auto plan = plan_block(runs[k], feature.nominal, plan_context());
     if (!plan) return tl::unexpected(plan.error());
     const bool scans = std::any_of(plan->commands.begin(), plan->commands.end(), [](const machine::Command& c) {
-      return std::holds_alternative<machine::ScanPath>(c.body) || std::holds_alternative<machine::ScanBufferWrite>(c.body);
+      return std::holds_alternative<machine::ScanPath>(c.body) ||
+             std::holds_alternative<machine::ScanBufferWrite>(c.body);
     });
     if (scans) {
       if (auto r = scanning_radius(block.span); !r) return tl::unexpected(r.error());
@@ -491,7 +497,7 @@ void MeasurementRuntime::apply_fit_algorithm(Geometry& actual, const std::vector
   for (const auto& p : points) surface.push_back(p.surface_mm());
   // The least-squares sense of a direction is kept: a reference feature has no sense of its own.
   const auto same_sense = [&](const Vec3& d) { return d.dot(actual.direction) < 0 ? Vec3(-d) : d; };
-  const std::optional<Vec3> hint = type == FeatureType::Line ? std::optional<Vec3>(actual.normal2)
+  const std::optional<Vec3> hint = type == FeatureType::Line     ? std::optional<Vec3>(actual.normal2)
                                    : type == FeatureType::Sphere ? std::nullopt
                                                                  : std::optional<Vec3>(actual.direction);
   // The reference feature's position where the least-squares one was: a circle stays in its
@@ -556,18 +562,20 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
         // The effective radius absorbs the pre-travel and trigger delays at the qualification
         // feed only: at another feed every point moves by the delay times the feed difference.
         m_feed_change_warned = true;
-        warn(span_of(i), fmt::format("probing at {:.3f} mm/s, but the probe was qualified at {:.3f} mm/s: its effective "
-                                     "radius holds the trigger delay at that feed only, so points move along their "
-                                     "normals (set FEDRAT/MESVEL before the sensor's first SNSLCT, which qualifies it, or "
-                                     "characterise the machine, docs/touch-trigger.md); told once",
-                                     plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s));
+        warn(span_of(i),
+             fmt::format("probing at {:.3f} mm/s, but the probe was qualified at {:.3f} mm/s: its effective "
+                         "radius holds the trigger delay at that feed only, so points move along their "
+                         "normals (set FEDRAT/MESVEL before the sensor's first SNSLCT, which qualifies it, or "
+                         "characterise the machine, docs/touch-trigger.md); told once",
+                         plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s));
       }
       if (m_characterisation && i < plan.measuring_feed_mm_s.size())
         // The effective radius holds the delay distance at the qualification feed; a hit at
         // another feed is latched farther (or less far) past the surface (SEEDS.md 3).
         centre += m_characterisation->dynamic_correction_mm(plan.measuring_feed_mm_s[i], m_qualification_feed_mm_s) *
                   r.hit->normal;
-      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s, span_of(i), false, std::nullopt, Vec3::UnitZ()});
+      points.push_back({centre, r.hit->normal, r.hit->ball_radius_mm, r.hit->time_s, span_of(i), false, std::nullopt,
+                        Vec3::UnitZ()});
       const auto* pt = i < plan.commands.size() ? std::get_if<machine::PtMeas>(&plan.commands[i].body) : nullptr;
       if (pt) {
         points.back().nominal_mm = pt->nominal_mm;
@@ -576,10 +584,12 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
       // Issue 11: a surface beyond the nominal tolerance is touched while still accelerating.
       const auto early = pt && m_characterisation ? m_characterisation->early_contact_mm(*pt, *r.hit) : std::nullopt;
       if (early)
-        warn(span_of(i), fmt::format("the surface lies about {:.3f} mm above its nominal, beyond the nominal tolerance of {:.3f} mm: "
-                                     "the probe touched it before reaching the probing feed and the point may be off "
-                                     "(raise the tolerance or SNSET/APPRCH)",
-                                     *early, m_characterisation->nominal_tolerance_mm));
+        warn(span_of(i),
+             fmt::format(
+                 "the surface lies about {:.3f} mm above its nominal, beyond the nominal tolerance of {:.3f} mm: "
+                 "the probe touched it before reaching the probing feed and the point may be off "
+                 "(raise the tolerance or SNSET/APPRCH)",
+                 *early, m_characterisation->nominal_tolerance_mm));
     }
   // Scanned samples: the deflection direction is the surface normal estimate (SEEDS.md 1: eu);
   // compensated with the nominal radius (no pre-travel: the deflection is read, see scan.cpp).
@@ -595,7 +605,8 @@ std::vector<MeasuredPoint> MeasurementRuntime::collect_points(const BlockPlan& p
       const double radius_mm = qualified != m_scanning_radius_mm.end() ? qualified->second
                                : tool                                  ? tool->nominal_radius_mm
                                                                        : 0.0;
-      points.push_back({sample.centre_mm, sample.deflection_mm / e, radius_mm, sample.time_s, span_of(i), true, std::nullopt, Vec3::UnitZ()});
+      points.push_back({sample.centre_mm, sample.deflection_mm / e, radius_mm, sample.time_s, span_of(i), true,
+                        std::nullopt, Vec3::UnitZ()});
     }
   return points;
 }
@@ -666,16 +677,17 @@ Result<double> MeasurementRuntime::scanning_radius(Span span) {
   const double dz = circle->position.z() - centre.z();
   const double radius_mm = std::sqrt(std::pow(circle->diameter_mm / 2, 2) + dz * dz) - big_r;
   m_scanning_radius_mm[tool.name] = radius_mm;
-  m_record.machine_log.push_back(fmt::format("scanning qualification of {}: {} samples on the reference sphere's "
-                                             "equator, scanning radius {:.4f} mm (nominal {:.4f}, touch effective {:.4f})",
-                                             tool.name, centres.size(), radius_mm, tool.nominal_radius_mm,
-                                             tool.effective_radius_mm));
+  m_record.machine_log.push_back(
+      fmt::format("scanning qualification of {}: {} samples on the reference sphere's "
+                  "equator, scanning radius {:.4f} mm (nominal {:.4f}, touch effective {:.4f})",
+                  tool.name, centres.size(), radius_mm, tool.nominal_radius_mm, tool.effective_radius_mm));
   return radius_mm;
 }
 
 Result<const Datum*> MeasurementRuntime::datum(const std::string& label, Span span) const {
   auto it = m_datums.find(label);
-  if (it == m_datums.end()) return program_error(span, fmt::format("datum DAT({}) is not defined: use DATDEF first", label));
+  if (it == m_datums.end())
+    return program_error(span, fmt::format("datum DAT({}) is not defined: use DATDEF first", label));
   return &it->second;
 }
 
@@ -762,7 +774,8 @@ Result<void> MeasurementRuntime::rotate(const std::string& label, const RotateRe
 
 Result<void> MeasurementRuntime::save(const std::string& label, Span span) {
   auto it = m_alignments.find(label);
-  if (it == m_alignments.end()) return program_error(span, fmt::format("coordinate system D({}) is not defined", label));
+  if (it == m_alignments.end())
+    return program_error(span, fmt::format("coordinate system D({}) is not defined", label));
   m_saved[label] = it->second;
   return {};
 }
@@ -794,8 +807,8 @@ void MeasurementRuntime::output_sensor(const std::string& label, bool actual, Sp
   } else {
     const machine::ToolInfo& t = tool->second;
     text = fmt::format("SA({}): tip {} nominal diameter, ", label, length(2 * t.nominal_radius_mm));
-    text += t.qualified ? fmt::format("{} effective (qualified on the reference sphere, form {})", length(2 * t.effective_radius_mm),
-                                      length(t.qualification_form_mm))
+    text += t.qualified ? fmt::format("{} effective (qualified on the reference sphere, form {})",
+                                      length(2 * t.effective_radius_mm), length(t.qualification_form_mm))
                         : std::string("not qualified yet");
     if (const auto sc = m_scanning_radius_mm.find(label); sc != m_scanning_radius_mm.end())
       text += fmt::format("; scanning {} effective", length(2 * sc->second));
@@ -822,9 +835,10 @@ void MeasurementRuntime::output_coordinate_system(const std::string& label, bool
     return fmt::format("({:.6f}, {:.6f}, {:.6f})", a.x(), a.y(), a.z());
   };
   const ReportUnits& u = m_report_units;
-  const std::string text = fmt::format("{}({}): origin ({}, {}, {}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
-                                       actual ? "DA" : "D", label, length_text(o.x(), u), length_text(o.y(), u),
-                                       length_text(o.z(), u), unit_word(u), axis(0), axis(1), axis(2));
+  const std::string text =
+      fmt::format("{}({}): origin ({}, {}, {}) {}, X axis {}, Y axis {}, Z axis {} in machine coordinates",
+                  actual ? "DA" : "D", label, length_text(o.x(), u), length_text(o.y(), u), length_text(o.z(), u),
+                  unit_word(u), axis(0), axis(1), axis(2));
   write_device_line("$$ " + text);
   emit(TextReport{text});
 }
@@ -849,16 +863,16 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     // The OUTPUT itself, then the result lines it produced (the DMIS output file's layout).
     std::string echo = "OUTPUT/";
     for (std::size_t i = 0; i < items.size(); ++i)
-      echo += (i ? ", " : "") + (items[i].kind == OutputItem::Kind::Tolerance
-                                     ? fmt::format("TA({})", items[i].tolerance)
-                                 : items[i].kind == OutputItem::Kind::Sensor
-                                     ? fmt::format("{}({})", items[i].sensor_actual ? "SA" : "S", items[i].sensor)
-                                 : items[i].kind == OutputItem::Kind::CoordinateSystem
-                                     ? fmt::format("{}({})", items[i].coordinate_system_actual ? "DA" : "D", items[i].coordinate_system)
-                                     : fmt::format("{}({}){}", items[i].feature.actual ? "FA" : "F", items[i].feature.label,
-                                                   items[i].points ? fmt::format("[{},{}]", items[i].points->first,
-                                                                                 items[i].points->second)
-                                                                   : std::string()));
+      echo +=
+          (i ? ", " : "") +
+          (items[i].kind == OutputItem::Kind::Tolerance ? fmt::format("TA({})", items[i].tolerance)
+           : items[i].kind == OutputItem::Kind::Sensor
+               ? fmt::format("{}({})", items[i].sensor_actual ? "SA" : "S", items[i].sensor)
+           : items[i].kind == OutputItem::Kind::CoordinateSystem
+               ? fmt::format("{}({})", items[i].coordinate_system_actual ? "DA" : "D", items[i].coordinate_system)
+               : fmt::format("{}({}){}", items[i].feature.actual ? "FA" : "F", items[i].feature.label,
+                             items[i].points ? fmt::format("[{},{}]", items[i].points->first, items[i].points->second)
+                                             : std::string()));
     write_device_line(echo);
   }
   for (const auto& item : items) {
@@ -871,7 +885,8 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
       continue;
     }
     if (item.kind == OutputItem::Kind::Tolerance) {
-      if (!find_tolerance(item.tolerance)) return program_error(span, fmt::format("tolerance T({}) is not defined", item.tolerance));
+      if (!find_tolerance(item.tolerance))
+        return program_error(span, fmt::format("tolerance T({}) is not defined", item.tolerance));
       tolerances.push_back(item.tolerance);
       continue;
     }
@@ -888,16 +903,16 @@ Result<void> MeasurementRuntime::output_or_evaluate(const std::vector<OutputItem
     report.point_count = f->points.size();
     report.source = f->source;
     report.units = m_report_units;
-    if (item.feature.actual && !f->actual)
-      warn(span, fmt::format("OUTPUT of FA({}) before it was measured", f->label));
+    if (item.feature.actual && !f->actual) warn(span, fmt::format("OUTPUT of FA({}) before it was measured", f->label));
     if (item.points) {
       const int count = static_cast<int>(f->points.size());
       const auto [first, last] = *item.points;
       const int from = std::max(first, 1), to = std::min(last, count);  // what the feature has of the range
       if (first < 1 || last < first || last > count)
-        warn(span, fmt::format("FA({})[{},{}] asks for points {} to {}; it has {}: {}", f->label, first, last, first, last,
-                               count, from > to ? std::string("none is listed")
-                                                : fmt::format("points {} to {} are listed", from, to)));
+        warn(span,
+             fmt::format(
+                 "FA({})[{},{}] asks for points {} to {}; it has {}: {}", f->label, first, last, first, last, count,
+                 from > to ? std::string("none is listed") : fmt::format("points {} to {} are listed", from, to)));
       const bool residuals = f->fit && f->fit->residuals_mm.size() == f->points.size();
       for (int i = from; i <= to; ++i) {
         const MeasuredPoint& p = f->points[static_cast<std::size_t>(i - 1)];
@@ -1055,9 +1070,10 @@ bool MeasurementRuntime::commit_device(Device& device) {
   device.stream.reset();
   std::error_code ec;
   if (!written) {
-    m_output_errors.push_back(fmt::format("cannot write the output file {}: a write failed (disk full?); the "
-                                          "earlier file, if any, is kept",
-                                          device.path));
+    m_output_errors.push_back(
+        fmt::format("cannot write the output file {}: a write failed (disk full?); the "
+                    "earlier file, if any, is kept",
+                    device.path));
     std::filesystem::remove(device.temp_path, ec);
     return false;
   }
@@ -1109,8 +1125,9 @@ Result<void> MeasurementRuntime::write_device(const std::string& label, const st
   auto it = m_devices.find(label);
   if (it == m_devices.end()) return program_error(span, fmt::format("device DID({}) is not defined", label));
   if (!it->second.open || !it->second.stream)
-    return program_error(span, fmt::format("WRITE/DID({}): the device is not open for OUTPUT (OPEN/DID({}),DIRECT,OUTPUT)",
-                                           label, label));
+    return program_error(
+        span,
+        fmt::format("WRITE/DID({}): the device is not open for OUTPUT (OPEN/DID({}),DIRECT,OUTPUT)", label, label));
   *it->second.stream << line << "\n";
   return {};
 }
@@ -1127,8 +1144,8 @@ Result<std::string> MeasurementRuntime::read_input_device(const std::string& lab
     for (const auto& dir : m_policy.read_dirs()) candidates.push_back(dir / written);
   }
   std::error_code ec;
-  const auto found = std::find_if(candidates.begin(), candidates.end(),
-                                  [&](const fs::path& p) { return fs::exists(p, ec); });
+  const auto found =
+      std::find_if(candidates.begin(), candidates.end(), [&](const fs::path& p) { return fs::exists(p, ec); });
   if (found == candidates.end())
     return program_error(span, fmt::format("OPEN/DID({}),INPUT: the file '{}' is not there (looked in {})", label,
                                            it->second.path, candidates.front().parent_path().string()));

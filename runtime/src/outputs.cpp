@@ -29,13 +29,11 @@ bool has_direction(FeatureType type) { return type != FeatureType::Sphere; }
 bool has_diameter(FeatureType type) {
   return type == FeatureType::Circle || type == FeatureType::Arc || type == FeatureType::Sphere ||
          type == FeatureType::Cylinder || type == FeatureType::Torus ||  // a torus: its major diameter
-         type == FeatureType::Ellipse;                                      // an ellipse: its major diameter
+         type == FeatureType::Ellipse;                                   // an ellipse: its major diameter
 }
 bool has_minor_diameter(FeatureType type) { return type == FeatureType::Torus || type == FeatureType::Ellipse; }
 /// CPARLN: its long axis; ELLIPS: its major axis.
-bool has_in_plane_axis(FeatureType type) {
-  return type == FeatureType::ClosedSlot || type == FeatureType::Ellipse;
-}
+bool has_in_plane_axis(FeatureType type) { return type == FeatureType::ClosedSlot || type == FeatureType::Ellipse; }
 bool has_length(const Geometry& g) {
   return g.type == FeatureType::Cylinder || g.type == FeatureType::Cone || g.type == FeatureType::ClosedSlot ||
          (g.type == FeatureType::Line && g.bounded);
@@ -102,8 +100,7 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
     rows.push_back(
         {"R", Unit::Millimetre, nominal.diameter_mm / 2, act([](const Geometry& g) { return g.diameter_mm / 2; })});
   else if (has_diameter(nominal.type))
-    rows.push_back(
-        {"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
+    rows.push_back({"D", Unit::Millimetre, nominal.diameter_mm, act([](const Geometry& g) { return g.diameter_mm; })});
   if (has_minor_diameter(nominal.type))
     rows.push_back({"MD", Unit::Millimetre, nominal.minor_diameter_mm,
                     act([](const Geometry& g) { return g.minor_diameter_mm; })});
@@ -116,17 +113,16 @@ std::vector<Row> report_rows(const Geometry& nominal, const Geometry* actual) {
   if (nominal.type == FeatureType::ParallelPlanes || nominal.type == FeatureType::ClosedSlot)
     rows.push_back({"W", Unit::Millimetre, nominal.width_mm, act([](const Geometry& g) { return g.width_mm; })});
   if (nominal.type == FeatureType::Arc) {
-    rows.push_back({"START", Unit::Degree, nominal.start_angle_deg,
-                    act([](const Geometry& g) { return g.start_angle_deg; })});
+    rows.push_back(
+        {"START", Unit::Degree, nominal.start_angle_deg, act([](const Geometry& g) { return g.start_angle_deg; })});
     rows.push_back({"INCL", Unit::Degree, nominal.included_angle_deg,
                     act([](const Geometry& g) { return g.included_angle_deg; })});
   }
   if (nominal.type == FeatureType::Cone)
-    rows.push_back({"ANGLE", Unit::Degree, nominal.apex_angle_deg,
-                    act([](const Geometry& g) { return g.apex_angle_deg; })});
-  if (has_length(nominal) && (nominal.type != FeatureType::Cone || nominal.length_mm > 0))
     rows.push_back(
-        {"L", Unit::Millimetre, nominal.length_mm, act([](const Geometry& g) { return g.length_mm; })});
+        {"ANGLE", Unit::Degree, nominal.apex_angle_deg, act([](const Geometry& g) { return g.apex_angle_deg; })});
+  if (has_length(nominal) && (nominal.type != FeatureType::Cone || nominal.length_mm > 0))
+    rows.push_back({"L", Unit::Millimetre, nominal.length_mm, act([](const Geometry& g) { return g.length_mm; })});
   return rows;
 }
 
@@ -254,8 +250,7 @@ json deviation_json(const Geometry& nominal, const Geometry& actual) {
   if (nominal.type == FeatureType::ParallelPlanes || nominal.type == FeatureType::ClosedSlot)
     j["width_mm"] = number(actual.width_mm - nominal.width_mm);
   if (has_length(nominal)) j["length_mm"] = number(actual.length_mm - nominal.length_mm);
-  if (nominal.type == FeatureType::Cone)
-    j["apex_angle_deg"] = number(actual.apex_angle_deg - nominal.apex_angle_deg);
+  if (nominal.type == FeatureType::Cone) j["apex_angle_deg"] = number(actual.apex_angle_deg - nominal.apex_angle_deg);
   if (nominal.type == FeatureType::Arc) {
     j["start_angle_deg"] = number(actual.start_angle_deg - nominal.start_angle_deg);
     j["included_angle_deg"] = number(actual.included_angle_deg - nominal.included_angle_deg);
@@ -381,36 +376,37 @@ std::string format_feature_report(const FeatureReport& report) {
   }
   if (actual && report.fit) {
     out += fmt::format("  {:6}{:>14}{:>14}\n", "RMS", "", fixed(report.fit->rms_mm, Unit::Millimetre, false, u));
-    out += fmt::format("  {:6}{:>14}{:>14}\n", "FORM", "",
-                       fixed(report.fit->form_mm, Unit::Millimetre, false, u));
+    out += fmt::format("  {:6}{:>14}{:>14}\n", "FORM", "", fixed(report.fit->form_mm, Unit::Millimetre, false, u));
   }
   if (!report.points.empty()) {
     // OUTPUT/FA(x)[first,last]: the probed points, compensated, with their distances from the fit.
-    out += fmt::format("  {:6}{:>14}{:>14}{:>14}{:>11}{:>11}{:>11}{:>12}\n", "POINT", "X", "Y", "Z", "I", "J", "K", "DEV");
+    out +=
+        fmt::format("  {:6}{:>14}{:>14}{:>14}{:>11}{:>11}{:>11}{:>12}\n", "POINT", "X", "Y", "Z", "I", "J", "K", "DEV");
     for (const ListedPoint& p : report.points) {
-      out += fmt::format("  {:<6}{:>14}{:>14}{:>14}", fmt::format("[{}]", p.index), fixed(p.surface_mm.x(), Unit::Millimetre, false, u),
-                         fixed(p.surface_mm.y(), Unit::Millimetre, false, u), fixed(p.surface_mm.z(), Unit::Millimetre, false, u));
+      out += fmt::format("  {:<6}{:>14}{:>14}{:>14}", fmt::format("[{}]", p.index),
+                         fixed(p.surface_mm.x(), Unit::Millimetre, false, u),
+                         fixed(p.surface_mm.y(), Unit::Millimetre, false, u),
+                         fixed(p.surface_mm.z(), Unit::Millimetre, false, u));
       for (int k = 0; k < 3; ++k) out += fmt::format("{:>11}", fixed(p.approach[k], Unit::Cosine, false, u));
-      out += fmt::format("{:>12}\n", p.residual_mm ? fixed(*p.residual_mm, Unit::Millimetre, true, u) : std::string("-"));
+      out +=
+          fmt::format("{:>12}\n", p.residual_mm ? fixed(*p.residual_mm, Unit::Millimetre, true, u) : std::string("-"));
     }
   }
   return out;
 }
 
 std::string format_tolerance_result(const ToleranceResult& result) {
-  std::string out =
-      fmt::format("T({})  {}  {}  ", result.label, kind_words(result), feature_list(result.features));
+  std::string out = fmt::format("T({})  {}  {}  ", result.label, kind_words(result), feature_list(result.features));
   const Unit unit = is_angle_result(result) ? Unit::Degree : Unit::Millimetre;
   const auto mm = [&](double v, bool sign) { return fixed(v, unit, sign, result.units); };
   if (is_deviation_kind(result.kind)) {
     // The nominal the deviation is taken from (DISTB: the tolerance's, not the features').
-    out += fmt::format("nominal {}  actual {}  ", mm(result.actual - result.value, false),
-                       mm(result.actual, false));
+    out += fmt::format("nominal {}  actual {}  ", mm(result.actual - result.value, false), mm(result.actual, false));
   }
   if (is_deviation_kind(result.kind) || result.kind == ToleranceKind::Profs || result.kind == ToleranceKind::Profl ||
       result.kind == ToleranceKind::Profp)
-    out += fmt::format("dev {}  limits [{}, {}]", mm(result.value, true), mm(result.lower, true),
-                       mm(result.upper, true));
+    out +=
+        fmt::format("dev {}  limits [{}, {}]", mm(result.value, true), mm(result.lower, true), mm(result.upper, true));
   else
     out += fmt::format("value {}  zone {}", mm(result.value, false), mm(result.upper, false));
   out += result.in_tolerance ? "  IN" : "  OUT";
@@ -428,17 +424,16 @@ std::string format_fault(const FaultReport& fault) {
   std::string_view text = fault.statement_text;
   while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.remove_suffix(1);
   if (!text.empty()) out += fmt::format("  {}\n", text);
-  out += fmt::format("  machine at {}, {}, {} mm, t = {:.3f} s\n",
-                     fixed(fault.position_mm.x(), Unit::Millimetre, false),
-                     fixed(fault.position_mm.y(), Unit::Millimetre, false),
-                     fixed(fault.position_mm.z(), Unit::Millimetre, false), fault.time_s);
+  out +=
+      fmt::format("  machine at {}, {}, {} mm, t = {:.3f} s\n", fixed(fault.position_mm.x(), Unit::Millimetre, false),
+                  fixed(fault.position_mm.y(), Unit::Millimetre, false),
+                  fixed(fault.position_mm.z(), Unit::Millimetre, false), fault.time_s);
   return out;
 }
 
 std::string dmis_feature_line(const FeatureReport& report) {
   const Geometry& g = report.actual ? *report.actual : report.nominal;
-  std::string head =
-      fmt::format("{}({}) = FEAT/{}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
+  std::string head = fmt::format("{}({}) = FEAT/{}", report.actual ? "FA" : "F", report.label, dmis_word(g.type));
   if (g.type == FeatureType::Line) head += g.bounded ? ", BND" : ", UNBND";
   if (has_side(g.type)) head += fmt::format(", {}", side_word(g));
   if (g.type == FeatureType::ClosedSlot) head += fmt::format(", {}", dmis_word(g.slot_ends));
@@ -529,7 +524,8 @@ std::optional<std::string> write_file_atomically(const std::string& path, const 
 std::optional<std::string> write_results_file(const RunRecord& record, const std::string& path) {
   // Program texts, file names and echoed lines may hold any bytes (a Latin-1 TEXT, CHR(200)):
   // they are replaced, never allowed to abort the dump and lose the results.
-  return write_file_atomically(path, results_json(record).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  return write_file_atomically(
+      path, results_json(record).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 }  // namespace metron::runtime

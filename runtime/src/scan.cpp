@@ -13,7 +13,8 @@ namespace metron::runtime {
 
 geometry::Contour path_contour(const PathDefinition& path, double step_mm) {
   if (path.section) return *path.section;
-  if (path.kind == PathDefinition::Kind::Line) return geometry::line_contour(path.point, path.point2, path.direction, step_mm);
+  if (path.kind == PathDefinition::Kind::Line)
+    return geometry::line_contour(path.point, path.point2, path.direction, step_mm);
   geometry::ArcSpec arc;
   arc.centre = path.point;
   arc.axis = path.direction.normalized();
@@ -27,7 +28,8 @@ geometry::Contour path_contour(const PathDefinition& path, double step_mm) {
 }
 
 tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, const Vec3& start_near, double depth_mm,
-                                                             const Vec3& up, const Vec3& arc_reference, double step_mm) {
+                                                             const Vec3& up, const Vec3& arc_reference,
+                                                             double step_mm) {
   const Vec3 axis = g.direction.normalized();
   switch (g.type) {
     case FeatureType::Circle:
@@ -52,12 +54,14 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, 
     }
     case FeatureType::Line: {
       if (!(g.length_mm > 0)) return tl::unexpected(std::string("scanning a line needs a bounded line (LINE,BND)"));
-      return geometry::line_contour(g.position, g.position + g.length_mm * axis, nominal_normal_at(g, g.position), step_mm);
+      return geometry::line_contour(g.position, g.position + g.length_mm * axis, nominal_normal_at(g, g.position),
+                                    step_mm);
     }
     case FeatureType::Plane: {
       // A circle of 5 mm radius on the plane (the touch planner's 4 points lie on it too).
       const Vec3 u = any_perpendicular(axis), v = axis.cross(u);
-      const std::size_t n = std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(2 * std::numbers::pi * 5.0 / step_mm)));
+      const std::size_t n =
+          std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(2 * std::numbers::pi * 5.0 / step_mm)));
       geometry::Contour c;
       c.closed = true;
       for (std::size_t i = 0; i <= n; ++i) {
@@ -68,14 +72,16 @@ tl::expected<geometry::Contour, std::string> nominal_contour(const Geometry& g, 
       return c;
     }
     default:
-      return tl::unexpected(fmt::format("metron scans CIRCLE, ARC, LINE (BND) and PLANE features by their nominal; "
-                                        "scan a {} along a PATH with PAMEAS",
-                                        dmis_word(g.type)));
+      return tl::unexpected(
+          fmt::format("metron scans CIRCLE, ARC, LINE (BND) and PLANE features by their nominal; "
+                      "scan a {} along a PATH with PAMEAS",
+                      dmis_word(g.type)));
   }
 }
 
-tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geometry& g, const Vec3& start, const Vec3& end,
-                                                                     const Vec3& normal, double step_mm) {
+tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geometry& g, const Vec3& start,
+                                                                     const Vec3& end, const Vec3& normal,
+                                                                     double step_mm) {
   const Vec3 axis = g.direction.normalized();
   switch (g.type) {
     case FeatureType::Circle:
@@ -84,7 +90,8 @@ tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geome
       const Vec3 a = start - g.position, b = end - g.position;
       const double ha = a.dot(axis), hb = b.dot(axis);
       const Vec3 ra = a - ha * axis, rb = b - hb * axis;
-      if (ra.norm() < 1e-9 || rb.norm() < 1e-9) return tl::unexpected(std::string("a scan's start or end lies on the feature's axis"));
+      if (ra.norm() < 1e-9 || rb.norm() < 1e-9)
+        return tl::unexpected(std::string("a scan's start or end lies on the feature's axis"));
       double sweep = std::atan2(ra.cross(rb).dot(axis), ra.dot(rb)) * 180 / std::numbers::pi;
       if (sweep <= 1e-9) sweep += 360;  // counterclockwise; the same point twice is a full turn
       geometry::ArcSpec arc;
@@ -102,9 +109,10 @@ tl::expected<geometry::Contour, std::string> nominal_contour_between(const Geome
       if ((end - start).norm() < 1e-9) return tl::unexpected(std::string("a scan's start and end are the same point"));
       return geometry::line_contour(start, end, normal, step_mm);
     default:
-      return tl::unexpected(fmt::format("scan mode with PTMEAS scans CIRCLE, ARC, CYLNDR, LINE and PLANE features; scan a {} "
-                                        "along a PATH with PAMEAS",
-                                        dmis_word(g.type)));
+      return tl::unexpected(
+          fmt::format("scan mode with PTMEAS scans CIRCLE, ARC, CYLNDR, LINE and PLANE features; scan a {} "
+                      "along a PATH with PAMEAS",
+                      dmis_word(g.type)));
   }
 }
 
@@ -126,7 +134,8 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
       it = m_models.emplace(path.model_path, std::move(*mesh)).first;
     }
     const geometry::Mesh placed = it->second.transformed(m_alignment.part_to_machine);
-    auto contour = geometry::nearest_contour(geometry::mesh_section_contours(placed, path.point, path.direction, 0.05), path.point2);
+    auto contour = geometry::nearest_contour(geometry::mesh_section_contours(placed, path.point, path.direction, 0.05),
+                                             path.point2);
     if (!contour) return program_error(span, "the PATH/SECTION plane does not cut the CAD model");
     if (path.point3) {
       // A sub-range: from the start to the contour's point nearest the end hint, in the contour's
@@ -144,10 +153,8 @@ Result<void> MeasurementRuntime::define_path(PathDefinition path, Span span) {
   if (path.kind == PathDefinition::Kind::Line && (path.point2 - path.point).norm() < 1e-9)
     return program_error(span, "PATH/LINE needs two different end points");
   const bool round = path.kind == PathDefinition::Kind::Arc || path.kind == PathDefinition::Kind::Helical;
-  if (round && !(path.radius_mm > 0))
-    return program_error(span, "the PATH radius must be positive");
-  if (round && path.end_deg == path.start_deg)
-    return program_error(span, "the PATH start and end angles are equal");
+  if (round && !(path.radius_mm > 0)) return program_error(span, "the PATH radius must be positive");
+  if (round && path.end_deg == path.start_deg) return program_error(span, "the PATH start and end angles are equal");
   path.span = span;
   m_paths[path.label] = path;
   return {};

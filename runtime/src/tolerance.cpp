@@ -92,14 +92,12 @@ const char* lowercase_name(FeatureType type) {
 
 const char* article(const char* word) {
   const char c = word[0];
-  const bool vowel = c == 'a' || c == 'e' || c == 'i' || c == 'o' || c == 'u' || c == 'A' || c == 'E' ||
-                     c == 'I' || c == 'O' || c == 'U';
+  const bool vowel = c == 'a' || c == 'e' || c == 'i' || c == 'o' || c == 'u' || c == 'A' || c == 'E' || c == 'I' ||
+                     c == 'O' || c == 'U';
   return vowel ? "an" : "a";
 }
 
-bool is_one_of(FeatureType type, Types types) {
-  return std::find(types.begin(), types.end(), type) != types.end();
-}
+bool is_one_of(FeatureType type, Types types) { return std::find(types.begin(), types.end(), type) != types.end(); }
 
 /// "a circle, arc, sphere or cylinder"
 std::string type_list(Types types) {
@@ -117,8 +115,8 @@ std::string type_list(Types types) {
 }
 
 Error wrong_type(ToleranceKind kind, Types types, FeatureType got) {
-  return Error(fmt::format("{} applies to {}, not to {} {}", dmis_word(kind), type_list(types),
-                           article(dmis_word(got)), dmis_word(got)));
+  return Error(fmt::format("{} applies to {}, not to {} {}", dmis_word(kind), type_list(types), article(dmis_word(got)),
+                           dmis_word(got)));
 }
 
 void add_note(ToleranceResult& result, const std::string& note) {
@@ -138,12 +136,12 @@ void add_note(ToleranceResult& result, const std::string& note) {
 /// and keeps the reading under which the datums' nominals and actuals agree best: the one that
 /// moves the feature least. The note says which.
 tl::expected<DatumFrame, std::string> frame_of_datums(const ToleranceSpec& spec, const Feature& feature,
-                                                     const ToleranceContext& context) {
+                                                      const ToleranceContext& context) {
   if (spec.datums.empty()) return DatumFrame{};
   for (std::size_t i = 0; i < spec.datums.size(); ++i)
     if (i >= context.datums.size() || !context.datums[i])
-      return Error(fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.datums[i],
-                               spec.datums[i]));
+      return Error(
+          fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.datums[i], spec.datums[i]));
   auto as_defined = fit_datum_frame(context.datums, feature.nominal_frame, DatumNominals::AsDefined);
   if (!as_defined) return as_defined;
   auto in_frame = fit_datum_frame(context.datums, feature.nominal_frame, DatumNominals::InFeaturesFrame);
@@ -193,8 +191,7 @@ bool has_axis(FeatureType type) {
 // ---------------------------------------------------------------- size
 
 Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
-                                    FeatureType::Cylinder};
+  static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
   static constexpr Types k_widths = {FeatureType::ParallelPlanes, FeatureType::ClosedSlot};
   static constexpr Types k_lengths = {FeatureType::ClosedSlot};
   const bool width = spec.kind == ToleranceKind::Width;
@@ -217,8 +214,8 @@ Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, Toleran
     const Geometry& g = **actual;
     const Vec3 axis = g.direction.norm() > 1e-12 ? Vec3(g.direction.normalized()) : Vec3::UnitZ();
     if (feature.points.empty())
-      return Error(fmt::format("{} of {} at {} needs its measured points: it has none", dmis_word(spec.kind), feature.label,
-                               spec.extent == DistanceExtent::Maximum ? "MAX" : "MIN"));
+      return Error(fmt::format("{} of {} at {} needs its measured points: it has none", dmis_word(spec.kind),
+                               feature.label, spec.extent == DistanceExtent::Maximum ? "MAX" : "MIN"));
     double lo = std::numeric_limits<double>::infinity(), hi = 0;
     for (const MeasuredPoint& p : feature.points) {
       Vec3 v = p.surface_mm() - g.position;
@@ -228,10 +225,10 @@ Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, Toleran
     }
     const bool maximum = spec.extent == DistanceExtent::Maximum;
     result.actual = 2 * scale * (maximum ? hi : lo);
-    add_note(result, fmt::format("{}: the {} {} of the {} measured points about the fitted centre (least squares {:.4f})",
-                                 maximum ? "MAX" : "MIN", maximum ? "largest" : "smallest",
-                                 spec.kind == ToleranceKind::Rad ? "radius" : "diameter", feature.points.size(),
-                                 size_of(g)));
+    add_note(result,
+             fmt::format("{}: the {} {} of the {} measured points about the fitted centre (least squares {:.4f})",
+                         maximum ? "MAX" : "MIN", maximum ? "largest" : "smallest",
+                         spec.kind == ToleranceKind::Rad ? "radius" : "diameter", feature.points.size(), size_of(g)));
   }
   result.value = result.actual - result.nominal;
   set_limits(result, spec.lower, spec.upper);
@@ -377,8 +374,8 @@ Outcome evaluate_distb(const ToleranceSpec& spec, const Feature& first, const Fe
     };
     const bool any_sized = sized(**a) || sized(**b);
     add_note(result, any_sized ? (spec.extent == DistanceExtent::Minimum ? "MINIM: between the near sides"
-                                                                      : "MAXIM: between the far sides")
-                           : "MINIM/MAXIM: neither feature has a size, the distance is between their positions");
+                                                                         : "MAXIM: between the far sides")
+                               : "MINIM/MAXIM: neither feature has a size, the distance is between their positions");
   }
   if (spec.limits)
     add_note(result, fmt::format("LIMIT form: the distance between {} and {}, deviations from their middle",
@@ -425,7 +422,8 @@ double departure_from(MaterialCondition condition, const Geometry& nominal, cons
 // The MMC or LMC bonus of a position zone: the actual size's departure from that material
 // condition, taken at the nominal diameter (the spec carries no size limits).
 tl::expected<double, std::string> material_bonus(MaterialCondition condition, const Geometry& nominal,
-                                                 const Geometry& actual, const ReportUnits& units, ToleranceResult& result) {
+                                                 const Geometry& actual, const ReportUnits& units,
+                                                 ToleranceResult& result) {
   if (condition == MaterialCondition::Rfs) return 0.0;
   const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
   if (!is_one_of(nominal.type, k_material_sized))
@@ -441,8 +439,8 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
 }
 
 // Datum shift (ASME Y14.5: a datum feature referenced at its maximum material boundary; ISO 2692:
-// the maximum material requirement applied to a datum feature): a datum feature of size referenced at MMC (LMC) that departs from that size
-// lets the datum reference frame move by half the departure, here a translation normal to the
+// the maximum material requirement applied to a datum feature): a datum feature of size referenced at MMC (LMC) that
+// departs from that size lets the datum reference frame move by half the departure, here a translation normal to the
 // datum's axis. For one feature the best shift takes up to that much off the deviation's
 // component across the datum's axis: |d_perp| -> max(0, |d_perp| - departure / 2). Only the first
 // datum of size with a modifier shifts; the rotation a further one would allow is not taken.
@@ -460,7 +458,8 @@ void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& contex
       continue;
     }
     if (shifted) {
-      add_note(result, fmt::format("DAT({}) at {}: the rotation its departure allows is not applied", datum.label, modifier));
+      add_note(result,
+               fmt::format("DAT({}) at {}: the rotation its departure allows is not applied", datum.label, modifier));
       continue;
     }
     shifted = true;
@@ -483,10 +482,9 @@ void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& contex
 
 Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                      ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Point,  FeatureType::Circle,   FeatureType::Arc,
-                                    FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                    FeatureType::Line,   FeatureType::ClosedSlot, FeatureType::Torus,
-                                    FeatureType::Ellipse};
+  static constexpr Types k_types = {
+      FeatureType::Point, FeatureType::Circle, FeatureType::Arc,        FeatureType::Sphere, FeatureType::Cylinder,
+      FeatureType::Cone,  FeatureType::Line,   FeatureType::ClosedSlot, FeatureType::Torus,  FeatureType::Ellipse};
   const Geometry& nominal = feature.nominal;
   if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
   const auto actual_or = actual_of(feature);
@@ -516,7 +514,8 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
 
 // ---------------------------------------------------------------- form
 
-Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ReportUnits& units, ToleranceResult result) {
+Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ReportUnits& units,
+                      ToleranceResult result) {
   static constexpr Types k_flat = {FeatureType::Plane};
   static constexpr Types k_round = {FeatureType::Circle, FeatureType::Arc};
   static constexpr Types k_cylinder = {FeatureType::Cylinder};
@@ -572,22 +571,20 @@ struct Reference {
   std::string name;    ///< "datum A" or "F2", for notes
 };
 
-tl::expected<Reference, std::string> reference_of(const Geometry& g, const std::string& name,
-                                                  ToleranceKind kind) {
-  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line,   FeatureType::Cylinder,
-                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc,
+tl::expected<Reference, std::string> reference_of(const Geometry& g, const std::string& name, ToleranceKind kind) {
+  static constexpr Types k_types = {FeatureType::Plane,         FeatureType::Line,   FeatureType::Cylinder,
+                                    FeatureType::Cone,          FeatureType::Circle, FeatureType::Arc,
                                     FeatureType::ParallelPlanes};
   if (!is_one_of(g.type, k_types))
-    return Error(fmt::format("{} is {} {}: it has no direction to measure {} against", name,
-                             article(dmis_word(g.type)), dmis_word(g.type), dmis_word(kind)));
+    return Error(fmt::format("{} is {} {}: it has no direction to measure {} against", name, article(dmis_word(g.type)),
+                             dmis_word(g.type), dmis_word(kind)));
   const auto d = unit(g.direction, name);
   if (!d) return Error(d.error());
   // A PARPLN orients like its median plane.
   return Reference{*d, g.type == FeatureType::Plane || g.type == FeatureType::ParallelPlanes, name};
 }
 
-tl::expected<Reference, std::string> primary_datum(const ToleranceSpec& spec,
-                                                   const ToleranceContext& context) {
+tl::expected<Reference, std::string> primary_datum(const ToleranceSpec& spec, const ToleranceContext& context) {
   const char* word = dmis_word(spec.kind);
   if (spec.datums.empty() && context.datums.empty())
     return Error(fmt::format("{} needs a datum: TOL/{},...,DAT(A)", word, word));
@@ -627,8 +624,8 @@ double axis_length_mm(const Feature& feature, const Geometry& actual, const Vec3
   return feature.nominal.length_mm;
 }
 
-Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
-                             const ToleranceContext& context, ToleranceResult result) {
+Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
+                             ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder,
                                     FeatureType::ClosedSlot};  // a CPARLN: its long axis
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
@@ -644,8 +641,8 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
 
   if (feature.nominal.type == FeatureType::Plane) {
     if (feature.points.empty())
-      return Error(fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind),
-                               feature.label));
+      return Error(
+          fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind), feature.label));
     // Zone: two planes of the tolerated orientation; their normal is the reference direction
     // itself, or the plane's normal made perpendicular to it.
     Vec3 zone_normal = d;
@@ -683,11 +680,11 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
       hi = std::max(hi, h);
     }
     result.value = hi - lo;
-    add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label,
-                                 line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis"));
+    add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label, line_angle_deg(*own, d),
+                                 datum->name, datum->plane ? "normal" : "axis"));
     if (oriented_by_secondary) {
-      add_note(result, fmt::format("zone oriented by datums {}: its normal at {:.4f} deg to the plane's", join_datums(spec),
-                                   line_angle_deg(*own, zone_normal)));
+      add_note(result, fmt::format("zone oriented by datums {}: its normal at {:.4f} deg to the plane's",
+                                   join_datums(spec), line_angle_deg(*own, zone_normal)));
       set_limits(result, 0, spec.zone);
       result.actual = result.value;
       return result;
@@ -695,16 +692,15 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
   } else {
     const double length_mm = axis_length_mm(feature, actual, *own);
     if (!(length_mm > 0))
-      return Error(fmt::format("{} of {}: the axis has no length and no points to take it from",
-                               dmis_word(spec.kind), feature.label));
+      return Error(fmt::format("{} of {}: the axis has no length and no points to take it from", dmis_word(spec.kind),
+                               feature.label));
     // The axis should run along d (PERP to a plane, PARLEL to an axis): a cylindrical zone whose
     // diameter is the axis's sideways excursion; otherwise two planes normal to d.
     const bool along = perp == datum->plane;
     result.value = along ? length_mm * own->cross(d).norm() : length_mm * std::abs(own->dot(d));
-    add_note(result,
-             fmt::format("axis of {} at {:.4f} deg to {} ({}), over {:.4f} mm ({} zone)", feature.label,
-                         line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
-                         along ? "diametral" : "two-plane"));
+    add_note(result, fmt::format("axis of {} at {:.4f} deg to {} ({}), over {:.4f} mm ({} zone)", feature.label,
+                                 line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
+                                 along ? "diametral" : "two-plane"));
   }
   result.actual = result.value;
   set_limits(result, 0, spec.zone);
@@ -714,9 +710,9 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature,
 
 Outcome evaluate_anglb(const ToleranceSpec& spec, const std::vector<const Feature*>& features,
                        const ToleranceContext& context, ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line,   FeatureType::Cylinder,
-                                    FeatureType::Cone,  FeatureType::Circle, FeatureType::Arc,
-                                    FeatureType::ClosedSlot};  // a CPARLN: its long axis
+  static constexpr Types k_types = {
+      FeatureType::Plane,  FeatureType::Line, FeatureType::Cylinder,  FeatureType::Cone,
+      FeatureType::Circle, FeatureType::Arc,  FeatureType::ClosedSlot};  // a CPARLN: its long axis
   const Feature& feature = *features.front();
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual = actual_of(feature);
@@ -790,9 +786,9 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
       // In the ellipse's plane (the point projected along its normal): the exact distance from
       // the nominal ellipse, + outside it.
       const Vec3 major = (nominal.slot_axis - nominal.slot_axis.dot(n) * n).normalized();
-      outward = geometry::ellipse_foot(radius_mm, 0.5 * nominal.minor_diameter_mm,
-                                       {v.dot(major), v.dot(n.cross(major))})
-                    .signed_distance;
+      outward =
+          geometry::ellipse_foot(radius_mm, 0.5 * nominal.minor_diameter_mm, {v.dot(major), v.dot(n.cross(major))})
+              .signed_distance;
       break;
     }
     default: break;
@@ -803,13 +799,15 @@ double profile_deviation(const Geometry& nominal, const Vec3& s) {
 
 Outcome evaluate_profs(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                        ToleranceResult result) {
-  static constexpr Types k_surfaces = {FeatureType::Plane,  FeatureType::Circle,   FeatureType::Arc,
-                                       FeatureType::Sphere, FeatureType::Cylinder, FeatureType::Cone,
-                                       FeatureType::GenericSurface, FeatureType::Torus, FeatureType::Ellipse};
+  static constexpr Types k_surfaces = {FeatureType::Plane,          FeatureType::Circle,   FeatureType::Arc,
+                                       FeatureType::Sphere,         FeatureType::Cylinder, FeatureType::Cone,
+                                       FeatureType::GenericSurface, FeatureType::Torus,    FeatureType::Ellipse};
   static constexpr Types k_lines = {FeatureType::Line, FeatureType::Circle, FeatureType::Arc, FeatureType::GenericCurve,
                                     FeatureType::Ellipse};
   static constexpr Types k_points = {FeatureType::Point};
-  const Types types = spec.kind == ToleranceKind::Profl ? k_lines : spec.kind == ToleranceKind::Profp ? k_points : k_surfaces;
+  const Types types = spec.kind == ToleranceKind::Profl   ? k_lines
+                      : spec.kind == ToleranceKind::Profp ? k_points
+                                                          : k_surfaces;
   if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
@@ -879,8 +877,9 @@ Outcome evaluate_polar_cortol(const ToleranceSpec& spec, const Feature& feature,
   };
   const Vec2 a = in_plane(actual.position);
   const Vec2 n = in_plane(feature.nominal.position);
-  const char* plane = context.working_plane == WorkingPlane::XY ? "XYPLAN"
-                      : context.working_plane == WorkingPlane::YZ ? "YZPLAN" : "ZXPLAN";
+  const char* plane = context.working_plane == WorkingPlane::XY   ? "XYPLAN"
+                      : context.working_plane == WorkingPlane::YZ ? "YZPLAN"
+                                                                  : "ZXPLAN";
   if (spec.polar == PolarCoordinate::Radius) {
     result.actual = a.norm();
     result.nominal = n.norm();
@@ -888,9 +887,10 @@ Outcome evaluate_polar_cortol(const ToleranceSpec& spec, const Feature& feature,
     add_note(result, fmt::format("polar radius in {} of {}", plane, frame.label));
   } else {
     if (a.norm() < 1e-9 || n.norm() < 1e-9)
-      return Error(fmt::format("CORTOL,ANGLE of {}: its {} position is at the origin of {} in {}, where the polar "
-                               "angle is undefined",
-                               feature.label, a.norm() < 1e-9 ? "actual" : "nominal", frame.label, plane));
+      return Error(
+          fmt::format("CORTOL,ANGLE of {}: its {} position is at the origin of {} in {}, where the polar "
+                      "angle is undefined",
+                      feature.label, a.norm() < 1e-9 ? "actual" : "nominal", frame.label, plane));
     constexpr double deg = 180.0 / std::numbers::pi;
     result.actual = std::atan2(a.y(), a.x()) * deg;
     result.nominal = std::atan2(n.y(), n.x()) * deg;
@@ -908,7 +908,8 @@ Outcome evaluate_cortol(const ToleranceSpec& spec, const Feature& feature, const
   if (!actual) return Error(actual.error());
   const Alignment mcs;
   const Alignment& frame = context.alignment ? *context.alignment : mcs;
-  if (spec.polar != PolarCoordinate::None) return evaluate_polar_cortol(spec, feature, **actual, frame, context, std::move(result));
+  if (spec.polar != PolarCoordinate::None)
+    return evaluate_polar_cortol(spec, feature, **actual, frame, context, std::move(result));
   if (spec.axis == DistanceAxis::PointToPoint) return Error("CORTOL needs the coordinate: XAXIS, YAXIS or ZAXIS");
   const int k = spec.axis == DistanceAxis::XAxis ? 0 : spec.axis == DistanceAxis::YAxis ? 1 : 2;
   const double a = frame.to_part_point((*actual)->position)[k];
@@ -935,8 +936,8 @@ struct DatumAxis {
 };
 
 bool is_axis_type(FeatureType t) {
-  return t == FeatureType::Line || t == FeatureType::Circle || t == FeatureType::Arc ||
-         t == FeatureType::Cylinder || t == FeatureType::Cone;
+  return t == FeatureType::Line || t == FeatureType::Circle || t == FeatureType::Arc || t == FeatureType::Cylinder ||
+         t == FeatureType::Cone;
 }
 
 tl::expected<DatumAxis, std::string> datum_axis(const ToleranceSpec& spec, const ToleranceContext& context) {
@@ -944,8 +945,8 @@ tl::expected<DatumAxis, std::string> datum_axis(const ToleranceSpec& spec, const
   if (spec.datums.empty()) return Error(fmt::format("{} needs a datum axis: TOL/{},zone,DAT(A)", word, word));
   for (std::size_t i = 0; i < spec.datums.size(); ++i)
     if (i >= context.datums.size() || !context.datums[i])
-      return Error(fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.datums[i],
-                               spec.datums[i]));
+      return Error(
+          fmt::format("datum {} is not defined: DATDEF/FA(feature),DAT({}) first", spec.datums[i], spec.datums[i]));
   const Geometry& first = context.datums[0]->geometry;
   DatumAxis axis;
   axis.name = "datum " + spec.datums[0];
@@ -974,8 +975,8 @@ tl::expected<DatumAxis, std::string> datum_axis(const ToleranceSpec& spec, const
     }
   }
   if (first.type == FeatureType::Plane)
-    return Error(fmt::format("{} is a PLANE: {} needs a datum axis (a cylinder, circle, cone or line)",
-                             axis.name, word));
+    return Error(
+        fmt::format("{} is a PLANE: {} needs a datum axis (a cylinder, circle, cone or line)", axis.name, word));
   return axis;
 }
 
@@ -1054,7 +1055,7 @@ std::vector<std::vector<std::size_t>> sections(const std::vector<double>& keys) 
 // TOTRUN: the same over all points at once.
 Outcome evaluate_runout(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                         ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc,  FeatureType::Cylinder,
+  static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc,    FeatureType::Cylinder,
                                     FeatureType::Cone,   FeatureType::Sphere, FeatureType::Plane};
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual = actual_of(feature);
@@ -1097,18 +1098,18 @@ Outcome evaluate_runout(const ToleranceSpec& spec, const Feature& feature, const
     ++used;
   }
   if (used == 0)
-    return Error(fmt::format("CRNOUT of {}: no section holds two points (points of one section lie within 0.5 mm "
-                             "{}); measure circles, or use TOTRUN",
-                             feature.label, axial ? "of one radius" : "of one axial position"));
-  if (feature.nominal.type == FeatureType::Cone)
-    value *= std::cos(0.5 * feature.nominal.apex_angle_deg * k_pi / 180.0);
+    return Error(
+        fmt::format("CRNOUT of {}: no section holds two points (points of one section lie within 0.5 mm "
+                    "{}); measure circles, or use TOTRUN",
+                    feature.label, axial ? "of one radius" : "of one axial position"));
+  if (feature.nominal.type == FeatureType::Cone) value *= std::cos(0.5 * feature.nominal.apex_angle_deg * k_pi / 180.0);
   result.value = value;
   result.actual = value;
   result.nominal = 0;
   set_limits(result, 0, spec.zone);
-  add_note(result, fmt::format("{} runout about {} over {} point{} in {} section{}", axial ? "axial" : "radial",
-                               axis->name, measured.size(), measured.size() == 1 ? "" : "s", used,
-                               used == 1 ? "" : "s"));
+  add_note(result,
+           fmt::format("{} runout about {} over {} point{} in {} section{}", axial ? "axial" : "radial", axis->name,
+                       measured.size(), measured.size() == 1 ? "" : "s", used, used == 1 ? "" : "s"));
   return result;
 }
 
@@ -1130,7 +1131,8 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
   const auto datum = primary_datum(spec, context);
   if (!datum) return Error(datum.error());
   if (!datum->plane)
-    return Error(fmt::format("{} is not a plane: SYMMTY needs a datum median plane (a PARPLN) or a PLANE", datum->name));
+    return Error(
+        fmt::format("{} is not a plane: SYMMTY needs a datum median plane (a PARPLN) or a PLANE", datum->name));
   const Geometry& datum_plane = context.datums.front()->geometry;
   const Geometry& g = **actual;
   const auto n = unit(g.direction, "the actual of " + feature.label);
@@ -1143,12 +1145,13 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
   }
   if (median.empty()) median.push_back(g.position);  // a constructed or stated actual: its median plane's point
   double largest_mm = 0;
-  for (const Vec3& m : median) largest_mm = std::max(largest_mm, std::abs((m - datum_plane.position).dot(datum->direction)));
+  for (const Vec3& m : median)
+    largest_mm = std::max(largest_mm, std::abs((m - datum_plane.position).dot(datum->direction)));
   result.value = 2.0 * largest_mm;
   result.actual = result.value;
   result.nominal = 0;
-  add_note(result, fmt::format("median plane of {} from {} median points, about the median plane of {}",
-                               feature.label, median.size(), datum->name));
+  add_note(result, fmt::format("median plane of {} from {} median points, about the median plane of {}", feature.label,
+                               median.size(), datum->name));
   if (line_angle_deg(*n, datum->direction) > 45)
     add_note(result, fmt::format("{}'s median plane is {:.1f} deg from the datum plane: not a symmetry about it",
                                  feature.label, line_angle_deg(*n, datum->direction)));
@@ -1172,7 +1175,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Strght: return in({T::Line});
     case ToleranceKind::Pos:
     case ToleranceKind::Compos:
-      return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});
+      return in(
+          {T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});
     case ToleranceKind::Perp:
     case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
     case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
@@ -1181,7 +1185,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Crnout:
     case ToleranceKind::Totrun: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere, T::Plane});
     case ToleranceKind::Profs:
-      return in({T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface, T::Torus, T::Ellipse});
+      return in(
+          {T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface, T::Torus, T::Ellipse});
     case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve, T::Ellipse});
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
     case ToleranceKind::Symmty: return in({T::ParallelPlanes});
@@ -1200,8 +1205,8 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
   if (needs_two(spec.kind) && features.size() != 2)
     return Error(fmt::format("{} needs two features, got {}", word, features.size()));
   if (spec.kind == ToleranceKind::Anglb && (features.empty() || features.size() > 2))
-    return Error(fmt::format("{} applies to one feature and a datum, or to two features, got {}", word,
-                             features.size()));
+    return Error(
+        fmt::format("{} applies to one feature and a datum, or to two features, got {}", word, features.size()));
   if (!needs_two(spec.kind) && spec.kind != ToleranceKind::Anglb && features.size() != 1)
     return Error(fmt::format("{} applies to one feature, got {}", word, features.size()));
 
@@ -1248,7 +1253,7 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
 // One feature's zone into a COMPOS tier: the tier reports its worst margin, and is in tolerance
 // when every feature is.
 static void merge_into_tier(ToleranceResult& tier, const ToleranceResult& feature, const std::string& label, bool first,
-                     std::string& per_feature) {
+                            std::string& per_feature) {
   per_feature += fmt::format("{}{} {:.4f}", per_feature.empty() ? "" : ", ", label, feature.value);
   if (first || feature.value - feature.upper > tier.value - tier.upper) {
     tier.value = feature.value;
@@ -1268,7 +1273,8 @@ static void merge_into_tier(ToleranceResult& tier, const ToleranceResult& featur
 // least-squares group fit never gives a smaller zone than the minimax one, so a pattern it
 // accepts is accepted by minimax too.
 tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const ToleranceSpec& spec,
-    const std::vector<const Feature*>& features, const ToleranceContext& context) {
+                                                                           const std::vector<const Feature*>& features,
+                                                                           const ToleranceContext& context) {
   if (features.empty()) return Error("COMPOS applies to a pattern of one or more features, got none");
   ToleranceResult pattern;
   pattern.label = spec.label;
@@ -1352,7 +1358,8 @@ tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const
     }
     const Eigen::VectorXd x = a.completeOrthogonalDecomposition().solve(b);
     const Vec3 t(x(0), x(1), x(2));
-    const Eigen::Matrix3d r = free_axis ? Eigen::AngleAxisd(x(3), *free_axis).toRotationMatrix() : Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d r =
+        free_axis ? Eigen::AngleAxisd(x(3), *free_axis).toRotationMatrix() : Eigen::Matrix3d::Identity();
     for (Vec3& q : fitted) q = r * (q - c) + c + t;
   }
   first = true;
@@ -1368,8 +1375,9 @@ tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const
     first = false;
   }
   relating.actual = relating.value;
-  add_note(relating, fmt::format("the pattern fitted as a group (least squares: translation{}); each feature's zone: {}",
-                                 free_axis ? ", and rotation about the axis its datums leave free" : " only", per_feature));
+  add_note(relating,
+           fmt::format("the pattern fitted as a group (least squares: translation{}); each feature's zone: {}",
+                       free_axis ? ", and rotation about the axis its datums leave free" : " only", per_feature));
   return std::vector<ToleranceResult>{pattern, relating};
 }
 

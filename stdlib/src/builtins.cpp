@@ -29,15 +29,18 @@ tl::expected<Value, std::string> call_vector_builtin(const std::string& name, co
   const auto& u = args[0].components;
   const double magnitude = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
   if (name == "VMAG") return Value::real(magnitude);
-  if (name == "VECX" || name == "VECY" || name == "VECZ") return Value::real(u[static_cast<std::size_t>(name[3] - 'X')]);
+  if (name == "VECX" || name == "VECY" || name == "VECZ")
+    return Value::real(u[static_cast<std::size_t>(name[3] - 'X')]);
   if (name == "VUNIT") {
     if (magnitude == 0) return tl::unexpected(std::string("VUNIT of a zero vector"));
     return Value::vector(u[0] / magnitude, u[1] / magnitude, u[2] / magnitude);
   }
-  if (name != "VDOT" && name != "VCROSS") return tl::unexpected(fmt::format("{} is answered by the interpreter (it reads the alignment)", name));
+  if (name != "VDOT" && name != "VCROSS")
+    return tl::unexpected(fmt::format("{} is answered by the interpreter (it reads the alignment)", name));
   const auto& v = args[1].components;
   if (name == "VDOT") return Value::real(u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
-  if (name == "VCROSS") return Value::vector(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
+  if (name == "VCROSS")
+    return Value::vector(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
   return tl::unexpected("unknown vector function " + name);
 }
 
@@ -79,54 +82,85 @@ std::string Value::to_display() const {
 const std::vector<Builtin>& builtins() {
   // DMIS 5 intrinsic functions (section 6.5), plus MN/MX aliases commonly used.
   static const std::vector<Builtin> table = {
-      {"ABS", 1, 1, ValueType::Real, false},   {"SQRT", 1, 1, ValueType::Real, false},
-      {"SIN", 1, 1, ValueType::Real, false},   {"COS", 1, 1, ValueType::Real, false},
-      {"TAN", 1, 1, ValueType::Real, false},   {"ASIN", 1, 1, ValueType::Real, false},
-      {"ACOS", 1, 1, ValueType::Real, false},  {"ATAN", 1, 1, ValueType::Real, false},
-      {"ATAN2", 2, 2, ValueType::Real, false}, {"EXP", 1, 1, ValueType::Real, false},
-      {"LN", 1, 1, ValueType::Real, false},    {"LOG", 1, 1, ValueType::Real, false},
-      {"INT", 1, 1, ValueType::Integer, false}, {"NINT", 1, 1, ValueType::Integer, false},
-      {"MOD", 2, 2, ValueType::Real, false},   {"SIGN", 2, 2, ValueType::Real, false},
-      {"MN", 2, 16, ValueType::Real, false},   {"MX", 2, 16, ValueType::Real, false},
-      {"MIN", 2, 16, ValueType::Real, false},  {"MAX", 2, 16, ValueType::Real, false},
-      {"DTOR", 1, 1, ValueType::Real, false},  {"RTOD", 1, 1, ValueType::Real, false},
-      {"PI", 0, 0, ValueType::Real, false},    {"RL", 1, 1, ValueType::Real, true},
-      {"DBLE", 1, 1, ValueType::Real, false},  {"STR", 1, 3, ValueType::String, false},
-      {"LEN", 1, 1, ValueType::Integer, true}, {"SUBSTR", 2, 3, ValueType::String, true},
-      {"CONCAT", 1, 16, ValueType::String, true}, {"INDX", 2, 2, ValueType::Integer, true},
-      {"TRIM", 1, 1, ValueType::String, true}, {"UPC", 1, 1, ValueType::String, true},
-      {"LWC", 1, 1, ValueType::String, true},  {"CHR", 1, 1, ValueType::String, false},
+      {"ABS", 1, 1, ValueType::Real, false},
+      {"SQRT", 1, 1, ValueType::Real, false},
+      {"SIN", 1, 1, ValueType::Real, false},
+      {"COS", 1, 1, ValueType::Real, false},
+      {"TAN", 1, 1, ValueType::Real, false},
+      {"ASIN", 1, 1, ValueType::Real, false},
+      {"ACOS", 1, 1, ValueType::Real, false},
+      {"ATAN", 1, 1, ValueType::Real, false},
+      {"ATAN2", 2, 2, ValueType::Real, false},
+      {"EXP", 1, 1, ValueType::Real, false},
+      {"LN", 1, 1, ValueType::Real, false},
+      {"LOG", 1, 1, ValueType::Real, false},
+      {"INT", 1, 1, ValueType::Integer, false},
+      {"NINT", 1, 1, ValueType::Integer, false},
+      {"MOD", 2, 2, ValueType::Real, false},
+      {"SIGN", 2, 2, ValueType::Real, false},
+      {"MN", 2, 16, ValueType::Real, false},
+      {"MX", 2, 16, ValueType::Real, false},
+      {"MIN", 2, 16, ValueType::Real, false},
+      {"MAX", 2, 16, ValueType::Real, false},
+      {"DTOR", 1, 1, ValueType::Real, false},
+      {"RTOD", 1, 1, ValueType::Real, false},
+      {"PI", 0, 0, ValueType::Real, false},
+      {"RL", 1, 1, ValueType::Real, true},
+      {"DBLE", 1, 1, ValueType::Real, false},
+      {"STR", 1, 3, ValueType::String, false},
+      {"LEN", 1, 1, ValueType::Integer, true},
+      {"SUBSTR", 2, 3, ValueType::String, true},
+      {"CONCAT", 1, 16, ValueType::String, true},
+      {"INDX", 2, 2, ValueType::Integer, true},
+      {"TRIM", 1, 1, ValueType::String, true},
+      {"UPC", 1, 1, ValueType::String, true},
+      {"LWC", 1, 1, ValueType::String, true},
+      {"CHR", 1, 1, ValueType::String, false},
       {"ORD", 1, 1, ValueType::Integer, true},
       // Strings to numbers and fields (DMIS 5.3 6.5): VAL('12.5'), ELEMNT(n, ',', 'a,b,c').
-      {"VAL", 1, 1, ValueType::Real, true},    {"ELEMNT", 3, 3, ValueType::String, true},
+      {"VAL", 1, 1, ValueType::Real, true},
+      {"ELEMNT", 3, 3, ValueType::String, true},
       // Intrinsics of the run (the interpreter answers them: docs/language.md): the date and time
       // on the run's clock, the simulated seconds since the start, end of an input file, the
       // number of points of a feature.
-      {"SDATE", 0, 0, ValueType::String, false},   {"STIME", 0, 0, ValueType::String, false},
-      {"SDATETIME", 0, 0, ValueType::String, false}, {"SELAPSETIME", 0, 0, ValueType::Real, false},
-      {"EOF", 1, 1, ValueType::Bool, true},        {"EOLN", 1, 1, ValueType::Bool, true},        {"PTDATA", 1, 1, ValueType::Integer, true},
+      {"SDATE", 0, 0, ValueType::String, false},
+      {"STIME", 0, 0, ValueType::String, false},
+      {"SDATETIME", 0, 0, ValueType::String, false},
+      {"SELAPSETIME", 0, 0, ValueType::Real, false},
+      {"EOF", 1, 1, ValueType::Bool, true},
+      {"EOLN", 1, 1, ValueType::Bool, true},
+      {"PTDATA", 1, 1, ValueType::Integer, true},
       // EXIST(F(x)|FA(x)|D(x)|...): whether the label is defined (measured, saved, evaluated);
       // DMESYS('key'): what the measuring system says about `key` (docs/language.md).
-      {"EXIST", 1, 1, ValueType::Bool, true},      {"DMESYS", 1, 1, ValueType::String, true},
+      {"EXIST", 1, 1, ValueType::Bool, true},
+      {"DMESYS", 1, 1, ValueType::String, true},
       // BADPT(), BADGT(): whether the last measurement failed under BADTST/ON, with a machine
       // fault (a missed or unexpected contact) or with points no feature fits.
-      {"BADPT", 0, 0, ValueType::Bool, false},     {"BADGT", 0, 0, ValueType::Bool, false},
+      {"BADPT", 0, 0, ValueType::Bool, false},
+      {"BADGT", 0, 0, ValueType::Bool, false},
       // SCSNS(), SMODE(), SCFEAT(), SERROR(): the current sensor's label, the MODE, the current
-      // feature's label, the last machine fault the run went on after, as strings (read as their names say, after SDATE and STIME: no public text of
-      // their definitions was found; docs/language.md).
-      {"SCSNS", 0, 0, ValueType::String, false},   {"SMODE", 0, 0, ValueType::String, false},
-      {"SCFEAT", 0, 0, ValueType::String, false},  {"SERROR", 0, 0, ValueType::String, false},
+      // feature's label, the last machine fault the run went on after, as strings (read as their names say, after SDATE
+      // and STIME: no public text of their definitions was found; docs/language.md).
+      {"SCSNS", 0, 0, ValueType::String, false},
+      {"SMODE", 0, 0, ValueType::String, false},
+      {"SCFEAT", 0, 0, ValueType::String, false},
+      {"SERROR", 0, 0, ValueType::String, false},
       // QTEMP(sensor): a temperature, C (the machine's thermometer; a number or a name).
       {"QTEMP", 0, 1, ValueType::Real, true},
       // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as
       // the POL coordinates of FEAT/POINT), combined (VCROSS, VDOT, VMAG, VUNIT), and turned
       // between the part and machine systems (VMCS, VPCS: the interpreter answers those, they
       // need the current alignment).
-      {"VCART", 3, 3, ValueType::Vector, false},   {"VPOL", 3, 3, ValueType::Vector, false},
-      {"VCROSS", 2, 2, ValueType::Vector, false, true}, {"VDOT", 2, 2, ValueType::Real, false, true},
-      {"VMAG", 1, 1, ValueType::Real, false, true},     {"VUNIT", 1, 1, ValueType::Vector, false, true},
-      {"VMCS", 1, 1, ValueType::Vector, false, true},   {"VPCS", 1, 1, ValueType::Vector, false, true},
-      {"VECX", 1, 1, ValueType::Real, false, true},     {"VECY", 1, 1, ValueType::Real, false, true},
+      {"VCART", 3, 3, ValueType::Vector, false},
+      {"VPOL", 3, 3, ValueType::Vector, false},
+      {"VCROSS", 2, 2, ValueType::Vector, false, true},
+      {"VDOT", 2, 2, ValueType::Real, false, true},
+      {"VMAG", 1, 1, ValueType::Real, false, true},
+      {"VUNIT", 1, 1, ValueType::Vector, false, true},
+      {"VMCS", 1, 1, ValueType::Vector, false, true},
+      {"VPCS", 1, 1, ValueType::Vector, false, true},
+      {"VECX", 1, 1, ValueType::Real, false, true},
+      {"VECY", 1, 1, ValueType::Real, false, true},
       {"VECZ", 1, 1, ValueType::Real, false, true},
   };
   return table;
@@ -262,7 +296,8 @@ tl::expected<Value, std::string> call_builtin(const Builtin& fn, const std::vect
   }
   if (name == "ELEMNT") {
     // ELEMNT(n, delimiter, string): the n-th field (1-based); '' past the last.
-    if (!args[0].is_number() || args[0].number < 1) return tl::unexpected(std::string("ELEMNT: the index must be 1 or more"));
+    if (!args[0].is_number() || args[0].number < 1)
+      return tl::unexpected(std::string("ELEMNT: the index must be 1 or more"));
     const std::string& delimiter = s[1];
     if (delimiter.empty()) return tl::unexpected(std::string("ELEMNT: the delimiter is empty"));
     std::size_t start = 0;

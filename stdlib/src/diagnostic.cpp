@@ -23,8 +23,8 @@ void DiagnosticSink::report(Diagnostic d) {
 bool DiagnosticSink::has_errors() const { return error_count() > 0; }
 
 std::size_t DiagnosticSink::error_count() const {
-  return static_cast<std::size_t>(std::count_if(m_items.begin(), m_items.end(),
-      [](const Diagnostic& d) { return d.severity == Severity::Error; }));
+  return static_cast<std::size_t>(
+      std::count_if(m_items.begin(), m_items.end(), [](const Diagnostic& d) { return d.severity == Severity::Error; }));
 }
 
 static const char* severity_word(Severity s) {

@@ -18,7 +18,8 @@ std::optional<std::string> refuse_input_file(const std::string& path, std::uintm
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) return fmt::format("cannot read {}: {}", path, ec.message());
   if (size > max_bytes)
-    return fmt::format("cannot read {}: {} bytes exceeds the limit of {} bytes for an input file", path, size, max_bytes);
+    return fmt::format("cannot read {}: {} bytes exceeds the limit of {} bytes for an input file", path, size,
+                       max_bytes);
   return std::nullopt;
 }
 
@@ -35,7 +36,8 @@ tl::expected<std::string, std::string> read_input_file(const std::string& path, 
     while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
       text.append(chunk, static_cast<std::size_t>(in.gcount()));
       if (text.size() > max_bytes)
-        return tl::unexpected(fmt::format("cannot read {}: more than the limit of {} bytes for an input file", path, max_bytes));
+        return tl::unexpected(
+            fmt::format("cannot read {}: more than the limit of {} bytes for an input file", path, max_bytes));
     }
     return text;
   }
@@ -90,17 +92,19 @@ std::optional<std::string> FileAccessPolicy::refuse_read(const std::string& path
   if (!m_restricted) return std::nullopt;
   for (const auto& d : m_read_dirs)
     if (path_is_inside(path, d)) return std::nullopt;
-  return fmt::format("reading {} is not allowed: a program reads only inside its own folder and the --include "
-                     "folders ({}); docs/security.md",
-                     resolved(path).string(), folder_list(m_read_dirs));
+  return fmt::format(
+      "reading {} is not allowed: a program reads only inside its own folder and the --include "
+      "folders ({}); docs/security.md",
+      resolved(path).string(), folder_list(m_read_dirs));
 }
 
 std::optional<std::string> FileAccessPolicy::refuse_write(const std::string& path) const {
   if (!m_restricted) return std::nullopt;
   if (path_is_inside(path, m_write_dir) && resolved(path) != m_write_dir) return std::nullopt;
-  return fmt::format("writing {} is not allowed: a program writes only inside the output folder {} (--out); "
-                     "docs/security.md",
-                     resolved(path).string(), m_write_dir.string());
+  return fmt::format(
+      "writing {} is not allowed: a program writes only inside the output folder {} (--out); "
+      "docs/security.md",
+      resolved(path).string(), m_write_dir.string());
 }
 
 std::string printable(std::string_view text, std::size_t max_bytes) {
@@ -108,8 +112,10 @@ std::string printable(std::string_view text, std::size_t max_bytes) {
   const std::size_t n = std::min(text.size(), max_bytes);
   for (std::size_t i = 0; i < n; ++i) {
     const auto c = static_cast<unsigned char>(text[i]);
-    if ((c < 0x20 && c != '\t') || c == 0x7f) out += fmt::format("\\x{:02x}", c);
-    else out += static_cast<char>(c);
+    if ((c < 0x20 && c != '\t') || c == 0x7f)
+      out += fmt::format("\\x{:02x}", c);
+    else
+      out += static_cast<char>(c);
   }
   if (text.size() > max_bytes) out += "...";
   return valid_utf8(out);

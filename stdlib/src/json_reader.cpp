@@ -4,8 +4,8 @@
 #include "metron/stdlib/file_access.hpp"
 
 #include <algorithm>
-#include <optional>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <fmt/format.h>
@@ -21,9 +21,12 @@ void fail(const std::string& pointer, std::string message) {
 std::string pointer_token(std::string_view key) {
   std::string out;
   for (char c : key) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
+    if (c == '~')
+      out += "~0";
+    else if (c == '/')
+      out += "~1";
+    else
+      out += c;
   }
   return out;
 }
@@ -81,7 +84,8 @@ Vec3 unit(const json& j, const std::string& ptr) {
 
 std::vector<double> numbers(const json& j, const std::string& ptr, long size) {
   if (!j.is_array()) fail(ptr, "expected an array of numbers");
-  if (size >= 0 && static_cast<long>(j.size()) != size) fail(ptr, fmt::format("expected {} numbers, got {}", size, j.size()));
+  if (size >= 0 && static_cast<long>(j.size()) != size)
+    fail(ptr, fmt::format("expected {} numbers, got {}", size, j.size()));
   std::vector<double> out;
   out.reserve(j.size());
   for (std::size_t i = 0; i < j.size(); ++i) out.push_back(number(j[i], fmt::format("{}/{}", ptr, i)));

@@ -11,10 +11,10 @@ namespace {
 
 // Windows-1252 bytes 0x80..0x9F as Unicode code points (the Unicode consortium's
 // bestfit1252 / WHATWG encoding table); 0 marks the five undefined bytes.
-constexpr std::array<std::uint16_t, 32> cp1252_high = {
-    0x20AC, 0,      0x201A, 0x0192, 0x201E, 0x2026, 0x2020, 0x2021, 0x02C6, 0x2030, 0x0160,
-    0x2039, 0x0152, 0,      0x017D, 0,      0,      0x2018, 0x2019, 0x201C, 0x201D, 0x2022,
-    0x2013, 0x2014, 0x02DC, 0x2122, 0x0161, 0x203A, 0x0153, 0,      0x017E, 0x0178};
+constexpr std::array<std::uint16_t, 32> cp1252_high = {0x20AC, 0,      0x201A, 0x0192, 0x201E, 0x2026, 0x2020, 0x2021,
+                                                       0x02C6, 0x2030, 0x0160, 0x2039, 0x0152, 0,      0x017D, 0,
+                                                       0,      0x2018, 0x2019, 0x201C, 0x201D, 0x2022, 0x2013, 0x2014,
+                                                       0x02DC, 0x2122, 0x0161, 0x203A, 0x0153, 0,      0x017E, 0x0178};
 
 void append_utf8(std::string& out, std::uint32_t cp) {
   if (cp < 0x80) {
@@ -90,11 +90,24 @@ bool is_valid_utf8(std::string_view s) {
     const auto c = static_cast<unsigned char>(s[i]);
     std::size_t n = 0;
     std::uint32_t cp = 0, min = 0;
-    if (c < 0x80) { ++i; continue; }
-    if ((c & 0xE0) == 0xC0) { n = 1; cp = c & 0x1F; min = 0x80; }
-    else if ((c & 0xF0) == 0xE0) { n = 2; cp = c & 0x0F; min = 0x800; }
-    else if ((c & 0xF8) == 0xF0) { n = 3; cp = c & 0x07; min = 0x10000; }
-    else return false;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    if ((c & 0xE0) == 0xC0) {
+      n = 1;
+      cp = c & 0x1F;
+      min = 0x80;
+    } else if ((c & 0xF0) == 0xE0) {
+      n = 2;
+      cp = c & 0x0F;
+      min = 0x800;
+    } else if ((c & 0xF8) == 0xF0) {
+      n = 3;
+      cp = c & 0x07;
+      min = 0x10000;
+    } else
+      return false;
     for (std::size_t k = 1; k <= n; ++k) {
       if (i + k >= s.size()) return false;
       const auto d = static_cast<unsigned char>(s[i + k]);
@@ -108,8 +121,10 @@ bool is_valid_utf8(std::string_view s) {
 }
 
 std::string to_utf8(std::string bytes, TextEncoding* detected) {
-  const bool bom_le = bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xFE;
-  const bool bom_be = bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFE && static_cast<unsigned char>(bytes[1]) == 0xFF;
+  const bool bom_le =
+      bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFF && static_cast<unsigned char>(bytes[1]) == 0xFE;
+  const bool bom_be =
+      bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0xFE && static_cast<unsigned char>(bytes[1]) == 0xFF;
   const std::optional<bool> by_nuls = bom_le || bom_be ? std::nullopt : utf16_by_nuls(bytes);
   if (bom_le || bom_be || by_nuls) {
     const bool little = bom_le || (by_nuls && *by_nuls);
@@ -118,7 +133,10 @@ std::string to_utf8(std::string bytes, TextEncoding* detected) {
   }
   bool ascii = true;
   for (const char c : bytes)
-    if (static_cast<unsigned char>(c) >= 0x80) { ascii = false; break; }
+    if (static_cast<unsigned char>(c) >= 0x80) {
+      ascii = false;
+      break;
+    }
   if (ascii || is_valid_utf8(bytes)) {
     if (detected) *detected = ascii ? TextEncoding::Ascii : TextEncoding::Utf8;
     return bytes;
@@ -128,9 +146,12 @@ std::string to_utf8(std::string bytes, TextEncoding* detected) {
   out.reserve(bytes.size() + bytes.size() / 8);
   for (const char ch : bytes) {
     const auto c = static_cast<unsigned char>(ch);
-    if (c < 0x80) out.push_back(ch);
-    else if (c < 0xA0 && cp1252_high[c - 0x80] != 0) append_utf8(out, cp1252_high[c - 0x80]);
-    else append_utf8(out, c);
+    if (c < 0x80)
+      out.push_back(ch);
+    else if (c < 0xA0 && cp1252_high[c - 0x80] != 0)
+      append_utf8(out, cp1252_high[c - 0x80]);
+    else
+      append_utf8(out, c);
   }
   return out;
 }
@@ -147,10 +168,14 @@ std::string upper_utf8(std::string_view text) {
     if ((c == 0xC3 || c == 0xC4 || c == 0xC5) && i + 1 < text.size() &&
         (static_cast<unsigned char>(text[i + 1]) & 0xC0) == 0x80) {
       unsigned cp = ((c & 0x1Fu) << 6) | (static_cast<unsigned char>(text[i + 1]) & 0x3Fu);
-      if (cp >= 0xE0 && cp <= 0xFE && cp != 0xF7) cp -= 0x20;  // à..þ (not ÷)
-      else if (cp == 0xFF) cp = 0x178;                          // ÿ
-      else if (((cp >= 0x100 && cp <= 0x137) || (cp >= 0x14A && cp <= 0x177)) && (cp & 1u)) cp -= 1;
-      else if (((cp >= 0x139 && cp <= 0x148) || (cp >= 0x179 && cp <= 0x17E)) && !(cp & 1u)) cp -= 1;
+      if (cp >= 0xE0 && cp <= 0xFE && cp != 0xF7)
+        cp -= 0x20;  // à..þ (not ÷)
+      else if (cp == 0xFF)
+        cp = 0x178;  // ÿ
+      else if (((cp >= 0x100 && cp <= 0x137) || (cp >= 0x14A && cp <= 0x177)) && (cp & 1u))
+        cp -= 1;
+      else if (((cp >= 0x139 && cp <= 0x148) || (cp >= 0x179 && cp <= 0x17E)) && !(cp & 1u))
+        cp -= 1;
       out += static_cast<char>(0xC0 | (cp >> 6));
       out += static_cast<char>(0x80 | (cp & 0x3Fu));
       ++i;

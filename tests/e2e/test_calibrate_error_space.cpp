@@ -22,9 +22,10 @@ TEST(CalibrateErrorSpaceCli, WritesAFileAndComparesWithTheHiddenErrors) {
   const auto dir = std::filesystem::temp_directory_path() / "metron_calibrate_es";
   std::filesystem::create_directories(dir);
   const auto file = (dir / "space.json").string();
-  const auto [code, out] = shell(std::string(METRON_BINARY) + " calibrate error-space --world " + METRON_SOURCE_DIR +
-                                 "/programs/worlds/cmm_errors.json --size 6,5,2 --components xyz --reversal --truth --out " +
-                                 file + " --report " + (dir / "space.svg").string());
+  const auto [code, out] =
+      shell(std::string(METRON_BINARY) + " calibrate error-space --world " + METRON_SOURCE_DIR +
+            "/programs/worlds/cmm_errors.json --size 6,5,2 --components xyz --reversal --truth --out " + file +
+            " --report " + (dir / "space.svg").string());
   ASSERT_EQ(code, 0) << out;
   auto read = metron::error_space::read_error_space_file(file);
   ASSERT_TRUE(read) << read.error().pointer << ": " << read.error().message;

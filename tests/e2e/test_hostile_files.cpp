@@ -30,9 +30,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using metron::interpreter::run_program;
 using metron::interpreter::RunExit;
 using metron::interpreter::RunOptions;
-using metron::interpreter::run_program;
 
 // A fresh, empty folder for one test.
 fs::path scratch(const std::string& name) {
@@ -165,7 +165,8 @@ TEST(HostileFiles, SystemCommandsAndCadSectionsReadOnlyWhatThePolicyAllows) {
     EXPECT_NE(text.find("the run will refuse it"), std::string::npos) << statement << text;
   }
   fs::create_symlink("/dev/zero", d / "prog" / "zero.stl");
-  write(d / "prog" / "z.dmi", header + probe + "P(CUT) = PATH/SECTION, 'zero.stl', 0, 0, 10, 0, 0, 1, 0, 0, 10\nENDFIL\n");
+  write(d / "prog" / "z.dmi",
+        header + probe + "P(CUT) = PATH/SECTION, 'zero.stl', 0, 0, 10, 0, 0, 1, 0, 0, 10\nENDFIL\n");
   const auto z = run(d / "prog" / "z.dmi", d / "out", {"/dev"});
   EXPECT_EQ(z.exit, RunExit::ProgramError) << z.diagnostics;
   EXPECT_NE(z.diagnostics.find("not a regular file"), std::string::npos) << z.diagnostics;
@@ -178,13 +179,16 @@ TEST(HostileFiles, DevicesAndHugeFilesAreRefusedBySize) {
   EXPECT_EQ(code, 2) << text;
   EXPECT_NE(text.find("not a regular file"), std::string::npos) << text;
   write(d / "p.dmi", header + "ENDFIL\n");
-  std::tie(code, text) = metron_cli("run " + (d / "p.dmi").string() + " --world /dev/zero --out " + (d / "o2").string());
+  std::tie(code, text) =
+      metron_cli("run " + (d / "p.dmi").string() + " --world /dev/zero --out " + (d / "o2").string());
   EXPECT_EQ(code, 2) << text;
   EXPECT_NE(text.find("not a regular file"), std::string::npos) << text;
-  std::tie(code, text) = metron_cli("debug " + (d / "p.dmi").string() + " --commands /dev/zero --out " + (d / "o3").string());
+  std::tie(code, text) =
+      metron_cli("debug " + (d / "p.dmi").string() + " --commands /dev/zero --out " + (d / "o3").string());
   EXPECT_EQ(code, 2) << text;
   // Before: --answers streamed /dev/zero line by line without end.
-  std::tie(code, text) = metron_cli("run " + (d / "p.dmi").string() + " --answers /dev/zero --out " + (d / "o6").string());
+  std::tie(code, text) =
+      metron_cli("run " + (d / "p.dmi").string() + " --answers /dev/zero --out " + (d / "o6").string());
   EXPECT_EQ(code, 2) << text;
   EXPECT_NE(text.find("not a regular file"), std::string::npos) << text;
   write(d / "q.dmi", header + "CALL/EXTERN, DMIS, '/dev/zero'\nENDFIL\n");
@@ -238,8 +242,9 @@ TEST(HostileFiles, CrOnlyLineEndsAndEmptyPrograms) {
 TEST(HostileFiles, NonUtf8BytesDoNotLoseTheResults) {
   // Before: a Latin-1 TEXT or CHR(200) aborted the dump after truncating results.json to 0 bytes.
   const fs::path d = scratch("latin1");
-  write(d / "p.dmi", header + probe + measure_top + "TEXT/OPER, 'caf\xe9'\nDECL/CHAR, 10, C\nC = ASSIGN/CHR(200)\n"
-                              "TEXT/OUTFIL, C\nENDFIL\n");
+  write(d / "p.dmi", header + probe + measure_top +
+                         "TEXT/OPER, 'caf\xe9'\nDECL/CHAR, 10, C\nC = ASSIGN/CHR(200)\n"
+                         "TEXT/OUTFIL, C\nENDFIL\n");
   const auto o = run(d / "p.dmi", d / "out");
   EXPECT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
   const auto j = results(d / "out");  // parses: valid UTF-8 JSON
@@ -352,9 +357,9 @@ TEST(HostileFiles, TheDebuggerPausesOnSigintAndEndsOnSigterm) {
   const std::string out = (d / "out").string();
   for (const int signal : {SIGINT, SIGTERM}) {
     const fs::path transcript = d / ("stdout" + std::to_string(signal));
-    const int status = signal_metron_when({"debug", (d / "p.dmi").string(), "--commands", (d / "commands").string(), "--out",
-                                           out, "--max-steps", "0"},
-                                          transcript, "(metron) run", signal);
+    const int status = signal_metron_when(
+        {"debug", (d / "p.dmi").string(), "--commands", (d / "commands").string(), "--out", out, "--max-steps", "0"},
+        transcript, "(metron) run", signal);
     const std::string text = slurp(transcript);
     ASSERT_TRUE(WIFEXITED(status)) << text;  // not killed by the signal
     if (signal == SIGINT) {
@@ -374,8 +379,9 @@ TEST(HostileFiles, TheDebuggerPausesOnSigintAndEndsOnSigterm) {
   // session read on).
   write(d / "typed", "DECL/INTGR, I\nDO/I, 1, 2000000000\nENDDO\nTEXT/OPER, 'after'\n");
   const fs::path transcript = d / "stdout_repl";
-  const int status = signal_metron_when({"repl", "--commands", (d / "typed").string(), "--out", out, "--max-steps", "0"},
-                                        transcript, "...> ENDDO", SIGTERM);
+  const int status =
+      signal_metron_when({"repl", "--commands", (d / "typed").string(), "--out", out, "--max-steps", "0"}, transcript,
+                         "...> ENDDO", SIGTERM);
   const std::string text = slurp(transcript);
   ASSERT_TRUE(WIFEXITED(status)) << text;
   EXPECT_EQ(WEXITSTATUS(status), 4) << text;
@@ -409,7 +415,8 @@ TEST(HostileFiles, AStringThatDoublesStopsAtTheMemoryLimit) {
   write(d / "p.dmi", header + probe + measure_top +
                          "DECL/CHAR, 10, S\nDECL/INTGR, I\nS = ASSIGN/'x'\nDO/I, 1, 60\n"
                          "S = ASSIGN/CONCAT(S, S)\nENDDO\nENDFIL\n");
-  const auto [code, text] = metron_cli("run " + (d / "p.dmi").string() + " --max-memory 400 --out " + (d / "out").string());
+  const auto [code, text] =
+      metron_cli("run " + (d / "p.dmi").string() + " --max-memory 400 --out " + (d / "out").string());
   EXPECT_EQ(code, 4) << text;
   EXPECT_NE(text.find("p.dmi:19:1: error: the run ran out of memory at its limit of 400 MiB here"), std::string::npos)
       << text;  // names the statement that asked for the memory
@@ -460,7 +467,8 @@ TEST(HostileFiles, TinyFeedsAndTimeStepsAreRefused) {
   write(d / "c.dmi", header + "DECL/CHAR, 10, C\nC = ASSIGN/CHR(300)\nENDFIL\n");
   o = run(d / "c.dmi", d / "o3");
   EXPECT_EQ(o.exit, RunExit::ProgramError);
-  EXPECT_NE(o.diagnostics.find("CHR needs a character code from 0 to 255, got 300"), std::string::npos) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("CHR needs a character code from 0 to 255, got 300"), std::string::npos)
+      << o.diagnostics;
 }
 
 // ---------------------------------------------------------------- the command line
@@ -474,11 +482,14 @@ TEST(HostileFiles, ExitCodesFollowTheDocs) {
   EXPECT_EQ(metron_cli("run x.dmi --no-such-option").first, 2);
   write(d / "p.dmi", header + "ENDFIL\n");
   for (const std::string seed : {"-1", "1e23", "18446744073709551616", "abc"}) {
-    const auto [code, text] = metron_cli("run " + (d / "p.dmi").string() + " --seed " + seed + " --out " + (d / "o").string());
+    const auto [code, text] =
+        metron_cli("run " + (d / "p.dmi").string() + " --seed " + seed + " --out " + (d / "o").string());
     EXPECT_EQ(code, 2) << seed << ": " << text;
     EXPECT_NE(text.find("--seed"), std::string::npos) << text;
   }
-  EXPECT_EQ(metron_cli("run " + (d / "p.dmi").string() + " --seed 18446744073709551615 --out " + (d / "o").string()).first, 0);
+  EXPECT_EQ(
+      metron_cli("run " + (d / "p.dmi").string() + " --seed 18446744073709551615 --out " + (d / "o").string()).first,
+      0);
   for (const std::string t : {"nan", "1e308", "inf", "-1", "0"})
     EXPECT_EQ(metron_cli("test " + d.string() + " --timeout " + t).first, 2) << t;
   EXPECT_EQ(metron_cli("--help").first, 0);
@@ -487,8 +498,9 @@ TEST(HostileFiles, ExitCodesFollowTheDocs) {
 TEST(HostileFiles, DebugCreatesItsOutputFolder) {
   // Before: debug/repl did not create --out, so OPEN/DID failed.
   const fs::path d = scratch("debug_out");
-  write(d / "p.dmi", header + "DID(A) = DEVICE/STOR, 'a.txt'\nOPEN/DID(A), DIRECT, OUTPUT, OVERWR\nTEXT/OUTFIL, 'hi'\n"
-                              "CLOSE/DID(A)\nENDFIL\n");
+  write(d / "p.dmi", header +
+                         "DID(A) = DEVICE/STOR, 'a.txt'\nOPEN/DID(A), DIRECT, OUTPUT, OVERWR\nTEXT/OUTFIL, 'hi'\n"
+                         "CLOSE/DID(A)\nENDFIL\n");
   write(d / "cmds", "run\nquit\n");
   const auto [code, text] = metron_cli("debug " + (d / "p.dmi").string() + " --commands " + (d / "cmds").string() +
                                        " --out " + (d / "new" / "out").string());
@@ -500,7 +512,8 @@ TEST(HostileFiles, DebuggerPrintSetAndBreakAreChecked) {
   // type; break accepted lines that do not exist.
   const fs::path d = scratch("debugger");
   write(d / "p.dmi", header + "DECL/REAL, V\nV = ASSIGN/1\nTEXT/OPER, 'x'\nENDFIL\n");
-  write(d / "cmds", "break 5\nbreak 9999\nbreak p.dmi:77\nrun\nprint 4/2\nset V = 'text'\nset V = 6/4\nprint V\nquit\n");
+  write(d / "cmds",
+        "break 5\nbreak 9999\nbreak p.dmi:77\nrun\nprint 4/2\nset V = 'text'\nset V = 6/4\nprint V\nquit\n");
   const auto [code, text] = metron_cli("debug " + (d / "p.dmi").string() + " --commands " + (d / "cmds").string() +
                                        " --out " + (d / "out").string());
   EXPECT_NE(text.find("4/2 = 2"), std::string::npos) << text;

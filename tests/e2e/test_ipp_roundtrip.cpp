@@ -43,7 +43,8 @@ class Child {
  public:
   /// Starts `metron args...`; stdout goes to a pipe (read_line) when `pipe_stdout`, else to
   /// `stdout_path`; stderr to `stderr_path` (never to the test's own stderr).
-  Child(const std::vector<std::string>& args, bool pipe_stdout, const fs::path& stdout_path, const fs::path& stderr_path) {
+  Child(const std::vector<std::string>& args, bool pipe_stdout, const fs::path& stdout_path,
+        const fs::path& stderr_path) {
     int out[2] = {-1, -1};
     if (pipe_stdout && ::pipe(out) != 0) throw std::runtime_error("pipe");
     const pid_t parent = ::getpid();
@@ -207,9 +208,10 @@ TEST(IppRoundTrip, BlockInspectionEqualsTheDirectRun) {
   // --once: the server ends with the client's session.
   EXPECT_EQ(server.child.wait(30), std::optional<int>(0));
   const std::string warnings = slurp(dir / "ipp.err");
-  EXPECT_NE(warnings.find("warning: sensor S(PROBE4) = SNSDEF (ball 4 mm, stylus (0, 0, -1)): the I++ server has no tool "
-                          "PROBE4; using its tool Probe1 (ball 4 mm"),
-            std::string::npos)
+  EXPECT_NE(
+      warnings.find("warning: sensor S(PROBE4) = SNSDEF (ball 4 mm, stylus (0, 0, -1)): the I++ server has no tool "
+                    "PROBE4; using its tool Probe1 (ball 4 mm"),
+      std::string::npos)
       << warnings;
 
   const json a = json::parse(std::ifstream(dir / "direct/results.json"));
@@ -232,7 +234,9 @@ TEST(IppRoundTrip, BlockInspectionEqualsTheDirectRun) {
   // Stated tolerances: the server writes coordinates and ER with 6 decimals (0.5 µm rounding per
   // coordinate); the fits pass that on within a few µm; angles in degrees.
   for (const auto& [key, w] : worst) {
-    const double bound = key == "apex_angle_deg" ? 1e-4 : key == "direction" || key == "approach" || key == "normal2" ? 1e-5 : 5e-6;
+    const double bound = key == "apex_angle_deg"                                       ? 1e-4
+                         : key == "direction" || key == "approach" || key == "normal2" ? 1e-5
+                                                                                       : 5e-6;
     EXPECT_LE(w, bound) << key;
   }
 }
@@ -243,17 +247,18 @@ TEST(IppRoundTrip, UnknownSensorIsAnErrorAtItsSnsdef) {
   const fs::path dir = work_dir("unknown");
   Server server({"--probe-diameter", "2"}, dir);
   const std::string program = (source_dir / "programs/examples/01_first_circle.dmi").string();
-  Child client({"run", program, "--machine", "ipp://127.0.0.1:" + std::to_string(server.port), "--out",
-                (dir / "ipp").string()},
-               false, dir / "ipp.out", dir / "ipp.err");
+  Child client(
+      {"run", program, "--machine", "ipp://127.0.0.1:" + std::to_string(server.port), "--out", (dir / "ipp").string()},
+      false, dir / "ipp.out", dir / "ipp.err");
   const auto code = client.wait(120);
   ASSERT_TRUE(code.has_value());
   EXPECT_NE(*code, 0);
   const std::string out = slurp(dir / "ipp.out");
   EXPECT_NE(out.find("01_first_circle.dmi:"), std::string::npos) << out;
-  EXPECT_NE(out.find("sensor S(PROBE4) = SNSDEF (ball 4 mm, stylus (0, 0, -1)): the I++ server has no tool named PROBE4 "
-                     "and none with this geometry; it offers Probe1 (ball 2 mm"),
-            std::string::npos)
+  EXPECT_NE(
+      out.find("sensor S(PROBE4) = SNSDEF (ball 4 mm, stylus (0, 0, -1)): the I++ server has no tool named PROBE4 "
+               "and none with this geometry; it offers Probe1 (ball 2 mm"),
+      std::string::npos)
       << out;
   EXPECT_NE(out.find("SNSDEF/PROBE"), std::string::npos) << out;  // the statement's text
 }
@@ -321,16 +326,21 @@ TEST(IppRoundTrip, ScansEqualTheDirectRunWithinHalfAMicrometre) {
   for (const char* label : {"BORE1", "BORE2"}) {
     const json* fa = nullptr;
     const json* fb = nullptr;
-    for (const auto& f : a["features"]) if (f["label"] == label) fa = &f;
-    for (const auto& f : b["features"]) if (f["label"] == label) fb = &f;
+    for (const auto& f : a["features"])
+      if (f["label"] == label) fa = &f;
+    for (const auto& f : b["features"])
+      if (f["label"] == label) fb = &f;
     ASSERT_TRUE(fa && fb) << label;
     EXPECT_GE((*fb)["points"].size(), 30u) << label;  // scanned, not probed
     // The program's point density reaches the server (ScanOnCurveDensity): as many points.
     EXPECT_NEAR(static_cast<double>((*fb)["points"].size()), static_cast<double>((*fa)["points"].size()),
-                0.02 * static_cast<double>((*fa)["points"].size()) + 2) << label;
-    EXPECT_NEAR((*fa)["actual"]["diameter_mm"].get<double>(), (*fb)["actual"]["diameter_mm"].get<double>(), 5e-4) << label;
+                0.02 * static_cast<double>((*fa)["points"].size()) + 2)
+        << label;
+    EXPECT_NEAR((*fa)["actual"]["diameter_mm"].get<double>(), (*fb)["actual"]["diameter_mm"].get<double>(), 5e-4)
+        << label;
     for (int i = 0; i < 3; ++i)
-      EXPECT_NEAR((*fa)["actual"]["position"][i].get<double>(), (*fb)["actual"]["position"][i].get<double>(), 5e-4) << label;
+      EXPECT_NEAR((*fa)["actual"]["position"][i].get<double>(), (*fb)["actual"]["position"][i].get<double>(), 5e-4)
+          << label;
     EXPECT_NEAR((*fa)["form_mm"].get<double>(), (*fb)["form_mm"].get<double>(), 5e-4) << label;
   }
   ASSERT_EQ(a["tolerances"].size(), b["tolerances"].size());

@@ -169,7 +169,8 @@ double item(const std::string& line, const std::string& name) {
 TEST(IppServe, SessionOverLoopback) {
   const fs::path log = metron::test_support::scratch_root("metron_ipp_serve") / "serve.log";
   fs::remove(log);
-  ServerProcess server({"--world", std::string(METRON_SOURCE_DIR) + "/programs/worlds/perfect.json", "--log", log.string()});
+  ServerProcess server(
+      {"--world", std::string(METRON_SOURCE_DIR) + "/programs/worlds/perfect.json", "--log", log.string()});
   {
     Client a(server.port());
     EXPECT_EQ(a.exchange("00001 StartSession()"), (std::vector<std::string>{"00001 &", "00001 %"}));
@@ -321,7 +322,8 @@ TEST(IppServe, RealtimeAbortEStopsTheMoveWhereItWas) {
   }
   const auto completed = clock::now();
   EXPECT_EQ(kinds(answer), (std::vector<std::string>{"E0090 &", "00070 !", "00070 %", "E0090 %"}));
-  const auto error_line = std::find_if(answer.begin(), answer.end(), [](const auto& l) { return l.rfind("00070 !", 0) == 0; });
+  const auto error_line =
+      std::find_if(answer.begin(), answer.end(), [](const auto& l) { return l.rfind("00070 !", 0) == 0; });
   ASSERT_NE(error_line, answer.end());
   const auto error = parse_response_line(*error_line);
   ASSERT_TRUE(error);

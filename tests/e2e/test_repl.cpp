@@ -35,10 +35,13 @@ std::pair<int, std::string> session(const std::string& args, const std::string& 
 const std::string example = std::string(METRON_SOURCE_DIR) + "/programs/examples/01_first_circle.dmi";
 
 TEST(Debugger, BreaksAtALineAndAtAFeatureAndPrintsActuals) {
-  const auto [code, out] = session("debug " + example, "break 13\nbreak F(BORE1)\nrun\ncontinue\nprint FA(BORE1)\ncontinue\n");
+  const auto [code, out] =
+      session("debug " + example, "break 13\nbreak F(BORE1)\nrun\ncontinue\nprint FA(BORE1)\ncontinue\n");
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("breakpoint 1: " + example + ":13: MEAS/CIRCLE, F(BORE1), 4"), std::string::npos) << out;
-  EXPECT_NE(out.find("breakpoint 2: F(BORE1) measured\nnext: " + example + ":21: OUTPUT/FA(BORE1), TA(DIAM1)"), std::string::npos) << out;
+  EXPECT_NE(out.find("breakpoint 2: F(BORE1) measured\nnext: " + example + ":21: OUTPUT/FA(BORE1), TA(DIAM1)"),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("FA(BORE1)  CIRCLE INNER  measured, 4 points  frame PART"), std::string::npos) << out;
   EXPECT_NE(out.find("  pt  4 "), std::string::npos) << out;
   EXPECT_NE(out.find("the program has ended"), std::string::npos) << out;
@@ -46,21 +49,24 @@ TEST(Debugger, BreaksAtALineAndAtAFeatureAndPrintsActuals) {
 
 TEST(Debugger, StepsIntoAMacroAndNextStepsOverIt) {
   const fs::path prog = temp("macro.dmi");
-  std::ofstream(prog) << "DMISMN/'macro', 5.0\n"                    // 1
-                         "DECL/REAL, R\n"                           // 2
-                         "M(TWICE) = MACRO/'X'\n"                   // 3
-                         "R = ASSIGN/X * 2\n"                       // 4
-                         "TEXT/OPER, STR(R)\n"                      // 5
-                         "ENDMAC\n"                                 // 6
-                         "CALL/M(TWICE), 21\n"                      // 7
-                         "CALL/M(TWICE), 5\n"                       // 8
-                         "TEXT/OPER, 'done'\n"                      // 9
+  std::ofstream(prog) << "DMISMN/'macro', 5.0\n"   // 1
+                         "DECL/REAL, R\n"          // 2
+                         "M(TWICE) = MACRO/'X'\n"  // 3
+                         "R = ASSIGN/X * 2\n"      // 4
+                         "TEXT/OPER, STR(R)\n"     // 5
+                         "ENDMAC\n"                // 6
+                         "CALL/M(TWICE), 21\n"     // 7
+                         "CALL/M(TWICE), 5\n"      // 8
+                         "TEXT/OPER, 'done'\n"     // 9
                          "ENDFIL\n";
-  const auto [code, out] = session("debug " + prog.string(), "break 7\nrun\nstep\nwhere\nprint X\nfinish\nnext\nnext\n");
+  const auto [code, out] =
+      session("debug " + prog.string(), "break 7\nrun\nstep\nwhere\nprint X\nfinish\nnext\nnext\n");
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("breakpoint 1: " + prog.string() + ":7: CALL/M(TWICE), 21"), std::string::npos) << out;
   EXPECT_NE(out.find("(metron) step\n" + prog.string() + ":4: R = ASSIGN/X * 2"), std::string::npos) << out;
-  EXPECT_NE(out.find("#0 M(TWICE) at " + prog.string() + ":4: R = ASSIGN/X * 2\n#1 " + prog.string()), std::string::npos) << out;
+  EXPECT_NE(out.find("#0 M(TWICE) at " + prog.string() + ":4: R = ASSIGN/X * 2\n#1 " + prog.string()),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("X = 21"), std::string::npos) << out;
   // finish returns from the macro (printing 42), next runs the second call whole (printing 10).
   EXPECT_NE(out.find("(metron) finish\n42\n" + prog.string() + ":8: CALL/M(TWICE), 5"), std::string::npos) << out;
@@ -68,17 +74,19 @@ TEST(Debugger, StepsIntoAMacroAndNextStepsOverIt) {
 }
 
 TEST(Repl, TypedMeasBlockMeasuresAndABadStatementDoesNotEndTheSession) {
-  const auto [code, out] = session("repl",
-      "S(P) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4\nSNSLCT/S(P)\n"
-      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-      "F(B2) = FEAT/CIRCLE, INNER, CART, 120, 30, 35, 0, 0, 1, 12\nGOTO/120, 30, 60\n"
-      "MEAS/CIRCLE, F(B2), 4\nPTMEAS/CART, 126, 30, 35, -1, 0, 0\nPTMEAS/CART, 120, 36, 35, 0, -1, 0\n"
-      "PTMEAS/CART, 114, 30, 35, 1, 0, 0\nPTMEAS/CART, 120, 24, 35, 0, 1, 0\nENDMES\n"
-      "F(BAD) = FEAT/CIRCLE, INNER, CART, 1, 2, 3\n"
-      "DECL/REAL, D\nD = OBTAIN/FA(B2), 10\nprint D\nprint FA(B2)\nmachine\n");
+  const auto [code, out] =
+      session("repl",
+              "S(P) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4\nSNSLCT/S(P)\n"
+              "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+              "F(B2) = FEAT/CIRCLE, INNER, CART, 120, 30, 35, 0, 0, 1, 12\nGOTO/120, 30, 60\n"
+              "MEAS/CIRCLE, F(B2), 4\nPTMEAS/CART, 126, 30, 35, -1, 0, 0\nPTMEAS/CART, 120, 36, 35, 0, -1, 0\n"
+              "PTMEAS/CART, 114, 30, 35, 1, 0, 0\nPTMEAS/CART, 120, 24, 35, 0, 1, 0\nENDMES\n"
+              "F(BAD) = FEAT/CIRCLE, INNER, CART, 1, 2, 3\n"
+              "DECL/REAL, D\nD = OBTAIN/FA(B2), 10\nprint D\nprint FA(B2)\nmachine\n");
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("...> ENDMES"), std::string::npos) << out;
-  EXPECT_NE(out.find(":1:42: error: FEAT/CIRCLE expects 7 numbers (x,y,z,i,j,k,diam), got 3"), std::string::npos) << out;
+  EXPECT_NE(out.find(":1:42: error: FEAT/CIRCLE expects 7 numbers (x,y,z,i,j,k,diam), got 3"), std::string::npos)
+      << out;
   // After the error the session goes on: the diameter of the bore measured at the prompt.
   const auto at = out.find("D = 12.0");
   EXPECT_NE(at, std::string::npos) << out;
@@ -102,12 +110,12 @@ TEST(Debugger, StopsOnAFaultWithBreakFault) {
 // 14: it ran to the end, while `next` stopped).
 TEST(Debugger, ContinueStopsAtTheSameBreakpointOnEachIterationOfADoLoop) {
   const fs::path prog = temp("loop.dmi");
-  std::ofstream(prog) << "DMISMN/'loop', 5.0\n"        // 1
-                         "DECL/INTGR, I\n"              // 2
-                         "DO/I, 1, 3\n"                 // 3
-                         "TEXT/OPER, STR(I)\n"          // 4
-                         "ENDDO\n"                      // 5
-                         "TEXT/OPER, 'done'\n"          // 6
+  std::ofstream(prog) << "DMISMN/'loop', 5.0\n"  // 1
+                         "DECL/INTGR, I\n"       // 2
+                         "DO/I, 1, 3\n"          // 3
+                         "TEXT/OPER, STR(I)\n"   // 4
+                         "ENDDO\n"               // 5
+                         "TEXT/OPER, 'done'\n"   // 6
                          "ENDFIL\n";
   const auto [code, out] = session("debug " + prog.string(), "break 4\nrun\ncontinue\ncontinue\ncontinue\n");
   EXPECT_EQ(code, 0) << out;

@@ -18,17 +18,17 @@
 namespace {
 
 namespace fs = std::filesystem;
+using metron::interpreter::run_program;
 using metron::interpreter::RunExit;
 using metron::interpreter::RunOptions;
-using metron::interpreter::run_program;
 using metron::runtime::FeatureReport;
 using metron::runtime::ToleranceResult;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
 fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_e2e", name); }
 
-metron::interpreter::RunOutcome run(const fs::path& program, const std::optional<fs::path>& world, const std::string& out,
-                                    std::optional<std::uint64_t> seed = std::nullopt) {
+metron::interpreter::RunOutcome run(const fs::path& program, const std::optional<fs::path>& world,
+                                    const std::string& out, std::optional<std::uint64_t> seed = std::nullopt) {
   RunOptions o;
   o.program = program.string();
   if (world) o.world_path = world->string();
@@ -115,10 +115,10 @@ TEST(EndToEnd, HiddenDeviationsAreRecovered) {
   const auto* pos = tolerance(o.record, "POS_BORE1");
   ASSERT_TRUE(pos);
   EXPECT_NEAR(pos->value, 2.0 * std::hypot(0.030, lean), 0.004);  // diametral zone
-  EXPECT_FALSE(pos->in_tolerance);        // zone 0.05
+  EXPECT_FALSE(pos->in_tolerance);                                // zone 0.05
   const auto* d1 = tolerance(o.record, "D_BORE1");
   ASSERT_TRUE(d1);
-  EXPECT_TRUE(d1->in_tolerance);          // +0.012 within [-0.010, +0.020]
+  EXPECT_TRUE(d1->in_tolerance);  // +0.012 within [-0.010, +0.020]
   const auto* top = report(o.record, "TOP");
   ASSERT_TRUE(top && top->actual);
   const double tilt_deg = std::acos(std::abs(top->actual->direction.normalized().z())) * 180.0 / std::numbers::pi;
@@ -142,7 +142,7 @@ TEST(EndToEnd, FaultStopsTheRunKeepsEarlierResultsAndNamesTheStatement) {
                       "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\nGOTO/20, 20, 60\n"
                       "MEAS/PLANE, F(TOP), 3\nPTMEAS/CART, 10, 10, 40, 0, 0, 1\nPTMEAS/CART, 150, 10, 40, 0, 0, 1\n"
                       "PTMEAS/CART, 150, 90, 40, 0, 0, 1\nENDMES\nOUTPUT/FA(TOP)\n"
-                      "GOTO/80, 50, 20\n"   // straight down into the block: a collision
+                      "GOTO/80, 50, 20\n"  // straight down into the block: a collision
                       "OUTPUT/FA(TOP)\nENDFIL\n";
   const auto o = run(p, std::nullopt, "fault");
   EXPECT_EQ(o.exit, RunExit::Faulted);
@@ -266,7 +266,8 @@ TEST(Cli, CheckPrintsPositionedDiagnosticsWithACaret) {
   const fs::path bad = source_dir / "programs" / "bad" / "tolerance_wrong_type.dmi";
   const auto [code, out] = shell(std::string(METRON_BINARY) + " check " + bad.string());
   EXPECT_EQ(code, 1);
-  EXPECT_NE(out.find(bad.string() + ":5:16: error: TOL/DIAM of T(D1) does not apply to a PLANE"), std::string::npos) << out;
+  EXPECT_NE(out.find(bad.string() + ":5:16: error: TOL/DIAM of T(D1) does not apply to a PLANE"), std::string::npos)
+      << out;
   EXPECT_NE(out.find("  OUTPUT/FA(P1), TA(D1)\n                 ^"), std::string::npos) << out;
   const auto [ok, good] = shell(std::string(METRON_BINARY) + " check " + program("02_block_inspection.dmi").string());
   EXPECT_EQ(ok, 0) << good;
@@ -285,8 +286,10 @@ TEST(Cli, DryRunFollowsAProgramTheWorldDoesNotHold) {
   const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + prog.string() + " --out " + dir.string());
   EXPECT_EQ(code, 3) << out;
   EXPECT_NE(out.find("hint: if the world does not hold this program's part or machine, `metron run --dry-run`"),
-            std::string::npos) << out;
-  const auto [dry, dry_out] = shell(std::string(METRON_BINARY) + " run " + prog.string() + " --dry-run --out " + dir.string());
+            std::string::npos)
+      << out;
+  const auto [dry, dry_out] =
+      shell(std::string(METRON_BINARY) + " run " + prog.string() + " --dry-run --out " + dir.string());
   EXPECT_EQ(dry, 0) << dry_out;
   EXPECT_NE(dry_out.find("run completed: 1 features, 1 tolerances in, 0 out, 0 faults"), std::string::npos) << dry_out;
   EXPECT_EQ(dry_out.find("hint:"), std::string::npos) << dry_out;
@@ -294,7 +297,8 @@ TEST(Cli, DryRunFollowsAProgramTheWorldDoesNotHold) {
 
 TEST(Cli, RunReportsAndWritesTheDmisOutputFile) {
   const fs::path dir = out_dir("cli_run");
-  const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + program("02_block_inspection.dmi").string() + " --out " + dir.string());
+  const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + program("02_block_inspection.dmi").string() +
+                                 " --out " + dir.string());
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("T(D_BORE1)  DIAM  FA(BORE1)"), std::string::npos) << out;
   std::ifstream dmo(dir / "block.dmo");

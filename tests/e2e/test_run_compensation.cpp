@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// `metron run --compensation` (and CALL/EXTERN,SYS,'COMPENSATION file') as a user runs it (issue 12, docs/error-space.md "The gain of
-// compensation"): calibrate the error space of programs/worlds/cmm_errors_ball_plate.json with the
-// two-point rig, then measure the world's 20 balls with programs/error_space/ball_array.dmi with and
-// without the map. Expected values are the hidden truth: the balls' design centres (written here by
-// hand from the world file; the part sits at the machine origin), whose distances the measured
+// `metron run --compensation` (and CALL/EXTERN,SYS,'COMPENSATION file') as a user runs it (issue 12,
+// docs/error-space.md "The gain of compensation"): calibrate the error space of
+// programs/worlds/cmm_errors_ball_plate.json with the two-point rig, then measure the world's 20 balls with
+// programs/error_space/ball_array.dmi with and without the map. Expected values are the hidden truth: the balls' design
+// centres (written here by hand from the world file; the part sits at the machine origin), whose distances the measured
 // centres must reproduce.
 #include <gtest/gtest.h>
 
@@ -63,7 +63,8 @@ double length_error_rms(const std::string& results_json) {
 std::pair<int, std::string> calibrate_ball_array_map(const std::string& map) {
   return shell(std::string(METRON_BINARY) + " calibrate error-space --world " + METRON_SOURCE_DIR +
                "/programs/worlds/cmm_errors_ball_plate.json --components xyz --reversal --sensor-offset 0,0,-50"
-               " --size 17,13,3 --origin 100,100,100 --runs 4 --laser-cycles 8 --out " + map);
+               " --size 17,13,3 --origin 100,100,100 --runs 4 --laser-cycles 8 --out " +
+               map);
 }
 
 TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
@@ -77,7 +78,8 @@ TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
   auto [code, out] = calibrate_ball_array_map(map);
   ASSERT_EQ(code, 0) << out;
   const std::string program = src + "/programs/error_space/ball_array.dmi";
-  std::tie(code, out) = shell(bin + " run " + program + " --world " + world + " --quiet --out " + (dir / "none").string());
+  std::tie(code, out) =
+      shell(bin + " run " + program + " --world " + world + " --quiet --out " + (dir / "none").string());
   ASSERT_EQ(code, 0) << out;
   std::tie(code, out) = shell(bin + " run " + program + " --world " + world + " --quiet --compensation " + map +
                               " --out " + (dir / "map").string());
@@ -86,20 +88,22 @@ TEST(RunCompensationCli, TheCalibratedMapCutsTheBallArraysLengthErrorsTenfold) {
   const double compensated = length_error_rms((dir / "map" / "results.json").string());
   std::printf("ball array length errors: none RMS %.3f um, calibrated map RMS %.3f um, gain %.1f\n", 1e3 * none,
               1e3 * compensated, none / compensated);
-  EXPECT_GT(none, 0.003);                // the machine's errors are there (4.3 um)
-  EXPECT_LT(compensated, none / 10);     // the issue's goal (measured: 0.22 um, 19x)
+  EXPECT_GT(none, 0.003);             // the machine's errors are there (4.3 um)
+  EXPECT_LT(compensated, none / 10);  // the issue's goal (measured: 0.22 um, 19x)
 
   // The same map loaded by the program itself (CALL/EXTERN,SYS,'COMPENSATION file', a path relative
   // to the program), then the ball array called as a file: the same centres as --compensation.
   std::filesystem::create_directories(dir / "dmis");
   std::ofstream(dir / "compensated.dmi") << "DMISMN/'compensation from the program', 5.0\n"
                                             "CALL/EXTERN, SYS, 'COMPENSATION map.json'\n"
-                                            "CALL/EXTERN, DMIS, '" << program << "'\n"
+                                            "CALL/EXTERN, DMIS, '"
+                                         << program
+                                         << "'\n"
                                             "ENDFIL\n";
   // The ball array lives outside this program's folder: --include lets it be read (docs/security.md).
-  std::tie(code, out) = shell(bin + " run " + (dir / "compensated.dmi").string() + " --world " + world +
-                              " --include " + std::filesystem::path(program).parent_path().string() + " --quiet --out " +
-                              (dir / "dmis").string());
+  std::tie(code, out) =
+      shell(bin + " run " + (dir / "compensated.dmi").string() + " --world " + world + " --include " +
+            std::filesystem::path(program).parent_path().string() + " --quiet --out " + (dir / "dmis").string());
   ASSERT_EQ(code, 0) << out;
   EXPECT_NEAR(length_error_rms((dir / "dmis" / "results.json").string()), compensated, 1e-12);
 }
@@ -122,8 +126,8 @@ TEST(RunCompensationCli, AProgramCalibratesTheErrorSpaceAndCompensatesByIt) {
   std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/ball_array.dmi --world " + world +
                               " --quiet --out " + (dir / "none").string());
   ASSERT_EQ(code, 0) << out;
-  std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/calibrate_then_measure.dmi --world " + world +
-                              " --out " + (dir / "program").string());
+  std::tie(code, out) = shell(bin + " run " + src + "/programs/error_space/calibrate_then_measure.dmi --world " +
+                              world + " --out " + (dir / "program").string());
   ASSERT_EQ(code, 0) << out;
   EXPECT_NE(out.find("error space 17 x 13 x 3 written to error-space.json"), std::string::npos) << out;
 
@@ -147,7 +151,9 @@ TEST(RunCompensationCli, AProgramCalibratesTheErrorSpaceAndCompensatesByIt) {
                                     "ENDFIL\n";
   std::tie(code, out) = shell(bin + " check " + (dir / "bad.dmi").string());
   EXPECT_NE(code, 0);
-  EXPECT_NE(out.find("bad.dmi:2:19: error: CALIBRATE ERROR-SPACE: SIZE=17,13: expected three numbers"), std::string::npos) << out;
+  EXPECT_NE(out.find("bad.dmi:2:19: error: CALIBRATE ERROR-SPACE: SIZE=17,13: expected three numbers"),
+            std::string::npos)
+      << out;
   std::ofstream(dir / "huge.dmi") << "DMISMN/'huge', 5.0\n"
                                      "CALL/EXTERN, SYS, 'CALIBRATE ERROR-SPACE SIZE=1000,1000,3 RUNS=7'\n"
                                      "ENDFIL\n";
@@ -206,13 +212,16 @@ TEST(RunCompensationCli, TheExampleBlockReadsAsOnAPerfectMachineAfterCompensatio
   std::filesystem::remove_all(dir);
   for (const char* d : {"perfect", "none", "map"}) std::filesystem::create_directories(dir / d);
   const std::string bin = METRON_BINARY, src = METRON_SOURCE_DIR;
-  const std::string world = src + "/programs/worlds/cmm_errors.json", program = src + "/programs/examples/02_block_inspection.dmi";
+  const std::string world = src + "/programs/worlds/cmm_errors.json",
+                    program = src + "/programs/examples/02_block_inspection.dmi";
   const std::string map = (dir / "map.json").string();
   auto [code, out] = shell(bin + " calibrate error-space --world " + world +
                            " --components xyz --reversal --sensor-offset 0,0,-50 --size 15,13,4 --origin 250,150,50"
-                           " --runs 4 --laser-cycles 8 --out " + map);
+                           " --runs 4 --laser-cycles 8 --out " +
+                           map);
   ASSERT_EQ(code, 0) << out;
-  for (const auto& [folder, options] : {std::pair<std::string, std::string>{"perfect", ""}, {"none", " --world " + world},
+  for (const auto& [folder, options] : {std::pair<std::string, std::string>{"perfect", ""},
+                                        {"none", " --world " + world},
                                         {"map", " --world " + world + " --compensation " + map}}) {
     std::tie(code, out) = shell(bin + " run " + program + options + " --quiet --out " + (dir / folder).string());
     ASSERT_EQ(code, 0) << out;
@@ -220,9 +229,10 @@ TEST(RunCompensationCli, TheExampleBlockReadsAsOnAPerfectMachineAfterCompensatio
   const auto perfect = block_deviations((dir / "perfect" / "results.json").string());
   const double none = rms_difference(block_deviations((dir / "none" / "results.json").string()), perfect);
   const double compensated = rms_difference(block_deviations((dir / "map" / "results.json").string()), perfect);
-  std::printf("example block, machine errors' share of 17 part-frame deviations: none RMS %.3f um, map RMS %.3f um (%.1fx)\n",
-              1e3 * none, 1e3 * compensated, none / compensated);
-  EXPECT_GT(none, 0.0005);              // the errors show in the part frame (measured 0.78 um)
+  std::printf(
+      "example block, machine errors' share of 17 part-frame deviations: none RMS %.3f um, map RMS %.3f um (%.1fx)\n",
+      1e3 * none, 1e3 * compensated, none / compensated);
+  EXPECT_GT(none, 0.0005);  // the errors show in the part frame (measured 0.78 um)
   // Measured 0.072 um, 10.8x (0.086 um with the tool qualification left uncompensated); over seeds
   // 1-6 of calibration and run 4.7x to 10.8x (docs/error-space.md), so the bound is the worst seed's.
   EXPECT_LT(compensated, none / 4);
@@ -240,7 +250,8 @@ TEST(RunCompensationCli, AMapAppendedAtASecondTemperatureIsInterpolatedByTheTher
   auto calibrate = [&](int t, const std::string& map, bool append) {
     return shell(bin + " calibrate error-space --world " + worlds + "cmm_errors_at_" + std::to_string(t) + "c.json" +
                  " --components xyz --reversal --sensor-offset 0,0,-50 --size 15,13,4 --origin 250,150,50 --runs 4"
-                 " --laser-cycles 8 --out " + map + (append ? " --append" : ""));
+                 " --laser-cycles 8 --out " +
+                 map + (append ? " --append" : ""));
   };
   const std::string only20 = (dir / "only20.json").string(), both = (dir / "both.json").string();
   auto [code, out] = calibrate(20, only20, false);
@@ -260,16 +271,18 @@ TEST(RunCompensationCli, AMapAppendedAtASecondTemperatureIsInterpolatedByTheTher
   std::tie(code, out) = shell(bin + " run " + program + " --quiet --out " + (dir / "perfect").string());
   ASSERT_EQ(code, 0) << out;
   for (const auto& [folder, map] : {std::pair<std::string, std::string>{"only20", only20}, {"both", both}}) {
-    std::tie(code, out) = shell(bin + " run " + program + " --world " + worlds + "cmm_errors_at_22c.json --compensation " +
-                                map + " --quiet --out " + (dir / folder).string());
+    std::tie(code, out) =
+        shell(bin + " run " + program + " --world " + worlds + "cmm_errors_at_22c.json --compensation " + map +
+              " --quiet --out " + (dir / folder).string());
     ASSERT_EQ(code, 0) << out;
   }
   const auto perfect = block_deviations((dir / "perfect" / "results.json").string());
   const double nearest = rms_difference(block_deviations((dir / "only20" / "results.json").string()), perfect);
   const double interpolated = rms_difference(block_deviations((dir / "both" / "results.json").string()), perfect);
-  std::printf("example block at 22 C, machine errors' share: 20 C map RMS %.3f um, 20 and 24 C interpolated RMS %.3f um\n",
-              1e3 * nearest, 1e3 * interpolated);
-  EXPECT_GT(nearest, 0.0008);             // measured 1.06 um
+  std::printf(
+      "example block at 22 C, machine errors' share: 20 C map RMS %.3f um, 20 and 24 C interpolated RMS %.3f um\n",
+      1e3 * nearest, 1e3 * interpolated);
+  EXPECT_GT(nearest, 0.0008);            // measured 1.06 um
   EXPECT_LT(interpolated, nearest / 5);  // measured 0.072 um
 }
 
@@ -277,7 +290,8 @@ TEST(RunCompensationCli, ABadCompensationFileIsRefusedNamingWhere) {
   const auto dir = std::filesystem::temp_directory_path() / "metron_run_compensation_bad";
   std::filesystem::create_directories(dir);
   const auto bad = (dir / "bad.json").string();
-  std::ofstream(bad) << R"({"format": "metron-error-space", "version": 1, "grid": {"x_mm": [0, 1], "y_mm": [0], "z_mm": [0]},
+  std::ofstream(bad)
+      << R"({"format": "metron-error-space", "version": 1, "grid": {"x_mm": [0, 1], "y_mm": [0], "z_mm": [0]},
     "interpolation": {"method": "trilinear"}, "temperatures": [{"temperature_c": 20, "components": {"x": {"values_mm": [0]}}}]})";
   const auto [code, out] = shell(std::string(METRON_BINARY) + " run " + METRON_SOURCE_DIR +
                                  "/programs/examples/01_first_circle.dmi --quiet --compensation " + bad);

@@ -24,8 +24,8 @@ double field(const std::string& out, const std::string& row_regex) {
 // by the second half of the path. A 40 mm line at 10 mm/s, 500 mm/s2 takes at least
 // 40/10 + 10/500 = 4.02 s (analytic), and no mode beats that.
 TEST(ScanCompareCli, LateralErrorPerLawAndModesAgainstTheBound) {
-  const auto [code, out] = shell(std::string(METRON_BINARY) +
-                                 " scan-compare --line 310 210 41.7 350 210 41.7 --start-offset 0 0.5 0");
+  const auto [code, out] =
+      shell(std::string(METRON_BINARY) + " scan-compare --line 310 210 41.7 350 210 41.7 --start-offset 0 0.5 0");
   ASSERT_EQ(code, 0) << out;
   EXPECT_NEAR(field(out, R"(\nnone\s+\S+\s+\S+\s+(\S+))"), 500, 2) << out;
   for (const char* law : {"Vc1", "Vc1'", "Vc2"})

@@ -15,9 +15,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using metron::interpreter::run_program;
 using metron::interpreter::RunExit;
 using metron::interpreter::RunOptions;
-using metron::interpreter::run_program;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
 
@@ -32,7 +32,8 @@ const metron::runtime::Feature* feature(const metron::runtime::RunRecord& r, con
 bool no_scanning_machine(const metron::interpreter::RunOutcome& o) {
   if (o.exit != RunExit::Faulted) return false;
   for (const auto& e : o.record.events)
-    if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e); f && f->message.find("no scanning probe") != std::string::npos)
+    if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e);
+        f && f->message.find("no scanning probe") != std::string::npos)
       return true;
   return false;
 }
@@ -155,8 +156,8 @@ TEST(ScanE2e, LobedBossThroughSmallCommandBuffers) {
     ASSERT_FALSE(segmented.empty()) << mode;
     std::size_t n = 0, per = 0, stops = 0, retracts = 0;
     ASSERT_EQ(std::sscanf(segmented.c_str() + segmented.find("segmented scan:"),
-                          "segmented scan: %zu commands of up to %zu segments, %zu stops, %zu retracts", &n, &per, &stops,
-                          &retracts),
+                          "segmented scan: %zu commands of up to %zu segments, %zu stops, %zu retracts", &n, &per,
+                          &stops, &retracts),
               4)
         << segmented;
     EXPECT_GT(n, 4u);

@@ -21,9 +21,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using metron::interpreter::run_program;
 using metron::interpreter::RunExit;
 using metron::interpreter::RunOptions;
-using metron::interpreter::run_program;
 using metron::runtime::FeatureReport;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
@@ -45,8 +45,8 @@ const FeatureReport* report(const metron::runtime::RunRecord& r, const std::stri
 
 // `metron characterise` as a user runs it; returns its stdout.
 std::string characterise(const std::string& world_name, const fs::path& out) {
-  const std::string cmd = std::string(METRON_BINARY) + " characterise --world " + world(world_name).string() + " --out " +
-                          out.string() + " 2>/dev/null";
+  const std::string cmd = std::string(METRON_BINARY) + " characterise --world " + world(world_name).string() +
+                          " --out " + out.string() + " 2>/dev/null";
   FILE* p = ::popen(cmd.c_str(), "r");
   EXPECT_NE(p, nullptr);
   std::string text;
@@ -129,14 +129,16 @@ TEST(Touch, CharacteriseFromAProgram) {
 // still completes (the stop distance bound holds on the ramp).
 TEST(Touch, SurfaceBeyondTheNominalToleranceIsReported) {
   const fs::path prog = out_dir("early") / "early.dmi";
-  std::ofstream(prog) << "DMISMN/'early contact', 5.0\nUNITS/MM, ANGDEC\nCALL/EXTERN, SYS, 'CHARACTERISE'\n"
-                         "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(PROBE4)\n"
-                         "F(P1) = FEAT/POINT, CART, 380, 250, 39.55, 0, 0, 1\nF(P2) = FEAT/POINT, CART, 380, 260, 39.9, 0, 0, 1\n"
-                         "GOTO/380, 250, 80\nMEAS/POINT, F(P1), 1\n  PTMEAS/CART, 380, 250, 39.55, 0, 0, 1\nENDMES\n"
-                         "MEAS/POINT, F(P2), 1\n  PTMEAS/CART, 380, 260, 39.9, 0, 0, 1\nENDMES\nENDFIL\n";
+  std::ofstream(prog)
+      << "DMISMN/'early contact', 5.0\nUNITS/MM, ANGDEC\nCALL/EXTERN, SYS, 'CHARACTERISE'\n"
+         "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(PROBE4)\n"
+         "F(P1) = FEAT/POINT, CART, 380, 250, 39.55, 0, 0, 1\nF(P2) = FEAT/POINT, CART, 380, 260, 39.9, 0, 0, 1\n"
+         "GOTO/380, 250, 80\nMEAS/POINT, F(P1), 1\n  PTMEAS/CART, 380, 250, 39.55, 0, 0, 1\nENDMES\n"
+         "MEAS/POINT, F(P2), 1\n  PTMEAS/CART, 380, 260, 39.9, 0, 0, 1\nENDMES\nENDFIL\n";
   const auto o = run(prog, "touch_latched.json", "early_run", std::nullopt);
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
-  EXPECT_NE(o.diagnostics.find("early.dmi:10:3: warning: the surface lies about 0.4"), std::string::npos) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("early.dmi:10:3: warning: the surface lies about 0.4"), std::string::npos)
+      << o.diagnostics;
   EXPECT_NE(o.diagnostics.find("beyond the nominal tolerance of 0.200 mm"), std::string::npos) << o.diagnostics;
   EXPECT_EQ(o.diagnostics.find("early.dmi:13"), std::string::npos) << o.diagnostics;
 }
@@ -200,13 +202,14 @@ TEST(Touch, BaselineCyclesRunTheSameProgramForComparison) {
   }
   EXPECT_EQ(seed.diagnostics.find("baseline touch cycle"), std::string::npos) << seed.diagnostics;
   EXPECT_NE(plain.diagnostics.find("baseline touch cycle: one-touch"), std::string::npos) << plain.diagnostics;
-  EXPECT_NE(two.diagnostics.find(fmt::format("baseline touch cycle: two-touch, 1.000 mm back-off, first touch at {:.3f} mm/s",
-                                             c->first_feed_mm_s)),
+  EXPECT_NE(two.diagnostics.find(fmt::format(
+                "baseline touch cycle: two-touch, 1.000 mm back-off, first touch at {:.3f} mm/s", c->first_feed_mm_s)),
             std::string::npos)
       << two.diagnostics;
-  const double t_seed = seed.record.simulated_time_s, t_one = plain.record.simulated_time_s, t_two = two.record.simulated_time_s;
-  std::printf("[figures] simulated s: characterised %.3f, one-touch baseline %.3f, two-touch 1 mm baseline %.3f\n", t_seed,
-              t_one, t_two);
+  const double t_seed = seed.record.simulated_time_s, t_one = plain.record.simulated_time_s,
+               t_two = two.record.simulated_time_s;
+  std::printf("[figures] simulated s: characterised %.3f, one-touch baseline %.3f, two-touch 1 mm baseline %.3f\n",
+              t_seed, t_one, t_two);
   // bench_touch_cycle (docs/touch-trigger.md) times these cycles apart on this world: the seed's
   // two-touch 0.687 s, the plain one-touch 1.042 s, the 1 mm two-touch 1.074 s per point. Over 14
   // points the characterised run must be faster than each baseline by at least half of that.
@@ -221,7 +224,8 @@ TEST(Touch, BaselineCyclesRunTheSameProgramForComparison) {
   const auto refused = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_fast", file, too_fast);
   EXPECT_EQ(refused.exit, RunExit::BadInput);
   EXPECT_NE(refused.diagnostics.find("exceeds the maximum protected feed"), std::string::npos) << refused.diagnostics;
-  const auto no_feed = run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_nofeed", std::nullopt, *two_touch);
+  const auto no_feed =
+      run(example("05_touch_strategy.dmi"), "touch_scanned_4ms.json", "baseline_nofeed", std::nullopt, *two_touch);
   EXPECT_EQ(no_feed.exit, RunExit::BadInput);
   EXPECT_NE(no_feed.diagnostics.find("needs a first-touch feed"), std::string::npos) << no_feed.diagnostics;
 }
@@ -233,7 +237,8 @@ TEST(Touch, TouchBaselineTextIsParsedOrRefused) {
   EXPECT_DOUBLE_EQ(two->backoff_mm, 0.5);
   EXPECT_DOUBLE_EQ(two->first_feed_mm_s.value_or(0), 20);
   EXPECT_FALSE(metron::runtime::parse_touch_baseline("one-touch")->two_touch);
-  for (const char* bad : {"", "two-touch", "two-touch:", "two-touch:-1", "two-touch:1:x", "two-touch:1:20:3", "three-touch"})
+  for (const char* bad :
+       {"", "two-touch", "two-touch:", "two-touch:-1", "two-touch:1:x", "two-touch:1:20:3", "three-touch"})
     EXPECT_FALSE(metron::runtime::parse_touch_baseline(bad)) << bad;
 }
 

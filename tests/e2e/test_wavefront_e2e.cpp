@@ -18,9 +18,9 @@
 namespace {
 
 namespace fs = std::filesystem;
+using metron::interpreter::run_program;
 using metron::interpreter::RunExit;
 using metron::interpreter::RunOptions;
-using metron::interpreter::run_program;
 using nlohmann::json;
 
 const fs::path source_dir = METRON_SOURCE_DIR;
@@ -79,7 +79,8 @@ TEST(WavefrontE2e, CalibrateWavefrontFromAProgram) {
   // The run's live report has the summary.
   bool said = false;
   for (const auto& e : o.record.events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e); t && t->text.find("wavefront calibration (all") != std::string::npos)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e);
+        t && t->text.find("wavefront calibration (all") != std::string::npos)
       said = true;
   EXPECT_TRUE(said);
 }
@@ -99,7 +100,8 @@ TEST(WavefrontE2e, BadCallsArePositionedErrors) {
     EXPECT_NE(o.diagnostics.find("name the wavefront world"), std::string::npos) << o.diagnostics;
   }
   {
-    const auto o = run(write_program("missing", "CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT nothing_here.json a-z'\n"), "missing");
+    const auto o =
+        run(write_program("missing", "CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT nothing_here.json a-z'\n"), "missing");
     EXPECT_EQ(o.exit, RunExit::ProgramError);
     EXPECT_NE(o.diagnostics.find("p.dmi:2:"), std::string::npos) << o.diagnostics;
     EXPECT_NE(o.diagnostics.find("nothing_here.json"), std::string::npos) << o.diagnostics;
@@ -107,7 +109,8 @@ TEST(WavefrontE2e, BadCallsArePositionedErrors) {
   }
   {
     const std::string cmm = (source_dir / "programs/worlds/touch_const_time.json").string();
-    const auto o = run(write_program("cmm_world", "CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT " + cmm + " a-z'\n"), "cmm_world");
+    const auto o =
+        run(write_program("cmm_world", "CALL/EXTERN, SYS, 'CALIBRATE WAVEFRONT " + cmm + " a-z'\n"), "cmm_world");
     EXPECT_EQ(o.exit, RunExit::ProgramError);
     EXPECT_NE(o.diagnostics.find("wavefront"), std::string::npos) << o.diagnostics;
   }

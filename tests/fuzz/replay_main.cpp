@@ -39,7 +39,8 @@ struct Options {
 
 bool wanted(const fs::path& p, const Options& o) {
   if (o.extensions.empty()) return true;
-  return std::any_of(o.extensions.begin(), o.extensions.end(), [&](const std::string& e) { return p.extension() == e; });
+  return std::any_of(o.extensions.begin(), o.extensions.end(),
+                     [&](const std::string& e) { return p.extension() == e; });
 }
 
 Bytes slurp(const fs::path& p) {
@@ -49,9 +50,11 @@ Bytes slurp(const fs::path& p) {
 
 // Values that break parsers more often than random bytes do (from libFuzzer's own mutators:
 // separators, brackets, signs, and numbers at the edges of the types).
-const char* const interesting_tokens[] = {"0", "-1", "1e400", "-1e308", "nan", "inf", "2147483648", "99999999999999999999",
-                                          "1e-320", ",", "/", "(", ")", "[", "]", "{", "}", "\"", "'", "$", "\n",
-                                          "\r", "\\", "=", ":", "null", "true", "ENDFIL", "\xc3\xa9", "\xff"};
+const char* const interesting_tokens[] = {
+    "0",      "-1",   "1e400", "-1e308", "nan",      "inf", "2147483648", "99999999999999999999",
+    "1e-320", ",",    "/",     "(",      ")",        "[",   "]",          "{",
+    "}",      "\"",   "'",     "$",      "\n",       "\r",  "\\",         "=",
+    ":",      "null", "true",  "ENDFIL", "\xc3\xa9", "\xff"};
 
 // One to four stacked edits of `input`, or a splice with `other`.
 Bytes mutate(Bytes input, const Bytes& other, std::mt19937_64& random, std::size_t max_bytes) {
@@ -87,7 +90,8 @@ Bytes mutate(Bytes input, const Bytes& other, std::mt19937_64& random, std::size
       case 5: {  // replace a number by an interesting token
         std::vector<std::size_t> digits;
         for (std::size_t i = 0; i < input.size(); ++i)
-          if (input[i] >= '0' && input[i] <= '9' && (i == 0 || input[i - 1] < '0' || input[i - 1] > '9')) digits.push_back(i);
+          if (input[i] >= '0' && input[i] <= '9' && (i == 0 || input[i - 1] < '0' || input[i - 1] > '9'))
+            digits.push_back(i);
         if (digits.empty()) break;
         const std::size_t at = digits[pick(digits.size())];
         std::size_t end = at;
@@ -110,8 +114,9 @@ Bytes mutate(Bytes input, const Bytes& other, std::mt19937_64& random, std::size
 }
 
 void run_one(const Bytes& input, const Options& o) {
-  if (!o.keep.empty()) std::ofstream(o.keep, std::ios::binary).write(reinterpret_cast<const char*>(input.data()),
-                                                                    static_cast<std::streamsize>(input.size()));
+  if (!o.keep.empty())
+    std::ofstream(o.keep, std::ios::binary)
+        .write(reinterpret_cast<const char*>(input.data()), static_cast<std::streamsize>(input.size()));
   LLVMFuzzerTestOneInput(input.data(), input.size());
 }
 
@@ -122,11 +127,16 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
-    if (a == "--mutations" && has_value) o.mutations = std::atol(argv[++i]);
-    else if (a == "--seed" && has_value) o.seed = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--max-bytes" && has_value) o.max_bytes = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--ext" && has_value) o.extensions.emplace_back(argv[++i]);
-    else if (a == "--keep" && has_value) o.keep = argv[++i];
+    if (a == "--mutations" && has_value)
+      o.mutations = std::atol(argv[++i]);
+    else if (a == "--seed" && has_value)
+      o.seed = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--max-bytes" && has_value)
+      o.max_bytes = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--ext" && has_value)
+      o.extensions.emplace_back(argv[++i]);
+    else if (a == "--keep" && has_value)
+      o.keep = argv[++i];
     else if (a.rfind("--", 0) == 0) {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -157,7 +167,8 @@ int main(int argc, char** argv) {
   }
   std::mt19937_64 random(o.seed);
   for (long m = 0; m < o.mutations; ++m) {
-    const std::size_t a = static_cast<std::size_t>(random() % seeds.size()), b = static_cast<std::size_t>(random() % seeds.size());
+    const std::size_t a = static_cast<std::size_t>(random() % seeds.size()),
+                      b = static_cast<std::size_t>(random() % seeds.size());
     run_one(mutate(seeds[a], seeds[b], random, o.max_bytes), o);
   }
   std::printf("%zu seeds and %ld mutations (seed %llu) ran without a crash\n", seeds.size(), o.mutations,

@@ -90,8 +90,7 @@ TEST(GrammarFuzz, RandomBytes) {
 
 TEST(GrammarFuzz, RandomDmisLikeText) {
   // Mostly the characters of DMIS, so the parser gets deep into its rules.
-  static const char raw[] =
-      "FEATMSDPLNCXYZ0123456789019.+-*/,,,==(()))[]''$$\n\n  \t\r.EQ.AND.NOT.OR._#@!~%\0\xff";
+  static const char raw[] = "FEATMSDPLNCXYZ0123456789019.+-*/,,,==(()))[]''$$\n\n  \t\r.EQ.AND.NOT.OR._#@!~%\0\xff";
   static const std::string alphabet(raw, sizeof raw - 1);
   std::mt19937 rng(7u);
   std::uniform_int_distribution<int> len(0, 120);
@@ -120,15 +119,9 @@ TEST(GrammarFuzz, MutatedRealStatements) {
     for (int k = 0; k < edits && !s.empty(); ++k) {
       const std::size_t at = rng() % s.size();
       switch (rng() % 3) {
-        case 0:
-          s[at] = static_cast<char>(byte(rng));
-          break;
-        case 1:
-          s.erase(at, 1);
-          break;
-        default:
-          s.insert(at, 1, s[rng() % s.size()]);
-          break;
+        case 0: s[at] = static_cast<char>(byte(rng)); break;
+        case 1: s.erase(at, 1); break;
+        default: s.insert(at, 1, s[rng() % s.size()]); break;
       }
     }
     check_input(s);

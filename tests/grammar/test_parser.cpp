@@ -46,18 +46,10 @@ Statement one(const std::string& text) {
 std::string sexpr(const Expr& e) {
   std::ostringstream os;
   switch (e.kind) {
-    case ExprKind::Number:
-      os << e.number;
-      break;
-    case ExprKind::String:
-      os << "'" << e.text << "'";
-      break;
-    case ExprKind::Word:
-      os << (e.text.empty() ? "<empty>" : e.text);
-      break;
-    case ExprKind::Label:
-      os << e.label.prefix << "(" << e.label.name << ")";
-      break;
+    case ExprKind::Number: os << e.number; break;
+    case ExprKind::String: os << "'" << e.text << "'"; break;
+    case ExprKind::Word: os << (e.text.empty() ? "<empty>" : e.text); break;
+    case ExprKind::Label: os << e.label.prefix << "(" << e.label.name << ")"; break;
     case ExprKind::Call:
     case ExprKind::Index:
       os << "(" << (e.kind == ExprKind::Call ? "call " : "index ") << e.text;
@@ -70,9 +62,7 @@ std::string sexpr(const Expr& e) {
       for (const auto& a : e.args) os << " " << sexpr(a);
       os << ")";
       break;
-    case ExprKind::Paren:
-      os << "(paren " << sexpr(e.args.at(0)) << ")";
-      break;
+    case ExprKind::Paren: os << "(paren " << sexpr(e.args.at(0)) << ")"; break;
     case ExprKind::Format:
       os << "(layout";
       for (const auto& a : e.args) os << " " << sexpr(a);
@@ -107,9 +97,7 @@ std::string lc(const Parsed& p, std::uint32_t offset) {
   return std::to_string(l.line) + ":" + std::to_string(l.column);
 }
 
-std::string text_of(const Parsed& p, Span s) {
-  return p.sources.file(p.file).text.substr(s.begin, s.end - s.begin);
-}
+std::string text_of(const Parsed& p, Span s) { return p.sources.file(p.file).text.substr(s.begin, s.end - s.begin); }
 
 }  // namespace
 
@@ -385,9 +373,7 @@ TEST(ParserSpans, ByteOrderMarkDoesNotShiftColumnsOfLaterLines) {
 }
 
 TEST(ParserLabelPrefix, Table) {
-  for (const char* w :
-       {"A", "F", "FA", "DAT", "DATT", "DID", "S", "SA", "T", "TA", "M", "QIS", "VW", "D", "DA"})
+  for (const char* w : {"A", "F", "FA", "DAT", "DATT", "DID", "S", "SA", "T", "TA", "M", "QIS", "VW", "D", "DA"})
     EXPECT_TRUE(is_label_prefix(w)) << w;
-  for (const char* w : {"", "FEAT", "SIN", "X", "f", "DATS", "B", "V1", "SQRT"})
-    EXPECT_FALSE(is_label_prefix(w)) << w;
+  for (const char* w : {"", "FEAT", "SIN", "X", "f", "DATS", "B", "V1", "SQRT"}) EXPECT_FALSE(is_label_prefix(w)) << w;
 }

@@ -123,7 +123,8 @@ TEST(ParserErrors, AnUnknownLabelPrefixSkipsItsStatementLeniently) {
 // blanks are dropped, with one warning per file; strictly each is an error. Before: a syntax
 // error "expected ')' after the label name".
 TEST(ParserErrors, BlanksInsideALabelNameAreDroppedLeniently) {
-  const auto r = parse_both_ways("blank.dmi", "F(HOLE 1)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA( HOLE 1 ),F(HOLE\t2)\nENDFIL\n");
+  const auto r =
+      parse_both_ways("blank.dmi", "F(HOLE 1)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA( HOLE 1 ),F(HOLE\t2)\nENDFIL\n");
   ASSERT_EQ(r->program.statements.size(), 3u);
   ASSERT_TRUE(r->program.statements[0].target);
   EXPECT_EQ(r->program.statements[0].target->name, "HOLE1");
@@ -157,7 +158,8 @@ TEST(ParserErrors, ATargetLabelWithoutItsCloseIsRestoredLeniently) {
 // The same generator leaves out commas in long CONST lists (`FA(E02F4)FA(F02F1)`, 12 errors in
 // its mmt_code.dmi): read leniently the comma is put back with a warning, outside strings only.
 TEST(ParserErrors, ACommaMissingBetweenTwoLabelsIsRestoredLeniently) {
-  const auto r = parse_both_ways("comma.dmi", "CONST/PLANE,F(P),BF,FA(A1),FA(A2)FA(A3), FA(A4) FA(A5)\nTEXT/OPER,'(x)FA(y)'\n");
+  const auto r =
+      parse_both_ways("comma.dmi", "CONST/PLANE,F(P),BF,FA(A1),FA(A2)FA(A3), FA(A4) FA(A5)\nTEXT/OPER,'(x)FA(y)'\n");
   ASSERT_EQ(r->program.statements.size(), 2u);
   ASSERT_EQ(r->program.statements[0].params.size(), 8u);
   EXPECT_EQ(r->program.statements[0].params[5].label.name, "A3");
@@ -184,8 +186,7 @@ TEST(ParserErrors, DeepNestingIsAnErrorNotACrash) {
   std::size_t n = 0;
   EXPECT_EQ(diagnose("A/" + std::string(63, '(') + "1" + std::string(63, ')'), &n), "0 diagnostics");
   EXPECT_EQ(n, 1u);
-  EXPECT_EQ(diagnose("A/" + std::string(64, '(') + "1" + std::string(64, ')')).substr(0, 15),
-            "parse.too-deep|");
+  EXPECT_EQ(diagnose("A/" + std::string(64, '(') + "1" + std::string(64, ')')).substr(0, 15), "parse.too-deep|");
 }
 
 TEST(ParserErrors, AllErrorsAreReportedAndGoodLinesKept) {

@@ -118,12 +118,17 @@ TEST(Preprocess, BlankLinesAfterAContinuationAreSkipped) {
 // (flatness_meas, Test_Emery-1.dmi). A TEXT line that does not end in a quote goes on to the line
 // that does, its line breaks inside the string; an apostrophe (a quote between letters) is doubled.
 TEST(Preprocess, ATextsStringRunsToItsLastQuote) {
-  const std::string src = "TEXT/OPER,'Mettre l'\xC3\xA9" "chelle en place;\r\nplans paires vers vous,\r\n"
-                          "et en but\xC3\xA9" "e vers la gauche'\r\nENDFIL\n";
+  const std::string src =
+      "TEXT/OPER,'Mettre l'\xC3\xA9"
+      "chelle en place;\r\nplans paires vers vous,\r\n"
+      "et en but\xC3\xA9"
+      "e vers la gauche'\r\nENDFIL\n";
   const auto lines = join_continuations(src);
   ASSERT_EQ(lines.size(), 2u);
-  EXPECT_EQ(lines[0].text, "TEXT/OPER,'Mettre l''\xC3\xA9" "chelle en place;\r\nplans paires vers vous,\r\net en but\xC3\xA9"
-                           "e vers la gauche'");
+  EXPECT_EQ(lines[0].text,
+            "TEXT/OPER,'Mettre l''\xC3\xA9"
+            "chelle en place;\r\nplans paires vers vous,\r\net en but\xC3\xA9"
+            "e vers la gauche'");
   EXPECT_EQ(lines[1].text, "ENDFIL");
   ASSERT_EQ(lines[0].physical.size(), lines[0].text.size() + 1);
   for (std::size_t i = 0; i < lines[0].text.size(); ++i) EXPECT_EQ(src[lines[0].physical[i]], lines[0].text[i]) << i;

@@ -10,8 +10,8 @@
 #include <random>
 #include <sstream>
 
-#include "metron/interpreter/compiler.hpp"
 #include "cli/virtual_cmm_backend.hpp"
+#include "metron/interpreter/compiler.hpp"
 #include "metron/interpreter/session.hpp"
 #include "metron/runtime/outputs.hpp"
 

@@ -73,8 +73,9 @@ TEST(HostileCompile, DuplicateLabelsAreDiagnosed) {
   const auto dids = compile(header + "DID(A) = DEVICE/STOR, 'a.txt'\nDID(A) = DEVICE/STOR, 'b.txt'\nENDFIL\n");
   EXPECT_TRUE(dids->has("warning: DID(A) is defined again")) << dids->all;
   // Before: a second DATDEF of DAT(A) replaced the first silently.
-  const auto datums = compile(header + "F(P1) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nF(P2) = FEAT/PLANE, CART, 0, 0, 5, 0, 0, 1\n"
-                                       "DATDEF/FA(P1), DAT(A)\nDATDEF/FA(P2), DAT(A)\nDATDEF/FA(P2), DAT(B)\nENDFIL\n");
+  const auto datums = compile(header +
+                              "F(P1) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nF(P2) = FEAT/PLANE, CART, 0, 0, 5, 0, 0, 1\n"
+                              "DATDEF/FA(P1), DAT(A)\nDATDEF/FA(P2), DAT(A)\nDATDEF/FA(P2), DAT(B)\nENDFIL\n");
   EXPECT_TRUE(datums->has("<hostile>:5:1: warning: DAT(A) is defined again (first at line 4)")) << datums->all;
   EXPECT_FALSE(datums->has("DAT(B) is defined again")) << datums->all;
 }

@@ -53,13 +53,13 @@ Ran run(const std::string& body, const std::string& name = "prog.dmi") {
 }
 
 TEST(Language, ArithmeticPrecedenceAndIntrinsics) {
-  auto r = run(
-      "DECL/REAL, A, B\nDECL/INTGR, I\nDECL/CHAR, 20, S\n"
-      "A = ASSIGN/2 + 3 * 4 ** 2 / 8 - -1\n"          // 2 + 3*16/8 + 1 = 9
-      "B = ASSIGN/SQRT(16) + ABS(-2) + MN(3, 1, 2) + ATAN2(1, 1)\n"  // 4 + 2 + 1 + 45 (ANGDEC)
-      "I = ASSIGN/7 / 2\n"                             // INTGR truncates 3.5 -> 3
-      "S = ASSIGN/CONCAT('ab', STR(I), SUBSTR('xyz', 2, 3))\n"
-      "TEXT/OPER, STR(A)\nTEXT/OPER, STR(B)\nTEXT/OPER, STR(I)\nTEXT/OPER, S\n");
+  auto r =
+      run("DECL/REAL, A, B\nDECL/INTGR, I\nDECL/CHAR, 20, S\n"
+          "A = ASSIGN/2 + 3 * 4 ** 2 / 8 - -1\n"                         // 2 + 3*16/8 + 1 = 9
+          "B = ASSIGN/SQRT(16) + ABS(-2) + MN(3, 1, 2) + ATAN2(1, 1)\n"  // 4 + 2 + 1 + 45 (ANGDEC)
+          "I = ASSIGN/7 / 2\n"                                           // INTGR truncates 3.5 -> 3
+          "S = ASSIGN/CONCAT('ab', STR(I), SUBSTR('xyz', 2, 3))\n"
+          "TEXT/OPER, STR(A)\nTEXT/OPER, STR(B)\nTEXT/OPER, STR(I)\nTEXT/OPER, S\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   ASSERT_EQ(r.texts.size(), 4u);
   EXPECT_EQ(r.texts[0], "9");
@@ -71,8 +71,9 @@ TEST(Language, ArithmeticPrecedenceAndIntrinsics) {
 // Issue 15: INTGR had no range check (3e9 was stored as it came, NaN too). INTGR is 32-bit signed,
 // LONG exact up to 2^53 (docs/language.md); a value outside is an error naming the statement.
 TEST(Language, IntegerVariablesHoldTheirRangeOnly) {
-  auto ok = run("DECL/INTGR, I, J\nDECL/LONG, L\nI = ASSIGN/2147483647\nJ = ASSIGN/-2147483648.9\n"
-                "L = ASSIGN/3000000000 * 1000\nTEXT/OPER, STR(I)\nTEXT/OPER, STR(J)\nTEXT/OPER, STR(L)\n");
+  auto ok =
+      run("DECL/INTGR, I, J\nDECL/LONG, L\nI = ASSIGN/2147483647\nJ = ASSIGN/-2147483648.9\n"
+          "L = ASSIGN/3000000000 * 1000\nTEXT/OPER, STR(I)\nTEXT/OPER, STR(J)\nTEXT/OPER, STR(L)\n");
   ASSERT_EQ(ok.status, ExecStatus::Finished) << ok.diagnostics;
   ASSERT_EQ(ok.texts.size(), 3u);
   EXPECT_EQ(ok.texts[0], "2147483647");
@@ -95,22 +96,22 @@ TEST(Language, IntegerVariablesHoldTheirRangeOnly) {
 }
 
 TEST(Language, IfElseWithAndWithoutParentheses) {
-  auto r = run(
-      "DECL/INTGR, I\nI = ASSIGN/5\n"
-      "IF/(I .GT. 3 .AND. .NOT. (I .EQ. 4))\nTEXT/OPER, 'big'\nELSE\nTEXT/OPER, 'small'\nENDIF\n"
-      "IF/I .LT. 3\nTEXT/OPER, 'wrong'\nENDIF\n"
-      "IF/(I .GE. 5 .OR. I .LT. 0)\nTEXT/OPER, 'yes'\nENDIF\n");
+  auto r =
+      run("DECL/INTGR, I\nI = ASSIGN/5\n"
+          "IF/(I .GT. 3 .AND. .NOT. (I .EQ. 4))\nTEXT/OPER, 'big'\nELSE\nTEXT/OPER, 'small'\nENDIF\n"
+          "IF/I .LT. 3\nTEXT/OPER, 'wrong'\nENDIF\n"
+          "IF/(I .GE. 5 .OR. I .LT. 0)\nTEXT/OPER, 'yes'\nENDIF\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"big", "yes"}));
 }
 
 TEST(Language, DoLoopsWithStepsAndArrays) {
-  auto r = run(
-      "DECL/INTGR, I, J\nDECL/REAL, SUM, V[5]\nSUM = ASSIGN/0\n"
-      "DO/I, 1, 5\nV[I] = ASSIGN/I * I\nENDDO\n"
-      "DO/J, 5, 1, -2\nSUM = ASSIGN/SUM + V[J]\nENDDO\n"   // 25 + 9 + 1
-      "DO/I, 3, 1\nTEXT/OPER, 'never'\nENDDO\n"
-      "TEXT/OPER, STR(SUM)\n");
+  auto r =
+      run("DECL/INTGR, I, J\nDECL/REAL, SUM, V[5]\nSUM = ASSIGN/0\n"
+          "DO/I, 1, 5\nV[I] = ASSIGN/I * I\nENDDO\n"
+          "DO/J, 5, 1, -2\nSUM = ASSIGN/SUM + V[J]\nENDDO\n"  // 25 + 9 + 1
+          "DO/I, 3, 1\nTEXT/OPER, 'never'\nENDDO\n"
+          "TEXT/OPER, STR(SUM)\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"35"}));
 }
@@ -118,11 +119,11 @@ TEST(Language, DoLoopsWithStepsAndArrays) {
 TEST(Language, ArraysOfSeveralDimensions) {
   // RationalDMIS's DECL/COMMON,DOUBLE,XX,NUM[3,30]: before, a declaration of two sizes was an
   // error, and an element V[i,j] of a one-dimensional array read V[i] (its second index ignored).
-  auto r = run(
-      "DECL/COMMON, DOUBLE, XX, NUM[3,30]\nDECL/INTGR, I, J\n"
-      "DO/I, 1, 3\nDO/J, 1, 30\nNUM[I,J] = ASSIGN/I*100 + J\nENDDO\nENDDO\n"
-      "TEXT/OPER, STR(NUM[2,7])\nTEXT/OPER, STR(NUM[3,30] + NUM[1,1])\n"
-      "NUM[1,31] = ASSIGN/0\n");
+  auto r =
+      run("DECL/COMMON, DOUBLE, XX, NUM[3,30]\nDECL/INTGR, I, J\n"
+          "DO/I, 1, 3\nDO/J, 1, 30\nNUM[I,J] = ASSIGN/I*100 + J\nENDDO\nENDDO\n"
+          "TEXT/OPER, STR(NUM[2,7])\nTEXT/OPER, STR(NUM[3,30] + NUM[1,1])\n"
+          "NUM[1,31] = ASSIGN/0\n");
   EXPECT_EQ(r.texts, (std::vector<std::string>{"207", "431"}));
   EXPECT_EQ(r.status, ExecStatus::Error);
   EXPECT_NE(r.diagnostics.find("index 1,31 is outside NUM[1..3,1..30]"), std::string::npos) << r.diagnostics;
@@ -134,28 +135,29 @@ TEST(Language, ArraysOfSeveralDimensions) {
 TEST(Language, TextJoinsItsPartsAndStrFormatsAWidth) {
   // TEXT/OPER,'R=',STR(R) showed only 'R=' (its other parts were dropped unseen); STR(x,w,d)
   // and STR of a BOOL were errors.
-  auto r = run("DECL/REAL, R\nDECL/BOOL, B\nR = ASSIGN/2.5\nB = ASSIGN/(R .GT. 2)\n"
-               "TEXT/OPER, 'R = ', STR(R), ' mm, ', R, ' B=', B\n"
-               "TEXT/OPER, CONCAT('[', STR(R, 8, 3), ']', STR(B))\n");
+  auto r =
+      run("DECL/REAL, R\nDECL/BOOL, B\nR = ASSIGN/2.5\nB = ASSIGN/(R .GT. 2)\n"
+          "TEXT/OPER, 'R = ', STR(R), ' mm, ', R, ' B=', B\n"
+          "TEXT/OPER, CONCAT('[', STR(R, 8, 3), ']', STR(B))\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"R = 2.5 mm, 2.5 B=.TRUE.", "[   2.500].TRUE."}));
 }
 
 TEST(Language, JumpToLabels) {
-  auto r = run(
-      "DECL/INTGR, N\nN = ASSIGN/0\n(AGAIN)\nN = ASSIGN/N + 1\n"
-      "IF/(N .LT. 4)\nJUMPTO/(AGAIN)\nENDIF\nTEXT/OPER, STR(N)\n");
+  auto r =
+      run("DECL/INTGR, N\nN = ASSIGN/0\n(AGAIN)\nN = ASSIGN/N + 1\n"
+          "IF/(N .LT. 4)\nJUMPTO/(AGAIN)\nENDIF\nTEXT/OPER, STR(N)\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"4"}));
 }
 
 TEST(Language, MacrosTakeValuesAndLabels) {
-  auto r = run(
-      "DECL/REAL, R\n"
-      "M(SQUARE) = MACRO/'X'\nR = ASSIGN/X * X\nENDMAC\n"
-      "M(DEFINE) = MACRO/'NAME', 'D'\nF(NAME) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, D\nENDMAC\n"
-      "CALL/M(SQUARE), 1.5\nTEXT/OPER, STR(R)\n"
-      "CALL/M(DEFINE), F(HOLE9), 12\n");
+  auto r =
+      run("DECL/REAL, R\n"
+          "M(SQUARE) = MACRO/'X'\nR = ASSIGN/X * X\nENDMAC\n"
+          "M(DEFINE) = MACRO/'NAME', 'D'\nF(NAME) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, D\nENDMAC\n"
+          "CALL/M(SQUARE), 1.5\nTEXT/OPER, STR(R)\n"
+          "CALL/M(DEFINE), F(HOLE9), 12\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"2.25"}));
   const auto* f = r.session->runtime().find_feature("HOLE9");
@@ -171,9 +173,9 @@ TEST(Language, CalledFilesShareTheContext) {
 }
 
 TEST(Language, InchAndRadianUnitsConvertAtTheEdge) {
-  auto r = run(
-      "UNITS/INCH, ANGRAD\nF(P) = FEAT/POINT, CART, 1, 2, 3, 0, 0, 1\n"
-      "DECL/REAL, A\nA = ASSIGN/SIN(PI() / 2)\nTEXT/OPER, STR(A)\n");
+  auto r =
+      run("UNITS/INCH, ANGRAD\nF(P) = FEAT/POINT, CART, 1, 2, 3, 0, 0, 1\n"
+          "DECL/REAL, A\nA = ASSIGN/SIN(PI() / 2)\nTEXT/OPER, STR(A)\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"1"}));
   const auto* f = r.session->runtime().find_feature("P");
@@ -192,13 +194,14 @@ TEST(Language, VendorStatementsAreSkippedWithAWarning) {
   auto r = run("VNDRX/SOMETHING, 1, 2\nTEXT/OPER, 'after'\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"after"}));
-  EXPECT_NE(r.diagnostics.find("prog.dmi:3:1: warning: unknown statement VNDRX is skipped"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("prog.dmi:3:1: warning: unknown statement VNDRX is skipped"), std::string::npos)
+      << r.diagnostics;
 }
 
 TEST(Language, ObtainReadsFeatureParameters) {
-  auto r = run(
-      "F(C) = FEAT/CIRCLE, INNER, CART, 1, 2, 3, 0, 0, 1, 10\n"
-      "DECL/REAL, D\nD = OBTAIN/F(C), 10\nTEXT/OPER, STR(D)\n");
+  auto r =
+      run("F(C) = FEAT/CIRCLE, INNER, CART, 1, 2, 3, 0, 0, 1, 10\n"
+          "DECL/REAL, D\nD = OBTAIN/F(C), 10\nTEXT/OPER, STR(D)\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"10"}));
 }
@@ -206,11 +209,11 @@ TEST(Language, ObtainReadsFeatureParameters) {
 TEST(Language, ObtainOnABoundedLineReadsTheEndPoint) {
   // FA(x)=FEAT/LINE,BND,CART,x1,y1,z1,x2,y2,z2,i2,j2,k2 (DMIS 5.x, as FEAT takes it and the DMIS
   // output writes it): OBTAIN counts the words LINE, BND, CART first, so 7 is x2. UNBND: 7-9 are i,j,k.
-  auto r = run(
-      "F(L) = FEAT/LINE, BND, CART, 1, 2, 3, 11, 2, 3, 0, 0, 1\n"
-      "F(U) = FEAT/LINE, UNBND, CART, 1, 2, 3, 0, 1, 0, 0, 0, 1\n"
-      "DECL/REAL, X2, K2, J\nX2 = OBTAIN/F(L), 7\nK2 = OBTAIN/F(L), 12\nJ = OBTAIN/F(U), 8\n"
-      "TEXT/OPER, STR(X2)\nTEXT/OPER, STR(K2)\nTEXT/OPER, STR(J)\n");
+  auto r =
+      run("F(L) = FEAT/LINE, BND, CART, 1, 2, 3, 11, 2, 3, 0, 0, 1\n"
+          "F(U) = FEAT/LINE, UNBND, CART, 1, 2, 3, 0, 1, 0, 0, 0, 1\n"
+          "DECL/REAL, X2, K2, J\nX2 = OBTAIN/F(L), 7\nK2 = OBTAIN/F(L), 12\nJ = OBTAIN/F(U), 8\n"
+          "TEXT/OPER, STR(X2)\nTEXT/OPER, STR(K2)\nTEXT/OPER, STR(J)\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"11", "1", "1"}));
 }
@@ -231,15 +234,16 @@ TEST(Language, EmitIrKeepsSourcePositions) {
 // SCSNS(), SMODE() and SCFEAT(): the current sensor, mode and feature as strings (read as their
 // names say, beside SDATE and STIME; they were unknown functions that stopped a run).
 TEST(Language, CurrentSensorModeAndFeatureAreStrings) {
-  auto r = run("TEXT/OPER, CONCAT('[', SCSNS(), '] [', SCFEAT(), '] ', SMODE())\n"
-               "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(PROBE4)\n"
-               "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\nMODE/PROG, MAN\n"
-               "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 4\n"
-               "  GOTO/40, 50, 30\n  PTMEAS/CART, 50, 50, 30, -1, 0, 0\n  PTMEAS/CART, 40, 60, 30, 0, -1, 0\n"
-               "  PTMEAS/CART, 30, 50, 30, 1, 0, 0\n  PTMEAS/CART, 40, 40, 30, 0, 1, 0\n  GOTO/40, 50, 80\nENDMES\n"
-               "TEXT/OPER, CONCAT(SCSNS(), ' ', SCFEAT(), ' ', SMODE())\n"
-               "F(MID) = FEAT/POINT, CART, 40, 50, 30, 0, 0, 1\nCONST/POINT, F(MID), MOVEPT, FA(BORE1), 0, 0, 0\n"
-               "MODE/MAN\nTEXT/OPER, CONCAT(SCFEAT(), ' ', SMODE())\n");
+  auto r =
+      run("TEXT/OPER, CONCAT('[', SCSNS(), '] [', SCFEAT(), '] ', SMODE())\n"
+          "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(PROBE4)\n"
+          "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\nMODE/PROG, MAN\n"
+          "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 4\n"
+          "  GOTO/40, 50, 30\n  PTMEAS/CART, 50, 50, 30, -1, 0, 0\n  PTMEAS/CART, 40, 60, 30, 0, -1, 0\n"
+          "  PTMEAS/CART, 30, 50, 30, 1, 0, 0\n  PTMEAS/CART, 40, 40, 30, 0, 1, 0\n  GOTO/40, 50, 80\nENDMES\n"
+          "TEXT/OPER, CONCAT(SCSNS(), ' ', SCFEAT(), ' ', SMODE())\n"
+          "F(MID) = FEAT/POINT, CART, 40, 50, 30, 0, 0, 1\nCONST/POINT, F(MID), MOVEPT, FA(BORE1), 0, 0, 0\n"
+          "MODE/MAN\nTEXT/OPER, CONCAT(SCFEAT(), ' ', SMODE())\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"[] [] AUTO", "PROBE4 BORE1 PROG,MAN", "MID MAN"}));
 }

@@ -72,16 +72,19 @@ class FakeScanMachine : public machine::Machine {
   void answer(const machine::GoTo& g, machine::Response&) { m_position = g.target_mm; }
   void answer(const machine::SetFeeds&, machine::Response&) {}
   void answer(const machine::PtMeas& p, machine::Response& r) {
-    r.hit = machine::Hit{p.nominal_mm + m_tool->effective_radius_mm * p.normal, p.normal, m_tool->effective_radius_mm, m_time};
+    r.hit = machine::Hit{p.nominal_mm + m_tool->effective_radius_mm * p.normal, p.normal, m_tool->effective_radius_mm,
+                         m_time};
   }
   // Its state() reports no buffer limit (0), so the runtime never splits a scan for it.
   void answer(const machine::ScanBufferWrite&, machine::Response& r) {
     r.status = machine::Response::Status::Fault;
-    r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine has no command buffers", m_position, m_time};
+    r.fault =
+        machine::Fault{machine::FaultKind::BadCommand, "the fake machine has no command buffers", m_position, m_time};
   }
   void answer(const machine::ContourScan&, machine::Response& r) {
     r.status = machine::Response::Status::Fault;
-    r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine follows no unknown contour", m_position, m_time};
+    r.fault = machine::Fault{machine::FaultKind::BadCommand, "the fake machine follows no unknown contour", m_position,
+                             m_time};
   }
   void answer(const machine::ScanPath& s, machine::Response& r) {
     scans.push_back(s);
@@ -154,11 +157,12 @@ Truth lobed_bore(const Vec3& c, const Vec3& o, double amplitude_mm, double ball_
 
 TEST(Scanning, ScnmodScansACircleByItsNominalAndFitsTheHiddenForm) {
   const Vec3 c(340, 250, 30), o(0.02, -0.015, 0);
-  auto r = run("FEDRAT/SCNVEL, MMPS, 8\nSCNSET/DIST, 0.05, DEFLEC, 0.25, LAW, VC1P, CHORD, 0.0005\n"
-               "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-               "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
-               "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n",
-               lobed_bore(c, o, 0.005, 2.0));
+  auto r =
+      run("FEDRAT/SCNVEL, MMPS, 8\nSCNSET/DIST, 0.05, DEFLEC, 0.25, LAW, VC1P, CHORD, 0.0005\n"
+          "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+          "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n",
+          lobed_bore(c, o, 0.005, 2.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 1u);
   const auto& scan = r->machine->scans[0];
@@ -233,12 +237,15 @@ double line_form(const std::vector<Vec2>& p) {
 TEST(Scanning, GeoalgSizesACircleByItsInscribedOrCircumscribedCircle) {
   const Vec3 c(340, 250, 30);
   // B2, a circle constructed from B1's points, is sized by the same algorithm.
-  const std::string scan = "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n"
-                           "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nCONST/CIRCLE, F(B2), BF, FA(B1)\n";
+  const std::string scan =
+      "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n"
+      "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nCONST/CIRCLE, F(B2), BF, FA(B1)\n";
   const auto diameter = [&](const std::string& geoalg) {
-    auto r = run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                 "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" + geoalg + scan,
-                 lobed_bore(c, Vec3::Zero(), 0.005, 2.0));
+    auto r =
+        run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+            "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" +
+                geoalg + scan,
+            lobed_bore(c, Vec3::Zero(), 0.005, 2.0));
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     const auto& b1 = r->runtime->features().at("B1");
     EXPECT_TRUE(b1.actual.has_value());
@@ -287,9 +294,11 @@ TEST(Scanning, GeoalgMinmaxCentresACircleInItsNarrowestAnnulus) {
     }
   ASSERT_NEAR(best_x, 0.0037, 1e-4);  // the reference itself, before metron is asked
   const auto fitted = [&](const std::string& geoalg) {
-    auto r = run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                 "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" + geoalg +
-                 "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n", truth);
+    auto r =
+        run("SCNSET/DIST, 0.05, CHORD, 0.0005\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+            "F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n" +
+                geoalg + "GOTO/40, 50, 35\nSCNMOD/ON\nMEAS/CIRCLE, F(B1), 0\nENDMES\nSCNMOD/OFF\n",
+            truth);
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     const auto& b1 = r->runtime->features().at("B1");
     EXPECT_TRUE(b1.actual.has_value());
@@ -309,8 +318,8 @@ TEST(Scanning, GeoalgMinmaxCentresACircleInItsNarrowestAnnulus) {
 // surface point, so a feature's points are the ones written here.
 std::string ptmeas(const Vec3& p, const Vec3& n) {
   char line[160];
-  std::snprintf(line, sizeof line, "PTMEAS/CART, %.9f, %.9f, %.9f, %.9f, %.9f, %.9f\n", p.x(), p.y(), p.z(), n.x(), n.y(),
-                n.z());
+  std::snprintf(line, sizeof line, "PTMEAS/CART, %.9f, %.9f, %.9f, %.9f, %.9f, %.9f\n", p.x(), p.y(), p.z(), n.x(),
+                n.y(), n.z());
   return line;
 }
 
@@ -319,9 +328,9 @@ std::string ptmeas(const Vec3& p, const Vec3& n) {
 // degrees of each ring 10 um proud. With the axis shifted by s along x (s small), the radii are
 // 10.01 - s at 0 degrees, 10 + s at 180, 10 -+ 0.7071 s at 45 and 135, 10 at 90 and 270:
 //   least squares: s = (2/8) 0.01 = 2.5 um, d = 2 (10 + 0.01/8)        = 20.0025
-//   minimum zone:  width 0.01 - 0.29 s for s < 5 um, 1.71 s beyond:  s = 5 um, d = 10.005 + 10 - 0.7071 0.005 = 20.001464
-//   circumscribed: max(10.01 - s, 10 + s) least at s = 5 um,          d = 20.01
-//   inscribed:     min radius 10 at s = 0 and less anywhere else,     d = 20.00
+//   minimum zone:  width 0.01 - 0.29 s for s < 5 um, 1.71 s beyond:  s = 5 um, d = 10.005 + 10 - 0.7071 0.005
+//   = 20.001464 circumscribed: max(10.01 - s, 10 + s) least at s = 5 um,          d = 20.01 inscribed:     min radius
+//   10 at s = 0 and less anywhere else,     d = 20.00
 // (first order in s; the neglected terms are s^2 / 2R = 1.25e-6). Tilting the axis moves the two
 // rings' centres apart, which only widens each. A sphere of radius 10 probed at its 6 axis points
 // and 8 cube-diagonal points, the +x point 10 um proud: the same reasoning with 0.5774 s at the
@@ -337,22 +346,28 @@ TEST(Geoalg, CylindersAndSpheresAreSizedByEachAlgorithm) {
       cylinder_points += ptmeas(Vec3(c.x(), c.y(), z) + (k == 0 ? 10.01 : 10.0) * u, u);
     }
   std::string sphere_points;
-  std::vector<Vec3> directions = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitY(), Vec3::UnitZ(), -Vec3::UnitZ()};
+  std::vector<Vec3> directions = {Vec3::UnitX(),  -Vec3::UnitX(), Vec3::UnitY(),
+                                  -Vec3::UnitY(), Vec3::UnitZ(),  -Vec3::UnitZ()};
   for (const double x : {-1.0, 1.0})
     for (const double y : {-1.0, 1.0})
       for (const double z : {-1.0, 1.0}) directions.push_back(Vec3(x, y, z).normalized());
   for (std::size_t i = 0; i < directions.size(); ++i)
     sphere_points += ptmeas(c + (i == 0 ? 10.01 : 10.0) * directions[i], directions[i]);
   const auto measured = [&](const std::string& geoalg) {
-    auto r = run(geoalg + "F(BOSS) = FEAT/CYLNDR, OUTER, CART, 40, 50, 20, 0, 0, 1, 20, 20\n"
-                 "MEAS/CYLNDR, F(BOSS), 16\n" + cylinder_points + "ENDMES\n"
-                 "F(BALL) = FEAT/SPHERE, OUTER, CART, 40, 50, 30, 20\n"
-                 "MEAS/SPHERE, F(BALL), 14\n" + sphere_points + "ENDMES\n",
+    auto r = run(geoalg +
+                     "F(BOSS) = FEAT/CYLNDR, OUTER, CART, 40, 50, 20, 0, 0, 1, 20, 20\n"
+                     "MEAS/CYLNDR, F(BOSS), 16\n" +
+                     cylinder_points +
+                     "ENDMES\n"
+                     "F(BALL) = FEAT/SPHERE, OUTER, CART, 40, 50, 30, 20\n"
+                     "MEAS/SPHERE, F(BALL), 14\n" +
+                     sphere_points + "ENDMES\n",
                  [](const Vec3& q) { return q; });
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     const auto& features = r->runtime->features();
     EXPECT_TRUE(features.at("BOSS").actual && features.at("BALL").actual) << geoalg;
-    return std::pair(features.at("BOSS").actual.value_or(runtime::Geometry{}), features.at("BALL").actual.value_or(runtime::Geometry{}));
+    return std::pair(features.at("BOSS").actual.value_or(runtime::Geometry{}),
+                     features.at("BALL").actual.value_or(runtime::Geometry{}));
   };
   struct Expected {
     const char* geoalg;
@@ -360,8 +375,8 @@ TEST(Geoalg, CylindersAndSpheresAreSizedByEachAlgorithm) {
   };
   const Expected cases[] = {
       {"", 0.0025, 20.0025, 3.0 / 14 * 0.01, 2 * (10 + 0.01 / 14)},
-      {"GEOALG/CYLNDR, MINMAX\nGEOALG/SPHERE, MINMAX\n", 0.005, 20.005 - std::sqrt(0.5) * 0.005,
-       0.005, 20.005 - std::sqrt(1.0 / 3) * 0.005},
+      {"GEOALG/CYLNDR, MINMAX\nGEOALG/SPHERE, MINMAX\n", 0.005, 20.005 - std::sqrt(0.5) * 0.005, 0.005,
+       20.005 - std::sqrt(1.0 / 3) * 0.005},
       {"GEOALG/CYLNDR, MINCIR\nGEOALG/SPHERE, MINCIR\n", 0.005, 20.01, 0.005, 20.01},
       {"GEOALG/CYLNDR, MAXINS\nGEOALG/SPHERE, MAXINS\n", 0.0, 20.0, 0.0, 20.0},
       // Back to least squares.
@@ -373,7 +388,7 @@ TEST(Geoalg, CylindersAndSpheresAreSizedByEachAlgorithm) {
     EXPECT_NEAR(boss.diameter_mm, e.cylinder_diameter_mm, 1e-5) << e.geoalg;
     EXPECT_NEAR(boss.position.x() - c.x(), e.cylinder_shift_mm, 1e-5) << e.geoalg;
     EXPECT_NEAR(boss.position.y() - c.y(), 0, 2e-4) << e.geoalg;  // MCC: flat in y to second order
-    EXPECT_NEAR(boss.position.z(), 20, 1e-3) << e.geoalg;        // at the nominal's height
+    EXPECT_NEAR(boss.position.z(), 20, 1e-3) << e.geoalg;         // at the nominal's height
     EXPECT_GT(boss.direction.z(), 1 - 1e-8) << e.geoalg;
     EXPECT_NEAR(ball.diameter_mm, e.sphere_diameter_mm, 1e-5) << e.geoalg;
     EXPECT_NEAR(ball.position.x() - c.x(), e.sphere_shift_mm, 1e-5) << e.geoalg;
@@ -392,8 +407,8 @@ TEST(Geoalg, AShortArcKeepsItsLeastSquaresSize) {
     points += ptmeas(Vec3(40, 50, 30) + 10 * u, -u);
   }
   const auto measured = [&](const std::string& geoalg) {
-    auto r = run(geoalg + "F(A1) = FEAT/ARC, INNER, CART, 40, 50, 30, 0, 0, 1, 10, 0, 120\nMEAS/ARC, F(A1), 5\n" + points +
-                     "ENDMES\n",
+    auto r = run(geoalg + "F(A1) = FEAT/ARC, INNER, CART, 40, 50, 30, 0, 0, 1, 10, 0, 120\nMEAS/ARC, F(A1), 5\n" +
+                     points + "ENDMES\n",
                  [](const Vec3& q) { return q; });
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     const auto& a = r->runtime->features().at("A1");
@@ -421,13 +436,15 @@ TEST(Geoalg, PlanesAndLinesAreTheMiddleOfTheirMinimumZone) {
   for (const double x : {0.0, 10.0, 15.0, 20.0, 30.0})
     line_points += ptmeas(Vec3(30 + x, 60, x == 15 ? 25.01 : 25), Vec3::UnitZ());
   const auto measured = [&](const std::string& geoalg) {
-    auto r = run(geoalg + "F(TOP) = FEAT/PLANE, CART, 35, 45, 25, 0, 0, 1\nMEAS/PLANE, F(TOP), 5\n" + plane_points +
-                     "ENDMES\nF(EDGE) = FEAT/LINE, BND, CART, 30, 60, 25, 60, 60, 25, 0, 1, 0\nMEAS/LINE, F(EDGE), 5\n" +
-                     line_points + "ENDMES\n",
-                 [](const Vec3& q) { return q; });
+    auto r =
+        run(geoalg + "F(TOP) = FEAT/PLANE, CART, 35, 45, 25, 0, 0, 1\nMEAS/PLANE, F(TOP), 5\n" + plane_points +
+                "ENDMES\nF(EDGE) = FEAT/LINE, BND, CART, 30, 60, 25, 60, 60, 25, 0, 1, 0\nMEAS/LINE, F(EDGE), 5\n" +
+                line_points + "ENDMES\n",
+            [](const Vec3& q) { return q; });
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     const auto& features = r->runtime->features();
-    return std::pair(features.at("TOP").actual.value_or(runtime::Geometry{}), features.at("EDGE").actual.value_or(runtime::Geometry{}));
+    return std::pair(features.at("TOP").actual.value_or(runtime::Geometry{}),
+                     features.at("EDGE").actual.value_or(runtime::Geometry{}));
   };
   const auto [ls_plane, ls_line] = measured("");
   EXPECT_NEAR(ls_plane.position.z(), 25.002, 1e-9);
@@ -464,8 +481,9 @@ TEST(Geoalg, AConeIsTheMiddleOfItsMinimumZone) {
     }
   }
   const auto measured = [&](const std::string& geoalg) {
-    auto r = run(geoalg + "F(CN) = FEAT/CONE, OUTER, CART, 40, 50, 0, 0, 0, 1, 60\nMEAS/CONE, F(CN), 15\n" + points + "ENDMES\n",
-                 [](const Vec3& q) { return q; });
+    auto r = run(
+        geoalg + "F(CN) = FEAT/CONE, OUTER, CART, 40, 50, 0, 0, 0, 1, 60\nMEAS/CONE, F(CN), 15\n" + points + "ENDMES\n",
+        [](const Vec3& q) { return q; });
     EXPECT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
     return r->runtime->features().at("CN").actual.value_or(runtime::Geometry{});
   };
@@ -501,14 +519,15 @@ TEST(Constructions, ExtremeRadialPointsAreFarthestFromAndNearestToTheAxis) {
     if (r > (plane_points[far] - reference.centre).norm()) far = k;
     if (r < (plane_points[near] - reference.centre).norm()) near = k;
   }
-  ASSERT_EQ(far, 1u);  // the reference itself: 60 degrees, 10.02
+  ASSERT_EQ(far, 1u);   // the reference itself: 60 degrees, 10.02
   ASSERT_EQ(near, 0u);  // 0 degrees: the fitted centre moved toward it
-  auto r = run("F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(B1), 6\n" + points +
-                   "ENDMES\nCONST/POINT, F(OUT), EXTREM, FA(B1), RADIAL\nCONST/POINT, F(IN), EXTREM, MIN, FA(B1), RADIAL\n"
-                   "F(TOP) = FEAT/PLANE, CART, 40, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\n" +
-                   ptmeas(Vec3(30, 40, 40), Vec3::UnitZ()) + ptmeas(Vec3(50, 40, 40), Vec3::UnitZ()) +
-                   ptmeas(Vec3(40, 60, 40), Vec3::UnitZ()) + "ENDMES\nCONST/POINT, F(BAD), EXTREM, FA(TOP), RADIAL\n",
-               [](const Vec3& q) { return q; });
+  auto r =
+      run("F(B1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(B1), 6\n" + points +
+              "ENDMES\nCONST/POINT, F(OUT), EXTREM, FA(B1), RADIAL\nCONST/POINT, F(IN), EXTREM, MIN, FA(B1), RADIAL\n"
+              "F(TOP) = FEAT/PLANE, CART, 40, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\n" +
+              ptmeas(Vec3(30, 40, 40), Vec3::UnitZ()) + ptmeas(Vec3(50, 40, 40), Vec3::UnitZ()) +
+              ptmeas(Vec3(40, 60, 40), Vec3::UnitZ()) + "ENDMES\nCONST/POINT, F(BAD), EXTREM, FA(TOP), RADIAL\n",
+          [](const Vec3& q) { return q; });
   EXPECT_EQ(r->status, ExecStatus::Error);
   EXPECT_NE(r->diagnostics.find("RADIAL measures from an axis or a centre: FA(TOP) is a PLANE"), std::string::npos)
       << r->diagnostics;
@@ -528,13 +547,14 @@ TEST(Scanning, PameasScansAnArcPathAndALinePath) {
     const double z = 40.003 + 0.002 * std::sin(2 * std::numbers::pi * q.x() / 7.5);
     return Vec3(q.x(), q.y(), z + 2.0);
   };
-  auto r = run("P(A1) = PATH/ARC, CART, 40, 50, 25, 0, 0, 1, 10, 0, 270, INNER\n"
-               "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\n"
-               "MEAS/CIRCLE, F(B2), 0\n  PAMEAS/P(A1)\nENDMES\n"
-               "P(L1) = PATH/LINE, CART, 5, 20, 40, 35, 20, 40, 0, 0, 1\n"
-               "F(E1) = FEAT/LINE, BND, CART, 5, 20, 40, 35, 20, 40, 0, 1, 0\n"
-               "MEAS/LINE, F(E1), 0\n  PAMEAS/P(L1)\nENDMES\n",
-               truth);
+  auto r =
+      run("P(A1) = PATH/ARC, CART, 40, 50, 25, 0, 0, 1, 10, 0, 270, INNER\n"
+          "F(B2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\n"
+          "MEAS/CIRCLE, F(B2), 0\n  PAMEAS/P(A1)\nENDMES\n"
+          "P(L1) = PATH/LINE, CART, 5, 20, 40, 35, 20, 40, 0, 0, 1\n"
+          "F(E1) = FEAT/LINE, BND, CART, 5, 20, 40, 35, 20, 40, 0, 1, 0\n"
+          "MEAS/LINE, F(E1), 0\n  PAMEAS/P(L1)\nENDMES\n",
+          truth);
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 2u);
   // The arc runs counterclockwise from angle 0 (+X) to 270 degrees, at the default E0 0.3 and law Vc2.
@@ -642,11 +662,14 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
     const double r_true = 10 + 0.004 * std::cos(3 * std::atan2(u.y(), u.x()));
     return Vec3(c + (r_true + rb) * u + Vec3(0, 0, q.z() - c.z()));
   };
-  auto r = run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-               "P(S1) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15\n"
-               "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 40, 50, 15, 0, 0, 1, 20\n"
-               "MEAS/CIRCLE, F(BOSS), 0\n  PAMEAS/P(S1)\nENDMES\n",
-               truth);
+  auto r =
+      run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "P(S1) = PATH/SECTION, '" +
+              stl.string() +
+              "', 0, 0, 15, 0, 0, 1, 40, 70, 15\n"
+              "F(BOSS) = FEAT/CIRCLE, OUTER, CART, 40, 50, 15, 0, 0, 1, 20\n"
+              "MEAS/CIRCLE, F(BOSS), 0\n  PAMEAS/P(S1)\nENDMES\n",
+          truth);
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 1u);
   const auto& scan = r->machine->scans[0];
@@ -672,11 +695,14 @@ TEST(Scanning, PathSectionCutsACadModelInThePartFrame) {
 TEST(Scanning, PathSectionScansASubRangeBetweenTwoPoints) {
   const fs::path stl = boss_stl();
   const Vec3 c(340, 250, 15);
-  auto r = run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-               "P(Q) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50, 15\n"
-               "F(BOSS) = FEAT/ARC, OUTER, CART, 40, 50, 15, 0, 0, 1, 10, 90, 180\n"
-               "MEAS/ARC, F(BOSS), 0\n  PAMEAS/P(Q)\nENDMES\n",
-               ball_centres_around(c, 12.0));
+  auto r =
+      run("D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "P(Q) = PATH/SECTION, '" +
+              stl.string() +
+              "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50, 15\n"
+              "F(BOSS) = FEAT/ARC, OUTER, CART, 40, 50, 15, 0, 0, 1, 10, 90, 180\n"
+              "MEAS/ARC, F(BOSS), 0\n  PAMEAS/P(Q)\nENDMES\n",
+          ball_centres_around(c, 12.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 1u);
   const auto& path = r->machine->scans[0].path;
@@ -686,18 +712,19 @@ TEST(Scanning, PathSectionScansASubRangeBetweenTwoPoints) {
   for (const auto& seg : path.segments) length += seg.d_mm;
   EXPECT_NEAR(length, 11.7 * std::numbers::pi / 2, 0.05);  // a quarter turn at the ball centre's radius
   // Three end numbers or none: anything else names the statement.
-  EXPECT_NE(run("P(Q) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50\n", nullptr)->diagnostics
-                .find("PATH/SECTION expects the file and 9 numbers"),
+  EXPECT_NE(run("P(Q) = PATH/SECTION, '" + stl.string() + "', 0, 0, 15, 0, 0, 1, 40, 70, 15, 30, 50\n", nullptr)
+                ->diagnostics.find("PATH/SECTION expects the file and 9 numbers"),
             std::string::npos);
 }
 
 TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
   // Part frame rotated 90 degrees about Z: part +X is machine +Y, so angle 90 is machine -X.
   const Vec3 c(100, 100, 10);
-  auto r = run("D(T) = TRANS/XORIG, 100, YORIG, 100, ZORIG, 10\nD(R) = ROTATE/ZAXIS, 90\n"
-               "F(A1) = FEAT/ARC, OUTER, CART, 0, 0, 0, 0, 0, 1, 10, 90, 180\n"
-               "SCNMOD/ON\nMEAS/ARC, F(A1), 0\nENDMES\n",
-               ball_centres_around(c, 12.0));
+  auto r =
+      run("D(T) = TRANS/XORIG, 100, YORIG, 100, ZORIG, 10\nD(R) = ROTATE/ZAXIS, 90\n"
+          "F(A1) = FEAT/ARC, OUTER, CART, 0, 0, 0, 0, 0, 1, 10, 90, 180\n"
+          "SCNMOD/ON\nMEAS/ARC, F(A1), 0\nENDMES\n",
+          ball_centres_around(c, 12.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 1u);
   ASSERT_LT((r->runtime->features().at("A1").nominal.position - c).norm(), 1e-9);
@@ -715,10 +742,11 @@ TEST(Scanning, ScnmodScansAnArcFromItsStartAngleInThePartFrame) {
 TEST(Scanning, HelicalPathIntoACylinder) {
   // Two turns of pitch 5 down a bore whose actual is a 3-lobe (A = 4 um) cylinder shifted by o.
   const Vec3 c(40, 50, 0), o(-0.01, 0.02, 0);
-  auto r = run("P(H) = PATH/HELICAL, CART, 40, 50, 20, 0, 0, -1, 10, 0, 720, 5, INNER\n"
-               "F(C) = FEAT/CYLNDR, INNER, CART, 40, 50, 0, 0, 0, 1, 20, 25\n"
-               "MEAS/CYLNDR, F(C), 0\n  PAMEAS/P(H)\nENDMES\n",
-               lobed_bore(c, o, 0.004, 2.0));
+  auto r =
+      run("P(H) = PATH/HELICAL, CART, 40, 50, 20, 0, 0, -1, 10, 0, 720, 5, INNER\n"
+          "F(C) = FEAT/CYLNDR, INNER, CART, 40, 50, 0, 0, 0, 1, 20, 25\n"
+          "MEAS/CYLNDR, F(C), 0\n  PAMEAS/P(H)\nENDMES\n",
+          lobed_bore(c, o, 0.004, 2.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   const auto& path = r->machine->scans.at(0).path;
   EXPECT_NEAR(path.segments.front().start().z(), 20, 1e-9);
@@ -752,13 +780,14 @@ TEST(Scanning, ScnmodWithPtmeasPairsScansFromStartToEnd) {
   // The RationalDMIS form: in scan mode two PTMEAS are the start and end of a scan (MEAS's count
   // is the number of PTMEAS); here 0 -> 180 degrees, then 90 -> 270, around a 20 mm bore.
   const Vec3 c(-20.5, 35.5, 107.5);
-  auto r = run("SCNMOD/ON\nSCNSET/DRAG, .1\n"
-               "F(CIR_11) = FEAT/CIRCLE, INNER, CART, -20.5, 35.5, 107.5, 0.0, 0.0, 1.0, 20\n"
-               "MEAS/CIRCLE, F(CIR_11), 4\n"
-               "PTMEAS/CART, -10.5, 35.5, 107.5, -1, 0, 0\nPTMEAS/CART, -30.5, 35.5, 107.5, 1, 0, 0\n"
-               "GOTO/-20.5, 35.5, 107.5\n"
-               "PTMEAS/CART, -20.5, 45.5, 107.5, 0, -1, 0\nPTMEAS/CART, -20.5, 25.5, 107.5, 0, 1, 0\nENDMES\n",
-               lobed_bore(c, Vec3(0.01, 0.005, 0), 0.002, 2.0));
+  auto r =
+      run("SCNMOD/ON\nSCNSET/DRAG, .1\n"
+          "F(CIR_11) = FEAT/CIRCLE, INNER, CART, -20.5, 35.5, 107.5, 0.0, 0.0, 1.0, 20\n"
+          "MEAS/CIRCLE, F(CIR_11), 4\n"
+          "PTMEAS/CART, -10.5, 35.5, 107.5, -1, 0, 0\nPTMEAS/CART, -30.5, 35.5, 107.5, 1, 0, 0\n"
+          "GOTO/-20.5, 35.5, 107.5\n"
+          "PTMEAS/CART, -20.5, 45.5, 107.5, 0, -1, 0\nPTMEAS/CART, -20.5, 25.5, 107.5, 0, 1, 0\nENDMES\n",
+          lobed_bore(c, Vec3(0.01, 0.005, 0), 0.002, 2.0));
   ASSERT_EQ(r->status, ExecStatus::Finished) << r->diagnostics;
   ASSERT_EQ(r->machine->scans.size(), 2u);
   const auto angle = [&](const Vec3& p) { return std::atan2(p.y() - c.y(), p.x() - c.x()) * 180 / std::numbers::pi; };
@@ -786,11 +815,13 @@ TEST(Scanning, ScnmodWithPtmeasPairsScansFromStartToEnd) {
   EXPECT_NEAR(f.actual->position.y(), c.y() + want.centre.y(), 1e-4);
   EXPECT_NEAR(f.fit->form_mm, want.form_mm, 1e-4);
   // An odd PTMEAS in scan mode has no end: a positioned error.
-  auto odd = run("SCNMOD/ON\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\nMEAS/CIRCLE, F(B), 3\n"
-                 "PTMEAS/CART, 10, 0, 0\nPTMEAS/CART, -10, 0, 0\nPTMEAS/CART, 0, 10, 0\nENDMES\n",
-                 [](const Vec3& q) { return q; });
+  auto odd =
+      run("SCNMOD/ON\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\nMEAS/CIRCLE, F(B), 3\n"
+          "PTMEAS/CART, 10, 0, 0\nPTMEAS/CART, -10, 0, 0\nPTMEAS/CART, 0, 10, 0\nENDMES\n",
+          [](const Vec3& q) { return q; });
   EXPECT_EQ(odd->status, ExecStatus::Error);
-  EXPECT_NE(odd->diagnostics.find("scan.dmi:10:1: error: in scan mode (SCNMOD/ON) PTMEAS come in pairs"), std::string::npos)
+  EXPECT_NE(odd->diagnostics.find("scan.dmi:10:1: error: in scan mode (SCNMOD/ON) PTMEAS come in pairs"),
+            std::string::npos)
       << odd->diagnostics;
 }
 
@@ -800,16 +831,21 @@ TEST(Scanning, CompileErrorsAndWarningsArePositioned) {
   // Lines 1-4 are the prologue of run(): the statement under test is on line 5.
   EXPECT_NE(diag("PAMEAS/P(X)\n").find("scan.dmi:5:1: error: PAMEAS outside a MEAS block"), std::string::npos);
   EXPECT_NE(diag("SCNMOD/MAYBE\n").find("scan.dmi:5:8: error: expected ON or OFF after SCNMOD/"), std::string::npos);
-  EXPECT_NE(diag("SCNSET/CHORD, 0\n").find("scan.dmi:5:15: error: the SCNSET/CHORD value must be positive"), std::string::npos);
-  EXPECT_NE(diag("P(Q) = PATH/LINE, CART, 1, 2, 3, 1, 2, 3, 0, 0, 1\n").find("scan.dmi:5:34: error: the line's end points are the same"),
+  EXPECT_NE(diag("SCNSET/CHORD, 0\n").find("scan.dmi:5:15: error: the SCNSET/CHORD value must be positive"),
             std::string::npos);
-  EXPECT_NE(diag("P(Q) = PATH/ARC, CART, 0, 0, 0, 0, 0, 0, 5, 0, 90\n").find("scan.dmi:5:33: error: the path vector i,j,k is zero"),
+  EXPECT_NE(diag("P(Q) = PATH/LINE, CART, 1, 2, 3, 1, 2, 3, 0, 0, 1\n")
+                .find("scan.dmi:5:34: error: the line's end points are the same"),
             std::string::npos);
-  EXPECT_NE(diag("P(Q) = PATH/SECTION, 'nowhere.stl', 0, 0, 0, 0, 0, 1, 0, 0, 0\n").find("scan.dmi:5:22: error: CAD file 'nowhere.stl' not found"),
+  EXPECT_NE(diag("P(Q) = PATH/ARC, CART, 0, 0, 0, 0, 0, 0, 5, 0, 90\n")
+                .find("scan.dmi:5:33: error: the path vector i,j,k is zero"),
+            std::string::npos);
+  EXPECT_NE(diag("P(Q) = PATH/SECTION, 'nowhere.stl', 0, 0, 0, 0, 0, 1, 0, 0, 0\n")
+                .find("scan.dmi:5:22: error: CAD file 'nowhere.stl' not found"),
             std::string::npos);
   // An unsupported PATH type is skipped with a warning; using it is an error naming the skip.
-  const auto d = diag("P(C) = PATH/CURVE, PTDATA\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n"
-                      "MEAS/CIRCLE, F(B), 0\n  PAMEAS/P(C)\nENDMES\n");
+  const auto d = diag(
+      "P(C) = PATH/CURVE, PTDATA\nF(B) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n"
+      "MEAS/CIRCLE, F(B), 0\n  PAMEAS/P(C)\nENDMES\n");
   EXPECT_NE(d.find("scan.dmi:5:13: warning: PATH/CURVE is not supported; P(C) is skipped"), std::string::npos) << d;
   EXPECT_NE(d.find("scan.dmi:8:10: error: path P(C) was defined by a skipped statement"), std::string::npos) << d;
 }
@@ -819,7 +855,8 @@ TEST(Scanning, RunTimeErrorsArePositioned) {
   auto r = run("F(S1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 3\nSCNMOD/ON\nMEAS/CIRCLE, F(S1), 0\nENDMES\n",
                [](const Vec3& q) { return q; });
   EXPECT_EQ(r->status, ExecStatus::Error);
-  EXPECT_NE(r->diagnostics.find("scan.dmi:7:1: error: cannot make a scan path: the offset path folds over"), std::string::npos)
+  EXPECT_NE(r->diagnostics.find("scan.dmi:7:1: error: cannot make a scan path: the offset path folds over"),
+            std::string::npos)
       << r->diagnostics;
   // A sphere is scanned along a path, not by its nominal.
   auto s = run("F(S2) = FEAT/SPHERE, OUTER, CART, 0, 0, 0, 20\nSCNMOD/ON\nMEAS/SPHERE, F(S2), 0\nENDMES\n",

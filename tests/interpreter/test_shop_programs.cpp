@@ -7,24 +7,24 @@
 #include "scratch.hpp"
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 #include <unistd.h>
 
 #include "cli/virtual_cmm_backend.hpp"
-#include "metron/machine/nominal_machine.hpp"
 #include "metron/grammar/parser.hpp"
-#include "metron/runtime/outputs.hpp"
 #include "metron/interpreter/compiler.hpp"
 #include "metron/interpreter/session.hpp"
+#include "metron/machine/nominal_machine.hpp"
+#include "metron/runtime/outputs.hpp"
 
 namespace {
 
@@ -52,9 +52,12 @@ Checked check(const std::string& program, bool strict = false) {
   Checked c;
   for (const auto& d : sink.items()) {
     c.text += metron::format_diagnostic(d, sources);
-    if (d.severity == Severity::Error) ++c.errors;
-    else if (d.severity == Severity::Warning) ++c.warnings;
-    else ++c.notes;
+    if (d.severity == Severity::Error)
+      ++c.errors;
+    else if (d.severity == Severity::Warning)
+      ++c.warnings;
+    else
+      ++c.notes;
   }
   return c;
 }
@@ -82,7 +85,8 @@ struct Ran {
 Ran run(const std::string& text, const std::optional<fs::path>& world = std::nullopt,
         std::vector<std::string> answers = {}) {
   const fs::path p = write("run.dmi", text);
-  auto backend = metron::cli::virtual_cmm_backend(world ? std::optional<std::string>(world->string()) : std::nullopt, 1);
+  auto backend =
+      metron::cli::virtual_cmm_backend(world ? std::optional<std::string>(world->string()) : std::nullopt, 1);
   EXPECT_TRUE(backend.has_value()) << (backend ? "" : backend.error());
   Ran r;
   r.session = Session::create(std::move(*backend));
@@ -140,7 +144,8 @@ std::string bore_program(const std::string& sensor_lines) {
 // ---- sensors defined outside the program ------------------------------------------------------
 
 TEST(ShopPrograms, RecallAndSelectOfALibrarySensorCheckWithOneNote) {
-  const auto c = check("DMISMN/'p', 5.1\nRECALL/SA(T1A0B0)\nSNSLCT/SA(T1A0B0)\nSNSLCT/S(TIP2)\nSNSLCT/SA(T1A0B0)\nENDFIL\n");
+  const auto c =
+      check("DMISMN/'p', 5.1\nRECALL/SA(T1A0B0)\nSNSLCT/SA(T1A0B0)\nSNSLCT/S(TIP2)\nSNSLCT/SA(T1A0B0)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 0u) << c.text;
   EXPECT_EQ(c.notes, 2u) << c.text;  // one per name, not one per use
@@ -148,7 +153,8 @@ TEST(ShopPrograms, RecallAndSelectOfALibrarySensorCheckWithOneNote) {
 }
 
 TEST(ShopPrograms, LibrarySensorRunsWithItsTipFromTheWorld) {
-  const auto r = run(bore_program("RECALL/SA(T1A0B0)\nSNSLCT/SA(T1A0B0)\n"), source_dir / "programs/worlds/probe_library.json");
+  const auto r =
+      run(bore_program("RECALL/SA(T1A0B0)\nSNSLCT/SA(T1A0B0)\n"), source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.diagnostics.find("not in the machine's probe library"), std::string::npos) << r.diagnostics;
   const auto* f = report(*r.session, "BORE1");
@@ -162,7 +168,8 @@ TEST(ShopPrograms, UnknownSensorNameGetsTheDefaultTipWithAWarningNotAHalt) {
   const auto r = run(bore_program("SNSLCT/SA(NOT_IN_LIBRARY)\n"), source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_NE(r.diagnostics.find("sensor NOT_IN_LIBRARY is not in the machine's probe library; using a 4 mm default tip"),
-            std::string::npos) << r.diagnostics;
+            std::string::npos)
+      << r.diagnostics;
   const auto* f = report(*r.session, "BORE1");
   ASSERT_TRUE(f && f->actual);
   EXPECT_NEAR(f->actual->diameter_mm, 20.0, 2e-3);
@@ -194,18 +201,21 @@ TEST(ShopPrograms, RotateOntoASignedDirection) {
       if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
   }
   EXPECT_EQ(said, (std::vector<std::string>{"-1.000000", "1.000000", "1.000000"}));
-  EXPECT_TRUE(check(head + "D(R)=ROTATE/ZAXIS,FA(L),-ZDIR\nENDFIL\n").has("the aligned axis cannot be the rotation axis"));
+  EXPECT_TRUE(
+      check(head + "D(R)=ROTATE/ZAXIS,FA(L),-ZDIR\nENDFIL\n").has("the aligned axis cannot be the rotation axis"));
 }
 
 TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
-  const auto c = check("DMISMN/'p', 5.1\nDECPL/ALL,DEFALT,4\nDMESWI/'COMM/GOTOPARAMS'\nDMESWV/'NEWSPEED'\nFLY/1.0\n"
-                       "PAUSE\nPAUSE\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nDECPL/ALL,DEFALT,4\nDMESWI/'COMM/GOTOPARAMS'\nDMESWV/'NEWSPEED'\nFLY/1.0\n"
+      "PAUSE\nPAUSE\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 0u) << c.text;
   EXPECT_EQ(c.notes, 1u) << c.text;  // PAUSE, once
   // Statements accepted without their effect warn once per kind: a program may rely on them.
-  const auto once = check("DMISMN/'p', 5.1\nMFGDEV/'M1'\nGEOALG/CIRCLE,LSTSQR\nGEOALG/CIRCLE,MINMAX\nGEOALG/CONE,MAXINS\n"
-                          "GEOALG/ELLIPS,MINMAX\nGEOALG/CONE,MINMAX\nGOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
+  const auto once = check(
+      "DMISMN/'p', 5.1\nMFGDEV/'M1'\nGEOALG/CIRCLE,LSTSQR\nGEOALG/CIRCLE,MINMAX\nGEOALG/CONE,MAXINS\n"
+      "GEOALG/ELLIPS,MINMAX\nGEOALG/CONE,MINMAX\nGOHOME\nGOHOME\nSNSET/CLRSRF,OFF\nSNSET/DEPTH,OFF\nENDFIL\n");
   EXPECT_EQ(once.errors, 0u) << once.text;
   EXPECT_EQ(once.warnings, 1u) << once.text;
   // GEOALG/CIRCLE,MINMAX and CONE,MINMAX are applied (minimum zone reference features); a cone
@@ -213,8 +223,9 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
   EXPECT_TRUE(once.has("5:1: warning: GEOALG/CONE,MAXINS: this fitting algorithm is not applied")) << once.text;
   EXPECT_FALSE(once.has("GOHOME")) << once.text;
   // A REPORT layout named in OUTPUT: one note, not a warning per OUTPUT.
-  const auto layout = check("DMISMN/'p', 5.1\nR(R1)=REPORT/ALGOR,DATE\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                            "OUTPUT/F(P),R(R1)\nOUTPUT/F(P),R(R1)\nENDFIL\n");
+  const auto layout = check(
+      "DMISMN/'p', 5.1\nR(R1)=REPORT/ALGOR,DATE\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+      "OUTPUT/F(P),R(R1)\nOUTPUT/F(P),R(R1)\nENDFIL\n");
   EXPECT_EQ(layout.errors + layout.warnings, 0u) << layout.text;
   EXPECT_EQ(layout.notes, 1u) << layout.text;
 }
@@ -230,10 +241,12 @@ TEST(ShopPrograms, GoHomeMovesTheMachineHome) {
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_LT((r.session->machine().state().position_mm - home).norm(), 1e-9);
-  const auto inside = run("DMISMN/'h', 5.1\nF(P)=FEAT/PLANE,CART,20,20,40,0,0,1\nMEAS/PLANE,F(P),1\nGOHOME\n"
-                          "PTMEAS/CART,20,20,40,0,0,1\nENDMES\nENDFIL\n");
+  const auto inside =
+      run("DMISMN/'h', 5.1\nF(P)=FEAT/PLANE,CART,20,20,40,0,0,1\nMEAS/PLANE,F(P),1\nGOHOME\n"
+          "PTMEAS/CART,20,20,40,0,0,1\nENDMES\nENDFIL\n");
   EXPECT_EQ(inside.status, ExecStatus::Error);
-  EXPECT_NE(inside.diagnostics.find("GOHOME is not allowed inside a MEAS block"), std::string::npos) << inside.diagnostics;
+  EXPECT_NE(inside.diagnostics.find("GOHOME is not allowed inside a MEAS block"), std::string::npos)
+      << inside.diagnostics;
 }
 
 // FROM sets the home GOHOME goes to, in the coordinate system current at FROM (it was skipped
@@ -258,10 +271,11 @@ TEST(ShopPrograms, FromSetsWhereGoHomeGoes) {
 // Statements with nothing to do on a virtual CMM that a reader may want to know of: one note
 // per word, with the reason, and no warning; point buffering and carriage definitions quietly.
 TEST(ShopPrograms, StatementsWithoutEffectAreNotedOnceEach) {
-  const auto c = check("DMISMN/'n', 5.1\nPTBUFF/ON\nRAPID/50\nRAPID/20\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                       "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nBOUND/F(P),F(P)\n"
-                       "XTERN\nENDXTN\nPSTHRU/PAUSE,'x'\nCZ(Z1)=CZONE\nCZSLCT/CZ(Z1),ON\n"
-                       "REFMNT/XVEC,1,0,0,ZVEC,0,0,1,MNTLEN,0,0,0\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'n', 5.1\nPTBUFF/ON\nRAPID/50\nRAPID/20\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+      "DELETE/F(P)\nDELETE/F(P)\nPTBUFF/OFF\nKEYCHAR/'k'\nBOUND/F(P),F(P)\n"
+      "XTERN\nENDXTN\nPSTHRU/PAUSE,'x'\nCZ(Z1)=CZONE\nCZSLCT/CZ(Z1),ON\n"
+      "REFMNT/XVEC,1,0,0,ZVEC,0,0,1,MNTLEN,0,0,0\nENDFIL\n");
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;  // clearance zones and reference mounts quietly
   EXPECT_EQ(c.notes, 5u) << c.text;
   EXPECT_TRUE(c.has("10:1: note: BOUND: features are not bounded")) << c.text;
@@ -300,8 +314,9 @@ TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
     if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
   const std::vector<std::string> expected = {"one", "two or three:2", "two or three:3", "other", "b"};
   EXPECT_EQ(said, expected);
-  const auto bad = check("DMISMN/'s', 5.1\nDECL/INTGR,I\nCASE/1\nSELECT/I\nCASE/1\nENDSEL\nSELECT/I\nDFTCAS\nENDCAS\n"
-                         "CASE/2\nENDCAS\nENDSEL\nSELECT/I\nENDFIL\n");
+  const auto bad = check(
+      "DMISMN/'s', 5.1\nDECL/INTGR,I\nCASE/1\nSELECT/I\nCASE/1\nENDSEL\nSELECT/I\nDFTCAS\nENDCAS\n"
+      "CASE/2\nENDCAS\nENDSEL\nSELECT/I\nENDFIL\n");
   EXPECT_TRUE(bad.has("3:1: error: CASE without a matching SELECT")) << bad.text;
   EXPECT_TRUE(bad.has("6:1: error: ENDSEL before the ENDCAS of the last case")) << bad.text;
   EXPECT_TRUE(bad.has("10:1: error: CASE after DFTCAS: the default case comes last")) << bad.text;
@@ -321,10 +336,11 @@ std::vector<std::string> operator_texts(const Ran& r) {
 // EXIST and DMESYS, a module that starts with FILNAM then DMISMD.
 TEST(ShopPrograms, MacroLibrariesAsModusWritesThem) {
   // RECALL/DA(param) and SAVE/DA(param): "coordinate system D(ALN) is not defined" at check.
-  const auto frames = run("DMISMN/'t', 05.2\nM(TOFRAME)=MACRO/'ALN'\nRECALL/DA(ALN)\nENDMAC\n"
-                          "M(KEEP)=MACRO/'ALN'\nSAVE/DA(ALN)\nENDMAC\nD(D1)=TRANS/XORIG,5\nCALL/M(KEEP),DA(D1)\n"
-                          "D(D2)=TRANS/XORIG,50\nCALL/M(TOFRAME),DA(D1)\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/F(P)\n"
-                          "ENDFIL\n");
+  const auto frames =
+      run("DMISMN/'t', 05.2\nM(TOFRAME)=MACRO/'ALN'\nRECALL/DA(ALN)\nENDMAC\n"
+          "M(KEEP)=MACRO/'ALN'\nSAVE/DA(ALN)\nENDMAC\nD(D1)=TRANS/XORIG,5\nCALL/M(KEEP),DA(D1)\n"
+          "D(D2)=TRANS/XORIG,50\nCALL/M(TOFRAME),DA(D1)\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/F(P)\n"
+          "ENDFIL\n");
   ASSERT_EQ(frames.status, ExecStatus::Finished) << frames.diagnostics;
   const auto* p = report(*frames.session, "P");
   ASSERT_TRUE(p);
@@ -341,12 +357,14 @@ TEST(ShopPrograms, MacroLibrariesAsModusWritesThem) {
 
   // A library file (FILNAM then DMISMD: no "does not start with DMISMN") declared by EXTFIL, its
   // macro called both ways; the file named in the call itself also works.
-  write("modus_lib.dmi", "FILNAM/'modus_lib',05.2\nDMISMD/'modus_lib'\nM(GREET)=MACRO/'WHO'\n"
-                         "TEXT/OPER,CONCAT('hello ',WHO)\nENDMAC\nENDFIL\n");
+  write("modus_lib.dmi",
+        "FILNAM/'modus_lib',05.2\nDMISMD/'modus_lib'\nM(GREET)=MACRO/'WHO'\n"
+        "TEXT/OPER,CONCAT('hello ',WHO)\nENDMAC\nENDFIL\n");
   const auto lib = check("FILNAM/'modus_lib',05.2\nDMISMD/'modus_lib'\nM(GREET)=MACRO/'WHO'\nENDMAC\nENDFIL\n");
   EXPECT_EQ(lib.errors + lib.warnings, 0U) << lib.text;
-  const auto called = run("DMISMN/'t', 05.2\nEXTFIL/DMIS,'modus_lib.dmi'\nCALL/EXTERN,DMIS,M(GREET),'world'\n"
-                          "CALL/M(GREET),'again'\nENDFIL\n");
+  const auto called =
+      run("DMISMN/'t', 05.2\nEXTFIL/DMIS,'modus_lib.dmi'\nCALL/EXTERN,DMIS,M(GREET),'world'\n"
+          "CALL/M(GREET),'again'\nENDFIL\n");
   ASSERT_EQ(called.status, ExecStatus::Finished) << called.diagnostics;
   EXPECT_EQ(operator_texts(called), (std::vector<std::string>{"hello world", "hello again"}));
   const auto named = run("DMISMN/'t', 05.2\nCALL/EXTERN,DMIS,M(GREET),'modus_lib.dmi','there'\nENDFIL\n");
@@ -354,22 +372,27 @@ TEST(ShopPrograms, MacroLibrariesAsModusWritesThem) {
   EXPECT_EQ(operator_texts(named), (std::vector<std::string>{"hello there"}));
   // Not declared: the error says how (it took 'a', an argument, for the file before).
   const auto undeclared = check("DMISMN/'t', 05.2\nCALL/EXTERN,DMIS,M(HELLO),1,'a'\nENDFIL\n");
-  EXPECT_TRUE(undeclared.has("2:18: error: macro M(HELLO) is not defined: declare the file that holds it with "
-                             "EXTFIL/DMIS,'file'")) << undeclared.text;
+  EXPECT_TRUE(
+      undeclared.has("2:18: error: macro M(HELLO) is not defined: declare the file that holds it with "
+                     "EXTFIL/DMIS,'file'"))
+      << undeclared.text;
 
   // EXIST of labels of every kind; DMESYS: the running file's folder, an unknown key ''.
-  const auto exist = run("DMISMN/'t', 05.2\nDECL/CHAR,200,P\nDECL/CHAR,20,Q\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                         "IF/(EXIST(F(P)) .AND. .NOT. EXIST(FA(P)) .AND. .NOT. EXIST(F(NONE)) .AND. EXIST(D(MCS)))\n"
-                         "TEXT/OPER,'exist'\nENDIF\nP=ASSIGN/DMESYS('CURRENT_DMIS_MODULE_PATH')\nTEXT/OPER,P\n"
-                         "Q=ASSIGN/DMESYS('COLOUR')\nTEXT/OPER,CONCAT('[',Q,']')\nENDFIL\n");
+  const auto exist =
+      run("DMISMN/'t', 05.2\nDECL/CHAR,200,P\nDECL/CHAR,20,Q\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+          "IF/(EXIST(F(P)) .AND. .NOT. EXIST(FA(P)) .AND. .NOT. EXIST(F(NONE)) .AND. EXIST(D(MCS)))\n"
+          "TEXT/OPER,'exist'\nENDIF\nP=ASSIGN/DMESYS('CURRENT_DMIS_MODULE_PATH')\nTEXT/OPER,P\n"
+          "Q=ASSIGN/DMESYS('COLOUR')\nTEXT/OPER,CONCAT('[',Q,']')\nENDFIL\n");
   ASSERT_EQ(exist.status, ExecStatus::Finished) << exist.diagnostics;
   EXPECT_EQ(operator_texts(exist), (std::vector<std::string>{"exist", temp_dir().string() + "/", "[]"}));
-  EXPECT_NE(exist.diagnostics.find("DMESYS('COLOUR'): metron does not know this key"), std::string::npos) << exist.diagnostics;
+  EXPECT_NE(exist.diagnostics.find("DMESYS('COLOUR'): metron does not know this key"), std::string::npos)
+      << exist.diagnostics;
   EXPECT_TRUE(check("DMISMN/'t', 05.2\nDECL/BOOL,B\nB=ASSIGN/EXIST(3)\nENDFIL\n").has("EXIST takes a label"));
 
   // SAVE/SA: a note; other SAVE forms: a warning, skipped (an error before).
-  const auto saves = check("DMISMN/'t', 05.2\nS(P1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,4\nSAVE/SA(P1)\n"
-                           "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nSAVE/F(P)\nENDFIL\n");
+  const auto saves = check(
+      "DMISMN/'t', 05.2\nS(P1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,4\nSAVE/SA(P1)\n"
+      "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nSAVE/F(P)\nENDFIL\n");
   EXPECT_EQ(saves.errors, 0U) << saves.text;
   EXPECT_EQ(saves.notes, 1U) << saves.text;
   EXPECT_TRUE(saves.has("5:6: warning: SAVE of F() is not supported and is ignored")) << saves.text;
@@ -386,9 +409,12 @@ TEST(ShopPrograms, PublicModusMacroLibrariesCheck) {
     Checked c;
     for (const auto& d : sink.items()) {
       c.text += metron::format_diagnostic(d, sources);
-      if (d.severity == Severity::Error) ++c.errors;
-      else if (d.severity == Severity::Warning) ++c.warnings;
-      else ++c.notes;
+      if (d.severity == Severity::Error)
+        ++c.errors;
+      else if (d.severity == Severity::Warning)
+        ++c.warnings;
+      else
+        ++c.notes;
     }
     return c;
   };
@@ -398,28 +424,33 @@ TEST(ShopPrograms, PublicModusMacroLibrariesCheck) {
   const auto points = check_file(source_dir / "programs/real/modus/OutputModusActualPoints_CommonMacros.dmi");
   EXPECT_EQ(points.errors, 0U) << points.text;
   EXPECT_EQ(points.warnings, 0U) << points.text;  // its OUTPUT/FA(@featureName)[1,n] lists the points
-  EXPECT_TRUE(points.has("121:15: note: FA(featureName): featureName is a CHAR variable and no feature has its name")) << points.text;
+  EXPECT_TRUE(points.has("121:15: note: FA(featureName): featureName is a CHAR variable and no feature has its name"))
+      << points.text;
   // FA(V), V a CHAR variable naming no feature: the value names the feature, as FA(@V).
-  const auto named = run("DMISMN/'t', 05.2\nDECL/CHAR,20,N\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nN=ASSIGN/'P'\n"
-                         "IF/(EXIST(F(N)))\nOUTPUT/F(N)\nENDIF\nENDFIL\n");
+  const auto named =
+      run("DMISMN/'t', 05.2\nDECL/CHAR,20,N\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nN=ASSIGN/'P'\n"
+          "IF/(EXIST(F(N)))\nOUTPUT/F(N)\nENDIF\nENDFIL\n");
   ASSERT_EQ(named.status, ExecStatus::Finished) << named.diagnostics;
   ASSERT_TRUE(report(*named.session, "P"));
   // A feature of that name keeps its own: no rewriting.
   const auto own = check("DMISMN/'t', 05.2\nDECL/CHAR,20,N\nF(N)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/F(N)\nENDFIL\n");
   EXPECT_EQ(own.errors + own.warnings + own.notes, 0U) << own.text;
   // A point range is OUTPUT's only.
-  EXPECT_TRUE(check("DMISMN/'t', 05.2\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(Q),MOVEPT,FA(P)[1,2],0,0,1\nENDFIL\n")
-                  .has("3:25: error: a point range FA(P)[...] is read only in OUTPUT"));
+  EXPECT_TRUE(
+      check("DMISMN/'t', 05.2\nF(P)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(Q),MOVEPT,FA(P)[1,2],0,0,1\nENDFIL\n")
+          .has("3:25: error: a point range FA(P)[...] is read only in OUTPUT"));
 }
 
 // A function metron does not know is a vendor's: read leniently it stops a run only where it is
 // evaluated (it stopped the whole check before); --strict keeps the error.
 TEST(ShopPrograms, AnUnknownFunctionStopsOnlyTheRunThatEvaluatesIt) {
-  const std::string text = "DMISMN/'t', 05.2\nDECL/REAL,X\nDECL/BOOL,B\nB=ASSIGN/.FALSE.\nIF/(B)\n"
-                           "X=ASSIGN/VENDORFN(1)\nENDIF\nTEXT/OPER,'after'\nX=ASSIGN/VENDORFN(2)\nTEXT/OPER,'never'\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'t', 05.2\nDECL/REAL,X\nDECL/BOOL,B\nB=ASSIGN/.FALSE.\nIF/(B)\n"
+      "X=ASSIGN/VENDORFN(1)\nENDIF\nTEXT/OPER,'after'\nX=ASSIGN/VENDORFN(2)\nTEXT/OPER,'never'\nENDFIL\n";
   const auto lenient = check(text);
   EXPECT_EQ(lenient.errors, 0U) << lenient.text;
-  EXPECT_TRUE(lenient.has("6:10: warning: unknown function VENDORFN: a run that evaluates it stops there")) << lenient.text;
+  EXPECT_TRUE(lenient.has("6:10: warning: unknown function VENDORFN: a run that evaluates it stops there"))
+      << lenient.text;
   EXPECT_TRUE(check(text, true).has("6:10: error: unknown function VENDORFN")) << check(text, true).text;
   // One letter off an intrinsic is a typo: an error either way.
   EXPECT_TRUE(check("DMISMN/'t', 05.2\nDECL/REAL,X\nX=ASSIGN/CONCT('a','b')\nENDFIL\n")
@@ -434,8 +465,9 @@ TEST(ShopPrograms, AnUnknownFunctionStopsOnlyTheRunThatEvaluatesIt) {
 // A FEAT that was rejected is named as such where the feature is used (it was "used before its
 // definition at line N", the use being after line N).
 TEST(ShopPrograms, AUseOfARejectedDefinitionSaysSo) {
-  const auto c = check("DMISMN/'t', 05.2\nF(L)=FEAT/LINE,CART,50,0,15,1,0,0,0,-1,0\nMEAS/LINE,F(L),2\nENDMES\n"
-                       "MEAS/CIRCLE,F(C),4\nENDMES\nF(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'t', 05.2\nF(L)=FEAT/LINE,CART,50,0,15,1,0,0,0,-1,0\nMEAS/LINE,F(L),2\nENDMES\n"
+      "MEAS/CIRCLE,F(C),4\nENDMES\nF(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nENDFIL\n");
   EXPECT_TRUE(c.has("2:16: error: expected BND or UNBND after LINE")) << c.text;
   EXPECT_TRUE(c.has("3:11: error: feature F(L) has no definition: its FEAT at line 2 was rejected")) << c.text;
   EXPECT_TRUE(c.has("5:13: error: feature F(C) is used before its definition at line 7")) << c.text;
@@ -444,44 +476,51 @@ TEST(ShopPrograms, AUseOfARejectedDefinitionSaysSo) {
 // Labels compare in upper case, accented letters included: F(Alésage) is FA(ALÉSAGE) (French
 // exports write both).
 TEST(ShopPrograms, AccentedLabelsCompareWithoutCase) {
-  const auto c = check("DMISMN/'p', 5.1\nF(Alésage_Ø)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(ALÉSAGE_Ø)=FEAT/POINT,CART,0,0,0.001,0,0,1\n"
-                       "OUTPUT/FA(alésage_ø)\nF(Œil)=FEAT/POINT,CART,0,0,0,0,0,1\nF(Łódź)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                       "OUTPUT/F(œil),F(ŁÓDŹ)\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nF(Alésage_Ø)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(ALÉSAGE_Ø)=FEAT/POINT,CART,0,0,0.001,0,0,1\n"
+      "OUTPUT/FA(alésage_ø)\nF(Œil)=FEAT/POINT,CART,0,0,0,0,0,1\nF(Łódź)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+      "OUTPUT/F(œil),F(ŁÓDŹ)\nENDFIL\n");
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
 }
 
 TEST(ShopPrograms, MeasPointCountMismatchIsAWarning) {
-  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nMEAS/CIRCLE,F(C1),4\n"
-                       "PTMEAS/CART,5,0,0,-1,0,0\nPTMEAS/CART,0,5,0,0,-1,0\nPTMEAS/CART,-5,0,0,1,0,0\nENDMES\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nMEAS/CIRCLE,F(C1),4\n"
+      "PTMEAS/CART,5,0,0,-1,0,0\nPTMEAS/CART,0,5,0,0,-1,0\nPTMEAS/CART,-5,0,0,1,0,0\nENDMES\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_TRUE(c.has("warning: MEAS declares 4 points but the block has 3 PTMEAS; the 3 are used")) << c.text;
 }
 
 TEST(ShopPrograms, UnevaluatedToleranceTypesWarnAndTheirOutputIsLeftOut) {
-  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(PT)=TOL/PROFT,0.05,DAT(A)\n"
-                       "T(PL)=TOL/PROFL,-0.02,0.02\nOUTPUT/FA(C1),TA(PT)\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(PT)=TOL/PROFT,0.05,DAT(A)\n"
+      "T(PL)=TOL/PROFL,-0.02,0.02\nOUTPUT/FA(C1),TA(PT)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_TRUE(c.has("tolerance type PROFT is not evaluated by metron")) << c.text;
   EXPECT_TRUE(c.has("T(PT) (TOL/PROFT) is not evaluated: left out of this OUTPUT")) << c.text;
   // A type metron does not know at all (angularity ANGLR, a vendor's) is left out alike: it
   // stopped the whole program before. DMIS's spellings ANGLWRT and COAXL are ANGWRT and COAXIAL.
-  const auto unknown = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(AR)=TOL/ANGLR,0.05,90,DAT(A)\n"
-                             "OUTPUT/FA(C1),TA(AR)\nENDFIL\n");
+  const auto unknown = check(
+      "DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(AR)=TOL/ANGLR,0.05,90,DAT(A)\n"
+      "OUTPUT/FA(C1),TA(AR)\nENDFIL\n");
   EXPECT_EQ(unknown.errors, 0u) << unknown.text;
-  EXPECT_TRUE(unknown.has("tolerance type ANGLR is not one metron knows; the OUTPUT of T(AR) will be left out")) << unknown.text;
+  EXPECT_TRUE(unknown.has("tolerance type ANGLR is not one metron knows; the OUTPUT of T(AR) will be left out"))
+      << unknown.text;
   EXPECT_TRUE(unknown.has("T(AR) (TOL/ANGLR) is not evaluated: left out of this OUTPUT")) << unknown.text;
-  const auto spelled = check("DMISMN/'p', 5.1\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(C1)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
-                             "DATDEF/FA(C1),DAT(D)\nT(AW)=TOL/ANGLWRT,90,-0.1,0.1,FA(P)\nT(CX)=TOL/COAXL,0.05,DAT(D)\n"
-                             "OUTPUT/FA(C1),TA(AW),TA(CX)\nENDFIL\n");
+  const auto spelled = check(
+      "DMISMN/'p', 5.1\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(C1)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
+      "DATDEF/FA(C1),DAT(D)\nT(AW)=TOL/ANGLWRT,90,-0.1,0.1,FA(P)\nT(CX)=TOL/COAXL,0.05,DAT(D)\n"
+      "OUTPUT/FA(C1),TA(AW),TA(CX)\nENDFIL\n");
   EXPECT_EQ(spelled.errors + spelled.warnings, 0u) << spelled.text;
 }
 
 TEST(ShopPrograms, CoaxialityAndRunoutTolerancesAreCheckedAndNeedADatum) {
-  const auto c = check("DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nDATDEF/F(C1),DAT(A)\n"
-                       "T(CONC)=TOL/CONCEN,0.05,DAT(A)\nT(COAX)=TOL/COAXIAL,0.05,DAT(A)\n"
-                       "T(RUN)=TOL/RUNOUT,0.02,DAT(A)\nT(CR)=TOL/CRNOUT,0.02,DAT(A)\n"
-                       "T(TR)=TOL/TOTRUN,0.02,DAT(A)\nT(TR2)=TOL/TRNOUT,0.02,DAT(A)\n"
-                       "OUTPUT/FA(C1),TA(CONC),TA(RUN)\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nDATDEF/F(C1),DAT(A)\n"
+      "T(CONC)=TOL/CONCEN,0.05,DAT(A)\nT(COAX)=TOL/COAXIAL,0.05,DAT(A)\n"
+      "T(RUN)=TOL/RUNOUT,0.02,DAT(A)\nT(CR)=TOL/CRNOUT,0.02,DAT(A)\n"
+      "T(TR)=TOL/TOTRUN,0.02,DAT(A)\nT(TR2)=TOL/TRNOUT,0.02,DAT(A)\n"
+      "OUTPUT/FA(C1),TA(CONC),TA(RUN)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_FALSE(c.has("not evaluated")) << c.text;
   const auto bad = check("DMISMN/'p', 5.1\nT(CONC)=TOL/CONCEN,0.05\nENDFIL\n");
@@ -545,7 +584,8 @@ TEST(ShopPrograms, ClearanceSurfaceLiftsAutoMovesOverThePart) {
   const auto program = [](const std::string& clearance) {
     return "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
            "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nSNSET/CLRSRF, 10\n"
-           "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\n" + clearance +
+           "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\n" +
+           clearance +
            "GOTO/80, -15, 80\nGOTO/80, -15, 10\nMODE/AUTO\n"
            "F(YPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 0, 1, 0, 100\nMEAS/PARPLN, F(YPAIR), 6\nENDMES\n"
            "OUTPUT/FA(YPAIR)\nENDFIL\n";
@@ -555,7 +595,8 @@ TEST(ShopPrograms, ClearanceSurfaceLiftsAutoMovesOverThePart) {
   EXPECT_EQ(low.status, ExecStatus::Faulted) << low.diagnostics;
   const auto collided = [](const Ran& r) {
     for (const auto& e : r.session->record().events)
-      if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e)) return f->message.find("collision") != std::string::npos;
+      if (const auto* f = std::get_if<metron::runtime::FaultReport>(&e))
+        return f->message.find("collision") != std::string::npos;
     return false;
   };
   EXPECT_TRUE(collided(low));
@@ -569,17 +610,21 @@ TEST(ShopPrograms, ClearanceSurfaceLiftsAutoMovesOverThePart) {
   EXPECT_EQ(removed.status, ExecStatus::Faulted) << removed.diagnostics;
   EXPECT_TRUE(collided(removed));
   // Only a plane facing up is a clearance surface; the distance is required.
-  const auto bore = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
-                        "SNSET/CLRSRF, F(B), 5\nENDFIL\n");
+  const auto bore =
+      run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+          "SNSET/CLRSRF, F(B), 5\nENDFIL\n");
   EXPECT_EQ(bore.status, ExecStatus::Error);
   EXPECT_NE(bore.diagnostics.find("a clearance surface is a plane"), std::string::npos) << bore.diagnostics;
-  const auto side = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(S) = FEAT/PLANE, CART, 0, 50, 20, -1, 0, 0\n"
-                        "SNSET/CLRSRF, F(S), 5\nENDFIL\n");
+  const auto side =
+      run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(S) = FEAT/PLANE, CART, 0, 50, 20, -1, 0, 0\n"
+          "SNSET/CLRSRF, F(S), 5\nENDFIL\n");
   EXPECT_EQ(side.status, ExecStatus::Error);
   EXPECT_NE(side.diagnostics.find("steeper than 60 degrees"), std::string::npos) << side.diagnostics;
-  const auto no_distance = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(T) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\n"
-                               "SNSET/CLRSRF, F(T)\nENDFIL\n");
-  EXPECT_NE(no_distance.diagnostics.find("expected the clearance distance"), std::string::npos) << no_distance.diagnostics;
+  const auto no_distance =
+      run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nF(T) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\n"
+          "SNSET/CLRSRF, F(T)\nENDFIL\n");
+  EXPECT_NE(no_distance.diagnostics.find("expected the clearance distance"), std::string::npos)
+      << no_distance.diagnostics;
 }
 
 // FEAT/PARPLN with TOL/WIDTH on a block whose side faces were moved (programs/worlds/
@@ -625,12 +670,13 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   EXPECT_FALSE(wy->in_tolerance);
 
   // Points on one face only, or a PARPLN where a circle is toleranced: positioned errors.
-  const auto one_side = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                            "GOTO/175, 50, 80\nF(XPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 1, 0, 0, 160\n"
-                            "MEAS/PARPLN, F(XPAIR), 4\n  GOTO/175, 50, 20\n"
-                            "  PTMEAS/CART, 160, 30, 20, 1, 0, 0\n  PTMEAS/CART, 160, 70, 20, 1, 0, 0\n"
-                            "  PTMEAS/CART, 160, 50, 30, 1, 0, 0\n  PTMEAS/CART, 160, 50, 10, 1, 0, 0\nENDMES\nENDFIL\n",
-                            source_dir / "programs/worlds/block_width.json");
+  const auto one_side =
+      run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "GOTO/175, 50, 80\nF(XPAIR) = FEAT/PARPLN, OUTER, CART, 80, 50, 20, 1, 0, 0, 160\n"
+          "MEAS/PARPLN, F(XPAIR), 4\n  GOTO/175, 50, 20\n"
+          "  PTMEAS/CART, 160, 30, 20, 1, 0, 0\n  PTMEAS/CART, 160, 70, 20, 1, 0, 0\n"
+          "  PTMEAS/CART, 160, 50, 30, 1, 0, 0\n  PTMEAS/CART, 160, 50, 10, 1, 0, 0\nENDMES\nENDFIL\n",
+          source_dir / "programs/worlds/block_width.json");
   EXPECT_NE(one_side.diagnostics.find("it needs points on both faces (4 on the +normal side, 0 on the other)"),
             std::string::npos)
       << one_side.diagnostics;
@@ -672,7 +718,8 @@ SlotTruth slot_truth(const std::string& slot) {
   for (const auto& p : all) {
     const std::string name = p.value("name", "");
     if (name.rfind(slot + "_", 0) != 0 || name.find("FLOOR") != std::string::npos) continue;
-    const Eigen::Vector3d offset(deviation(name, "offset_mm", 0), deviation(name, "offset_mm", 1), deviation(name, "offset_mm", 2));
+    const Eigen::Vector3d offset(deviation(name, "offset_mm", 0), deviation(name, "offset_mm", 1),
+                                 deviation(name, "offset_mm", 2));
     if (p["type"] == "half_space") {
       const auto vec = [&](const char* key) {
         return Eigen::Vector3d(p[key][0].get<double>(), p[key][1].get<double>(), p[key][2].get<double>());
@@ -709,7 +756,8 @@ TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
   EXPECT_NEAR(flat.centre_y, 49.995, 1e-12);
   const std::string slot1 = "F(SLOT1) = FEAT/CPARLN, INNER, ROUND, CART, 80, 25, 35, 0, 0, 1, 1, 0, 0, 30, 10\n";
   const std::string text =
-      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/80, 25, 80\n" + slot1 +
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/80, 25, 80\n" +
+      slot1 +
       "MEAS/CPARLN, F(SLOT1), 8\n  GOTO/80, 25, 35\n"
       "  PTMEAS/CART, 73, 20, 35, 0, 1, 0\n  PTMEAS/CART, 87, 20, 35, 0, 1, 0\n"
       "  PTMEAS/CART, 95, 25, 35, -1, 0, 0\n  PTMEAS/CART, 93.53553, 28.53553, 35, -0.70711, -0.70711, 0\n"
@@ -718,7 +766,8 @@ TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
       "  GOTO/80, 25, 35\n  GOTO/80, 25, 80\nENDMES\n"
       "MODE/AUTO\nF(SLOT1A) = FEAT/CPARLN, INNER, ROUND, CART, 80, 25, 35, 0, 0, 1, 1, 0, 0, 30, 10\n"
       "MEAS/CPARLN, F(SLOT1A), 10\nENDMES\n"
-      "F(SLOT2) = FEAT/CPARLN, INNER, FLAT, CART, 145, 50, 35, 0, 0, 1, 0, 1, 0, 30, 10\nMEAS/CPARLN, F(SLOT2), 8\nENDMES\n"
+      "F(SLOT2) = FEAT/CPARLN, INNER, FLAT, CART, 145, 50, 35, 0, 0, 1, 0, 1, 0, 30, 10\nMEAS/CPARLN, F(SLOT2), "
+      "8\nENDMES\n"
       "T(W) = TOL/WIDTH, -0.01, 0.01\nT(L) = TOL/WIDTH, -0.02, 0.02, LONG\nT(P2) = TOL/POS, 2D, 0.05\n"
       "T(P3) = TOL/POS, 3D, 0.05\n"
       "OUTPUT/FA(SLOT1), TA(W), TA(L), TA(P2), TA(P3)\nOUTPUT/FA(SLOT1A), TA(W), TA(L), TA(P2)\n"
@@ -762,17 +811,21 @@ TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
   EXPECT_NEAR(results[3]->value, results[2]->value, 1e-9);  // 3D: the centre stays in the nominal's plane
 
   // Points on the sides only: an error that says which parts have none.
-  const auto sides_only = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                              "GOTO/80, 25, 80\n" + slot1 + "MEAS/CPARLN, F(SLOT1), 6\n  GOTO/80, 25, 35\n"
-                              "  PTMEAS/CART, 73, 20, 35, 0, 1, 0\n  PTMEAS/CART, 80, 20, 35, 0, 1, 0\n"
-                              "  PTMEAS/CART, 87, 20, 35, 0, 1, 0\n  PTMEAS/CART, 87, 30, 35, 0, -1, 0\n"
-                              "  PTMEAS/CART, 80, 30, 35, 0, -1, 0\n  PTMEAS/CART, 73, 30, 35, 0, -1, 0\n"
-                              "  GOTO/80, 25, 80\nENDMES\nENDFIL\n",
-                              source_dir / "programs/worlds/block_slot.json");
+  const auto sides_only =
+      run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "GOTO/80, 25, 80\n" +
+              slot1 +
+              "MEAS/CPARLN, F(SLOT1), 6\n  GOTO/80, 25, 35\n"
+              "  PTMEAS/CART, 73, 20, 35, 0, 1, 0\n  PTMEAS/CART, 80, 20, 35, 0, 1, 0\n"
+              "  PTMEAS/CART, 87, 20, 35, 0, 1, 0\n  PTMEAS/CART, 87, 30, 35, 0, -1, 0\n"
+              "  PTMEAS/CART, 80, 30, 35, 0, -1, 0\n  PTMEAS/CART, 73, 30, 35, 0, -1, 0\n"
+              "  GOTO/80, 25, 80\nENDMES\nENDFIL\n",
+          source_dir / "programs/worlds/block_slot.json");
   EXPECT_NE(sides_only.diagnostics.find("run.dmi:6:"), std::string::npos) << sides_only.diagnostics;
-  EXPECT_NE(sides_only.diagnostics.find("cannot fit a CPARLN to 6 points: it needs 5, with points on both sides (3 and 3) "
-                                        "and both ends (0 toward +axis, 0 toward -axis)"),
-            std::string::npos)
+  EXPECT_NE(
+      sides_only.diagnostics.find("cannot fit a CPARLN to 6 points: it needs 5, with points on both sides (3 and 3) "
+                                  "and both ends (0 toward +axis, 0 toward -axis)"),
+      std::string::npos)
       << sides_only.diagnostics;
 }
 
@@ -780,16 +833,19 @@ TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
 // as longer DMIS 5.3 forms and vendors write them): read leniently with the form's numbers and a
 // warning naming what is ignored; --strict: an error. Fewer numbers stay an error.
 TEST(ShopPrograms, FeaturesWithMoreNumbersThanTheirFormAreReadWithAWarning) {
-  const std::string text = "DMISMN/'p', 5.0\nF(C) = FEAT/CONE, INNER, CART, 10, 20, 0, 0, 0, 1, 60, 5, 10\n"
-                           "F(P) = FEAT/PLANE, CART, 0, 0, 5, 0, 0, 1, 10, 20\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'p', 5.0\nF(C) = FEAT/CONE, INNER, CART, 10, 20, 0, 0, 0, 1, 60, 5, 10\n"
+      "F(P) = FEAT/PLANE, CART, 0, 0, 5, 0, 0, 1, 10, 20\nENDFIL\n";
   const auto lenient = check(text);
   EXPECT_EQ(lenient.errors, 0u) << lenient.text;
   EXPECT_EQ(lenient.warnings, 2u) << lenient.text;
-  EXPECT_TRUE(lenient.has("shop.dmi:2:59: warning: FEAT/CONE takes at most 8 numbers (x,y,z,i,j,k,angle[,len]); the 1 "
-                          "after them is ignored"))
+  EXPECT_TRUE(
+      lenient.has("shop.dmi:2:59: warning: FEAT/CONE takes at most 8 numbers (x,y,z,i,j,k,angle[,len]); the 1 "
+                  "after them is ignored"))
       << lenient.text;
-  EXPECT_TRUE(lenient.has("shop.dmi:3:44: warning: FEAT/PLANE takes at most 6 numbers (x,y,z,i,j,k); the 2 after them are "
-                          "ignored"))
+  EXPECT_TRUE(
+      lenient.has("shop.dmi:3:44: warning: FEAT/PLANE takes at most 6 numbers (x,y,z,i,j,k); the 2 after them are "
+                  "ignored"))
       << lenient.text;
   const auto strict = check(text, true);
   EXPECT_EQ(strict.errors, 2u) << strict.text;
@@ -806,16 +862,19 @@ TEST(ShopPrograms, FeaturesWithMoreNumbersThanTheirFormAreReadWithAWarning) {
 
 // Bad CPARLN statements: positioned errors that say what is wrong.
 TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
-  const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, " + rest + "\nENDFIL\n"); };
+  const auto feat = [](const std::string& rest) {
+    return check("DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, " + rest + "\nENDFIL\n");
+  };
   const auto arity = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30");
-  EXPECT_TRUE(arity.has("shop.dmi:2:") && arity.has("FEAT/CPARLN expects 11 numbers (x,y,z,i1,j1,k1,i2,j2,k2,len,wid")) << arity.text;
+  EXPECT_TRUE(arity.has("shop.dmi:2:") && arity.has("FEAT/CPARLN expects 11 numbers (x,y,z,i1,j1,k1,i2,j2,k2,len,wid"))
+      << arity.text;
   const auto ends = feat("INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 10");
   EXPECT_TRUE(ends.has("shop.dmi:2:28: error: expected ROUND or FLAT after CPARLN,INNER|OUTER")) << ends.text;
   const auto zero = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 0, 0, 0, 30, 10");
   EXPECT_TRUE(zero.has("shop.dmi:2:") && zero.has("the long axis i2,j2,k2 is zero")) << zero.text;
   const auto slanted = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 1, 30, 10");
-  EXPECT_TRUE(slanted.has("shop.dmi:2:") &&
-              slanted.has("the long axis i2,j2,k2 of F(S) is not perpendicular to the normal i1,j1,k1 of its plane (at 45.000 deg to it, not 90)"))
+  EXPECT_TRUE(slanted.has("shop.dmi:2:") && slanted.has("the long axis i2,j2,k2 of F(S) is not perpendicular to the "
+                                                        "normal i1,j1,k1 of its plane (at 45.000 deg to it, not 90)"))
       << slanted.text;
   const auto wide = feat("INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 10, 12");
   EXPECT_TRUE(wide.has("shop.dmi:2:") && wide.has("the width 12 of F(S) is not less than its length 10")) << wide.text;
@@ -823,19 +882,20 @@ TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
   const auto negative = feat("OUTER, FLAT, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, -1");
   EXPECT_TRUE(negative.has("the width of F(S) must be positive")) << negative.text;
   // WIDTH applies to a CPARLN; SYMMTY does not.
-  const auto symmetry = check("DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 10\n"
-                              "F(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nDATDEF/FA(P), DAT(A)\n"
-                              "T(W) = TOL/WIDTH, -0.1, 0.1, LONG\nT(S) = TOL/SYMMTY, 0.1, DAT(A)\nOUTPUT/FA(S), TA(W)\n"
-                              "OUTPUT/FA(S), TA(S)\nENDFIL\n");
+  const auto symmetry = check(
+      "DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 10\n"
+      "F(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nDATDEF/FA(P), DAT(A)\n"
+      "T(W) = TOL/WIDTH, -0.1, 0.1, LONG\nT(S) = TOL/SYMMTY, 0.1, DAT(A)\nOUTPUT/FA(S), TA(W)\n"
+      "OUTPUT/FA(S), TA(S)\nENDFIL\n");
   EXPECT_EQ(symmetry.errors, 1U) << symmetry.text;
   EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
 }
 
 // TOL/DIAM,lo,up,AVG|MAX|MIN: the elliptic pocket of block_ellipse.json (30.03 x 16.03 as
 // machined, centre 95.025, 29.985, major axis at 20.3 deg) probed as a CIRCLE at the ends of its
-// axes (PTMEAS along them from the machined centre). The four points are symmetric about both axes, so the least-squares
-// circle is centred on the ellipse's centre with the mean radius, (15.015 + 8.015) / 2: AVG 23.03;
-// the largest and smallest distances from that centre give MAX 30.03 and MIN 16.03.
+// axes (PTMEAS along them from the machined centre). The four points are symmetric about both axes, so the
+// least-squares circle is centred on the ellipse's centre with the mean radius, (15.015 + 8.015) / 2: AVG 23.03; the
+// largest and smallest distances from that centre give MAX 30.03 and MIN 16.03.
 TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
   const std::string text =
       "DMISMN/'diam', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
@@ -857,9 +917,11 @@ TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
   EXPECT_NEAR(tolerance(*r.session, "MN")->actual, 16.03, tol_mm);
   EXPECT_NEAR(tolerance(*r.session, "RX")->actual, 15.015, tol_mm);
   EXPECT_NEAR(tolerance(*r.session, "LP")->actual, 23.03, tol_mm);  // DIAMLP is not applied: AVG
-  EXPECT_NE(r.diagnostics.find("TOL/DIAM takes AVG, MAX or MIN after its limits; DIAMLP is not applied"), std::string::npos)
+  EXPECT_NE(r.diagnostics.find("TOL/DIAM takes AVG, MAX or MIN after its limits; DIAMLP is not applied"),
+            std::string::npos)
       << r.diagnostics;
-  EXPECT_NE(tolerance(*r.session, "MN")->note.find("MIN: the smallest diameter of the 4 measured points"), std::string::npos)
+  EXPECT_NE(tolerance(*r.session, "MN")->note.find("MIN: the smallest diameter of the 4 measured points"),
+            std::string::npos)
       << tolerance(*r.session, "MN")->note;
 }
 
@@ -880,7 +942,8 @@ TEST(ShopPrograms, APatternIsOutputAsItsFeatures) {
     }
     return out;
   };
-  const auto listed = run(head + "OUTPUT/FA(B1), FA(B2), TA(C)\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
+  const auto listed =
+      run(head + "OUTPUT/FA(B1), FA(B2), TA(C)\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
   const auto pattern = run(head + "F(HOLES) = FEAT/PATERN, F(B1), F(B2)\nOUTPUT/FA(HOLES), TA(C)\nENDFIL\n",
                            source_dir / "programs/worlds/block_deviations.json");
   ASSERT_EQ(listed.status, ExecStatus::Finished) << listed.diagnostics;
@@ -889,8 +952,10 @@ TEST(ShopPrograms, APatternIsOutputAsItsFeatures) {
   EXPECT_EQ(events(pattern).size(), 4U);  // two features, two tiers
   EXPECT_NE(pattern.diagnostics.find("F(HOLES) is a pattern of 2 features"), std::string::npos) << pattern.diagnostics;
   // Elsewhere a pattern is not a feature; its members must be features defined before.
-  const auto c = check("DMISMN/'p', 5.0\nF(A) = FEAT/POINT, CART, 0, 0, 0, 0, 0, 1\nF(P) = FEAT/PATERN, F(A), F(NOPE)\n"
-                       "F(B) = FEAT/POINT, CART, 1, 0, 0, 0, 0, 1\nF(Q) = FEAT/PATERN, F(A), F(B)\nDATDEF/FA(Q), DAT(A)\nF(R) = FEAT/PATERN, F(A), 3\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.0\nF(A) = FEAT/POINT, CART, 0, 0, 0, 0, 0, 1\nF(P) = FEAT/PATERN, F(A), F(NOPE)\n"
+      "F(B) = FEAT/POINT, CART, 1, 0, 0, 0, 0, 1\nF(Q) = FEAT/PATERN, F(A), F(B)\nDATDEF/FA(Q), DAT(A)\nF(R) = "
+      "FEAT/PATERN, F(A), 3\nENDFIL\n");
   EXPECT_TRUE(c.has("3:27: error: feature F(NOPE) is not defined")) << c.text;
   EXPECT_TRUE(c.has("6:8: error: FA(Q) is a pattern (FEAT/PATERN): OUTPUT takes it")) << c.text;
   EXPECT_TRUE(c.has("7:27: error: FEAT/PATERN lists the pattern's features")) << c.text;
@@ -907,62 +972,81 @@ TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {
       "GEOALG/CIRCLE, LSTSQR, FILTER, LAMBDAC, 0.8\nGEOALG/PLANE, LSTSQR, ELIMINATE, STDDEV, 3\nENDFIL\n");
   EXPECT_EQ(c.errors, 0U) << c.text;
   // A fitting filter was dropped unseen: told once.
-  EXPECT_TRUE(c.has("10:24: warning: GEOALG/CIRCLE,LSTSQR,FILTER: metron does not filter or thin the points")) << c.text;
+  EXPECT_TRUE(c.has("10:24: warning: GEOALG/CIRCLE,LSTSQR,FILTER: metron does not filter or thin the points"))
+      << c.text;
   const auto told = c.text.find("metron does not filter or thin the points");
   EXPECT_EQ(c.text.find("metron does not filter or thin the points", told + 1), std::string::npos) << c.text;  // once
   // So were a tolerance's numbers past its form's, and DATDEF's second datum.
-  const auto extra = check("DMISMN/'t', 5.0\nF(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nT(A) = TOL/FLAT, 0.1, 0.2\n"
-                           "T(B) = TOL/DIAM, -0.1, 0.1, 0.3, 4\nT(C) = TOL/DIAM, -0.1, 0.1\nDATDEF/FA(P), DAT(A), DAT(B)\nENDFIL\n");
+  const auto extra = check(
+      "DMISMN/'t', 5.0\nF(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nT(A) = TOL/FLAT, 0.1, 0.2\n"
+      "T(B) = TOL/DIAM, -0.1, 0.1, 0.3, 4\nT(C) = TOL/DIAM, -0.1, 0.1\nDATDEF/FA(P), DAT(A), DAT(B)\nENDFIL\n");
   EXPECT_EQ(extra.errors, 0u) << extra.text;
   EXPECT_EQ(extra.warnings, 3u) << extra.text;
-  EXPECT_TRUE(extra.has("3:1: warning: TOL/FLAT takes the tolerance zone (1 number); the 1 number after it is not used")) << extra.text;
-  EXPECT_TRUE(extra.has("4:1: warning: TOL/DIAM takes lower and upper tolerance (2 numbers); the 2 numbers after them are not used"))
+  EXPECT_TRUE(
+      extra.has("3:1: warning: TOL/FLAT takes the tolerance zone (1 number); the 1 number after it is not used"))
       << extra.text;
-  EXPECT_TRUE(extra.has("6:23: warning: DATDEF names one datum: FA(P) is DAT(A); what follows it is not used")) << extra.text;
-  const auto select = check("DMISMN/'t', 5.0\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P), 0, 90\nENDFIL\n");
+  EXPECT_TRUE(extra.has(
+      "4:1: warning: TOL/DIAM takes lower and upper tolerance (2 numbers); the 2 numbers after them are not used"))
+      << extra.text;
+  EXPECT_TRUE(extra.has("6:23: warning: DATDEF names one datum: FA(P) is DAT(A); what follows it is not used"))
+      << extra.text;
+  const auto select =
+      check("DMISMN/'t', 5.0\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P), 0, 90\nENDFIL\n");
   EXPECT_TRUE(select.has("3:14: warning: SNSLCT selects S(P) as it is defined; the 2 parameters after it are not used"))
       << select.text;
-  const auto feeds = check("DMISMN/'t', 5.0\nFEDRAT/MESVEL, MMPS, 3, 4\nACLRAT/POSACL, MMPSS, 100, 5\n"
-                           "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nMEAS/POINT,F(P),1\nPTMEAS/CART,0,0,0,0,0,1,FA(P)\nENDMES\nENDFIL\n");
+  const auto feeds = check(
+      "DMISMN/'t', 5.0\nFEDRAT/MESVEL, MMPS, 3, 4\nACLRAT/POSACL, MMPSS, 100, 5\n"
+      "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nMEAS/POINT,F(P),1\nPTMEAS/CART,0,0,0,0,0,1,FA(P)\nENDMES\nENDFIL\n");
   EXPECT_TRUE(feeds.has("2:25: warning: FEDRAT takes a kind, a unit and one value; what follows the value is not used"))
       << feeds.text;
   EXPECT_TRUE(feeds.has("3:28: warning: ACLRAT takes a kind, a unit and one value")) << feeds.text;
   // A reference feature after a PTMEAS is RMEAS's (the message said "got 7 numbers").
   EXPECT_TRUE(feeds.has("6:25: error: a reference feature after the point belongs to RMEAS")) << feeds.text;
   EXPECT_TRUE(c.has("4:23: note: CLRSRF on a MEAS (RationalDMIS) is not applied")) << c.text;
-  EXPECT_TRUE(c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
-                    "them are ignored")) << c.text;
+  EXPECT_TRUE(
+      c.has("6:23: warning: MEAS takes the feature type, F(label) and the number of points; the 2 parameters after "
+            "them are ignored"))
+      << c.text;
   // DMIS lets a nominal feature label be defined again: a note, not a warning.
   EXPECT_TRUE(c.has("8:1: note: F(P1) is defined again (first at line 2)")) << c.text;
-  EXPECT_TRUE(c.has("9:1: warning: the DMIS statement EQUATE is not supported by metron and is skipped: the coordinate "
-                    "systems are not equated")) << c.text;
+  EXPECT_TRUE(
+      c.has("9:1: warning: the DMIS statement EQUATE is not supported by metron and is skipped: the coordinate "
+            "systems are not equated"))
+      << c.text;
   EXPECT_EQ(c.warnings, 3U) << c.text;
   // A typographic quote copied from a document is named.
   const auto quote = check("DMISMN/\u2019EXAMPLE\u2019, 4.0\nENDFIL\n");
-  EXPECT_TRUE(quote.has("1:8: error: expected a parameter after '/': \u2019 is a typographic quote; a DMIS string is "
-                        "quoted with ' (an apostrophe)")) << quote.text;
+  EXPECT_TRUE(
+      quote.has("1:8: error: expected a parameter after '/': \u2019 is a typographic quote; a DMIS string is "
+                "quoted with ' (an apostrophe)"))
+      << quote.text;
   // A size from a variable never assigned stops the run at the FEAT (it measured a 0 mm circle).
-  const auto unassigned = run("DMISMN/'t', 5.0\nDECL/REAL, DD\nMODE/AUTO\nF(C1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, DD\n"
-                              "MEAS/CIRCLE, F(C1), 4\nENDMES\nENDFIL\n");
+  const auto unassigned =
+      run("DMISMN/'t', 5.0\nDECL/REAL, DD\nMODE/AUTO\nF(C1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, DD\n"
+          "MEAS/CIRCLE, F(C1), 4\nENDMES\nENDFIL\n");
   EXPECT_NE(unassigned.status, ExecStatus::Finished);
-  EXPECT_NE(unassigned.diagnostics.find("4:1: error: the diameter of F(C1) is 0: it must be positive"), std::string::npos)
+  EXPECT_NE(unassigned.diagnostics.find("4:1: error: the diameter of F(C1) is 0: it must be positive"),
+            std::string::npos)
       << unassigned.diagnostics;
   // A hole the ball cannot enter is told before it is probed.
-  const auto small = run("DMISMN/'t', 5.0\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
-                         "GOTO/40, 50, 60\nF(H) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 3\n"
-                         "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n"
-                         "  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
+  const auto small =
+      run("DMISMN/'t', 5.0\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+          "GOTO/40, 50, 60\nF(H) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 3\n"
+          "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n"
+          "  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
   EXPECT_NE(small.diagnostics.find("6:1: warning: the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"),
             std::string::npos)
       << small.diagnostics;
   // So is one whose ball is selected inside the block (the first sensor's was the only one judged).
-  const auto switched = dry_run("DMISMN/'t', 5.0\nS(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 1.0\n"
-                            "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P1)\n"
-                            "GOTO/40, 50, 60\nF(H) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 3\n"
-                            "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  SNSLCT/S(P4)\n"
-                            "  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
+  const auto switched = dry_run(
+      "DMISMN/'t', 5.0\nS(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 1.0\n"
+      "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P1)\n"
+      "GOTO/40, 50, 60\nF(H) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 3\n"
+      "MEAS/CIRCLE, F(H), 3\n  PTMEAS/CART, 41.5, 50, 35, -1, 0, 0\n  SNSLCT/S(P4)\n"
+      "  PTMEAS/CART, 40, 51.5, 35, 0, -1, 0\n  PTMEAS/CART, 38.5, 50, 35, 1, 0, 0\nENDMES\nENDFIL\n");
   ASSERT_EQ(switched.status, ExecStatus::Finished) << switched.diagnostics;
-  EXPECT_NE(switched.diagnostics.find("the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"), std::string::npos)
+  EXPECT_NE(switched.diagnostics.find("the ball of P4 (4.000 mm) is not smaller than F(H) (3.000 mm)"),
+            std::string::npos)
       << switched.diagnostics;
   EXPECT_EQ(switched.diagnostics.find("the ball of P1"), std::string::npos) << switched.diagnostics;
 }
@@ -976,8 +1060,9 @@ TEST(ShopPrograms, OutputListsAFeaturesPointRange) {
       "F(C) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(C), 4\n"
       "  PTMEAS/CART, 50, 50, 35, -1, 0, 0\n  PTMEAS/CART, 40, 60, 35, 0, -1, 0\n"
       "  PTMEAS/CART, 30, 50, 35, 1, 0, 0\n  PTMEAS/CART, 40, 40, 35, 0, 1, 0\nENDMES\n";
-  const auto r = run(head + "DECL/INTGR, N\nN = ASSIGN/3\nOUTPUT/FA(C)[2,N]\nOUTPUT/FA(C)[4]\nOUTPUT/FA(C)[3,9]\n"
-                            "OUTPUT/FA(C)[3,2]\nOUTPUT/FA(C)[6,7]\nENDFIL\n",
+  const auto r = run(head +
+                         "DECL/INTGR, N\nN = ASSIGN/3\nOUTPUT/FA(C)[2,N]\nOUTPUT/FA(C)[4]\nOUTPUT/FA(C)[3,9]\n"
+                         "OUTPUT/FA(C)[3,2]\nOUTPUT/FA(C)[6,7]\nENDFIL\n",
                      source_dir / "programs/worlds/perfect.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::vector<const metron::runtime::FeatureReport*> reports;
@@ -996,28 +1081,33 @@ TEST(ShopPrograms, OutputListsAFeaturesPointRange) {
   EXPECT_NEAR((reports[1]->points[0].surface_mm - metron::Vec3(40, 40, 35)).norm(), 0, 2e-3);
   // Beyond the points it has: listed as far as it goes, with a warning.
   ASSERT_EQ(reports[2]->points.size(), 2U);
-  EXPECT_NE(r.diagnostics.find("FA(C)[3,9] asks for points 3 to 9; it has 4: points 3 to 4 are listed"), std::string::npos)
+  EXPECT_NE(r.diagnostics.find("FA(C)[3,9] asks for points 3 to 9; it has 4: points 3 to 4 are listed"),
+            std::string::npos)
       << r.diagnostics;
   // A range backwards, or past the last point: nothing is listed, and the warning says so.
   EXPECT_TRUE(reports[3]->points.empty());
   EXPECT_TRUE(reports[4]->points.empty());
-  EXPECT_NE(r.diagnostics.find("FA(C)[3,2] asks for points 3 to 2; it has 4: none is listed"), std::string::npos) << r.diagnostics;
-  EXPECT_NE(r.diagnostics.find("FA(C)[6,7] asks for points 6 to 7; it has 4: none is listed"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("FA(C)[3,2] asks for points 3 to 2; it has 4: none is listed"), std::string::npos)
+      << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("FA(C)[6,7] asks for points 6 to 7; it has 4: none is listed"), std::string::npos)
+      << r.diagnostics;
   const std::string text = metron::runtime::format_feature_report(*reports[1]);
   EXPECT_NE(text.find("[4]"), std::string::npos) << text;
   // A point range on a tolerance, or outside OUTPUT, is an error.
   const auto bad = check(head + "T(D) = TOL/DIAM, -0.1, 0.1\nOUTPUT/FA(C), TA(D)[1,2]\nENDFIL\n");
-  EXPECT_TRUE(bad.has("shop.dmi:13:") && bad.has("a point range TA(D)[...] is read only for a feature in OUTPUT")) << bad.text;
+  EXPECT_TRUE(bad.has("shop.dmi:13:") && bad.has("a point range TA(D)[...] is read only for a feature in OUTPUT"))
+      << bad.text;
 }
 
 // An ARC measured in MODE/AUTO: its points lie within its span (they went round the whole circle,
 // into the air beside a real arc). perfect.json's BORE1 (20 mm at part 40, 50) holds the arc, so
 // each touched point shows where it was planned: angles from the part's X axis.
 TEST(ShopPrograms, AnArcIsProbedWithinItsSpan) {
-  const auto r = run("DMISMN/'arc', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                     "GOTO/40, 50, 60\nMODE/AUTO\nF(A) = FEAT/ARC, INNER, CART, 40, 50, 40, 0, 0, 1, 10, 30, 90\n"
-                     "MEAS/ARC, F(A), 4\nENDMES\nENDFIL\n",
-                     source_dir / "programs/worlds/perfect.json");
+  const auto r =
+      run("DMISMN/'arc', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "GOTO/40, 50, 60\nMODE/AUTO\nF(A) = FEAT/ARC, INNER, CART, 40, 50, 40, 0, 0, 1, 10, 30, 90\n"
+          "MEAS/ARC, F(A), 4\nENDMES\nENDFIL\n",
+          source_dir / "programs/worlds/perfect.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* f = r.session->runtime().find_feature("A");
   ASSERT_TRUE(f && f->actual);
@@ -1033,10 +1123,11 @@ TEST(ShopPrograms, AnArcIsProbedWithinItsSpan) {
 
   // RationalDMIS writes the direction the angles count from after them (12 numbers): here the
   // part's Y, so every point turns 90 deg on.
-  const auto y = run("DMISMN/'arc', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                     "GOTO/40, 50, 60\nMODE/AUTO\nF(A) = FEAT/ARC, INNER, CART, 40, 50, 40, 0, 0, 1, 10, 30, 90, 0, 1, 0\n"
-                     "MEAS/ARC, F(A), 4\nENDMES\nENDFIL\n",
-                     source_dir / "programs/worlds/perfect.json");
+  const auto y =
+      run("DMISMN/'arc', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "GOTO/40, 50, 60\nMODE/AUTO\nF(A) = FEAT/ARC, INNER, CART, 40, 50, 40, 0, 0, 1, 10, 30, 90, 0, 1, 0\n"
+          "MEAS/ARC, F(A), 4\nENDMES\nENDFIL\n",
+          source_dir / "programs/worlds/perfect.json");
   ASSERT_EQ(y.status, ExecStatus::Finished) << y.diagnostics;
   const auto* g = y.session->runtime().find_feature("A");
   ASSERT_TRUE(g && g->actual && g->points.size() == 4U);
@@ -1045,7 +1136,8 @@ TEST(ShopPrograms, AnArcIsProbedWithinItsSpan) {
     const double turned = std::remainder(std::atan2(s.y(), s.x()) * 180 / std::numbers::pi - (expected[i] + 90), 360.0);
     EXPECT_NEAR(turned, 0, 0.01) << i;
   }
-  const auto bad = check("DMISMN/'arc', 5.0\nF(A) = FEAT/ARC, INNER, CART, 0, 0, 0, 0, 0, 1, 10, 30, 90, 1, 0\nENDFIL\n");
+  const auto bad =
+      check("DMISMN/'arc', 5.0\nF(A) = FEAT/ARC, INNER, CART, 0, 0, 0, 0, 0, 1, 10, 30, 90, 1, 0\nENDFIL\n");
   EXPECT_TRUE(bad.has("FEAT/ARC expects 9 or 12 numbers (x,y,z,i,j,k,rad,ang1,ang2[,i2,j2,k2]), got 11")) << bad.text;
 }
 
@@ -1101,14 +1193,19 @@ TEST(ShopPrograms, ToriAgainstTheMachinedRingAndGroove) {
   EXPECT_TRUE(results[3]->in_tolerance);
 
   // A torus needs seven points; its tube must be thinner than its centre circle.
-  const auto few = run("DMISMN/'torus', 5.0\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
-                       "F(RING) = FEAT/TORUS, OUTER, CART, 80, 30, 43, 0, 0, 1, 30, 6\nMEAS/TORUS, F(RING), 6\nENDMES\nENDFIL\n",
-                       source_dir / "programs/worlds/block_torus.json");
+  const auto few =
+      run("DMISMN/'torus', 5.0\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
+          "F(RING) = FEAT/TORUS, OUTER, CART, 80, 30, 43, 0, 0, 1, 30, 6\nMEAS/TORUS, F(RING), 6\nENDMES\nENDFIL\n",
+          source_dir / "programs/worlds/block_torus.json");
   EXPECT_NE(few.diagnostics.find("run.dmi:5:"), std::string::npos) << few.diagnostics;
-  const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(T) = FEAT/TORUS, " + rest + "\nENDFIL\n"); };
+  const auto feat = [](const std::string& rest) {
+    return check("DMISMN/'p', 5.0\nF(T) = FEAT/TORUS, " + rest + "\nENDFIL\n");
+  };
   EXPECT_EQ(feat("OUTER, CART, 0, 0, 0, 0, 0, 1, 30, 6").errors, 0U);
   const auto fat = feat("OUTER, CART, 0, 0, 0, 0, 0, 1, 30, 30");
-  EXPECT_TRUE(fat.has("shop.dmi:2:") && fat.has("the tube's diameter 30 of F(T) is not less than its major diameter 30")) << fat.text;
+  EXPECT_TRUE(fat.has("shop.dmi:2:") &&
+              fat.has("the tube's diameter 30 of F(T) is not less than its major diameter 30"))
+      << fat.text;
   const auto arity = feat("INNER, CART, 0, 0, 0, 0, 0, 1, 30");
   EXPECT_TRUE(arity.has("FEAT/TORUS expects 8 numbers (x,y,z,i,j,k,majdiam,mindiam")) << arity.text;
   EXPECT_TRUE(feat("CART, 0, 0, 0, 0, 0, 1, 30, 6").has("expected INNER or OUTER after the feature type TORUS"));
@@ -1122,8 +1219,8 @@ TEST(ShopPrograms, ToriAgainstTheMachinedRingAndGroove) {
 // d (cos t, sin t) + o + w (-y, x), whose part along the outward normal (b cos t, a sin t) / N is
 // d (b cos^2 t + a sin^2 t) / N + o . n + w (a^2 - b^2) sin t cos t / N, to first order (+ out of
 // the material: negated in a pocket).
-double ellipse_profile_extreme(double a, double b, double grow, Eigen::Vector2d offset, double turn_deg, double angle_deg,
-                               int points, bool inner) {
+double ellipse_profile_extreme(double a, double b, double grow, Eigen::Vector2d offset, double turn_deg,
+                               double angle_deg, int points, bool inner) {
   const double angle = angle_deg * std::numbers::pi / 180;
   const Eigen::Vector2d u(std::cos(angle), std::sin(angle)), v(-u.y(), u.x());
   double extreme = 0;
@@ -1133,7 +1230,8 @@ double ellipse_profile_extreme(double a, double b, double grow, Eigen::Vector2d 
     const Eigen::Vector2d n = (b * std::cos(t) * u + a * std::sin(t) * v) / norm;
     // A turn w about the centre moves the point by w (-y, x): along the normal w (a^2 - b^2) sin t cos t / N.
     const double turn = turn_deg * std::numbers::pi / 180 * (a * a - b * b) * std::sin(t) * std::cos(t) / norm;
-    const double out = grow * (b * std::cos(t) * std::cos(t) + a * std::sin(t) * std::sin(t)) / norm + offset.dot(n) + turn;
+    const double out =
+        grow * (b * std::cos(t) * std::cos(t) + a * std::sin(t) * std::sin(t)) / norm + offset.dot(n) + turn;
     const double deviation = inner ? -out : out;
     if (std::abs(deviation) > std::abs(extreme)) extreme = deviation;
   }
@@ -1161,7 +1259,8 @@ TEST(ShopPrograms, EllipsesAndRectanglesAgainstTheMachinedPocketsAndBoss) {
   EXPECT_NEAR(pocket->actual->position.y(), 29.985, tol_mm);
   EXPECT_NEAR(pocket->actual->diameter_mm, 30.03, tol_mm);
   EXPECT_NEAR(pocket->actual->minor_diameter_mm, 16.03, tol_mm);
-  EXPECT_NEAR(std::atan2(pocket->actual->slot_axis.y(), pocket->actual->slot_axis.x()) * 180 / std::numbers::pi, 20.3, 0.01);
+  EXPECT_NEAR(std::atan2(pocket->actual->slot_axis.y(), pocket->actual->slot_axis.x()) * 180 / std::numbers::pi, 20.3,
+              0.01);
   const auto* boss = report(*r.session, "EBOSS");
   ASSERT_TRUE(boss && boss->actual);
   EXPECT_NEAR(boss->actual->position.x(), 29.98, tol_mm);
@@ -1192,25 +1291,31 @@ TEST(ShopPrograms, EllipsesAndRectanglesAgainstTheMachinedPocketsAndBoss) {
       << r.diagnostics;
 
   // An ellipse needs five points.
-  const auto few = run("DMISMN/'e', 5.0\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
-                       "F(E) = FEAT/ELLIPS, INNER, CART, 95, 30, 40, 0, 0, 1, 0.9396926, 0.3420201, 0, 30, 16\n"
-                       "MEAS/ELLIPS, F(E), 4\nENDMES\nENDFIL\n",
-                       source_dir / "programs/worlds/block_ellipse.json");
+  const auto few =
+      run("DMISMN/'e', 5.0\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\n"
+          "F(E) = FEAT/ELLIPS, INNER, CART, 95, 30, 40, 0, 0, 1, 0.9396926, 0.3420201, 0, 30, 16\n"
+          "MEAS/ELLIPS, F(E), 4\nENDMES\nENDFIL\n",
+          source_dir / "programs/worlds/block_ellipse.json");
   EXPECT_NE(few.status, ExecStatus::Finished);
   EXPECT_NE(few.diagnostics.find("run.dmi:5:"), std::string::npos) << few.diagnostics;
   // check: the numbers of ELLIPS and RCTNGL.
-  const auto feat = [](const std::string& rest) { return check("DMISMN/'p', 5.0\nF(E) = FEAT/" + rest + "\nENDFIL\n"); };
+  const auto feat = [](const std::string& rest) {
+    return check("DMISMN/'p', 5.0\nF(E) = FEAT/" + rest + "\nENDFIL\n");
+  };
   EXPECT_EQ(feat("ELLIPS, OUTER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 16").errors, 0U);
   const auto swapped = feat("ELLIPS, OUTER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 16, 30");
-  EXPECT_TRUE(swapped.has("shop.dmi:2:") && swapped.has("the minor diameter 30 of F(E) is more than its major diameter 16"))
+  EXPECT_TRUE(swapped.has("shop.dmi:2:") &&
+              swapped.has("the minor diameter 30 of F(E) is more than its major diameter 16"))
       << swapped.text;
   const auto slanted = feat("ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 1, 30, 16");
   EXPECT_TRUE(slanted.has("the major axis i2,j2,k2 of F(E) is not perpendicular")) << slanted.text;
   EXPECT_TRUE(feat("ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 30, 16").has("FEAT/ELLIPS expects 11 numbers")) << "arity";
   EXPECT_EQ(feat("RCTNGL, INNER, CART, 0, 0, 0, 0, 0, 1, 0, 1, 0, 20, 12").errors, 0U);
-  EXPECT_TRUE(feat("RCTNGL, INNER, CART, 0, 0, 0, 0, 0, 1, 20, 12").has("FEAT/RCTNGL expects INNER or OUTER, CART or POL and 11 or 12"));
-  const auto mismatch = check("DMISMN/'p', 5.0\nF(E) = FEAT/ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 16\n"
-                              "MEAS/CIRCLE, F(E), 8\nENDMES\nENDFIL\n");
+  EXPECT_TRUE(feat("RCTNGL, INNER, CART, 0, 0, 0, 0, 0, 1, 20, 12")
+                  .has("FEAT/RCTNGL expects INNER or OUTER, CART or POL and 11 or 12"));
+  const auto mismatch = check(
+      "DMISMN/'p', 5.0\nF(E) = FEAT/ELLIPS, INNER, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 16\n"
+      "MEAS/CIRCLE, F(E), 8\nENDMES\nENDFIL\n");
   EXPECT_TRUE(mismatch.has("MEAS/CIRCLE on F(E), which is FEAT/ELLIPS")) << mismatch.text;
 }
 
@@ -1223,11 +1328,13 @@ TEST(ShopPrograms, GenericSurfacePointsAreJudgedAlongTheirOwnNormals) {
       "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/100, 50, 60\n"
       "F(SKIN) = FEAT/GSURF\nMEAS/GSURF, F(SKIN), 5\n"
       "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 100, 20, 40, 0, 0, 1\n"
-      "  GOTO/175, 50, 60\n  GOTO/175, 50, 20\n  PTMEAS/CART, 160, 50, 20, 1, 0, 0\n  PTMEAS/CART, 160, 80, 30, 1, 0, 0\n"
+      "  GOTO/175, 50, 60\n  GOTO/175, 50, 20\n  PTMEAS/CART, 160, 50, 20, 1, 0, 0\n  PTMEAS/CART, 160, 80, 30, 1, 0, "
+      "0\n"
       "  GOTO/175, 80, 60\n  GOTO/120, 115, 60\n  GOTO/120, 115, 20\n  PTMEAS/CART, 120, 100, 20, 0, 1, 0\n"
       "  GOTO/120, 115, 60\nENDMES\n"
       "F(EDGE) = FEAT/GCURVE, CART, 60, 50, 40, 0, 1, 0\nMEAS/GCURVE, F(EDGE), 3\n"
-      "  PTMEAS/CART, 60, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 50, 40, 0, 0, 1\n  PTMEAS/CART, 60, 80, 40, 0, 0, 1\nENDMES\n"
+      "  PTMEAS/CART, 60, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 50, 40, 0, 0, 1\n  PTMEAS/CART, 60, 80, 40, 0, 0, "
+      "1\nENDMES\n"
       "T(SURF) = TOL/PROFS, -0.02, 0.02\nT(LINE) = TOL/PROFL, -0.005, 0.005\n"
       "OUTPUT/FA(SKIN), TA(SURF)\nOUTPUT/FA(EDGE), TA(LINE)\nENDFIL\n";
   const auto r = run(text, source_dir / "programs/worlds/block_width.json");
@@ -1249,10 +1356,11 @@ TEST(ShopPrograms, GenericSurfacePointsAreJudgedAlongTheirOwnNormals) {
 
   // An EDGEPT is measured as a point on its surface: the TOP face beside the RIGHT edge, where
   // it was designed.
-  const auto edge = run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
-                        "GOTO/155, 50, 60\nF(E1) = FEAT/EDGEPT, CART, 155, 50, 40, 0, 0, 1, 1, 0, 0\n"
-                        "MEAS/EDGEPT, F(E1), 1\n  PTMEAS/CART, 155, 50, 40, 0, 0, 1\nENDMES\nOUTPUT/FA(E1)\nENDFIL\n",
-                        source_dir / "programs/worlds/block_width.json");
+  const auto edge =
+      run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "GOTO/155, 50, 60\nF(E1) = FEAT/EDGEPT, CART, 155, 50, 40, 0, 0, 1, 1, 0, 0\n"
+          "MEAS/EDGEPT, F(E1), 1\n  PTMEAS/CART, 155, 50, 40, 0, 0, 1\nENDMES\nOUTPUT/FA(E1)\nENDFIL\n",
+          source_dir / "programs/worlds/block_width.json");
   ASSERT_EQ(edge.status, ExecStatus::Finished) << edge.diagnostics;
   const auto* e1 = report(*edge.session, "E1");
   ASSERT_TRUE(e1 && e1->actual);
@@ -1273,8 +1381,10 @@ TEST(ShopPrograms, DatsetWithAFeatureInPlaceOfADatum) {
     return "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
            "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/100, 50, 60\n"
            "F(TOPPL) = FEAT/PLANE, CART, 100, 40, 40, 0, 0, 1\nMEAS/PLANE, F(TOPPL), 3\n"
-           "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 100, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 40, 40, 0, 0, 1\n"
-           "  GOTO/60, 40, 60\nENDMES\nDATDEF/FA(TOPPL), DAT(A)\n" + datset +
+           "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 100, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 40, 40, 0, 0, "
+           "1\n"
+           "  GOTO/60, 40, 60\nENDMES\nDATDEF/FA(TOPPL), DAT(A)\n" +
+           datset +
            "GOTO/40, 50, 20\nF(FLOOR) = FEAT/POINT, CART, 40, 50, -25, 0, 0, 1\nMEAS/POINT, F(FLOOR), 1\n"
            "  PTMEAS/CART, 40, 50, -25, 0, 0, 1\nENDMES\nGOTO/40, 50, 20\nOUTPUT/FA(FLOOR)\nENDFIL\n";
   };
@@ -1351,7 +1461,8 @@ TEST(ShopPrograms, EvalKeepsAToleranceResultForALaterOutput) {
 // oversize: the expected values are that truth, not metron's output.
 TEST(ShopPrograms, ValueReadsAFeaturesSizeAndAToleranceResult) {
   const std::string head =
-      "DMISMN/'value', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "DMISMN/'value', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, "
+      "4.0\nSNSLCT/S(P4)\n"
       "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
       "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 8\nENDMES\n"
       "T(D) = TOL/DIAM, -0.005, 0.005\nDECL/REAL, SZ, NOM, ACTV, DEVV, AMTV\nDECL/BOOL, IN, OUT\n";
@@ -1374,13 +1485,18 @@ TEST(ShopPrograms, ValueReadsAFeaturesSizeAndAToleranceResult) {
   EXPECT_NEAR(num("SZ"), num("ACTV") / 25.4, 1e-12);  // in the program's units at the VALUE
   // Forms and order: a size a feature has not, a tolerance read before any evaluation, a word
   // that is no VALUE word, a VALUE form metron does not answer.
-  const auto no_length = run(head + "SZ = VALUE/FA(BORE1), SIZE, 2\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
-  EXPECT_TRUE(no_length.diagnostics.find("VALUE/FA(BORE1),SIZE,2: a CIRCLE has no size 2") != std::string::npos) << no_length.diagnostics;
-  const auto early = run(head + "ACTV = VALUE/TA(D), ACT\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
-  EXPECT_TRUE(early.diagnostics.find("VALUE/TA(D) before T(D) was evaluated") != std::string::npos) << early.diagnostics;
+  const auto no_length =
+      run(head + "SZ = VALUE/FA(BORE1), SIZE, 2\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
+  EXPECT_TRUE(no_length.diagnostics.find("VALUE/FA(BORE1),SIZE,2: a CIRCLE has no size 2") != std::string::npos)
+      << no_length.diagnostics;
+  const auto early =
+      run(head + "ACTV = VALUE/TA(D), ACT\nENDFIL\n", source_dir / "programs/worlds/block_deviations.json");
+  EXPECT_TRUE(early.diagnostics.find("VALUE/TA(D) before T(D) was evaluated") != std::string::npos)
+      << early.diagnostics;
   // Another word of a feature may be a vendor's or a later DMIS's: a warning read leniently, an
   // error strictly; a tolerance's words are DMIS's own.
-  const std::string words = head + "SZ = VALUE/FA(BORE1), DIAM\nACTV = VALUE/TA(NONE), ACT\nSZ = VALUE/TA(D), DIAM\nENDFIL\n";
+  const std::string words =
+      head + "SZ = VALUE/FA(BORE1), DIAM\nACTV = VALUE/TA(NONE), ACT\nSZ = VALUE/TA(D), DIAM\nENDFIL\n";
   const Checked bad = check(words);
   EXPECT_TRUE(bad.has("warning: VALUE/FA(x),DIAM is not answered")) << bad.text;
   EXPECT_TRUE(bad.has("tolerance T(NONE) is not defined")) << bad.text;
@@ -1396,10 +1512,11 @@ TEST(ShopPrograms, ValueReadsAFeaturesSizeAndAToleranceResult) {
 // stated actual of 91.2 deg against 90 makes the deviation analytic; the default world's
 // countersink is a true 90 deg cone (CONE1, half angle 45), measured.
 TEST(ShopPrograms, AnglJudgesAConesIncludedAngle) {
-  const auto stated = run("DMISMN/'angl', 5.0\nF(C)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,90\n"
-                          "FA(C)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,91.2\nT(A)=TOL/ANGL,-0.5,0.5\n"
-                          "UNITS/MM,ANGRAD\nT(R)=TOL/ANGL,-0.05,0.05\nDECL/REAL,DEV\n"
-                          "OUTPUT/FA(C),TA(A),TA(R)\nDEV=VALUE/TA(R),DEV\nENDFIL\n");
+  const auto stated =
+      run("DMISMN/'angl', 5.0\nF(C)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,90\n"
+          "FA(C)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,91.2\nT(A)=TOL/ANGL,-0.5,0.5\n"
+          "UNITS/MM,ANGRAD\nT(R)=TOL/ANGL,-0.05,0.05\nDECL/REAL,DEV\n"
+          "OUTPUT/FA(C),TA(A),TA(R)\nDEV=VALUE/TA(R),DEV\nENDFIL\n");
   ASSERT_EQ(stated.status, ExecStatus::Finished) << stated.diagnostics;
   const auto* a = tolerance(*stated.session, "A");
   ASSERT_NE(a, nullptr);
@@ -1410,17 +1527,19 @@ TEST(ShopPrograms, AnglJudgesAConesIncludedAngle) {
   EXPECT_NEAR(r->upper, 0.05 * 180 / M_PI, 1e-9);
   EXPECT_TRUE(r->in_tolerance);
   EXPECT_NEAR(stated.session->interpreter().variable("DEV")->number, 1.2 * M_PI / 180, 1e-12);  // in ANGRAD
-  const auto measured = run("DMISMN/'angl', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
-                            "SNSLCT/S(P4)\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 20, 80\n"
-                            "F(CSINK) = FEAT/CONE, INNER, CART, 40, 20, 32, 0, 0, 1, 90, 8\nMEAS/CONE, F(CSINK), 8\nENDMES\n"
-                            "T(A)=TOL/ANGL,-0.05,0.05\nOUTPUT/FA(CSINK),TA(A)\nENDFIL\n");
+  const auto measured =
+      run("DMISMN/'angl', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+          "SNSLCT/S(P4)\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 20, 80\n"
+          "F(CSINK) = FEAT/CONE, INNER, CART, 40, 20, 32, 0, 0, 1, 90, 8\nMEAS/CONE, F(CSINK), 8\nENDMES\n"
+          "T(A)=TOL/ANGL,-0.05,0.05\nOUTPUT/FA(CSINK),TA(A)\nENDFIL\n");
   ASSERT_EQ(measured.status, ExecStatus::Finished) << measured.diagnostics;
   const auto* m = tolerance(*measured.session, "A");
   ASSERT_NE(m, nullptr);
   EXPECT_NEAR(m->value, 0.0, 0.01);
   EXPECT_TRUE(m->in_tolerance);
-  const auto circle = check("DMISMN/'angl', 5.0\nF(B)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(A)=TOL/ANGL,-0.5,0.5\n"
-                            "OUTPUT/FA(B),TA(A)\nT(W)=TOL/ANGL,0.5,-0.5\nENDFIL\n");
+  const auto circle = check(
+      "DMISMN/'angl', 5.0\nF(B)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(A)=TOL/ANGL,-0.5,0.5\n"
+      "OUTPUT/FA(B),TA(A)\nT(W)=TOL/ANGL,0.5,-0.5\nENDFIL\n");
   EXPECT_TRUE(circle.has("TOL/ANGL of T(A) does not apply to a CIRCLE")) << circle.text;
   EXPECT_TRUE(circle.has("the lower tolerance 0.5 is above the upper tolerance -0.5")) << circle.text;
 }
@@ -1437,10 +1556,14 @@ TEST(ShopPrograms, CompositePositionJudgesThePatternAndItsFeatures) {
       "F(A)=FEAT/PLANE,CART,0,0,0,0,0,1\nFA(A)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(A),DAT(A)\n"
       "F(B)=FEAT/PLANE,CART,-50,0,0,-1,0,0\nFA(B)=FEAT/PLANE,CART,-50,0,0,-1,0,0\nDATDEF/FA(B),DAT(B)\n"
       "F(C)=FEAT/PLANE,CART,0,-50,0,0,-1,0\nFA(C)=FEAT/PLANE,CART,0,-50,0,0,-1,0\nDATDEF/FA(C),DAT(C)\n"
-      "F(H1)=FEAT/CIRCLE,INNER,CART,20,20,0,0,0,1,10\nFA(H1)=FEAT/CIRCLE,INNER,CART,20.169960026680,20.149959973347,0,0,0,1,10\n"
-      "F(H2)=FEAT/CIRCLE,INNER,CART,-20,20,0,0,0,1,10\nFA(H2)=FEAT/CIRCLE,INNER,CART,-19.839959973347,20.059960026680,0,0,0,1,10\n"
-      "F(H3)=FEAT/CIRCLE,INNER,CART,-20,-20,0,0,0,1,10\nFA(H3)=FEAT/CIRCLE,INNER,CART,-19.769960026680,-19.949959973347,0,0,0,1,10\n"
-      "F(H4)=FEAT/CIRCLE,INNER,CART,20,-20,0,0,0,1,10\nFA(H4)=FEAT/CIRCLE,INNER,CART,20.239959973347,-19.859960026680,0,0,0,1,10\n"
+      "F(H1)=FEAT/CIRCLE,INNER,CART,20,20,0,0,0,1,10\nFA(H1)=FEAT/"
+      "CIRCLE,INNER,CART,20.169960026680,20.149959973347,0,0,0,1,10\n"
+      "F(H2)=FEAT/CIRCLE,INNER,CART,-20,20,0,0,0,1,10\nFA(H2)=FEAT/"
+      "CIRCLE,INNER,CART,-19.839959973347,20.059960026680,0,0,0,1,10\n"
+      "F(H3)=FEAT/CIRCLE,INNER,CART,-20,-20,0,0,0,1,10\nFA(H3)=FEAT/"
+      "CIRCLE,INNER,CART,-19.769960026680,-19.949959973347,0,0,0,1,10\n"
+      "F(H4)=FEAT/CIRCLE,INNER,CART,20,-20,0,0,0,1,10\nFA(H4)=FEAT/"
+      "CIRCLE,INNER,CART,20.239959973347,-19.859960026680,0,0,0,1,10\n"
       "T(CP)=TOL/COMPOS,PATERN,0.5,DAT(A),DAT(B),DAT(C),FEATUR,0.05,DAT(A)\n"
       "T(CQ)=TOL/COMPOS,2D,PATERN,0.5,MMC,DAT(A),DAT(B),DAT(C),FEATUR,0.05,DAT(A),DAT(B)\n"
       "DECL/REAL,PAT,FEA\n"
@@ -1500,9 +1623,11 @@ TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   const auto inch = [](double mm) { return fmt::format("{:.6f}", mm / 25.4); };
   const std::string text =
       "DMISMN/'inch', 5.0\nUNITS/INCH, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
-      "D(PART) = TRANS/XORIG, " + inch(300) + ", YORIG, " + inch(200) + ", ZORIG, 0\nGOTO/" + inch(40) + ", " +
-      inch(50) + ", " + inch(80) + "\nF(BORE1) = FEAT/CIRCLE, INNER, CART, " + inch(40) + ", " + inch(50) + ", " +
-      inch(30) + ", 0, 0, 1, " + inch(20) + "\nT(D1) = TOL/DIAM, -0.0005, 0.0005\nMEAS/CIRCLE, F(BORE1), 4\nENDMES\n"
+      "D(PART) = TRANS/XORIG, " +
+      inch(300) + ", YORIG, " + inch(200) + ", ZORIG, 0\nGOTO/" + inch(40) + ", " + inch(50) + ", " + inch(80) +
+      "\nF(BORE1) = FEAT/CIRCLE, INNER, CART, " + inch(40) + ", " + inch(50) + ", " + inch(30) + ", 0, 0, 1, " +
+      inch(20) +
+      "\nT(D1) = TOL/DIAM, -0.0005, 0.0005\nMEAS/CIRCLE, F(BORE1), 4\nENDMES\n"
       "OUTPUT/FA(BORE1), TA(D1)\nDECPL/ALL, 3\nOUTPUT/FA(BORE1), TA(D1)\nENDFIL\n";
   const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
@@ -1525,9 +1650,7 @@ TEST(ShopPrograms, ReportsAreInTheProgramsUnitsWithDecpl) {
   EXPECT_NE(second.find("  D              0.787"), std::string::npos) << second;  // DECPL/ALL,3
   const std::string line = metron::runtime::dmis_feature_line(reports[1]);
   // Direction cosines keep their 5 decimals (DECPL is for lengths and angles).
-  EXPECT_NE(line.find("1.575, 1.969, 1.181, 0.00000, 0.00000, 1.00000, 0.787"),
-            std::string::npos)
-      << line;
+  EXPECT_NE(line.find("1.575, 1.969, 1.181, 0.00000, 0.00000, 1.00000, 0.787"), std::string::npos) << line;
   EXPECT_TRUE(results[0].in_tolerance);
   const std::string tol = metron::runtime::format_tolerance_result(results[0]);
   EXPECT_NE(tol.find("limits [-0.00050, +0.00050]"), std::string::npos) << tol;
@@ -1553,13 +1676,14 @@ TEST(ShopPrograms, InputFilesAndTheIntrinsicsOfTheRun) {
   std::vector<std::string> texts;
   for (const auto& e : r.session->record().events)
     if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
-  const std::vector<std::string> expected = {"P1=4.0", "P2=7.0", "A B=11.0", "3", "1971/01/02 00:00:00",
-                                             "1971/01/02|00:00:00", "0.000", "25.00", "b"};
+  const std::vector<std::string> expected = {
+      "P1=4.0", "P2=7.0", "A B=11.0", "3", "1971/01/02 00:00:00", "1971/01/02|00:00:00", "0.000", "25.00", "b"};
   EXPECT_EQ(texts, expected);
 
   // Reading past the end, a number that is not one, a file that is not there: positioned errors.
-  const auto past = run("DMISMN/'p', 5.0\nDECL/REAL,X\nDID(IN1)=DEVICE/STOR,'offsets.txt'\n"
-                        "OPEN/DID(IN1),DIRECT,INPUT\nREAD/DID(IN1),X\nENDFIL\n");
+  const auto past =
+      run("DMISMN/'p', 5.0\nDECL/REAL,X\nDID(IN1)=DEVICE/STOR,'offsets.txt'\n"
+          "OPEN/DID(IN1),DIRECT,INPUT\nREAD/DID(IN1),X\nENDFIL\n");
   EXPECT_NE(past.diagnostics.find("READ/DID(IN1): 'P1' is not a number for X (field 1 of the file)"), std::string::npos)
       << past.diagnostics;
   const auto missing = run("DMISMN/'p', 5.0\nDID(IN1)=DEVICE/STOR,'nowhere.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nENDFIL\n");
@@ -1579,9 +1703,11 @@ TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
       "U=ASSIGN/VCART(1,0,0)\nV=ASSIGN/VCART(0,1,0)\nW=ASSIGN/VCROSS(U,V)\nTEXT/OPER,STR(VDOT(W,VCART(0,0,1)))\n"
       "D=ASSIGN/VMAG(VCART(3,4,12))\nTEXT/OPER,STR(D)\nW=ASSIGN/VUNIT(VCART(0,0,-7))\nTEXT/OPER,STR(W)\n"
       "W=ASSIGN/2*U-V/4+(-U)\nTEXT/OPER,STR(VDOT(W,VCART(1,10,100)))\n"
-      "ARR[2]=ASSIGN/VPOL(2,30,5)\nTEXT/OPER,STR(VDOT(ARR[2],VCART(1,0,0)),6)\nTEXT/OPER,STR(VDOT(ARR[2],VCART(0,1,1)),6)\n"
+      "ARR[2]=ASSIGN/VPOL(2,30,5)\nTEXT/OPER,STR(VDOT(ARR[2],VCART(1,0,0)),6)\nTEXT/"
+      "OPER,STR(VDOT(ARR[2],VCART(0,1,1)),6)\n"
       "IF/(VCROSS(U,V).EQ.VCART(0,0,1))\n  TEXT/OPER,'cross ok'\nENDIF\n"
-      "D(R) = ROTATE/ZAXIS, 90\nTEXT/OPER,STR(VDOT(VMCS(U),VCART(0,1,0)),6)\nTEXT/OPER,STR(VDOT(VPCS(U),VCART(0,-1,0)),6)\n"
+      "D(R) = ROTATE/ZAXIS, "
+      "90\nTEXT/OPER,STR(VDOT(VMCS(U),VCART(0,1,0)),6)\nTEXT/OPER,STR(VDOT(VPCS(U),VCART(0,-1,0)),6)\n"
       "DID(IN1)=DEVICE/STOR,'vectors.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nREAD/DID(IN1),U\n"
       "TEXT/OPER,STR(VDOT(U,VCART(100,10,1)),3)\n"
       "TEXT/OPER,CONCAT(STR(VECX(U)),' ',STR(VECY(U)),' ',STR(VECZ(U)))\nENDFIL\n";
@@ -1590,13 +1716,14 @@ TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
   std::vector<std::string> texts;
   for (const auto& e : r.session->record().events)
     if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
-  const std::vector<std::string> expected = {"1", "13", "0,0,-1", "-1.5", "1.732051", "6.000000", "cross ok",
-                                             "1.000000", "1.000000", "130.250", "1.5 -2 0.25"};
+  const std::vector<std::string> expected = {"1",        "13",       "0,0,-1",   "-1.5",    "1.732051",   "6.000000",
+                                             "cross ok", "1.000000", "1.000000", "130.250", "1.5 -2 0.25"};
   EXPECT_EQ(texts, expected);
 
   // Type errors are found by check, with the place.
-  const auto wrong = check("DMISMN/'p', 5.0\nDECL/VECTOR,U\nDECL/REAL,X\nX=ASSIGN/VCART(1,2,3)\nU=ASSIGN/U*U\n"
-                           "X=ASSIGN/SQRT(U)\nX=ASSIGN/VMAG(X)\nENDFIL\n");
+  const auto wrong = check(
+      "DMISMN/'p', 5.0\nDECL/VECTOR,U\nDECL/REAL,X\nX=ASSIGN/VCART(1,2,3)\nU=ASSIGN/U*U\n"
+      "X=ASSIGN/SQRT(U)\nX=ASSIGN/VMAG(X)\nENDFIL\n");
   EXPECT_EQ(wrong.errors, 4U) << wrong.text;
   EXPECT_TRUE(wrong.has("shop.dmi:4:")) << wrong.text;
   EXPECT_TRUE(wrong.has("cannot assign a VECTOR to X, which is declared REAL")) << wrong.text;
@@ -1621,29 +1748,33 @@ TEST(ShopPrograms, DmisOutputFilesCheckAndTheirActualsCanBeJudged) {
     EXPECT_EQ(c.errors, 0u) << c.text;
     EXPECT_TRUE(c.has("FA(A_CIRCLE)=FEAT/... states a measured actual")) << c.text;
   }
-  const auto results = check("DMISMN/'out', 5.0\nOUTPUT/FA(C1),TA(D1)\nFA(C1)=FEAT/CIRCLE,INNER,CART,1,2,3,0,0,1,10.01\n"
-                             "TA(D1)=TOL/DIAM,0.01000,INTOL\nENDFIL\n");
+  const auto results = check(
+      "DMISMN/'out', 5.0\nOUTPUT/FA(C1),TA(D1)\nFA(C1)=FEAT/CIRCLE,INNER,CART,1,2,3,0,0,1,10.01\n"
+      "TA(D1)=TOL/DIAM,0.01000,INTOL\nENDFIL\n");
   EXPECT_EQ(results.errors, 0u) << results.text;
   // A CAMIO output file echoes the program's DATDEF and DATSET without restating their features,
   // and reports the alignment as DA(l)=DATSET/TRMATX,...: notes, not errors.
-  const auto camio = check("$$ Version Camio 8.6\nUNITS/MM,ANGDEC\nDATDEF/FA(PLN_Décalé),DAT(A)\n"
-                           "D(Réf)=DATSET/DAT(A),-YDIR,YORIG\n"
-                           "DA(Réf)=DATSET/TRMATX,-1,0,0,0,1,0,0,0,-1,1251.254,155.056,-0.034\n"
-                           "OUTPUT/FA(P1),TA(A1)\nFA(P1)=FEAT/POINT,CART,1062.026,-7.805,373.053,0,-1,0\n"
-                           "TA(A1)=TOL/DISTWRT,OUTOL,NOMINL,7.805,7.805,7.805,FA(PLN_Décalé),YAXIS,AVG\n");
+  const auto camio = check(
+      "$$ Version Camio 8.6\nUNITS/MM,ANGDEC\nDATDEF/FA(PLN_Décalé),DAT(A)\n"
+      "D(Réf)=DATSET/DAT(A),-YDIR,YORIG\n"
+      "DA(Réf)=DATSET/TRMATX,-1,0,0,0,1,0,0,0,-1,1251.254,155.056,-0.034\n"
+      "OUTPUT/FA(P1),TA(A1)\nFA(P1)=FEAT/POINT,CART,1062.026,-7.805,373.053,0,-1,0\n"
+      "TA(A1)=TOL/DISTWRT,OUTOL,NOMINL,7.805,7.805,7.805,FA(PLN_Décalé),YAXIS,AVG\n");
   EXPECT_EQ(camio.errors, 0u) << camio.text;
   EXPECT_TRUE(camio.has("3:1: note: an echo of the measuring program's line")) << camio.text;
   EXPECT_TRUE(camio.has("5:1: note: DA(Réf)=DATSET/... is a reported alignment")) << camio.text;
   // In a program that measures, the same DATDEF leans on an actual from an earlier run: a warning
   // read leniently, an error under --strict.
-  const std::string measuring = "DMISMN/'p', 5.0\nDATDEF/FA(PLN_Décalé),DAT(A)\nFA(P1)=FEAT/POINT,CART,0,0,0,0,0,1\n"
-                                "GOTO/0,0,10\nENDFIL\n";
+  const std::string measuring =
+      "DMISMN/'p', 5.0\nDATDEF/FA(PLN_Décalé),DAT(A)\nFA(P1)=FEAT/POINT,CART,0,0,0,0,0,1\n"
+      "GOTO/0,0,10\nENDFIL\n";
   const auto program = check(measuring);
   EXPECT_TRUE(program.has("2:8: warning: feature FA(PLN_Décalé) is not defined in this program")) << program.text;
   EXPECT_TRUE(check(measuring, true).has("2:8: error: feature FA(PLN_Décalé) is not defined"));
-  const auto r = run("DMISMN/'judge', 5.0\nF(C1)=FEAT/CIRCLE,INNER,CART,50,50,40,0,0,1,50\n"
-                     "FA(C1)=FEAT/CIRCLE,INNER,CART,50.01,50,40,0,0,1,50.02\nT(D)=TOL/DIAM,-0.01,0.01\n"
-                     "OUTPUT/FA(C1),TA(D)\nENDFIL\n");
+  const auto r =
+      run("DMISMN/'judge', 5.0\nF(C1)=FEAT/CIRCLE,INNER,CART,50,50,40,0,0,1,50\n"
+          "FA(C1)=FEAT/CIRCLE,INNER,CART,50.01,50,40,0,0,1,50.02\nT(D)=TOL/DIAM,-0.01,0.01\n"
+          "OUTPUT/FA(C1),TA(D)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* d = tolerance(*r.session, "D");
   ASSERT_TRUE(d);
@@ -1660,8 +1791,9 @@ TEST(ShopPrograms, DmisOutputFilesCheckAndTheirActualsCanBeJudged) {
 TEST(ShopPrograms, OpenOfACadModelMakesNoFile) {
   const fs::path out = temp_dir() / "cad_out";
   fs::create_directories(out);
-  const std::string text = "DMISMN/'cad', 5.2\nDID(Ladder)=DEVICE/STOR,'C:\\LK\\CAO\\Ladder_model.sab'\n"
-                           "OPEN/DID(Ladder),CAD,VENDOR,'ACIS'\nTEXT/OPER,'after'\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'cad', 5.2\nDID(Ladder)=DEVICE/STOR,'C:\\LK\\CAO\\Ladder_model.sab'\n"
+      "OPEN/DID(Ladder),CAD,VENDOR,'ACIS'\nTEXT/OPER,'after'\nENDFIL\n";
   const auto c = check(text);
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
   EXPECT_TRUE(c.has("3:18: note: OPEN of a CAD model: the part is the world's, the model is not read")) << c.text;
@@ -1689,8 +1821,10 @@ TEST(ShopPrograms, DryRunTakesEveryPointAtItsNominal) {
       "PTMEAS/CART, -1057, -20, 150, -1, 0, 0\nPTMEAS/CART, -1063, -14, 150, 0, -1, 0\n"
       "PTMEAS/CART, -1069, -20, 150, 1, 0, 0\nPTMEAS/CART, -1063, -26, 150, 0, 1, 0\nENDMES\n"
       "FEDRAT/SCNVEL, MMPS, 10\nSCNSET/DRAG, 0.1, DEFLEC, 0.3, LAW, VC2\n"
-      "F(B2) = FEAT/CIRCLE, INNER, CART, -1063, -20, 140, 0, 0, 1, 12\nSCNMOD/ON\nMEAS/CIRCLE, F(B2), 0\nENDMES\nSCNMOD/OFF\n"
-      "T(D) = TOL/DIAM, -0.001, 0.001\nT(F) = TOL/FLAT, 0.001\nOUTPUT/FA(TOP), TA(F)\nOUTPUT/FA(B1), TA(D)\nOUTPUT/FA(B2), TA(D)\nENDFIL\n";
+      "F(B2) = FEAT/CIRCLE, INNER, CART, -1063, -20, 140, 0, 0, 1, 12\nSCNMOD/ON\nMEAS/CIRCLE, F(B2), "
+      "0\nENDMES\nSCNMOD/OFF\n"
+      "T(D) = TOL/DIAM, -0.001, 0.001\nT(F) = TOL/FLAT, 0.001\nOUTPUT/FA(TOP), TA(F)\nOUTPUT/FA(B1), "
+      "TA(D)\nOUTPUT/FA(B2), TA(D)\nENDFIL\n";
   const Ran dry = dry_run(text);
   ASSERT_EQ(dry.status, ExecStatus::Finished) << dry.diagnostics;
   Session* session = dry.session.get();
@@ -1729,10 +1863,11 @@ TEST(ShopPrograms, DirectFilesGetOnlyTheirWriteLines) {
   const fs::path out = temp_dir() / "direct_out";
   fs::remove_all(out);
   fs::create_directories(out);
-  const std::string text = "DMISMN/'direct', 5.1\nDID(CSV)=DEVICE/STOR,'table.csv'\nDID(DMO)=DEVICE/STOR,'part.dmo'\n"
-                           "OPEN/DID(CSV),DIRECT,OUTPUT,OVERWR\nOPEN/DID(DMO),FDATA,V(1),OUTPUT,OVERWR\n"
-                           "F(P1)=FEAT/POINT,CART,1,2,3,0,0,1\nFA(P1)=FEAT/POINT,CART,1,2,3.5,0,0,1\n"
-                           "WRITE/DID(CSV),'x,y,z'\nOUTPUT/FA(P1)\nTEXT/OUTFIL,'note'\nCLOSE/DID(CSV)\nCLOSE/DID(DMO)\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'direct', 5.1\nDID(CSV)=DEVICE/STOR,'table.csv'\nDID(DMO)=DEVICE/STOR,'part.dmo'\n"
+      "OPEN/DID(CSV),DIRECT,OUTPUT,OVERWR\nOPEN/DID(DMO),FDATA,V(1),OUTPUT,OVERWR\n"
+      "F(P1)=FEAT/POINT,CART,1,2,3,0,0,1\nFA(P1)=FEAT/POINT,CART,1,2,3.5,0,0,1\n"
+      "WRITE/DID(CSV),'x,y,z'\nOUTPUT/FA(P1)\nTEXT/OUTFIL,'note'\nCLOSE/DID(CSV)\nCLOSE/DID(DMO)\nENDFIL\n";
   const fs::path p = write("direct.dmi", text);
   auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
   ASSERT_TRUE(backend.has_value());
@@ -1764,7 +1899,9 @@ TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {
   const std::string stated =
       "DMISMN/'k', 5.1\nFA(CN)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,90\nFA(CY)=FEAT/CYLNDR,INNER,CART,1,2,0,0,0,1,12,20\n"
       "FA(PL)=FEAT/PLANE,CART,0,0,14,0,0,1\nFA(TL)=FEAT/PLANE,CART,0,0,14,0,0.0872,0.9962\n";
-  const auto r = run(stated + "CONST/CIRCLE,F(K),INTOF,FA(CN),FA(PL)\nCONST/CIRCLE,F(L),INTOF,FA(PL),FA(CY)\nOUTPUT/FA(K),FA(L)\nENDFIL\n");
+  const auto r =
+      run(stated +
+          "CONST/CIRCLE,F(K),INTOF,FA(CN),FA(PL)\nCONST/CIRCLE,F(L),INTOF,FA(PL),FA(CY)\nOUTPUT/FA(K),FA(L)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* k = report(*r.session, "K");
   ASSERT_TRUE(k && k->actual);
@@ -1774,14 +1911,16 @@ TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {
   ASSERT_TRUE(l && l->actual);
   EXPECT_NEAR(l->actual->diameter_mm, 12.0, 1e-12);
   const auto tilted = run(stated + "CONST/CIRCLE,F(K),INTOF,FA(CN),FA(TL)\nENDFIL\n");
-  EXPECT_NE(tilted.diagnostics.find("deg off normal to the axis: the section is an ellipse"), std::string::npos) << tilted.diagnostics;
+  EXPECT_NE(tilted.diagnostics.find("deg off normal to the axis: the section is an ellipse"), std::string::npos)
+      << tilted.diagnostics;
   // The default block's BORE1 (a 20 mm bore, its axis along Z) from two measured sections.
-  const auto bore = run("DMISMN/'sections', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
-                        "SNSLCT/S(P4)\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
-                        "F(C1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(C1), 8\nENDMES\n"
-                        "F(C2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\nMEAS/CIRCLE, F(C2), 8\nENDMES\n"
-                        "GOTO/40, 50, 80\nF(CY) = FEAT/CYLNDR, INNER, CART, 40, 50, 30, 0, 0, 1, 20, 10\n"
-                        "CONST/CYLNDR, F(CY), BF, FA(C1), FA(C2)\nOUTPUT/FA(CY)\nENDFIL\n");
+  const auto bore =
+      run("DMISMN/'sections', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+          "SNSLCT/S(P4)\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nMODE/AUTO\nGOTO/40, 50, 80\n"
+          "F(C1) = FEAT/CIRCLE, INNER, CART, 40, 50, 35, 0, 0, 1, 20\nMEAS/CIRCLE, F(C1), 8\nENDMES\n"
+          "F(C2) = FEAT/CIRCLE, INNER, CART, 40, 50, 25, 0, 0, 1, 20\nMEAS/CIRCLE, F(C2), 8\nENDMES\n"
+          "GOTO/40, 50, 80\nF(CY) = FEAT/CYLNDR, INNER, CART, 40, 50, 30, 0, 0, 1, 20, 10\n"
+          "CONST/CYLNDR, F(CY), BF, FA(C1), FA(C2)\nOUTPUT/FA(CY)\nENDFIL\n");
   ASSERT_EQ(bore.status, ExecStatus::Finished) << bore.diagnostics;
   const auto* cy = report(*bore.session, "CY");
   ASSERT_TRUE(cy && cy->actual);
@@ -1794,8 +1933,8 @@ TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {
 // The block's -X face is at machine x = 300 exactly (the world's truth).
 TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
   const auto program = [](const std::string& before, const std::string& after) {
-    return "DMISMN/'feed', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n" + before +
-           "SNSLCT/S(P4)\n" + after +
+    return "DMISMN/'feed', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n" +
+           before + "SNSLCT/S(P4)\n" + after +
            "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nF(P1) = FEAT/POINT, CART, 0, 50, 30, -1, 0, 0\n"
            "F(P2) = FEAT/POINT, CART, 0, 60, 30, -1, 0, 0\nGOTO/-10, 50, 80\nGOTO/-10, 50, 30\n"
            "MEAS/POINT, F(P1), 1\nPTMEAS/CART, 0, 50, 30, -1, 0, 0\nENDMES\n"
@@ -1805,7 +1944,8 @@ TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
   const auto after = run(program("", slow));
   ASSERT_EQ(after.status, ExecStatus::Finished) << after.diagnostics;
   EXPECT_NE(after.diagnostics.find("12:1: warning: probing at 0.600 mm/s, but the probe was qualified at 3.000 mm/s"),
-            std::string::npos) << after.diagnostics;
+            std::string::npos)
+      << after.diagnostics;
   EXPECT_EQ(after.diagnostics.find("probing at", after.diagnostics.find("probing at") + 1), std::string::npos);  // once
   const auto* off = report(*after.session, "P1");
   ASSERT_TRUE(off && off->actual);
@@ -1832,11 +1972,13 @@ TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
 // off its nominal. CAST reads a cylinder's axis as a LINE and its centre as a POINT.
 TEST(ShopPrograms, RmeasBlockAndCastConstructions) {
   const std::string text =
-      "DMISMN/'rmeas', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "DMISMN/'rmeas', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, "
+      "4.0\nSNSLCT/S(P4)\n"
       "F(REF)=FEAT/CIRCLE,INNER,CART,10,20,0,0,0,1,8\nFA(REF)=FEAT/CIRCLE,INNER,CART,10.5,19.8,0,0,0,1,8\n"
       "F(P)=FEAT/POINT,CART,30,20,-5,0,0,1\nRMEAS/POINT,F(P),1,FA(REF)\nPTMEAS/CART,30,20,-5,0,0,1\nENDMES\n"
       "F(Q)=FEAT/POINT,CART,40,20,-5,0,0,1\nRMEAS/POINT,F(Q),1,VECBLD,2,3\nPTMEAS/CART,40,20,-5,0,0,1\nENDMES\n"
-      "FA(CY)=FEAT/CYLNDR,INNER,CART,5,6,7,0,0.6,0.8,12,20\nCONST/LINE,F(AX),CAST,FA(CY)\nCONST/POINT,F(CT),CAST,FA(CY)\n"
+      "FA(CY)=FEAT/CYLNDR,INNER,CART,5,6,7,0,0.6,0.8,12,20\nCONST/LINE,F(AX),CAST,FA(CY)\nCONST/"
+      "POINT,F(CT),CAST,FA(CY)\n"
       "CONST/CIRCLE,F(SEC),CAST,FA(CY)\nOUTPUT/FA(P),FA(Q),FA(AX),FA(CT),FA(SEC)\nENDFIL\n";
   const Checked c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
@@ -1860,8 +2002,9 @@ TEST(ShopPrograms, RmeasBlockAndCastConstructions) {
   const auto* sec = report(*session, "SEC");
   ASSERT_TRUE(sec && sec->actual);
   EXPECT_NEAR(sec->actual->diameter_mm, 12.0, 1e-12);
-  const Checked bad = check("DMISMN/'c', 5.0\nFA(A)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(B)=FEAT/POINT,CART,1,0,0,0,0,1\n"
-                            "CONST/LINE,F(L),CAST,FA(A),FA(B)\nENDFIL\n");
+  const Checked bad = check(
+      "DMISMN/'c', 5.0\nFA(A)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(B)=FEAT/POINT,CART,1,0,0,0,0,1\n"
+      "CONST/LINE,F(L),CAST,FA(A),FA(B)\nENDFIL\n");
   EXPECT_TRUE(bad.has("CAST takes one source feature, got 2")) << bad.text;
 }
 
@@ -1871,14 +2014,16 @@ TEST(ShopPrograms, RmeasBlockAndCastConstructions) {
 // with X along -X of the machine (DA(..)=DATSET/TRMATX,-1,...). The nominal's sense made metron's
 // X the opposite, and every distance along X to a point then came out 1680 mm off the machine's.
 TEST(ShopPrograms, ALineThroughFeaturesRunsFromTheFirstToTheLast) {
-  const auto r = run("DMISMN/'line', 5.0\nFA(P2)=FEAT/POINT,CART,1257,145,-514,0,0,-1\nFA(P3)=FEAT/POINT,CART,408,146,-514,0,0,-1\n"
-                     "F(L)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,1,0\nCONST/LINE,F(L),BF,FA(P2),FA(P3)\nOUTPUT/FA(L)\nENDFIL\n");
+  const auto r = run(
+      "DMISMN/'line', 5.0\nFA(P2)=FEAT/POINT,CART,1257,145,-514,0,0,-1\nFA(P3)=FEAT/POINT,CART,408,146,-514,0,0,-1\n"
+      "F(L)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,1,0\nCONST/LINE,F(L),BF,FA(P2),FA(P3)\nOUTPUT/FA(L)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* l = report(*r.session, "L");
   ASSERT_TRUE(l && l->actual);
   const Eigen::Vector3d run_dir = Eigen::Vector3d(408 - 1257, 1, 0).normalized();
   EXPECT_NEAR(l->actual->direction.dot(run_dir), 1.0, 1e-9);
-  EXPECT_NE(r.diagnostics.find("F(L) runs from FA(P2) to FA(P3), against its nominal direction"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("F(L) runs from FA(P2) to FA(P3), against its nominal direction"), std::string::npos)
+      << r.diagnostics;
 }
 
 TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
@@ -1895,16 +2040,18 @@ TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   EXPECT_EQ(texts[0], "SN-0042");
   EXPECT_EQ(std::stod(texts[1]), 2.5);
   EXPECT_EQ(std::stod(texts[2]), 0.0);
-  EXPECT_NE(r.diagnostics.find("PROMPT 'Second limit ?': no operator on the virtual CMM, answered 0"), std::string::npos)
+  EXPECT_NE(r.diagnostics.find("PROMPT 'Second limit ?': no operator on the virtual CMM, answered 0"),
+            std::string::npos)
       << r.diagnostics;
 }
 
 // TEXT/QUERY,(V),len,AN|N,L|R,'question' (older and MCOSMOS-style programs ask the serial number
 // so) is a PROMPT into V: it displayed V and dropped the question and the answer.
 TEST(ShopPrograms, TextQueryReadsTheAnswerIntoItsVariable) {
-  const std::string text = "DMISMN/'q', 5.0\nDECL/CHAR,20,AA\nDECL/REAL,X\nAA=ASSIGN/'none'\n"
-                           "TEXT/QUERY,(AA),20,AN,L,'Enter serial number'\nTEXT/QUERY,(X),8,N,R,'Temperature?'\n"
-                           "TEXT/OPER,CONCAT('SN=',AA)\nTEXT/OPER,STR(X*2)\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'q', 5.0\nDECL/CHAR,20,AA\nDECL/REAL,X\nAA=ASSIGN/'none'\n"
+      "TEXT/QUERY,(AA),20,AN,L,'Enter serial number'\nTEXT/QUERY,(X),8,N,R,'Temperature?'\n"
+      "TEXT/OPER,CONCAT('SN=',AA)\nTEXT/OPER,STR(X*2)\nENDFIL\n";
   EXPECT_EQ(check(text).errors, 0u);
   const auto r = run(text, std::nullopt, {"SN123", "21.5"});
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
@@ -1923,10 +2070,12 @@ TEST(ShopPrograms, TextQueryReadsTheAnswerIntoItsVariable) {
 TEST(ShopPrograms, LabelsWithAccentsPlusAndPlusMinusInEveryEncoding) {
   // The same program in UTF-8 and in Windows-1252 (è = 0xE8, ± = 0xB1): both check clean and
   // the label is the same UTF-8 text.
-  const std::string utf8 = "DMISMN/'p', 5.1\nF(PLN_Sph\xC3\xA8res+\xC2\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
-                           "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xC3\xA8res+\xC2\xB1),TA(F1)\nENDFIL\n";
-  const std::string latin = "DMISMN/'p', 5.1\nF(PLN_Sph\xE8res+\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
-                            "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xE8res+\xB1),TA(F1)\nENDFIL\n";
+  const std::string utf8 =
+      "DMISMN/'p', 5.1\nF(PLN_Sph\xC3\xA8res+\xC2\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
+      "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xC3\xA8res+\xC2\xB1),TA(F1)\nENDFIL\n";
+  const std::string latin =
+      "DMISMN/'p', 5.1\nF(PLN_Sph\xE8res+\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
+      "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xE8res+\xB1),TA(F1)\nENDFIL\n";
   for (const auto* t : {&utf8, &latin}) {
     const auto c = check(*t);
     EXPECT_EQ(c.errors, 0u) << c.text;
@@ -1942,8 +2091,9 @@ TEST(ShopPrograms, LabelsWithAccentsPlusAndPlusMinusInEveryEncoding) {
 TEST(ShopPrograms, ProgramsSavedAsUtf16AreRead) {
   // Windows editors save "Unicode" text as UTF-16 (with or without a byte-order mark): before,
   // "expected a major word" at 1:1 with a NUL after every letter.
-  const std::string text = "DMISMN/'p', 5.1\r\nF(PLN_Sph\xC3\xA8res)=FEAT/PLANE,CART,0,0,0,0,0,1\r\n"
-                           "TEXT/OPER,'\xF0\x9D\x9C\x8B ok'\r\nFEAT PLANE\r\nENDFIL\r\n";  // a 4-byte character: a surrogate pair
+  const std::string text =
+      "DMISMN/'p', 5.1\r\nF(PLN_Sph\xC3\xA8res)=FEAT/PLANE,CART,0,0,0,0,0,1\r\n"
+      "TEXT/OPER,'\xF0\x9D\x9C\x8B ok'\r\nFEAT PLANE\r\nENDFIL\r\n";  // a 4-byte character: a surrogate pair
   // UTF-16 from UTF-8, by hand (the test's own encoder: code points, then units).
   const auto utf16 = [&](bool little, bool bom) {
     std::u32string cps;
@@ -1982,18 +2132,24 @@ TEST(ShopPrograms, ProgramsSavedAsUtf16AreRead) {
       EXPECT_TRUE(c.has("shop.dmi:4:6: error: expected '/' after the major word 'FEAT'")) << c.text;
     }
   // A lone surrogate and a lone last byte are U+FFFD, not a crash.
-  EXPECT_EQ(metron::to_utf8(std::string("\xFF\xFE" "A\0\x00\xD8" "B", 7)), "A\xEF\xBF\xBD\xEF\xBF\xBD");
+  EXPECT_EQ(metron::to_utf8(std::string("\xFF\xFE"
+                                        "A\0\x00\xD8"
+                                        "B",
+                                        7)),
+            "A\xEF\xBF\xBD\xEF\xBF\xBD");
 }
 
 TEST(ShopPrograms, ContinuationInsideALabelSkipsTheLeadingBlanks) {
-  const auto c = check("DMISMN/'p', 5.1\nF(CIR_1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
-                       "T(D1)=TOL/DIAM,-0.1,0.1\nOUTPUT/FA(CIR_$\n    1),TA(D1)\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nF(CIR_1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
+      "T(D1)=TOL/DIAM,-0.1,0.1\nOUTPUT/FA(CIR_$\n    1),TA(D1)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
 }
 
 TEST(ShopPrograms, NonStatementLinesAreOneWarningEachLenientAndErrorsStrict) {
-  const std::string text = "DMISMN/'p', 5.1\n-------------------------\nOperator: turn the part over\nFEAT PLANE\n"
-                           "//////////////////////////////////////\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'p', 5.1\n-------------------------\nOperator: turn the part over\nFEAT PLANE\n"
+      "//////////////////////////////////////\nENDFIL\n";
   const auto lenient = check(text);
   EXPECT_EQ(lenient.warnings, 3u) << lenient.text;
   // CAMIO writes separators of slashes around operator notes: a line of symbols only is a note.
@@ -2007,10 +2163,12 @@ TEST(ShopPrograms, NonStatementLinesAreOneWarningEachLenientAndErrorsStrict) {
 }
 
 TEST(ShopPrograms, TextAfterEndfilIsReportedOnceAsASecondProgram) {
-  const auto c = check("DMISMN/'one', 5.1\nENDFIL\nDMISMN/'two', 5.1\nF(X)=FEAT/POINT,CART,0,0,0,0,0,1\nGARBAGE !!\nENDFIL\n");
+  const auto c =
+      check("DMISMN/'one', 5.1\nENDFIL\nDMISMN/'two', 5.1\nF(X)=FEAT/POINT,CART,0,0,0,0,0,1\nGARBAGE !!\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 1u) << c.text;
-  EXPECT_TRUE(c.has("3 statements after ENDFIL are ignored: the file holds a second program (DMISMN after ENDFIL)")) << c.text;
+  EXPECT_TRUE(c.has("3 statements after ENDFIL are ignored: the file holds a second program (DMISMN after ENDFIL)"))
+      << c.text;
 }
 
 // ---- defects found as a new user --------------------------------------------------------------
@@ -2025,8 +2183,10 @@ TEST(ShopPrograms, ActualsFromAnEarlierRunAreReadLeniently) {
       "F(PL)=FEAT/PLANE,CART,0,0,0,0,0,1\nENDFIL\n";
   const auto c = check(text);
   EXPECT_EQ(c.errors, 0U) << c.text;
-  EXPECT_TRUE(c.has("2:8: warning: feature FA(PL) is used before its definition at line 5: CMM software may keep its "
-                    "actual from an earlier run, metron does not")) << c.text;
+  EXPECT_TRUE(
+      c.has("2:8: warning: feature FA(PL) is used before its definition at line 5: CMM software may keep its "
+            "actual from an earlier run, metron does not"))
+      << c.text;
   EXPECT_TRUE(c.has("4:24: warning: feature FA(OLD1) is not defined in this program: CMM software may keep its actual"))
       << c.text;
   EXPECT_GE(check(text, true).errors, 3U);  // --strict: errors
@@ -2058,7 +2218,8 @@ TEST(ShopPrograms, OutputOfAFeatureTheProgramNeverDefinesIsLeftOutLeniently) {
       "T(Z)=TOL/CORTOL,ZAXIS,-0.01,0.01\nOUTPUT/FA(NEVER),TA(Z)\nOUTPUT/FA(P1),FA(NEVER2),TA(Z)\nENDFIL\n";
   const auto lenient = check(text);
   EXPECT_EQ(lenient.errors, 0u) << lenient.text;
-  EXPECT_TRUE(lenient.has("5:8: warning: feature FA(NEVER) is never defined in this program: left out of this OUTPUT")) << lenient.text;
+  EXPECT_TRUE(lenient.has("5:8: warning: feature FA(NEVER) is never defined in this program: left out of this OUTPUT"))
+      << lenient.text;
   EXPECT_TRUE(lenient.has("5:18: note: T(Z) is left out with the feature")) << lenient.text;
   EXPECT_TRUE(lenient.has("6:15: warning: feature FA(NEVER2) is never defined")) << lenient.text;
   const auto strict = check(text, true);
@@ -2067,7 +2228,8 @@ TEST(ShopPrograms, OutputOfAFeatureTheProgramNeverDefinesIsLeftOutLeniently) {
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::size_t results = 0;
-  for (const auto& e : r.session->record().events) results += std::holds_alternative<metron::runtime::ToleranceResult>(e);
+  for (const auto& e : r.session->record().events)
+    results += std::holds_alternative<metron::runtime::ToleranceResult>(e);
   EXPECT_EQ(results, 1u);
   const auto* z = tolerance(*r.session, "Z");
   ASSERT_NE(z, nullptr);
@@ -2082,11 +2244,12 @@ TEST(ShopPrograms, PartoAndPerptoConstructThroughAPoint) {
       "DMISMN/'p', 5.1\nF(A)=FEAT/PLANE,CART,0,0,0,0,0.6,0.8\nFA(A)=FEAT/PLANE,CART,1,2,-1.25,0,0.6,0.8\n"
       "F(P)=FEAT/POINT,CART,10,20,30,0,0,1\nFA(P)=FEAT/POINT,CART,10,20,30,0,0,1\n"
       "F(L)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,0,1\nFA(L)=FEAT/LINE,UNBND,CART,5,5,5,-1,0,0,0,0,1\n"
-      "F(B)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(N)=FEAT/LINE,UNBND,CART,0,0,0,0,0,1,1,0,0\nF(Q)=FEAT/PLANE,CART,0,0,0,1,0,0\n";
+      "F(B)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(N)=FEAT/LINE,UNBND,CART,0,0,0,0,0,1,1,0,0\nF(Q)=FEAT/"
+      "PLANE,CART,0,0,0,1,0,0\n";
   const std::string text = head +
-      "CONST/PLANE,F(B),PARTO,FA(A),THRU,FA(P)\nCONST/LINE,F(N),PERPTO,FA(A),THRU,FA(P)\n"
-      "CONST/PLANE,F(Q),PERPTO,FA(L),THRU,FA(P)\nCONST/LINE,F(M),PARTO,FA(L),THRU,FA(P)\n"
-      "OUTPUT/FA(B),FA(N),FA(Q),FA(M)\nENDFIL\n";
+                           "CONST/PLANE,F(B),PARTO,FA(A),THRU,FA(P)\nCONST/LINE,F(N),PERPTO,FA(A),THRU,FA(P)\n"
+                           "CONST/PLANE,F(Q),PERPTO,FA(L),THRU,FA(P)\nCONST/LINE,F(M),PARTO,FA(L),THRU,FA(P)\n"
+                           "OUTPUT/FA(B),FA(N),FA(Q),FA(M)\nENDFIL\n";
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const Eigen::Vector3d p(10, 20, 30), n(0, 0.6, 0.8), x(1, 0, 0);
@@ -2096,17 +2259,20 @@ TEST(ShopPrograms, PartoAndPerptoConstructThroughAPoint) {
     ASSERT_TRUE(f->actual.has_value()) << label;
     // Through the point: for a plane the point lies in it, for a line on it.
     const Eigen::Vector3d d = f->actual->position - p;
-    if (f->actual->type == metron::runtime::FeatureType::Plane) EXPECT_NEAR(d.dot(dir), 0.0, 1e-12) << label;
-    else EXPECT_NEAR(d.cross(dir).norm(), 0.0, 1e-12) << label;
+    if (f->actual->type == metron::runtime::FeatureType::Plane)
+      EXPECT_NEAR(d.dot(dir), 0.0, 1e-12) << label;
+    else
+      EXPECT_NEAR(d.cross(dir).norm(), 0.0, 1e-12) << label;
     EXPECT_NEAR(f->actual->direction.dot(dir), 1.0, 1e-12) << label;  // the nominal's sense
   };
-  expect("B", n);  // parallel to A
-  expect("N", n);  // along A's normal
-  expect("Q", x);  // normal to L (L runs along -x; Q's nominal says +x)
+  expect("B", n);   // parallel to A
+  expect("N", n);   // along A's normal
+  expect("Q", x);   // normal to L (L runs along -x; Q's nominal says +x)
   expect("M", -x);  // parallel to L; M has no nominal, so L's actual sense (-x) stays
   // Wrong references and forms are positioned errors.
   const auto bad_ref = run(head + "CONST/PLANE,F(B),PARTO,FA(L),THRU,FA(P)\nENDFIL\n");
-  EXPECT_NE(bad_ref.diagnostics.find("PARTO a PLANE needs a PLANE as its reference, got a LINE"), std::string::npos) << bad_ref.diagnostics;
+  EXPECT_NE(bad_ref.diagnostics.find("PARTO a PLANE needs a PLANE as its reference, got a LINE"), std::string::npos)
+      << bad_ref.diagnostics;
   // THRU may be left out, as shop software (Creo CMM) writes it: the same plane.
   const auto no_thru = run(head + "CONST/PLANE,F(B),PARTO,FA(A),FA(P)\nOUTPUT/FA(B)\nENDFIL\n");
   ASSERT_EQ(no_thru.status, ExecStatus::Finished) << no_thru.diagnostics;
@@ -2116,7 +2282,8 @@ TEST(ShopPrograms, PartoAndPerptoConstructThroughAPoint) {
   EXPECT_NEAR(b->actual->direction.dot(n), 1.0, 1e-12);
   const auto no_point = check(head + "CONST/PLANE,F(B),PARTO,FA(A),THRU\nENDFIL\n");
   EXPECT_TRUE(no_point.has("PARTO takes a reference and a point: PARTO,FA(ref),THRU,FA(point)")) << no_point.text;
-  const auto circle = check(head + "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,5\nCONST/CIRCLE,F(C),PERPTO,FA(A),THRU,FA(P)\nENDFIL\n");
+  const auto circle =
+      check(head + "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,5\nCONST/CIRCLE,F(C),PERPTO,FA(A),THRU,FA(P)\nENDFIL\n");
   EXPECT_TRUE(circle.has("PERPTO constructs a PLANE or a LINE")) << circle.text;
 }
 
@@ -2192,11 +2359,13 @@ TEST(ShopPrograms, MidPlaneMidLineCopyAndVertexConstructions) {
   const Checked wrong = check(head + "CONST/LINE,F(X),MIDPL,FA(P1),FA(P2)\nENDFIL\n");
   EXPECT_TRUE(wrong.has("MIDPL constructs a PLANE")) << wrong.text;
   const auto not_cone = run(head + "CONST/POINT,F(V),VERTEX,FA(C)\nENDFIL\n");
-  EXPECT_NE(not_cone.diagnostics.find("VERTEX is the apex of a CONE, got a CIRCLE"), std::string::npos) << not_cone.diagnostics;
+  EXPECT_NE(not_cone.diagnostics.find("VERTEX is the apex of a CONE, got a CIRCLE"), std::string::npos)
+      << not_cone.diagnostics;
   const auto retype = run(head + "CONST/POINT,F(X),COPY,FA(C)\nENDFIL\n");
   EXPECT_NE(retype.diagnostics.find("COPY keeps the type"), std::string::npos) << retype.diagnostics;
   const auto lines = run(head + "CONST/LINE,F(X),MIDLI,FA(L1),FA(P1)\nENDFIL\n");
-  EXPECT_NE(lines.diagnostics.find("the mid line of two LINEs (or axes), got a PLANE"), std::string::npos) << lines.diagnostics;
+  EXPECT_NE(lines.diagnostics.find("the mid line of two LINEs (or axes), got a PLANE"), std::string::npos)
+      << lines.diagnostics;
 }
 
 // TOL/DISTB and DISTWRT with MINIM and MAXIM: between the near or far sides of features of size.
@@ -2205,24 +2374,29 @@ TEST(ShopPrograms, MidPlaneMidLineCopyAndVertexConstructions) {
 // CORTOL,ANGLE and DISTB,LIMIT were such forms; they are evaluated now
 // (ShopPrograms.PolarCoordinatesAndDistanceLimitsAreEvaluated).
 TEST(ShopPrograms, UnevaluatedToleranceFormsAreLeftOut) {
-  const Checked c = check("DMISMN/'f', 5.0\nF(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
-                          "T(CA)=TOL/CORTOL,ANGLE,-1,1\nT(DB)=TOL/DISTB,LIMIT,39.9,40.1\nT(CQ)=TOL/CORTOL,PHI,-1,1\n"
-                          "OUTPUT/FA(C),TA(CA),TA(CQ)\nENDFIL\n");
+  const Checked c = check(
+      "DMISMN/'f', 5.0\nF(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\n"
+      "T(CA)=TOL/CORTOL,ANGLE,-1,1\nT(DB)=TOL/DISTB,LIMIT,39.9,40.1\nT(CQ)=TOL/CORTOL,PHI,-1,1\n"
+      "OUTPUT/FA(C),TA(CA),TA(CQ)\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_FALSE(c.has("TOL/CORTOL,ANGLE is not evaluated by metron")) << c.text;
   EXPECT_FALSE(c.has("TOL/DISTB,LIMIT is not evaluated by metron")) << c.text;
   EXPECT_TRUE(c.has("TOL/CORTOL,PHI is not evaluated by metron")) << c.text;
   // A scanned GCURVE: run refused it, check now does.
-  const Checked scan = check("DMISMN/'g', 5.0\nP(PTH1)=PATH/LINE,CART,10,50,0,90,50,0,0,-1,0\nF(GC1)=FEAT/GCURVE,CART,10,50,0,0,-1,0\n"
-                             "MEAS/GCURVE,F(GC1),20\nPAMEAS/P(PTH1)\nENDMES\nENDFIL\n");
-  EXPECT_TRUE(scan.has("F(GC1) is a GCURVE: it is measured by PTMEAS points, each its own nominal, not by a scan")) << scan.text;
+  const Checked scan = check(
+      "DMISMN/'g', 5.0\nP(PTH1)=PATH/LINE,CART,10,50,0,90,50,0,0,-1,0\nF(GC1)=FEAT/GCURVE,CART,10,50,0,0,-1,0\n"
+      "MEAS/GCURVE,F(GC1),20\nPAMEAS/P(PTH1)\nENDMES\nENDFIL\n");
+  EXPECT_TRUE(scan.has("F(GC1) is a GCURVE: it is measured by PTMEAS points, each its own nominal, not by a scan"))
+      << scan.text;
   // A feature constructed by a method metron does not evaluate: its OUTPUT is left out with its
   // tolerance (the run stopped at "OUTPUT of FA(TANP) before it was measured").
-  const std::string tangent = "DMISMN/'o', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(TANP)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
-                              "CONST/PLANE,F(TANP),TANTO,FA(PA),FA(PA)\nT(FL)=TOL/FLAT,0.01\nOUTPUT/FA(TANP),TA(FL)\nOUTPUT/FA(PA)\nENDFIL\n";
+  const std::string tangent =
+      "DMISMN/'o', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(TANP)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
+      "CONST/PLANE,F(TANP),TANTO,FA(PA),FA(PA)\nT(FL)=TOL/FLAT,0.01\nOUTPUT/FA(TANP),TA(FL)\nOUTPUT/FA(PA)\nENDFIL\n";
   const Checked o = check(tangent);
   EXPECT_EQ(o.errors, 0u) << o.text;
-  EXPECT_TRUE(o.has("FA(TANP) has no actual: its CONST method TANTO is not supported; left out of this OUTPUT")) << o.text;
+  EXPECT_TRUE(o.has("FA(TANP) has no actual: its CONST method TANTO is not supported; left out of this OUTPUT"))
+      << o.text;
   const auto r = run(tangent);
   EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
 }
@@ -2251,9 +2425,10 @@ TEST(ShopPrograms, WriteLaysOutValuesInTheirFields) {
   const fs::path out = temp_dir() / "write_format_out";
   fs::remove_all(out);
   fs::create_directories(out);
-  const std::string text = "DMISMN/'fmt', 5.1\nDECL/REAL,X\nDECL/INTGR,N\nX=ASSIGN/-12.34567\nN=ASSIGN/42\n"
-                           "DID(T)=DEVICE/STOR,'table.txt'\nOPEN/DID(T),DIRECT,OUTPUT,OVERWR\n"
-                           "WRITE/DID(T),'D':4,X:10:3,N:5,'|',X:3:1,N:6:2,' ',-0.0004:5:3\nCLOSE/DID(T)\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'fmt', 5.1\nDECL/REAL,X\nDECL/INTGR,N\nX=ASSIGN/-12.34567\nN=ASSIGN/42\n"
+      "DID(T)=DEVICE/STOR,'table.txt'\nOPEN/DID(T),DIRECT,OUTPUT,OVERWR\n"
+      "WRITE/DID(T),'D':4,X:10:3,N:5,'|',X:3:1,N:6:2,' ',-0.0004:5:3\nCLOSE/DID(T)\nENDFIL\n";
   EXPECT_EQ(check(text).errors, 0u);
   const fs::path p = write("write_format.dmi", text);
   auto backend = metron::cli::virtual_cmm_backend(std::nullopt, 1);
@@ -2302,8 +2477,9 @@ TEST(ShopPrograms, IndexedLabelsNameOneFeaturePerIndex) {
   ASSERT_TRUE(m && m->actual);
   EXPECT_NEAR(m->actual->position.x(), 140.0, 1e-12);
   // An index that is no number, a family never defined and a missing ']' are positioned errors.
-  const Checked bad = check("DMISMN/'i', 5.0\nDECL/CHAR,8,S\nF(H[S])=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA(G[1])\n"
-                            "F(K[1)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n");
+  const Checked bad = check(
+      "DMISMN/'i', 5.0\nDECL/CHAR,8,S\nF(H[S])=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/FA(G[1])\n"
+      "F(K[1)=FEAT/POINT,CART,0,0,0,0,0,1\nENDFIL\n");
   EXPECT_TRUE(bad.has("a label's index")) << bad.text;
   EXPECT_TRUE(bad.has("G[1]")) << bad.text;
   EXPECT_TRUE(bad.has("expected ']' after the label's index")) << bad.text;
@@ -2365,9 +2541,11 @@ TEST(ShopPrograms, ExtremePointsAndOffsetPlanes) {
   EXPECT_NEAR(e5.x(), 60, 1e-4);
   EXPECT_NEAR(std::abs(e5.y()), 40, 1e-4);
   // A construction with no measured points, and OFFSET of what is not a plane, are errors at run.
-  const auto none = run("DMISMN/'e', 5.0\nF(A)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(A)=FEAT/POINT,CART,1,2,3,0,0,1\n"
-                        "CONST/POINT,F(B),EXTREM,FA(A),ZDIR\nENDFIL\n");
-  EXPECT_NE(none.diagnostics.find("EXTREM picks one of the measured points of FA(A), which has none"), std::string::npos)
+  const auto none =
+      run("DMISMN/'e', 5.0\nF(A)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(A)=FEAT/POINT,CART,1,2,3,0,0,1\n"
+          "CONST/POINT,F(B),EXTREM,FA(A),ZDIR\nENDFIL\n");
+  EXPECT_NE(none.diagnostics.find("EXTREM picks one of the measured points of FA(A), which has none"),
+            std::string::npos)
       << none.diagnostics;
   EXPECT_TRUE(check("DMISMN/'e', 5.0\nF(A)=FEAT/POINT,CART,0,0,0,0,0,1\nCONST/POINT,F(B),EXTREM,FA(A)\nENDFIL\n")
                   .has("EXTREM takes a feature and a direction"));
@@ -2407,7 +2585,8 @@ TEST(ShopPrograms, BadTestTakesAFailedMeasurementAndTellsWhichKind) {
   EXPECT_EQ(r.session->interpreter().variable("E0")->text, "");
   EXPECT_EQ(r.session->interpreter().variable("E1")->text, "NOTOUCH");
   EXPECT_NE(r.diagnostics.find("is taken by BADTST/ON: BADPT() is .TRUE."), std::string::npos) << r.diagnostics;
-  EXPECT_NE(r.diagnostics.find("cannot fit a CIRCLE to 3 points: degenerate point set: taken by BADTST/ON"), std::string::npos)
+  EXPECT_NE(r.diagnostics.find("cannot fit a CIRCLE to 3 points: degenerate point set: taken by BADTST/ON"),
+            std::string::npos)
       << r.diagnostics;
   const auto* two = report(*r.session, "TWO");
   EXPECT_TRUE(!two || !two->actual);  // no actual for a failed measurement
@@ -2434,16 +2613,19 @@ TEST(ShopPrograms, QtempReadsTheMachinesThermometer) {
   EXPECT_EQ(plain.session->interpreter().variable("T1")->number, 20.0);
   const auto told = plain.diagnostics.find("QTEMP: this machine has no thermometer");
   EXPECT_NE(told, std::string::npos) << plain.diagnostics;
-  EXPECT_EQ(plain.diagnostics.find("QTEMP: this machine has no thermometer", told + 1), std::string::npos) << plain.diagnostics;
+  EXPECT_EQ(plain.diagnostics.find("QTEMP: this machine has no thermometer", told + 1), std::string::npos)
+      << plain.diagnostics;
   // UNITS/...,TEMPF: QTEMP answers in degrees Fahrenheit (22 C = 71.6 F); TEMPC back to Celsius.
   // Before, the third word of UNITS was dropped unseen.
-  const std::string fahrenheit = "DMISMN/'t', 5.0\nUNITS/MM,ANGDEC,TEMPF\nDECL/REAL,T1,T2\nT1=ASSIGN/QTEMP(1)\n"
-                                 "UNITS/MM,ANGDEC,TEMPC\nT2=ASSIGN/QTEMP(1)\nENDFIL\n";
+  const std::string fahrenheit =
+      "DMISMN/'t', 5.0\nUNITS/MM,ANGDEC,TEMPF\nDECL/REAL,T1,T2\nT1=ASSIGN/QTEMP(1)\n"
+      "UNITS/MM,ANGDEC,TEMPC\nT2=ASSIGN/QTEMP(1)\nENDFIL\n";
   const auto f = run(fahrenheit, source_dir / "programs/worlds/cmm_errors_at_22c.json");
   ASSERT_EQ(f.status, ExecStatus::Finished) << f.diagnostics;
   EXPECT_NEAR(f.session->interpreter().variable("T1")->number, 71.6, 0.01);
   EXPECT_NEAR(f.session->interpreter().variable("T2")->number, 22.0, 0.005);
-  EXPECT_TRUE(check("DMISMN/'t', 5.0\nUNITS/MM,ANGDEC,KELVIN\nENDFIL\n").has("expected a temperature unit (TEMPC, TEMPF)"));
+  EXPECT_TRUE(
+      check("DMISMN/'t', 5.0\nUNITS/MM,ANGDEC,KELVIN\nENDFIL\n").has("expected a temperature unit (TEMPC, TEMPF)"));
 }
 
 // ERROR/(label),cond: a machine fault the condition covers goes to the handler, which goes on
@@ -2451,8 +2633,9 @@ TEST(ShopPrograms, QtempReadsTheMachinesThermometer) {
 // cover stops the run, as without ERROR. The air point: nothing of the block (x 0..160) is
 // within the probing move at x = 200.
 TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
-  const std::string air = "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
-                          "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nGOTO/220,50,60\nGOTO/40,50,80\n";
+  const std::string air =
+      "F(AIR)=FEAT/POINT,CART,200,50,20,1,0,0\nMEAS/POINT,F(AIR),1\nGOTO/220,50,60\nGOTO/220,50,20\n"
+      "PTMEAS/CART,200,50,20,1,0,0\nGOTO/220,50,60\nENDMES\nGOTO/220,50,60\nGOTO/40,50,80\n";
   const auto program = [&](const std::string& handling, const std::string& handler) {
     std::string text = bore_program("");
     text.insert(text.find("F(BORE1)"), "DECL/INTGR,N\n" + handling + air);
@@ -2461,14 +2644,15 @@ TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
   };
   // The handler lifts the probe clear (it stopped at the end of its search, beside the block),
   // counts, retries the measurement once (CURMEAS), then goes on after it.
-  const std::string retry = program("ERROR/(EH),ALL\n",
-                                    "GOTO/220,50,60\nN=ASSIGN/N+1\nIF/(N.LT.2)\nRESUME/CURMEAS\nENDIF\nRESUME/NEXTMEAS\n");
+  const std::string retry = program(
+      "ERROR/(EH),ALL\n", "GOTO/220,50,60\nN=ASSIGN/N+1\nIF/(N.LT.2)\nRESUME/CURMEAS\nENDIF\nRESUME/NEXTMEAS\n");
   const Checked c = check(retry);
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
   const auto r = run(retry);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.session->interpreter().variable("N")->number, 2);  // the air point failed twice
-  EXPECT_NE(r.diagnostics.find("is handled by ERROR/(label): the run goes on at the handler"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("is handled by ERROR/(label): the run goes on at the handler"), std::string::npos)
+      << r.diagnostics;
   const auto* bore = report(*r.session, "BORE1");
   ASSERT_TRUE(bore && bore->actual);
   EXPECT_NEAR(bore->actual->diameter_mm, 20.0, 2e-3);
@@ -2495,7 +2679,8 @@ TEST(ShopPrograms, ErrorHandlersGoOnAfterAMachineFault) {
   EXPECT_NE(stray.diagnostics.find("RESUME outside an error handler"), std::string::npos) << stray.diagnostics;
   EXPECT_TRUE(check("DMISMN/'r', 5.0\nERROR/EH,ALL\nENDFIL\n").has("expected the handler's label in parentheses"));
   // The condition first, IGNORE for AUTO, a macro handler (not run: one warning).
-  const Checked orders = check("DMISMN/'r', 5.0\nERROR/ALL,IGNORE\nERROR/NOTOUCH,(EH)\nERROR/ILLEGALTOUCH,M(EH)\n(EH)\nENDFIL\n");
+  const Checked orders =
+      check("DMISMN/'r', 5.0\nERROR/ALL,IGNORE\nERROR/NOTOUCH,(EH)\nERROR/ILLEGALTOUCH,M(EH)\n(EH)\nENDFIL\n");
   EXPECT_EQ(orders.errors, 0u) << orders.text;
   EXPECT_EQ(orders.warnings, 1u) << orders.text;
   EXPECT_TRUE(orders.has("ERROR with the macro M(EH) as its handler is not run")) << orders.text;
@@ -2539,7 +2724,8 @@ TEST(ShopPrograms, AMeasuredLineIsReportedFromItsNominalsPoint) {
       "PTMEAS/CART,10,5,-3,0,-1,0\nPTMEAS/CART,50,5,-3,0,-1,0\nPTMEAS/CART,90,5,-3,0,-1,0\nENDMES\n"
       "F(LU)=FEAT/LINE,UNBND,CART,20,5,-6,1,0,0,0,0,1\nMEAS/LINE,F(LU),2\n"
       "PTMEAS/CART,60,5,-6,0,-1,0\nPTMEAS/CART,80,5,-6,0,-1,0\nENDMES\n"
-      "T(LX)=TOL/CORTOL,XAXIS,-0.1,0.1\nOUTPUT/FA(LB),FA(LU),TA(LX)\nDX=VALUE/TA(LX),DEV,1\nDU=VALUE/TA(LX),DEV,2\nENDFIL\n";
+      "T(LX)=TOL/CORTOL,XAXIS,-0.1,0.1\nOUTPUT/FA(LB),FA(LU),TA(LX)\nDX=VALUE/TA(LX),DEV,1\nDU=VALUE/"
+      "TA(LX),DEV,2\nENDFIL\n";
   const Ran dry = dry_run(text);
   ASSERT_EQ(dry.status, ExecStatus::Finished) << dry.diagnostics;
   Session* session = dry.session.get();
@@ -2570,9 +2756,10 @@ TEST(ShopPrograms, AModuleHeaderStartsAFile) {
 // diameter is 12, not the disc's thickness 3 (the last number), and the shape is told once. A
 // `VEC` word before the stylus vector (`POL,0,0,VEC,0,0,1,50,4`) was an error.
 TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
-  const std::string text = "DMISMN/'s', 5.0\nS(DISK1)=SNSDEF/PROBE,FIXED,POL,0,0,0,0,1,115,12,DISC,3\n"
-                           "S(B)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,SPHERE\nCI(CL1)=CLMPID/'CLAMP-A'\n"
-                           "S(V)=SNSDEF/PROBE,INDEX,POL,0,0,VEC,0,0,1,50,4\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'s', 5.0\nS(DISK1)=SNSDEF/PROBE,FIXED,POL,0,0,0,0,1,115,12,DISC,3\n"
+      "S(B)=SNSDEF/PROBE,INDEX,POL,90,45,0,0,1,127,2,SPHERE\nCI(CL1)=CLMPID/'CLAMP-A'\n"
+      "S(V)=SNSDEF/PROBE,INDEX,POL,0,0,VEC,0,0,1,50,4\nENDFIL\n";
   const Checked c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 1u) << c.text;
@@ -2599,13 +2786,15 @@ TEST(ShopPrograms, SensorTipShapesKeepTheirDiameter) {
 // appeared). POS takes it as the datum's (a datum shift, TolerancePosition.ADatumHoleAtMmcLetsTheFrameShift);
 // other tolerances evaluate their datums RFS, which a warning says.
 TEST(ShopPrograms, DatumModifiersDoNotChangeTheFeaturesCondition) {
-  const std::string text = "DMISMN/'s', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\nDATDEF/FA(P),DAT(B)\n"
-                           "T(TP)=TOL/POS,2D,0.010,RFS,DAT(A),DAT(B),MMC\nT(TQ)=TOL/POS,2D,0.010,MMC,DAT(A),DAT(B),RFS\n"
-                           "T(TR)=TOL/PERP,0.010,DAT(A),MMC\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'s', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\nDATDEF/FA(P),DAT(B)\n"
+      "T(TP)=TOL/POS,2D,0.010,RFS,DAT(A),DAT(B),MMC\nT(TQ)=TOL/POS,2D,0.010,MMC,DAT(A),DAT(B),RFS\n"
+      "T(TR)=TOL/PERP,0.010,DAT(A),MMC\nENDFIL\n";
   const Checked c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 1u) << c.text;
-  EXPECT_TRUE(c.has("7:29: warning: DAT(A) at MMC: the datums of TOL/PERP are evaluated RFS, metron applies no datum shift"))
+  EXPECT_TRUE(
+      c.has("7:29: warning: DAT(A) at MMC: the datums of TOL/PERP are evaluated RFS, metron applies no datum shift"))
       << c.text;
   SourceManager sources;
   DiagnosticSink sink;
@@ -2623,18 +2812,20 @@ TEST(ShopPrograms, DatumModifiersDoNotChangeTheFeaturesCondition) {
 // A tolerance of one feature output with several applies to each (it stopped the run: "DIAM
 // applies to one feature, got 2"), and check refuses what run would: PERP of a CIRCLE.
 TEST(ShopPrograms, OneFeatureTolerancesApplyToEachOutputFeatureAndCheckAgreesWithRun) {
-  const std::string text = "DMISMN/'each', 5.0\nDECL/REAL,D1,D2\n"
-                           "F(H1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(H1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10.02\n"
-                           "F(H2)=FEAT/CIRCLE,INNER,CART,20,0,0,0,0,1,10\nFA(H2)=FEAT/CIRCLE,INNER,CART,20,0,0,0,0,1,9.9\n"
-                           "T(DD)=TOL/DIAM,-0.05,0.05\nOUTPUT/FA(H1),FA(H2),TA(DD)\n"
-                           "D1=VALUE/TA(DD),DEV,1\nD2=VALUE/TA(DD),DEV,2\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'each', 5.0\nDECL/REAL,D1,D2\n"
+      "F(H1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nFA(H1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10.02\n"
+      "F(H2)=FEAT/CIRCLE,INNER,CART,20,0,0,0,0,1,10\nFA(H2)=FEAT/CIRCLE,INNER,CART,20,0,0,0,0,1,9.9\n"
+      "T(DD)=TOL/DIAM,-0.05,0.05\nOUTPUT/FA(H1),FA(H2),TA(DD)\n"
+      "D1=VALUE/TA(DD),DEV,1\nD2=VALUE/TA(DD),DEV,2\nENDFIL\n";
   EXPECT_EQ(check(text).errors, 0u);
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_NEAR(r.session->interpreter().variable("D1")->number, 0.02, 1e-9);
   EXPECT_NEAR(r.session->interpreter().variable("D2")->number, -0.1, 1e-9);
-  const Checked perp = check("DMISMN/'p', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\n"
-                             "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(PR)=TOL/PERP,0.02,DAT(A)\nOUTPUT/FA(C),TA(PR)\nENDFIL\n");
+  const Checked perp = check(
+      "DMISMN/'p', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nDATDEF/FA(P),DAT(A)\n"
+      "F(C)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(PR)=TOL/PERP,0.02,DAT(A)\nOUTPUT/FA(C),TA(PR)\nENDFIL\n");
   EXPECT_TRUE(perp.has("TOL/PERP of T(PR) does not apply to a CIRCLE")) << perp.text;
 }
 
@@ -2642,11 +2833,12 @@ TEST(ShopPrograms, OneFeatureTolerancesApplyToEachOutputFeatureAndCheckAgreesWit
 // primary's orients X from the origin hole toward its centre. It stopped the run ("the secondary
 // datum is parallel to the primary datum").
 TEST(ShopPrograms, PlaneHoleHoleAlignsXFromTheOriginHoleToTheOther) {
-  const std::string text = "DMISMN/'phh', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
-                           "FA(B)=FEAT/CIRCLE,INNER,CART,10,20,5,0,0,1,8\nFA(C)=FEAT/CIRCLE,INNER,CART,70,100,5,0,0,1,8\n"
-                           "FA(E)=FEAT/POINT,CART,10,120,5,0,0,1\n"
-                           "DATDEF/FA(PA),DAT(A)\nDATDEF/FA(B),DAT(B)\nDATDEF/FA(C),DAT(C)\n"
-                           "D(A1)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG,DAT(C),XDIR\nOUTPUT/FA(C),FA(E)\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'phh', 5.0\nFA(PA)=FEAT/PLANE,CART,0,0,5,0,0,1\n"
+      "FA(B)=FEAT/CIRCLE,INNER,CART,10,20,5,0,0,1,8\nFA(C)=FEAT/CIRCLE,INNER,CART,70,100,5,0,0,1,8\n"
+      "FA(E)=FEAT/POINT,CART,10,120,5,0,0,1\n"
+      "DATDEF/FA(PA),DAT(A)\nDATDEF/FA(B),DAT(B)\nDATDEF/FA(C),DAT(C)\n"
+      "D(A1)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XORIG,YORIG,DAT(C),XDIR\nOUTPUT/FA(C),FA(E)\nENDFIL\n";
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   // B at the origin, C on +X at |BC| = 100; E (0, 100) from B is at 3-4-5 angles: (80, 60) in the part.
@@ -2659,10 +2851,11 @@ TEST(ShopPrograms, PlaneHoleHoleAlignsXFromTheOriginHoleToTheOther) {
   EXPECT_NEAR((part("E") - Eigen::Vector3d(80, 60, 0)).norm(), 0.0, 1e-9);
   // Spheres have no direction of their own: a sphere orients from the origin sphere toward it,
   // whatever the primary (here a wall x = 0, so Y runs from S1 to S2 along (0, 0.6, 0.8)).
-  const auto balls = run("DMISMN/'balls', 5.0\nFA(W)=FEAT/PLANE,CART,0,0,0,1,0,0\n"
-                         "FA(S1)=FEAT/SPHERE,OUTER,CART,0,10,10,25\nFA(S2)=FEAT/SPHERE,OUTER,CART,0,40,50,25\n"
-                         "DATDEF/FA(W),DAT(A)\nDATDEF/FA(S1),DAT(B)\nDATDEF/FA(S2),DAT(C)\n"
-                         "D(A2)=DATSET/DAT(A),XDIR,XORIG,DAT(B),YORIG,ZORIG,DAT(C),YDIR\nOUTPUT/FA(S2)\nENDFIL\n");
+  const auto balls =
+      run("DMISMN/'balls', 5.0\nFA(W)=FEAT/PLANE,CART,0,0,0,1,0,0\n"
+          "FA(S1)=FEAT/SPHERE,OUTER,CART,0,10,10,25\nFA(S2)=FEAT/SPHERE,OUTER,CART,0,40,50,25\n"
+          "DATDEF/FA(W),DAT(A)\nDATDEF/FA(S1),DAT(B)\nDATDEF/FA(S2),DAT(C)\n"
+          "D(A2)=DATSET/DAT(A),XDIR,XORIG,DAT(B),YORIG,ZORIG,DAT(C),YDIR\nOUTPUT/FA(S2)\nENDFIL\n");
   ASSERT_EQ(balls.status, ExecStatus::Finished) << balls.diagnostics;
   const auto* s2 = report(*balls.session, "S2");
   ASSERT_TRUE(s2 && s2->actual);
@@ -2670,10 +2863,12 @@ TEST(ShopPrograms, PlaneHoleHoleAlignsXFromTheOriginHoleToTheOther) {
 }
 
 TEST(ShopPrograms, JumptoALabelWithAMinus) {
-  const auto c = check("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  const auto r = run("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\n"
-                     "TEXT/OPER,STR(I)\nENDFIL\n");
+  const auto r =
+      run("DMISMN/'p', 5.1\nDECL/INTGR,I\nI=ASSIGN/0\n(L-1)\nI=ASSIGN/I+1\nIF/(I.LT.3)\nJUMPTO/(L-1)\nENDIF\n"
+          "TEXT/OPER,STR(I)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.session->interpreter().variable("I")->number, 3);
 }
@@ -2719,10 +2914,13 @@ TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtR
   const fs::path lib = temp_dir() / "library";
   fs::create_directories(lib);
   std::ofstream(lib / "SUB_PART.dmi") << "DMISMN/'sub', 5.0\nTEXT/OPER,'in the sub program'\nENDFIL\n";
-  const std::string text = "DMISMN/'p', 5.1\nTEXT/OPER,'before'\nCALL/EXTERN,DMIS,'Z:\\CMM\\Programs\\SUB_PART.dmi'\nTEXT/OPER,'after'\nENDFIL\n";
+  const std::string text =
+      "DMISMN/'p', "
+      "5.1\nTEXT/OPER,'before'\nCALL/EXTERN,DMIS,'Z:\\CMM\\Programs\\SUB_PART.dmi'\nTEXT/OPER,'after'\nENDFIL\n";
   const auto c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("'Z:\\CMM\\Programs\\SUB_PART.dmi' was written on another machine and SUB_PART.dmi is not in")) << c.text;
+  EXPECT_TRUE(c.has("'Z:\\CMM\\Programs\\SUB_PART.dmi' was written on another machine and SUB_PART.dmi is not in"))
+      << c.text;
   {
     SourceManager sources;
     DiagnosticSink sink;
@@ -2734,7 +2932,8 @@ TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtR
   }
   const auto r = run(text);
   EXPECT_EQ(r.status, ExecStatus::Error);
-  EXPECT_NE(r.diagnostics.find("was not found (give its folder with --include DIR)"), std::string::npos) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("was not found (give its folder with --include DIR)"), std::string::npos)
+      << r.diagnostics;
   // CAMIO writes a label after the file (CALL/EXTERN,DMIS,'...',PLNA02): a warning on it, and
   // the file is still the string.
   const auto labelled = check("DMISMN/'p', 5.1\nCALL/EXTERN,DMIS,'Z:\\CMM\\SUB_PART.dmi',PLNA02\nENDFIL\n");
@@ -2751,18 +2950,22 @@ TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtR
 // a warning). By hand: the part origin at machine (300, 200, 0), turned 90 deg about z, so part x
 // is machine y and part y machine -x; in inches 300 mm is 11.81102.
 TEST(ShopPrograms, CoordinateSystemsAreOutputAsOriginAndAxes) {
-  const auto r = run("DMISMN/'d', 5.1\nUNITS/MM,ANGDEC\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nD(R)=ROTATE/ZAXIS,90\n"
-                     "OUTPUT/D(R)\nUNITS/INCH,ANGDEC\nOUTPUT/DA(PART),D(MCS)\nOUTPUT/D(LATER)\nENDFIL\n");
+  const auto r =
+      run("DMISMN/'d', 5.1\nUNITS/MM,ANGDEC\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nD(R)=ROTATE/ZAXIS,90\n"
+          "OUTPUT/D(R)\nUNITS/INCH,ANGDEC\nOUTPUT/DA(PART),D(MCS)\nOUTPUT/D(LATER)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::vector<std::string> said;
   for (const auto& e : r.session->record().events)
     if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
   const std::vector<std::string> expected = {
-      "D(R): origin (300.0000, 200.0000, 0.0000) mm, X axis (0.000000, 1.000000, 0.000000), Y axis (-1.000000, 0.000000, "
+      "D(R): origin (300.0000, 200.0000, 0.0000) mm, X axis (0.000000, 1.000000, 0.000000), Y axis (-1.000000, "
+      "0.000000, "
       "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates",
-      "DA(PART): origin (11.81102, 7.87402, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
+      "DA(PART): origin (11.81102, 7.87402, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, "
+      "1.000000, "
       "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates",
-      "D(MCS): origin (0.00000, 0.00000, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, 1.000000, "
+      "D(MCS): origin (0.00000, 0.00000, 0.00000) INCH, X axis (1.000000, 0.000000, 0.000000), Y axis (0.000000, "
+      "1.000000, "
       "0.000000), Z axis (0.000000, 0.000000, 1.000000) in machine coordinates"};
   EXPECT_EQ(said, expected);
   EXPECT_NE(r.diagnostics.find("D(LATER) is not defined yet: nothing to output"), std::string::npos) << r.diagnostics;
@@ -2787,7 +2990,10 @@ TEST(ShopPrograms, SensorsAreOutputWithTheirQualification) {
   ASSERT_EQ(p.size(), 4U) << perfect.diagnostics;
   EXPECT_EQ(p[0], "S(P1): probe tip 2.0000 mm diameter, stylus 50.0000 mm along (0.0000, 0.0000, -1.0000)");
   EXPECT_EQ(p[1], "SA(P1): tip 2.0000 mm nominal diameter, not qualified yet");
-  EXPECT_EQ(p[3].rfind("SA(P1): tip 2.0000 mm nominal diameter, 2.0000 mm effective (qualified on the reference sphere, form 0.0000 mm)", 0), 0U)
+  EXPECT_EQ(p[3].rfind("SA(P1): tip 2.0000 mm nominal diameter, 2.0000 mm effective (qualified on the reference "
+                       "sphere, form 0.0000 mm)",
+                       0),
+            0U)
       << p[3];
   const auto plain = run(program, source_dir / "programs/worlds/default.json");
   ASSERT_EQ(plain.status, ExecStatus::Finished) << plain.diagnostics;
@@ -2868,14 +3074,17 @@ TEST(ShopPrograms, ProgramsInAPackagesOwnLanguageAreToldOnce) {
       "ASSIGN/'ZMEAS'=\"10.000000\",FIXP=4\nPTMEAS/CART,10.000,20.000,'ZMEAS',VECCOMP,0,0,-1\nENDMES\nENDFIL\n");
   EXPECT_EQ(geopak.errors, 1u) << geopak.text;
   EXPECT_EQ(geopak.warnings, 0u) << geopak.text;
-  EXPECT_TRUE(geopak.has("shop.dmi:5:1: error: this file is not DMIS: it reads as a part program in MCOSMOS GEOPAK's own "
-                         "language (CNCON/ here, and no DMISMN)"))
+  EXPECT_TRUE(
+      geopak.has("shop.dmi:5:1: error: this file is not DMIS: it reads as a part program in MCOSMOS GEOPAK's own "
+                 "language (CNCON/ here, and no DMISMN)"))
       << geopak.text;
   const auto pcdmis = check(
       "PART NAME  : BLOCK\n            MODE/DCC\n            LOADPROBE/PROBE1\nPNT2       =FEAT/POINT,RECT\n"
       "            ENDMEAS/\n            COMMENT/OPER,\"done\"\n");
   EXPECT_EQ(pcdmis.errors, 1u) << pcdmis.text;
-  EXPECT_TRUE(pcdmis.has("shop.dmi:2:13: error: this file is not DMIS: it reads as a part program in PC-DMIS's own language (MODE/DCC here"))
+  EXPECT_TRUE(
+      pcdmis.has("shop.dmi:2:13: error: this file is not DMIS: it reads as a part program in PC-DMIS's own language "
+                 "(MODE/DCC here"))
       << pcdmis.text;
   // A real file no one here wrote: NIST's I++ DME command stream of the simple part.
   std::ifstream in(fs::path(METRON_SHARED_DATA) / "nist-simple-part/simple.prg");
@@ -2885,8 +3094,9 @@ TEST(ShopPrograms, ProgramsInAPackagesOwnLanguageAreToldOnce) {
   const auto ipp = check(text.str());
   EXPECT_EQ(ipp.errors, 1u) << ipp.text;
   EXPECT_EQ(ipp.warnings, 0u);
-  EXPECT_TRUE(ipp.has("shop.dmi:1:1: error: this file is not DMIS: it reads as an I++ DME command stream, a client's tagged "
-                      "commands (StartSession() here"))
+  EXPECT_TRUE(
+      ipp.has("shop.dmi:1:1: error: this file is not DMIS: it reads as an I++ DME command stream, a client's tagged "
+              "commands (StartSession() here"))
       << ipp.text;
   // DMIS stays DMIS: a DMISMN makes any program DMIS, whatever vendor words it holds.
   const auto dmis = check("DMISMN/'p', 5.0\nCONTOUR/MEAS, 'Scan'\nDRIVE/ZAXIS, 10\nENDFIL\n");
@@ -2917,20 +3127,26 @@ TEST(ShopPrograms, ACountersinksGaugeCircleIsCutFromItsCone) {
   EXPECT_NEAR(h->actual->diameter_mm, 2 * 3 * tan30, 1e-12);
   EXPECT_NEAR((h->actual->position - (vertex + 3 * axis)).norm(), 0.0, 1e-9);
   // Only a cone is cut, only a circle is made, and the value is positive.
-  const auto cylinder = run("DMISMN/'c', 5.1\nFA(CY)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
-                            "CONST/CIRCLE,F(G),CONE,FA(CY),DIAM,8\nENDFIL\n");
-  EXPECT_NE(cylinder.diagnostics.find("CONE cuts a CONE, FA(CY) is a CYLNDR"), std::string::npos) << cylinder.diagnostics;
-  EXPECT_TRUE(check("DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/POINT,F(P),CONE,FA(CS),DIAM,8\nENDFIL\n")
-                  .has("CONE constructs a CIRCLE"));
-  const auto negative = run("DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/CIRCLE,F(G),CONE,FA(CS),DIST,-1\nENDFIL\n");
+  const auto cylinder =
+      run("DMISMN/'c', 5.1\nFA(CY)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
+          "CONST/CIRCLE,F(G),CONE,FA(CY),DIAM,8\nENDFIL\n");
+  EXPECT_NE(cylinder.diagnostics.find("CONE cuts a CONE, FA(CY) is a CYLNDR"), std::string::npos)
+      << cylinder.diagnostics;
+  EXPECT_TRUE(
+      check(
+          "DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/POINT,F(P),CONE,FA(CS),DIAM,8\nENDFIL\n")
+          .has("CONE constructs a CIRCLE"));
+  const auto negative = run(
+      "DMISMN/'c', 5.1\nFA(CS)=FEAT/CONE,INNER,CART,1,2,10,0,0,1,60\nCONST/CIRCLE,F(G),CONE,FA(CS),DIST,-1\nENDFIL\n");
   EXPECT_NE(negative.diagnostics.find("the distance must be positive"), std::string::npos) << negative.diagnostics;
 }
 
 TEST(ShopPrograms, ASensorsMountIsNotedNotAnError) {
   // SNSDEF/PROBE,...,SW(x): the wrist (extension, sensor group) a probe hangs from. Before: an
   // error "expected a value, got the label SW(W1)".
-  const auto c = check("DMISMN/'m', 5.1\nS(P1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,4,SW(W1)\n"
-                       "S(P2)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2,SX(E1)\nSNSLCT/S(P1)\nENDFIL\n");
+  const auto c = check(
+      "DMISMN/'m', 5.1\nS(P1)=SNSDEF/PROBE,INDEX,POL,0,0,0,0,-1,100,4,SW(W1)\n"
+      "S(P2)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2,SX(E1)\nSNSLCT/S(P1)\nENDFIL\n");
   EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
   EXPECT_EQ(c.notes, 1u) << c.text;
   EXPECT_TRUE(c.has("S(P1) names the SW(W1) it is mounted on")) << c.text;
@@ -2955,9 +3171,11 @@ TEST(ShopPrograms, DefaltGivesTheMachinesOwnFeedsAndAccelerationBack) {
   // A 200 mm move: slower under a programmed acceleration of 10 mm/s^2, as fast again after DEFALT;
   // on the default machine and on one whose axes have their own ramp laws (which the programmed
   // acceleration caps).
-  for (const std::optional<fs::path>& world : {std::optional<fs::path>(), std::optional(source_dir / "programs/worlds/touch_braking.json")}) {
+  for (const std::optional<fs::path>& world :
+       {std::optional<fs::path>(), std::optional(source_dir / "programs/worlds/touch_braking.json")}) {
     const auto move_time = [&](const std::string& lines) {
-      const auto r = run("DMISMN/'a', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n" + lines + "GOTO/500, 200, 200\nENDFIL\n", world);
+      const auto r = run(
+          "DMISMN/'a', 5.0\nUNITS/MM, ANGDEC\nGOTO/300, 200, 200\n" + lines + "GOTO/500, 200, 200\nENDFIL\n", world);
       EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
       return r.session->runtime().machine().state().time_s;
     };
@@ -2977,7 +3195,8 @@ TEST(ShopPrograms, AJumpOutOfABlockStopsTheRunAtTheNextMeas) {
   EXPECT_EQ(check(text).errors, 0u) << check(text).text;
   const auto r = run(text);
   EXPECT_EQ(r.status, ExecStatus::Error);
-  EXPECT_NE(r.diagnostics.find("MEAS of BORE1 while the block of BORE1 is still open (a JUMPTO out of it skipped its ENDMES)"),
+  EXPECT_NE(r.diagnostics.find(
+                "MEAS of BORE1 while the block of BORE1 is still open (a JUMPTO out of it skipped its ENDMES)"),
             std::string::npos)
       << r.diagnostics;
 }
@@ -2986,13 +3205,15 @@ TEST(ShopPrograms, CheckCountsScanModePtmeasAsScansLikeTheRun) {
   // RationalDMIS's form: after SCNMOD/ON two PTMEAS are the start and end of a scan, so a circle
   // with one pair is measured by a scan of many points and MEAS's count is not a PTMEAS count
   // (Scanning.ScnmodWithPtmeasPairsScansFromStartToEnd runs it). Check said "needs at least 3".
-  const std::string head = "DMISMN/'scan pairs', 05.2\nUNITS/MM, ANGDEC\n"
-                           "F(C1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n";
+  const std::string head =
+      "DMISMN/'scan pairs', 05.2\nUNITS/MM, ANGDEC\n"
+      "F(C1) = FEAT/CIRCLE, INNER, CART, 0, 0, 0, 0, 0, 1, 20\n";
   const std::string pair = "PTMEAS/CART, 10, 0, -5, -1, 0, 0\nPTMEAS/CART, -10, 0, -5, 1, 0, 0\n";
   const auto scanned = check(head + "SCNMOD/ON\nMEAS/CIRCLE, F(C1), 50\n" + pair + "ENDMES\nSCNMOD/OFF\nENDFIL\n");
   EXPECT_EQ(scanned.errors + scanned.warnings, 0U) << scanned.text;
   // An odd PTMEAS has no end: the run stops there, and check now says so at that PTMEAS.
-  const auto odd = check(head + "SCNMOD/ON\nMEAS/CIRCLE, F(C1), 3\n" + pair + "PTMEAS/CART, 0, 10, -5, 0, -1, 0\nENDMES\nENDFIL\n");
+  const auto odd =
+      check(head + "SCNMOD/ON\nMEAS/CIRCLE, F(C1), 3\n" + pair + "PTMEAS/CART, 0, 10, -5, 0, -1, 0\nENDMES\nENDFIL\n");
   EXPECT_EQ(odd.errors, 1U) << odd.text;
   EXPECT_TRUE(odd.has("shop.dmi:8:1: error: in scan mode (SCNMOD/ON) PTMEAS come in pairs")) << odd.text;
   // After SCNMOD/OFF the same block is three touches again: no error, and two are too few.
@@ -3057,8 +3278,9 @@ TEST(ShopPrograms, PolarCoordinatesAndDistanceLimitsAreEvaluated) {
   const std::string report = metron::runtime::format_tolerance_result(*results[5]);
   EXPECT_NE(report.find("polar angle in YZPLAN"), std::string::npos) << report;
   // Limits the wrong way round, and a coordinate CORTOL does not know.
-  const auto wrong = check("DMISMN/'t', 5.0\nT(L) = TOL/DISTB, LIMIT, 5.05, 5.01, XAXIS\n"
-                           "T(Q) = TOL/CORTOL, PZ, -0.1, 0.1\nWKPLAN/FA(TOP)\nENDFIL\n");
+  const auto wrong = check(
+      "DMISMN/'t', 5.0\nT(L) = TOL/DISTB, LIMIT, 5.05, 5.01, XAXIS\n"
+      "T(Q) = TOL/CORTOL, PZ, -0.1, 0.1\nWKPLAN/FA(TOP)\nENDFIL\n");
   EXPECT_TRUE(wrong.has("shop.dmi:2:32: error: the lower limit 5.05 is above the upper limit 5.01")) << wrong.text;
   EXPECT_TRUE(wrong.has("TOL/CORTOL,PZ is not evaluated by metron")) << wrong.text;
   EXPECT_TRUE(wrong.has("WKPLAN takes XYPLAN, YZPLAN or ZXPLAN")) << wrong.text;
@@ -3068,9 +3290,10 @@ TEST(ShopPrograms, PolarCoordinatesAndDistanceLimitsAreEvaluated) {
 // "characterisation failed: ... a positive feed and ramp time", the nominal machine having no
 // ramps. It is a warning now, and the program's bore is measured after it.
 TEST(ShopPrograms, ADryRunGoesPastCharacterise) {
-  const auto r = dry_run("DMISMN/'dry', 5.0\nUNITS/MM, ANGDEC\nCALL/EXTERN, SYS, 'CHARACTERISE touch.json'\n"
-                         "SNSLCT/SA(T1A0B0)\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
-                         "MEAS/CIRCLE, F(B), 4\nENDMES\nOUTPUT/FA(B)\nENDFIL\n");
+  const auto r = dry_run(
+      "DMISMN/'dry', 5.0\nUNITS/MM, ANGDEC\nCALL/EXTERN, SYS, 'CHARACTERISE touch.json'\n"
+      "SNSLCT/SA(T1A0B0)\nF(B) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+      "MEAS/CIRCLE, F(B), 4\nENDMES\nOUTPUT/FA(B)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_NE(r.diagnostics.find("CHARACTERISE in a dry run: the nominal machine has no dynamics to characterise"),
             std::string::npos)
@@ -3084,24 +3307,28 @@ TEST(ShopPrograms, ADryRunGoesPastCharacterise) {
 // QUINDOS-like listing, written for this test) is told once: before, an error or a warning on each
 // line. A DMIS module without DMISMN (a CALL/EXTERN file) with one bad line keeps its diagnostics.
 TEST(ShopPrograms, AFileThatIsNotDmisIsToldOnce) {
-  const auto report = check("Inspection report  part 4711   operator: K. Meier\n"
-                            "------------------------------------------------\n"
-                            "Feature      Nominal    Actual     Dev      Tol\n"
-                            "Bore 1 D     20.000     20.004    0.004   +-0.010   OK\n"
-                            "Bore 2 D     20.000     19.987   -0.013   +-0.010   NOT OK\n"
-                            "Flatness A    0.000      0.006    0.006    0.020    OK\n"
-                            "MESPLN (NAM=EBENE1, NPT=4)\nMESCIR (NAM=KREIS1, NPT=8)\n");
+  const auto report = check(
+      "Inspection report  part 4711   operator: K. Meier\n"
+      "------------------------------------------------\n"
+      "Feature      Nominal    Actual     Dev      Tol\n"
+      "Bore 1 D     20.000     20.004    0.004   +-0.010   OK\n"
+      "Bore 2 D     20.000     19.987   -0.013   +-0.010   NOT OK\n"
+      "Flatness A    0.000      0.006    0.006    0.020    OK\n"
+      "MESPLN (NAM=EBENE1, NPT=4)\nMESCIR (NAM=KREIS1, NPT=8)\n");
   EXPECT_EQ(report.errors, 1U) << report.text;
   EXPECT_EQ(report.warnings, 0U) << report.text;
-  EXPECT_TRUE(report.has("shop.dmi:1:1: error: this file does not read as DMIS: 8 of its lines are not DMIS statements"))
+  EXPECT_TRUE(
+      report.has("shop.dmi:1:1: error: this file does not read as DMIS: 8 of its lines are not DMIS statements"))
       << report.text;
-  const auto module = check("GOTO/10, 10, 60\nF(P1) = FEAT/POINT, CART, 10, 10, 50, 0, 0, 1\nMEAS/POINT, F(P1), 1\n"
-                            "PTMEAS/CART, 10, 10, 50, 0, 0, 1\nENDMES\nthis line is a note\nGOTO/10, 10, 60\n");
+  const auto module = check(
+      "GOTO/10, 10, 60\nF(P1) = FEAT/POINT, CART, 10, 10, 50, 0, 0, 1\nMEAS/POINT, F(P1), 1\n"
+      "PTMEAS/CART, 10, 10, 50, 0, 0, 1\nENDMES\nthis line is a note\nGOTO/10, 10, 60\n");
   EXPECT_FALSE(module.has("does not read as DMIS")) << module.text;
   EXPECT_TRUE(module.has("shop.dmi:6:1: warning: this line is not a DMIS statement")) << module.text;
   // Five notes in a module of twenty statements: still DMIS (the bad lines are not the most).
   std::string long_module;
-  for (int k = 0; k < 20; ++k) long_module += (k % 4 == 0 ? "operator note " + std::to_string(k) + "\n" : "") + "GOTO/10, 10, 60\n";
+  for (int k = 0; k < 20; ++k)
+    long_module += (k % 4 == 0 ? "operator note " + std::to_string(k) + "\n" : "") + "GOTO/10, 10, 60\n";
   const auto noted = check(long_module);
   EXPECT_FALSE(noted.has("does not read as DMIS")) << noted.text;
   EXPECT_TRUE(noted.has("shop.dmi:21:1: warning: this line is not a DMIS statement")) << noted.text;
@@ -3111,12 +3338,13 @@ TEST(ShopPrograms, AFileThatIsNotDmisIsToldOnce) {
 // so a program can read rows of different lengths field by field: rows of 3, 2 and 1 values.
 TEST(ShopPrograms, EolnEndsEachRowOfAnInputFile) {
   write("rows.txt", "1, 2, 3\n4 5\n\n6\n");
-  const auto r = run("DMISMN/'p', 5.0\nDECL/REAL,X,S\nDECL/INTGR,N\nDECL/BOOL,B\n"
-                     "DID(IN1)=DEVICE/STOR,'rows.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nB=ASSIGN/EOLN(DID(IN1))\n"
-                     "TEXT/OPER,STR(B)\n(ROW)\nIF/(.NOT.EOF(DID(IN1)))\n  S=ASSIGN/0\n  N=ASSIGN/0\n"
-                     "  (FIELD)\n  READ/DID(IN1),X\n  S=ASSIGN/S+X\n  N=ASSIGN/N+1\n"
-                     "  IF/(.NOT.EOLN(DID(IN1)))\n    JUMPTO/(FIELD)\n  ENDIF\n"
-                     "  TEXT/OPER,CONCAT(STR(N),':',STR(S,1))\n  JUMPTO/(ROW)\nENDIF\nENDFIL\n");
+  const auto r =
+      run("DMISMN/'p', 5.0\nDECL/REAL,X,S\nDECL/INTGR,N\nDECL/BOOL,B\n"
+          "DID(IN1)=DEVICE/STOR,'rows.txt'\nOPEN/DID(IN1),DIRECT,INPUT\nB=ASSIGN/EOLN(DID(IN1))\n"
+          "TEXT/OPER,STR(B)\n(ROW)\nIF/(.NOT.EOF(DID(IN1)))\n  S=ASSIGN/0\n  N=ASSIGN/0\n"
+          "  (FIELD)\n  READ/DID(IN1),X\n  S=ASSIGN/S+X\n  N=ASSIGN/N+1\n"
+          "  IF/(.NOT.EOLN(DID(IN1)))\n    JUMPTO/(FIELD)\n  ENDIF\n"
+          "  TEXT/OPER,CONCAT(STR(N),':',STR(S,1))\n  JUMPTO/(ROW)\nENDIF\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   std::vector<std::string> texts;
   for (const auto& e : r.session->record().events)

@@ -14,10 +14,10 @@
 #include <nlohmann/json.hpp>
 
 #include "ball_array.hpp"
+#include "block_probing.hpp"
 #include "metron/machine/compensation/compensated_machine.hpp"
 #include "metron/machine/error_space/calibration.hpp"
 #include "metron/machine/virtual_cmm.hpp"
-#include "block_probing.hpp"
 #include "scan_paths.hpp"
 
 using namespace metron;
@@ -151,8 +151,8 @@ TEST(CompensatedMachine, AScaleErrorIsUndoneOnATouchOfTheVirtualCmm) {
   const double raw = touch_left_face(scaled, nullptr);
   const double compensated = touch_left_face(scaled, scale_map_file(k));
   EXPECT_NEAR(raw, perfect / (1 + k), 1e-5);
-  EXPECT_NEAR(compensated, perfect, 1e-4) << "raw " << (raw - perfect) * 1e3 << " um, compensated "
-                                                 << (compensated - perfect) * 1e3 << " um";
+  EXPECT_NEAR(compensated, perfect, 1e-4)
+      << "raw " << (raw - perfect) * 1e3 << " um, compensated " << (compensated - perfect) * 1e3 << " um";
 }
 
 // The ball array of programs/worlds/cmm_errors_ball_plate.json (its design: the hidden truth).
@@ -198,17 +198,19 @@ Gain measure_gain(const SpaceCalibrationPlan& plan) {
   error_space::ErrorSpaceFile file;
   file.spaces.push_back(run.space);
   file.sensor_offset_mm = {0, 0, -50};
-  const auto ideal = test_support::truth_error_space(world->truth.errors, plan.grid, Vec3(0, 0, -50), file.interpolation);
+  const auto ideal =
+      test_support::truth_error_space(world->truth.errors, plan.grid, Vec3(0, 0, -50), file.interpolation);
   Gain g;
   g.none = measure(nullptr);
   g.calibrated = measure(std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(file)));
   g.truth_grid = measure(std::make_shared<const ErrorSpaceMap>(*ErrorSpaceMap::build(ideal)));
   g.truth_exact = measure(std::make_shared<const test_support::TruthErrorMap>(world->truth.errors, Vec3(0, 0, -50)));
-  std::printf("ball array, %zu length errors (um): none RMS %.3f max %.3f | calibrated RMS %.3f max %.3f | "
-              "true map on the grid RMS %.3f max %.3f | true errors exactly RMS %.3f max %.3f\n",
-              g.none.pairs, 1e3 * g.none.rms_mm, 1e3 * g.none.max_abs_mm, 1e3 * g.calibrated.rms_mm,
-              1e3 * g.calibrated.max_abs_mm, 1e3 * g.truth_grid.rms_mm, 1e3 * g.truth_grid.max_abs_mm,
-              1e3 * g.truth_exact.rms_mm, 1e3 * g.truth_exact.max_abs_mm);
+  std::printf(
+      "ball array, %zu length errors (um): none RMS %.3f max %.3f | calibrated RMS %.3f max %.3f | "
+      "true map on the grid RMS %.3f max %.3f | true errors exactly RMS %.3f max %.3f\n",
+      g.none.pairs, 1e3 * g.none.rms_mm, 1e3 * g.none.max_abs_mm, 1e3 * g.calibrated.rms_mm,
+      1e3 * g.calibrated.max_abs_mm, 1e3 * g.truth_grid.rms_mm, 1e3 * g.truth_grid.max_abs_mm,
+      1e3 * g.truth_exact.rms_mm, 1e3 * g.truth_exact.max_abs_mm);
   return g;
 }
 
@@ -298,7 +300,8 @@ TEST(ErrorSpaceMap, IsQueriedAtTheTipMinusTheSensorOffsetAndKeepsItInTheFile) {
   s.values_mm[2].resize(s.grid.size());
   for (std::size_t k = 0; k < 2; ++k)
     for (std::size_t j = 0; j < 2; ++j)
-      for (std::size_t i = 0; i < 2; ++i) s.values_mm[2][s.grid.index(i, j, k)] = 1e-5 * s.grid.axes_mm[2][k];  // e_z = 1e-5 z_ram
+      for (std::size_t i = 0; i < 2; ++i)
+        s.values_mm[2][s.grid.index(i, j, k)] = 1e-5 * s.grid.axes_mm[2][k];  // e_z = 1e-5 z_ram
   error_space::ErrorSpaceFile f;
   f.spaces.push_back(s);
   f.sensor_offset_mm = {0, 0, -50};
@@ -364,12 +367,15 @@ TEST(CompensatedMachine, AScanOfAFlatFaceOnABowedGuidewayIsFlatAgainWithTheMap) 
     const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
     return *hi - *lo;
   };
-  auto mean = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size()); };
+  auto mean = [](const std::vector<double>& v) {
+    return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  };
   std::printf("TOP face heights over the scan, range: perfect %.3f um, bowed %.3f um, bowed with the map %.3f um\n",
               1e3 * range(perfect), 1e3 * range(raw), 1e3 * range(compensated));
   EXPECT_GT(range(raw), 0.018) << "the bow shows: k (450^2 - 310^2) = 21 um";
-  EXPECT_LT(range(compensated), range(perfect) + 0.001) << "raw " << range(raw) * 1e3 << " um, compensated "
-                                                        << range(compensated) * 1e3 << " um, perfect " << range(perfect) * 1e3;
+  EXPECT_LT(range(compensated), range(perfect) + 0.001)
+      << "raw " << range(raw) * 1e3 << " um, compensated " << range(compensated) * 1e3 << " um, perfect "
+      << range(perfect) * 1e3;
   EXPECT_NEAR(mean(compensated), mean(perfect), 0.001);
 }
 
@@ -444,9 +450,10 @@ TEST(CompensatedMachine, AMapAtTwoTemperaturesFollowsTheMachinesThermometer) {
   const double warming_perfect = block_width(default_with(""), nullptr, 300);
   const double warming_interpolated = block_width(warming, interpolated, 300) - warming_perfect;
   const double warming_nearest = block_width(warming, nearest, 300) - warming_perfect;
-  std::printf("block width minus the perfect machine's, um: at 22 C raw %.3f, nearest (20 C) %.3f, interpolated %.3f; "
-              "warming to 23 C: nearest %.3f, interpolated %.3f\n",
-              1e3 * raw, 1e3 * with_nearest, 1e3 * with_interpolated, 1e3 * warming_nearest, 1e3 * warming_interpolated);
+  std::printf(
+      "block width minus the perfect machine's, um: at 22 C raw %.3f, nearest (20 C) %.3f, interpolated %.3f; "
+      "warming to 23 C: nearest %.3f, interpolated %.3f\n",
+      1e3 * raw, 1e3 * with_nearest, 1e3 * with_interpolated, 1e3 * warming_nearest, 1e3 * warming_interpolated);
   EXPECT_NEAR(with_nearest, -10.5e-6 * 2 * 160, 0.0005);  // the map at 20 C undoes the 20 C errors only
   EXPECT_NEAR(with_interpolated, 0, 0.0004);
   EXPECT_LT(warming_nearest, -10.5e-6 * 3 * 160);  // 3 K and more by the time of the touches
@@ -484,8 +491,8 @@ TEST(CompensatedMachine, TheQualificationIsRefittedThroughTheMap) {
   const double perfect = qualified_radius(default_with(""), nullptr);
   const double raw = qualified_radius(at24, nullptr);
   const double compensated = qualified_radius(at24, sphere_map);
-  std::printf("effective radius minus the perfect machine's, um: raw %.3f, through the map %.3f\n", 1e3 * (raw - perfect),
-              1e3 * (compensated - perfect));
+  std::printf("effective radius minus the perfect machine's, um: raw %.3f, through the map %.3f\n",
+              1e3 * (raw - perfect), 1e3 * (compensated - perfect));
   EXPECT_GT(std::abs(raw - perfect), 0.0002);
   EXPECT_NEAR(compensated, perfect, 0.00005);
 }

@@ -61,8 +61,8 @@ csg::Node half_space(const char* name, const Vec3& point, const Vec3& normal) {
 csg::Node block() {
   csg::Node b;
   b.op = csg::Node::Op::Intersection;
-  b.children = {half_space("TOP", {20, 15, 20}, Vec3::UnitZ()), half_space("BOTTOM", {20, 15, 0}, -Vec3::UnitZ()),
-                half_space("LEFT", {0, 15, 10}, -Vec3::UnitX()), half_space("RIGHT", {40, 15, 10}, Vec3::UnitX()),
+  b.children = {half_space("TOP", {20, 15, 20}, Vec3::UnitZ()),   half_space("BOTTOM", {20, 15, 0}, -Vec3::UnitZ()),
+                half_space("LEFT", {0, 15, 10}, -Vec3::UnitX()),  half_space("RIGHT", {40, 15, 10}, Vec3::UnitX()),
                 half_space("FRONT", {20, 0, 10}, -Vec3::UnitY()), half_space("BACK", {20, 30, 10}, Vec3::UnitY())};
   return b;
 }
@@ -120,9 +120,10 @@ TEST(ContourScan, AnUnknownLobedBoreIsFollowedRoundAndShowsItsHiddenForm) {
     h += f->residuals_mm[i] * std::exp(std::complex<double>(0, -5 * std::atan2(v.y(), v.x())));
   }
   h *= 2.0 / static_cast<double>(pts.size());
-  std::printf("[figures] unknown lobed bore: %zu samples, diameter %.5f mm (true 36), 5th harmonic %.5f mm (hidden %.4f) "
-              "at %.2f deg (hidden %.0f), centre off the plane at most %.5f mm\n",
-              pts.size(), f->diameter_mm, std::abs(h), amplitude, -std::arg(h) / 5 / deg, phase_deg, worst_z);
+  std::printf(
+      "[figures] unknown lobed bore: %zu samples, diameter %.5f mm (true 36), 5th harmonic %.5f mm (hidden %.4f) "
+      "at %.2f deg (hidden %.0f), centre off the plane at most %.5f mm\n",
+      pts.size(), f->diameter_mm, std::abs(h), amplitude, -std::arg(h) / 5 / deg, phase_deg, worst_z);
   EXPECT_NEAR(f->diameter_mm, 2 * bore_r, 0.001);
   EXPECT_NEAR(std::abs(h), amplitude, 0.1 * amplitude);
   EXPECT_NEAR(-std::arg(h) / 5 / deg, phase_deg, 3);
@@ -159,14 +160,17 @@ TEST(ContourScan, ClimbsAnUndescribedStepAndFindsItsHiddenPosition) {
   for (const ScanSample& s : r.out.samples) {
     if (s.centre_mm.z() > 5 && s.centre_mm.z() < 15) side_sum += s.centre_mm.x(), ++side;
     if (s.centre_mm.x() < hi.x() - 1) ++top;
-    if (s.centre_mm.x() > hi.x() && s.centre_mm.z() > hi.z()) ++edge;
-    else worst = std::max(worst, std::abs(true_distance(s.centre_mm) - ball_r));
+    if (s.centre_mm.x() > hi.x() && s.centre_mm.z() > hi.z())
+      ++edge;
+    else
+      worst = std::max(worst, std::abs(true_distance(s.centre_mm) - ball_r));
   }
   const double side_x = side_sum / side;
-  std::printf("[figures] unknown step: %zu samples (%d on the side, %d beyond the edge where the CSG model is not exact, "
-              "%d on the top), ball centre from the true surfaces %.5f mm at worst off the ball radius elsewhere; side found "
-              "at x = %.5f (true %.3f)\n",
-              r.out.samples.size(), side, edge, top, worst, side_x - ball_r, hi.x());
+  std::printf(
+      "[figures] unknown step: %zu samples (%d on the side, %d beyond the edge where the CSG model is not exact, "
+      "%d on the top), ball centre from the true surfaces %.5f mm at worst off the ball radius elsewhere; side found "
+      "at x = %.5f (true %.3f)\n",
+      r.out.samples.size(), side, edge, top, worst, side_x - ball_r, hi.x());
   EXPECT_LT(worst, 0.003);
   EXPECT_GT(side, 30);
   EXPECT_GT(edge, 5);
@@ -201,11 +205,13 @@ TEST(ContourScan, HoldsItsSectionWhereTheSurfaceLeansOutOfIt) {
   double worst_plane = 0, worst_r = 0;
   for (const ScanSample& s : r.out.samples) {
     worst_plane = std::max(worst_plane, std::abs((s.centre_mm - c.start_mm).dot(m)));
-    worst_r = std::max(worst_r, std::abs(std::hypot(s.centre_mm.x() - axis.x(), s.centre_mm.y() - axis.y()) - (15 + ball_r)));
+    worst_r =
+        std::max(worst_r, std::abs(std::hypot(s.centre_mm.x() - axis.x(), s.centre_mm.y() - axis.y()) - (15 + ball_r)));
   }
-  std::printf("[figures] boss cut by a tilted plane: %zu samples, ball centre off the section plane at most %.5f mm, "
-              "off R + r from the hidden axis at most %.5f mm\n",
-              r.out.samples.size(), worst_plane, worst_r);
+  std::printf(
+      "[figures] boss cut by a tilted plane: %zu samples, ball centre off the section plane at most %.5f mm, "
+      "off R + r from the hidden axis at most %.5f mm\n",
+      r.out.samples.size(), worst_plane, worst_r);
   EXPECT_GT(r.out.samples.size(), 200u);
   EXPECT_LT(worst_plane, 0.01);  // without the section term: up to E0 * 0.5 = 0.15 mm
   EXPECT_LT(worst_r, 0.003);
@@ -237,7 +243,8 @@ TEST(ContourScan, TheLeastRadiusHintSlowsTheFeedFromTheStart) {
     return v;
   };
   const double free_run = fastest(std::nullopt), hinted = fastest(0.05);
-  std::printf("[figures] least-radius hint: fastest %.3f mm/s without, %.3f mm/s with ScanUnknownHint(0.05)\n", free_run, hinted);
+  std::printf("[figures] least-radius hint: fastest %.3f mm/s without, %.3f mm/s with ScanUnknownHint(0.05)\n",
+              free_run, hinted);
   EXPECT_GT(free_run, 9);
   EXPECT_LT(hinted, 5.0 * 1.05);
 }
@@ -283,7 +290,8 @@ TEST(ContourScan, FaultsAreNamed) {
   r = contour(w, c);
   ASSERT_TRUE(r.out.fault);
   EXPECT_EQ(r.out.fault->kind, FaultKind::Stalled) << r.out.fault->message;
-  EXPECT_NE(r.out.fault->message.find("went round a closed contour 2 times"), std::string::npos) << r.out.fault->message;
+  EXPECT_NE(r.out.fault->message.find("went round a closed contour 2 times"), std::string::npos)
+      << r.out.fault->message;
   EXPECT_LT(r.out.stats.reached_mm, 3 * 2 * (40 + 30 + 2 * std::numbers::pi * ball_r));
 
   c.section.direction = Vec3::UnitX();  // the section plane is the side face's own plane

@@ -64,7 +64,8 @@ dc::MeasuredData simulate(const dc::MeasuredData& nominal, const json& world_err
 
 dc::Analysis analyse(const dc::MeasuredData& data, const json& base_errors = nullptr) {
   const auto m = model(base_errors);
-  const auto p = dc::make_problem(data, [&](std::size_t r, int a) { return mc::predicted_deviation_mm(m, data, r, a); });
+  const auto p =
+      dc::make_problem(data, [&](std::size_t r, int a) { return mc::predicted_deviation_mm(m, data, r, a); });
   return dc::analyse(p);
 }
 
@@ -88,9 +89,10 @@ bool found(const dc::Analysis& a, const std::string& kind, int component) {
   EXPECT_EQ(a.effects[0].component, component);
   EXPECT_LT(a.cv_rms_after_mm, 1.5 * kNoise) << "CV residual " << a.cv_rms_after_mm * 1e3 << " um";
   EXPECT_GT(a.cv_rms_before_mm, 1.5 * kNoise) << "the hidden effect should be visible before";
-  std::cout << fmt::format("[case] {}: {} | CV {:.3f} -> {:.3f} um (noise {:.3f})", kind, a.effects[0].what, a.cv_rms_before_mm * 1e3,
-                           a.cv_rms_after_mm * 1e3, kNoise * 1e3);
-  for (const auto& p : a.effects[0].parameters) std::cout << fmt::format(" | {} {:.5g}+-{:.2g} {}", p.name, p.value, p.sd, p.unit);
+  std::cout << fmt::format("[case] {}: {} | CV {:.3f} -> {:.3f} um (noise {:.3f})", kind, a.effects[0].what,
+                           a.cv_rms_before_mm * 1e3, a.cv_rms_after_mm * 1e3, kNoise * 1e3);
+  for (const auto& p : a.effects[0].parameters)
+    std::cout << fmt::format(" | {} {:.5g}+-{:.2g} {}", p.name, p.value, p.sd, p.unit);
   std::cout << "\n";
   return a.effects[0].kind == kind;
 }
@@ -109,12 +111,13 @@ dc::MeasuredData positioning(bool with_acceleration = false) {
         csv += fmt::format("{},{},{},{},{},0\n", x, c, d > 0 ? "+" : "-", t, acc);
         t += 2;
       }
-  json cols = json::array({{{"name", "target_mm"}, {"role", "nominal"}, {"axis", "x"}, {"unit", "mm"}},
-                           {{"name", "cycle"}, {"role", "cycle"}},
-                           {{"name", "direction"}, {"role", "direction"}, {"axis", "x"}},
-                           {{"name", "time_s"}, {"role", "time"}, {"unit", "s"}},
-                           {{"name", "accel_mm_s2"}, {"role", with_acceleration ? "acceleration" : "ignore"}, {"unit", "mm/s2"}},
-                           {{"name", "deviation_um"}, {"role", "deviation"}, {"axis", "x"}, {"unit", "um"}}});
+  json cols = json::array(
+      {{{"name", "target_mm"}, {"role", "nominal"}, {"axis", "x"}, {"unit", "mm"}},
+       {{"name", "cycle"}, {"role", "cycle"}},
+       {{"name", "direction"}, {"role", "direction"}, {"axis", "x"}},
+       {{"name", "time_s"}, {"role", "time"}, {"unit", "s"}},
+       {{"name", "accel_mm_s2"}, {"role", with_acceleration ? "acceleration" : "ignore"}, {"unit", "mm/s2"}},
+       {{"name", "deviation_um"}, {"role", "deviation"}, {"axis", "x"}, {"unit", "um"}}});
   return table(csv, {{"kind", "positioning"}, {"noise_mm", kNoise}, {"columns", cols}});
 }
 
@@ -122,7 +125,8 @@ dc::MeasuredData positioning(bool with_acceleration = false) {
 dc::MeasuredData hole_plate() {
   std::string csv = "nom_x,nom_y,meas_x,meas_y\n";
   for (int j = 0; j < 9; ++j)
-    for (int i = 0; i < 11; ++i) csv += fmt::format("{},{},{},{}\n", 100 + 50 * i, 100 + 50 * j, 100 + 50 * i, 100 + 50 * j);
+    for (int i = 0; i < 11; ++i)
+      csv += fmt::format("{},{},{},{}\n", 100 + 50 * i, 100 + 50 * j, 100 + 50 * i, 100 + 50 * j);
   json cols = json::array({{{"name", "nom_x"}, {"role", "nominal"}, {"axis", "x"}, {"unit", "mm"}},
                            {{"name", "nom_y"}, {"role", "nominal"}, {"axis", "y"}, {"unit", "mm"}},
                            {{"name", "meas_x"}, {"role", "measured"}, {"axis", "x"}, {"unit", "mm"}},
@@ -162,24 +166,28 @@ DriftLog drift_log() {
                            {{"name", "air_c"}, {"role", "temperature"}, {"of", "air"}, {"unit", "C"}},
                            {{"name", "humidity_pct"}, {"role", "condition"}, {"unit", "%"}},
                            {{"name", "dz_um"}, {"role", "deviation"}, {"axis", "z"}, {"unit", "um"}}});
-  d.data = table(csv, {{"kind", "drift"}, {"noise_mm", kNoise}, {"fixed_position_mm", {300, 200, 100}}, {"columns", cols}});
+  d.data =
+      table(csv, {{"kind", "drift"}, {"noise_mm", kNoise}, {"fixed_position_mm", {300, 200, 100}}, {"columns", cols}});
   return d;
 }
 
 // A sphere probed from 72 directions in the xy plane: the deviation along the approach vector.
 dc::MeasuredData sphere() {
   std::string csv = "ax,ay,dn_um\n";
-  for (int k = 0; k < 72; ++k) csv += fmt::format("{:.9f},{:.9f},0\n", std::cos(k * 5 * kPi / 180), std::sin(k * 5 * kPi / 180));
+  for (int k = 0; k < 72; ++k)
+    csv += fmt::format("{:.9f},{:.9f},0\n", std::cos(k * 5 * kPi / 180), std::sin(k * 5 * kPi / 180));
   json cols = json::array({{{"name", "ax"}, {"role", "approach"}, {"axis", "x"}},
                            {{"name", "ay"}, {"role", "approach"}, {"axis", "y"}},
                            {{"name", "dn_um"}, {"role", "deviation"}, {"axis", "n"}, {"unit", "um"}}});
-  return table(csv, {{"kind", "artefact"}, {"noise_mm", kNoise}, {"fixed_position_mm", {400, 300, 100}}, {"columns", cols}});
+  return table(csv,
+               {{"kind", "artefact"}, {"noise_mm", kNoise}, {"fixed_position_mm", {400, 300, 100}}, {"columns", cols}});
 }
 
 json terms(json t) { return {{"terms", json::array({std::move(t)})}}; }
 
 TEST(DiscrepancyHidden, ScaleInPositioning) {
-  const auto d = simulate(positioning(), terms({{"kind", "linear"}, {"component", "x"}, {"along", "x"}, {"coefficient", 8e-6}}), 11);
+  const auto d = simulate(positioning(),
+                          terms({{"kind", "linear"}, {"component", "x"}, {"along", "x"}, {"coefficient", 8e-6}}), 11);
   const auto a = analyse(d);
   EXPECT_FOUND(a, "scale", 0);
   expect_within(param(a.effects[0], "scale").value, 8.0, "scale ppm");
@@ -193,8 +201,14 @@ TEST(DiscrepancyHidden, ReversalInPositioning) {
 }
 
 TEST(DiscrepancyHidden, CyclicInPositioning) {
-  const auto d = simulate(positioning(), terms({{"kind", "cyclic"}, {"component", "x"}, {"along", "x"}, {"amplitude_mm", 0.0015},
-                                                {"period_mm", 130}, {"phase_rad", 0.5}}), 13);
+  const auto d = simulate(positioning(),
+                          terms({{"kind", "cyclic"},
+                                 {"component", "x"},
+                                 {"along", "x"},
+                                 {"amplitude_mm", 0.0015},
+                                 {"period_mm", 130},
+                                 {"phase_rad", 0.5}}),
+                          13);
   const auto a = analyse(d);
   EXPECT_FOUND(a, "cyclic", 0);
   expect_within(param(a.effects[0], "amplitude").value, 1.5, "amplitude um");
@@ -223,8 +237,14 @@ TEST(DiscrepancyHidden, SquarenessInHolePlate) {
 }
 
 TEST(DiscrepancyHidden, CyclicInHolePlate) {
-  const auto d = simulate(hole_plate(), terms({{"kind", "cyclic"}, {"component", "y"}, {"along", "y"}, {"amplitude_mm", 0.002},
-                                               {"period_mm", 140}, {"phase_rad", 0.0}}), 16);
+  const auto d = simulate(hole_plate(),
+                          terms({{"kind", "cyclic"},
+                                 {"component", "y"},
+                                 {"along", "y"},
+                                 {"amplitude_mm", 0.002},
+                                 {"period_mm", 140},
+                                 {"phase_rad", 0.0}}),
+                          16);
   const auto a = analyse(d);
   EXPECT_FOUND(a, "cyclic", 1);
   expect_within(param(a.effects[0], "amplitude").value, 2.0, "amplitude um");
@@ -232,14 +252,16 @@ TEST(DiscrepancyHidden, CyclicInHolePlate) {
 }
 
 TEST(DiscrepancyHidden, CrossAxisInGrid) {
-  const auto d = simulate(grid(), terms({{"kind", "cross_axis"}, {"component", "z"}, {"along", {"x", "y"}}, {"coefficient", 1e-8}}), 17);
+  const auto d = simulate(
+      grid(), terms({{"kind", "cross_axis"}, {"component", "z"}, {"along", {"x", "y"}}, {"coefficient", 1e-8}}), 17);
   const auto a = analyse(d);
   EXPECT_FOUND(a, "cross-axis", 2);
   expect_within(param(a.effects[0], "coefficient").value, 10.0, "um/m^2 (1e-8 /mm)");
 }
 
 TEST(DiscrepancyHidden, SquarenessXzInGrid) {
-  const auto d = simulate(grid(), terms({{"kind", "linear"}, {"component", "z"}, {"along", "x"}, {"coefficient", -6e-6}}), 18);
+  const auto d =
+      simulate(grid(), terms({{"kind", "linear"}, {"component", "z"}, {"along", "x"}, {"coefficient", -6e-6}}), 18);
   const auto a = analyse(d);
   EXPECT_FOUND(a, "squareness", 2);
   expect_within(param(a.effects[0], "slope").value, -6.0, "urad");
@@ -255,7 +277,8 @@ TEST(DiscrepancyHidden, DriftInDriftLog) {
 
 TEST(DiscrepancyHidden, TransientInDriftLog) {
   const auto log = drift_log();
-  const auto d = simulate(log.data, terms({{"kind", "transient"}, {"component", "z"}, {"amplitude_mm", 0.004}, {"tau_s", 2400}}), 22);
+  const auto d = simulate(
+      log.data, terms({{"kind", "transient"}, {"component", "z"}, {"amplitude_mm", 0.004}, {"tau_s", 2400}}), 22);
   const auto a = analyse(d);
   EXPECT_FOUND(a, "transient", 2);
   expect_within(param(a.effects[0], "amplitude").value, 4.0, "amplitude um");
@@ -264,7 +287,10 @@ TEST(DiscrepancyHidden, TransientInDriftLog) {
 
 TEST(DiscrepancyHidden, ThermalLagInDriftLog) {
   const auto log = drift_log();
-  const json t{{"kind", "thermal"}, {"component", "z"}, {"mm_per_k", 0.002}, {"reference_c", 20},
+  const json t{{"kind", "thermal"},
+               {"component", "z"},
+               {"mm_per_k", 0.002},
+               {"reference_c", 20},
                {"temperature", {{"t_s", log.t}, {"temperature_c", log.air}, {"lag_s", 1800}}}};
   const auto d = simulate(log.data, terms(t), 20);
   const auto a = analyse(d);
@@ -310,7 +336,12 @@ TEST(DiscrepancyNull, AKnownBaseErrorIsNotAnEffect) {
 }
 
 TEST(DiscrepancyTwoEffects, CyclicAndReversal) {
-  json hidden{{"terms", json::array({{{"kind", "cyclic"}, {"component", "x"}, {"along", "x"}, {"amplitude_mm", 0.0012}, {"period_mm", 90}, {"phase_rad", 1.0}},
+  json hidden{{"terms", json::array({{{"kind", "cyclic"},
+                                      {"component", "x"},
+                                      {"along", "x"},
+                                      {"amplitude_mm", 0.0012},
+                                      {"period_mm", 90},
+                                      {"phase_rad", 1.0}},
                                      {{"kind", "reversal"}, {"component", "x"}, {"reversal_mm", 0.003}}})}};
   const auto a = analyse(simulate(positioning(), hidden, 40));
   ASSERT_EQ(a.effects.size(), 2u);
@@ -325,7 +356,10 @@ TEST(DiscrepancyTwoEffects, CyclicAndReversal) {
 
 TEST(DiscrepancyTwoEffects, ThermalAndDrift) {
   const auto log = drift_log();
-  json hidden{{"terms", json::array({{{"kind", "thermal"}, {"component", "z"}, {"mm_per_k", -0.0015}, {"reference_c", 20},
+  json hidden{{"terms", json::array({{{"kind", "thermal"},
+                                      {"component", "z"},
+                                      {"mm_per_k", -0.0015},
+                                      {"reference_c", 20},
                                       {"temperature", {{"t_s", log.t}, {"temperature_c", log.air}, {"lag_s", 900}}}},
                                      {{"kind", "drift"}, {"component", "z"}, {"rate_mm_per_s", 0.8e-3 / 3600}}})}};
   const auto a = analyse(simulate(log.data, hidden, 41));
@@ -344,7 +378,8 @@ TEST(DiscrepancyOutOfCatalogue, HumidityIsReportedUnexplained) {
   // the residual's structure is reported against the humidity.
   const auto log = drift_log();
   const auto* h = log.data.find(dc::Role::Condition);
-  const auto d = simulate(log.data, nullptr, 50, [&](std::size_t r, int) { return 4e-5 * std::pow(h->values[r] - 50, 2); });
+  const auto d =
+      simulate(log.data, nullptr, 50, [&](std::size_t r, int) { return 4e-5 * std::pow(h->values[r] - 50, 2); });
   const auto a = analyse(d);
   for (const auto& e : a.effects) ADD_FAILURE() << "claimed " << e.what;
   ASSERT_FALSE(a.unexplained.empty());
@@ -355,14 +390,28 @@ TEST(DiscrepancyWorld, TheExtendedWorldSimulatesWhatWasFound) {
   // Every claimed effect's world term, parsed by the machine's own reader, reproduces its fitted
   // contribution: the extended world predicts what the analysis fitted.
   const auto log = drift_log();
-  json hidden{{"terms", json::array({{{"kind", "thermal"}, {"component", "z"}, {"mm_per_k", 0.002}, {"reference_c", 20},
-                                      {"temperature", {{"t_s", log.t}, {"temperature_c", log.air}, {"lag_s", 1800}}}}})}};
+  json hidden{
+      {"terms", json::array({{{"kind", "thermal"},
+                              {"component", "z"},
+                              {"mm_per_k", 0.002},
+                              {"reference_c", 20},
+                              {"temperature", {{"t_s", log.t}, {"temperature_c", log.air}, {"lag_s", 1800}}}}})}};
   for (const auto& [data, errs] : std::vector<std::pair<dc::MeasuredData, json>>{
            {simulate(log.data, hidden, 60), hidden},
-           {simulate(hole_plate(), terms({{"kind", "linear"}, {"component", "x"}, {"along", "y"}, {"coefficient", 20e-6}}), 61), nullptr},
-           {simulate(positioning(), terms({{"kind", "cyclic"}, {"component", "x"}, {"along", "x"}, {"amplitude_mm", 0.0015}, {"period_mm", 130}}), 62), nullptr}}) {
+           {simulate(hole_plate(),
+                     terms({{"kind", "linear"}, {"component", "x"}, {"along", "y"}, {"coefficient", 20e-6}}), 61),
+            nullptr},
+           {simulate(positioning(),
+                     terms({{"kind", "cyclic"},
+                            {"component", "x"},
+                            {"along", "x"},
+                            {"amplitude_mm", 0.0015},
+                            {"period_mm", 130}}),
+                     62),
+            nullptr}}) {
     const auto m0 = model(nullptr);
-    const auto p = dc::make_problem(data, [&](std::size_t r, int a) { return mc::predicted_deviation_mm(m0, data, r, a); });
+    const auto p =
+        dc::make_problem(data, [&](std::size_t r, int a) { return mc::predicted_deviation_mm(m0, data, r, a); });
     const auto a = dc::analyse(p);
     ASSERT_FALSE(a.effects.empty());
     const auto ext = model(mc::extended_errors(nullptr, a.effects));

@@ -25,13 +25,16 @@ using Interp = AxisFunction::Interpolation;
 MachineErrorModel realistic_machine(double pitch_urad = 0) {
   std::array<AxisErrors, 3> axes;
   const std::vector<double> at = {0, 100, 200, 300, 400, 500, 600, 700, 800, 900, 1000};
-  axes[0].translation_mm[0] = AxisFunction::polynomial({0, 15e-6, -2e-9});                                       // EXX
-  axes[0].translation_mm[1] = AxisFunction::table(at, {0, 2e-3, 3e-3, 3.5e-3, 3e-3, 2.5e-3, 2e-3, 2e-3, 2.5e-3, 3e-3, 4e-3}, Interp::Cubic);  // EYX
-  axes[0].translation_mm[2] = AxisFunction::table(at, {0, 3e-3, 6e-3, 8e-3, 10e-3, 11e-3, 10e-3, 8e-3, 6.5e-3, 5e-3, 4e-3}, Interp::Cubic);   // EZX
-  axes[0].rotation_rad[2] = AxisFunction::polynomial({0, 4e-9, -3e-12});                                         // ECX yaw
-  axes[1].translation_mm[1] = AxisFunction::polynomial({0, -12e-6});                                            // EYY
-  axes[1].translation_mm[2] = AxisFunction::table(at, {0, -2e-3, -4.5e-3, -6e-3, -7e-3, -8e-3, -7.5e-3, -6e-3, -4e-3, -2e-3, 0}, Interp::Cubic);  // EZY
-  axes[2].translation_mm[0] = AxisFunction::polynomial({0, 0, 1e-8});                                           // EXZ
+  axes[0].translation_mm[0] = AxisFunction::polynomial({0, 15e-6, -2e-9});  // EXX
+  axes[0].translation_mm[1] = AxisFunction::table(
+      at, {0, 2e-3, 3e-3, 3.5e-3, 3e-3, 2.5e-3, 2e-3, 2e-3, 2.5e-3, 3e-3, 4e-3}, Interp::Cubic);  // EYX
+  axes[0].translation_mm[2] = AxisFunction::table(
+      at, {0, 3e-3, 6e-3, 8e-3, 10e-3, 11e-3, 10e-3, 8e-3, 6.5e-3, 5e-3, 4e-3}, Interp::Cubic);  // EZX
+  axes[0].rotation_rad[2] = AxisFunction::polynomial({0, 4e-9, -3e-12});                         // ECX yaw
+  axes[1].translation_mm[1] = AxisFunction::polynomial({0, -12e-6});                             // EYY
+  axes[1].translation_mm[2] = AxisFunction::table(
+      at, {0, -2e-3, -4.5e-3, -6e-3, -7e-3, -8e-3, -7.5e-3, -6e-3, -4e-3, -2e-3, 0}, Interp::Cubic);  // EZY
+  axes[2].translation_mm[0] = AxisFunction::polynomial({0, 0, 1e-8});                                 // EXZ
   if (pitch_urad != 0) {
     // EBX: pitch of the carriage, one wave over the travel (violates the seed's assumption).
     std::vector<double> pitch;
@@ -72,8 +75,8 @@ Compare compare(const std::vector<double>& rec, const std::vector<double>& truth
 }
 
 void print(const char* what, const Compare& c) {
-  std::printf("%-44s RMS %.4f um  max %.4f um  | noise floor RMS %.4f um  ratio %.2f\n", what, 1e3 * c.rms_mm, 1e3 * c.max_mm,
-              1e3 * c.floor_rms_mm, c.rms_mm / c.floor_rms_mm);
+  std::printf("%-44s RMS %.4f um  max %.4f um  | noise floor RMS %.4f um  ratio %.2f\n", what, 1e3 * c.rms_mm,
+              1e3 * c.max_mm, 1e3 * c.floor_rms_mm, c.rms_mm / c.floor_rms_mm);
 }
 
 TEST(ErrorSpaceCalibration, NoiseFreeRunRecoversTheTruthExactly) {
@@ -87,7 +90,8 @@ TEST(ErrorSpaceCalibration, NoiseFreeRunRecoversTheTruthExactly) {
   const auto truth = truth_in_reference(m, plan);
   // To 0.1 nm: B at step k-1 and A at step k read plate points apart by the positioning error's
   // change over one step (~0.6 um), on a plate sloping ~3e-5: ~0.02 nm per step.
-  for (std::size_t i = 0; i < truth.values_mm[2].size(); ++i) EXPECT_NEAR(run.space.values_mm[2][i], truth.values_mm[2][i], 1e-7) << i;
+  for (std::size_t i = 0; i < truth.values_mm[2].size(); ++i)
+    EXPECT_NEAR(run.space.values_mm[2][i], truth.values_mm[2][i], 1e-7) << i;
   const Eigen::MatrixXd f = plate_truth_in_reference(m, plan, 2, 1);
   // The profile is sampled where the tip really is: in-plane errors of ~10 um on a plate sloping
   // ~3e-5 shift it by < 1 nm.
@@ -125,7 +129,8 @@ TEST(ErrorSpaceCalibration, LineWithinTheNoiseFloor) {
     floor2 += std::pow(error_space::line_noise_rms_mm(n, head.noise_sd_mm), 2);
   }
   const double rms = std::sqrt(sum2 / trials), floor = std::sqrt(floor2 / trials);
-  std::printf("line (%d steps, 40 trials)                     RMS %.4f um | noise floor %.4f um  ratio %.2f\n", n, 1e3 * rms, 1e3 * floor, rms / floor);
+  std::printf("line (%d steps, 40 trials)                     RMS %.4f um | noise floor %.4f um  ratio %.2f\n", n,
+              1e3 * rms, 1e3 * floor, rms / floor);
   EXPECT_LT(rms, 1.5 * floor);
   EXPECT_GT(rms, 0.5 * floor);  // the floor is not a loose bound
 }
@@ -152,7 +157,8 @@ TEST(ErrorSpaceCalibration, SurfaceAndPlateWithinTheNoiseFloor) {
     for (Eigen::Index i = 0; i < f.rows(); ++i)
       for (Eigen::Index j = 0; j < f.cols(); ++j) {
         rec.push_back(fr(i, j)), tru.push_back(f(i, j));
-        const double e_sd = run.space.sd_mm[2][plan.grid.index(static_cast<std::size_t>(i), static_cast<std::size_t>(j), 0)];
+        const double e_sd =
+            run.space.sd_mm[2][plan.grid.index(static_cast<std::size_t>(i), static_cast<std::size_t>(j), 0)];
         sd.push_back(std::sqrt(e_sd * e_sd + 2 * s * s));
       }
     const Compare cp = compare(rec, tru, sd);
@@ -183,7 +189,8 @@ TEST(ErrorSpaceCalibration, SpaceOfPlanesWithLaserOffsetsWithinTheNoiseFloor) {
   // S7 on 50-line planes: no false re-measure from noise (a rounding-level D_0 once asked for one).
   SpaceCalibrationPlan big;
   big.head.spacing_mm = 20;
-  for (int i = 0; i < 50; ++i) big.grid.axes_mm[0].push_back(10 + 20.0 * i), big.grid.axes_mm[1].push_back(10 + 20.0 * i);
+  for (int i = 0; i < 50; ++i)
+    big.grid.axes_mm[0].push_back(10 + 20.0 * i), big.grid.axes_mm[1].push_back(10 + 20.0 * i);
   big.grid.axes_mm[2] = {-500, -480, -460};
   EXPECT_EQ(calibrate_space(m, big).planes_to_remeasure, 0);
 }
@@ -219,7 +226,8 @@ TEST(ErrorSpaceCalibration, SpacesAtTwoTemperaturesInterpolatedBetween) {
   auto machine_at = [](double t_c) {
     MachineErrorModel m = realistic_machine();
     std::array<ScaleThermalTerm::Scale, 3> scales;
-    scales[2] = {10e-6, 0.0, std::make_shared<TemperatureHistory>(std::vector<double>{0}, std::vector<double>{t_c}, 0, t_c)};
+    scales[2] = {10e-6, 0.0,
+                 std::make_shared<TemperatureHistory>(std::vector<double>{0}, std::vector<double>{t_c}, 0, t_c)};
     m.add(std::make_shared<ScaleThermalTerm>(scales));
     return m;
   };
@@ -258,8 +266,9 @@ TEST(ErrorSpaceCalibration, DeltaByReversalKeepsThePlanesSlope) {
     for (std::size_t i = 0; i < truth.values_mm[2].size(); ++i)
       lost2 += std::pow(truth.values_mm[2][i] - without.values_mm[2][i], 2) / truth.values_mm[2].size();
   }
-  std::printf("Delta by reversal, 21 x 16, 4 seeds: RMS %.4f um | floor %.4f um  ratio %.2f (slope kept: %.4f um RMS)\n",
-              1e3 * std::sqrt(e2 / 4), 1e3 * std::sqrt(f2 / 4), std::sqrt(e2 / f2), 1e3 * std::sqrt(lost2 / 4));
+  std::printf(
+      "Delta by reversal, 21 x 16, 4 seeds: RMS %.4f um | floor %.4f um  ratio %.2f (slope kept: %.4f um RMS)\n",
+      1e3 * std::sqrt(e2 / 4), 1e3 * std::sqrt(f2 / 4), std::sqrt(e2 / f2), 1e3 * std::sqrt(lost2 / 4));
   EXPECT_LT(std::sqrt(e2 / f2), 1.5);
   EXPECT_GT(std::sqrt(lost2 / 4), 3 * std::sqrt(e2 / 4));  // the kept slope is well above the noise
 }
@@ -307,7 +316,8 @@ TEST(ErrorSpaceCalibration, WhatBreakingTheSeedsAssumptionsCosts) {
   double lost2 = 0;
   for (std::size_t i = 0; i < with_slope.values_mm[2].size(); ++i)
     lost2 += std::pow(with_slope.values_mm[2][i] - without.values_mm[2][i], 2) / with_slope.values_mm[2].size();
-  std::printf("%-44s RMS %.4f um (the plane's tilt; invisible to the method)\n", "Delta unknown: slope lost", 1e3 * std::sqrt(lost2));
+  std::printf("%-44s RMS %.4f um (the plane's tilt; invisible to the method)\n", "Delta unknown: slope lost",
+              1e3 * std::sqrt(lost2));
   EXPECT_GT(c_spaced.rms_mm, 0.5 * ok.rms_mm);
   EXPECT_LT(ok.rms_mm, 1.5 * ok.floor_rms_mm);
   EXPECT_GT(c_pitch.rms_mm, 2 * ok.rms_mm);
@@ -340,7 +350,8 @@ TEST(ErrorSpaceCalibration, AnAngleInstrumentRemovesTheHeadsRotationFromTheChain
   space.components = {true, true, true};
   for (int c = 0; c < 3; ++c) {
     const double without = pooled(pitching, space, false, c), with = pooled(pitching, space, true, c);
-    std::printf("EBX 5 urad, e_%c: ratio to the floor %.2f without the angle instrument, %.2f with it\n", "xyz"[c], without, with);
+    std::printf("EBX 5 urad, e_%c: ratio to the floor %.2f without the angle instrument, %.2f with it\n", "xyz"[c],
+                without, with);
     EXPECT_LT(with, 1.5) << "xyz"[c];
     if (c == 2) {
       EXPECT_GT(without, 1.7);  // the pitch reaches e_z's chain (lines along x)
@@ -351,7 +362,8 @@ TEST(ErrorSpaceCalibration, AnAngleInstrumentRemovesTheHeadsRotationFromTheChain
   for (int i = 0; i <= 10; ++i) at.push_back(100.0 * i), th.push_back(5e-6 * std::sin(0.9 * i));
   head.head.pitch_rad = AxisFunction::table(at, th, Interp::Cubic);
   const double without = pooled(realistic_machine(), head, false, 2), with = pooled(realistic_machine(), head, true, 2);
-  std::printf("head pitch 5 urad wave, e_z: ratio to the floor %.2f without the angle instrument, %.2f with it\n", without, with);
+  std::printf("head pitch 5 urad wave, e_z: ratio to the floor %.2f without the angle instrument, %.2f with it\n",
+              without, with);
   EXPECT_GT(without, 2.0);
   EXPECT_LT(with, 1.5);
 }
@@ -382,7 +394,8 @@ TEST(LaserInterferometer, Iso230_2RunsAndTheirCsvForm) {
   ASSERT_EQ(back->size(), rec.size());
   EXPECT_NEAR((*back)[17].deviation_mm, rec[17].deviation_mm, 1e-9);
   EXPECT_EQ((*back)[17].direction, rec[17].direction);
-  EXPECT_FALSE(error_space::parse_positioning_csv("axis,target,target_mm,cycle,direction,deviation_mm,time_s,line_u_mm,line_v_mm\nx,1,2,3,?,4,5,6,7\n"));
+  EXPECT_FALSE(error_space::parse_positioning_csv(
+      "axis,target,target_mm,cycle,direction,deviation_mm,time_s,line_u_mm,line_v_mm\nx,1,2,3,?,4,5,6,7\n"));
 }
 
 }  // namespace

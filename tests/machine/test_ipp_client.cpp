@@ -86,7 +86,8 @@ TEST(IppClient, SameHitsDirectAndThroughTheServer) {
 
   // The block's top (z = 40), right face (x = 460) and bore BORE1 (centre (340, 250), d 20).
   const std::vector<Body> program{
-      DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0}, SelectTool{"Probe1"},
+      DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0},
+      SelectTool{"Probe1"},
       GoTo{Vec3(445, 210, 60), std::nullopt},
       pt(Vec3(445, 210, 40), Vec3::UnitZ()),
       [] {
@@ -120,7 +121,7 @@ TEST(IppClient, SameHitsDirectAndThroughTheServer) {
   int hits = 0;
   for (std::size_t k = 0; k < via.size(); ++k) {
     ASSERT_EQ(via[k].status, expected[k].status) << k << ": " << (via[k].fault ? via[k].fault->message : "") << " / "
-                                                  << (expected[k].fault ? expected[k].fault->message : "");
+                                                 << (expected[k].fault ? expected[k].fault->message : "");
     ASSERT_EQ(via[k].hit.has_value(), expected[k].hit.has_value()) << k;
     if (!via[k].hit) continue;
     ++hits;
@@ -137,7 +138,8 @@ TEST(IppClient, FaultsComeBackAsMachineFaults) {
   LoopbackServer server;
   {
     ipp::ClientMachine client("127.0.0.1", server.port());
-    const auto r = run(client, {SelectTool{"Probe1"}, GoTo{Vec3(5000, 0, 0), std::nullopt}, GoTo{Vec3(0, 0, 400), std::nullopt}});
+    const auto r =
+        run(client, {SelectTool{"Probe1"}, GoTo{Vec3(5000, 0, 0), std::nullopt}, GoTo{Vec3(0, 0, 400), std::nullopt}});
     ASSERT_EQ(r.size(), 3u);
     EXPECT_EQ(r[0].status, Response::Status::Done);
     ASSERT_TRUE(r[1].fault);
@@ -189,7 +191,8 @@ TEST(IppClient, AnUnknownContourScanThroughTheServerEqualsTheDirectOne) {
   }
   server.stop();
   VirtualCmm direct(machine::default_world(), 1);
-  run(direct, {DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0}, GoTo{machine::default_world().machine.home_mm, std::nullopt}});
+  run(direct,
+      {DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0}, GoTo{machine::default_world().machine.home_mm, std::nullopt}});
   const auto expected = run(direct, program);
   ASSERT_EQ(via.size(), 4u);
   ASSERT_EQ(via[3].status, Response::Status::Done) << via[3].fault->message;

@@ -73,7 +73,7 @@ TEST(IppCodec, NumberErrorsHaveTheNistNumbers) {
   EXPECT_EQ(error_number("00060 GoTo(X(+1.2E0010))"), 509);
   EXPECT_EQ(error_number("00070 GoTo(X(0.34.33))"), 509);
   EXPECT_EQ(error_number("00080 GoTo(X(1234567890123456))"), -1);  // 16 digits are allowed
-  EXPECT_EQ(error_number("00090 GoTo(X(9.9E999))"), 509);           // beyond the double range
+  EXPECT_EQ(error_number("00090 GoTo(X(9.9E999))"), 509);          // beyond the double range
 }
 
 TEST(IppCodec, TagAndLineErrorsHaveTheNistNumbers) {
@@ -154,8 +154,10 @@ TEST(IppCodec, FuzzedLinesNeverCrash) {
       }
     }
     auto r = parse_command_line(s);
-    if (r) ++parsed;
-    else ASSERT_TRUE(find_error(static_cast<int>(r.error().code))) << s;
+    if (r)
+      ++parsed;
+    else
+      ASSERT_TRUE(find_error(static_cast<int>(r.error().code))) << s;
     (void)parse_response_line(s);
   }
   EXPECT_GT(parsed, 1000);  // the mutations keep some lines valid

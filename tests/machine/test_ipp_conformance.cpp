@@ -12,9 +12,9 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
-#include <optional>
 
 #include "metron/machine/ipp/command_line.hpp"
 #include "metron/machine/ipp/response_line.hpp"
@@ -140,7 +140,10 @@ FileResult replay(const std::string& name) {
   for (std::size_t k = 0; k < commands.size(); ++k) {
     const auto e = expected.count(k) ? expected.at(k) : std::vector<std::string>{};
     const auto a = actual.count(k) ? actual.at(k) : std::vector<std::string>{};
-    auto sorted = [](std::vector<std::string> v) { std::sort(v.begin(), v.end()); return v; };
+    auto sorted = [](std::vector<std::string> v) {
+      std::sort(v.begin(), v.end());
+      return v;
+    };
     if (e.empty() || sorted(e) == sorted(a)) {
       ++result.matched;  // no expected answer recorded: nothing to compare against
       continue;
@@ -188,18 +191,21 @@ TEST(IppConformance, NistFilesReplay) {
   table << "| **total** (" << results.size() << " files, " << files_full << " fully matched) | " << commands << " | "
         << matched << " | |\n";
   std::cout << table.str() << "\nall differences:\n" << details.str();
-  if (const char* out = std::getenv("METRON_IPP_CONFORMANCE_TABLE")) std::ofstream(out) << table.str() << "\n" << details.str();
+  if (const char* out = std::getenv("METRON_IPP_CONFORMANCE_TABLE"))
+    std::ofstream(out) << table.str() << "\n" << details.str();
   RecordProperty("commands", static_cast<int>(commands));
   RecordProperty("matched", static_cast<int>(matched));
   // Regression floor (950 of 1213 measured 2026-11-30, 918 before the ScanIn... commands' argument
   // checks; most differences are the class-3 error state, docs/ipp-dme.md); the files below match
   // completely.
   EXPECT_GE(matched, 945u) << matched << " of " << commands;
-  for (const char* f : {"StartSession", "EndSession", "ClearAllErrors", "GetDMEVersion", "IsHomed", "Home",
-                        "GetErrStatusE", "GetXtdErrStatus", "EnableUser", "DisableUser", "IsUserEnabled",
-                        "GetCoordSystem", "SetCoordSystem", "StopDaemon", "AbortE", "ChangeTool", "FindTool", "SetTool",
-                        "ScanUnknownHint", "Error", "Get", "OnMoveReportE", "OnPtMeasReport", "numbersErrorCmd"})
-    EXPECT_EQ(results[f].matched, results[f].commands) << f << ": " << (results[f].differences.empty() ? "" : results[f].differences[0]);
+  for (const char* f : {"StartSession",  "EndSession",     "ClearAllErrors",  "GetDMEVersion",   "IsHomed",
+                        "Home",          "GetErrStatusE",  "GetXtdErrStatus", "EnableUser",      "DisableUser",
+                        "IsUserEnabled", "GetCoordSystem", "SetCoordSystem",  "StopDaemon",      "AbortE",
+                        "ChangeTool",    "FindTool",       "SetTool",         "ScanUnknownHint", "Error",
+                        "Get",           "OnMoveReportE",  "OnPtMeasReport",  "numbersErrorCmd"})
+    EXPECT_EQ(results[f].matched, results[f].commands)
+        << f << ": " << (results[f].differences.empty() ? "" : results[f].differences[0]);
 }
 
 // parserCmdErrors.txt: what the NIST command parser answers for each malformed command. Each is
@@ -210,8 +216,10 @@ TEST(IppConformance, NistParserErrorNumbers) {
   std::string line;
   while (std::getline(in, line)) {
     while (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) blocks.emplace_back();
-    else blocks.back().push_back(line);
+    if (line.empty())
+      blocks.emplace_back();
+    else
+      blocks.back().push_back(line);
   }
   const World world = machine::default_world();
   int cases = 0, same = 0;
@@ -228,8 +236,10 @@ TEST(IppConformance, NistParserErrorNumbers) {
     for (const auto& l : s.handle(b[0]).lines)
       if (auto r = parse_response_line(l); r && r->kind == ResponseLine::Kind::Error) got = r->error_number;
     ++cases;
-    if (got == want) ++same;
-    else diffs << b[0] << "  (" << b[1] << ")  NIST " << want << ", metron " << got << "\n";
+    if (got == want)
+      ++same;
+    else
+      diffs << b[0] << "  (" << b[1] << ")  NIST " << want << ", metron " << got << "\n";
   }
   std::cout << "parserCmdErrors: " << same << " of " << cases << " error numbers as NIST's parser\n" << diffs.str();
   if (const char* out = std::getenv("METRON_IPP_PARSER_TABLE"))
@@ -237,7 +247,8 @@ TEST(IppConformance, NistParserErrorNumbers) {
   RecordProperty("parser_cases", cases);
   RecordProperty("parser_same", same);
   EXPECT_GT(cases, 150);
-  EXPECT_GE(same, 215) << same << " of " << cases;  // 219 measured 2026-11-30 (188 before the ScanIn... and hint commands)
+  EXPECT_GE(same, 215) << same << " of "
+                       << cases;  // 219 measured 2026-11-30 (188 before the ScanIn... and hint commands)
 }
 
 namespace {
@@ -323,16 +334,18 @@ TEST(IppConformance, DcxPartReplay) {
   // Recorded against replayed: the real part stood elsewhere; per face group the offset along
   // the normal is common, and what remains is the real part's form and the real probe's noise.
   std::ostringstream table;
-  table << "| points | replayed - nominal, along IJK, max [mm] | recorded - replayed along IJK, mean [mm] | spread about the mean (max) [mm] |\n|---|---:|---:|---:|\n";
+  table << "| points | replayed - nominal, along IJK, max [mm] | recorded - replayed along IJK, mean [mm] | spread "
+           "about the mean (max) [mm] |\n|---|---:|---:|---:|\n";
   double worst_truth = 0;
   // Feature groups: consecutive points with the same normal (planes), or the 8 of a hole.
   std::vector<std::pair<std::size_t, std::size_t>> groups;
   for (std::size_t k = 0; k < points.size();) {
     const bool hole = std::abs(points[k].nominal.x()) < 16 && std::abs(points[k].nominal.y()) < 16;
     std::size_t e = k + 1;
-    while (e < points.size() && (hole ? std::abs(points[e].nominal.x()) < 16 && std::abs(points[e].nominal.y()) < 16 &&
-                                            std::abs(points[e].nominal.head<2>().norm() - points[k].nominal.head<2>().norm()) < 1
-                                      : points[e].normal.dot(points[k].normal) > 0.99))
+    while (e < points.size() &&
+           (hole ? std::abs(points[e].nominal.x()) < 16 && std::abs(points[e].nominal.y()) < 16 &&
+                       std::abs(points[e].nominal.head<2>().norm() - points[k].nominal.head<2>().norm()) < 1
+                 : points[e].normal.dot(points[k].normal) > 0.99))
       ++e;
     groups.emplace_back(k, e);
     k = e;
@@ -347,8 +360,9 @@ TEST(IppConformance, DcxPartReplay) {
     for (std::size_t k = g; k < e; ++k)
       spread = std::max(spread, std::abs((points[k].recorded - points[k].replayed).dot(points[k].normal) - mean));
     worst_truth = std::max(worst_truth, max_truth);
-    table << "| " << points[g].tag << ".." << points[e - 1].tag << " (" << e - g << ") | " << format_number(max_truth, 4)
-          << " | " << format_number(mean, 4) << " | " << format_number(spread, 4) << " |\n";
+    table << "| " << points[g].tag << ".." << points[e - 1].tag << " (" << e - g << ") | "
+          << format_number(max_truth, 4) << " | " << format_number(mean, 4) << " | " << format_number(spread, 4)
+          << " |\n";
   }
   std::cout << table.str();
   if (const char* out = std::getenv("METRON_IPP_DCX_TABLE")) std::ofstream(out) << table.str();
@@ -356,7 +370,8 @@ TEST(IppConformance, DcxPartReplay) {
   // the recorded and replayed points agree within 0.3 mm along the normal.
   for (const auto& [g, e] : groups) {
     double mean = 0;
-    for (std::size_t k = g; k < e; ++k) mean += (points[k].recorded - points[k].replayed).dot(points[k].normal) / static_cast<double>(e - g);
+    for (std::size_t k = g; k < e; ++k)
+      mean += (points[k].recorded - points[k].replayed).dot(points[k].normal) / static_cast<double>(e - g);
     for (std::size_t k = g; k < e; ++k)
       EXPECT_LT(std::abs((points[k].recorded - points[k].replayed).dot(points[k].normal) - mean), 0.3) << points[k].tag;
   }

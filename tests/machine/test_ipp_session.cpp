@@ -139,8 +139,9 @@ TEST(IppSession, PartCoordinateSystemTransformsInAndOut) {
 
 // What clients metron's authors did not write send (the Rust crate ippdme-core, MIT; the C++
 // library libjdme2x, BSL-1.0): the probing direction as I(), J(), K(); SetCoordSystem(MCS|PCS),
-// the shorthands of the specification's dialogs; a system's name quoted; and the named coordinate systems of I++ DME 1.5 (SaveNamedCsyTransformation,
-// GetNamedCsyTransformation, EnumCoordSystems, DeleteCoordSystem), which were 0500/0501.
+// the shorthands of the specification's dialogs; a system's name quoted; and the named coordinate systems of I++
+// DME 1.5 (SaveNamedCsyTransformation, GetNamedCsyTransformation, EnumCoordSystems, DeleteCoordSystem), which were
+// 0500/0501.
 TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
   Fixture f;
   f.start();
@@ -166,7 +167,8 @@ TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
   EXPECT_EQ(f.error("00031 SaveActiveCoordSystem(\"Machine\")"), 0);
   EXPECT_EQ(f.send("00032 EnumCoordSystems()"),
             (std::vector<std::string>{"00032 &", "00032 # \"Fixture 1\"", "00032 # \"Machine\"", "00032 %"}));
-  EXPECT_EQ(f.data("00033 GetNamedCsyTransformation(\"Fixture 1\")"), "GetNamedCsyTransformation(300, 200, 0, 0, 90, 0)");
+  EXPECT_EQ(f.data("00033 GetNamedCsyTransformation(\"Fixture 1\")"),
+            "GetNamedCsyTransformation(300, 200, 0, 0, 90, 0)");
   // Loaded, the named system is the part system: machine (320, 210) is part (10, -20).
   EXPECT_EQ(f.error("00034 LoadCoordSystem(\"Fixture 1\")"), 0);
   EXPECT_EQ(f.error("00035 GoTo(X(10), Y(-20), Z(60))"), 0);
@@ -175,7 +177,8 @@ TEST(IppSession, SeparateDirectionShorthandSystemsAndNamedTransformations) {
   EXPECT_NEAR(item(m, "X"), 320, 1e-6);
   EXPECT_NEAR(item(m, "Y"), 210, 1e-6);
   EXPECT_EQ(f.error("00040 DeleteCoordSystem(\"Fixture 1\")"), 0);
-  EXPECT_EQ(f.send("00041 EnumCoordSystems()"), (std::vector<std::string>{"00041 &", "00041 # \"Machine\"", "00041 %"}));
+  EXPECT_EQ(f.send("00041 EnumCoordSystems()"),
+            (std::vector<std::string>{"00041 &", "00041 # \"Machine\"", "00041 %"}));
   EXPECT_EQ(f.error("00042 GetNamedCsyTransformation(\"Fixture 1\")"), 509);
   EXPECT_EQ(f.error("00043 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00044 DeleteCoordSystem(\"Fixture 1\")"), 509);
@@ -198,8 +201,8 @@ TEST(IppSession, PartTemperatureAndExpansionAreKeptProperties) {
   EXPECT_EQ(f.data("00013 GetProp(Part.Temperature(), Part.XpanCoefficient())"),
             "Part.Temperature(23.5), Part.XpanCoefficient(0.0000115)");
   EXPECT_EQ(f.send("00014 EnumProp(Part())"),
-            (std::vector<std::string>{"00014 &", "00014 # \"Temperature\", \"Number\"", "00014 # \"XpanCoefficient\", \"Number\"",
-                                      "00014 %"}));
+            (std::vector<std::string>{"00014 &", "00014 # \"Temperature\", \"Number\"",
+                                      "00014 # \"XpanCoefficient\", \"Number\"", "00014 %"}));
   const auto after = f.data("00015 PtMeas(X(445), Y(210), Z(41.3), IJK(0,0,1))");
   EXPECT_NEAR(item(after, "Z"), item(before, "Z"), 1e-9);
   EXPECT_EQ(f.error("00020 SetProp(Part.Temperature(-300))"), 509);
@@ -228,7 +231,8 @@ TEST(IppSession, MachineFaultsBecomeStandardErrors) {
   EXPECT_EQ(f.error("00011 GoTo(X(100))"), 514);  // class 3: refused until ClearAllErrors
   EXPECT_EQ(f.data("E0012 GetErrStatusE()"), "ErrStatus(1)");
   EXPECT_EQ(f.error("00013 ClearAllErrors()"), 0);
-  EXPECT_EQ(f.error("00020 PtMeas(X(445), Y(150), Z(40), IJK(0,0,1))"), 1003);  // in front of the block: nothing to touch
+  EXPECT_EQ(f.error("00020 PtMeas(X(445), Y(150), Z(40), IJK(0,0,1))"),
+            1003);  // in front of the block: nothing to touch
   EXPECT_EQ(f.error("00030 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00040 GoTo(X(380), Y(250), Z(20))"), 2504);  // through the block
   EXPECT_EQ(f.error("00050 ClearAllErrors()"), 0);
@@ -237,13 +241,13 @@ TEST(IppSession, MachineFaultsBecomeStandardErrors) {
 
 TEST(IppSession, OrderAndArgumentErrors) {
   Fixture f;
-  EXPECT_EQ(f.error("00001 GoTo(X(1))"), 507);          // before StartSession
+  EXPECT_EQ(f.error("00001 GoTo(X(1))"), 507);  // before StartSession
   EXPECT_EQ(f.error("00002 StartSession()"), 0);
-  EXPECT_EQ(f.error("00003 GoTo(X(1))"), 514);          // the 0507 above is class 3
+  EXPECT_EQ(f.error("00003 GoTo(X(1))"), 514);  // the 0507 above is class 3
   EXPECT_EQ(f.error("00004 ClearAllErrors()"), 0);
-  EXPECT_EQ(f.error("00005 GoTo(X(1))"), 507);          // not homed
+  EXPECT_EQ(f.error("00005 GoTo(X(1))"), 507);  // not homed
   EXPECT_EQ(f.error("00006 ClearAllErrors()"), 0);
-  EXPECT_EQ(f.error("00007 AbortE()"), 1);              // an E-command needs an event tag
+  EXPECT_EQ(f.error("00007 AbortE()"), 1);  // an E-command needs an event tag
   EXPECT_EQ(f.error("E0008 GoTo(X(1))"), 1);
   EXPECT_EQ(f.error("00009 Home(1)"), 502);
   EXPECT_EQ(f.error("00010 ClearAllErrors()"), 0);
@@ -365,8 +369,8 @@ TEST(IppSession, AbortEStopsAPacedGoToWhereItWas) {
   ASSERT_EQ(f.error("00040 SetProp(Tool.GoToPar.Accel(50.0))"), 0);
   ASSERT_EQ(f.error("00050 SetProp(Tool.GoToPar.Speed(5.0))"), 0);
   const Vec3 home = f.world.machine.home_mm;
-  const auto go = f.session.handle("00070 GoTo(X(" + std::to_string(home.x() + 100) + "), Y(" + std::to_string(home.y()) +
-                                   "), Z(" + std::to_string(home.z()) + "))");
+  const auto go = f.session.handle("00070 GoTo(X(" + std::to_string(home.x() + 100) + "), Y(" +
+                                   std::to_string(home.y()) + "), Z(" + std::to_string(home.z()) + "))");
   ASSERT_EQ(go.lines.back(), "00070 %");
   EXPECT_NEAR(go.motion_s, 20.1, 0.01);
   const auto abort = f.session.interrupt("E0090 AbortE()", 3.0);
@@ -524,12 +528,18 @@ TEST(IppSession, ScanOnCurveOnTheTopFaceAndItsErrors) {
   for (std::size_t k = 2; k < v.size(); k += 3) EXPECT_NEAR(v[k], 41, 0.01) << k;
   EXPECT_NEAR(v[0], 310, 0.5);
   EXPECT_NEAR(v[v.size() - 3], 450, 0.5);
-  EXPECT_EQ(f.error("00020 ScanOnCurve(Closed(2), Format(X(), Y(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5, 6, 0, 0, 1))"), 509);
+  EXPECT_EQ(
+      f.error("00020 ScanOnCurve(Closed(2), Format(X(), Y(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5, 6, 0, 0, 1))"),
+      509);
   EXPECT_EQ(f.error("00021 ClearAllErrors()"), 0);
   EXPECT_EQ(f.error("00030 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5))"), 502);
   EXPECT_EQ(f.error("00031 ClearAllErrors()"), 0);
-  EXPECT_EQ(f.error("00040 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK()), Data(320, 210, 41, 0, 0, 0, 330, 210, 41, 0, 0, 1))"), 1010);
-  EXPECT_EQ(f.error("00050 ScanOnCurve(Closed(0), Format(Y(), X(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5, 6, 0, 0, 1))"), 509);
+  EXPECT_EQ(f.error("00040 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK()), Data(320, 210, 41, 0, 0, 0, 330, 210, "
+                    "41, 0, 0, 1))"),
+            1010);
+  EXPECT_EQ(
+      f.error("00050 ScanOnCurve(Closed(0), Format(Y(), X(), Z(), IJK()), Data(1, 2, 3, 0, 0, 1, 4, 5, 6, 0, 0, 1))"),
+      509);
 }
 
 // Random and mutated lines never crash the session and every line gets a tagged answer.
@@ -553,11 +563,13 @@ TEST(IppSession, FuzzedSessionNeverCrashes) {
         "00030 SetProp(Tool.PtMeasPar.Speed(5))", "00020 ChangeTool(\"Probe1\")", "00040 GoTo(X(400), Y(250), Z(100))",
         "00050 SetCsyTransformation(PartCsy, 1, 2, 3, 4, 5, 6)", "00060 EnumAllProp(Tool())", "00070 ClearAllErrors()",
         "00080 ScanOnCircle(340, 250, 30, 330, 250, 30, 0, 0, 1, 360, 90, 1)",
-        "00090 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK(), tag), Data(320, 210, 41, 0, 0, 1, 5, 360, 230, 41, 0, 0, 1, 6))"},
+        "00090 ScanOnCurve(Closed(0), Format(X(), Y(), Z(), IJK(), tag), Data(320, 210, 41, 0, 0, 1, 5, 360, 230, 41, "
+        "0, 0, 1, 6))"},
        3000, "0123456789(),.-EXYZ\"");
   // The unknown-contour scans.
   fuzz({"00100 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)",
-        "00110 ScanInCylEndIsSphere(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 325, 250, 41, 2, 0, 0, 1)",
+        "00110 ScanInCylEndIsSphere(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 325, 250, 41, 2, 0, "
+        "0, 1)",
         "00120 GoTo(X(450), Y(250), Z(60))", "00130 ClearAllErrors()"},
        300, "0123456789(),.-EXYZ\"");
   // The named coordinate systems and the clients' dialects.
@@ -597,7 +609,8 @@ TEST(IppSession, ScanOnCurveDensityBoundsTheReportedPoints) {
   double sharpest = 0;
   for (std::size_t k = 2; k < turned.size(); ++k) {
     const Vec3 a = turned[k - 1] - turned[k - 2], b = turned[k] - turned[k - 1];
-    sharpest = std::max(sharpest, std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi);
+    sharpest = std::max(sharpest,
+                        std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / std::numbers::pi);
   }
   EXPECT_GT(sharpest, 0.75);  // not denser than it needs
   EXPECT_LE(sharpest, 1.5);
@@ -617,7 +630,8 @@ TEST(IppSession, ScanInPlaneEndIsSphereFollowsABoreRoundToItsStart) {
   ASSERT_EQ(f.error("00011 GoTo(X(340), Y(250), Z(30))"), 0);
   // BORE1 (diameter 20 at (340, 250)): in the plane z = 30, setting off along +y, ending back in
   // a 1 mm sphere about the start.
-  const auto v = csv_numbers(f.data("00020 ScanInPlaneEndIsSphere(349, 250, 30, -1, 0, 0, 349, 251, 30, 0.5, 349, 250, 30, 1, -1, 0, 0)"));
+  const auto v = csv_numbers(
+      f.data("00020 ScanInPlaneEndIsSphere(349, 250, 30, -1, 0, 0, 349, 251, 30, 0.5, 349, 250, 30, 1, -1, 0, 0)"));
   ASSERT_GE(v.size(), 3u * 100);
   double worst = 0, turned = 0, last = 0;
   for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
@@ -639,7 +653,8 @@ TEST(IppSession, ScanInPlaneEndIsPlaneGoesOverAnEdgeAndDown) {
   ASSERT_EQ(f.error("00010 GoTo(X(450), Y(250), Z(60))"), 0);
   // Along the top toward the right face (x = 460), round its edge and down the face until the
   // ball centre crosses z = 30.
-  const auto v = csv_numbers(f.data("00020 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)"));
+  const auto v = csv_numbers(
+      f.data("00020 ScanInPlaneEndIsPlane(450, 250, 41, 0, 0, 1, 451, 250, 41, 0.5, 0, 0, 30, 0, 0, 1, 1, 1, 0, 0)"));
   ASSERT_GE(v.size(), 3u * 30);
   double worst = 0;
   int on_face = 0;
@@ -661,8 +676,9 @@ TEST(IppSession, ScanInCylEndIsPlaneCirclesTheTopFaceAboutAnAxis) {
   ASSERT_EQ(f.error("00010 GoTo(X(355), Y(250), Z(60))"), 0);
   // The top face about BORE1's axis at 15 mm, until the ball centre crosses the plane y = 250
   // again: half a turn.
-  const auto v = csv_numbers(
-      f.data("00020 ScanInCylEndIsPlane(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 340, 250, 0, 0, 1, 0, 1, 0, 0, 1)"));
+  const auto v =
+      csv_numbers(f.data("00020 ScanInCylEndIsPlane(340, 250, 0, 0, 0, 1, 355, 250, 41, 0, 0, 1, 355, 251, 41, 1, 340, "
+                         "250, 0, 0, 1, 0, 1, 0, 0, 1)"));
   ASSERT_GE(v.size(), 3u * 40);
   for (std::size_t k = 0; k + 2 < v.size(); k += 3) {
     EXPECT_NEAR(std::hypot(v[k] - 340, v[k + 1] - 250), 15, 0.01) << k;

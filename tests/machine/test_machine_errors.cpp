@@ -23,7 +23,7 @@ MachinePose pose(double x, double y, double z, Vec3 offset = Vec3::Zero()) {
 
 TEST(RigidBody, PitchOfXWithAProbeOffsetGivesTheAbbeError) {
   std::array<AxisErrors, 3> axes;
-  const double theta = 5e-6;                                  // EBX: rotation of X about y
+  const double theta = 5e-6;  // EBX: rotation of X about y
   axes[0].rotation_rad[1] = AxisFunction::polynomial({theta});
   const RigidBodyTerm term(axes, {});
   // Tip 150 mm below the ram reference, Z at 0: eps x lever = (0, th, 0) x (0, 0, -150) = (-150 th, 0, 0).
@@ -49,7 +49,8 @@ TEST(RigidBody, YawOfTheBridgeActsOnTheCarriagePosition) {
 
 TEST(RigidBody, SquarenessPositioningAndStraightness) {
   std::array<AxisErrors, 3> axes;
-  axes[0].translation_mm[0] = AxisFunction::table({0, 500, 1000}, {0, 0.004, 0.010}, AxisFunction::Interpolation::Linear);
+  axes[0].translation_mm[0] =
+      AxisFunction::table({0, 500, 1000}, {0, 0.004, 0.010}, AxisFunction::Interpolation::Linear);
   axes[0].translation_mm[2] = AxisFunction::polynomial({0, 0, 1e-8});  // EZX = 1e-8 x^2
   Squareness sq{3e-6, -2e-6, 4e-6};
   const RigidBodyTerm term(axes, sq);
@@ -60,7 +61,8 @@ TEST(RigidBody, SquarenessPositioningAndStraightness) {
 }
 
 TEST(AxisFunctionTable, CubicPassesThroughTheEntriesAndReproducesLines) {
-  const auto f = AxisFunction::table({0, 100, 250, 400}, {0.001, 0.003, -0.002, 0.0}, AxisFunction::Interpolation::Cubic);
+  const auto f =
+      AxisFunction::table({0, 100, 250, 400}, {0.001, 0.003, -0.002, 0.0}, AxisFunction::Interpolation::Cubic);
   EXPECT_NEAR(f(100), 0.003, 1e-15);
   EXPECT_NEAR(f(250), -0.002, 1e-15);
   EXPECT_NEAR(f(-50), 0.001, 1e-15);  // held beyond the ends

@@ -14,8 +14,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/active_scanning/scan_controller.hpp"
+#include "metron/machine/mesh_solid.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
@@ -27,10 +27,11 @@ using scan_test::deg;
 
 namespace {
 
-constexpr double ball_r = 2;  // 4 mm stylus ball
+constexpr double ball_r = 2;     // 4 mm stylus ball
 const Vec3 origin(100, 100, 0);  // design pose of the test parts
 
-World world_with(std::variant<csg::Node, CadDesign> design, const Vec3& offset = Vec3::Zero(), double roughness_mm = 0) {
+World world_with(std::variant<csg::Node, CadDesign> design, const Vec3& offset = Vec3::Zero(),
+                 double roughness_mm = 0) {
   World w = default_world();
   PartSpec part;
   part.design = std::move(design);
@@ -91,7 +92,8 @@ TEST(ScanningSpec, DefaultWorldHasAScanningProbeAndWorldsOverrideIt) {
   EXPECT_GT(d.machine.scanning.probe.measuring_range_mm, d.machine.scanning.probe.reference_deflection_mm);
   using nlohmann::json;
   auto w = parse_world(json::parse(R"({"extends": "default", "scanning": {"probe": {"measuring_range_mm": 0.8},
-                                       "servo": {"natural_frequency_hz": 30}}})"), "t.json");
+                                       "servo": {"natural_frequency_hz": 30}}})"),
+                       "t.json");
   ASSERT_TRUE(w) << w.error().message;
   EXPECT_DOUBLE_EQ(w->machine.scanning.probe.measuring_range_mm, 0.8);
   EXPECT_DOUBLE_EQ(w->truth.scanning.servo.natural_frequency_hz, 30);
@@ -139,8 +141,14 @@ TEST(Scanning, Vc1FightsTheDeflectionCorrectionAsItsEquilibriumPredicts) {
   // With the gain functions: K Ge(x) x = Kc Gc(y) (dz - x), x = e - E0, y = dz - x (the path is
   // straight above the head), solved by bisection; dz Kc/(K + Kc) at Ge = Gc = 1.
   const auto& ctl = w.machine.scanning.control;
-  const auto ge = [&](double x) { const double u = x / ctl.deflection_tolerance_mm; return u < 0 ? 1 + 0.2 * u * u / (1 + u * u) : 1.0; };
-  const auto gc = [&](double y) { const double u = y / ctl.trajectory_tolerance_mm; return 1 + 0.5 * u * u / (1 + u * u); };
+  const auto ge = [&](double x) {
+    const double u = x / ctl.deflection_tolerance_mm;
+    return u < 0 ? 1 + 0.2 * u * u / (1 + u * u) : 1.0;
+  };
+  const auto gc = [&](double y) {
+    const double u = y / ctl.trajectory_tolerance_mm;
+    return 1 + 0.5 * u * u / (1 + u * u);
+  };
   double lo = 0, hi = dz;
   for (int i = 0; i < 100; ++i) {
     const double x = (lo + hi) / 2;
@@ -251,9 +259,10 @@ TEST(ScanningLateral, Vc2MovesTheHeadToThePerpendicularFootOnASidewaysTiltedPlan
     if (c.path_s_mm > 20) {
       ASSERT_LT(std::abs(c.lateral_error_mm), 0.003) << c.path_s_mm;
     }
-  std::printf("[figures] tilted plane: head y %.4f (Vc2) vs %.4f analytic, %.4f without correction; "
-              "lateral rms %.4f / %.4f mm\n",
-              h2.y(), expected.y(), h0.y(), vc2.out.stats.rms_lateral_error_mm, none.out.stats.rms_lateral_error_mm);
+  std::printf(
+      "[figures] tilted plane: head y %.4f (Vc2) vs %.4f analytic, %.4f without correction; "
+      "lateral rms %.4f / %.4f mm\n",
+      h2.y(), expected.y(), h0.y(), vc2.out.stats.rms_lateral_error_mm, none.out.stats.rms_lateral_error_mm);
 }
 
 // A head starting 0.5 mm sideways of the path on a flat top (q = y): Vc2 = Kc (P - Pp).q q pulls
@@ -281,8 +290,9 @@ TEST(ScanningLateral, Vc2RemovesALateralStartOffsetAtTheRateKc) {
   EXPECT_GT(t2 - t1, 0.5 / kc);
   EXPECT_LT(t2 - t1, 3 / kc);
   const double rate = std::log(9.0) / (t2 - t1);
-  std::printf("[figures] lateral start offset 0.5 mm: 90 %% -> 10 %% at %.1f /s (Kc = %.0f /s), final y %.4f; none %.4f\n", rate,
-              kc, mean_head(vc2, 10, 55).y(), mean_head(none, 10, 55).y());
+  std::printf(
+      "[figures] lateral start offset 0.5 mm: 90 %% -> 10 %% at %.1f /s (Kc = %.0f /s), final y %.4f; none %.4f\n",
+      rate, kc, mean_head(vc2, 10, 55).y(), mean_head(none, 10, 55).y());
 }
 
 // A latitude circle (45 degrees) on a sphere whose actual centre is off the design: the truth
@@ -313,9 +323,10 @@ TEST(ScanningLateral, Vc2HoldsTheLatitudeOnASphereOffItsNominalCentre) {
     if (c.path_s_mm > 5) {
       ASSERT_NEAR((c.head_mm - centre).norm(), 20 + 1.7, 0.01);
     }
-  std::printf("[figures] sphere latitude, centre off by (0.3, -0.3, 0.2): largest true lateral error %.4f mm (Vc2), "
-              "%.4f mm without correction, over %.1f mm\n",
-              true_lateral(vc2, 5), true_lateral(none, 5), length);
+  std::printf(
+      "[figures] sphere latitude, centre off by (0.3, -0.3, 0.2): largest true lateral error %.4f mm (Vc2), "
+      "%.4f mm without correction, over %.1f mm\n",
+      true_lateral(vc2, 5), true_lateral(none, 5), length);
 }
 
 // The gain functions (docs/scanning.md): Gf = 1/((1 + x^2)(1 + y^2)), Ge = 1 + x^2/(5(1 + x^2)) for x < 0 (else 1),
@@ -354,7 +365,8 @@ TEST(Scanning, Vc1RingsBecauseItsNormalLoopGainIsKPlusKc) {
   w.machine.scanning.control.deflection_gain_1_s = w.machine.scanning.control.trajectory_gain_1_s = 60;
   // Ringing so hard that the scan faults before the window counts as ringing (1 mm).
   const auto ring = [](const ScanRun& r) {
-    const auto n = std::count_if(r.cycles.begin(), r.cycles.end(), [](const ScanCycle& c) { return c.path_s_mm >= 15 && c.path_s_mm <= 50; });
+    const auto n = std::count_if(r.cycles.begin(), r.cycles.end(),
+                                 [](const ScanCycle& c) { return c.path_s_mm >= 15 && c.path_s_mm <= 50; });
     if (r.out.fault) std::printf("[figures] %s\n", r.out.fault->message.c_str());
     return n > 100 ? deflection_error(r, 15, 50).second : 1.0;
   };
@@ -366,7 +378,8 @@ TEST(Scanning, Vc1RingsBecauseItsNormalLoopGainIsKPlusKc) {
   EXPECT_LT(vc2, 0.003);
   EXPECT_GT(vc1, 5 * vc2);
   EXPECT_GT(vc2_fast, 5 * vc2);
-  std::printf("[figures] std of |Ep| at K = Kc = 60: Vc1 %.4f mm, Vc2 %.4f mm; Vc2 at K = 120: %.4f mm\n", vc1, vc2, vc2_fast);
+  std::printf("[figures] std of |Ep| at K = Kc = 60: Vc1 %.4f mm, Vc2 %.4f mm; Vc2 at K = 120: %.4f mm\n", vc1, vc2,
+              vc2_fast);
 }
 
 // Accuracy: a boss with a hidden 3-lobe form (5 um roundness) on a part offset from its design.
@@ -445,8 +458,8 @@ std::tuple<double, double, double> fifth_harmonic(const std::vector<Vec3>& surfa
 // The bore's surface points show the hidden form: amplitude within 10 %, phase within 3 degrees.
 void expect_the_hidden_bore_form(const std::vector<Vec3>& surface_points, const char* how) {
   const auto [amplitude, phase, form] = fifth_harmonic(surface_points);
-  std::printf("[figures] lobed bore, %s: 5th harmonic %.5f mm (hidden %.4f) at %.2f deg (hidden %.0f), form %.5f mm\n", how,
-              amplitude, bore_amplitude, phase, bore_phase_deg, form);
+  std::printf("[figures] lobed bore, %s: 5th harmonic %.5f mm (hidden %.4f) at %.2f deg (hidden %.0f), form %.5f mm\n",
+              how, amplitude, bore_amplitude, phase, bore_phase_deg, form);
   EXPECT_NEAR(amplitude, bore_amplitude, 0.1 * bore_amplitude);
   EXPECT_NEAR(phase, bore_phase_deg, 3);
 }
@@ -536,7 +549,8 @@ TEST(Scanning, FreeFormSurfaceWithAHiddenBumpIsRecoveredWithin1um) {
     const Vec3 p = s.surface_mm(ball_r);
     const double measured = design.signed_distance(p);  // deviation from the design, + = material added
     const Vec3 q = p - origin;
-    const double truth = bump.amplitude_mm * std::exp(-(q - bump.centre_mm).squaredNorm() / (2 * bump.sigma_mm * bump.sigma_mm));
+    const double truth =
+        bump.amplitude_mm * std::exp(-(q - bump.centre_mm).squaredNorm() / (2 * bump.sigma_mm * bump.sigma_mm));
     worst = std::max(worst, std::abs(measured - truth));
     peak = std::max(peak, measured);
   }
@@ -585,7 +599,8 @@ TEST(Scanning, SpeedLimitsAreHonouredAndLogged) {
          w.machine.data_sheet = data_sheet_of(w.truth);
        },
        [&](const World& w) {
-         return 1000 * std::sqrt(w.machine.data_sheet.scanning_stiffness_n_mm / w.machine.data_sheet.scanning_stylus_mass_g) *
+         return 1000 *
+                std::sqrt(w.machine.data_sheet.scanning_stiffness_n_mm / w.machine.data_sheet.scanning_stylus_mass_g) *
                 std::sqrt(w.machine.scanning.probe.reference_deflection_mm * path_r);
        }},
       {"machine", [](World& w) { w.machine.max_speed_mm_s = 20; }, [](const World&) { return 20.0; }},
@@ -660,7 +675,7 @@ TEST(Scanning, VirtualCmmScansTheDefaultBlockTop) {
   ASSERT_GT(r[2].scan.size(), 350u);
   for (const ScanSample& s : r[2].scan) EXPECT_NEAR(s.surface_mm(ball_r).z(), 40, 0.001);
   EXPECT_FALSE(r[2].scan_log.empty());
-  EXPECT_GT(cmm.simulated_time_s(), 4.0);                    // 40 mm at 10 mm/s, plus moves
+  EXPECT_GT(cmm.simulated_time_s(), 4.0);                       // 40 mm at 10 mm/s, plus moves
   EXPECT_NEAR(cmm.state().position_mm.z(), z + 0.3 + 2, 0.05);  // retracted 2 mm off the surface
   EXPECT_NEAR(cmm.state().position_mm.x(), 350, 0.1);
   ScanPath empty;
@@ -752,7 +767,9 @@ double brute_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 }  // namespace
 
 TEST(Scanning, CoherentMeshSearchAnswersLikeBruteForce) {
-  const auto height = [](double x, double y) { return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7) + 0.3 * std::sin(x * 1.3); };
+  const auto height = [](double x, double y) {
+    return 20 + 1.5 * std::sin(x / 6) * std::cos(y / 7) + 0.3 * std::sin(x * 1.3);
+  };
   auto mesh = std::make_shared<const geometry::Mesh>(scan_test::heightfield_block(height, 0, 40, -20, 20, 60, 50));
   Frame pose = Frame::Identity();
   pose.translate(origin);
@@ -761,7 +778,8 @@ TEST(Scanning, CoherentMeshSearchAnswersLikeBruteForce) {
     const Vec3 p = p_machine - origin;
     double d = 1e300;
     for (const auto& f : mesh->faces())
-      d = std::min(d, brute_triangle_distance(p, mesh->vertices()[f[0]], mesh->vertices()[f[1]], mesh->vertices()[f[2]]));
+      d = std::min(d,
+                   brute_triangle_distance(p, mesh->vertices()[f[0]], mesh->vertices()[f[1]], mesh->vertices()[f[2]]));
     return d;
   };
   std::mt19937_64 rng(12);
@@ -880,8 +898,8 @@ TEST(ScanningWorlds, OffsetAndRoughBlocksAreFollowed) {
   const double z = 40 + ball_r - 0.3;
   c.path.segments.push_back(geometry::PccSegment::hermite({310, 210, z}, {350, 210, z}, Vec3::UnitX(), Vec3::UnitX()));
   c.approach_normal = Vec3::UnitZ();
-  for (const auto& [file, top_z, tolerance] : {std::tuple{"scan_offset_block.json", 40.2, 0.001},
-                                               std::tuple{"scan_rough_block.json", 40.0, 0.006}}) {
+  for (const auto& [file, top_z, tolerance] :
+       {std::tuple{"scan_offset_block.json", 40.2, 0.001}, std::tuple{"scan_rough_block.json", 40.0, 0.006}}) {
     const ScanRun r = scan(scan_world_file(file), c);
     ASSERT_TRUE(r.out.completed) << file << ": " << r.out.fault->message;
     double lo = 1e9, hi = -1e9;

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <numbers>
 
+#include "metron/machine/segmented_scanning/time_optimal_bound.hpp"
 #include "reference_planner.hpp"
 #include "sample_paths.hpp"
 #include "scan_paths.hpp"
-#include "metron/machine/segmented_scanning/time_optimal_bound.hpp"
 
 namespace {
 
@@ -59,10 +59,11 @@ TEST(TimeOptimalBound, BelowTheJerkLimitedReferenceOnTheBenchPaths) {
     // bound: the planner gives each quarter of a segment its own curvature limit (one limit per
     // segment, the sharpest point's, left the meander 17.9 % above the bound).
     EXPECT_LT(ref_stiff.time_s, 1.06 * b.time_s);
-    std::printf("[figures] %.1f mm: bound %.3f s, reference %.3f s (+%.1f %%), with 1000x the jerk %.3f s (+%.1f %%), "
-                "sum(l/v) %.3f s\n",
-                b.length_mm, b.time_s, ref.time_s, 100 * (ref.time_s / b.time_s - 1), ref_stiff.time_s,
-                100 * (ref_stiff.time_s / b.time_s - 1), ref.lower_bound_s);
+    std::printf(
+        "[figures] %.1f mm: bound %.3f s, reference %.3f s (+%.1f %%), with 1000x the jerk %.3f s (+%.1f %%), "
+        "sum(l/v) %.3f s\n",
+        b.length_mm, b.time_s, ref.time_s, 100 * (ref.time_s / b.time_s - 1), ref_stiff.time_s,
+        100 * (ref_stiff.time_s / b.time_s - 1), ref.lower_bound_s);
   }
 }
 

@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "reference_planner.hpp"
 #include "sample_paths.hpp"
-#include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "scan_paths.hpp"
 
 namespace {
@@ -25,10 +25,10 @@ struct ScanRun {
   SegmentedStats stats;
   std::vector<ScanPoint> points;
   std::vector<ScanCycle> cycles;
-  std::vector<int> b_flags;                 // B at each command change
+  std::vector<int> b_flags;                        // B at each command change
   std::vector<std::pair<std::size_t, int>> loads;  // (command, buffer written)
-  std::vector<bool> lf;                     // LF per cycle
-  std::vector<double> t;                    // time per cycle
+  std::vector<bool> lf;                            // LF per cycle
+  std::vector<double> t;                           // time per cycle
   double reference_s = 0;
 };
 
@@ -126,7 +126,11 @@ TEST(SegmentedController, LoadRefusedWhenBuffersFullOrOutOfOrder) {
   const auto refused = ctl.load(cmds[2]);
   ASSERT_FALSE(refused.has_value());
   EXPECT_EQ(refused.error().kind, FaultKind::BadCommand);
-  EXPECT_THROW(SegmentedController([] { auto c = base(SegmentedMode::Seed, 4); c.low.speed_mm_s = 8; return c; }()),
+  EXPECT_THROW(SegmentedController([] {
+                 auto c = base(SegmentedMode::Seed, 4);
+                 c.low.speed_mm_s = 8;
+                 return c;
+               }()),
                std::invalid_argument);
 }
 
@@ -241,7 +245,11 @@ TEST(SegmentedController, SeedFallsBackOnlyAtTheLateBoundary) {
   }
   expect_continuous(r, test_path(), 100.0);
   // The stop lasts at least retract + plan remainder + approach.
-  const ScanRun ok = run(test_path(), [] { auto c = base(SegmentedMode::Seed, 40); c.planning_s_per_segment = 0.02; return c; }());
+  const ScanRun ok = run(test_path(), [] {
+    auto c = base(SegmentedMode::Seed, 40);
+    c.planning_s_per_segment = 0.02;
+    return c;
+  }());
   EXPECT_EQ(ok.stats.stops, 0u);
   EXPECT_GT(r.stats.scan_time_s(), ok.stats.scan_time_s() + 2 * rest_to_rest_time_s(2.0, cfg.positioning));
 }

@@ -9,9 +9,9 @@
 
 #include "metron/machine/motion_profile.hpp"
 #include "metron/machine/segmented_scanning/path_interpolator.hpp"
+#include "metron/machine/segmented_scanning/speed_plan.hpp"
 #include "reference_planner.hpp"
 #include "sample_paths.hpp"
-#include "metron/machine/segmented_scanning/speed_plan.hpp"
 
 namespace {
 
@@ -129,9 +129,9 @@ TEST(SegmentedPlan, CurvatureLimitsTheSpeed) {
   const int n = 16;
   for (int i = 0; i < n; ++i) {
     const double a0 = std::numbers::pi / 2 * i / n, a1 = std::numbers::pi / 2 * (i + 1) / n;
-    segs.push_back(geometry::PccSegment::hermite(Vec3(10 * std::cos(a0), 10 * std::sin(a0), 0),
-                                                 Vec3(10 * std::cos(a1), 10 * std::sin(a1), 0),
-                                                 Vec3(-std::sin(a0), std::cos(a0), 0), Vec3(-std::sin(a1), std::cos(a1), 0)));
+    segs.push_back(geometry::PccSegment::hermite(
+        Vec3(10 * std::cos(a0), 10 * std::sin(a0), 0), Vec3(10 * std::cos(a1), 10 * std::sin(a1), 0),
+        Vec3(-std::sin(a0), std::cos(a0), 0), Vec3(-std::sin(a1), std::cos(a1), 0)));
   }
   for (const auto& s : segs) {
     const SegmentLimit l = segment_limit(s, {k_limits, 250.0});

@@ -10,11 +10,11 @@
 #include <numbers>
 
 #include "metron/machine/segmented_scanning/probe_scan_driver.hpp"
-#include "scan_paths.hpp"
 #include "metron/machine/segmented_scanning/segmented_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/machine/world_solid.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
+#include "scan_paths.hpp"
 
 namespace {
 
@@ -25,7 +25,6 @@ using namespace metron::machine::segmented;
 using namespace metron::scan_test;
 constexpr double ball_r = boss_ball_radius_mm, lobe_mm = boss_lobe_mm, boss_d = boss_diameter_mm;
 const Vec3 centre = boss_centre_mm;
-
 
 struct ProbeRun {
   SegmentedStats stats;
@@ -154,9 +153,10 @@ TEST(SegmentedProbe, LongScanAroundALobedBossInEveryMode) {
     // The deflection stays well inside the gain tolerance at the junctions too.
     EXPECT_LT(near, 0.05);
     EXPECT_LT(away, 0.05);
-    std::printf("[figures] %s: %zu samples, scan %.2f s, stops %zu, approaches %zu, |Ep|-E0 near junctions %.4f mm, "
-                "elsewhere %.4f mm\n",
-                name(mode), r.samples.size(), r.stats.scan_time_s(), r.stats.stops, r.approaches, near, away);
+    std::printf(
+        "[figures] %s: %zu samples, scan %.2f s, stops %zu, approaches %zu, |Ep|-E0 near junctions %.4f mm, "
+        "elsewhere %.4f mm\n",
+        name(mode), r.samples.size(), r.stats.scan_time_s(), r.stats.stops, r.approaches, near, away);
   }
 }
 

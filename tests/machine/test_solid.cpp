@@ -19,8 +19,9 @@ using namespace metron::machine;
 
 namespace {
 
-csg::Node leaf(std::string name,
-               std::variant<csg::HalfSpace, csg::Cylinder, csg::Sphere, csg::Cone, csg::Torus, csg::EllipticCylinder> shape) {
+csg::Node leaf(
+    std::string name,
+    std::variant<csg::HalfSpace, csg::Cylinder, csg::Sphere, csg::Cone, csg::Torus, csg::EllipticCylinder> shape) {
   csg::Node n;
   n.primitive = {std::move(name), std::move(shape)};
   return n;
@@ -63,8 +64,10 @@ TEST(Solid, PrimitiveDistancesAreExact) {
     const double rho = std::hypot(p.x(), p.y());
     const bool inside = rho < 5 && p.z() > 0 && p.z() < 20;
     const double to_side = std::hypot(rho - 5, std::max({0.0, -p.z(), p.z() - 20}));
-    const double to_caps = std::min(std::hypot(std::max(0.0, rho - 5), p.z()), std::hypot(std::max(0.0, rho - 5), p.z() - 20));
-    EXPECT_NEAR(capped.signed_distance(p), inside ? -std::min({5 - rho, p.z(), 20 - p.z()}) : std::min(to_side, to_caps), 1e-12)
+    const double to_caps =
+        std::min(std::hypot(std::max(0.0, rho - 5), p.z()), std::hypot(std::max(0.0, rho - 5), p.z() - 20));
+    EXPECT_NEAR(capped.signed_distance(p),
+                inside ? -std::min({5 - rho, p.z(), 20 - p.z()}) : std::min(to_side, to_caps), 1e-12)
         << p.transpose();
     // Cone: distance to the generator in the point's half-plane, or to the apex.
     const double along = rho * std::sin(a) + p.z() * std::cos(a);
@@ -113,16 +116,16 @@ TEST(Solid, EllipticCylinderDistanceIsTheDistanceFromItsSection) {
 
 TEST(Solid, DefaultBlockDistancesNearFaces) {
   const auto part = make_part_solid(default_world().truth);
-  const Vec3 o(300, 200, 0);  // part origin in the machine
-  EXPECT_NEAR(part->signed_distance(o + Vec3(20, 20, 42.5)), 2.5, 1e-12);    // above TOP
-  EXPECT_NEAR(part->signed_distance(o + Vec3(-3, 50, 20)), 3, 1e-12);        // left of LEFT
-  EXPECT_NEAR(part->signed_distance(o + Vec3(40, 57, 30)), 3, 1e-12);        // in BORE1, 3 mm from the wall
-  EXPECT_NEAR(part->signed_distance(o + Vec3(40, 50, 17)), 2, 1e-12);        // above BORE1's bottom
-  EXPECT_NEAR(part->signed_distance(o + Vec3(75, 75, 61)), 3, 1e-12);        // above SPHERE1
-  EXPECT_NEAR(part->signed_distance(o + Vec3(120, 85, 50)), 3, 1e-12);       // beside BOSS1
-  EXPECT_NEAR(part->signed_distance(o + Vec3(120, 70, 56)), 1, 1e-12);       // above BOSS1_TOP
+  const Vec3 o(300, 200, 0);                                                            // part origin in the machine
+  EXPECT_NEAR(part->signed_distance(o + Vec3(20, 20, 42.5)), 2.5, 1e-12);               // above TOP
+  EXPECT_NEAR(part->signed_distance(o + Vec3(-3, 50, 20)), 3, 1e-12);                   // left of LEFT
+  EXPECT_NEAR(part->signed_distance(o + Vec3(40, 57, 30)), 3, 1e-12);                   // in BORE1, 3 mm from the wall
+  EXPECT_NEAR(part->signed_distance(o + Vec3(40, 50, 17)), 2, 1e-12);                   // above BORE1's bottom
+  EXPECT_NEAR(part->signed_distance(o + Vec3(75, 75, 61)), 3, 1e-12);                   // above SPHERE1
+  EXPECT_NEAR(part->signed_distance(o + Vec3(120, 85, 50)), 3, 1e-12);                  // beside BOSS1
+  EXPECT_NEAR(part->signed_distance(o + Vec3(120, 70, 56)), 1, 1e-12);                  // above BOSS1_TOP
   EXPECT_NEAR(part->signed_distance(o + Vec3(40, 20, 40)), 8 * std::sqrt(0.5), 1e-12);  // CONE1 axis at the top
-  EXPECT_LT(part->signed_distance(o + Vec3(10, 10, 10)), 0);                // material
+  EXPECT_LT(part->signed_distance(o + Vec3(10, 10, 10)), 0);                            // material
   EXPECT_EQ(part->feature_at(o + Vec3(20, 20, 42.5)), "TOP");
   EXPECT_EQ(part->feature_at(o + Vec3(40, 57, 30)), "BORE1");
   EXPECT_EQ(part->feature_at(o + Vec3(75, 75, 61)), "SPHERE1");
@@ -161,9 +164,8 @@ TEST(Solid, BallContactIsExactOnPlaneSphereBoreAndCone) {
 
 TEST(Solid, ThinFeaturesAreNotTunnelled) {
   // A 0.1 mm wall crossed by a long move in one step.
-  const auto wall = op(csg::Node::Op::Intersection,
-                       {leaf("A", csg::HalfSpace{{0, 0, 0.05}, Vec3::UnitX()}),
-                        leaf("B", csg::HalfSpace{{-0.05, 0, 0}, -Vec3::UnitX()})});
+  const auto wall = op(csg::Node::Op::Intersection, {leaf("A", csg::HalfSpace{{0, 0, 0.05}, Vec3::UnitX()}),
+                                                     leaf("B", csg::HalfSpace{{-0.05, 0, 0}, -Vec3::UnitX()})});
   const CsgSolid solid(wall, Frame::Identity());
   const auto s = first_ball_contact(solid, Vec3(-500, 0, 0), Vec3(500, 0, 0), 0.5);
   ASSERT_TRUE(s);
@@ -179,8 +181,8 @@ TEST(Solid, StartingInContactIsFreeOnlyWhenMovingAway) {
   ASSERT_TRUE(s);
   EXPECT_EQ(*s, 0.0);
   // Leaving and coming back down elsewhere is a new contact.
-  const CsgSolid steps(op(csg::Node::Op::Union, {leaf("P", csg::HalfSpace{{0, 0, 0}, Vec3::UnitZ()}),
-                                                  leaf("Q", csg::Sphere{{10, 0, 0}, 4})}),
+  const CsgSolid steps(op(csg::Node::Op::Union,
+                          {leaf("P", csg::HalfSpace{{0, 0, 0}, Vec3::UnitZ()}), leaf("Q", csg::Sphere{{10, 0, 0}, 4})}),
                        Frame::Identity());
   EXPECT_TRUE(first_ball_contact(steps, Vec3(0, 0, 1.99), Vec3(10, 0, 3), 2.0));
 }
@@ -223,11 +225,11 @@ TEST(Solid, DeviationsMoveResizeTiltAndShapePrimitives) {
 TEST(Solid, WorldSolidHasTableReferenceSphereAndPost) {
   const World w = default_world();
   const auto all = make_world_solid(w.truth);
-  EXPECT_NEAR(all->signed_distance(Vec3(600, 600, 5)), 5, 1e-12);             // the table
+  EXPECT_NEAR(all->signed_distance(Vec3(600, 600, 5)), 5, 1e-12);  // the table
   EXPECT_EQ(all->feature_at(Vec3(600, 600, 5)), "TABLE");
-  EXPECT_NEAR(all->signed_distance(Vec3(900, 700, 120)), 7.5, 1e-12);         // the sphere's top
+  EXPECT_NEAR(all->signed_distance(Vec3(900, 700, 120)), 7.5, 1e-12);  // the sphere's top
   EXPECT_EQ(all->feature_at(Vec3(900, 700, 120)), "REFERENCE_SPHERE");
-  EXPECT_NEAR(all->signed_distance(Vec3(910, 700, 50)), 5, 1e-12);            // the post
+  EXPECT_NEAR(all->signed_distance(Vec3(910, 700, 50)), 5, 1e-12);  // the post
   EXPECT_EQ(all->feature_at(Vec3(910, 700, 50)), "REFERENCE_POST");
 }
 
@@ -272,14 +274,14 @@ Truth simple_part_truth(const Vec3& p) {
   const auto out = [](double v, double lo, double hi) { return std::max({0.0, lo - v, v - hi}); };
   const double in_square = std::hypot(out(x, 0, 100), out(y, 0, 100));
   std::vector<double> faces = {
-      std::hypot(in_square, z),                                     // bottom
-      std::hypot(x, out(y, 0, 100), out(z, 0, 50)),                 // x = 0
-      std::hypot(x - 100, out(y, 0, 100), out(z, 0, 50)),           // x = 100
-      std::hypot(y, out(x, 0, 100), out(z, 0, 50)),                 // y = 0
-      std::hypot(y - 100, out(x, 0, 100), out(z, 0, 50)),           // y = 100
+      std::hypot(in_square, z),                                                 // bottom
+      std::hypot(x, out(y, 0, 100), out(z, 0, 50)),                             // x = 0
+      std::hypot(x - 100, out(y, 0, 100), out(z, 0, 50)),                       // x = 100
+      std::hypot(y, out(x, 0, 100), out(z, 0, 50)),                             // y = 0
+      std::hypot(y - 100, out(x, 0, 100), out(z, 0, 50)),                       // y = 100
       std::hypot(in_square > 0 ? in_square : std::max(0.0, 25 - rho), z - 50),  // top, less the bore
-      std::hypot(rho - 25, out(z, 25, 50)),                         // bore wall
-      std::hypot(std::max(0.0, rho - 25), z - 25),                  // bore bottom
+      std::hypot(rho - 25, out(z, 25, 50)),                                     // bore wall
+      std::hypot(std::max(0.0, rho - 25), z - 25),                              // bore bottom
   };
   std::sort(faces.begin(), faces.end());
   const bool inside = in_square == 0 && z > 0 && z < 50 && !(rho < 25 && z > 25);

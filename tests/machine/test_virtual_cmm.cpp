@@ -108,8 +108,8 @@ std::vector<Hit> probe_top(Cmm& cmm) {
 }
 
 // A circle of points on an axial (vertical) round feature, probed along the radius.
-std::vector<Hit> probe_round(Cmm& cmm, const Vec3& axis_point_machine, double radius_mm, double z_mm, int n,
-                             bool inner, double phase_deg = 0) {
+std::vector<Hit> probe_round(Cmm& cmm, const Vec3& axis_point_machine, double radius_mm, double z_mm, int n, bool inner,
+                             double phase_deg = 0) {
   std::vector<Hit> hits;
   const Vec3 c(axis_point_machine.x(), axis_point_machine.y(), z_mm);
   if (inner) {
@@ -125,7 +125,8 @@ std::vector<Hit> probe_round(Cmm& cmm, const Vec3& axis_point_machine, double ra
       cmm.go(Vec3(over.x(), over.y(), 80));
     }
     hits.push_back(cmm.point(nominal, inner ? -radial : radial));
-    if (!inner) cmm.go(Vec3(hits.back().centre_mm.x() + 2 * radial.x(), hits.back().centre_mm.y() + 2 * radial.y(), 80));
+    if (!inner)
+      cmm.go(Vec3(hits.back().centre_mm.x() + 2 * radial.x(), hits.back().centre_mm.y() + 2 * radial.y(), 80));
   }
   cmm.go(Vec3(c.x(), c.y(), 80));
   return hits;
@@ -225,9 +226,10 @@ TEST(VirtualCmm, PerfectPartConeIsExact) {
 TEST(VirtualCmm, QualificationFindsTheEffectiveRadius) {
   // Analytic: the ball centre stops short by pre-travel + feed * (filter + transmission + latency).
   const World w = noiseless(default_world());
-  const double expected = 2 - w.truth.probe.pre_travel.horizontal_mm -
-                          w.machine.measuring_feed_mm_s *
-                              (w.truth.probe.filter_delay_s + w.truth.probe.transmission_delay_s + w.machine.skip.latency_s);
+  const double expected =
+      2 - w.truth.probe.pre_travel.horizontal_mm -
+      w.machine.measuring_feed_mm_s *
+          (w.truth.probe.filter_delay_s + w.truth.probe.transmission_delay_s + w.machine.skip.latency_s);
   for (const char* file : {"default.json", "block_deviations.json"}) {
     Cmm cmm(noiseless(world_file(file)));
     cmm.tool(4);
@@ -558,7 +560,8 @@ bool shared_data(const std::string& file) {
 }  // namespace
 
 TEST(VirtualCmm, StepPartIsExact) {
-  if (!shared_data("nist-simple-part/ipp_simple.stp")) GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
+  if (!shared_data("nist-simple-part/ipp_simple.stp"))
+    GTEST_SKIP() << "shared data folder absent: " << METRON_SHARED_DATA;
   World w = perfect_cad("nist_simple_part.json");
   Cmm cmm(w);
   cmm.tool(4);
@@ -621,7 +624,8 @@ TEST(VirtualCmm, DcxStepCylinderAndSphereAreExact) {
       for (std::size_t i = 0; i < face.triangles.size(); i += 1 + face.triangles.size() / 20) {
         const auto t = face.triangles[i];
         const auto& tri = cad.mesh->faces()[t];
-        const Vec3 centroid = (cad.mesh->vertices()[tri[0]] + cad.mesh->vertices()[tri[1]] + cad.mesh->vertices()[tri[2]]) / 3;
+        const Vec3 centroid =
+            (cad.mesh->vertices()[tri[0]] + cad.mesh->vertices()[tri[1]] + cad.mesh->vertices()[tri[2]]) / 3;
         const Vec3 p = centroid + offset(g) * cad.mesh->face_normal(t);
         const double v = exact.signed_distance(p), m = mesh_only.signed_distance(p);
         ASSERT_LE(std::abs(v - m), 1.5 * cad.chord_tolerance_mm + 1e-7) << p.transpose();

@@ -4,16 +4,16 @@
 #include "scratch.hpp"
 
 #include <filesystem>
-#include <numbers>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
-#include "metron/machine/wavefront/wavefront_world.hpp"
 #include "metron/machine/virtual_cmm.hpp"
+#include "metron/machine/wavefront/wavefront_world.hpp"
 #include "metron/machine/world.hpp"
 
 using namespace metron;
@@ -106,7 +106,8 @@ TEST(World, ExtendsMergesOverTheBase) {
   EXPECT_EQ(w->machine.reference_sphere.nominal_centre_mm, Vec3(899.6, 700.3, 99.8));
 
   auto scanned = parse_world(nlohmann::json::parse(R"({"extends": "default",
-      "machine": {"skip": {"scanned": {"period_s": 0.003}}}})"), "s.json");
+      "machine": {"skip": {"scanned": {"period_s": 0.003}}}})"),
+                             "s.json");
   ASSERT_TRUE(scanned) << scanned.error().message;
   EXPECT_EQ(scanned->machine.skip.kind, SkipInput::Kind::Scanned);
   EXPECT_EQ(scanned->machine.skip.period_s, 0.003);
@@ -115,12 +116,17 @@ TEST(World, ExtendsMergesOverTheBase) {
 TEST(World, ErrorsNameTheFileAndTheJsonPath) {
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"deviations": {"BORE1": {"diameter_mm": "big"}}}})"),
             "world.json: /part/deviations/BORE1/diameter_mm: expected a number");
-  EXPECT_EQ(error_of(R"({"machine": {"max_speed_mm_s": -3}})"), "world.json: /machine/max_speed_mm_s: expected a positive number");
-  EXPECT_EQ(error_of(R"({"machine": {"home_mm": [1, 2]}})"), "world.json: /machine/home_mm: expected an array of 3 numbers");
-  EXPECT_EQ(error_of(R"({"machine": {"home_mm": [0, 0, 5000]}})"), "world.json: /machine/home_mm: outside the axis travel");
-  EXPECT_EQ(error_of(R"({"machine": {"skip": {}}})"), "world.json: /machine/skip: expected exactly one of 'latched' or 'scanned'");
+  EXPECT_EQ(error_of(R"({"machine": {"max_speed_mm_s": -3}})"),
+            "world.json: /machine/max_speed_mm_s: expected a positive number");
+  EXPECT_EQ(error_of(R"({"machine": {"home_mm": [1, 2]}})"),
+            "world.json: /machine/home_mm: expected an array of 3 numbers");
+  EXPECT_EQ(error_of(R"({"machine": {"home_mm": [0, 0, 5000]}})"),
+            "world.json: /machine/home_mm: outside the axis travel");
+  EXPECT_EQ(error_of(R"({"machine": {"skip": {}}})"),
+            "world.json: /machine/skip: expected exactly one of 'latched' or 'scanned'");
   EXPECT_EQ(error_of(R"({"part": {"design": {"type": "cylindre"}}})"),
-            "world.json: /part/design/type: unknown primitive type 'cylindre' (expected half_space, cylinder, sphere, cone, torus or "
+            "world.json: /part/design/type: unknown primitive type 'cylindre' (expected half_space, cylinder, sphere, "
+            "cone, torus or "
             "elliptic_cylinder)");
   EXPECT_EQ(error_of(R"({"part": {"design": {"union": [{"type": "sphere", "centre": [0, 0, 0]}]}}})"),
             "world.json: /part/design/union/0: missing key 'diameter_mm'");
@@ -132,8 +138,9 @@ TEST(World, ErrorsNameTheFileAndTheJsonPath) {
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"deviations": {"TOP": {"form": {"lobes": 3}}}}})"),
             "world.json: /part/deviations/TOP/form/lobes: unknown key 'lobes' "
             "(expected one of: amplitude_mm, phase_deg, wavelength_mm)");
-  EXPECT_EQ(error_of(R"({"part": {"design": {"type": "cone", "apex": [0,0,0], "axis": [0,0,0], "half_angle_deg": 30}}})"),
-            "world.json: /part/design/axis: expected a non-zero direction");
+  EXPECT_EQ(
+      error_of(R"({"part": {"design": {"type": "cone", "apex": [0,0,0], "axis": [0,0,0], "half_angle_deg": 30}}})"),
+      "world.json: /part/design/axis: expected a non-zero direction");
 }
 
 TEST(World, UnknownKeysAreErrorsWithASuggestion) {
@@ -141,7 +148,8 @@ TEST(World, UnknownKeysAreErrorsWithASuggestion) {
             "world.json: /probe/pre_travle: unknown key 'pre_travle' (did you mean 'pre_travel'?)");
   EXPECT_EQ(error_of(R"({"colour": "red"})"),
             "world.json: /colour: unknown key 'colour' "
-            "(expected one of: description, kind, machine, name, part, probe, probe_library, reference_sphere, scanning, seed)");
+            "(expected one of: description, kind, machine, name, part, probe, probe_library, reference_sphere, "
+            "scanning, seed)");
   EXPECT_EQ(error_of(R"([1, 2])"), "world.json: /: expected an object");
 }
 
@@ -154,7 +162,8 @@ TEST(World, FileErrors) {
   std::ofstream(path) << "{\n  \"name\": \"x\",\n  \"seed\": \n}\n";
   auto bad = load_world(path);
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find(path + ": invalid JSON: parse error at line 4"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find(path + ": invalid JSON: parse error at line 4"), std::string::npos)
+      << bad.error().message;
 
   std::ofstream(path) << R"({"extends": "default", "part": {"design": {"cad": "no_such_part.stp"}}})";
   auto cad = load_world(path);
@@ -181,13 +190,16 @@ TEST(World, PreTravelModel) {
 TEST(World, ProbeLibraryIsReadCheckedAndSelectsTools) {
   auto w = parse_world(nlohmann::json::parse(R"({"probe_library": [
       {"name": "T1A0B0", "tip_diameter_mm": 3, "offset_mm": [0, 0, -50]},
-      {"name": "Star_2", "tip_diameter_mm": 2}]})"), "world.json");
+      {"name": "Star_2", "tip_diameter_mm": 2}]})"),
+                       "world.json");
   ASSERT_TRUE(w) << w.error().message;
   ASSERT_EQ(w->machine.probe_library.size(), 2u);
   EXPECT_EQ(w->machine.probe_library[1].offset_mm, metron::Vec3(0, 0, -50));
-  EXPECT_EQ(error_of(R"({"probe_library": [{"name": "A", "tip_diameter_mm": 3}, {"name": "a", "tip_diameter_mm": 2}]})"),
-            "world.json: /probe_library/1/name: sensor 'a' is listed twice");
-  EXPECT_EQ(error_of(R"({"probe_library": [{"name": "A"}]})"), "world.json: /probe_library/0: missing key 'tip_diameter_mm'");
+  EXPECT_EQ(
+      error_of(R"({"probe_library": [{"name": "A", "tip_diameter_mm": 3}, {"name": "a", "tip_diameter_mm": 2}]})"),
+      "world.json: /probe_library/1/name: sensor 'a' is listed twice");
+  EXPECT_EQ(error_of(R"({"probe_library": [{"name": "A"}]})"),
+            "world.json: /probe_library/0: missing key 'tip_diameter_mm'");
 
   metron::machine::VirtualCmm cmm(*w, 1);
   cmm.submit({1, metron::machine::SelectTool{"t1a0b0"}});  // names are case-insensitive

@@ -128,7 +128,9 @@ TEST(ExpectedFormat, CorruptFilesNameTheLineAndWhatWasExpected) {
   const std::vector<Case> cases = {
       {"seed 1\nfeature B1 diameter 20.0x\n", 2, "expected a number or 'none' for feature B1 diameter, got '20.0x'"},
       {"status done\n", 1, "expected completed, faulted or error after 'status'"},
-      {"# c\n\nfeature B1 diam 20\n", 3, "unknown feature quantity 'diam': expected frame, points, actual, x, y, z, i, j, k, diameter, length, angle, start, included, form"},
+      {"# c\n\nfeature B1 diam 20\n", 3,
+       "unknown feature quantity 'diam': expected frame, points, actual, x, y, z, i, j, k, diameter, length, angle, "
+       "start, included, form"},
       {"feature B1 x 1\nfeature B1 x 2\n", 2, "a second line for feature B1 x (the first is line 1)"},
       {"feature B1 x 1 +-\n", 1, "expected a tolerance (a number >= 0) after '+-'"},
       {"feature B1 x 1 +--0.1\n", 1, "expected a tolerance (a number >= 0) after '+-', got '-0.1'"},
@@ -140,7 +142,9 @@ TEST(ExpectedFormat, CorruptFilesNameTheLineAndWhatWasExpected) {
       {"seed 1\nseed 2\n", 2, "'seed' is given twice"},
       {"default size +-1\n", 1, "expected length, direction or angle after 'default', got 'size'"},
       {"fault collision at 14\n", 1, "expected 'fault KIND line N', e.g. 'fault collision line 14'"},
-      {"features B1 x 1\n", 1, "unknown line 'features': expected world, seed, default, skip, status, feature, tolerance, text, fault, error, file or a # comment"},
+      {"features B1 x 1\n", 1,
+       "unknown line 'features': expected world, seed, default, skip, status, feature, tolerance, text, fault, error, "
+       "file or a # comment"},
   };
   for (const auto& c : cases) {
     const auto f = rg::parse_expected(c.text);
@@ -175,20 +179,23 @@ TEST(Observe, ResultsBecomeEntriesInReportOrder) {
   EXPECT_EQ(o.fault_summary, "line 14 (GOTO/80, 50, 20): collision with TOP");
   std::string all;
   for (const auto& e : o.entries) all += e.key() + " = " + e.value.text + "\n";
-  EXPECT_EQ(all,
-            "status = faulted\n"
-            "feature B1 frame = PART\nfeature B1 points = 4\nfeature B1 x = 40.00010\nfeature B1 y = 50.00000\n"
-            "feature B1 z = 30.00000\nfeature B1 i = 0.00000000\nfeature B1 j = 0.00000000\nfeature B1 k = 1.00000000\n"
-            "feature B1 diameter = 20.01230\nfeature B1 form = 0.00040\n"
-            "tolerance A1 status = OUT\ntolerance A1 value = -0.05000\n"
-            "tolerance D1 status = IN\ntolerance D1 value = 0.01230\n"
-            "text 1 = hello\n"
-            "feature B1@2 frame = MCS\nfeature B1@2 points = 4\nfeature B1@2 x = 340.00010\nfeature B1@2 y = 250.00000\n"
-            "feature B1@2 z = 30.00000\nfeature B1@2 i = 0.00000000\nfeature B1@2 j = 0.00000000\nfeature B1@2 k = 1.00000000\n"
-            "feature B1@2 diameter = 20.01230\nfeature B1@2 form = 0.00040\n"
-            "feature P frame = PART\nfeature P points = 0\nfeature P actual = none\n"
-            "fault = collision line 14\n");
-  const auto angle = std::find_if(o.entries.begin(), o.entries.end(), [](const rg::Entry& e) { return e.key() == "tolerance A1 value"; });
+  EXPECT_EQ(
+      all,
+      "status = faulted\n"
+      "feature B1 frame = PART\nfeature B1 points = 4\nfeature B1 x = 40.00010\nfeature B1 y = 50.00000\n"
+      "feature B1 z = 30.00000\nfeature B1 i = 0.00000000\nfeature B1 j = 0.00000000\nfeature B1 k = 1.00000000\n"
+      "feature B1 diameter = 20.01230\nfeature B1 form = 0.00040\n"
+      "tolerance A1 status = OUT\ntolerance A1 value = -0.05000\n"
+      "tolerance D1 status = IN\ntolerance D1 value = 0.01230\n"
+      "text 1 = hello\n"
+      "feature B1@2 frame = MCS\nfeature B1@2 points = 4\nfeature B1@2 x = 340.00010\nfeature B1@2 y = 250.00000\n"
+      "feature B1@2 z = 30.00000\nfeature B1@2 i = 0.00000000\nfeature B1@2 j = 0.00000000\nfeature B1@2 k = "
+      "1.00000000\n"
+      "feature B1@2 diameter = 20.01230\nfeature B1@2 form = 0.00040\n"
+      "feature P frame = PART\nfeature P points = 0\nfeature P actual = none\n"
+      "fault = collision line 14\n");
+  const auto angle = std::find_if(o.entries.begin(), o.entries.end(),
+                                  [](const rg::Entry& e) { return e.key() == "tolerance A1 value"; });
   EXPECT_EQ(angle->cls, rg::QuantityClass::Angle);  // ANGLB values are degrees
 }
 
@@ -203,7 +210,8 @@ TEST(Observe, CompileErrorsGiveTheLineOfTheFirstError) {
 
 std::vector<std::string> differences(const std::string& expected) {
   std::vector<std::string> out;
-  for (const auto& d : rg::compare(parse(expected), rg::observe_results(results_fixture()))) out.push_back(d.key + ": " + d.message);
+  for (const auto& d : rg::compare(parse(expected), rg::observe_results(results_fixture())))
+    out.push_back(d.key + ": " + d.message);
   return out;
 }
 
@@ -227,13 +235,16 @@ TEST(Compare, AgreesWithinTheTolerancesAndRounding) {
 
 TEST(Compare, NamesTheQuantityExpectedGotAndTolerance) {
   EXPECT_EQ(differences(all_subjects + "feature B1 diameter 20.0110\n"),
-            std::vector<std::string>{"feature B1 diameter: expected 20.0110, got 20.01230 (difference +0.00130, tolerance +-0.0005)"});
+            std::vector<std::string>{
+                "feature B1 diameter: expected 20.0110, got 20.01230 (difference +0.00130, tolerance +-0.0005)"});
   EXPECT_EQ(differences(all_subjects + "feature B1 diameter 20.0110 +-0.001\n"),
-            std::vector<std::string>{"feature B1 diameter: expected 20.0110, got 20.01230 (difference +0.00130, tolerance +-0.001)"});
+            std::vector<std::string>{
+                "feature B1 diameter: expected 20.0110, got 20.01230 (difference +0.00130, tolerance +-0.001)"});
   EXPECT_TRUE(differences(all_subjects + "feature B1 diameter 20.0110 +-0.002\n").empty());
   EXPECT_TRUE(differences("default length +-0.002\n" + all_subjects + "feature B1 diameter 20.0110\n").empty());
   EXPECT_EQ(differences(all_subjects + "feature B1 k 0.9999\n"),
-            std::vector<std::string>{"feature B1 k: expected 0.9999, got 1.00000000 (difference +0.00010000, tolerance +-1e-05)"});
+            std::vector<std::string>{
+                "feature B1 k: expected 0.9999, got 1.00000000 (difference +0.00010000, tolerance +-1e-05)"});
   EXPECT_EQ(differences(all_subjects + "tolerance D1 value none\n"),
             std::vector<std::string>{"tolerance D1 value: expected none, got 0.01230"});
   EXPECT_EQ(differences(all_subjects + "feature B1@2 frame PART\n"),
@@ -241,8 +252,9 @@ TEST(Compare, NamesTheQuantityExpectedGotAndTolerance) {
 }
 
 TEST(Compare, MissingAndUnexpectedOutputsAndStatus) {
-  EXPECT_EQ(differences(all_subjects + "feature B9 x 1\nfeature B9 y 2\nfeature B1 length 20\n"),
-            (std::vector<std::string>{"feature B9: expected, not reported", "feature B1 length: expected 20, not reported"}));
+  EXPECT_EQ(
+      differences(all_subjects + "feature B9 x 1\nfeature B9 y 2\nfeature B1 length 20\n"),
+      (std::vector<std::string>{"feature B9: expected, not reported", "feature B1 length: expected 20, not reported"}));
   EXPECT_EQ(differences("status faulted\nfeature B1 points 4\ntolerance D1 status IN\nfeature B1@2 points 4\n"
                         "feature P actual none\nfault collision line 14\n"),
             (std::vector<std::string>{"tolerance A1: reported, not expected", "text 1: got \"hello\", not expected"}));
@@ -251,7 +263,8 @@ TEST(Compare, MissingAndUnexpectedOutputsAndStatus) {
   ASSERT_FALSE(d.empty());
   EXPECT_EQ(d.front(), "status: expected completed, got faulted");
   EXPECT_EQ(d.back(), "fault: got collision line 14, not expected");
-  EXPECT_EQ(differences(all_subjects + "text \"hello\"\n"), std::vector<std::string>{"text 2: expected \"hello\", not reported"});
+  EXPECT_EQ(differences(all_subjects + "text \"hello\"\n"),
+            std::vector<std::string>{"text 2: expected \"hello\", not reported"});
 }
 
 TEST(Update, KeepsHeaderDirectivesToleranceOverridesAndComments) {
@@ -275,10 +288,10 @@ TEST(Discovery, FindsProgramsWithExpectedFilesSortedAndOrphans) {
   fs::create_directories(d / "sub");
   write(d / "b.dmi", "");
   write(d / "b.expected", "");
-  write(d / "a.dmi", "");               // no expected file: not a case
+  write(d / "a.dmi", "");  // no expected file: not a case
   write(d / "sub" / "c.dmi", "");
   write(d / "sub" / "c.expected", "");
-  write(d / "orphan.expected", "");     // no program: a case that fails
+  write(d / "orphan.expected", "");  // no program: a case that fails
   const auto cases = rg::discover_cases({d.string(), (d / "b.dmi").string()});
   ASSERT_TRUE(cases.has_value()) << cases.error();
   std::vector<std::string> names;
@@ -301,15 +314,24 @@ TEST(Reports, LinesSummaryAndJunit) {
   rg::CaseResult fail{{"p/b<1>.dmi", "", ""}, rg::Verdict::Fail, 1.5, "1 difference", {"feature X x: expected 1 & 2"}};
   rg::CaseResult skip{{"p/c.dmi", "", ""}, rg::Verdict::Skip, 0, "not yet", {}};
   EXPECT_EQ(rg::format_case_result(pass), "PASS  p/a.dmi  0.25 s\n");
-  EXPECT_EQ(rg::format_case_result(fail), "FAIL  p/b<1>.dmi  1.50 s  1 difference\n      feature X x: expected 1 & 2\n");
+  EXPECT_EQ(rg::format_case_result(fail),
+            "FAIL  p/b<1>.dmi  1.50 s  1 difference\n      feature X x: expected 1 & 2\n");
   EXPECT_EQ(rg::format_case_result(skip), "SKIP  p/c.dmi  not yet\n");
   EXPECT_EQ(rg::format_summary({pass, fail}), "1 passed, 1 failed");
   EXPECT_EQ(rg::format_summary({pass, fail, skip}), "1 passed, 1 failed, 1 skipped");
   const std::string xml = rg::junit_xml({pass, fail, skip}, 2.0);
-  EXPECT_NE(xml.find("<testsuites name=\"metron test\" tests=\"3\" failures=\"1\" errors=\"0\" skipped=\"1\" time=\"2.000\">"), std::string::npos) << xml;
-  EXPECT_NE(xml.find("<testcase classname=\"p\" name=\"a.dmi\" file=\"p/a.dmi\" time=\"0.250\"/>"), std::string::npos) << xml;
+  EXPECT_NE(
+      xml.find(
+          "<testsuites name=\"metron test\" tests=\"3\" failures=\"1\" errors=\"0\" skipped=\"1\" time=\"2.000\">"),
+      std::string::npos)
+      << xml;
+  EXPECT_NE(xml.find("<testcase classname=\"p\" name=\"a.dmi\" file=\"p/a.dmi\" time=\"0.250\"/>"), std::string::npos)
+      << xml;
   EXPECT_NE(xml.find("name=\"b&lt;1&gt;.dmi\""), std::string::npos) << xml;
-  EXPECT_NE(xml.find("<failure message=\"1 difference\" type=\"regression\">feature X x: expected 1 &amp; 2\n</failure>"), std::string::npos) << xml;
+  EXPECT_NE(
+      xml.find("<failure message=\"1 difference\" type=\"regression\">feature X x: expected 1 &amp; 2\n</failure>"),
+      std::string::npos)
+      << xml;
   EXPECT_NE(xml.find("<skipped message=\"not yet\"/>"), std::string::npos) << xml;
 }
 
@@ -371,7 +393,8 @@ TEST(Runner, ResultsArriveInTheOrderOfTheCasesWhateverTheCompletionOrder) {
   std::vector<std::string> seen;
   const auto cases = rg::discover_cases({d.string()});
   ASSERT_TRUE(cases);
-  const auto r = rg::run_cases(*cases, o, [&](const rg::CaseResult& c) { seen.push_back(fs::path(c.test.name).filename().string()); });
+  const auto r = rg::run_cases(
+      *cases, o, [&](const rg::CaseResult& c) { seen.push_back(fs::path(c.test.name).filename().string()); });
   EXPECT_EQ(seen, (std::vector<std::string>{"a.dmi", "b.dmi", "c.dmi", "d.dmi"}));
   EXPECT_GT(r[0].wall_s, 0.3);
 }
@@ -413,7 +436,8 @@ TEST(Cli, UpdateLeavesFilesCentredOnTheTruth) {
   const std::string metron = METRON_BINARY;
   auto [code, out] = shell(metron + " test " + d.string() + " --update");
   EXPECT_EQ(code, 1) << out;
-  EXPECT_NE(out.find("not updated: the file is centred on the hidden truth; edit it by hand"), std::string::npos) << out;
+  EXPECT_NE(out.find("not updated: the file is centred on the hidden truth; edit it by hand"), std::string::npos)
+      << out;
   EXPECT_EQ(read(d / "bore.expected"), truth);
 }
 
@@ -423,7 +447,9 @@ TEST(Cli, PassingChangedBeyondToleranceAndFaultingPrograms) {
   write(d / "pass_b.dmi", circle_program);
   write(d / "changed.dmi", circle_program);
   // Straight down into the block on line 6: an unexpected collision.
-  write(d / "zfault.dmi", std::string(circle_program).replace(std::string(circle_program).find("GOTO/40, 50, 80"), 15, "GOTO/80, 50, 20"));
+  write(
+      d / "zfault.dmi",
+      std::string(circle_program).replace(std::string(circle_program).find("GOTO/40, 50, 80"), 15, "GOTO/80, 50, 20"));
   for (const char* n : {"pass_a", "pass_b", "changed"}) write(d / (std::string(n) + ".expected"), "# a case\nseed 1\n");
   write(d / "zfault.expected", "seed 1\nstatus completed\nfeature BORE1 diameter 20\n");
   const std::string metron = METRON_BINARY;
@@ -433,7 +459,10 @@ TEST(Cli, PassingChangedBeyondToleranceAndFaultingPrograms) {
   EXPECT_EQ(code, 0) << out;
   EXPECT_EQ(last_line(out), "0 passed, 0 failed, 2 updated") << out;
   const std::string recorded = read(d / "pass_a.expected");
-  EXPECT_EQ(recorded.rfind("# a case\nseed 1\n\nstatus completed\n\nfeature BORE1 frame PART\nfeature BORE1 points 4\n", 0), 0u) << recorded;
+  EXPECT_EQ(
+      recorded.rfind("# a case\nseed 1\n\nstatus completed\n\nfeature BORE1 frame PART\nfeature BORE1 points 4\n", 0),
+      0u)
+      << recorded;
   std::tie(code, out) = shell(metron + " test " + d.string() + " --filter pass_");
   EXPECT_EQ(code, 0) << out;
   EXPECT_EQ(last_line(out), "2 passed, 0 failed") << out;
@@ -453,7 +482,8 @@ TEST(Cli, PassingChangedBeyondToleranceAndFaultingPrograms) {
   EXPECT_EQ(code, 1) << out;
   const std::string prefix = (d / "").lexically_normal().generic_string();
   EXPECT_NE(out.find("FAIL  " + prefix + "changed.dmi  "), std::string::npos) << out;
-  EXPECT_NE(out.find("  1 difference\n      feature BORE1 diameter: expected " + shifted + ", got "), std::string::npos) << out;
+  EXPECT_NE(out.find("  1 difference\n      feature BORE1 diameter: expected " + shifted + ", got "), std::string::npos)
+      << out;
   EXPECT_NE(out.find("(difference -0.0006"), std::string::npos) << out;
   EXPECT_NE(out.find(", tolerance +-0.0005)\n"), std::string::npos) << out;
   EXPECT_NE(out.find("PASS  " + prefix + "pass_a.dmi  "), std::string::npos) << out;

@@ -92,7 +92,7 @@ TEST(PlanBlock, GotoAndPtmeasInTheCurrentFrameBecomeMachineCommands) {
   EXPECT_EQ(p1->approach_mm, 3);          // SNSET/APPRCH, SEARCH, RETRCT as given
   EXPECT_EQ(p1->search_mm, 6);
   EXPECT_EQ(p1->retract_mm, 1.5);
-  EXPECT_FALSE(p1->speed_mm_s);           // the machine's measuring feed
+  EXPECT_FALSE(p1->speed_mm_s);  // the machine's measuring feed
   EXPECT_FALSE(p1->two_touch);
   EXPECT_FALSE(p1->blend_mm);
   EXPECT_EQ(plan->spans[1].begin, 20u);

@@ -69,7 +69,8 @@ TEST_P(Recovery, RecoversTheHiddenTruth) {
   // with a scanned input each mean scatters by F * period / sqrt(12 N), so the split into delay
   // and jitter carries the jitter's 1/N range error as well.
   EXPECT_NEAR(c.response.delay_s + c.response.jitter_s / 2, true_delay_s(w) + true_jitter_s(w) / 2,
-              0.02 * true_delay_s(w) + 0.02 * true_jitter_s(w)) << name;
+              0.02 * true_delay_s(w) + 0.02 * true_jitter_s(w))
+      << name;
   EXPECT_NEAR(c.response.delay_s, true_delay_s(w), 0.02 * true_delay_s(w) + 0.05 * true_jitter_s(w)) << name;
   EXPECT_NEAR(c.dt_s, w.machine.dt_s, 1e-9);
   EXPECT_DOUBLE_EQ(c.over_travel_mm, w.truth.probe.over_travel_mm);
@@ -88,11 +89,12 @@ TEST_P(Recovery, RecoversTheHiddenTruth) {
   EXPECT_LE(c.max_probe_feed_mm_s, c.max_feed_mm_s(Vec3::UnitZ()) + 1e-9);
 }
 
-INSTANTIATE_TEST_SUITE_P(Worlds, Recovery,
-                         ::testing::Values(std::pair{"touch_latched.json", 1ull}, std::pair{"touch_scanned_4ms.json", 1ull},
-                                           std::pair{"touch_scanned_4ms.json", 7ull}, std::pair{"touch_const_time.json", 1ull},
-                                           std::pair{"touch_const_time.json", 11ull}, std::pair{"touch_mixed.json", 1ull},
-                                           std::pair{"scanned_skip.json", 3ull}, std::pair{"default.json", 1ull}));
+INSTANTIATE_TEST_SUITE_P(
+    Worlds, Recovery,
+    ::testing::Values(std::pair{"touch_latched.json", 1ull}, std::pair{"touch_scanned_4ms.json", 1ull},
+                      std::pair{"touch_scanned_4ms.json", 7ull}, std::pair{"touch_const_time.json", 1ull},
+                      std::pair{"touch_const_time.json", 11ull}, std::pair{"touch_mixed.json", 1ull},
+                      std::pair{"scanned_skip.json", 3ull}, std::pair{"default.json", 1ull}));
 
 // Seed's strategy rule: latched controllers one-touch, a 4 ms scanned one two-touch with a
 // second-touch feed whose spread meets the threshold.
@@ -120,7 +122,8 @@ TEST(Characterisation, FileRoundTrip) {
   auto back = load_characterisation(path);
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(to_json(*back), to_json(c));
-  for (double f : {1.0, 10.0, 40.0}) EXPECT_DOUBLE_EQ(back->acceleration_distance_mm(Vec3::UnitX(), f), c.acceleration_distance_mm(Vec3::UnitX(), f));
+  for (double f : {1.0, 10.0, 40.0})
+    EXPECT_DOUBLE_EQ(back->acceleration_distance_mm(Vec3::UnitX(), f), c.acceleration_distance_mm(Vec3::UnitX(), f));
   // A damaged file names what is wrong.
   nlohmann::json j = to_json(c);
   j["axes"]["y"]["mode"] = "bouncy";
@@ -369,7 +372,8 @@ TEST(Characterisation, PlanProbesFromWhereTheHeadRests) {
   const TouchPlan rested = c.plan(n, fs, std::nullopt, RestingHead{2.0, 200});
   EXPECT_DOUBLE_EQ(rested.approach_mm, 2.0);
   // Resting inside the standoff: the standoff stands.
-  EXPECT_DOUBLE_EQ(c.plan(n, fs, std::nullopt, RestingHead{0.5 * closer.approach_mm, 200}).approach_mm, closer.approach_mm);
+  EXPECT_DOUBLE_EQ(c.plan(n, fs, std::nullopt, RestingHead{0.5 * closer.approach_mm, 200}).approach_mm,
+                   closer.approach_mm);
   // Resting far away: a fast move closer wins over probing 100 mm at the measuring feed.
   EXPECT_DOUBLE_EQ(c.plan(n, fs, std::nullopt, RestingHead{100.0, 200}).approach_mm, closer.approach_mm);
   // An explicit approach (SNSET/APPRCH) is kept.
@@ -387,7 +391,8 @@ TEST(Characterisation, PlanProbesFromWhereTheHeadRests) {
   machine::PtMeas plain;
   plain.approach_mm = 2.0;
   plain.speed_mm_s = fs;
-  const double t_plain = mean_time(plain), t_rested = mean_time(ptmeas_of(rested)), t_closer = mean_time(ptmeas_of(closer));
+  const double t_plain = mean_time(plain), t_rested = mean_time(ptmeas_of(rested)),
+               t_closer = mean_time(ptmeas_of(closer));
   EXPECT_LE(t_rested, t_plain + 1e-9);
   EXPECT_LT(t_rested, 0.95 * t_closer);
 }
@@ -432,7 +437,8 @@ TEST_P(RampProtection, MaximumFeedIsSafeAnywhereOnTheRamp) {
     ASSERT_TRUE(ref.hit);
     const auto r = b.cycle(ptmeas_of(c.plan(Vec3::UnitZ(), std::nullopt, std::nullopt)), offset);
     ASSERT_TRUE(r.hit) << name << " offset " << offset << ": " << r.fault->message;
-    EXPECT_NEAR(r.hit->centre_mm.z() - offset, ref.hit->centre_mm.z() - offset, c.threshold_mm) << name << " offset " << offset;
+    EXPECT_NEAR(r.hit->centre_mm.z() - offset, ref.hit->centre_mm.z() - offset, c.threshold_mm)
+        << name << " offset " << offset;
   }
   // Beyond the tolerance a one-touch cycle touches the surface before reaching its feed: no
   // over-travel (above), and the hit is reported as early (the runtime warns), with the

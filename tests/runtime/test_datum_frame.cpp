@@ -8,10 +8,10 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "feature_geometry.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/datum_frame.hpp"
 #include "metron/runtime/tolerance.hpp"
-#include "feature_geometry.hpp"
 
 namespace metron::runtime {
 namespace {

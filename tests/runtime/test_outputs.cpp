@@ -11,8 +11,8 @@
 namespace metron::runtime {
 namespace {
 
-Geometry geometry(FeatureType type, Side side, const Vec3& position, const Vec3& direction,
-                  double diameter_mm = 0, double length_mm = 0) {
+Geometry geometry(FeatureType type, Side side, const Vec3& position, const Vec3& direction, double diameter_mm = 0,
+                  double length_mm = 0) {
   Geometry g;
   g.type = type;
   g.side = side;
@@ -139,9 +139,9 @@ TEST(DmisOutput, ToleranceLines) {
 // ------------------------------------------------------------------ human report
 
 TEST(HumanReport, FeatureBlock) {
-  FeatureReport r = measured(
-      "CYL1", geometry(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 20, 30),
-      geometry(FeatureType::Cylinder, Side::Inner, {10.003, 20, -1e-7}, Vec3(0, 0.0001, 1), 20.012, 29.8));
+  FeatureReport r =
+      measured("CYL1", geometry(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 20, 30),
+               geometry(FeatureType::Cylinder, Side::Inner, {10.003, 20, -1e-7}, Vec3(0, 0.0001, 1), 20.012, 29.8));
   r.frame = "PART";
   r.point_count = 12;
   r.fit = FitFigures{{}, 0.0021, 0.008};

@@ -5,9 +5,9 @@
 
 #include <numeric>
 
+#include "metron/runtime/scan_segmentation.hpp"
 #include "sample_paths.hpp"
 #include "stream_commands.hpp"
-#include "metron/runtime/scan_segmentation.hpp"
 
 namespace {
 
@@ -17,15 +17,15 @@ using metron::runtime::command_sizes;
 TEST(ScanSegmentation, SeedExamples) {
   // P = 8, 8n + m (the seed's example buffer is P = 4, SEEDS.md 2 step 1; 8 makes P/4 = 2 a
   // threshold with both sides reachable). The seed's own P = 4 cases:
-  EXPECT_EQ(command_sizes(13, 4), (std::vector<std::size_t>{4, 4, 4, 1}));  // m = 1 >= P/4 = 1: no averaging
-  EXPECT_EQ(command_sizes(12, 4), (std::vector<std::size_t>{4, 4, 4}));     // m = 0
-  EXPECT_EQ(command_sizes(32, 8), (std::vector<std::size_t>{8, 8, 8, 8}));          // m = 0
-  EXPECT_EQ(command_sizes(33, 8), (std::vector<std::size_t>{8, 8, 8, 5, 4}));       // m = 1 < 2: (8+1)/2, odd
-  EXPECT_EQ(command_sizes(34, 8), (std::vector<std::size_t>{8, 8, 8, 8, 2}));       // m = 2 = P/4: no averaging
-  EXPECT_EQ(command_sizes(1003, 1000), (std::vector<std::size_t>{502, 501}));      // m = 3, n = 1
-  EXPECT_EQ(command_sizes(2100, 1000), (std::vector<std::size_t>{1000, 550, 550}));  // m = 100 < 250
+  EXPECT_EQ(command_sizes(13, 4), (std::vector<std::size_t>{4, 4, 4, 1}));            // m = 1 >= P/4 = 1: no averaging
+  EXPECT_EQ(command_sizes(12, 4), (std::vector<std::size_t>{4, 4, 4}));               // m = 0
+  EXPECT_EQ(command_sizes(32, 8), (std::vector<std::size_t>{8, 8, 8, 8}));            // m = 0
+  EXPECT_EQ(command_sizes(33, 8), (std::vector<std::size_t>{8, 8, 8, 5, 4}));         // m = 1 < 2: (8+1)/2, odd
+  EXPECT_EQ(command_sizes(34, 8), (std::vector<std::size_t>{8, 8, 8, 8, 2}));         // m = 2 = P/4: no averaging
+  EXPECT_EQ(command_sizes(1003, 1000), (std::vector<std::size_t>{502, 501}));         // m = 3, n = 1
+  EXPECT_EQ(command_sizes(2100, 1000), (std::vector<std::size_t>{1000, 550, 550}));   // m = 100 < 250
   EXPECT_EQ(command_sizes(2300, 1000), (std::vector<std::size_t>{1000, 1000, 300}));  // m = 300 >= 250
-  EXPECT_EQ(command_sizes(7, 8), (std::vector<std::size_t>{7}));                    // shorter than a buffer
+  EXPECT_EQ(command_sizes(7, 8), (std::vector<std::size_t>{7}));                      // shorter than a buffer
   EXPECT_TRUE(command_sizes(0, 8).empty());
 }
 

@@ -13,11 +13,11 @@
 #include <nlohmann/json.hpp>
 
 #include "fixtures.hpp"
-#include "scan_paths.hpp"
 #include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/virtual_cmm.hpp"
 #include "metron/runtime/scan_segmentation.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
+#include "scan_paths.hpp"
 
 namespace {
 
@@ -106,8 +106,8 @@ TEST(SegmentedScanMachine, LobedBossThroughSmallBuffersInEveryMode) {
   c.approach_normal = Vec3::UnitX();
   c.sample_spacing_mm = 0.2;
   ASSERT_GT(c.path.segments.size(), 3000u);
-  for (const auto mode : {segmented::SegmentedMode::Conventional, segmented::SegmentedMode::Seed,
-                          segmented::SegmentedMode::LookAhead}) {
+  for (const auto mode :
+       {segmented::SegmentedMode::Conventional, segmented::SegmentedMode::Seed, segmented::SegmentedMode::LookAhead}) {
     w.machine.scanning.segmented.mode = mode;
     VirtualCmm cmm(w, 1);
     start_machine(cmm);
@@ -159,8 +159,8 @@ TEST(SegmentedScanMachine, FreeFormBumpThroughSmallBuffers) {
   c.path = subdivided(p, 50);
   c.approach_normal = c.path.normals.front();
   ASSERT_GT(c.path.segments.size(), 2000u);
-  for (const auto mode : {segmented::SegmentedMode::Conventional, segmented::SegmentedMode::Seed,
-                          segmented::SegmentedMode::LookAhead}) {
+  for (const auto mode :
+       {segmented::SegmentedMode::Conventional, segmented::SegmentedMode::Seed, segmented::SegmentedMode::LookAhead}) {
     w.machine.scanning.segmented.mode = mode;
     VirtualCmm cmm(w, 1);
     start_machine(cmm);
@@ -181,9 +181,10 @@ TEST(SegmentedScanMachine, FreeFormBumpThroughSmallBuffers) {
     }
     EXPECT_NEAR(peak, 0.010, 0.001);
     EXPECT_NEAR(at, 30, 0.5);
-    std::printf("[figures] VirtualCmm free-form bump, P = 50, %s: %zu commands, %zu samples, scan %.2f s, "
-                "peak %.5f mm at x %.2f\n",
-                name(mode), res.commands, res.samples.size(), cmm.simulated_time_s() - t0, peak, at);
+    std::printf(
+        "[figures] VirtualCmm free-form bump, P = 50, %s: %zu commands, %zu samples, scan %.2f s, "
+        "peak %.5f mm at x %.2f\n",
+        name(mode), res.commands, res.samples.size(), cmm.simulated_time_s() - t0, peak, at);
   }
 }
 

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "metron/runtime/tolerance.hpp"
 #include "feature_geometry.hpp"
+#include "metron/runtime/tolerance.hpp"
 #include "runtime/src/detail/fit_actual.hpp"
 
 namespace metron::runtime {
@@ -80,9 +80,8 @@ tl::expected<ToleranceResult, std::string> evaluate(const ToleranceSpec& s, std:
 // ------------------------------------------------------------------ size
 
 TEST(ToleranceSize, BoreOversizeIsInOrOutByItsLimits) {
-  const Feature bore =
-      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.0, 30),
-              round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.012, 30));
+  const Feature bore = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.0, 30),
+                               round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 20.012, 30));
   ToleranceSpec s = spec(ToleranceKind::Diam);
   s.lower = -0.01;
   s.upper = 0.02;
@@ -103,9 +102,8 @@ TEST(ToleranceSize, BoreOversizeIsInOrOutByItsLimits) {
 }
 
 TEST(ToleranceSize, RadiusIsHalfTheDiameterDeviation) {
-  const Feature circle =
-      feature("C1", round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10.0),
-              round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 9.99));
+  const Feature circle = feature("C1", round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10.0),
+                                 round(FeatureType::Circle, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 9.99));
   ToleranceSpec s = spec(ToleranceKind::Rad);
   s.lower = -0.004;
   s.upper = 0.004;
@@ -137,8 +135,7 @@ TEST(ToleranceSize, WrongTypesAndMissingActual) {
             "DIAM applies to a circle, arc, sphere or cylinder, not to a CONE");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Rad), {&pl}).error(),
             "RAD applies to a circle, arc, sphere or cylinder, not to a PLANE");
-  const Feature unmeasured =
-      feature("F1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 5), {});
+  const Feature unmeasured = feature("F1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 5), {});
   EXPECT_EQ(evaluate(spec(ToleranceKind::Diam), {&unmeasured}).error(),
             "feature F1 has no actual: measure or construct it first");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Diam), {&pl, &pl}).error(), "DIAM applies to one feature, got 2");
@@ -166,10 +163,8 @@ TEST(ToleranceForm, EachFormAppliesToItsShape) {
   Feature c = feature("CYL1", cyl, cyl);
   c.fit = FitFigures{{}, 0.001, 0.005};
   EXPECT_EQ(evaluate(spec(ToleranceKind::Flat), {&c}).error(), "FLAT applies to a plane, not to a CYLNDR");
-  EXPECT_EQ(evaluate(spec(ToleranceKind::Cirlty), {&c}).error(),
-            "CIRLTY applies to a circle or arc, not to a CYLNDR");
-  EXPECT_EQ(evaluate(spec(ToleranceKind::Sphcty), {&c}).error(),
-            "SPHCTY applies to a sphere, not to a CYLNDR");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Cirlty), {&c}).error(), "CIRLTY applies to a circle or arc, not to a CYLNDR");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Sphcty), {&c}).error(), "SPHCTY applies to a sphere, not to a CYLNDR");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Strght), {&c}).error(),
             "STRGHT applies to a line; the axis straightness of a CYLNDR is not available");
   ToleranceSpec s = spec(ToleranceKind::Cylcty);
@@ -190,18 +185,16 @@ TEST(ToleranceForm, EachFormAppliesToItsShape) {
 
 TEST(ToleranceForm, ConstructedFeatureHasNoForm) {
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
-  EXPECT_EQ(
-      evaluate(spec(ToleranceKind::Flat), {&pl}).error(),
-      "feature PL1 has no fit: FLAT needs the form of measured points, and it was constructed without any");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Flat), {&pl}).error(),
+            "feature PL1 has no fit: FLAT needs the form of measured points, and it was constructed without any");
 }
 
 // ------------------------------------------------------------------ POS
 
 TEST(TolerancePosition, AxisOffsetGivesTwiceTheOffset) {
   // The actual axis is offset 0.03 in X; its position lies at another height on the axis.
-  const Feature bore =
-      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 12, 30),
-              round(FeatureType::Cylinder, Side::Inner, {10.03, 20, 15}, Vec3::UnitZ(), 12, 30));
+  const Feature bore = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 12, 30),
+                               round(FeatureType::Cylinder, Side::Inner, {10.03, 20, 15}, Vec3::UnitZ(), 12, 30));
   ToleranceSpec s = spec(ToleranceKind::Pos);
   s.zone = 0.1;
   auto r = evaluate(s, {&bore});
@@ -221,9 +214,8 @@ TEST(TolerancePosition, AxisOffsetGivesTwiceTheOffset) {
 
 TEST(TolerancePosition, TiltedAxisIsComparedAtTheNominalHeight) {
   // Through (10, 20, 10), tilted 0.001 in X per mm of Z: at z = 0 it passes x = 9.99.
-  const Feature bore =
-      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 12, 30),
-              round(FeatureType::Cylinder, Side::Inner, {10, 20, 10}, {0.001, 0, 1}, 12, 30));
+  const Feature bore = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {10, 20, 0}, Vec3::UnitZ(), 12, 30),
+                               round(FeatureType::Cylinder, Side::Inner, {10, 20, 10}, {0.001, 0, 1}, 12, 30));
   ToleranceSpec s = spec(ToleranceKind::Pos);
   s.zone = 0.1;
   EXPECT_NEAR(evaluate(s, {&bore})->value, 0.02, 1e-9);
@@ -303,7 +295,8 @@ TEST(TolerancePosition, ADatumHoleAtMmcLetsTheFrameShift) {
   EXPECT_TRUE(mmc->in_tolerance);
   EXPECT_NE(mmc->note.find("datum shift: DAT(B) at MMC departs 0.0400 from that size, the frame may move 0.0200; "
                            "without the shift 0.1000"),
-            std::string::npos) << mmc->note;
+            std::string::npos)
+      << mmc->note;
   // LMC: a hole larger than nominal is nearer its LMC, no departure, no shift.
   s.datum_conditions[1] = MaterialCondition::Lmc;
   EXPECT_NEAR(evaluate(s, {&c}, context)->value, 0.10, k_tight);
@@ -340,7 +333,8 @@ TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
       << r->note;
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
   EXPECT_EQ(evaluate(s, {&pl}).error(),
-            "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN), torus or ellipse, not to a "
+            "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN), torus or "
+            "ellipse, not to a "
             "PLANE");
 }
 
@@ -358,9 +352,7 @@ Alignment rotated_part() {
 
 TEST(ToleranceDistance, TwoPlanesAlongZOfARotatedAlignment) {
   const Alignment part = rotated_part();
-  const auto pl = [&](const Vec3& p) {
-    return plane(part.to_machine_point(p), part.to_machine_vector(Vec3::UnitZ()));
-  };
+  const auto pl = [&](const Vec3& p) { return plane(part.to_machine_point(p), part.to_machine_vector(Vec3::UnitZ())); };
   // Positions (centroids) at different part XY: only the Z difference counts.
   const Feature bottom = feature("PL1", pl({0, 0, 0}), pl({5, 3, 0}));
   const Feature top = feature("PL2", pl({10, 10, 40}), pl({-7, 12, 40.015}));
@@ -387,18 +379,15 @@ TEST(ToleranceDistance, TwoPlanesAlongZOfARotatedAlignment) {
   EXPECT_NEAR(evaluate(s, {&bottom, &top})->actual, 40.015 / std::cos(30.0 * k_pi / 180.0), 1e-9);
   // Part X lies in both planes.
   s.axis = DistanceAxis::XAxis;
-  EXPECT_EQ(evaluate(s, {&bottom, &top}, context).error(),
-            "DISTB along XAXIS: plane PL1 is parallel to that axis");
+  EXPECT_EQ(evaluate(s, {&bottom, &top}, context).error(), "DISTB along XAXIS: plane PL1 is parallel to that axis");
 }
 
 TEST(ToleranceDistance, PointsAxesAndCounts) {
   const Alignment part = rotated_part();
   ToleranceContext context;
   context.alignment = &part;
-  const Feature a =
-      feature("A", point(part.to_machine_point({0, 0, 0})), point(part.to_machine_point({0, 0, 0})));
-  const Feature b =
-      feature("B", point(part.to_machine_point({3, 4, 0})), point(part.to_machine_point({3, 4.01, 0})));
+  const Feature a = feature("A", point(part.to_machine_point({0, 0, 0})), point(part.to_machine_point({0, 0, 0})));
+  const Feature b = feature("B", point(part.to_machine_point({3, 4, 0})), point(part.to_machine_point({3, 4.01, 0})));
   ToleranceSpec s = spec(ToleranceKind::DistB);
   s.nominal = 5;
   s.lower = -0.1;
@@ -413,9 +402,8 @@ TEST(ToleranceDistance, PointsAxesAndCounts) {
   EXPECT_NEAR(r->value, 0.01, 1e-9);
 
   // A point and a cylinder: from the point to the axis.
-  const Feature cyl =
-      feature("CYL", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 5, 10),
-              round(FeatureType::Cylinder, Side::Inner, {0, 0, 7}, Vec3::UnitZ(), 5, 10));
+  const Feature cyl = feature("CYL", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 5, 10),
+                              round(FeatureType::Cylinder, Side::Inner, {0, 0, 7}, Vec3::UnitZ(), 5, 10));
   const Feature p = feature("P", point({6, 8, 3}), point({6, 8, 3}));
   s.axis = DistanceAxis::PointToPoint;
   s.nominal = 10;
@@ -425,8 +413,7 @@ TEST(ToleranceDistance, PointsAxesAndCounts) {
   EXPECT_EQ(evaluate(s, {&a}).error(), "DISTB needs two features, got 1");
   // A nominal that disagrees with the features' nominals is noted.
   s.nominal = 9.5;
-  EXPECT_EQ(evaluate(s, {&cyl, &p})->note,
-            "the feature nominals give 10.0000, the tolerance nominal is 9.5000");
+  EXPECT_EQ(evaluate(s, {&cyl, &p})->note, "the feature nominals give 10.0000, the tolerance nominal is 9.5000");
 }
 
 TEST(ToleranceDistance, MinimAndMaximTakeTheSizesOffOrAddThem) {
@@ -539,9 +526,8 @@ TEST(ToleranceOrientation, AxisToDatumPlaneAndAxis) {
   s.zone = 0.05;
   // A 50 mm bore tilted by atan(0.001) from Z: diametral zone 50 sin(theta).
   const Vec3 tilted = Vec3(0.001, 0, 1).normalized();
-  const Feature bore =
-      feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 50),
-              round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, tilted, 10, 50));
+  const Feature bore = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 50),
+                               round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, tilted, 10, 50));
   auto r = evaluate(s, {&bore}, context);
   ASSERT_TRUE(r) << r.error();
   EXPECT_NEAR(r->value, 50 * 0.001 / std::sqrt(1 + 1e-6), 1e-12);
@@ -595,11 +581,11 @@ TEST(ToleranceOrientation, DatumErrors) {
   EXPECT_EQ(evaluate(s, {&wall}, context).error(), "datum A is not defined: DATDEF/FA(feature),DAT(A) first");
   const Datum p = datum("A", point({0, 0, 0}));
   context.datums = {&p};
-  EXPECT_EQ(evaluate(s, {&wall}, context).error(),
-            "datum A is a POINT: it has no direction to measure PERP against");
+  EXPECT_EQ(evaluate(s, {&wall}, context).error(), "datum A is a POINT: it has no direction to measure PERP against");
   const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
                             round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
-  EXPECT_EQ(evaluate(s, {&c}, context).error(), "PERP applies to a plane, line, cylinder or closed slot (CPARLN), not to a CIRCLE");
+  EXPECT_EQ(evaluate(s, {&c}, context).error(),
+            "PERP applies to a plane, line, cylinder or closed slot (CPARLN), not to a CIRCLE");
 }
 
 // ------------------------------------------------------------------ ANGLB
@@ -610,9 +596,8 @@ TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
   ToleranceContext context;
   context.datums = {&a};
   // A face whose normal is 30.01 deg from the datum normal (its sense does not matter).
-  const Feature face =
-      feature("F1", plane({0, 0, 0}, Vec3(std::sin(30 * k_pi / 180), 0, std::cos(30 * k_pi / 180))),
-              plane({0, 0, 0}, Vec3(-std::sin(rad), 0, -std::cos(rad))));
+  const Feature face = feature("F1", plane({0, 0, 0}, Vec3(std::sin(30 * k_pi / 180), 0, std::cos(30 * k_pi / 180))),
+                               plane({0, 0, 0}, Vec3(-std::sin(rad), 0, -std::cos(rad))));
   ToleranceSpec s = spec(ToleranceKind::Anglb);
   s.nominal = 30;
   s.lower = -0.02;
@@ -632,8 +617,8 @@ TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
 
   // Two lines 60 deg apart, the second given as the reference.
   const Feature l1 = feature("L1", line({0, 0, 0}, Vec3::UnitX()), line({0, 0, 0}, Vec3::UnitX()));
-  const Feature l2 = feature("L2", line({0, 0, 0}, Vec3(0.5, std::sqrt(3) / 2, 0)),
-                             line({0, 0, 0}, Vec3(0.5, std::sqrt(3) / 2, 0)));
+  const Feature l2 =
+      feature("L2", line({0, 0, 0}, Vec3(0.5, std::sqrt(3) / 2, 0)), line({0, 0, 0}, Vec3(0.5, std::sqrt(3) / 2, 0)));
   s.nominal = 60;
   s.datums.clear();
   r = evaluate(s, {&l1, &l2});
@@ -888,8 +873,7 @@ TEST(ToleranceProfile, Errors) {
   EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&l}).error(),
             "PROFS applies to a plane, circle, arc, sphere, cylinder, cone, GSURF, torus or ellipse, not to a LINE");
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
-  EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&pl}).error(),
-            "PROFS of PL1 needs measured points: it has none");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Profs), {&pl}).error(), "PROFS of PL1 needs measured points: it has none");
 }
 
 // ------------------------------------------------------------------ PARPLN, WIDTH, SYMMTY
@@ -1076,17 +1060,16 @@ namespace {
 // kind and every type, the evaluator refuses the type ("... applies to ...") exactly when the
 // table says it does not apply.
 TEST(ToleranceTypes, TheTableIsTheEvaluators) {
-  const FeatureType types[] = {FeatureType::Point,    FeatureType::Plane,          FeatureType::Line,
-                               FeatureType::Circle,   FeatureType::Arc,            FeatureType::Sphere,
-                               FeatureType::Cylinder, FeatureType::Cone,           FeatureType::ParallelPlanes,
+  const FeatureType types[] = {FeatureType::Point,          FeatureType::Plane,        FeatureType::Line,
+                               FeatureType::Circle,         FeatureType::Arc,          FeatureType::Sphere,
+                               FeatureType::Cylinder,       FeatureType::Cone,         FeatureType::ParallelPlanes,
                                FeatureType::GenericSurface, FeatureType::GenericCurve, FeatureType::ClosedSlot};
-  const ToleranceKind kinds[] = {ToleranceKind::Diam,   ToleranceKind::Rad,    ToleranceKind::Flat,
-                                 ToleranceKind::Cirlty, ToleranceKind::Cylcty, ToleranceKind::Sphcty,
-                                 ToleranceKind::Strght, ToleranceKind::Pos,    ToleranceKind::Perp,
-                                 ToleranceKind::Parlel, ToleranceKind::Concen, ToleranceKind::Coaxial,
-                                 ToleranceKind::Crnout, ToleranceKind::Totrun, ToleranceKind::Profs,
-                                 ToleranceKind::Profl,  ToleranceKind::Width,  ToleranceKind::Symmty,
-                                 ToleranceKind::Profp,  ToleranceKind::Angl};
+  const ToleranceKind kinds[] = {
+      ToleranceKind::Diam,   ToleranceKind::Rad,    ToleranceKind::Flat,   ToleranceKind::Cirlty,
+      ToleranceKind::Cylcty, ToleranceKind::Sphcty, ToleranceKind::Strght, ToleranceKind::Pos,
+      ToleranceKind::Perp,   ToleranceKind::Parlel, ToleranceKind::Concen, ToleranceKind::Coaxial,
+      ToleranceKind::Crnout, ToleranceKind::Totrun, ToleranceKind::Profs,  ToleranceKind::Profl,
+      ToleranceKind::Width,  ToleranceKind::Symmty, ToleranceKind::Profp,  ToleranceKind::Angl};
   const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitX()));
   ToleranceContext context;
   context.datums = {&a};

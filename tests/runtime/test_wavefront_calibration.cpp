@@ -58,7 +58,8 @@ TEST(WavefrontCalibration, WholeProcedureRecoversTheHiddenGeometry) {
     EXPECT_LT((r.report.gauge_frame->gauge_to_a_rad - t.at("gauge-frame").gauge_to_a_rad).norm(), 2e-8);
     EXPECT_LT(t.at("gauge-frame:after").gauge_to_a_rad.norm(), 2e-8);
     EXPECT_LT((r.report.focus->focus_to_a_mm - t.at("focus:pom").focus_to_a_mm).norm(), 2e-6);
-    EXPECT_LT(t.at("focus:after").focus_to_a_mm.norm(), 1e-3);  // the ball's own decentre-free A axis is on the focus within the move's accuracy
+    EXPECT_LT(t.at("focus:after").focus_to_a_mm.norm(),
+              1e-3);  // the ball's own decentre-free A axis is on the focus within the move's accuracy
     EXPECT_LT((r.report.focus->residual_mm - t.at("focus:after").focus_to_a_mm).norm(), 2e-6);
     EXPECT_NEAR(r.report.focus->focus_table_z_steps, t.at("focus:cat").focus_table_z_steps, 5);
     const auto& ar = *r.report.axis_response;
@@ -101,8 +102,10 @@ TEST(WavefrontCalibration, StitchingThePartsFormRemovesItsBiasFromTheRotationFit
     double raw_tilt_bias_rad;                                // at least this far off when read raw
     double astig_nm, trefoil_nm, spherical_nm;               // the mounted ball's hidden form (world file)
   };
-  for (const Case& c : {Case{"wavefront_concave.json", 0.0011e-6, 0.038e-6, 0.0015e-3, 0.0025e-3, 5.3e-6, -0.0034e-6, 1.5e-6, 12, 4, 0},
-                        Case{"wavefront_sphere_machine.json", 0.0026e-6, 0.055e-6, 0.0013e-3, 0.0017e-3, 7.0e-6, 0, 0.4e-6, 10, 0, 4}}) {
+  for (const Case& c :
+       {Case{"wavefront_concave.json", 0.0011e-6, 0.038e-6, 0.0015e-3, 0.0025e-3, 5.3e-6, -0.0034e-6, 1.5e-6, 12, 4, 0},
+        Case{"wavefront_sphere_machine.json", 0.0026e-6, 0.055e-6, 0.0013e-3, 0.0017e-3, 7.0e-6, 0, 0.4e-6, 10, 0,
+             4}}) {
     SCOPED_TRACE(c.world);
     const auto w = world(c.world);
     const CalRun r = run_all(w, 21);
@@ -124,7 +127,8 @@ TEST(WavefrontCalibration, StitchingThePartsFormRemovesItsBiasFromTheRotationFit
     // Read raw (the nulls as the maps read them), the same run is off by many spreads.
     mw::SimulatedWavefrontMachine m(w, 21);
     std::map<std::string, mw::WavefrontTruth> t;
-    auto raw = rw::calibrate(m, "all", {}, {}, [&](const std::string& tag) { t[tag] = m.truth(); }, false);
+    auto raw = rw::calibrate(
+        m, "all", {}, {}, [&](const std::string& tag) { t[tag] = m.truth(); }, false);
     ASSERT_TRUE(raw) << raw.error();
     EXPECT_GT(std::abs(raw->b_rotation->b_axis_tilt_rad - t.at("b-rotation").b_axis_tilt_rad), c.raw_tilt_bias_rad);
     EXPECT_TRUE(raw->b_rotation->form_height_nm.empty());
@@ -216,4 +220,3 @@ TEST(WavefrontCalibration, ReversalNeedsTheGaugeFrameStepAndThenSeparatesWedgeAn
   // The separation is real: wedge and table tilt differ by tens of microradians here.
   EXPECT_GT((t.at("reversal").part_wedge_rad - t.at("reversal").table_tilt_rad).norm(), 20e-6);
 }
-

@@ -49,7 +49,8 @@ TEST(WavefrontWorld, LoadsTheShippedWorldsAndRejectsUnknownKeys) {
     ASSERT_TRUE(w) << w.error();
     EXPECT_FALSE(w->parts.empty());
   }
-  auto bad = mw::parse_wavefront_world(nlohmann::json::parse(R"({"kind": "wavefront", "hidden": {"xb_mn": 1}})"), "w.json");
+  auto bad =
+      mw::parse_wavefront_world(nlohmann::json::parse(R"({"kind": "wavefront", "hidden": {"xb_mn": 1}})"), "w.json");
   ASSERT_FALSE(bad);
   EXPECT_EQ(bad.error(), "w.json: /hidden/xb_mn: unknown key 'xb_mn'");
   auto kind = mw::parse_wavefront_world(nlohmann::json::parse(R"({"kind": "cmm"})"), "w.json");

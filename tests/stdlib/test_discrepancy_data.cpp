@@ -47,13 +47,15 @@ TEST(DiscrepancyData, ErrorsNameFileRowAndColumn) {
   EXPECT_EQ(error_of("target_mm,dir,dev\n0,+\n"), "data.csv:2: column 'dev': missing value (the row has 2 cells)");
   json d = description();
   d["columns"][2]["unit"] = "furlong";
-  EXPECT_EQ(error_of("", d), "d.json: /columns/2/unit: bad unit 'furlong' for column 'dev': expected a length (mm, um, nm, m, in)");
+  EXPECT_EQ(error_of("", d),
+            "d.json: /columns/2/unit: bad unit 'furlong' for column 'dev': expected a length (mm, um, nm, m, in)");
   d = description();
   d["columns"][1]["role"] = "speed";
   EXPECT_NE(error_of("", d).find("d.json: /columns/1/role: unknown role 'speed' (expected one of"), std::string::npos);
   d = description();
   d["columns"][0]["unit"] = "s";
-  EXPECT_EQ(error_of("", d), "d.json: /columns/0/unit: bad unit 's' for column 'target_mm': expected a length (mm, um, nm, m, in)");
+  EXPECT_EQ(error_of("", d),
+            "d.json: /columns/0/unit: bad unit 's' for column 'target_mm': expected a length (mm, um, nm, m, in)");
   d = description();
   d["colums"] = 1;
   EXPECT_NE(error_of("", d).find("unknown key 'colums'"), std::string::npos);
@@ -66,7 +68,8 @@ TEST(DiscrepancyData, WhitespaceTablesWithAPreamble) {
     {"name": "nx", "role": "nominal", "axis": "x", "unit": "mm"}, {"name": "ny", "role": "nominal", "axis": "y", "unit": "mm"}]})");
   auto desc = dc::parse_description(d, "d.json");
   ASSERT_TRUE(desc) << desc.error().text();
-  auto r = dc::parse_measured_data("Plug Plate: 1\r\nDate: x\r\n  Meas X  Meas Y Nom X Nom Y\r\n -73.126 121.717 -73.140 121.705\r\n", "p", *desc);
+  auto r = dc::parse_measured_data(
+      "Plug Plate: 1\r\nDate: x\r\n  Meas X  Meas Y Nom X Nom Y\r\n -73.126 121.717 -73.140 121.705\r\n", "p", *desc);
   ASSERT_TRUE(r) << r.error().text();
   EXPECT_NEAR(r->deviation_mm(0, 0), 0.014, 1e-12);
   EXPECT_NEAR(r->deviation_mm(0, 1), 0.012, 1e-12);

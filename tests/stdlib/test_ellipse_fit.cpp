@@ -39,8 +39,17 @@ TEST(EllipseDistance, IsTheDistanceToTheNearestPointOfTheCurve) {
   const double a = 30, b = 12;
   // Outside, inside, on both axes (inside the evolute's cusp and beyond it), at the centre,
   // on the curve, in every quadrant.
-  const std::vector<Eigen::Vector2d> points = {{40, 20}, {-35, 3}, {5, -4}, {-20, -9}, {10, 0}, {28, 0},
-                                               {45, 0},  {0, 5},   {0, -30}, {0, 0},  {30 * std::cos(1.0), 12 * std::sin(1.0)}};
+  const std::vector<Eigen::Vector2d> points = {{40, 20},
+                                               {-35, 3},
+                                               {5, -4},
+                                               {-20, -9},
+                                               {10, 0},
+                                               {28, 0},
+                                               {45, 0},
+                                               {0, 5},
+                                               {0, -30},
+                                               {0, 0},
+                                               {30 * std::cos(1.0), 12 * std::sin(1.0)}};
   for (const auto& p : points) {
     const geometry::EllipseFoot f = geometry::ellipse_foot(a, b, p);
     const bool inside = (p.x() / a) * (p.x() / a) + (p.y() / b) * (p.y() / b) < 1;
@@ -101,7 +110,8 @@ TEST(EllipseFit, RecoversAHoleAndABossFromTheirNominals) {
 TEST(EllipseFit, SeededNoiseLeavesTheEstimateWithinItsStatistics) {
   // 36 points with sigma 2 um: the centre is known to about sigma * sqrt(2/n) ~ 0.5 um; allow 4 um.
   const EllipseOutline truth = ellipse(5, 7, -12, 60, 30);
-  const auto fit = fit_ellipse(probe_ellipse(truth, true, 2, 36, 0, 0.002, 11), 2, true, ellipse(5.02, 6.98, -11, 60.1, 29.9));
+  const auto fit =
+      fit_ellipse(probe_ellipse(truth, true, 2, 36, 0, 0.002, 11), 2, true, ellipse(5.02, 6.98, -11, 60.1, 29.9));
   ASSERT_TRUE(fit);
   EXPECT_NEAR(fit->outline.centre.x(), 5, 0.004);
   EXPECT_NEAR(fit->outline.centre.y(), 7, 0.004);

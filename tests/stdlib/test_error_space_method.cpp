@@ -8,8 +8,8 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "metron/stdlib/error_space/error_space_file.hpp"
 #include "metron/stdlib/error_space/interpolation.hpp"
@@ -102,11 +102,13 @@ TEST(TwoPointLine, NoiseIsARandomWalkAndABrownianBridge) {
     const LineReadings r = make_line(zero, zf, 0, 0, &rng, sigma);
     const auto raw = chain(r);
     const auto bridge = solve_line(r).motion_mm;
-    for (int k = 0; k <= n; ++k) var_raw[k] += raw[k] * raw[k] / trials, var_bridge[k] += bridge[k] * bridge[k] / trials;
+    for (int k = 0; k <= n; ++k)
+      var_raw[k] += raw[k] * raw[k] / trials, var_bridge[k] += bridge[k] * bridge[k] / trials;
   }
   double mean_var = 0;
   for (int k = 1; k < n; ++k) {
-    EXPECT_NEAR(std::sqrt(var_raw[k]), line_noise_sd_mm(n, k, sigma, false), 0.03 * line_noise_sd_mm(n, k, sigma, false));
+    EXPECT_NEAR(std::sqrt(var_raw[k]), line_noise_sd_mm(n, k, sigma, false),
+                0.03 * line_noise_sd_mm(n, k, sigma, false));
     EXPECT_NEAR(std::sqrt(var_bridge[k]), line_noise_sd_mm(n, k, sigma), 0.03 * line_noise_sd_mm(n, k, sigma));
   }
   for (int k = 0; k <= n; ++k) mean_var += var_bridge[k] / (n + 1);
@@ -198,7 +200,8 @@ TEST(TwoPointSurface, PropagatedNoiseFloorMatchesMonteCarlo) {
   zero.ca = zero.cb = 0;
   std::mt19937_64 rng(5);
   Eigen::MatrixXd var = Eigen::MatrixXd::Zero(l + 1, m + 1);
-  for (int t = 0; t < trials; ++t) var += solve_surface(read_surface(zero, &rng, sigma)).error_mm.array().square().matrix() / trials;
+  for (int t = 0; t < trials; ++t)
+    var += solve_surface(read_surface(zero, &rng, sigma)).error_mm.array().square().matrix() / trials;
   for (int i = 0; i <= l; ++i)
     for (int j = 0; j <= m; ++j)
       if (sd(i, j) > 0) {
@@ -229,7 +232,9 @@ std::vector<double> sample(const Grid& g, F fn) {
 TEST(Interpolation, TrilinearReproducesMultilinearFunctions) {
   Grid g = uniform_grid(5, 4, 3);
   g.axes_mm[0][2] = 17;  // non-uniform axis
-  auto fn = [](double x, double y, double z) { return 0.001 + 2e-5 * x - 3e-5 * y + 1e-5 * z + 4e-7 * x * y - 2e-7 * y * z + 1e-8 * x * y * z; };
+  auto fn = [](double x, double y, double z) {
+    return 0.001 + 2e-5 * x - 3e-5 * y + 1e-5 * z + 4e-7 * x * y - 2e-7 * y * z + 1e-8 * x * y * z;
+  };
   auto f = make_field(g, sample(g, fn), {Method::Trilinear, {}});
   ASSERT_TRUE(f);
   std::mt19937_64 rng(3);
@@ -243,7 +248,8 @@ TEST(Interpolation, TrilinearReproducesMultilinearFunctions) {
 TEST(Interpolation, BSplineReproducesTensorCubicsAndIsC2) {
   const Grid g = uniform_grid(7, 6, 5);
   auto fn = [](double x, double y, double z) {
-    return 1e-6 * (x * x * x - 20 * x * x) * (1 + 0.01 * y - 1e-4 * y * y + 1e-6 * y * y * y) * (2 + 0.1 * z + 1e-3 * z * z * z);
+    return 1e-6 * (x * x * x - 20 * x * x) * (1 + 0.01 * y - 1e-4 * y * y + 1e-6 * y * y * y) *
+           (2 + 0.1 * z + 1e-3 * z * z * z);
   };
   auto f = make_field(g, sample(g, fn), {Method::BSpline, {}});
   ASSERT_TRUE(f);

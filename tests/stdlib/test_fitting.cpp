@@ -4,8 +4,8 @@
 // System reference pairs in shared/data/nist-fitting.
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <numbers>
@@ -83,8 +83,8 @@ struct CylinderTruth {
   double radius_mm;
 };
 
-std::vector<Vec3> cylinder_points(const CylinderTruth& t, int rings, int per_ring, double length_mm,
-                                  double span_deg, Noise noise = Noise(0)) {
+std::vector<Vec3> cylinder_points(const CylinderTruth& t, int rings, int per_ring, double length_mm, double span_deg,
+                                  Noise noise = Noise(0)) {
   const auto [u, v] = basis(t.axis);
   std::vector<Vec3> pts;
   for (int r = 0; r < rings; ++r) {
@@ -98,15 +98,15 @@ std::vector<Vec3> cylinder_points(const CylinderTruth& t, int rings, int per_rin
 }
 
 struct ConeTruth {
-  Vec3 point;          ///< on the axis
-  Vec3 axis;           ///< apex toward opening
+  Vec3 point;  ///< on the axis
+  Vec3 axis;   ///< apex toward opening
   double half_angle_rad;
   double distance_mm;  ///< orthogonal distance from point to surface
 };
 
 /// Points at axial offsets w in [w0, w1] from the truth point, pushed `noise()` along the normal.
-std::vector<Vec3> cone_points(const ConeTruth& t, int rings, int per_ring, double w0, double w1,
-                              double span_deg, Noise noise = Noise(0)) {
+std::vector<Vec3> cone_points(const ConeTruth& t, int rings, int per_ring, double w0, double w1, double span_deg,
+                              Noise noise = Noise(0)) {
   const auto [u, v] = basis(t.axis);
   const Vec3 a = t.axis.normalized();
   const double c = std::cos(t.half_angle_rad);
@@ -116,7 +116,8 @@ std::vector<Vec3> cone_points(const ConeTruth& t, int rings, int per_ring, doubl
     const double w = w0 + (w1 - w0) * r / double(rings - 1);
     const double radius = t.distance_mm / c + w * std::tan(t.half_angle_rad);
     for (int k = 0; k < per_ring; ++k) {
-      const double ang = (span_deg * std::numbers::pi / 180) * k / (span_deg >= 360 ? per_ring : per_ring - 1) + 0.15 * r;
+      const double ang =
+          (span_deg * std::numbers::pi / 180) * k / (span_deg >= 360 ? per_ring : per_ring - 1) + 0.15 * r;
       const Vec3 radial = std::cos(ang) * u + std::sin(ang) * v;
       const Vec3 normal = c * radial - s * a;  // outward surface normal
       pts.push_back(t.point + w * a + radius * radial + noise() * normal);
@@ -136,7 +137,8 @@ double cylinder_ssq(const std::vector<Vec3>& pts, const Vec3& point, const Vec3&
 // Names and failures
 
 TEST(FitNames, ShapeNamesRoundTripCaseInsensitively) {
-  for (Shape s : {Shape::Point, Shape::Line, Shape::Plane, Shape::Circle, Shape::Sphere, Shape::Cylinder, Shape::Cone}) {
+  for (Shape s :
+       {Shape::Point, Shape::Line, Shape::Plane, Shape::Circle, Shape::Sphere, Shape::Cylinder, Shape::Cone}) {
     EXPECT_EQ(shape_from_name(to_string(s)), s);
   }
   EXPECT_EQ(shape_from_name("CyLinder"), Shape::Cylinder);
@@ -283,7 +285,8 @@ TEST(FitExact, SpheresFullAndCap) {
       const double polar = (cap_deg * std::numbers::pi / 180) * (i + 1) / 6.0;
       for (int k = 0; k < 8; ++k) {
         const double az = 2 * std::numbers::pi * k / 8 + 0.1 * i;
-        pts.push_back(centre + radius * Vec3(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar)));
+        pts.push_back(centre +
+                      radius * Vec3(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar)));
       }
     }
     const auto r = fit_sphere(pts);
@@ -315,7 +318,8 @@ TEST(FitExact, ConesSteepFlatAndPartial) {
     double half_angle_deg, w0, w1, span_deg;
   };
   for (const Case c : {Case{30, -5, 5, 360}, Case{1, -20, 20, 360}, Case{80, -1, 1, 360}, Case{20, 0, 10, 90}}) {
-    const ConeTruth truth{Vec3(-40, 70, 210), Vec3(-0.3, 0.1, 1).normalized(), c.half_angle_deg * std::numbers::pi / 180, 9};
+    const ConeTruth truth{Vec3(-40, 70, 210), Vec3(-0.3, 0.1, 1).normalized(),
+                          c.half_angle_deg * std::numbers::pi / 180, 9};
     const auto pts = cone_points(truth, 5, 10, c.w0, c.w1, c.span_deg);
     const auto r = fit_cone(pts);
     const std::string what = fmt::format("half angle {} span {}", c.half_angle_deg, c.span_deg);
@@ -473,7 +477,8 @@ TEST(FitCompensation, InnerAndOuterCones) {
     const auto r = fit_cone(centres(surface, approach), options);
     ASSERT_TRUE(r);
     const double w = (r->position - truth.point).dot(truth.axis);
-    EXPECT_NEAR(r->cone_distance_mm, truth.distance_mm + w * std::sin(truth.half_angle_rad), exact_tol) << "inner " << inner;
+    EXPECT_NEAR(r->cone_distance_mm, truth.distance_mm + w * std::sin(truth.half_angle_rad), exact_tol)
+        << "inner " << inner;
     EXPECT_NEAR(r->apex_angle_deg, 60, 1e-8);
     for (double d : r->residuals_mm) EXPECT_NEAR(d, 0, exact_tol);
   }
@@ -508,8 +513,8 @@ TEST(FitExact, CylinderAxisFollowsTheHintAndLongScansStayFast) {
 
 const std::filesystem::path nist_dir = std::filesystem::path(METRON_SHARED_DATA) / "nist-fitting";
 
-constexpr double nist_length_tol_mm = 1e-4;    // 0.1 um
-constexpr double nist_angle_tol_rad = 0.48e-6; // about 0.1 arc second
+constexpr double nist_length_tol_mm = 1e-4;     // 0.1 um
+constexpr double nist_angle_tol_rad = 0.48e-6;  // about 0.1 arc second
 
 std::vector<double> read_numbers(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -522,11 +527,11 @@ std::vector<double> read_numbers(const std::filesystem::path& path) {
 /// Errors of one set against its reference.
 struct NistErrors {
   std::string name;
-  std::string failure;          ///< non-empty when the fit failed
-  double location_mm = 0;       ///< centre distance, or reference point to fitted axis / plane
-  double size_mm = 0;           ///< diameter, or cone distance at the reference point
-  double direction_rad = 0;     ///< normal/axis angle (up to sign except cones)
-  double apex_rad = 0;          ///< cone: full apex angle error
+  std::string failure;       ///< non-empty when the fit failed
+  double location_mm = 0;    ///< centre distance, or reference point to fitted axis / plane
+  double size_mm = 0;        ///< diameter, or cone distance at the reference point
+  double direction_rad = 0;  ///< normal/axis angle (up to sign except cones)
+  double apex_rad = 0;       ///< cone: full apex angle error
   [[nodiscard]] bool pass() const {
     return failure.empty() && location_mm <= nist_length_tol_mm && size_mm <= nist_length_tol_mm &&
            direction_rad <= nist_angle_tol_rad && apex_rad <= nist_angle_tol_rad;

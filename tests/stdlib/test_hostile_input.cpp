@@ -22,7 +22,8 @@ TEST(HostileInput, ReadInputFileRefusesDevicesDirectoriesAndHugeFiles) {
   EXPECT_NE(metron::read_input_file("/no/such/file").error().find("no such file"), std::string::npos);
   const fs::path p = metron::test_support::scratch_root("metron_hostile_input") / "big";
   std::ofstream(p) << std::string(2000, 'x');
-  EXPECT_NE(metron::read_input_file(p.string(), 1000).error().find("exceeds the limit of 1000 bytes"), std::string::npos);
+  EXPECT_NE(metron::read_input_file(p.string(), 1000).error().find("exceeds the limit of 1000 bytes"),
+            std::string::npos);
   EXPECT_EQ(metron::read_input_file(p.string(), 2000)->size(), 2000u);
   fs::remove(p);
 }
@@ -77,7 +78,7 @@ TEST(HostileInput, PolicyResolvesDotDotAndSymlinks) {
 TEST(HostileInput, Utf8AndPrintable) {
   EXPECT_EQ(metron::valid_utf8("caf\xe9"), "caf\xef\xbf\xbd");
   EXPECT_EQ(metron::valid_utf8("caf\xc3\xa9"), "caf\xc3\xa9");
-  EXPECT_EQ(metron::valid_utf8("\xc0\xaf"), "\xef\xbf\xbd\xef\xbf\xbd");  // overlong '/'
+  EXPECT_EQ(metron::valid_utf8("\xc0\xaf"), "\xef\xbf\xbd\xef\xbf\xbd");                  // overlong '/'
   EXPECT_EQ(metron::valid_utf8("\xed\xa0\x80"), "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd");  // a surrogate
   EXPECT_EQ(metron::printable("a\x1b[31mb"), "a\\x1b[31mb");
   EXPECT_EQ(metron::printable(std::string(300, 'x'), 10), "xxxxxxxxxx...");

@@ -6,6 +6,7 @@
 
 #include "scratch.hpp"
 
+#include <unistd.h>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -16,7 +17,6 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 
 #include "metron/stdlib/geometry/cad_import.hpp"
 #include "metron/stdlib/geometry/mesh.hpp"
@@ -39,22 +39,30 @@ Mesh make(std::vector<Vec3> v, std::vector<Mesh::Face> f) {
 // Axis-aligned box as 12 outward triangles.
 Mesh box(const Vec3& lo, const Vec3& hi) {
   std::vector<Vec3> v;
-  for (int i = 0; i < 8; ++i)
-    v.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  return make(v, {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                  {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}});
+  for (int i = 0; i < 8; ++i) v.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  return make(v, {{0, 2, 1},
+                  {1, 2, 3},
+                  {4, 5, 6},
+                  {5, 7, 6},
+                  {0, 1, 4},
+                  {1, 5, 4},
+                  {2, 6, 3},
+                  {3, 6, 7},
+                  {0, 4, 2},
+                  {2, 4, 6},
+                  {1, 3, 5},
+                  {3, 7, 5}});
 }
 Mesh unit_cube() { return box(Vec3::Zero(), Vec3::Ones()); }
 
 // Icosahedron subdivided `levels` times and pushed onto a sphere of radius r at the origin.
 Mesh icosphere(double r, int levels) {
   const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<Mesh::Face> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                               {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                               {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                               {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Mesh::Face> f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                               {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                               {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
     auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
@@ -81,8 +89,8 @@ Mesh icosphere(double r, int levels) {
 double sagitta(const Mesh& m, double r) {
   double inradius = r;
   for (const auto& f : m.faces())
-    inradius = std::min(inradius, std::abs(m.vertices()[f[0]].dot(m.face_normal(
-                                      static_cast<std::uint32_t>(&f - m.faces().data())))));
+    inradius = std::min(
+        inradius, std::abs(m.vertices()[f[0]].dot(m.face_normal(static_cast<std::uint32_t>(&f - m.faces().data())))));
   return r - inradius;
 }
 
@@ -137,13 +145,13 @@ TEST(Mesh, CubeClosestPointAndNormal) {
   };
   const double s2 = 1 / std::sqrt(2.0), s3 = 1 / std::sqrt(3.0);
   const Case cases[] = {
-      {{0.5, 0.5, 2}, {0.5, 0.5, 1}, {0, 0, 1}},       // above a face
-      {{0.3, 0.6, -0.5}, {0.3, 0.6, 0}, {0, 0, -1}},   // below
-      {{0.5, 0.5, 0.9}, {0.5, 0.5, 1}, {0, 0, 1}},     // inside: still the outward normal
-      {{0.3, 0.7, 1}, {0.3, 0.7, 1}, {0, 0, 1}},       // on the surface
-      {{2, 2, 0.5}, {1, 1, 0.5}, {s2, s2, 0}},         // nearest an edge
-      {{2, 2, 2}, {1, 1, 1}, {s3, s3, s3}},            // nearest a corner
-      {{-1, 0.5, -1}, {0, 0.5, 0}, {-s2, 0, -s2}},     // another edge
+      {{0.5, 0.5, 2}, {0.5, 0.5, 1}, {0, 0, 1}},         // above a face
+      {{0.3, 0.6, -0.5}, {0.3, 0.6, 0}, {0, 0, -1}},     // below
+      {{0.5, 0.5, 0.9}, {0.5, 0.5, 1}, {0, 0, 1}},       // inside: still the outward normal
+      {{0.3, 0.7, 1}, {0.3, 0.7, 1}, {0, 0, 1}},         // on the surface
+      {{2, 2, 0.5}, {1, 1, 0.5}, {s2, s2, 0}},           // nearest an edge
+      {{2, 2, 2}, {1, 1, 1}, {s3, s3, s3}},              // nearest a corner
+      {{-1, 0.5, -1}, {0, 0.5, 0}, {-s2, 0, -s2}},       // another edge
       {{0.5, 0.5, 1 + 1e-9}, {0.5, 0.5, 1}, {0, 0, 1}},  // just above
   };
   for (const auto& c : cases) {
@@ -191,9 +199,9 @@ TEST(Mesh, RayCastHitsTheFirstFace) {
   EXPECT_NEAR(hit->t, 4, 1e-12);
   EXPECT_LT((hit->normal - Vec3::UnitZ()).norm(), 1e-12);
   EXPECT_FALSE(cube.ray_cast({0.5, 0.5, 5}, {0, 0, -1}, 3.9));
-  EXPECT_FALSE(cube.ray_cast({0.5, 0.5, 5}, {0, 0, 1}));   // pointing away
-  EXPECT_FALSE(cube.ray_cast({2, 0.5, 5}, {0, 0, -1}));    // passes beside
-  hit = cube.ray_cast({0.5, 0.25, 0.5}, {1, 0, 0});         // from inside
+  EXPECT_FALSE(cube.ray_cast({0.5, 0.5, 5}, {0, 0, 1}));  // pointing away
+  EXPECT_FALSE(cube.ray_cast({2, 0.5, 5}, {0, 0, -1}));   // passes beside
+  hit = cube.ray_cast({0.5, 0.25, 0.5}, {1, 0, 0});       // from inside
   ASSERT_TRUE(hit);
   EXPECT_NEAR(hit->t, 0.5, 1e-12);
   EXPECT_LT((hit->normal - Vec3::UnitX()).norm(), 1e-12);
@@ -306,8 +314,7 @@ TEST(Mesh, CubeSectionIsASquare) {
   }
   for (const Vec3& p : l) {
     EXPECT_NEAR(p.z(), 0.5, 1e-12);
-    const double to_edge =
-        std::min({std::abs(p.x()), std::abs(p.x() - 1), std::abs(p.y()), std::abs(p.y() - 1)});
+    const double to_edge = std::min({std::abs(p.x()), std::abs(p.x() - 1), std::abs(p.y()), std::abs(p.y() - 1)});
     EXPECT_LT(to_edge, 1e-12) << p.transpose();
   }
   EXPECT_NEAR(perimeter, 4, 1e-12);
@@ -316,8 +323,7 @@ TEST(Mesh, CubeSectionIsASquare) {
   const auto tilted = cube.section({0.5, 0.5, 0.5}, {1, 1, 0});
   ASSERT_EQ(tilted.size(), 1u);
   double len = 0;
-  for (std::size_t i = 0; i + 1 < tilted[0].size(); ++i)
-    len += (tilted[0][i + 1] - tilted[0][i]).norm();
+  for (std::size_t i = 0; i + 1 < tilted[0].size(); ++i) len += (tilted[0][i + 1] - tilted[0][i]).norm();
   EXPECT_NEAR(len, 2 * std::sqrt(2.0) + 2, 1e-12);  // a sqrt(2) x 1 rectangle
   EXPECT_TRUE(cube.section({0, 0, 2}, {0, 0, 1}).empty());
 }
@@ -389,8 +395,7 @@ std::string ascii_stl_of(const Mesh& m) {
   char line[200];
   for (std::size_t i = 0; i < m.face_count(); ++i) {
     const Vec3 n = m.face_normal(static_cast<std::uint32_t>(i));
-    std::snprintf(line, sizeof line, "  facet normal %g %g %g\n    outer loop\n", n.x(), n.y(),
-                  n.z());
+    std::snprintf(line, sizeof line, "  facet normal %g %g %g\n    outer loop\n", n.x(), n.y(), n.z());
     s += line;
     for (auto v : m.faces()[i]) {
       const Vec3& p = m.vertices()[v];
@@ -503,9 +508,8 @@ TEST_F(MeshFiles, CorruptFilesGiveErrorsThatNameTheFile) {
 
 const std::string data_dir = METRON_SHARED_DATA;
 
-#define SKIP_WITHOUT(file)                                                         \
-  if (!fs::exists(file)) GTEST_SKIP() << "reference data not found: " << (file) \
-                                      << " (see /work/shared/data/README.md)"
+#define SKIP_WITHOUT(file) \
+  if (!fs::exists(file)) GTEST_SKIP() << "reference data not found: " << (file) << " (see /work/shared/data/README.md)"
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -531,11 +535,9 @@ double off_surface(const CadFace& f, const Vec3& p) {
     case CadFace::Kind::Plane: return std::abs(h);
     case CadFace::Kind::Cylinder: return std::abs(radial.norm() - f.radius_mm);
     case CadFace::Kind::Sphere: return std::abs(q.norm() - f.radius_mm);
-    case CadFace::Kind::Torus:
-      return std::abs((q - f.radius_mm * radial.normalized()).norm() - f.minor_radius_mm);
+    case CadFace::Kind::Torus: return std::abs((q - f.radius_mm * radial.normalized()).norm() - f.minor_radius_mm);
     case CadFace::Kind::Cone:
-      return std::abs(radial.norm() - (f.radius_mm + h * std::tan(f.semi_angle_rad))) *
-             std::cos(f.semi_angle_rad);
+      return std::abs(radial.norm() - (f.radius_mm + h * std::tan(f.semi_angle_rad))) * std::cos(f.semi_angle_rad);
     default: return 0;
   }
 }
@@ -583,16 +585,15 @@ struct Move {
   bool touch;
   Vec3 p, n;
 };
-int fly(const Mesh& m, const std::vector<Move>& moves, double r, double approach,
-        double retract, double tol_mm, bool verbose) {
+int fly(const Mesh& m, const std::vector<Move>& moves, double r, double approach, double retract, double tol_mm,
+        bool verbose) {
   int collisions = 0;
   Vec3 at = moves.front().p;
   auto free_move = [&](const Vec3& to, const char* what) {
     if (auto s = m.first_ball_contact(at, to, r)) {
       ++collisions;
       if (verbose)
-        std::printf("    collision on %s move %s -> %s at %s\n", what,
-                    fmt_vec(at).c_str(), fmt_vec(to).c_str(),
+        std::printf("    collision on %s move %s -> %s at %s\n", what, fmt_vec(at).c_str(), fmt_vec(to).c_str(),
                     fmt_vec(at + *s * (to - at)).c_str());
     }
     at = to;
@@ -616,7 +617,6 @@ int fly(const Mesh& m, const std::vector<Move>& moves, double r, double approach
   }
   return collisions;
 }
-
 
 Touch touch(double x, double y, double z, double i, double j, double k) {
   return {{x, y, z}, Vec3(i, j, k).normalized()};
@@ -642,9 +642,9 @@ TEST(CadSimplePart, StepIsInTheDmisProgramsCoordinates) {
   ASSERT_TRUE(model) << model.error().message;
   const Mesh& m = model->mesh;
   const auto b = m.bounds();
-  std::printf("  ipp_simple.stp: %.3f s, %zu vertices, %zu triangles, %zu faces, bounds %s - %s\n",
-              load_s, m.vertex_count(), m.face_count(), model->faces.size(),
-              fmt_vec(b.min()).c_str(), fmt_vec(b.max()).c_str());
+  std::printf("  ipp_simple.stp: %.3f s, %zu vertices, %zu triangles, %zu faces, bounds %s - %s\n", load_s,
+              m.vertex_count(), m.face_count(), model->faces.size(), fmt_vec(b.min()).c_str(),
+              fmt_vec(b.max()).c_str());
   EXPECT_TRUE(m.is_closed());
   EXPECT_LT((b.min() - Vec3(0, 0, 0)).norm(), 1e-6);
   EXPECT_LT((b.max() - Vec3(100, 100, 50)).norm(), 1e-6);
@@ -656,13 +656,11 @@ TEST(CadSimplePart, StepIsInTheDmisProgramsCoordinates) {
   int holes = 0, bottoms = 0;
   for (const CadFace& f : model->faces) {
     if (f.kind == CadFace::Kind::Cylinder && std::abs(f.radius_mm - 25) < 1e-9 &&
-        std::abs(std::abs(f.axis.z()) - 1) < 1e-12 &&
-        to_axis({50, 50, 40}, f.origin, f.axis) < 1e-9) {
+        std::abs(std::abs(f.axis.z()) - 1) < 1e-12 && to_axis({50, 50, 40}, f.origin, f.axis) < 1e-9) {
       ++holes;
       EXPECT_TRUE(f.inner);
     }
-    if (f.kind == CadFace::Kind::Plane && (f.axis - Vec3::UnitZ()).norm() < 1e-12 &&
-        std::abs(f.origin.z() - 25) < 1e-9)
+    if (f.kind == CadFace::Kind::Plane && (f.axis - Vec3::UnitZ()).norm() < 1e-12 && std::abs(f.origin.z() - 25) < 1e-9)
       ++bottoms;
   }
   EXPECT_GE(holes, 1);
@@ -670,8 +668,8 @@ TEST(CadSimplePart, StepIsInTheDmisProgramsCoordinates) {
   const auto [vertex_error, chord_error] = tessellation_error(*model);
   EXPECT_LT(vertex_error, 1e-9);
   EXPECT_LE(chord_error, 0.001);
-  const Touch circle[] = {touch(75, 50, 40, -1, 0, 0), touch(25, 50, 40, 1, 0, 0),
-                          touch(50, 75, 40, 0, -1, 0), touch(50, 25, 40, 0, 1, 0)};
+  const Touch circle[] = {touch(75, 50, 40, -1, 0, 0), touch(25, 50, 40, 1, 0, 0), touch(50, 75, 40, 0, -1, 0),
+                          touch(50, 25, 40, 0, 1, 0)};
   for (const auto& t : circle) expect_on_surface(m, t, 0.001 + 1e-9, "A_CIRCLE");
   // The program's moves with its probe (SNSDEF diameter 4), APPRCH 10, RETRCT 10.
   std::vector<Move> moves = {go(50, 50, 175), go(50, 50, 75), go(50, 50, 40)};
@@ -691,8 +689,8 @@ TEST(CadSimplePart, IgesIsTheStepPartShiftedDown50) {
   auto reference = metron::geometry::load_cad(step);
   ASSERT_TRUE(reference) << reference.error().message;
   const auto b = model->mesh.bounds();
-  std::printf("  ipp_simple.igs: %.3f s, %zu triangles, bounds %s - %s\n", load_s,
-              model->mesh.face_count(), fmt_vec(b.min()).c_str(), fmt_vec(b.max()).c_str());
+  std::printf("  ipp_simple.igs: %.3f s, %zu triangles, bounds %s - %s\n", load_s, model->mesh.face_count(),
+              fmt_vec(b.min()).c_str(), fmt_vec(b.max()).c_str());
   EXPECT_TRUE(model->mesh.is_closed());
   EXPECT_NEAR(model->mesh.volume_mm3(), reference->volume_mm3(), 1e-6 * reference->volume_mm3());
   Frame up = Frame::Identity();
@@ -762,27 +760,26 @@ class DcxPart : public ::testing::Test {
 Vec3 from_partx(const Vec3& p) { return {-p.x(), -p.y(), p.z()}; }
 Touch from_partx(const Touch& t) { return {from_partx(t.point), from_partx(t.normal)}; }
 
-const Touch pln1[] = {touch(-43, 15, 30, 0, 0, 1), touch(43, 15, 30, 0, 0, 1),
-                      touch(43, -35, 30, 0, 0, 1), touch(-50, -25, 30, 0, 0, 1)};
-const Touch pln2[] = {touch(19, -52, 23, 0, -1, 0), touch(19, -52, 7, 0, -1, 0),
-                      touch(-19, -52, 7, 0, -1, 0), touch(-19, -52, 23, 0, -1, 0)};
-const Touch pln3[] = {touch(-86, -14, 23, -1, 0, 0), touch(-86, -29, 23, -1, 0, 0),
-                      touch(-86, -29, 7, -1, 0, 0), touch(-86, -14, 7, -1, 0, 0)};
-const Touch cyl1[] = {touch(0, -15.5, 23, 0, 1, 0), touch(-15.5, 0, 23, 1, 0, 0),
-                      touch(0, 15.5, 23, 0, -1, 0), touch(15.5, 0, 23, -1, 0, 0),
-                      touch(15.5, 0, 17, -1, 0, 0), touch(0, 15.5, 17, 0, -1, 0),
+const Touch pln1[] = {touch(-43, 15, 30, 0, 0, 1), touch(43, 15, 30, 0, 0, 1), touch(43, -35, 30, 0, 0, 1),
+                      touch(-50, -25, 30, 0, 0, 1)};
+const Touch pln2[] = {touch(19, -52, 23, 0, -1, 0), touch(19, -52, 7, 0, -1, 0), touch(-19, -52, 7, 0, -1, 0),
+                      touch(-19, -52, 23, 0, -1, 0)};
+const Touch pln3[] = {touch(-86, -14, 23, -1, 0, 0), touch(-86, -29, 23, -1, 0, 0), touch(-86, -29, 7, -1, 0, 0),
+                      touch(-86, -14, 7, -1, 0, 0)};
+const Touch cyl1[] = {touch(0, -15.5, 23, 0, 1, 0), touch(-15.5, 0, 23, 1, 0, 0), touch(0, 15.5, 23, 0, -1, 0),
+                      touch(15.5, 0, 23, -1, 0, 0), touch(15.5, 0, 17, -1, 0, 0), touch(0, 15.5, 17, 0, -1, 0),
                       touch(-15.5, 0, 17, 1, 0, 0), touch(0, -15.5, 17, 0, 1, 0)};
-const Touch cyl2[] = {touch(0, 6.25, 3, 0, -1, 0), touch(-6.25, 0, 3, 1, 0, 0),
-                      touch(0, -6.25, 3, 0, 1, 0), touch(6.25, 0, 3, -1, 0, 0),
-                      touch(6.25, 0, 11, -1, 0, 0), touch(0, -6.25, 11, 0, 1, 0),
+const Touch cyl2[] = {touch(0, 6.25, 3, 0, -1, 0),  touch(-6.25, 0, 3, 1, 0, 0),  touch(0, -6.25, 3, 0, 1, 0),
+                      touch(6.25, 0, 3, -1, 0, 0),  touch(6.25, 0, 11, -1, 0, 0), touch(0, -6.25, 11, 0, 1, 0),
                       touch(-6.25, 0, 11, 1, 0, 0), touch(0, 6.25, 11, 0, -1, 0)};
 
 TEST_F(DcxPart, LoadsClosedAtTheDefaultTessellation) {
   const auto b = mesh().bounds();
-  std::printf("  DaimlerChryslerTestPartAP203.stp (chord 0.001 mm): %.2f s, %zu vertices, %zu "
-              "triangles, %zu B-rep faces, volume %.1f mm^3\n  bounds %s - %s\n",
-              s_load_s, mesh().vertex_count(), mesh().face_count(), s_model->faces.size(),
-              mesh().volume_mm3(), fmt_vec(b.min()).c_str(), fmt_vec(b.max()).c_str());
+  std::printf(
+      "  DaimlerChryslerTestPartAP203.stp (chord 0.001 mm): %.2f s, %zu vertices, %zu "
+      "triangles, %zu B-rep faces, volume %.1f mm^3\n  bounds %s - %s\n",
+      s_load_s, mesh().vertex_count(), mesh().face_count(), s_model->faces.size(), mesh().volume_mm3(),
+      fmt_vec(b.min()).c_str(), fmt_vec(b.max()).c_str());
   EXPECT_TRUE(mesh().is_closed());
   EXPECT_EQ(s_model->faces.size(), 140u);
   // DMIS: PLN3 at x = -86 (and x = +86 in STEP), the part on the table at z = 0, PLN2 y = -52.
@@ -799,8 +796,8 @@ TEST_F(DcxPart, LoadsClosedAtTheDefaultTessellation) {
   // Nodes on B-rep edges lie within the edge tolerance of the surfaces, and a few triangles
   // along edges (the R 4.75 spheres') exceed the chord tolerance by up to ~2 um.
   const auto [vertex_error, chord_error] = tessellation_error(*s_model);
-  std::printf("  distance to the analytic surfaces: vertices <= %.2g mm, centroids <= %.2g mm\n",
-              vertex_error, chord_error);
+  std::printf("  distance to the analytic surfaces: vertices <= %.2g mm, centroids <= %.2g mm\n", vertex_error,
+              chord_error);
   EXPECT_LT(vertex_error, 0.001);
   EXPECT_LT(chord_error, 0.003);
 }
@@ -810,10 +807,9 @@ TEST_F(DcxPart, CylindersOfTheCadModel) {
   bool big_hole = false, small_hole = false;
   for (const CadFace& f : s_model->faces) {
     if (f.kind != CadFace::Kind::Cylinder) continue;
-    std::printf("    %s %s r %.3f %s face %u\n", fmt_vec(f.origin).c_str(), fmt_vec(f.axis).c_str(),
-                f.radius_mm, f.inner ? "inner" : "outer", f.shape_index);
-    const bool on_z_axis = std::abs(std::abs(f.axis.z()) - 1) < 1e-12 &&
-                           to_axis(Vec3::Zero(), f.origin, f.axis) < 1e-9;
+    std::printf("    %s %s r %.3f %s face %u\n", fmt_vec(f.origin).c_str(), fmt_vec(f.axis).c_str(), f.radius_mm,
+                f.inner ? "inner" : "outer", f.shape_index);
+    const bool on_z_axis = std::abs(std::abs(f.axis.z()) - 1) < 1e-12 && to_axis(Vec3::Zero(), f.origin, f.axis) < 1e-9;
     big_hole |= on_z_axis && f.inner && std::abs(f.radius_mm - 15.5) < 1e-9;
     small_hole |= on_z_axis && f.inner && std::abs(f.radius_mm - 6.25) < 1e-9;
   }
@@ -860,8 +856,7 @@ TEST_F(DcxPart, DmisFactsHoldInStepCoordinatesAfterTurningPartxByRz180) {
     const Vec3 p = from_partx(d.point), n = from_partx(d.normal);
     bool face = false;
     for (const CadFace& f : s_model->faces)
-      face |= f.kind == CadFace::Kind::Plane && (f.axis - n).norm() < 1e-9 &&
-              std::abs((f.origin - p).dot(n)) < 1e-9;
+      face |= f.kind == CadFace::Kind::Plane && (f.axis - n).norm() < 1e-9 && std::abs((f.origin - p).dot(n)) < 1e-9;
     EXPECT_TRUE(face) << d.name << " has no CAD plane at " << p.transpose();
     for (int i = 0; i < 4; ++i) expect_on_surface(mesh(), from_partx(d.touches[i]), 1e-6, d.name);
   }
@@ -946,9 +941,10 @@ TEST_F(DcxPart, IgesMatchesStepExceptItsSpheres) {
   const double load_s = seconds_since(t0);
   ASSERT_TRUE(model) << model.error().message;
   const Mesh& m = model->mesh;
-  std::printf("  IGES (chord 0.01 mm): %.2f s, %zu triangles, closed %d, volume %.1f mm^3 "
-              "(STEP %.1f)\n", load_s, m.face_count(), m.is_closed(), m.volume_mm3(),
-              mesh().volume_mm3());
+  std::printf(
+      "  IGES (chord 0.01 mm): %.2f s, %zu triangles, closed %d, volume %.1f mm^3 "
+      "(STEP %.1f)\n",
+      load_s, m.face_count(), m.is_closed(), m.volume_mm3(), mesh().volume_mm3());
   EXPECT_TRUE(m.is_closed());
   EXPECT_LT((m.bounds().min() - mesh().bounds().min()).norm(), 0.011);
   EXPECT_LT((m.bounds().max() - mesh().bounds().max()).norm(), 0.011);
@@ -966,8 +962,8 @@ TEST_F(DcxPart, IgesMatchesStepExceptItsSpheres) {
     }
     if (worst < 0.011) continue;
     ++off_faces;
-    std::printf("    IGES face %u (%s r %.2f at %s) is up to %.2f mm off the STEP part\n",
-                f.shape_index, kind_name(f.kind), f.radius_mm, fmt_vec(f.origin).c_str(), worst);
+    std::printf("    IGES face %u (%s r %.2f at %s) is up to %.2f mm off the STEP part\n", f.shape_index,
+                kind_name(f.kind), f.radius_mm, fmt_vec(f.origin).c_str(), worst);
     EXPECT_EQ(f.kind, CadFace::Kind::Sphere) << "face " << f.shape_index;
   }
   EXPECT_LE(off_faces, 18);

@@ -16,7 +16,9 @@ using metron::fitting::Shape;
 
 namespace {
 constexpr double pi = std::numbers::pi;
-Vec3 polar(double r, double deg, double z = 0) { return {r * std::cos(deg * pi / 180), r * std::sin(deg * pi / 180), z}; }
+Vec3 polar(double r, double deg, double z = 0) {
+  return {r * std::cos(deg * pi / 180), r * std::sin(deg * pi / 180), z};
+}
 }  // namespace
 
 // Straightness in a plane: the minimum zone of a point set is the minimum width of its convex
@@ -74,7 +76,8 @@ TEST(MinimumZone, RoundnessWithAlternatingContactsIsTheAnnulusWidth) {
 TEST(MinimumZone, SphericityWithAlternatingContactsIsTheShellWidth) {
   const double r = 12.5, t = 0.015;
   std::vector<Vec3> pts = {{r + t, 0, 0}, {-(r + t), 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, r}, {0, 0, -r}};
-  for (double a = 20; a <= 60; a += 10) pts.push_back(r * Vec3(std::cos(a * pi / 180), 0.3, std::sin(a * pi / 180)).normalized());
+  for (double a = 20; a <= 60; a += 10)
+    pts.push_back(r * Vec3(std::cos(a * pi / 180), 0.3, std::sin(a * pi / 180)).normalized());
   const auto mz = minimum_zone(Shape::Sphere, pts);
   ASSERT_TRUE(mz);
   EXPECT_NEAR(mz->form_mm, t, 1e-9);
@@ -86,7 +89,8 @@ TEST(MinimumZone, CylindricityOfTwoAlternatingSectionsIsTheShellWidth) {
   const double r = 8, t = 0.01;
   std::vector<Vec3> pts;
   for (double z : {0.0, 40.0}) {
-    for (const auto& p : {polar(r + t, 0, z), polar(r, 90, z), polar(r + t, 180, z), polar(r, 270, z)}) pts.push_back(p);
+    for (const auto& p : {polar(r + t, 0, z), polar(r, 90, z), polar(r + t, 180, z), polar(r, 270, z)})
+      pts.push_back(p);
     for (double a = 10; a <= 40; a += 5) pts.push_back(polar(r, a, z));
   }
   const auto mz = minimum_zone(Shape::Cylinder, pts);
@@ -199,7 +203,7 @@ TEST(ExtremeFeature, InscribedAndCircumscribedSpheresOfFourContacts) {
     const double a = 0.7 * i, e = std::asin(-0.95 + 0.0475 * i);  // a spiral over the whole sphere
     const Vec3 u(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
     inside.push_back(c + Vec3(2, 1, 0) + (5 + 0.05 * i) * u);  // within the sphere, off-centre
-    outside.push_back(c + (10.5 + 0.05 * i) * u);               // beyond it, all round
+    outside.push_back(c + (10.5 + 0.05 * i) * u);              // beyond it, all round
   }
   const auto mcc = metron::fitting::extreme_feature(Shape::Sphere, inside, false);
   ASSERT_TRUE(mcc);
@@ -225,7 +229,8 @@ TEST(ExtremeFeature, InscribedAndCircumscribedSpheresOfFourContacts) {
   // A cylinder probed over half its circumference bounds no inscribed cylinder either.
   std::vector<Vec3> half;
   for (const double z : {0.0, 20.0})
-    for (int k = 0; k <= 6; ++k) half.push_back(c + Vec3(10 * std::cos(k * std::numbers::pi / 6), 10 * std::sin(k * std::numbers::pi / 6), z));
+    for (int k = 0; k <= 6; ++k)
+      half.push_back(c + Vec3(10 * std::cos(k * std::numbers::pi / 6), 10 * std::sin(k * std::numbers::pi / 6), z));
   EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Cylinder, half, true, Vec3::UnitZ()));
   EXPECT_FALSE(metron::fitting::extreme_feature(Shape::Cylinder, half, false, Vec3::UnitZ()));
 }

@@ -213,7 +213,8 @@ TEST(ScanPath, PlaneSectionOfAMeshCylinder) {
   // Normals are outward and radial within half a facet angle.
   for (std::size_t k = 0; k < plan->path.segments.size(); ++k) {
     const Vec3 p = plan->path.segments[k].start();
-    EXPECT_GT(plan->path.normals[k].dot(Vec3(p.x(), p.y(), 0).normalized()), std::cos(std::numbers::pi / facets) - 1e-9);
+    EXPECT_GT(plan->path.normals[k].dot(Vec3(p.x(), p.y(), 0).normalized()),
+              std::cos(std::numbers::pi / facets) - 1e-9);
   }
   // Counterclockwise about +z (Mesh::section's orientation for an outer boundary).
   const Vec3 t = plan->path.segments.front().tangent(0);
@@ -314,7 +315,8 @@ TEST(ScanPath, AFacetedConcaveFilletWiderThanTheBallIsScanned) {
 
 TEST(ScanPath, BoxSectionHasFourCornersAndStaysOnTheOffsetSides) {
   // A box section is a rectangle: the ball centre rolls around its four corners.
-  std::vector<Vec3> v = {{0, 0, 0}, {30, 0, 0}, {30, 20, 0}, {0, 20, 0}, {0, 0, 10}, {30, 0, 10}, {30, 20, 10}, {0, 20, 10}};
+  std::vector<Vec3> v = {{0, 0, 0},  {30, 0, 0},  {30, 20, 0},  {0, 20, 0},
+                         {0, 0, 10}, {30, 0, 10}, {30, 20, 10}, {0, 20, 10}};
   std::vector<Mesh::Face> f = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
                                {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
   auto mesh = Mesh::from_triangles(v, f);

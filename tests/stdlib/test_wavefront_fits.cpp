@@ -60,7 +60,8 @@ TEST(WavefrontZernike, FitRecoversKnownCoefficientsAndTheirNoise) {
   auto fn = wf::fit_zernike(p, vn, 11);
   ASSERT_TRUE(fn);
   // sigma of a unit-rms term from M samples with noise sigma: sigma / sqrt(M).
-  EXPECT_NEAR(fn->sigma[1], 2.0 / std::sqrt(static_cast<double>(p.size())), 0.1 * 2.0 / std::sqrt(static_cast<double>(p.size())));
+  EXPECT_NEAR(fn->sigma[1], 2.0 / std::sqrt(static_cast<double>(p.size())),
+              0.1 * 2.0 / std::sqrt(static_cast<double>(p.size())));
   EXPECT_NEAR(fn->residual_rms, 2.0, 0.05);
   EXPECT_FALSE(wf::fit_zernike(std::vector<Vec2>(3, Vec2(0, 0)), std::vector<double>(3, 0.0), 4));
 }

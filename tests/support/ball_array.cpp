@@ -56,7 +56,8 @@ BallMeasurement measure_balls(Machine& cmm, const std::vector<Vec3>& nominal_cen
     run(GoTo{Vec3(c.x(), c.y(), safe_z_mm), std::nullopt});
     auto f = fitting::fit(fitting::Shape::Sphere, hits);
     out.centres_mm.push_back(f ? f->position : Vec3(Vec3::Constant(std::nan(""))));
-    if (!f && out.error.empty()) out.error = fmt::format("sphere fit failed for the ball at ({}, {}, {})", c.x(), c.y(), c.z());
+    if (!f && out.error.empty())
+      out.error = fmt::format("sphere fit failed for the ball at ({}, {}, {})", c.x(), c.y(), c.z());
   }
   out.simulated_time_s = cmm.state().time_s;
   return out;
@@ -84,7 +85,8 @@ Vec3 TruthErrorMap::error_at_mm(const Vec3& q_mm) const {
 }
 
 error_space::ErrorSpaceFile truth_error_space(const MachineErrorModel& model, const error_space::Grid& grid,
-                                              const Vec3& stylus_offset_mm, const error_space::InterpolationSpec& spec) {
+                                              const Vec3& stylus_offset_mm,
+                                              const error_space::InterpolationSpec& spec) {
   error_space::ErrorSpace space;
   space.grid = grid;
   for (auto& v : space.values_mm) v.assign(grid.size(), 0.0);

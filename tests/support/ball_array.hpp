@@ -17,9 +17,9 @@ namespace metron::test_support {
 
 /// The measured centres of a set of balls (ball-centre fits of 9 touches each).
 struct BallMeasurement {
-  std::vector<Vec3> centres_mm;   ///< one per ball, in order
-  std::string error;              ///< empty when every touch succeeded
-  double simulated_time_s = 0;    ///< the machine's clock at the end
+  std::vector<Vec3> centres_mm;  ///< one per ball, in order
+  std::string error;             ///< empty when every touch succeeded
+  double simulated_time_s = 0;   ///< the machine's clock at the end
 };
 
 /// Touches each ball (nominal centre, diameter) at its top, 4 points at 45 degrees and 4 on the
@@ -31,9 +31,9 @@ BallMeasurement measure_balls(machine::Machine& cmm, const std::vector<Vec3>& no
 
 /// Every pair's measured distance minus its true distance (ISO 10360-2 style length errors).
 struct LengthErrors {
-  double rms_mm = 0;       ///< RMS over the pairs
-  double max_abs_mm = 0;   ///< largest |error|
-  std::size_t pairs = 0;   ///< number of pairs
+  double rms_mm = 0;      ///< RMS over the pairs
+  double max_abs_mm = 0;  ///< largest |error|
+  std::size_t pairs = 0;  ///< number of pairs
 };
 LengthErrors length_errors(const std::vector<Vec3>& measured_mm, const std::vector<Vec3>& truth_mm);
 

@@ -10,8 +10,8 @@ using namespace machine::segmented;
 ReferenceProfile reference_profile(const geometry::PccPath& path, const ScanLimits& limits, double dt_s,
                                    ScanRecorder* recorder) {
   ReferenceProfile out;
-  const SpeedPlan plan = plan_command(path.segments, path.speed_mm_s, 0, 0.0, PlanKind::LookAhead, limits,
-                                      LowSpeedRegion{}, true);
+  const SpeedPlan plan =
+      plan_command(path.segments, path.speed_mm_s, 0, 0.0, PlanKind::LookAhead, limits, LowSpeedRegion{}, true);
   for (const LimitPiece& p : plan.pieces) out.lower_bound_s += (p.end_mm - p.start_mm) / p.limit_mm_s;
   out.length_mm = plan.end_mm;
   PathInterpolator interp(limits.path);

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <functional>
 #include <memory>
-#include <vector>
 #include <numbers>
+#include <vector>
 
 namespace metron::test_support {
 namespace {

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <variant>
-#include <stdexcept>
 #include <vector>
 
 #include "metron/machine/command.hpp"
@@ -49,8 +49,8 @@ inline void add_arc(geometry::PccPath& path, const Vec3& c, double radius, const
   const auto tangent = [&](double a) { return Vec3((phi > 0 ? 1 : -1) * (-std::sin(a) * e0 + std::cos(a) * e1)); };
   for (int i = 0; i < n; ++i) {
     const double a0 = phi * i / n, a1 = phi * (i + 1) / n;
-    path.segments.push_back(geometry::PccSegment::hermite(c + radius * radial(a0), c + radius * radial(a1), tangent(a0),
-                                                          tangent(a1)));
+    path.segments.push_back(
+        geometry::PccSegment::hermite(c + radius * radial(a0), c + radius * radial(a1), tangent(a0), tangent(a1)));
     path.normals.push_back(normal_sign * radial(a0));
   }
 }
@@ -124,7 +124,8 @@ inline std::vector<Vec3> ramp_profile(double angle_deg, double x0 = 20, double r
                                       double base = 10) {
   if (angle_deg <= 0) return {Vec3(0, 0, base), Vec3(x_end, 0, base)};
   const double run = rise / std::tan(angle_deg * deg);
-  return {Vec3(0, 0, base), Vec3(x0, 0, base), Vec3(x0 + run, 0, base + rise), Vec3(x0 + run + x_end - x0, 0, base + rise)};
+  return {Vec3(0, 0, base), Vec3(x0, 0, base), Vec3(x0 + run, 0, base + rise),
+          Vec3(x0 + run + x_end - x0, 0, base + rise)};
 }
 
 /// The ramp part as CSG (part coordinates): (below the flat or below the ramp) and below the
@@ -143,14 +144,18 @@ inline machine::csg::Node ramp_design(double angle_deg, double x0 = 20, double r
     const double a = angle_deg * deg;
     Node climb;
     climb.op = Node::Op::Union;
-    climb.children = {half(Vec3(0, 0, base), Vec3::UnitZ()), half(Vec3(x0, 0, base), Vec3(-std::sin(a), 0, std::cos(a)))};
+    climb.children = {half(Vec3(0, 0, base), Vec3::UnitZ()),
+                      half(Vec3(x0, 0, base), Vec3(-std::sin(a), 0, std::cos(a)))};
     top.op = Node::Op::Intersection;
     top.children = {climb, half(Vec3(0, 0, base + rise), Vec3::UnitZ())};
   }
   Node block;
   block.op = Node::Op::Intersection;
-  block.children = {top, half(Vec3(-20, 0, 0), -Vec3::UnitX()), half(Vec3(200, 0, 0), Vec3::UnitX()),
-                    half(Vec3(0, -30, 0), -Vec3::UnitY()), half(Vec3(0, 30, 0), Vec3::UnitY()),
+  block.children = {top,
+                    half(Vec3(-20, 0, 0), -Vec3::UnitX()),
+                    half(Vec3(200, 0, 0), Vec3::UnitX()),
+                    half(Vec3(0, -30, 0), -Vec3::UnitY()),
+                    half(Vec3(0, 30, 0), Vec3::UnitY()),
                     half(Vec3(0, 0, 0), -Vec3::UnitZ())};
   return block;
 }
@@ -234,7 +239,9 @@ template <class F>
 inline geometry::Mesh heightfield_block(F height, double x0, double x1, double y0, double y1, int nx, int ny) {
   std::vector<Vec3> v;
   std::vector<geometry::Mesh::Face> f;
-  const auto at = [&](int i, int j, bool top) { return static_cast<std::uint32_t>((top ? 0 : (nx + 1) * (ny + 1)) + j * (nx + 1) + i); };
+  const auto at = [&](int i, int j, bool top) {
+    return static_cast<std::uint32_t>((top ? 0 : (nx + 1) * (ny + 1)) + j * (nx + 1) + i);
+  };
   for (int top = 1; top >= 0; --top)
     for (int j = 0; j <= ny; ++j)
       for (int i = 0; i <= nx; ++i) {
@@ -254,18 +261,17 @@ inline geometry::Mesh heightfield_block(F height, double x0, double x1, double y
     f.push_back({a, b, b0});
   };
   for (int i = 0; i < nx; ++i) {
-    wall(at(i + 1, 0, true), at(i, 0, true), at(i + 1, 0, false), at(i, 0, false));          // y = y0
-    wall(at(i, ny, true), at(i + 1, ny, true), at(i, ny, false), at(i + 1, ny, false));      // y = y1
+    wall(at(i + 1, 0, true), at(i, 0, true), at(i + 1, 0, false), at(i, 0, false));      // y = y0
+    wall(at(i, ny, true), at(i + 1, ny, true), at(i, ny, false), at(i + 1, ny, false));  // y = y1
   }
   for (int j = 0; j < ny; ++j) {
-    wall(at(0, j, true), at(0, j + 1, true), at(0, j, false), at(0, j + 1, false));          // x = x0
-    wall(at(nx, j + 1, true), at(nx, j, true), at(nx, j + 1, false), at(nx, j, false));      // x = x1
+    wall(at(0, j, true), at(0, j + 1, true), at(0, j, false), at(0, j + 1, false));      // x = x0
+    wall(at(nx, j + 1, true), at(nx, j, true), at(nx, j + 1, false), at(nx, j, false));  // x = x1
   }
   auto m = geometry::Mesh::from_triangles(std::move(v), std::move(f));
   if (!m) throw std::runtime_error(m.error().message);
   return *m;
 }
-
 
 /// The ramp part's block with a plane top through (0, 0, base + raise_mm) tilted sideways (about
 /// x) by tilt_deg: its outward normal is (0, -sin(tilt), cos(tilt)). A flat design's path along x
@@ -281,8 +287,10 @@ inline machine::csg::Node tilted_block_design(double tilt_deg, double raise_mm, 
   Node block;
   block.op = Node::Op::Intersection;
   block.children = {half(Vec3(0, 0, base + raise_mm), Vec3(0, -std::sin(a), std::cos(a))),
-                    half(Vec3(-20, 0, 0), -Vec3::UnitX()), half(Vec3(200, 0, 0), Vec3::UnitX()),
-                    half(Vec3(0, -30, 0), -Vec3::UnitY()), half(Vec3(0, 30, 0), Vec3::UnitY()),
+                    half(Vec3(-20, 0, 0), -Vec3::UnitX()),
+                    half(Vec3(200, 0, 0), Vec3::UnitX()),
+                    half(Vec3(0, -30, 0), -Vec3::UnitY()),
+                    half(Vec3(0, 30, 0), Vec3::UnitY()),
                     half(Vec3(0, 0, 0), -Vec3::UnitZ())};
   return block;
 }
@@ -306,10 +314,10 @@ inline geometry::PccPath sampled_path(F f, G g, double u0, double u1, int n) {
 /// A scan whose path deviates from the actual surface across the scan direction (issue 11 item 1):
 /// the world (its part as machined), the nominal command, and where the head starts.
 struct LateralCase {
-  std::string name;                   ///< for tables
-  machine::World world;               ///< the part as machined (hidden)
-  machine::ScanPath command;          ///< the path from the design
-  Vec3 start_mm = Vec3::Zero();       ///< the head's start (the approach point, or off it)
+  std::string name;              ///< for tables
+  machine::World world;          ///< the part as machined (hidden)
+  machine::ScanPath command;     ///< the path from the design
+  Vec3 start_mm = Vec3::Zero();  ///< the head's start (the approach point, or off it)
 };
 
 /// The design pose of the lateral cases' parts.
@@ -341,7 +349,8 @@ inline machine::World lateral_world(std::variant<machine::csg::Node, machine::Ca
 /// Case 1: the flat design's line over a top that is actually tilted sideways by tilt_deg and
 /// raised by raise_mm.
 inline LateralCase tilted_plane_case(double tilt_deg = 20, double raise_mm = 0.3, double roughness_mm = 0) {
-  LateralCase c{"plane tilted sideways", lateral_world(tilted_block_design(tilt_deg, raise_mm), lateral_origin_mm, roughness_mm),
+  LateralCase c{"plane tilted sideways",
+                lateral_world(tilted_block_design(tilt_deg, raise_mm), lateral_origin_mm, roughness_mm),
                 flat_line_scan(), Vec3::Zero()};
   c.start_mm = c.command.path.segments.front().start() + c.command.approach_mm * Vec3::UnitZ();
   return c;
@@ -363,9 +372,12 @@ inline LateralCase sphere_latitude_case(const Vec3& offset_mm, double polar_deg 
                                         double ball_radius_mm = 2, double e0_mm = 0.3) {
   machine::csg::Node ball;
   ball.primitive = {"SPHERE", machine::csg::Sphere{Vec3::Zero(), sphere_diameter_mm}};
-  LateralCase c{"sphere latitude, centre off", lateral_world(ball, sphere_centre_mm + offset_mm, roughness_mm), {}, Vec3::Zero()};
+  LateralCase c{
+      "sphere latitude, centre off", lateral_world(ball, sphere_centre_mm + offset_mm, roughness_mm), {}, Vec3::Zero()};
   const double r = sphere_diameter_mm / 2 + ball_radius_mm - e0_mm, th = polar_deg * deg;
-  const auto radial = [th](double phi) { return Vec3(std::sin(th) * std::cos(phi), std::sin(th) * std::sin(phi), std::cos(th)); };
+  const auto radial = [th](double phi) {
+    return Vec3(std::sin(th) * std::cos(phi), std::sin(th) * std::sin(phi), std::cos(th));
+  };
   c.command.path = sampled_path([&](double phi) { return Vec3(sphere_centre_mm + r * radial(phi)); }, radial, 0,
                                 2 * std::numbers::pi, 72);
   c.command.approach_normal = radial(0);
@@ -386,7 +398,9 @@ inline LateralCase free_form_case(double shift_mm = 0.5, double roughness_mm = 0
   machine::CadDesign cad;
   cad.path = "<free-form heightfield>";
   cad.mesh = mesh;
-  LateralCase c{"free-form shifted sideways", lateral_world(cad, lateral_origin_mm + Vec3(0, shift_mm, 0), roughness_mm), {},
+  LateralCase c{"free-form shifted sideways",
+                lateral_world(cad, lateral_origin_mm + Vec3(0, shift_mm, 0), roughness_mm),
+                {},
                 Vec3::Zero()};
   const auto normal = [](double x) {
     const double h = 1e-5;
@@ -395,7 +409,9 @@ inline LateralCase free_form_case(double shift_mm = 0.5, double roughness_mm = 0
     return Vec3(Vec3(-hx, -hy, 1).normalized());
   };
   c.command.path = sampled_path(
-      [&](double x) { return Vec3(lateral_origin_mm + Vec3(x, 0, free_form_height(x, 0)) + (ball_radius_mm - e0_mm) * normal(x)); },
+      [&](double x) {
+        return Vec3(lateral_origin_mm + Vec3(x, 0, free_form_height(x, 0)) + (ball_radius_mm - e0_mm) * normal(x));
+      },
       normal, 5, 55, 50);
   c.command.approach_normal = normal(5);
   c.command.sample_spacing_mm = 0.1;

@@ -22,8 +22,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> feature_quantities = {"frame", "points", "actual", "x", "y", "z", "i", "j", "k",
-                                                     "diameter", "length", "angle", "start", "included", "form"};
+const std::vector<std::string> feature_quantities = {"frame",  "points", "actual", "x",        "y",
+                                                     "z",      "i",      "j",      "k",        "diameter",
+                                                     "length", "angle",  "start",  "included", "form"};
 const std::vector<std::string> tolerance_quantities = {"status", "value"};
 
 std::string_view trim(std::string_view s) {
@@ -61,10 +62,14 @@ std::optional<double> parse_number(std::string_view s) {
 std::string quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
-    if (c == '"' || c == '\\') out += {'\\', c};
-    else if (c == '\n') out += "\\n";
-    else if (c == '\t') out += "\\t";
-    else out += c;
+    if (c == '"' || c == '\\')
+      out += {'\\', c};
+    else if (c == '\n')
+      out += "\\n";
+    else if (c == '\t')
+      out += "\\t";
+    else
+      out += c;
   }
   return out + "\"";
 }
@@ -218,8 +223,10 @@ class ExpectedParser {
     if (head == "text") return text_line(line);
     if (head == "file") return file_lines();
     if (head == "feature" || head == "tolerance") return quantity();
-    return fmt::format("unknown line '{}': expected world, seed, default, skip, status, feature, tolerance, text, fault, "
-                       "error, file or a # comment", head);
+    return fmt::format(
+        "unknown line '{}': expected world, seed, default, skip, status, feature, tolerance, text, fault, "
+        "error, file or a # comment",
+        head);
   }
 
   ExpectedFile finish() {
@@ -261,7 +268,8 @@ class ExpectedParser {
     if (m_words.size() != 2) return "expected an integer seed >= 0 after 'seed'";
     const auto& w = m_words[1];
     const auto [p, ec] = std::from_chars(w.data(), w.data() + w.size(), v);
-    if (ec != std::errc() || p != w.data() + w.size()) return fmt::format("expected an integer seed >= 0 after 'seed', got '{}'", w);
+    if (ec != std::errc() || p != w.data() + w.size())
+      return fmt::format("expected an integer seed >= 0 after 'seed', got '{}'", w);
     if (auto e = directive("seed")) return e;
     m_file.seed = v;
     return std::nullopt;
@@ -279,7 +287,9 @@ class ExpectedParser {
     const auto v = parse_number(t);
     if (!v || *v < 0) return fmt::format("expected a tolerance (a number >= 0) for default {}, got '{}'", kind, t);
     if (auto e = directive("default " + kind)) return e;
-    (kind == "length" ? m_file.defaults.length_mm : kind == "direction" ? m_file.defaults.direction : m_file.defaults.angle_deg) = *v;
+    (kind == "length"      ? m_file.defaults.length_mm
+     : kind == "direction" ? m_file.defaults.direction
+                           : m_file.defaults.angle_deg) = *v;
     m_file.defaults_given.push_back(kind);
     return std::nullopt;
   }
@@ -316,7 +326,8 @@ class ExpectedParser {
     auto s = unquote(trim(line.substr(4)));
     if (!s) return s.error() + " after 'text'";
     if (!trim(s->second).empty()) return fmt::format("unexpected '{}' after the string", std::string(trim(s->second)));
-    return add(make_entry(fmt::format("text {}", ++m_texts), "", {Value::Kind::String, 0, s->first}, QuantityClass::Exact));
+    return add(
+        make_entry(fmt::format("text {}", ++m_texts), "", {Value::Kind::String, 0, s->first}, QuantityClass::Exact));
   }
 
   // feature LABEL[@N] QUANTITY VALUE [+-t]  |  tolerance LABEL[@N] status|value VALUE [+-t]
@@ -341,7 +352,8 @@ class ExpectedParser {
       if (v != "none") return "expected 'none' after 'actual' (a feature reported without an actual)";
       e.value = word(v);
     } else if (q == "points") {
-      if (v.find_first_not_of("0123456789") != std::string::npos) return fmt::format("expected a point count, got '{}'", v);
+      if (v.find_first_not_of("0123456789") != std::string::npos)
+        return fmt::format("expected a point count, got '{}'", v);
       e.value = word(v);
     } else if (v == "none") {
       e.value = {Value::Kind::None, 0, ""};
@@ -351,9 +363,12 @@ class ExpectedParser {
       e.value = {Value::Kind::Number, *x, v};
       if (next < m_words.size()) {
         std::string t = m_words[next++];
-        if (t == "+-" && next < m_words.size()) t = m_words[next++];
-        else if (t.rfind("+-", 0) == 0) t = t.substr(2);
-        else return fmt::format("expected '+-tolerance' or the end of the line after the value, got '{}'", t);
+        if (t == "+-" && next < m_words.size())
+          t = m_words[next++];
+        else if (t.rfind("+-", 0) == 0)
+          t = t.substr(2);
+        else
+          return fmt::format("expected '+-tolerance' or the end of the line after the value, got '{}'", t);
         if (t.empty()) return "expected a tolerance (a number >= 0) after '+-'";
         const auto tol = parse_number(t);
         if (!tol || *tol < 0) return fmt::format("expected a tolerance (a number >= 0) after '+-', got '{}'", t);
@@ -366,9 +381,9 @@ class ExpectedParser {
   }
 
   ExpectedFile m_file;
-  std::vector<std::string> m_pending;   // comment lines waiting for the entry below them
-  bool m_started = false;               // a directive or entry was seen: comments stop being header
-  std::map<std::string, int> m_seen;    // key -> line, for duplicates
+  std::vector<std::string> m_pending;  // comment lines waiting for the entry below them
+  bool m_started = false;              // a directive or entry was seen: comments stop being header
+  std::map<std::string, int> m_seen;   // key -> line, for duplicates
   std::set<std::string> m_directives;
   int m_texts = 0;
   int m_number = 0;
@@ -398,7 +413,9 @@ std::string format_expected(const ExpectedFile& file) {
   if (file.world) out += "world " + *file.world + "\n";
   if (file.seed) out += fmt::format("seed {}\n", *file.seed);
   for (const auto& kind : file.defaults_given) {
-    const double v = kind == "length" ? file.defaults.length_mm : kind == "direction" ? file.defaults.direction : file.defaults.angle_deg;
+    const double v = kind == "length"      ? file.defaults.length_mm
+                     : kind == "direction" ? file.defaults.direction
+                                           : file.defaults.angle_deg;
     out += fmt::format("default {} +-{}\n", kind, v);
   }
   if (file.skip) out += "skip " + *file.skip + "\n";
@@ -409,8 +426,10 @@ std::string format_expected(const ExpectedFile& file) {
     if (!out.empty() && (!grouped || !e.comments.empty())) out += "\n";
     subject = e.subject;
     for (const auto& c : e.comments) out += c + "\n";
-    if (e.subject.rfind("text ", 0) == 0) out += "text";
-    else out += e.subject;
+    if (e.subject.rfind("text ", 0) == 0)
+      out += "text";
+    else
+      out += e.subject;
     if (!e.quantity.empty()) out += " " + e.quantity;
     out += " " + format_value(e.value);
     if (e.tolerance) out += fmt::format(" +-{}", *e.tolerance);
@@ -439,7 +458,9 @@ Observed observe_results(const nlohmann::json& results) {
     const std::string kind = e.value("kind", "");
     if (kind == "feature") {
       const std::string s = subject("feature", e.value("label", "?"));
-      const auto add = [&](const std::string& q, Value v) { o.entries.push_back(make_entry(s, q, std::move(v), feature_class(q))); };
+      const auto add = [&](const std::string& q, Value v) {
+        o.entries.push_back(make_entry(s, q, std::move(v), feature_class(q)));
+      };
       add("frame", word(e.value("frame", "")));
       add("points", word(std::to_string(e.value("point_count", 0))));
       const auto& a = e.contains("actual") ? e["actual"] : nlohmann::json();
@@ -451,9 +472,11 @@ Observed observe_results(const nlohmann::json& results) {
         for (int i = 0; i < 3; ++i) add(std::string(1, "xyz"[i]), number(a["position"][i], QuantityClass::Length));
       if (a.contains("direction"))
         for (int i = 0; i < 3; ++i) add(std::string(1, "ijk"[i]), number(a["direction"][i], QuantityClass::Direction));
-      static const std::vector<std::pair<const char*, const char*>> sizes = {
-          {"diameter_mm", "diameter"}, {"length_mm", "length"}, {"apex_angle_deg", "angle"},
-          {"start_angle_deg", "start"}, {"included_angle_deg", "included"}};
+      static const std::vector<std::pair<const char*, const char*>> sizes = {{"diameter_mm", "diameter"},
+                                                                             {"length_mm", "length"},
+                                                                             {"apex_angle_deg", "angle"},
+                                                                             {"start_angle_deg", "start"},
+                                                                             {"included_angle_deg", "included"}};
       for (const auto& [field, q] : sizes)
         if (a.contains(field)) add(q, number(a[field], feature_class(q)));
       if (e.contains("form_mm") && e["form_mm"].is_number()) add("form", number(e["form_mm"], QuantityClass::Length));
@@ -461,11 +484,15 @@ Observed observe_results(const nlohmann::json& results) {
       const std::string s = subject("tolerance", e.value("label", "?"));
       const QuantityClass cls = e.value("type", "") == "ANGLB" ? QuantityClass::Angle : QuantityClass::Length;
       o.entries.push_back(make_entry(s, "status", word(e.value("status", "")), QuantityClass::Exact));
-      o.entries.push_back(make_entry(s, "value", number(e.contains("value") ? e["value"] : nlohmann::json(), cls), cls));
+      o.entries.push_back(
+          make_entry(s, "value", number(e.contains("value") ? e["value"] : nlohmann::json(), cls), cls));
     } else if (kind == "text") {
-      o.entries.push_back(make_entry(fmt::format("text {}", ++texts), "", {Value::Kind::String, 0, e.value("text", "")}, QuantityClass::Exact));
+      o.entries.push_back(make_entry(fmt::format("text {}", ++texts), "", {Value::Kind::String, 0, e.value("text", "")},
+                                     QuantityClass::Exact));
     } else if (kind == "fault") {
-      o.entries.push_back(make_entry("fault", "", word(fmt::format("{} line {}", e.value("fault", "?"), e.value("line", 0))), QuantityClass::Exact));
+      o.entries.push_back(make_entry("fault", "",
+                                     word(fmt::format("{} line {}", e.value("fault", "?"), e.value("line", 0))),
+                                     QuantityClass::Exact));
       if (o.fault_summary.empty()) o.fault_summary = summarize_fault(e);
     }
   }
@@ -492,7 +519,8 @@ void observe_files(const fs::path& out_dir, Observed& observed) {
   for (fs::directory_iterator it(out_dir, ec), end; !ec && it != end; it.increment(ec)) {
     if (!it->is_regular_file() || it->path().filename() == "results.json") continue;
     std::ifstream in(it->path(), std::ios::binary);
-    const auto lines = static_cast<std::size_t>(std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
+    const auto lines = static_cast<std::size_t>(
+        std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
     files.emplace_back(it->path().filename().string(), lines);
   }
   std::sort(files.begin(), files.end());  // directory order is not deterministic
@@ -511,7 +539,8 @@ std::vector<Difference> compare(const ExpectedFile& expected, const Observed& ob
   for (const auto& e : expected.entries) expected_subjects.insert(e.subject);
 
   // The status first: when it differs, the rest is a consequence.
-  const auto st = std::find_if(expected.entries.begin(), expected.entries.end(), [](const Entry& e) { return e.subject == "status"; });
+  const auto st = std::find_if(expected.entries.begin(), expected.entries.end(),
+                               [](const Entry& e) { return e.subject == "status"; });
   const std::string want = st == expected.entries.end() ? "completed" : st->value.text;
   if (want != observed.status) out.push_back({"status", fmt::format("expected {}, got {}", want, observed.status)});
 
@@ -521,9 +550,11 @@ std::vector<Difference> compare(const ExpectedFile& expected, const Observed& ob
     if (it == got.end()) {
       if (!got_subjects.count(e.subject)) {
         if (missing_reported.insert(e.subject).second)
-          out.push_back({e.subject, e.subject.rfind("text ", 0) == 0 ? fmt::format("expected {}, not reported", format_value(e.value))
-                                    : e.quantity.empty() ? fmt::format("expected {}, not reported", format_value(e.value))
-                                                         : "expected, not reported"});
+          out.push_back({e.subject, e.subject.rfind("text ", 0) == 0
+                                        ? fmt::format("expected {}, not reported", format_value(e.value))
+                                    : e.quantity.empty()
+                                        ? fmt::format("expected {}, not reported", format_value(e.value))
+                                        : "expected, not reported"});
       } else {
         out.push_back({e.key(), fmt::format("expected {}, not reported", format_value(e.value))});
       }
@@ -531,15 +562,16 @@ std::vector<Difference> compare(const ExpectedFile& expected, const Observed& ob
     }
     const Entry& g = *it->second;
     if (e.value.kind == Value::Kind::Number && g.value.kind == Value::Kind::Number) {
-      const double tol = e.tolerance ? *e.tolerance
+      const double tol = e.tolerance                         ? *e.tolerance
                          : g.cls == QuantityClass::Direction ? expected.defaults.direction
-                         : g.cls == QuantityClass::Angle ? expected.defaults.angle_deg
-                                                         : expected.defaults.length_mm;
+                         : g.cls == QuantityClass::Angle     ? expected.defaults.angle_deg
+                                                             : expected.defaults.length_mm;
       const double diff = g.value.number - e.value.number;
       if (std::abs(diff) > tol) {
         const int d = decimals_of(g.cls);
-        out.push_back({e.key(), fmt::format("expected {}, got {} (difference {}{}, tolerance +-{})", format_value(e.value),
-                                            format_value(g.value), diff >= 0 ? "+" : "", format_number(diff, d), tol)});
+        out.push_back(
+            {e.key(), fmt::format("expected {}, got {} (difference {}{}, tolerance +-{})", format_value(e.value),
+                                  format_value(g.value), diff >= 0 ? "+" : "", format_number(diff, d), tol)});
       }
     } else if (e.value.kind != g.value.kind || e.value.text != g.value.text) {
       out.push_back({e.key(), fmt::format("expected {}, got {}", format_value(e.value), format_value(g.value))});
@@ -548,7 +580,8 @@ std::vector<Difference> compare(const ExpectedFile& expected, const Observed& ob
   for (const auto& g : observed.entries) {
     if (expected_subjects.count(g.subject) || g.subject == "status") continue;
     expected_subjects.insert(g.subject);  // one line per unexpected subject
-    out.push_back({g.subject, g.quantity.empty() ? fmt::format("got {}, not expected", format_value(g.value)) : "reported, not expected"});
+    out.push_back({g.subject, g.quantity.empty() ? fmt::format("got {}, not expected", format_value(g.value))
+                                                 : "reported, not expected"});
   }
   return out;
 }
@@ -591,7 +624,8 @@ tl::expected<std::vector<Case>, std::string> discover_cases(const std::vector<st
       continue;
     }
     if (!fs::is_directory(root, ec)) return tl::unexpected(fmt::format("{}: no such directory", r));
-    for (fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, ec), end; it != end; it.increment(ec)) {
+    for (fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, ec), end; it != end;
+         it.increment(ec)) {
       if (ec) return tl::unexpected(fmt::format("{}: {}", it->path().string(), ec.message()));
       if (it->is_regular_file()) consider(it->path());
     }
@@ -652,9 +686,10 @@ std::string junit_xml(const std::vector<CaseResult>& results, double total_wall_
   }
   const std::string counts = fmt::format("tests=\"{}\" failures=\"{}\" errors=\"0\" skipped=\"{}\" time=\"{:.3f}\"",
                                          results.size(), failures, skipped, total_wall_s);
-  return fmt::format("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"metron test\" {}>\n"
-                     "  <testsuite name=\"metron test\" {}>\n{}  </testsuite>\n</testsuites>\n",
-                     counts, counts, body);
+  return fmt::format(
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"metron test\" {}>\n"
+      "  <testsuite name=\"metron test\" {}>\n{}  </testsuite>\n</testsuites>\n",
+      counts, counts, body);
 }
 
 }  // namespace metron::regression

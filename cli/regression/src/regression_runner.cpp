@@ -10,8 +10,8 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 #include <optional>
+#include <sstream>
 #include <thread>
 #include <variant>
 
@@ -68,11 +68,13 @@ std::variant<Prepared, CaseResult> prepare(const Case& c, const fs::path& dir) {
   if (!fs::exists(c.program))
     return fail(c, fmt::format("no program {} beside {}", c.program.filename().string(), c.expected.string()));
   std::error_code ec;
-  if (!fs::is_regular_file(c.expected, ec)) return fail(c, fmt::format("{} is not a regular file", c.expected.string()));
+  if (!fs::is_regular_file(c.expected, ec))
+    return fail(c, fmt::format("{} is not a regular file", c.expected.string()));
   Prepared p;
   p.expected_text = slurp(c.expected);
   auto parsed = parse_expected(p.expected_text);
-  if (!parsed) return fail(c, fmt::format("{}:{}: error: {}", c.expected.string(), parsed.error().line, parsed.error().message));
+  if (!parsed)
+    return fail(c, fmt::format("{}:{}: error: {}", c.expected.string(), parsed.error().line, parsed.error().message));
   p.expected = std::move(*parsed);
   if (p.expected.skip) return CaseResult{c, Verdict::Skip, 0, *p.expected.skip, {}};
   p.dir = dir;
@@ -140,7 +142,8 @@ struct ProcessEnd {
 CaseResult evaluate(const Case& c, const Prepared& p, const ProcessEnd& end, const RunnerOptions& options) {
   const std::string err = slurp(p.dir / "stderr", 64 * 1024);
   const double t = end.wall_s;
-  if (end.kind == ProcessEnd::Kind::TimedOut) return fail(c, fmt::format("timed out after {} s: killed", options.timeout_s), {}, t);
+  if (end.kind == ProcessEnd::Kind::TimedOut)
+    return fail(c, fmt::format("timed out after {} s: killed", options.timeout_s), {}, t);
   if (end.kind == ProcessEnd::Kind::Signaled)
     return fail(c, fmt::format("crashed: killed by signal {} ({})", end.code, ::strsignal(end.code)), tail(err, 10), t);
   if (end.code == 2) {
@@ -160,7 +163,7 @@ CaseResult evaluate(const Case& c, const Prepared& p, const ProcessEnd& end, con
     observed = observe_results(j);
     observe_files(p.dir / "out", observed);
   } else if (end.code == 1) {
-    observed = observe_diagnostics(err);   // a compile error: no results.json
+    observed = observe_diagnostics(err);  // a compile error: no results.json
   } else {
     return fail(c, fmt::format("no results.json written (exit status {})", end.code), tail(err, 10), t);
   }
@@ -181,7 +184,8 @@ CaseResult evaluate(const Case& c, const Prepared& p, const ProcessEnd& end, con
     out << text;
     if (!out) return fail(c, fmt::format("cannot write {}", c.expected.string()), {}, t);
     if (p.expected.entries.empty()) return {c, Verdict::Updated, t, "written from the results", {}};
-    return {c, Verdict::Updated, t, diffs.empty() ? "rewritten, same results" : headline(diffs, observed), detail_lines(diffs)};
+    return {c, Verdict::Updated, t, diffs.empty() ? "rewritten, same results" : headline(diffs, observed),
+            detail_lines(diffs)};
   }
   if (diffs.empty()) return {c, Verdict::Pass, t, "", {}};
   return fail(c, headline(diffs, observed), detail_lines(diffs), t);
@@ -273,7 +277,8 @@ std::vector<CaseResult> run_cases(const std::vector<Case>& cases, const RunnerOp
         continue;
       }
       if (r < 0) {
-        done[it->index] = fail(cases[it->index], fmt::format("lost the child process: {}", std::strerror(errno)), {}, wall_s);
+        done[it->index] =
+            fail(cases[it->index], fmt::format("lost the child process: {}", std::strerror(errno)), {}, wall_s);
       } else {
         done[it->index] = stopping ? fail(cases[it->index], "interrupted by a signal to metron test", {}, wall_s)
                                    : evaluate(cases[it->index], it->prepared, end, options);

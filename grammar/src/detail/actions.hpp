@@ -155,7 +155,8 @@ struct action<rules::label_tail> {
     Expr e;
     e.kind = ExprKind::Label;
     e.span = Span::join(id.span, b.span(in.begin(), in.end()));
-    e.label = LabelRef{std::move(id.upper), std::move(label.name), e.span, std::move(label.index), std::move(label.points)};
+    e.label =
+        LabelRef{std::move(id.upper), std::move(label.name), e.span, std::move(label.index), std::move(label.points)};
     b.stack.push_back(std::move(e));
   }
 };
@@ -218,10 +219,10 @@ struct push_op {
   template <typename In>
   static void apply(const In& in, Builder& b) {
     if (++b.operators > max_operators)
-      throw SyntaxError{"parse.too-long",
-                        "expression too long (more than " + std::to_string(max_operators) +
-                            " operators in one statement)",
-                        b.point(in.begin())};
+      throw SyntaxError{
+          "parse.too-long",
+          "expression too long (more than " + std::to_string(max_operators) + " operators in one statement)",
+          b.point(in.begin())};
     b.ops.push_back({upper(in.string_view()), b.span(in.begin(), in.end())});
   }
 };

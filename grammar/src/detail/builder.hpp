@@ -47,10 +47,10 @@ struct Builder {
   const LogicalLine* line = nullptr;
   const char* base = nullptr;  ///< first byte of line->text, for logical offsets
 
-  std::vector<Expr> stack;            ///< finished operands
-  std::vector<PendingOp> ops;         ///< operators awaiting their right operand
-  std::vector<PendingIdent> idents;   ///< identifiers awaiting '(' / '[' / nothing
-  std::vector<std::size_t> marks;     ///< stack size at each open call or index list
+  std::vector<Expr> stack;           ///< finished operands
+  std::vector<PendingOp> ops;        ///< operators awaiting their right operand
+  std::vector<PendingIdent> idents;  ///< identifiers awaiting '(' / '[' / nothing
+  std::vector<std::size_t> marks;    ///< stack size at each open call or index list
   /// The label references being read (an index may hold another): the name, its index.
   struct PendingLabel {
     std::string name;
@@ -60,7 +60,7 @@ struct Builder {
   std::vector<PendingLabel> labels;
   const char* string_open = nullptr;  ///< the opening quote of the string being read
   int depth = 0;
-  int operators = 0;                  ///< binary and sign operators read so far (max_operators)
+  int operators = 0;  ///< binary and sign operators read so far (max_operators)
   Statement stmt;
   std::optional<Span> blank_in_label;  ///< the first label name written with a blank (`F(HOLE 1)`)
 

@@ -38,17 +38,12 @@ inline SyntaxError expected(const Builder& b, const char* at, std::string code, 
   return SyntaxError{std::move(code), std::move(message), b.point(at)};
 }
 
-inline std::string last_op(const Builder& b) {
-  return b.ops.empty() ? std::string("operator") : b.ops.back().text;
-}
-inline std::string last_ident(const Builder& b) {
-  return b.idents.empty() ? std::string() : b.idents.back().upper;
-}
+inline std::string last_op(const Builder& b) { return b.ops.empty() ? std::string("operator") : b.ops.back().text; }
+inline std::string last_ident(const Builder& b) { return b.idents.empty() ? std::string() : b.idents.back().upper; }
 
 // "unexpected character 'c' after <what>", or "unknown operator '.XX.' after <what>".
 inline SyntaxError unexpected(const Builder& b, const char* at, const std::string& what) {
-  if (at_end(b, at))
-    return expected(b, at, "parse.unexpected-end", "unexpected end of the statement after " + what);
+  if (at_end(b, at)) return expected(b, at, "parse.unexpected-end", "unexpected end of the statement after " + what);
   const std::string_view rest(at, b.line->text.size() - b.offset(at));
   if (rest.size() > 2 && rest[0] == '.') {
     std::size_t i = 1;
@@ -178,9 +173,8 @@ inline SyntaxError error_for(tag<rules::end_after_jump>, const Builder& b, const
 // Rules whose recursion the nesting guard counts.
 // Operands are counted, not the operator rules, so merely trying `-x` at a primary costs nothing.
 template <typename Rule>
-inline constexpr bool nests =
-    std::is_same_v<Rule, rules::or_expr> || std::is_same_v<Rule, rules::unary_operand> ||
-    std::is_same_v<Rule, rules::not_operand> || std::is_same_v<Rule, rules::pow_operand>;
+inline constexpr bool nests = std::is_same_v<Rule, rules::or_expr> || std::is_same_v<Rule, rules::unary_operand> ||
+                              std::is_same_v<Rule, rules::not_operand> || std::is_same_v<Rule, rules::pow_operand>;
 
 template <typename Rule>
 struct control : tao::pegtl::normal<Rule> {
@@ -196,10 +190,9 @@ struct control : tao::pegtl::normal<Rule> {
   static void start(const ParseInput& in, Builder& b) {
     if constexpr (nests<Rule>) {
       if (++b.depth > max_nesting)
-        throw SyntaxError{
-            "parse.too-deep",
-            "expression nested too deeply (more than " + std::to_string(max_nesting) + " levels)",
-            b.point(in.current())};
+        throw SyntaxError{"parse.too-deep",
+                          "expression nested too deeply (more than " + std::to_string(max_nesting) + " levels)",
+                          b.point(in.current())};
     }
   }
   template <typename ParseInput>

@@ -13,11 +13,14 @@ using runtime::FeatureType;
 using runtime::ToleranceKind;
 
 void UnitCompiler::add_alignment(StatementTable& t) {
-  t.insert({
-      {"DATSET", &UnitCompiler::datset}, {"TRANS", &UnitCompiler::trans}, {"ROTATE", &UnitCompiler::rotate},
-      {"SAVE", &UnitCompiler::save}, {"RECALL", &UnitCompiler::recall}, {"CONST", &UnitCompiler::construct},
-      {"OUTPUT", &UnitCompiler::output}, {"EVAL", &UnitCompiler::evaluate}
-  });
+  t.insert({{"DATSET", &UnitCompiler::datset},
+            {"TRANS", &UnitCompiler::trans},
+            {"ROTATE", &UnitCompiler::rotate},
+            {"SAVE", &UnitCompiler::save},
+            {"RECALL", &UnitCompiler::recall},
+            {"CONST", &UnitCompiler::construct},
+            {"OUTPUT", &UnitCompiler::output},
+            {"EVAL", &UnitCompiler::evaluate}});
 }
 
 // D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...   (-ZDIR = ZMINUS; FA(x) in
@@ -26,7 +29,8 @@ void UnitCompiler::datset(const grammar::Statement& s) {
   if (s.target && upper(s.target->prefix) == "DA") {
     // DA(l)=DATSET/TRMATX,...: the alignment a DMIS output file reports.
     note_once(m_reported_results_noted, s.target->span, "sema.reported-alignment",
-              fmt::format("DA({})=DATSET/... is a reported alignment (a DMIS output file's line): kept as it is", s.target->name));
+              fmt::format("DA({})=DATSET/... is a reported alignment (a DMIS output file's line): kept as it is",
+                          s.target->name));
     emit(make(Op::Nop, s, "DATSET"));
     return;
   }
@@ -41,7 +45,8 @@ void UnitCompiler::datset(const grammar::Statement& s) {
     return;
   }
   auto in = make(Op::DatSet, s, upper(s.target->name));
-  static const std::set<std::string> words = {"XDIR", "YDIR", "ZDIR", "XMINUS", "YMINUS", "ZMINUS", "XORIG", "YORIG", "ZORIG"};
+  static const std::set<std::string> words = {"XDIR",   "YDIR",  "ZDIR",  "XMINUS", "YMINUS",
+                                              "ZMINUS", "XORIG", "YORIG", "ZORIG"};
   if (is_word(s.params[0], "MCS")) {
     in.operands.push_back(word_operand(s.params[0]));
   } else {
@@ -51,7 +56,9 @@ void UnitCompiler::datset(const grammar::Statement& s) {
       if (is_label(p, {"DAT"})) {
         const std::string d = upper(p.label.name);
         if (!m_symbols.datums.count(d) && !named_at_run(d))
-          return error(p.span, "sema.undefined-datum", fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
+          return error(
+              p.span, "sema.undefined-datum",
+              fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
         in.operands.push_back(label_op(p));
         have_datum = true;
       } else if (is_label(p, {"FA", "F"})) {
@@ -59,10 +66,13 @@ void UnitCompiler::datset(const grammar::Statement& s) {
         in.operands.push_back(label_op(p));
         have_datum = true;
       } else if (is_word(p) && words.count(p.text)) {
-        if (!have_datum) return error(p.span, "sema.expected-datum", fmt::format("expected DAT(label) or FA(label) before {}", p.text));
+        if (!have_datum)
+          return error(p.span, "sema.expected-datum",
+                       fmt::format("expected DAT(label) or FA(label) before {}", p.text));
         in.operands.push_back(word_operand(p));
       } else {
-        return error(p.span, "sema.bad-datset", "expected DAT(label), FA(label) or XDIR, YDIR, ZDIR, XMINUS, ..., XORIG, YORIG, ZORIG");
+        return error(p.span, "sema.bad-datset",
+                     "expected DAT(label), FA(label) or XDIR, YDIR, ZDIR, XMINUS, ..., XORIG, YORIG, ZORIG");
       }
     }
   }
@@ -74,7 +84,8 @@ void UnitCompiler::datset(const grammar::Statement& s) {
 void UnitCompiler::trans(const grammar::Statement& s) {
   if (!require_target(s, {"D"}, "D(label)=TRANS/...")) return;
   if (s.params.empty() || s.params.size() % 2 != 0)
-    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.trans-arity", "TRANS expects pairs of XORIG|YORIG|ZORIG and a value or feature");
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.trans-arity",
+                 "TRANS expects pairs of XORIG|YORIG|ZORIG and a value or feature");
   auto in = make(Op::Trans, s, upper(s.target->name));
   for (std::size_t i = 0; i < s.params.size(); i += 2) {
     const auto& w = s.params[i];
@@ -118,13 +129,15 @@ void UnitCompiler::rotate(const grammar::Statement& s) {
     const grammar::Expr direction = s.params.size() == 3 ? unsigned_direction(s.params[2]) : grammar::Expr{};
     static const std::set<std::string> directions = {"XDIR", "YDIR", "ZDIR", "XMINUS", "YMINUS", "ZMINUS"};
     if (s.params.size() != 3 || !is_word(direction) || !directions.count(direction.text))
-      return error(s.params.back().span, "sema.bad-rotate", "expected XDIR, YDIR or ZDIR (or -XDIR, -YDIR, -ZDIR) after the feature");
+      return error(s.params.back().span, "sema.bad-rotate",
+                   "expected XDIR, YDIR or ZDIR (or -XDIR, -YDIR, -ZDIR) after the feature");
     if (direction.text[0] == s.params[0].text[0])
       return error(s.params[2].span, "sema.bad-rotate", "the aligned axis cannot be the rotation axis");
     in.operands.push_back(label_op(s.params[1]));
     in.operands.push_back(word_operand(direction));
   } else {
-    if (s.params.size() != 2) return error(s.params.back().span, "sema.bad-rotate", "ROTATE/axis,angle takes one angle");
+    if (s.params.size() != 2)
+      return error(s.params.back().span, "sema.bad-rotate", "ROTATE/axis,angle takes one angle");
     if (!push_number(in, s.params[1], "an angle")) return;
   }
   m_symbols.alignments.insert(upper(s.target->name));
@@ -137,14 +150,16 @@ void UnitCompiler::save(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a coordinate system DA(label)")) return;
   const auto& p = s.params[0];
   if (is_label(p, {"SA", "S"})) {
-    note_once(m_sensor_saves_noted, p.span, "sema.save-sensor",
-              "SAVE/SA(): the probe library keeps the qualified sensors (docs/language.md, \"Sensors\"); nothing to do");
+    note_once(
+        m_sensor_saves_noted, p.span, "sema.save-sensor",
+        "SAVE/SA(): the probe library keeps the qualified sensors (docs/language.md, \"Sensors\"); nothing to do");
     emit(make(Op::Nop, s, "SAVE"));
     return;
   }
   if (!is_label(p, {"DA", "D"})) {
     if (p.kind == ExprKind::Label) {
-      warn(p.span, "sema.unsupported-save", fmt::format("SAVE of {}() is not supported and is ignored", p.label.prefix));
+      warn(p.span, "sema.unsupported-save",
+           fmt::format("SAVE of {}() is not supported and is ignored", p.label.prefix));
       emit(make(Op::Nop, s, "SAVE"));
       return;
     }
@@ -170,7 +185,8 @@ void UnitCompiler::recall(const grammar::Statement& s) {
   }
   if (!is_label(s.params[0], {"DA", "D"})) {
     if (s.params[0].kind == ExprKind::Label) {  // RECALL/SA(), RECALL/FA() ...: not supported
-      warn(s.params[0].span, "sema.unsupported-recall", fmt::format("RECALL of {}() is not supported and is ignored", s.params[0].label.prefix));
+      warn(s.params[0].span, "sema.unsupported-recall",
+           fmt::format("RECALL of {}() is not supported and is ignored", s.params[0].label.prefix));
       emit(make(Op::Nop, s, "RECALL"));
       return;
     }
@@ -183,10 +199,12 @@ void UnitCompiler::recall(const grammar::Statement& s) {
   if (!m_symbols.alignments.count(name) && !m_symbols.saved.count(name) && name != "MCS" && !named_at_run(name)) {
     const std::string written = fmt::format("{}({})", upper(s.params[0].label.prefix), s.params[0].label.name);
     if (m_strict || m_repl)
-      return error(s.params[0].span, "sema.undefined-alignment", fmt::format("coordinate system {} is not defined", written));
+      return error(s.params[0].span, "sema.undefined-alignment",
+                   fmt::format("coordinate system {} is not defined", written));
     warn(s.params[0].span, "sema.undefined-alignment",
          fmt::format("coordinate system {} is not defined in this program (one the CMM's software keeps?): a run stops "
-                     "at this RECALL (--strict makes it an error)", written));
+                     "at this RECALL (--strict makes it an error)",
+                     written));
   }
   auto in = make(Op::Recall, s);
   in.operands.push_back(label_op(s.params[0]));
@@ -200,26 +218,30 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   const auto& p = s.params;
   const auto const_type = type_word(p[0]);
   if (!const_type) return error(p[0].span, "sema.bad-feature-type", "expected a feature type after CONST/");
-  if (!is_label(p[1], {"F"})) return error(p[1].span, "sema.expected-feature", "expected F(label) after the feature type");
+  if (!is_label(p[1], {"F"}))
+    return error(p[1].span, "sema.expected-feature", "expected F(label) after the feature type");
   const std::string label = upper(p[1].label.name);
   const auto type = feature_type(label);
   if (type && *type != *const_type)
-    return error(p[0].span, "sema.const-type", fmt::format("CONST/{} on F({}), which is FEAT/{}", p[0].text, p[1].label.name, ir::word_of(*type)));
+    return error(p[0].span, "sema.const-type",
+                 fmt::format("CONST/{} on F({}), which is FEAT/{}", p[0].text, p[1].label.name, ir::word_of(*type)));
   const auto method = is_word(p[2]) ? ir::parse_word<ir::ConstructionMethod>(p[2].text) : std::nullopt;
   if (!method) {
     if (is_word(p[2])) {
-      warn(p[2].span, "sema.unsupported-construction", fmt::format("construction method {} is not supported; F({}) gets no actual", p[2].text, p[1].label.name));
+      warn(p[2].span, "sema.unsupported-construction",
+           fmt::format("construction method {} is not supported; F({}) gets no actual", p[2].text, p[1].label.name));
       m_symbols.unconstructed[label] = p[2].text;
       emit(make(Op::Nop, s, "CONST"));
       return;
     }
-    return error(p[2].span, "sema.bad-construction", "expected a construction method (BF, INTOF, MIDPT, PROJPT, ...) after the feature");
+    return error(p[2].span, "sema.bad-construction",
+                 "expected a construction method (BF, INTOF, MIDPT, PROJPT, ...) after the feature");
   }
   // The methods that make one type only.
-  const std::optional<FeatureType> makes = *method == ir::ConstructionMethod::Midpl   ? FeatureType::Plane
-                                           : *method == ir::ConstructionMethod::Midli ? FeatureType::Line
+  const std::optional<FeatureType> makes = *method == ir::ConstructionMethod::Midpl    ? FeatureType::Plane
+                                           : *method == ir::ConstructionMethod::Midli  ? FeatureType::Line
                                            : *method == ir::ConstructionMethod::Vertex ? FeatureType::Point
-                                                                                      : std::optional<FeatureType>{};
+                                                                                       : std::optional<FeatureType>{};
   if (makes && *makes != *const_type)
     return error(p[0].span, "sema.const-type", fmt::format("{} constructs a {}", p[2].text, ir::word_of(*makes)));
   m_symbols.unconstructed.erase(label);
@@ -230,7 +252,8 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     // CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz
     if (*const_type != FeatureType::Point) return error(p[0].span, "sema.const-type", "MOVEPT constructs a POINT");
     if (p.size() != 7 || !is_label(p[3], {"FA", "F"}))
-      return error(p.back().span, "sema.construction-arity", "MOVEPT takes a feature and an offset: MOVEPT,FA(x),dx,dy,dz");
+      return error(p.back().span, "sema.construction-arity",
+                   "MOVEPT takes a feature and an offset: MOVEPT,FA(x),dx,dy,dz");
     if (!check_feature(p[3])) return;
     in.operands.push_back(label_op(p[3]));
     for (std::size_t i = 4; i < 7; ++i)
@@ -261,7 +284,8 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     // CONST/PLANE,F(l),OFFSET,FA(plane),d
     if (*const_type != FeatureType::Plane) {
       warn(p[2].span, "sema.unsupported-construction",
-           fmt::format("OFFSET constructs a PLANE here (OFFSET,FA(plane),d); an offset {} is not supported: F({}) gets no actual",
+           fmt::format("OFFSET constructs a PLANE here (OFFSET,FA(plane),d); an offset {} is not supported: F({}) gets "
+                       "no actual",
                        p[0].text, p[1].label.name));
       m_symbols.unconstructed[label] = p[2].text;
       emit(make(Op::Nop, s, "CONST"));
@@ -294,7 +318,8 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     return;
   }
   for (std::size_t i = 3; i < p.size(); ++i) {
-    if (!is_label(p[i], {"FA", "F"})) return error(p[i].span, "sema.expected-feature", "expected FA(label) source features");
+    if (!is_label(p[i], {"FA", "F"}))
+      return error(p[i].span, "sema.expected-feature", "expected FA(label) source features");
     if (!check_feature(p[i])) return;
     in.operands.push_back(label_op(p[i]));
   }
@@ -302,9 +327,11 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   using M = ir::ConstructionMethod;
   const bool one_source = *method == M::Cast || *method == M::Copy || *method == M::Vertex;
   if (one_source && sources != 1)
-    return error(p.back().span, "sema.construction-arity", fmt::format("{} takes one source feature, got {}", p[2].text, sources));
+    return error(p.back().span, "sema.construction-arity",
+                 fmt::format("{} takes one source feature, got {}", p[2].text, sources));
   if (*method != M::Bf && !one_source && sources != 2)
-    return error(p.back().span, "sema.construction-arity", fmt::format("{} takes two source features, got {}", p[2].text, sources));
+    return error(p.back().span, "sema.construction-arity",
+                 fmt::format("{} takes two source features, got {}", p[2].text, sources));
   if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
   emit(std::move(in));
 }
@@ -317,15 +344,19 @@ void UnitCompiler::extreme_point(const grammar::Statement& s, ir::Instruction in
   const auto& p = s.params;
   if (type_word(p[0]) != FeatureType::Point) return error(p[0].span, "sema.const-type", "EXTREM constructs a POINT");
   const char* usage =
-      "EXTREM takes a feature and a direction: EXTREM,[MIN|MAX,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)|RADIAL";
+      "EXTREM takes a feature and a direction: "
+      "EXTREM,[MIN|MAX,]FA(x),XDIR|YDIR|ZDIR|-XDIR|...|VEC,i,j,k|FA(axis)|RADIAL";
   std::optional<grammar::Expr> source, axis_feature, axis_word;
   std::vector<const grammar::Expr*> vec;
   bool minimum = false;
   for (std::size_t i = 3; i < p.size(); ++i) {
     const grammar::Expr& q = p[i];
-    if (is_word(q, "MIN") || is_word(q, "MINUS")) minimum = true;
-    else if (is_word(q, "MAX") || is_word(q, "PLUS")) minimum = false;
-    else if (is_label(q, {"FA", "F"})) (source ? axis_feature : source) = q;
+    if (is_word(q, "MIN") || is_word(q, "MINUS"))
+      minimum = true;
+    else if (is_word(q, "MAX") || is_word(q, "PLUS"))
+      minimum = false;
+    else if (is_label(q, {"FA", "F"}))
+      (source ? axis_feature : source) = q;
     else if (is_word(q, "XDIR") || is_word(q, "YDIR") || is_word(q, "ZDIR") || is_word(q, "XMINUS") ||
              is_word(q, "YMINUS") || is_word(q, "ZMINUS")) {
       axis_word = q;
@@ -359,7 +390,8 @@ void UnitCompiler::extreme_point(const grammar::Statement& s, ir::Instruction in
       if (!push_number(in, *e, "a direction component")) return;
   }
   const std::string label = upper(p[1].label.name);
-  if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {FeatureType::Point, s.span};
+  if (m_symbols.features.find(label) == m_symbols.features.end())
+    m_symbols.features[label] = {FeatureType::Point, s.span};
   emit(std::move(in));
 }
 
@@ -393,7 +425,8 @@ void UnitCompiler::evaluate(const grammar::Statement& s) {
     any_tolerance = true;
     m_symbols.evaluated_tolerances.insert(upper(o.label.name));
   }
-  if (!any_tolerance) return error(s.span, "sema.eval-without-tolerance", "EVAL evaluates tolerances: EVAL/FA(x),TA(t)");
+  if (!any_tolerance)
+    return error(s.span, "sema.eval-without-tolerance", "EVAL evaluates tolerances: EVAL/FA(x),TA(t)");
   emit(std::move(in));
 }
 
@@ -406,14 +439,16 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
   bool left_out = false;  // a feature the program never defines was left out (lenient reading)
   for (const auto& p : s.params) {
     if (p.kind == ExprKind::Label && !p.label.points.empty() && (!is_label(p, {"F", "FA"}) || s.major != "OUTPUT"))
-      return fail(p.span, "sema.point-range",
-                  fmt::format("a point range {}({})[...] is read only for a feature in OUTPUT", p.label.prefix, p.label.name));
+      return fail(
+          p.span, "sema.point-range",
+          fmt::format("a point range {}({})[...] is read only for a feature in OUTPUT", p.label.prefix, p.label.name));
     // In a DMIS output file each OUTPUT is followed by the result lines it produced: an OUTPUT of
     // a result stated below (and not defined before) echoes it.
     const bool feature_label = is_label(p, {"F", "FA"});
     const std::string key = std::string(feature_label ? "FA:" : "TA:") + upper(p.label.name);
     if ((feature_label || is_label(p, {"T", "TA"})) && m_reported_results.count(key) &&
-        !(feature_label ? m_symbols.features.count(upper(p.label.name)) : m_symbols.tolerances.count(upper(p.label.name)))) {
+        !(feature_label ? m_symbols.features.count(upper(p.label.name))
+                        : m_symbols.tolerances.count(upper(p.label.name)))) {
       ++echoed;
       continue;
     }
@@ -433,16 +468,19 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       // generator's leftover): read leniently, the item is left out with a warning.
       if (!m_strict && !m_repl && never_defined(upper(p.label.name))) {
         warn(p.span, "sema.output-undefined-feature",
-             fmt::format("feature {}({}) is never defined in this program: left out of this {} (--strict makes it an error)",
-                         p.label.prefix, p.label.name, s.major));
+             fmt::format(
+                 "feature {}({}) is never defined in this program: left out of this {} (--strict makes it an error)",
+                 p.label.prefix, p.label.name, s.major));
         left_out = true;
         continue;
       }
-      if (auto u = m_symbols.unconstructed.find(upper(p.label.name)); !m_strict && !m_repl && u != m_symbols.unconstructed.end()) {
+      if (auto u = m_symbols.unconstructed.find(upper(p.label.name));
+          !m_strict && !m_repl && u != m_symbols.unconstructed.end()) {
         warn(p.span, "sema.output-unconstructed-feature",
-             fmt::format("{}({}) has no actual: its CONST method {} is not supported; left out of this {} (--strict makes it "
-                         "an error)",
-                         p.label.prefix, p.label.name, u->second, s.major));
+             fmt::format(
+                 "{}({}) has no actual: its CONST method {} is not supported; left out of this {} (--strict makes it "
+                 "an error)",
+                 p.label.prefix, p.label.name, u->second, s.major));
         left_out = true;
         continue;
       }
@@ -452,35 +490,45 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       const std::string t = upper(p.label.name);
       if (!named_at_run(t)) {
         auto it = m_symbols.tolerances.find(t);
-        if (auto u = m_symbols.unevaluated_tolerances.find(t); it == m_symbols.tolerances.end() && u != m_symbols.unevaluated_tolerances.end()) {
-          note(p.span, "sema.unevaluated-output", fmt::format("T({}) (TOL/{}) is not evaluated: left out of this OUTPUT", p.label.name, u->second));
+        if (auto u = m_symbols.unevaluated_tolerances.find(t);
+            it == m_symbols.tolerances.end() && u != m_symbols.unevaluated_tolerances.end()) {
+          note(p.span, "sema.unevaluated-output",
+               fmt::format("T({}) (TOL/{}) is not evaluated: left out of this OUTPUT", p.label.name, u->second));
           continue;
         }
         if (it == m_symbols.tolerances.end())
-          return fail(p.span, m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
-                       m_symbols.skipped.count("T:" + t) ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
-                                                         : fmt::format("tolerance T({}) is not defined", p.label.name));
+          return fail(p.span,
+                      m_symbols.skipped.count("T:" + t) ? "sema.skipped-definition" : "sema.undefined-tolerance",
+                      m_symbols.skipped.count("T:" + t)
+                          ? fmt::format("tolerance T({}) was defined by a skipped statement", p.label.name)
+                          : fmt::format("tolerance T({}) is not defined", p.label.name));
         const ToleranceKind kind = it->second;
         if (types.empty() && left_out) {
-          note(p.span, "sema.output-undefined-feature", fmt::format("T({}) is left out with the feature", p.label.name));
+          note(p.span, "sema.output-undefined-feature",
+               fmt::format("T({}) is left out with the feature", p.label.name));
           continue;
         }
         if (types.empty() && in.op == Op::Output && m_symbols.evaluated_tolerances.count(t)) {
           in.operands.push_back(label_op(p));  // OUTPUT/TA(t) alone: what an EVAL of it found
           continue;
         }
-        if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Cortol) && types.empty())
-          return fail(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
+        if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Cortol) &&
+            types.empty())
+          return fail(p.span, "sema.tolerance-without-feature",
+                      fmt::format("T({}) is output without a feature to apply it to", p.label.name));
         if (kind == ToleranceKind::DistB && types.size() != 2)
           return fail(p.span, "sema.distb-features", "TOL/DISTB is output with two features: OUTPUT/FA(a),FA(b),TA(t)");
         if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
-          return fail(p.span, "sema.anglb-reference", "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
+          return fail(p.span, "sema.anglb-reference",
+                      "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
         for (const auto& type : types)
           if (type && !runtime::tolerance_applies(kind, *type))
             return fail(p.span, "sema.tolerance-type",
-                         fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name, ir::word_of(*type)));
+                        fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name,
+                                    ir::word_of(*type)));
         if (types.empty())
-          return fail(p.span, "sema.tolerance-without-feature", fmt::format("T({}) is output without a feature to apply it to", p.label.name));
+          return fail(p.span, "sema.tolerance-without-feature",
+                      fmt::format("T({}) is output without a feature to apply it to", p.label.name));
       }
     } else if (is_label(p, {"R"})) {
       // A REPORT layout (R(x)=REPORT/...) for the features beside it: metron's reports are its own.
@@ -491,18 +539,22 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       // program never defines may come from the probe library (RECALL/SA): the run tells.
       if (!m_symbols.sensors.count(upper(p.label.name)) && !m_symbols.library_sensors.count(upper(p.label.name)))
         note(p.span, "sema.output-library-sensor",
-             fmt::format("{}({}) is not defined in this program: its output is what the machine's probe library holds at run",
-                         p.label.prefix, p.label.name));
+             fmt::format(
+                 "{}({}) is not defined in this program: its output is what the machine's probe library holds at run",
+                 p.label.prefix, p.label.name));
     } else if (is_label(p, {"D", "DA"}) && in.op == Op::Output) {
       // A coordinate system: its origin and axes in the machine's, as a report line.
       const std::string d = upper(p.label.name);
       if (!m_symbols.alignments.count(d) && d != "MCS" && !named_at_run(d))
-        warn(p.span, "sema.undefined-datum-set", fmt::format("coordinate system D({}) is not defined in this program", p.label.name));
+        warn(p.span, "sema.undefined-datum-set",
+             fmt::format("coordinate system D({}) is not defined in this program", p.label.name));
     } else if (p.kind == ExprKind::Label) {
-      warn(p.span, "sema.unsupported-output", fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
+      warn(p.span, "sema.unsupported-output",
+           fmt::format("OUTPUT of {}() labels is not supported and is ignored", p.label.prefix));
       continue;
     } else {
-      return fail(p.span, "sema.expected-label", fmt::format("expected F(), FA(), T() or TA() labels after {}/", s.major));
+      return fail(p.span, "sema.expected-label",
+                  fmt::format("expected F(), FA(), T() or TA() labels after {}/", s.major));
     }
     in.operands.push_back(label_op(p));
     for (const auto& bound : p.label.points) {  // OUTPUT/FA(x)[first,last]: the numbers follow the label

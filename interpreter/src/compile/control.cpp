@@ -22,31 +22,48 @@ tl::expected<std::pair<std::string, std::string>, std::string> calibrate_wavefro
   std::string verb, what, world, step, extra;
   words >> verb >> what >> world >> step >> extra;
   if (upper(what) != "WAVEFRONT")
-    return tl::unexpected(fmt::format("'{}': metron calibrates WAVEFRONT (CALIBRATE WAVEFRONT world [step]) and ERROR-SPACE "
-                                      "(CALIBRATE ERROR-SPACE [SIZE=nx,ny,nz ORIGIN=x,y,z STEP=d COMPONENTS=xyz ...])", text));
-  if (world.empty()) return tl::unexpected(fmt::format("'{}': name the wavefront world, e.g. CALIBRATE WAVEFRONT station.json a-z", text));
+    return tl::unexpected(
+        fmt::format("'{}': metron calibrates WAVEFRONT (CALIBRATE WAVEFRONT world [step]) and ERROR-SPACE "
+                    "(CALIBRATE ERROR-SPACE [SIZE=nx,ny,nz ORIGIN=x,y,z STEP=d COMPONENTS=xyz ...])",
+                    text));
+  if (world.empty())
+    return tl::unexpected(
+        fmt::format("'{}': name the wavefront world, e.g. CALIBRATE WAVEFRONT station.json a-z", text));
   if (!extra.empty()) return tl::unexpected(fmt::format("too many words in '{}'", text));
   if (step.empty()) step = "all";
-  static const char* const steps[] = {"all", "part-on-mount", "gauge-frame", "focus", "axis-response",
-                                      "a-z", "b-rotation", "c-rotation", "reversal"};
+  static const char* const steps[] = {"all", "part-on-mount", "gauge-frame", "focus",   "axis-response",
+                                      "a-z", "b-rotation",    "c-rotation",  "reversal"};
   if (std::none_of(std::begin(steps), std::end(steps), [&](const char* k) { return step == k; }))
-    return tl::unexpected(fmt::format("unknown wavefront calibration step '{}' (all, part-on-mount, gauge-frame, focus, "
-                                      "axis-response, a-z, b-rotation, c-rotation, reversal)", step));
+    return tl::unexpected(
+        fmt::format("unknown wavefront calibration step '{}' (all, part-on-mount, gauge-frame, focus, "
+                    "axis-response, a-z, b-rotation, c-rotation, reversal)",
+                    step));
   return std::pair{world, step};
 }
 
 }  // namespace
 
 void UnitCompiler::add_control(StatementTable& t) {
-  t.insert({
-      {std::string(assignment_row), &UnitCompiler::assignment}, {"ASSIGN", &UnitCompiler::bad_assign},
-      {"OBTAIN", &UnitCompiler::bad_assign}, {"VALUE", &UnitCompiler::bad_assign}, {"ENDFIL", &UnitCompiler::endfil}, {"IF", &UnitCompiler::if_},
-      {"ELSE", &UnitCompiler::else_}, {"ENDIF", &UnitCompiler::endif}, {"SELECT", &UnitCompiler::select},
-      {"CASE", &UnitCompiler::case_}, {"DFTCAS", &UnitCompiler::case_}, {"ENDCAS", &UnitCompiler::endcas},
-      {"ENDSEL", &UnitCompiler::endsel}, {"DO", &UnitCompiler::do_},
-      {"ENDDO", &UnitCompiler::enddo}, {"JUMPTO", &UnitCompiler::jumpto}, {"MACRO", &UnitCompiler::macro},
-      {"ENDMAC", &UnitCompiler::endmac}, {"CALL", &UnitCompiler::call}, {"EXTFIL", &UnitCompiler::extfil}
-  });
+  t.insert({{std::string(assignment_row), &UnitCompiler::assignment},
+            {"ASSIGN", &UnitCompiler::bad_assign},
+            {"OBTAIN", &UnitCompiler::bad_assign},
+            {"VALUE", &UnitCompiler::bad_assign},
+            {"ENDFIL", &UnitCompiler::endfil},
+            {"IF", &UnitCompiler::if_},
+            {"ELSE", &UnitCompiler::else_},
+            {"ENDIF", &UnitCompiler::endif},
+            {"SELECT", &UnitCompiler::select},
+            {"CASE", &UnitCompiler::case_},
+            {"DFTCAS", &UnitCompiler::case_},
+            {"ENDCAS", &UnitCompiler::endcas},
+            {"ENDSEL", &UnitCompiler::endsel},
+            {"DO", &UnitCompiler::do_},
+            {"ENDDO", &UnitCompiler::enddo},
+            {"JUMPTO", &UnitCompiler::jumpto},
+            {"MACRO", &UnitCompiler::macro},
+            {"ENDMAC", &UnitCompiler::endmac},
+            {"CALL", &UnitCompiler::call},
+            {"EXTFIL", &UnitCompiler::extfil}});
 }
 
 // ENDFIL
@@ -66,10 +83,13 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     return;
   }
   const SymbolTable::VariableInfo* info = nullptr;
-  if (auto it = m_locals.find(name); it != m_locals.end()) info = &it->second;
-  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end()) info = &jt->second;
+  if (auto it = m_locals.find(name); it != m_locals.end())
+    info = &it->second;
+  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end())
+    info = &jt->second;
   if (!info && !macro_param(name))
-    return error(v.span, "sema.undeclared-variable", fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) first", name, name));
+    return error(v.span, "sema.undeclared-variable",
+                 fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) first", name, name));
   auto in = make(Op::Assign, s, name);
   if (v.kind == ExprKind::Index) {
     if (info && info->size == 0) return error(v.span, "sema.not-array", fmt::format("{} is not an array", name));
@@ -114,7 +134,8 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
       value.args.push_back(std::move(q->e));
     }
   } else {
-    if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.assign", "ASSIGN expects one expression");
+    if (s.params.size() != 1)
+      return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.assign", "ASSIGN expects one expression");
     auto e = expression(s.params[0]);
     if (!e) return;
     dynamic = e->dynamic;
@@ -125,7 +146,8 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     const bool vnum = value.type == ValueType::Real || value.type == ValueType::Integer;
     if (num != vnum || (!num && info->type != value.type))
       return error(s.params.empty() ? s.span : s.params[0].span, "sema.type",
-                   fmt::format("cannot assign a {} to {}, which is declared {}", to_string(value.type), name, to_string(info->type)));
+                   fmt::format("cannot assign a {} to {}, which is declared {}", to_string(value.type), name,
+                               to_string(info->type)));
   }
   in.operands.push_back(expr_operand(std::move(value)));
   emit(std::move(in));
@@ -152,7 +174,8 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   }
   const grammar::Expr& target = s.params[0];
   const bool tolerance = target.label.prefix == "TA";
-  if (s.params.size() < 2 || (s.params.size() > 3 && !(is_word(s.params[1]) && s.params[1].text != "SIZE" && !tolerance && !m_strict)) ||
+  if (s.params.size() < 2 ||
+      (s.params.size() > 3 && !(is_word(s.params[1]) && s.params[1].text != "SIZE" && !tolerance && !m_strict)) ||
       !is_word(s.params[1])) {
     error(s.params.size() < 2 ? target.span : s.params[1].span, "sema.value",
           tolerance ? "VALUE/TA(t) expects ACT, DEV, AMT, INTOL or OUTOL[,n]" : "VALUE/FA(x) expects SIZE[,n]");
@@ -179,7 +202,8 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
     if (!named_at_run(t) && !m_symbols.tolerances.count(t)) {
       error(target.span, "sema.undefined-tolerance",
             m_symbols.unevaluated_tolerances.count(t)
-                ? fmt::format("T({}) is a tolerance metron does not evaluate; VALUE has nothing to read", target.label.name)
+                ? fmt::format("T({}) is a tolerance metron does not evaluate; VALUE has nothing to read",
+                              target.label.name)
                 : fmt::format("tolerance T({}) is not defined", target.label.name));
       return std::nullopt;
     }
@@ -205,7 +229,8 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
 }
 
 void UnitCompiler::bad_assign(const grammar::Statement& s) {
-  error(s.major_span, "sema.missing-variable", fmt::format("{} needs a variable on the left: V1={}/...", s.major, s.major));
+  error(s.major_span, "sema.missing-variable",
+        fmt::format("{} needs a variable on the left: V1={}/...", s.major, s.major));
 }
 
 void UnitCompiler::mark_control() {
@@ -215,7 +240,9 @@ void UnitCompiler::mark_control() {
 
 // IF/(condition)  |  IF/condition
 void UnitCompiler::if_(const grammar::Statement& s) {
-  if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.if", "IF expects one condition, e.g. IF/(V1.GT.0)");
+  if (s.params.size() != 1)
+    return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.if",
+                 "IF expects one condition, e.g. IF/(V1.GT.0)");
   auto c = expression(s.params[0]);
   if (!c) {
     m_blocks.push_back(block(Block::Kind::If, s.span));
@@ -232,7 +259,8 @@ void UnitCompiler::if_(const grammar::Statement& s) {
 }
 
 void UnitCompiler::else_(const grammar::Statement& s) {
-  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::If) return error(s.major_span, "sema.unmatched", "ELSE without a matching IF");
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::If)
+    return error(s.major_span, "sema.unmatched", "ELSE without a matching IF");
   Block& b = m_blocks.back();
   if (b.has_else) return error(s.major_span, "sema.unmatched", "a second ELSE for the same IF");
   b.has_else = true;
@@ -242,7 +270,8 @@ void UnitCompiler::else_(const grammar::Statement& s) {
 }
 
 void UnitCompiler::endif(const grammar::Statement& s) {
-  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::If) return error(s.major_span, "sema.unmatched", "ENDIF without a matching IF");
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::If)
+    return error(s.major_span, "sema.unmatched", "ENDIF without a matching IF");
   Block b = m_blocks.back();
   m_blocks.pop_back();
   const std::size_t end = emit(make(Op::Nop, s, "ENDIF"));
@@ -257,7 +286,8 @@ void UnitCompiler::select(const grammar::Statement& s) {
   Block b = block(Block::Kind::Select, s.span);
   if (s.params.size() != 1) {
     m_blocks.push_back(b);
-    return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.select", "SELECT expects one value, e.g. SELECT/V1");
+    return error(s.params.empty() ? s.major_span : s.params[1].span, "sema.select",
+                 "SELECT expects one value, e.g. SELECT/V1");
   }
   auto e = expression(s.params[0]);
   if (e) b.selector = std::move(e->e);
@@ -270,8 +300,10 @@ void UnitCompiler::case_(const grammar::Statement& s) {
   if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Select)
     return error(s.major_span, "sema.unmatched", fmt::format("{} without a matching SELECT", s.major));
   Block& b = m_blocks.back();
-  if (b.in_case) return error(s.major_span, "sema.unmatched", fmt::format("{} before the ENDCAS of the previous case", s.major));
-  if (b.has_default) return error(s.major_span, "sema.unmatched", fmt::format("{} after DFTCAS: the default case comes last", s.major));
+  if (b.in_case)
+    return error(s.major_span, "sema.unmatched", fmt::format("{} before the ENDCAS of the previous case", s.major));
+  if (b.has_default)
+    return error(s.major_span, "sema.unmatched", fmt::format("{} after DFTCAS: the default case comes last", s.major));
   b.in_case = true;
   if (s.major == "DFTCAS") {
     b.has_default = true;
@@ -319,7 +351,8 @@ void UnitCompiler::endcas(const grammar::Statement& s) {
 void UnitCompiler::endsel(const grammar::Statement& s) {
   if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Select)
     return error(s.major_span, "sema.unmatched", "ENDSEL without a matching SELECT");
-  if (m_blocks.back().in_case) return error(s.major_span, "sema.unmatched", "ENDSEL before the ENDCAS of the last case");
+  if (m_blocks.back().in_case)
+    return error(s.major_span, "sema.unmatched", "ENDSEL before the ENDCAS of the last case");
   Block b = m_blocks.back();
   m_blocks.pop_back();
   const std::size_t end = emit(make(Op::Nop, s, "ENDSEL"));
@@ -332,15 +365,18 @@ void UnitCompiler::do_(const grammar::Statement& s) {
   placeholder.start = invalid;
   m_blocks.push_back(placeholder);
   if (s.params.size() < 3 || s.params.size() > 4)
-    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.do", "DO expects a variable, a start, an end and optionally a step");
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.do",
+                 "DO expects a variable, a start, an end and optionally a step");
   const auto& v = s.params[0];
   if (v.kind != ExprKind::Word || !is_variable(v.text))
-    return error(v.span, "sema.undeclared-variable", fmt::format("the DO variable {} is not declared: add DECL/INTGR,{}", v.text, v.text));
+    return error(v.span, "sema.undeclared-variable",
+                 fmt::format("the DO variable {} is not declared: add DECL/INTGR,{}", v.text, v.text));
   auto in = make(Op::DoInit, s, v.text);
   for (std::size_t i = 1; i < s.params.size(); ++i) {
     auto e = numeric(s.params[i], "a loop bound");
     if (!e) return;
-    if (i == 3 && e->op == ir::ExprOp::Constant && e->value.number == 0) return error(s.params[i].span, "sema.do", "the DO step must not be zero");
+    if (i == 3 && e->op == ir::ExprOp::Constant && e->value.number == 0)
+      return error(s.params[i].span, "sema.do", "the DO step must not be zero");
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   mark_control();
@@ -351,7 +387,8 @@ void UnitCompiler::do_(const grammar::Statement& s) {
 }
 
 void UnitCompiler::enddo(const grammar::Statement& s) {
-  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Do) return error(s.major_span, "sema.unmatched", "ENDDO without a matching DO");
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Do)
+    return error(s.major_span, "sema.unmatched", "ENDDO without a matching DO");
   Block b = m_blocks.back();
   m_blocks.pop_back();
   if (b.start == invalid) return;
@@ -363,7 +400,9 @@ void UnitCompiler::enddo(const grammar::Statement& s) {
 
 // JUMPTO/(label)
 void UnitCompiler::jumpto(const grammar::Statement& s) {
-  if (s.params.size() != 1) return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.jumpto", "JUMPTO expects one label, e.g. JUMPTO/(L1)");
+  if (s.params.size() != 1)
+    return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.jumpto",
+                 "JUMPTO expects one label, e.g. JUMPTO/(L1)");
   const auto [name, span] = jump_label_name(s.params[0]);
   if (name.empty()) return error(span, "sema.jumpto", "expected a label name after JUMPTO/");
   emit_jump(make(Op::Jump, s, name), name, span);
@@ -388,7 +427,8 @@ std::pair<std::string, Span> UnitCompiler::jump_label_name(const grammar::Expr& 
       std::string inner = text.substr(p->span.begin + 1, p->span.end - p->span.begin - 2);
       std::erase_if(inner, [](char c) { return c == ' ' || c == '\t'; });
       const bool plain = !inner.empty() && std::all_of(inner.begin(), inner.end(), [](char c) {
-        return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("_.-#@!~").find(c) != std::string_view::npos;
+        return std::isalnum(static_cast<unsigned char>(c)) ||
+               std::string_view("_.-#@!~").find(c) != std::string_view::npos;
       });
       if (plain) name = upper(inner);
     }
@@ -406,10 +446,13 @@ void UnitCompiler::macro(const grammar::Statement& s) {
   m.name = upper(s.target->name);
   m.span = s.span;
   for (const auto& p : s.params) {
-    if (p.kind == ExprKind::String || p.kind == ExprKind::Word) m.params.push_back(upper(p.text));
-    else return error(p.span, "sema.macro-param", "macro parameters are names, e.g. MACRO/'X','Y'");
+    if (p.kind == ExprKind::String || p.kind == ExprKind::Word)
+      m.params.push_back(upper(p.text));
+    else
+      return error(p.span, "sema.macro-param", "macro parameters are names, e.g. MACRO/'X','Y'");
   }
-  if (m_symbols.macros.count(m.name)) warn(s.target->span, "sema.redefined-macro", fmt::format("macro M({}) is redefined", s.target->name));
+  if (m_symbols.macros.count(m.name))
+    warn(s.target->span, "sema.redefined-macro", fmt::format("macro M({}) is redefined", s.target->name));
   m_module.macros.push_back(std::move(m));
   m_macro = static_cast<int>(m_module.macros.size() - 1);
   m_symbols.macros[m_module.macros.back().name] = *m_macro;
@@ -417,7 +460,8 @@ void UnitCompiler::macro(const grammar::Statement& s) {
 }
 
 void UnitCompiler::endmac(const grammar::Statement& s) {
-  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Macro) return error(s.major_span, "sema.unmatched", "ENDMAC without a matching MACRO");
+  if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Macro)
+    return error(s.major_span, "sema.unmatched", "ENDMAC without a matching MACRO");
   m_blocks.pop_back();
   emit(make(Op::Return, s));
   resolve_jumps(m_macro_jumps, m_module.macros[static_cast<std::size_t>(*m_macro)].code);
@@ -430,20 +474,27 @@ void UnitCompiler::call(const grammar::Statement& s) {
   if (!expect_params(s, 1, "M(name) or EXTERN")) return;
   mark_control();
   if (is_word(s.params[0], "EXTERN")) return call_extern(s);
-  if (!is_label(s.params[0], {"M"})) return error(s.params[0].span, "sema.expected-macro", "expected M(name) or EXTERN after CALL/");
+  if (!is_label(s.params[0], {"M"}))
+    return error(s.params[0].span, "sema.expected-macro", "expected M(name) or EXTERN after CALL/");
   const std::string name = upper(s.params[0].label.name);
   auto it = m_symbols.macros.find(name);
-  if (it == m_symbols.macros.end()) return error(s.params[0].span, "sema.undefined-macro", fmt::format("macro M({}) is not defined before this call", s.params[0].label.name));
+  if (it == m_symbols.macros.end())
+    return error(s.params[0].span, "sema.undefined-macro",
+                 fmt::format("macro M({}) is not defined before this call", s.params[0].label.name));
   const auto& macro = m_module.macros[static_cast<std::size_t>(it->second)];
   if (s.params.size() - 1 != macro.params.size())
-    return error(s.params.back().span, "sema.arity", fmt::format("M({}) takes {} argument{}, got {}", s.params[0].label.name, macro.params.size(), macro.params.size() == 1 ? "" : "s", s.params.size() - 1));
+    return error(s.params.back().span, "sema.arity",
+                 fmt::format("M({}) takes {} argument{}, got {}", s.params[0].label.name, macro.params.size(),
+                             macro.params.size() == 1 ? "" : "s", s.params.size() - 1));
   auto in = make(Op::CallMacro, s, name);
   in.target = it->second;
   if (auto mf = m_symbols.macro_features.find(name); mf != m_symbols.macro_features.end())
     for (const auto& [index, type] : mf->second) {
       const auto& a = s.params[static_cast<std::size_t>(index) + 1];
-      if (a.kind == ExprKind::Label) m_symbols.features[upper(a.label.name)] = {type, a.span};
-      else if (a.kind == ExprKind::String || a.kind == ExprKind::Word) m_symbols.features[upper(a.text)] = {type, a.span};
+      if (a.kind == ExprKind::Label)
+        m_symbols.features[upper(a.label.name)] = {type, a.span};
+      else if (a.kind == ExprKind::String || a.kind == ExprKind::Word)
+        m_symbols.features[upper(a.text)] = {type, a.span};
     }
   for (std::size_t i = 1; i < s.params.size(); ++i) {
     const auto& a = s.params[i];
@@ -520,14 +571,17 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
       return;
     }
     note(s.params[2].span, "sema.unsupported-call",
-         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION, COMPENSATION, CALIBRATE WAVEFRONT and CALIBRATE ERROR-SPACE); "
-                     "the call is skipped", text));
+         fmt::format("unknown system command '{}' (metron knows CHARACTERISE, CHARACTERISATION, COMPENSATION, "
+                     "CALIBRATE WAVEFRONT and CALIBRATE ERROR-SPACE); "
+                     "the call is skipped",
+                     text));
     emit(make(Op::Nop, s, "CALL"));
     return;
   }
   if (s.params.size() >= 2 && (is_word(s.params[1], "DME") || is_word(s.params[1], "SYS"))) {
     // The DME's or the system's own commands: their contents mean nothing to a virtual CMM.
-    note(s.params[1].span, "sema.unsupported-call", fmt::format("CALL/EXTERN,{} is for the CMM's own software; the call is skipped", s.params[1].text));
+    note(s.params[1].span, "sema.unsupported-call",
+         fmt::format("CALL/EXTERN,{} is for the CMM's own software; the call is skipped", s.params[1].text));
     emit(make(Op::Nop, s, "CALL"));
     return;
   }
@@ -544,7 +598,8 @@ void UnitCompiler::call_extern(const grammar::Statement& s) {
   const auto file_param = std::find_if(s.params.begin() + 2, s.params.end(),
                                        [](const grammar::Expr& e) { return e.kind == ExprKind::String; });
   if (file_param == s.params.end())
-    return error(s.params[2].span, "sema.expected-file", "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
+    return error(s.params[2].span, "sema.expected-file",
+                 "expected the file name as a string, e.g. CALL/EXTERN,DMIS,'sub.dmi'");
   const grammar::Expr& f = *file_param;
   if (file_param != s.params.begin() + 2 || file_param + 1 != s.params.end())
     warn(file_param + 1 != s.params.end() ? (file_param + 1)->span : s.params[2].span, "sema.call-arguments",
@@ -584,7 +639,8 @@ std::optional<std::filesystem::path> UnitCompiler::called_file(const grammar::Ex
   }
   warn(f.span, "sema.foreign-path",
        fmt::format("'{}' was written on another machine and {} is not in {}: give its folder with --include DIR; the "
-                   "run stops at this call", f.text, base, searched));
+                   "run stops at this call",
+                   f.text, base, searched));
   return std::nullopt;
 }
 
@@ -593,13 +649,16 @@ std::optional<std::filesystem::path> UnitCompiler::called_file(const grammar::Ex
 void UnitCompiler::extfil(const grammar::Statement& s) {
   if (!expect_params(s, 2, "DMIS or DME and the file name")) return;
   if (is_word(s.params[0], "DME")) {
-    note(s.params[0].span, "sema.unsupported-call", "EXTFIL/DME declares a file of the CMM's own software; nothing to do");
+    note(s.params[0].span, "sema.unsupported-call",
+         "EXTFIL/DME declares a file of the CMM's own software; nothing to do");
     emit(make(Op::Nop, s, "EXTFIL"));
     return;
   }
-  if (!is_word(s.params[0], "DMIS")) return error(s.params[0].span, "sema.expected-word", "expected DMIS or DME after EXTFIL/");
+  if (!is_word(s.params[0], "DMIS"))
+    return error(s.params[0].span, "sema.expected-word", "expected DMIS or DME after EXTFIL/");
   if (s.params[1].kind != ExprKind::String)
-    return error(s.params[1].span, "sema.expected-file", "expected the file name as a string, e.g. EXTFIL/DMIS,'macros.dmi'");
+    return error(s.params[1].span, "sema.expected-file",
+                 "expected the file name as a string, e.g. EXTFIL/DMIS,'macros.dmi'");
   emit(make(Op::Nop, s, "EXTFIL"));
   const auto path = called_file(s.params[1]);
   if (path) m_include(path->string(), s.params[1].text, s.params[1].span);
@@ -623,9 +682,11 @@ void UnitCompiler::call_external_macro(const grammar::Statement& s) {
       break;
     }
     if (!m_symbols.macros.count(name))
-      return error(m.params[0].span, "sema.undefined-macro",
-                   fmt::format("macro M({}) is not defined: declare the file that holds it with EXTFIL/DMIS,'file' before "
-                               "this call", m.params[0].label.name));
+      return error(
+          m.params[0].span, "sema.undefined-macro",
+          fmt::format("macro M({}) is not defined: declare the file that holds it with EXTFIL/DMIS,'file' before "
+                      "this call",
+                      m.params[0].label.name));
   }
   call(m);
 }

@@ -27,22 +27,28 @@ FeatureForm feature_form(FeatureType type, bool bounded) {
   switch (type) {
     case FeatureType::Point:
     case FeatureType::Plane: return {6, 6, "x,y,z,i,j,k"};
-    case FeatureType::Line: return bounded ? FeatureForm{9, 9, "x1,y1,z1,x2,y2,z2,i,j,k"} : FeatureForm{9, 9, "x,y,z,i,j,k,i2,j2,k2"};
+    case FeatureType::Line:
+      return bounded ? FeatureForm{9, 9, "x1,y1,z1,x2,y2,z2,i,j,k"} : FeatureForm{9, 9, "x,y,z,i,j,k,i2,j2,k2"};
     case FeatureType::Circle: return {7, 7, "x,y,z,i,j,k,diam"};
     case FeatureType::Arc: return {9, 12, "x,y,z,i,j,k,rad,ang1,ang2[,i2,j2,k2]"};
     case FeatureType::Sphere: return {4, 7, "x,y,z,diam (or x,y,z,i,j,k,diam)"};
     case FeatureType::Cylinder: return {7, 8, "x,y,z,i,j,k,diam[,len]"};
     case FeatureType::Cone: return {7, 8, "x,y,z,i,j,k,angle[,len]"};
-    case FeatureType::ParallelPlanes: return {7, 7, "x,y,z,i,j,k,width (a point on the median plane, its normal, the width)"};
+    case FeatureType::ParallelPlanes:
+      return {7, 7, "x,y,z,i,j,k,width (a point on the median plane, its normal, the width)"};
     case FeatureType::GenericSurface: return {0, 6, "none, or x,y,z,i,j,k (a point of the surface and its normal)"};
-    case FeatureType::GenericCurve: return {0, 6, "none, or x,y,z,i,j,k (a point of the curve and the normal of its plane)"};
-    case FeatureType::Torus: return {8, 8, "x,y,z,i,j,k,majdiam,mindiam (the centre, the axis, the centre circle's and the tube's diameters)"};
+    case FeatureType::GenericCurve:
+      return {0, 6, "none, or x,y,z,i,j,k (a point of the curve and the normal of its plane)"};
+    case FeatureType::Torus:
+      return {8, 8, "x,y,z,i,j,k,majdiam,mindiam (the centre, the axis, the centre circle's and the tube's diameters)"};
     case FeatureType::ClosedSlot:
-      return {11, 11, "x,y,z,i1,j1,k1,i2,j2,k2,len,wid (the centre, the normal of its plane, its long axis, the length end to "
-                      "end, the width)"};
+      return {11, 11,
+              "x,y,z,i1,j1,k1,i2,j2,k2,len,wid (the centre, the normal of its plane, its long axis, the length end to "
+              "end, the width)"};
     case FeatureType::Ellipse:
-      return {11, 11, "x,y,z,i1,j1,k1,i2,j2,k2,majdiam,mindiam (the centre, the normal of its plane, its major axis, the "
-                      "major and minor diameters)"};
+      return {11, 11,
+              "x,y,z,i1,j1,k1,i2,j2,k2,majdiam,mindiam (the centre, the normal of its plane, its major axis, the "
+              "major and minor diameters)"};
   }
   return {0, 0, ""};
 }
@@ -82,14 +88,16 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
 }  // namespace
 
 void UnitCompiler::add_definitions(StatementTable& t) {
-  t.insert({
-      {"FEAT", &UnitCompiler::feat}, {"SNSDEF", &UnitCompiler::snsdef}, {"TOL", &UnitCompiler::tol},
-      {"DATDEF", &UnitCompiler::datdef}, {"PATH", &UnitCompiler::path}, {"DECL", &UnitCompiler::decl}
-  });
+  t.insert({{"FEAT", &UnitCompiler::feat},
+            {"SNSDEF", &UnitCompiler::snsdef},
+            {"TOL", &UnitCompiler::tol},
+            {"DATDEF", &UnitCompiler::datdef},
+            {"PATH", &UnitCompiler::path},
+            {"DECL", &UnitCompiler::decl}});
 }
 
-// F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE, PARPLN; CART|POL)
-// F(l)=FEAT/CPARLN,INNER|OUTER,ROUND|FLAT,CART,x,y,z,i1,j1,k1,i2,j2,k2,len,wid
+// F(l)=FEAT/CIRCLE,INNER|OUTER,CART,x,y,z,i,j,k,d  (likewise POINT, PLANE, LINE, ARC, SPHERE, CYLNDR, CONE, PARPLN;
+// CART|POL) F(l)=FEAT/CPARLN,INNER|OUTER,ROUND|FLAT,CART,x,y,z,i1,j1,k1,i2,j2,k2,len,wid
 void UnitCompiler::feat(const grammar::Statement& s) {
   if (!require_target(s, {"F", "FA"}, "F(label)=FEAT/...")) return;
   // FA(l)=FEAT/... states a feature's actual, as DMIS output files report it: metron takes it as
@@ -102,9 +110,11 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   // measures it as a POINT on the surface (x,y,z along i,j,k); the edge vector does not enter.
   if (is_word(p[0], "EDGEPT")) {
     if (p.size() < 11 || p.size() > 12)
-      return error(p.back().span, "sema.feature-arity",
-                   fmt::format("FEAT/EDGEPT expects CART or POL and 9 or 10 numbers (x,y,z,i,j,k,ei,ej,ek[,thickness]), got {} "
-                               "parameters", p.size() - 1));
+      return error(
+          p.back().span, "sema.feature-arity",
+          fmt::format("FEAT/EDGEPT expects CART or POL and 9 or 10 numbers (x,y,z,i,j,k,ei,ej,ek[,thickness]), got {} "
+                      "parameters",
+                      p.size() - 1));
     note_once(m_edge_points_noted, p[0].span, "sema.edge-point",
               "FEAT/EDGEPT is measured as a POINT on its surface (x,y,z along i,j,k); the edge vector is not used");
     p.resize(8);
@@ -135,9 +145,10 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
-    if (is_word(p[0]) && (p[0].text == "COMPOUND" || p[0].text == "OBJECT" ||
-                          p[0].text == "SYMPLN" || p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
-      warn(p[0].span, "sema.unsupported-feature", fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
+    if (is_word(p[0]) && (p[0].text == "COMPOUND" || p[0].text == "OBJECT" || p[0].text == "SYMPLN" ||
+                          p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
+      warn(p[0].span, "sema.unsupported-feature",
+           fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["F:" + label] = s.span;
       emit(make(Op::Nop, s, "FEAT"));
       return;
@@ -188,8 +199,9 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const std::size_t most = type == FeatureType::Arc ? 12 : runtime::is_point_set(type) ? 6 : form.max_numbers;
   if (n > most && !m_strict) {
     warn(p[i + most].span, "sema.feature-arity",
-         fmt::format("FEAT/{} takes at most {} numbers ({}); the {} after them {} ignored (--strict makes this an error)", word,
-                     most, form.meaning, n - most, n - most == 1 ? "is" : "are"));
+         fmt::format(
+             "FEAT/{} takes at most {} numbers ({}); the {} after them {} ignored (--strict makes this an error)", word,
+             most, form.meaning, n - most, n - most == 1 ? "is" : "are"));
     trimmed.assign(p.begin(), p.begin() + static_cast<std::ptrdiff_t>(i + most));
     n = most;
   }
@@ -201,13 +213,16 @@ void UnitCompiler::feat(const grammar::Statement& s) {
                  fmt::format("FEAT/{} expects {} numbers ({}), got {}", word,
                              form.min_numbers == form.max_numbers ? fmt::format("{}", form.min_numbers)
                              : type == FeatureType::Arc           ? std::string("9 or 12")
-                                                                  : fmt::format("{} to {}", form.min_numbers, form.max_numbers),
+                                                        : fmt::format("{} to {}", form.min_numbers, form.max_numbers),
                              form.meaning, n));
   bool ok = true;
   std::vector<double> literal;
   for (; i < used.size(); ++i) {
     auto e = numeric(used[i], "a feature coordinate");
-    if (!e) { ok = false; continue; }
+    if (!e) {
+      ok = false;
+      continue;
+    }
     literal.push_back(literal_value(*e));
     in.operands.push_back(expr_operand(std::move(*e)));
   }
@@ -217,7 +232,8 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     const Location loc = m_sources.locate(it->second.span);
     // DMIS lets a feature's nominal label be defined again (only other labels are unique): a note.
     note(s.target->span, "sema.redefined-feature",
-         fmt::format("F({}) is defined again (first at line {}): the new nominal holds from here", s.target->name, loc.line));
+         fmt::format("F({}) is defined again (first at line {}): the new nominal holds from here", s.target->name,
+                     loc.line));
   }
   if (auto param = macro_param(label)) {
     in.name_is_param = true;
@@ -251,14 +267,16 @@ void UnitCompiler::pattern(const grammar::Statement& s) {
       return error(e.span, "sema.pattern-members",
                    "FEAT/PATERN lists the pattern's features: F(p)=FEAT/PATERN,F(a),F(b)[,...]");
     if (m_symbols.patterns.count(upper(e.label.name)))
-      return error(e.span, "sema.pattern-members", fmt::format("F({}) is a pattern: a pattern lists features", e.label.name));
+      return error(e.span, "sema.pattern-members",
+                   fmt::format("F({}) is a pattern: a pattern lists features", e.label.name));
     if (!check_feature(e)) return;
     members.push_back(upper(e.label.name));
   }
-  note_once(m_patterns_noted, s.target->span, "sema.pattern",
-            fmt::format("F({}) is a pattern of {} features: OUTPUT/FA({}) reports them and judges its tolerances on them "
-                        "together; other statements take its features one by one",
-                        s.target->name, members.size(), s.target->name));
+  note_once(
+      m_patterns_noted, s.target->span, "sema.pattern",
+      fmt::format("F({}) is a pattern of {} features: OUTPUT/FA({}) reports them and judges its tolerances on them "
+                  "together; other statements take its features one by one",
+                  s.target->name, members.size(), s.target->name));
   m_symbols.patterns[label] = std::move(members);
   m_symbols.skipped.erase("F:" + label);
   emit(make(Op::Nop, s, "FEAT"));
@@ -287,16 +305,18 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
     const Vec3 normal(literal[3], literal[4], literal[5]), axis(literal[6], literal[7], literal[8]);
     const double cos_angle = normal.normalized().dot(axis.normalized());
     if (std::isfinite(cos_angle) && std::abs(cos_angle) > 1e-3)
-      return fail(6, "sema.slot-axis",
-                  fmt::format("the {} i2,j2,k2 of F({}) is not perpendicular to the normal i1,j1,k1 of its plane "
-                              "(at {:.3f} deg to it, not 90)",
-                              axis_name, s.target->name, std::acos(std::clamp(cos_angle, -1.0, 1.0)) * 180 / std::numbers::pi));
+      return fail(
+          6, "sema.slot-axis",
+          fmt::format("the {} i2,j2,k2 of F({}) is not perpendicular to the normal i1,j1,k1 of its plane "
+                      "(at {:.3f} deg to it, not 90)",
+                      axis_name, s.target->name, std::acos(std::clamp(cos_angle, -1.0, 1.0)) * 180 / std::numbers::pi));
   }
   if (type == FeatureType::Ellipse) {
     for (std::size_t k : {9, 10})
       if (!std::isnan(literal[k]) && literal[k] <= 0)
-        return fail(k, "sema.bad-size", fmt::format("the {} diameter of F({}) must be positive", k == 9 ? "major" : "minor",
-                                                    s.target->name));
+        return fail(
+            k, "sema.bad-size",
+            fmt::format("the {} diameter of F({}) must be positive", k == 9 ? "major" : "minor", s.target->name));
     if (literal[10] > literal[9])
       return fail(10, "sema.bad-size",
                   fmt::format("the minor diameter {} of F({}) is more than its major diameter {} (the major diameter "
@@ -310,17 +330,19 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
         return fail(k, "sema.bad-size",
                     fmt::format("the {} of F({}) must be positive", k == 9 ? "length" : "width", s.target->name));
     if (form.slot_ends == runtime::SlotEnds::Round && literal[10] >= literal[9])
-      return fail(10, "sema.bad-size",
-                  fmt::format("the width {} of F({}) is not less than its length {}: a ROUND slot's ends are semicircles "
-                              "of its width, so the length (end to end) must exceed it",
-                              literal[10], s.target->name, literal[9]));
+      return fail(
+          10, "sema.bad-size",
+          fmt::format("the width {} of F({}) is not less than its length {}: a ROUND slot's ends are semicircles "
+                      "of its width, so the length (end to end) must exceed it",
+                      literal[10], s.target->name, literal[9]));
     return true;
   }
   if (type == FeatureType::Torus) {
     for (std::size_t k : {6, 7})
       if (!std::isnan(literal[k]) && literal[k] <= 0)
-        return fail(k, "sema.bad-size", fmt::format("the {} diameter of F({}) must be positive", k == 6 ? "major" : "minor",
-                                                    s.target->name));
+        return fail(
+            k, "sema.bad-size",
+            fmt::format("the {} diameter of F({}) must be positive", k == 6 ? "major" : "minor", s.target->name));
     if (literal[7] >= literal[6])
       return fail(7, "sema.bad-size",
                   fmt::format("the tube's diameter {} of F({}) is not less than its major diameter {}: a torus's tube "
@@ -336,7 +358,10 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
     if (!std::isnan(size) && size <= 0)
       return fail(idx, "sema.bad-size",
                   fmt::format("the {} of F({}) must be positive",
-                              arc ? "radius" : type == FeatureType::ParallelPlanes ? "width" : "diameter", s.target->name));
+                              arc                                   ? "radius"
+                              : type == FeatureType::ParallelPlanes ? "width"
+                                                                    : "diameter",
+                              s.target->name));
   }
   if (type == FeatureType::Cone && !std::isnan(literal[6]) && (literal[6] <= 0 || literal[6] >= 180))
     return fail(6, "sema.bad-size", "the cone angle must be between 0 and 180 degrees");
@@ -348,7 +373,8 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   if (!require_target(s, {"S"}, "S(label)=SNSDEF/PROBE,...")) return;
   if (!expect_params(s, 1, "the sensor type")) return;
   if (!is_word(s.params[0], "PROBE")) {
-    warn(s.params[0].span, "sema.unsupported-sensor", fmt::format("sensor type {} is not supported; S({}) is skipped", s.params[0].text, s.target->name));
+    warn(s.params[0].span, "sema.unsupported-sensor",
+         fmt::format("sensor type {} is not supported; S({}) is skipped", s.params[0].text, s.target->name));
     m_symbols.skipped["S:" + upper(s.target->name)] = s.span;
     emit(make(Op::Nop, s, "SNSDEF"));
     return;
@@ -358,7 +384,9 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   for (; i < s.params.size() && is_word(s.params[i]) && !is_variable(s.params[i].text); ++i)
     in.operands.push_back(word_operand(s.params[i]));
   const std::size_t n = s.params.size() - i;
-  if (n < 4) return error(s.params.back().span, "sema.sensor-arity", "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
+  if (n < 4)
+    return error(s.params.back().span, "sema.sensor-arity",
+                 "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
   for (; i < s.params.size(); ++i) {
     // `VEC,i,j,k` (`...,POL,0,0,VEC,0,0,1,50,4`, as DMIS 5.x programs write the stylus vector):
     // the word names the three numbers that follow.
@@ -366,10 +394,11 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
     // The wrist, extension or sensor it is mounted on (`...,100,4,SW(W1)`): the virtual CMM's
     // sensors hang from the head by their own offset.
     if (s.params[i].kind == ExprKind::Label && i + 1 == s.params.size()) {
-      note_once(m_sensor_mount_noted, s.params[i].span, "sema.sensor-mount",
-                fmt::format("S({}) names the {}({}) it is mounted on: the virtual CMM places a sensor by its own offset and "
-                            "vector, the mount is not used (noted once)",
-                            s.target->name, upper(s.params[i].label.prefix), s.params[i].label.name));
+      note_once(
+          m_sensor_mount_noted, s.params[i].span, "sema.sensor-mount",
+          fmt::format("S({}) names the {}({}) it is mounted on: the virtual CMM places a sensor by its own offset and "
+                      "vector, the mount is not used (noted once)",
+                      s.target->name, upper(s.params[i].label.prefix), s.params[i].label.name));
       break;
     }
     // The tip's shape after its diameter (`...,115,12,DISC,3`): the virtual CMM's tips are balls.
@@ -377,11 +406,15 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
       const std::string& shape = s.params[i].text;
       static const std::set<std::string> shapes = {"SPHERE", "CYLNDR", "DISC", "DISK", "POINT", "OPTIC"};
       if (!shapes.count(shape))
-        return error(s.params[i].span, "sema.sensor-shape",
-                     fmt::format("expected a sensor parameter (a number) or the tip's shape (SPHERE, CYLNDR, DISC), got the word {}", shape));
+        return error(
+            s.params[i].span, "sema.sensor-shape",
+            fmt::format(
+                "expected a sensor parameter (a number) or the tip's shape (SPHERE, CYLNDR, DISC), got the word {}",
+                shape));
       if (shape != "SPHERE")
         warn(s.params[i].span, "sema.sensor-shape",
-             fmt::format("S({}) has a {} tip: the virtual CMM probes with a ball of its diameter; the shape's other sizes are not used",
+             fmt::format("S({}) has a {} tip: the virtual CMM probes with a ball of its diameter; the shape's other "
+                         "sizes are not used",
                          s.target->name, shape));
       break;
     }
@@ -435,13 +468,15 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     if (is_word(p[0])) {
       warn(p[0].span, "sema.unevaluated-tolerance",
            fmt::format("tolerance type {} {}; the OUTPUT of T({}) will be left out", p[0].text,
-                       standard.count(p[0].text) ? "is not evaluated by metron" : "is not one metron knows", s.target->name));
+                       standard.count(p[0].text) ? "is not evaluated by metron" : "is not one metron knows",
+                       s.target->name));
       m_symbols.unevaluated_tolerances[upper(s.target->name)] = p[0].text;
       m_symbols.tolerances.erase(upper(s.target->name));
       emit(make(Op::Nop, s, "TOL"));
       return;
     }
-    return error(p[0].span, "sema.bad-tolerance", "expected a tolerance type (DIAM, RAD, DISTB, POS, FLAT, ...) after TOL/");
+    return error(p[0].span, "sema.bad-tolerance",
+                 "expected a tolerance type (DIAM, RAD, DISTB, POS, FLAT, ...) after TOL/");
   }
   // Forms of known types metron does not evaluate (CORTOL with a coordinate other than XAXIS,
   // YAXIS, ZAXIS, RADIUS or ANGLE): left out as an unknown type is, with the form named.
@@ -474,7 +509,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   for (std::size_t i = 1; i < p.size(); ++i) {
     // A material modifier right after a datum is the datum's (`DAT(B),MMC`), not the feature's:
     // it is not passed on, so it cannot change the feature's condition, and it is told.
-    if (i > 1 && is_label(p[i - 1], {"DAT", "DATT"}) && (is_word(p[i], "MMC") || is_word(p[i], "LMC") || is_word(p[i], "RFS"))) {
+    if (i > 1 && is_label(p[i - 1], {"DAT", "DATT"}) &&
+        (is_word(p[i], "MMC") || is_word(p[i], "LMC") || is_word(p[i], "RFS"))) {
       if (is_word(p[i], "RFS")) continue;
       if (kind == ToleranceKind::Pos) {  // the datum shift of POS (docs/tolerances.md "Datum shift")
         in.operands.push_back(word_operand("DATUM-" + p[i].text, p[i].span));
@@ -495,7 +531,9 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       if (!is_label(p[i], {"DAT", "DATT"})) return error(p[i].span, "sema.expected-datum", "expected a datum DAT(x)");
       const std::string d = upper(p[i].label.name);
       if (!m_symbols.datums.count(d) && !named_at_run(d))
-        warn(p[i].span, "sema.datum-later", fmt::format("datum DAT({}) is not defined yet; it must be defined by DATDEF before the OUTPUT", p[i].label.name));
+        warn(p[i].span, "sema.datum-later",
+             fmt::format("datum DAT({}) is not defined yet; it must be defined by DATDEF before the OUTPUT",
+                         p[i].label.name));
       in.operands.push_back(label_op(p[i]));
       // DISTWRT and ANGWRT are taken with respect to a feature or, as written here, a datum's.
       if (kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) has_reference = true;
@@ -521,23 +559,29 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   const ToleranceNumbers need =
       limit_form ? ToleranceNumbers{2, "the lower and upper limit of the distance", false} : tolerance_numbers(kind);
   if (numbers.size() < need.count)
-    return error(p.back().span, "sema.tolerance-arity", fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count, need.count == 1 ? "" : "s", numbers.size()));
+    return error(p.back().span, "sema.tolerance-arity",
+                 fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count,
+                             need.count == 1 ? "" : "s", numbers.size()));
   if ((kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) && !has_reference)
-    return error(p.back().span, "sema.expected-feature", fmt::format("TOL/{} needs the reference feature FA(x) or datum DAT(x)", word));
-  if (kind == ToleranceKind::Cortol &&
-      !any_word({"XAXIS", "YAXIS", "ZAXIS", "RADIUS", "ANGLE"}))
-    return error(p[0].span, "sema.expected-axis", "TOL/CORTOL needs the coordinate: XAXIS, YAXIS, ZAXIS, RADIUS or ANGLE");
+    return error(p.back().span, "sema.expected-feature",
+                 fmt::format("TOL/{} needs the reference feature FA(x) or datum DAT(x)", word));
+  if (kind == ToleranceKind::Cortol && !any_word({"XAXIS", "YAXIS", "ZAXIS", "RADIUS", "ANGLE"}))
+    return error(p[0].span, "sema.expected-axis",
+                 "TOL/CORTOL needs the coordinate: XAXIS, YAXIS, ZAXIS, RADIUS or ANGLE");
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
        kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
        kind == ToleranceKind::Width || kind == ToleranceKind::Angl) &&
       numbers[0] > numbers[1])
-    return error(p[2].span, "sema.tolerance-order", fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
+    return error(p[2].span, "sema.tolerance-order",
+                 fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
   if (limit_form && numbers[0] > numbers[1])
-    return error(p[3].span, "sema.tolerance-order", fmt::format("the lower limit {} is above the upper limit {}", numbers[0], numbers[1]));
+    return error(p[3].span, "sema.tolerance-order",
+                 fmt::format("the lower limit {} is above the upper limit {}", numbers[0], numbers[1]));
   if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||
        kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout || kind == ToleranceKind::Totrun ||
        kind == ToleranceKind::Symmty) &&
-      std::none_of(in.operands.begin(), in.operands.end(), [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
+      std::none_of(in.operands.begin(), in.operands.end(),
+                   [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
     return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
   if (kind == ToleranceKind::Compos) {
     // One zone in each tier.
@@ -581,7 +625,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
 // DATDEF/FA(x),DAT(A)
 void UnitCompiler::datdef(const grammar::Statement& s) {
   if (!expect_params(s, 2, "a feature FA(x) and a datum DAT(y)")) return;
-  if (!is_label(s.params[0], {"F", "FA"})) return error(s.params[0].span, "sema.expected-feature", "expected FA(label) after DATDEF/");
+  if (!is_label(s.params[0], {"F", "FA"}))
+    return error(s.params[0].span, "sema.expected-feature", "expected FA(label) after DATDEF/");
   if (m_output_file && is_label(s.params[1], {"DAT"}) && never_defined(upper(s.params[0].label.name))) {
     // An output file echoes the program's DATDEF without restating the feature.
     note_once(m_echo_noted, s.span, "sema.echoed-line",
@@ -591,11 +636,12 @@ void UnitCompiler::datdef(const grammar::Statement& s) {
     return;
   }
   if (!check_feature(s.params[0])) return;
-  if (!is_label(s.params[1], {"DAT"})) return error(s.params[1].span, "sema.expected-datum", "expected DAT(label) after the feature");
+  if (!is_label(s.params[1], {"DAT"}))
+    return error(s.params[1].span, "sema.expected-datum", "expected DAT(label) after the feature");
   if (s.params.size() > 2)
     warn(s.params[2].span, "sema.datdef-arity",
-         fmt::format("DATDEF names one datum: {}({}) is DAT({}); what follows it is not used", upper(s.params[0].label.prefix),
-                     s.params[0].label.name, s.params[1].label.name));
+         fmt::format("DATDEF names one datum: {}({}) is DAT({}); what follows it is not used",
+                     upper(s.params[0].label.prefix), s.params[0].label.name, s.params[1].label.name));
   // A second DATDEF of one datum silently replaced the first (issue 15): say so.
   note_definition("DAT", upper(s.params[1].label.name), s.span);
   m_symbols.datums.insert(upper(s.params[1].label.name));
@@ -617,7 +663,8 @@ void UnitCompiler::path(const grammar::Statement& s) {
   static const std::set<std::string> kinds = {"LINE", "ARC", "HELICAL"};
   if (!is_word(p[0]) || !kinds.count(p[0].text)) {
     if (is_word(p[0])) {
-      warn(p[0].span, "sema.unsupported-path", fmt::format("PATH/{} is not supported; P({}) is skipped", p[0].text, s.target->name));
+      warn(p[0].span, "sema.unsupported-path",
+           fmt::format("PATH/{} is not supported; P({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["P:" + name] = s.span;
       emit(make(Op::Nop, s, "PATH"));
       return;
@@ -626,23 +673,29 @@ void UnitCompiler::path(const grammar::Statement& s) {
   }
   const std::string kind = p[0].text;
   if (p.size() < 2 || !(is_word(p[1], "CART") || is_word(p[1], "POL")))
-    return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-form", fmt::format("expected CART after PATH/{}", kind));
-  if (is_word(p[1], "POL")) return error(p[1].span, "sema.unsupported-form", "PATH with POL coordinates is not supported: use CART");
+    return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-form",
+                 fmt::format("expected CART after PATH/{}", kind));
+  if (is_word(p[1], "POL"))
+    return error(p[1].span, "sema.unsupported-form", "PATH with POL coordinates is not supported: use CART");
   auto in = make(Op::PathDef, s, name);
   in.operands.push_back(word_operand(p[0]));
   std::size_t end = p.size();
   std::optional<ir::Operand> side;
   if (kind != "LINE" && end > 2 && is_word(p[end - 1]) && !is_variable(p[end - 1].text)) {
     if (!is_word(p[end - 1], "INNER") && !is_word(p[end - 1], "OUTER"))
-      return error(p[end - 1].span, "sema.expected-side", fmt::format("expected INNER or OUTER at the end of PATH/{}", kind));
+      return error(p[end - 1].span, "sema.expected-side",
+                   fmt::format("expected INNER or OUTER at the end of PATH/{}", kind));
     side = word_operand(p[end - 1]);
     --end;
   }
   const std::size_t want = kind == "LINE" ? 9 : kind == "ARC" ? 9 : 10;
-  const char* form = kind == "LINE" ? "x1,y1,z1,x2,y2,z2,i,j,k" : kind == "ARC" ? "x,y,z,i,j,k,rad,ang1,ang2" : "x,y,z,i,j,k,rad,ang1,ang2,pitch";
+  const char* form = kind == "LINE"  ? "x1,y1,z1,x2,y2,z2,i,j,k"
+                     : kind == "ARC" ? "x,y,z,i,j,k,rad,ang1,ang2"
+                                     : "x,y,z,i,j,k,rad,ang1,ang2,pitch";
   const std::size_t n = end - 2;
   if (n != want)
-    return error(end > 2 ? p[end - 1].span : p[1].span, "sema.path-arity", fmt::format("PATH/{} expects {} numbers ({}), got {}", kind, want, form, n));
+    return error(end > 2 ? p[end - 1].span : p[1].span, "sema.path-arity",
+                 fmt::format("PATH/{} expects {} numbers ({}), got {}", kind, want, form, n));
   if (side) in.operands.push_back(*side);
   std::vector<double> v;
   for (std::size_t i = 2; i < end; ++i) {
@@ -652,10 +705,14 @@ void UnitCompiler::path(const grammar::Statement& s) {
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   const std::size_t vec = kind == "LINE" ? 6 : 3;
-  if (v[vec] == 0 && v[vec + 1] == 0 && v[vec + 2] == 0) return error(p[2 + vec].span, "sema.zero-vector", "the path vector i,j,k is zero");
-  if (kind != "LINE" && v[6] <= 0) return error(p[8].span, "sema.bad-size", fmt::format("the radius of P({}) must be positive", s.target->name));
-  if (kind != "LINE" && v[7] == v[8]) return error(p[10].span, "sema.bad-angle", "the start and end angles of the path are equal");
-  if (kind == "LINE" && v[0] == v[3] && v[1] == v[4] && v[2] == v[5]) return error(p[5].span, "sema.bad-path", "the line's end points are the same");
+  if (v[vec] == 0 && v[vec + 1] == 0 && v[vec + 2] == 0)
+    return error(p[2 + vec].span, "sema.zero-vector", "the path vector i,j,k is zero");
+  if (kind != "LINE" && v[6] <= 0)
+    return error(p[8].span, "sema.bad-size", fmt::format("the radius of P({}) must be positive", s.target->name));
+  if (kind != "LINE" && v[7] == v[8])
+    return error(p[10].span, "sema.bad-angle", "the start and end angles of the path are equal");
+  if (kind == "LINE" && v[0] == v[3] && v[1] == v[4] && v[2] == v[5])
+    return error(p[5].span, "sema.bad-path", "the line's end points are the same");
   m_symbols.paths.insert(name);
   m_symbols.skipped.erase("P:" + name);
   emit(std::move(in));
@@ -665,16 +722,20 @@ void UnitCompiler::path(const grammar::Statement& s) {
 void UnitCompiler::path_section(const grammar::Statement& s) {
   const auto& p = s.params;
   if (p.size() < 2 || p[1].kind != ExprKind::String)
-    return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-file", "expected the CAD file name as a string after PATH/SECTION, e.g. 'part.stl'");
+    return error(p.size() < 2 ? p[0].span : p[1].span, "sema.expected-file",
+                 "expected the CAD file name as a string after PATH/SECTION, e.g. 'part.stl'");
   std::filesystem::path file(p[1].text);
   if (file.is_relative()) file = std::filesystem::path(m_module.units[m_unit].path).parent_path() / file;
-  if (!std::filesystem::exists(file)) return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
+  if (!std::filesystem::exists(file))
+    return error(p[1].span, "sema.missing-file", fmt::format("CAD file '{}' not found", p[1].text));
   warn_if_unreadable(p[1].span, "PATH/SECTION", file.string());
   const std::size_t n = p.size() - 2;
   if (n != 9 && n != 12)
-    return error(p.back().span, "sema.path-arity",
-                 fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near "
-                             "xs,ys,zs) or 12 (and end near xe,ye,ze), got {}", n));
+    return error(
+        p.back().span, "sema.path-arity",
+        fmt::format("PATH/SECTION expects the file and 9 numbers (plane point x,y,z, plane normal i,j,k, start near "
+                    "xs,ys,zs) or 12 (and end near xe,ye,ze), got {}",
+                    n));
   auto in = make(Op::PathDef, s, upper(s.target->name));
   in.operands.push_back(word_operand(p[0]));
   in.names.push_back(file.string());
@@ -685,7 +746,8 @@ void UnitCompiler::path_section(const grammar::Statement& s) {
     v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
     in.operands.push_back(expr_operand(std::move(*e)));
   }
-  if (v[3] == 0 && v[4] == 0 && v[5] == 0) return error(p[5].span, "sema.zero-vector", "the plane normal i,j,k is zero");
+  if (v[3] == 0 && v[4] == 0 && v[5] == 0)
+    return error(p[5].span, "sema.zero-vector", "the plane normal i,j,k is zero");
   m_symbols.paths.insert(upper(s.target->name));
   m_symbols.skipped.erase("P:" + upper(s.target->name));
   emit(std::move(in));
@@ -696,11 +758,14 @@ void UnitCompiler::decl(const grammar::Statement& s) {
   if (!expect_params(s, 2, "a type and variable names")) return;
   std::size_t i = 0;
   if (is_word(s.params[0], "COMMON") || is_word(s.params[0], "GLOBAL") || is_word(s.params[0], "LOCAL")) ++i;
-  if (i >= s.params.size() || !is_word(s.params[i])) return error(s.params[i < s.params.size() ? i : 0].span, "sema.bad-type", "expected a type (INTGR, LONG, REAL, DOUBLE, BOOL, CHAR, VECTOR) after DECL/");
+  if (i >= s.params.size() || !is_word(s.params[i]))
+    return error(s.params[i < s.params.size() ? i : 0].span, "sema.bad-type",
+                 "expected a type (INTGR, LONG, REAL, DOUBLE, BOOL, CHAR, VECTOR) after DECL/");
   const std::optional<ValueType> type = declared_type(s.params[i].text);
   if (!type)
-    return error(s.params[i].span, "sema.bad-type",
-                 fmt::format("unknown type {}: expected INTGR, LONG, REAL, DOUBLE, BOOL, CHAR or VECTOR", s.params[i].text));
+    return error(
+        s.params[i].span, "sema.bad-type",
+        fmt::format("unknown type {}: expected INTGR, LONG, REAL, DOUBLE, BOOL, CHAR or VECTOR", s.params[i].text));
   auto in = make(Op::Declare, s);
   ir::Operand type_word;
   type_word.kind = ir::Operand::Kind::Word;
@@ -708,7 +773,8 @@ void UnitCompiler::decl(const grammar::Statement& s) {
   in.operands.push_back(type_word);
   ++i;
   if (*type == ValueType::String && i < s.params.size() && s.params[i].kind == ExprKind::Number) ++i;  // CHAR length
-  if (i >= s.params.size()) return error(s.params.back().span, "sema.missing-parameter", "expected variable names after the type");
+  if (i >= s.params.size())
+    return error(s.params.back().span, "sema.missing-parameter", "expected variable names after the type");
   for (; i < s.params.size(); ++i) {
     const auto& p = s.params[i];
     int size = 0;
@@ -721,15 +787,18 @@ void UnitCompiler::decl(const grammar::Statement& s) {
       double elements = 1;
       for (const auto& a : p.args) {
         if (a.kind != ExprKind::Number || !(a.number >= 1) || a.number != std::floor(a.number))
-          return error(a.span, "sema.bad-array", "an array declaration needs positive whole sizes, e.g. V1[10] or V2[3,30]");
+          return error(a.span, "sema.bad-array",
+                       "an array declaration needs positive whole sizes, e.g. V1[10] or V2[3,30]");
         elements *= a.number;
         if (elements > max_array_size)
           return error(a.span, "sema.bad-array",
-                       fmt::format("array {} of {:g} elements exceeds the limit of {:g} elements (docs/limits.md)", p.text,
-                                   elements, max_array_size));
+                       fmt::format("array {} of {:g} elements exceeds the limit of {:g} elements (docs/limits.md)",
+                                   p.text, elements, max_array_size));
         dims.push_back(static_cast<int>(a.number));
       }
-      if (dims.empty()) return error(p.span, "sema.bad-array", "an array declaration needs positive whole sizes, e.g. V1[10] or V2[3,30]");
+      if (dims.empty())
+        return error(p.span, "sema.bad-array",
+                     "an array declaration needs positive whole sizes, e.g. V1[10] or V2[3,30]");
       size = static_cast<int>(elements);
     } else if (p.kind != ExprKind::Word || p.text.empty()) {
       return error(p.span, "sema.expected-name", "expected a variable name");
@@ -741,12 +810,14 @@ void UnitCompiler::decl(const grammar::Statement& s) {
       if (auto prior = scope.find(p.text); prior != scope.end() && prior->second.span.file == p.span.file) {
         const Location at = m_sources.locate(prior->second.span);
         warn(p.span, "sema.redeclared",
-             fmt::format("variable {} is declared again (first at line {}); the later declaration replaces it",
-                         p.text, at.line));
+             fmt::format("variable {} is declared again (first at line {}); the later declaration replaces it", p.text,
+                         at.line));
       }
     }
-    if (m_macro) m_locals[p.text] = info;
-    else m_symbols.variables[p.text] = info;
+    if (m_macro)
+      m_locals[p.text] = info;
+    else
+      m_symbols.variables[p.text] = info;
     in.names.push_back(p.text);
     ir::Operand sz;
     sz.kind = ir::Operand::Kind::Expr;

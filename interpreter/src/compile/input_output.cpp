@@ -13,10 +13,10 @@ using ir::Op;
 
 namespace {
 // Statements metron accepts with no run-time effect (settings a virtual CMM does not need).
-const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "VFORM",
-                                       "DMEHW", "DMESW", "FINPOS", "CLMPID", "CLMPSN", "PREVOP", "MFGDEV",
-                                       "OPERID", "PLANID", "PARTID", "PARTRV", "PARTSN", "PROCID", "QISDEF",
-                                       "TECOMP", "TEMPF", "TEMPC", "CRMODE", "CRSLCT",
+const char* const no_effect_words[] = {"DMISMN", "DMISMD", "FILNAM", "DISPLY", "PRCOMP", "VFORM", "DMEHW", "DMESW",
+                                       "FINPOS", "CLMPID", "CLMPSN", "PREVOP", "MFGDEV", "OPERID", "PLANID", "PARTID",
+                                       "PARTRV", "PARTSN", "PROCID", "QISDEF", "TECOMP", "TEMPF", "TEMPC", "CRMODE",
+                                       "CRSLCT",
                                        // DMIS 5.x statements shop programs carry that change nothing on a
                                        // virtual CMM: vendor switches, fly mode.
                                        "DMESWI", "DMESWV", "FLY", "DMEID", "LOTID", "FIXTID", "FIXTSN",
@@ -63,15 +63,23 @@ const NotedWord noted_words[] = {
 void UnitCompiler::add_input_output(StatementTable& t) {
   for (const char* w : no_effect_words) t.emplace(w, &UnitCompiler::no_effect);
   for (const auto& w : noted_words) t.emplace(w.word, &UnitCompiler::noted_no_effect);
-  t.insert({
-      {"UNITS", &UnitCompiler::units}, {"MODE", &UnitCompiler::mode}, {"TEXT", &UnitCompiler::text},
-      {"DEVICE", &UnitCompiler::device}, {"OPEN", &UnitCompiler::open}, {"CLOSE", &UnitCompiler::close},
-      {"PAUSE", &UnitCompiler::pause}, {"DECPL", &UnitCompiler::decpl},
-      {"READ", &UnitCompiler::read}, {"WRITE", &UnitCompiler::write},
-      {"ERROR", &UnitCompiler::on_error}, {"RESUME", &UnitCompiler::resume},
-      {"GEOALG", &UnitCompiler::geometry_algorithm}, {"WKPLAN", &UnitCompiler::work_plane}, {"GOHOME", &UnitCompiler::go_home},
-      {"FROM", &UnitCompiler::from}, {"BADTST", &UnitCompiler::bad_test}
-  });
+  t.insert({{"UNITS", &UnitCompiler::units},
+            {"MODE", &UnitCompiler::mode},
+            {"TEXT", &UnitCompiler::text},
+            {"DEVICE", &UnitCompiler::device},
+            {"OPEN", &UnitCompiler::open},
+            {"CLOSE", &UnitCompiler::close},
+            {"PAUSE", &UnitCompiler::pause},
+            {"DECPL", &UnitCompiler::decpl},
+            {"READ", &UnitCompiler::read},
+            {"WRITE", &UnitCompiler::write},
+            {"ERROR", &UnitCompiler::on_error},
+            {"RESUME", &UnitCompiler::resume},
+            {"GEOALG", &UnitCompiler::geometry_algorithm},
+            {"WKPLAN", &UnitCompiler::work_plane},
+            {"GOHOME", &UnitCompiler::go_home},
+            {"FROM", &UnitCompiler::from},
+            {"BADTST", &UnitCompiler::bad_test}});
 }
 
 // DECPL/ALL,n | DECPL/LENGTH,n[,ANGLE,m] | DECPL/n: the decimals of reports and DMIS output files
@@ -92,7 +100,8 @@ void UnitCompiler::decpl(const grammar::Statement& s) {
 void UnitCompiler::no_effect(const grammar::Statement& s) { emit(make(Op::Nop, s, s.major)); }
 
 void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
-  const auto* w = std::find_if(std::begin(noted_words), std::end(noted_words), [&](const NotedWord& n) { return s.major == n.word; });
+  const auto* w = std::find_if(std::begin(noted_words), std::end(noted_words),
+                               [&](const NotedWord& n) { return s.major == n.word; });
   if (w != std::end(noted_words) && m_noted_kinds.insert(s.major).second)
     note(s.span, "sema.not-applied", fmt::format("{} (noted once)", w->reason));
   emit(make(Op::Nop, s, s.major));
@@ -109,7 +118,8 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
   const auto& w = s.params[0];
   if (s.params.size() != 1 || !(is_word(w, "XYPLAN") || is_word(w, "YZPLAN") || is_word(w, "ZXPLAN"))) {
     if (m_strict) return error(w.span, "sema.bad-setting", "expected XYPLAN, YZPLAN or ZXPLAN after WKPLAN/");
-    warn(w.span, "sema.bad-setting", "WKPLAN takes XYPLAN, YZPLAN or ZXPLAN; this form is not applied: the working plane is unchanged");
+    warn(w.span, "sema.bad-setting",
+         "WKPLAN takes XYPLAN, YZPLAN or ZXPLAN; this form is not applied: the working plane is unchanged");
     emit(make(Op::Nop, s, "WKPLAN"));
     return;
   }
@@ -119,7 +129,9 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
 }
 
 void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
-  const auto word_at = [&](std::size_t i) { return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string(); };
+  const auto word_at = [&](std::size_t i) {
+    return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string();
+  };
   const std::string type = word_at(0), algorithm = word_at(1);
   const bool sized = type == "CIRCLE" || type == "ARC" || type == "SPHERE" || type == "CYLNDR";
   const bool unsized = type == "PLANE" || type == "LINE" || type == "CONE";  // no size a gauge would find
@@ -129,9 +141,11 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   if (s.params.size() > 2 && (is_word(s.params[2], "FILTER") || is_word(s.params[2], "ELIMINATE")) &&
       m_noted_kinds.insert("GEOALG-FILTER").second)
     warn(s.params[2].span, "sema.not-applied",
-         fmt::format("GEOALG/{},{},{}: metron does not filter or thin the points; they are fitted as measured (noted once)",
-                     type, algorithm, s.params[2].text));
-  if ((sized || unsized) && (least_squares || algorithm == "MINMAX" || (sized && (algorithm == "MAXINS" || algorithm == "MINCIR")))) {
+         fmt::format(
+             "GEOALG/{},{},{}: metron does not filter or thin the points; they are fitted as measured (noted once)",
+             type, algorithm, s.params[2].text));
+  if ((sized || unsized) &&
+      (least_squares || algorithm == "MINMAX" || (sized && (algorithm == "MAXINS" || algorithm == "MINCIR")))) {
     // MAXINS a hole's pin-gauge size, MINCIR a boss's ring-gauge size, MINMAX the minimum zone
     // reference feature; LSTSQR and DEFALT back to least squares.
     auto in = make(Op::FitAlgorithm, s);
@@ -195,20 +209,24 @@ void UnitCompiler::on_error(const grammar::Statement& s) {
       how = word_operand("AUTO", q.span);
     } else if (q.kind == ExprKind::Paren) {
       std::tie(jump_name, jump_span) = jump_label_name(q);
-      if (jump_name.empty()) return error(q.span, "sema.bad-error-handler", "expected the handler's label in parentheses");
+      if (jump_name.empty())
+        return error(q.span, "sema.bad-error-handler", "expected the handler's label in parentheses");
       how = word_operand("JUMP", q.span);
     } else if (is_label(q, {"M"})) {
       warn(q.span, "sema.not-applied",
-           fmt::format("ERROR with the macro M({}) as its handler is not run: a machine fault stops the run", q.label.name));
+           fmt::format("ERROR with the macro M({}) as its handler is not run: a machine fault stops the run",
+                       q.label.name));
       emit(make(Op::Nop, s, s.major));
       return;
     } else {
-      return error(q.span, "sema.bad-error-handler",
-                   "expected the handler's label in parentheses, AUTO or OFF, and ALL, NOTOUCH, ILLEGALTOUCH or an error code");
+      return error(
+          q.span, "sema.bad-error-handler",
+          "expected the handler's label in parentheses, AUTO or OFF, and ALL, NOTOUCH, ILLEGALTOUCH or an error code");
     }
   }
   if (!how)
-    return error(p[0].span, "sema.bad-error-handler", "expected the handler's label in parentheses, AUTO or OFF after ERROR/");
+    return error(p[0].span, "sema.bad-error-handler",
+                 "expected the handler's label in parentheses, AUTO or OFF after ERROR/");
   in.operands.push_back(*how);
   in.operands.push_back(condition.value_or(word_operand("ALL", p[0].span)));
   if (jump_name.empty()) {
@@ -274,13 +292,15 @@ void UnitCompiler::units(const grammar::Statement& s) {
   ir::UnitsPayload units;
   const auto length = is_word(s.params[0]) ? ir::parse_word<ir::LengthUnit>(s.params[0].text) : std::nullopt;
   if (!length)
-    return error(s.params[0].span, "sema.bad-unit", fmt::format("expected a length unit ({}) after UNITS/", ir::word_list<ir::LengthUnit>()));
+    return error(s.params[0].span, "sema.bad-unit",
+                 fmt::format("expected a length unit ({}) after UNITS/", ir::word_list<ir::LengthUnit>()));
   units.length = *length;
   if (s.params.size() > 1) {
     units.angle = is_word(s.params[1]) ? ir::parse_word<ir::AngleUnit>(s.params[1].text) : std::nullopt;
     if (!units.angle)
       return error(s.params[1].span, "sema.bad-unit", "expected an angle unit (ANGDEC, ANGRAD) after the length unit");
-    if (units.angle == ir::AngleUnit::Angdms) warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
+    if (units.angle == ir::AngleUnit::Angdms)
+      warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
   }
   if (s.params.size() > 2) {
     units.temperature = is_word(s.params[2]) ? ir::parse_word<ir::TemperatureUnit>(s.params[2].text) : std::nullopt;
@@ -300,12 +320,17 @@ void UnitCompiler::mode(const grammar::Statement& s) {
   bool is_auto = false, is_prog = false, is_man = false;
   for (const auto& p : s.params) {
     const std::string w = is_word(p) ? p.text : std::string();
-    if (w == "AUTO") is_auto = true;
-    else if (w == "PROG") is_prog = true;
-    else if (w == "MAN") is_man = true;
-    else return error(p.span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+    if (w == "AUTO")
+      is_auto = true;
+    else if (w == "PROG")
+      is_prog = true;
+    else if (w == "MAN")
+      is_man = true;
+    else
+      return error(p.span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
   }
-  if (is_prog && !is_auto && !is_man) return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+  if (is_prog && !is_auto && !is_man)
+    return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
   in.payload = ir::ModePayload{is_auto ? ir::RunMode::Auto : is_prog ? ir::RunMode::ProgMan : ir::RunMode::Man};
   emit(std::move(in));
 }
@@ -369,9 +394,12 @@ void UnitCompiler::text_query(const grammar::Statement& s) {
                  "TEXT/QUERY takes the variable that receives the answer: TEXT/QUERY,(V),20,AN,L,'question'");
   const std::string name = v->text;
   const SymbolTable::VariableInfo* info = nullptr;
-  if (auto it = m_locals.find(name); it != m_locals.end()) info = &it->second;
-  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end()) info = &jt->second;
-  if (info && info->size > 0) return error(v->span, "sema.array-without-index", fmt::format("array {} needs an index", name));
+  if (auto it = m_locals.find(name); it != m_locals.end())
+    info = &it->second;
+  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end())
+    info = &jt->second;
+  if (info && info->size > 0)
+    return error(v->span, "sema.array-without-index", fmt::format("array {} needs an index", name));
   ir::Expr value;
   value.op = ir::ExprOp::Call;
   value.name = "PROMPT";
@@ -413,7 +441,8 @@ bool UnitCompiler::check_device(const grammar::Statement& s) {
     return false;
   }
   if (!m_symbols.devices.count(upper(s.params[0].label.name))) {
-    error(s.params[0].span, "sema.undefined-device", fmt::format("device DID({}) is not defined", s.params[0].label.name));
+    error(s.params[0].span, "sema.undefined-device",
+          fmt::format("device DID({}) is not defined", s.params[0].label.name));
     return false;
   }
   return true;
@@ -473,8 +502,9 @@ void UnitCompiler::read(const grammar::Statement& s) {
   for (std::size_t i = 1; i < s.params.size(); ++i) {
     const auto& p = s.params[i];
     if (p.kind != ExprKind::Word || !(is_variable(p.text) || macro_param(p.text) || m_locals.count(p.text)))
-      return error(p.span, "sema.read", fmt::format("READ reads into declared scalar variables; {} is not one",
-                                                    p.text.empty() ? std::string("this") : p.text));
+      return error(p.span, "sema.read",
+                   fmt::format("READ reads into declared scalar variables; {} is not one",
+                               p.text.empty() ? std::string("this") : p.text));
     in.names.push_back(p.text);
   }
   emit(std::move(in));

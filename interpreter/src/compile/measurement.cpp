@@ -12,14 +12,22 @@ using grammar::ExprKind;
 using ir::Op;
 
 void UnitCompiler::add_measurement(StatementTable& t) {
-  t.insert({
-      {"SNSMNT", &UnitCompiler::snsmnt}, {"SNSLCT", &UnitCompiler::snslct}, {"CALIB", &UnitCompiler::calib}, {"SNSET", &UnitCompiler::snset},
-      {"FEDRAT", &UnitCompiler::fedrat}, {"ACLRAT", &UnitCompiler::aclrat},
-      {"SCNMOD", &UnitCompiler::scnmod}, {"SCNSET", &UnitCompiler::scnset}, {"GOTO", &UnitCompiler::go_to},
-      {"GOTARG", &UnitCompiler::go_target}, {"ENDGO", &UnitCompiler::end_go},
-      {"MEAS", &UnitCompiler::meas}, {"ENDMES", &UnitCompiler::endmes}, {"PTMEAS", &UnitCompiler::ptmeas},
-      {"RMEAS", &UnitCompiler::ptmeas}, {"PAMEAS", &UnitCompiler::pameas}
-  });
+  t.insert({{"SNSMNT", &UnitCompiler::snsmnt},
+            {"SNSLCT", &UnitCompiler::snslct},
+            {"CALIB", &UnitCompiler::calib},
+            {"SNSET", &UnitCompiler::snset},
+            {"FEDRAT", &UnitCompiler::fedrat},
+            {"ACLRAT", &UnitCompiler::aclrat},
+            {"SCNMOD", &UnitCompiler::scnmod},
+            {"SCNSET", &UnitCompiler::scnset},
+            {"GOTO", &UnitCompiler::go_to},
+            {"GOTARG", &UnitCompiler::go_target},
+            {"ENDGO", &UnitCompiler::end_go},
+            {"MEAS", &UnitCompiler::meas},
+            {"ENDMES", &UnitCompiler::endmes},
+            {"PTMEAS", &UnitCompiler::ptmeas},
+            {"RMEAS", &UnitCompiler::ptmeas},
+            {"PAMEAS", &UnitCompiler::pameas}});
 }
 
 // SNSMNT/XVEC,i,j,k,ZVEC,i,j,k,MNTLEN,x,y,z: the probe mount; the virtual CMM's head is fixed.
@@ -28,11 +36,13 @@ void UnitCompiler::snsmnt(const grammar::Statement& s) { emit(make(Op::Nop, s, "
 // SNSLCT/S(l) | SNSLCT/SA(l)   (SA: a sensor of the machine's probe library, RECALLed or not)
 void UnitCompiler::snslct(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a sensor label S(...)")) return;
-  if (!is_label(s.params[0], {"S", "SA"})) return error(s.params[0].span, "sema.expected-sensor", "expected a sensor label S(...) after SNSLCT/");
+  if (!is_label(s.params[0], {"S", "SA"}))
+    return error(s.params[0].span, "sema.expected-sensor", "expected a sensor label S(...) after SNSLCT/");
   const std::string name = upper(s.params[0].label.name);
   if (!m_symbols.sensors.count(name)) {
     if (auto it = m_symbols.skipped.find("S:" + name); it != m_symbols.skipped.end())
-      return error(s.params[0].span, "sema.skipped-definition", fmt::format("sensor S({}) was defined by a skipped statement", s.params[0].label.name));
+      return error(s.params[0].span, "sema.skipped-definition",
+                   fmt::format("sensor S({}) was defined by a skipped statement", s.params[0].label.name));
     library_sensor(s.params[0]);
   }
   if (s.params.size() > 1)  // a head orientation, a vendor's option: dropped unseen before
@@ -50,7 +60,8 @@ void UnitCompiler::calib(const grammar::Statement& s) {
   if (!expect_params(s, 1, "SENS and a sensor label S(...)")) return;
   if (!is_word(s.params[0], "SENS")) {
     warn(s.params[0].span, "sema.unsupported-calibration",
-         fmt::format("CALIB/{} is not supported and is skipped", is_word(s.params[0]) ? s.params[0].text : std::string("...")));
+         fmt::format("CALIB/{} is not supported and is skipped",
+                     is_word(s.params[0]) ? s.params[0].text : std::string("...")));
     emit(make(Op::Nop, s, "CALIB"));
     return;
   }
@@ -60,12 +71,14 @@ void UnitCompiler::calib(const grammar::Statement& s) {
   const std::string name = upper(s.params[1].label.name);
   if (!m_symbols.sensors.count(name)) {
     if (m_symbols.skipped.count("S:" + name))
-      return error(s.params[1].span, "sema.skipped-definition", fmt::format("sensor S({}) was defined by a skipped statement", s.params[1].label.name));
+      return error(s.params[1].span, "sema.skipped-definition",
+                   fmt::format("sensor S({}) was defined by a skipped statement", s.params[1].label.name));
     library_sensor(s.params[1]);
   }
   if (s.params.size() > 2 && is_label(s.params[2], {"F", "FA"}))
     note_once(m_calib_artifact_noted, s.params[2].span, "sema.calibration-artifact",
-              fmt::format("CALIB/SENS qualifies on the world's reference sphere; F({}) is not measured", s.params[2].label.name));
+              fmt::format("CALIB/SENS qualifies on the world's reference sphere; F({}) is not measured",
+                          s.params[2].label.name));
   auto in = make(Op::SensorSelect, s, name);
   in.count = 1;  // qualify again
   emit(std::move(in));
@@ -88,16 +101,20 @@ void UnitCompiler::snset(const grammar::Statement& s) {
   for (std::size_t i = 0; i < s.params.size(); i += 2) {
     if (!is_word(s.params[i]) || !words.count(s.params[i].text)) {
       if (is_word(s.params[i])) {
-        warn(s.params[i].span, "sema.unsupported-setting", fmt::format("SNSET/{} is not supported and is ignored", s.params[i].text));
+        warn(s.params[i].span, "sema.unsupported-setting",
+             fmt::format("SNSET/{} is not supported and is ignored", s.params[i].text));
         emit(make(Op::Nop, s, "SNSET"));
         return;
       }
       return error(s.params[i].span, "sema.bad-setting", "expected APPRCH, RETRCT, SEARCH, CLRSRF or DEPTH");
     }
-    if (i + 1 >= s.params.size()) return error(s.params[i].span, "sema.missing-parameter", fmt::format("expected a distance after {}", s.params[i].text));
+    if (i + 1 >= s.params.size())
+      return error(s.params[i].span, "sema.missing-parameter",
+                   fmt::format("expected a distance after {}", s.params[i].text));
     if (s.params[i].text == "CLRSRF" && is_label(s.params[i + 1], {"F", "FA"})) {
       if (i + 2 >= s.params.size())
-        return error(s.params[i + 1].span, "sema.missing-parameter", "expected the clearance distance from the plane after its label");
+        return error(s.params[i + 1].span, "sema.missing-parameter",
+                     "expected the clearance distance from the plane after its label");
       auto d = numeric(s.params[i + 2], "a distance");
       if (!d) return;
       auto in = make(Op::ProbeSet, s);
@@ -109,7 +126,8 @@ void UnitCompiler::snset(const grammar::Statement& s) {
       continue;
     }
     std::optional<ir::Expr> e;
-    if (is_word(s.params[i + 1], "OFF") && !is_variable("OFF") && (s.params[i].text == "CLRSRF" || s.params[i].text == "DEPTH")) {
+    if (is_word(s.params[i + 1], "OFF") && !is_variable("OFF") &&
+        (s.params[i].text == "CLRSRF" || s.params[i].text == "DEPTH")) {
       // SNSET/CLRSRF,OFF: no clearance surface (AUTO moves keep metron's default clearance, 10
       // mm above the feature); SNSET/DEPTH,OFF: no depth.
       e.emplace();
@@ -121,7 +139,8 @@ void UnitCompiler::snset(const grammar::Statement& s) {
     }
     if (!e) return;
     if (e->op == ir::ExprOp::Constant && e->value.number < 0 && s.params[i].text != "DEPTH")
-      return error(s.params[i + 1].span, "sema.negative-distance", fmt::format("the {} distance must not be negative", s.params[i].text));
+      return error(s.params[i + 1].span, "sema.negative-distance",
+                   fmt::format("the {} distance must not be negative", s.params[i].text));
     auto in = make(Op::ProbeSet, s);
     in.operands.push_back(word_operand(s.params[i]));
     in.operands.push_back(expr_operand(std::move(*e)));
@@ -150,21 +169,27 @@ void UnitCompiler::fedrat(const grammar::Statement& s) {
   if (!expect_params(s, 3, "MESVEL|POSVEL, a unit (MPM, MMPS, IPM, IPS, PCENT) and a value")) return;
   const auto kind = is_word(s.params[0]) ? ir::parse_word<ir::FeedKind>(s.params[0].text) : std::nullopt;
   if (is_word(s.params[0]) && !kind) {
-    warn(s.params[0].span, "sema.unsupported-setting", fmt::format("FEDRAT/{} is not supported and is ignored", s.params[0].text));
+    warn(s.params[0].span, "sema.unsupported-setting",
+         fmt::format("FEDRAT/{} is not supported and is ignored", s.params[0].text));
     emit(make(Op::Nop, s, "FEDRAT"));
     return;
   }
-  if (!is_word(s.params[0])) return error(s.params[0].span, "sema.bad-setting", "expected MESVEL, POSVEL or SCNVEL after FEDRAT/");
-  const ir::FeedUnit unit =
-      is_word(s.params[1]) ? ir::parse_word<ir::FeedUnit>(s.params[1].text).value_or(ir::FeedUnit::Defalt) : ir::FeedUnit::Defalt;
+  if (!is_word(s.params[0]))
+    return error(s.params[0].span, "sema.bad-setting", "expected MESVEL, POSVEL or SCNVEL after FEDRAT/");
+  const ir::FeedUnit unit = is_word(s.params[1])
+                                ? ir::parse_word<ir::FeedUnit>(s.params[1].text).value_or(ir::FeedUnit::Defalt)
+                                : ir::FeedUnit::Defalt;
   if (unit == ir::FeedUnit::Defalt)  // DEFALT takes no value (above)
     return error(s.params[1].span, "sema.bad-unit",
-                 fmt::format("expected a feed unit (MPM, MMPS, IPM, IPS, PCENT) and a value, or DEFALT, after {}", s.params[0].text));
+                 fmt::format("expected a feed unit (MPM, MMPS, IPM, IPS, PCENT) and a value, or DEFALT, after {}",
+                             s.params[0].text));
   auto e = numeric(s.params[2], "a feed rate");
   if (!e) return;
-  if (e->op == ir::ExprOp::Constant && e->value.number <= 0) return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
+  if (e->op == ir::ExprOp::Constant && e->value.number <= 0)
+    return error(s.params[2].span, "sema.bad-feed", "a feed rate must be positive");
   if (s.params.size() > 3)  // dropped unseen before
-    warn(s.params[3].span, "sema.feed-arity", "FEDRAT takes a kind, a unit and one value; what follows the value is not used");
+    warn(s.params[3].span, "sema.feed-arity",
+         "FEDRAT takes a kind, a unit and one value; what follows the value is not used");
   auto in = make(Op::Feed, s);
   in.payload = ir::FeedPayload{*kind, unit};
   in.operands.push_back(expr_operand(std::move(*e)));
@@ -174,7 +199,8 @@ void UnitCompiler::fedrat(const grammar::Statement& s) {
 // ACLRAT/MESACL|POSACL,MPMM|MMPSS|IPMM|IPSS|PCENT,v
 void UnitCompiler::aclrat(const grammar::Statement& s) {
   // ACLRAT/DEFALT, ACLRAT/MESACL|POSACL,DEFALT: the machine's own acceleration again.
-  if ((s.params.size() == 1 && is_word(s.params[0], "DEFALT")) || (s.params.size() == 2 && is_word(s.params[1], "DEFALT"))) {
+  if ((s.params.size() == 1 && is_word(s.params[0], "DEFALT")) ||
+      (s.params.size() == 2 && is_word(s.params[1], "DEFALT"))) {
     auto in = make(Op::Accel, s);
     in.operands.push_back(word_operand("DEFALT", s.params.back().span));
     emit(std::move(in));
@@ -184,7 +210,8 @@ void UnitCompiler::aclrat(const grammar::Statement& s) {
   auto e = numeric(s.params[2], "an acceleration");
   if (!e) return;
   if (s.params.size() > 3)  // dropped unseen before
-    warn(s.params[3].span, "sema.feed-arity", "ACLRAT takes a kind, a unit and one value; what follows the value is not used");
+    warn(s.params[3].span, "sema.feed-arity",
+         "ACLRAT takes a kind, a unit and one value; what follows the value is not used");
   auto in = make(Op::Accel, s);
   in.operands.push_back(word_operand(s.params[0]));
   in.operands.push_back(word_operand(s.params[1]));
@@ -217,7 +244,8 @@ void UnitCompiler::scnset(const grammar::Statement& s) {
       }
       return error(w.span, "sema.bad-setting", "expected DRAG, DIST, CHORD, ACCEL, DEFLEC or LAW");
     }
-    if (i + 1 >= s.params.size()) return error(w.span, "sema.missing-parameter", fmt::format("expected a value after {}", w.text));
+    if (i + 1 >= s.params.size())
+      return error(w.span, "sema.missing-parameter", fmt::format("expected a value after {}", w.text));
     auto in = make(Op::ScanSet, s);
     in.operands.push_back(word_operand(w));
     if (w.text == "LAW") {
@@ -229,7 +257,8 @@ void UnitCompiler::scnset(const grammar::Statement& s) {
       auto e = numeric(s.params[i + 1], "a value");
       if (!e) return;
       if (e->op == ir::ExprOp::Constant && !(e->value.number > 0))
-        return error(s.params[i + 1].span, "sema.bad-setting", fmt::format("the SCNSET/{} value must be positive", w.text));
+        return error(s.params[i + 1].span, "sema.bad-setting",
+                     fmt::format("the SCNSET/{} value must be positive", w.text));
       in.operands.push_back(expr_operand(std::move(*e)));
     }
     emit(std::move(in));
@@ -261,7 +290,8 @@ void UnitCompiler::go_to(const grammar::Statement& s) {
 void UnitCompiler::go_target(const grammar::Statement& s) {
   if (m_go_target) {
     const Location at = m_sources.locate(m_go_target->span);
-    return error(s.major_span, "sema.nested-gotarg", fmt::format("GOTARG inside the GOTARG of line {}: close it with ENDGO first", at.line));
+    return error(s.major_span, "sema.nested-gotarg",
+                 fmt::format("GOTARG inside the GOTARG of line {}: close it with ENDGO first", at.line));
   }
   m_go_target = point_instruction(s, Op::GoTo, "the target");
 }
@@ -282,12 +312,15 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   if (!expect_params(s, 3, "the feature type, F(label) and the number of points")) return;
   const auto meas_type = type_word(s.params[0]);
   if (!meas_type) return error(s.params[0].span, "sema.bad-feature-type", "expected a feature type after MEAS/");
-  if (!is_label(s.params[1], {"F"})) return error(s.params[1].span, "sema.expected-feature", "expected F(label) after the feature type");
+  if (!is_label(s.params[1], {"F"}))
+    return error(s.params[1].span, "sema.expected-feature", "expected F(label) after the feature type");
   if (!check_feature(s.params[1])) return;
   const std::string label = upper(s.params[1].label.name);
   const auto type = feature_type(label);
   if (type && *type != *meas_type)
-    return error(s.params[0].span, "sema.meas-type", fmt::format("MEAS/{} on F({}), which is FEAT/{}", s.params[0].text, s.params[1].label.name, ir::word_of(*type)));
+    return error(s.params[0].span, "sema.meas-type",
+                 fmt::format("MEAS/{} on F({}), which is FEAT/{}", s.params[0].text, s.params[1].label.name,
+                             ir::word_of(*type)));
   auto count = numeric(s.params[2], "the number of points");
   if (!count) return;
   if (s.params.size() > 3) {
@@ -332,16 +365,20 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
   if (!b.control && !b.scanned && b.ptmeas > 0 && b.declared > 0 && b.ptmeas != b.declared)
     // Shop software measures the PTMEAS it has and reports the difference (DMIS 5.3 leaves it to
     // the DME): a warning, and the block's points are used.
-    warn(b.span, "sema.point-count", fmt::format("MEAS declares {} points but the block has {} PTMEAS; the {} are used", b.declared, b.ptmeas, b.ptmeas));
+    warn(b.span, "sema.point-count",
+         fmt::format("MEAS declares {} points but the block has {} PTMEAS; the {} are used", b.declared, b.ptmeas,
+                     b.ptmeas));
   // A macro's body may be called in either mode: only the program's own blocks are judged here.
   if (b.scan_pairs && !m_macro && !b.control && b.ptmeas % 2 == 1)
     error(b.last_ptmeas, "sema.scan-pairs",
           fmt::format("in scan mode (SCNMOD/ON) PTMEAS come in pairs, the start and end of a scan: the block has {}, "
-                      "this last one has no end", b.ptmeas));
+                      "this last one has no end",
+                      b.ptmeas));
   const int n = b.ptmeas > 0 ? b.ptmeas : b.declared;
   const int minimum = runtime::minimum_points(b.type);
   if (!b.control && !b.scanned && n > 0 && n < minimum)
-    error(b.span, "sema.too-few-points", fmt::format("a {} needs at least {} points, the block has {}", ir::word_of(b.type), minimum, n));
+    error(b.span, "sema.too-few-points",
+          fmt::format("a {} needs at least {} points, the block has {}", ir::word_of(b.type), minimum, n));
   const std::size_t end = emit(make(Op::MeasEnd, s));
   code()[b.start].target = static_cast<std::int64_t>(end);
 }
@@ -370,7 +407,8 @@ void UnitCompiler::rmeas_block(const grammar::Statement& s) {
 // PTMEAS/CART,x,y,z[,i,j,k]  |  RMEAS/CART,x,y,z,i,j,k[,FA(ref)]
 void UnitCompiler::ptmeas(const grammar::Statement& s) {
   if (s.major == "RMEAS" && s.params.size() >= 3 && is_label(s.params[1], {"F"})) return rmeas_block(s);
-  if (m_blocks.empty() || std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
+  if (m_blocks.empty() ||
+      std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
     return error(s.major_span, "sema.ptmeas-outside", fmt::format("{} outside a MEAS block", s.major));
   if (!expect_params(s, 1, "CART or POL")) return;
   if (!is_word(s.params[0], "CART") && !is_word(s.params[0], "POL"))
@@ -379,7 +417,8 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
   in.payload = ir::FormPayload{ir::parse_word<ir::CoordinateForm>(s.params[0].text)};
   std::size_t end = s.params.size();
   if (s.major == "RMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label) {
-    if (!is_label(s.params[end - 1], {"FA", "F"})) return error(s.params[end - 1].span, "sema.expected-feature", "expected FA(label) as the RMEAS reference");
+    if (!is_label(s.params[end - 1], {"FA", "F"}))
+      return error(s.params[end - 1].span, "sema.expected-feature", "expected FA(label) as the RMEAS reference");
     if (!check_feature(s.params[end - 1])) return;
     --end;
   }
@@ -397,12 +436,14 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
     v.push_back(e->op == ir::ExprOp::Constant ? e->value.number : NAN);
     in.operands.push_back(expr_operand(std::move(*e)));
   }
-  if (n == 6 && v[3] == 0 && v[4] == 0 && v[5] == 0) return error(s.params[4].span, "sema.zero-vector", "the approach vector i,j,k is zero");
+  if (n == 6 && v[3] == 0 && v[4] == 0 && v[5] == 0)
+    return error(s.params[4].span, "sema.zero-vector", "the approach vector i,j,k is zero");
   if (end < s.params.size()) {
     in.operands.push_back(label_op(s.params[end]));
   } else {
     // Inside an RMEAS block a PTMEAS is relative to the block's reference.
-    const auto meas = std::find_if(m_blocks.rbegin(), m_blocks.rend(), [](const Block& b) { return b.kind == Block::Kind::Meas; });
+    const auto meas =
+        std::find_if(m_blocks.rbegin(), m_blocks.rend(), [](const Block& b) { return b.kind == Block::Kind::Meas; });
     if (meas != m_blocks.rend() && meas->reference) in.operands.push_back(*meas->reference);
   }
   for (auto& b : m_blocks)
@@ -415,16 +456,21 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
 
 // PAMEAS/P(l): scan along a path inside a MEAS block
 void UnitCompiler::pameas(const grammar::Statement& s) {
-  if (m_blocks.empty() || std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
+  if (m_blocks.empty() ||
+      std::none_of(m_blocks.begin(), m_blocks.end(), [](const Block& b) { return b.kind == Block::Kind::Meas; }))
     return error(s.major_span, "sema.ptmeas-outside", "PAMEAS outside a MEAS block");
   if (!expect_params(s, 1, "P(label)")) return;
   if (s.params.size() != 1 || !is_label(s.params[0], {"P"}))
-    return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.expected-path", "expected a single P(label) after PAMEAS/");
+    return error(s.params[s.params.size() == 1 ? 0 : 1].span, "sema.expected-path",
+                 "expected a single P(label) after PAMEAS/");
   const std::string name = upper(s.params[0].label.name);
   if (!m_symbols.paths.count(name) && !named_at_run(name)) {
     if (auto it = m_symbols.skipped.find("P:" + name); it != m_symbols.skipped.end())
-      return error(s.params[0].span, "sema.skipped-definition", fmt::format("path P({}) was defined by a skipped statement", s.params[0].label.name));
-    return error(s.params[0].span, "sema.undefined-path", fmt::format("path P({}) is not defined: define it with P({})=PATH/...", s.params[0].label.name, s.params[0].label.name));
+      return error(s.params[0].span, "sema.skipped-definition",
+                   fmt::format("path P({}) was defined by a skipped statement", s.params[0].label.name));
+    return error(s.params[0].span, "sema.undefined-path",
+                 fmt::format("path P({}) is not defined: define it with P({})=PATH/...", s.params[0].label.name,
+                             s.params[0].label.name));
   }
   // A GSURF or GCURVE is known only by its PTMEAS points, each its own nominal (run refused a
   // scan of one; check now says so).

@@ -25,13 +25,16 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   }
   // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
   for (const auto& s : st) {
-    if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT") m_later_features.emplace(upper(s.target->name), s.span);
-    if (s.target && ((upper(s.target->prefix) == "FA" && s.major == "FEAT") || (upper(s.target->prefix) == "TA" && s.major == "TOL")))
+    if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT")
+      m_later_features.emplace(upper(s.target->name), s.span);
+    if (s.target && ((upper(s.target->prefix) == "FA" && s.major == "FEAT") ||
+                     (upper(s.target->prefix) == "TA" && s.major == "TOL")))
       m_reported_results.emplace(upper(s.target->prefix) + ":" + upper(s.target->name), s.span);
   }
   static const std::set<std::string> measuring = {"MEAS", "RMEAS", "PTMEAS", "PAMEAS", "GOTO", "SNSLCT", "CALL"};
-  m_output_file = !repl && !m_reported_results.empty() &&
-                  std::none_of(st.begin(), st.end(), [](const grammar::Statement& s) { return measuring.count(s.major) > 0; });
+  m_output_file =
+      !repl && !m_reported_results.empty() &&
+      std::none_of(st.begin(), st.end(), [](const grammar::Statement& s) { return measuring.count(s.major) > 0; });
   // A DMIS output file starts with FILNAM (NIST's output.dms, metron's own).
   // A DMIS module (DMISMD, as MODUS's helper tools write) starts as a program does, or with
   // FILNAM followed by DMISMD (MODUS's macro libraries).
@@ -48,7 +51,8 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
                                       [](const grammar::Statement& t) { return t.major == "DMISMN"; });
       warn(s.span, "sema.after-endfil",
            fmt::format("{} statement{} after ENDFIL {} ignored{}", st.size() - i, st.size() - i == 1 ? "" : "s",
-                       st.size() - i == 1 ? "is" : "are", second ? ": the file holds a second program (DMISMN after ENDFIL)" : ""));
+                       st.size() - i == 1 ? "is" : "are",
+                       second ? ": the file holds a second program (DMISMN after ENDFIL)" : ""));
       break;
     }
     statement(s);
@@ -57,10 +61,12 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
     static const char* closers[] = {"ENDMES", "ENDIF", "ENDDO", "ENDMAC", "ENDSEL"};
     static const char* openers[] = {"MEAS", "IF", "DO", "MACRO", "SELECT"};
     error(it->span, "sema.unclosed-block",
-          fmt::format("{} is never closed: expected {} before the end of the file",
-                      openers[static_cast<int>(it->kind)], closers[static_cast<int>(it->kind)]));
+          fmt::format("{} is never closed: expected {} before the end of the file", openers[static_cast<int>(it->kind)],
+                      closers[static_cast<int>(it->kind)]));
   }
-  if (m_go_target) error(m_go_target->span, "sema.unclosed-block", "GOTARG is never closed: expected ENDGO before the end of the file");
+  if (m_go_target)
+    error(m_go_target->span, "sema.unclosed-block",
+          "GOTARG is never closed: expected ENDGO before the end of the file");
   resolve_jumps(m_unit_jumps, m_module.units[m_unit].code);
   if (!repl && !m_ended && !st.empty() && !m_included)
     warn(st.back().span, "sema.no-endfil", "the program does not end with ENDFIL");
@@ -90,13 +96,17 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   if (m_symbols.features.count(name)) return true;
   if (m_symbols.patterns.count(name)) {
     error(e.span, "sema.pattern-use",
-          fmt::format("{}({}) is a pattern (FEAT/PATERN): OUTPUT takes it; here name its features one by one", e.label.prefix,
-                      e.label.name));
+          fmt::format("{}({}) is a pattern (FEAT/PATERN): OUTPUT takes it; here name its features one by one",
+                      e.label.prefix, e.label.name));
     return false;
   }
   if (auto it = m_symbols.skipped.find("F:" + name); it != m_symbols.skipped.end()) {
-    Diagnostic d{Severity::Error, "sema.skipped-definition", e.span,
-                 fmt::format("feature {}({}) is defined only by a statement metron skipped", e.label.prefix, e.label.name), {}};
+    Diagnostic d{
+        Severity::Error,
+        "sema.skipped-definition",
+        e.span,
+        fmt::format("feature {}({}) is defined only by a statement metron skipped", e.label.prefix, e.label.name),
+        {}};
     const Location loc = m_sources.locate(it->second);
     d.notes.push_back(fmt::format("the unsupported statement is at {}:{}:{}", loc.path, loc.line, loc.column));
     m_sink.report(std::move(d));
@@ -106,15 +116,16 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
   // only further on, or never (CAMIO). Read leniently that is a warning, and the run stops at the
   // use unless x has an actual by then.
   const auto later = m_later_features.find(name);
-  const bool rejected = later != m_later_features.end() && later->second.file == e.span.file &&
-                        later->second.begin < e.span.begin;
+  const bool rejected =
+      later != m_later_features.end() && later->second.file == e.span.file && later->second.begin < e.span.begin;
   if (upper(e.label.prefix) == "FA" && !m_strict && !m_repl && !rejected) {
     warn(e.span, "sema.actual-from-before",
          later != m_later_features.end()
-             ? fmt::format("feature FA({}) is used before its definition at line {}: CMM software may keep its actual from "
-                           "an earlier run, metron does not; a run stops here unless it has one (--strict makes it an "
-                           "error)",
-                           e.label.name, m_sources.locate(later->second).line)
+             ? fmt::format(
+                   "feature FA({}) is used before its definition at line {}: CMM software may keep its actual from "
+                   "an earlier run, metron does not; a run stops here unless it has one (--strict makes it an "
+                   "error)",
+                   e.label.name, m_sources.locate(later->second).line)
              : fmt::format("feature FA({}) is not defined in this program: CMM software may keep its actual from an "
                            "earlier run, metron does not; a run stops here (--strict makes it an error)",
                            e.label.name));
@@ -124,14 +135,16 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
     const Location loc = m_sources.locate(later->second);
     // A definition above the use that did not define the feature was rejected (its error is above).
     error(e.span, "sema.undefined-feature",
-          rejected ? fmt::format("feature {}({}) has no definition: its FEAT at line {} was rejected (see the error there)",
-                                 e.label.prefix, e.label.name, loc.line)
-                   : fmt::format("feature {}({}) is used before its definition at line {}", e.label.prefix, e.label.name,
-                                 loc.line));
+          rejected
+              ? fmt::format("feature {}({}) has no definition: its FEAT at line {} was rejected (see the error there)",
+                            e.label.prefix, e.label.name, loc.line)
+              : fmt::format("feature {}({}) is used before its definition at line {}", e.label.prefix, e.label.name,
+                            loc.line));
     return false;
   }
   error(e.span, "sema.undefined-feature",
-        fmt::format("feature {}({}) is not defined: define it with F({})=FEAT/...", e.label.prefix, e.label.name, e.label.name));
+        fmt::format("feature {}({}) is not defined: define it with F({})=FEAT/...", e.label.prefix, e.label.name,
+                    e.label.name));
   return false;
 }
 
@@ -147,8 +160,8 @@ bool UnitCompiler::defines_indirectly() const {
 
 // A feature label no statement of the program defines, before or after (nor a skipped one).
 bool UnitCompiler::never_defined(const std::string& name) const {
-  return !named_at_run(name) && !defines_indirectly() && !m_symbols.features.count(name) && !m_symbols.skipped.count("F:" + name) &&
-         !m_later_features.count(name);
+  return !named_at_run(name) && !defines_indirectly() && !m_symbols.features.count(name) &&
+         !m_symbols.skipped.count("F:" + name) && !m_later_features.count(name);
 }
 
 std::optional<runtime::FeatureType> UnitCompiler::feature_type(const std::string& name) const {
@@ -162,7 +175,8 @@ void UnitCompiler::note_definition(const char* kind, const std::string& name, Sp
   if (auto prior = m_defined_here.find(key); prior != m_defined_here.end() && !m_repl) {
     const Location at = m_sources.locate(prior->second);
     warn(span, "sema.redefined",
-         fmt::format("{}({}) is defined again (first at line {}); the later definition replaces it", kind, name, at.line));
+         fmt::format("{}({}) is defined again (first at line {}); the later definition replaces it", kind, name,
+                     at.line));
   }
   m_defined_here[key] = span;
 }
@@ -209,10 +223,11 @@ bool UnitCompiler::names_by_variable(const grammar::Expr& e) const {
 bool UnitCompiler::variable_label_names(grammar::Expr& e) {
   bool changed = false;
   if (e.kind == grammar::ExprKind::Label && names_feature_by_variable(e.label)) {
-    note_once(m_variable_labels_noted, e.span, "sema.variable-label",
-              fmt::format("{}({}): {} is a CHAR variable and no feature has its name, so its value names the feature, as "
-                          "{}(@{}) (MODUS reads it so)", e.label.prefix, e.label.name, e.label.name, e.label.prefix,
-                          e.label.name));
+    note_once(
+        m_variable_labels_noted, e.span, "sema.variable-label",
+        fmt::format("{}({}): {} is a CHAR variable and no feature has its name, so its value names the feature, as "
+                    "{}(@{}) (MODUS reads it so)",
+                    e.label.prefix, e.label.name, e.label.name, e.label.prefix, e.label.name));
     e.label.name = "@" + e.label.name;
     changed = true;
   }
@@ -250,24 +265,26 @@ void UnitCompiler::statement(const grammar::Statement& given) {
   if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
     // What a measurement block may hold: its motions and points, the probing settings (a SNSLCT
     // switches the sensor between the block's points), and the flow of control.
-    static const std::set<std::string> allowed = {
-        "GOTO", "GOTARG", "ENDGO", "PTMEAS", "RMEAS", "PAMEAS", "ENDMES", "ENDFIL", "SNSET", "FEDRAT", "ACLRAT", "SNSLCT",
-        "WKPLAN", "TEXT", "IF", "ELSE", "ENDIF", "DO", "ENDDO", "SELECT", "CASE", "DFTCAS", "ENDCAS", "ENDSEL", "JUMPTO",
-        "ASSIGN", "CALL", "DISPLY"};
+    static const std::set<std::string> allowed = {"GOTO",   "GOTARG", "ENDGO",  "PTMEAS", "RMEAS",  "PAMEAS", "ENDMES",
+                                                  "ENDFIL", "SNSET",  "FEDRAT", "ACLRAT", "SNSLCT", "WKPLAN", "TEXT",
+                                                  "IF",     "ELSE",   "ENDIF",  "DO",     "ENDDO",  "SELECT", "CASE",
+                                                  "DFTCAS", "ENDCAS", "ENDSEL", "JUMPTO", "ASSIGN", "CALL",   "DISPLY"};
     // Settings and records shop software writes inside blocks: no motion, no definition.
-    static const std::set<std::string> tolerated = {"FLY", "DMESW", "DMESWI", "DMESWV", "DMEHW", "PTBUFF", "SCNSET", "DECPL",
-                                                    "PAUSE", "TECOMP", "PRCOMP", "CRMODE", "DECL", "WRITE", "READ", "GEOALG",
-                                                    "RECALL", "MODE", "WRIST", "FINPOS", "SNSMNT"};
+    static const std::set<std::string> tolerated = {
+        "FLY",    "DMESW", "DMESWI", "DMESWV", "DMEHW",  "PTBUFF", "SCNSET", "DECPL", "PAUSE",  "TECOMP", "PRCOMP",
+        "CRMODE", "DECL",  "WRITE",  "READ",   "GEOALG", "RECALL", "MODE",   "WRIST", "FINPOS", "SNSMNT"};
     if (!allowed.count(m) && !s.variable) {
       if (m_strict || !tolerated.count(m)) {
-        error(s.major_span, "sema.not-in-meas", fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
+        error(s.major_span, "sema.not-in-meas",
+              fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
         return;
       }
       // Read leniently, they are carried out where they stand, before the points ENDMES measures.
       warn(s.major_span, "sema.not-in-meas",
-           fmt::format("{} inside a MEAS block is not DMIS: it is carried out where it stands, before the block's points, "
-                       "which are measured at ENDMES (--strict: an error)",
-                       m));
+           fmt::format(
+               "{} inside a MEAS block is not DMIS: it is carried out where it stands, before the block's points, "
+               "which are measured at ENDMES (--strict: an error)",
+               m));
     }
   }
   // V=ASSIGN/... and V=OBTAIN/... are a row of their own (the grammar parsed the variable).
@@ -277,7 +294,8 @@ void UnitCompiler::statement(const grammar::Statement& given) {
   // A point range FA(x)[i,j] is OUTPUT's (MODUS); elsewhere it would be dropped unseen.
   for (const auto& p : s.params)
     if (p.kind == grammar::ExprKind::Label && !p.label.points.empty() && m != "OUTPUT")
-      return error(p.span, "sema.point-range", fmt::format("a point range {}({})[...] is read only in OUTPUT", p.label.prefix, p.label.name));
+      return error(p.span, "sema.point-range",
+                   fmt::format("a point range {}({})[...] is read only in OUTPUT", p.label.prefix, p.label.name));
   (this->*(it->second))(s);
 }
 
@@ -297,7 +315,8 @@ const StatementTable& UnitCompiler::statements() {
 // A vendor or unsupported statement: warn and skip; remember labels it would have defined.
 void UnitCompiler::unknown(const grammar::Statement& s) {
   warn(s.major_span, "sema.unknown-statement", skipped_statement_message(s.major));
-  if (s.target) m_symbols.skipped[(s.target->prefix == "F" ? "F:" : s.target->prefix + ":") + upper(s.target->name)] = s.span;
+  if (s.target)
+    m_symbols.skipped[(s.target->prefix == "F" ? "F:" : s.target->prefix + ":") + upper(s.target->name)] = s.span;
   emit(make(Op::Nop, s, s.major));
 }
 
@@ -306,7 +325,8 @@ std::string UnitCompiler::skipped_statement_message(const std::string& major) {
   if (major.empty()) return "unknown statement ? is skipped";
   if (!grammar::is_major_word(major)) return fmt::format("unknown statement {} is skipped", major);
   std::string message = fmt::format("the DMIS statement {} is not supported by metron and is skipped", major);
-  if (major == "EQUATE") message += ": the coordinate systems are not equated, so results in them may be in another frame";
+  if (major == "EQUATE")
+    message += ": the coordinate systems are not equated, so results in them may be in another frame";
   return message;
 }
 
@@ -317,7 +337,8 @@ bool UnitCompiler::expect_params(const grammar::Statement& s, std::size_t n, con
   return false;
 }
 
-bool UnitCompiler::require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example) {
+bool UnitCompiler::require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes,
+                                  const char* example) {
   if (s.target && std::any_of(prefixes.begin(), prefixes.end(), [&](const char* p) { return s.target->prefix == p; }))
     return true;
   error(s.span, "sema.missing-label", fmt::format("{} needs a label on the left: {}", s.major, example));

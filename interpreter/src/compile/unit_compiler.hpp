@@ -6,9 +6,9 @@
 #pragma once
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <functional>
 #include <map>
-#include <filesystem>
 #include <optional>
 #include <set>
 #include <string>
@@ -37,9 +37,13 @@ using IncludeFile = std::function<std::optional<std::size_t>(const std::string&,
 
 class UnitCompiler {
  public:
-  UnitCompiler(SymbolTable& symbols, ir::Module& module, SourceManager& sources, DiagnosticSink& sink,
-               std::size_t unit, IncludeFile include)
-      : m_symbols(symbols), m_module(module), m_sources(sources), m_sink(sink), m_unit(unit),
+  UnitCompiler(SymbolTable& symbols, ir::Module& module, SourceManager& sources, DiagnosticSink& sink, std::size_t unit,
+               IncludeFile include)
+      : m_symbols(symbols),
+        m_module(module),
+        m_sources(sources),
+        m_sink(sink),
+        m_unit(unit),
         m_include(std::move(include)) {}
 
   /// Compiles a parsed program into this unit; `repl` relaxes the checks that suit whole files.
@@ -71,19 +75,19 @@ class UnitCompiler {
     enum class Kind { Meas, If, Do, Macro, Select } kind = Kind::Meas;
     Span span;
     std::size_t start = 0;
-    std::vector<std::size_t> exits;      // jumps to patch to the end
-    std::optional<std::size_t> branch;   // IF: the JumpIfFalse to patch at ELSE/ENDIF
+    std::vector<std::size_t> exits;     // jumps to patch to the end
+    std::optional<std::size_t> branch;  // IF: the JumpIfFalse to patch at ELSE/ENDIF
     bool has_else = false;
     int ptmeas = 0;
     int declared = 0;
-    bool control = false;                // control flow inside a MEAS: counts are not static
-    bool scanned = false;                // PAMEAS inside, or SCNMOD/ON: the point count is the machine's
-    bool scan_pairs = false;             // SCNMOD/ON before it: its PTMEAS are the ends of scans
-    Span last_ptmeas;                    // MEAS: where its last PTMEAS stands
-    std::string feature;                 // MEAS: the feature label; DO: the loop variable
-    std::optional<ir::Expr> selector;    // SELECT: the value CASE compares with (evaluated at each CASE)
-    bool in_case = false;                // SELECT: inside CASE or DFTCAS, before its ENDCAS
-    bool has_default = false;            // SELECT: DFTCAS seen
+    bool control = false;                  // control flow inside a MEAS: counts are not static
+    bool scanned = false;                  // PAMEAS inside, or SCNMOD/ON: the point count is the machine's
+    bool scan_pairs = false;               // SCNMOD/ON before it: its PTMEAS are the ends of scans
+    Span last_ptmeas;                      // MEAS: where its last PTMEAS stands
+    std::string feature;                   // MEAS: the feature label; DO: the loop variable
+    std::optional<ir::Expr> selector;      // SELECT: the value CASE compares with (evaluated at each CASE)
+    bool in_case = false;                  // SELECT: inside CASE or DFTCAS, before its ENDCAS
+    bool has_default = false;              // SELECT: DFTCAS seen
     std::optional<ir::Operand> reference;  // RMEAS block: the feature its points are relative to
     runtime::FeatureType type = runtime::FeatureType::Point;  // MEAS
   };
@@ -135,7 +139,9 @@ class UnitCompiler {
 
   // ---- operand helpers ----------------------------------------------------------------------
   static bool is_word(const grammar::Expr& e) { return e.kind == grammar::ExprKind::Word; }
-  static bool is_word(const grammar::Expr& e, std::string_view w) { return e.kind == grammar::ExprKind::Word && e.text == w; }
+  static bool is_word(const grammar::Expr& e, std::string_view w) {
+    return e.kind == grammar::ExprKind::Word && e.text == w;
+  }
   static bool is_label(const grammar::Expr& e, std::initializer_list<const char*> prefixes) {
     if (e.kind != grammar::ExprKind::Label) return false;
     return std::any_of(prefixes.begin(), prefixes.end(), [&](const char* p) { return e.label.prefix == p; });
@@ -209,7 +215,7 @@ class UnitCompiler {
   std::optional<runtime::FeatureType> feature_type(const std::string& name) const;
   /// A feature type word parameter (MEAS/, CONST/), or nullopt.
   static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
-    if (is_word(e, "EDGEPT")) return runtime::FeatureType::Point;  // measured as a point (FEAT/EDGEPT)
+    if (is_word(e, "EDGEPT")) return runtime::FeatureType::Point;       // measured as a point (FEAT/EDGEPT)
     if (is_word(e, "RCTNGL")) return runtime::FeatureType::ClosedSlot;  // measured as CPARLN,FLAT (FEAT/RCTNGL)
     return is_word(e) ? ir::parse_word<runtime::FeatureType>(e.text) : std::nullopt;
   }
@@ -346,24 +352,25 @@ class UnitCompiler {
   // SCNMOD/ON seen (in program order) and not turned OFF since: a block's PTMEAS then come in pairs,
   // each the ends of a scan, so its point count is the machine's (as with PAMEAS).
   bool m_scan_mode_on = false;
-  std::set<std::string> m_noted_kinds;  // ERROR, GEOALG: noted once each
+  std::set<std::string> m_noted_kinds;           // ERROR, GEOALG: noted once each
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;
   bool m_reported_results_noted = false;  // one note per unit for reported results
-  bool m_sensor_mount_noted = false;  ///< SNSDEF/...,SW(x): the sensor's mount, told once
+  bool m_sensor_mount_noted = false;      ///< SNSDEF/...,SW(x): the sensor's mount, told once
   /// A DMIS output file: it states results (FA(x)=FEAT, TA(t)=TOL) and measures nothing. Its
   /// echoed DATDEF and DATSET lines name features it does not restate.
   bool m_output_file = false;
   std::set<std::string> m_echoed_datums;  ///< DATDEFs of an output file whose feature it does not state
   bool m_echo_noted = false;
   bool m_calib_artifact_noted = false;
-  bool m_report_layout_noted = false;     // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
-  bool m_edge_points_noted = false;       // one note per unit for FEAT/EDGEPT
-  bool m_rectangles_noted = false;        // one note per unit for FEAT/RCTNGL
-  bool m_patterns_noted = false;          // one note per unit for FEAT/PATERN
-  bool m_meas_clearance_noted = false;    // one note per unit for MEAS/...,CLRSRF (RationalDMIS)
+  bool m_report_layout_noted =
+      false;  // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
+  bool m_edge_points_noted = false;      // one note per unit for FEAT/EDGEPT
+  bool m_rectangles_noted = false;       // one note per unit for FEAT/RCTNGL
+  bool m_patterns_noted = false;         // one note per unit for FEAT/PATERN
+  bool m_meas_clearance_noted = false;   // one note per unit for MEAS/...,CLRSRF (RationalDMIS)
   bool m_sensor_saves_noted = false;     // one note per unit for SAVE/SA()
   bool m_variable_labels_noted = false;  // one note per unit for FA(V), V a CHAR variable
 };

@@ -27,10 +27,14 @@ std::optional<runtime::Axis> axis_of(const std::string& w) {
 }  // namespace
 
 void Execute::add_alignment(ExecuteTable& t) {
-  add_rows(t, {
-      {Op::Output, &output}, {Op::Evaluate, &evaluate}, {Op::DatSet, &datset}, {Op::Trans, &trans}, {Op::Rotate, &rotate},
-      {Op::Save, &save}, {Op::Recall, &recall}, {Op::Construct, &construct}
-  });
+  add_rows(t, {{Op::Output, &output},
+               {Op::Evaluate, &evaluate},
+               {Op::DatSet, &datset},
+               {Op::Trans, &trans},
+               {Op::Rotate, &rotate},
+               {Op::Save, &save},
+               {Op::Recall, &recall},
+               {Op::Construct, &construct}});
 }
 
 // The items of an OUTPUT or EVAL, in order.
@@ -82,7 +86,8 @@ ExecStatus Execute::evaluate(Interpreter& vm, const ir::Instruction& in, CallFra
 ExecStatus Execute::datset(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   runtime::DatsetRequest req;
   for (const auto& o : in.operands) {
-    if (o.kind == Operand::Kind::Word && o.word == "MCS") req.mcs = true;
+    if (o.kind == Operand::Kind::Word && o.word == "MCS")
+      req.mcs = true;
     else if (o.kind == Operand::Kind::Label && o.label.prefix == "DAT")
       req.clauses.push_back({vm.label_name(o.label), std::nullopt, std::nullopt, false, {}});
     else if (o.kind == Operand::Kind::Label)  // DATSET/FA(x),...: the feature itself
@@ -90,7 +95,8 @@ ExecStatus Execute::datset(Interpreter& vm, const ir::Instruction& in, CallFrame
     else if (o.kind == Operand::Kind::Word && !req.clauses.empty()) {
       auto& c = req.clauses.back();
       const auto axis = axis_of(o.word);
-      if (o.word.find("ORIG") != std::string::npos) c.origins.push_back(*axis);
+      if (o.word.find("ORIG") != std::string::npos)
+        c.origins.push_back(*axis);
       else {
         c.direction = axis;
         c.minus = o.word.find("MINUS") != std::string::npos;
@@ -161,7 +167,8 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
     if (offset.size() != 3) return vm.fail(in.span, "MOVEPT needs dx, dy, dz");
     const double len = vm.m_length_mm;
     if (auto r = vm.m_runtime.construct_moved_point(vm.name_of(in), feature_ref(vm, in.operands[0].label),
-                                                    Vec3(offset[0] * len, offset[1] * len, offset[2] * len), in.span); !r)
+                                                    Vec3(offset[0] * len, offset[1] * len, offset[2] * len), in.span);
+        !r)
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
@@ -170,7 +177,8 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
     // axis feature or i, j, k
     if (in.operands.at(2).kind == Operand::Kind::Word && in.operands[2].word == "RADIAL") {
       if (auto r = vm.m_runtime.construct_radial_extreme_point(vm.name_of(in), feature_ref(vm, in.operands[0].label),
-                                                               in.operands[1].word == "MIN", in.span); !r)
+                                                               in.operands[1].word == "MIN", in.span);
+          !r)
         return vm.from_runtime(r.error());
       return ExecStatus::Running;
     }
@@ -189,8 +197,9 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
         direction[k] = *v;
       }
     }
-    if (auto r = vm.m_runtime.construct_extreme_point(vm.name_of(in), feature_ref(vm, in.operands[0].label), axis, direction,
-                                                      in.operands[1].word == "MIN", in.span); !r)
+    if (auto r = vm.m_runtime.construct_extreme_point(vm.name_of(in), feature_ref(vm, in.operands[0].label), axis,
+                                                      direction, in.operands[1].word == "MIN", in.span);
+        !r)
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
@@ -198,28 +207,30 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
     auto v = vm.number(in.operands.at(2).expr);
     if (!v) return vm.fail(in.span, v.error());
     if (auto r = vm.m_runtime.construct_cone_section(vm.name_of(in), feature_ref(vm, in.operands[0].label),
-                                                     in.operands[1].word == "DIAM", *v * vm.m_length_mm, in.span); !r)
+                                                     in.operands[1].word == "DIAM", *v * vm.m_length_mm, in.span);
+        !r)
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
   if (words.method == M::Offset) {
     auto d = vm.number(in.operands.at(1).expr);
     if (!d) return vm.fail(in.span, d.error());
-    if (auto r = vm.m_runtime.construct_offset_plane(vm.name_of(in), feature_ref(vm, in.operands[0].label), *d * vm.m_length_mm,
-                                                     in.span); !r)
+    if (auto r = vm.m_runtime.construct_offset_plane(vm.name_of(in), feature_ref(vm, in.operands[0].label),
+                                                     *d * vm.m_length_mm, in.span);
+        !r)
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
-  const auto method = words.method == M::Bf      ? runtime::ConstructMethod::BestFit
+  const auto method = words.method == M::Bf                                   ? runtime::ConstructMethod::BestFit
                       : words.method == M::Intof || words.method == M::Pierce ? runtime::ConstructMethod::Intersection
-                      : words.method == M::Midpt ? runtime::ConstructMethod::Midpoint
-                      : words.method == M::Parto ? runtime::ConstructMethod::ParallelThrough
+                      : words.method == M::Midpt                              ? runtime::ConstructMethod::Midpoint
+                      : words.method == M::Parto  ? runtime::ConstructMethod::ParallelThrough
                       : words.method == M::Perpto ? runtime::ConstructMethod::PerpendicularThrough
                       : words.method == M::Midpl || words.method == M::Midli ? runtime::ConstructMethod::Midpoint
-                      : words.method == M::Cast ? runtime::ConstructMethod::Cast
-                      : words.method == M::Copy ? runtime::ConstructMethod::Copy
-                      : words.method == M::Vertex ? runtime::ConstructMethod::Vertex
-                                                 : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
+                      : words.method == M::Cast                              ? runtime::ConstructMethod::Cast
+                      : words.method == M::Copy                              ? runtime::ConstructMethod::Copy
+                      : words.method == M::Vertex                            ? runtime::ConstructMethod::Vertex
+                                                  : runtime::ConstructMethod::Projection;  // PROJPT, PROJLN, PROJCT
   std::vector<runtime::FeatureRef> sources;
   for (const auto& o : in.operands) sources.push_back(feature_ref(vm, o.label));
   if (auto r = vm.m_runtime.construct(vm.name_of(in), words.type, method, sources, in.span); !r)

@@ -14,13 +14,21 @@ using ir::Operand;
 using runtime::FeatureType;
 
 void Execute::add_control(ExecuteTable& t) {
-  add_rows(t, {
-      {Op::Nop, &nothing}, {Op::JumpLabel, &nothing}, {Op::System, &system}, {Op::End, &end},
-      {Op::Assign, &assign}, {Op::Jump, &jump}, {Op::JumpIfFalse, &jump_if_false}, {Op::DoInit, &do_init},
-      {Op::DoNext, &do_next}, {Op::CallMacro, &call_macro}, {Op::Return, &return_},
-      {Op::CallUnit, &call_unit}, {Op::OnError, &on_error}, {Op::Resume, &resume},
-      {Op::BadTest, &bad_test}
-  });
+  add_rows(t, {{Op::Nop, &nothing},
+               {Op::JumpLabel, &nothing},
+               {Op::System, &system},
+               {Op::End, &end},
+               {Op::Assign, &assign},
+               {Op::Jump, &jump},
+               {Op::JumpIfFalse, &jump_if_false},
+               {Op::DoInit, &do_init},
+               {Op::DoNext, &do_next},
+               {Op::CallMacro, &call_macro},
+               {Op::Return, &return_},
+               {Op::CallUnit, &call_unit},
+               {Op::OnError, &on_error},
+               {Op::Resume, &resume},
+               {Op::BadTest, &bad_test}});
 }
 
 // Op::OnError: ERROR/(label)|AUTO,condition or ERROR/OFF
@@ -69,9 +77,7 @@ ExecStatus Execute::resume(Interpreter& vm, const ir::Instruction& in, CallFrame
 }
 
 // Op::Nop, Op::JumpLabel
-ExecStatus Execute::nothing(Interpreter&, const ir::Instruction&, CallFrame&) {
-  return ExecStatus::Running;
-}
+ExecStatus Execute::nothing(Interpreter&, const ir::Instruction&, CallFrame&) { return ExecStatus::Running; }
 
 // Op::System
 ExecStatus Execute::system(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
@@ -88,8 +94,8 @@ ExecStatus Execute::system(Interpreter& vm, const ir::Instruction& in, CallFrame
     if (!w) return vm.from_runtime(w.error());
     return ExecStatus::Running;
   }
-  auto r = in.name == "CHARACTERISE"
-               ? vm.m_runtime.characterise_machine(arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
+  auto r = in.name == "CHARACTERISE" ? vm.m_runtime.characterise_machine(
+                                           arg.empty() ? std::nullopt : std::optional<std::string>(arg), in.span)
            : in.name == "COMPENSATION" ? vm.m_runtime.use_compensation(arg, in.span)
                                        : vm.m_runtime.use_characterisation(arg, in.span);
   if (!r) return vm.from_runtime(r.error());
@@ -195,7 +201,9 @@ ExecStatus Execute::return_(Interpreter& vm, const ir::Instruction&, CallFrame&)
 // Op::CallUnit
 ExecStatus Execute::call_unit(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   // A called file that check could not find (a path of another machine): an error only now.
-  if (in.target < 0) return vm.fail(in.span, fmt::format("CALL/EXTERN,DMIS file {} was not found (give its folder with --include DIR)", in.name));
+  if (in.target < 0)
+    return vm.fail(in.span,
+                   fmt::format("CALL/EXTERN,DMIS file {} was not found (give its folder with --include DIR)", in.name));
   CallFrame f;
   f.kind = CallFrame::Kind::Unit;
   f.index = static_cast<std::size_t>(in.target);

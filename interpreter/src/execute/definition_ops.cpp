@@ -28,10 +28,11 @@ Value default_value(ValueType t) {
 }  // namespace
 
 void Execute::add_definitions(ExecuteTable& t) {
-  add_rows(t, {
-      {Op::FeatureDef, &feature_def}, {Op::ToleranceDef, &tolerance_def}, {Op::SensorDef, &sensor_def},
-      {Op::DatDef, &datdef}, {Op::Declare, &declare}
-  });
+  add_rows(t, {{Op::FeatureDef, &feature_def},
+               {Op::ToleranceDef, &tolerance_def},
+               {Op::SensorDef, &sensor_def},
+               {Op::DatDef, &datdef},
+               {Op::Declare, &declare}});
 }
 
 // Op::FeatureDef
@@ -63,7 +64,10 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
         g.normal2 = vec(6);
       }
       break;
-    case FeatureType::Circle: g.direction = vec(3); g.diameter_mm = nums[6] * len; break;
+    case FeatureType::Circle:
+      g.direction = vec(3);
+      g.diameter_mm = nums[6] * len;
+      break;
     case FeatureType::Arc:
       g.direction = vec(3);
       g.diameter_mm = 2 * nums[6] * len;
@@ -121,7 +125,8 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
   if (g.direction.norm() < 1e-12) return vm.fail(in.span, "the direction vector i,j,k is zero");
   // Sizes the compiler could not check (computed: a variable never assigned is 0).
   const bool diameter = g.type == FeatureType::Circle || g.type == FeatureType::Arc || g.type == FeatureType::Sphere ||
-                        g.type == FeatureType::Cylinder || g.type == FeatureType::Torus || g.type == FeatureType::Ellipse;
+                        g.type == FeatureType::Cylinder || g.type == FeatureType::Torus ||
+                        g.type == FeatureType::Ellipse;
   if (diameter && !(g.diameter_mm > 0))
     return vm.fail(in.span, fmt::format("the {} of F({}) is {}: it must be positive (a variable never assigned?)",
                                         g.type == FeatureType::Arc ? "radius" : "diameter", vm.name_of(in),
@@ -138,8 +143,8 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
     if (!(g.width_mm > 0) || !(g.length_mm > 0))
       return vm.fail(in.span, "the length and width of a CPARLN must be positive");
     if (g.slot_ends == runtime::SlotEnds::Round && g.width_mm >= g.length_mm)
-      return vm.fail(in.span,
-                     "the width of a ROUND CPARLN must be less than its length (its ends are semicircles of the width)");
+      return vm.fail(
+          in.span, "the width of a ROUND CPARLN must be less than its length (its ends are semicircles of the width)");
     g.slot_axis = (g.slot_axis - g.slot_axis.dot(n) * n).normalized();  // within the rounding of the program's numbers
   }
   if (g.type == FeatureType::Ellipse) {
@@ -195,8 +200,10 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     if (o.kind == Operand::Kind::Word && o.word == "FEATUR") feature_tier = true;
     if (feature_tier && o.kind == Operand::Kind::Word && (o.word == "MMC" || o.word == "LMC"))
       t.feature_condition = o.word == "MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
-    if (o.kind == Operand::Kind::Word && (o.word == "DATUM-MMC" || o.word == "DATUM-LMC") && !t.datum_conditions.empty())
-      t.datum_conditions.back() = o.word == "DATUM-MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
+    if (o.kind == Operand::Kind::Word && (o.word == "DATUM-MMC" || o.word == "DATUM-LMC") &&
+        !t.datum_conditions.empty())
+      t.datum_conditions.back() =
+          o.word == "DATUM-MMC" ? runtime::MaterialCondition::Mmc : runtime::MaterialCondition::Lmc;
     if (o.kind != Operand::Kind::Label) continue;
     if (o.label.prefix == "F" || o.label.prefix == "FA") {
       t.reference_feature = vm.label_name(o.label);  // DISTWRT, ANGWRT
@@ -222,8 +229,14 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     case K::Width:
     case K::Profs:
     case K::Profl:
-    case K::Profp: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
-    case K::Rad: t.lower = nums[0] * len; t.upper = nums[1] * len; break;
+    case K::Profp:
+      t.lower = nums[0] * len;
+      t.upper = nums[1] * len;
+      break;
+    case K::Rad:
+      t.lower = nums[0] * len;
+      t.upper = nums[1] * len;
+      break;
     case K::DistB:
     case K::DistWrt:
       if (t.limits) {  // the limits' middle is the nominal the deviations are reported from
@@ -233,18 +246,31 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
         t.lower = nums[0] * len - t.nominal;
         t.upper = nums[1] * len - t.nominal;
       } else {
-        t.nominal = nums[0] * len; t.lower = nums[1] * len; t.upper = nums[2] * len;
+        t.nominal = nums[0] * len;
+        t.lower = nums[1] * len;
+        t.upper = nums[2] * len;
       }
       break;
     case K::Cortol: {
       const double unit = t.polar == runtime::PolarCoordinate::Angle ? deg : len;
-      t.lower = nums[0] * unit; t.upper = nums[1] * unit;
+      t.lower = nums[0] * unit;
+      t.upper = nums[1] * unit;
       break;
     }
     case K::AngWrt:
-    case K::Anglb: t.nominal = nums[0] * deg; t.lower = nums[1] * deg; t.upper = nums[2] * deg; break;
-    case K::Angl: t.lower = nums[0] * deg; t.upper = nums[1] * deg; break;
-    case K::Compos: t.zone = nums[0] * len; t.feature_zone = nums[1] * len; break;
+    case K::Anglb:
+      t.nominal = nums[0] * deg;
+      t.lower = nums[1] * deg;
+      t.upper = nums[2] * deg;
+      break;
+    case K::Angl:
+      t.lower = nums[0] * deg;
+      t.upper = nums[1] * deg;
+      break;
+    case K::Compos:
+      t.zone = nums[0] * len;
+      t.feature_zone = nums[1] * len;
+      break;
     default: t.zone = nums[0] * len; break;
   }
   if (auto r = vm.m_runtime.define_tolerance(t); !r) return vm.from_runtime(r.error());
@@ -263,7 +289,8 @@ ExecStatus Execute::sensor_def(Interpreter& vm, const ir::Instruction& in, CallF
   s.ball_diameter_mm = nums.back() * len;
   // INDEX,POL: tilt, rotation, i, j, k, length, diameter; CART: x, y, z, i, j, k, diameter.
   if (nums.size() >= 7) {
-    s.direction = Vec3(nums[nums.size() - (polar ? 5 : 4)], nums[nums.size() - (polar ? 4 : 3)], nums[nums.size() - (polar ? 3 : 2)]);
+    s.direction = Vec3(nums[nums.size() - (polar ? 5 : 4)], nums[nums.size() - (polar ? 4 : 3)],
+                       nums[nums.size() - (polar ? 3 : 2)]);
     if (polar) s.length_mm = nums[nums.size() - 2] * len;
   }
   if (s.direction.norm() < 1e-12) s.direction = -Vec3::UnitZ();
@@ -273,7 +300,9 @@ ExecStatus Execute::sensor_def(Interpreter& vm, const ir::Instruction& in, CallF
 
 // Op::DatDef
 ExecStatus Execute::datdef(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
-  if (auto r = vm.m_runtime.define_datum(feature_ref(vm, in.operands[0].label), vm.label_name(in.operands[1].label), in.span); !r)
+  if (auto r = vm.m_runtime.define_datum(feature_ref(vm, in.operands[0].label), vm.label_name(in.operands[1].label),
+                                         in.span);
+      !r)
     return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
@@ -293,8 +322,10 @@ ExecStatus Execute::declare(Interpreter& vm, const ir::Instruction& in, CallFram
     } else {
       vm.m_dims.erase(in.names[i]);
     }
-    if (in.operands[0].word == "INTGR") vm.m_intgr.insert(in.names[i]);
-    else vm.m_intgr.erase(in.names[i]);
+    if (in.operands[0].word == "INTGR")
+      vm.m_intgr.insert(in.names[i]);
+    else
+      vm.m_intgr.erase(in.names[i]);
   }
   return ExecStatus::Running;
 }

@@ -4,9 +4,9 @@
 #pragma once
 #include <array>
 #include <initializer_list>
-#include <utility>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "metron/interpreter/interpreter.hpp"

@@ -14,10 +14,18 @@ using ir::Operand;
 using runtime::FeatureType;
 
 void Execute::add_measurement(ExecuteTable& t) {
-  add_rows(t, {
-      {Op::SensorSelect, &sensor_select}, {Op::FitAlgorithm, &fit_algorithm}, {Op::WorkPlane, &work_plane}, {Op::ProbeSet, &probe_set}, {Op::Feed, &feed}, {Op::Accel, &accel},
-      {Op::GoTo, &go_to}, {Op::GoHome, &go_home}, {Op::SetHome, &set_home}, {Op::MeasBegin, &meas_begin}, {Op::PtMeas, &ptmeas}, {Op::MeasEnd, &meas_end}
-  });
+  add_rows(t, {{Op::SensorSelect, &sensor_select},
+               {Op::FitAlgorithm, &fit_algorithm},
+               {Op::WorkPlane, &work_plane},
+               {Op::ProbeSet, &probe_set},
+               {Op::Feed, &feed},
+               {Op::Accel, &accel},
+               {Op::GoTo, &go_to},
+               {Op::GoHome, &go_home},
+               {Op::SetHome, &set_home},
+               {Op::MeasBegin, &meas_begin},
+               {Op::PtMeas, &ptmeas},
+               {Op::MeasEnd, &meas_end}});
 }
 
 // Op::SensorSelect
@@ -31,7 +39,8 @@ ExecStatus Execute::sensor_select(Interpreter& vm, const ir::Instruction& in, Ca
     vm.m_block->steps.push_back(std::move(step));
     return ExecStatus::Running;
   }
-  if (auto r = vm.m_runtime.select_sensor(vm.name_of(in), in.span, in.count == 1); !r) return vm.from_runtime(r.error());
+  if (auto r = vm.m_runtime.select_sensor(vm.name_of(in), in.span, in.count == 1); !r)
+    return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 
@@ -71,11 +80,16 @@ ExecStatus Execute::probe_set(Interpreter& vm, const ir::Instruction& in, CallFr
     return ExecStatus::Running;
   }
   if (w == "CLRSRF") p.clearance_plane.reset();
-  if (w == "APPRCH") p.approach_mm = d, p.approach_explicit = true;
-  else if (w == "RETRCT") p.retract_mm = d;
-  else if (w == "SEARCH") p.search_mm = d;
-  else if (w == "CLRSRF") p.clearance_mm = d;
-  else if (w == "DEPTH") p.depth_mm = d;
+  if (w == "APPRCH")
+    p.approach_mm = d, p.approach_explicit = true;
+  else if (w == "RETRCT")
+    p.retract_mm = d;
+  else if (w == "SEARCH")
+    p.search_mm = d;
+  else if (w == "CLRSRF")
+    p.clearance_mm = d;
+  else if (w == "DEPTH")
+    p.depth_mm = d;
   return ExecStatus::Running;
 }
 
@@ -89,7 +103,8 @@ ExecStatus Execute::feed(Interpreter& vm, const ir::Instruction& in, CallFrame&)
       vm.m_runtime.scan_settings().feed_mm_s.reset();  // a scan runs at the measuring feed again
       return ExecStatus::Running;
     }
-    if (auto r = vm.m_runtime.restore_default_feed(kind == ir::FeedKind::Posvel, in.span); !r) return vm.from_runtime(r.error());
+    if (auto r = vm.m_runtime.restore_default_feed(kind == ir::FeedKind::Posvel, in.span); !r)
+      return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
   const auto state = vm.m_runtime.machine().state();
@@ -100,7 +115,8 @@ ExecStatus Execute::feed(Interpreter& vm, const ir::Instruction& in, CallFrame&)
     vm.m_runtime.scan_settings().feed_mm_s = mm_s;
     return ExecStatus::Running;
   }
-  auto r = kind == ir::FeedKind::Posvel ? vm.m_runtime.set_feeds(mm_s, std::nullopt, in.span) : vm.m_runtime.set_feeds(std::nullopt, mm_s, in.span);
+  auto r = kind == ir::FeedKind::Posvel ? vm.m_runtime.set_feeds(mm_s, std::nullopt, in.span)
+                                        : vm.m_runtime.set_feeds(std::nullopt, mm_s, in.span);
   if (!r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
@@ -115,10 +131,14 @@ ExecStatus Execute::accel(Interpreter& vm, const ir::Instruction& in, CallFrame&
   if (!v) return vm.fail(in.span, v.error());
   const std::string& unit = in.operands[1].word;
   double a = *v;
-  if (unit == "MPMM") a = *v * 1000.0 / 3600.0;
-  else if (unit == "IPMM") a = *v * 25.4 / 3600.0;
-  else if (unit == "IPSS") a = *v * 25.4;
-  else if (unit == "PCENT") return ExecStatus::Running;  // relative to an unknown maximum: leave unchanged
+  if (unit == "MPMM")
+    a = *v * 1000.0 / 3600.0;
+  else if (unit == "IPMM")
+    a = *v * 25.4 / 3600.0;
+  else if (unit == "IPSS")
+    a = *v * 25.4;
+  else if (unit == "PCENT")
+    return ExecStatus::Running;  // relative to an unknown maximum: leave unchanged
   if (auto r = vm.m_runtime.set_acceleration(a, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
@@ -169,8 +189,9 @@ ExecStatus Execute::meas_begin(Interpreter& vm, const ir::Instruction& in, CallF
   auto n = vm.number(in.operands[0].expr);
   if (!n) return vm.fail(in.span, n.error());
   if (vm.m_block)  // a JUMPTO left the earlier block before its ENDMES
-    return vm.fail(in.span, fmt::format("MEAS of {} while the block of {} is still open (a JUMPTO out of it skipped its ENDMES)",
-                                        vm.name_of(in), vm.m_block->feature));
+    return vm.fail(in.span,
+                   fmt::format("MEAS of {} while the block of {} is still open (a JUMPTO out of it skipped its ENDMES)",
+                               vm.name_of(in), vm.m_block->feature));
   vm.m_bad_point = vm.m_bad_geometry = false;  // BADPT and BADGT tell of this measurement from here on
   runtime::MeasBlock b;
   b.feature = vm.name_of(in);

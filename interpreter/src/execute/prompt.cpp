@@ -27,7 +27,8 @@ tl::expected<Value, std::string> Interpreter::prompt(const ir::Expr& e) {
     return e.type == ValueType::Integer ? Value::integer(std::trunc(v)) : Value::real(v);
   }
   m_runtime.warning(e.span, fmt::format("PROMPT '{}': no operator on the virtual CMM, answered {} (script the answers "
-                                        "with `metron run --answers FILE`)", question, text ? "''" : "0"));
+                                        "with `metron run --answers FILE`)",
+                                        question, text ? "''" : "0"));
   if (text) return Value::string("");
   return e.type == ValueType::Integer ? Value::integer(0) : Value::real(0);
 }

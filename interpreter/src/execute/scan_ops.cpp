@@ -10,9 +10,7 @@ using ir::Op;
 using ir::Operand;
 
 void Execute::add_scanning(ExecuteTable& t) {
-  add_rows(t, {
-      {Op::PathDef, &path_def}, {Op::ScanMode, &scan_mode}, {Op::ScanSet, &scan_set}, {Op::PaMeas, &pameas}
-  });
+  add_rows(t, {{Op::PathDef, &path_def}, {Op::ScanMode, &scan_mode}, {Op::ScanSet, &scan_set}, {Op::PaMeas, &pameas}});
 }
 
 // Op::PathDef
@@ -69,15 +67,21 @@ ExecStatus Execute::scan_set(Interpreter& vm, const ir::Instruction& in, CallFra
   const double len = vm.m_length_mm;
   const std::string& w = words[0];
   if (w == "LAW") {
-    scan.law = words[1] == "VC1" ? machine::ScanLaw::Vc1 : words[1] == "VC1P" ? machine::ScanLaw::Vc1Prime : machine::ScanLaw::Vc2;
+    scan.law = words[1] == "VC1"    ? machine::ScanLaw::Vc1
+               : words[1] == "VC1P" ? machine::ScanLaw::Vc1Prime
+                                    : machine::ScanLaw::Vc2;
     return ExecStatus::Running;
   }
   const double v = nums[0];
   if (!(v > 0)) return vm.fail(in.span, "the SCNSET/" + w + " value must be positive");
-  if (w == "DIST" || w == "DRAG") scan.sample_spacing_mm = v * len;  // DRAG: contact scanning, point spacing
-  else if (w == "CHORD") scan.chord_tolerance_mm = v * len;
-  else if (w == "ACCEL") scan.centripetal_accel_mm_s2 = v * len;
-  else if (w == "DEFLEC") scan.reference_deflection_mm = v * len;
+  if (w == "DIST" || w == "DRAG")
+    scan.sample_spacing_mm = v * len;  // DRAG: contact scanning, point spacing
+  else if (w == "CHORD")
+    scan.chord_tolerance_mm = v * len;
+  else if (w == "ACCEL")
+    scan.centripetal_accel_mm_s2 = v * len;
+  else if (w == "DEFLEC")
+    scan.reference_deflection_mm = v * len;
   return ExecStatus::Running;
 }
 

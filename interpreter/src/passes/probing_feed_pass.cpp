@@ -4,7 +4,8 @@
 namespace metron::interpreter::passes {
 namespace {
 
-void check_code(const std::vector<ir::Instruction>& code, const runtime::MeasurementRuntime& runtime, DiagnosticSink& sink) {
+void check_code(const std::vector<ir::Instruction>& code, const runtime::MeasurementRuntime& runtime,
+                DiagnosticSink& sink) {
   for (const auto& in : code) {
     if (in.op != ir::Op::Feed) continue;
     const auto& feed = std::get<ir::FeedPayload>(in.payload);

@@ -22,13 +22,15 @@ using asio::ip::tcp;
 
 /// The answer to one protocol command.
 struct Answer {
-  std::vector<std::string> data;      ///< bodies of its `#` lines
+  std::vector<std::string> data;  ///< bodies of its `#` lines
   std::optional<ResponseLine> error;
 };
 
 std::string number(double v) { return format_number(v, 9); }
 
-std::string xyz(const Vec3& p) { return "X(" + number(p.x()) + "), Y(" + number(p.y()) + "), Z(" + number(p.z()) + ")"; }
+std::string xyz(const Vec3& p) {
+  return "X(" + number(p.x()) + "), Y(" + number(p.y()) + "), Z(" + number(p.z()) + ")";
+}
 
 FaultKind fault_kind(int error_number) {
   switch (error_number) {
@@ -80,8 +82,8 @@ namespace {
 /// A tool the server offers, as its properties describe it.
 struct ServerTool {
   std::string name;
-  double radius_mm = 0;               ///< Tool.AvrRadius (0: no stylus, or not answered)
-  std::optional<Vec3> alignment;      ///< Tool.Alignment: from the tip towards the head
+  double radius_mm = 0;           ///< Tool.AvrRadius (0: no stylus, or not answered)
+  std::optional<Vec3> alignment;  ///< Tool.Alignment: from the tip towards the head
 };
 
 std::string describe(const DefineTool& d) {
@@ -115,15 +117,15 @@ struct ClientMachine::Impl {
   std::vector<std::string> transcript;
   std::deque<Command> queue;
   std::map<std::string, DefineTool> definitions;
-  std::map<std::string, ServerTool> mapped;     ///< DMIS sensor label -> the server's tool
+  std::map<std::string, ServerTool> mapped;             ///< DMIS sensor label -> the server's tool
   std::optional<std::vector<ServerTool>> server_tools;  ///< read once, on the first DefineTool
   std::function<void(const std::string&)> on_warning;
   std::optional<ToolInfo> tool;
   double positioning_feed = 0, measuring_feed = 0;
   std::size_t executed = 0;
-  std::optional<std::string> lost;        ///< why the connection is gone (then every command faults)
-  bool density_supported = true;          ///< the server answered ScanOnCurveDensity (or was not asked yet)
-  Vec3 last_position = Vec3::Zero();      ///< the last position the server answered
+  std::optional<std::string> lost;    ///< why the connection is gone (then every command faults)
+  bool density_supported = true;      ///< the server answered ScanOnCurveDensity (or was not asked yet)
+  Vec3 last_position = Vec3::Zero();  ///< the last position the server answered
 
   std::string read_line() {
     asio::read_until(socket, input, '\n');
@@ -178,7 +180,8 @@ struct ClientMachine::Impl {
     try {
       const Answer a = call("Get(X(), Y(), Z())");
       if (!a.data.empty())
-        last_position = {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0), item(a.data[0], "Z").value_or(0)};
+        last_position = {item(a.data[0], "X").value_or(0), item(a.data[0], "Y").value_or(0),
+                         item(a.data[0], "Z").value_or(0)};
     } catch (const std::runtime_error&) {  // lost: reported by the next command's fault
     }
     return last_position;
@@ -272,12 +275,14 @@ struct ClientMachine::Impl {
     const auto& path = body.path;
     if (path.segments.empty() || path.normals.size() != path.segments.size() + 1) {
       done.status = Response::Status::Fault;
-      done.fault = Fault{FaultKind::BadCommand, "a scan path needs segments and a normal at each point", last_position, 0};
+      done.fault =
+          Fault{FaultKind::BadCommand, "a scan path needs segments and a normal at each point", last_position, 0};
       return done;
     }
     const double e0 = body.reference_deflection_mm.value_or(0.3);
     std::vector<Vec3> points, normals;
-    for (std::size_t k = 0; k < path.segments.size(); ++k) points.push_back(path.segments[k].start()), normals.push_back(path.normals[k]);
+    for (std::size_t k = 0; k < path.segments.size(); ++k)
+      points.push_back(path.segments[k].start()), normals.push_back(path.normals[k]);
     points.push_back(path.segments.back().end()), normals.push_back(path.normals.back());
     const bool closed = points.size() > 3 && (points.back() - points.front()).norm() < 1e-6;
     if (closed) points.pop_back(), normals.pop_back();
@@ -285,10 +290,12 @@ struct ClientMachine::Impl {
     for (std::size_t k = 0; k < points.size(); ++k) {
       const Vec3 n = normals[k].normalized();
       const Vec3 p = points[k] + e0 * n;
-      data += (k ? ", " : "") + number(p.x()) + ", " + number(p.y()) + ", " + number(p.z()) + ", " + number(n.x()) + ", " +
-              number(n.y()) + ", " + number(n.z());
+      data += (k ? ", " : "") + number(p.x()) + ", " + number(p.y()) + ", " + number(p.z()) + ", " + number(n.x()) +
+              ", " + number(n.y()) + ", " + number(n.z());
     }
-    return scan_command(command_tag, std::string("ScanOnCurve(Closed(") + (closed ? "1" : "0") + "), Format(X(), Y(), Z(), IJK()), Data(" + data + "))",
+    return scan_command(command_tag,
+                        std::string("ScanOnCurve(Closed(") + (closed ? "1" : "0") +
+                            "), Format(X(), Y(), Z(), IJK()), Data(" + data + "))",
                         e0, body.speed_mm_s.value_or(measuring_feed), body.sample_spacing_mm, true);
   }
 
@@ -298,7 +305,8 @@ struct ClientMachine::Impl {
     const Vec3 n = body.start_normal.normalized();
     const double step = body.sample_spacing_mm > 0 ? body.sample_spacing_mm : 0.1;
     // I++ gives the direction as a point D: the start plus the direction.
-    const std::string start = v3(body.start_mm) + ", " + v3(n) + ", " + v3(body.start_mm + body.direction.normalized()) + ", " + number(step);
+    const std::string start =
+        v3(body.start_mm) + ", " + v3(n) + ", " + v3(body.start_mm + body.direction.normalized()) + ", " + number(step);
     std::string end;
     const Vec3 ed = body.end.direction.normalized();
     switch (body.end.kind) {
@@ -307,9 +315,12 @@ struct ClientMachine::Impl {
       case ContourEnd::Kind::Cylinder: end = "EndIsCyl"; break;
     }
     std::string end_args = v3(body.end.point_mm);
-    if (body.end.kind == ContourEnd::Kind::Sphere) end_args += ", " + number(body.end.diameter_mm);
-    else if (body.end.kind == ContourEnd::Kind::Plane) end_args += ", " + v3(ed) + ", " + std::to_string(body.end.crossings);
-    else end_args += ", " + v3(ed) + ", " + number(body.end.diameter_mm) + ", " + std::to_string(body.end.crossings);
+    if (body.end.kind == ContourEnd::Kind::Sphere)
+      end_args += ", " + number(body.end.diameter_mm);
+    else if (body.end.kind == ContourEnd::Kind::Plane)
+      end_args += ", " + v3(ed) + ", " + std::to_string(body.end.crossings);
+    else
+      end_args += ", " + v3(ed) + ", " + number(body.end.diameter_mm) + ", " + std::to_string(body.end.crossings);
     end_args += ", " + v3(n);  // the surface normal at the end: not known ahead, the start's stands for it
     std::string text;
     if (body.section.kind == ContourSection::Kind::Plane) {
@@ -319,13 +330,15 @@ struct ClientMachine::Impl {
         Response r;
         r.tag = command_tag;
         r.status = Response::Status::Fault;
-        r.fault = Fault{FaultKind::BadCommand, "I++ DME has no cylinder section with a cylinder end (ScanInCylEndIsCyl)", last_position, 0};
+        r.fault = Fault{FaultKind::BadCommand,
+                        "I++ DME has no cylinder section with a cylinder end (ScanInCylEndIsCyl)", last_position, 0};
         return r;
       }
-      text = "ScanInCyl" + end + "(" + v3(body.section.point_mm) + ", " + v3(body.section.direction.normalized()) + ", " + start + ", " + end_args + ")";
+      text = "ScanInCyl" + end + "(" + v3(body.section.point_mm) + ", " + v3(body.section.direction.normalized()) +
+             ", " + start + ", " + end_args + ")";
     }
-    return scan_command(command_tag, text, body.reference_deflection_mm.value_or(0.3), body.speed_mm_s.value_or(measuring_feed),
-                        body.sample_spacing_mm, false);
+    return scan_command(command_tag, text, body.reference_deflection_mm.value_or(0.3),
+                        body.speed_mm_s.value_or(measuring_feed), body.sample_spacing_mm, false);
   }
 
   /// Sends a scan command with its speed and report format and reads its samples (X, Y, Z, IJK).
@@ -356,7 +369,8 @@ struct ClientMachine::Impl {
       std::size_t start = 0;
       while (start < body_line.size()) {
         const auto comma = body_line.find(',', start);
-        const std::string field = body_line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        const std::string field =
+            body_line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
         double x = 0;
         const auto* b = field.data() + field.find_first_not_of(' ');
         std::from_chars(b, field.data() + field.size(), x);
@@ -401,13 +415,15 @@ struct ClientMachine::Impl {
               Response r;
               r.tag = c.tag;
               r.status = Response::Status::Fault;
-              r.fault = Fault{FaultKind::BadCommand, "two-touch and blended cycles are not part of I++ DME PtMeas", Vec3::Zero(), 0};
+              r.fault = Fault{FaultKind::BadCommand, "two-touch and blended cycles are not part of I++ DME PtMeas",
+                              Vec3::Zero(), 0};
               return r;
             }
             const double speed = body.speed_mm_s.value_or(measuring_feed);
-            if (auto f = check(call("SetProp(Tool.PtMeasPar.Approach(" + number(body.approach_mm) + "), Tool.PtMeasPar.Search(" +
-                                    number(body.search_mm) + "), Tool.PtMeasPar.Retract(" + number(body.retract_mm) +
-                                    ")" + (speed > 0 ? ", Tool.PtMeasPar.Speed(" + number(speed) + ")" : std::string()) + ")")))
+            if (auto f = check(
+                    call("SetProp(Tool.PtMeasPar.Approach(" + number(body.approach_mm) + "), Tool.PtMeasPar.Search(" +
+                         number(body.search_mm) + "), Tool.PtMeasPar.Retract(" + number(body.retract_mm) + ")" +
+                         (speed > 0 ? ", Tool.PtMeasPar.Speed(" + number(speed) + ")" : std::string()) + ")")))
               return *f;
             const Vec3 n = body.normal.normalized();
             const double r_mm = tool ? tool->effective_radius_mm : 0;
@@ -417,9 +433,11 @@ struct ClientMachine::Impl {
             const Answer m = call("PtMeas(" + xyz(body.nominal_mm + r_mm * n) + ", IJK(" + number(n.x()) + ", " +
                                   number(n.y()) + ", " + number(n.z()) + "))");
             if (auto f = check(m)) return *f;
-            if (m.data.empty()) return fault(c.tag, ResponseLine{{}, ResponseLine::Kind::Error, "", 2, 1003, "PtMeas", "No touch"});
+            if (m.data.empty())
+              return fault(c.tag, ResponseLine{{}, ResponseLine::Kind::Error, "", 2, 1003, "PtMeas", "No touch"});
             Hit h;
-            h.centre_mm = {item(m.data[0], "X").value_or(0), item(m.data[0], "Y").value_or(0), item(m.data[0], "Z").value_or(0)};
+            h.centre_mm = {item(m.data[0], "X").value_or(0), item(m.data[0], "Y").value_or(0),
+                           item(m.data[0], "Z").value_or(0)};
             h.normal = n;
             h.ball_radius_mm = item(m.data[0], "ER").value_or(r_mm);
             done.hit = h;
@@ -462,7 +480,8 @@ struct ClientMachine::Impl {
               if (!(measuring_feed > 0)) measuring_feed = item(feeds.data[0], "Tool.PtMeasPar.Speed").value_or(0);
             }
             if (positioning_feed > 0 && measuring_feed > 0)
-              call("SetProp(Tool.GoToPar.Speed(" + number(positioning_feed) + "), Tool.PtMeasPar.Speed(" + number(measuring_feed) + "))");
+              call("SetProp(Tool.GoToPar.Speed(" + number(positioning_feed) + "), Tool.PtMeasPar.Speed(" +
+                   number(measuring_feed) + "))");
             return done;
           } else if constexpr (std::is_same_v<T, QualifyTool>) {
             if (auto f = check(call("ReQualify()"))) return *f;
@@ -476,10 +495,14 @@ struct ClientMachine::Impl {
           } else if constexpr (std::is_same_v<T, SetFeeds>) {
             std::string props;
             auto add = [&](const std::string& p) { props += (props.empty() ? "" : ", ") + p; };
-            if (body.positioning_mm_s > 0) add("Tool.GoToPar.Speed(" + number(body.positioning_mm_s) + ")"), positioning_feed = body.positioning_mm_s;
-            if (body.measuring_mm_s > 0) add("Tool.PtMeasPar.Speed(" + number(body.measuring_mm_s) + ")"), measuring_feed = body.measuring_mm_s;
+            if (body.positioning_mm_s > 0)
+              add("Tool.GoToPar.Speed(" + number(body.positioning_mm_s) + ")"),
+                  positioning_feed = body.positioning_mm_s;
+            if (body.measuring_mm_s > 0)
+              add("Tool.PtMeasPar.Speed(" + number(body.measuring_mm_s) + ")"), measuring_feed = body.measuring_mm_s;
             if (body.acceleration_mm_s2 > 0)
-              add("Tool.GoToPar.Accel(" + number(body.acceleration_mm_s2) + "), Tool.PtMeasPar.Accel(" + number(body.acceleration_mm_s2) + ")");
+              add("Tool.GoToPar.Accel(" + number(body.acceleration_mm_s2) + "), Tool.PtMeasPar.Accel(" +
+                  number(body.acceleration_mm_s2) + ")");
             if (!props.empty())
               if (auto f = check(call("SetProp(" + props + ")"))) return *f;
             return done;
@@ -491,7 +514,8 @@ struct ClientMachine::Impl {
             Response r;
             r.tag = c.tag;
             r.status = Response::Status::Fault;
-            r.fault = Fault{FaultKind::BadCommand, "segmented scans (ScanBufferWrite) are not mapped onto I++ DME", Vec3::Zero(), 0};
+            r.fault = Fault{FaultKind::BadCommand, "segmented scans (ScanBufferWrite) are not mapped onto I++ DME",
+                            Vec3::Zero(), 0};
             return r;
           }
         },
@@ -563,6 +587,8 @@ std::vector<Command> ClientMachine::queued() const { return {m_impl->queue.begin
 
 const std::vector<std::string>& ClientMachine::transcript() const { return m_impl->transcript; }
 
-void ClientMachine::on_warning(std::function<void(const std::string&)> handler) { m_impl->on_warning = std::move(handler); }
+void ClientMachine::on_warning(std::function<void(const std::string&)> handler) {
+  m_impl->on_warning = std::move(handler);
+}
 
 }  // namespace metron::machine::ipp

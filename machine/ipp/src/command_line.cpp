@@ -9,8 +9,8 @@
 #include "metron/machine/ipp/command_line.hpp"
 
 #include <cctype>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
@@ -110,10 +110,14 @@ struct Reader {
       a.kind = Argument::Kind::Empty;
       return a;
     }
-    tl::expected<Argument, ParseError> r = error(ErrorCode::IncorrectArguments, "an unexpected character in the arguments");
-    if (is_digit(c) || c == '+' || c == '-' || c == '.') r = number();
-    else if (c == '"') r = string();
-    else if (is_alpha(c) || c == '_') r = word(depth);
+    tl::expected<Argument, ParseError> r =
+        error(ErrorCode::IncorrectArguments, "an unexpected character in the arguments");
+    if (is_digit(c) || c == '+' || c == '-' || c == '.')
+      r = number();
+    else if (c == '"')
+      r = string();
+    else if (is_alpha(c) || c == '_')
+      r = word(depth);
     if (!r) return r;
     skip_spaces();
     if (peek() != ',' && peek() != ')') {
@@ -146,8 +150,10 @@ struct Reader {
 
 std::string Tag::text() const {
   char buffer[8];
-  if (event) std::snprintf(buffer, sizeof buffer, "E%04u", static_cast<unsigned>(number % 10000));
-  else std::snprintf(buffer, sizeof buffer, "%05u", static_cast<unsigned>(number % 100000));
+  if (event)
+    std::snprintf(buffer, sizeof buffer, "E%04u", static_cast<unsigned>(number % 10000));
+  else
+    std::snprintf(buffer, sizeof buffer, "%05u", static_cast<unsigned>(number % 100000));
   return buffer;
 }
 

@@ -46,7 +46,8 @@ std::string format_number(double value, int decimals) {
 
 tl::expected<ResponseLine, std::string> parse_response_line(std::string_view line) {
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.remove_suffix(1);
-  if (line.size() < 7 || line[5] != ' ') return tl::unexpected(std::string("a response line is a tag, a space and a kind"));
+  if (line.size() < 7 || line[5] != ' ')
+    return tl::unexpected(std::string("a response line is a tag, a space and a kind"));
   ResponseLine r;
   r.tag.event = line[0] == 'E';
   for (std::size_t k = r.tag.event ? 1 : 0; k < 5; ++k) {

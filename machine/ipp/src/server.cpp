@@ -65,7 +65,7 @@ struct ServerCore {
   tcp::acceptor acceptor{io};
   asio::signal_set signals{io};
   ExchangeLog log;
-  bool busy = false;                      ///< a client holds the session
+  bool busy = false;  ///< a client holds the session
   std::shared_ptr<Connection> active;
 
   ServerCore(Machine& m, SessionOptions s, ServerOptions o)
@@ -96,7 +96,7 @@ struct Connection : std::enable_shared_from_this<Connection> {
   asio::steady_timer pacing;
   Session session;
   std::string peer;
-  std::deque<std::string> outbox;         ///< lines to write, in order
+  std::deque<std::string> outbox;                    ///< lines to write, in order
   std::deque<std::pair<double, std::string>> paced;  ///< the current answer's lines held back, with their due time
   /// A command received while an answer is paced: acknowledged at once when its tag is readable
   /// (`&` says the server has it queued), executed after the answer.
@@ -106,16 +106,19 @@ struct Connection : std::enable_shared_from_this<Connection> {
   };
   std::deque<Waiting> waiting;
   std::chrono::steady_clock::time_point acknowledged_at;  ///< when the paced command was acknowledged
-  std::uint64_t pace_id = 0;              ///< which pacing a timer belongs to
+  std::uint64_t pace_id = 0;                              ///< which pacing a timer belongs to
   bool pacing_now = false;
-  bool draining = false;                  ///< answered() is running the waiting commands
+  bool draining = false;  ///< answered() is running the waiting commands
   bool reading = false;
   bool writing = false;
-  bool input_closed = false;              ///< the client closed its side: finish, then close
+  bool input_closed = false;  ///< the client closed its side: finish, then close
   bool closed = false;
 
   Connection(ServerCore& s, tcp::socket sock)
-      : server(s), socket(std::move(sock)), input(s.options.max_line_bytes), pacing(s.io),
+      : server(s),
+        socket(std::move(sock)),
+        input(s.options.max_line_bytes),
+        pacing(s.io),
         session(s.machine, s.session_options) {
     asio::error_code ec;
     const auto ep = socket.remote_endpoint(ec);
@@ -152,7 +155,8 @@ struct Connection : std::enable_shared_from_this<Connection> {
         }
         return;
       }
-      std::string line(asio::buffers_begin(self->input.data()), asio::buffers_begin(self->input.data()) + static_cast<std::ptrdiff_t>(n));
+      std::string line(asio::buffers_begin(self->input.data()),
+                       asio::buffers_begin(self->input.data()) + static_cast<std::ptrdiff_t>(n));
       self->input.consume(n);
       while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
       if (!line.empty()) {  // a blank line is no command: nothing to answer
@@ -290,8 +294,10 @@ struct Connection : std::enable_shared_from_this<Connection> {
   // Closes once the session ended (or the client stopped sending) and every answer is written.
   void maybe_close() {
     if (closed || writing || !outbox.empty() || pacing_now) return;
-    if (session.ended()) close("session ended");
-    else if (input_closed && waiting.empty()) close("disconnected");
+    if (session.ended())
+      close("session ended");
+    else if (input_closed && waiting.empty())
+      close("disconnected");
   }
 
   void close(const std::string& why) {
@@ -316,7 +322,8 @@ void ServerCore::active_close() {
 void ServerCore::refuse(std::shared_ptr<tcp::socket> socket) {
   // The protocol serves one client: the newcomer learns why and is closed.
   auto line = std::make_shared<std::string>(
-      format_error(Tag{true, 0}, ErrorCode::BadContext, "another client holds the session; one client at a time") + "\r\n");
+      format_error(Tag{true, 0}, ErrorCode::BadContext, "another client holds the session; one client at a time") +
+      "\r\n");
   asio::error_code ec;
   const auto ep = socket->remote_endpoint(ec);
   log.write("refused", ec ? "?" : ep.address().to_string() + ":" + std::to_string(ep.port()));
@@ -367,7 +374,9 @@ void Server::listen() {
   if (!ec) a.set_option(tcp::acceptor::reuse_address(true), ec);
   if (!ec) a.bind(endpoint, ec);
   if (!ec) a.listen(asio::socket_base::max_listen_connections, ec);
-  if (ec) throw std::runtime_error("cannot listen on " + m_impl->options.host + ":" + std::to_string(m_impl->options.port) + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot listen on " + m_impl->options.host + ":" + std::to_string(m_impl->options.port) +
+                             ": " + ec.message());
   m_impl->log.write("listening", m_impl->options.host + ":" + std::to_string(port()));
 }
 

@@ -31,14 +31,14 @@ struct NumberProperty {
 struct Tool {
   std::string name;
   int id = 0;
-  std::optional<DefineTool> definition;   ///< none: NoTool and RefTool (no stylus)
+  std::optional<DefineTool> definition;  ///< none: NoTool and RefTool (no stylus)
   bool defined_on_machine = false;
-  std::optional<double> qualified_radius_mm;  ///< the effective radius from the last ReQualify
+  std::optional<double> qualified_radius_mm;      ///< the effective radius from the last ReQualify
   std::map<std::string, NumberProperty> numbers;  ///< "GoToPar.Speed", "PtMeasPar.Search", ...
 };
 
-const std::vector<std::string> k_number_properties{"GoToPar.Speed",     "GoToPar.Accel",      "PtMeasPar.Speed",
-                                                   "PtMeasPar.Accel",   "PtMeasPar.Approach", "PtMeasPar.Retract",
+const std::vector<std::string> k_number_properties{"GoToPar.Speed",   "GoToPar.Accel",      "PtMeasPar.Speed",
+                                                   "PtMeasPar.Accel", "PtMeasPar.Approach", "PtMeasPar.Retract",
                                                    "PtMeasPar.Search"};
 
 /// A coordinate system's placement: machine = origin + R * p, R = Rz(psi) Rx(theta) Rz(phi)
@@ -55,18 +55,18 @@ struct Csy {
 
 const std::vector<std::string> k_csy_names{"MachineCsy", "MoveableMachineCsy", "MultipleArmCsy", "RotaryTableVarCsy",
                                            "PartCsy"};
-const std::vector<std::string> k_transform_names{"PartCsy", "MoveableMachineCsy", "MultipleArmCsy", "JogDisplayCsy",
-                                                 "JogMoveCsy", "SensorCsy"};
+const std::vector<std::string> k_transform_names{"PartCsy",       "MoveableMachineCsy", "MultipleArmCsy",
+                                                 "JogDisplayCsy", "JogMoveCsy",         "SensorCsy"};
 
 /// A daemon started by OnMoveReportE. With Time and/or Dis it reports along the motion whenever
 /// both given conditions hold since its last report (I++ DME 1.4: Time the least time between
 /// reports, Dis the least distance); with neither, once at the end of each motion.
 struct Daemon {
-  std::vector<std::string> items;         ///< "X", "Y", "Z", "R", "Tool.A", ...
-  std::optional<double> every_s;          ///< Time(s)
-  std::optional<double> every_mm;         ///< Dis(d)
-  double last_s = 0;                      ///< controller clock of the last report (or the command's start)
-  Vec3 last_mm = Vec3::Zero();            ///< machine position then
+  std::vector<std::string> items;  ///< "X", "Y", "Z", "R", "Tool.A", ...
+  std::optional<double> every_s;   ///< Time(s)
+  std::optional<double> every_mm;  ///< Dis(d)
+  double last_s = 0;               ///< controller clock of the last report (or the command's start)
+  Vec3 last_mm = Vec3::Zero();     ///< machine position then
   [[nodiscard]] bool along_motion() const { return every_s || every_mm; }
 };
 
@@ -83,15 +83,22 @@ const std::set<std::string> k_unsupported{
     // libjdme2x lists them) that the server does not carry out: a client that tries one learns
     // the command is known and unsupported (0501), not that it is no command at all (0507).
     "LockPosition", "ScanOnHelix", "ScanUnknownDensity", "PtMeasSelfCenter", "PtMeasSelfCenterLocked", "GoToOnCircle",
-    "GoToOnSpiral", "Step", "IsAlignable", "OnMoveReport", "EnumNameSpaces", "EnumerateMoverAxes", "GetSupportedCommands",
-    "GetSupportedArguments", "GetTemperatureSensors", "ReadTemperatureSensor", "ReadAllTemperatures",
-    "GetScaleTemperatures", "SetScaleTemperatures", "UpdateScaleTemperatures", "SetTemperatureCompensationOrigin",
-    "EnumToolCollection", "EnumAllToolCollections", "OpenToolCollection"};
+    "GoToOnSpiral", "Step", "IsAlignable", "OnMoveReport", "EnumNameSpaces", "EnumerateMoverAxes",
+    "GetSupportedCommands", "GetSupportedArguments", "GetTemperatureSensors", "ReadTemperatureSensor",
+    "ReadAllTemperatures", "GetScaleTemperatures", "SetScaleTemperatures", "UpdateScaleTemperatures",
+    "SetTemperatureCompensationOrigin", "EnumToolCollection", "EnumAllToolCollections", "OpenToolCollection"};
 /// The unsupported commands that would move the machine: they need Home first, as the supported
 /// ones do (NIST: 0507 before 0501).
-const std::set<std::string> k_unsupported_motion{"AlignPart",    "CenterPart",       "TiltPart",
-                                                 "TiltCenterPart", "ScanOnHelix",    "PtMeasSelfCenter",
-                                                 "PtMeasSelfCenterLocked", "GoToOnCircle", "GoToOnSpiral", "Step"};
+const std::set<std::string> k_unsupported_motion{"AlignPart",
+                                                 "CenterPart",
+                                                 "TiltPart",
+                                                 "TiltCenterPart",
+                                                 "ScanOnHelix",
+                                                 "PtMeasSelfCenter",
+                                                 "PtMeasSelfCenterLocked",
+                                                 "GoToOnCircle",
+                                                 "GoToOnSpiral",
+                                                 "Step"};
 
 bool is_event_command(std::string_view name) {
   return name == "AbortE" || name == "GetErrStatusE" || name == "GetPropE" || name == "OnMoveReportE" ||
@@ -110,10 +117,10 @@ struct Session::Impl {
   bool error_state = false;
   std::vector<std::string> pending_errors;  ///< error lines since the last ClearAllErrors
   std::vector<Tool> tools;
-  std::size_t active_tool = 0;              ///< index into tools
+  std::size_t active_tool = 0;  ///< index into tools
   std::size_t found_tool = 0;
   std::uint64_t next_machine_tag = 1;
-  std::map<std::string, Csy> csys;          ///< transformations by name
+  std::map<std::string, Csy> csys;  ///< transformations by name
   std::map<std::string, Csy> saved_csys;
   std::string active_csy = "MachineCsy";
   /// The Part object's properties (I++ DME 1.5 section 6.4): what the client says of the part's
@@ -123,7 +130,7 @@ struct Session::Impl {
   double part_expansion_per_k = 0.0;
   std::vector<std::string> pt_report{"X", "Y", "Z"};
   std::vector<std::string> scan_report{"X", "Y", "Z"};
-  std::map<std::string, Daemon> daemons;    ///< by tag text
+  std::map<std::string, Daemon> daemons;  ///< by tag text
   double scan_hint_min_radius_mm = 0;
   /// ScanOnCurveDensity: at most this far between reported points (Dis), at most this angle in
   /// degrees between the chords of three consecutive points (Angle); none: the server's choice.
@@ -132,9 +139,9 @@ struct Session::Impl {
   /// limits untouched, so a client that never sets Accel moves exactly as a direct run.
   double sent_acceleration = -1;
   double motion_s = 0;
-  bool observing = false;                   ///< the machine reports its motion (daemons along it)
-  double command_start_s = 0;               ///< controller clock when the command started
-  std::map<std::size_t, double> line_due_s; ///< reply lines due before the command's end (reports)
+  bool observing = false;                    ///< the machine reports its motion (daemons along it)
+  double command_start_s = 0;                ///< controller clock when the command started
+  std::map<std::size_t, double> line_due_s;  ///< reply lines due before the command's end (reports)
   /// The last command, when it moved the machine and ended without error: an AbortE received
   /// while its answer is still paced stops it (interrupt()).
   struct Running {
@@ -191,8 +198,14 @@ struct Session::Impl {
     if (active_csy == "MachineCsy" || active_csy == "RotaryTableVarCsy") return {};
     return csys.at(active_csy);
   }
-  [[nodiscard]] Vec3 to_machine(const Vec3& p) const { const Csy c = active(); return c.origin() + c.rotation() * p; }
-  [[nodiscard]] Vec3 to_csy(const Vec3& m) const { const Csy c = active(); return c.rotation().transpose() * (m - c.origin()); }
+  [[nodiscard]] Vec3 to_machine(const Vec3& p) const {
+    const Csy c = active();
+    return c.origin() + c.rotation() * p;
+  }
+  [[nodiscard]] Vec3 to_csy(const Vec3& m) const {
+    const Csy c = active();
+    return c.rotation().transpose() * (m - c.origin());
+  }
   [[nodiscard]] Vec3 dir_to_machine(const Vec3& d) const { return active().rotation() * d; }
   [[nodiscard]] Vec3 dir_to_csy(const Vec3& d) const { return active().rotation().transpose() * d; }
 
@@ -207,8 +220,8 @@ struct Session::Impl {
   }
   // X0, Y0, Z0, Theta, Psi, Phi as GetCsyTransformation and GetNamedCsyTransformation answer them.
   static std::string transformation_text(const Csy& t) {
-    return format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) + ", " + format_number(t.theta) +
-           ", " + format_number(t.psi) + ", " + format_number(t.phi);
+    return format_number(t.x0) + ", " + format_number(t.y0) + ", " + format_number(t.z0) + ", " +
+           format_number(t.theta) + ", " + format_number(t.psi) + ", " + format_number(t.phi);
   }
   static const std::string& one_string(const Args& a) {
     if (a.size() != 1) fail(ErrorCode::IncorrectArguments);
@@ -229,7 +242,8 @@ struct Session::Impl {
     std::vector<std::string> v;
     if (a.empty()) fail(ErrorCode::IncorrectArguments);
     for (const auto& x : a) {
-      if (x.kind != Argument::Kind::Call || !x.args.empty() || !allowed.count(x.text)) fail(ErrorCode::IncorrectArguments);
+      if (x.kind != Argument::Kind::Call || !x.args.empty() || !allowed.count(x.text))
+        fail(ErrorCode::IncorrectArguments);
       if (std::find(v.begin(), v.end(), x.text) != v.end()) fail(ErrorCode::IncorrectArguments);
       v.push_back(x.text);
     }
@@ -265,7 +279,8 @@ struct Session::Impl {
     machine.submit(std::move(c));
     // The daemons that report along the motion watch it while it runs, and only then (the
     // machine outlives the session, and a cycle without a watcher costs nothing).
-    const bool watch = observing && std::any_of(daemons.begin(), daemons.end(), [](const auto& d) { return d.second.along_motion(); });
+    const bool watch =
+        observing && std::any_of(daemons.begin(), daemons.end(), [](const auto& d) { return d.second.along_motion(); });
     struct Watching {
       Machine* m;
       ~Watching() {
@@ -320,7 +335,8 @@ struct Session::Impl {
       if (!observing || !d.along_motion()) move_report(daemon_tag, d, p, std::nullopt);
   }
   /// A daemon's report; `due_s`: its time after the command's start (none: with the command's end).
-  void move_report(const std::string& daemon_tag, const Daemon& d, const Vec3& machine_mm, std::optional<double> due_s) {
+  void move_report(const std::string& daemon_tag, const Daemon& d, const Vec3& machine_mm,
+                   std::optional<double> due_s) {
     std::string body;
     const Vec3 p = to_csy(machine_mm);
     for (const char* item : {"R", "X", "Y", "Z", "Tool.A", "Tool.B", "Tool.C"}) {
@@ -359,8 +375,8 @@ struct Session::Impl {
   // ---- properties
   struct PropertyRef {
     Tool* tool;
-    std::string prefix;   ///< "Tool" or "FoundTool"
-    std::string path;     ///< after the prefix: "GoToPar.Speed.Max", "Name", ...
+    std::string prefix;  ///< "Tool" or "FoundTool"
+    std::string path;    ///< after the prefix: "GoToPar.Speed.Max", "Name", ...
   };
   PropertyRef property(const std::string& dotted) {
     const auto dot = dotted.find('.');
@@ -369,7 +385,8 @@ struct Session::Impl {
     if (dot == std::string::npos) fail(ErrorCode::IncorrectArguments);
     PropertyRef ref{head == "Tool" ? &tools[active_tool] : &tools[found_tool], head, dotted.substr(dot + 1)};
     // NoTool cannot probe: it has no PtMeasPar (NIST: 0507).
-    if (head == "Tool" && ref.tool->name == "NoTool" && ref.path.rfind("PtMeasPar", 0) == 0) fail(ErrorCode::IllegalCommand);
+    if (head == "Tool" && ref.tool->name == "NoTool" && ref.path.rfind("PtMeasPar", 0) == 0)
+      fail(ErrorCode::IllegalCommand);
     return ref;
   }
   /// Part.Temperature, Part.XpanCoefficient; nullptr for another Part. name (0509).
@@ -438,7 +455,7 @@ struct Session::Impl {
       for (const char* name : {"Temperature", "XpanCoefficient"}) data("\"" + std::string(name) + "\", \"Number\"");
       return;
     }
-    auto p = property(dotted + ".X");  // validates the head
+    auto p = property(dotted + ".X");                        // validates the head
     std::string node = p.path.substr(0, p.path.size() - 1);  // "" or "GoToPar." or "GoToPar.Speed."
     if (!node.empty()) node.pop_back();
     std::vector<std::pair<std::string, std::string>> children;
@@ -519,7 +536,8 @@ struct Session::Impl {
         separate[static_cast<std::size_t>(x.text[0] - 'I')] = *v;
       }
     }
-    const int given = static_cast<int>(std::count_if(separate.begin(), separate.end(), [](const auto& c) { return c.has_value(); }));
+    const int given =
+        static_cast<int>(std::count_if(separate.begin(), separate.end(), [](const auto& c) { return c.has_value(); }));
     if (given == 0) return ijk;
     if (given != 3 || ijk) fail(ErrorCode::IncorrectArguments);
     return Vec3(*separate[0], *separate[1], *separate[2]);
@@ -565,14 +583,20 @@ struct Session::Impl {
     std::string body;
     for (const auto& item : pt_report) {
       std::string v;
-      if (item == "X") v = format_number(s.x());
-      else if (item == "Y") v = format_number(s.y());
-      else if (item == "Z") v = format_number(s.z());
+      if (item == "X")
+        v = format_number(s.x());
+      else if (item == "Y")
+        v = format_number(s.y());
+      else if (item == "Z")
+        v = format_number(s.z());
       // IJKAct (I++ DME 1.5), the normal the sensor measured: a touch-trigger probe measures none,
       // so it is the probing direction, as IJK.
-      else if (item == "IJK" || item == "IJKAct") v = format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z());
-      else if (item == "ER") v = format_number(r.hit->ball_radius_mm);
-      else v = "0";  // R, Tool.A/B/C: no rotary table, a fixed head
+      else if (item == "IJK" || item == "IJKAct")
+        v = format_number(d.x()) + ", " + format_number(d.y()) + ", " + format_number(d.z());
+      else if (item == "ER")
+        v = format_number(r.hit->ball_radius_mm);
+      else
+        v = "0";  // R, Tool.A/B/C: no rotary table, a fixed head
       body += (body.empty() ? "" : ", ") + item + "(" + v + ")";
     }
     data(body);
@@ -628,7 +652,8 @@ struct Session::Impl {
       const double delta = v[9] * k_deg, sfa = v[10];
       step = v[11];
       // NIST: a zero radius, or a start not in the plane through C normal to IJK, is 0502.
-      if ((s - c).norm() < 1e-9 || std::abs((s - c).dot(w)) > 1e-6 * (s - c).norm()) fail(ErrorCode::IncorrectArguments);
+      if ((s - c).norm() < 1e-9 || std::abs((s - c).dot(w)) > 1e-6 * (s - c).norm())
+        fail(ErrorCode::IncorrectArguments);
       Vec3 e0 = (s - c) - (s - c).dot(w) * w;
       const double radius = e0.norm();
       if (step <= 0 || radius < 1e-9) fail(ErrorCode::BadArgument);
@@ -646,8 +671,11 @@ struct Session::Impl {
       for (int k = 0; k < n; ++k) {
         const double a0 = delta * k / n, a1 = delta * (k + 1) / n;
         const auto radial = [&](double t) { return Vec3(std::cos(t) * e0 + std::sin(t) * e1); };
-        const auto tangent = [&](double t) { return Vec3((delta > 0 ? 1 : -1) * (-std::sin(t) * e0 + std::cos(t) * e1)); };
-        sp.path.segments.push_back(geometry::PccSegment::hermite(c + rc * radial(a0), c + rc * radial(a1), tangent(a0), tangent(a1)));
+        const auto tangent = [&](double t) {
+          return Vec3((delta > 0 ? 1 : -1) * (-std::sin(t) * e0 + std::cos(t) * e1));
+        };
+        sp.path.segments.push_back(
+            geometry::PccSegment::hermite(c + rc * radial(a0), c + rc * radial(a1), tangent(a0), tangent(a1)));
         sp.path.normals.push_back(sign * radial(a0));
       }
       sp.path.normals.push_back(sign * Vec3(std::cos(delta) * e0 + std::sin(delta) * e1));
@@ -670,15 +698,20 @@ struct Session::Impl {
     std::string body;
     for (const auto& sample : resp.scan) {
       const Vec3 p = to_csy(sample.centre_mm);
-      const Vec3 d = sample.deflection_mm.norm() > 0 ? Vec3(dir_to_csy(sample.deflection_mm.normalized())) : Vec3::Zero();
+      const Vec3 d =
+          sample.deflection_mm.norm() > 0 ? Vec3(dir_to_csy(sample.deflection_mm.normalized())) : Vec3::Zero();
       for (const auto& item : scan_report) {
         if (!body.empty()) body += ",";
-        if (item == "X") body += format_number(p.x());
-        else if (item == "Y") body += format_number(p.y());
-        else if (item == "Z") body += format_number(p.z());
+        if (item == "X")
+          body += format_number(p.x());
+        else if (item == "Y")
+          body += format_number(p.y());
+        else if (item == "Z")
+          body += format_number(p.z());
         else if (item == "IJK" || item == "IJKAct")  // the deflection's direction: what the probe measured
           body += format_number(d.x()) + "," + format_number(d.y()) + "," + format_number(d.z());
-        else body += "0";
+        else
+          body += "0";
       }
     }
     data(body);
@@ -701,12 +734,17 @@ struct Session::Impl {
     for (const auto& f : a[1].args) {
       const std::string n = f.text;
       if (std::find(names.begin(), names.end(), n) != names.end()) fail(ErrorCode::IncorrectArguments);
-      if (f.kind == Argument::Kind::Name && n == "tag") columns += 1;
-      else if (f.kind != Argument::Kind::Call || !f.args.empty()) fail(ErrorCode::IncorrectArguments);
-      else if (n == "IJK") columns += 3;
-      else if (n == "X" || n == "Y" || n == "Z" || n == "pi" || n == "pj" || n == "pk" || n == "si" || n == "sj" || n == "sk")
+      if (f.kind == Argument::Kind::Name && n == "tag")
         columns += 1;
-      else fail(ErrorCode::BadArgument);
+      else if (f.kind != Argument::Kind::Call || !f.args.empty())
+        fail(ErrorCode::IncorrectArguments);
+      else if (n == "IJK")
+        columns += 3;
+      else if (n == "X" || n == "Y" || n == "Z" || n == "pi" || n == "pj" || n == "pk" || n == "si" || n == "sj" ||
+               n == "sk")
+        columns += 1;
+      else
+        fail(ErrorCode::BadArgument);
       names.push_back(n);
     }
     // X, Y, Z, IJK first, in this order: the form of the standard's table and of the NIST files.
@@ -820,7 +858,8 @@ struct Session::Impl {
     }
     // NIST: D at S (no direction), or S on the section cylinder's axis, is 0502.
     const Vec3 across = toward - toward.dot(c.start_normal) * c.start_normal;
-    if (toward.norm() < 1e-9 || across.norm() < 1e-9 * std::max(1.0, toward.norm())) fail(ErrorCode::IncorrectArguments);
+    if (toward.norm() < 1e-9 || across.norm() < 1e-9 * std::max(1.0, toward.norm()))
+      fail(ErrorCode::IncorrectArguments);
     if (in_cyl) {
       const Vec3 r = c.start_mm - c.section.point_mm;
       if ((r - r.dot(c.section.direction) * c.section.direction).norm() < 1e-9) fail(ErrorCode::IncorrectArguments);
@@ -1145,7 +1184,8 @@ struct Session::Impl {
     command_text = parsed->text;
     out->push_back(format_ack(tag));
     running.reset();
-    if (observing && std::any_of(daemons.begin(), daemons.end(), [](const auto& d) { return d.second.along_motion(); })) {
+    if (observing &&
+        std::any_of(daemons.begin(), daemons.end(), [](const auto& d) { return d.second.along_motion(); })) {
       const MachineState s = machine.state();
       command_start_s = s.time_s;
       for (auto& [daemon_tag, d] : daemons) d.last_s = s.time_s, d.last_mm = s.position_mm;
@@ -1192,7 +1232,8 @@ struct Session::Impl {
   }
 };
 
-Session::Session(Machine& machine, SessionOptions options) : m_impl(std::make_unique<Impl>(machine, std::move(options))) {}
+Session::Session(Machine& machine, SessionOptions options)
+    : m_impl(std::make_unique<Impl>(machine, std::move(options))) {}
 Session::~Session() = default;
 SessionReply Session::handle(std::string_view line) { return m_impl->handle(line); }
 SessionReply Session::interrupt(std::string_view line, double elapsed_s) { return m_impl->interrupt(line, elapsed_s); }

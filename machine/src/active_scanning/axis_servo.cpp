@@ -7,7 +7,8 @@
 namespace metron::machine {
 
 AxisServo::AxisServo(const ServoSpec& spec, const Vec3& position_mm)
-    : m_spec(spec), m_position(position_mm),
+    : m_spec(spec),
+      m_position(position_mm),
       m_pipeline(static_cast<std::size_t>(std::max(0, spec.command_delay_cycles)) + 1, Vec3::Zero()) {}
 
 void AxisServo::step(const Vec3& command_mm_s, double dt_s) {

@@ -6,10 +6,10 @@
 
 #include <fmt/format.h>
 
-#include "metron/machine/rng.hpp"
+#include "active_scanning/scan_cycle.hpp"
 #include "metron/machine/active_scanning/axis_servo.hpp"
 #include "metron/machine/active_scanning/scanning_probe.hpp"
-#include "active_scanning/scan_cycle.hpp"
+#include "metron/machine/rng.hpp"
 
 namespace metron::machine {
 namespace {
@@ -91,18 +91,24 @@ std::string validate_contour_scan(const ContourScan& c) {
   if (!c.start_mm.allFinite()) return "contour scan needs a finite start";
   if (!unit_like(c.start_normal)) return "contour scan needs a non-zero start normal";
   if (!unit_like(c.direction)) return "contour scan needs a non-zero direction";
-  if (!c.section.point_mm.allFinite() || !unit_like(c.section.direction)) return "contour scan needs a section with a non-zero direction";
+  if (!c.section.point_mm.allFinite() || !unit_like(c.section.direction))
+    return "contour scan needs a section with a non-zero direction";
   if (!c.end.point_mm.allFinite() || (c.end.kind != ContourEnd::Kind::Sphere && !unit_like(c.end.direction)))
     return "contour scan needs an end with a non-zero direction";
-  if (c.end.kind != ContourEnd::Kind::Plane && !(c.end.diameter_mm > 0)) return "contour scan's end sphere or cylinder needs a positive diameter";
-  if (c.end.kind != ContourEnd::Kind::Sphere && c.end.crossings < 1) return "contour scan's end needs at least one crossing";
+  if (c.end.kind != ContourEnd::Kind::Plane && !(c.end.diameter_mm > 0))
+    return "contour scan's end sphere or cylinder needs a positive diameter";
+  if (c.end.kind != ContourEnd::Kind::Sphere && c.end.crossings < 1)
+    return "contour scan's end needs at least one crossing";
   if (c.section.kind == ContourSection::Kind::Cylinder) {
-    if (section_at(c.section, 0, c.start_mm).g < 1e-6) return "contour scan's start lies on the section cylinder's axis";
+    if (section_at(c.section, 0, c.start_mm).g < 1e-6)
+      return "contour scan's start lies on the section cylinder's axis";
   }
   const Vec3 grad = section_at(c.section, section_at(c.section, 0, c.start_mm).g, c.start_mm).grad;
-  if (grad.cross(c.start_normal.normalized()).norm() < 1e-6) return "contour scan's section is parallel to the surface at the start";
+  if (grad.cross(c.start_normal.normalized()).norm() < 1e-6)
+    return "contour scan's section is parallel to the surface at the start";
   if (c.speed_mm_s && !(*c.speed_mm_s > 0)) return "scan speed must be positive";
-  if (c.reference_deflection_mm && !(*c.reference_deflection_mm > 0)) return "scan reference deflection must be positive";
+  if (c.reference_deflection_mm && !(*c.reference_deflection_mm > 0))
+    return "scan reference deflection must be positive";
   if (!(c.sample_spacing_mm >= 0) || !(c.approach_mm >= 0) || !(c.retract_mm >= 0) || !(c.max_length_mm > 0))
     return "scan sample spacing, approach and retract must be >= 0, its length limit > 0";
   return {};
@@ -173,7 +179,8 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
     if (const int axis = outside_travel(setup.machine, head); axis >= 0) {
       const AxisTravel& tr = setup.machine.travel[static_cast<std::size_t>(axis)];
       stop(FaultKind::AxisLimit,
-           fmt::format("contour scan reached the end of the {} travel [{}, {}] at {}", "xyz"[axis], tr.min_mm, tr.max_mm, detail::scan_xyz(head)),
+           fmt::format("contour scan reached the end of the {} travel [{}, {}] at {}", "xyz"[axis], tr.min_mm,
+                       tr.max_mm, detail::scan_xyz(head)),
            head, t);
       break;
     }
@@ -192,7 +199,9 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
     if (phase == Phase::Approach) {
       const auto step = approach.step(t, head, reading);
       if (step.no_contact) {
-        stop(FaultKind::NoContact, fmt::format("no contact within {:.3f} mm of the contour scan's start {}", range, detail::scan_xyz(command.start_mm)),
+        stop(FaultKind::NoContact,
+             fmt::format("no contact within {:.3f} mm of the contour scan's start {}", range,
+                         detail::scan_xyz(command.start_mm)),
              head, t);
         break;
       }
@@ -263,19 +272,21 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
       } else if (lost_at_mm < 0) {
         lost_at_mm = travelled, lost_at_t = t;
       } else if (travelled - lost_at_mm > ctl.lost_contact_mm || t - lost_at_t > ctl.stall_time_s) {
-        stop(FaultKind::NoContact, fmt::format("contour scan lost contact with the surface after {:.3f} mm of travel", lost_at_mm),
-             head, t);
+        stop(FaultKind::NoContact,
+             fmt::format("contour scan lost contact with the surface after {:.3f} mm of travel", lost_at_mm), head, t);
         break;
       }
       if (t - progress_t > ctl.stall_time_s) {
-        stop(FaultKind::Stalled, fmt::format("contour scan stalled after {:.3f} mm of travel: no progress for {:.2f} s",
-                                             best_mm, ctl.stall_time_s),
+        stop(FaultKind::Stalled,
+             fmt::format("contour scan stalled after {:.3f} mm of travel: no progress for {:.2f} s", best_mm,
+                         ctl.stall_time_s),
              head, t);
         break;
       }
       if (travelled > command.max_length_mm) {
-        stop(FaultKind::Stalled, fmt::format("contour scan did not meet its end within {:.1f} mm of travel", command.max_length_mm),
-             head, t);
+        stop(FaultKind::Stalled,
+             fmt::format("contour scan did not meet its end within {:.1f} mm of travel", command.max_length_mm), head,
+             t);
         break;
       }
       // A closed contour that comes back round past its start again and again without meeting
@@ -286,7 +297,8 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
         away_from_start = false;
         if (++rounds > std::max(2, command.end.crossings)) {
           stop(FaultKind::Stalled,
-               fmt::format("contour scan went round a closed contour {} times without meeting its end", rounds - 1), head, t);
+               fmt::format("contour scan went round a closed contour {} times without meeting its end", rounds - 1),
+               head, t);
           break;
         }
       }
@@ -302,8 +314,10 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
     if (phase == Phase::Retract && !rec.scanning) {
       const auto back = detail::retract_velocity(ctl, t - retract_t, command.retract_mm, retract_deflection_mm, eu_last,
                                                  servo.velocity_mm_s());
-      if (back) v = *back;
-      else phase = Phase::Done;
+      if (back)
+        v = *back;
+      else
+        phase = Phase::Done;
     }
 
     v = detail::within_machine_limits(v, v_prev, v_max, a_max, dt);
@@ -321,11 +335,11 @@ ScanOutcome run_contour_scan(const ContourScan& command, const ScanSetup& setup,
     out.end_position_mm = servo.position_mm();
     out.end_time_s = start_time_s + static_cast<double>(k) * dt;
   }
-  out.log.push_back(fmt::format("unknown contour: {:.3f} mm travelled, {} samples; |Ep| - E0: rms {:.4f} mm, peak {:.4f} mm; "
-                                "ball centre off the section: rms {:.4f} mm, peak {:.4f} mm",
-                                travelled, out.samples.size(), out.stats.rms_deflection_error_mm,
-                                out.stats.peak_deflection_error_mm, out.stats.rms_lateral_error_mm,
-                                out.stats.max_lateral_error_mm));
+  out.log.push_back(
+      fmt::format("unknown contour: {:.3f} mm travelled, {} samples; |Ep| - E0: rms {:.4f} mm, peak {:.4f} mm; "
+                  "ball centre off the section: rms {:.4f} mm, peak {:.4f} mm",
+                  travelled, out.samples.size(), out.stats.rms_deflection_error_mm, out.stats.peak_deflection_error_mm,
+                  out.stats.rms_lateral_error_mm, out.stats.max_lateral_error_mm));
   return out;
 }
 

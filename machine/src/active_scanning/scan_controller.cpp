@@ -6,11 +6,11 @@
 
 #include <fmt/format.h>
 
-#include "metron/machine/rng.hpp"
+#include "active_scanning/scan_cycle.hpp"
 #include "metron/machine/active_scanning/axis_servo.hpp"
 #include "metron/machine/active_scanning/path_cursor.hpp"
 #include "metron/machine/active_scanning/scanning_probe.hpp"
-#include "active_scanning/scan_cycle.hpp"
+#include "metron/machine/rng.hpp"
 
 namespace metron::machine {
 namespace {
@@ -31,7 +31,8 @@ std::string validate_scan(const ScanPath& c) {
   if (!(length > 0)) return "scan path has zero length";
   if (!c.approach_normal.allFinite() || c.approach_normal.norm() < 1e-9) return "scan needs a non-zero approach normal";
   if (c.speed_mm_s && !(*c.speed_mm_s > 0)) return "scan speed must be positive";
-  if (c.reference_deflection_mm && !(*c.reference_deflection_mm > 0)) return "scan reference deflection must be positive";
+  if (c.reference_deflection_mm && !(*c.reference_deflection_mm > 0))
+    return "scan reference deflection must be positive";
   if (!(c.sample_spacing_mm >= 0) || !(c.approach_mm >= 0) || !(c.retract_mm >= 0))
     return "scan sample spacing, approach and retract must be >= 0";
   return {};
@@ -103,9 +104,10 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
     return out;
   }
   if (!(e0 < range)) {
-    fault_at(FaultKind::BadCommand,
-             fmt::format("reference deflection {:.3f} mm is not below the probe's measuring range {:.3f} mm", e0, range),
-             start_mm, start_time_s);
+    fault_at(
+        FaultKind::BadCommand,
+        fmt::format("reference deflection {:.3f} mm is not below the probe's measuring range {:.3f} mm", e0, range),
+        start_mm, start_time_s);
     out.end_position_mm = start_mm;
     out.end_time_s = start_time_s;
     return out;
@@ -169,7 +171,8 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       const auto step = approach.step(t, head, reading);
       if (step.no_contact) {
         fault_at(FaultKind::NoContact,
-                 fmt::format("no contact within {:.3f} mm of the scan start {}", range, xyz(command.path.segments.front().start())),
+                 fmt::format("no contact within {:.3f} mm of the scan start {}", range,
+                             xyz(command.path.segments.front().start())),
                  head, t);
         break;
       }
@@ -225,14 +228,14 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
       } else if (lost_at_s < 0) {
         lost_at_s = s, lost_at_t = t;
       } else if (s - lost_at_s > ctl.lost_contact_mm || t - lost_at_t > ctl.stall_time_s) {
-        fault_at(FaultKind::NoContact, fmt::format("scan lost contact with the surface at {:.3f} mm along the path", lost_at_s),
-                 head, t);
+        fault_at(FaultKind::NoContact,
+                 fmt::format("scan lost contact with the surface at {:.3f} mm along the path", lost_at_s), head, t);
         break;
       }
       if (t - progress_t > ctl.stall_time_s) {
         fault_at(FaultKind::Stalled,
-                 fmt::format("scan stalled at {:.3f} of {:.3f} mm along the path: no progress for {:.2f} s", best_s, length,
-                             ctl.stall_time_s),
+                 fmt::format("scan stalled at {:.3f} of {:.3f} mm along the path: no progress for {:.2f} s", best_s,
+                             length, ctl.stall_time_s),
                  head, t);
         break;
       }
@@ -246,8 +249,10 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
     if (phase == Phase::Retract && !rec.scanning) {
       const auto back = detail::retract_velocity(ctl, t - retract_t, command.retract_mm, retract_deflection_mm, eu_last,
                                                  servo.velocity_mm_s());
-      if (back) v = *back;
-      else phase = Phase::Done;
+      if (back)
+        v = *back;
+      else
+        phase = Phase::Done;
     }
 
     v = detail::within_machine_limits(v, v_prev, v_max, a_max, dt);
@@ -263,11 +268,11 @@ ScanOutcome run_scan(const ScanPath& command, const ScanSetup& setup, const Vec3
   out.end_position_mm = servo.position_mm();
   out.end_time_s = start_time_s + static_cast<double>(k) * dt;
   out.log = plan.log();
-  out.log.push_back(fmt::format("measured speed: at most {:.3f} of the limit; |Ep| - E0: rms {:.4f} mm, peak {:.4f} mm; "
-                                "largest distance from the path {:.4f} mm, across it (along q) rms {:.4f} mm, peak {:.4f} mm",
-                                out.stats.max_speed_ratio, out.stats.rms_deflection_error_mm,
-                                out.stats.peak_deflection_error_mm, out.stats.max_path_distance_mm,
-                                out.stats.rms_lateral_error_mm, out.stats.max_lateral_error_mm));
+  out.log.push_back(
+      fmt::format("measured speed: at most {:.3f} of the limit; |Ep| - E0: rms {:.4f} mm, peak {:.4f} mm; "
+                  "largest distance from the path {:.4f} mm, across it (along q) rms {:.4f} mm, peak {:.4f} mm",
+                  out.stats.max_speed_ratio, out.stats.rms_deflection_error_mm, out.stats.peak_deflection_error_mm,
+                  out.stats.max_path_distance_mm, out.stats.rms_lateral_error_mm, out.stats.max_lateral_error_mm));
   return out;
 }
 

@@ -5,9 +5,9 @@
 
 #include <fmt/format.h>
 
-#include "metron/machine/fault.hpp"
 #include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/active_scanning/scanning_probe.hpp"
+#include "metron/machine/fault.hpp"
 
 // What the nominal scan (scan_controller.cpp) and the unknown-contour scan (contour_scan.cpp)
 // do alike every control cycle around their scanning laws: read the probe, approach the surface
@@ -29,10 +29,11 @@ inline ProbeReading read_probe(ScanningProbe& probe, const Vec3& head, double ra
   const Vec3 true_ep = probe.deflection(head);
   stats.max_force_n = std::max(stats.max_force_n, probe.force_n(true_ep));
   if (true_ep.norm() > range_mm) {
-    r.over_range = Fault{FaultKind::OverTravel,
-                         fmt::format("scanning probe over-range: deflection {:.3f} mm exceeds the measuring range {:.3f} mm at {}",
-                                     true_ep.norm(), range_mm, scan_xyz(head)),
-                         head, t};
+    r.over_range =
+        Fault{FaultKind::OverTravel,
+              fmt::format("scanning probe over-range: deflection {:.3f} mm exceeds the measuring range {:.3f} mm at {}",
+                          true_ep.norm(), range_mm, scan_xyz(head)),
+              head, t};
     return r;
   }
   r.ep = probe.read(true_ep);
@@ -50,9 +51,9 @@ class ApproachAndSettle {
                     double approach_mm)
       : m_ctl(ctl), m_e0(e0_mm), m_range(range_mm), m_start(start_mm), m_normal(normal), m_approach(approach_mm) {}
   struct Step {
-    Vec3 v = Vec3::Zero();            ///< the command velocity
-    bool settled = false;             ///< the scanning law takes over this cycle
-    bool no_contact = false;          ///< approached past approach + range without a touch
+    Vec3 v = Vec3::Zero();    ///< the command velocity
+    bool settled = false;     ///< the scanning law takes over this cycle
+    bool no_contact = false;  ///< approached past approach + range without a touch
   };
   Step step(double t, const Vec3& head, const ProbeReading& r) {
     Step s;
@@ -86,8 +87,8 @@ class ApproachAndSettle {
 
 /// The retract after the scan: back off along the last deflection direction until the ball is
 /// `retract_mm` off the surface (the deflection, then the distance), then stop. nullopt: done.
-inline std::optional<Vec3> retract_velocity(const ScanControlSpec& ctl, double since_s, double retract_mm, double deflection_mm,
-                                            const Vec3& eu_last, const Vec3& velocity) {
+inline std::optional<Vec3> retract_velocity(const ScanControlSpec& ctl, double since_s, double retract_mm,
+                                            double deflection_mm, const Vec3& eu_last, const Vec3& velocity) {
   const double feed = ctl.approach_feed_mm_s;
   const double travel_s = (retract_mm + deflection_mm) / feed;
   if (since_s < travel_s) return Vec3(feed * eu_last);

@@ -30,8 +30,8 @@ Vec3 ScanningProbe::deflection(const Vec3& head_mm) {
   // distance's excess over the radius allows (|grad d| <= lipschitz): no query needed. The slack
   // covers the steps of MeshSolid's exact CAD faces (about 1.5 chord tolerances) at face edges.
   constexpr double slack_mm = 0.01;
-  if (coherent && std::max(1.0, m_solid.lipschitz()) * (head_mm - m_free_head).norm() <
-                      m_free_distance_mm - m_radius_mm - slack_mm)
+  if (coherent &&
+      std::max(1.0, m_solid.lipschitz()) * (head_mm - m_free_head).norm() < m_free_distance_mm - m_radius_mm - slack_mm)
     return Vec3::Zero();
   if (!m_view || (head_mm - m_view_centre).norm() > renew_mm) {
     m_view = m_solid.local_view(head_mm, view_radius_mm);

@@ -58,10 +58,14 @@ tl::expected<void, sj::ReadError> parse_scanning_spec(const json& j, const std::
       });
       g.read("mode", [&](const json& mj, const std::string& mp) {
         const std::string m = mj.is_string() ? mj.get<std::string>() : "";
-        if (m == "conventional") s.mode = segmented::SegmentedMode::Conventional;
-        else if (m == "seed") s.mode = segmented::SegmentedMode::Seed;
-        else if (m == "look_ahead") s.mode = segmented::SegmentedMode::LookAhead;
-        else sj::fail(mp, "expected \"conventional\", \"seed\" or \"look_ahead\"");
+        if (m == "conventional")
+          s.mode = segmented::SegmentedMode::Conventional;
+        else if (m == "seed")
+          s.mode = segmented::SegmentedMode::Seed;
+        else if (m == "look_ahead")
+          s.mode = segmented::SegmentedMode::LookAhead;
+        else
+          sj::fail(mp, "expected \"conventional\", \"seed\" or \"look_ahead\"");
       });
       g.non_negative("planning_s_per_segment", s.planning_s_per_segment);
       g.non_negative("planning_fixed_s", s.planning_fixed_s);

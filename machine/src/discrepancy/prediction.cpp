@@ -11,9 +11,12 @@ MachinePose row_pose(const discrepancy::MeasuredData& data, std::size_t row) {
   pose.axes_mm = Vec3(q[0], q[1], q[2]);
   for (int a = 0; a < 3; ++a) {
     const auto au = static_cast<std::size_t>(a);
-    if (const auto* d = data.find(Role::Direction, a)) pose.approach[au] = d->values[row] > 0 ? 1 : -1;
-    else if (const auto* dd = data.find(Role::Direction)) pose.approach[au] = dd->values[row] > 0 ? 1 : -1;
-    else if (const auto* ap = data.find(Role::Approach, a)) pose.approach[au] = ap->values[row] > 0 ? 1 : ap->values[row] < 0 ? -1 : 0;
+    if (const auto* d = data.find(Role::Direction, a))
+      pose.approach[au] = d->values[row] > 0 ? 1 : -1;
+    else if (const auto* dd = data.find(Role::Direction))
+      pose.approach[au] = dd->values[row] > 0 ? 1 : -1;
+    else if (const auto* ap = data.find(Role::Approach, a))
+      pose.approach[au] = ap->values[row] > 0 ? 1 : ap->values[row] < 0 ? -1 : 0;
   }
   return pose;
 }
@@ -23,7 +26,8 @@ double row_time_s(const discrepancy::MeasuredData& data, std::size_t row) {
   return t ? t->values[row] : 0.0;
 }
 
-double predicted_deviation_mm(const MachineErrorModel& errors, const discrepancy::MeasuredData& data, std::size_t row, int axis) {
+double predicted_deviation_mm(const MachineErrorModel& errors, const discrepancy::MeasuredData& data, std::size_t row,
+                              int axis) {
   if (errors.empty()) return 0;
   const Vec3 e = errors.displacement(row_pose(data, row), row_time_s(data, row));
   const double sign = data.description.kind == discrepancy::DataKind::Artefact ? -1.0 : 1.0;

@@ -19,10 +19,12 @@ void check_plan(const SpaceCalibrationPlan& plan, int c) {
   for (int a : {u_of(c), v_of(c)}) {
     const auto& x = plan.grid.axes_mm[a];
     if (x.size() < 2)
-      throw std::invalid_argument(fmt::format("error-space calibration: component {} needs at least 2 grid points on {}", "xyz"[c], "xyz"[a]));
+      throw std::invalid_argument(
+          fmt::format("error-space calibration: component {} needs at least 2 grid points on {}", "xyz"[c], "xyz"[a]));
     for (std::size_t i = 1; i < x.size(); ++i)
       if (std::abs(x[i] - x[i - 1] - d) > 1e-9)
-        throw std::invalid_argument(fmt::format("error-space calibration: the {} grid must step by the sensor spacing {} mm", "xyz"[a], d));
+        throw std::invalid_argument(
+            fmt::format("error-space calibration: the {} grid must step by the sensor spacing {} mm", "xyz"[a], d));
   }
 }
 
@@ -41,7 +43,8 @@ std::size_t flat_index(const error_space::Grid& g, int c, std::size_t i, std::si
 }
 
 /// The hidden error e_c over one plane (i along u, j along v), as the rig's pose sees it.
-Eigen::MatrixXd plane_truth(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan, int c, std::size_t k, double t) {
+Eigen::MatrixXd plane_truth(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan, int c, std::size_t k,
+                            double t) {
   const auto& g = plan.grid;
   const auto nu = g.axes_mm[u_of(c)].size(), nv = g.axes_mm[v_of(c)].size();
   Eigen::MatrixXd e(static_cast<Eigen::Index>(nu), static_cast<Eigen::Index>(nv));
@@ -67,7 +70,8 @@ FlatPlate plan_plate(const SpaceCalibrationPlan& plan, int c, int k) {
   Vec3 origin;
   origin[u] = g.axes_mm[u].front() + t[u] - 10;
   origin[v] = g.axes_mm[v].front() + t[v] - 10;
-  origin[c] = g.axes_mm[c][static_cast<std::size_t>(k)] + t[c] - plan.head.standoff_mm;  // the sensors at their standoff
+  origin[c] =
+      g.axes_mm[c][static_cast<std::size_t>(k)] + t[c] - plan.head.standoff_mm;  // the sensors at their standoff
   plate.place(c, +1, origin);
   return plate;
 }
@@ -107,15 +111,20 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
     const double sigma_b = plan.head.angle_instrument
                                ? std::hypot(plan.head.noise_sd_mm, plan.head.angle_noise_sd_rad * plan.head.spacing_mm)
                                : plan.head.noise_sd_mm;
-    const double reversal_sd = std::hypot(plan.head.noise_sd_mm, sigma_b) / std::sqrt(2.0 * static_cast<double>(nu - 1));
-    const Eigen::MatrixXd floor = error_space::surface_noise_sd_mm(
-        static_cast<int>(nu - 1), static_cast<int>(nv - 1), plan.head.noise_sd_mm,
-        plan.delta_by_reversal ? reversal_sd : plan.known_delta_mm ? 0.0 : -1.0, sigma_b);
+    const double reversal_sd =
+        std::hypot(plan.head.noise_sd_mm, sigma_b) / std::sqrt(2.0 * static_cast<double>(nu - 1));
+    const Eigen::MatrixXd floor =
+        error_space::surface_noise_sd_mm(static_cast<int>(nu - 1), static_cast<int>(nv - 1), plan.head.noise_sd_mm,
+                                         plan.delta_by_reversal ? reversal_sd
+                                         : plan.known_delta_mm  ? 0.0
+                                                                : -1.0,
+                                         sigma_b);
     auto& values = out.space.values_mm[static_cast<std::size_t>(c)];
     auto& sd = out.space.sd_mm[static_cast<std::size_t>(c)];
     values.assign(g.size(), 0.0);
     sd.assign(g.size(), 0.0);
-    TwoPointRig rig(hidden, plan_plate(plan, c, 0), plan.head, plan.seed + static_cast<std::uint64_t>(c) * 7919, time_s);
+    TwoPointRig rig(hidden, plan_plate(plan, c, 0), plan.head, plan.seed + static_cast<std::uint64_t>(c) * 7919,
+                    time_s);
     for (std::size_t k = 0; k < nc; ++k) {
       // The same plate, put where plan_plate puts it: the sensors at their standoff over the plane.
       Vec3 origin;
@@ -135,7 +144,8 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
         if (plan.delta_by_reversal) {
           // A fresh forward line and the reversed one, so Delta's noise is independent of the plane's.
           const auto forward = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1));
-          const auto reversed = rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1), false, true);
+          const auto reversed =
+              rig.measure_line(grid_point(g, c, 0, 0, k), u_of(c), static_cast<int>(nu - 1), false, true);
           opt.known_delta_mm = error_space::delta_by_reversal(forward, reversed);
         }
         auto result = error_space::solve_surface(readings, opt);
@@ -168,7 +178,8 @@ SpaceCalibration calibrate_space(const MachineErrorModel& hidden, const SpaceCal
   return out;
 }
 
-error_space::ErrorSpace truth_in_reference(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan, double t) {
+error_space::ErrorSpace truth_in_reference(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan,
+                                           double t) {
   error_space::ErrorSpace out;
   out.grid = plan.grid;
   for (int c = 0; c < 3; ++c) {
@@ -182,7 +193,7 @@ error_space::ErrorSpace truth_in_reference(const MachineErrorModel& hidden, cons
       const Eigen::MatrixXd e = plane_truth(hidden, plan, c, k, t);
       // e - e(0,0) - s (i + j); with a known Delta the method keeps the slope: e - e(0,0).
       const Eigen::MatrixXd ref = plan.known_delta_mm || plan.delta_by_reversal ? Eigen::MatrixXd(e.array() - e(0, 0))
-                                                                                 : error_space::surface_reference(e);
+                                                                                : error_space::surface_reference(e);
       const double offset = plan.laser_offsets && nc > 1 ? e(0, 0) - first : 0.0;
       for (Eigen::Index i = 0; i < e.rows(); ++i)
         for (Eigen::Index j = 0; j < e.cols(); ++j)
@@ -192,7 +203,8 @@ error_space::ErrorSpace truth_in_reference(const MachineErrorModel& hidden, cons
   return out;
 }
 
-Eigen::MatrixXd plate_truth_in_reference(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan, int c, int k) {
+Eigen::MatrixXd plate_truth_in_reference(const MachineErrorModel& hidden, const SpaceCalibrationPlan& plan, int c,
+                                         int k) {
   const FlatPlate plate = plan_plate(plan, c, k);
   const Eigen::MatrixXd e = plane_truth(hidden, plan, c, static_cast<std::size_t>(k), 0);
   const Eigen::Index l = e.rows() - 1;
@@ -201,7 +213,8 @@ Eigen::MatrixXd plate_truth_in_reference(const MachineErrorModel& hidden, const 
   Eigen::MatrixXd f(e.rows(), e.cols());
   for (Eigen::Index i = 0; i < e.rows(); ++i)
     for (Eigen::Index j = 0; j < e.cols(); ++j) {
-      const Vec3 p = grid_point(plan.grid, c, static_cast<std::size_t>(i), static_cast<std::size_t>(j), static_cast<std::size_t>(k)) +
+      const Vec3 p = grid_point(plan.grid, c, static_cast<std::size_t>(i), static_cast<std::size_t>(j),
+                                static_cast<std::size_t>(k)) +
                      plan.head.sensor_offset_mm;
       const Vec2 uv = plate.plate_uv(p);
       f(i, j) = plate.profile_mm(uv.x(), uv.y());

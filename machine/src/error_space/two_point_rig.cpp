@@ -7,7 +7,8 @@ TwoPointRig::TwoPointRig(const MachineErrorModel& errors, FlatPlate plate, TwoPo
                          double start_time_s)
     : m_errors(errors), m_plate(std::move(plate)), m_head(std::move(head)), m_rng(seed), m_time_s(start_time_s) {}
 
-std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, double travel_mm, bool turned, bool reversed) {
+std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, double travel_mm, bool turned,
+                                            bool reversed) {
   const double d = m_head.spacing_mm;
   MachinePose pose;
   pose.axes_mm = axes;
@@ -33,16 +34,19 @@ std::pair<double, double> TwoPointRig::read(const Vec3& axes, int step_axis, dou
   // per unit of B's nominal lever.
   const int normal = m_plate.normal_axis();
   const double b_lever = reversed ? -d : d;
-  const double rotated_mm = m_plate.normal_sign() * ((pb - pa)[normal] - (b_offset - m_head.sensor_offset_mm)[normal]) - 2 * lever;
+  const double rotated_mm =
+      m_plate.normal_sign() * ((pb - pa)[normal] - (b_offset - m_head.sensor_offset_mm)[normal]) - 2 * lever;
   m_last_angle_rad = rotated_mm / b_lever;
   if (m_head.angle_instrument) m_last_angle_rad += m_head.angle_noise_sd_rad * m_rng.normal();
   const double a = reading(pa, +lever, m_head.zero_a_mm);
-  const double b = reading(pb, -lever - m_head.delta_mm - (turned ? m_head.delta_change_turned_mm : 0.0), m_head.zero_b_mm);
+  const double b =
+      reading(pb, -lever - m_head.delta_mm - (turned ? m_head.delta_change_turned_mm : 0.0), m_head.zero_b_mm);
   m_time_s += dwell_s;
   return {a, b};
 }
 
-error_space::LineReadings TwoPointRig::measure_line(const Vec3& start, int step_axis, int steps, bool turned, bool reversed) {
+error_space::LineReadings TwoPointRig::measure_line(const Vec3& start, int step_axis, int steps, bool turned,
+                                                    bool reversed) {
   error_space::LineReadings out;
   for (int k = 0; k <= steps; ++k) {
     Vec3 q = start;

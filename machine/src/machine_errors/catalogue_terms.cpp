@@ -20,7 +20,9 @@ Vec3 along(int c, double v) {
 }  // namespace
 
 Vec3 LinearTerm::displacement(const MachinePose& p, double) const { return along(m_c, m_k * p.axes_mm[m_j]); }
-Vec3 CrossAxisTerm::displacement(const MachinePose& p, double) const { return along(m_c, m_k * p.axes_mm[m_i] * p.axes_mm[m_j]); }
+Vec3 CrossAxisTerm::displacement(const MachinePose& p, double) const {
+  return along(m_c, m_k * p.axes_mm[m_i] * p.axes_mm[m_j]);
+}
 Vec3 CyclicTerm::displacement(const MachinePose& p, double) const {
   return along(m_c, m_a * std::sin(2 * kPi * p.axes_mm[m_j] / m_p + m_phi));
 }
@@ -43,10 +45,12 @@ void parse_catalogue_terms(const nlohmann::json& terms, const std::string& point
   for (std::size_t i = 0; i < terms.size(); ++i) {
     const std::string p = fmt::format("{}/{}", pointer, i);
     Object o(terms[i], p);
-    const std::string kind = one_of(o.required("kind"), o.at("kind"), {"linear", "cross_axis", "cyclic", "drift", "transient", "thermal", "reversal"});
+    const std::string kind = one_of(o.required("kind"), o.at("kind"),
+                                    {"linear", "cross_axis", "cyclic", "drift", "transient", "thermal", "reversal"});
     const int c = axis(o.required("component"), o.at("component"));
     if (kind == "linear") {
-      model.add(std::make_shared<LinearTerm>(c, axis(o.required("along"), o.at("along")), o.get("coefficient", number)));
+      model.add(
+          std::make_shared<LinearTerm>(c, axis(o.required("along"), o.at("along")), o.get("coefficient", number)));
     } else if (kind == "cross_axis") {
       const nlohmann::json& a = o.required("along");
       if (!a.is_array() || a.size() != 2) fail(o.at("along"), "expected two axes");
@@ -84,7 +88,8 @@ void parse_catalogue_terms(const nlohmann::json& terms, const std::string& point
       for (std::size_t k = 1; k < ts.size(); ++k)
         if (!(ts[k] > ts[k - 1])) fail(fmt::format("{}/{}", t.at("t_s"), k), "expected increasing times");
       t.finish();
-      model.add(std::make_shared<ThermalLagTerm>(c, k0, k1, ref, std::make_shared<TemperatureHistory>(ts, temp, lag, std::nan(""))));
+      model.add(std::make_shared<ThermalLagTerm>(c, k0, k1, ref,
+                                                 std::make_shared<TemperatureHistory>(ts, temp, lag, std::nan(""))));
     }
     o.finish();
   }

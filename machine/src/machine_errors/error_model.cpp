@@ -56,8 +56,10 @@ AxisFunction axis_function(const json& j, const std::string& p) {
     auto interp = AxisFunction::Interpolation::Linear;
     if (const json* in = o.find("interpolation")) {
       const std::string s = string(*in, o.at("interpolation"));
-      if (s == "cubic") interp = AxisFunction::Interpolation::Cubic;
-      else if (s != "linear") fail(o.at("interpolation"), "expected \"linear\" or \"cubic\"");
+      if (s == "cubic")
+        interp = AxisFunction::Interpolation::Cubic;
+      else if (s != "linear")
+        fail(o.at("interpolation"), "expected \"linear\" or \"cubic\"");
     }
     f = AxisFunction::table(at, values, interp);
   }
@@ -65,7 +67,8 @@ AxisFunction axis_function(const json& j, const std::string& p) {
   return f;
 }
 
-std::shared_ptr<const TemperatureHistory> history(const json& j, const std::string& p, const json* air, const std::string& air_p) {
+std::shared_ptr<const TemperatureHistory> history(const json& j, const std::string& p, const json* air,
+                                                  const std::string& air_p) {
   // {"lag_s": 600, "initial_c": 20.5} against the shared air history, or its own {"t_s", "temperature_c"}.
   Object o(j, p);
   double lag = 0, initial = std::numeric_limits<double>::quiet_NaN();
@@ -114,8 +117,10 @@ MachineErrorModel parse(const json& j, const std::string& p) {
       const char* tkeys[3] = {"tx_mm", "ty_mm", "tz_mm"};
       const char* rkeys[3] = {"rx_rad", "ry_rad", "rz_rad"};
       for (int c = 0; c < 3; ++c) {
-        if (const json* f = eo.find(tkeys[c])) axes[ax].translation_mm[c] = axis_function(*f, eo.at(tkeys[c])), rigid = true;
-        if (const json* f = eo.find(rkeys[c])) axes[ax].rotation_rad[c] = axis_function(*f, eo.at(rkeys[c])), rigid = true;
+        if (const json* f = eo.find(tkeys[c]))
+          axes[ax].translation_mm[c] = axis_function(*f, eo.at(tkeys[c])), rigid = true;
+        if (const json* f = eo.find(rkeys[c]))
+          axes[ax].rotation_rad[c] = axis_function(*f, eo.at(rkeys[c])), rigid = true;
       }
       eo.finish();
     }
@@ -134,7 +139,8 @@ MachineErrorModel parse(const json& j, const std::string& p) {
     Object ro(*r, root.at("reversal_mm"));
     std::array<double, 3> rev{0, 0, 0};
     for (int ax = 0; ax < 3; ++ax)
-      if (const json* v = ro.find(std::string(1, "xyz"[ax]))) rev[static_cast<std::size_t>(ax)] = number(*v, ro.at(std::string(1, "xyz"[ax])));
+      if (const json* v = ro.find(std::string(1, "xyz"[ax])))
+        rev[static_cast<std::size_t>(ax)] = number(*v, ro.at(std::string(1, "xyz"[ax])));
     ro.finish();
     model.add(std::make_shared<ReversalTerm>(rev));
   }
@@ -176,10 +182,12 @@ MachineErrorModel parse(const json& j, const std::string& p) {
         if (!s) continue;
         Object one(*s, so.at(name));
         scales[static_cast<std::size_t>(ax)].alpha_per_k = number(one.required("alpha_per_k"), one.at("alpha_per_k"));
-        if (const json* f = one.find("fixed_at_mm")) scales[static_cast<std::size_t>(ax)].fixed_at_mm = number(*f, one.at("fixed_at_mm"));
+        if (const json* f = one.find("fixed_at_mm"))
+          scales[static_cast<std::size_t>(ax)].fixed_at_mm = number(*f, one.at("fixed_at_mm"));
         const json* t = one.find("temperature");
         const json empty = json::object();
-        scales[static_cast<std::size_t>(ax)].temperature = history(t ? *t : empty, one.at("temperature"), air, to.at("air_c"));
+        scales[static_cast<std::size_t>(ax)].temperature =
+            history(t ? *t : empty, one.at("temperature"), air, to.at("air_c"));
         one.finish();
       }
       so.finish();
@@ -205,7 +213,8 @@ MachineErrorModel parse(const json& j, const std::string& p) {
 
 }  // namespace
 
-tl::expected<MachineErrorModel, strict_json::ReadError> parse_machine_errors(const json& j, const std::string& pointer) {
+tl::expected<MachineErrorModel, strict_json::ReadError> parse_machine_errors(const json& j,
+                                                                             const std::string& pointer) {
   if (j.is_null()) return MachineErrorModel{};
   try {
     return parse(j, pointer);

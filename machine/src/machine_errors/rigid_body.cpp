@@ -31,7 +31,8 @@ Vec3 RigidBodyTerm::displacement(const MachinePose& pose, double) const {
 
 Vec3 ReversalTerm::displacement(const MachinePose& pose, double) const {
   Vec3 e = Vec3::Zero();
-  for (int a = 0; a < 3; ++a) e[a] = 0.5 * m_reversal_mm[static_cast<std::size_t>(a)] * pose.approach[static_cast<std::size_t>(a)];
+  for (int a = 0; a < 3; ++a)
+    e[a] = 0.5 * m_reversal_mm[static_cast<std::size_t>(a)] * pose.approach[static_cast<std::size_t>(a)];
   return e;
 }
 

@@ -18,7 +18,8 @@ double lag_step(double t0_c, double a, double b, double s, double tau) {
 
 TemperatureHistory::TemperatureHistory(std::vector<double> t, std::vector<double> air, double lag, double initial)
     : m_t(std::move(t)), m_air(std::move(air)), m_lag_s(lag) {
-  if (m_t.empty() || m_t.size() != m_air.size()) throw std::invalid_argument("temperature history: times and temperatures differ in number");
+  if (m_t.empty() || m_t.size() != m_air.size())
+    throw std::invalid_argument("temperature history: times and temperatures differ in number");
   for (std::size_t i = 1; i < m_t.size(); ++i)
     if (!(m_t[i] > m_t[i - 1])) throw std::invalid_argument("temperature history: times must increase");
   if (lag < 0) throw std::invalid_argument("temperature history: the lag must be >= 0");

@@ -100,9 +100,8 @@ bool PathInterpolator::safe(const PathState& x) const {
     const LimitPiece& p = m_pieces[m];
     const double d = p.end_mm - x.s_mm;
     if (d > stop + k_eps) break;
-    const double cap = m + 1 < m_pieces.size()
-                           ? std::min({p.limit_mm_s, p.end_cap_mm_s, m_pieces[m + 1].limit_mm_s})
-                           : 0.0;
+    const double cap =
+        m + 1 < m_pieces.size() ? std::min({p.limit_mm_s, p.end_cap_mm_s, m_pieces[m + 1].limit_mm_s}) : 0.0;
     if (peak <= cap) continue;
     const double room = m + 1 < m_pieces.size() ? d : d - k_end_margin_mm;
     if (brake_distance_mm(x.v_mm_s, x.a_mm_s2, cap, m_check_limits) > room + k_eps) return false;

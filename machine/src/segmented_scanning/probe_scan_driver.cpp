@@ -6,10 +6,10 @@
 
 #include <fmt/format.h>
 
-#include "metron/machine/rng.hpp"
 #include "metron/machine/active_scanning/axis_servo.hpp"
 #include "metron/machine/active_scanning/path_cursor.hpp"
 #include "metron/machine/active_scanning/scanning_probe.hpp"
+#include "metron/machine/rng.hpp"
 #include "metron/machine/segmented_scanning/speed_plan.hpp"
 
 namespace metron::machine::segmented {
@@ -39,9 +39,12 @@ const Vec3& ProbeScanDriver::velocity_mm_s() const { return m_servo->velocity_mm
 void ProbeScanDriver::extend(std::span<const geometry::PccSegment> segments, std::span<const Vec3> normals) {
   auto& path = m_scan.path;
   // Normals at the segment ends: a command's first normal is the previous command's last.
-  const bool with_normals = normals.size() == segments.size() + 1 && path.normals.size() == path.segments.size() + (path.segments.empty() ? 0 : 1);
-  if (with_normals) path.normals.insert(path.normals.end(), normals.begin() + (path.segments.empty() ? 0 : 1), normals.end());
-  else path.normals.clear();
+  const bool with_normals = normals.size() == segments.size() + 1 &&
+                            path.normals.size() == path.segments.size() + (path.segments.empty() ? 0 : 1);
+  if (with_normals)
+    path.normals.insert(path.normals.end(), normals.begin() + (path.segments.empty() ? 0 : 1), normals.end());
+  else
+    path.normals.clear();
   for (const auto& g : segments) {
     path.segments.push_back(g);
     m_cumulative.push_back(m_cumulative.back() + g.length());
@@ -108,16 +111,17 @@ Vec3 ProbeScanDriver::scan_law(double plan_s_mm, double plan_v_mm_s, std::size_t
   }
   if (plan_s_mm - m_s_mm > ctl.lost_contact_mm && !m_fault)
     m_fault = Fault{FaultKind::Stalled,
-                    fmt::format("scan stalled at {:.3f} mm along the path: the probe trails the plan by {:.3f} mm", m_s_mm,
-                                plan_s_mm - m_s_mm),
+                    fmt::format("scan stalled at {:.3f} mm along the path: the probe trails the plan by {:.3f} mm",
+                                m_s_mm, plan_s_mm - m_s_mm),
                     head, m_t_s};
   if (m_contact) {
     m_lost_at_s = -1;
   } else if (m_lost_at_s < 0) {
     m_lost_at_s = m_s_mm, m_lost_at_t = m_t_s;
   } else if ((m_s_mm - m_lost_at_s > ctl.lost_contact_mm || m_t_s - m_lost_at_t > ctl.stall_time_s) && !m_fault) {
-    m_fault = Fault{FaultKind::NoContact,
-                    fmt::format("scan lost contact with the surface at {:.3f} mm along the path", m_lost_at_s), head, m_t_s};
+    m_fault =
+        Fault{FaultKind::NoContact,
+              fmt::format("scan lost contact with the surface at {:.3f} mm along the path", m_lost_at_s), head, m_t_s};
   }
   return tm.gf * tm.vf + tm.ge * tm.ve + tm.gc * tm.vc;
 }

@@ -105,13 +105,14 @@ void SegmentedController::start_planning(std::size_t b) {
     kind = lf ? PlanKind::Connection : PlanKind::Individual;
   }
   const auto w0 = std::chrono::steady_clock::now();
-  buf.plan = plan_command(cmd.segments, cmd.speed_mm_s, cmd.index, m_next_start_mm, kind, m_config.limits,
-                          m_config.low, cmd.last);
+  buf.plan = plan_command(cmd.segments, cmd.speed_mm_s, cmd.index, m_next_start_mm, kind, m_config.limits, m_config.low,
+                          cmd.last);
   const auto w1 = std::chrono::steady_clock::now();
   m_stats.planning_wall_s.push_back(std::chrono::duration<double>(w1 - w0).count());
   m_stats.plan_kinds.push_back(kind);
   m_next_start_mm = buf.plan->end_mm;
-  const double net = m_config.planning_fixed_s + m_config.planning_s_per_segment * static_cast<double>(cmd.segments.size());
+  const double net =
+      m_config.planning_fixed_s + m_config.planning_s_per_segment * static_cast<double>(cmd.segments.size());
   const double factor = m_config.planning_factor ? m_config.planning_factor(cmd.index) : 1.0;
   m_planning = static_cast<int>(b);
   m_plan_ready_s = m_t_s + net * factor;
@@ -306,8 +307,7 @@ void SegmentedController::step() {
                          : m_t_s + 1e-12 >= m_phase_end_s)
         m_phase = Phase::Retracted;
       break;
-    case Phase::Done:
-      break;
+    case Phase::Done: break;
   }
   update_connection_flag();
 }
@@ -317,8 +317,8 @@ void SegmentedController::update_connection_flag() {
   // while tei - t > Tp (Tp = margin * the net planning time of Ci+1, not the net time itself: the
   // margin is what makes a connection plan ready in time). No Ci+1 (Ci is the last): LF = 0.
   const int nb = buffer_of(m_done_commands + 1);
-  const std::size_t next_segments = nb >= 0 ? m_buffers[static_cast<std::size_t>(nb)].command->segments.size()
-                                            : m_config.buffer_segments;
+  const std::size_t next_segments =
+      nb >= 0 ? m_buffers[static_cast<std::size_t>(nb)].command->segments.size() : m_config.buffer_segments;
   m_lf = m_phase != Phase::Done && !(m_last_index && m_done_commands >= *m_last_index) &&
          gap_before_s(m_done_commands + 1) > planning_time_s(next_segments);
 }

@@ -17,7 +17,8 @@ void Controller::write_scan_buffer(const ScanBufferWrite& body, Response& respon
     segmented_scan.reset();
   };
   if (command.index == 0) {
-    if (segmented_scan) return fail({FaultKind::BadCommand, "a segmented scan is already in progress", position, now()});
+    if (segmented_scan)
+      return fail({FaultKind::BadCommand, "a segmented scan is already in progress", position, now()});
     const Tool* tool = active_tool();
     if (!tool) return fail({FaultKind::NoTool, "no tool selected", position, now()});
     // The scan's settings with the first command's segments: what the approach needs.
@@ -25,7 +26,8 @@ void Controller::write_scan_buffer(const ScanBufferWrite& body, Response& respon
     first.path.segments = command.segments;
     first.path.normals = command.normals;
     first.path.speed_mm_s = command.speed_mm_s;
-    if (const std::string bad = validate_scan(first); !bad.empty()) return fail({FaultKind::BadCommand, bad, position, now()});
+    if (const std::string bad = validate_scan(first); !bad.empty())
+      return fail({FaultKind::BadCommand, bad, position, now()});
     if (auto ok = move_to(scan_approach_point(first), positioning_feed); !ok) return fail(ok.error());
     sim.set_time(now());
     const ScanSetup setup = sim.scan_setup(tool->info.nominal_radius_mm, config);
@@ -51,9 +53,10 @@ void Controller::write_scan_buffer(const ScanBufferWrite& body, Response& respon
     session->controller = std::make_unique<segmented::SegmentedController>(cfg, session->probe.get());
     segmented_scan = std::move(session);
   } else if (!segmented_scan) {
-    return fail({FaultKind::BadCommand,
-                 fmt::format("measurement command {} without a segmented scan in progress (the first is 0)", command.index),
-                 position, now()});
+    return fail(
+        {FaultKind::BadCommand,
+         fmt::format("measurement command {} without a segmented scan in progress (the first is 0)", command.index),
+         position, now()});
   }
   SegmentedSession& g = *segmented_scan;
   segmented::SegmentedController& ctl = *g.controller;
@@ -79,7 +82,8 @@ void Controller::write_scan_buffer(const ScanBufferWrite& body, Response& respon
   if (!problem && command.last) {
     while (!ctl.finished() && !probe.fault() && probe.time_s() < limit_s) step();
     if (!probe.fault() && !probe.finish(ctl.path_state().s_mm))
-      problem = Fault{FaultKind::Stalled, "segmented scan did not finish at the path end", probe.position_mm(), probe.time_s()};
+      problem = Fault{FaultKind::Stalled, "segmented scan did not finish at the path end", probe.position_mm(),
+                      probe.time_s()};
     if (probe.fault()) problem = probe.fault();
   }
   const auto& samples = probe.samples();

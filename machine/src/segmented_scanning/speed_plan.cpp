@@ -63,10 +63,11 @@ double ongoing_speed_mm_s(double v0, double d, const MotionLimits& l) {
   return v0 + J * t * t / 2;
 }
 
-void junction_passes(std::span<const LimitPiece> pieces, double start_speed, double end_speed,
-                     const MotionLimits& l, std::vector<double>& w, std::vector<double>* middle,
-                     bool ongoing) {
-  const auto reach = [&](double v0, double d) { return ongoing ? ongoing_speed_mm_s(v0, d, l) : reachable_speed_mm_s(v0, d, l); };
+void junction_passes(std::span<const LimitPiece> pieces, double start_speed, double end_speed, const MotionLimits& l,
+                     std::vector<double>& w, std::vector<double>* middle, bool ongoing) {
+  const auto reach = [&](double v0, double d) {
+    return ongoing ? ongoing_speed_mm_s(v0, d, l) : reachable_speed_mm_s(v0, d, l);
+  };
   const std::size_t n = pieces.size();
   w.assign(n + 1, 0.0);
   if (middle != nullptr) middle->assign(n, 0.0);
@@ -112,8 +113,7 @@ void junction_passes(std::span<const LimitPiece> pieces, double start_speed, dou
   for (std::size_t k = 0; k < n; ++k) {
     const double mid = 0.5 * (at[k] + at[k + 1]);
     const std::size_t b = back_active[k + 1], f = fwd_active[k];
-    (*middle)[k] = std::min({pieces[k].limit_mm_s, reach(cap[b], at[b] - mid),
-                             reach(w[f], mid - at[f])});
+    (*middle)[k] = std::min({pieces[k].limit_mm_s, reach(cap[b], at[b] - mid), reach(w[f], mid - at[f])});
   }
 }
 
@@ -150,8 +150,7 @@ double parameter_at_arc(const geometry::PccSegment& seg, double arc, double leng
   return u;
 }
 
-SegmentLimit segment_limit(const geometry::PccSegment& seg, const ScanLimits& limits,
-                           double path_speed_mm_s) {
+SegmentLimit segment_limit(const geometry::PccSegment& seg, const ScanLimits& limits, double path_speed_mm_s) {
   SegmentLimit out;
   out.length_mm = seg.length();
   double kappa = 0;
@@ -163,7 +162,8 @@ SegmentLimit segment_limit(const geometry::PccSegment& seg, const ScanLimits& li
 namespace {
 
 // The curvature limit at the samples of one parameter range (the planner's resolution).
-double curvature_limit(const geometry::PccSegment& seg, double u0, double u1, const ScanLimits& limits, double path_speed_mm_s) {
+double curvature_limit(const geometry::PccSegment& seg, double u0, double u1, const ScanLimits& limits,
+                       double path_speed_mm_s) {
   double kappa = 0;
   for (double u : {u0, 0.5 * (u0 + u1), u1}) kappa = std::max(kappa, seg.curvature(u));
   return limit_for_curvature(kappa, limits, path_speed_mm_s);
@@ -194,9 +194,8 @@ void append_segment_pieces(std::vector<LimitPiece>& pieces, const geometry::PccS
 
 }  // namespace
 
-SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
-                       std::span<const double> path_speed, std::size_t command_index,
-                       double start_mm, PlanKind kind, const ScanLimits& limits,
+SpeedPlan plan_command(std::span<const geometry::PccSegment> segments, std::span<const double> path_speed,
+                       std::size_t command_index, double start_mm, PlanKind kind, const ScanLimits& limits,
                        const LowSpeedRegion& low, bool last_command) {
   if (!(low.speed_mm_s > 0) || !(low.length_mm >= 0))
     throw std::invalid_argument("low-speed region needs a positive speed and a length >= 0");
@@ -207,7 +206,8 @@ SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
   plan.pieces.reserve(segments.size() + 1);
   double s = start_mm;
   for (std::size_t i = 0; i < segments.size(); ++i) {
-    append_segment_pieces(plan.pieces, segments[i], s, i < path_speed.size() ? path_speed[i] : 0.0, limits, command_index);
+    append_segment_pieces(plan.pieces, segments[i], s, i < path_speed.size() ? path_speed[i] : 0.0, limits,
+                          command_index);
     s = plan.pieces.back().end_mm;
   }
   plan.end_mm = s;

@@ -26,8 +26,10 @@ TimeOptimalBound time_optimal_bound(const geometry::PccPath& path, const BoundLi
     for (int i = 0; i <= 8; ++i) speed = std::max(speed, seg.derivative(seg.d_mm * i / 8).norm());
     const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil(seg.d_mm * std::max(speed, 1e-9) / step_mm)));
     Vec3 prev = seg.point(0);
-    if (vmax.empty()) vmax.push_back(limit_at(seg, 0));
-    else vmax.back() = std::min(vmax.back(), limit_at(seg, 0));  // the junction node: both sides' limit
+    if (vmax.empty())
+      vmax.push_back(limit_at(seg, 0));
+    else
+      vmax.back() = std::min(vmax.back(), limit_at(seg, 0));  // the junction node: both sides' limit
     for (std::size_t i = 1; i <= n; ++i) {
       const double u = seg.d_mm * static_cast<double>(i) / static_cast<double>(n);
       const Vec3 p = seg.point(u);
@@ -45,7 +47,8 @@ TimeOptimalBound time_optimal_bound(const geometry::PccPath& path, const BoundLi
   v.front() = v.back() = 0;
   const double a = limits.acceleration_mm_s2;
   for (std::size_t i = 1; i < m; ++i) v[i] = std::min(v[i], std::sqrt(v[i - 1] * v[i - 1] + 2 * a * (s[i] - s[i - 1])));
-  for (std::size_t i = m - 1; i-- > 0;) v[i] = std::min(v[i], std::sqrt(v[i + 1] * v[i + 1] + 2 * a * (s[i + 1] - s[i])));
+  for (std::size_t i = m - 1; i-- > 0;)
+    v[i] = std::min(v[i], std::sqrt(v[i + 1] * v[i + 1] + 2 * a * (s[i + 1] - s[i])));
   for (std::size_t i = 1; i < m; ++i) {
     const double ds = s[i] - s[i - 1];
     if (ds > 0) out.time_s += 2 * ds / (v[i - 1] + v[i]);

@@ -54,15 +54,14 @@ MotionLimits slowing(const MotionLimits& l, const std::optional<BrakingLimits>& 
 
 }  // namespace
 
-TouchCycleLimit touch_cycle_limit(const MachineConfig& config, const WorldTruth& truth, const Vec3& direction, double feed_mm_s,
-                                  double clearance_mm, double tolerance_mm, double positioning_feed_mm_s,
-                                  double qualification_feed_mm_s) {
+TouchCycleLimit touch_cycle_limit(const MachineConfig& config, const WorldTruth& truth, const Vec3& direction,
+                                  double feed_mm_s, double clearance_mm, double tolerance_mm,
+                                  double positioning_feed_mm_s, double qualification_feed_mm_s) {
   const Vec3 u = direction.normalized();
   const MotionLimits fast = path_limits(config, truth.axes, u, positioning_feed_mm_s, config.max_acceleration_mm_s2);
   const MotionLimits fast_down = slowing(fast, path_braking(config, truth.axes, u, positioning_feed_mm_s));
-  const MotionLimits slow_down =
-      slowing(path_limits(config, truth.axes, u, feed_mm_s, config.max_acceleration_mm_s2),
-              path_braking(config, truth.axes, u, feed_mm_s));
+  const MotionLimits slow_down = slowing(path_limits(config, truth.axes, u, feed_mm_s, config.max_acceleration_mm_s2),
+                                         path_braking(config, truth.axes, u, feed_mm_s));
   const double jitter = config.skip.kind == SkipInput::Kind::Scanned ? config.skip.period_s : 0;
   const double latency = config.skip.kind == SkipInput::Kind::Latched ? config.skip.latency_s : 0;
   // Mean time from the threshold to the latch: filter, transmission, skip latency, half a scan.
@@ -80,7 +79,8 @@ TouchCycleLimit touch_cycle_limit(const MachineConfig& config, const WorldTruth&
     // braking distance V Tb / 2).
     const double tb = change_s(feed_mm_s, slow_down, jerk);
     const double t = reach_s(std::max(lim.reach_mm, 0.0), feed_mm_s, fast, fast_down, jerk) + tolerance_mm / feed_mm_s +
-                     pt / feed_mm_s + delay + tb + rest_to_rest_s(clearance_mm + feed_mm_s * tb / 2, fast, fast_down, jerk);
+                     pt / feed_mm_s + delay + tb +
+                     rest_to_rest_s(clearance_mm + feed_mm_s * tb / 2, fast, fast_down, jerk);
     (jerk ? lim.time_s : lim.no_jerk_time_s) = t;
   }
   return lim;

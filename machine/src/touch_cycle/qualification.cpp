@@ -27,7 +27,8 @@ tl::expected<ToolInfo, Fault> Controller::qualify() {
     for (const Vec3& d : dirs) {
       const double safe_z = std::max(centre.z() + sphere_r + r + clearance_mm, position.z());
       const Vec3 over = centre + (sphere_r + r + approach) * d;
-      if (auto ok = move_to({position.x(), position.y(), safe_z}, positioning_feed); !ok) return tl::unexpected(ok.error());
+      if (auto ok = move_to({position.x(), position.y(), safe_z}, positioning_feed); !ok)
+        return tl::unexpected(ok.error());
       if (auto ok = move_to({over.x(), over.y(), safe_z}, positioning_feed); !ok) return tl::unexpected(ok.error());
       PtMeas pt;
       pt.nominal_mm = centre + sphere_r * d;
@@ -39,7 +40,8 @@ tl::expected<ToolInfo, Fault> Controller::qualify() {
       if (!hit) return tl::unexpected(hit.error());
       centres.push_back(hit->centre_mm);
     }
-    if (auto ok = move_to({position.x(), position.y(), centre.z() + sphere_r + r + clearance_mm}, positioning_feed); !ok)
+    if (auto ok = move_to({position.x(), position.y(), centre.z() + sphere_r + r + clearance_mm}, positioning_feed);
+        !ok)
       return tl::unexpected(ok.error());
     return centres;
   };
@@ -51,8 +53,9 @@ tl::expected<ToolInfo, Fault> Controller::qualify() {
     fitting::FitOptions options;
     options.inner = false;
     auto f = fitting::fit(fitting::Shape::Sphere, pts, options);
-    if (!f) return fault(FaultKind::BadCommand, "qualification sphere fit failed: " + fitting::to_string(f.error()),
-                         position, now());
+    if (!f)
+      return fault(FaultKind::BadCommand, "qualification sphere fit failed: " + fitting::to_string(f.error()), position,
+                   now());
     return *f;
   };
 

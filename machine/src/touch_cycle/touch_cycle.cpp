@@ -12,21 +12,22 @@ namespace metron::machine::detail {
 // One probing move from rest at `start` along unit u over `len` at `feed` until the trigger:
 // the controller latches the axes when it acts on the trigger (SEEDS.md 3, C->D), brakes, and
 // the probe's over-travel switch is checked.
-tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, const Vec3& u, double len, double feed, double search_mm,
-                                                         std::optional<double> reach_mm) {
+tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, const Vec3& u, double len, double feed,
+                                                         double search_mm, std::optional<double> reach_mm) {
   const double move_feed = reach_mm ? positioning_feed : feed;
   const MotionLimits move_limits = limits(u, move_feed);
-  const MotionProfile profile =
-      reach_mm ? MotionProfile::reach_feed(*reach_mm, len, std::min(feed, config.max_speed_mm_s), move_limits,
-                                           braking(u, move_feed))
-               : MotionProfile::rest_to_rest(len, move_limits, braking(u, move_feed));
+  const MotionProfile profile = reach_mm
+                                    ? MotionProfile::reach_feed(*reach_mm, len, std::min(feed, config.max_speed_mm_s),
+                                                                move_limits, braking(u, move_feed))
+                                    : MotionProfile::rest_to_rest(len, move_limits, braking(u, move_feed));
   const double t_end = profile.duration_s();
   const std::int64_t n_cycles = cycles_for(t_end), c0 = cycle;
   const double t0_abs = now();
   sim.begin_probe(&profile, start, u, t0_abs);
   std::optional<double> signal;
   for (std::int64_t k = 1; k <= n_cycles && !signal; ++k) {
-    const double t0 = static_cast<double>(k - 1) * config.dt_s, t1 = std::min(static_cast<double>(k) * config.dt_s, t_end);
+    const double t0 = static_cast<double>(k - 1) * config.dt_s,
+                 t1 = std::min(static_cast<double>(k) * config.dt_s, t_end);
     signal = sim.probe_step(t0, t1);
     const MotionState st = profile.at(t1);
     if (!signal) emit(t0_abs + t1, start + st.position_mm * u, st.speed_mm_s);
@@ -70,8 +71,8 @@ tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, cons
   }
   cycle = c0 + cycles_for(stop_t);
   position = start + stop_s * u;
-  motion.moves.push_back(PositioningMove{start, u, len, profile, move_limits, braking(u, move_feed), c0, brake,
-                                        now(), position});
+  motion.moves.push_back(
+      PositioningMove{start, u, len, profile, move_limits, braking(u, move_feed), c0, brake, now(), position});
   if (const auto past = sim.over_travel(stop_s))
     return fault(FaultKind::OverTravel,
                  fmt::format("probe over-travel: stopped {:.3f} mm past contact, limit {:.3f} mm", *past,

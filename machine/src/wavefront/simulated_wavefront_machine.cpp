@@ -45,7 +45,10 @@ double ray_plane(const Vec3& o, const Vec3& d, const Vec3& p0, const Vec3& n) {
 }  // namespace
 
 SimulatedWavefrontMachine::SimulatedWavefrontMachine(WavefrontWorld world, std::uint64_t seed)
-    : m_world(std::move(world)), m_rng(seed), m_position(m_world.start), m_element(m_world.gauge.element),
+    : m_world(std::move(world)),
+      m_rng(seed),
+      m_position(m_world.start),
+      m_element(m_world.gauge.element),
       m_mounted(m_world.mounted) {}
 
 bool SimulatedWavefrontMachine::mount(const std::string& part) {
@@ -186,7 +189,8 @@ tl::expected<GaugeMap, GaugeError> SimulatedWavefrontMachine::ideal_map() const 
     }
   }
   if (map.valid_count() == 0)
-    return tl::unexpected(GaugeError{GaugeFault::NoReturn, "no light returns into the gauge's pupil: the part is far from null"});
+    return tl::unexpected(
+        GaugeError{GaugeFault::NoReturn, "no light returns into the gauge's pupil: the part is far from null"});
   // Nyquist: a fringe is one wavelength of OPD; the camera resolves at most half a fringe per pixel.
   double worst = 0;
   int wx = 0, wy = 0;

@@ -48,7 +48,8 @@ class Object {
   }
   void vec(const std::string& key, double* out, int n) {
     if (const json* j = find(key)) {
-      if (!j->is_array() || static_cast<int>(j->size()) != n) fail(at(key), fmt::format("expected an array of {} numbers", n));
+      if (!j->is_array() || static_cast<int>(j->size()) != n)
+        fail(at(key), fmt::format("expected an array of {} numbers", n));
       for (int i = 0; i < n; ++i) {
         const json& v = (*j)[static_cast<std::size_t>(i)];
         if (!v.is_number() || !std::isfinite(v.get<double>()))
@@ -80,9 +81,12 @@ void read_gauge(const json& j, const std::string& ptr, GaugeSpec& g) {
   o.number("flat_radius_mm", g.flat_radius_mm, 1, 1000);
   o.number("noise_nm", g.noise_nm, 0, 1000);
   if (const json* e = o.find("element")) {
-    if (*e == "sphere") g.element = Element::Sphere;
-    else if (*e == "flat") g.element = Element::Flat;
-    else fail(o.at("element"), "expected \"sphere\" or \"flat\"");
+    if (*e == "sphere")
+      g.element = Element::Sphere;
+    else if (*e == "flat")
+      g.element = Element::Flat;
+    else
+      fail(o.at("element"), "expected \"sphere\" or \"flat\"");
   }
   o.finish();
 }
@@ -137,9 +141,12 @@ PartSpec read_part(const json& j, const std::string& ptr) {
   if (!name || !name->is_string() || name->get<std::string>().empty()) fail(o.at("name"), "expected a part name");
   p.name = name->get<std::string>();
   if (const json* k = o.find("kind")) {
-    if (*k == "sphere") p.kind = PartKind::Sphere;
-    else if (*k == "flat") p.kind = PartKind::Flat;
-    else fail(o.at("kind"), "expected \"sphere\" or \"flat\"");
+    if (*k == "sphere")
+      p.kind = PartKind::Sphere;
+    else if (*k == "flat")
+      p.kind = PartKind::Flat;
+    else
+      fail(o.at("kind"), "expected \"sphere\" or \"flat\"");
   }
   o.number("radius_mm", p.radius_mm);
   if (p.kind == PartKind::Sphere && std::abs(p.radius_mm) < 0.1) fail(o.at("radius_mm"), "expected |radius| >= 0.1 mm");
@@ -177,7 +184,8 @@ WavefrontWorld read_world(const json& j) {
     for (std::size_t i = 0; i < ps->size(); ++i) {
       w.parts.push_back(read_part((*ps)[i], "/parts/" + std::to_string(i)));
       for (std::size_t k = 0; k + 1 < w.parts.size(); ++k)
-        if (w.parts[k].name == w.parts.back().name) fail("/parts/" + std::to_string(i) + "/name", "duplicate part name");
+        if (w.parts[k].name == w.parts.back().name)
+          fail("/parts/" + std::to_string(i) + "/name", "duplicate part name");
     }
   }
   if (const json* m = o.find("mounted")) {

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <numbers>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
+#include <Eigen/Dense>
 
 #include "metron/runtime/wavefront/calibration.hpp"
 #include "metron/runtime/wavefront/form_stitching.hpp"
@@ -122,8 +122,8 @@ tl::expected<GaugeReading, std::string> acquire(WavefrontMachine& m, const Knowl
       }
     }
   m.move(start);
-  return tl::unexpected(fmt::format("the gauge reads nowhere near the start (Z +-2 mm; X-Y within 0.2 mm, Z +-5 search steps): {}",
-                                    first.error()));
+  return tl::unexpected(fmt::format(
+      "the gauge reads nowhere near the start (Z +-2 mm; X-Y within 0.2 mm, Z +-5 search steps): {}", first.error()));
 }
 
 // The translation (steps) that would null a reading, from the knowledge's responses.
@@ -182,7 +182,8 @@ Knowledge initial_knowledge(const WavefrontMachine& machine) {
   return k;
 }
 
-tl::expected<NullResult, std::string> null_sphere(WavefrontMachine& m, const Knowledge& k, const Log& log, bool z_only) {
+tl::expected<NullResult, std::string> null_sphere(WavefrontMachine& m, const Knowledge& k, const Log& log,
+                                                  bool z_only) {
   NullResult out;
   auto r = acquire(m, k, out.maps, log);
   if (!r) return tl::unexpected(r.error());
@@ -327,7 +328,9 @@ tl::expected<AxisResponseResult, std::string> axis_response(WavefrontMachine& m,
       m.move(c);
       auto r = read_here(m);
       ++res.maps;
-      if (!r) return tl::unexpected(fmt::format("axis-response: moving {} by {} steps: {}", "XYZ"[axis], move_steps, r.error()));
+      if (!r)
+        return tl::unexpected(
+            fmt::format("axis-response: moving {} by {} steps: {}", "XYZ"[axis], move_steps, r.error()));
       reading[side] = Vec3(r->lateral_mm.x(), r->lateral_mm.y(), r->axial_mm);
     }
     resp.col(axis) = (reading[0] - reading[1]) / (2 * move_steps);
@@ -349,8 +352,9 @@ tl::expected<AxisResponseResult, std::string> axis_response(WavefrontMachine& m,
   return res;
 }
 
-tl::expected<GaugeFrameResult, std::string> align_gauge_frame(WavefrontMachine& m, Knowledge& k, const std::string& flat,
-                                                              const PartOnMountOptions& o, const Log& log) {
+tl::expected<GaugeFrameResult, std::string> align_gauge_frame(WavefrontMachine& m, Knowledge& k,
+                                                              const std::string& flat, const PartOnMountOptions& o,
+                                                              const Log& log) {
   const auto p = part_named(m, flat);
   if (!p || p->kind != PartKind::Flat) return tl::unexpected(fmt::format("gauge-frame: '{}' is not a flat part", flat));
   const Element was = m.element();
@@ -509,8 +513,10 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
         b[static_cast<Eigen::Index>(j)] = (res.null_steps[j].x() - res.null_steps[0].x()) * k.step_mm.x();
       }
       const Eigen::Vector2d sol = a.colPivHouseholderQr().solve(b);
-      if (std::isfinite(sol[0]) && t.size() >= 3) zf_guess = sol[0], ecc_guess = sol[1];
-      else if (std::isfinite(sol[0])) zf_guess = sol[0];
+      if (std::isfinite(sol[0]) && t.size() >= 3)
+        zf_guess = sol[0], ecc_guess = sol[1];
+      else if (std::isfinite(sol[0]))
+        zf_guess = sol[0];
     }
   }
   {
@@ -525,7 +531,8 @@ tl::expected<BRotationResult, std::string> b_rotation(WavefrontMachine& m, Knowl
     if (!st) return tl::unexpected("b-rotation: " + st.error());
     res.form_height_nm = st->form_height_nm;
     res.form_residual_rms_nm = st->residual_rms_nm;
-    say(log, fmt::format("  B rotation: the part's form stitched from {} maps (rms {:.2f} nm left); nulls moved by up to {:.2f} steps",
+    say(log, fmt::format("  B rotation: the part's form stitched from {} maps (rms {:.2f} nm left); nulls moved by up "
+                         "to {:.2f} steps",
                          sub_maps.size(), st->residual_rms_nm, max_shift(res.raw_null_steps, res.null_steps)));
   }
   // (f) least squares of P, Q, R, S (and Z0, Y0, E) by Gauss-Newton from a linear start.
@@ -664,7 +671,8 @@ tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowl
     if (!st) return tl::unexpected("c-rotation: " + st.error());
     res.form_height_nm = st->form_height_nm;
     res.form_residual_rms_nm = st->residual_rms_nm;
-    say(log, fmt::format("  C rotation: the part's form stitched from {} maps (rms {:.2f} nm left); nulls moved by up to {:.2f} steps",
+    say(log, fmt::format("  C rotation: the part's form stitched from {} maps (rms {:.2f} nm left); nulls moved by up "
+                         "to {:.2f} steps",
                          sub_maps.size(), st->residual_rms_nm, max_shift(res.raw_null_steps, res.null_steps)));
   }
   // docs/wavefront.md "The C-rotation null": in steps of dy, c = (., Q_c + P_y, R_c),
@@ -730,7 +738,8 @@ tl::expected<CRotationResult, std::string> c_rotation(WavefrontMachine& m, Knowl
   return res;
 }
 
-tl::expected<AzResult, std::string> align_a_to_z(WavefrontMachine& m, Knowledge& k, const AzOptions& o, const Log& log) {
+tl::expected<AzResult, std::string> align_a_to_z(WavefrontMachine& m, Knowledge& k, const AzOptions& o,
+                                                 const Log& log) {
   std::vector<PartSpec> balls;
   if (o.balls.empty()) {
     for (const auto& p : m.parts())
@@ -795,8 +804,9 @@ tl::expected<AzResult, std::string> align_a_to_z(WavefrontMachine& m, Knowledge&
       m.shift_rotary_zeros(it.correction_deg.x(), it.correction_deg.y());
       k.az_correction_deg += it.correction_deg;
     }
-    say(log, fmt::format("  A-Z iteration {}: tilt ({:.3f}, {:.3f}) urad, B/C zero shift ({:.6f}, {:.6f}) deg", iter + 1,
-                         it.angle_rad.x() * 1e6, it.angle_rad.y() * 1e6, it.correction_deg.x(), it.correction_deg.y()));
+    say(log,
+        fmt::format("  A-Z iteration {}: tilt ({:.3f}, {:.3f}) urad, B/C zero shift ({:.6f}, {:.6f}) deg", iter + 1,
+                    it.angle_rad.x() * 1e6, it.angle_rad.y() * 1e6, it.correction_deg.x(), it.correction_deg.y()));
     res.iterations.push_back(it);
     if (o.on_iteration) o.on_iteration(res.iterations.back());
     if (done) {
@@ -872,7 +882,8 @@ tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, cons
   }
   if (all || step == "focus") {
     known = true;
-    if (auto ok = need(!flats.empty() && !spheres.empty(), "a flat and a sphere"); !ok) return tl::unexpected(ok.error());
+    if (auto ok = need(!flats.empty() && !spheres.empty(), "a flat and a sphere"); !ok)
+      return tl::unexpected(ok.error());
     say(log, "step 3: the focus on the A axis (cat's eye, part-on-mount on a ball)");
     auto r = focus_on_axis(m, k, flats.front().name, spheres.front().name, {}, log);
     if (!r) return tl::unexpected(r.error());
@@ -927,8 +938,10 @@ tl::expected<CalibrationReport, std::string> calibrate(WavefrontMachine& m, cons
     m.fit_element(Element::Sphere);
   }
   if (!known)
-    return tl::unexpected(fmt::format(
-        "unknown step '{}' (expected part-on-mount, gauge-frame, axis-response, focus, a-z, b-rotation, c-rotation, reversal, all)", step));
+    return tl::unexpected(
+        fmt::format("unknown step '{}' (expected part-on-mount, gauge-frame, axis-response, focus, a-z, b-rotation, "
+                    "c-rotation, reversal, all)",
+                    step));
   // The focus Z with the step size the later steps calibrated (the cat's eye used the one then known).
   if (k.cat_eye_z_steps) {
     k.focus_table_z_steps = *k.cat_eye_z_steps + k.cat_eye_height_mm / k.step_mm.z();

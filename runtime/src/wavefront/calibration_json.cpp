@@ -60,18 +60,16 @@ nlohmann::json to_json(const CalibrationReport& r) {
   }
   if (r.focus) {
     const auto& f = *r.focus;
-    j["focus"] = {{"cat_eye_z_steps", f.cat_eye_z_steps},
-                  {"focus_table_z_steps", f.focus_table_z_steps},
-                  {"focus_to_a_mm", v2(f.focus_to_a_mm)},
-                  {"a_through_focus_steps", v2(f.a_through_focus_steps)},
-                  {"residual_mm", v2(f.residual_mm)},
-                  {"maps", f.maps}};
+    j["focus"] = {{"cat_eye_z_steps", f.cat_eye_z_steps}, {"focus_table_z_steps", f.focus_table_z_steps},
+                  {"focus_to_a_mm", v2(f.focus_to_a_mm)}, {"a_through_focus_steps", v2(f.a_through_focus_steps)},
+                  {"residual_mm", v2(f.residual_mm)},     {"maps", f.maps}};
   }
   if (r.a_to_z) {
     json its = json::array();
     for (const auto& it : r.a_to_z->iterations) {
       json pts = json::array();
-      for (std::size_t i = 0; i < it.z_mm.size(); ++i) pts.push_back({{"z_mm", it.z_mm[i]}, {"a_offset_mm", v2(it.a_offset_mm[i])}});
+      for (std::size_t i = 0; i < it.z_mm.size(); ++i)
+        pts.push_back({{"z_mm", it.z_mm[i]}, {"a_offset_mm", v2(it.a_offset_mm[i])}});
       its.push_back({{"points", pts}, {"angle_rad", v2(it.angle_rad)}, {"correction_deg", v2(it.correction_deg)}});
     }
     j["a_to_z"] = {{"iterations", its}, {"converged", r.a_to_z->converged}, {"maps", r.a_to_z->maps}};
@@ -86,12 +84,20 @@ nlohmann::json to_json(const CalibrationReport& r) {
       if (i < b.raw_null_steps.size()) nulls.back()["raw_steps"] = v3(b.raw_null_steps[i]);
     }
     j["b_rotation"] = {{"nulls", nulls},
-                       {"P_steps", b.p_steps}, {"Q", b.q}, {"R", b.r}, {"S", b.s},
-                       {"eccentricity_mm", b.eccentricity_mm}, {"xb_mm", b.xb_mm}, {"zf_mm", b.zf_mm},
-                       {"dz_mm", b.dz_mm}, {"b_axis_tilt_rad", b.b_axis_tilt_rad},
-                       {"residual_rms_steps", b.residual_rms_steps}, {"maps", b.maps}};
+                       {"P_steps", b.p_steps},
+                       {"Q", b.q},
+                       {"R", b.r},
+                       {"S", b.s},
+                       {"eccentricity_mm", b.eccentricity_mm},
+                       {"xb_mm", b.xb_mm},
+                       {"zf_mm", b.zf_mm},
+                       {"dz_mm", b.dz_mm},
+                       {"b_axis_tilt_rad", b.b_axis_tilt_rad},
+                       {"residual_rms_steps", b.residual_rms_steps},
+                       {"maps", b.maps}};
     if (!b.form_height_nm.empty())
-      j["b_rotation"]["form"] = {{"terms", form_terms}, {"height_nm", b.form_height_nm}, {"residual_rms_nm", b.form_residual_rms_nm}};
+      j["b_rotation"]["form"] = {
+          {"terms", form_terms}, {"height_nm", b.form_height_nm}, {"residual_rms_nm", b.form_residual_rms_nm}};
   }
   if (r.c_rotation) {
     const auto& c = *r.c_rotation;
@@ -100,17 +106,23 @@ nlohmann::json to_json(const CalibrationReport& r) {
       nulls.push_back({{"c_deg", c.c_deg[i]}, {"steps", v3(c.null_steps[i])}});
       if (i < c.raw_null_steps.size()) nulls.back()["raw_steps"] = v3(c.raw_null_steps[i]);
     }
-    j["c_rotation"] = {{"nulls", nulls}, {"P_steps", c.p_steps}, {"Q", c.q}, {"R", c.r}, {"S", c.s},
-                       {"yc_mm", c.yc_mm}, {"zf_minus_zc_mm", c.zf_minus_zc_mm},
-                       {"residual_rms_steps", c.residual_rms_steps}, {"maps", c.maps}};
+    j["c_rotation"] = {{"nulls", nulls},
+                       {"P_steps", c.p_steps},
+                       {"Q", c.q},
+                       {"R", c.r},
+                       {"S", c.s},
+                       {"yc_mm", c.yc_mm},
+                       {"zf_minus_zc_mm", c.zf_minus_zc_mm},
+                       {"residual_rms_steps", c.residual_rms_steps},
+                       {"maps", c.maps}};
     if (c.zc_mm) j["c_rotation"]["zc_mm"] = *c.zc_mm;
     if (!c.form_height_nm.empty())
-      j["c_rotation"]["form"] = {{"terms", form_terms}, {"height_nm", c.form_height_nm}, {"residual_rms_nm", c.form_residual_rms_nm}};
+      j["c_rotation"]["form"] = {
+          {"terms", form_terms}, {"height_nm", c.form_height_nm}, {"residual_rms_nm", c.form_residual_rms_nm}};
   }
   if (r.reversal) {
     const auto& v = *r.reversal;
-    j["reversal"] = {{"part", v2(v.part_rad)}, {"table", v2(v.table_rad)},
-                     {"unit", v.at_0.sphere ? "mm" : "rad"},
+    j["reversal"] = {{"part", v2(v.part_rad)},   {"table", v2(v.table_rad)},     {"unit", v.at_0.sphere ? "mm" : "rad"},
                      {"at_0", pom_json(v.at_0)}, {"at_180", pom_json(v.at_180)}, {"maps", v.maps}};
   }
   const auto& k = r.knowledge;

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <numbers>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
+#include <Eigen/Dense>
 
 #include "metron/runtime/wavefront/form_stitching.hpp"
 #include "metron/stdlib/wavefront/zernike.hpp"
@@ -24,13 +24,13 @@ constexpr int kRow = kPlacement + kForm;
 double form_term(int j, double x, double y) {
   const double r2 = x * x + y * y;
   switch (j) {
-    case 0: return x * x - y * y;          // astigmatism 0/90 (Z6 = sqrt6 this)
-    case 1: return 2 * x * y;              // astigmatism 45 (Z5)
+    case 0: return x * x - y * y;              // astigmatism 0/90 (Z6 = sqrt6 this)
+    case 1: return 2 * x * y;                  // astigmatism 45 (Z5)
     case 2: return x * x * x - 3 * x * y * y;  // trefoil (Z10 = sqrt8 this)
     case 3: return 3 * x * x * y - y * y * y;  // trefoil (Z9)
-    case 4: return x * r2;                 // coma's cubic part (Z8 = sqrt8 (3 this - 2 x))
-    case 5: return y * r2;                 // (Z7)
-    default: return r2 * r2;               // spherical's quartic part (Z11 = sqrt5 (6 this - 6 r^2 + 1))
+    case 4: return x * r2;                     // coma's cubic part (Z8 = sqrt8 (3 this - 2 x))
+    case 5: return y * r2;                     // (Z7)
+    default: return r2 * r2;                   // spherical's quartic part (Z11 = sqrt5 (6 this - 6 r^2 + 1))
   }
 }
 
@@ -64,8 +64,7 @@ Eigen::Matrix<double, kRow, 1> row(const SubApertureMap& sm, const Disc& disc, d
   // on the focus at F - R d; at null the centre of curvature is on the focus.
   const Vec3 d(u * s, v * s, -std::sqrt(std::max(0.0, 1 - (u * u + v * v) * s * s)));
   const Vec3 hit = -radius_mm * (sm.gauge_to_part * d);
-  for (int j = 0; j < kForm; ++j)
-    r[kPlacement + j] = form_term(j, hit.x() / clear_mm, hit.y() / clear_mm);
+  for (int j = 0; j < kForm; ++j) r[kPlacement + j] = form_term(j, hit.x() / clear_mm, hit.y() / clear_mm);
   return r;
 }
 
@@ -94,7 +93,8 @@ tl::expected<FormStitch, std::string> stitch_common_form(const std::vector<SubAp
       for (int ix = 0; ix < sm.map.pixels; ++ix) {
         const double o = sm.map.at(ix, iy);
         if (!std::isfinite(o)) continue;
-        const auto r = row(sm, discs.back(), s, radius_mm, clear_radius_mm, sm.map.coordinate(ix), sm.map.coordinate(iy));
+        const auto r =
+            row(sm, discs.back(), s, radius_mm, clear_radius_mm, sm.map.coordinate(ix), sm.map.coordinate(iy));
         a.selfadjointView<Eigen::Lower>().rankUpdate(r);
         b += r * o;
         ++samples;
@@ -136,8 +136,9 @@ tl::expected<FormStitch, std::string> stitch_common_form(const std::vector<SubAp
     const Eigen::VectorXd b = atb(idx);
     Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
     if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-13)
-      return tl::unexpected(std::string("form stitching: the maps do not separate the form from the placement "
-                                        "(the sub-apertures must move across the part)"));
+      return tl::unexpected(
+          std::string("form stitching: the maps do not separate the form from the placement "
+                      "(the sub-apertures must move across the part)"));
     const Eigen::VectorXd y = ldlt.solve(b);
     Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
     for (std::size_t j = 0; j < idx.size(); ++j) x[idx[j]] = y[static_cast<Eigen::Index>(j)];

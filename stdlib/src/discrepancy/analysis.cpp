@@ -8,8 +8,8 @@
 #include <set>
 #include <tuple>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
+#include <Eigen/Dense>
 
 namespace metron::discrepancy {
 namespace {
@@ -59,7 +59,9 @@ double variance(const std::vector<double>& v) {
   return s / static_cast<double>(v.size() - 1);
 }
 
-double rms(const Eigen::VectorXd& v) { return v.size() ? std::sqrt(v.squaredNorm() / static_cast<double>(v.size())) : 0; }
+double rms(const Eigen::VectorXd& v) {
+  return v.size() ? std::sqrt(v.squaredNorm() / static_cast<double>(v.size())) : 0;
+}
 
 // Least squares by normal equations on RMS-normalised columns (the columns mix mm, mm^2, s).
 struct Fit {
@@ -105,14 +107,19 @@ struct Features {
 // A candidate effect: its columns given the nonlinear parameter, and how to describe it.
 struct Candidate {
   Candidate(std::string k, std::string w, std::string cond, std::string e, int c, int a = -1)
-      : kind(std::move(k)), what(std::move(w)), condition(std::move(cond)), explanation(std::move(e)), component(c), along(a) {}
+      : kind(std::move(k)),
+        what(std::move(w)),
+        condition(std::move(cond)),
+        explanation(std::move(e)),
+        component(c),
+        along(a) {}
   std::string kind, what, condition, explanation;
   int component = 0;
-  int along = -1, along2 = -1;         // position axes
+  int along = -1, along2 = -1;  // position axes
   const Series* temperature = nullptr;
-  std::vector<double> grid;            // nonlinear parameter values to search (empty: linear)
-  bool log_refine = false;             // refine the nonlinear parameter (golden section)
-  double tests = 1;                    // independent search points (Bonferroni)
+  std::vector<double> grid;  // nonlinear parameter values to search (empty: linear)
+  bool log_refine = false;   // refine the nonlinear parameter (golden section)
+  double tests = 1;          // independent search points (Bonferroni)
   std::string nl_name, nl_unit;
   std::function<Eigen::MatrixXd(double)> columns;
 };
@@ -150,8 +157,10 @@ Evaluated fit_candidate(const Candidate& c, const Eigen::MatrixXd& base, const E
     double x1 = b - g * (b - a), x2 = a + g * (b - a);
     double f1 = rss_at(x1, nullptr), f2 = rss_at(x2, nullptr);
     for (int it = 0; it < 25; ++it) {
-      if (f1 < f2) b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = rss_at(x1, nullptr);
-      else a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = rss_at(x2, nullptr);
+      if (f1 < f2)
+        b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = rss_at(x1, nullptr);
+      else
+        a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = rss_at(x2, nullptr);
     }
     const double xm = 0.5 * (a + b), fm = rss_at(xm, nullptr);
     if (fm < rss) nl = xm, rss = fm;
@@ -179,7 +188,8 @@ std::vector<int> make_folds(const Problem& p, std::string& how, int& count) {
       std::vector<double> cv(cycles.begin(), cycles.end());
       count = static_cast<int>(std::min<std::size_t>(cv.size(), 10));
       for (std::size_t o = 0; o < n; ++o) {
-        const auto idx = static_cast<std::size_t>(std::lower_bound(cv.begin(), cv.end(), cyc->values[p.row[o]]) - cv.begin());
+        const auto idx =
+            static_cast<std::size_t>(std::lower_bound(cv.begin(), cv.end(), cyc->values[p.row[o]]) - cv.begin());
         fold[o] = static_cast<int>(idx * static_cast<std::size_t>(count) / cv.size());
       }
       how = fmt::format("leave cycles out ({} folds of whole cycles)", count);
@@ -187,12 +197,14 @@ std::vector<int> make_folds(const Problem& p, std::string& how, int& count) {
     }
   }
   count = static_cast<int>(std::min<std::size_t>(10, std::max<std::size_t>(2, p.data->rows / 8)));
-  for (std::size_t o = 0; o < n; ++o) fold[o] = static_cast<int>(p.row[o] * static_cast<std::size_t>(count) / p.data->rows);
+  for (std::size_t o = 0; o < n; ++o)
+    fold[o] = static_cast<int>(p.row[o] * static_cast<std::size_t>(count) / p.data->rows);
   how = fmt::format("{} contiguous blocks of rows (time order)", count);
   return fold;
 }
 
-Eigen::VectorXd cv_residual(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const std::vector<int>& fold, int count) {
+Eigen::VectorXd cv_residual(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const std::vector<int>& fold,
+                            int count) {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(y.size());
   for (int k = 0; k < count; ++k) {
     std::vector<Eigen::Index> tr, te;
@@ -209,10 +221,12 @@ Eigen::VectorXd cv_residual(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, 
 }
 
 // Binned means along a condition: one-way ANOVA F over B equal-count bins.
-Structure binned_means(const std::vector<double>& x, const Eigen::VectorXd& r, const std::vector<Eigen::Index>& idx, int bins) {
+Structure binned_means(const std::vector<double>& x, const Eigen::VectorXd& r, const std::vector<Eigen::Index>& idx,
+                       int bins) {
   Structure s;
   std::vector<Eigen::Index> order = idx;
-  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return x[static_cast<std::size_t>(a)] < x[static_cast<std::size_t>(b)]; });
+  std::sort(order.begin(), order.end(),
+            [&](auto a, auto b) { return x[static_cast<std::size_t>(a)] < x[static_cast<std::size_t>(b)]; });
   const auto n = order.size();
   std::set<double> distinct;
   for (auto i : order) distinct.insert(x[static_cast<std::size_t>(i)]);
@@ -225,7 +239,8 @@ Structure binned_means(const std::vector<double>& x, const Eigen::VectorXd& r, c
   std::size_t k = 0;
   for (int b = 0; b < B; ++b) {
     const std::size_t end = (b + 1 == B) ? n : (n * static_cast<std::size_t>(b + 1)) / static_cast<std::size_t>(B);
-    while (k < n && (k < end || (k > 0 && x[static_cast<std::size_t>(order[k])] == x[static_cast<std::size_t>(order[k - 1])]))) {
+    while (k < n &&
+           (k < end || (k > 0 && x[static_cast<std::size_t>(order[k])] == x[static_cast<std::size_t>(order[k - 1])]))) {
       bin[k] = b;
       sum[static_cast<std::size_t>(b)] += r[order[k]];
       cnt[static_cast<std::size_t>(b)] += 1;
@@ -285,16 +300,30 @@ std::vector<double> first_order_lag(const std::vector<double>& t, const std::vec
 
 const std::vector<CatalogueEntry>& catalogue() {
   static const std::vector<CatalogueEntry> c{
-      {"scale", "e_c = s q_c", "scale (positioning) error of axis c: scale pitch, uncompensated uniform expansion (ISO 230-2 linear trend)"},
-      {"squareness", "e_c = k q_j", "out-of-squareness of axes c and j, or a constant angular error with an Abbe lever (ISO 230-1)"},
-      {"cross-axis", "e_c = k q_i q_j", "non-rigid term: the error along c grows with two axes together, e.g. a bridge or beam bending under the carriage (twist)"},
-      {"reversal", "e_c = B/2 d_c", "reversal (backlash, friction, servo lag at the stop): half the reversal value with the sign of the approach (ISO 230-2 B)"},
-      {"cyclic", "e_c = a sin(2 pi q_j / P) + b cos(2 pi q_j / P)", "cyclic error of a lead screw, rack or scale graduation with period P (ISO 230-2 periodic error)"},
+      {"scale", "e_c = s q_c",
+       "scale (positioning) error of axis c: scale pitch, uncompensated uniform expansion (ISO 230-2 linear trend)"},
+      {"squareness", "e_c = k q_j",
+       "out-of-squareness of axes c and j, or a constant angular error with an Abbe lever (ISO 230-1)"},
+      {"cross-axis", "e_c = k q_i q_j",
+       "non-rigid term: the error along c grows with two axes together, e.g. a bridge or beam bending under the "
+       "carriage (twist)"},
+      {"reversal", "e_c = B/2 d_c",
+       "reversal (backlash, friction, servo lag at the stop): half the reversal value with the sign of the approach "
+       "(ISO 230-2 B)"},
+      {"cyclic", "e_c = a sin(2 pi q_j / P) + b cos(2 pi q_j / P)",
+       "cyclic error of a lead screw, rack or scale graduation with period P (ISO 230-2 periodic error)"},
       {"drift", "e_c = r (t - t0)", "linear drift over time: warm-up, creep, sensor drift"},
-      {"transient", "e_c = A exp(-(t - t0) / tau)", "start-up transient: the first readings after a start or a pause settle with time constant tau (warm-up of drives, settling of a stepper)"},
-      {"thermal", "e_c = (k0 + k1 q_c)(T_lag(t; tau) - T_ref)", "thermal expansion of part, scale or structure following a recorded temperature through a first-order lag tau (ISO 230-3)"},
-      {"acceleration", "e_c = k a", "deflection under acceleration: inertial bending of the structure or the stylus (dynamic error)"},
-      {"lobing", "e_n = a cos(m theta) + b sin(m theta)", "probe pre-travel lobing: a kinematic touch-trigger probe triggers later in some directions (m = 3 for a three-point seat)"},
+      {"transient", "e_c = A exp(-(t - t0) / tau)",
+       "start-up transient: the first readings after a start or a pause settle with time constant tau (warm-up of "
+       "drives, settling of a stepper)"},
+      {"thermal", "e_c = (k0 + k1 q_c)(T_lag(t; tau) - T_ref)",
+       "thermal expansion of part, scale or structure following a recorded temperature through a first-order lag tau "
+       "(ISO 230-3)"},
+      {"acceleration", "e_c = k a",
+       "deflection under acceleration: inertial bending of the structure or the stylus (dynamic error)"},
+      {"lobing", "e_n = a cos(m theta) + b sin(m theta)",
+       "probe pre-travel lobing: a kinematic touch-trigger probe triggers later in some directions (m = 3 for a "
+       "three-point seat)"},
   };
   return c;
 }
@@ -321,7 +350,9 @@ Analysis analyse(const Problem& p, const Options& opt) {
   out.observations = nu;
   const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(p.residual_mm.data(), n);
   out.rms_base_mm = rms(y);
-  auto say = [&](const std::string& s) { if (opt.progress) opt.progress(s); };
+  auto say = [&](const std::string& s) {
+    if (opt.progress) opt.progress(s);
+  };
   const double sign = data.description.kind == DataKind::Artefact ? -1.0 : 1.0;  // data deviation = sign * e
 
   // Features.
@@ -338,7 +369,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
   }
   const Series* time = data.find(Role::Time);
   const Series* dir_any = nullptr;
-  for (const auto& s : data.series) if (s.role == Role::Direction) dir_any = &s;
+  for (const auto& s : data.series)
+    if (s.role == Role::Direction) dir_any = &s;
   const Series* acc_any = data.find(Role::Acceleration);
   const Series* ax = data.find(Role::Approach, 0);
   const Series* ay = data.find(Role::Approach, 1);
@@ -353,7 +385,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
     nuis.push_back(v);
     out.nuisance.push_back(fmt::format("zero offset of {}", kAxis[c]));
   }
-  if (data.description.kind == DataKind::Artefact && comps.count(0) && comps.count(1) && F.q_varies[0] && F.q_varies[1]) {
+  if (data.description.kind == DataKind::Artefact && comps.count(0) && comps.count(1) && F.q_varies[0] &&
+      F.q_varies[1]) {
     Eigen::VectorXd v(n);
     for (Eigen::Index o = 0; o < n; ++o) {
       const auto& q = F.q[static_cast<std::size_t>(o)];
@@ -370,33 +403,46 @@ Analysis analyse(const Problem& p, const Options& opt) {
     nuis.clear();
     for (const auto& [key, g] : group) {
       Eigen::VectorXd v(n);
-      for (Eigen::Index o = 0; o < n; ++o) v[o] = std::make_pair(F.comp[static_cast<std::size_t>(o)], F.q[static_cast<std::size_t>(o)]) == key ? 1 : 0;
+      for (Eigen::Index o = 0; o < n; ++o)
+        v[o] = std::make_pair(F.comp[static_cast<std::size_t>(o)], F.q[static_cast<std::size_t>(o)]) == key ? 1 : 0;
       nuis.push_back(v);
     }
-    out.nuisance = {fmt::format("a table of {} systematic deviations per nominal position (ISO 230-2 mean bidirectional deviation)", group.size())};
+    out.nuisance = {
+        fmt::format("a table of {} systematic deviations per nominal position (ISO 230-2 mean bidirectional deviation)",
+                    group.size())};
   }
   Eigen::MatrixXd base(n, static_cast<Eigen::Index>(nuis.size()));
   for (std::size_t k = 0; k < nuis.size(); ++k) base.col(static_cast<Eigen::Index>(k)) = nuis[k];
 
   auto on = [&](int c, auto f) {  // a column acting on component c
     Eigen::VectorXd v(n);
-    for (Eigen::Index o = 0; o < n; ++o) v[o] = F.comp[static_cast<std::size_t>(o)] == c ? f(static_cast<std::size_t>(o)) : 0.0;
+    for (Eigen::Index o = 0; o < n; ++o)
+      v[o] = F.comp[static_cast<std::size_t>(o)] == c ? f(static_cast<std::size_t>(o)) : 0.0;
     return v;
   };
-  auto enabled = [&](const std::string& k) { return std::find(opt.disabled.begin(), opt.disabled.end(), k) == opt.disabled.end(); };
+  auto enabled = [&](const std::string& k) {
+    return std::find(opt.disabled.begin(), opt.disabled.end(), k) == opt.disabled.end();
+  };
 
   // Catalogue candidates.
   std::vector<Candidate> cands;
   const auto& cat = catalogue();
   auto expl = [&](const std::string& k) {
-    for (const auto& e : cat) if (e.kind == k) return e.explanation;
+    for (const auto& e : cat)
+      if (e.kind == k) return e.explanation;
     return std::string{};
   };
   for (int c : comps) {
     const std::size_t cu = static_cast<std::size_t>(c);
     if (c < 3 && F.q_varies[cu] && enabled("scale")) {
-      Candidate k{"scale", fmt::format("scale error of {}", kAxis[c]), fmt::format("{} position", kAxis[c]), expl("scale"), c, c};
-      k.columns = [&, c, cu](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return F.q[o][cu]; }); return m; };
+      Candidate k{
+          "scale", fmt::format("scale error of {}", kAxis[c]), fmt::format("{} position", kAxis[c]), expl("scale"), c,
+          c};
+      k.columns = [&, c, cu](double) {
+        Eigen::MatrixXd m(n, 1);
+        m.col(0) = on(c, [&](std::size_t o) { return F.q[o][cu]; });
+        return m;
+      };
       cands.push_back(k);
     }
     for (int j = 0; j < 3; ++j) {
@@ -405,22 +451,41 @@ Analysis analyse(const Problem& p, const Options& opt) {
       // With the artefact's rotation free, "y along x" equals "x along y" (one squareness xy): keep one.
       const bool rotation_free = out.nuisance.size() > comps.size();
       if (j != c && c < 3 && enabled("squareness") && !(rotation_free && c == 1 && j == 0)) {
-        Candidate k{"squareness", fmt::format("{} error growing with {} (squareness {}{})", kAxis[c], kAxis[j], kAxis[std::min(c, j)], kAxis[std::max(c, j)]),
-                    fmt::format("{} position", kAxis[j]), expl("squareness"), c, j};
-        k.columns = [&, c, ju](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return F.q[o][ju]; }); return m; };
+        Candidate k{"squareness",
+                    fmt::format("{} error growing with {} (squareness {}{})", kAxis[c], kAxis[j], kAxis[std::min(c, j)],
+                                kAxis[std::max(c, j)]),
+                    fmt::format("{} position", kAxis[j]),
+                    expl("squareness"),
+                    c,
+                    j};
+        k.columns = [&, c, ju](double) {
+          Eigen::MatrixXd m(n, 1);
+          m.col(0) = on(c, [&](std::size_t o) { return F.q[o][ju]; });
+          return m;
+        };
         cands.push_back(k);
       }
       for (int i = 0; i < j; ++i) {
         const std::size_t iu = static_cast<std::size_t>(i);
         if (!F.q_varies[iu] || c == 3 || !enabled("cross-axis")) continue;
-        Candidate k{"cross-axis", fmt::format("{} error growing with {}*{}", kAxis[c], kAxis[i], kAxis[j]), fmt::format("{}*{} position", kAxis[i], kAxis[j]), expl("cross-axis"), c, i};
+        Candidate k{"cross-axis",
+                    fmt::format("{} error growing with {}*{}", kAxis[c], kAxis[i], kAxis[j]),
+                    fmt::format("{}*{} position", kAxis[i], kAxis[j]),
+                    expl("cross-axis"),
+                    c,
+                    i};
         k.along2 = j;
-        k.columns = [&, c, iu, ju](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return F.q[o][iu] * F.q[o][ju]; }); return m; };
+        k.columns = [&, c, iu, ju](double) {
+          Eigen::MatrixXd m(n, 1);
+          m.col(0) = on(c, [&](std::size_t o) { return F.q[o][iu] * F.q[o][ju]; });
+          return m;
+        };
         cands.push_back(k);
       }
       if (enabled("cyclic")) {
         std::vector<double> v;
-        for (std::size_t o = 0; o < nu; ++o) if (F.comp[o] == c) v.push_back(F.q[o][ju]);
+        for (std::size_t o = 0; o < nu; ++o)
+          if (F.comp[o] == c) v.push_back(F.q[o][ju]);
         std::sort(v.begin(), v.end());
         v.erase(std::unique(v.begin(), v.end()), v.end());
         if (v.size() >= 8) {
@@ -431,7 +496,12 @@ Analysis analyse(const Problem& p, const Options& opt) {
           // At least two whole periods in the span: a longer wave is a form (bow) error, not a
           // screw's or scale's cycle, and stays unexplained rather than forced into this entry.
           const double pmin = std::max(2 * gaps[gaps.size() / 2], span / 200), pmax = span / 2;
-          Candidate k{"cyclic", fmt::format("cyclic error of {} along {}", kAxis[c], kAxis[j]), fmt::format("{} position", kAxis[j]), expl("cyclic"), c, j};
+          Candidate k{"cyclic",
+                      fmt::format("cyclic error of {} along {}", kAxis[c], kAxis[j]),
+                      fmt::format("{} position", kAxis[j]),
+                      expl("cyclic"),
+                      c,
+                      j};
           // Frequencies 1/pmax .. 1/pmin, four times oversampled (Lomb-Scargle practice).
           const double df = 1 / (4 * span);
           for (double f = 1 / pmax; f <= 1 / pmin; f += df) k.grid.push_back(1 / f);
@@ -452,13 +522,21 @@ Analysis analyse(const Problem& p, const Options& opt) {
     if (!dir) dir = dir_any;
     if (dir && variance(dir->values) > 0 && enabled("reversal")) {
       Candidate k{"reversal", fmt::format("reversal of {}", kAxis[c]), dir->name, expl("reversal"), c};
-      k.columns = [&, c, dir](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return 0.5 * dir->values[F.row[o]]; }); return m; };
+      k.columns = [&, c, dir](double) {
+        Eigen::MatrixXd m(n, 1);
+        m.col(0) = on(c, [&](std::size_t o) { return 0.5 * dir->values[F.row[o]]; });
+        return m;
+      };
       cands.push_back(k);
     }
     if (time && variance(time->values) > 0 && enabled("drift")) {
       const double t0 = *std::min_element(time->values.begin(), time->values.end());
       Candidate k{"drift", fmt::format("drift of {}", kAxis[c]), time->name, expl("drift"), c};
-      k.columns = [&, c, t0](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return time->values[F.row[o]] - t0; }); return m; };
+      k.columns = [&, c, t0](double) {
+        Eigen::MatrixXd m(n, 1);
+        m.col(0) = on(c, [&](std::size_t o) { return time->values[F.row[o]] - t0; });
+        return m;
+      };
       cands.push_back(k);
     }
     if (time && variance(time->values) > 0 && enabled("transient")) {
@@ -481,8 +559,13 @@ Analysis analyse(const Problem& p, const Options& opt) {
     const Series* acc = data.find(Role::Acceleration, c);
     if (!acc) acc = acc_any;
     if (acc && variance(acc->values) > 0 && enabled("acceleration")) {
-      Candidate k{"acceleration", fmt::format("deflection of {} under acceleration", kAxis[c]), acc->name, expl("acceleration"), c};
-      k.columns = [&, c, acc](double) { Eigen::MatrixXd m(n, 1); m.col(0) = on(c, [&](std::size_t o) { return acc->values[F.row[o]]; }); return m; };
+      Candidate k{"acceleration", fmt::format("deflection of {} under acceleration", kAxis[c]), acc->name,
+                  expl("acceleration"), c};
+      k.columns = [&, c, acc](double) {
+        Eigen::MatrixXd m(n, 1);
+        m.col(0) = on(c, [&](std::size_t o) { return acc->values[F.row[o]]; });
+        return m;
+      };
       cands.push_back(k);
     }
     if (time && enabled("thermal")) {
@@ -501,7 +584,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
         if (tt->size() < 8 || dur <= 0) continue;
         const double tref = data.description.reference_temperature_c;
         const bool along = c < 3 && F.q_varies[static_cast<std::size_t>(c)];
-        Candidate k{"thermal", fmt::format("thermal expansion of {} following {}", kAxis[c], T->name), T->name + " (lagged)", expl("thermal"), c};
+        Candidate k{"thermal", fmt::format("thermal expansion of {} following {}", kAxis[c], T->name),
+                    T->name + " (lagged)", expl("thermal"), c};
         k.temperature = T;
         k.grid = {0.0};
         const double dtmin = std::max(dur / static_cast<double>(tt->size()), 1e-3);
@@ -513,7 +597,10 @@ Analysis analyse(const Problem& p, const Options& opt) {
           const auto lag = first_order_lag(*tt, *TT, std::max(0.0, tau));
           Eigen::MatrixXd m(n, along ? 2 : 1);
           m.col(0) = on(c, [&](std::size_t o) { return lag[(*node)[F.row[o]]] - tref; });
-          if (along) m.col(1) = on(c, [&](std::size_t o) { return (lag[(*node)[F.row[o]]] - tref) * F.q[o][static_cast<std::size_t>(c)]; });
+          if (along)
+            m.col(1) = on(c, [&](std::size_t o) {
+              return (lag[(*node)[F.row[o]]] - tref) * F.q[o][static_cast<std::size_t>(c)];
+            });
           return m;
         };
         cands.push_back(k);
@@ -526,8 +613,10 @@ Analysis analyse(const Problem& p, const Options& opt) {
       k.nl_name = "lobes", k.nl_unit = "";
       k.columns = [&, c](double m) {
         Eigen::MatrixXd M(n, 2);
-        M.col(0) = on(c, [&](std::size_t o) { return std::cos(m * std::atan2(ay->values[F.row[o]], ax->values[F.row[o]])); });
-        M.col(1) = on(c, [&](std::size_t o) { return std::sin(m * std::atan2(ay->values[F.row[o]], ax->values[F.row[o]])); });
+        M.col(0) =
+            on(c, [&](std::size_t o) { return std::cos(m * std::atan2(ay->values[F.row[o]], ax->values[F.row[o]])); });
+        M.col(1) =
+            on(c, [&](std::size_t o) { return std::sin(m * std::atan2(ay->values[F.row[o]], ax->values[F.row[o]])); });
         return M;
       };
       cands.push_back(k);
@@ -575,16 +664,18 @@ Analysis analyse(const Problem& p, const Options& opt) {
     next << current, be.cols;
     const double cv1 = rms(cv_residual(next, y, fold, count));
     const bool significant = opt.significance ? (pv * total_tests < opt.alpha && bic < 0) : true;
-    say(fmt::format("best: {} F={:.3g} p={:.3g} x{:.0f} tests, dBIC={:.1f}, CV {:.4g} -> {:.4g} mm{}", c.what, Fst, pv, total_tests, bic,
-                    cv_cur, cv1, significant ? "" : " (not significant)"));
+    say(fmt::format("best: {} F={:.3g} p={:.3g} x{:.0f} tests, dBIC={:.1f}, CV {:.4g} -> {:.4g} mm{}", c.what, Fst, pv,
+                    total_tests, bic, cv_cur, cv1, significant ? "" : " (not significant)"));
     if (!significant || (opt.significance && cv1 >= cv_cur)) {
-      out.stopped_at = fmt::format("best remaining candidate {}: F={:.3g}, p={:.2g} x {:.0f} tests, dBIC={:.1f}, CV RMS {:.4g} -> {:.4g} um: {}", c.what,
-                                   Fst, pv, total_tests, bic, cv_cur * 1e3, cv1 * 1e3,
-                                   !significant ? "not significant" : "significant in the fit but not confirmed by cross-validation");
+      out.stopped_at = fmt::format(
+          "best remaining candidate {}: F={:.3g}, p={:.2g} x {:.0f} tests, dBIC={:.1f}, CV RMS {:.4g} -> {:.4g} um: {}",
+          c.what, Fst, pv, total_tests, bic, cv_cur * 1e3, cv1 * 1e3,
+          !significant ? "not significant" : "significant in the fit but not confirmed by cross-validation");
       break;
     }
     Effect eff;
-    eff.kind = c.kind, eff.what = c.what, eff.explanation = c.explanation, eff.condition = c.condition, eff.component = c.component;
+    eff.kind = c.kind, eff.what = c.what, eff.explanation = c.explanation, eff.condition = c.condition,
+    eff.component = c.component;
     eff.f_statistic = Fst, eff.p_value = pv, eff.tests = total_tests, eff.delta_bic = bic, eff.cv_rms_mm = cv1;
     out.effects.push_back(eff);
     chosen.emplace_back(best, be);
@@ -628,12 +719,17 @@ Analysis analyse(const Problem& p, const Options& opt) {
     const std::string cx = kAxis[c.component];
     const double um = 1e3;
     if (c.kind == "scale" || c.kind == "squareness") {
-      eff.parameters.push_back({c.kind == "scale" ? "scale" : "slope", b[0] * 1e6, std::sqrt(C(0, 0)) * 1e6, c.kind == "scale" ? "ppm" : "urad"});
+      eff.parameters.push_back({c.kind == "scale" ? "scale" : "slope", b[0] * 1e6, std::sqrt(C(0, 0)) * 1e6,
+                                c.kind == "scale" ? "ppm" : "urad"});
       eff.world_term = {{"kind", "linear"}, {"component", cx}, {"along", kAxis[c.along]}, {"coefficient", b[0]}};
     } else if (c.kind == "cross-axis") {
-      eff.parameters.push_back({"coefficient", b[0] * 1e6, std::sqrt(C(0, 0)) * 1e6, "um/m^2"});  // mm/mm^2 * 1e6 = um/m^2 * ... (1 mm/mm^2 = 1e9 um/m^2)
+      eff.parameters.push_back({"coefficient", b[0] * 1e6, std::sqrt(C(0, 0)) * 1e6,
+                                "um/m^2"});  // mm/mm^2 * 1e6 = um/m^2 * ... (1 mm/mm^2 = 1e9 um/m^2)
       eff.parameters.back().value = b[0] * 1e9, eff.parameters.back().sd = std::sqrt(C(0, 0)) * 1e9;
-      eff.world_term = {{"kind", "cross_axis"}, {"component", cx}, {"along", {kAxis[c.along], kAxis[c.along2]}}, {"coefficient", b[0]}};
+      eff.world_term = {{"kind", "cross_axis"},
+                        {"component", cx},
+                        {"along", {kAxis[c.along], kAxis[c.along2]}},
+                        {"coefficient", b[0]}};
     } else if (c.kind == "reversal") {
       eff.parameters.push_back({"reversal B", b[0] * um, std::sqrt(C(0, 0)) * um, "um"});
       eff.world_term = {{"kind", "reversal"}, {"component", cx}, {"reversal_mm", b[0]}};
@@ -645,7 +741,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
       eff.parameters.push_back({"amplitude", b[0] * um, std::sqrt(C(0, 0)) * um, "um"});
       eff.parameters.push_back({"time constant", ev.nl, nl_sd, "s"});
       const double t0 = *std::min_element(time->values.begin(), time->values.end());
-      eff.world_term = {{"kind", "transient"}, {"component", cx}, {"amplitude_mm", b[0]}, {"tau_s", ev.nl}, {"t0_s", t0}};
+      eff.world_term = {
+          {"kind", "transient"}, {"component", cx}, {"amplitude_mm", b[0]}, {"tau_s", ev.nl}, {"t0_s", t0}};
     } else if (c.kind == "acceleration") {
       eff.parameters.push_back({"compliance", b[0] * um, std::sqrt(C(0, 0)) * um, "um per mm/s^2"});
     } else if (c.kind == "cyclic" || c.kind == "lobing") {
@@ -656,7 +753,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
         eff.parameters.push_back({"period", ev.nl, nl_sd, "mm"});
         const double phase = std::atan2(bb, a);  // a sin + b cos = A sin(w q + phase)
         eff.parameters.push_back({"phase", phase, A > 0 ? sdA / A : 0, "rad"});
-        eff.world_term = {{"kind", "cyclic"}, {"component", cx}, {"along", kAxis[c.along]}, {"amplitude_mm", A}, {"period_mm", ev.nl}, {"phase_rad", phase}};
+        eff.world_term = {{"kind", "cyclic"},  {"component", cx},    {"along", kAxis[c.along]},
+                          {"amplitude_mm", A}, {"period_mm", ev.nl}, {"phase_rad", phase}};
       } else {
         eff.parameters.push_back({"lobes", ev.nl, 0, ""});
         eff.parameters.push_back({"phase", std::atan2(bb, a), A > 0 ? sdA / A : 0, "rad"});
@@ -668,10 +766,15 @@ Analysis analyse(const Problem& p, const Options& opt) {
       std::vector<double> tt, TT;
       std::vector<std::size_t> order(data.rows);
       std::iota(order.begin(), order.end(), 0);
-      std::stable_sort(order.begin(), order.end(), [&](auto a2, auto b2) { return time->values[a2] < time->values[b2]; });
+      std::stable_sort(order.begin(), order.end(),
+                       [&](auto a2, auto b2) { return time->values[a2] < time->values[b2]; });
       for (auto r : order)
-        if (tt.empty() || time->values[r] > tt.back()) tt.push_back(time->values[r]), TT.push_back(c.temperature->values[r]);
-      eff.world_term = {{"kind", "thermal"}, {"component", cx}, {"mm_per_k", b[0]}, {"per_k", k > 1 ? b[1] : 0.0},
+        if (tt.empty() || time->values[r] > tt.back())
+          tt.push_back(time->values[r]), TT.push_back(c.temperature->values[r]);
+      eff.world_term = {{"kind", "thermal"},
+                        {"component", cx},
+                        {"mm_per_k", b[0]},
+                        {"per_k", k > 1 ? b[1] : 0.0},
                         {"reference_c", data.description.reference_temperature_c},
                         {"temperature", {{"t_s", tt}, {"temperature_c", TT}, {"lag_s", std::max(0.0, ev.nl)}}}};
     }
@@ -688,7 +791,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
     std::map<std::tuple<int, std::array<double, 3>, double>, std::vector<double>> groups;
     const Series* dir = dir_any;
     for (std::size_t o = 0; o < nu; ++o)
-      groups[{F.comp[o], F.q[o], dir ? dir->values[F.row[o]] : 0.0}].push_back(ff.residual[static_cast<Eigen::Index>(o)]);
+      groups[{F.comp[o], F.q[o], dir ? dir->values[F.row[o]] : 0.0}].push_back(
+          ff.residual[static_cast<Eigen::Index>(o)]);
     double ss = 0, df = 0;
     for (const auto& [k, v] : groups) {
       if (v.size() < 2) continue;
@@ -723,7 +827,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
     const double tests = static_cast<double>(conds.size() * comps.size()) * 2;
     for (int c : comps) {
       std::vector<Eigen::Index> idx;
-      for (std::size_t o = 0; o < nu; ++o) if (F.comp[o] == c) idx.push_back(static_cast<Eigen::Index>(o));
+      for (std::size_t o = 0; o < nu; ++o)
+        if (F.comp[o] == c) idx.push_back(static_cast<Eigen::Index>(o));
       for (const auto& [name, v] : conds) {
         Structure s = binned_means(v, r, idx, 20);
         s.p_value = std::min(1.0, s.p_value * tests);
@@ -745,7 +850,8 @@ Analysis analyse(const Problem& p, const Options& opt) {
         const double pmin = std::max(2 * gaps[gaps.size() / 2], span / 200);
         Eigen::VectorXd rr(static_cast<Eigen::Index>(idx.size()));
         std::vector<double> xv(idx.size());
-        for (std::size_t i = 0; i < idx.size(); ++i) rr[static_cast<Eigen::Index>(i)] = r[idx[i]], xv[i] = v[static_cast<std::size_t>(idx[i])];
+        for (std::size_t i = 0; i < idx.size(); ++i)
+          rr[static_cast<Eigen::Index>(i)] = r[idx[i]], xv[i] = v[static_cast<std::size_t>(idx[i])];
         const double r0 = (rr.array() - rr.mean()).matrix().squaredNorm();
         Spectrum sp;
         sp.against = name, sp.component = c;
@@ -753,7 +859,9 @@ Analysis analyse(const Problem& p, const Options& opt) {
         const auto m = static_cast<Eigen::Index>(idx.size());
         for (double f = 1 / span; f <= 1 / pmin; f += 1 / (4 * span)) {
           Eigen::MatrixXd X(m, 3);
-          for (Eigen::Index i = 0; i < m; ++i) X(i, 0) = 1, X(i, 1) = std::sin(2 * kPi * f * xv[static_cast<std::size_t>(i)]), X(i, 2) = std::cos(2 * kPi * f * xv[static_cast<std::size_t>(i)]);
+          for (Eigen::Index i = 0; i < m; ++i)
+            X(i, 0) = 1, X(i, 1) = std::sin(2 * kPi * f * xv[static_cast<std::size_t>(i)]),
+                 X(i, 2) = std::cos(2 * kPi * f * xv[static_cast<std::size_t>(i)]);
           const double pw = r0 > 0 ? 1 - least_squares(X, rr).rss / r0 : 0;
           sp.period.push_back(1 / f), sp.power.push_back(pw);
           if (pw > best_p) best_p = pw, best_P = 1 / f;
@@ -793,19 +901,33 @@ nlohmann::json to_json(const Analysis& a) {
   j["stopped_at"] = a.stopped_at;
   j["effects"] = json::array();
   for (const auto& e : a.effects) {
-    json je{{"kind", e.kind}, {"what", e.what}, {"explanation", e.explanation}, {"condition", e.condition},
-            {"component", kAxis[e.component]}, {"f", e.f_statistic}, {"p_value", e.p_value}, {"tests", e.tests},
-            {"delta_bic", e.delta_bic}, {"cv_rms_mm", e.cv_rms_mm}};
+    json je{{"kind", e.kind},
+            {"what", e.what},
+            {"explanation", e.explanation},
+            {"condition", e.condition},
+            {"component", kAxis[e.component]},
+            {"f", e.f_statistic},
+            {"p_value", e.p_value},
+            {"tests", e.tests},
+            {"delta_bic", e.delta_bic},
+            {"cv_rms_mm", e.cv_rms_mm}};
     je["parameters"] = json::array();
-    for (const auto& p : e.parameters) je["parameters"].push_back({{"name", p.name}, {"value", p.value}, {"sd", p.sd}, {"unit", p.unit}});
-    je["world_term"] = e.world_term.is_null() ? json("not expressible as a machine error term") : json(e.world_term.value("kind", ""));
+    for (const auto& p : e.parameters)
+      je["parameters"].push_back({{"name", p.name}, {"value", p.value}, {"sd", p.sd}, {"unit", p.unit}});
+    je["world_term"] =
+        e.world_term.is_null() ? json("not expressible as a machine error term") : json(e.world_term.value("kind", ""));
     j["effects"].push_back(je);
   }
   auto structs = [](const std::vector<Structure>& v) {
     json arr = json::array();
     for (const auto& s : v)
-      arr.push_back({{"condition", s.condition}, {"component", kAxis[s.component]}, {"test", s.test}, {"f", s.statistic},
-                     {"p_value", s.p_value}, {"size_mm", s.size_mm}, {"period", s.period}});
+      arr.push_back({{"condition", s.condition},
+                     {"component", kAxis[s.component]},
+                     {"test", s.test},
+                     {"f", s.statistic},
+                     {"p_value", s.p_value},
+                     {"size_mm", s.size_mm},
+                     {"period", s.period}});
     return arr;
   };
   j["structure_before"] = structs(a.structure_before);
@@ -816,33 +938,34 @@ nlohmann::json to_json(const Analysis& a) {
 std::string summary(const Analysis& a, const MeasuredData& data) {
   std::string s;
   s += fmt::format("{}: {} rows, {} observations ({})\n", data.file, data.rows, a.observations, data.description.name);
-  s += fmt::format("base model: residual RMS {:.3f} um; cross-validated with nuisance terms ({}) {:.3f} um\n", a.rms_base_mm * 1e3,
-                   fmt::join(a.nuisance, ", "), a.cv_rms_before_mm * 1e3);
+  s += fmt::format("base model: residual RMS {:.3f} um; cross-validated with nuisance terms ({}) {:.3f} um\n",
+                   a.rms_base_mm * 1e3, fmt::join(a.nuisance, ", "), a.cv_rms_before_mm * 1e3);
   if (!a.structure_before.empty()) {
     s += "what the base model gets wrong (structure in its residual):\n";
     for (std::size_t i = 0; i < std::min<std::size_t>(6, a.structure_before.size()); ++i) {
       const auto& st = a.structure_before[i];
-      s += fmt::format("  {} residual follows {} ({}, F={:.1f}, p={:.2g}, size {:.3f} um{})\n", kAxis[st.component], st.condition, st.test,
-                       st.statistic, st.p_value, st.size_mm * 1e3, st.period > 0 ? fmt::format(", period {:.4g}", st.period) : "");
+      s += fmt::format("  {} residual follows {} ({}, F={:.1f}, p={:.2g}, size {:.3f} um{})\n", kAxis[st.component],
+                       st.condition, st.test, st.statistic, st.p_value, st.size_mm * 1e3,
+                       st.period > 0 ? fmt::format(", period {:.4g}", st.period) : "");
     }
   } else {
     s += "no structure found in the base model's residual\n";
   }
   if (a.effects.empty()) s += "effects claimed: none\n";
   for (const auto& e : a.effects) {
-    s += fmt::format("effect: {} [{}] F={:.1f} p={:.2g} (x{:.0f} tests) dBIC={:.1f}, CV RMS -> {:.3f} um\n", e.what, e.kind, e.f_statistic,
-                     e.p_value, e.tests, e.delta_bic, e.cv_rms_mm * 1e3);
+    s += fmt::format("effect: {} [{}] F={:.1f} p={:.2g} (x{:.0f} tests) dBIC={:.1f}, CV RMS -> {:.3f} um\n", e.what,
+                     e.kind, e.f_statistic, e.p_value, e.tests, e.delta_bic, e.cv_rms_mm * 1e3);
     s += fmt::format("  cause: {}\n", e.explanation);
     for (const auto& p : e.parameters) s += fmt::format("  {} = {:.6g} +- {:.2g} {}\n", p.name, p.value, p.sd, p.unit);
     if (e.world_term.is_null()) s += "  (not written into the world: no machine error term simulates it yet)\n";
   }
   if (!a.stopped_at.empty()) s += "stopped: " + a.stopped_at + "\n";
-  s += fmt::format("gain: cross-validated RMS {:.3f} um -> {:.3f} um ({}), noise {:.3f} um ({})\n", a.cv_rms_before_mm * 1e3,
-                   a.cv_rms_after_mm * 1e3, a.folds, a.noise_mm * 1e3, a.noise_source);
+  s += fmt::format("gain: cross-validated RMS {:.3f} um -> {:.3f} um ({}), noise {:.3f} um ({})\n",
+                   a.cv_rms_before_mm * 1e3, a.cv_rms_after_mm * 1e3, a.folds, a.noise_mm * 1e3, a.noise_source);
   if (a.unexplained.empty()) s += "unexplained structure: none\n";
   for (const auto& st : a.unexplained)
-    s += fmt::format("unexplained structure: {} residual follows {} ({}, F={:.1f}, p={:.2g}, size {:.3f} um{})\n", kAxis[st.component],
-                     st.condition, st.test, st.statistic, st.p_value, st.size_mm * 1e3,
+    s += fmt::format("unexplained structure: {} residual follows {} ({}, F={:.1f}, p={:.2g}, size {:.3f} um{})\n",
+                     kAxis[st.component], st.condition, st.test, st.statistic, st.p_value, st.size_mm * 1e3,
                      st.period > 0 ? fmt::format(", period {:.4g}", st.period) : "");
   return s;
 }

@@ -26,27 +26,48 @@ struct Unit {
 // Units accepted per dimension, converted to metron units (mm, s, C, mm/s, mm/s^2).
 const std::map<std::string, Unit>& units() {
   static const std::map<std::string, Unit> u{
-      {"mm", {Dim::Length, 1, 0}},       {"um", {Dim::Length, 1e-3, 0}},    {"µm", {Dim::Length, 1e-3, 0}},
-      {"nm", {Dim::Length, 1e-6, 0}},    {"m", {Dim::Length, 1e3, 0}},      {"in", {Dim::Length, 25.4, 0}},
-      {"s", {Dim::Time, 1, 0}},          {"ms", {Dim::Time, 1e-3, 0}},      {"min", {Dim::Time, 60, 0}},
-      {"h", {Dim::Time, 3600, 0}},       {"C", {Dim::Temperature, 1, 0}},   {"degC", {Dim::Temperature, 1, 0}},
-      {"K", {Dim::Temperature, 1, -273.15}}, {"mm/s", {Dim::Velocity, 1, 0}}, {"mm/min", {Dim::Velocity, 1.0 / 60, 0}},
-      {"m/s", {Dim::Velocity, 1e3, 0}},  {"mm/s2", {Dim::Acceleration, 1, 0}}, {"m/s2", {Dim::Acceleration, 1e3, 0}},
-      {"1", {Dim::Unitless, 1, 0}},      {"rpm", {Dim::Any, 1, 0}},         {"%", {Dim::Any, 1, 0}},
-      {"deg", {Dim::Any, 1, 0}},         {"rad", {Dim::Any, 1, 0}},         {"bar", {Dim::Any, 1, 0}},
+      {"mm", {Dim::Length, 1, 0}},
+      {"um", {Dim::Length, 1e-3, 0}},
+      {"µm", {Dim::Length, 1e-3, 0}},
+      {"nm", {Dim::Length, 1e-6, 0}},
+      {"m", {Dim::Length, 1e3, 0}},
+      {"in", {Dim::Length, 25.4, 0}},
+      {"s", {Dim::Time, 1, 0}},
+      {"ms", {Dim::Time, 1e-3, 0}},
+      {"min", {Dim::Time, 60, 0}},
+      {"h", {Dim::Time, 3600, 0}},
+      {"C", {Dim::Temperature, 1, 0}},
+      {"degC", {Dim::Temperature, 1, 0}},
+      {"K", {Dim::Temperature, 1, -273.15}},
+      {"mm/s", {Dim::Velocity, 1, 0}},
+      {"mm/min", {Dim::Velocity, 1.0 / 60, 0}},
+      {"m/s", {Dim::Velocity, 1e3, 0}},
+      {"mm/s2", {Dim::Acceleration, 1, 0}},
+      {"m/s2", {Dim::Acceleration, 1e3, 0}},
+      {"1", {Dim::Unitless, 1, 0}},
+      {"rpm", {Dim::Any, 1, 0}},
+      {"%", {Dim::Any, 1, 0}},
+      {"deg", {Dim::Any, 1, 0}},
+      {"rad", {Dim::Any, 1, 0}},
+      {"bar", {Dim::Any, 1, 0}},
   };
   return u;
 }
 
 Dim role_dim(Role r) {
   switch (r) {
-    case Role::Nominal: case Role::Measured: case Role::Deviation: return Dim::Length;
+    case Role::Nominal:
+    case Role::Measured:
+    case Role::Deviation: return Dim::Length;
     case Role::Time: return Dim::Time;
     case Role::Temperature: return Dim::Temperature;
     case Role::Velocity: return Dim::Velocity;
     case Role::Acceleration: return Dim::Acceleration;
-    case Role::Direction: case Role::Cycle: case Role::Approach: return Dim::Unitless;
-    case Role::Condition: case Role::Ignore: return Dim::Any;
+    case Role::Direction:
+    case Role::Cycle:
+    case Role::Approach: return Dim::Unitless;
+    case Role::Condition:
+    case Role::Ignore: return Dim::Any;
   }
   return Dim::Any;
 }
@@ -91,12 +112,14 @@ Description parse(const json& j) {
     return DataKind::Positioning;
   }();
   if (const json* n = o.find("name")) d.name = string(*n, o.at("name"));
-  if (const json* s = o.find("separator")) d.whitespace = one_of(*s, o.at("separator"), {"comma", "whitespace"}) == "whitespace";
+  if (const json* s = o.find("separator"))
+    d.whitespace = one_of(*s, o.at("separator"), {"comma", "whitespace"}) == "whitespace";
   if (const json* s = o.find("skip_lines")) d.skip_lines = static_cast<int>(integer(*s, o.at("skip_lines"), 0));
   if (const json* h = o.find("header")) d.header = boolean(*h, o.at("header"));
   if (const json* n = o.find("noise_mm")) d.noise_mm = positive(*n, o.at("noise_mm"));
   o.number("reference_temperature_c", d.reference_temperature_c);
-  if (const json* b = o.find("base")) d.per_position_table = one_of(*b, o.at("base"), {"world", "world+per-position-table"}) != "world";
+  if (const json* b = o.find("base"))
+    d.per_position_table = one_of(*b, o.at("base"), {"world", "world+per-position-table"}) != "world";
   if (const json* f = o.find("fixed_position_mm")) {
     const auto v = numbers(*f, o.at("fixed_position_mm"), 3);
     d.fixed_position_mm = {v[0], v[1], v[2]};
@@ -122,8 +145,10 @@ Description parse(const json& j) {
     if (const json* u = c.find("unit")) {
       col.unit = string(*u, c.at("unit"));
       auto it = units().find(col.unit);
-      if (it == units().end() || (want != Dim::Any && it->second.dim != want && !(want == Dim::Unitless && it->second.dim == Dim::Unitless)))
-        fail(c.at("unit"), fmt::format("bad unit '{}' for column '{}': expected {}", col.unit, col.name, dim_name(want)));
+      if (it == units().end() ||
+          (want != Dim::Any && it->second.dim != want && !(want == Dim::Unitless && it->second.dim == Dim::Unitless)))
+        fail(c.at("unit"),
+             fmt::format("bad unit '{}' for column '{}': expected {}", col.unit, col.name, dim_name(want)));
       col.scale = it->second.scale;
       col.offset = it->second.offset;
     } else if (want != Dim::Any && want != Dim::Unitless) {
@@ -235,7 +260,8 @@ tl::expected<MeasuredData, DataError> parse_measured_data(const std::string& tex
     for (std::size_t c = 0; c < ncol; ++c) {
       auto it = std::find(data.header.begin(), data.header.end(), description.columns[c].name);
       if (it == data.header.end())
-        return tl::unexpected(DataError{name, line_no, description.columns[c].name, "missing column (not in the header)"});
+        return tl::unexpected(
+            DataError{name, line_no, description.columns[c].name, "missing column (not in the header)"});
       index[c] = static_cast<int>(it - data.header.begin());
     }
   } else {
@@ -258,7 +284,9 @@ tl::expected<MeasuredData, DataError> parse_measured_data(const std::string& tex
     for (std::size_t k = 0; k < used.size(); ++k) {
       const auto& spec = description.columns[used[k]];
       const auto fc = static_cast<std::size_t>(index[used[k]]);
-      if (fc >= cells.size()) return tl::unexpected(DataError{name, line_no, spec.name, fmt::format("missing value (the row has {} cells)", cells.size())});
+      if (fc >= cells.size())
+        return tl::unexpected(
+            DataError{name, line_no, spec.name, fmt::format("missing value (the row has {} cells)", cells.size())});
       double v = 0;
       const std::string& s = cells[fc];
       if (spec.role == Role::Direction && (s == "+" || s == "-")) {
@@ -266,9 +294,11 @@ tl::expected<MeasuredData, DataError> parse_measured_data(const std::string& tex
       } else if (!parse_number(s, v)) {
         return tl::unexpected(DataError{name, line_no, spec.name, fmt::format("expected a number, got '{}'", s)});
       }
-      if (!std::isfinite(v)) return tl::unexpected(DataError{name, line_no, spec.name, fmt::format("not a finite number ('{}')", s)});
+      if (!std::isfinite(v))
+        return tl::unexpected(DataError{name, line_no, spec.name, fmt::format("not a finite number ('{}')", s)});
       if (spec.role == Role::Direction && v != 1 && v != -1)
-        return tl::unexpected(DataError{name, line_no, spec.name, fmt::format("expected a direction +1/-1 or +/-, got '{}'", s)});
+        return tl::unexpected(
+            DataError{name, line_no, spec.name, fmt::format("expected a direction +1/-1 or +/-, got '{}'", s)});
       data.series[k].values.push_back(v * spec.scale + spec.offset);
     }
     data.cells.push_back(std::move(cells));
@@ -276,7 +306,11 @@ tl::expected<MeasuredData, DataError> parse_measured_data(const std::string& tex
   data.rows = data.cells.size();
   if (data.rows == 0) return tl::unexpected(DataError{name, 0, {}, "no data rows"});
   if (data.measured_axes().empty())
-    return tl::unexpected(DataError{name, 0, {}, "the description gives no measured values (a 'deviation' column, or 'measured' with its 'nominal')"});
+    return tl::unexpected(
+        DataError{name,
+                  0,
+                  {},
+                  "the description gives no measured values (a 'deviation' column, or 'measured' with its 'nominal')"});
   return data;
 }
 
@@ -288,7 +322,8 @@ tl::expected<MeasuredData, DataError> read_measured_data(const std::string& data
   return parse_measured_data(s.str(), data_file, description);
 }
 
-tl::expected<MeasuredData, DataError> read_measured_data(const std::string& data_file, const std::string& description_file) {
+tl::expected<MeasuredData, DataError> read_measured_data(const std::string& data_file,
+                                                         const std::string& description_file) {
   std::ifstream in(description_file, std::ios::binary);
   if (!in) return tl::unexpected(DataError{description_file, 0, {}, "cannot open the file"});
   json j;
@@ -320,9 +355,12 @@ std::string write_with_deviations_impl(const MeasuredData& data, const std::vect
       if (fc >= cells.size() || spec->axis < 0) continue;
       const double d = dev[r][static_cast<std::size_t>(spec->axis)];
       double v;
-      if (spec->role == Role::Deviation) v = d;
-      else if (spec->role == Role::Measured && spec->axis < 3) v = pos[static_cast<std::size_t>(spec->axis)] + d;
-      else continue;
+      if (spec->role == Role::Deviation)
+        v = d;
+      else if (spec->role == Role::Measured && spec->axis < 3)
+        v = pos[static_cast<std::size_t>(spec->axis)] + d;
+      else
+        continue;
       cells[fc] = fmt::format("{:.9g}", (v - spec->offset) / spec->scale);
     }
     for (std::size_t c = 0; c < cells.size(); ++c) out += (c ? "," : "") + cells[c];

@@ -30,7 +30,8 @@ bool Grid::valid() const {
 ErrorSpace at_temperature(const std::vector<ErrorSpace>& spaces, double t) {
   if (spaces.empty()) throw std::invalid_argument("no error space to interpolate by temperature");
   for (const auto& s : spaces) {
-    if (!(s.grid == spaces[0].grid)) throw std::invalid_argument("error spaces at different temperatures have different grids");
+    if (!(s.grid == spaces[0].grid))
+      throw std::invalid_argument("error spaces at different temperatures have different grids");
     for (int c = 0; c < 3; ++c)
       if (s.values_mm[c].size() != spaces[0].values_mm[c].size())
         throw std::invalid_argument("error spaces at different temperatures have different components");

@@ -65,19 +65,25 @@ tl::expected<ErrorSpaceFile, FileError> from_json(const json& j) {
         const auto& x = grid.axes_mm[a];
         if (x.empty()) fail(g.at(keys[a]), "expected at least one coordinate");
         for (std::size_t i = 1; i < x.size(); ++i)
-          if (!(x[i] > x[i - 1])) fail(fmt::format("{}/{}", g.at(keys[a]), i), "expected strictly increasing coordinates");
+          if (!(x[i] > x[i - 1]))
+            fail(fmt::format("{}/{}", g.at(keys[a]), i), "expected strictly increasing coordinates");
       }
       g.finish();
     }
     {
       Object in(root.required("interpolation"), "/interpolation");
       const std::string m = string(in.required("method"), in.at("method"));
-      if (m == "trilinear") out.interpolation.method = Method::Trilinear;
-      else if (m == "bspline") out.interpolation.method = Method::BSpline;
-      else if (m == "least-squares") out.interpolation.method = Method::LeastSquares;
-      else fail(in.at("method"), "expected \"trilinear\", \"bspline\" or \"least-squares\"");
+      if (m == "trilinear")
+        out.interpolation.method = Method::Trilinear;
+      else if (m == "bspline")
+        out.interpolation.method = Method::BSpline;
+      else if (m == "least-squares")
+        out.interpolation.method = Method::LeastSquares;
+      else
+        fail(in.at("method"), "expected \"trilinear\", \"bspline\" or \"least-squares\"");
       if (out.interpolation.method == Method::LeastSquares) {
-        if (const json* d = in.find("degree")) out.interpolation.least_squares.degree = integer(*d, in.at("degree"), 1, 2);
+        if (const json* d = in.find("degree"))
+          out.interpolation.least_squares.degree = integer(*d, in.at("degree"), 1, 2);
         if (const json* n = in.find("neighbourhood"))
           out.interpolation.least_squares.neighbourhood = integer(*n, in.at("neighbourhood"), 1, 100);
       }
@@ -92,7 +98,8 @@ tl::expected<ErrorSpaceFile, FileError> from_json(const json& j) {
       s.grid = grid;
       s.temperature_c = number(o.required("temperature_c"), o.at("temperature_c"));
       for (const auto& prev : out.spaces)
-        if (prev.temperature_c == s.temperature_c) fail(o.at("temperature_c"), "expected a temperature not given before");
+        if (prev.temperature_c == s.temperature_c)
+          fail(o.at("temperature_c"), "expected a temperature not given before");
       Object comps(o.required("components"), o.at("components"));
       for (int c = 0; c < 3; ++c) {
         const std::string key(to_string(static_cast<Component>(c)));
@@ -100,7 +107,8 @@ tl::expected<ErrorSpaceFile, FileError> from_json(const json& j) {
         if (!cj) continue;
         Object comp(*cj, comps.at(key));
         s.values_mm[c] = numbers(comp.required("values_mm"), comp.at("values_mm"), static_cast<long>(grid.size()));
-        if (const json* sd = comp.find("sd_mm")) s.sd_mm[c] = numbers(*sd, comp.at("sd_mm"), static_cast<long>(grid.size()));
+        if (const json* sd = comp.find("sd_mm"))
+          s.sd_mm[c] = numbers(*sd, comp.at("sd_mm"), static_cast<long>(grid.size()));
         comp.finish();
       }
       comps.finish();
@@ -133,7 +141,9 @@ tl::expected<ErrorSpaceFile, FileError> read_error_space_file(const std::string&
   auto j = strict_json::read_document(path);
   if (!j) return tl::unexpected(FileError{"", j.error()});
   auto f = from_json(*j);
-  if (!f) return tl::unexpected(FileError{f.error().pointer, fmt::format("{}: {}: {}", path, f.error().pointer, f.error().message)});
+  if (!f)
+    return tl::unexpected(
+        FileError{f.error().pointer, fmt::format("{}: {}: {}", path, f.error().pointer, f.error().message)});
   return f;
 }
 

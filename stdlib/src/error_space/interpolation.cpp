@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
+#include <Eigen/Dense>
 
 namespace metron::error_space {
 namespace {
@@ -29,7 +29,11 @@ class AxisLookup {
   [[nodiscard]] bool uniform() const { return m_uniform; }
   /// Cell i in [0, n-2] and the fraction r in [0, 1] (clamped); a one-point axis gives (0, 0).
   void locate(double q, int& i, double& r) const {
-    if (m_n < 2) { i = 0; r = 0; return; }
+    if (m_n < 2) {
+      i = 0;
+      r = 0;
+      return;
+    }
     if (m_uniform) {
       const double t = std::clamp((q - m_x.front()) / m_h, 0.0, static_cast<double>(m_n - 1));
       i = std::min(static_cast<int>(t), m_n - 2);
@@ -65,7 +69,8 @@ class Trilinear final : public FieldInterpolator {
     m_ax[2].locate(z, k, rz);
     const std::size_t dx = m_ax[0].size() > 1 ? 1 : 0, dy = m_ax[1].size() > 1 ? m_nx : 0,
                       dz = m_ax[2].size() > 1 ? m_nxy : 0;
-    const std::size_t b = static_cast<std::size_t>(i) + m_nx * static_cast<std::size_t>(j) + m_nxy * static_cast<std::size_t>(k);
+    const std::size_t b =
+        static_cast<std::size_t>(i) + m_nx * static_cast<std::size_t>(j) + m_nxy * static_cast<std::size_t>(k);
     const double* v = m_v.data();
     // SEEDS.md 4: e = sum over the 8 corners of the corner value times (1-r or r) per axis.
     const double c00 = v[b] * (1 - rx) + v[b + dx] * rx;
@@ -114,9 +119,11 @@ class BSpline final : public FieldInterpolator {
           for (std::size_t i = 0; i < (a == 0 ? 1 : dims[0]); ++i) {
             const std::size_t base_in = i + dims[0] * (j + dims[1] * k);
             const std::size_t base_out = i + out_dims[0] * (j + out_dims[1] * k);
-            for (std::size_t t = 0; t < dims[a]; ++t) line[static_cast<Eigen::Index>(t)] = data[base_in + t * stride_in];
+            for (std::size_t t = 0; t < dims[a]; ++t)
+              line[static_cast<Eigen::Index>(t)] = data[base_in + t * stride_in];
             const Eigen::VectorXd c = p * line;
-            for (std::size_t t = 0; t < out_dims[a]; ++t) out[base_out + t * stride_out] = c[static_cast<Eigen::Index>(t)];
+            for (std::size_t t = 0; t < out_dims[a]; ++t)
+              out[base_out + t * stride_out] = c[static_cast<Eigen::Index>(t)];
           }
       data = std::move(out);
       dims = out_dims;
@@ -129,7 +136,12 @@ class BSpline final : public FieldInterpolator {
     int start[3], count[3];
     const double q[3] = {x, y, z};
     for (int a = 0; a < 3; ++a) {
-      if (m_ax[a].size() == 1) { w[a][0] = 1; start[a] = 0; count[a] = 1; continue; }
+      if (m_ax[a].size() == 1) {
+        w[a][0] = 1;
+        start[a] = 0;
+        count[a] = 1;
+        continue;
+      }
       int i;
       double u;
       m_ax[a].locate(q[a], i, u);
@@ -143,8 +155,9 @@ class BSpline final : public FieldInterpolator {
     for (int c = 0; c < count[2]; ++c) {
       double sy = 0;
       for (int b = 0; b < count[1]; ++b) {
-        const double* row = &m_c[static_cast<std::size_t>(start[0]) +
-                                 m_dims[0] * (static_cast<std::size_t>(start[1] + b) + m_dims[1] * static_cast<std::size_t>(start[2] + c))];
+        const double* row =
+            &m_c[static_cast<std::size_t>(start[0]) + m_dims[0] * (static_cast<std::size_t>(start[1] + b) +
+                                                                   m_dims[1] * static_cast<std::size_t>(start[2] + c))];
         double sx = 0;
         for (int a = 0; a < count[0]; ++a) sx += w[0][static_cast<std::size_t>(a)] * row[a];
         sy += w[1][static_cast<std::size_t>(b)] * sx;
@@ -194,8 +207,7 @@ class LeastSquares final : public FieldInterpolator {
         for (int ci = 0; ci < m_cells[0]; ++ci) {
           const int c[3] = {ci, cj, ck};
           int lo[3];
-          for (int a = 0; a < 3; ++a)
-            lo[a] = std::clamp(c[a] - (o.neighbourhood - 1), 0, m_ax[a].size() - window[a]);
+          for (int a = 0; a < 3; ++a) lo[a] = std::clamp(c[a] - (o.neighbourhood - 1), 0, m_ax[a].size() - window[a]);
           int row = 0;
           for (int k = lo[2]; k < lo[2] + window[2]; ++k)
             for (int j = lo[1]; j < lo[1] + window[1]; ++j)
@@ -204,7 +216,8 @@ class LeastSquares final : public FieldInterpolator {
                 double u[3];
                 for (int a = 0; a < 3; ++a) u[a] = local(a, c[a], m_grid.axes_mm[a][static_cast<std::size_t>(idx[a])]);
                 phi(u, &A(row, 0), A.outerStride());
-                y[row] = v[g.index(static_cast<std::size_t>(i), static_cast<std::size_t>(j), static_cast<std::size_t>(k))];
+                y[row] =
+                    v[g.index(static_cast<std::size_t>(i), static_cast<std::size_t>(j), static_cast<std::size_t>(k))];
                 ++row;
               }
           const Eigen::MatrixXd ata = A.transpose() * A;
@@ -218,12 +231,15 @@ class LeastSquares final : public FieldInterpolator {
           const int dof = points - np;
           const double s2 = dof > 0 ? (y - A * xhat).squaredNorm() / dof : nan;
           const std::size_t cell = static_cast<std::size_t>(ci + m_cells[0] * (cj + m_cells[1] * ck));
-          for (int t = 0; t < np; ++t) m_coef[cell * static_cast<std::size_t>(np) + static_cast<std::size_t>(t)] = xhat[t];
+          for (int t = 0; t < np; ++t)
+            m_coef[cell * static_cast<std::size_t>(np) + static_cast<std::size_t>(t)] = xhat[t];
           for (int t = 0; t < np * np; ++t)
             m_cov[cell * static_cast<std::size_t>(np * np) + static_cast<std::size_t>(t)] = s2 * inv(t % np, t / np);
         }
   }
-  [[nodiscard]] double value(double x, double y, double z) const override { return estimate_impl(x, y, z, false).value_mm; }
+  [[nodiscard]] double value(double x, double y, double z) const override {
+    return estimate_impl(x, y, z, false).value_mm;
+  }
   [[nodiscard]] Estimate estimate(double x, double y, double z) const override { return estimate_impl(x, y, z, true); }
 
  private:
@@ -294,7 +310,8 @@ tl::expected<std::unique_ptr<FieldInterpolator>, std::string> make_field(const G
         const AxisLookup ax(grid.axes_mm[a]);
         if (ax.size() == 1) continue;
         if (ax.size() < 4)
-          return tl::unexpected(fmt::format("bspline: axis {} has {} points, needs 1 or at least 4", "xyz"[a], ax.size()));
+          return tl::unexpected(
+              fmt::format("bspline: axis {} has {} points, needs 1 or at least 4", "xyz"[a], ax.size()));
         if (!ax.uniform()) return tl::unexpected(fmt::format("bspline: axis {} is not uniformly spaced", "xyz"[a]));
       }
       return std::make_unique<BSpline>(grid, v);
@@ -311,7 +328,7 @@ tl::expected<std::unique_ptr<FieldInterpolator>, std::string> make_field(const G
 }
 
 tl::expected<SpaceInterpolator, std::string> SpaceInterpolator::build(const ErrorSpace& space,
-                                                                       const InterpolationSpec& spec) {
+                                                                      const InterpolationSpec& spec) {
   SpaceInterpolator out;
   for (int c = 0; c < 3; ++c) {
     if (space.values_mm[c].empty()) continue;
@@ -347,7 +364,8 @@ tl::expected<Validation, std::string> validate_every_second(const Grid& grid, co
   sv.reserve(sub.size());
   for (std::size_t k = 0; k <= last[2]; k += grid.axes_mm[2].size() > 1 ? 2 : 1)
     for (std::size_t j = 0; j <= last[1]; j += grid.axes_mm[1].size() > 1 ? 2 : 1)
-      for (std::size_t i = 0; i <= last[0]; i += grid.axes_mm[0].size() > 1 ? 2 : 1) sv.push_back(v[grid.index(i, j, k)]);
+      for (std::size_t i = 0; i <= last[0]; i += grid.axes_mm[0].size() > 1 ? 2 : 1)
+        sv.push_back(v[grid.index(i, j, k)]);
   auto f = make_field(sub, sv, spec);
   if (!f) return tl::unexpected(f.error());
   Validation out;
@@ -355,10 +373,11 @@ tl::expected<Validation, std::string> validate_every_second(const Grid& grid, co
   for (std::size_t k = 0; k <= last[2]; ++k)
     for (std::size_t j = 0; j <= last[1]; ++j)
       for (std::size_t i = 0; i <= last[0]; ++i) {
-        const bool in_sub = (grid.axes_mm[0].size() == 1 || i % 2 == 0) && (grid.axes_mm[1].size() == 1 || j % 2 == 0) &&
-                            (grid.axes_mm[2].size() == 1 || k % 2 == 0);
+        const bool in_sub = (grid.axes_mm[0].size() == 1 || i % 2 == 0) &&
+                            (grid.axes_mm[1].size() == 1 || j % 2 == 0) && (grid.axes_mm[2].size() == 1 || k % 2 == 0);
         if (in_sub) continue;
-        const double d = (*f)->value(grid.axes_mm[0][i], grid.axes_mm[1][j], grid.axes_mm[2][k]) - v[grid.index(i, j, k)];
+        const double d =
+            (*f)->value(grid.axes_mm[0][i], grid.axes_mm[1][j], grid.axes_mm[2][k]) - v[grid.index(i, j, k)];
         sum2 += d * d;
         out.max_abs_mm = std::max(out.max_abs_mm, std::abs(d));
         ++out.points;

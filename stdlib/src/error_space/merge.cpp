@@ -16,9 +16,12 @@ Series merge_redundant(const Series& s1, const Series& s2, ZeroCorrection zero) 
   // ... average the overlap point by point ...
   Series out(s1.size());
   for (std::size_t i = 0; i < s1.size(); ++i) {
-    if (s1[i] && s2[i]) out[i] = 0.5 * (*s1[i] + *s2[i] + offset);
-    else if (s1[i]) out[i] = *s1[i];
-    else if (s2[i]) out[i] = *s2[i] + offset;
+    if (s1[i] && s2[i])
+      out[i] = 0.5 * (*s1[i] + *s2[i] + offset);
+    else if (s1[i])
+      out[i] = *s1[i];
+    else if (s2[i])
+      out[i] = *s2[i] + offset;
   }
   // ... then the zero correction.
   std::size_t first = out.size(), last = 0;
@@ -28,8 +31,10 @@ Series merge_redundant(const Series& s1, const Series& s2, ZeroCorrection zero) 
   const double v0 = *out[first], v1 = *out[last];
   for (std::size_t i = first; i <= last; ++i) {
     if (!out[i]) continue;
-    if (zero == ZeroCorrection::First || last == first) *out[i] -= v0;
-    else *out[i] -= v0 + (v1 - v0) * static_cast<double>(i - first) / static_cast<double>(last - first);
+    if (zero == ZeroCorrection::First || last == first)
+      *out[i] -= v0;
+    else
+      *out[i] -= v0 + (v1 - v0) * static_cast<double>(i - first) / static_cast<double>(last - first);
   }
   return out;
 }

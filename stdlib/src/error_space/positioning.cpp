@@ -12,7 +12,10 @@ namespace metron::error_space {
 
 tl::expected<PositioningEvaluation, std::string> evaluate_positioning(const std::vector<PositioningRecord>& records) {
   if (records.empty()) return tl::unexpected(std::string("no positioning records"));
-  struct Acc { std::vector<double> up, down; double target = 0; };
+  struct Acc {
+    std::vector<double> up, down;
+    double target = 0;
+  };
   std::map<int, Acc> by_target;
   for (const auto& r : records) {
     if (r.axis != records[0].axis) return tl::unexpected(std::string("positioning records of more than one axis"));
@@ -20,7 +23,11 @@ tl::expected<PositioningEvaluation, std::string> evaluate_positioning(const std:
     a.target = r.target_mm;
     (r.direction > 0 ? a.up : a.down).push_back(r.deviation_mm);
   }
-  auto mean = [](const std::vector<double>& v) { double s = 0; for (double x : v) s += x; return s / static_cast<double>(v.size()); };
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return s / static_cast<double>(v.size());
+  };
   auto sd = [&](const std::vector<double>& v) {
     if (v.size() < 2) return 0.0;
     const double m = mean(v);
@@ -44,12 +51,13 @@ tl::expected<PositioningEvaluation, std::string> evaluate_positioning(const std:
     alo = std::min({alo, t.mean_up_mm - 2 * t.sd_up_mm, t.mean_down_mm - 2 * t.sd_down_mm});
     ahi = std::max({ahi, t.mean_up_mm + 2 * t.sd_up_mm, t.mean_down_mm + 2 * t.sd_down_mm});
     // ISO 230-2 3.14: R_i = max(2 s_up + 2 s_down + |B_i|, 4 s_up, 4 s_down)
-    const double r = std::max({2 * t.sd_up_mm + 2 * t.sd_down_mm + std::abs(t.reversal_mm), 4 * t.sd_up_mm, 4 * t.sd_down_mm});
+    const double r =
+        std::max({2 * t.sd_up_mm + 2 * t.sd_down_mm + std::abs(t.reversal_mm), 4 * t.sd_up_mm, 4 * t.sd_down_mm});
     out.repeatability_mm = std::max(out.repeatability_mm, r);
     out.targets.push_back(t);
   }
-  out.systematic_mm = hi - lo;   // ISO 230-2 3.19
-  out.accuracy_mm = ahi - alo;   // ISO 230-2 3.21
+  out.systematic_mm = hi - lo;  // ISO 230-2 3.19
+  out.accuracy_mm = ahi - alo;  // ISO 230-2 3.21
   return out;
 }
 
@@ -70,7 +78,8 @@ tl::expected<std::vector<PositioningRecord>, std::string> parse_positioning_csv(
     ++n;
     if (n == 1) {
       if (line.rfind("axis,target,target_mm,cycle,direction,deviation_mm", 0) != 0)
-        return tl::unexpected(std::string("line 1: expected the header axis,target,target_mm,cycle,direction,deviation_mm,..."));
+        return tl::unexpected(
+            std::string("line 1: expected the header axis,target,target_mm,cycle,direction,deviation_mm,..."));
       continue;
     }
     if (line.empty()) continue;
@@ -79,13 +88,18 @@ tl::expected<std::vector<PositioningRecord>, std::string> parse_positioning_csv(
     for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
     if (f.size() != 9) return tl::unexpected(fmt::format("line {}: expected 9 fields, got {}", n, f.size()));
     PositioningRecord r;
-    if (f[0] != "x" && f[0] != "y" && f[0] != "z") return tl::unexpected(fmt::format("line {}: expected the axis x, y or z", n));
+    if (f[0] != "x" && f[0] != "y" && f[0] != "z")
+      return tl::unexpected(fmt::format("line {}: expected the axis x, y or z", n));
     r.axis = f[0][0] - 'x';
     if (f[4] != "+" && f[4] != "-") return tl::unexpected(fmt::format("line {}: expected the direction + or -", n));
     r.direction = f[4] == "+" ? 1 : -1;
     try {
       std::size_t pos = 0;
-      auto num = [&](const std::string& s) { const double v = std::stod(s, &pos); if (pos != s.size() || !std::isfinite(v)) throw std::invalid_argument(s); return v; };
+      auto num = [&](const std::string& s) {
+        const double v = std::stod(s, &pos);
+        if (pos != s.size() || !std::isfinite(v)) throw std::invalid_argument(s);
+        return v;
+      };
       r.target = static_cast<int>(num(f[1]));
       r.target_mm = num(f[2]);
       r.cycle = static_cast<int>(num(f[3]));

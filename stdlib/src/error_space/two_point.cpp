@@ -147,7 +147,8 @@ Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma, double known_del
   if (sigma_b < 0) sigma_b = sigma;
   // The method is linear in the readings: propagate each reading's unit impulse and add the squares.
   SurfaceReadings r;
-  r.x_lines.assign(static_cast<std::size_t>(m + 1), LineReadings{std::vector<double>(l + 1, 0.0), std::vector<double>(l + 1, 0.0), {}, 0});
+  r.x_lines.assign(static_cast<std::size_t>(m + 1),
+                   LineReadings{std::vector<double>(l + 1, 0.0), std::vector<double>(l + 1, 0.0), {}, 0});
   r.y_line_first = LineReadings{std::vector<double>(m + 1, 0.0), std::vector<double>(m + 1, 0.0), {}, 0};
   r.y_line_last = r.y_line_first;
   Eigen::MatrixXd var = Eigen::MatrixXd::Zero(l + 1, m + 1);
@@ -160,9 +161,12 @@ Eigen::MatrixXd surface_noise_sd_mm(int l, int m, double sigma, double known_del
     reading = 0.0;
   };
   for (auto& line : r.x_lines)
-    for (int i = 0; i <= l; ++i) impulse(line.a_mm[static_cast<std::size_t>(i)], sigma), impulse(line.b_mm[static_cast<std::size_t>(i)], sigma_b);
+    for (int i = 0; i <= l; ++i)
+      impulse(line.a_mm[static_cast<std::size_t>(i)], sigma), impulse(line.b_mm[static_cast<std::size_t>(i)], sigma_b);
   for (auto* line : {&r.y_line_first, &r.y_line_last})
-    for (int j = 0; j <= m; ++j) impulse(line->a_mm[static_cast<std::size_t>(j)], sigma), impulse(line->b_mm[static_cast<std::size_t>(j)], sigma_b);
+    for (int j = 0; j <= m; ++j)
+      impulse(line->a_mm[static_cast<std::size_t>(j)], sigma),
+          impulse(line->b_mm[static_cast<std::size_t>(j)], sigma_b);
   if (known_delta_sd > 0)
     for (int i = 0; i <= l; ++i)
       for (int j = 0; j <= m; ++j) var(i, j) += std::pow(known_delta_sd * (i + j), 2);

@@ -15,8 +15,7 @@
 namespace metron::fitting {
 namespace {
 
-constexpr std::array<std::string_view, 7> shape_names{"point", "line", "plane", "circle", "sphere",
-                                                     "cylinder", "cone"};
+constexpr std::array<std::string_view, 7> shape_names{"point", "line", "plane", "circle", "sphere", "cylinder", "cone"};
 
 std::size_t min_points(Shape shape) {
   switch (shape) {
@@ -46,9 +45,9 @@ Vec3 orient(const Vec3& n, std::initializer_list<std::optional<Vec3>> references
 
 /// What fit() needs from the options about the measured side, checked once.
 struct Probe {
-  double radius_mm = 0;                 ///< 0 without compensation
-  std::vector<Vec3> surface_points;     ///< centre - r * approach (the points themselves without compensation)
-  std::optional<Vec3> mean_approach;    ///< mean unit approach, when compensated
+  double radius_mm = 0;               ///< 0 without compensation
+  std::vector<Vec3> surface_points;   ///< centre - r * approach (the points themselves without compensation)
+  std::optional<Vec3> mean_approach;  ///< mean unit approach, when compensated
 };
 
 Probe make_probe(const std::vector<Vec3>& points, const FitOptions& options) {
@@ -229,9 +228,8 @@ std::string_view to_string(Shape shape) { return shape_names.at(static_cast<std:
 std::optional<Shape> shape_from_name(std::string_view name) {
   for (std::size_t i = 0; i < shape_names.size(); ++i) {
     const std::string_view candidate = shape_names[i];
-    if (std::equal(name.begin(), name.end(), candidate.begin(), candidate.end(), [](char a, char b) {
-          return std::tolower(static_cast<unsigned char>(a)) == b;
-        })) {
+    if (std::equal(name.begin(), name.end(), candidate.begin(), candidate.end(),
+                   [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; })) {
       return static_cast<Shape>(i);
     }
   }
@@ -261,11 +259,13 @@ tl::expected<FitResult, FitFailure> fit(Shape shape, const std::vector<Vec3>& po
         return detail::fit_sphere_geometry(points).map(
             [&](const detail::Geometry& g) { return with_iterations(make_sphere(g, probe, options), g); });
       case Shape::Cylinder:
-        return detail::fit_cylinder_geometry(points, hint, options.start_from_hint).map(
-            [&](const detail::Geometry& g) { return with_iterations(make_cylinder(g, probe, options), g); });
+        return detail::fit_cylinder_geometry(points, hint, options.start_from_hint).map([&](const detail::Geometry& g) {
+          return with_iterations(make_cylinder(g, probe, options), g);
+        });
       case Shape::Cone:
-        return detail::fit_cone_geometry(points, hint, options.start_from_hint).map(
-            [&](const detail::Geometry& g) { return with_iterations(make_cone(g, probe, options), g); });
+        return detail::fit_cone_geometry(points, hint, options.start_from_hint).map([&](const detail::Geometry& g) {
+          return with_iterations(make_cone(g, probe, options), g);
+        });
     }
     return tl::unexpected(FitFailure::Degenerate);
   }();

@@ -39,8 +39,7 @@ Mat3 axis_frame(const Vec3& axis) {
 /// Report DITC 140/89, 1989): the axis through (d0, d1, 0) along
 /// (d2, d3, 1) in the frame of the current axis. The new point is moved to the foot of the
 /// origin (the centroid), the NIST reference point; returns that axial shift.
-double step_axis(const Vec3& point, const Vec3& axis, const Eigen::VectorXd& delta, Vec3& new_point,
-                 Vec3& new_axis) {
+double step_axis(const Vec3& point, const Vec3& axis, const Eigen::VectorXd& delta, Vec3& new_point, Vec3& new_axis) {
   const Mat3 rt = axis_frame(axis).transpose();
   new_axis = (rt * Vec3(delta(2), delta(3), 1)).normalized();
   new_point = point + rt * Vec3(delta(0), delta(1), 0);
@@ -50,8 +49,8 @@ double step_axis(const Vec3& point, const Vec3& axis, const Eigen::VectorXd& del
 }
 
 struct CylinderState {
-  Vec3 point;   ///< on the axis, foot of the centroid
-  Vec3 axis;    ///< unit
+  Vec3 point;  ///< on the axis, foot of the centroid
+  Vec3 axis;   ///< unit
   double radius = 0;
 };
 
@@ -82,8 +81,8 @@ struct CylinderModel {
 };
 
 struct ConeState {
-  Vec3 point;   ///< on the axis, foot of the centroid
-  Vec3 axis;    ///< unit
+  Vec3 point;             ///< on the axis, foot of the centroid
+  Vec3 axis;              ///< unit
   double half_angle = 0;  ///< psi, radius grows along +axis when positive
   double distance = 0;    ///< s: orthogonal distance from `point` to the surface
 };
@@ -107,8 +106,7 @@ struct ConeModel {
       const double cy = rho > 0 ? l.y() / rho : 0;
       const double w = l.z();
       r(i) = rho * c - w * sn - s.distance;
-      jac.row(i) << -c * cx, -c * cy, -cx * w * c - sn * l.x(), -cy * w * c - sn * l.y(),
-          -rho * sn - w * c, -1;
+      jac.row(i) << -c * cx, -c * cy, -cx * w * c - sn * l.x(), -cy * w * c - sn * l.y(), -rho * sn - w * c, -1;
     }
   }
   ConeState step(const ConeState& s, const Eigen::VectorXd& delta) const {
@@ -125,8 +123,7 @@ struct ConeModel {
 /// cylinders lie along the largest, short rings and flat cones along the smallest, partial
 /// patches may need the middle one; `smallest_first` for cones, which are mostly short: seats,
 /// countersinks, chamfers), and the distinct eigenvector of an algebraic quadric through the points.
-std::vector<Vec3> candidate_axes(const std::vector<Vec3>& q, const std::optional<Vec3>& hint,
-                                 bool smallest_first) {
+std::vector<Vec3> candidate_axes(const std::vector<Vec3>& q, const std::optional<Vec3>& hint, bool smallest_first) {
   std::vector<Vec3> axes;
   auto add = [&axes](const Vec3& a) {
     if (!(a.norm() > 0) || !a.allFinite()) return;
@@ -145,8 +142,8 @@ std::vector<Vec3> candidate_axes(const std::vector<Vec3>& q, const std::optional
     Eigen::MatrixXd m(static_cast<Eigen::Index>(q.size()), 10);
     for (std::size_t i = 0; i < q.size(); ++i) {
       const Vec3& p = q[i];
-      m.row(static_cast<Eigen::Index>(i)) << p.x() * p.x(), p.y() * p.y(), p.z() * p.z(), p.x() * p.y(),
-          p.x() * p.z(), p.y() * p.z(), p.x(), p.y(), p.z(), 1;
+      m.row(static_cast<Eigen::Index>(i)) << p.x() * p.x(), p.y() * p.y(), p.z() * p.z(), p.x() * p.y(), p.x() * p.z(),
+          p.y() * p.z(), p.x(), p.y(), p.z(), 1;
     }
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeThinV);
     const Eigen::VectorXd c = svd.matrixV().col(9);
@@ -301,7 +298,8 @@ auto search_best(const Model& model, const std::vector<Vec3>& sample, MakeStart 
   for (const Vec3& axis : candidate_axes(sample, axis_hint, cone)) {
     for (const State& s : make_start(model.points, axis)) starts.push_back(s);
   }
-  add_searched_starts(Model{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
+  add_searched_starts(
+      Model{sample}, [&](const Vec3& axis) { return make_start(sample, axis); }, starts);
   return best_of(model, starts);
 }
 

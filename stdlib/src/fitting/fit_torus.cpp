@@ -67,7 +67,7 @@ struct TorusModel {
       jac(i, 3) = rel->h * big_r * rel->e.dot(u) / rel->distance;
       jac(i, 4) = rel->h * big_r * rel->e.dot(v) / rel->distance;
       jac(i, 5) = -0.5 * normal.dot(rel->e);  // per unit of the major diameter
-      jac(i, 6) = -0.5;                        // per unit of the minor diameter
+      jac(i, 6) = -0.5;                       // per unit of the minor diameter
     }
   }
   Torus step(const Torus& t, const Eigen::VectorXd& delta) const {

@@ -26,8 +26,8 @@ NormalizedPoints normalize(const std::vector<Vec3>& points);
 
 /// Principal axes of centred points: columns of `axes` sorted by decreasing RMS extent.
 struct PrincipalAxes {
-  Mat3 axes = Mat3::Identity();   ///< unit columns: largest, middle, smallest spread
-  Vec3 rms_extent = Vec3::Zero(); ///< RMS coordinate along each axis
+  Mat3 axes = Mat3::Identity();    ///< unit columns: largest, middle, smallest spread
+  Vec3 rms_extent = Vec3::Zero();  ///< RMS coordinate along each axis
 };
 
 /// SVD of the centred points (they must be centred already).
@@ -54,10 +54,8 @@ tl::expected<Geometry, FitFailure> fit_circle_geometry(const std::vector<Vec3>& 
                                                        const std::optional<Vec3>& plane_normal);
 tl::expected<Geometry, FitFailure> fit_sphere_geometry(const std::vector<Vec3>& points);
 tl::expected<Geometry, FitFailure> fit_cylinder_geometry(const std::vector<Vec3>& points,
-                                                         const std::optional<Vec3>& axis_hint,
-                                                         bool hint_only = false);
+                                                         const std::optional<Vec3>& axis_hint, bool hint_only = false);
 tl::expected<Geometry, FitFailure> fit_cone_geometry(const std::vector<Vec3>& points,
-                                                     const std::optional<Vec3>& axis_hint,
-                                                     bool hint_only = false);
+                                                     const std::optional<Vec3>& axis_hint, bool hint_only = false);
 
 }  // namespace metron::fitting::detail

@@ -32,7 +32,8 @@ std::vector<std::string_view> split_fields(std::string_view line, bool csv) {
     std::size_t start = 0;
     for (;;) {
       const std::size_t comma = line.find(',', start);
-      fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+      fields.push_back(
+          trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
       if (comma == std::string_view::npos) break;
       start = comma + 1;
     }
@@ -134,8 +135,8 @@ tl::expected<std::vector<Vec3>, PointFileError> parse_point_text(std::string_vie
     points.push_back(p);
   }
   if (declared && *declared != points.size()) {
-    return tl::unexpected(PointFileError{
-        fmt::format("declared {} points but found {}", *declared, points.size()), lines.front().first});
+    return tl::unexpected(
+        PointFileError{fmt::format("declared {} points but found {}", *declared, points.size()), lines.front().first});
   }
   if (!declared && points.empty()) return tl::unexpected(PointFileError{"the file holds no points", 0});
   return points;
@@ -146,7 +147,8 @@ tl::expected<std::vector<Vec3>, PointFileError> read_point_file(const std::strin
   if (std::filesystem::is_directory(path, ec)) {
     return tl::unexpected(PointFileError{fmt::format("'{}' is a directory", path), 0});
   }
-  if (!std::ifstream(path, std::ios::binary)) return tl::unexpected(PointFileError{fmt::format("cannot open '{}'", path), 0});
+  if (!std::ifstream(path, std::ios::binary))
+    return tl::unexpected(PointFileError{fmt::format("cannot open '{}'", path), 0});
   // The input size cap and regular files only: /dev/zero must not grow memory (docs/security.md).
   auto text = read_input_file(path);
   if (!text) return tl::unexpected(PointFileError{text.error(), 0});

@@ -27,11 +27,11 @@
 #include <Message_Messenger.hxx>
 #include <Message_Printer.hxx>
 #include <Message_PrinterOStream.hxx>
-#include <TCollection_AsciiString.hxx>
 #include <Poly_Triangulation.hxx>
 #include <STEPControl_Reader.hxx>
 #include <ShapeFix_Solid.hxx>
 #include <Standard_Failure.hxx>
+#include <TCollection_AsciiString.hxx>
 #include <TopAbs.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -113,8 +113,8 @@ class Welder {
 // revolution or extrusion and B-splines, which are recognised when they are exactly analytic.
 void recognise(const GeomAdaptor_Surface& s, CadFace& out) {
   using Kind = CadFace::Kind;
-  auto set = [&](Kind kind, const Vec3& origin, const Vec3& axis, double radius = 0,
-                 double minor = 0, double semi_angle = 0) {
+  auto set = [&](Kind kind, const Vec3& origin, const Vec3& axis, double radius = 0, double minor = 0,
+                 double semi_angle = 0) {
     out.kind = kind;
     out.origin = origin;
     out.axis = axis;
@@ -127,9 +127,7 @@ void recognise(const GeomAdaptor_Surface& s, CadFace& out) {
   };
   constexpr double tol = 1e-7;
   switch (s.GetType()) {
-    case GeomAbs_Plane:
-      set_axis(Kind::Plane, s.Plane().Position());
-      return;
+    case GeomAbs_Plane: set_axis(Kind::Plane, s.Plane().Position()); return;
     case GeomAbs_Cylinder:
       set_axis(Kind::Cylinder, s.Cylinder().Position());
       out.radius_mm = s.Cylinder().Radius();
@@ -187,13 +185,11 @@ void recognise(const GeomAdaptor_Surface& s, CadFace& out) {
       const Handle(Adaptor3d_Curve) c = s.BasisCurve();
       if (c->GetType() == GeomAbs_Line) {
         const Vec3 n = to_eigen(c->Line().Direction().XYZ()).cross(d);
-        if (n.norm() > tol)
-          set(Kind::Plane, to_eigen(c->Line().Location().XYZ()), n.normalized());
+        if (n.norm() > tol) set(Kind::Plane, to_eigen(c->Line().Location().XYZ()), n.normalized());
       } else if (c->GetType() == GeomAbs_Circle) {
         const gp_Circ circle = c->Circle();
         const Vec3 a = to_eigen(circle.Axis().Direction().XYZ());
-        if (a.cross(d).norm() < tol)
-          set(Kind::Cylinder, to_eigen(circle.Location().XYZ()), a, circle.Radius());
+        if (a.cross(d).norm() < tol) set(Kind::Cylinder, to_eigen(circle.Location().XYZ()), a, circle.Radius());
       }
       return;
     }
@@ -203,8 +199,7 @@ void recognise(const GeomAdaptor_Surface& s, CadFace& out) {
       if (planar.IsPlanar()) set_axis(Kind::Plane, planar.Plan().Position());
       return;
     }
-    default:
-      return;
+    default: return;
   }
 }
 
@@ -230,14 +225,9 @@ void orient(const TopoDS_Face& face, CadFace& out) {
     case CadFace::Kind::Plane:
       if (n.dot(out.axis) < 0) out.axis = -out.axis;
       return;
-    case CadFace::Kind::Sphere:
-      radial = q;
-      break;
-    case CadFace::Kind::Torus:
-      radial -= out.radius_mm * radial.normalized();
-      break;
-    default:
-      break;
+    case CadFace::Kind::Sphere: radial = q; break;
+    case CadFace::Kind::Torus: radial -= out.radius_mm * radial.normalized(); break;
+    default: break;
   }
   out.inner = n.dot(radial) < 0;
   if (out.kind == CadFace::Kind::Cone && out.semi_angle_rad < 0) {  // radius grows along +axis
@@ -308,8 +298,7 @@ tl::expected<TopoDS_Shape, MeshError> read_shape(const std::string& path, const 
     }
   }
   if (status != IFSelect_RetDone)
-    return tl::unexpected(file_error(path, std::string("could not be parsed as ") +
-                                               (step ? "STEP" : "IGES") +
+    return tl::unexpected(file_error(path, std::string("could not be parsed as ") + (step ? "STEP" : "IGES") +
                                                (failures.empty() ? "" : ": " + failures)));
   if (shape.IsNull() || !TopExp_Explorer(shape, TopAbs_FACE).More())
     return tl::unexpected(file_error(path, "contains no surfaces"));
@@ -361,21 +350,18 @@ tl::expected<CadModel, MeshError> tessellate(const std::string& path, const Topo
     TopLoc_Location location;
     const Handle(Poly_Triangulation) tri = BRep_Tool::Triangulation(face, location);
     if (tri.IsNull() || tri->NbTriangles() == 0)
-      return tl::unexpected(file_error(
-          path, "BRepMesh produced no triangles for face " + std::to_string(i) + " of " +
-                    std::to_string(face_map.Extent())));
+      return tl::unexpected(file_error(path, "BRepMesh produced no triangles for face " + std::to_string(i) + " of " +
+                                                 std::to_string(face_map.Extent())));
     const gp_Trsf trsf = location.Transformation();
     std::vector<std::uint32_t> node_index(static_cast<std::size_t>(tri->NbNodes()) + 1);
     for (int n = 1; n <= tri->NbNodes(); ++n)
-      node_index[static_cast<std::size_t>(n)] =
-          welder.add(to_eigen(tri->Node(n).Transformed(trsf).XYZ()));
+      node_index[static_cast<std::size_t>(n)] = welder.add(to_eigen(tri->Node(n).Transformed(trsf).XYZ()));
     const bool reversed = face.Orientation() == TopAbs_REVERSED;
     for (int t = 1; t <= tri->NbTriangles(); ++t) {
       int n1 = 0, n2 = 0, n3 = 0;
       tri->Triangle(t).Get(n1, n2, n3);
       if (reversed) std::swap(n2, n3);
-      const Mesh::Face f{node_index[static_cast<std::size_t>(n1)],
-                         node_index[static_cast<std::size_t>(n2)],
+      const Mesh::Face f{node_index[static_cast<std::size_t>(n1)], node_index[static_cast<std::size_t>(n2)],
                          node_index[static_cast<std::size_t>(n3)]};
       if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) continue;  // collapsed by the weld
       info.triangles.push_back(static_cast<std::uint32_t>(triangles.size()));
@@ -389,14 +375,13 @@ tl::expected<CadModel, MeshError> tessellate(const std::string& path, const Topo
 
 }  // namespace
 
-tl::expected<CadModel, MeshError> load_cad_model(const std::string& path,
-                                                 const TessellationOptions& options) {
+tl::expected<CadModel, MeshError> load_cad_model(const std::string& path, const TessellationOptions& options) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext != ".step" && ext != ".stp" && ext != ".iges" && ext != ".igs")
-    return tl::unexpected(file_error(
-        path, "unsupported CAD format '" + ext + "' (expected .step, .stp, .iges or .igs)"));
+    return tl::unexpected(
+        file_error(path, "unsupported CAD format '" + ext + "' (expected .step, .stp, .iges or .igs)"));
   if (!std::ifstream(path)) return tl::unexpected(file_error(path, "cannot open file"));
   // A device named like a mesh (/dev/zero as part.stl) would never end: regular files within the
   // input cap only (docs/security.md).
@@ -409,13 +394,11 @@ tl::expected<CadModel, MeshError> load_cad_model(const std::string& path,
     if (!shape) return tl::unexpected(shape.error());
     return tessellate(path, *shape, options);
   } catch (const Standard_Failure& e) {  // OCCT reports malformed input by throwing
-    return tl::unexpected(file_error(path, std::string("OpenCASCADE failed: ") +
-                                               e.GetMessageString()));
+    return tl::unexpected(file_error(path, std::string("OpenCASCADE failed: ") + e.GetMessageString()));
   }
 }
 
-tl::expected<Mesh, MeshError> load_cad(const std::string& path,
-                                       const TessellationOptions& options) {
+tl::expected<Mesh, MeshError> load_cad(const std::string& path, const TessellationOptions& options) {
   auto model = load_cad_model(path, options);
   if (!model) return tl::unexpected(model.error());
   return std::move(model->mesh);

@@ -30,10 +30,8 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
 using FaceIndex = SurfaceMesh::Face_index;
-using FaceTree = CGAL::AABB_tree<
-    CGAL::AABB_traits<Kernel, CGAL::AABB_face_graph_triangle_primitive<SurfaceMesh>>>;
-using EdgeTree = CGAL::AABB_tree<
-    CGAL::AABB_traits<Kernel, CGAL::AABB_halfedge_graph_segment_primitive<SurfaceMesh>>>;
+using FaceTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, CGAL::AABB_face_graph_triangle_primitive<SurfaceMesh>>>;
+using EdgeTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, CGAL::AABB_halfedge_graph_segment_primitive<SurfaceMesh>>>;
 using Slicer = CGAL::Polygon_mesh_slicer<SurfaceMesh, Kernel>;
 using Side = CGAL::Side_of_triangle_mesh<SurfaceMesh, Kernel, CGAL::Default, FaceTree>;
 
@@ -59,22 +57,18 @@ struct Mesh::Impl {
   mutable std::unique_ptr<Slicer> slicer;
 };
 
-tl::expected<Mesh, MeshError> Mesh::from_triangles(std::vector<Vec3> vertices,
-                                                   std::vector<Face> faces) {
+tl::expected<Mesh, MeshError> Mesh::from_triangles(std::vector<Vec3> vertices, std::vector<Face> faces) {
   if (faces.empty()) return tl::unexpected(MeshError{"mesh has no faces"});
   for (std::size_t i = 0; i < vertices.size(); ++i)
-    if (!vertices[i].allFinite())
-      return tl::unexpected(MeshError{"vertex " + std::to_string(i) + " is not finite"});
+    if (!vertices[i].allFinite()) return tl::unexpected(MeshError{"vertex " + std::to_string(i) + " is not finite"});
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const Face& f = faces[i];
     for (auto v : f)
       if (v >= vertices.size())
-        return tl::unexpected(MeshError{"face " + std::to_string(i) + " refers to vertex " +
-                                        std::to_string(v) + " but the mesh has " +
-                                        std::to_string(vertices.size()) + " vertices"});
+        return tl::unexpected(MeshError{"face " + std::to_string(i) + " refers to vertex " + std::to_string(v) +
+                                        " but the mesh has " + std::to_string(vertices.size()) + " vertices"});
     if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2])
-      return tl::unexpected(
-          MeshError{"face " + std::to_string(i) + " repeats a vertex index"});
+      return tl::unexpected(MeshError{"face " + std::to_string(i) + " repeats a vertex index"});
   }
 
   auto impl = std::make_shared<Impl>();
@@ -95,14 +89,12 @@ tl::expected<Mesh, MeshError> Mesh::from_triangles(std::vector<Vec3> vertices,
     FaceIndex fi = sm.add_face(V(f[0]), V(f[1]), V(f[2]));
     if (fi == SurfaceMesh::null_face()) {
       split = true;
-      fi = sm.add_face(sm.add_vertex(to_cgal(impl->vertices[f[0]])),
-                       sm.add_vertex(to_cgal(impl->vertices[f[1]])),
+      fi = sm.add_face(sm.add_vertex(to_cgal(impl->vertices[f[0]])), sm.add_vertex(to_cgal(impl->vertices[f[1]])),
                        sm.add_vertex(to_cgal(impl->vertices[f[2]])));
     }
     const Vec3& a = impl->vertices[f[0]];
     const Vec3 n = (impl->vertices[f[1]] - a).cross(impl->vertices[f[2]] - a);
-    const bool degenerate = CGAL::collinear(to_cgal(a), to_cgal(impl->vertices[f[1]]),
-                                            to_cgal(impl->vertices[f[2]]));
+    const bool degenerate = CGAL::collinear(to_cgal(a), to_cgal(impl->vertices[f[1]]), to_cgal(impl->vertices[f[2]]));
     impl->normals.push_back(degenerate ? Vec3::Zero() : Vec3(n.normalized()));
     if (!degenerate) solid_faces.push_back(fi);
     for (auto v : f) impl->box.extend(impl->vertices[v]);
@@ -146,10 +138,9 @@ Mesh::Closest Mesh::closest(const Vec3& query) const {
   return c;
 }
 
-std::optional<Mesh::Hit> Mesh::ray_cast(const Vec3& origin, const Vec3& unit_direction,
-                                        double max_t) const {
-  const Kernel::Ray_3 ray(to_cgal(origin), Kernel::Vector_3(unit_direction.x(), unit_direction.y(),
-                                                            unit_direction.z()));
+std::optional<Mesh::Hit> Mesh::ray_cast(const Vec3& origin, const Vec3& unit_direction, double max_t) const {
+  const Kernel::Ray_3 ray(to_cgal(origin),
+                          Kernel::Vector_3(unit_direction.x(), unit_direction.y(), unit_direction.z()));
   const auto hit = m_impl->tree.first_intersection(ray);
   if (!hit) return std::nullopt;
   Vec3 p;
@@ -166,17 +157,15 @@ std::optional<Mesh::Hit> Mesh::ray_cast(const Vec3& origin, const Vec3& unit_dir
   return Hit{p, m_impl->normals[face], t, face};
 }
 
-std::optional<double> Mesh::first_ball_contact(const Vec3& a, const Vec3& b,
-                                               double ball_radius_mm, double tol_mm) const {
+std::optional<double> Mesh::first_ball_contact(const Vec3& a, const Vec3& b, double ball_radius_mm,
+                                               double tol_mm) const {
   // With r = 0 the clearance never goes negative, so there would be no crossing to bracket.
   if (!(ball_radius_mm > 0)) throw std::invalid_argument("first_ball_contact: radius must be > 0");
   const Vec3 ab = b - a;
   const double length = ab.norm();
   const double r = ball_radius_mm;
   // Signed clearance between ball and surface at parameter s.
-  auto clearance = [&](double s) {
-    return std::sqrt(m_impl->tree.squared_distance(to_cgal(a + s * ab))) - r;
-  };
+  auto clearance = [&](double s) { return std::sqrt(m_impl->tree.squared_distance(to_cgal(a + s * ab))) - r; };
   double s = 0, c = clearance(0);
   if (c <= 0) return 0.0;
   if (length == 0) return std::nullopt;
@@ -199,14 +188,11 @@ std::optional<double> Mesh::first_ball_contact(const Vec3& a, const Vec3& b,
   return std::nullopt;
 }
 
-std::vector<std::vector<Vec3>> Mesh::section(const Vec3& plane_point,
-                                             const Vec3& plane_normal) const {
-  std::call_once(m_impl->slicer_once, [this] {
-    m_impl->slicer = std::make_unique<Slicer>(m_impl->surface);
-  });
+std::vector<std::vector<Vec3>> Mesh::section(const Vec3& plane_point, const Vec3& plane_normal) const {
+  std::call_once(m_impl->slicer_once, [this] { m_impl->slicer = std::make_unique<Slicer>(m_impl->surface); });
   std::vector<std::vector<Point>> polylines;
-  const Kernel::Plane_3 plane(
-      to_cgal(plane_point), Kernel::Vector_3(plane_normal.x(), plane_normal.y(), plane_normal.z()));
+  const Kernel::Plane_3 plane(to_cgal(plane_point),
+                              Kernel::Vector_3(plane_normal.x(), plane_normal.y(), plane_normal.z()));
   (*m_impl->slicer)(plane, std::back_inserter(polylines));
   std::vector<std::vector<Vec3>> out;
   out.reserve(polylines.size());

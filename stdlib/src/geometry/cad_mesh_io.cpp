@@ -39,9 +39,7 @@ std::string lowercase_extension(const std::string& path) {
   return ext;
 }
 
-MeshError file_error(const std::string& path, const std::string& what) {
-  return MeshError{"'" + path + "': " + what};
-}
+MeshError file_error(const std::string& path, const std::string& what) { return MeshError{"'" + path + "': " + what}; }
 
 // CGAL's readers only say "failed"; for a binary STL the byte count says which record broke.
 std::string diagnose_stl(const std::string& path) {
@@ -56,10 +54,9 @@ std::string diagnose_stl(const std::string& path) {
   const auto size = std::filesystem::file_size(path);
   const std::uintmax_t expected = 84 + 50ull * count;
   if (size < expected)
-    return "truncated binary STL: the header declares " + std::to_string(count) +
-           " triangles (" + std::to_string(expected) + " bytes) but the file has " +
-           std::to_string(size) + " bytes, so triangle " + std::to_string((size - 84) / 50) +
-           " (0-based) is incomplete";
+    return "truncated binary STL: the header declares " + std::to_string(count) + " triangles (" +
+           std::to_string(expected) + " bytes) but the file has " + std::to_string(size) + " bytes, so triangle " +
+           std::to_string((size - 84) / 50) + " (0-based) is incomplete";
   return "could not be read as STL";
 }
 
@@ -70,8 +67,7 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
   if (ext == ".step" || ext == ".stp" || ext == ".iges" || ext == ".igs") return load_cad(path);
   if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".ply")
     return tl::unexpected(file_error(
-        path, "unsupported mesh format '" + ext +
-                  "' (expected .stl, .off, .obj, .ply, .step, .stp, .iges or .igs)"));
+        path, "unsupported mesh format '" + ext + "' (expected .stl, .off, .obj, .ply, .step, .stp, .iges or .igs)"));
   if (!std::ifstream(path)) return tl::unexpected(file_error(path, "cannot open file"));
   // A device named like a mesh (/dev/zero as part.stl) would never end: regular files within the
   // input cap only (docs/security.md).
@@ -83,16 +79,14 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
     std::string format = ext.substr(1);
     std::transform(format.begin(), format.end(), format.begin(),
                    [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-    const std::string what =
-        ext == ".stl" ? diagnose_stl(path) : "could not be parsed as " + format;
+    const std::string what = ext == ".stl" ? diagnose_stl(path) : "could not be parsed as " + format;
     return tl::unexpected(file_error(path, what));
   }
   for (std::size_t i = 0; i < polygons.size(); ++i)
     for (std::size_t v : polygons[i])
       if (v >= points.size())
-        return tl::unexpected(file_error(path, "polygon " + std::to_string(i) +
-                                                   " refers to a missing vertex " +
-                                                   std::to_string(v)));
+        return tl::unexpected(
+            file_error(path, "polygon " + std::to_string(i) + " refers to a missing vertex " + std::to_string(v)));
   if (polygons.empty()) return tl::unexpected(file_error(path, "contains no polygons"));
 
   // Merge duplicate points, drop degenerate and duplicate polygons, orient consistently,
@@ -102,8 +96,7 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
   if (polygons.empty()) return tl::unexpected(file_error(path, "every polygon is degenerate"));
   SurfaceMesh sm;
   PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
-  if (!PMP::triangulate_faces(sm))
-    return tl::unexpected(file_error(path, "has a polygon that cannot be triangulated"));
+  if (!PMP::triangulate_faces(sm)) return tl::unexpected(file_error(path, "has a polygon that cannot be triangulated"));
   if (CGAL::is_closed(sm) && !PMP::is_outward_oriented(sm)) PMP::reverse_face_orientations(sm);
 
   std::vector<Vec3> vertices;
@@ -128,16 +121,15 @@ tl::expected<Mesh, MeshError> load_mesh(const std::string& path) {
 tl::expected<void, MeshError> save_mesh(const Mesh& mesh, const std::string& path) {
   const std::string ext = lowercase_extension(path);
   if (ext != ".stl" && ext != ".off" && ext != ".obj" && ext != ".ply")
-    return tl::unexpected(file_error(path, "cannot write mesh format '" + ext +
-                                               "' (expected .stl, .off, .obj or .ply)"));
+    return tl::unexpected(
+        file_error(path, "cannot write mesh format '" + ext + "' (expected .stl, .off, .obj or .ply)"));
   std::vector<Point> points;
   points.reserve(mesh.vertex_count());
   for (const Vec3& v : mesh.vertices()) points.emplace_back(v.x(), v.y(), v.z());
   std::vector<std::array<std::size_t, 3>> triangles;
   triangles.reserve(mesh.face_count());
   for (const auto& f : mesh.faces()) triangles.push_back({f[0], f[1], f[2]});
-  if (!CGAL::IO::write_polygon_soup(path, points, triangles,
-                                    CGAL::parameters::stream_precision(17)))
+  if (!CGAL::IO::write_polygon_soup(path, points, triangles, CGAL::parameters::stream_precision(17)))
     return tl::unexpected(file_error(path, "could not be written"));
   return {};
 }

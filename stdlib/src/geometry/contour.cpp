@@ -84,7 +84,8 @@ std::vector<Contour> mesh_section_contours(const Mesh& mesh, const Vec3& plane_p
     c.closed = closed;
     // A vertex between two faces: a convex edge gets a fan of normals (the ball rolls around it,
     // so the offset has an arc of radius r - E0 there); a concave one the mean normal.
-    const auto vertex = [&](const Vec3& at, const Vec3& before, const Vec3& after, const Vec3& travel_after, bool full) {
+    const auto vertex = [&](const Vec3& at, const Vec3& before, const Vec3& after, const Vec3& travel_after,
+                            bool full) {
       const double angle = std::acos(std::clamp(before.dot(after), -1.0, 1.0));
       const bool convex = before.dot(travel_after) < 0;
       if (!(angle > 1e-3) || !convex) {
@@ -95,16 +96,21 @@ std::vector<Contour> mesh_section_contours(const Mesh& mesh, const Vec3& plane_p
       const Vec3 axis = before.cross(after).normalized();
       const std::size_t k = sample_count(angle, 2.0 * std::numbers::pi / 180.0);
       for (std::size_t j = full ? 0 : k; j <= k; ++j)
-        c.points.push_back({at, Eigen::AngleAxisd(angle * static_cast<double>(j) / static_cast<double>(k), axis) * before});
+        c.points.push_back(
+            {at, Eigen::AngleAxisd(angle * static_cast<double>(j) / static_cast<double>(k), axis) * before});
     };
     for (std::size_t i = 0; i < m; ++i) {
       const Vec3 travel = (poly[i + 1] - poly[i]).normalized();
-      if (i == 0 && !closed) c.points.push_back({poly[0], seg_normal[0]});
-      else if (i == 0) vertex(poly[0], seg_normal[m - 1], seg_normal[0], travel, false);
-      else vertex(poly[i], seg_normal[i - 1], seg_normal[i], travel, true);
+      if (i == 0 && !closed)
+        c.points.push_back({poly[0], seg_normal[0]});
+      else if (i == 0)
+        vertex(poly[0], seg_normal[m - 1], seg_normal[0], travel, false);
+      else
+        vertex(poly[i], seg_normal[i - 1], seg_normal[i], travel, true);
       const std::size_t k = sample_count((poly[i + 1] - poly[i]).norm(), step_mm);
       for (std::size_t j = 1; j < k; ++j)
-        c.points.push_back({poly[i] + (static_cast<double>(j) / static_cast<double>(k)) * (poly[i + 1] - poly[i]), seg_normal[i]});
+        c.points.push_back(
+            {poly[i] + (static_cast<double>(j) / static_cast<double>(k)) * (poly[i + 1] - poly[i]), seg_normal[i]});
     }
     if (closed) {
       vertex(poly[0], seg_normal[m - 1], seg_normal[0], (poly[1] - poly[0]).normalized(), true);

@@ -20,9 +20,12 @@ double root(double r0, double z0, double z1, double g) {
     if (s == s0 || s == s1) break;
     const double ratio0 = n0 / (s + r0), ratio1 = z1 / (s + 1);
     const double value = ratio0 * ratio0 + ratio1 * ratio1 - 1;
-    if (value > 0) s0 = s;
-    else if (value < 0) s1 = s;
-    else break;
+    if (value > 0)
+      s0 = s;
+    else if (value < 0)
+      s1 = s;
+    else
+      break;
   }
   return s;
 }

@@ -175,7 +175,8 @@ tl::expected<ScanPathPlan, ScanPathError> make_scan_path(const Contour& contour,
   }
   if (offset.points.size() < 2) return tl::unexpected(ScanPathError{"the ball does not fit the contour"});
   // A closed contour whose closing point was shadowed is scanned open.
-  if (offset.closed && (offset.points.back().position - offset.points.front().position).norm() > 1e-9) offset.closed = false;
+  if (offset.closed && (offset.points.back().position - offset.points.front().position).norm() > 1e-9)
+    offset.closed = false;
   const auto& pts = offset.points;
   // Sharp corners end a smooth piece; each piece is fitted on its own.
   const double corner_cos = std::cos(o.corner_angle_deg * std::numbers::pi / 180.0);
@@ -219,10 +220,14 @@ tl::expected<ScanPathPlan, ScanPathError> make_scan_path(const Contour& contour,
   for (std::size_t k = 0; k < knots.size(); ++k) {
     plan.path.normals.push_back(pts[knots[k]].normal);
     double kappa;
-    if (corner[k]) kappa = std::numeric_limits<double>::infinity();
-    else if (k == 0) kappa = segs.front().curvature(0);
-    else if (k + 1 == knots.size()) kappa = segs.back().curvature(segs.back().d_mm);
-    else kappa = 0.5 * (segs[k - 1].curvature(segs[k - 1].d_mm) + segs[k].curvature(0));
+    if (corner[k])
+      kappa = std::numeric_limits<double>::infinity();
+    else if (k == 0)
+      kappa = segs.front().curvature(0);
+    else if (k + 1 == knots.size())
+      kappa = segs.back().curvature(segs.back().d_mm);
+    else
+      kappa = 0.5 * (segs[k - 1].curvature(segs[k - 1].d_mm) + segs[k].curvature(0));
     plan.curvature_per_mm.push_back(kappa);
   }
   for (const auto& s : segs) {

@@ -121,8 +121,8 @@ tl::expected<Circle2, const char*> fit_circle_geometric(std::span<const Vec2> po
   return c;
 }
 
-tl::expected<PhasedCircle, const char*> fit_circle_phased(std::span<const Vec2> points, std::span<const double> angles_rad,
-                                                          int sense) {
+tl::expected<PhasedCircle, const char*> fit_circle_phased(std::span<const Vec2> points,
+                                                          std::span<const double> angles_rad, int sense) {
   if (points.size() != angles_rad.size()) return tl::make_unexpected("points and angles differ in number");
   if (points.size() < 2) return tl::make_unexpected("a phased circle needs 2 angles");
   if (sense == 0) {

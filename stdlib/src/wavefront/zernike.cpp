@@ -42,7 +42,8 @@ tl::expected<ZernikeFit, const char*> fit_zernike(std::span<const Vec2> xy, std:
   }
   ata = ata.selfadjointView<Eigen::Lower>();
   Eigen::LDLT<Eigen::MatrixXd> ldlt(ata);
-  if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-12) return tl::make_unexpected("the points do not determine the zernike terms");
+  if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-12)
+    return tl::make_unexpected("the points do not determine the zernike terms");
   const Eigen::VectorXd c = ldlt.solve(atb);
   double ss = 0;
   for (Eigen::Index i = 0; i < n; ++i) {

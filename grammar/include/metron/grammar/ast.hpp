@@ -15,8 +15,9 @@ struct Expr;
 /// label `F(HOLE[I])` (DMIS 5.x): one label per value of the index.
 struct LabelRef {
   std::string prefix;  ///< upper-case label prefix: F, FA, T, TA, D, DA, DAT, DID, S, SA, M, ...
-  std::string name;    ///< the name between the parentheses as written; indexed: `HOLE[I]`, the index upper-case without blanks
-  Span span;           ///< the whole reference, prefix to closing parenthesis
+  std::string
+      name;   ///< the name between the parentheses as written; indexed: `HOLE[I]`, the index upper-case without blanks
+  Span span;  ///< the whole reference, prefix to closing parenthesis
   std::vector<Expr> index;  ///< an indexed label's index expression (one), else empty
   /// A point range after the label, `FA(x)[first,last]` or `FA(x)[n]` (MODUS writes OUTPUT of a
   /// feature's points so): one or two expressions, else empty.
@@ -30,7 +31,8 @@ enum class ExprKind {
   Label,   ///< `label`
   Call,    ///< intrinsic function call: `text` = upper-case function name, `args`
   Unary,   ///< `text` = operator ("-", "+", ".NOT."), one operand in `args`
-  Binary,  ///< `text` = operator ("+","-","*","/","**",".EQ.",".NE.",".LT.",".LE.",".GT.",".GE.",".AND.",".OR."), two operands
+  Binary,  ///< `text` = operator ("+","-","*","/","**",".EQ.",".NE.",".LT.",".LE.",".GT.",".GE.",".AND.",".OR."), two
+           ///< operands
   Paren,   ///< a parenthesised expression `( e )`, one operand in `args` (kept: JUMPTO/(L1) and IF/(c) need it)
   Index,   ///< array element `name[i]` or `name[i,j]`: `text` = upper-case variable name, indices in `args`
   Format,  ///< a WRITE value with its layout `e:width[:decimals]`: args = {e, width, [decimals]} (numbers)
@@ -49,19 +51,19 @@ struct Expr {
 /// One logical DMIS statement (continuation lines joined), e.g.
 /// `F(CYL1)=FEAT/CYLNDR,INNER,CART,0,0,26,0,0,-1,31,12` or `V1=ASSIGN/V2+1` or `ENDMES` or `(L1)`.
 struct Statement {
-  Span span;                          ///< the whole statement (physical positions)
-  std::optional<LabelRef> target;     ///< label on the left of '=' (F(x)=FEAT/..., M(m)=MACRO/...)
-  std::optional<Expr> variable;       ///< variable on the left of '=' (Word or Index), V1=ASSIGN/...
-  std::string major;                  ///< upper-case major word (FEAT, MEAS, ENDMES ...); empty for a jump label line
+  Span span;                       ///< the whole statement (physical positions)
+  std::optional<LabelRef> target;  ///< label on the left of '=' (F(x)=FEAT/..., M(m)=MACRO/...)
+  std::optional<Expr> variable;    ///< variable on the left of '=' (Word or Index), V1=ASSIGN/...
+  std::string major;               ///< upper-case major word (FEAT, MEAS, ENDMES ...); empty for a jump label line
   Span major_span;
-  bool has_slash = false;             ///< whether '/' followed the major word
-  std::vector<Expr> params;           ///< the comma-separated parameters after '/'
+  bool has_slash = false;                 ///< whether '/' followed the major word
+  std::vector<Expr> params;               ///< the comma-separated parameters after '/'
   std::optional<std::string> jump_label;  ///< `(name)` alone on a line: a JUMPTO target (name as written)
 };
 
 /// A parsed source file: its statements in order.
 struct Program {
-  std::uint32_t file = 0;             ///< SourceManager id
+  std::uint32_t file = 0;  ///< SourceManager id
   std::vector<Statement> statements;
   /// The leading word of the file's first statement line, upper case, read or not (a DMISMN the
   /// parser could not read is still the program's start).

@@ -27,8 +27,8 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
 /// A part program in a CMM package's own language (PC-DMIS's, MCOSMOS GEOPAK's ASCII), which
 /// looks like DMIS but is not: what it reads as and its first line DMIS has no form for.
 struct ForeignDialect {
-  std::string dialect;    ///< "PC-DMIS", "MCOSMOS GEOPAK"
-  std::string statement;  ///< the statement that tells it (`ENDMEAS/`, `CONTOUR/`)
+  std::string dialect;       ///< "PC-DMIS", "MCOSMOS GEOPAK"
+  std::string statement;     ///< the statement that tells it (`ENDMEAS/`, `CONTOUR/`)
   std::uint32_t offset = 0;  ///< where that line's statement starts in the text
 };
 /// A file without DMISMN (or DMISMD) holding a statement of one of those languages.

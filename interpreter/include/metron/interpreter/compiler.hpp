@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "metron/grammar/parser.hpp"
 #include "metron/grammar/ast.hpp"
+#include "metron/grammar/parser.hpp"
 #include "metron/interpreter/ir/instruction.hpp"
 #include "metron/stdlib/diagnostic.hpp"
 #include "metron/stdlib/file_access.hpp"
@@ -44,28 +44,29 @@ struct SymbolTable {
   };
   struct VariableInfo {
     ValueType type = ValueType::Real;
-    int size = 0;       ///< array size (all its elements), 0 for a scalar
+    int size = 0;  ///< array size (all its elements), 0 for a scalar
     Span span;
     std::vector<int> dims;  ///< an array's dimensions, V[3,30]: {3, 30}; one for V[10]
   };
   std::map<std::string, FeatureInfo, LabelLess> features;
-  std::map<std::string, runtime::ToleranceKind, LabelLess> tolerances;   ///< label -> kind
+  std::map<std::string, runtime::ToleranceKind, LabelLess> tolerances;  ///< label -> kind
   std::set<std::string, LabelLess> datums, sensors, alignments, devices, saved, paths;
-  std::map<std::string, VariableInfo> variables;   ///< globals
-  std::map<std::string, int> macros;               ///< name -> index in Module::macros
+  std::map<std::string, VariableInfo> variables;  ///< globals
+  std::map<std::string, int> macros;              ///< name -> index in Module::macros
   /// Macro name -> (parameter index -> feature type) for FEAT statements whose label is a parameter:
   /// a call defines the feature named by its argument.
   std::map<std::string, std::map<int, runtime::FeatureType>> macro_features;
-  std::map<std::string, Span, LabelLess> skipped; ///< labels defined by skipped vendor statements
+  std::map<std::string, Span, LabelLess> skipped;  ///< labels defined by skipped vendor statements
   /// Features whose last CONST used a method metron does not evaluate (OFFSET, TANTO ...): label ->
   /// the method word. Read leniently, their OUTPUT is left out with a warning.
   std::map<std::string, std::string, LabelLess> unconstructed;
   /// F(p)=FEAT/PATERN,F(a),F(b),...: pattern label -> its features' labels (upper case), in order.
   std::map<std::string, std::vector<std::string>, LabelLess> patterns;
-  std::set<std::string> units_in_progress;         ///< CALL/EXTERN cycle detection
+  std::set<std::string> units_in_progress;            ///< CALL/EXTERN cycle detection
   std::map<std::string, std::size_t> compiled_units;  ///< called file (canonical path) -> unit
-  std::set<std::string, LabelLess> tolerance_datums;      ///< tolerances defined with datum references
-  std::set<std::string, LabelLess> evaluated_tolerances;  ///< tolerances an EVAL has evaluated (OUTPUT/TA(t) alone reports them)
+  std::set<std::string, LabelLess> tolerance_datums;  ///< tolerances defined with datum references
+  std::set<std::string, LabelLess>
+      evaluated_tolerances;  ///< tolerances an EVAL has evaluated (OUTPUT/TA(t) alone reports them)
   /// Sensors the program takes from the machine's probe library (RECALL/SA, SNSLCT without SNSDEF).
   std::set<std::string, LabelLess> library_sensors;
   /// Tolerances of a DMIS type metron parses but does not evaluate (ANGLR, CPROFS, ...): label -> type.

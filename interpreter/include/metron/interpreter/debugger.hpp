@@ -33,9 +33,9 @@ enum class StopReason {
 /// The outcome of a run/continue/step command.
 struct Stop {
   StopReason reason = StopReason::Finished;
-  int breakpoint = 0;      ///< the breakpoint id that stopped it, when one did
-  std::string detail;      ///< e.g. the feature measured, the fault message
-  int signal = 0;          ///< Interrupted: the signal number
+  int breakpoint = 0;  ///< the breakpoint id that stopped it, when one did
+  std::string detail;  ///< e.g. the feature measured, the fault message
+  int signal = 0;      ///< Interrupted: the signal number
 };
 
 /// The debugger core: breakpoints and stepping over the IR interpreter; the REPL (cli) drives it.

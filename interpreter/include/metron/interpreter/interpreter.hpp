@@ -2,8 +2,8 @@
 #pragma once
 #include <cstdint>
 #include <map>
-#include <set>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -22,11 +22,11 @@ struct Execute;
 /// Where execution is: a unit's code or a macro's code, and the next instruction.
 struct CallFrame {
   enum class Kind { Unit, Macro } kind = Kind::Unit;
-  std::size_t index = 0;                 ///< unit or macro index in the module
-  std::size_t pc = 0;                    ///< next instruction
-  std::map<std::string, std::vector<Value>> locals;   ///< macro parameters and local variables
+  std::size_t index = 0;                                   ///< unit or macro index in the module
+  std::size_t pc = 0;                                      ///< next instruction
+  std::map<std::string, std::vector<Value>> locals;        ///< macro parameters and local variables
   std::map<std::size_t, std::pair<double, double>> loops;  ///< DoInit pc -> (end, step)
-  Span call_site;                        ///< the CALL that entered this frame
+  Span call_site;                                          ///< the CALL that entered this frame
 };
 
 /// How a step or a run ended.
@@ -72,7 +72,10 @@ class Interpreter {
 
   /// Scripted operator answers for `V=PROMPT/...`, used in order (`metron run --answers FILE`);
   /// when they run out a PROMPT takes its default answer ('' or 0) with a warning.
-  void set_prompt_answers(std::vector<std::string> answers) { m_prompt_answers = std::move(answers); m_next_answer = 0; }
+  void set_prompt_answers(std::vector<std::string> answers) {
+    m_prompt_answers = std::move(answers);
+    m_next_answer = 0;
+  }
 
   /// Variables (debugger `print`/`set`); nullopt when not declared.
   [[nodiscard]] std::optional<Value> variable(const std::string& name) const;
@@ -92,13 +95,14 @@ class Interpreter {
   ExecStatus fail(Span span, std::string message);
   ExecStatus from_runtime(const runtime::RuntimeError& e);
   std::string label_name(const ir::LabelOperand& l) const;
-  std::string indexed(const std::string& name) const;  ///< `HOLE[I]` with I's value: `HOLE[3]`
+  std::string indexed(const std::string& name) const;    ///< `HOLE[I]` with I's value: `HOLE[3]`
   std::string name_of(const ir::Instruction& in) const;  ///< the instruction's label, resolved through macro parameters
   tl::expected<double, std::string> number(const ir::Expr& e);
   std::vector<Value>* find_variable(const std::string& name);
   /// The element V[i,j,...] (1-based indices) of array `name` holding `size` values, as an offset
   /// into its storage; an index outside its dimension is an error naming it.
-  [[nodiscard]] tl::expected<std::size_t, std::string> element_offset(const std::string& name, const std::vector<double>& indices,
+  [[nodiscard]] tl::expected<std::size_t, std::string> element_offset(const std::string& name,
+                                                                      const std::vector<double>& indices,
                                                                       std::size_t size) const;
   const std::vector<ir::Instruction>& code_of(const CallFrame& f) const;
 
@@ -109,24 +113,24 @@ class Interpreter {
   std::vector<CallFrame> m_frames;
   std::map<std::string, std::vector<Value>> m_globals;
   std::map<std::string, ValueType> m_types;
-  std::set<std::string> m_intgr;  ///< variables declared INTGR (32-bit) rather than LONG
+  std::set<std::string> m_intgr;                           ///< variables declared INTGR (32-bit) rather than LONG
   std::map<std::string, std::vector<std::size_t>> m_dims;  ///< arrays of several dimensions: V[3,30] -> {3, 30}
   std::optional<runtime::MeasBlock> m_block;
   /// ERROR/...: which machine faults the program handles from here on, and how.
   struct ErrorHandling {
-    bool automatic = false;          ///< AUTO: go on after the failing statement
-    std::string condition;           ///< ALL, NOTOUCH or ILLEGALTOUCH
-    std::size_t frame = 0;           ///< the frame ERROR was set in (the handler's code is there)
+    bool automatic = false;  ///< AUTO: go on after the failing statement
+    std::string condition;   ///< ALL, NOTOUCH or ILLEGALTOUCH
+    std::size_t frame = 0;   ///< the frame ERROR was set in (the handler's code is there)
     CallFrame::Kind kind = CallFrame::Kind::Unit;
-    std::size_t index = 0;           ///< that frame's unit or macro
-    std::size_t target = 0;          ///< the handler label's instruction
+    std::size_t index = 0;   ///< that frame's unit or macro
+    std::size_t target = 0;  ///< the handler label's instruction
   };
   std::optional<ErrorHandling> m_on_error;
   /// The fault a handler is handling: where RESUME goes on.
   struct HandledFault {
     std::size_t frame = 0;
-    std::size_t failed = 0;          ///< the failing instruction
-    std::size_t measurement = 0;     ///< its MEAS when it is an ENDMES, else the failing instruction
+    std::size_t failed = 0;       ///< the failing instruction
+    std::size_t measurement = 0;  ///< its MEAS when it is an ENDMES, else the failing instruction
   };
   std::optional<HandledFault> m_handled;
   std::optional<machine::Fault> m_last_fault;  ///< the last machine fault a statement stopped on

@@ -53,8 +53,8 @@ class StopSignalScope {
   StopSignalScope& operator=(const StopSignalScope&) = delete;
 
  private:
-  struct sigaction m_interrupt{};
-  struct sigaction m_terminate{};
+  struct sigaction m_interrupt {};
+  struct sigaction m_terminate {};
 };
 
 }  // namespace metron::interpreter

@@ -23,7 +23,7 @@ struct Backend {
   std::uint64_t seed = 0;                     ///< for the record: the run seed
   /// Wavefront stations for CALL/EXTERN,SYS,'CALIBRATE WAVEFRONT world' (empty: none).
   runtime::WavefrontStationFactory wavefront_stations;
-  runtime::ErrorSpaceRig error_space_rig;     ///< CALIBRATE ERROR-SPACE on this machine (none: refused)
+  runtime::ErrorSpaceRig error_space_rig;  ///< CALIBRATE ERROR-SPACE on this machine (none: refused)
 };
 
 /// Builds a backend for a world file (none: the default world) and a seed (none: the world's);
@@ -33,10 +33,10 @@ using BackendFactory = std::function<tl::expected<Backend, std::string>(const st
 
 /// What `metron run` needs.
 struct RunOptions {
-  std::string program;                       ///< path of the main program
-  std::optional<std::string> world_path;     ///< world JSON; empty = the embedded default world
-  std::optional<std::uint64_t> seed;         ///< empty = the world's seed
-  std::string out_dir = ".";                 ///< results.json and DMIS output files go here
+  std::string program;                                     ///< path of the main program
+  std::optional<std::string> world_path;                   ///< world JSON; empty = the embedded default world
+  std::optional<std::uint64_t> seed;                       ///< empty = the world's seed
+  std::string out_dir = ".";                               ///< results.json and DMIS output files go here
   std::function<void(const runtime::RunEvent&)> on_event;  ///< live report
   /// A machine characterisation file (docs/touch-trigger.md); PTMEAS uses its touch strategy.
   std::optional<std::string> characterisation_path;
@@ -62,8 +62,8 @@ enum class RunExit { Completed = 0, ProgramError = 1, BadInput = 2, Faulted = 3,
 struct RunOutcome {
   RunExit exit = RunExit::Completed;
   runtime::RunRecord record;
-  std::string diagnostics;                   ///< formatted diagnostics (compile and run time)
-  std::string results_path;                  ///< results.json written (empty if not written)
+  std::string diagnostics;   ///< formatted diagnostics (compile and run time)
+  std::string results_path;  ///< results.json written (empty if not written)
 };
 
 /// A loaded program with its machine, runtime and interpreter: what `run`, `debug` and the test

@@ -16,7 +16,8 @@ tl::expected<ErrorSpaceMap, std::string> ErrorSpaceMap::build(const error_space:
   }
   auto interpolator = error_space::SpaceInterpolator::build(space, file.interpolation);
   if (!interpolator) return tl::unexpected(interpolator.error());
-  return ErrorSpaceMap(std::move(*interpolator), std::make_shared<const error_space::ErrorSpaceFile>(file), monitored_temperature_c);
+  return ErrorSpaceMap(std::move(*interpolator), std::make_shared<const error_space::ErrorSpaceFile>(file),
+                       monitored_temperature_c);
 }
 
 Vec3 ErrorSpaceMap::error_at_mm(const Vec3& q_mm) const {

@@ -16,7 +16,7 @@ namespace metron::machine {
 /// A ball that starts in contact (a deflected stylus) is free while the move takes it away from
 /// the surface; checking starts where it leaves. Starting in contact and not moving away is a
 /// contact at s = 0.
-std::optional<double> first_ball_contact(const Solid& solid, const Vec3& a, const Vec3& b,
-                                         double radius_mm, double tol_mm = 1e-9);
+std::optional<double> first_ball_contact(const Solid& solid, const Vec3& a, const Vec3& b, double radius_mm,
+                                         double tol_mm = 1e-9);
 
 }  // namespace metron::machine

@@ -27,9 +27,8 @@ class MeshSolid final : public Solid {
  public:
   /// `faces` index triangles of `mesh` (geometry::CadModel); `chord_tolerance_mm` is the
   /// tessellation's, the largest expected gap between a triangle and its face.
-  MeshSolid(std::shared_ptr<const geometry::Mesh> mesh, const Frame& part_to_machine,
-            std::vector<Bump> bumps = {}, const std::vector<geometry::CadFace>& faces = {},
-            double chord_tolerance_mm = 0.001);
+  MeshSolid(std::shared_ptr<const geometry::Mesh> mesh, const Frame& part_to_machine, std::vector<Bump> bumps = {},
+            const std::vector<geometry::CadFace>& faces = {}, double chord_tolerance_mm = 0.001);
   [[nodiscard]] double signed_distance(const Vec3& p) const override;
   [[nodiscard]] Vec3 normal(const Vec3& p) const override;
   [[nodiscard]] double lipschitz() const override { return m_lipschitz; }
@@ -56,12 +55,12 @@ class MeshSolid final : public Solid {
   /// An analytic face in part coordinates, oriented outward.
   struct Surface {
     geometry::CadFace::Kind kind = geometry::CadFace::Kind::Plane;
-    Vec3 origin = Vec3::Zero();  ///< plane point; axis point; centre; cone apex
-    Vec3 axis = Vec3::UnitZ();   ///< plane: outward normal; cone: the radius grows along it
-    double radius_mm = 0;        ///< cylinder, sphere, torus (major)
-    double minor_radius_mm = 0;  ///< torus
+    Vec3 origin = Vec3::Zero();   ///< plane point; axis point; centre; cone apex
+    Vec3 axis = Vec3::UnitZ();    ///< plane: outward normal; cone: the radius grows along it
+    double radius_mm = 0;         ///< cylinder, sphere, torus (major)
+    double minor_radius_mm = 0;   ///< torus
     double cos_a = 1, sin_a = 0;  ///< cone semi-angle
-    bool inner = false;          ///< material outside the surface
+    bool inner = false;           ///< material outside the surface
   };
   /// The surface under a CAD face; nullopt for kinds evaluated on the mesh.
   [[nodiscard]] static std::optional<Surface> surface_of(const geometry::CadFace& face);
@@ -93,7 +92,7 @@ class MeshSolid final : public Solid {
   std::vector<Surface> m_surfaces;
   std::vector<std::int32_t> m_surface_of_triangle;  ///< index into m_surfaces; -1: mesh only
   std::vector<std::uint32_t> m_shape_of_triangle;   ///< B-rep face (1-based); empty: no CAD faces
-  double m_guard_mm = 0;  ///< largest accepted |exact - mesh| distance
+  double m_guard_mm = 0;                            ///< largest accepted |exact - mesh| distance
   std::shared_ptr<std::once_flag> m_grid_once = std::make_shared<std::once_flag>();
   mutable std::shared_ptr<const Grid> m_grid;
 };

@@ -7,29 +7,29 @@ namespace metron::machine {
 
 /// Limits of a 1-D motion along a path (all positive).
 struct MotionLimits {
-  double speed_mm_s = 300;            ///< maximum path speed
-  double acceleration_mm_s2 = 1000;   ///< maximum |acceleration|
-  double jerk_mm_s3 = 10000;          ///< maximum |jerk|
+  double speed_mm_s = 300;           ///< maximum path speed
+  double acceleration_mm_s2 = 1000;  ///< maximum |acceleration|
+  double jerk_mm_s3 = 10000;         ///< maximum |jerk|
 };
 
 /// Braking limits of a motion whose braking differs from its acceleration (an axis with its own
 /// braking law, docs/world.md); where none is given, braking mirrors the acceleration.
 struct BrakingLimits {
-  double deceleration_mm_s2 = 1000;   ///< maximum |deceleration|
-  double jerk_mm_s3 = 10000;          ///< maximum |jerk| while braking
+  double deceleration_mm_s2 = 1000;  ///< maximum |deceleration|
+  double jerk_mm_s3 = 10000;         ///< maximum |jerk| while braking
 };
 
 /// Kinematic state along the path.
 struct MotionState {
-  double position_mm = 0;             ///< distance along the path
-  double speed_mm_s = 0;              ///< path speed
-  double acceleration_mm_s2 = 0;      ///< path acceleration
+  double position_mm = 0;         ///< distance along the path
+  double speed_mm_s = 0;          ///< path speed
+  double acceleration_mm_s2 = 0;  ///< path acceleration
 };
 
 /// One phase of constant jerk.
 struct JerkPhase {
-  double duration_s = 0;              ///< length of the phase
-  double jerk_mm_s3 = 0;              ///< constant jerk during it
+  double duration_s = 0;  ///< length of the phase
+  double jerk_mm_s3 = 0;  ///< constant jerk during it
 };
 
 /// A 1-D jerk-limited motion: a start state followed by phases of constant jerk, so position,
@@ -82,8 +82,8 @@ class MotionProfile {
  private:
   MotionState m_start;
   std::vector<JerkPhase> m_phases;
-  std::vector<double> m_phase_start_s;       // cumulative start time of each phase
-  std::vector<MotionState> m_phase_state;    // state at the start of each phase
+  std::vector<double> m_phase_start_s;     // cumulative start time of each phase
+  std::vector<MotionState> m_phase_state;  // state at the start of each phase
   MotionState m_end;
   double m_duration_s = 0;
 };

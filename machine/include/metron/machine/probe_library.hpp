@@ -15,9 +15,9 @@ namespace metron::machine {
 
 /// One sensor of the library, as the controller knows it (a tool of an I++ DME server).
 struct LibrarySensor {
-  std::string name;                      ///< as the program writes it, compared case-insensitively
-  double tip_diameter_mm = 4.0;          ///< nominal stylus ball diameter
-  Vec3 offset_mm{0, 0, -50};             ///< ball centre from the head's reference point
+  std::string name;              ///< as the program writes it, compared case-insensitively
+  double tip_diameter_mm = 4.0;  ///< nominal stylus ball diameter
+  Vec3 offset_mm{0, 0, -50};     ///< ball centre from the head's reference point
 };
 
 /// The sensor named `name` (case-insensitive), if the library holds it.

@@ -15,9 +15,9 @@ namespace metron::machine {
 
 /// One controller cycle of motion, for plots and timing studies.
 struct TraceSample {
-  double time_s = 0;                  ///< simulated time at the end of the cycle
-  Vec3 position_mm = Vec3::Zero();    ///< ball centre (undeflected), machine coordinates
-  double speed_mm_s = 0;              ///< path speed
+  double time_s = 0;                ///< simulated time at the end of the cycle
+  Vec3 position_mm = Vec3::Zero();  ///< ball centre (undeflected), machine coordinates
+  double speed_mm_s = 0;            ///< path speed
 };
 
 /// The virtual CMM: a motion controller stepping in cycles of dt (jerk-limited straight moves,

@@ -13,11 +13,11 @@
 #include <nlohmann/json_fwd.hpp>
 #include <tl/expected.hpp>
 
-#include "metron/machine/probe_library.hpp"
+#include "metron/machine/active_scanning/scanning_spec.hpp"
 #include "metron/machine/csg.hpp"
 #include "metron/machine/machine_errors/error_model.hpp"
+#include "metron/machine/probe_library.hpp"
 #include "metron/machine/touch_cycle/pre_travel.hpp"
-#include "metron/machine/active_scanning/scanning_spec.hpp"
 #include "metron/stdlib/geometry/cad_import.hpp"
 #include "metron/stdlib/geometry/mesh.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
@@ -31,8 +31,8 @@ namespace metron::machine {
 
 /// Travel of one axis, machine coordinates of the ball centre.
 struct AxisTravel {
-  double min_mm = 0;                  ///< lowest position
-  double max_mm = 0;                  ///< highest position
+  double min_mm = 0;  ///< lowest position
+  double max_mm = 0;  ///< highest position
 };
 
 /// How the controller sees the probe's trigger signal (SEEDS.md 3, C->D).
@@ -41,15 +41,15 @@ struct SkipInput {
     Latched,  ///< high-speed skip input: the axes are latched after a fixed latency
     Scanned,  ///< the input is polled once per scan period: latency uniform in [0, period)
   };
-  Kind kind = Kind::Latched;          ///< which of the two
-  double latency_s = 4e-6;            ///< Latched: fixed latency
-  double period_s = 0.002;            ///< Scanned: scan period
+  Kind kind = Kind::Latched;  ///< which of the two
+  double latency_s = 4e-6;    ///< Latched: fixed latency
+  double period_s = 0.002;    ///< Scanned: scan period
 };
 
 /// One point of a tabulated ramp: the axis reaches `feed_mm_s` from rest in `ramp_time_s`.
 struct RampTimePoint {
-  double feed_mm_s = 0;               ///< axis feed
-  double ramp_time_s = 0;             ///< time from rest to that feed
+  double feed_mm_s = 0;    ///< axis feed
+  double ramp_time_s = 0;  ///< time from rest to that feed
 };
 
 /// A law by which one axis changes its speed (SEEDS.md 3, acceleration zone). Simulated truth:
@@ -60,11 +60,11 @@ struct RampLaw {
     ConstantTime,  ///< the programmed feed is reached in a fixed time: ramp distance grows linearly with feed
     Tabulated,     ///< the ramp time is a table over the axis feed, linear between its points, held beyond them
   };
-  Mode mode = Mode::ConstantRate;     ///< which of the three
-  double acceleration_mm_s2 = 1000;   ///< ConstantRate: acceleration (or deceleration) limit of the axis
-  double jerk_mm_s3 = 10000;          ///< ConstantRate: jerk limit of the axis
-  double time_s = 0.06;               ///< ConstantTime: time to reach any programmed feed from rest
-  std::vector<RampTimePoint> table;   ///< Tabulated: feeds strictly increasing, at least two points
+  Mode mode = Mode::ConstantRate;    ///< which of the three
+  double acceleration_mm_s2 = 1000;  ///< ConstantRate: acceleration (or deceleration) limit of the axis
+  double jerk_mm_s3 = 10000;         ///< ConstantRate: jerk limit of the axis
+  double time_s = 0.06;              ///< ConstantTime: time to reach any programmed feed from rest
+  std::vector<RampTimePoint> table;  ///< Tabulated: feeds strictly increasing, at least two points
 };
 
 /// How one axis accelerates to a programmed feed and brakes from it.
@@ -87,98 +87,98 @@ struct ReferenceSphereConfig {
 /// the world is loaded (data_sheet_of), overridden by the world file's machine.data_sheet where
 /// the published values differ from the true ones (docs/world.md).
 struct DataSheet {
-  double rated_over_travel_mm = 1.0;       ///< touch-trigger probe: largest travel from contact to standstill
-  double scanning_stiffness_n_mm = 0.6;    ///< scanning probe: contact force per mm of deflection
-  double scanning_stylus_mass_g = 5.0;     ///< scanning probe: effective moving stylus mass
+  double rated_over_travel_mm = 1.0;     ///< touch-trigger probe: largest travel from contact to standstill
+  double scanning_stiffness_n_mm = 0.6;  ///< scanning probe: contact force per mm of deflection
+  double scanning_stylus_mass_g = 5.0;   ///< scanning probe: effective moving stylus mass
 };
 
 /// The machine's configuration: everything its controller knows (its own settings, the reference
 /// sphere's certificate, the probes' data sheets). The controller code receives only this.
 struct MachineConfig {
   std::array<AxisTravel, 3> travel{{{-100, 1100}, {-100, 900}, {-200, 600}}};  ///< x, y, z
-  double max_speed_mm_s = 300;        ///< path speed limit
-  double max_acceleration_mm_s2 = 1000;  ///< path acceleration limit
-  double max_jerk_mm_s3 = 10000;      ///< path jerk limit
-  double dt_s = 0.001;                ///< controller cycle
-  double positioning_feed_mm_s = 50;  ///< default GoTo speed
-  double measuring_feed_mm_s = 3;     ///< default probing speed
-  SkipInput skip;                     ///< the trigger input, as configured
-  Vec3 home_mm{0, 0, 500};            ///< ball centre at start
-  ReferenceSphereConfig reference_sphere;  ///< nominal centre and certified diameter
-  ScanningSpec scanning;              ///< scan controller, scanning probe settings, command buffers
-  DataSheet data_sheet;               ///< the probes' published values
+  double max_speed_mm_s = 300;                                                 ///< path speed limit
+  double max_acceleration_mm_s2 = 1000;                                        ///< path acceleration limit
+  double max_jerk_mm_s3 = 10000;                                               ///< path jerk limit
+  double dt_s = 0.001;                                                         ///< controller cycle
+  double positioning_feed_mm_s = 50;                                           ///< default GoTo speed
+  double measuring_feed_mm_s = 3;                                              ///< default probing speed
+  SkipInput skip;                                                              ///< the trigger input, as configured
+  Vec3 home_mm{0, 0, 500};                                                     ///< ball centre at start
+  ReferenceSphereConfig reference_sphere;    ///< nominal centre and certified diameter
+  ScanningSpec scanning;                     ///< scan controller, scanning probe settings, command buffers
+  DataSheet data_sheet;                      ///< the probes' published values
   std::vector<LibrarySensor> probe_library;  ///< named qualified sensors (RECALL/SA, SNSLCT/SA)
 };
 
 /// The touch-trigger probe as it truly is (hidden).
 struct ProbeSpec {
-  double ball_radius_error_mm = 0;    ///< true ball radius = nominal (from DefineTool) + error
-  PreTravel pre_travel;               ///< direction-dependent pre-travel
-  double filter_delay_s = 0.002;      ///< interface filter (SEEDS.md 3, B->C)
+  double ball_radius_error_mm = 0;      ///< true ball radius = nominal (from DefineTool) + error
+  PreTravel pre_travel;                 ///< direction-dependent pre-travel
+  double filter_delay_s = 0.002;        ///< interface filter (SEEDS.md 3, B->C)
   double transmission_delay_s = 0.002;  ///< signal transmission (optical, radio ...)
-  double over_travel_mm = 1.0;        ///< largest allowed travel from contact to standstill
-  double repeatability_mm = 0.0002;   ///< 1-sigma noise of the trigger threshold
+  double over_travel_mm = 1.0;          ///< largest allowed travel from contact to standstill
+  double repeatability_mm = 0.0002;     ///< 1-sigma noise of the trigger threshold
 };
 
 /// The reference sphere for tool qualification, on a post, as it truly is (hidden).
 struct ReferenceSphereTruth {
-  Vec3 true_centre_mm{900, 700, 100};     ///< where it is
-  double true_diameter_mm = 25;           ///< its size
-  double post_diameter_mm = 10;       ///< the post: a capped cylinder, collision geometry
-  Vec3 post_direction = -Vec3::UnitZ();   ///< unit, from the centre toward the post's foot
-  double post_length_mm = 100;            ///< from the true centre
+  Vec3 true_centre_mm{900, 700, 100};    ///< where it is
+  double true_diameter_mm = 25;          ///< its size
+  double post_diameter_mm = 10;          ///< the post: a capped cylinder, collision geometry
+  Vec3 post_direction = -Vec3::UnitZ();  ///< unit, from the centre toward the post's foot
+  double post_length_mm = 100;           ///< from the true centre
 };
 
 /// Placement of the part: p_machine = translation + Rz * Ry * Rx * p_part (x first).
 struct Pose {
   Vec3 translation_mm = Vec3::Zero();  ///< where the part origin is in the machine
-  Vec3 rotation_deg = Vec3::Zero();   ///< about the machine x, y, z axes, applied x, then y, then z
+  Vec3 rotation_deg = Vec3::Zero();    ///< about the machine x, y, z axes, applied x, then y, then z
   /// The transform p_machine = part_to_machine() * p_part.
   [[nodiscard]] Frame part_to_machine() const;
 };
 
 /// A Gaussian bump of a CAD part's deviation field, along the outward normal.
 struct Bump {
-  Vec3 centre_mm = Vec3::Zero();      ///< part coordinates
-  double amplitude_mm = 0;            ///< + = material added
+  Vec3 centre_mm = Vec3::Zero();  ///< part coordinates
+  double amplitude_mm = 0;        ///< + = material added
   double sigma_mm = 1;
 };
 
 /// A CAD design: a mesh read from STEP, IGES, STL, OFF, OBJ or PLY.
 struct CadDesign {
-  std::string path;                   ///< resolved (relative to the world file in JSON)
+  std::string path;                            ///< resolved (relative to the world file in JSON)
   std::shared_ptr<const geometry::Mesh> mesh;  ///< part coordinates
   /// STEP/IGES: the analytic surface of each B-rep face and its triangles in `mesh`; null for
   /// plain meshes.
   std::shared_ptr<const std::vector<geometry::CadFace>> faces;
-  double chord_tolerance_mm = 0;      ///< STEP/IGES: of the tessellation in `mesh`
+  double chord_tolerance_mm = 0;  ///< STEP/IGES: of the tessellation in `mesh`
 };
 
 /// Smooth random roughness of all part surfaces (a fixed surface, seeded by PartSpec::seed).
 struct Roughness {
-  double amplitude_mm = 0;            ///< peak value of the noise field
-  double correlation_mm = 1;          ///< lattice spacing of the noise field
+  double amplitude_mm = 0;    ///< peak value of the noise field
+  double correlation_mm = 1;  ///< lattice spacing of the noise field
 };
 
 /// The workpiece: design, placement and (hidden) deviations.
 struct PartSpec {
-  std::variant<csg::Node, CadDesign> design;  ///< part coordinates
-  Pose pose;                          ///< part to machine
+  std::variant<csg::Node, CadDesign> design;         ///< part coordinates
+  Pose pose;                                         ///< part to machine
   std::map<std::string, csg::Deviation> deviations;  ///< CSG: keyed by primitive name
-  std::vector<Bump> bumps;            ///< CAD: deviation field
-  Roughness roughness;                ///< hidden
-  std::uint64_t seed = 1;             ///< of the roughness field
+  std::vector<Bump> bumps;                           ///< CAD: deviation field
+  Roughness roughness;                               ///< hidden
+  std::uint64_t seed = 1;                            ///< of the roughness field
 };
 
 /// The simulated truth: everything the controller must not read (ARCHITECTURE.md rule 1). Only
 /// the simulation receives it; the controller learns about it through simulated sensors.
 struct WorldTruth {
-  ProbeSpec probe;                    ///< the touch-trigger probe
+  ProbeSpec probe;                        ///< the touch-trigger probe
   ReferenceSphereTruth reference_sphere;  ///< true centre and size, the post
-  AxesDynamics axes;                  ///< how the axes accelerate (measured by the characterisation)
-  double table_z_mm = 0;              ///< table surface; everything below it is solid
-  std::optional<PartSpec> part;       ///< none: an empty table
-  ScanningTruth scanning;             ///< scanning probe dynamics and noise, axis servos
+  AxesDynamics axes;                      ///< how the axes accelerate (measured by the characterisation)
+  double table_z_mm = 0;                  ///< table surface; everything below it is solid
+  std::optional<PartSpec> part;           ///< none: an empty table
+  ScanningTruth scanning;                 ///< scanning probe dynamics and noise, axis servos
   /// The machine's geometry and thermal errors (machine.errors; none: a perfect machine): where
   /// the scales say the ball is and where it really is differ by their displacement.
   MachineErrorModel errors;
@@ -188,10 +188,10 @@ struct WorldTruth {
 /// configuration (known to its controller) and the truth (hidden), as two types.
 struct World {
   std::string name = "default";
-  std::string source;                 ///< file it was read from ("<default>" when embedded)
-  std::uint64_t seed = 1;             ///< default run seed (a tool may override it)
-  MachineConfig machine;              ///< known to the controller
-  WorldTruth truth;                   ///< hidden
+  std::string source;      ///< file it was read from ("<default>" when embedded)
+  std::uint64_t seed = 1;  ///< default run seed (a tool may override it)
+  MachineConfig machine;   ///< known to the controller
+  WorldTruth truth;        ///< hidden
 };
 
 /// The data sheet of the world's probes: the true values, exactly (the loader's copy).
@@ -199,7 +199,7 @@ DataSheet data_sheet_of(const WorldTruth& truth);
 
 /// A world file that could not be read; `message` is "file: /json/pointer: what was expected".
 struct WorldError {
-  std::string message;                ///< "file: /pointer: what was expected"
+  std::string message;  ///< "file: /pointer: what was expected"
 };
 
 /// Reads a world from a JSON file (comments allowed). Unknown keys are errors. A file may start

@@ -8,7 +8,7 @@ namespace metron::runtime {
 
 /// A part coordinate system: `part_to_machine` maps its coordinates to machine coordinates.
 struct Alignment {
-  std::string label = "MCS";         ///< the D()/DA() label, "MCS" for the machine system
+  std::string label = "MCS";  ///< the D()/DA() label, "MCS" for the machine system
   Frame part_to_machine = Frame::Identity();
 
   [[nodiscard]] Vec3 to_machine_point(const Vec3& p) const { return part_to_machine * p; }

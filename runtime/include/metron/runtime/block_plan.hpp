@@ -23,22 +23,22 @@ namespace metron::runtime {
 /// What planning a MEAS block reads: the program's settings and the machine's state when the
 /// block starts. Nothing here is sent to the machine.
 struct BlockPlanContext {
-  Alignment alignment;                   ///< the current frame: the block's points are in it
-  ProbeSettings probe;                   ///< SNSET
-  ScanSettings scan;                     ///< SCNMOD, SCNSET, FEDRAT/SCNVEL
-  Mode mode = Mode::Auto;                ///< MODE
+  Alignment alignment;                                           ///< the current frame: the block's points are in it
+  ProbeSettings probe;                                           ///< SNSET
+  ScanSettings scan;                                             ///< SCNMOD, SCNSET, FEDRAT/SCNVEL
+  Mode mode = Mode::Auto;                                        ///< MODE
   const std::map<std::string, PathDefinition>* paths = nullptr;  ///< P(label) definitions (MCS); null: none
   const MachineCharacterisation* characterisation = nullptr;     ///< null: the machine is not characterised
   std::optional<TouchBaseline> touch_baseline;  ///< `run --touch-baseline`: this cycle instead of the characterised one
   std::optional<double> measuring_feed_mm_s;  ///< FEDRAT/MESVEL as the program gave it (overrides the characterisation)
-  machine::MachineState state;           ///< position, active tool, feeds and scan buffer size
+  machine::MachineState state;                ///< position, active tool, feeds and scan buffer size
 };
 
 /// The machine commands of one MEAS block, in order, with the statement each comes from.
 struct BlockPlan {
-  std::vector<machine::Command> commands;  ///< tags 0: numbered when submitted
-  std::vector<Span> spans;                 ///< one a command: the PTMEAS, PAMEAS or MEAS it implements
-  std::vector<double> measuring_feed_mm_s; ///< one a command: a PtMeas's probing feed, 0 for the others
+  std::vector<machine::Command> commands;   ///< tags 0: numbered when submitted
+  std::vector<Span> spans;                  ///< one a command: the PTMEAS, PAMEAS or MEAS it implements
+  std::vector<double> measuring_feed_mm_s;  ///< one a command: a PtMeas's probing feed, 0 for the others
 };
 
 /// The commands that measure `block` on a feature with nominal `nominal` (MCS): its GOTO, PTMEAS

@@ -21,8 +21,8 @@ namespace metron::runtime {
 /// One timed move: the ramp time Td = Ta - Dc/V at feed V (SEEDS.md 3); or one timed stop: the
 /// time from feed V to rest.
 struct RampSample {
-  double feed_mm_s = 0;               ///< commanded feed
-  double ramp_time_s = 0;             ///< Td, averaged over dithered lengths (a stop: its time Tb)
+  double feed_mm_s = 0;    ///< commanded feed
+  double ramp_time_s = 0;  ///< Td, averaged over dithered lengths (a stop: its time Tb)
 };
 
 /// The acceleration characteristic of one axis, fitted over feed for lookup. Timed rest-to-rest
@@ -30,18 +30,18 @@ struct RampSample {
 /// timed stops give Tb, so Ta = 2 Td - Tb (docs/touch-trigger.md, "braking").
 struct AxisAcceleration {
   enum class Mode {
-    ConstantRate,                     ///< jerk-limited ramp to a fixed acceleration: Td = V/a + a/j (SEEDS.md 3)
-    ConstantTime,                     ///< any feed in a fixed time: Td = T (SEEDS.md 3)
-    Interpolated,                     ///< no family: monotone cubic through the samples (Fritsch-Carlson)
+    ConstantRate,  ///< jerk-limited ramp to a fixed acceleration: Td = V/a + a/j (SEEDS.md 3)
+    ConstantTime,  ///< any feed in a fixed time: Td = T (SEEDS.md 3)
+    Interpolated,  ///< no family: monotone cubic through the samples (Fritsch-Carlson)
   };
-  Mode mode = Mode::ConstantRate;     ///< the simplest model that fits the timed moves within its threshold
-  double time_s = 0;                  ///< ConstantTime: the ramp time (informative for the others: best constant)
-  double acceleration_mm_s2 = 0;      ///< ConstantRate: fitted acceleration limit (informative for the others)
-  double jerk_mm_s3 = 0;              ///< ConstantRate: fitted jerk limit (informative for the others)
+  Mode mode = Mode::ConstantRate;  ///< the simplest model that fits the timed moves within its threshold
+  double time_s = 0;               ///< ConstantTime: the ramp time (informative for the others: best constant)
+  double acceleration_mm_s2 = 0;   ///< ConstantRate: fitted acceleration limit (informative for the others)
+  double jerk_mm_s3 = 0;           ///< ConstantRate: fitted jerk limit (informative for the others)
   /// RMS relative residual of Td of the chosen model; Interpolated: its leave-one-out residual
   /// (each inner sample predicted from the others), since it passes through every sample.
   double fit_rms_relative = 0;
-  std::vector<RampSample> samples;    ///< the timed moves, by increasing feed (Interpolated: its knots)
+  std::vector<RampSample> samples;  ///< the timed moves, by increasing feed (Interpolated: its knots)
   /// Timed stops from constant speed (feed, stop time Tb), by increasing feed; empty: braking
   /// not measured (it is then taken to mirror the acceleration).
   std::vector<RampSample> stops;
@@ -79,27 +79,25 @@ tl::expected<AxisAcceleration, std::string> fit_acceleration(std::vector<RampSam
 
 /// Repeated touches on one point at one feed (same standoff).
 struct TouchSample {
-  double feed_mm_s = 0;               ///< probing feed
-  int count = 0;                      ///< touches
-  double mean_mm = 0;                 ///< mean latched position along the probing direction
-  double range_mm = 0;                ///< max - min of the latched positions
-  double midrange_mm = 0;             ///< (max + min) / 2: for a uniform latency far steadier than the mean
-  double stddev_mm = 0;               ///< sample standard deviation
+  double feed_mm_s = 0;    ///< probing feed
+  int count = 0;           ///< touches
+  double mean_mm = 0;      ///< mean latched position along the probing direction
+  double range_mm = 0;     ///< max - min of the latched positions
+  double midrange_mm = 0;  ///< (max + min) / 2: for a uniform latency far steadier than the mean
+  double stddev_mm = 0;    ///< sample standard deviation
 };
 
 /// The controller's response to the trigger as seen from the latched positions.
 struct ResponseTime {
-  bool scanned = false;               ///< jitter class: scanned skip input (else latched)
-  double jitter_s = 0;                ///< estimated scan period (latency uniform in [0, jitter))
-  double delay_s = 0;                 ///< constant delay trigger -> latch (filter + transmission + latency)
-  double noise_mm = 0;                ///< 1-sigma trigger noise (the probe's repeatability)
-  double qualification_feed_mm_s = 0; ///< feed at which the tool's effective radius was qualified
-  std::vector<TouchSample> samples;   ///< the measurements
+  bool scanned = false;                ///< jitter class: scanned skip input (else latched)
+  double jitter_s = 0;                 ///< estimated scan period (latency uniform in [0, jitter))
+  double delay_s = 0;                  ///< constant delay trigger -> latch (filter + transmission + latency)
+  double noise_mm = 0;                 ///< 1-sigma trigger noise (the probe's repeatability)
+  double qualification_feed_mm_s = 0;  ///< feed at which the tool's effective radius was qualified
+  std::vector<TouchSample> samples;    ///< the measurements
   /// Expected spread (range) of repeated touches at a feed: feed * jitter and 6 sigma of the
   /// probe's own scatter, independent, added in quadrature.
-  [[nodiscard]] double spread_mm(double feed_mm_s) const {
-    return std::hypot(feed_mm_s * jitter_s, 6 * noise_mm);
-  }
+  [[nodiscard]] double spread_mm(double feed_mm_s) const { return std::hypot(feed_mm_s * jitter_s, 6 * noise_mm); }
 };
 
 /// The documented default of CharacterisationSettings::nominal_tolerance_mm (mm).
@@ -112,26 +110,26 @@ struct CharacterisationSettings {
   /// documented default for `metron characterise` and CHARACTERISE in a program
   /// (docs/touch-trigger.md); a surface farther off its nominal is touched while accelerating.
   double nominal_tolerance_mm = default_nominal_tolerance_mm;
-  double over_travel_margin = 0.8;    ///< the stop distance may use this share of the over-travel
-  int touches_per_feed = 60;          ///< repeated touches per feed
-  int dither = 10;                    ///< timed moves per feed, lengths spread over one cycle
+  double over_travel_margin = 0.8;  ///< the stop distance may use this share of the over-travel
+  int touches_per_feed = 60;        ///< repeated touches per feed
+  int dither = 10;                  ///< timed moves per feed, lengths spread over one cycle
   std::vector<double> timing_feeds_mm_s{2, 5, 10, 20, 50, 100, 150};  ///< feeds of the timed moves
-  RampFitSettings ramp_fit;           ///< model choice and rejection of the acceleration characteristic
-  bool time_stops = true;             ///< time stops after touches on the reference sphere (braking per axis)
-  bool blend = false;                 ///< beyond the seed: blended one-touch cycles (TouchPlan::blend_mm)
-  bool optimise_first_feed = false;   ///< beyond the seed: first-touch feed from timed trial cycles
-  bool fastest = false;               ///< beyond the seed: the fastest cycle meeting the threshold, by timed trials
+  RampFitSettings ramp_fit;          ///< model choice and rejection of the acceleration characteristic
+  bool time_stops = true;            ///< time stops after touches on the reference sphere (braking per axis)
+  bool blend = false;                ///< beyond the seed: blended one-touch cycles (TouchPlan::blend_mm)
+  bool optimise_first_feed = false;  ///< beyond the seed: first-touch feed from timed trial cycles
+  bool fastest = false;              ///< beyond the seed: the fastest cycle meeting the threshold, by timed trials
 };
 
 /// A touch cycle chosen for one probing direction.
 struct TouchPlan {
-  bool two_touch = false;             ///< else one touch
-  double feed_mm_s = 0;               ///< the measuring feed (second touch or the single touch)
-  double first_feed_mm_s = 0;         ///< two-touch: first-touch feed
-  double approach_mm = 0;             ///< start distance before the nominal surface
-  double backoff_mm = 0;              ///< two-touch: from the first latched centre to the second start
-  double standoff_mm = 0;             ///< two-touch: D1 + D2 + D3 from the surface found
-  std::optional<double> blend_mm;     ///< blended one touch: the feed is reached this far before the nominal
+  bool two_touch = false;          ///< else one touch
+  double feed_mm_s = 0;            ///< the measuring feed (second touch or the single touch)
+  double first_feed_mm_s = 0;      ///< two-touch: first-touch feed
+  double approach_mm = 0;          ///< start distance before the nominal surface
+  double backoff_mm = 0;           ///< two-touch: from the first latched centre to the second start
+  double standoff_mm = 0;          ///< two-touch: D1 + D2 + D3 from the surface found
+  std::optional<double> blend_mm;  ///< blended one touch: the feed is reached this far before the nominal
 };
 
 /// Puts a plan's cycle (approach, feeds, two-touch, blend) into a touch command; its point, normal,
@@ -165,19 +163,19 @@ tl::expected<TouchBaseline, std::string> parse_touch_baseline(const std::string&
 
 /// Everything a characterisation found, and the strategy derived from it.
 struct MachineCharacterisation {
-  std::string world;                  ///< informative: the machine it was measured on
+  std::string world;                     ///< informative: the machine it was measured on
   std::array<AxisAcceleration, 3> axes;  ///< x, y, z
-  ResponseTime response;              ///< trigger response
-  double dt_s = 0.001;                ///< controller cycle (from the clock's resolution)
-  double over_travel_mm = 0;          ///< the probe's rated over-travel
-  double pre_travel_mm = 0;           ///< upper estimate of pre-travel (nominal - effective radius - delay term)
-  double max_probe_feed_mm_s = 0;     ///< fastest feed whose stop distance stays within margin * over-travel
-  double over_travel_margin = 0.8;    ///< share of the over-travel the stop distance may use
-  double threshold_mm = 0.010;        ///< strategy threshold on the spread
-  double nominal_tolerance_mm = 0;    ///< the standoff's tolerance term
-  bool one_touch = false;             ///< strategy (SEEDS.md 3)
-  double measuring_feed_mm_s = 0;     ///< one-touch feed, or the second touch's
-  double first_feed_mm_s = 0;         ///< two-touch: first-touch feed
+  ResponseTime response;                 ///< trigger response
+  double dt_s = 0.001;                   ///< controller cycle (from the clock's resolution)
+  double over_travel_mm = 0;             ///< the probe's rated over-travel
+  double pre_travel_mm = 0;              ///< upper estimate of pre-travel (nominal - effective radius - delay term)
+  double max_probe_feed_mm_s = 0;        ///< fastest feed whose stop distance stays within margin * over-travel
+  double over_travel_margin = 0.8;       ///< share of the over-travel the stop distance may use
+  double threshold_mm = 0.010;           ///< strategy threshold on the spread
+  double nominal_tolerance_mm = 0;       ///< the standoff's tolerance term
+  bool one_touch = false;                ///< strategy (SEEDS.md 3)
+  double measuring_feed_mm_s = 0;        ///< one-touch feed, or the second touch's
+  double first_feed_mm_s = 0;            ///< two-touch: first-touch feed
   /// Beyond the seed: one touch at the measuring feed whose approach blends into it, reaching it
   /// (with zero acceleration) the nominal tolerance + D3 before the nominal surface.
   bool blend = false;
@@ -200,7 +198,8 @@ struct MachineCharacterisation {
   /// Fastest feed along `direction` whose stop distance stays within margin * over-travel.
   [[nodiscard]] double max_feed_mm_s(const Vec3& direction) const;
   /// SEEDS.md 3: optimal standoff D1 + D2 + D3 (+ the nominal tolerance when `with_tolerance`).
-  [[nodiscard]] double standoff_mm(const Vec3& direction, double slow_mm_s, double fast_mm_s, double tolerance_mm) const;
+  [[nodiscard]] double standoff_mm(const Vec3& direction, double slow_mm_s, double fast_mm_s,
+                                   double tolerance_mm) const;
   /// Nominal minus effective radius of a tool qualified at the qualification feed: the ball
   /// centre is at nominal + effective radius when latched, this much before it at contact.
   /// Approach distances (from nominal + effective radius) include it.
@@ -237,9 +236,9 @@ tl::expected<MachineCharacterisation, std::string> characterise(machine::Machine
 /// When no family fits, feeds halfway (geometrically) between the timed ones are timed as well,
 /// up to twice, before the interpolation is judged.
 tl::expected<AxisAcceleration, std::string> measure_axis_acceleration(machine::Machine& machine, int axis,
-                                                                     const std::vector<double>& feeds_mm_s, int dither,
-                                                                     double* clock_resolution_s = nullptr,
-                                                                     const RampFitSettings& fit = {});
+                                                                      const std::vector<double>& feeds_mm_s, int dither,
+                                                                      double* clock_resolution_s = nullptr,
+                                                                      const RampFitSettings& fit = {});
 
 /// The characterisation file (docs/touch-trigger.md).
 nlohmann::json to_json(const MachineCharacterisation& c);

@@ -11,8 +11,8 @@ namespace metron::runtime {
 /// A step the scheduler plans in machine coordinates.
 struct PlannedStep {
   enum class Kind { GoTo, Probe } kind = Kind::Probe;
-  Vec3 point = Vec3::Zero();   ///< GoTo: ball-centre target; Probe: nominal surface point
-  Vec3 normal = Vec3::UnitZ(); ///< Probe: approach side normal
+  Vec3 point = Vec3::Zero();    ///< GoTo: ball-centre target; Probe: nominal surface point
+  Vec3 normal = Vec3::UnitZ();  ///< Probe: approach side normal
 };
 
 /// The nominal surface normal on the probe's side at (near) `point`, for a PTMEAS without i,j,k.

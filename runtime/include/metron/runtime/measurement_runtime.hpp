@@ -16,8 +16,8 @@
 #include "metron/runtime/feature.hpp"
 #include "metron/runtime/requests.hpp"
 #include "metron/runtime/run_record.hpp"
-#include "metron/runtime/scan.hpp"
 #include "metron/runtime/runtime_error.hpp"
+#include "metron/runtime/scan.hpp"
 #include "metron/runtime/tolerance.hpp"
 #include "metron/stdlib/file_access.hpp"
 #include "metron/stdlib/source.hpp"
@@ -36,8 +36,9 @@ struct BlockPlanContext;
 /// Builds the wavefront station of a world file (kind "wavefront") for CALIBRATE WAVEFRONT. The
 /// composition root provides it (the simulation is not the runtime's to build, ARCHITECTURE.md);
 /// the error names the file.
-using WavefrontStationFactory = std::function<tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string>(
-    const std::string& world_path)>;
+using WavefrontStationFactory =
+    std::function<tl::expected<std::unique_ptr<machine::wavefront::WavefrontMachine>, std::string>(
+        const std::string& world_path)>;
 
 /// The results file of CALIBRATE WAVEFRONT in the run's output directory: wavefront-calibration.json
 /// for the whole procedure, wavefront-calibration-STEP.json for one step.
@@ -180,20 +181,24 @@ class MeasurementRuntime {
 
   // Constructions and outputs.
   /// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: FA(x)'s position moved by an offset (current frame, mm).
-  Result<void> construct_moved_point(const std::string& label, const FeatureRef& source, const Vec3& offset_current, Span span);
+  Result<void> construct_moved_point(const std::string& label, const FeatureRef& source, const Vec3& offset_current,
+                                     Span span);
   /// CONST/POINT,F(l),EXTREM: the measured (compensated) point of FA(x) furthest along a
   /// direction, least far with `minimum`: `axis`'s direction, else `direction_current`.
-  Result<void> construct_extreme_point(const std::string& label, const FeatureRef& source, const std::optional<FeatureRef>& axis,
-                                       const Vec3& direction_current, bool minimum, Span span);
+  Result<void> construct_extreme_point(const std::string& label, const FeatureRef& source,
+                                       const std::optional<FeatureRef>& axis, const Vec3& direction_current,
+                                       bool minimum, Span span);
   /// CONST/POINT,F(l),EXTREM,...,RADIAL: the measured (compensated) point of FA(x) furthest from
   /// its own axis (circle, arc, cylinder, cone) or centre (sphere), nearest with `minimum`.
-  Result<void> construct_radial_extreme_point(const std::string& label, const FeatureRef& source, bool minimum, Span span);
+  Result<void> construct_radial_extreme_point(const std::string& label, const FeatureRef& source, bool minimum,
+                                              Span span);
   /// CONST/PLANE,F(l),OFFSET,FA(plane),d: the plane moved d (mm) along its normal.
-  Result<void> construct_offset_plane(const std::string& label, const FeatureRef& source, double distance_mm, Span span);
+  Result<void> construct_offset_plane(const std::string& label, const FeatureRef& source, double distance_mm,
+                                      Span span);
   /// CONST/CIRCLE,F(x),CONE,FA(cone),DIAM,d | DIST,h: the cone's circle of diameter d (a
   /// countersink's gauge diameter), or its circle h from the vertex along the axis.
-  Result<void> construct_cone_section(const std::string& label, const FeatureRef& source, bool by_diameter, double value_mm,
-                                      Span span);
+  Result<void> construct_cone_section(const std::string& label, const FeatureRef& source, bool by_diameter,
+                                      double value_mm, Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
                          const std::vector<FeatureRef>& sources, Span span);
   /// OUTPUT: reports the features and evaluates and reports the tolerances (against the features
@@ -224,14 +229,16 @@ class MeasurementRuntime {
   [[nodiscard]] machine::Machine& machine() { return m_machine; }
 
  private:
-  void apply_fit_algorithm(Geometry& actual, const std::vector<MeasuredPoint>& points, const std::string& label, Span span);
+  void apply_fit_algorithm(Geometry& actual, const std::vector<MeasuredPoint>& points, const std::string& label,
+                           Span span);
   void keep_failed_points(Feature& feature, const std::vector<MeasuredPoint>& points, Span span);
-  void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures, Span span);
+  void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures,
+                         Span span);
   void store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction, Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
   /// Tolerance `t` against `features` (one result; DISTWRT, ANGWRT and CORTOL: one per feature).
-  Result<std::vector<ToleranceResult>> evaluate_tolerance(const std::string& t, const std::vector<const Feature*>& features,
-                                                          Span span);
+  Result<std::vector<ToleranceResult>> evaluate_tolerance(const std::string& t,
+                                                          const std::vector<const Feature*>& features, Span span);
   struct Execution {
     std::vector<machine::Response> responses;
     std::optional<RuntimeError> error;
@@ -274,7 +281,7 @@ class MeasurementRuntime {
   std::map<std::string, Feature> m_features;
   std::vector<std::string> m_feature_order;
   std::map<std::string, ToleranceSpec> m_tolerances;
-  std::map<std::string, std::vector<ToleranceResult>> m_evaluated;  ///< EVAL results, for OUTPUT/TA(t) alone
+  std::map<std::string, std::vector<ToleranceResult>> m_evaluated;     ///< EVAL results, for OUTPUT/TA(t) alone
   std::map<std::string, std::vector<ToleranceResult>> m_last_results;  ///< last OUTPUT or EVAL, for VALUE/TA(t)
   std::map<std::string, Datum> m_datums;
   WorkingPlane m_working_plane = WorkingPlane::XY;
@@ -293,11 +300,11 @@ class MeasurementRuntime {
   std::map<std::string, geometry::Mesh> m_models;  ///< CAD models loaded by PATH/SECTION, by path
   std::optional<MachineCharacterisation> m_characterisation;
   std::optional<TouchBaseline> m_touch_baseline;
-  std::optional<double> m_measuring_feed_explicit;  ///< FEDRAT/MESVEL given by the program
-  double m_qualification_feed_mm_s = 0;             ///< measuring feed when the active tool was qualified
+  std::optional<double> m_measuring_feed_explicit;       ///< FEDRAT/MESVEL given by the program
+  double m_qualification_feed_mm_s = 0;                  ///< measuring feed when the active tool was qualified
   std::map<FeatureType, FitAlgorithm> m_fit_algorithms;  ///< GEOALG: least squares where absent
-  bool m_strict = false;                             ///< set_strict
-  bool m_feed_change_warned = false;                ///< a probing feed other than the qualification's, told once
+  bool m_strict = false;                                 ///< set_strict
+  bool m_feed_change_warned = false;                     ///< a probing feed other than the qualification's, told once
   Mode m_mode = Mode::Auto;
   ReportUnits m_report_units;
   struct Device {

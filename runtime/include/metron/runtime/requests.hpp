@@ -29,7 +29,7 @@ struct ProbeSettings {
     Vec3 normal = Vec3::UnitZ();
   };
   std::optional<ClearancePlane> clearance_plane;
-  double depth_mm = 0.0;       ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
+  double depth_mm = 0.0;           ///< SNSET/DEPTH: measuring depth below a feature's start for AUTO points
   bool approach_explicit = false;  ///< SNSET/APPRCH was given: it overrides a characterisation's approach
 };
 
@@ -37,7 +37,7 @@ struct ProbeSettings {
 struct SensorDefinition {
   std::string label;
   double ball_diameter_mm = 4.0;
-  Vec3 direction = -Vec3::UnitZ();   ///< from the head to the ball (current frame)
+  Vec3 direction = -Vec3::UnitZ();  ///< from the head to the ball (current frame)
   double length_mm = 50.0;
 };
 
@@ -52,10 +52,10 @@ struct MeasStep {
   /// SelectSensor: a SNSLCT inside the block; the points after it are taken with that sensor.
   enum class Kind { GoTo, PtMeas, Scan, SelectSensor } kind = Kind::PtMeas;
   Vec3 point = Vec3::Zero();
-  std::optional<Vec3> normal;        ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
+  std::optional<Vec3> normal;  ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
   Span span;
-  std::string path;                  ///< Scan (PAMEAS/P(label)): the path's label; SelectSensor: the sensor's
-  bool requalify = false;            ///< SelectSensor: SNSLCT/...,CALIB (qualify it again)
+  std::string path;        ///< Scan (PAMEAS/P(label)): the path's label; SelectSensor: the sensor's
+  bool requalify = false;  ///< SelectSensor: SNSLCT/...,CALIB (qualify it again)
 };
 
 /// MEAS/type,F(label),n ... ENDMES.
@@ -64,7 +64,7 @@ struct MeasBlock {
   FeatureType type = FeatureType::Point;
   int point_count = 0;
   std::vector<MeasStep> steps;
-  Span span;                         ///< the MEAS statement
+  Span span;  ///< the MEAS statement
   /// Without PTMEAS, plan the points (AUTO, a nominal scan); off for the runs of a block that a
   /// SNSLCT splits when another run has the points.
   bool plan_missing_points = true;
@@ -73,13 +73,13 @@ struct MeasBlock {
 /// DATSET/... with datum labels.
 struct DatsetRequest {
   struct Clause {
-    std::string datum;                 ///< DAT(datum), or
-    std::optional<FeatureRef> feature; ///< a feature written in its place (DATSET/FA(x),...)
+    std::string datum;                  ///< DAT(datum), or
+    std::optional<FeatureRef> feature;  ///< a feature written in its place (DATSET/FA(x),...)
     std::optional<Axis> direction;
     bool minus = false;
     std::vector<Axis> origins;
   };
-  bool mcs = false;                  ///< DATSET/MCS
+  bool mcs = false;  ///< DATSET/MCS
   std::vector<Clause> clauses;
 };
 
@@ -99,12 +99,17 @@ struct RotateRequest {
 };
 
 /// CONST/type,F(x),method,sources...
-enum class ConstructMethod { BestFit, Intersection, Midpoint, Projection,
-                             ParallelThrough,        ///< PARTO: the reference's direction, through a point
-                             PerpendicularThrough,   ///< PERPTO: normal to the reference, through a point
-                             Cast,                   ///< CAST: one feature's geometry as another type
-                             Copy,                   ///< COPY: one feature's geometry, the same type
-                             Vertex };               ///< VERTEX: a cone's apex as a POINT
+enum class ConstructMethod {
+  BestFit,
+  Intersection,
+  Midpoint,
+  Projection,
+  ParallelThrough,       ///< PARTO: the reference's direction, through a point
+  PerpendicularThrough,  ///< PERPTO: normal to the reference, through a point
+  Cast,                  ///< CAST: one feature's geometry as another type
+  Copy,                  ///< COPY: one feature's geometry, the same type
+  Vertex
+};  ///< VERTEX: a cone's apex as a POINT
 
 /// OUTPUT/ item: a feature (F or FA) or a tolerance (T or TA).
 struct OutputItem {

@@ -15,9 +15,9 @@ namespace metron::runtime {
 struct RuntimeError {
   enum class Kind { Program, Fault } kind = Kind::Program;
   std::string message;
-  Span span;                              ///< the statement that caused it
-  std::optional<machine::Fault> fault;    ///< when kind == Fault
-  bool bad_geometry = false;              ///< a Program error: a measurement's points fit no feature (BADTST's BADGT)
+  Span span;                            ///< the statement that caused it
+  std::optional<machine::Fault> fault;  ///< when kind == Fault
+  bool bad_geometry = false;            ///< a Program error: a measurement's points fit no feature (BADTST's BADGT)
 };
 
 template <class T>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <optional>
-#include <tl/expected.hpp>
 #include <string>
+#include <tl/expected.hpp>
 #include <vector>
 
 #include "metron/runtime/alignment.hpp"
@@ -13,21 +13,35 @@
 namespace metron::runtime {
 
 /// The DMIS tolerance kinds metron evaluates.
-enum class ToleranceKind { Diam, Rad, DistB, Pos, Flat, Cirlty, Cylcty, Sphcty, Strght, Perp, Parlel, Anglb, Profs,
-                           DistWrt,  ///< DISTB to a reference feature named in the TOL (DMIS 5.3 6.163)
-                           AngWrt,   ///< ANGLB to a reference feature named in the TOL
-                           Cortol,   ///< one coordinate of the feature's position (CORTOL)
-                           Concen,   ///< concentricity: a centre within a circle about the datum axis
-                           Coaxial,  ///< coaxiality: an axis within a cylinder about the datum axis
-                           Crnout,   ///< circular runout (CRNOUT; RUNOUT in older programs)
-                           Totrun,   ///< total runout (TOTRUN; TRNOUT)
-                           Profl,    ///< line profile: PROFS on a line, circle or arc
-                           Profp,    ///< point profile: a point's deviation along its nominal normal
-                           Width,    ///< size of a PARPLN (slot or tab): its width's deviation
-                           Symmty,   ///< symmetry: a PARPLN's median plane about a datum plane
-                           Angl,     ///< a CONE's included angle: its deviation (DMIS TOL/ANGL,lo,up)
-                           Compos }; ///< composite position: a pattern's PATERN tier and its FEATUR tier
-const char* dmis_word(ToleranceKind kind);   ///< DIAM, RAD, DISTB, POS, FLAT, ...
+enum class ToleranceKind {
+  Diam,
+  Rad,
+  DistB,
+  Pos,
+  Flat,
+  Cirlty,
+  Cylcty,
+  Sphcty,
+  Strght,
+  Perp,
+  Parlel,
+  Anglb,
+  Profs,
+  DistWrt,  ///< DISTB to a reference feature named in the TOL (DMIS 5.3 6.163)
+  AngWrt,   ///< ANGLB to a reference feature named in the TOL
+  Cortol,   ///< one coordinate of the feature's position (CORTOL)
+  Concen,   ///< concentricity: a centre within a circle about the datum axis
+  Coaxial,  ///< coaxiality: an axis within a cylinder about the datum axis
+  Crnout,   ///< circular runout (CRNOUT; RUNOUT in older programs)
+  Totrun,   ///< total runout (TOTRUN; TRNOUT)
+  Profl,    ///< line profile: PROFS on a line, circle or arc
+  Profp,    ///< point profile: a point's deviation along its nominal normal
+  Width,    ///< size of a PARPLN (slot or tab): its width's deviation
+  Symmty,   ///< symmetry: a PARPLN's median plane about a datum plane
+  Angl,     ///< a CONE's included angle: its deviation (DMIS TOL/ANGL,lo,up)
+  Compos
+};                                          ///< composite position: a pattern's PATERN tier and its FEATUR tier
+const char* dmis_word(ToleranceKind kind);  ///< DIAM, RAD, DISTB, POS, FLAT, ...
 /// Kinds whose value is an angle (degrees), not a length.
 inline bool is_angle_kind(ToleranceKind kind) {
   return kind == ToleranceKind::Anglb || kind == ToleranceKind::AngWrt || kind == ToleranceKind::Angl;
@@ -59,12 +73,12 @@ enum class MaterialCondition { Rfs, Mmc, Lmc };
 struct ToleranceSpec {
   std::string label;
   ToleranceKind kind = ToleranceKind::Diam;
-  double nominal = 0;            ///< DISTB nominal distance, ANGLB nominal angle
-  double lower = 0;              ///< lower deviation limit (DIAM, RAD, DISTB, ANGLB, PROFS)
-  double upper = 0;              ///< upper deviation limit
-  double zone = 0;               ///< tolerance zone (POS, form, PERP, PARLEL)
-  bool three_d = false;          ///< POS 3D (else 2D)
-  bool long_side = false;        ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
+  double nominal = 0;      ///< DISTB nominal distance, ANGLB nominal angle
+  double lower = 0;        ///< lower deviation limit (DIAM, RAD, DISTB, ANGLB, PROFS)
+  double upper = 0;        ///< upper deviation limit
+  double zone = 0;         ///< tolerance zone (POS, form, PERP, PARLEL)
+  bool three_d = false;    ///< POS 3D (else 2D)
+  bool long_side = false;  ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
   DistanceAxis axis = DistanceAxis::PointToPoint;
   PolarCoordinate polar = PolarCoordinate::None;  ///< CORTOL,RADIUS|ANGLE (lower, upper: mm or degrees)
   /// DISTB, DISTWRT: the LIMIT form: `lower` and `upper` bound the distance itself (no nominal).
@@ -80,7 +94,7 @@ struct ToleranceSpec {
   double feature_zone = 0;
   MaterialCondition feature_condition = MaterialCondition::Rfs;
   std::vector<std::string> feature_datums;
-  std::string reference_feature;   ///< DISTWRT, ANGWRT: the FA() the distance or angle is taken to
+  std::string reference_feature;  ///< DISTWRT, ANGWRT: the FA() the distance or angle is taken to
   Span defined_at;
 };
 
@@ -88,8 +102,8 @@ struct ToleranceSpec {
 struct Datum {
   std::string label;
   std::string feature;
-  Geometry geometry;             ///< the actual (MCS) at DATDEF time
-  Geometry nominal;              ///< the datum feature's nominal (MCS)
+  Geometry geometry;                        ///< the actual (MCS) at DATDEF time
+  Geometry nominal;                         ///< the datum feature's nominal (MCS)
   Frame nominal_frame = Frame::Identity();  ///< the alignment that nominal was written in
 };
 
@@ -97,33 +111,34 @@ struct Datum {
 struct ToleranceResult {
   std::string label;
   ToleranceKind kind = ToleranceKind::Diam;
-  std::string tier;                    ///< COMPOS: "PATERN" or "FEATUR" (empty otherwise)
-  std::vector<std::string> features;   ///< feature labels it was applied to
-  double value = 0;              ///< the measured quantity: deviation (DIAM, RAD, DISTB, ANGLB), zone used (POS, form ...)
-  double actual = 0;             ///< the actual size/distance/angle where meaningful (DIAM: actual diameter)
-  double nominal = 0;            ///< the nominal size/distance/angle where meaningful
-  double lower = 0;              ///< accepted range for `value`
+  std::string tier;                   ///< COMPOS: "PATERN" or "FEATUR" (empty otherwise)
+  std::vector<std::string> features;  ///< feature labels it was applied to
+  double value = 0;    ///< the measured quantity: deviation (DIAM, RAD, DISTB, ANGLB), zone used (POS, form ...)
+  double actual = 0;   ///< the actual size/distance/angle where meaningful (DIAM: actual diameter)
+  double nominal = 0;  ///< the nominal size/distance/angle where meaningful
+  double lower = 0;    ///< accepted range for `value`
   double upper = 0;
   bool in_tolerance = false;
-  std::string note;              ///< how it was evaluated when not obvious (e.g. the datum reference frame)
-  bool three_d = false;          ///< POS: the spec's 3D zone (else 2D); the DMIS output line needs it
-  bool angle_value = false;      ///< the value is an angle (degrees) though the kind is not (CORTOL,ANGLE)
-  ReportUnits units;             ///< the program's UNITS and DECPL at the OUTPUT (reports only)
+  std::string note;          ///< how it was evaluated when not obvious (e.g. the datum reference frame)
+  bool three_d = false;      ///< POS: the spec's 3D zone (else 2D); the DMIS output line needs it
+  bool angle_value = false;  ///< the value is an angle (degrees) though the kind is not (CORTOL,ANGLE)
+  ReportUnits units;         ///< the program's UNITS and DECPL at the OUTPUT (reports only)
 };
 
 /// What an evaluation needs besides the spec and features.
 struct ToleranceContext {
-  const Alignment* alignment = nullptr;            ///< the current coordinate system (reporting frame)
-  std::vector<const Datum*> datums;                ///< resolved datums of spec.datums, same order
-  std::vector<const Datum*> feature_datums;        ///< resolved datums of spec.feature_datums (COMPOS)
-  ReportUnits units;                               ///< the program's UNITS and DECPL: the notes' lengths
-  WorkingPlane working_plane = WorkingPlane::XY;   ///< WKPLAN: CORTOL's polar coordinates
+  const Alignment* alignment = nullptr;           ///< the current coordinate system (reporting frame)
+  std::vector<const Datum*> datums;               ///< resolved datums of spec.datums, same order
+  std::vector<const Datum*> feature_datums;       ///< resolved datums of spec.feature_datums (COMPOS)
+  ReportUnits units;                              ///< the program's UNITS and DECPL: the notes' lengths
+  WorkingPlane working_plane = WorkingPlane::XY;  ///< WKPLAN: CORTOL's polar coordinates
 };
 
 /// Evaluates `spec` on `features` (one feature, or two for DISTB). Returns an error message
 /// (lowercase) when the tolerance does not apply, e.g. "DIAM needs a feature of size, got PLANE".
 tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpec& spec,
-    const std::vector<const Feature*>& features, const ToleranceContext& context);
+                                                              const std::vector<const Feature*>& features,
+                                                              const ToleranceContext& context);
 
 /// TOL/COMPOS on a pattern of features (one or more): the PATERN tier is POS of each feature in
 /// the PATERN datums' frame (the largest zone used is reported); the FEATUR tier is the same after
@@ -131,6 +146,7 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
 /// translate, turned only about what the FEATUR datums leave free (docs/tolerances.md). Two
 /// results, PATERN then FEATUR.
 tl::expected<std::vector<ToleranceResult>, std::string> evaluate_composite(const ToleranceSpec& spec,
-    const std::vector<const Feature*>& features, const ToleranceContext& context);
+                                                                           const std::vector<const Feature*>& features,
+                                                                           const ToleranceContext& context);
 
 }  // namespace metron::runtime

@@ -17,8 +17,8 @@ struct Builtin {
   int min_args = 1;
   int max_args = 1;
   ValueType result = ValueType::Real;
-  bool string_args = false;   ///< takes strings (LEN, SUBSTR, CONCAT ...) rather than numbers
-  bool vector_args = false;   ///< takes VECTORs (VCROSS, VDOT, VMAG, ...)
+  bool string_args = false;  ///< takes strings (LEN, SUBSTR, CONCAT ...) rather than numbers
+  bool vector_args = false;  ///< takes VECTORs (VCROSS, VDOT, VMAG, ...)
 };
 
 /// Looks up an intrinsic by upper-case name (ABS, SQRT, SIN, ..., CONCAT, STR, ...).

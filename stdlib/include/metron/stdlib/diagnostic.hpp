@@ -13,9 +13,9 @@ enum class Severity { Note, Warning, Error };
 /// A diagnostic is data: collected in a sink, printed as `file:line:col: error: message`.
 struct Diagnostic {
   Severity severity = Severity::Error;
-  std::string code;      ///< stable identifier, e.g. "parse.expected" or "sema.undefined-feature"
-  Span span;             ///< where; invalid span = no position
-  std::string message;   ///< lowercase, says what was expected after what
+  std::string code;     ///< stable identifier, e.g. "parse.expected" or "sema.undefined-feature"
+  Span span;            ///< where; invalid span = no position
+  std::string message;  ///< lowercase, says what was expected after what
   std::vector<std::string> notes;
 };
 

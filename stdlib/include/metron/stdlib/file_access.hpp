@@ -22,7 +22,7 @@ inline constexpr std::uintmax_t max_input_file_bytes = 64u * 1024u * 1024u;
 /// (/dev/zero), FIFOs and /proc files (their size is not known in advance) and larger files, with
 /// a message that names the file and the reason.
 tl::expected<std::string, std::string> read_input_file(const std::string& path,
-                                                        std::uintmax_t max_bytes = max_input_file_bytes);
+                                                       std::uintmax_t max_bytes = max_input_file_bytes);
 
 /// The checks of read_input_file without the reading, for files a library reads itself (CAD
 /// through CGAL or OCCT): empty when `path` is a regular file of at most `max_bytes` bytes,

@@ -21,8 +21,8 @@ namespace metron::strict_json {
 
 /// A value that does not match its schema: where it is and what was expected.
 struct ReadError {
-  std::string pointer;                ///< e.g. "/machine/dt_s" ("/" for the document)
-  std::string message;                ///< e.g. "expected a positive number"
+  std::string pointer;  ///< e.g. "/machine/dt_s" ("/" for the document)
+  std::string message;  ///< e.g. "expected a positive number"
 };
 
 /// Thrown by the getters; read() turns it into a value (the reader's only exception).
@@ -67,12 +67,12 @@ double positive(const nlohmann::json& j, const std::string& ptr);      ///< a fi
 double non_negative(const nlohmann::json& j, const std::string& ptr);  ///< a finite number >= 0
 /// A finite number in the open interval (lo, hi).
 double open_interval(const nlohmann::json& j, const std::string& ptr, double lo, double hi);
-Vec3 vec3(const nlohmann::json& j, const std::string& ptr);            ///< [x, y, z]
-Vec3 unit(const nlohmann::json& j, const std::string& ptr);            ///< a non-zero [x, y, z], normalised
-std::string string(const nlohmann::json& j, const std::string& ptr);   ///< a string
+Vec3 vec3(const nlohmann::json& j, const std::string& ptr);           ///< [x, y, z]
+Vec3 unit(const nlohmann::json& j, const std::string& ptr);           ///< a non-zero [x, y, z], normalised
+std::string string(const nlohmann::json& j, const std::string& ptr);  ///< a string
 /// An array of finite numbers (its size checked when `size` >= 0).
 std::vector<double> numbers(const nlohmann::json& j, const std::string& ptr, long size = -1);
-bool boolean(const nlohmann::json& j, const std::string& ptr);         ///< true or false
+bool boolean(const nlohmann::json& j, const std::string& ptr);  ///< true or false
 /// One of `choices` (a string); the message lists them.
 std::string one_of(const nlohmann::json& j, const std::string& ptr, std::initializer_list<std::string_view> choices);
 std::uint64_t unsigned_integer(const nlohmann::json& j, const std::string& ptr);  ///< an integer >= 0

@@ -24,7 +24,7 @@ struct SourceFile {
   std::string path;
   std::string text;
   TextEncoding encoding = TextEncoding::Ascii;  ///< what the bytes were found to be
-  std::vector<std::uint32_t> line_starts;  ///< byte offset of each line start
+  std::vector<std::uint32_t> line_starts;       ///< byte offset of each line start
 };
 
 /// Owns every source file of a compilation; maps spans to positions and source lines.

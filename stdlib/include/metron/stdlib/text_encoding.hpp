@@ -23,8 +23,9 @@ bool is_valid_utf8(std::string_view bytes);
 
 /// Detects the encoding of `bytes` and returns them as UTF-8: UTF-16 (by its byte-order mark, or
 /// by the NUL bytes its ASCII text has in every other place) decoded, its BOM dropped and an
-/// unpaired surrogate read as U+FFFD; ASCII and UTF-8 unchanged; anything else decoded as Windows-1252 (bytes 0x81, 0x8D, 0x8F, 0x90 and 0x9D, undefined there, as the
-/// Latin-1 control characters of the same value, so no byte is lost).
+/// unpaired surrogate read as U+FFFD; ASCII and UTF-8 unchanged; anything else decoded as Windows-1252 (bytes 0x81,
+/// 0x8D, 0x8F, 0x90 and 0x9D, undefined there, as the Latin-1 control characters of the same value, so no byte is
+/// lost).
 std::string to_utf8(std::string bytes, TextEncoding* detected = nullptr);
 
 /// Upper case of UTF-8 text for comparing labels: ASCII letters, and the letters of Latin-1 and

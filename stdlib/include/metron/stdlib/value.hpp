@@ -20,8 +20,8 @@ struct Value {
   ValueType type = ValueType::Real;
   double number = 0;
   bool boolean = false;
-  std::string text;     ///< String contents, or a label's name
-  std::string prefix;   ///< Label prefix (F, FA, ...)
+  std::string text;                    ///< String contents, or a label's name
+  std::string prefix;                  ///< Label prefix (F, FA, ...)
   std::array<double, 3> components{};  ///< A VECTOR's x, y, z
 
   static Value real(double v) { return Value{ValueType::Real, v, false, {}, {}, {}}; }

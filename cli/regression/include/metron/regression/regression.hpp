@@ -33,18 +33,19 @@ struct Value {
     String,  ///< a quoted string (TEXT output)
   } kind = Kind::Number;
   double number = 0;
-  std::string text;      ///< Word, String; for Number: the digits as written or to be written
+  std::string text;  ///< Word, String; for Number: the digits as written or to be written
 };
 
 /// One line of results: `feature BORE1 diameter 20.01200 +-0.001`.
 struct Entry {
-  std::string subject;   ///< `feature BORE1`, `feature BORE1@2`, `tolerance T1`, `text 3`, `file x.dmo`, `status`, `fault`, `error`
+  std::string subject;   ///< `feature BORE1`, `feature BORE1@2`, `tolerance T1`, `text 3`, `file x.dmo`, `status`,
+                         ///< `fault`, `error`
   std::string quantity;  ///< `x`, `diameter`, `value`, ...; empty for status, fault, error and text
   Value value;
-  std::optional<double> tolerance;  ///< expected files: this line's own tolerance (`+-t`)
+  std::optional<double> tolerance;           ///< expected files: this line's own tolerance (`+-t`)
   QuantityClass cls = QuantityClass::Exact;  ///< observed entries: how the quantity compares
-  int line = 0;          ///< expected files: 1-based line number
-  std::vector<std::string> comments;  ///< expected files: the `#` lines just above it (kept by --update)
+  int line = 0;                              ///< expected files: 1-based line number
+  std::vector<std::string> comments;         ///< expected files: the `#` lines just above it (kept by --update)
   /// `feature BORE1 diameter`: what messages call it.
   [[nodiscard]] std::string key() const;
 };
@@ -58,20 +59,21 @@ struct Defaults {
 
 /// A parsed NAME.expected file.
 struct ExpectedFile {
-  std::vector<std::string> header;        ///< comment and blank lines before the first directive or entry, kept by --update
-  std::optional<std::string> world;       ///< world path relative to the expected file; empty: the embedded default
-  std::optional<std::uint64_t> seed;      ///< empty: the world's seed
+  std::vector<std::string> header;    ///< comment and blank lines before the first directive or entry, kept by --update
+  std::optional<std::string> world;   ///< world path relative to the expected file; empty: the embedded default
+  std::optional<std::uint64_t> seed;  ///< empty: the world's seed
   Defaults defaults;
-  std::vector<std::string> defaults_given;  ///< which defaults the file sets (`length`, ...), in order: --update keeps them
-  std::optional<std::string> skip;        ///< `skip REASON`: the program is not run
-  std::vector<Entry> entries;             ///< status, quantities, texts, fault, error
-  std::vector<std::string> trailer;       ///< `#` lines after the last entry
+  std::vector<std::string>
+      defaults_given;                ///< which defaults the file sets (`length`, ...), in order: --update keeps them
+  std::optional<std::string> skip;   ///< `skip REASON`: the program is not run
+  std::vector<Entry> entries;        ///< status, quantities, texts, fault, error
+  std::vector<std::string> trailer;  ///< `#` lines after the last entry
 };
 
 /// A corrupt expected file: where and why.
 struct ParseError {
-  int line = 0;          ///< 1-based
-  std::string message;   ///< lowercase, says what was expected
+  int line = 0;         ///< 1-based
+  std::string message;  ///< lowercase, says what was expected
 };
 
 /// Parses the text of an expected file.
@@ -82,9 +84,9 @@ std::string format_expected(const ExpectedFile& file);
 /// A run's results as entries, in report order (docs/regression.md lists the quantities).
 struct Observed {
   std::vector<Entry> entries;
-  std::string status;                     ///< completed, faulted, error
-  std::string fault_summary;              ///< `line 14 (GOTO/...): message`, when faulted
-  std::string first_error;                ///< the first error diagnostic, when status is error
+  std::string status;         ///< completed, faulted, error
+  std::string fault_summary;  ///< `line 14 (GOTO/...): message`, when faulted
+  std::string first_error;    ///< the first error diagnostic, when status is error
   std::uint64_t seed = 0;
 };
 
@@ -97,8 +99,8 @@ void observe_files(const std::filesystem::path& out_dir, Observed& observed);
 
 /// One difference between expected and observed.
 struct Difference {
-  std::string key;       ///< `feature BORE1 diameter`
-  std::string message;   ///< `expected 20.01300, got 20.01200 (difference -0.00100, tolerance +-0.00050)`
+  std::string key;      ///< `feature BORE1 diameter`
+  std::string message;  ///< `expected 20.01300, got 20.01200 (difference -0.00100, tolerance +-0.00050)`
 };
 
 /// Compares: every expected entry must be observed within its tolerance; every observed subject
@@ -111,9 +113,9 @@ ExpectedFile updated_expected(const ExpectedFile& previous, const Observed& obse
 
 /// A program of the suite.
 struct Case {
-  std::string name;                       ///< the program path as shown (root-relative as given)
-  std::filesystem::path program;          ///< NAME.dmi (may not exist: an orphan expected file)
-  std::filesystem::path expected;         ///< NAME.expected
+  std::string name;                ///< the program path as shown (root-relative as given)
+  std::filesystem::path program;   ///< NAME.dmi (may not exist: an orphan expected file)
+  std::filesystem::path expected;  ///< NAME.expected
 };
 
 /// Finds NAME.dmi files with a NAME.expected beside them under the roots (directories,
@@ -136,17 +138,17 @@ enum class Verdict {
 struct CaseResult {
   Case test;
   Verdict verdict = Verdict::Pass;
-  double wall_s = 0;                      ///< wall-clock time of the child process; 0 when none ran
-  std::string reason;                     ///< one line: why it failed, was skipped or updated
-  std::vector<std::string> details;       ///< one line each: the differences, stderr of a crash
+  double wall_s = 0;                 ///< wall-clock time of the child process; 0 when none ran
+  std::string reason;                ///< one line: why it failed, was skipped or updated
+  std::vector<std::string> details;  ///< one line each: the differences, stderr of a crash
 };
 
 /// How to run the suite.
 struct RunnerOptions {
-  std::string executable;                 ///< the metron binary (`run PROGRAM --out DIR --quiet ...`)
-  unsigned jobs = 1;                      ///< at most this many programs at once
-  double timeout_s = 120;                 ///< wall-clock limit of each program; then it is killed
-  bool update = false;                    ///< rewrite expected files from the results
+  std::string executable;  ///< the metron binary (`run PROGRAM --out DIR --quiet ...`)
+  unsigned jobs = 1;       ///< at most this many programs at once
+  double timeout_s = 120;  ///< wall-clock limit of each program; then it is killed
+  bool update = false;     ///< rewrite expected files from the results
   /// Polled while running: when it returns true (SIGINT/SIGTERM to `metron test`), every child
   /// gets SIGTERM (SIGKILL 2 s later), no new one starts, the temporary folder is removed and the
   /// cases not finished fail as "interrupted".

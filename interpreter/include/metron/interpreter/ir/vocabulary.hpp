@@ -27,19 +27,26 @@ enum class RunMode { Auto, ProgMan, Man };
 /// How a statement gives its coordinates: CART x,y,z; POL radius,angle,height; GOTO/INCR distance,i,j,k.
 enum class CoordinateForm { Cart, Pol, Incr };
 /// CONST methods.
-enum class ConstructionMethod { Bf, Intof, Midpt, Projpt, Projln, Projct,
-                                Pierce,   ///< a line-like feature through a surface: INTOF's point
-                                Movept,   ///< a feature's point moved by dx, dy, dz
-                                Parto,    ///< PARTO,FA(ref),THRU,FA(point): parallel to ref through the point
-                                Perpto,   ///< PERPTO,FA(ref),THRU,FA(point): perpendicular to ref through the point
-                                Cast,     ///< CAST,FA(x): x's geometry as another type (a cylinder's axis as a LINE ...)
-                                Midpl,    ///< MIDPL,FA(a),FA(b): the plane midway between two planes
-                                Midli,    ///< MIDLI,FA(a),FA(b): the line midway between two lines
-                                Copy,     ///< COPY,FA(x): x's geometry under another label
-                                Vertex,   ///< VERTEX,FA(cone): the cone's apex
-                                Extrem,   ///< EXTREM,[MIN|MAX,]FA(x),direction: x's measured point furthest along it
-                                Offset,   ///< OFFSET,FA(plane),d: the plane moved d along its normal
-                                Cone };   ///< CONE,FA(cone),DIAM|DIST,v: the cone's section of diameter v, or v from its vertex
+enum class ConstructionMethod {
+  Bf,
+  Intof,
+  Midpt,
+  Projpt,
+  Projln,
+  Projct,
+  Pierce,  ///< a line-like feature through a surface: INTOF's point
+  Movept,  ///< a feature's point moved by dx, dy, dz
+  Parto,   ///< PARTO,FA(ref),THRU,FA(point): parallel to ref through the point
+  Perpto,  ///< PERPTO,FA(ref),THRU,FA(point): perpendicular to ref through the point
+  Cast,    ///< CAST,FA(x): x's geometry as another type (a cylinder's axis as a LINE ...)
+  Midpl,   ///< MIDPL,FA(a),FA(b): the plane midway between two planes
+  Midli,   ///< MIDLI,FA(a),FA(b): the line midway between two lines
+  Copy,    ///< COPY,FA(x): x's geometry under another label
+  Vertex,  ///< VERTEX,FA(cone): the cone's apex
+  Extrem,  ///< EXTREM,[MIN|MAX,]FA(x),direction: x's measured point furthest along it
+  Offset,  ///< OFFSET,FA(plane),d: the plane moved d along its normal
+  Cone
+};  ///< CONE,FA(cone),DIAM|DIST,v: the cone's section of diameter v, or v from its vertex
 
 /// One row of a vocabulary: an enumerator and its DMIS word.
 template <class E>
@@ -53,16 +60,26 @@ struct WordEntry {
 template <class E>
 const std::vector<WordEntry<E>>& vocabulary();
 
-template <> const std::vector<WordEntry<runtime::FeatureType>>& vocabulary();
-template <> const std::vector<WordEntry<runtime::ToleranceKind>>& vocabulary();
-template <> const std::vector<WordEntry<FeedKind>>& vocabulary();
-template <> const std::vector<WordEntry<FeedUnit>>& vocabulary();
-template <> const std::vector<WordEntry<LengthUnit>>& vocabulary();
-template <> const std::vector<WordEntry<AngleUnit>>& vocabulary();
-template <> const std::vector<WordEntry<TemperatureUnit>>& vocabulary();
-template <> const std::vector<WordEntry<RunMode>>& vocabulary();
-template <> const std::vector<WordEntry<CoordinateForm>>& vocabulary();
-template <> const std::vector<WordEntry<ConstructionMethod>>& vocabulary();
+template <>
+const std::vector<WordEntry<runtime::FeatureType>>& vocabulary();
+template <>
+const std::vector<WordEntry<runtime::ToleranceKind>>& vocabulary();
+template <>
+const std::vector<WordEntry<FeedKind>>& vocabulary();
+template <>
+const std::vector<WordEntry<FeedUnit>>& vocabulary();
+template <>
+const std::vector<WordEntry<LengthUnit>>& vocabulary();
+template <>
+const std::vector<WordEntry<AngleUnit>>& vocabulary();
+template <>
+const std::vector<WordEntry<TemperatureUnit>>& vocabulary();
+template <>
+const std::vector<WordEntry<RunMode>>& vocabulary();
+template <>
+const std::vector<WordEntry<CoordinateForm>>& vocabulary();
+template <>
+const std::vector<WordEntry<ConstructionMethod>>& vocabulary();
 
 /// The enumerator a DMIS word names, or nullopt.
 template <class E>

@@ -12,11 +12,11 @@ namespace metron::machine {
 
 /// What the controller can say about itself (for reports and the debugger's `machine` command).
 struct MachineState {
-  Vec3 position_mm = Vec3::Zero();    ///< ball centre, machine coordinates
+  Vec3 position_mm = Vec3::Zero();  ///< ball centre, machine coordinates
   Vec3 velocity_mm_s = Vec3::Zero();
-  double time_s = 0;                  ///< simulated clock
-  std::string active_tool;            ///< empty when none selected
-  std::optional<ToolInfo> tool;       ///< calibration of the active tool
+  double time_s = 0;             ///< simulated clock
+  std::string active_tool;       ///< empty when none selected
+  std::optional<ToolInfo> tool;  ///< calibration of the active tool
   std::optional<Hit> last_hit;
   double positioning_feed_mm_s = 0;
   double measuring_feed_mm_s = 0;

@@ -3,8 +3,8 @@
 #include <functional>
 #include <string>
 
-#include "metron/machine/command.hpp"
 #include "metron/machine/active_scanning/scan_controller.hpp"
+#include "metron/machine/command.hpp"
 
 namespace metron::machine {
 

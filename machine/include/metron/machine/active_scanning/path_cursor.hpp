@@ -40,7 +40,7 @@ class PathCursor {
   const geometry::PccPath& m_path;
   std::vector<double> m_cumulative;  ///< arc length at each segment start, plus the total
   std::size_t m_segment = 0;
-  double m_s = 0;                    ///< parameter S on the current segment
+  double m_s = 0;  ///< parameter S on the current segment
 };
 
 }  // namespace metron::machine

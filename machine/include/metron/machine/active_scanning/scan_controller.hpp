@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "metron/machine/command.hpp"
-#include "metron/machine/fault.hpp"
 #include "metron/machine/active_scanning/scanning_spec.hpp"
 #include "metron/machine/active_scanning/speed_plan.hpp"
+#include "metron/machine/command.hpp"
+#include "metron/machine/fault.hpp"
 #include "metron/machine/solid.hpp"
 #include "metron/machine/world.hpp"
 
@@ -17,11 +17,11 @@ namespace metron::machine {
 
 /// The three velocity terms and gains of one control cycle (SEEDS.md 1).
 struct ScanTerms {
-  Vec3 vf = Vec3::Zero();             ///< path velocity Vf
-  Vec3 ve = Vec3::Zero();             ///< deflection correction Ve
-  Vec3 vc = Vec3::Zero();             ///< the selected trajectory correction (Vc1, Vc1' or Vc2)
-  Vec3 vc1 = Vec3::Zero();            ///< Vc1, for comparison
-  double gf = 1, ge = 1, gc = 1;      ///< the gains after their deviation functions
+  Vec3 vf = Vec3::Zero();         ///< path velocity Vf
+  Vec3 ve = Vec3::Zero();         ///< deflection correction Ve
+  Vec3 vc = Vec3::Zero();         ///< the selected trajectory correction (Vc1, Vc1' or Vc2)
+  Vec3 vc1 = Vec3::Zero();        ///< Vc1, for comparison
+  double gf = 1, ge = 1, gc = 1;  ///< the gains after their deviation functions
 };
 
 /// One control cycle as seen by the controller, for plots, tests and the benchmark.
@@ -43,39 +43,39 @@ struct ScanCycle {
 
 /// Summary figures of a scan (over the scanning phase).
 struct ScanStats {
-  std::int64_t cycles = 0;            ///< controller cycles, all phases
-  std::int64_t scan_cycles = 0;       ///< cycles of the scanning phase
-  double rms_deflection_error_mm = 0; ///< RMS of |Ep| - E0 while scanning
+  std::int64_t cycles = 0;              ///< controller cycles, all phases
+  std::int64_t scan_cycles = 0;         ///< cycles of the scanning phase
+  double rms_deflection_error_mm = 0;   ///< RMS of |Ep| - E0 while scanning
   double peak_deflection_error_mm = 0;  ///< max of | |Ep| - E0 | while scanning
-  double max_path_distance_mm = 0;    ///< max |P - Pp| while scanning
-  double rms_lateral_error_mm = 0;    ///< RMS of (P - Pp) . q while scanning (the part Vc2 corrects)
-  double max_lateral_error_mm = 0;    ///< max |(P - Pp) . q| while scanning
-  double max_speed_ratio = 0;         ///< max tangential speed / speed limit at the foot
-  double max_force_n = 0;             ///< largest contact force
-  std::int64_t free_cycles = 0;       ///< scanning cycles without contact
-  double path_length_mm = 0;          ///< length of the commanded path
-  double reached_mm = 0;              ///< arc length reached
+  double max_path_distance_mm = 0;      ///< max |P - Pp| while scanning
+  double rms_lateral_error_mm = 0;      ///< RMS of (P - Pp) . q while scanning (the part Vc2 corrects)
+  double max_lateral_error_mm = 0;      ///< max |(P - Pp) . q| while scanning
+  double max_speed_ratio = 0;           ///< max tangential speed / speed limit at the foot
+  double max_force_n = 0;               ///< largest contact force
+  std::int64_t free_cycles = 0;         ///< scanning cycles without contact
+  double path_length_mm = 0;            ///< length of the commanded path
+  double reached_mm = 0;                ///< arc length reached
 };
 
 /// The result of one scan.
 struct ScanOutcome {
-  std::vector<ScanSample> samples;    ///< recorded samples (every sample_spacing_mm of path)
-  std::optional<Fault> fault;         ///< why the scan stopped early
-  bool completed = false;             ///< the whole path was scanned
+  std::vector<ScanSample> samples;      ///< recorded samples (every sample_spacing_mm of path)
+  std::optional<Fault> fault;           ///< why the scan stopped early
+  bool completed = false;               ///< the whole path was scanned
   Vec3 end_position_mm = Vec3::Zero();  ///< head position at the end (after the retract)
-  double end_time_s = 0;              ///< simulated time at the end
-  std::vector<std::string> log;       ///< speed limits by stretch of path, and the stats
-  ScanStats stats;                    ///< summary figures
+  double end_time_s = 0;                ///< simulated time at the end
+  std::vector<std::string> log;         ///< speed limits by stretch of path, and the stats
+  ScanStats stats;                      ///< summary figures
 };
 
 /// Where the scanning controller runs: the simulated world's parts it touches and its truth
 /// (simulation side), and the controller's own configuration.
 struct ScanSetup {
-  const Solid* solid = nullptr;       ///< everything the ball can touch (simulation side)
-  double true_ball_radius_mm = 2;     ///< the stylus ball as it truly is (simulation side)
-  MachineConfig machine;              ///< the controller: limits, cycle dt, scanning configuration, data sheet
-  ScanningTruth truth;                ///< the probe's dynamics and noise, the axis servos (simulation side)
-  std::uint64_t seed = 1;             ///< of the probe noise
+  const Solid* solid = nullptr;    ///< everything the ball can touch (simulation side)
+  double true_ball_radius_mm = 2;  ///< the stylus ball as it truly is (simulation side)
+  MachineConfig machine;           ///< the controller: limits, cycle dt, scanning configuration, data sheet
+  ScanningTruth truth;             ///< the probe's dynamics and noise, the axis servos (simulation side)
+  std::uint64_t seed = 1;          ///< of the probe noise
 };
 
 /// The trajectory-correction direction q = (eu x t)/|eu x t| (SEEDS.md 1; t stands in for Vf's

@@ -2,8 +2,8 @@
 #pragma once
 #include <memory>
 
-#include "metron/machine/rng.hpp"
 #include "metron/machine/active_scanning/scanning_spec.hpp"
+#include "metron/machine/rng.hpp"
 #include "metron/machine/solid.hpp"
 
 namespace metron::machine {
@@ -25,11 +25,13 @@ class ScanningProbe {
   /// One reading of the deflection sensor: the true deflection plus the sensor's noise.
   [[nodiscard]] Vec3 read(const Vec3& true_deflection_mm);
   /// The contact force for a deflection, N.
-  [[nodiscard]] double force_n(const Vec3& deflection_mm) const { return m_truth.stiffness_n_mm * deflection_mm.norm(); }
+  [[nodiscard]] double force_n(const Vec3& deflection_mm) const {
+    return m_truth.stiffness_n_mm * deflection_mm.norm();
+  }
 
  private:
   const Solid& m_solid;
-  std::unique_ptr<Solid> m_view;     ///< m_solid's local view about m_view_centre
+  std::unique_ptr<Solid> m_view;  ///< m_solid's local view about m_view_centre
   Vec3 m_view_centre = Vec3::Zero();
   Vec3 m_free_head = Vec3::Zero();  ///< the last head position with a free ball
   double m_free_distance_mm = 0;    ///< the solid's distance there (0: in contact since)

@@ -22,21 +22,21 @@ const char* to_string(SpeedLimit limit);
 
 /// A stretch of path over which one limit binds.
 struct SpeedLimitSpan {
-  double from_mm = 0;                 ///< arc length where it starts
-  double to_mm = 0;                   ///< arc length where it ends
+  double from_mm = 0;                   ///< arc length where it starts
+  double to_mm = 0;                     ///< arc length where it ends
   SpeedLimit limit = SpeedLimit::Feed;  ///< which limit
-  double min_speed_mm_s = 0;          ///< the lowest planned speed in the stretch
+  double min_speed_mm_s = 0;            ///< the lowest planned speed in the stretch
 };
 
 /// Inputs of the speed plan: every limit the scan speed must honour.
 struct SpeedPlanLimits {
-  double feed_mm_s = 10;              ///< requested speed
-  double machine_speed_mm_s = 300;    ///< machine path speed limit
-  double acceleration_mm_s2 = 1000;   ///< tangential acceleration used to change speed
-  double centripetal_mm_s2 = 500;     ///< centripetal acceleration limit
+  double feed_mm_s = 10;                       ///< requested speed
+  double machine_speed_mm_s = 300;             ///< machine path speed limit
+  double acceleration_mm_s2 = 1000;            ///< tangential acceleration used to change speed
+  double centripetal_mm_s2 = 500;              ///< centripetal acceleration limit
   double probe_natural_frequency_rad_s = 350;  ///< sqrt(stiffness / stylus mass)
-  double reference_deflection_mm = 0.3;  ///< E0
-  double end_speed_mm_s = 0.5;        ///< speed at the path's start and end (a creep, not a stop)
+  double reference_deflection_mm = 0.3;        ///< E0
+  double end_speed_mm_s = 0.5;                 ///< speed at the path's start and end (a creep, not a stop)
 };
 
 /// The path speed Vf as a function of arc length (SEEDS.md 1: "magnitude from the path curvature

@@ -22,7 +22,8 @@ double row_time_s(const discrepancy::MeasuredData& data, std::size_t row);
 /// The deviation the virtual CMM predicts for `row` along `axis` (0..2, or 3 = along the approach
 /// vector): positioning, grid and drift data see +e (an instrument on the table against the tool);
 /// artefacts measured by the CMM itself read -e (the scales put the tip at p while it is at p + e).
-double predicted_deviation_mm(const MachineErrorModel& errors, const discrepancy::MeasuredData& data, std::size_t row, int axis);
+double predicted_deviation_mm(const MachineErrorModel& errors, const discrepancy::MeasuredData& data, std::size_t row,
+                              int axis);
 
 /// machine.errors of an extended world: `base_errors` (the world file's own machine.errors, null when
 /// none) with the effects' terms appended to `terms`.

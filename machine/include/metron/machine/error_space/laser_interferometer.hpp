@@ -12,13 +12,13 @@ namespace metron::machine {
 /// bidirectional runs, cycles): the component along the axis of motion, which the two-point
 /// method cannot see.
 struct LaserPlan {
-  int axis = 0;                       ///< the axis of motion
-  std::vector<double> targets_mm;     ///< P_i, increasing
-  Vec3 line_axes_mm = Vec3::Zero();   ///< the other axes' positions (the `axis` entry is ignored)
+  int axis = 0;                          ///< the axis of motion
+  std::vector<double> targets_mm;        ///< P_i, increasing
+  Vec3 line_axes_mm = Vec3::Zero();      ///< the other axes' positions (the `axis` entry is ignored)
   Vec3 reflector_offset_mm{0, 0, -120};  ///< reflector from the ram reference point (put it at the probe tip)
-  int cycles = 5;                     ///< ISO 230-2 standard test: 5 bidirectional runs
-  double noise_sd_mm = 0.0002;        ///< reading noise (air refraction, dead path), 0.2 um
-  double dwell_s = 4;                 ///< simulated time per target
+  int cycles = 5;                        ///< ISO 230-2 standard test: 5 bidirectional runs
+  double noise_sd_mm = 0.0002;           ///< reading noise (air refraction, dead path), 0.2 um
+  double dwell_s = 4;                    ///< simulated time per target
 };
 
 /// Runs the plan on the hidden machine: each run goes up through the targets then down (an

@@ -14,11 +14,11 @@ class FlatPlate {
  public:
   /// One smooth undulation of the face: A cos(2 pi u / lu + pu) cos(2 pi v / lv + pv) (l = 0: flat that way).
   struct Mode {
-    double amplitude_mm = 0;   ///< A
+    double amplitude_mm = 0;     ///< A
     double wavelength_u_mm = 0;  ///< lu
     double wavelength_v_mm = 0;  ///< lv
-    double phase_u = 0;        ///< pu, rad
-    double phase_v = 0;        ///< pv, rad
+    double phase_u = 0;          ///< pu, rad
+    double phase_v = 0;          ///< pv, rad
   };
   /// A plate with the given undulations and a bow b ((u/size)^2 + (v/size)^2).
   FlatPlate(std::vector<Mode> modes, double bow_mm, double size_mm);

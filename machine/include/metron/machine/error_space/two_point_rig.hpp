@@ -14,13 +14,13 @@ namespace metron::machine {
 /// The two-sensor head of SEEDS.md 4 (hidden truth except `spacing_mm`, `noise_sd_mm` as a
 /// datasheet value, and the sensor offset, which the user sets up).
 struct TwoPointHead {
-  double spacing_mm = 20;          ///< d: B sits d ahead of A along the step direction
-  double delta_mm = 0.0023;        ///< hidden: B's tip is this much nearer the plate than A's
-  double zero_a_mm = 0.0011;       ///< hidden zero offset of A
-  double zero_b_mm = -0.0007;      ///< hidden zero offset of B
-  double noise_sd_mm = 0.0001;     ///< white noise of every reading (0.1 um)
-  double linearity_per_mm = 0;     ///< hidden nonlinearity: r -> r + k r^2 (r from the nominal standoff)
-  double standoff_mm = 1;          ///< nominal gap at which the sensors read zero
+  double spacing_mm = 20;       ///< d: B sits d ahead of A along the step direction
+  double delta_mm = 0.0023;     ///< hidden: B's tip is this much nearer the plate than A's
+  double zero_a_mm = 0.0011;    ///< hidden zero offset of A
+  double zero_b_mm = -0.0007;   ///< hidden zero offset of B
+  double noise_sd_mm = 0.0001;  ///< white noise of every reading (0.1 um)
+  double linearity_per_mm = 0;  ///< hidden nonlinearity: r -> r + k r^2 (r from the nominal standoff)
+  double standoff_mm = 1;       ///< nominal gap at which the sensors read zero
   /// Hidden pitch of the head itself during the move (rad, as a function of the travel along the
   /// line, mm), about its centre: A's gap changes by +theta d/2, B's by -theta d/2. The seed
   /// assumes none.
@@ -43,28 +43,33 @@ struct TwoPointHead {
 class TwoPointRig {
  public:
   /// `errors` must outlive the rig.
-  TwoPointRig(const MachineErrorModel& errors, FlatPlate plate, TwoPointHead head, std::uint64_t seed, double start_time_s = 0);
+  TwoPointRig(const MachineErrorModel& errors, FlatPlate plate, TwoPointHead head, std::uint64_t seed,
+              double start_time_s = 0);
 
   /// Moves the plate (SEEDS.md 4: the plate for each plane; the same plate, so the same profile).
-  void place_plate(int normal_axis, int normal_sign, const Vec3& origin_mm) { m_plate.place(normal_axis, normal_sign, origin_mm); }
+  void place_plate(int normal_axis, int normal_sign, const Vec3& origin_mm) {
+    m_plate.place(normal_axis, normal_sign, origin_mm);
+  }
   /// The readings (a, b) with the ram at `axes_mm`, the sensors lined up along machine axis
   /// `step_axis` (turned 90 degrees when that changes), `travel_mm` along the line for the head pitch.
   /// `reversed`: the head turned 180 degrees, B one step behind A.
-  std::pair<double, double> read(const Vec3& axes_mm, int step_axis, double travel_mm, bool turned = false, bool reversed = false);
+  std::pair<double, double> read(const Vec3& axes_mm, int step_axis, double travel_mm, bool turned = false,
+                                 bool reversed = false);
   /// A line: steps+1 head positions from `start_axes_mm` in steps of d along `step_axis`
   /// (`turned`: the sensors turned 90 degrees from their first orientation).
   error_space::LineReadings measure_line(const Vec3& start_axes_mm, int step_axis, int steps, bool turned = false,
                                          bool reversed = false);
   /// S1 and S4 of SEEDS.md 4 on the plate as placed: lines along u at v_0..v_m, then along v at
   /// u_0 and u_l; grid origin `origin_axes_mm` (ram positions), steps of d.
-  error_space::SurfaceReadings measure_surface(const Vec3& origin_axes_mm, int u_axis, int v_axis, int l_steps, int m_steps);
+  error_space::SurfaceReadings measure_surface(const Vec3& origin_axes_mm, int u_axis, int v_axis, int l_steps,
+                                               int m_steps);
 
   /// The angle instrument's reading at the last `read` (rad; see LineReadings::angle_rad).
   [[nodiscard]] double last_angle_rad() const { return m_last_angle_rad; }
-  [[nodiscard]] double time_s() const { return m_time_s; }  ///< simulated time now
+  [[nodiscard]] double time_s() const { return m_time_s; }           ///< simulated time now
   [[nodiscard]] const TwoPointHead& head() const { return m_head; }  ///< the head
   [[nodiscard]] const FlatPlate& plate() const { return m_plate; }   ///< the plate (hidden profile)
-  double dwell_s = 0.5;  ///< simulated time per reading (move and settle)
+  double dwell_s = 0.5;                                              ///< simulated time per reading (move and settle)
 
  private:
   const MachineErrorModel& m_errors;

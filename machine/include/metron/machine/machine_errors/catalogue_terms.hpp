@@ -64,7 +64,8 @@ class DriftTerm final : public ErrorTerm {
 /// e_c += A exp(-(t - t0) / tau) for t >= t0: a start-up transient settling over simulated time.
 class TransientTerm final : public ErrorTerm {
  public:
-  TransientTerm(int component, double amplitude_mm, double tau_s, double t0_s) : m_c(component), m_a(amplitude_mm), m_tau(tau_s), m_t0(t0_s) {}
+  TransientTerm(int component, double amplitude_mm, double tau_s, double t0_s)
+      : m_c(component), m_a(amplitude_mm), m_tau(tau_s), m_t0(t0_s) {}
   [[nodiscard]] Vec3 displacement(const MachinePose& pose, double time_s) const override;
   [[nodiscard]] std::string_view name() const override { return "transient"; }
 
@@ -77,7 +78,8 @@ class TransientTerm final : public ErrorTerm {
 /// growth of a structure (k0) or a scale (k1 = alpha) that follows a temperature (ISO 230-3).
 class ThermalLagTerm final : public ErrorTerm {
  public:
-  ThermalLagTerm(int component, double mm_per_k, double per_k, double reference_c, std::shared_ptr<const TemperatureHistory> t)
+  ThermalLagTerm(int component, double mm_per_k, double per_k, double reference_c,
+                 std::shared_ptr<const TemperatureHistory> t)
       : m_c(component), m_k0(mm_per_k), m_k1(per_k), m_ref(reference_c), m_t(std::move(t)) {}
   [[nodiscard]] Vec3 displacement(const MachinePose& pose, double time_s) const override;
   [[nodiscard]] std::string_view name() const override { return "thermal-lag"; }

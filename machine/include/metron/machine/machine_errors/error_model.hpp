@@ -45,7 +45,7 @@ class MachineErrorModel {
 /// Reads a world file's `machine.errors` object (docs/error-space.md, "Machine errors"); strict:
 /// unknown keys and bad values are errors naming their JSON pointer below `pointer`. A missing
 /// object is the default: no errors.
-tl::expected<MachineErrorModel, strict_json::ReadError> parse_machine_errors(const nlohmann::json& errors,
-                                                                         const std::string& pointer = "/machine/errors");
+tl::expected<MachineErrorModel, strict_json::ReadError> parse_machine_errors(
+    const nlohmann::json& errors, const std::string& pointer = "/machine/errors");
 
 }  // namespace metron::machine

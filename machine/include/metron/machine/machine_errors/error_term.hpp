@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-#include <optional>
 #include <array>
+#include <optional>
 #include <string_view>
 
 #include "metron/stdlib/geometry/vec.hpp"

@@ -36,8 +36,8 @@ class ScaleThermalTerm final : public ErrorTerm {
  public:
   /// One axis' scale.
   struct Scale {
-    double alpha_per_k = 0;             ///< expansion coefficient, 1/K
-    double fixed_at_mm = 0;             ///< q0
+    double alpha_per_k = 0;                                 ///< expansion coefficient, 1/K
+    double fixed_at_mm = 0;                                 ///< q0
     std::shared_ptr<const TemperatureHistory> temperature;  ///< the scale's temperature (null: 20 C)
   };
   explicit ScaleThermalTerm(std::array<Scale, 3> scales) : m_scales(std::move(scales)) {}

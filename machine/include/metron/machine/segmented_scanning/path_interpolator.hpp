@@ -11,10 +11,10 @@ namespace metron::machine::segmented {
 
 /// The interpolator's state along the path.
 struct PathState {
-  double s_mm = 0;              ///< global arc length
-  double v_mm_s = 0;            ///< path speed
-  double a_mm_s2 = 0;           ///< path acceleration
-  double j_mm_s3 = 0;           ///< jerk applied in the last cycle
+  double s_mm = 0;     ///< global arc length
+  double v_mm_s = 0;   ///< path speed
+  double a_mm_s2 = 0;  ///< path acceleration
+  double j_mm_s3 = 0;  ///< jerk applied in the last cycle
 };
 
 /// Shortest distance to bring the speed to <= vt from (v, a) with the jerk and acceleration
@@ -27,7 +27,8 @@ double brake_distance_mm(double v_mm_s, double a_mm_s2, double vt_mm_s, const Mo
 class PathInterpolator {
  public:
   explicit PathInterpolator(MotionLimits limits)
-      : m_limits(limits), m_check_limits{limits.speed_mm_s, limits.acceleration_mm_s2, limits.jerk_mm_s3 * k_jerk_reserve} {}
+      : m_limits(limits),
+        m_check_limits{limits.speed_mm_s, limits.acceleration_mm_s2, limits.jerk_mm_s3 * k_jerk_reserve} {}
 
   /// The braking checks plan with this share of the jerk limit: the reserve lets a constant
   /// jerk per cycle follow a braking curve whose switching instants fall inside a cycle.

@@ -6,9 +6,9 @@
 #include <span>
 #include <vector>
 
+#include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/command.hpp"
 #include "metron/machine/fault.hpp"
-#include "metron/machine/active_scanning/scan_controller.hpp"
 #include "metron/machine/segmented_scanning/scan_recorder.hpp"
 
 namespace metron::machine {
@@ -25,21 +25,21 @@ struct ProbeDriveSpec {
   /// Vf = v_plan + this * (s_plan - s), at most the speed limit where the plan is: the probe's
   /// place along the path follows the plan's.
   double position_gain_1_s = 10;
-  double positioning_speed_mm_s = 50;        ///< free moves off the surface (retract, return)
+  double positioning_speed_mm_s = 50;           ///< free moves off the surface (retract, return)
   double positioning_acceleration_mm_s2 = 500;  ///< and their acceleration
-  double search_from_mm = 0.5;               ///< an approach searches at the approach feed from this far off the path
-  double retract_mm = 2;                     ///< distance off the surface after a stop
-  double finish_creep_mm_s = 0.5;            ///< least speed while finishing the path up to a stop
+  double search_from_mm = 0.5;     ///< an approach searches at the approach feed from this far off the path
+  double retract_mm = 2;           ///< distance off the surface after a stop
+  double finish_creep_mm_s = 0.5;  ///< least speed while finishing the path up to a stop
 };
 
 /// One control cycle of the driven probe (for the junction figures).
 struct DrivenCycle {
-  double t_s = 0;                    ///< simulated time
-  bool scanning = false;             ///< the scanning law ran (else: hold, retract, approach)
-  bool contact = false;              ///< the stylus touched
-  double s_mm = 0;                   ///< arc length at the foot of the probe (scanning cycles)
-  double plan_s_mm = 0;              ///< arc length the plan asked for
-  double deflection_error_mm = 0;    ///< |Ep| - E0 as read
+  double t_s = 0;                  ///< simulated time
+  bool scanning = false;           ///< the scanning law ran (else: hold, retract, approach)
+  bool contact = false;            ///< the stylus touched
+  double s_mm = 0;                 ///< arc length at the foot of the probe (scanning cycles)
+  double plan_s_mm = 0;            ///< arc length the plan asked for
+  double deflection_error_mm = 0;  ///< |Ep| - E0 as read
 };
 
 /// The scanning probe on the simulated part, driven by the segmented controller (SEEDS.md 1 + 2):
@@ -96,7 +96,7 @@ class ProbeScanDriver final : public ScanRecorder {
   void apply(Vec3 v, bool scanning, double plan_s_mm);
   [[nodiscard]] Vec3 point_at(double s_mm, Vec3* normal) const;
 
-  ScanPath m_scan;                 // settings; m_scan.path grows with extend()
+  ScanPath m_scan;  // settings; m_scan.path grows with extend()
   ScanSetup m_setup;
   ProbeDriveSpec m_drive;
   double m_e0_mm = 0.3;

@@ -11,12 +11,12 @@ namespace metron::machine::segmented {
 
 /// What the controller knows about one control cycle while the probe scans.
 struct ScanCycle {
-  double t_s = 0;                      ///< simulated time at the end of the cycle
-  double dt_s = 0.001;                 ///< cycle length
-  std::size_t command_index = 0;       ///< the command the probe is in
-  PathState state;                     ///< arc length, speed, acceleration, jerk
-  double limit_mm_s = 0;               ///< the speed limit where the probe is
-  Vec3 position_mm = Vec3::Zero();     ///< commanded probe (ball-centre) position on the path
+  double t_s = 0;                          ///< simulated time at the end of the cycle
+  double dt_s = 0.001;                     ///< cycle length
+  std::size_t command_index = 0;           ///< the command the probe is in
+  PathState state;                         ///< arc length, speed, acceleration, jerk
+  double limit_mm_s = 0;                   ///< the speed limit where the probe is
+  Vec3 position_mm = Vec3::Zero();         ///< commanded probe (ball-centre) position on the path
   Vec3 acceleration_mm_s2 = Vec3::Zero();  ///< path acceleration a*T + v^2*kappa*N
 };
 
@@ -48,12 +48,12 @@ class ScanRecorder {
 
 /// A recorded measurement point.
 struct ScanPoint {
-  double t_s = 0;                      ///< simulated time
-  std::size_t command_index = 0;       ///< the command it belongs to
-  double s_mm = 0;                     ///< arc length along the path
-  Vec3 position_mm = Vec3::Zero();     ///< probe position
-  double speed_mm_s = 0;               ///< path speed
-  double deflection_error_mm = 0;      ///< |stylus deflection - reference|: the quality signal
+  double t_s = 0;                   ///< simulated time
+  std::size_t command_index = 0;    ///< the command it belongs to
+  double s_mm = 0;                  ///< arc length along the path
+  Vec3 position_mm = Vec3::Zero();  ///< probe position
+  double speed_mm_s = 0;            ///< path speed
+  double deflection_error_mm = 0;   ///< |stylus deflection - reference|: the quality signal
 };
 
 /// Stand-in for the scanning probe's deflection (documented in docs/segmented-scanning.md): the
@@ -91,7 +91,7 @@ class StylusDeflectionRecorder : public ScanRecorder {
 class CycleLog : public ScanRecorder {
  public:
   void record(const ScanCycle& cycle) override { cycles.push_back(cycle); }
-  std::vector<ScanCycle> cycles;   ///< all recorded cycles in order
+  std::vector<ScanCycle> cycles;  ///< all recorded cycles in order
 };
 
 /// Forwards to several recorders.
@@ -99,9 +99,18 @@ class RecorderTee : public ScanRecorder {
  public:
   /// Forwards to `a`, then `b`.
   RecorderTee(ScanRecorder& a, ScanRecorder& b) : m_a(a), m_b(b) {}
-  void record(const ScanCycle& c) override { m_a.record(c); m_b.record(c); }
-  void contact_changed(bool in, double t) override { m_a.contact_changed(in, t); m_b.contact_changed(in, t); }
-  void command_loaded(const MeasurementCommand& c) override { m_a.command_loaded(c); m_b.command_loaded(c); }
+  void record(const ScanCycle& c) override {
+    m_a.record(c);
+    m_b.record(c);
+  }
+  void contact_changed(bool in, double t) override {
+    m_a.contact_changed(in, t);
+    m_b.contact_changed(in, t);
+  }
+  void command_loaded(const MeasurementCommand& c) override {
+    m_a.command_loaded(c);
+    m_b.command_loaded(c);
+  }
   [[nodiscard]] bool drives_probe() const override { return m_a.drives_probe() || m_b.drives_probe(); }
   bool off_path(OffPathMove move, double s_mm, double t_s) override {
     const bool a = m_a.off_path(move, s_mm, t_s);

@@ -28,23 +28,23 @@ enum class SegmentedMode {
 /// Configuration of the simulated controller.
 struct ControllerConfig {
   SegmentedMode mode = SegmentedMode::Seed;  ///< boundary behaviour
-  ScanLimits limits;                       ///< scanning motion limits
-  LowSpeedRegion low;                      ///< the seed's low-speed region
-  double dt_s = 0.001;                     ///< control cycle
-  std::size_t buffer_segments = 1000;      ///< P: one buffer's capacity in segments
+  ScanLimits limits;                         ///< scanning motion limits
+  LowSpeedRegion low;                        ///< the seed's low-speed region
+  double dt_s = 0.001;                       ///< control cycle
+  std::size_t buffer_segments = 1000;        ///< P: one buffer's capacity in segments
   /// Net simulated planning time per segment. Default: the planner's measured cost on the build
   /// host (bench_segmented, P = 1000, with a piece per quarter segment since issue 11: min 1.44,
   /// median 1.47, p99 1.51 us per segment), rounded up to 2 us; a constant, so simulated results
   /// never depend on the wall clock.
   double planning_s_per_segment = 2e-6;
-  double planning_fixed_s = 0.0;           ///< plus this per command
-  double planning_margin = 1.3;            ///< Tp = margin * net planning time (SEEDS.md 2 step 4)
+  double planning_fixed_s = 0.0;  ///< plus this per command
+  double planning_margin = 1.3;   ///< Tp = margin * net planning time (SEEDS.md 2 step 4)
   /// Actual planning time / net planning time for command i (default 1: plans take the net
   /// time); > margin makes the plan of command i late.
   std::function<double(std::size_t)> planning_factor;
-  double retract_mm = 2.0;                 ///< retract (and approach) distance off the surface
+  double retract_mm = 2.0;                        ///< retract (and approach) distance off the surface
   MotionLimits positioning{50.0, 500.0, 5000.0};  ///< limits of retract and approach moves
-  double contact_settle_s = 0.3;           ///< after an approach: contact and settling at E0
+  double contact_settle_s = 0.3;                  ///< after an approach: contact and settling at E0
   /// Look-ahead only: when the next plan is still being made, slow down so the buffered end is
   /// reached when the plan is expected (start + Tp) instead of stopping there.
   bool pace_to_planner = true;
@@ -52,25 +52,25 @@ struct ControllerConfig {
 
 /// What happened at the boundary between Ci and Ci+1.
 struct BoundaryEvent {
-  std::size_t next_command = 0;      ///< i+1
-  double s_mm = 0;                   ///< arc length of the boundary
-  double t_s = 0;                    ///< when the probe passed (or reached) it
-  double speed_mm_s = 0;             ///< path speed there (0 when it stopped)
-  bool stopped = false;              ///< the probe came to rest at the boundary
-  bool retracted = false;            ///< and retracted / approached again
-  bool late_plan = false;            ///< a connection plan was not ready in time (seed fallback)
+  std::size_t next_command = 0;  ///< i+1
+  double s_mm = 0;               ///< arc length of the boundary
+  double t_s = 0;                ///< when the probe passed (or reached) it
+  double speed_mm_s = 0;         ///< path speed there (0 when it stopped)
+  bool stopped = false;          ///< the probe came to rest at the boundary
+  bool retracted = false;        ///< and retracted / approached again
+  bool late_plan = false;        ///< a connection plan was not ready in time (seed fallback)
 };
 
 /// Figures of one run.
 struct SegmentedStats {
-  std::size_t stops = 0;                ///< rests at a command boundary before the path end
-  std::size_t retracts = 0;             ///< retract-approach cycles at boundaries
-  std::size_t late_plans = 0;           ///< connection plans not ready in time
-  double scan_start_s = 0;              ///< first motion along the path
-  double scan_end_s = 0;                ///< rest at the path end
+  std::size_t stops = 0;       ///< rests at a command boundary before the path end
+  std::size_t retracts = 0;    ///< retract-approach cycles at boundaries
+  std::size_t late_plans = 0;  ///< connection plans not ready in time
+  double scan_start_s = 0;     ///< first motion along the path
+  double scan_end_s = 0;       ///< rest at the path end
   [[nodiscard]] double scan_time_s() const { return scan_end_s - scan_start_s; }
-  std::vector<PlanKind> plan_kinds;     ///< per command
-  std::vector<double> planning_wall_s;  ///< wall-clock time of each plan (host CPU)
+  std::vector<PlanKind> plan_kinds;       ///< per command
+  std::vector<double> planning_wall_s;    ///< wall-clock time of each plan (host CPU)
   std::vector<BoundaryEvent> boundaries;  ///< per boundary, in order
 };
 
@@ -114,11 +114,11 @@ class SegmentedController {
  private:
   enum class Phase { Retracted, Approaching, Scanning, Retracting, Done };
   struct Buffer {
-    bool full = false;                        // SB
+    bool full = false;  // SB
     std::optional<MeasurementCommand> command;
     std::optional<SpeedPlan> plan;
     bool plan_ready = false;
-    bool attached = false;                    // its pieces are in the interpolator
+    bool attached = false;  // its pieces are in the interpolator
   };
 
   void start_planning(std::size_t b);
@@ -140,13 +140,13 @@ class SegmentedController {
   std::size_t m_next_load = 0, m_next_plan = 0, m_next_attach = 0, m_done_commands = 0;
   bool m_last_loaded = false;
   std::optional<std::size_t> m_last_index;
-  int m_planning = -1;                        // buffer being planned
-  double m_plan_ready_s = 0;                  // when the plan will be ready (simulated truth)
-  double m_plan_expected_s = 0;               // when the controller expects it: start + Tp
+  int m_planning = -1;           // buffer being planned
+  double m_plan_ready_s = 0;     // when the plan will be ready (simulated truth)
+  double m_plan_expected_s = 0;  // when the controller expects it: start + Tp
   double m_next_start_mm = 0;
   bool m_lf = false;
   Phase m_phase = Phase::Retracted;
-  double m_phase_end_s = 0;                   // end of the current retract / approach
+  double m_phase_end_s = 0;  // end of the current retract / approach
   int m_approach_buffer = -1;
   bool m_stop_counted = false;
   double m_t_s = 0;

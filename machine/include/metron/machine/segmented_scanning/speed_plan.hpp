@@ -18,8 +18,8 @@ struct ScanLimits {
 
 /// The low-speed region that ends every plan of the seed method (SEEDS.md 2 step 3).
 struct LowSpeedRegion {
-  double length_mm = 3.0;    ///< L, run at the low speed at the end of a command
-  double speed_mm_s = 3.0;   ///< the low speed (the seed claims 1-5 mm/s)
+  double length_mm = 3.0;   ///< L, run at the low speed at the end of a command
+  double speed_mm_s = 3.0;  ///< the low speed (the seed claims 1-5 mm/s)
 };
 
 /// How a plan begins (SEEDS.md 2 step 3), or which other mode it belongs to.
@@ -32,28 +32,28 @@ enum class PlanKind {
 
 /// A stretch of path with one speed limit; the interpolator's unit of constraint.
 struct LimitPiece {
-  double start_mm = 0;        ///< global arc length where the piece begins
-  double end_mm = 0;          ///< and ends
-  double limit_mm_s = 0;      ///< speed limit inside the piece
-  double end_cap_mm_s = 0;    ///< extra limit at the piece end (the low speed at a command end)
-  geometry::PccSegment segment;  ///< the segment the piece lies on (a copy: buffers get overwritten)
-  double segment_start_mm = 0;   ///< global arc length of that segment's start
-  double segment_length_mm = 0;  ///< its arc length
-  std::size_t command_index = 0; ///< the command the piece belongs to
+  double start_mm = 0;            ///< global arc length where the piece begins
+  double end_mm = 0;              ///< and ends
+  double limit_mm_s = 0;          ///< speed limit inside the piece
+  double end_cap_mm_s = 0;        ///< extra limit at the piece end (the low speed at a command end)
+  geometry::PccSegment segment;   ///< the segment the piece lies on (a copy: buffers get overwritten)
+  double segment_start_mm = 0;    ///< global arc length of that segment's start
+  double segment_length_mm = 0;   ///< its arc length
+  std::size_t command_index = 0;  ///< the command the piece belongs to
 };
 
 /// The speed-pattern plan of one measurement command.
 struct SpeedPlan {
   PlanKind kind = PlanKind::Individual;
-  std::size_t command_index = 0;        ///< i of Ci (0-based)
-  double start_mm = 0;                  ///< global arc length of the command start
-  double end_mm = 0;                    ///< and end
-  double low_speed_from_mm = 0;         ///< start of the low-speed region (== end_mm when none)
-  double start_speed_mm_s = 0;          ///< 0 (individual, conventional) or the low speed (connection)
-  double end_speed_mm_s = 0;            ///< the planned speed at the end (low speed or 0)
-  std::vector<LimitPiece> pieces;       ///< limits in path order (segments, split at the region)
-  std::vector<double> junction_mm_s;    ///< planned speed at each piece boundary (pieces.size()+1)
-  std::vector<double> time_to_end_s;    ///< planned time from each piece boundary to the end
+  std::size_t command_index = 0;      ///< i of Ci (0-based)
+  double start_mm = 0;                ///< global arc length of the command start
+  double end_mm = 0;                  ///< and end
+  double low_speed_from_mm = 0;       ///< start of the low-speed region (== end_mm when none)
+  double start_speed_mm_s = 0;        ///< 0 (individual, conventional) or the low speed (connection)
+  double end_speed_mm_s = 0;          ///< the planned speed at the end (low speed or 0)
+  std::vector<LimitPiece> pieces;     ///< limits in path order (segments, split at the region)
+  std::vector<double> junction_mm_s;  ///< planned speed at each piece boundary (pieces.size()+1)
+  std::vector<double> time_to_end_s;  ///< planned time from each piece boundary to the end
   /// Planned duration tei - tsi.
   [[nodiscard]] double duration_s() const { return time_to_end_s.empty() ? 0 : time_to_end_s.front(); }
 };
@@ -61,8 +61,8 @@ struct SpeedPlan {
 /// Arc length and curvature speed limit of one segment: the part of the plan that depends only
 /// on the geometry (the seed plans "according to the curvature of each segment").
 struct SegmentLimit {
-  double length_mm = 0;     ///< arc length
-  double limit_mm_s = 0;    ///< min(path speed, sqrt(a_n / max curvature), the path's own limit)
+  double length_mm = 0;   ///< arc length
+  double limit_mm_s = 0;  ///< min(path speed, sqrt(a_n / max curvature), the path's own limit)
 };
 
 /// The parameter S at arc length `arc_mm` from the segment start (Newton on the arc length).
@@ -70,16 +70,14 @@ double parameter_at_arc(const geometry::PccSegment& segment, double arc_mm, doub
 
 /// Curvature limit of one segment: curvature sampled at 5 points of S (a cubic's curvature has
 /// few extrema; the sampling is documented as the planner's resolution).
-SegmentLimit segment_limit(const geometry::PccSegment& segment, const ScanLimits& limits,
-                           double path_speed_mm_s = 0);
+SegmentLimit segment_limit(const geometry::PccSegment& segment, const ScanLimits& limits, double path_speed_mm_s = 0);
 
 /// Plans one command: `segments` start at global arc length `start_mm`; `path_speed_mm_s` is the
 /// per-segment limit from the path (may be empty). Seed kinds get the low-speed region: the last
 /// L of the command (over as many segments as needed) at the low speed, none when the command is
 /// shorter than L (then the plan only ends at the low speed).
-SpeedPlan plan_command(std::span<const geometry::PccSegment> segments,
-                       std::span<const double> path_speed_mm_s, std::size_t command_index,
-                       double start_mm, PlanKind kind, const ScanLimits& limits,
+SpeedPlan plan_command(std::span<const geometry::PccSegment> segments, std::span<const double> path_speed_mm_s,
+                       std::size_t command_index, double start_mm, PlanKind kind, const ScanLimits& limits,
                        const LowSpeedRegion& low, bool last_command);
 
 // --- jerk-limited ramp algebra (symmetric S-curve between two speeds, zero acceleration at
@@ -98,10 +96,9 @@ double reachable_speed_mm_s(double v0_mm_s, double d_mm, const MotionLimits& lim
 /// constraint, across junctions. `middle` (optional) gets the same envelope at each piece middle.
 /// With `ongoing`, ramps need not end at zero acceleration (ongoing_speed_mm_s): the envelope of
 /// what the interpolator can reach, used for the schedule.
-void junction_passes(std::span<const LimitPiece> pieces, double start_speed_mm_s,
-                     double end_speed_mm_s, const MotionLimits& limits,
-                     std::vector<double>& junction_mm_s, std::vector<double>* middle = nullptr,
-                     bool ongoing = false);
+void junction_passes(std::span<const LimitPiece> pieces, double start_speed_mm_s, double end_speed_mm_s,
+                     const MotionLimits& limits, std::vector<double>& junction_mm_s,
+                     std::vector<double>* middle = nullptr, bool ongoing = false);
 
 /// Speed after `d_mm` of the fastest acceleration from (v0, a = 0): jerk up to the acceleration
 /// limit, then constant acceleration (the ramp does not have to end; by time reversal also the

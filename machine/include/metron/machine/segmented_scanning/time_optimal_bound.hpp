@@ -8,16 +8,16 @@ namespace metron::machine::segmented {
 
 /// The limits of the time-optimal bound: no jerk limit, so no jerk-limited motion can be faster.
 struct BoundLimits {
-  double speed_mm_s = 100;            ///< tangential speed limit
-  double acceleration_mm_s2 = 1000;   ///< tangential acceleration (and braking) limit
+  double speed_mm_s = 100;                 ///< tangential speed limit
+  double acceleration_mm_s2 = 1000;        ///< tangential acceleration (and braking) limit
   double normal_acceleration_mm_s2 = 500;  ///< centripetal limit: v^2 * curvature <= this
 };
 
 /// The independent lower bound of a scan's duration (issue 11 item 5).
 struct TimeOptimalBound {
-  double time_s = 0;                  ///< rest-to-rest minimum time under BoundLimits
-  double length_mm = 0;               ///< arc length of the discretised path
-  std::size_t nodes = 0;              ///< discretisation nodes
+  double time_s = 0;      ///< rest-to-rest minimum time under BoundLimits
+  double length_mm = 0;   ///< arc length of the discretised path
+  std::size_t nodes = 0;  ///< discretisation nodes
 };
 
 /// Time-optimal traversal of `path` from rest to rest with speed, tangential-acceleration and

@@ -25,7 +25,8 @@ MotionLimits path_limits(const MachineConfig& config, const AxesDynamics& axes, 
 /// The braking limits of the same move when an axis involved brakes by its own law (the others
 /// by their acceleration's); none when every axis involved brakes as it accelerates.
 std::optional<BrakingLimits> path_braking(const MachineConfig& config, const AxesDynamics& axes, const Vec3& direction,
-                                          double feed_mm_s, std::optional<double> acceleration_cap_mm_s2 = std::nullopt);
+                                          double feed_mm_s,
+                                          std::optional<double> acceleration_cap_mm_s2 = std::nullopt);
 
 /// True ramp time to `feed_mm_s` from rest along `direction` (hidden truth, for tests): the
 /// acceleration distance is feed * Td / 2. With symmetric braking it is the time-difference Td

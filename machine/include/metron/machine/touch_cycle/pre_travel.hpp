@@ -15,11 +15,11 @@ namespace metron::machine {
 /// true surface normal at the contact), in machine coordinates. Isotropic when horizontal ==
 /// vertical and lobe_amplitude == 0.
 struct PreTravel {
-  double horizontal_mm = 0.010;       ///< mean pre-travel for contacts in the XY plane
-  double vertical_mm = 0.010;         ///< pre-travel for contacts along Z
-  int lobes = 3;                      ///< lobes per turn (3 for a three-seat kinematic probe)
-  double lobe_amplitude_mm = 0;       ///< half the peak-to-valley variation in the XY plane
-  double lobe_phase_deg = 0;          ///< azimuth of a maximum, from +X toward +Y
+  double horizontal_mm = 0.010;  ///< mean pre-travel for contacts in the XY plane
+  double vertical_mm = 0.010;    ///< pre-travel for contacts along Z
+  int lobes = 3;                 ///< lobes per turn (3 for a three-seat kinematic probe)
+  double lobe_amplitude_mm = 0;  ///< half the peak-to-valley variation in the XY plane
+  double lobe_phase_deg = 0;     ///< azimuth of a maximum, from +X toward +Y
 
   /// Pre-travel for the unit direction `d` (see above); never negative.
   [[nodiscard]] double at(const Vec3& d) const;

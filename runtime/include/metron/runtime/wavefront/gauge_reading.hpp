@@ -22,8 +22,8 @@ struct GaugeReading {
   /// Centroid of the valid data in gauge coordinates (flat: mm; sphere: pupil units).
   Vec2 centroid{0, 0};
   int valid_pixels = 0;
-  double residual_rms_nm = 0;   ///< rms of the map minus the 11-term fit
-  double tilt_sigma_nm = 0;     ///< standard error of c2 from the fit's residual
+  double residual_rms_nm = 0;  ///< rms of the map minus the 11-term fit
+  double tilt_sigma_nm = 0;    ///< standard error of c2 from the fit's residual
 };
 
 /// Reads a map: the fit and its conversion to placement (sin_max of the transmission sphere from

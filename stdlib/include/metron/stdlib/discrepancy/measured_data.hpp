@@ -38,26 +38,26 @@ enum class Role {
 
 /// One column of the description.
 struct ColumnSpec {
-  std::string name;         ///< header name (or the name given when the file has no header)
+  std::string name;  ///< header name (or the name given when the file has no header)
   Role role = Role::Ignore;
-  int axis = -1;            ///< 0 x, 1 y, 2 z, 3 n (along the approach vector), -1 none
-  std::string unit;         ///< as written in the description
-  double scale = 1;         ///< value in metron units = raw * scale + offset
+  int axis = -1;     ///< 0 x, 1 y, 2 z, 3 n (along the approach vector), -1 none
+  std::string unit;  ///< as written in the description
+  double scale = 1;  ///< value in metron units = raw * scale + offset
   double offset = 0;
-  std::string of;           ///< for temperatures: what was measured
+  std::string of;  ///< for temperatures: what was measured
 };
 
 /// The description (JSON) of a data file.
 struct Description {
   DataKind kind = DataKind::Positioning;
-  std::vector<ColumnSpec> columns;  ///< in file order
-  bool whitespace = false;          ///< columns separated by blanks instead of commas
-  int skip_lines = 0;               ///< lines before the header (or the data)
-  bool header = true;               ///< the first line after skip_lines names the columns
-  double noise_mm = std::nan("");   ///< stated noise of one reading (NaN: estimate it)
-  double reference_temperature_c = 20;  ///< ISO 1
+  std::vector<ColumnSpec> columns;                   ///< in file order
+  bool whitespace = false;                           ///< columns separated by blanks instead of commas
+  int skip_lines = 0;                                ///< lines before the header (or the data)
+  bool header = true;                                ///< the first line after skip_lines names the columns
+  double noise_mm = std::nan("");                    ///< stated noise of one reading (NaN: estimate it)
+  double reference_temperature_c = 20;               ///< ISO 1
   std::array<double, 3> fixed_position_mm{0, 0, 0};  ///< position of axes without a nominal column
-  std::string name;                 ///< for reports
+  std::string name;                                  ///< for reports
   /// The base model's own table of systematic deviations per nominal position (ISO 230-2's mean
   /// bidirectional deviation per target): what a compensation table holds; effects are then
   /// searched beyond it (reversal, drift, thermal), not in the per-target shape itself.
@@ -78,9 +78,9 @@ struct MeasuredData {
   std::string file;
   Description description;
   std::size_t rows = 0;
-  std::vector<Series> series;                  ///< every non-ignored column
-  std::vector<std::vector<std::string>> cells; ///< raw text per row, per column
-  std::vector<std::string> header;             ///< column names in file order
+  std::vector<Series> series;                   ///< every non-ignored column
+  std::vector<std::vector<std::string>> cells;  ///< raw text per row, per column
+  std::vector<std::string> header;              ///< column names in file order
 
   /// The series with role and axis (-1: any axis), null when absent.
   [[nodiscard]] const Series* find(Role role, int axis = -1) const;
@@ -107,7 +107,8 @@ tl::expected<Description, DataError> parse_description(const nlohmann::json& j, 
 /// Reads the data file described by `description`.
 tl::expected<MeasuredData, DataError> read_measured_data(const std::string& data_file, const Description& description);
 /// Reads both files.
-tl::expected<MeasuredData, DataError> read_measured_data(const std::string& data_file, const std::string& description_file);
+tl::expected<MeasuredData, DataError> read_measured_data(const std::string& data_file,
+                                                         const std::string& description_file);
 /// Reads a table from text (for tests and generators).
 tl::expected<MeasuredData, DataError> parse_measured_data(const std::string& text, const std::string& name,
                                                           const Description& description);
@@ -116,7 +117,8 @@ tl::expected<MeasuredData, DataError> parse_measured_data(const std::string& tex
 /// measured - nominal (Measured columns get nominal + it, Deviation columns it), in the column's unit.
 template <class Deviation>
 std::string write_with_deviations(const MeasuredData& data, Deviation deviation);
-std::string write_with_deviations_impl(const MeasuredData& data, const std::vector<std::array<double, 4>>& deviation_mm);
+std::string write_with_deviations_impl(const MeasuredData& data,
+                                       const std::vector<std::array<double, 4>>& deviation_mm);
 
 template <class Deviation>
 std::string write_with_deviations(const MeasuredData& data, Deviation deviation) {

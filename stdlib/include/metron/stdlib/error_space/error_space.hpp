@@ -33,8 +33,8 @@ struct Grid {
 
 /// An error space (SEEDS.md 4): error components at the grid points, at one temperature.
 struct ErrorSpace {
-  Grid grid;                   ///< where the values are
-  double temperature_c = 20;   ///< the monitored temperature it was measured at
+  Grid grid;                  ///< where the values are
+  double temperature_c = 20;  ///< the monitored temperature it was measured at
   /// Per component, one value per grid point (flat, Grid::index order) in mm; empty when the
   /// instruments did not reach that component.
   std::array<std::vector<double>, 3> values_mm;

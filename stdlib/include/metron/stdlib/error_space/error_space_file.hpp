@@ -16,9 +16,9 @@ namespace metron::error_space {
 
 /// What an error-space file holds.
 struct ErrorSpaceFile {
-  std::vector<ErrorSpace> spaces;     ///< one per temperature, all on the same grid with the same components
-  InterpolationSpec interpolation;    ///< how the controller interpolates between grid points
-  std::string description;            ///< free text (how it was measured)
+  std::vector<ErrorSpace> spaces;   ///< one per temperature, all on the same grid with the same components
+  InterpolationSpec interpolation;  ///< how the controller interpolates between grid points
+  std::string description;          ///< free text (how it was measured)
   /// The measuring tip's offset from the ram reference point during the calibration (the grid is
   /// in ram positions): the map describes the error at the tip position grid + offset
   /// (docs/error-space.md, "Compensation"). Optional in the file; default zero.

@@ -17,9 +17,10 @@ namespace metron::error_space {
 
 /// The interpolation methods of SEEDS.md 4.
 enum class Method {
-  Trilinear,     ///< 8 cell corners; continuous, derivative not continuous
-  BSpline,       ///< cubic tensor B-spline through the grid values (not-a-knot ends); C2; needs >= 4 uniform points per axis
-  LeastSquares,  ///< a local model fitted by least squares around the cell; value and sigma_e; discontinuous between cells
+  Trilinear,  ///< 8 cell corners; continuous, derivative not continuous
+  BSpline,  ///< cubic tensor B-spline through the grid values (not-a-knot ends); C2; needs >= 4 uniform points per axis
+  LeastSquares,  ///< a local model fitted by least squares around the cell; value and sigma_e; discontinuous between
+                 ///< cells
 };
 
 /// "trilinear", "bspline", "least-squares".
@@ -80,9 +81,9 @@ class SpaceInterpolator {
 /// SEEDS.md 4, validation: fit on every second grid point (even indices on every axis with more
 /// than one point), predict the others inside that subgrid's box, compare.
 struct Validation {
-  double rms_mm = 0;      ///< RMS of predicted minus grid value
-  double max_abs_mm = 0;  ///< largest absolute difference
-  std::size_t points = 0; ///< number of predicted points
+  double rms_mm = 0;       ///< RMS of predicted minus grid value
+  double max_abs_mm = 0;   ///< largest absolute difference
+  std::size_t points = 0;  ///< number of predicted points
 };
 
 /// Runs the validation for one component; an error when the subgrid does not suit the method.

@@ -15,17 +15,17 @@ namespace metron::error_space {
 
 /// One heat map: values on a grid (rows = first axis), NaN = no data (drawn grey).
 struct HeatMap {
-  std::string title;             ///< above the map
-  std::string x_label, y_label;  ///< axis names with units
+  std::string title;               ///< above the map
+  std::string x_label, y_label;    ///< axis names with units
   std::vector<double> x_mm, y_mm;  ///< coordinates of the columns of `values_mm` rows/cols
-  Eigen::MatrixXd values_mm;     ///< (x_mm.size()) x (y_mm.size())
+  Eigen::MatrixXd values_mm;       ///< (x_mm.size()) x (y_mm.size())
 };
 
 /// What the report shows.
 struct ReportInput {
-  std::string title;                 ///< page title
-  std::vector<std::string> notes;    ///< lines of text under the title (figures, settings)
-  std::vector<HeatMap> maps;         ///< drawn in order, three per row
+  std::string title;               ///< page title
+  std::vector<std::string> notes;  ///< lines of text under the title (figures, settings)
+  std::vector<HeatMap> maps;       ///< drawn in order, three per row
 };
 
 /// The slice k of component c of a space as a heat map over x and y (um colour scale).

@@ -81,8 +81,8 @@ struct SurfaceReadings {
 
 /// Choices of the surface method.
 struct SurfaceOptions {
-  double sensor_sigma_mm = 0;       ///< sensor noise standard deviation, for the S7 threshold and the noise floor
-  double s7_factor = 4;             ///< S7: re-measure when |disagreement| > max(s7_factor * its standard deviation, 1 nm)
+  double sensor_sigma_mm = 0;  ///< sensor noise standard deviation, for the S7 threshold and the noise floor
+  double s7_factor = 4;        ///< S7: re-measure when |disagreement| > max(s7_factor * its standard deviation, 1 nm)
   std::optional<double> known_delta_mm;  ///< Delta known from elsewhere (e.g. a reversal): S2 is skipped
 };
 
@@ -92,14 +92,15 @@ struct SurfaceResult {
   Eigen::MatrixXd profile_mm;  ///< (l+1) x (m+1): plate profile under A, relative to the same plane
   double delta_mm = 0;         ///< S2: Delta from the first X line (includes that line's end slope per step)
   std::vector<double> s7_disagreement_mm;  ///< S7, per j: X curve end rise minus the Y boundary curves' difference
-  std::vector<double> s7_sd_mm;            ///< its standard deviation from sensor noise: 2 sigma sqrt(l + j), 0 for j = 0
-  std::vector<int> remeasure_lines;        ///< S7: the j whose disagreement exceeds the threshold
-  bool remeasure = false;                  ///< S7 decision: any line to re-measure
+  std::vector<double> s7_sd_mm;      ///< its standard deviation from sensor noise: 2 sigma sqrt(l + j), 0 for j = 0
+  std::vector<int> remeasure_lines;  ///< S7: the j whose disagreement exceeds the threshold
+  bool remeasure = false;            ///< S7 decision: any line to re-measure
 };
 
 /// S1-S7 of SEEDS.md 4. The result is relative to the reference plane P(i, j) = e(0,0) + s (i + j),
 /// s = (e(l,0) - e(0,0)) / l: the one Delta cannot be told from one common slope per step in both
-/// directions. With `known_delta_mm` the slope stays: the result is e - e(0,0). Throws std::invalid_argument on inconsistent sizes (fewer than 2 points per line).
+/// directions. With `known_delta_mm` the slope stays: the result is e - e(0,0). Throws std::invalid_argument on
+/// inconsistent sizes (fewer than 2 points per line).
 SurfaceResult solve_surface(const SurfaceReadings& readings, const SurfaceOptions& options = {});
 
 /// The same reference applied to a known surface (for comparing with truth): e - P.

@@ -13,9 +13,9 @@ namespace metron::fitting {
 
 struct EllipseOutline {
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  double angle_rad = 0;           ///< the major axis, from the plane's first axis toward its second
-  double major_diameter_mm = 0;   ///< 2a, along the major axis
-  double minor_diameter_mm = 0;   ///< 2b <= 2a
+  double angle_rad = 0;          ///< the major axis, from the plane's first axis toward its second
+  double major_diameter_mm = 0;  ///< 2a, along the major axis
+  double minor_diameter_mm = 0;  ///< 2b <= 2a
 };
 
 /// Signed orthogonal distance of `p` from the ellipse: > 0 outside the region it bounds, < 0

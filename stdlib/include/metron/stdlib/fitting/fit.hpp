@@ -18,9 +18,13 @@ namespace metron::fitting {
 
 /// Why a fit produced no result (an expected outcome, not a bug).
 enum class FitFailure {
-  TooFewPoints,   ///< fewer points than the shape needs (point 1, line 2, plane 3, circle 3, sphere 4, cylinder 5, cone 6)
-  Degenerate,     ///< the points do not determine the shape (coincident, collinear for a plane or circle, coplanar for a sphere) or a coordinate is not finite
-  NoConvergence,  ///< no finite least-squares shape: the iteration did not settle, or the best fit is worse than a plane (line), i.e. the minimum lies at infinite radius (a cylinder, cone, sphere or circle through nearly flat or straight data)
+  TooFewPoints,  ///< fewer points than the shape needs (point 1, line 2, plane 3, circle 3, sphere 4, cylinder 5, cone
+                 ///< 6)
+  Degenerate,    ///< the points do not determine the shape (coincident, collinear for a plane or circle, coplanar for a
+                 ///< sphere) or a coordinate is not finite
+  NoConvergence,  ///< no finite least-squares shape: the iteration did not settle, or the best fit is worse than a
+                  ///< plane (line), i.e. the minimum lies at infinite radius (a cylinder, cone, sphere or circle
+                  ///< through nearly flat or straight data)
 };
 
 /// "too few points", "degenerate point set", "no convergence".
@@ -51,13 +55,15 @@ struct FitOptions {
   /// Plane/circle normal or cylinder/cone axis to orient the result (and to start the iteration
   /// from); for a line, the normal of the plane the line was measured in.
   std::optional<Vec3> direction_hint;
-  bool inner = true;  ///< circle/sphere/cylinder/cone: a hole (material outside); the side for compensation and residual signs
+  bool inner =
+      true;  ///< circle/sphere/cylinder/cone: a hole (material outside); the side for compensation and residual signs
   bool circle_in_plane_of_hint = false;
   /// Cylinder/cone: keep the minimum reached from `direction_hint` (the nominal axis) when that fit
   /// converges, instead of the lowest of a global search. CMM software fits measured features
   /// from their nominal; it also keeps degenerate patterns on the nominal (two rings of four
   /// points at equal angles lie exactly on a diagonal cylinder too).
-  bool start_from_hint = false;  ///< circle: project onto the plane through the centroid normal to `direction_hint` instead of fitting a plane
+  bool start_from_hint = false;  ///< circle: project onto the plane through the centroid normal to `direction_hint`
+                                 ///< instead of fitting a plane
 };
 
 /// A fitted feature. All lengths in mm, in the coordinates of the input points.
@@ -75,8 +81,8 @@ struct FitResult {
   /// agreeing with the hint, else largest component positive. Cone: axis from the apex toward
   /// the opening (NIST). Point: zero.
   Vec3 direction = Vec3::Zero();
-  double diameter_mm = 0;       ///< circle, sphere, cylinder (compensated)
-  double apex_angle_deg = 0;    ///< cone: full apex angle
+  double diameter_mm = 0;     ///< circle, sphere, cylinder (compensated)
+  double apex_angle_deg = 0;  ///< cone: full apex angle
   /// Cone: orthogonal distance from `position` to the cone surface (NIST convention; equals the
   /// radius at `position` times cos(apex_angle/2)), compensated.
   double cone_distance_mm = 0;
@@ -99,8 +105,7 @@ struct FitResult {
 /// Fits `shape` to `points` by orthogonal distance least squares.
 /// @throws std::invalid_argument when the compensation does not give one finite, non-zero approach
 ///         per point (they need not be unit: they are normalised) or its ball radius is negative.
-tl::expected<FitResult, FitFailure> fit(Shape shape, const std::vector<Vec3>& points,
-                                        const FitOptions& options = {});
+tl::expected<FitResult, FitFailure> fit(Shape shape, const std::vector<Vec3>& points, const FitOptions& options = {});
 
 /// The mean of the points.
 tl::expected<FitResult, FitFailure> fit_point(const std::vector<Vec3>& points, const FitOptions& options = {});

@@ -16,9 +16,10 @@ namespace metron::fitting {
 
 /// The minimum zone of a point set and the reference feature that achieves it.
 struct MinimumZone {
-  double form_mm = 0;        ///< zone width: plane gap, annulus / shell width, cylinder-shell width, line-zone width
-  Vec3 position = Vec3::Zero();  ///< a point of the MZ reference: plane point, circle/sphere centre, point on the axis or line
-  Vec3 direction = Vec3::UnitZ();  ///< plane normal, circle plane normal, cylinder axis, line direction
+  double form_mm = 0;  ///< zone width: plane gap, annulus / shell width, cylinder-shell width, line-zone width
+  Vec3 position =
+      Vec3::Zero();  ///< a point of the MZ reference: plane point, circle/sphere centre, point on the axis or line
+  Vec3 direction = Vec3::UnitZ();    ///< plane normal, circle plane normal, cylinder axis, line direction
   double least_squares_form_mm = 0;  ///< the same points' least-squares form (max - min residual), for comparison
   /// Circle, sphere, cylinder: the zone's mean diameter, r_min + r_max about `position` (and
   /// `direction`): the size of the minimum-zone reference feature (ISO 12181-1 MZCI and its
@@ -27,7 +28,7 @@ struct MinimumZone {
   /// Cone: the full apex angle of the minimum-zone reference cone, whose apex is `position` and
   /// axis `direction` (from the apex toward the opening); its surface is the zone's middle.
   double apex_angle_deg = 0;
-  int evaluations = 0;       ///< objective evaluations of the search
+  int evaluations = 0;  ///< objective evaluations of the search
 };
 
 /// Minimum-zone form of `points` (no probe compensation: give surface points) for a Plane
@@ -68,8 +69,8 @@ tl::expected<ExtremeCircle, FitFailure> extreme_circle(const std::vector<Vec3>& 
 /// one hemisphere (a cap); an inscribed one also when its search drifts farther than a quarter of
 /// the least-squares radius.
 struct ExtremeFeature {
-  Vec3 position = Vec3::Zero();   ///< centre; a point on the axis
-  Vec3 direction = Vec3::UnitZ(); ///< circle normal, cylinder axis (the least-squares sense); sphere: +Z
+  Vec3 position = Vec3::Zero();    ///< centre; a point on the axis
+  Vec3 direction = Vec3::UnitZ();  ///< circle normal, cylinder axis (the least-squares sense); sphere: +Z
   double diameter_mm = 0;
 };
 tl::expected<ExtremeFeature, FitFailure> extreme_feature(Shape shape, const std::vector<Vec3>& points, bool inscribed,

@@ -13,8 +13,8 @@ namespace metron::fitting {
 
 /// Why a point file could not be read.
 struct PointFileError {
-  std::string message;  ///< complete and lowercase, naming the record: "line 7: expected 3 numbers, got 2"
-  std::size_t line = 0; ///< 1-based line the error refers to; 0 for the whole file (e.g. cannot open)
+  std::string message;   ///< complete and lowercase, naming the record: "line 7: expected 3 numbers, got 2"
+  std::size_t line = 0;  ///< 1-based line the error refers to; 0 for the whole file (e.g. cannot open)
 };
 
 /// Reads points in mm from the text of a point file. Accepted layouts:

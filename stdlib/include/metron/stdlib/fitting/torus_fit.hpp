@@ -13,8 +13,8 @@
 namespace metron::fitting {
 
 struct Torus {
-  Vec3 centre = Vec3::Zero();  ///< the centre of the centre circle
-  Vec3 axis = Vec3::UnitZ();   ///< unit, normal to the centre circle's plane
+  Vec3 centre = Vec3::Zero();    ///< the centre of the centre circle
+  Vec3 axis = Vec3::UnitZ();     ///< unit, normal to the centre circle's plane
   double major_diameter_mm = 0;  ///< 2R: the centre circle's diameter
   double minor_diameter_mm = 0;  ///< 2r: the tube's diameter
 };

@@ -31,13 +31,13 @@ struct CadFace {
     Other      ///< B-spline, revolved, extruded, offset ... surfaces
   };
   Kind kind = Kind::Other;
-  Vec3 origin = Vec3::Zero();     ///< see `Kind`; in the model's coordinates, mm
-  Vec3 axis = Vec3::UnitZ();      ///< unit; plane: outward normal; others: the surface's axis
-  double radius_mm = 0;           ///< cylinder, cone (at origin), sphere, torus (major)
-  double minor_radius_mm = 0;     ///< torus only
-  double semi_angle_rad = 0;      ///< cone only; the radius grows along +axis when positive
-  bool inner = false;             ///< material outside the surface (a hole), i.e. DMIS INNER
-  std::uint32_t shape_index = 0;  ///< 1-based face index in the shape (TopExp::MapShapes order)
+  Vec3 origin = Vec3::Zero();            ///< see `Kind`; in the model's coordinates, mm
+  Vec3 axis = Vec3::UnitZ();             ///< unit; plane: outward normal; others: the surface's axis
+  double radius_mm = 0;                  ///< cylinder, cone (at origin), sphere, torus (major)
+  double minor_radius_mm = 0;            ///< torus only
+  double semi_angle_rad = 0;             ///< cone only; the radius grows along +axis when positive
+  bool inner = false;                    ///< material outside the surface (a hole), i.e. DMIS INNER
+  std::uint32_t shape_index = 0;         ///< 1-based face index in the shape (TopExp::MapShapes order)
   std::vector<std::uint32_t> triangles;  ///< indices into `CadModel::mesh.faces()`
 };
 
@@ -50,11 +50,9 @@ struct CadModel {
 /// Reads a STEP (.step/.stp) or IGES (.iges/.igs) file, chosen by extension (case-insensitive),
 /// in millimetres; tessellates every face with BRepMesh respecting face orientation and
 /// location, and welds coincident nodes so a valid solid gives a closed, outward mesh.
-tl::expected<CadModel, MeshError> load_cad_model(const std::string& path,
-                                                 const TessellationOptions& options = {});
+tl::expected<CadModel, MeshError> load_cad_model(const std::string& path, const TessellationOptions& options = {});
 
 /// `load_cad_model(path, options)->mesh`.
-tl::expected<Mesh, MeshError> load_cad(const std::string& path,
-                                       const TessellationOptions& options = {});
+tl::expected<Mesh, MeshError> load_cad(const std::string& path, const TessellationOptions& options = {});
 
 }  // namespace metron::geometry

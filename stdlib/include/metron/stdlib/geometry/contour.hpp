@@ -34,9 +34,9 @@ struct ArcSpec {
   double radius_mm = 10;
   Vec3 reference = Vec3::UnitX();  ///< direction of angle 0
   double start_deg = 0;
-  double sweep_deg = 360;          ///< signed: negative runs clockwise about `axis`
+  double sweep_deg = 360;  ///< signed: negative runs clockwise about `axis`
   bool inner = true;
-  double pitch_mm = 0;             ///< helix: advance along `axis` per turn (0: a circle)
+  double pitch_mm = 0;  ///< helix: advance along `axis` per turn (0: a circle)
 };
 Contour arc_contour(const ArcSpec& arc, double step_mm = 0.05);
 

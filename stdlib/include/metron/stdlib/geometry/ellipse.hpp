@@ -8,8 +8,8 @@ namespace metron::geometry {
 
 /// The nearest point of an ellipse and the distance to it.
 struct EllipseFoot {
-  Eigen::Vector2d foot = Eigen::Vector2d::Zero();    ///< on the ellipse, in its frame
-  Eigen::Vector2d normal = Eigen::Vector2d::UnitX(); ///< unit, outward, at the foot
+  Eigen::Vector2d foot = Eigen::Vector2d::Zero();     ///< on the ellipse, in its frame
+  Eigen::Vector2d normal = Eigen::Vector2d::UnitX();  ///< unit, outward, at the foot
   double signed_distance = 0;                         ///< > 0 outside the ellipse, < 0 inside
 };
 

@@ -32,8 +32,7 @@ class Mesh {
   /// Builds the mesh and its tree. Fails on no faces, an index out of range, a repeated index
   /// in one face or a non-finite coordinate. Winding is kept as given; zero-area faces are kept
   /// in `faces()` but never returned by queries.
-  static tl::expected<Mesh, MeshError> from_triangles(std::vector<Vec3> vertices,
-                                                      std::vector<Face> faces);
+  static tl::expected<Mesh, MeshError> from_triangles(std::vector<Vec3> vertices, std::vector<Face> faces);
 
   [[nodiscard]] std::size_t vertex_count() const;
   [[nodiscard]] std::size_t face_count() const;
@@ -59,9 +58,8 @@ class Mesh {
     std::uint32_t face;  ///< index into `faces()`
   };
   /// First hit with t <= max_t (an origin on the surface hits at t = 0); nullopt if none.
-  [[nodiscard]] std::optional<Hit> ray_cast(
-      const Vec3& origin, const Vec3& unit_direction,
-      double max_t = std::numeric_limits<double>::infinity()) const;
+  [[nodiscard]] std::optional<Hit> ray_cast(const Vec3& origin, const Vec3& unit_direction,
+                                            double max_t = std::numeric_limits<double>::infinity()) const;
 
   /// First parameter s in [0,1] along a->b at which a ball of radius r centred at a+s(b-a)
   /// touches the surface (distance == r), to within tol_mm along the path; 0 if it touches at a;
@@ -74,16 +72,14 @@ class Mesh {
   /// distance <= r brackets the first crossing, which is bisected to tol_mm / 2. The returned s
   /// is the touching end of the bracket: the ball there touches or penetrates by at most tol_mm.
   /// Throws std::invalid_argument unless ball_radius_mm > 0 (use ray_cast for a point).
-  [[nodiscard]] std::optional<double> first_ball_contact(const Vec3& a, const Vec3& b,
-                                                         double ball_radius_mm,
+  [[nodiscard]] std::optional<double> first_ball_contact(const Vec3& a, const Vec3& b, double ball_radius_mm,
                                                          double tol_mm = 1e-7) const;
 
   /// Plane section (CGAL::Polygon_mesh_slicer): polylines where the plane cuts the surface; a
   /// closed polyline repeats its first point at the end. (Outward face normal, direction of
   /// travel, plane normal) is right-handed, so seen from the side the plane normal points to,
   /// outer boundaries of a closed outward mesh run counterclockwise and holes clockwise.
-  [[nodiscard]] std::vector<std::vector<Vec3>> section(const Vec3& plane_point,
-                                                       const Vec3& plane_normal) const;
+  [[nodiscard]] std::vector<std::vector<Vec3>> section(const Vec3& plane_point, const Vec3& plane_normal) const;
 
   /// Axis-aligned bounds of the vertices used by faces.
   [[nodiscard]] Eigen::AlignedBox3d bounds() const;

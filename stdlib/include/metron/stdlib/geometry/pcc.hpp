@@ -14,7 +14,7 @@ namespace metron::geometry {
 /// with K0 the start point and D the straight-line distance from start to end (SEEDS.md 2).
 struct PccSegment {
   Eigen::Matrix<double, 3, 4> k = Eigen::Matrix<double, 3, 4>::Zero();  ///< columns K0, K1, K2, K3
-  double d_mm = 0.0;  ///< parameter range D
+  double d_mm = 0.0;                                                    ///< parameter range D
 
   /// The cubic Hermite segment from p0 to p1 with unit tangents t0, t1 at its ends; S is then
   /// close to arc length for gently curved segments.
@@ -31,13 +31,9 @@ struct PccSegment {
     return seg;
   }
 
-  [[nodiscard]] Vec3 point(double s) const {
-    return ((k.col(3) * s + k.col(2)) * s + k.col(1)) * s + k.col(0);
-  }
+  [[nodiscard]] Vec3 point(double s) const { return ((k.col(3) * s + k.col(2)) * s + k.col(1)) * s + k.col(0); }
   /// dX/dS
-  [[nodiscard]] Vec3 derivative(double s) const {
-    return (3.0 * k.col(3) * s + 2.0 * k.col(2)) * s + k.col(1);
-  }
+  [[nodiscard]] Vec3 derivative(double s) const { return (3.0 * k.col(3) * s + 2.0 * k.col(2)) * s + k.col(1); }
   /// d2X/dS2
   [[nodiscard]] Vec3 second_derivative(double s) const { return 6.0 * k.col(3) * s + 2.0 * k.col(2); }
   [[nodiscard]] Vec3 start() const { return k.col(0); }
@@ -53,14 +49,11 @@ struct PccSegment {
   /// Arc length from 0 to S by 8-point Gauss-Legendre quadrature (exact to ~1e-12 relative
   /// for the gently curved segments scan paths are made of).
   [[nodiscard]] double arc_length(double s) const {
-    static constexpr double x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
-                                    0.9602898564975363};
-    static constexpr double w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
-                                    0.1012285362903763};
+    static constexpr double x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+    static constexpr double w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
     double sum = 0.0;
     for (int i = 0; i < 4; ++i) {
-      sum += w[i] * (derivative(0.5 * s * (1.0 + x[i])).norm() +
-                     derivative(0.5 * s * (1.0 - x[i])).norm());
+      sum += w[i] * (derivative(0.5 * s * (1.0 + x[i])).norm() + derivative(0.5 * s * (1.0 - x[i])).norm());
     }
     return 0.5 * s * sum;
   }
@@ -71,8 +64,8 @@ struct PccSegment {
 /// at each interpolation point (segment starts, plus the path end) and a speed per segment.
 struct PccPath {
   std::vector<PccSegment> segments;
-  std::vector<Vec3> normals;         ///< unit surface normals, segments.size() + 1 (may be empty)
-  std::vector<double> speed_mm_s;    ///< per-segment speed limit (may be empty: no limit known)
+  std::vector<Vec3> normals;       ///< unit surface normals, segments.size() + 1 (may be empty)
+  std::vector<double> speed_mm_s;  ///< per-segment speed limit (may be empty: no limit known)
 
   [[nodiscard]] double length() const {
     double sum = 0.0;

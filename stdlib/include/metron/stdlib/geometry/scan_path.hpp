@@ -20,13 +20,13 @@ struct ScanPathError {
 
 /// How a scan path is built from a contour.
 struct ScanPathOptions {
-  double ball_radius_mm = 2.0;            ///< r, the stylus ball radius
-  double reference_deflection_mm = 0.3;   ///< E0, the reference deflection
-  double chord_tolerance_mm = 0.001;      ///< max distance between the PCC chain and the offset contour
-  double max_segment_mm = 0;              ///< longest segment chord D (0: no limit)
-  double feed_mm_s = 10;                  ///< scan feed: the speed cap on every segment
-  double centripetal_accel_mm_s2 = 200;   ///< a: a segment of curvature kappa runs at most sqrt(a/kappa)
-  double corner_angle_deg = 20;           ///< a turn sharper than this between samples ends a smooth piece
+  double ball_radius_mm = 2.0;           ///< r, the stylus ball radius
+  double reference_deflection_mm = 0.3;  ///< E0, the reference deflection
+  double chord_tolerance_mm = 0.001;     ///< max distance between the PCC chain and the offset contour
+  double max_segment_mm = 0;             ///< longest segment chord D (0: no limit)
+  double feed_mm_s = 10;                 ///< scan feed: the speed cap on every segment
+  double centripetal_accel_mm_s2 = 200;  ///< a: a segment of curvature kappa runs at most sqrt(a/kappa)
+  double corner_angle_deg = 20;          ///< a turn sharper than this between samples ends a smooth piece
 };
 
 /// A chain of PCC segments and how well it fits.
@@ -45,11 +45,11 @@ PccFit fit_pcc(const std::vector<Vec3>& points, bool closed, double tolerance_mm
 
 /// A scan path with what it was made from.
 struct ScanPathPlan {
-  PccPath path;                          ///< ball-centre path; normals and speeds filled
-  std::vector<double> curvature_per_mm;  ///< path curvature at each interpolation point (segments + 1)
+  PccPath path;                                  ///< ball-centre path; normals and speeds filled
+  std::vector<double> curvature_per_mm;          ///< path curvature at each interpolation point (segments + 1)
   std::vector<double> segment_curvature_per_mm;  ///< the largest curvature on each segment (sets its speed)
-  double max_deviation_mm = 0;           ///< fit deviation from the offset contour
-  std::size_t corner_count = 0;          ///< sharp corners where smooth pieces meet
+  double max_deviation_mm = 0;                   ///< fit deviation from the offset contour
+  std::size_t corner_count = 0;                  ///< sharp corners where smooth pieces meet
 };
 
 /// SEEDS.md 1: contour -> offset by (r - E0) along the normals -> PCC chain within the chord

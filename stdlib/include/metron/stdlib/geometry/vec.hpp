@@ -5,7 +5,7 @@
 
 namespace metron {
 
-using Vec3 = Eigen::Vector3d;      ///< a point or direction in mm
+using Vec3 = Eigen::Vector3d;  ///< a point or direction in mm
 using Vec2 = Eigen::Vector2d;
 using Mat3 = Eigen::Matrix3d;
 /// A rigid transform; by convention `Frame` maps part (or local) coordinates to machine coordinates.

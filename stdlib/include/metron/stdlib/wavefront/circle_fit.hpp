@@ -38,14 +38,14 @@ struct PhasedCircle {
 };
 
 /// Fits a phased circle; `sense` 0 tries both senses and keeps the better (needs 3 angles).
-tl::expected<PhasedCircle, const char*> fit_circle_phased(std::span<const Vec2> points, std::span<const double> angles_rad,
-                                                          int sense = 0);
+tl::expected<PhasedCircle, const char*> fit_circle_phased(std::span<const Vec2> points,
+                                                          std::span<const double> angles_rad, int sense = 0);
 
 /// Straight line y = intercept + slope x by ordinary least squares (x exact, y noisy).
 struct Line2 {
   double intercept = 0;
   double slope = 0;
-  double slope_sigma = 0;   ///< standard error of the slope from the residual (needs > 2 points)
+  double slope_sigma = 0;  ///< standard error of the slope from the residual (needs > 2 points)
   double residual_rms = 0;
 };
 

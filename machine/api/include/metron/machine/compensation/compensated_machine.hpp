@@ -55,8 +55,8 @@ class CompensatedMachine final : public Machine {
   void compensate_tool(ToolInfo& info) const;
   std::shared_ptr<const ErrorMap> m_map;
   std::shared_ptr<const ErrorSpaceMap> m_by_temperature;  ///< the loaded map when it follows the temperature
-  std::vector<Command> m_queued;  ///< the commands as the client sent them
-  Vec3 m_scan_shift_mm = Vec3::Zero();  ///< the running segmented scan's shift (set by its command 0)
+  std::vector<Command> m_queued;                          ///< the commands as the client sent them
+  Vec3 m_scan_shift_mm = Vec3::Zero();                    ///< the running segmented scan's shift (set by its command 0)
   /// Per tool, its last qualification (centres as the scales read them, certified diameter), and
   /// the effective radius refitted through the map it was last computed with.
   struct Qualification {

@@ -11,8 +11,8 @@ namespace metron::machine::wavefront {
 /// One gauge measurement: optical path difference (test minus reference, double pass) on a square
 /// pixel grid over the pupil; NaN where there is no data (outside the pupil or the part).
 struct GaugeMap {
-  int pixels = 0;                 ///< pixels across the grid (pixels x pixels values, row major, row = y)
-  std::vector<double> opd_nm;     ///< optical path difference per pixel, NaN outside the aperture
+  int pixels = 0;              ///< pixels across the grid (pixels x pixels values, row major, row = y)
+  std::vector<double> opd_nm;  ///< optical path difference per pixel, NaN outside the aperture
   Element element = Element::Sphere;
   /// Millimetres (flat: lateral position in the gauge frame) or pupil units (sphere: sine of the
   /// ray angle / sin_max) per unit of normalised pupil coordinate; the grid spans [-1, 1]^2.

@@ -17,8 +17,8 @@ namespace metron::machine::ipp {
 
 /// A command tag: five digits, or `E` and four digits for a fast (event) command.
 struct Tag {
-  bool event = false;                 ///< `E0001`: an event tag (daemons, E-commands)
-  std::uint32_t number = 0;           ///< 1..99999 (command), 1..9999 (event); 0 only for E0000
+  bool event = false;        ///< `E0001`: an event tag (daemons, E-commands)
+  std::uint32_t number = 0;  ///< 1..99999 (command), 1..9999 (event); 0 only for E0000
   /// The five characters, e.g. "00012" or "E0001".
   [[nodiscard]] std::string text() const;
   friend bool operator==(const Tag&, const Tag&) = default;
@@ -27,16 +27,16 @@ struct Tag {
 /// One argument of a command (and, recursively, of a call argument).
 struct Argument {
   enum class Kind {
-    Number,   ///< 12.5, -2.6E01
-    String,   ///< "Probe1" (the quotes are not part of `text`)
-    Name,     ///< a bare word or dotted name: MachineCsy, E0006, OBB
-    Call,     ///< a name with an argument list: X(1), IJK(0,0,1), Tool.PtMeasPar.Speed()
-    Empty,    ///< nothing between two commas (kept so the checker can say what was wrong)
+    Number,  ///< 12.5, -2.6E01
+    String,  ///< "Probe1" (the quotes are not part of `text`)
+    Name,    ///< a bare word or dotted name: MachineCsy, E0006, OBB
+    Call,    ///< a name with an argument list: X(1), IJK(0,0,1), Tool.PtMeasPar.Speed()
+    Empty,   ///< nothing between two commas (kept so the checker can say what was wrong)
   };
   Kind kind = Kind::Empty;
-  std::string text;                   ///< the number as written, the string's content, or the name
-  double number = 0;                  ///< for Number
-  std::vector<Argument> args;         ///< for Call
+  std::string text;            ///< the number as written, the string's content, or the name
+  double number = 0;           ///< for Number
+  std::vector<Argument> args;  ///< for Call
 
   [[nodiscard]] bool is_number() const { return kind == Kind::Number; }
   [[nodiscard]] bool is_call(std::string_view name) const;
@@ -47,16 +47,16 @@ struct Argument {
 /// A parsed command line.
 struct CommandLine {
   Tag tag;
-  std::string name;                   ///< e.g. "PtMeas" (case as sent)
+  std::string name;  ///< e.g. "PtMeas" (case as sent)
   std::vector<Argument> args;
-  std::string text;                   ///< the line as received, without the line terminator
+  std::string text;  ///< the line as received, without the line terminator
 };
 
 /// Why a line could not be parsed, with the specification's error number.
 struct ParseError {
   ErrorCode code = ErrorCode::IncorrectArguments;
-  std::string message;                ///< lowercase detail, e.g. "two decimal points in a number"
-  std::optional<Tag> tag;             ///< the tag, when it could be read
+  std::string message;     ///< lowercase detail, e.g. "two decimal points in a number"
+  std::optional<Tag> tag;  ///< the tag, when it could be read
 };
 
 /// The tag of a line (columns 1-5), when it has one: what a server needs to acknowledge a line

@@ -59,18 +59,18 @@ enum class ErrorCode : int {
 
 /// Severity classes of the specification: what the server does after the error.
 enum class Severity : int {
-  Info = 0,         ///< a message only; the command goes on
-  Warning = 1,      ///< the command goes on
-  Error = 2,        ///< the command is not (fully) executed; the session goes on
-  Stop = 3,         ///< the server stops: later commands are refused until ClearAllErrors
-  Fatal = 9,        ///< the machine is unusable until the controller is reset
+  Info = 0,     ///< a message only; the command goes on
+  Warning = 1,  ///< the command goes on
+  Error = 2,    ///< the command is not (fully) executed; the session goes on
+  Stop = 3,     ///< the server stops: later commands are refused until ClearAllErrors
+  Fatal = 9,    ///< the machine is unusable until the controller is reset
 };
 
 /// The specification's class and text of an error number.
 struct ErrorInfo {
   ErrorCode code = ErrorCode::ProtocolError;
   Severity severity = Severity::Stop;
-  std::string_view text;          ///< the specification's wording, e.g. "Illegal command"
+  std::string_view text;  ///< the specification's wording, e.g. "Illegal command"
 };
 
 /// The table entry of `code` (every enumerator has one).

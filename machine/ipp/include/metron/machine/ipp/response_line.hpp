@@ -23,10 +23,10 @@ struct ResponseLine {
   enum class Kind { Ack, Data, Complete, Error };
   Tag tag;
   Kind kind = Kind::Ack;
-  std::string body;                   ///< after "# " or "! " (empty for & and %)
+  std::string body;  ///< after "# " or "! " (empty for & and %)
   // For errors (parsed from the body):
-  int severity = 0;                   ///< 0, 1, 2, 3 or 9
-  int error_number = 0;               ///< e.g. 507
+  int severity = 0;      ///< 0, 1, 2, 3 or 9
+  int error_number = 0;  ///< e.g. 507
   std::string error_cause;
   std::string error_text;
 };

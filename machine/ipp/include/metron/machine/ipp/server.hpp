@@ -13,11 +13,11 @@ namespace metron::machine::ipp {
 /// How `metron serve` listens and paces (docs/ipp-dme.md).
 struct ServerOptions {
   std::string host = "127.0.0.1";
-  std::uint16_t port = 1294;          ///< I++ DME's port; 0 picks a free one (see Server::port)
-  bool realtime = false;              ///< hold `%` back for the simulated duration of the motion
-  std::string log_path;               ///< every exchange, NIST server log style; empty: none
-  bool once = false;                  ///< stop after the first session's connection closes
-  std::size_t max_line_bytes = 65536; ///< a longer line is a protocol error and ends the connection
+  std::uint16_t port = 1294;           ///< I++ DME's port; 0 picks a free one (see Server::port)
+  bool realtime = false;               ///< hold `%` back for the simulated duration of the motion
+  std::string log_path;                ///< every exchange, NIST server log style; empty: none
+  bool once = false;                   ///< stop after the first session's connection closes
+  std::size_t max_line_bytes = 65536;  ///< a longer line is a protocol error and ends the connection
 };
 
 /// The I++ DME TCP server: one client and one Session at a time (further clients get an error

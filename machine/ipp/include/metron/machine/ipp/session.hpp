@@ -14,18 +14,18 @@ namespace metron::machine::ipp {
 struct SessionOptions {
   /// Probing tools offered next to "NoTool", "BaseTool" and "RefTool" (which carry no stylus).
   std::vector<DefineTool> tools{DefineTool{"Probe1", 2.0, -Vec3::UnitZ(), 50.0}};
-  std::string machine_class = "CartCMM";   ///< GetMachineClass answer
-  double max_speed_mm_s = 500;             ///< GoToPar.Speed.Max and PtMeasPar.Speed.Max
-  double max_acceleration_mm_s2 = 3000;    ///< GoToPar.Accel.Max and PtMeasPar.Accel.Max
-  Vec3 home_mm{0, 0, 500};                 ///< where Home() moves the ball centre (machine coordinates)
-  bool start_homed = false;                ///< IsHomed() before the first Home()
+  std::string machine_class = "CartCMM";      ///< GetMachineClass answer
+  double max_speed_mm_s = 500;                ///< GoToPar.Speed.Max and PtMeasPar.Speed.Max
+  double max_acceleration_mm_s2 = 3000;       ///< GoToPar.Accel.Max and PtMeasPar.Accel.Max
+  Vec3 home_mm{0, 0, 500};                    ///< where Home() moves the ball centre (machine coordinates)
+  bool start_homed = false;                   ///< IsHomed() before the first Home()
   double scan_reference_deflection_mm = 0.3;  ///< E0 of the scanning commands (SEEDS.md 1)
 };
 
 /// The answer to one received line.
 struct SessionReply {
-  std::vector<std::string> lines;          ///< response lines in order, without line terminators
-  double motion_s = 0;                     ///< simulated time the machine moved (for real-time pacing)
+  std::vector<std::string> lines;  ///< response lines in order, without line terminators
+  double motion_s = 0;             ///< simulated time the machine moved (for real-time pacing)
   /// When each line is due, in seconds of simulated motion after the acknowledgement (real-time
   /// pacing): daemon reports along the motion at their time, the rest at the motion's end.
   std::vector<double> due_s;
