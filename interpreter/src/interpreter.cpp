@@ -356,6 +356,20 @@ std::vector<std::string> Execute::words(const ir::Instruction& in) {
 
 double Execute::degrees(const Interpreter& vm) { return vm.m_degrees ? 1.0 : 180.0 / pi; }
 
+// Polar (r, angle, h) is (u, v, n) in the working plane: XYPLAN (x, y, z), YZPLAN (y, z, x),
+// ZXPLAN (z, x, y); the angle from the plane's first axis toward its second, the height along its
+// normal (PC-DMIS: "the height depends on the workplane currently being used").
+Vec3 Execute::position(const Interpreter& vm, ir::CoordinateForm form, double a, double b, double c) {
+  const Vec3 uvn = ir::position_mm(form, a, b, c, vm.m_length_mm, degrees(vm));
+  if (form != ir::CoordinateForm::Pol) return uvn;
+  switch (vm.m_runtime.working_plane()) {
+    case runtime::WorkingPlane::XY: return uvn;
+    case runtime::WorkingPlane::YZ: return Vec3(uvn.z(), uvn.x(), uvn.y());
+    case runtime::WorkingPlane::ZX: return Vec3(uvn.y(), uvn.z(), uvn.x());
+  }
+  return uvn;
+}
+
 runtime::FeatureRef Execute::feature_ref(const Interpreter& vm, const ir::LabelOperand& l) {
   return runtime::FeatureRef{vm.label_name(l), l.prefix == "FA"};
 }

@@ -3286,6 +3286,57 @@ TEST(ShopPrograms, PolarCoordinatesAndDistanceLimitsAreEvaluated) {
   EXPECT_TRUE(wrong.has("WKPLAN takes XYPLAN, YZPLAN or ZXPLAN")) << wrong.text;
 }
 
+// Polar positions (FEAT/POL, PTMEAS/POL, GOTO/POL) are (radius, angle, height) in the working plane
+// WKPLAN set, as CMM software reads them: YZPLAN (y, z) and x the height, ZXPLAN (z, x) and y.
+// Before, they stayed in XY whatever WKPLAN said. The bore of the world at (40, 50, 30) written in
+// YZPLAN and a point of the top face (60, 80, 40) in ZXPLAN, their numbers computed here.
+TEST(ShopPrograms, PolarPositionsAreInTheWorkingPlane) {
+  constexpr double deg = 180.0 / std::numbers::pi;
+  // (u, v, n) -> "r, angle, h" of the POL form.
+  const auto pol = [&](double u, double v, double n) {
+    return fmt::format("{:.9f}, {:.9f}, {:.9f}", std::hypot(u, v), std::atan2(v, u) * deg, n);
+  };
+  // YZPLAN: u = y, v = z, n = x.   ZXPLAN: u = z, v = x, n = y.
+  const auto yz = [&](double x, double y, double z) { return pol(y, z, x); };
+  const auto zx = [&](double x, double y, double z) { return pol(z, x, y); };
+  const std::string text =
+      "DMISMN/'polar', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\nWKPLAN/YZPLAN\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, POL, " +
+      yz(40, 50, 30) +
+      ", 0, 0, 1, 20\n"
+      "MEAS/CIRCLE, F(BORE1), 4\n  GOTO/POL, " +
+      yz(40, 50, 30) +
+      "\n"
+      "  PTMEAS/POL, " +
+      yz(50, 50, 30) + ", -1, 0, 0\n  PTMEAS/POL, " + yz(40, 60, 30) +
+      ", 0, -1, 0\n"
+      "  PTMEAS/POL, " +
+      yz(30, 50, 30) + ", 1, 0, 0\n  PTMEAS/POL, " + yz(40, 40, 30) +
+      ", 0, 1, 0\n"
+      "  GOTO/POL, " +
+      yz(40, 50, 80) +
+      "\nENDMES\nWKPLAN/ZXPLAN\n"
+      "F(TOPPT) = FEAT/POINT, POL, " +
+      zx(60, 80, 40) +
+      ", 0, 0, 1\n"
+      "MEAS/POINT, F(TOPPT), 1\n  GOTO/POL, " +
+      zx(60, 80, 50) + "\n  PTMEAS/POL, " + zx(60, 80, 40) + ", 0, 0, 1\nENDMES\nOUTPUT/FA(BORE1), FA(TOPPT)\nENDFIL\n";
+  const auto checked = check(text);
+  EXPECT_EQ(checked.errors + checked.warnings, 0U) << checked.text;
+  const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* bore = report(*r.session, "BORE1");
+  ASSERT_TRUE(bore && bore->actual) << r.diagnostics;
+  EXPECT_LT((bore->nominal.position - Eigen::Vector3d(40, 50, 30)).norm(), 1e-6);
+  EXPECT_LT((bore->actual->position - Eigen::Vector3d(40, 50, 30)).norm(), 2e-3);
+  EXPECT_NEAR(bore->actual->diameter_mm, 20.0, 2e-3);
+  const auto* top = report(*r.session, "TOPPT");
+  ASSERT_TRUE(top && top->actual) << r.diagnostics;
+  EXPECT_LT((top->nominal.position - Eigen::Vector3d(60, 80, 40)).norm(), 1e-6);
+  EXPECT_LT((top->actual->position - Eigen::Vector3d(60, 80, 40)).norm(), 2e-3);
+}
+
 // A dry run follows a program to its end: CHARACTERISE there (example 06) stopped it with
 // "characterisation failed: ... a positive feed and ramp time", the nominal machine having no
 // ramps. It is a warning now, and the program's bore is measured after it.

@@ -107,11 +107,8 @@ void UnitCompiler::noted_no_effect(const grammar::Statement& s) {
   emit(make(Op::Nop, s, s.major));
 }
 
-// GEOALG/type,algorithm: MAXINS, MINCIR, MINMAX and LSTSQR (DEFALT) are applied to CIRCLE, ARC,
-// SPHERE and CYLNDR, MINMAX and LSTSQR to PLANE and LINE; any other type or algorithm (CONE, an
-// EXTERN algorithm ...), and a FILTER or ELIMINATE after it, is accepted without its effect, which
-// a program may rely on: one warning per program says so.
-// WKPLAN/XYPLAN|YZPLAN|ZXPLAN: the plane CORTOL's polar coordinates (RADIUS, ANGLE) are taken in.
+// WKPLAN/XYPLAN|YZPLAN|ZXPLAN: the plane polar coordinates are taken in (CORTOL RADIUS and ANGLE,
+// the POL positions of FEAT, PTMEAS, GOTO and FROM).
 // Another form (a feature's plane) is read leniently with a warning: XYPLAN stays.
 void UnitCompiler::work_plane(const grammar::Statement& s) {
   if (!expect_params(s, 1, "XYPLAN, YZPLAN or ZXPLAN")) return;
@@ -128,6 +125,10 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
+// GEOALG/type,algorithm: MAXINS, MINCIR, MINMAX and LSTSQR (DEFALT) are applied to CIRCLE, ARC,
+// SPHERE and CYLNDR, MINMAX and LSTSQR to PLANE, LINE and CONE; any other type or algorithm (an
+// EXTERN algorithm ...), and a FILTER or ELIMINATE after it, is accepted without its effect, which
+// a program may rely on: one warning per program says so.
 void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
   const auto word_at = [&](std::size_t i) {
     return i < s.params.size() && is_word(s.params[i]) ? s.params[i].text : std::string();

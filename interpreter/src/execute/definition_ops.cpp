@@ -47,7 +47,7 @@ ExecStatus Execute::feature_def(Interpreter& vm, const ir::Instruction& in, Call
   if (words.side) g.side = *words.side;
   if (words.bounded) g.bounded = *words.bounded;
   const auto form = words.form.value_or(ir::CoordinateForm::Cart);
-  const auto point = [&](std::size_t i) { return ir::position_mm(form, nums[i], nums[i + 1], nums[i + 2], len, deg); };
+  const auto point = [&](std::size_t i) { return position(vm, form, nums[i], nums[i + 1], nums[i + 2]); };
   const auto vec = [&](std::size_t i) { return Vec3(nums[i], nums[i + 1], nums[i + 2]); };
   if (!nums.empty()) g.position = point(0);  // a bare GSURF or GCURVE has no numbers
   switch (g.type) {

@@ -38,6 +38,9 @@ struct Execute {
   static std::vector<std::string> words(const ir::Instruction& in);
   /// Degrees per program angle unit (UNITS: ANGDEC or ANGRAD).
   static double degrees(const Interpreter& vm);
+  /// A position of the program in mm: CART as written, POL (radius, angle, height) in the working
+  /// plane WKPLAN set (XYPLAN until one), as CMM software reads polar coordinates.
+  static Vec3 position(const Interpreter& vm, ir::CoordinateForm form, double a, double b, double c);
   static runtime::FeatureRef feature_ref(const Interpreter& vm, const ir::LabelOperand& l);
 
   // ---- expressions (expressions.cpp) ---------------------------------------------------------

@@ -146,7 +146,6 @@ ExecStatus Execute::accel(Interpreter& vm, const ir::Instruction& in, CallFrame&
 // Op::GoTo
 ExecStatus Execute::go_to(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   std::vector<double> nums;
-  const double deg = degrees(vm);
   const double len = vm.m_length_mm;
   if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
   const auto form = std::get<ir::FormPayload>(in.payload).form.value_or(ir::CoordinateForm::Cart);
@@ -157,7 +156,7 @@ ExecStatus Execute::go_to(Interpreter& vm, const ir::Instruction& in, CallFrame&
     if (d.norm() < 1e-12) return vm.fail(in.span, "the GOTO/INCR direction is a zero vector");
     target = from + nums[0] * len * d.normalized();
   } else {
-    target = ir::position_mm(form, nums[0], nums[1], nums[2], len, deg);
+    target = position(vm, form, nums[0], nums[1], nums[2]);
   }
   if (vm.m_block) {
     vm.m_block->steps.push_back({runtime::MeasStep::Kind::GoTo, target, std::nullopt, in.span, {}});
@@ -180,7 +179,7 @@ ExecStatus Execute::set_home(Interpreter& vm, const ir::Instruction& in, CallFra
   std::vector<double> nums;
   if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
   const auto form = std::get<ir::FormPayload>(in.payload).form.value_or(ir::CoordinateForm::Cart);
-  vm.m_runtime.set_home(ir::position_mm(form, nums[0], nums[1], nums[2], vm.m_length_mm, degrees(vm)));
+  vm.m_runtime.set_home(position(vm, form, nums[0], nums[1], nums[2]));
   return ExecStatus::Running;
 }
 
@@ -207,12 +206,10 @@ ExecStatus Execute::meas_begin(Interpreter& vm, const ir::Instruction& in, CallF
 // Op::PtMeas
 ExecStatus Execute::ptmeas(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   std::vector<double> nums;
-  const double deg = degrees(vm);
-  const double len = vm.m_length_mm;
   if (!vm.m_block) return vm.fail(in.span, "PTMEAS outside a MEAS block");
   if (auto e = numbers(vm, in, nums)) return vm.fail(in.span, *e);
   const auto form = std::get<ir::FormPayload>(in.payload).form.value_or(ir::CoordinateForm::Cart);
-  Vec3 p = ir::position_mm(form, nums[0], nums[1], nums[2], len, deg);
+  Vec3 p = position(vm, form, nums[0], nums[1], nums[2]);
   std::optional<Vec3> n;
   if (nums.size() >= 6) n = Vec3(nums[3], nums[4], nums[5]);
   if (!in.operands.empty() && in.operands.back().kind == Operand::Kind::Label) {

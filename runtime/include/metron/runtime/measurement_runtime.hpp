@@ -145,6 +145,7 @@ class MeasurementRuntime {
   void set_report_units(ReportUnits units) { m_report_units = std::move(units); }
   /// WKPLAN: the plane of CORTOL's polar coordinates from here on.
   void set_working_plane(WorkingPlane plane) { m_working_plane = plane; }
+  WorkingPlane working_plane() const { return m_working_plane; }
   /// Strict reading (`--strict`): a tolerance that cannot be evaluated stops the run; read
   /// leniently (the default) it is left out of its OUTPUT with a warning, as shop software goes on.
   void set_strict(bool strict) { m_strict = strict; }

@@ -78,7 +78,7 @@ enum class Op {
   Write,          ///< WRITE/DID(x),e1,e2,...: labels: DID; exprs: the values, written as one line
   FitAlgorithm,   ///< GEOALG/type,...: words: the type (CIRCLE, SPHERE, CYLNDR, PLANE, LINE) and the algorithm (LSTSQR,
                   ///< MAXINS, MINCIR, MINMAX)
-  WorkPlane,      ///< WKPLAN/XYPLAN|YZPLAN|ZXPLAN: word, the plane of CORTOL's polar coordinates
+  WorkPlane,      ///< WKPLAN/XYPLAN|YZPLAN|ZXPLAN: word, the plane of polar coordinates (CORTOL, POL positions)
   GoHome,         ///< GOHOME: no operands
   SetHome,        ///< FROM/[CART|POL,]x,y,z: payload FormPayload; exprs: the point GOHOME goes to from here on
   BadTest,        ///< BADTST/ON|OFF: word ON or OFF
