@@ -961,6 +961,31 @@ TEST(ShopPrograms, APatternIsOutputAsItsFeatures) {
   EXPECT_TRUE(c.has("7:27: error: FEAT/PATERN lists the pattern's features")) << c.text;
 }
 
+// A CAMIO program (a public lab's scale-bar program) ties its alignment to the CAD model's
+// coordinate system and names the model's geometry: EQUATE/DA(x),CADCS,DID(m),'cs' and
+// G(x)=GEOM/DID(m). The virtual CMM reads no model: a note each, where both were warnings saying
+// the statement "is not supported". EQUATE of two alignments stays a warning.
+TEST(ShopPrograms, CadModelStatementsAreNoted) {
+  const auto c = check(
+      "DMISMN/'cad', 5.0\nDID(LADDER) = DEVICE/STOR, 'ladder.igs'\nOPEN/DID(LADDER), CAD, IGES\n"
+      "D(REF) = DATSET/MCS\nG(ALL) = GEOM/DID(LADDER)\nG(TOP) = GEOM/DID(LADDER)\n"
+      "EQUATE/DA(REF), CADCS, DID(LADDER), '_Origin'\nEQUATE/DA(REF), DA(OTHER)\nENDFIL\n");
+  EXPECT_EQ(c.errors, 0U) << c.text;
+  EXPECT_EQ(c.warnings, 1U) << c.text;
+  EXPECT_TRUE(c.has("5:1: note: GEOM names geometry of the CAD model: the part is the world's")) << c.text;
+  EXPECT_EQ(c.text.find("GEOM names geometry", c.text.find("GEOM names geometry") + 1), std::string::npos)
+      << c.text;  // once
+  EXPECT_TRUE(c.has("7:17: note: EQUATE of DA(REF) with the CAD model's coordinate system: the model is not read"))
+      << c.text;
+  EXPECT_TRUE(c.has("8:1: warning: the DMIS statement EQUATE is not supported by metron")) << c.text;
+  // The dry run goes past them.
+  const auto r = dry_run(
+      "DMISMN/'cad', 5.0\nDID(LADDER) = DEVICE/STOR, 'ladder.igs'\nOPEN/DID(LADDER), CAD, IGES\n"
+      "D(REF) = DATSET/MCS\nG(ALL) = GEOM/DID(LADDER)\nEQUATE/DA(REF), CADCS, DID(LADDER), '_Origin'\n"
+      "F(P) = FEAT/POINT, CART, 10, 10, 40, 0, 0, 1\nMEAS/POINT, F(P), 1\nENDMES\nOUTPUT/FA(P)\nENDFIL\n");
+  EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+}
+
 // Forms found in public programs (RationalDMIS exports, CAMIO lab programs, web tutorials) that
 // metron read without a word or with a misleading one: each is now told for what it is.
 TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {

@@ -68,6 +68,8 @@ void UnitCompiler::add_input_output(StatementTable& t) {
             {"TEXT", &UnitCompiler::text},
             {"DEVICE", &UnitCompiler::device},
             {"OPEN", &UnitCompiler::open},
+            {"GEOM", &UnitCompiler::cad_geometry},
+            {"EQUATE", &UnitCompiler::equate},
             {"CLOSE", &UnitCompiler::close},
             {"PAUSE", &UnitCompiler::pause},
             {"DECPL", &UnitCompiler::decpl},
@@ -464,6 +466,34 @@ void UnitCompiler::open(const grammar::Statement& s) {
   for (const auto& p : s.params)
     if (is_word(p, "INPUT") || is_word(p, "DIRECT")) in.operands.push_back(word_operand(p));
   emit(std::move(in));
+}
+
+// G(l)=GEOM/DID(model),...: geometry of the CAD model, named for the CMM software's nominals. The
+// virtual CMM's part is the world's and the model is not read (OPEN/CAD): noted once; G(l) is
+// remembered as skipped, so a later use of it says so.
+void UnitCompiler::cad_geometry(const grammar::Statement& s) {
+  if (s.target) m_symbols.skipped[s.target->prefix + ":" + upper(s.target->name)] = s.span;
+  if (m_noted_kinds.insert("GEOM").second)
+    note(s.span, "sema.cad-model",
+         "GEOM names geometry of the CAD model: the part is the world's, the model is not read (noted once)");
+  emit(make(Op::Nop, s, "GEOM"));
+}
+
+// EQUATE/DA(l),CADCS,DID(model)[,'name']: ties an alignment to the CAD model's coordinate system, so
+// that CMM software places the model on the part. The virtual CMM reads no model and the program's
+// nominals are in the part's coordinates already: nothing to tie, a note. EQUATE/DA(a),DA(b) (two
+// part set-ups made one) is not carried out: a warning, as before.
+void UnitCompiler::equate(const grammar::Statement& s) {
+  const auto& p = s.params;
+  if (p.size() >= 3 && is_label(p[0], {"DA", "D"}) && is_word(p[1], "CADCS") && is_label(p[2], {"DID"})) {
+    note(p[1].span, "sema.cad-model",
+         fmt::format("EQUATE of DA({}) with the CAD model's coordinate system: the model is not read and the "
+                     "nominals are the part's; nothing to equate",
+                     p[0].label.name));
+    emit(make(Op::Nop, s, "EQUATE"));
+    return;
+  }
+  unknown(s);
 }
 
 // WRITE/DID(l),e1,e2,...: one line of the values (text as it is, numbers as TEXT shows them) into

@@ -259,6 +259,8 @@ class UnitCompiler {
   void device(const grammar::Statement& s);
   bool check_device(const grammar::Statement& s);
   void open(const grammar::Statement& s);
+  void cad_geometry(const grammar::Statement& s);
+  void equate(const grammar::Statement& s);
   void close(const grammar::Statement& s);
 
   // ---- definitions: FEAT, SNSDEF, TOL, DATDEF, PATH, DECL (compile/definitions.cpp) ---------
