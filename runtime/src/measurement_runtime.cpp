@@ -416,13 +416,14 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
                                    tool->name, ball_mm, feature.label, opening_mm));
   };
   // A SNSLCT inside the block (a feature probed with several sensors) switches the sensor between
-  // its points: each run of steps is planned and measured with the sensor selected before it.
+  // its points, a FEDRAT, ACLRAT or SNSET changes a setting between them: each run of steps is
+  // planned and measured with what was selected and set before it.
   MeasBlock empty_run = block;
   empty_run.steps.clear();
   std::vector<MeasBlock> runs(1, empty_run);
   std::vector<const MeasStep*> selections(1, nullptr);
   for (const auto& step : block.steps) {
-    if (step.kind == MeasStep::Kind::SelectSensor) {
+    if (step.kind == MeasStep::Kind::SelectSensor || step.kind == MeasStep::Kind::Setting) {
       runs.push_back(empty_run);
       selections.push_back(&step);
     } else {
@@ -435,7 +436,10 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   std::vector<MeasuredPoint> points;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     if (selections[k]) {
-      if (auto r = select_sensor(selections[k]->path, selections[k]->span, selections[k]->requalify); !r) {
+      const MeasStep& before = *selections[k];
+      if (auto r = before.kind == MeasStep::Kind::Setting ? before.apply(*this)
+                                                          : select_sensor(before.path, before.span, before.requalify);
+          !r) {
         keep_failed_points(feature, points, block.span);
         return r;
       }

@@ -3362,6 +3362,37 @@ TEST(ShopPrograms, PolarPositionsAreInTheWorkingPlane) {
   EXPECT_LT((top->actual->position - Eigen::Vector3d(60, 80, 40)).norm(), 2e-3);
 }
 
+// A setting between a block's points (FEDRAT, ACLRAT, SNSET) holds for the points after it, as
+// SNSLCT there does: before, it held for the whole block, which metron measures at ENDMES. The
+// first point's nominal is 4 mm above the top face (z = 40): SEARCH 6 finds it; the SEARCH 2 after
+// it, applied to the whole block, made it "no contact within 2.000 mm".
+TEST(ShopPrograms, ASettingInsideABlockHoldsFromWhereItStands) {
+  const std::string text =
+      "DMISMN/'block settings', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/90, 10, 80\nSNSET/SEARCH, 6\n"
+      "F(TOP) = FEAT/PLANE, CART, 120, 25, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 4\n"
+      "  PTMEAS/CART, 90, 10, 44, 0, 0, 1\n  SNSET/SEARCH, 2\n  FEDRAT/MESVEL, MMPS, 4\n"
+      "  PTMEAS/CART, 150, 10, 40, 0, 0, 1\n  PTMEAS/CART, 150, 40, 40, 0, 0, 1\n  PTMEAS/CART, 90, 40, 40, 0, 0, 1\n"
+      "ENDMES\nOUTPUT/FA(TOP)\nF(LOW) = FEAT/POINT, CART, 100, 20, 43, 0, 0, 1\nMEAS/POINT, F(LOW), 1\nENDMES\n"
+      "ENDFIL\n";
+  const auto checked = check(text);
+  EXPECT_EQ(checked.errors + checked.warnings, 0U) << checked.text;
+  const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+  const auto* top = report(*r.session, "TOP");
+  ASSERT_TRUE(top && top->actual) << r.diagnostics;
+  EXPECT_EQ(top->point_count, 4U);
+  EXPECT_NEAR(top->actual->position.z(), 40.0, 2e-3);
+  // The FEDRAT between the first point and the second holds from the second on: the feed differs
+  // from the qualification's at line 12, not at the first point (line 9).
+  EXPECT_NE(r.diagnostics.find("run.dmi:12:3: warning: probing at 4.000 mm/s"), std::string::npos) << r.diagnostics;
+  // SEARCH 2 holds after the block: the point 3 mm above the face (line 18) is not found.
+  ASSERT_EQ(r.status, ExecStatus::Faulted) << r.diagnostics;
+  const auto* fault = std::get_if<metron::runtime::FaultReport>(&r.session->record().events.back());
+  ASSERT_TRUE(fault);
+  EXPECT_EQ(fault->statement.line, 18U);
+  EXPECT_NE(fault->message.find("no contact within 2.000 mm"), std::string::npos) << fault->message;
+}
+
 // A dry run follows a program to its end: CHARACTERISE there (example 06) stopped it with
 // "characterisation failed: ... a positive feed and ramp time", the nominal machine having no
 // ramps. It is a warning now, and the program's bore is measured after it.

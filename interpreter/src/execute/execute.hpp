@@ -3,6 +3,7 @@
 // family adds its rows (operation -> handler) to the table the interpreter dispatches through.
 #pragma once
 #include <array>
+#include <functional>
 #include <initializer_list>
 #include <optional>
 #include <string>
@@ -42,6 +43,10 @@ struct Execute {
   /// plane WKPLAN set (XYPLAN until one), as CMM software reads polar coordinates.
   static Vec3 position(const Interpreter& vm, ir::CoordinateForm form, double a, double b, double c);
   static runtime::FeatureRef feature_ref(const Interpreter& vm, const ir::LabelOperand& l);
+  /// A setting (FEDRAT, ACLRAT, SNSET) applied now, or inside a MEAS block where it stands among
+  /// the block's points, which are measured at ENDMES.
+  using SettingFn = std::function<runtime::Result<void>(runtime::MeasurementRuntime&)>;
+  static ExecStatus apply_setting(Interpreter& vm, const ir::Instruction& in, SettingFn apply);
 
   // ---- expressions (expressions.cpp) ---------------------------------------------------------
   static tl::expected<Value, std::string> obtain(Interpreter& vm, const ir::Expr& e);

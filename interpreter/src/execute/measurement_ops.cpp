@@ -71,25 +71,42 @@ ExecStatus Execute::probe_set(Interpreter& vm, const ir::Instruction& in, CallFr
   const double len = vm.m_length_mm;
   auto v = vm.number(in.operands.back().expr);
   if (!v) return vm.fail(in.span, v.error());
-  auto& p = vm.m_runtime.probe_settings();
-  const std::string& w = in.operands[0].word;
+  const std::string w = in.operands[0].word;
   const double d = *v * len;
+  const Span span = in.span;
   if (in.operands.size() == 3) {  // SNSET/CLRSRF,F(plane),d
-    if (auto r = vm.m_runtime.set_clearance_surface(feature_ref(vm, in.operands[1].label), d, in.span); !r)
-      return vm.from_runtime(r.error());
+    return apply_setting(vm, in,
+                         [ref = feature_ref(vm, in.operands[1].label), d, span](runtime::MeasurementRuntime& rt) {
+                           return rt.set_clearance_surface(ref, d, span);
+                         });
+  }
+  return apply_setting(vm, in, [w, d](runtime::MeasurementRuntime& rt) -> runtime::Result<void> {
+    auto& p = rt.probe_settings();
+    if (w == "CLRSRF") p.clearance_plane.reset();
+    if (w == "APPRCH")
+      p.approach_mm = d, p.approach_explicit = true;
+    else if (w == "RETRCT")
+      p.retract_mm = d;
+    else if (w == "SEARCH")
+      p.search_mm = d;
+    else if (w == "CLRSRF")
+      p.clearance_mm = d;
+    else if (w == "DEPTH")
+      p.depth_mm = d;
+    return {};
+  });
+}
+
+ExecStatus Execute::apply_setting(Interpreter& vm, const ir::Instruction& in, SettingFn apply) {
+  if (vm.m_block) {
+    runtime::MeasStep step;
+    step.kind = runtime::MeasStep::Kind::Setting;
+    step.span = in.span;
+    step.apply = std::move(apply);
+    vm.m_block->steps.push_back(std::move(step));
     return ExecStatus::Running;
   }
-  if (w == "CLRSRF") p.clearance_plane.reset();
-  if (w == "APPRCH")
-    p.approach_mm = d, p.approach_explicit = true;
-  else if (w == "RETRCT")
-    p.retract_mm = d;
-  else if (w == "SEARCH")
-    p.search_mm = d;
-  else if (w == "CLRSRF")
-    p.clearance_mm = d;
-  else if (w == "DEPTH")
-    p.depth_mm = d;
+  if (auto r = apply(vm.m_runtime); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 
@@ -98,35 +115,34 @@ ExecStatus Execute::feed(Interpreter& vm, const ir::Instruction& in, CallFrame&)
   auto v = vm.number(in.operands.at(0).expr);
   if (!v) return vm.fail(in.span, v.error());
   const auto [kind, unit] = std::get<ir::FeedPayload>(in.payload);
-  if (unit == ir::FeedUnit::Defalt) {
-    if (kind == ir::FeedKind::Scnvel) {
-      vm.m_runtime.scan_settings().feed_mm_s.reset();  // a scan runs at the measuring feed again
-      return ExecStatus::Running;
-    }
-    if (auto r = vm.m_runtime.restore_default_feed(kind == ir::FeedKind::Posvel, in.span); !r)
-      return vm.from_runtime(r.error());
-    return ExecStatus::Running;
-  }
-  const auto state = vm.m_runtime.machine().state();
-  // PCENT: of the current positioning feed for POSVEL, of the measuring feed otherwise.
-  const double percent_of = kind == ir::FeedKind::Posvel ? state.positioning_feed_mm_s : state.measuring_feed_mm_s;
-  const double mm_s = ir::feed_mm_s(*v, unit).value_or(*v / 100.0 * percent_of);
-  if (kind == ir::FeedKind::Scnvel) {
-    vm.m_runtime.scan_settings().feed_mm_s = mm_s;
-    return ExecStatus::Running;
-  }
-  auto r = kind == ir::FeedKind::Posvel ? vm.m_runtime.set_feeds(mm_s, std::nullopt, in.span)
-                                        : vm.m_runtime.set_feeds(std::nullopt, mm_s, in.span);
-  if (!r) return vm.from_runtime(r.error());
-  return ExecStatus::Running;
+  return apply_setting(
+      vm, in,
+      [kind = kind, unit = unit, value = *v, span = in.span](runtime::MeasurementRuntime& rt) -> runtime::Result<void> {
+        if (unit == ir::FeedUnit::Defalt) {
+          if (kind != ir::FeedKind::Scnvel) return rt.restore_default_feed(kind == ir::FeedKind::Posvel, span);
+          rt.scan_settings().feed_mm_s.reset();  // a scan runs at the measuring feed again
+          return {};
+        }
+        const auto state = rt.machine().state();
+        // PCENT: of the current positioning feed for POSVEL, of the measuring feed otherwise.
+        const double percent_of =
+            kind == ir::FeedKind::Posvel ? state.positioning_feed_mm_s : state.measuring_feed_mm_s;
+        const double mm_s = ir::feed_mm_s(value, unit).value_or(value / 100.0 * percent_of);
+        if (kind == ir::FeedKind::Scnvel) {
+          rt.scan_settings().feed_mm_s = mm_s;
+          return {};
+        }
+        return kind == ir::FeedKind::Posvel ? rt.set_feeds(mm_s, std::nullopt, span)
+                                            : rt.set_feeds(std::nullopt, mm_s, span);
+      });
 }
 
 // Op::Accel
 ExecStatus Execute::accel(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
-  if (in.operands.size() == 1) {  // DEFALT
-    if (auto r = vm.m_runtime.restore_default_acceleration(in.span); !r) return vm.from_runtime(r.error());
-    return ExecStatus::Running;
-  }
+  const Span span = in.span;
+  if (in.operands.size() == 1)  // DEFALT
+    return apply_setting(vm, in,
+                         [span](runtime::MeasurementRuntime& rt) { return rt.restore_default_acceleration(span); });
   auto v = vm.number(in.operands[2].expr);
   if (!v) return vm.fail(in.span, v.error());
   const std::string& unit = in.operands[1].word;
@@ -139,8 +155,7 @@ ExecStatus Execute::accel(Interpreter& vm, const ir::Instruction& in, CallFrame&
     a = *v * 25.4;
   else if (unit == "PCENT")
     return ExecStatus::Running;  // relative to an unknown maximum: leave unchanged
-  if (auto r = vm.m_runtime.set_acceleration(a, in.span); !r) return vm.from_runtime(r.error());
-  return ExecStatus::Running;
+  return apply_setting(vm, in, [a, span](runtime::MeasurementRuntime& rt) { return rt.set_acceleration(a, span); });
 }
 
 // Op::GoTo
@@ -159,7 +174,7 @@ ExecStatus Execute::go_to(Interpreter& vm, const ir::Instruction& in, CallFrame&
     target = position(vm, form, nums[0], nums[1], nums[2]);
   }
   if (vm.m_block) {
-    vm.m_block->steps.push_back({runtime::MeasStep::Kind::GoTo, target, std::nullopt, in.span, {}});
+    vm.m_block->steps.push_back({runtime::MeasStep::Kind::GoTo, target, std::nullopt, in.span, {}, false, {}});
     vm.m_block_position = target;
     return ExecStatus::Running;
   }
@@ -220,7 +235,7 @@ ExecStatus Execute::ptmeas(Interpreter& vm, const ir::Instruction& in, CallFrame
     if (!actual) return vm.from_runtime(actual.error());
     p += actual->position - nominal->position;
   }
-  vm.m_block->steps.push_back({runtime::MeasStep::Kind::PtMeas, p, n, in.span, {}});
+  vm.m_block->steps.push_back({runtime::MeasStep::Kind::PtMeas, p, n, in.span, {}, false, {}});
   return ExecStatus::Running;
 }
 

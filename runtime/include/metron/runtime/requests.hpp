@@ -1,17 +1,21 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/feature.hpp"
+#include "metron/runtime/runtime_error.hpp"
 #include "metron/stdlib/geometry/vec.hpp"
 #include "metron/stdlib/span.hpp"
 
 // What the interpreter asks of the measurement runtime: the operands of its calls, one type per
 // DMIS statement or setting (in current-frame coordinates, mm, unless a field says otherwise).
 namespace metron::runtime {
+
+class MeasurementRuntime;
 
 /// DMIS MODE: who takes the points. metron's virtual operator takes PROG MAN points as given.
 enum class Mode { Auto, ProgMan, Man };
@@ -50,12 +54,15 @@ struct FeatureRef {
 /// One step of a MEAS block, in current-frame coordinates (already in mm).
 struct MeasStep {
   /// SelectSensor: a SNSLCT inside the block; the points after it are taken with that sensor.
-  enum class Kind { GoTo, PtMeas, Scan, SelectSensor } kind = Kind::PtMeas;
+  /// Setting: a FEDRAT, ACLRAT or SNSET inside the block; the points after it are taken with it.
+  enum class Kind { GoTo, PtMeas, Scan, SelectSensor, Setting } kind = Kind::PtMeas;
   Vec3 point = Vec3::Zero();
   std::optional<Vec3> normal;  ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
   Span span;
   std::string path;        ///< Scan (PAMEAS/P(label)): the path's label; SelectSensor: the sensor's
   bool requalify = false;  ///< SelectSensor: SNSLCT/...,CALIB (qualify it again)
+  /// Setting: applies it (its numbers evaluated where the statement stands in the program).
+  std::function<Result<void>(MeasurementRuntime&)> apply;
 };
 
 /// MEAS/type,F(label),n ... ENDMES.
