@@ -502,10 +502,19 @@ class Repl {
     else
       std::cout << "last hit   none\n";
     std::cout << fmt::format("commands   {} executed, {} queued\n", s.executed_commands, s.queued_commands);
-    if (m_session.interpreter().in_measurement())
-      std::cout << fmt::format("measuring  F({}): {} steps collected, sent at ENDMES\n",
-                               m_session.interpreter().pending_block()->feature,
-                               m_session.interpreter().pending_block()->steps.size());
+    if (m_session.interpreter().in_measurement()) {
+      // Settings and sensor selections in the block are applied between its points at ENDMES: the
+      // feeds and sensor above are still those before the block.
+      const auto& block = *m_session.interpreter().pending_block();
+      const auto held =
+          std::count_if(block.steps.begin(), block.steps.end(), [](const metron::runtime::MeasStep& step) {
+            return step.kind == metron::runtime::MeasStep::Kind::Setting ||
+                   step.kind == metron::runtime::MeasStep::Kind::SelectSensor;
+          });
+      std::cout << fmt::format(
+          "measuring  F({}): {} steps collected{}, sent at ENDMES\n", block.feature, block.steps.size(),
+          held ? fmt::format(" ({} settings or sensor selections, applied between the points)", held) : std::string());
+    }
     return true;
   }
 

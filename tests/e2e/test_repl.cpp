@@ -127,3 +127,25 @@ TEST(Debugger, ContinueStopsAtTheSameBreakpointOnEachIterationOfADoLoop) {
   EXPECT_NE(out.find("1\n"), std::string::npos) << out;
   EXPECT_NE(out.find("done"), std::string::npos) << out;
 }
+
+// Inside a MEAS block, a FEDRAT or SNSET waits for ENDMES, between the points after which it
+// stands: `machine` shows the feeds before the block and says how many steps wait so; after
+// ENDMES the FEDRAT holds.
+TEST(Debugger, MachineTellsOfSettingsWaitingInABlock) {
+  const fs::path prog = temp("block_settings.dmi");
+  std::ofstream(prog) << "DMISMN/'block settings', 5.0\nUNITS/MM, ANGDEC\n"
+                         "S(P) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 3\nSNSLCT/S(P)\n"
+                         "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/90, 10, 80\n"
+                         "F(TOP) = FEAT/PLANE, CART, 120, 25, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\n"  // 7, 8
+                         "  PTMEAS/CART, 90, 10, 40, 0, 0, 1\n  FEDRAT/MESVEL, MMPS, 4\n  SNSET/SEARCH, 3\n"
+                         "  PTMEAS/CART, 150, 10, 40, 0, 0, 1\n  PTMEAS/CART, 150, 40, 40, 0, 0, 1\n"  // 12, 13
+                         "ENDMES\nTEXT/OPER, 'after'\nENDFIL\n";                                       // 14, 15
+  const auto [code, out] = session("debug " + prog.string(), "break 12\nbreak 15\nrun\nmachine\ncontinue\nmachine\n");
+  EXPECT_EQ(code, 0) << out;
+  const auto inside = out.find(
+      "measuring  F(TOP): 3 steps collected (2 settings or sensor selections, applied "
+      "between the points), sent at ENDMES");
+  ASSERT_NE(inside, std::string::npos) << out;
+  EXPECT_NE(out.rfind("measuring 3.000 mm/s", inside), std::string::npos) << out;
+  EXPECT_NE(out.find("measuring 4.000 mm/s", inside), std::string::npos) << out;
+}
