@@ -2932,7 +2932,7 @@ TEST(ShopPrograms, ReconstructedShopProgramsCheckCleanAndRunToTheEnd) {
     const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
     EXPECT_EQ(r.status, ExecStatus::Finished) << entry.path() << "\n" << r.diagnostics;
   }
-  EXPECT_EQ(seen, 6);
+  EXPECT_EQ(seen, 7);
 }
 
 TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtRun) {
