@@ -986,6 +986,48 @@ TEST(ShopPrograms, CadModelStatementsAreNoted) {
   EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
 }
 
+// The header RationalDMIS saves every program with (a public RationalDMIS 2024 program, its Quick
+// 3-2-1 alignment block): `UNITS/MM, ANGDEC, MMPS` (a velocity unit after the angle unit) and
+// `KNPTC1 = VALUE/MODE` with no DECL of KNPTC1. Both were errors, so no RationalDMIS program
+// checked. Now the unit is read (each FEDRAT names its own), VALUE/MODE answers the mode as SMODE()
+// does, and the VALUE declares its variable with a warning (`--strict`: the error).
+TEST(ShopPrograms, RationalDmisHeaderIsRead) {
+  const std::string text =
+      "DMISMN/'Created by [RationalDMIS]', 4.0\nUNITS/MM, ANGDEC, MMPS\nWKPLAN/XYPLAN\nPRCOMP/ON\nTECOMP/ON\n"
+      "FLY/1.0000\nMODE/PROG, MAN\nSNSET/APPRCH, 2.0000\nRECALL/D(MCS)\nSNSLCT/S(D3-L20)\nGEOALG/BF, LSTSQR\n"
+      "GEOALG/CIRCLE, LSTSQR\nMODE/MAN\nDECL/COMMON, DOUBLE, DPROBEX, DPROBEY, DPROBEZ\nPRCOMP/OFF\n"
+      "KNPTC1 = VALUE/MODE\nMODE/PROG, MAN\nKNPTC2 = VALUE/MODE\nTEXT/OPER, CONCAT(KNPTC1, ' ', KNPTC2)\n"
+      "F(PT1)=FEAT/POINT,POL,53.2994,32.5276,40.0000,0.0000,0.0000,1.0000\nGEOALG/ANGLB, COMPLM\nENDFIL\n";
+  const auto c = check(text);
+  EXPECT_EQ(c.errors, 0U) << c.text;
+  EXPECT_TRUE(
+      c.has("21:1: warning: GEOALG/ANGLB,COMPLM: this algorithm is not applied: metron evaluates ANGLB as "
+            "docs/tolerances.md describes"))
+      << c.text;
+  EXPECT_TRUE(c.has("16:1: warning: variable KNPTC1 is not declared: this VALUE declares it CHAR (--strict: an error)"))
+      << c.text;
+  const auto strict = check(text, true);
+  EXPECT_TRUE(strict.has("16:1: error: variable KNPTC1 is not declared")) << strict.text;
+  const auto r = dry_run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<std::string> texts;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  EXPECT_EQ(texts, (std::vector<std::string>{"MAN PROG,MAN"}));
+  // Units the velocity word does not excuse.
+  const auto units = check(
+      "DMISMN/'u', 4.0\nUNITS/INCH, ANGRAD, TEMPF, IPS\nUNITS/MM, ANGDEC, MMPS, IPS\nUNITS/MM, ANGDEC, PCENT\n"
+      "UNITS/MM, ANGDEC, TEMPC, TEMPF\nENDFIL\n");
+  EXPECT_EQ(units.errors, 3U) << units.text;
+  EXPECT_TRUE(units.has("3:25: error: expected a temperature unit (TEMPC, TEMPF) or a velocity unit")) << units.text;
+  EXPECT_TRUE(units.has("4:19: error:")) << units.text;
+  EXPECT_TRUE(units.has("5:26: error:")) << units.text;
+  // An undeclared variable of a VALUE form metron does not answer is not declared by it.
+  const auto unanswered = check("DMISMN/'v', 4.0\nK = VALUE/SNSET, APPRCH\nENDFIL\n");
+  EXPECT_EQ(unanswered.errors, 0U) << unanswered.text;
+  EXPECT_TRUE(unanswered.has("this VALUE form is not answered")) << unanswered.text;
+}
+
 // Forms found in public programs (RationalDMIS exports, CAMIO lab programs, web tutorials) that
 // metron read without a word or with a misleading one: each is now told for what it is.
 TEST(ShopPrograms, ShopSoftwareFormsAreToldNotDropped) {

@@ -87,6 +87,24 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     info = &it->second;
   else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end())
     info = &jt->second;
+  if (!info && !macro_param(name) && s.major == "VALUE" && !m_strict && v.kind != ExprKind::Index) {
+    // RationalDMIS saves `KNPTC1 = VALUE/MODE` with no DECL of KNPTC1: read leniently, the VALUE
+    // declares it with the type of what it answers.
+    auto query = value_query(s);
+    if (!query) return;
+    if (query->op == ir::ExprOp::Constant) {  // not answered: nothing to declare it with
+      emit(make(Op::Nop, s, s.major));
+      return;
+    }
+    warn(v.span, "sema.undeclared-variable",
+         fmt::format("variable {} is not declared: this VALUE declares it {} (--strict: an error)", name,
+                     declared_word(query->type)));
+    declare_implicitly(name, query->type, v.span, s);
+    auto in = make(Op::Assign, s, name);
+    in.operands.push_back(expr_operand(std::move(*query)));
+    emit(std::move(in));
+    return;
+  }
   if (!info && !macro_param(name))
     return error(v.span, "sema.undeclared-variable",
                  fmt::format("variable {} is not declared: add DECL/REAL,{} (or INTGR, CHAR, BOOL) first", name, name));
@@ -158,6 +176,37 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
 // OUTPUT or EVAL of T(t) found, for its n-th output feature (DMIS 5 VALUE; the index n as in DMIS
 // SIR 97-8). Other VALUE forms (settings such as VALUE/SNSET) are one warning, and the variable
 // keeps its value; the result is a Constant then.
+// The DECL word of a value type.
+const char* UnitCompiler::declared_word(ValueType type) {
+  switch (type) {
+    case ValueType::Integer: return "INTGR";
+    case ValueType::Bool: return "BOOL";
+    case ValueType::String: return "CHAR";
+    case ValueType::Vector: return "VECTOR";
+    default: return "REAL";
+  }
+}
+
+// DECL/type,name where a statement uses a variable the program does not declare (read leniently).
+void UnitCompiler::declare_implicitly(const std::string& name, ValueType type, Span span, const grammar::Statement& s) {
+  SymbolTable::VariableInfo info{type, 0, span, {}};
+  if (m_macro)
+    m_locals[name] = info;
+  else
+    m_symbols.variables[name] = info;
+  auto in = make(Op::Declare, s);
+  ir::Operand type_word;
+  type_word.kind = ir::Operand::Kind::Word;
+  type_word.word = declared_word(type);
+  in.operands.push_back(type_word);
+  in.names.push_back(name);
+  ir::Operand size;
+  size.kind = ir::Operand::Kind::Expr;
+  size.expr.value = Value::integer(0);
+  in.operands.push_back(size);
+  emit(std::move(in));
+}
+
 std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   static const char* const size_words[] = {"SIZE"};
   static const char* const tolerance_words[] = {"ACT", "DEV", "AMT", "INTOL", "OUTOL"};
@@ -166,10 +215,17 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   };
   ir::Expr q;
   q.span = s.span;
+  if (s.params.size() == 1 && is_word(s.params[0], "MODE")) {
+    // VALUE/MODE: the current MODE, as SMODE() says it ('AUTO', 'PROG,MAN', 'MAN').
+    q.op = ir::ExprOp::Call;
+    q.name = "SMODE";
+    q.type = ValueType::String;
+    return q;
+  }
   if (s.params.empty() || !(is_label(s.params[0], {"FA", "F", "TA"}))) {
     warn(s.params.empty() ? s.major_span : s.params[0].span, "sema.value-form",
-         "this VALUE form is not answered (metron answers VALUE/FA(x),SIZE and VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL); "
-         "the variable keeps its value");
+         "this VALUE form is not answered (metron answers VALUE/FA(x),SIZE, VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL and "
+         "VALUE/MODE); the variable keeps its value");
     return q;
   }
   const grammar::Expr& target = s.params[0];

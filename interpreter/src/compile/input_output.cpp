@@ -162,10 +162,18 @@ void UnitCompiler::geometry_algorithm(const grammar::Statement& s) {
     return;
   }
   if (m_noted_kinds.insert(s.major).second) {
-    const std::string message = fmt::format(
-        "GEOALG/{},{}: this fitting algorithm is not applied: metron fits {} by least squares (form tolerances by "
-        "minimum zone) (noted once)",
-        type, algorithm, type.empty() ? std::string("them") : type);
+    // A feature type is fitted by least squares; another word (ANGLB, a vendor's) is evaluated as
+    // docs/tolerances.md describes.
+    const bool feature_type = !type.empty() && ir::parse_word<runtime::FeatureType>(type).has_value();
+    const std::string message =
+        feature_type ? fmt::format(
+                           "GEOALG/{},{}: this fitting algorithm is not applied: metron fits {} by least "
+                           "squares (form tolerances by minimum zone) (noted once)",
+                           type, algorithm, type)
+                     : fmt::format(
+                           "GEOALG/{},{}: this algorithm is not applied: metron evaluates {} as "
+                           "docs/tolerances.md describes (noted once)",
+                           type, algorithm, type.empty() ? std::string("it") : type);
     warn(s.span, "sema.not-applied", message);
   }
   emit(make(Op::Nop, s, s.major));
@@ -288,7 +296,9 @@ std::optional<ir::Instruction> UnitCompiler::point_instruction(const grammar::St
   return in;
 }
 
-// UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC]
+// UNITS/MM|INCH|CM|M|FEET,ANGDEC|ANGRAD[,TEMPF|TEMPC][,MMPS|IPS|MPM|IPM]. RationalDMIS writes a
+// velocity unit after the angle unit (`UNITS/MM, ANGDEC, MMPS` heads every program it saves); each
+// FEDRAT names its own unit, so it is accepted and changes nothing.
 void UnitCompiler::units(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a length unit (MM, INCH, CM, M, FEET)")) return;
   auto in = make(Op::Units, s);
@@ -305,11 +315,20 @@ void UnitCompiler::units(const grammar::Statement& s) {
     if (units.angle == ir::AngleUnit::Angdms)
       warn(s.params[1].span, "sema.angdms", "ANGDMS is read as decimal degrees");
   }
-  if (s.params.size() > 2) {
-    units.temperature = is_word(s.params[2]) ? ir::parse_word<ir::TemperatureUnit>(s.params[2].text) : std::nullopt;
-    if (!units.temperature || s.params.size() > 3)
-      return error(s.params[units.temperature ? 3 : 2].span, "sema.bad-unit",
-                   "expected a temperature unit (TEMPC, TEMPF) after the angle unit, and nothing after it");
+  bool velocity = false;
+  for (std::size_t i = 2; i < s.params.size(); ++i) {
+    const auto& p = s.params[i];
+    const bool word = is_word(p);
+    if (const auto t = word ? ir::parse_word<ir::TemperatureUnit>(p.text) : std::nullopt; t && !units.temperature) {
+      units.temperature = t;
+    } else if (const auto v = word ? ir::parse_word<ir::FeedUnit>(p.text) : std::nullopt;
+               v && !velocity && *v != ir::FeedUnit::Pcent && *v != ir::FeedUnit::Defalt) {
+      velocity = true;
+    } else {
+      return error(p.span, "sema.bad-unit",
+                   "expected a temperature unit (TEMPC, TEMPF) or a velocity unit (MMPS, IPS, MPM, IPM) after the "
+                   "angle unit, each once");
+    }
   }
   in.payload = units;
   emit(std::move(in));

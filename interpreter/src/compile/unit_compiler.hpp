@@ -304,6 +304,8 @@ class UnitCompiler {
 
   // ---- control: assignment, IF, DO, JUMPTO, macros, CALL (compile/control.cpp) --------------
   void endfil(const grammar::Statement& s);
+  static const char* declared_word(ValueType type);
+  void declare_implicitly(const std::string& name, ValueType type, Span span, const grammar::Statement& s);
   void assignment(const grammar::Statement& s);
   void bad_assign(const grammar::Statement& s);
   std::optional<ir::Expr> value_query(const grammar::Statement& s);
