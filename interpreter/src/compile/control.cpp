@@ -171,11 +171,6 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// VALUE/FA(x)|F(x),SIZE[,n]: the feature's n-th size (1: diameter, ARC radius, CONE angle, slot
-// width; 2: CYLNDR or CPARLN length). VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL[,n]: what the last
-// OUTPUT or EVAL of T(t) found, for its n-th output feature (DMIS 5 VALUE; the index n as in DMIS
-// SIR 97-8). Other VALUE forms (settings such as VALUE/SNSET) are one warning, and the variable
-// keeps its value; the result is a Constant then.
 // The DECL word of a value type.
 const char* UnitCompiler::declared_word(ValueType type) {
   switch (type) {
@@ -207,6 +202,11 @@ void UnitCompiler::declare_implicitly(const std::string& name, ValueType type, S
   emit(std::move(in));
 }
 
+// VALUE/FA(x)|F(x),SIZE[,n]: the feature's n-th size (1: diameter, ARC radius, CONE angle, slot
+// width; 2: CYLNDR or CPARLN length). VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL[,n]: what the last
+// OUTPUT or EVAL of T(t) found, for its n-th output feature (DMIS 5 VALUE; the index n as in DMIS
+// SIR 97-8). VALUE/MODE: the current mode, as SMODE(). Other VALUE forms (settings such as
+// VALUE/SNSET) are one warning, and the variable keeps its value; the result is a Constant then.
 std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   static const char* const size_words[] = {"SIZE"};
   static const char* const tolerance_words[] = {"ACT", "DEV", "AMT", "INTOL", "OUTOL"};
