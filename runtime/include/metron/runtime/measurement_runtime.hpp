@@ -143,7 +143,7 @@ class MeasurementRuntime {
   void set_mode(Mode mode) { m_mode = mode; }
   /// UNITS and DECPL: what OUTPUT reports and DMIS output files are written in.
   void set_report_units(ReportUnits units) { m_report_units = std::move(units); }
-  /// WKPLAN: the plane of CORTOL's polar coordinates from here on.
+  /// WKPLAN: the plane of polar coordinates from here on (CORTOL RADIUS and ANGLE, POL positions).
   void set_working_plane(WorkingPlane plane) { m_working_plane = plane; }
   WorkingPlane working_plane() const { return m_working_plane; }
   /// Strict reading (`--strict`): a tolerance that cannot be evaluated stops the run; read
