@@ -247,3 +247,19 @@ TEST(Language, CurrentSensorModeAndFeatureAreStrings) {
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"[] [] AUTO", "PROBE4 BORE1 PROG,MAN", "MID MAN"}));
 }
+
+// VALUE/SNSET,word and VALUE/FEDRAT,word answer the setting in force (a program saves it to set it
+// back), VALUE/SNSLCT the selected sensor; before, each was "not answered" and the variable kept
+// its value. SNSET distances in the program's length unit, feeds in mm/s.
+TEST(Language, ValueAnswersTheSettingsInForce) {
+  auto s =
+      run("DECL/REAL, KA, KS, KF, KP, KB\nDECL/CHAR, 20, KN\nUNITS/INCH, ANGDEC\nSNSET/APPRCH, 0.1\n"
+          "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 2, 0, 0, -1, 0.16\nSNSLCT/S(PROBE4)\n"
+          "FEDRAT/MESVEL, MMPS, 4\nFEDRAT/POSVEL, MMPS, 40\nKA = VALUE/SNSET, APPRCH\nKS = VALUE/SNSET, SEARCH\n"
+          "KF = VALUE/FEDRAT, MESVEL\nKP = VALUE/FEDRAT, POSVEL\nKN = VALUE/SNSLCT\n"
+          "SNSET/APPRCH, 0.5\nSNSET/APPRCH, KA\nKB = VALUE/SNSET, APPRCH\n"
+          "TEXT/OPER, CONCAT(STR(KA), ' ', STR(KS * 25.4), ' ', STR(KF), ' ', STR(KP), ' ', KN, ' ', STR(KB))\n");
+  ASSERT_EQ(s.status, ExecStatus::Finished) << s.diagnostics;
+  // SEARCH at its default, 5 mm.
+  EXPECT_EQ(s.texts, (std::vector<std::string>{"0.1 5 4 40 PROBE4 0.1"})) << s.diagnostics;
+}

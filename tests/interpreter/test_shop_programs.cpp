@@ -1023,7 +1023,7 @@ TEST(ShopPrograms, RationalDmisHeaderIsRead) {
   EXPECT_TRUE(units.has("4:19: error:")) << units.text;
   EXPECT_TRUE(units.has("5:26: error:")) << units.text;
   // An undeclared variable of a VALUE form metron does not answer is not declared by it.
-  const auto unanswered = check("DMISMN/'v', 4.0\nK = VALUE/SNSET, APPRCH\nENDFIL\n");
+  const auto unanswered = check("DMISMN/'v', 4.0\nK = VALUE/GEOALG, CIRCLE\nENDFIL\n");
   EXPECT_EQ(unanswered.errors, 0U) << unanswered.text;
   EXPECT_TRUE(unanswered.has("this VALUE form is not answered")) << unanswered.text;
 }
@@ -1570,7 +1570,7 @@ TEST(ShopPrograms, ValueReadsAFeaturesSizeAndAToleranceResult) {
   EXPECT_TRUE(bad.has("VALUE/TA(t),DIAM: expected ACT, DEV, AMT, INTOL or OUTOL")) << bad.text;
   EXPECT_EQ(bad.errors, 2u) << bad.text;
   EXPECT_TRUE(check(words, true).has("error: VALUE/FA(x),DIAM: expected SIZE"));
-  const Checked other = check(head + "SZ = VALUE/SNSET, APPRCH\nENDFIL\n");
+  const Checked other = check(head + "SZ = VALUE/GEOALG, CIRCLE\nENDFIL\n");
   EXPECT_EQ(other.errors, 0u) << other.text;
   EXPECT_TRUE(other.has("this VALUE form is not answered")) << other.text;
 }

@@ -205,8 +205,9 @@ void UnitCompiler::declare_implicitly(const std::string& name, ValueType type, S
 // VALUE/FA(x)|F(x),SIZE[,n]: the feature's n-th size (1: diameter, ARC radius, CONE angle, slot
 // width; 2: CYLNDR or CPARLN length). VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL[,n]: what the last
 // OUTPUT or EVAL of T(t) found, for its n-th output feature (DMIS 5 VALUE; the index n as in DMIS
-// SIR 97-8). VALUE/MODE: the current mode, as SMODE(). Other VALUE forms (settings such as
-// VALUE/SNSET) are one warning, and the variable keeps its value; the result is a Constant then.
+// SIR 97-8). VALUE/MODE and VALUE/SNSLCT: the current mode and sensor, as SMODE() and SCSNS();
+// VALUE/SNSET,word and VALUE/FEDRAT,word: the setting in force. Other VALUE forms are one warning,
+// and the variable keeps its value; the result is a Constant then.
 std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
   static const char* const size_words[] = {"SIZE"};
   static const char* const tolerance_words[] = {"ACT", "DEV", "AMT", "INTOL", "OUTOL"};
@@ -222,10 +223,29 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
     q.type = ValueType::String;
     return q;
   }
+  if (s.params.size() == 1 && is_word(s.params[0], "SNSLCT")) {  // the selected sensor, as SCSNS()
+    q.op = ir::ExprOp::Call;
+    q.name = "SCSNS";
+    q.type = ValueType::String;
+    return q;
+  }
+  // VALUE/SNSET,APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH (program length units) and
+  // VALUE/FEDRAT,MESVEL|POSVEL|SCNVEL (mm/s): the setting in force, which a program saves to set
+  // it back later. The run answers them by name (Interpreter::run_function).
+  static const char* const snset_words[] = {"APPRCH", "RETRCT", "SEARCH", "CLRSRF", "DEPTH"};
+  static const char* const feed_words[] = {"MESVEL", "POSVEL", "SCNVEL"};
+  if (s.params.size() == 2 && (is_word(s.params[0], "SNSET") || is_word(s.params[0], "FEDRAT")) &&
+      is_word(s.params[1]) &&
+      (is_word(s.params[0], "SNSET") ? listed(snset_words, s.params[1].text) : listed(feed_words, s.params[1].text))) {
+    q.op = ir::ExprOp::Call;
+    q.name = fmt::format("VALUE/{},{}", s.params[0].text, s.params[1].text);
+    q.type = ValueType::Real;
+    return q;
+  }
   if (s.params.empty() || !(is_label(s.params[0], {"FA", "F", "TA"}))) {
     warn(s.params.empty() ? s.major_span : s.params[0].span, "sema.value-form",
-         "this VALUE form is not answered (metron answers VALUE/FA(x),SIZE, VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL and "
-         "VALUE/MODE); the variable keeps its value");
+         "this VALUE form is not answered (metron answers VALUE/FA(x),SIZE, VALUE/TA(t),ACT|DEV|AMT|INTOL|OUTOL, "
+         "VALUE/MODE, VALUE/SNSLCT, VALUE/SNSET,word and VALUE/FEDRAT,word); the variable keeps its value");
     return q;
   }
   const grammar::Expr& target = s.params[0];

@@ -135,6 +135,23 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
       case runtime::Mode::Man: return Value::string("MAN");
     }
   }
+  if (name.rfind("VALUE/SNSET,", 0) == 0) {  // the distance in force, in the program's length unit
+    const auto& p = m_runtime.probe_settings();
+    const std::string word = name.substr(12);
+    const double mm = word == "APPRCH"   ? p.approach_mm
+                      : word == "RETRCT" ? p.retract_mm
+                      : word == "SEARCH" ? p.search_mm
+                      : word == "CLRSRF" ? p.clearance_mm
+                                         : p.depth_mm;
+    return Value::real(mm / m_length_mm);
+  }
+  if (name.rfind("VALUE/FEDRAT,", 0) == 0) {  // the feed in force, mm/s
+    const auto state = m_runtime.machine().state();
+    const std::string word = name.substr(13);
+    return Value::real(word == "POSVEL"   ? state.positioning_feed_mm_s
+                       : word == "SCNVEL" ? m_runtime.scan_settings().feed_mm_s.value_or(state.measuring_feed_mm_s)
+                                          : state.measuring_feed_mm_s);
+  }
   if (name == "BADPT") return Value::boolean_value(m_bad_point);
   if (name == "BADGT") return Value::boolean_value(m_bad_geometry);
   if (name == "PTDATA") {
