@@ -513,7 +513,9 @@ class Repl {
           });
       std::cout << fmt::format(
           "measuring  F({}): {} steps collected{}, sent at ENDMES\n", block.feature, block.steps.size(),
-          held ? fmt::format(" ({} settings or sensor selections, applied between the points)", held) : std::string());
+          held == 1  ? std::string(" (1 setting or sensor selection, applied between the points)")
+          : held > 1 ? fmt::format(" ({} settings or sensor selections, applied between the points)", held)
+                     : std::string());
     }
     return true;
   }
