@@ -117,6 +117,13 @@ const metron::runtime::FeatureReport* report(Session& s, const std::string& labe
     if (const auto* f = std::get_if<metron::runtime::FeatureReport>(&e); f && f->label == label) found = f;
   return found;
 }
+// The TEXT lines a run printed, in order.
+std::vector<std::string> texts_of(Session& s) {
+  std::vector<std::string> texts;
+  for (const auto& e : s.record().events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  return texts;
+}
 const metron::runtime::ToleranceResult* tolerance(Session& s, const std::string& label) {
   const metron::runtime::ToleranceResult* found = nullptr;
   for (const auto& e : s.record().events)
@@ -309,9 +316,7 @@ TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
       "SELECT/I\nCASE/1\nTEXT/OPER,'none runs'\nENDCAS\nENDSEL\nENDFIL\n";
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> said;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  const std::vector<std::string> said = texts_of(*r.session);
   const std::vector<std::string> expected = {"one", "two or three:2", "two or three:3", "other", "b"};
   EXPECT_EQ(said, expected);
   const auto bad = check(
@@ -325,9 +330,7 @@ TEST(ShopPrograms, SelectRunsTheOneMatchingCase) {
 
 /// The TEXT/OPER lines a run said, in order.
 std::vector<std::string> operator_texts(const Ran& r) {
-  std::vector<std::string> said;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  const std::vector<std::string> said = texts_of(*r.session);
   return said;
 }
 
@@ -1010,9 +1013,7 @@ TEST(ShopPrograms, RationalDmisHeaderIsRead) {
   EXPECT_TRUE(strict.has("16:1: error: variable KNPTC1 is not declared")) << strict.text;
   const auto r = dry_run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> texts;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> texts = texts_of(*r.session);
   EXPECT_EQ(texts, (std::vector<std::string>{"MAN PROG,MAN"}));
   // Units the velocity word does not excuse.
   const auto units = check(
@@ -1740,9 +1741,7 @@ TEST(ShopPrograms, InputFilesAndTheIntrinsicsOfTheRun) {
   const auto r = run(text);
   ::unsetenv("SOURCE_DATE_EPOCH");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> texts;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> texts = texts_of(*r.session);
   const std::vector<std::string> expected = {
       "P1=4.0", "P2=7.0", "A B=11.0", "3", "1971/01/02 00:00:00", "1971/01/02|00:00:00", "0.000", "25.00", "b"};
   EXPECT_EQ(texts, expected);
@@ -1780,9 +1779,7 @@ TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
       "TEXT/OPER,CONCAT(STR(VECX(U)),' ',STR(VECY(U)),' ',STR(VECZ(U)))\nENDFIL\n";
   const auto r = run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> texts;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> texts = texts_of(*r.session);
   const std::vector<std::string> expected = {"1",        "13",       "0,0,-1",   "-1.5",    "1.732051",   "6.000000",
                                              "cross ok", "1.000000", "1.000000", "130.250", "1.5 -2 0.25"};
   EXPECT_EQ(texts, expected);
@@ -2100,9 +2097,7 @@ TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
       "TEXT/OPER,PARTNO\nTEXT/OPER,STR(LIM)\nTEXT/OPER,STR(LIM2)\nENDFIL\n";
   const auto r = run(text, std::nullopt, {"SN-0042", "2.5"});
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> texts;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> texts = texts_of(*r.session);
   ASSERT_EQ(texts.size(), 3u);
   EXPECT_EQ(texts[0], "SN-0042");
   EXPECT_EQ(std::stod(texts[1]), 2.5);
@@ -2122,9 +2117,7 @@ TEST(ShopPrograms, TextQueryReadsTheAnswerIntoItsVariable) {
   EXPECT_EQ(check(text).errors, 0u);
   const auto r = run(text, std::nullopt, {"SN123", "21.5"});
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> texts;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> texts = texts_of(*r.session);
   ASSERT_EQ(texts.size(), 2u);
   EXPECT_EQ(texts[0], "SN=SN123");
   EXPECT_EQ(std::stod(texts[1]), 43.0);
@@ -3021,9 +3014,7 @@ TEST(ShopPrograms, CoordinateSystemsAreOutputAsOriginAndAxes) {
       run("DMISMN/'d', 5.1\nUNITS/MM,ANGDEC\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nD(R)=ROTATE/ZAXIS,90\n"
           "OUTPUT/D(R)\nUNITS/INCH,ANGDEC\nOUTPUT/DA(PART),D(MCS)\nOUTPUT/D(LATER)\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> said;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) said.push_back(t->text);
+  const std::vector<std::string> said = texts_of(*r.session);
   const std::vector<std::string> expected = {
       "D(R): origin (300.0000, 200.0000, 0.0000) mm, X axis (0.000000, 1.000000, 0.000000), Y axis (-1.000000, "
       "0.000000, "
@@ -3046,9 +3037,7 @@ TEST(ShopPrograms, SensorsAreOutputWithTheirQualification) {
       "S(P1) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nOUTPUT/S(P1), SA(P1)\nSNSLCT/S(P1)\n"
       "OUTPUT/S(P1), SA(P1)\nENDFIL\n";
   auto texts = [](const auto& r) {
-    std::vector<std::string> out;
-    for (const auto& e : r.session->record().events)
-      if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) out.push_back(t->text);
+    const std::vector<std::string> out = texts_of(*r.session);
     return out;
   };
   const auto perfect = run(program, source_dir / "programs/worlds/perfect.json");
@@ -3495,8 +3484,6 @@ TEST(ShopPrograms, EolnEndsEachRowOfAnInputFile) {
           "  IF/(.NOT.EOLN(DID(IN1)))\n    JUMPTO/(FIELD)\n  ENDIF\n"
           "  TEXT/OPER,CONCAT(STR(N),':',STR(S,1))\n  JUMPTO/(ROW)\nENDIF\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
-  std::vector<std::string> texts;
-  for (const auto& e : r.session->record().events)
-    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) texts.push_back(t->text);
+  const std::vector<std::string> texts = texts_of(*r.session);
   EXPECT_EQ(texts, (std::vector<std::string>{".FALSE.", "3:6.0", "2:9.0", "1:6.0"}));
 }
