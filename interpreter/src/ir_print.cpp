@@ -40,6 +40,7 @@ const char* to_string(Op op) {
     case Op::DatSet: return "DATSET";
     case Op::Trans: return "TRANS";
     case Op::Rotate: return "ROTATE";
+    case Op::Locate: return "LOCATE";
     case Op::Save: return "SAVE";
     case Op::Recall: return "RECALL";
     case Op::Construct: return "CONSTRUCT";

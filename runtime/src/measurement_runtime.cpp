@@ -33,6 +33,15 @@ void MeasurementRuntime::warn(Span span, const std::string& message) {
   m_record.diagnostics.push_back(fmt::format("{}:{}:{}: warning: {}", loc.path, loc.line, loc.column, message));
 }
 
+void MeasurementRuntime::note(Span span, const std::string& message) {
+  if (!span.valid()) {
+    m_record.diagnostics.push_back("note: " + message);
+    return;
+  }
+  const Location loc = m_sources.locate(span);
+  m_record.diagnostics.push_back(fmt::format("{}:{}:{}: note: {}", loc.path, loc.line, loc.column, message));
+}
+
 void MeasurementRuntime::emit(RunEvent event) {
   if (m_on_event) m_on_event(event);
   m_record.events.push_back(std::move(event));

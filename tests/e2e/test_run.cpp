@@ -243,6 +243,106 @@ TEST(DatumReferenceFrame, PositionToDatumsDoesNotDependOnTheProgramsAlignment) {
   EXPECT_NE(without_alignment->note.find("datum reference frame A|B|C"), std::string::npos);
 }
 
+// LOCATE against the world's hidden pose: example 09 measures the block where the fixture should
+// hold it (FIXTURE); block_turned.json put it 1.2, -0.6, 0.3 mm away, tilted 0.05 and -0.03 deg
+// and turned 0.8 deg. The best fit of the top face, two circles and the sphere must give that pose
+// back, and BORE2, measured after it, its drawing position; in FIXTURE the same bore is where the
+// pose puts it (computed here from the world's numbers), nearly 1.3 mm away.
+namespace best_fit {
+
+std::string example09() {
+  std::ifstream in(program("09_best_fit_locate.dmi"));
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+fs::path written(const std::string& name, const std::string& text) {
+  const fs::path dir = out_dir("best_fit_programs");
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
+// The world's pose (machine/src/world.cpp: T, then Rz, Ry, Rx).
+metron::Frame world_pose() {
+  constexpr double k = std::numbers::pi / 180;
+  metron::Frame f = metron::Frame::Identity();
+  f.translate(Eigen::Vector3d(301.2, 199.4, 0.3));
+  f.rotate(Eigen::AngleAxisd(0.8 * k, Eigen::Vector3d::UnitZ()));
+  f.rotate(Eigen::AngleAxisd(-0.03 * k, Eigen::Vector3d::UnitY()));
+  f.rotate(Eigen::AngleAxisd(0.05 * k, Eigen::Vector3d::UnitX()));
+  return f;
+}
+
+std::string texts(const metron::runtime::RunRecord& r) {
+  std::string all;
+  for (const auto& e : r.events)
+    if (const auto* t = std::get_if<metron::runtime::TextReport>(&e)) all += t->text + "\n";
+  return all;
+}
+
+}  // namespace best_fit
+
+TEST(BestFitAlignment, LocateFindsThePoseTheWorldHides) {
+  const auto o = run(program("09_best_fit_locate.dmi"), world("block_turned.json"), "locate_turned");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const metron::Frame pose = best_fit::world_pose();
+  const std::string origin = fmt::format("D(BEST): origin ({:.4f}, {:.4f}, {:.4f}) mm", pose.translation().x(),
+                                         pose.translation().y(), pose.translation().z());
+  EXPECT_NE(best_fit::texts(o.record).find(origin), std::string::npos) << best_fit::texts(o.record) << origin;
+  EXPECT_NE(o.diagnostics.find("turned 0.0500, -0.0300, 0.8000 deg about FIXTURE's X, Y, Z"), std::string::npos)
+      << o.diagnostics;
+  const auto* bore = report(o.record, "BORE2");
+  ASSERT_TRUE(bore && bore->actual);
+  EXPECT_EQ(bore->frame, "BEST");
+  EXPECT_LT((bore->actual->position.head<2>() - Eigen::Vector2d(120, 30)).norm(), 1e-3);
+
+  // Without LOCATE the bore is reported in FIXTURE, where the pose puts it.
+  const std::string without = best_fit::replaced(
+      best_fit::example09(), "D(BEST) = LOCATE/FA(TOP), FA(BORE1), FA(BOSS1), FA(SPHERE1)\nOUTPUT/D(BEST)\n", "");
+  const auto unlocated = run(best_fit::written("09_no_locate.dmi", without), world("block_turned.json"), "locate_none");
+  ASSERT_EQ(unlocated.exit, RunExit::Completed) << unlocated.diagnostics;
+  const auto* fixture_bore = report(unlocated.record, "BORE2");
+  ASSERT_TRUE(fixture_bore && fixture_bore->actual);
+  metron::Frame fixture = metron::Frame::Identity();
+  fixture.translate(Eigen::Vector3d(300, 200, 0));
+  const Eigen::Vector3d where = fixture.inverse() * pose * Eigen::Vector3d(120, 30, 30);
+  EXPECT_LT((fixture_bore->actual->position.head<2>() - where.head<2>()).norm(), 2e-3);
+  EXPECT_GT((where.head<2>() - Eigen::Vector2d(120, 30)).norm(), 1.0);
+}
+
+// LOCATE/XDIR, YDIR, ZAXIS: the fit moves in the table's plane only; the 0.3 mm lift and the
+// tilt stay out of the frame (the top face, reported after it, is 0.3 mm high; with all six
+// freedoms it is at its drawing height).
+TEST(BestFitAlignment, LocateMovesOnlyAlongAndAboutTheAxesWritten) {
+  const std::string six = best_fit::replaced(best_fit::example09(), "OUTPUT/D(BEST)\n", "OUTPUT/FA(TOP)\n");
+  const std::string planar = best_fit::replaced(six, "LOCATE/FA(TOP)", "LOCATE/XDIR, YDIR, ZAXIS, FA(TOP)");
+  const auto all = run(best_fit::written("09_six.dmi", six), world("block_turned.json"), "locate_six");
+  const auto flat = run(best_fit::written("09_planar.dmi", planar), world("block_turned.json"), "locate_planar");
+  ASSERT_EQ(all.exit, RunExit::Completed) << all.diagnostics;
+  ASSERT_EQ(flat.exit, RunExit::Completed) << flat.diagnostics;
+  const auto* top_six = report(all.record, "TOP");
+  const auto* top_flat = report(flat.record, "TOP");
+  ASSERT_TRUE(top_six && top_six->actual && top_flat && top_flat->actual);
+  EXPECT_NEAR(top_six->actual->position.z(), 40.0, 1e-3);
+  // The top face's centroid (80, 50, 40) lifted 0.3 mm and tilted: + 50 sin 0.05 deg + 80 sin 0.03 deg.
+  constexpr double k = std::numbers::pi / 180;
+  EXPECT_NEAR(top_flat->actual->position.z(), 40.3 + 50 * std::sin(0.05 * k) + 80 * std::sin(0.03 * k), 0.005);
+  const std::string turned = "mm and turned 0.0000, 0.0000, ";
+  const auto at = flat.diagnostics.find(turned);
+  ASSERT_NE(at, std::string::npos) << flat.diagnostics;
+  EXPECT_NEAR(std::stod(flat.diagnostics.substr(at + turned.size())), 0.8, 0.01);
+  EXPECT_NE(flat.diagnostics.find(", 0.0000 mm and turned"), std::string::npos) << flat.diagnostics;
+}
+
 // WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
 TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
   const fs::path dir = out_dir("write_program");

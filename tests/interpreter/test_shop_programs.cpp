@@ -3487,3 +3487,38 @@ TEST(ShopPrograms, EolnEndsEachRowOfAnInputFile) {
   const std::vector<std::string> texts = texts_of(*r.session);
   EXPECT_EQ(texts, (std::vector<std::string>{".FALSE.", "3:6.0", "2:9.0", "1:6.0"}));
 }
+
+// LOCATE read leniently: a word it does not know is a warning (--strict: an error), a LOCATE
+// without a feature an error; at run, features that cannot fix a freedom given are an error at
+// its line naming the freedom (the top face alone says nothing of X), and fixing only what they
+// can (ZDIR, XAXIS, YAXIS) the fit goes on. DAT(x) fits the datum's feature.
+TEST(ShopPrograms, LocateIsReadLenientlyAndNamesWhatItCannotFix) {
+  const std::string head =
+      "DMISMN/'locate', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/20, 20, 80\n"
+      "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 4\n"
+      "  PTMEAS/CART, 10, 10, 40, 0, 0, 1\n  PTMEAS/CART, 150, 10, 40, 0, 0, 1\n"
+      "  PTMEAS/CART, 150, 90, 40, 0, 0, 1\n  PTMEAS/CART, 10, 90, 40, 0, 0, 1\nENDMES\nDATDEF/FA(TOP), DAT(A)\n";
+  const auto lenient = check(head + "D(BF) = LOCATE/ZDIR, XAXIS, YAXIS, FA(TOP), MINMAX\nENDFIL\n");
+  EXPECT_EQ(lenient.errors, 0U) << lenient.text;
+  EXPECT_EQ(lenient.warnings, 1U) << lenient.text;
+  EXPECT_TRUE(lenient.has("shop.dmi:14:45: warning: not read: LOCATE is a least-squares fit")) << lenient.text;
+  EXPECT_EQ(check(head + "D(BF) = LOCATE/ZDIR, XAXIS, YAXIS, FA(TOP), MINMAX\nENDFIL\n", true).errors, 1U);
+  EXPECT_TRUE(check(head + "D(BF) = LOCATE/XDIR, YDIR\nENDFIL\n").has("LOCATE needs at least one feature"));
+  EXPECT_EQ(check(head + "D(BF) = LOCATE/FA(NOWHERE)\nENDFIL\n", true).errors, 1U);
+
+  const auto loose = run(head + "D(BF) = LOCATE/FA(TOP)\nENDFIL\n", source_dir / "programs/worlds/perfect.json");
+  EXPECT_EQ(loose.status, ExecStatus::Error);
+  EXPECT_NE(loose.diagnostics.find("run.dmi:14:1: error: LOCATE D(BF): the features do not fix the part's"),
+            std::string::npos)
+      << loose.diagnostics;
+
+  const auto fixed = run(head + "D(BF) = LOCATE/ZDIR, XAXIS, YAXIS, DAT(A)\nOUTPUT/FA(TOP)\nENDFIL\n",
+                         source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(fixed.status, ExecStatus::Finished) << fixed.diagnostics;
+  EXPECT_NE(fixed.diagnostics.find("LOCATE D(BF): 1 features fitted"), std::string::npos) << fixed.diagnostics;
+  const auto* top = report(*fixed.session, "TOP");
+  ASSERT_TRUE(top && top->actual);
+  EXPECT_EQ(top->frame, "BF");
+  EXPECT_NEAR(top->actual->position.z(), 40.0, 1e-6);
+}

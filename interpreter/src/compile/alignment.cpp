@@ -16,6 +16,7 @@ void UnitCompiler::add_alignment(StatementTable& t) {
   t.insert({{"DATSET", &UnitCompiler::datset},
             {"TRANS", &UnitCompiler::trans},
             {"ROTATE", &UnitCompiler::rotate},
+            {"LOCATE", &UnitCompiler::locate},
             {"SAVE", &UnitCompiler::save},
             {"RECALL", &UnitCompiler::recall},
             {"CONST", &UnitCompiler::construct},
@@ -100,6 +101,45 @@ void UnitCompiler::trans(const grammar::Statement& s) {
       if (!push_number(in, v, "an origin coordinate")) return;
     }
   }
+  m_symbols.alignments.insert(upper(s.target->name));
+  emit(std::move(in));
+}
+
+// D(l)=LOCATE/[XDIR,YDIR,ZDIR,XAXIS,YAXIS,ZAXIS,]FA(f)|F(f)|DAT(d),...: the best-fit alignment
+// (docs/alignments.md). The words are the motions the fit may make (along, about the current
+// axes; all six when none is written); another word is not read (a warning; --strict: an error).
+void UnitCompiler::locate(const grammar::Statement& s) {
+  if (!require_target(s, {"D"}, "D(label)=LOCATE/...")) return;
+  if (!expect_params(s, 1, "the features to fit")) return;
+  auto in = make(Op::Locate, s, upper(s.target->name));
+  static const std::set<std::string> freedoms = {"XDIR", "YDIR", "ZDIR", "XAXIS", "YAXIS", "ZAXIS"};
+  bool have_feature = false;
+  for (const auto& param : s.params) {
+    const grammar::Expr p = unsigned_direction(param);
+    if (is_label(p, {"DAT"})) {
+      const std::string d = upper(p.label.name);
+      if (!m_symbols.datums.count(d) && !named_at_run(d))
+        return error(
+            p.span, "sema.undefined-datum",
+            fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
+      in.operands.push_back(label_op(p));
+      have_feature = true;
+    } else if (is_label(p, {"FA", "F"})) {
+      if (!check_feature(p)) return;
+      in.operands.push_back(label_op(p));
+      have_feature = true;
+    } else if (is_word(p) && freedoms.count(p.text)) {
+      in.operands.push_back(word_operand(p));
+    } else if (m_strict) {
+      return error(p.span, "sema.bad-locate",
+                   "expected XDIR, YDIR, ZDIR, XAXIS, YAXIS, ZAXIS or a feature FA(x), F(x), DAT(x)");
+    } else {
+      warn(p.span, "sema.bad-locate",
+           "not read: LOCATE is a least-squares fit of the features named, moving along (XDIR, YDIR, ZDIR) and "
+           "about (XAXIS, YAXIS, ZAXIS) the axes written (--strict: an error)");
+    }
+  }
+  if (!have_feature) return error(s.major_span, "sema.bad-locate", "LOCATE needs at least one feature to fit");
   m_symbols.alignments.insert(upper(s.target->name));
   emit(std::move(in));
 }

@@ -294,6 +294,7 @@ class UnitCompiler {
   void datset(const grammar::Statement& s);
   void trans(const grammar::Statement& s);
   void rotate(const grammar::Statement& s);
+  void locate(const grammar::Statement& s);
   void save(const grammar::Statement& s);
   void recall(const grammar::Statement& s);
   void construct(const grammar::Statement& s);

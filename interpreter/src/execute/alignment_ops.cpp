@@ -32,6 +32,7 @@ void Execute::add_alignment(ExecuteTable& t) {
                {Op::DatSet, &datset},
                {Op::Trans, &trans},
                {Op::Rotate, &rotate},
+               {Op::Locate, &locate},
                {Op::Save, &save},
                {Op::Recall, &recall},
                {Op::Construct, &construct}});
@@ -141,6 +142,34 @@ ExecStatus Execute::rotate(Interpreter& vm, const ir::Instruction& in, CallFrame
     req.angle_deg = *a * deg;
   }
   if (auto r = vm.m_runtime.rotate(vm.name_of(in), req, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Locate
+ExecStatus Execute::locate(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  runtime::LocateRequest req;
+  bool any_along = false, any_about = false;
+  std::array<bool, 3> along{}, about{};
+  for (const auto& o : in.operands) {
+    if (o.kind == Operand::Kind::Word) {
+      const int k = static_cast<int>(*axis_of(o.word));
+      if (o.word.ends_with("AXIS")) {
+        about[static_cast<std::size_t>(k)] = any_about = true;
+      } else {
+        along[static_cast<std::size_t>(k)] = any_along = true;
+      }
+    } else if (o.label.prefix == "DAT") {
+      req.datums.push_back(vm.label_name(o.label));
+    } else {
+      req.features.push_back(feature_ref(vm, o.label));
+    }
+  }
+  // No freedom written: all six; freedoms written: those only.
+  if (any_along || any_about) {
+    req.along = along;
+    req.about = about;
+  }
+  if (auto r = vm.m_runtime.locate(vm.name_of(in), req, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

@@ -179,6 +179,11 @@ class MeasurementRuntime {
   Result<void> rotate(const std::string& label, const RotateRequest& request, Span span);
   Result<void> save(const std::string& label, Span span);
   Result<void> recall(const std::string& label, Span span);
+  /// LOCATE: D(label) = the frame that lays the features' nominals, as the program wrote them,
+  /// closest to their actuals (least squares, moving only as the request allows, along and
+  /// about the current frame's axes); it becomes the current alignment, and a note tells the
+  /// motion and each feature's residual (runtime/src/best_fit_alignment.cpp).
+  Result<void> locate(const std::string& label, const LocateRequest& request, Span span);
 
   // Constructions and outputs.
   /// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: FA(x)'s position moved by an offset (current frame, mm).
@@ -264,6 +269,7 @@ class MeasurementRuntime {
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);
   void warn(Span span, const std::string& message);  ///< a positioned run-time warning in the record
+  void note(Span span, const std::string& message);  ///< a positioned run-time note in the record
   void write_device_line(const std::string& line);
   void output_sensor(const std::string& label, bool actual, Span span);
   void output_coordinate_system(const std::string& label, bool actual, Span span);

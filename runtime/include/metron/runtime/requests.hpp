@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <array>
 #include <functional>
 #include <optional>
 #include <string>
@@ -103,6 +104,14 @@ struct RotateRequest {
   std::optional<FeatureRef> feature;
   Axis align = Axis::X;
   bool align_negative = false;  ///< -XDIR ...: the feature's direction is turned onto the axis's minus side
+};
+
+/// D(l)=LOCATE/[XDIR,YDIR,ZDIR,XAXIS,YAXIS,ZAXIS,]FA(f)|DAT(d),...: a best-fit alignment.
+struct LocateRequest {
+  std::vector<FeatureRef> features;             ///< FA(f) or F(f) (the actual is what is fitted)
+  std::vector<std::string> datums;              ///< DAT(d): the datum feature's actual
+  std::array<bool, 3> along{true, true, true};  ///< XDIR, YDIR, ZDIR (all when none is written)
+  std::array<bool, 3> about{true, true, true};  ///< XAXIS, YAXIS, ZAXIS
 };
 
 /// CONST/type,F(x),method,sources...

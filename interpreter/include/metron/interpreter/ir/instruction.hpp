@@ -52,6 +52,7 @@ enum class Op {
   DatSet,         ///< `name` = D label; operands: MCS | (DAT label, words...)...
   Trans,          ///< `name` = D label; operands: (axis word, expr | feature label)...
   Rotate,         ///< `name` = D label; operands: axis word, expr angle | (feature label, axis word)
+  Locate,         ///< `name` = D label; operands: freedom words (XDIR ... ZAXIS) and F/FA/DAT labels
   Save,           ///< labels: DA(x)
   Recall,         ///< labels: D(x) / DA(x)
   Construct,      ///< `name` = feature; payload: ConstructPayload; labels: sources

@@ -1,0 +1,128 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// LOCATE: the best-fit alignment of features' actuals onto their nominals (docs/alignments.md).
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/stdlib/fitting/best_fit_frame.hpp"
+
+namespace metron::runtime {
+namespace {
+
+using fitting::FrameMatch;
+
+// How far a feature's measured surface points spread about their centroid (RMS, mm): the lever
+// a direction's mismatch acts through. 0 without points (constructed or stated actuals).
+double spread_mm(const Feature& f) {
+  if (f.points.size() < 2) return 0;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& p : f.points) centroid += p.surface_mm();
+  centroid /= static_cast<double>(f.points.size());
+  double squares = 0;
+  for (const auto& p : f.points) squares += (p.surface_mm() - centroid).squaredNorm();
+  return std::sqrt(squares / static_cast<double>(f.points.size()));
+}
+
+// What a feature says about where the part is (fitting::FrameMatch). The nominal is taken as the
+// program wrote it: in the alignment in force at its FEAT.
+std::vector<FrameMatch> matches_of(const Feature& f, const std::string& name) {
+  const Frame written = f.nominal_frame.inverse();
+  const Geometry& nominal = f.nominal;
+  const Geometry& actual = *f.actual;
+  FrameMatch m;
+  m.name = name;
+  m.nominal_position = written * nominal.position;
+  m.nominal_direction = (written.linear() * nominal.direction).normalized();
+  m.actual_position = actual.position;
+  m.actual_direction = actual.direction.normalized();
+  switch (nominal.type) {
+    case FeatureType::Point:  // a surface point: only its height along its vector was measured
+      m.kind = FrameMatch::Kind::Plane;
+      break;
+    case FeatureType::Sphere:
+    case FeatureType::Torus: m.kind = FrameMatch::Kind::Point; break;
+    case FeatureType::Circle:
+    case FeatureType::Arc:
+    case FeatureType::Ellipse:
+    case FeatureType::ClosedSlot:  // their height along the axis is where they were probed
+      m.kind = FrameMatch::Kind::Axis;
+      break;
+    case FeatureType::Line:
+    case FeatureType::Cylinder:
+    case FeatureType::Cone:
+      m.kind = FrameMatch::Kind::Axis;
+      m.extent_mm = spread_mm(f);
+      break;
+    case FeatureType::Plane:
+    case FeatureType::ParallelPlanes:
+      m.kind = FrameMatch::Kind::Plane;
+      m.extent_mm = spread_mm(f);
+      break;
+    case FeatureType::GenericSurface:
+    case FeatureType::GenericCurve: {
+      // Each probed point against its own nominal, along the nominal's normal.
+      std::vector<FrameMatch> points;
+      for (std::size_t i = 0; i < f.points.size(); ++i) {
+        const MeasuredPoint& p = f.points[i];
+        if (!p.nominal_mm) continue;
+        FrameMatch q;
+        q.kind = FrameMatch::Kind::Plane;
+        q.name = fmt::format("{}[{}]", name, i + 1);
+        q.nominal_position = written * *p.nominal_mm;
+        q.nominal_direction = (written.linear() * p.nominal_normal).normalized();
+        q.actual_position = p.surface_mm();
+        q.actual_direction = p.nominal_normal;
+        points.push_back(q);
+      }
+      return points;
+    }
+  }
+  return {m};
+}
+
+}  // namespace
+
+Result<void> MeasurementRuntime::locate(const std::string& label, const LocateRequest& request, Span span) {
+  std::vector<FrameMatch> matches;
+  auto add = [&](const std::string& feature, const std::string& name) -> Result<void> {
+    const Feature* f = find_feature(feature);
+    if (!f) return program_error(span, fmt::format("LOCATE: feature F({}) is not defined", feature));
+    if (!f->actual)
+      return program_error(span, fmt::format("LOCATE: {} has no actual yet: measure or construct it first", name));
+    const auto m = matches_of(*f, name);
+    if (m.empty())
+      return program_error(span, fmt::format("LOCATE: {} has no probed point with a nominal to fit", name));
+    matches.insert(matches.end(), m.begin(), m.end());
+    return {};
+  };
+  for (const auto& ref : request.features)
+    if (auto r = add(ref.label, fmt::format("FA({})", ref.label)); !r) return r;
+  for (const auto& d : request.datums) {
+    auto datum_of = datum(d, span);
+    if (!datum_of) return tl::unexpected(datum_of.error());
+    if (auto r = add((*datum_of)->feature, fmt::format("DAT({})", d)); !r) return r;
+  }
+  fitting::FrameFreedoms freedoms;
+  freedoms.along = request.along;
+  freedoms.about = request.about;
+  const auto fit = fitting::best_fit_frame(matches, m_alignment.part_to_machine, freedoms);
+  if (!fit) return program_error(span, fmt::format("LOCATE D({}): {}", label, fit.error()));
+
+  // The note: the motion from the current alignment, the fit's RMS and its worst feature.
+  const std::size_t worst = static_cast<std::size_t>(
+      std::max_element(fit->residual_mm.begin(), fit->residual_mm.end()) - fit->residual_mm.begin());
+  const ReportUnits& u = m_report_units;
+  const Vec3& t = fit->translation_mm;
+  note(span, fmt::format("LOCATE D({}): {} features fitted; moved {}, {}, {} {} and turned {:.4f}, {:.4f}, {:.4f} "
+                         "deg about {}'s X, Y, Z; residual RMS {} {}, the largest {} {} at {}",
+                         label, matches.size(), length_text(t.x(), u), length_text(t.y(), u), length_text(t.z(), u),
+                         unit_word(u), fit->rotation_deg.x(), fit->rotation_deg.y(), fit->rotation_deg.z(),
+                         m_alignment.label, length_text(fit->rms_mm, u), unit_word(u),
+                         length_text(fit->residual_mm[worst], u), unit_word(u), matches[worst].name));
+  set_alignment(label, fit->part_to_machine);
+  return {};
+}
+
+}  // namespace metron::runtime
