@@ -41,6 +41,7 @@ const char* to_string(Op op) {
     case Op::Trans: return "TRANS";
     case Op::Rotate: return "ROTATE";
     case Op::Locate: return "LOCATE";
+    case Op::Iterate: return "ITERAT";
     case Op::Save: return "SAVE";
     case Op::Recall: return "RECALL";
     case Op::Construct: return "CONSTRUCT";

@@ -84,45 +84,80 @@ std::vector<FrameMatch> matches_of(const Feature& f, const std::string& name) {
 
 }  // namespace
 
-Result<void> MeasurementRuntime::locate(const std::string& label, const LocateRequest& request, Span span) {
+Result<std::vector<FrameMatch>> MeasurementRuntime::best_fit_matches(const std::string& statement,
+                                                                     const LocateRequest& request, Span span) const {
   std::vector<FrameMatch> matches;
   auto add = [&](const std::string& feature, const std::string& name) -> Result<void> {
     const Feature* f = find_feature(feature);
-    if (!f) return program_error(span, fmt::format("LOCATE: feature F({}) is not defined", feature));
+    if (!f) return program_error(span, fmt::format("{}: feature F({}) is not defined", statement, feature));
     if (!f->actual)
-      return program_error(span, fmt::format("LOCATE: {} has no actual yet: measure or construct it first", name));
+      return program_error(span,
+                           fmt::format("{}: {} has no actual yet: measure or construct it first", statement, name));
     const auto m = matches_of(*f, name);
     if (m.empty())
-      return program_error(span, fmt::format("LOCATE: {} has no probed point with a nominal to fit", name));
+      return program_error(span, fmt::format("{}: {} has no probed point with a nominal to fit", statement, name));
     matches.insert(matches.end(), m.begin(), m.end());
     return {};
   };
   for (const auto& ref : request.features)
-    if (auto r = add(ref.label, fmt::format("FA({})", ref.label)); !r) return r;
+    if (auto r = add(ref.label, fmt::format("FA({})", ref.label)); !r) return tl::unexpected(r.error());
   for (const auto& d : request.datums) {
     auto datum_of = datum(d, span);
     if (!datum_of) return tl::unexpected(datum_of.error());
-    if (auto r = add((*datum_of)->feature, fmt::format("DAT({})", d)); !r) return r;
+    if (auto r = add((*datum_of)->feature, fmt::format("DAT({})", d)); !r) return tl::unexpected(r.error());
   }
+  return matches;
+}
+
+Result<void> MeasurementRuntime::locate(const std::string& label, const LocateRequest& request, Span span) {
+  const std::string statement = fmt::format("LOCATE D({})", label);
+  const auto matches = best_fit_matches(statement, request, span);
+  if (!matches) return tl::unexpected(matches.error());
   fitting::FrameFreedoms freedoms;
   freedoms.along = request.along;
   freedoms.about = request.about;
-  const auto fit = fitting::best_fit_frame(matches, m_alignment.part_to_machine, freedoms);
-  if (!fit) return program_error(span, fmt::format("LOCATE D({}): {}", label, fit.error()));
+  const auto fit = fitting::best_fit_frame(*matches, m_alignment.part_to_machine, freedoms);
+  if (!fit) return program_error(span, fmt::format("{}: {}", statement, fit.error()));
 
   // The note: the motion from the current alignment, the fit's RMS and its worst feature.
   const std::size_t worst = static_cast<std::size_t>(
       std::max_element(fit->residual_mm.begin(), fit->residual_mm.end()) - fit->residual_mm.begin());
   const ReportUnits& u = m_report_units;
   const Vec3& t = fit->translation_mm;
-  note(span, fmt::format("LOCATE D({}): {} features fitted; moved {}, {}, {} {} and turned {:.4f}, {:.4f}, {:.4f} "
+  note(span, fmt::format("{}: {} features fitted; moved {}, {}, {} {} and turned {:.4f}, {:.4f}, {:.4f} "
                          "deg about {}'s X, Y, Z; residual RMS {} {}, the largest {} {} at {}",
-                         label, matches.size(), length_text(t.x(), u), length_text(t.y(), u), length_text(t.z(), u),
-                         unit_word(u), fit->rotation_deg.x(), fit->rotation_deg.y(), fit->rotation_deg.z(),
-                         m_alignment.label, length_text(fit->rms_mm, u), unit_word(u),
-                         length_text(fit->residual_mm[worst], u), unit_word(u), matches[worst].name));
+                         statement, request.features.size() + request.datums.size(), length_text(t.x(), u),
+                         length_text(t.y(), u), length_text(t.z(), u), unit_word(u), fit->rotation_deg.x(),
+                         fit->rotation_deg.y(), fit->rotation_deg.z(), m_alignment.label, length_text(fit->rms_mm, u),
+                         unit_word(u), length_text(fit->residual_mm[worst], u), unit_word(u), (*matches)[worst].name));
   set_alignment(label, fit->part_to_machine);
   return {};
+}
+
+Result<double> MeasurementRuntime::iterate(const std::string& label, const LocateRequest& request, bool incremental,
+                                           Span span) {
+  const std::string statement = fmt::format("ITERAT D({})", label);
+  const auto matches = best_fit_matches(statement, request, span);
+  if (!matches) return tl::unexpected(matches.error());
+  const Frame before = m_alignment.part_to_machine;
+  const auto fit = fitting::best_fit_frame(*matches, before, {});
+  if (!fit) return program_error(span, fmt::format("{}: {}", statement, fit.error()));
+  double criterion = 0;
+  if (incremental) {
+    for (const auto& m : *matches)
+      criterion = std::max(criterion, (fit->part_to_machine * m.nominal_position - before * m.nominal_position).norm());
+  } else {
+    for (const double d : fitting::frame_residuals_mm(*matches, before)) criterion = std::max(criterion, d);
+  }
+  const ReportUnits& u = m_report_units;
+  const std::string test = incremental ? fmt::format("this fit moves the features' nominals at most {} {}",
+                                                     length_text(criterion, u), unit_word(u))
+                                       : fmt::format("the features were at most {} {} from their nominals in {}",
+                                                     length_text(criterion, u), unit_word(u), m_alignment.label);
+  note(span,
+       fmt::format("{}: {}; the fit's residual RMS {} {}", statement, test, length_text(fit->rms_mm, u), unit_word(u)));
+  set_alignment(label, fit->part_to_machine);
+  return criterion;
 }
 
 }  // namespace metron::runtime

@@ -343,6 +343,53 @@ TEST(BestFitAlignment, LocateMovesOnlyAlongAndAboutTheAxesWritten) {
   EXPECT_NE(flat.diagnostics.find(", 0.0000 mm and turned"), std::string::npos) << flat.diagnostics;
 }
 
+// ITERAT against the same hidden pose (example 10): six surface points, three of them on bore walls,
+// where a point probed in the wrong place is also off along its vector, so one 3-2-1 fit leaves the
+// frame off; fitted again after each new measurement the frame settles on the world's pose and
+// BORE2 on its drawing position. Limited to one fit (the one-shot 3-2-1 alignment, the baseline),
+// BORE2 is a tenth of a millimetre and more away and a warning says the test was not met; INCR
+// (the fit's own motion as the test) settles as ABSL does.
+TEST(BestFitAlignment, IteratMeasuresAgainUntilTheAlignmentSettles) {
+  std::ifstream in(program("10_iterative_alignment.dmi"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string iterat = "(REDO), 0.0005, 10, ABSL";
+  const auto settled = run(program("10_iterative_alignment.dmi"), world("block_turned.json"), "iterat_settled");
+  const auto once = run(best_fit::written("10_once.dmi", best_fit::replaced(text.str(), iterat, "(REDO), 0.0005, 1")),
+                        world("block_turned.json"), "iterat_once");
+  const auto incr =
+      run(best_fit::written("10_incr.dmi", best_fit::replaced(text.str(), iterat, "(REDO), 0.0005, 10, INCR")),
+          world("block_turned.json"), "iterat_incr");
+  for (const auto* o : {&settled, &once, &incr}) ASSERT_EQ(o->exit, RunExit::Completed) << o->diagnostics;
+
+  const metron::Frame pose = best_fit::world_pose();
+  const std::string origin = fmt::format("D(ITER): origin ({:.4f}, {:.4f}, {:.4f}) mm", pose.translation().x(),
+                                         pose.translation().y(), pose.translation().z());
+  EXPECT_NE(best_fit::texts(settled.record).find(origin), std::string::npos) << best_fit::texts(settled.record);
+  const auto fits = [](const std::string& d) {
+    std::size_t n = 0;
+    for (auto at = d.find("note: ITERAT D(ITER)"); at != std::string::npos; at = d.find("note: ITERAT D(ITER)", at + 1))
+      ++n;
+    return n;
+  };
+  EXPECT_GT(fits(settled.diagnostics), 2U) << settled.diagnostics;
+  EXPECT_EQ(fits(once.diagnostics), 1U);
+  EXPECT_GT(fits(incr.diagnostics), 2U);
+  EXPECT_NE(once.diagnostics.find("warning: ITERAT D(ITER): not within 0.0005 after 1 fits"), std::string::npos)
+      << once.diagnostics;
+
+  const auto bore_error = [](const metron::interpreter::RunOutcome& o) {
+    const auto* bore = report(o.record, "BORE2");
+    EXPECT_TRUE(bore && bore->actual && bore->frame == "ITER");
+    return bore && bore->actual ? (bore->actual->position.head<2>() - Eigen::Vector2d(120, 30)).norm() : 1e9;
+  };
+  EXPECT_LT(bore_error(settled), 1e-3);
+  EXPECT_LT(bore_error(incr), 1e-3);
+  EXPECT_GT(bore_error(once), 0.1);
+  std::printf("BORE2 from its drawing position: settled %.5f mm (%zu fits), one fit %.4f mm\n", bore_error(settled),
+              fits(settled.diagnostics), bore_error(once));
+}
+
 // WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
 TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
   const fs::path dir = out_dir("write_program");

@@ -3522,3 +3522,31 @@ TEST(ShopPrograms, LocateIsReadLenientlyAndNamesWhatItCannotFix) {
   EXPECT_EQ(top->frame, "BF");
   EXPECT_NEAR(top->actual->position.z(), 40.0, 1e-6);
 }
+
+// ITERAT read in the form metron documents, or skipped with the reason (as before metron read it):
+// no jump label, a word it does not know before the label, no accuracy and count.
+TEST(ShopPrograms, IteratIsReadOrSkippedWithAReason) {
+  const std::string head =
+      "DMISMN/'iterat', 5.0\nUNITS/MM, ANGDEC\nSNSLCT/SA(T1A0B0)\nD(PART) = TRANS/XORIG, 300, YORIG, 200\n(AGAIN)\n"
+      "F(P1) = FEAT/POINT, CART, 10, 10, 40, 0, 0, 1\nMEAS/POINT, F(P1), 1\nENDMES\n";
+  const auto read = check(head + "D(IT) = ITERAT/ZDIR, FA(P1), (AGAIN), 0.01, 5, ABSL\nENDFIL\n");
+  EXPECT_EQ(read.errors + read.warnings, 0U) << read.text;
+  EXPECT_EQ(check(head + "D(IT) = ITERAT/-ZDIR, FA(P1), (AGAIN), 0.01, 5\nENDFIL\n").warnings, 0U);
+  for (const char* form :
+       {"D(IT) = ITERAT/ZDIR, FA(P1), 0.01, 5\n", "D(IT) = ITERAT/ZDIR, FA(P1), WHAT, (AGAIN), 0.01, 5\n",
+        "D(IT) = ITERAT/ZDIR, FA(P1), (AGAIN), 0.01\n", "D(IT) = ITERAT/ZDIR, (AGAIN), 0.01, 5\n"}) {
+    const auto skipped = check(head + std::string(form) + "ENDFIL\n");
+    EXPECT_EQ(skipped.errors, 0U) << form << skipped.text;
+    EXPECT_TRUE(skipped.has("warning: ITERAT is skipped: ")) << form << skipped.text;
+  }
+  // A jump label no statement defines is an error, as JUMPTO's is.
+  EXPECT_EQ(check(head + "D(IT) = ITERAT/ZDIR, FA(P1), (NOWHERE), 0.01, 5\nENDFIL\n").errors, 1U);
+  // At run, one point cannot fix the part's six freedoms: an error at the ITERAT naming them.
+  const auto r = run(head + "D(IT) = ITERAT/ZDIR, FA(P1), (AGAIN), 0.01, 5\nENDFIL\n",
+                     source_dir / "programs/worlds/perfect.json");
+  EXPECT_EQ(r.status, ExecStatus::Error) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("error: ITERAT D(IT): the features do not fix the part's position along X, position "
+                               "along Y, position along Z, rotation about X, rotation about Y and rotation about Z"),
+            std::string::npos)
+      << r.diagnostics;
+}

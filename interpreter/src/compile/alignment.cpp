@@ -17,6 +17,7 @@ void UnitCompiler::add_alignment(StatementTable& t) {
             {"TRANS", &UnitCompiler::trans},
             {"ROTATE", &UnitCompiler::rotate},
             {"LOCATE", &UnitCompiler::locate},
+            {"ITERAT", &UnitCompiler::iterate},
             {"SAVE", &UnitCompiler::save},
             {"RECALL", &UnitCompiler::recall},
             {"CONST", &UnitCompiler::construct},
@@ -142,6 +143,66 @@ void UnitCompiler::locate(const grammar::Statement& s) {
   if (!have_feature) return error(s.major_span, "sema.bad-locate", "LOCATE needs at least one feature to fit");
   m_symbols.alignments.insert(upper(s.target->name));
   emit(std::move(in));
+}
+
+// D(l)=ITERAT/[dir,]FA(a),FA(b),...,[dir,]FA(c),...,(label),accuracy,count[,ABSL|INCR]: an
+// iterative alignment (docs/language.md). Each time it is reached the features are fitted as
+// LOCATE fits them (six freedoms; the direction words that group them are not needed for it) and
+// D(l) made current; while the test is not within the accuracy and fewer than `count` fits were
+// made, the program goes back to (label) to measure the features again in the new alignment.
+// A statement not of this form is skipped with a warning, as before metron read ITERAT.
+void UnitCompiler::iterate(const grammar::Statement& s) {
+  if (!require_target(s, {"D"}, "D(label)=ITERAT/...")) return;
+  const auto skip = [&](Span at, const std::string& why) {
+    warn(at, "sema.unknown-statement",
+         fmt::format("ITERAT is skipped: {}; metron reads D(label)=ITERAT/[XDIR,...]FA(x),...,(label),accuracy,"
+                     "count[,ABSL|INCR] (docs/language.md)",
+                     why));
+    m_symbols.skipped["D:" + upper(s.target->name)] = s.span;
+    emit(make(Op::Nop, s, s.major));
+  };
+  std::size_t jump_at = s.params.size();
+  for (std::size_t i = 0; i < s.params.size(); ++i)
+    if (s.params[i].kind == ExprKind::Paren) {
+      jump_at = i;
+      break;
+    }
+  if (jump_at == s.params.size())
+    return skip(s.major_span, "it names no jump label (label) to measure the features again from");
+  const auto [label, label_span] = jump_label_name(s.params[jump_at]);
+  if (label.empty()) return skip(s.params[jump_at].span, "expected a jump label (label)");
+  auto in = make(Op::Iterate, s, upper(s.target->name));
+  static const std::set<std::string> directions = {"XDIR",   "YDIR",   "ZDIR",  "XMINUS", "YMINUS",
+                                                   "ZMINUS", "JUMPTO", "XAXIS", "YAXIS",  "ZAXIS"};
+  bool have_feature = false;
+  for (std::size_t i = 0; i < jump_at; ++i) {
+    const grammar::Expr p = unsigned_direction(s.params[i]);
+    if (is_label(p, {"DAT"})) {
+      const std::string d = upper(p.label.name);
+      if (!m_symbols.datums.count(d) && !named_at_run(d))
+        return error(
+            p.span, "sema.undefined-datum",
+            fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
+      in.operands.push_back(label_op(p));
+      have_feature = true;
+    } else if (is_label(p, {"FA", "F"})) {
+      if (!check_feature(p)) return;
+      in.operands.push_back(label_op(p));
+      have_feature = true;
+    } else if (!(is_word(p) && directions.count(p.text))) {
+      return skip(p.span, "expected a direction word or a feature before the jump label");
+    }
+  }
+  if (!have_feature) return skip(s.major_span, "it names no feature to fit");
+  const std::size_t numbers = s.params.size() - jump_at - 1;
+  const bool mode_word = numbers == 3 && (is_word(s.params.back(), "ABSL") || is_word(s.params.back(), "INCR"));
+  if (numbers != 2 && !mode_word)
+    return skip(s.params[jump_at].span, "expected an accuracy and a count after the jump label, then ABSL or INCR");
+  if (!push_number(in, s.params[jump_at + 1], "the accuracy") || !push_number(in, s.params[jump_at + 2], "the count"))
+    return;
+  in.operands.push_back(word_operand(mode_word ? s.params.back().text : std::string("ABSL"), s.params.back().span));
+  m_symbols.alignments.insert(upper(s.target->name));
+  emit_jump(std::move(in), label, label_span);
 }
 
 // Signed directions (DMIS 5.x, written by PC-DMIS and CAMIO): -XDIR is the word XMINUS, +XDIR is

@@ -295,6 +295,7 @@ class UnitCompiler {
   void trans(const grammar::Statement& s);
   void rotate(const grammar::Statement& s);
   void locate(const grammar::Statement& s);
+  void iterate(const grammar::Statement& s);
   void save(const grammar::Statement& s);
   void recall(const grammar::Statement& s);
   void construct(const grammar::Statement& s);

@@ -33,6 +33,7 @@ void Execute::add_alignment(ExecuteTable& t) {
                {Op::Trans, &trans},
                {Op::Rotate, &rotate},
                {Op::Locate, &locate},
+               {Op::Iterate, &iterate},
                {Op::Save, &save},
                {Op::Recall, &recall},
                {Op::Construct, &construct}});
@@ -170,6 +171,48 @@ ExecStatus Execute::locate(Interpreter& vm, const ir::Instruction& in, CallFrame
     req.about = about;
   }
   if (auto r = vm.m_runtime.locate(vm.name_of(in), req, in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Iterate: a fit, then back to the jump label until the test is within the accuracy or
+// `count` fits were made (then a warning, and the last fit stays current).
+ExecStatus Execute::iterate(Interpreter& vm, const ir::Instruction& in, CallFrame& frame) {
+  const std::size_t pc = frame.pc - 1;
+  runtime::LocateRequest req;
+  std::vector<double> nums;
+  bool incremental = false;
+  for (const auto& o : in.operands) {
+    if (o.kind == Operand::Kind::Expr) {
+      auto v = vm.number(o.expr);
+      if (!v) return vm.fail(in.span, v.error());
+      nums.push_back(*v);
+    } else if (o.kind == Operand::Kind::Word) {
+      incremental = o.word == "INCR";
+    } else if (o.label.prefix == "DAT") {
+      req.datums.push_back(vm.label_name(o.label));
+    } else {
+      req.features.push_back(feature_ref(vm, o.label));
+    }
+  }
+  const double accuracy_mm = nums.at(0) * vm.m_length_mm;
+  const double count = nums.at(1);
+  if (!(accuracy_mm >= 0) || !(count >= 1) || count > 1e6)
+    return vm.fail(in.span, fmt::format("ITERAT needs an accuracy of 0 or more and a count from 1 to 10^6 (got {}, {})",
+                                        nums[0], nums[1]));
+  auto criterion = vm.m_runtime.iterate(vm.name_of(in), req, incremental, in.span);
+  if (!criterion) return vm.from_runtime(criterion.error());
+  const int fits = ++frame.iterations[pc];
+  if (*criterion <= accuracy_mm) {
+    frame.iterations.erase(pc);
+    return ExecStatus::Running;
+  }
+  if (fits < count) {
+    frame.pc = static_cast<std::size_t>(in.target);
+    return ExecStatus::Running;
+  }
+  frame.iterations.erase(pc);
+  vm.m_runtime.warning(in.span, fmt::format("ITERAT D({}): not within {} after {} fits; the last fit is kept",
+                                            vm.name_of(in), nums[0], fits));
   return ExecStatus::Running;
 }
 

@@ -145,4 +145,16 @@ tl::expected<BestFitFrame, std::string> best_fit_frame(const std::vector<FrameMa
   return fit;
 }
 
+std::vector<double> frame_residuals_mm(const std::vector<FrameMatch>& matches, const Frame& part_to_machine) {
+  std::vector<double> lengths;
+  for (const auto& m : matches) {
+    std::vector<double> r;
+    append_residuals(m, part_to_machine, r);
+    double squares = 0;
+    for (const double v : r) squares += v * v;
+    lengths.push_back(std::sqrt(squares));
+  }
+  return lengths;
+}
+
 }  // namespace metron::fitting

@@ -26,6 +26,7 @@ struct CallFrame {
   std::size_t pc = 0;                                      ///< next instruction
   std::map<std::string, std::vector<Value>> locals;        ///< macro parameters and local variables
   std::map<std::size_t, std::pair<double, double>> loops;  ///< DoInit pc -> (end, step)
+  std::map<std::size_t, int> iterations;                   ///< ITERAT pc -> fits made since it last ended
   Span call_site;                                          ///< the CALL that entered this frame
 };
 

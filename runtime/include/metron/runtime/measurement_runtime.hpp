@@ -20,6 +20,7 @@
 #include "metron/runtime/scan.hpp"
 #include "metron/runtime/tolerance.hpp"
 #include "metron/stdlib/file_access.hpp"
+#include "metron/stdlib/fitting/best_fit_frame.hpp"
 #include "metron/stdlib/source.hpp"
 
 namespace metron::machine::wavefront {
@@ -184,6 +185,11 @@ class MeasurementRuntime {
   /// about the current frame's axes); it becomes the current alignment, and a note tells the
   /// motion and each feature's residual (runtime/src/best_fit_alignment.cpp).
   Result<void> locate(const std::string& label, const LocateRequest& request, Span span);
+  /// ITERAT: one fit of an iterative alignment: D(label) = LOCATE's six-freedom best fit of the
+  /// features, made current. Returns what the convergence test compares with its accuracy (mm):
+  /// the features' largest distance from their nominals in the alignment they were measured in
+  /// (ABSL), or how far the fit moved their nominals (`incremental`, INCR).
+  Result<double> iterate(const std::string& label, const LocateRequest& request, bool incremental, Span span);
 
   // Constructions and outputs.
   /// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: FA(x)'s position moved by an offset (current frame, mm).
@@ -268,6 +274,9 @@ class MeasurementRuntime {
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);
+  /// The matches of LOCATE's and ITERAT's features (runtime/src/best_fit_alignment.cpp).
+  Result<std::vector<fitting::FrameMatch>> best_fit_matches(const std::string& statement, const LocateRequest& request,
+                                                            Span span) const;
   void warn(Span span, const std::string& message);  ///< a positioned run-time warning in the record
   void note(Span span, const std::string& message);  ///< a positioned run-time note in the record
   void write_device_line(const std::string& line);

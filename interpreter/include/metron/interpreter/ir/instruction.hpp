@@ -36,25 +36,27 @@ enum class Op {
   Mode,   ///< payload: ModePayload
   Text,   ///< words: OPER|OUTFIL|...; expr: the text
   FeatureDef,  ///< `name` = label; payload: FeaturePayload; exprs: the numbers; `count` 1: FA(l)=FEAT, a stated actual
-  ToleranceDef,   ///< `name` = label; payload: kind; words: modifiers; exprs: values; labels: datums
-  SensorDef,      ///< `name` = label; words: PROBE, FIXED|INDEX, CART|POL; exprs: numbers
-  SensorSelect,   ///< `name` = sensor label
-  ProbeSet,       ///< words: APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH; expr: distance
-  Feed,           ///< payload: FeedPayload; expr: value
-  Accel,          ///< words: MESACL|POSACL, unit; expr: value
-  GoTo,           ///< payload: FormPayload; exprs: x, y, z (inside a MEAS block: a block step)
-  MeasBegin,      ///< `name` = feature; payload: FeaturePayload (type); expr: point count; `target` = index of MeasEnd
-  PtMeas,         ///< payload: FormPayload; exprs: x,y,z[,i,j,k]; [label: RMEAS reference]
-  MeasEnd,        ///< ENDMES: runs the collected block on the machine
-  Output,         ///< labels: F/FA/T/TA in order
-  Evaluate,       ///< EVAL: labels F/FA then T/TA; the tolerances are evaluated and kept, not reported
-  DatDef,         ///< labels: feature, DAT(x)
-  DatSet,         ///< `name` = D label; operands: MCS | (DAT label, words...)...
-  Trans,          ///< `name` = D label; operands: (axis word, expr | feature label)...
-  Rotate,         ///< `name` = D label; operands: axis word, expr angle | (feature label, axis word)
-  Locate,         ///< `name` = D label; operands: freedom words (XDIR ... ZAXIS) and F/FA/DAT labels
-  Save,           ///< labels: DA(x)
-  Recall,         ///< labels: D(x) / DA(x)
+  ToleranceDef,  ///< `name` = label; payload: kind; words: modifiers; exprs: values; labels: datums
+  SensorDef,     ///< `name` = label; words: PROBE, FIXED|INDEX, CART|POL; exprs: numbers
+  SensorSelect,  ///< `name` = sensor label
+  ProbeSet,      ///< words: APPRCH|RETRCT|SEARCH|CLRSRF|DEPTH; expr: distance
+  Feed,          ///< payload: FeedPayload; expr: value
+  Accel,         ///< words: MESACL|POSACL, unit; expr: value
+  GoTo,          ///< payload: FormPayload; exprs: x, y, z (inside a MEAS block: a block step)
+  MeasBegin,     ///< `name` = feature; payload: FeaturePayload (type); expr: point count; `target` = index of MeasEnd
+  PtMeas,        ///< payload: FormPayload; exprs: x,y,z[,i,j,k]; [label: RMEAS reference]
+  MeasEnd,       ///< ENDMES: runs the collected block on the machine
+  Output,        ///< labels: F/FA/T/TA in order
+  Evaluate,      ///< EVAL: labels F/FA then T/TA; the tolerances are evaluated and kept, not reported
+  DatDef,        ///< labels: feature, DAT(x)
+  DatSet,        ///< `name` = D label; operands: MCS | (DAT label, words...)...
+  Trans,         ///< `name` = D label; operands: (axis word, expr | feature label)...
+  Rotate,        ///< `name` = D label; operands: axis word, expr angle | (feature label, axis word)
+  Locate,        ///< `name` = D label; operands: freedom words (XDIR ... ZAXIS) and F/FA/DAT labels
+  Iterate,  ///< `name` = D label; operands: F/FA/DAT labels, expr accuracy, expr count, word ABSL|INCR; `target` = the
+            ///< jump label
+  Save,     ///< labels: DA(x)
+  Recall,   ///< labels: D(x) / DA(x)
   Construct,      ///< `name` = feature; payload: ConstructPayload; labels: sources
   Declare,        ///< words: scope, type; `names`: variables (with `count` = array size, 0 = scalar)
   Assign,         ///< `name` = variable; exprs: [indices...,] value; `count` = number of indices

@@ -54,4 +54,8 @@ struct BestFitFrame {
 tl::expected<BestFitFrame, std::string> best_fit_frame(const std::vector<FrameMatch>& matches, const Frame& start,
                                                        const FrameFreedoms& freedoms);
 
+/// Each match's residual length (mm) with the nominals placed by `part_to_machine`: how far each
+/// feature is from its nominal in that frame (ITERAT's convergence test).
+std::vector<double> frame_residuals_mm(const std::vector<FrameMatch>& matches, const Frame& part_to_machine);
+
 }  // namespace metron::fitting
