@@ -82,6 +82,12 @@ std::vector<FrameMatch> matches_of(const Feature& f, const std::string& name) {
   return {m};
 }
 
+// A number as the note writes it, without the sign of a zero ("-0.0000" is "0.0000").
+std::string without_negative_zero(std::string text) {
+  if (text.starts_with('-') && text.find_first_not_of("0.", 1) == std::string::npos) text.erase(0, 1);
+  return text;
+}
+
 }  // namespace
 
 Result<std::vector<FrameMatch>> MeasurementRuntime::best_fit_matches(const std::string& statement,
@@ -123,13 +129,16 @@ Result<void> MeasurementRuntime::locate(const std::string& label, const LocateRe
   const std::size_t worst = static_cast<std::size_t>(
       std::max_element(fit->residual_mm.begin(), fit->residual_mm.end()) - fit->residual_mm.begin());
   const ReportUnits& u = m_report_units;
+  const auto length = [&](double mm) { return without_negative_zero(length_text(mm, u)); };
+  const auto angle = [&](double deg) { return without_negative_zero(fmt::format("{:.4f}", deg)); };
   const Vec3& t = fit->translation_mm;
-  note(span, fmt::format("{}: {} features fitted; moved {}, {}, {} {} and turned {:.4f}, {:.4f}, {:.4f} "
-                         "deg about {}'s X, Y, Z; residual RMS {} {}, the largest {} {} at {}",
-                         statement, request.features.size() + request.datums.size(), length_text(t.x(), u),
-                         length_text(t.y(), u), length_text(t.z(), u), unit_word(u), fit->rotation_deg.x(),
-                         fit->rotation_deg.y(), fit->rotation_deg.z(), m_alignment.label, length_text(fit->rms_mm, u),
-                         unit_word(u), length_text(fit->residual_mm[worst], u), unit_word(u), (*matches)[worst].name));
+  const Vec3& r = fit->rotation_deg;
+  note(span, fmt::format("{}: {} features fitted; moved {}, {}, {} {} and turned {}, {}, {} deg about {}'s X, Y, Z; "
+                         "residual RMS {} {}, the largest {} {} at {}",
+                         statement, request.features.size() + request.datums.size(), length(t.x()), length(t.y()),
+                         length(t.z()), unit_word(u), angle(r.x()), angle(r.y()), angle(r.z()), m_alignment.label,
+                         length(fit->rms_mm), unit_word(u), length(fit->residual_mm[worst]), unit_word(u),
+                         (*matches)[worst].name));
   set_alignment(label, fit->part_to_machine);
   return {};
 }
