@@ -24,22 +24,17 @@ MeasurementRuntime::MeasurementRuntime(machine::Machine& machine, const SourceMa
   m_alignments["MCS"] = m_alignment;
 }
 
-void MeasurementRuntime::warn(Span span, const std::string& message) {
-  if (!span.valid()) {
-    m_record.diagnostics.push_back("warning: " + message);
-    return;
-  }
-  const Location loc = m_sources.locate(span);
-  m_record.diagnostics.push_back(fmt::format("{}:{}:{}: warning: {}", loc.path, loc.line, loc.column, message));
-}
+void MeasurementRuntime::warn(Span span, const std::string& message) { record(span, "warning", message); }
 
-void MeasurementRuntime::note(Span span, const std::string& message) {
+void MeasurementRuntime::note(Span span, const std::string& message) { record(span, "note", message); }
+
+void MeasurementRuntime::record(Span span, const char* severity, const std::string& message) {
   if (!span.valid()) {
-    m_record.diagnostics.push_back("note: " + message);
+    m_record.diagnostics.push_back(fmt::format("{}: {}", severity, message));
     return;
   }
   const Location loc = m_sources.locate(span);
-  m_record.diagnostics.push_back(fmt::format("{}:{}:{}: note: {}", loc.path, loc.line, loc.column, message));
+  m_record.diagnostics.push_back(fmt::format("{}:{}:{}: {}: {}", loc.path, loc.line, loc.column, severity, message));
 }
 
 void MeasurementRuntime::emit(RunEvent event) {

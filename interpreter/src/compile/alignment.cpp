@@ -25,6 +25,26 @@ void UnitCompiler::add_alignment(StatementTable& t) {
             {"EVAL", &UnitCompiler::evaluate}});
 }
 
+// A DAT(x), FA(x) or F(x) parameter appended to `in`, checked as DATSET, LOCATE and ITERAT need it
+// (a datum DATDEF defined, a feature defined): nullopt when `p` is none of them, false when its
+// check failed (reported).
+std::optional<bool> UnitCompiler::push_datum_or_feature(ir::Instruction& in, const grammar::Expr& p) {
+  if (is_label(p, {"DAT"})) {
+    const std::string d = upper(p.label.name);
+    if (!m_symbols.datums.count(d) && !named_at_run(d)) {
+      error(p.span, "sema.undefined-datum",
+            fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
+      return false;
+    }
+  } else if (is_label(p, {"FA", "F"})) {
+    if (!check_feature(p)) return false;
+  } else {
+    return std::nullopt;
+  }
+  in.operands.push_back(label_op(p));
+  return true;
+}
+
 // D(l)=DATSET/MCS | D(l)=DATSET/DAT(A),ZDIR,ZORIG,DAT(B),XDIR,...   (-ZDIR = ZMINUS; FA(x) in
 // place of DAT(A), as CAMIO and PC-DMIS write it: the feature's actual)
 void UnitCompiler::datset(const grammar::Statement& s) {
@@ -55,17 +75,8 @@ void UnitCompiler::datset(const grammar::Statement& s) {
     bool have_datum = false;
     for (const auto& param : s.params) {
       const grammar::Expr p = unsigned_direction(param);
-      if (is_label(p, {"DAT"})) {
-        const std::string d = upper(p.label.name);
-        if (!m_symbols.datums.count(d) && !named_at_run(d))
-          return error(
-              p.span, "sema.undefined-datum",
-              fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
-        in.operands.push_back(label_op(p));
-        have_datum = true;
-      } else if (is_label(p, {"FA", "F"})) {
-        if (!check_feature(p)) return;
-        in.operands.push_back(label_op(p));
+      if (const auto pushed = push_datum_or_feature(in, p)) {
+        if (!*pushed) return;
         have_datum = true;
       } else if (is_word(p) && words.count(p.text)) {
         if (!have_datum)
@@ -117,17 +128,8 @@ void UnitCompiler::locate(const grammar::Statement& s) {
   bool have_feature = false;
   for (const auto& param : s.params) {
     const grammar::Expr p = unsigned_direction(param);
-    if (is_label(p, {"DAT"})) {
-      const std::string d = upper(p.label.name);
-      if (!m_symbols.datums.count(d) && !named_at_run(d))
-        return error(
-            p.span, "sema.undefined-datum",
-            fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
-      in.operands.push_back(label_op(p));
-      have_feature = true;
-    } else if (is_label(p, {"FA", "F"})) {
-      if (!check_feature(p)) return;
-      in.operands.push_back(label_op(p));
+    if (const auto pushed = push_datum_or_feature(in, p)) {
+      if (!*pushed) return;
       have_feature = true;
     } else if (is_word(p) && freedoms.count(p.text)) {
       in.operands.push_back(word_operand(p));
@@ -177,17 +179,8 @@ void UnitCompiler::iterate(const grammar::Statement& s) {
   bool have_feature = false;
   for (std::size_t i = 0; i < jump_at; ++i) {
     const grammar::Expr p = unsigned_direction(s.params[i]);
-    if (is_label(p, {"DAT"})) {
-      const std::string d = upper(p.label.name);
-      if (!m_symbols.datums.count(d) && !named_at_run(d))
-        return error(
-            p.span, "sema.undefined-datum",
-            fmt::format("datum DAT({}) is not defined: use DATDEF/FA(x),DAT({}) first", p.label.name, p.label.name));
-      in.operands.push_back(label_op(p));
-      have_feature = true;
-    } else if (is_label(p, {"FA", "F"})) {
-      if (!check_feature(p)) return;
-      in.operands.push_back(label_op(p));
+    if (const auto pushed = push_datum_or_feature(in, p)) {
+      if (!*pushed) return;
       have_feature = true;
     } else if (!(is_word(p) && directions.count(p.text))) {
       return skip(p.span, "expected a direction word or a feature before the jump label");

@@ -296,6 +296,7 @@ class UnitCompiler {
   void rotate(const grammar::Statement& s);
   void locate(const grammar::Statement& s);
   void iterate(const grammar::Statement& s);
+  std::optional<bool> push_datum_or_feature(ir::Instruction& in, const grammar::Expr& p);
   void save(const grammar::Statement& s);
   void recall(const grammar::Statement& s);
   void construct(const grammar::Statement& s);

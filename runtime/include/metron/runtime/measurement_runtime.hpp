@@ -279,6 +279,7 @@ class MeasurementRuntime {
                                                             Span span) const;
   void warn(Span span, const std::string& message);  ///< a positioned run-time warning in the record
   void note(Span span, const std::string& message);  ///< a positioned run-time note in the record
+  void record(Span span, const char* severity, const std::string& message);  ///< the line of warn and note
   void write_device_line(const std::string& line);
   void output_sensor(const std::string& label, bool actual, Span span);
   void output_coordinate_system(const std::string& label, bool actual, Span span);
