@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// LOCATE: the best-fit alignment of features' actuals onto their nominals (docs/alignments.md).
+// LOCATE and ITERAT: best-fit alignments of features' actuals onto their nominals (docs/language.md).
 #include <algorithm>
 #include <cmath>
 
@@ -38,8 +38,10 @@ std::vector<FrameMatch> matches_of(const Feature& f, const std::string& name) {
   m.actual_position = actual.position;
   m.actual_direction = actual.direction.normalized();
   switch (nominal.type) {
-    case FeatureType::Point:  // a surface point: only its height along its vector was measured
-      m.kind = FrameMatch::Kind::Plane;
+    case FeatureType::Point:
+      // A probed surface point: only its height along its vector was measured (the other two
+      // coordinates are where the probe was sent). A constructed point (a corner) is known whole.
+      m.kind = f.source == ActualSource::Constructed ? FrameMatch::Kind::Point : FrameMatch::Kind::Plane;
       break;
     case FeatureType::Sphere:
     case FeatureType::Torus: m.kind = FrameMatch::Kind::Point; break;

@@ -368,6 +368,27 @@ TEST(BestFitAlignment, LocateMovesOnlyAlongAndAboutTheAxesWritten) {
   EXPECT_NE(flat.diagnostics.find(", 0.0000 mm and turned"), std::string::npos) << flat.diagnostics;
 }
 
+// A constructed point is known whole, not only along its vector as a probed surface point is:
+// example 02's corner (the intersection of the top, front and left faces, measured in FIXTURE on
+// block_turned.json) alone fixes LOCATE's three translations, by where the world's pose puts the
+// drawing's (0, 0, 40).
+TEST(BestFitAlignment, AConstructedCornerFixesItsWholePosition) {
+  std::ifstream in(program("02_block_inspection.dmi"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const auto o =
+      run(best_fit::written("02_corner.dmi",
+                            best_fit::replaced(text.str(), "OUTPUT/FA(CORNER)\n",
+                                               "OUTPUT/FA(CORNER)\nD(BF) = LOCATE/XDIR, YDIR, ZDIR, FA(CORNER)\n")),
+          world("block_turned.json"), "locate_corner");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const Eigen::Vector3d corner(0, 0, 40);
+  const Eigen::Vector3d moved = best_fit::world_pose() * corner - best_fit::fixture_frame() * corner;
+  const std::string said =
+      fmt::format("LOCATE D(BF): 1 features fitted; moved {:.4f}, {:.4f}, {:.4f} mm", moved.x(), moved.y(), moved.z());
+  EXPECT_NE(o.diagnostics.find(said), std::string::npos) << o.diagnostics << said;
+}
+
 // ITERAT against the same hidden pose (example 10): six surface points, three of them on bore walls,
 // where a point probed in the wrong place is also off along its vector, so one 3-2-1 fit leaves the
 // frame off; fitted again after each new measurement the frame settles on the world's pose and

@@ -118,7 +118,7 @@ void UnitCompiler::trans(const grammar::Statement& s) {
 }
 
 // D(l)=LOCATE/[XDIR,YDIR,ZDIR,XAXIS,YAXIS,ZAXIS,]FA(f)|F(f)|DAT(d),...: the best-fit alignment
-// (docs/alignments.md). The words are the motions the fit may make (along, about the current
+// (docs/language.md). The words are the motions the fit may make (along, about the current
 // axes; all six when none is written); another word is not read (a warning; --strict: an error).
 void UnitCompiler::locate(const grammar::Statement& s) {
   if (!require_target(s, {"D"}, "D(label)=LOCATE/...")) return;
