@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// LOCATE and ITERAT: best-fit alignments of features' actuals onto their nominals (docs/language.md).
+// LOCATE and ITERAT: best-fit alignments of features' actuals onto their nominals (docs/alignments.md).
 #include <algorithm>
 #include <cmath>
 

@@ -118,7 +118,7 @@ void UnitCompiler::trans(const grammar::Statement& s) {
 }
 
 // D(l)=LOCATE/[XDIR,YDIR,ZDIR,XAXIS,YAXIS,ZAXIS,]FA(f)|F(f)|DAT(d),...: the best-fit alignment
-// (docs/language.md). The words are the motions the fit may make (along, about the current
+// (docs/alignments.md). The words are the motions the fit may make (along, about the current
 // axes; all six when none is written); another word is not read (a warning; --strict: an error).
 void UnitCompiler::locate(const grammar::Statement& s) {
   if (!require_target(s, {"D"}, "D(label)=LOCATE/...")) return;
@@ -148,7 +148,7 @@ void UnitCompiler::locate(const grammar::Statement& s) {
 }
 
 // D(l)=ITERAT/[dir,]FA(a),FA(b),...,[dir,]FA(c),...,(label),accuracy,count[,ABSL|INCR]: an
-// iterative alignment (docs/language.md). Each time it is reached the features are fitted as
+// iterative alignment (docs/alignments.md). Each time it is reached the features are fitted as
 // LOCATE fits them (six freedoms; the direction words that group them are not needed for it) and
 // D(l) made current; while the test is not within the accuracy and fewer than `count` fits were
 // made, the program goes back to (label) to measure the features again in the new alignment.
@@ -158,7 +158,7 @@ void UnitCompiler::iterate(const grammar::Statement& s) {
   const auto skip = [&](Span at, const std::string& why) {
     warn(at, "sema.unknown-statement",
          fmt::format("ITERAT is skipped: {}; metron reads D(label)=ITERAT/[XDIR,...]FA(x),...,(label),accuracy,"
-                     "count[,ABSL|INCR] (docs/language.md)",
+                     "count[,ABSL|INCR] (docs/alignments.md)",
                      why));
     m_symbols.skipped["D:" + upper(s.target->name)] = s.span;
     emit(make(Op::Nop, s, s.major));
