@@ -368,6 +368,32 @@ TEST(BestFitAlignment, LocateMovesOnlyAlongAndAboutTheAxesWritten) {
   EXPECT_NE(flat.diagnostics.find(", 0.0000 mm and turned"), std::string::npos) << flat.diagnostics;
 }
 
+// On a part with a deviation the fit spreads it: block_deviations.json's BORE1 is 0.030 off in x,
+// BORE2 is not. Fitted in the table's plane (XDIR, YDIR, ZAXIS) the two centres cannot change
+// their distance, so the part of the 0.030 along the line joining them, 0.030 x 80 / |(80, -20)|,
+// is left split equally: 0.01455 at each, and the residuals' RMS over the six components
+// 0.01455 sqrt(2 / 6).
+TEST(BestFitAlignment, LocateSpreadsAMisplacedBoreOverThePattern) {
+  const std::string text =
+      "DMISMN/'locate spread', 5.0\nUNITS/MM, ANGDEC\n"
+      "S(PROBE4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(PROBE4)\n"
+      "SNSET/APPRCH, 3\nSNSET/RETRCT, 3\nSNSET/SEARCH, 5\nSNSET/CLRSRF, 10\nMODE/AUTO\n"
+      "D(FIXTURE) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/40, 50, 80\n"
+      "F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 8\nENDMES\n"
+      "F(BORE2) = FEAT/CIRCLE, INNER, CART, 120, 30, 30, 0, 0, 1, 12\nMEAS/CIRCLE, F(BORE2), 8\nENDMES\n"
+      "D(PATTERN) = LOCATE/XDIR, YDIR, ZAXIS, FA(BORE1), FA(BORE2)\nENDFIL\n";
+  const auto o = run(best_fit::written("spread.dmi", text), world("block_deviations.json"), "locate_spread");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const double split = 0.5 * 0.030 * 80 / std::hypot(80.0, 20.0);
+  const auto number_after = [&](const std::string& words) {
+    const auto at = o.diagnostics.find(words);
+    EXPECT_NE(at, std::string::npos) << o.diagnostics;
+    return at == std::string::npos ? -1.0 : std::stod(o.diagnostics.substr(at + words.size()));
+  };
+  EXPECT_NEAR(number_after("the largest "), split, 5e-4) << o.diagnostics;
+  EXPECT_NEAR(number_after("residual RMS "), split * std::sqrt(2.0 / 6.0), 5e-4) << o.diagnostics;
+}
+
 // A constructed point is known whole, not only along its vector as a probed surface point is:
 // example 02's corner (the intersection of the top, front and left faces, measured in FIXTURE on
 // block_turned.json) alone fixes LOCATE's three translations, by where the world's pose puts the
