@@ -41,16 +41,6 @@ void append_residuals(const FrameMatch& m, const Frame& f, std::vector<double>& 
   if (m.extent_mm > 0) push(m.extent_mm * (direction - same_sense(m.actual_direction.normalized(), direction)));
 }
 
-std::size_t residual_count(const FrameMatch& m) {
-  const std::size_t direction = m.extent_mm > 0 && m.kind != FrameMatch::Kind::Point ? 3 : 0;
-  switch (m.kind) {
-    case FrameMatch::Kind::Point: return 3;
-    case FrameMatch::Kind::Plane: return 1 + direction;
-    case FrameMatch::Kind::Axis: return 3 + direction;
-  }
-  return 0;
-}
-
 struct FrameModel {
   const std::vector<FrameMatch>& matches;
   const Frame& start;
@@ -136,12 +126,7 @@ tl::expected<BestFitFrame, std::string> best_fit_frame(const std::vector<FrameMa
   fit.rotation_deg = p.tail<3>() * 180.0 / std::numbers::pi;
   fit.rms_mm = std::sqrt(r.squaredNorm() / static_cast<double>(r.size()));
   fit.iterations = out.iterations;
-  Eigen::Index at = 0;
-  for (const auto& m : matches) {
-    const auto n = static_cast<Eigen::Index>(residual_count(m));
-    fit.residual_mm.push_back(r.segment(at, n).norm());
-    at += n;
-  }
+  fit.residual_mm = frame_residuals_mm(matches, fit.part_to_machine);
   return fit;
 }
 
