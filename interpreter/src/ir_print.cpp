@@ -44,6 +44,8 @@ const char* to_string(Op op) {
     case Op::Iterate: return "ITERAT";
     case Op::Save: return "SAVE";
     case Op::Recall: return "RECALL";
+    case Op::Equate: return "EQUATE";
+    case Op::Pause: return "PAUSE";
     case Op::Construct: return "CONSTRUCT";
     case Op::Declare: return "DECLARE";
     case Op::Assign: return "ASSIGN";

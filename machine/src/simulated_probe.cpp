@@ -52,6 +52,16 @@ void SimulatedProbe::update_error_state() {
   m_free_radius_mm = -1;
 }
 
+std::optional<std::size_t> SimulatedProbe::operator_stop() {
+  if (!m_truth.part || m_setups_done >= m_truth.part->setups.size()) return std::nullopt;
+  m_truth.part->pose = m_truth.part->setups[m_setups_done++];
+  m_solid = make_probed_solid(m_truth, m_stylus_offset_mm);
+  m_scan_solid.reset();
+  update_error_state();
+  m_free_radius_mm = -1;
+  return m_setups_done + 1;
+}
+
 std::optional<double> SimulatedProbe::sweep(const Vec3& a, const Vec3& b) {
   // An axis that moves sets its approach direction; one that stands keeps its last.
   std::array<int, 3> approach = m_approach;

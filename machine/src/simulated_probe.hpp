@@ -46,6 +46,10 @@ class SimulatedProbe {
   /// move at which the ball first touches, if it does. The move's direction sets each moving
   /// axis' approach direction (the machine errors' reversal terms).
   [[nodiscard]] std::optional<double> sweep(const Vec3& a, const Vec3& b);
+  /// The operator stops the program (DMIS PAUSE): the part goes to its next set-up, if the world
+  /// gives one. Returns its number (2 for the first of part.setups: the part's pose is set-up 1).
+  std::optional<std::size_t> operator_stop();
+
   /// The feature name at a contact point (for fault messages).
   [[nodiscard]] std::string feature_at(const Vec3& p) const;
 
@@ -88,6 +92,7 @@ class SimulatedProbe {
   std::unique_ptr<Solid> m_scan_solid;  // kept: a CAD part takes a while to build
   Vec3 m_stylus_offset_mm = Vec3::Zero();
   Rng m_rng;
+  std::size_t m_setups_done = 0;  // part.setups taken so far
   double m_ball_radius_mm = 0;
   Vec3 m_free_centre = Vec3::Zero();
   double m_free_radius_mm = -1;            // none

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "controller.hpp"
 #include "metron/machine/aborted_response.hpp"
 #include "metron/machine/active_scanning/contour_scan.hpp"
@@ -243,6 +245,12 @@ std::optional<Response> VirtualCmm::stop_last_motion(double after_s) { return m_
 bool VirtualCmm::set_motion_observer(std::function<void(double, const Vec3&)> observer) {
   m_impl->motion_observer = std::move(observer);
   return true;
+}
+// Where the part now lies is the world's truth: the answer names the set-up, not the pose.
+std::optional<std::string> VirtualCmm::operator_stop() {
+  const auto setup = m_impl->sim.operator_stop();
+  if (!setup) return std::nullopt;
+  return fmt::format("the virtual operator puts the part in its set-up {} (the world's part.setups)", *setup);
 }
 double VirtualCmm::simulated_time_s() const { return m_impl->now(); }
 void VirtualCmm::set_trace(std::function<void(const TraceSample&)> trace) { m_impl->trace = std::move(trace); }

@@ -372,11 +372,20 @@ PartSpec parse_part(const json& j, const std::string& ptr, const std::string& ba
       part.design = parse_node(dj, dp);
     }
   }
-  o.read("pose", [&](const json& pj, const std::string& pp) {
+  const auto read_pose = [](const json& pj, const std::string& pp, Pose& into) {
     Object pose(pj, pp);
-    pose.vec3("translation_mm", part.pose.translation_mm);
-    pose.vec3("rotation_deg", part.pose.rotation_deg);
+    pose.vec3("translation_mm", into.translation_mm);
+    pose.vec3("rotation_deg", into.rotation_deg);
     pose.finish();
+  };
+  o.read("pose", [&](const json& pj, const std::string& pp) { read_pose(pj, pp, part.pose); });
+  o.read("setups", [&](const json& sj, const std::string& sp) {
+    if (!sj.is_array()) fail(sp, "expected an array of poses (translation_mm, rotation_deg)");
+    for (std::size_t i = 0; i < sj.size(); ++i) {
+      Pose pose;
+      read_pose(sj[i], sp + "/" + std::to_string(i), pose);
+      part.setups.push_back(pose);
+    }
   });
   o.read("deviations", [&](const json& dj, const std::string& dp) {
     Object devs(dj, dp);

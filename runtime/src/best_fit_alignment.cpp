@@ -2,6 +2,7 @@
 // LOCATE and ITERAT: best-fit alignments of features' actuals onto their nominals (docs/alignments.md).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -84,12 +85,6 @@ std::vector<FrameMatch> matches_of(const Feature& f, const std::string& name) {
   return {m};
 }
 
-// A number as the note writes it, without the sign of a zero ("-0.0000" is "0.0000").
-std::string without_negative_zero(std::string text) {
-  if (text.starts_with('-') && text.find_first_not_of("0.", 1) == std::string::npos) text.erase(0, 1);
-  return text;
-}
-
 }  // namespace
 
 Result<std::vector<FrameMatch>> MeasurementRuntime::best_fit_matches(const std::string& statement,
@@ -117,6 +112,15 @@ Result<std::vector<FrameMatch>> MeasurementRuntime::best_fit_matches(const std::
   return matches;
 }
 
+// A best fit rests on the features it fits (Alignment::rests_on_s).
+double MeasurementRuntime::best_fit_rests_on_s(const LocateRequest& request) const {
+  double rests_on = std::numeric_limits<double>::infinity();
+  for (const FeatureRef& f : request.features) rests_on = std::min(rests_on, rests_on_s(f));
+  for (const std::string& d : request.datums)
+    if (const auto it = m_datums.find(d); it != m_datums.end()) rests_on = std::min(rests_on, it->second.rests_on_s);
+  return rests_on;
+}
+
 Result<void> MeasurementRuntime::locate(const std::string& label, const LocateRequest& request, Span span) {
   const std::string statement = fmt::format("LOCATE D({})", label);
   const auto matches = best_fit_matches(statement, request, span);
@@ -141,7 +145,7 @@ Result<void> MeasurementRuntime::locate(const std::string& label, const LocateRe
                          length(t.z()), unit_word(u), angle(r.x()), angle(r.y()), angle(r.z()), m_alignment.label,
                          length(fit->rms_mm), unit_word(u), length(fit->residual_mm[worst]), unit_word(u),
                          (*matches)[worst].name));
-  set_alignment(label, fit->part_to_machine);
+  set_alignment(label, fit->part_to_machine, best_fit_rests_on_s(request));
   return {};
 }
 
@@ -167,7 +171,7 @@ Result<double> MeasurementRuntime::iterate(const std::string& label, const Locat
                                                      length_text(criterion, u), unit_word(u), m_alignment.label);
   note(span,
        fmt::format("{}: {}; the fit's residual RMS {} {}", statement, test, length_text(fit->rms_mm, u), unit_word(u)));
-  set_alignment(label, fit->part_to_machine);
+  set_alignment(label, fit->part_to_machine, best_fit_rests_on_s(request));
   return criterion;
 }
 

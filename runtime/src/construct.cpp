@@ -2,6 +2,7 @@
 // CONST/...: features constructed from other features' actuals.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <fmt/format.h>
@@ -78,10 +79,12 @@ Vec3 line_plane_normal(const Geometry& line) {
 Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType type, ConstructMethod method,
                                            const std::vector<FeatureRef>& sources, Span span) {
   std::vector<Geometry> in;
+  double rests_on = std::numeric_limits<double>::infinity();
   for (const auto& s : sources) {
     auto g = resolve(s, span);
     if (!g) return tl::unexpected(g.error());
     in.push_back(*g);
+    rests_on = std::min(rests_on, rests_on_s(s));
   }
   auto it = m_features.find(label);
   if (it == m_features.end()) {
@@ -300,14 +303,14 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
       break;
     }
   }
-  store_constructed(label, g, figures, span);
+  store_constructed(label, g, figures, rests_on, span);
   return {};
 }
 
 // A construction's result: the feature's actual; a feature with no FEAT nominal takes it as its
 // nominal too (construct warned).
 void MeasurementRuntime::store_constructed(const std::string& label, const Geometry& actual,
-                                           const std::optional<FitFigures>& figures, Span span) {
+                                           const std::optional<FitFigures>& figures, double rests_on_s, Span span) {
   auto it = m_features.find(label);
   if (it == m_features.end()) {
     Feature f;
@@ -321,6 +324,7 @@ void MeasurementRuntime::store_constructed(const std::string& label, const Geome
   it->second.actual = actual;
   it->second.source = ActualSource::Constructed;
   it->second.fit = figures;
+  it->second.rests_on_s = rests_on_s;
   it->second.measured_at = span;
 }
 
@@ -330,14 +334,15 @@ Result<void> MeasurementRuntime::construct_moved_point(const std::string& label,
                                                        const Vec3& offset_current, Span span) {
   auto g = resolve(source, span);
   if (!g) return tl::unexpected(g.error());
-  store_constructed_point(label, g->position + m_alignment.to_machine_vector(offset_current), g->direction, span);
+  store_constructed_point(label, g->position + m_alignment.to_machine_vector(offset_current), g->direction,
+                          rests_on_s(source), span);
   return {};
 }
 
 // A constructed POINT: its nominal's direction, or `direction` for one without a FEAT nominal
 // (whose nominal is then taken from the actual, with a warning).
 void MeasurementRuntime::store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction,
-                                                 Span span) {
+                                                 double rests_on_s, Span span) {
   const auto it = m_features.find(label);
   Geometry point = it != m_features.end() ? it->second.nominal : Geometry{};
   point.type = FeatureType::Point;
@@ -346,7 +351,7 @@ void MeasurementRuntime::store_constructed_point(const std::string& label, const
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
     point.direction = direction;
   }
-  store_constructed(label, point, std::nullopt, span);
+  store_constructed(label, point, std::nullopt, rests_on_s, span);
 }
 
 // CONST/POINT,F(l),EXTREM: among FA(x)'s measured points (surface points, the probe radius
@@ -363,9 +368,11 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
   if (!measured) return tl::unexpected(measured.error());
   const Feature* f = *measured;
   Vec3 d = m_alignment.to_machine_vector(direction_current);
+  double rests_on = f->rests_on_s;
   if (axis) {
     auto a = resolve(*axis, span);
     if (!a) return tl::unexpected(a.error());
+    rests_on = std::min(rests_on, rests_on_s(*axis));
     if (a->type == FeatureType::Point || a->type == FeatureType::Sphere)
       return fail(fmt::format("FA({}) is a {}: it has no axis to give the direction", axis->label, dmis_word(a->type)));
     d = a->direction;
@@ -375,7 +382,7 @@ Result<void> MeasurementRuntime::construct_extreme_point(const std::string& labe
   const auto far = std::max_element(
       f->points.begin(), f->points.end(),
       [&](const MeasuredPoint& a, const MeasuredPoint& b) { return a.surface_mm().dot(d) < b.surface_mm().dot(d); });
-  store_constructed_point(label, far->surface_mm(), far->normal, span);
+  store_constructed_point(label, far->surface_mm(), far->normal, rests_on, span);
   return {};
 }
 
@@ -408,7 +415,7 @@ Result<void> MeasurementRuntime::construct_radial_extreme_point(const std::strin
       std::max_element(f->points.begin(), f->points.end(), [&](const MeasuredPoint& a, const MeasuredPoint& b) {
         return minimum ? radial(a) > radial(b) : radial(a) < radial(b);
       });
-  store_constructed_point(label, far->surface_mm(), far->normal, span);
+  store_constructed_point(label, far->surface_mm(), far->normal, f->rests_on_s, span);
   return {};
 }
 
@@ -425,7 +432,7 @@ Result<void> MeasurementRuntime::construct_offset_plane(const std::string& label
   moved.position = g->position + distance_mm * g->direction.normalized();
   if (m_features.find(label) == m_features.end())
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
-  store_constructed(label, moved, std::nullopt, span);
+  store_constructed(label, moved, std::nullopt, rests_on_s(source), span);
   return {};
 }
 
@@ -454,7 +461,7 @@ Result<void> MeasurementRuntime::construct_cone_section(const std::string& label
   circle.diameter_mm = by_diameter ? value_mm : 2 * h * tan_half;
   if (m_features.find(label) == m_features.end())
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
-  store_constructed(label, circle, std::nullopt, span);
+  store_constructed(label, circle, std::nullopt, rests_on_s(source), span);
   return {};
 }
 

@@ -68,6 +68,7 @@ Result<void> MeasurementRuntime::define_reported_actual(const std::string& label
   if (actual.slot_axis.norm() > 0) actual.slot_axis.normalize();
   f.actual = actual;
   f.source = ActualSource::Measured;
+  f.rests_on_s = m_machine.state().time_s;
   f.points.clear();
   f.fit.reset();
   f.measured_at = span;
@@ -484,6 +485,8 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   }
   feature.actual = fitted->first;
   feature.fit = fitted->second;
+  feature.rests_on_s = std::numeric_limits<double>::infinity();
+  for (const MeasuredPoint& p : points) feature.rests_on_s = std::min(feature.rests_on_s, p.time_s);
   apply_fit_algorithm(*feature.actual, points, feature.label, block.span);
   return {};
 }
@@ -703,35 +706,46 @@ Result<void> MeasurementRuntime::define_datum(const FeatureRef& ref, const std::
   auto g = resolve(ref, span);
   if (!g) return tl::unexpected(g.error());
   const Feature* f = find_feature(ref.label);
-  m_datums[label] = Datum{label, ref.label, *g, f->nominal, f->nominal_frame};
+  m_datums[label] = Datum{label, ref.label, *g, f->nominal, f->nominal_frame, rests_on_s(ref)};
   return {};
 }
 
-void MeasurementRuntime::set_alignment(const std::string& label, const Frame& frame) {
-  m_alignment = Alignment{label, frame};
+void MeasurementRuntime::set_alignment(const std::string& label, const Frame& frame, double rests_on_s) {
+  m_alignment = Alignment{label, frame, rests_on_s};
   m_alignments[label] = m_alignment;
 }
 
+double MeasurementRuntime::rests_on_s(const FeatureRef& ref) const {
+  const Feature* f = find_feature(ref.label);
+  if (!ref.actual || !f || !f->actual) return std::numeric_limits<double>::infinity();
+  return f->rests_on_s;
+}
+
 Result<void> MeasurementRuntime::datset(const std::string& label, const DatsetRequest& request, Span span) {
+  double rests_on = std::numeric_limits<double>::infinity();
   if (request.mcs) {
-    set_alignment(label, Frame::Identity());
+    set_alignment(label, Frame::Identity(), rests_on);
     return {};
   }
+  // The frame rests on the features written here (not on the alignment it replaces: a DATSET of a
+  // new set-up is made while the last set-up's alignment is current).
   std::vector<DatsetClause> clauses;
   for (const auto& c : request.clauses) {
     if (c.feature) {
       auto g = resolve(*c.feature, span);
       if (!g) return tl::unexpected(g.error());
       clauses.push_back({*g, c.direction, c.minus, c.origins});
+      rests_on = std::min(rests_on, rests_on_s(*c.feature));
       continue;
     }
     auto d = datum(c.datum, span);
     if (!d) return tl::unexpected(d.error());
     clauses.push_back({(*d)->geometry, c.direction, c.minus, c.origins});
+    rests_on = std::min(rests_on, (*d)->rests_on_s);
   }
   auto frame = runtime::datset(m_alignment.part_to_machine, clauses);
   if (!frame) return program_error(span, frame.error());
-  set_alignment(label, *frame);
+  set_alignment(label, *frame, rests_on);
   return {};
 }
 
@@ -752,21 +766,27 @@ Result<void> MeasurementRuntime::set_clearance_surface(const FeatureRef& plane, 
 
 Result<void> MeasurementRuntime::trans(const std::string& label, const TransRequest& request, Span span) {
   std::optional<double> origin[3];
+  // Moved by numbers only, the frame rests on what the current one rests on; moved to features,
+  // on those.
+  double rests_on = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 3; ++k) {
     if (request.value[k]) origin[k] = request.value[k];
     if (request.feature[k]) {
       auto g = resolve(*request.feature[k], span);
       if (!g) return tl::unexpected(g.error());
       origin[k] = m_alignment.to_part_point(g->position)[k];
+      rests_on = std::min(rests_on, rests_on_s(*request.feature[k]));
     }
   }
-  set_alignment(label, translate_origin(m_alignment.part_to_machine, origin));
+  if (std::isinf(rests_on)) rests_on = m_alignment.rests_on_s;
+  set_alignment(label, translate_origin(m_alignment.part_to_machine, origin), rests_on);
   return {};
 }
 
 Result<void> MeasurementRuntime::rotate(const std::string& label, const RotateRequest& request, Span span) {
   if (request.angle_deg) {
-    set_alignment(label, rotate_about(m_alignment.part_to_machine, request.about, *request.angle_deg));
+    set_alignment(label, rotate_about(m_alignment.part_to_machine, request.about, *request.angle_deg),
+                  m_alignment.rests_on_s);
     return {};
   }
   if (!request.feature) return program_error(span, "ROTATE needs an angle or a feature");
@@ -776,7 +796,8 @@ Result<void> MeasurementRuntime::rotate(const std::string& label, const RotateRe
   const Vec3 direction = request.align_negative ? Vec3(-g->direction) : g->direction;
   auto frame = rotate_to(m_alignment.part_to_machine, request.about, direction, request.align);
   if (!frame) return program_error(span, frame.error());
-  set_alignment(label, *frame);
+  const double rests_on = rests_on_s(*request.feature);
+  set_alignment(label, *frame, std::isinf(rests_on) ? m_alignment.rests_on_s : rests_on);
   return {};
 }
 

@@ -476,6 +476,99 @@ TEST(BestFitAlignment, IteratMeasuresAgainUntilTheAlignmentSettles) {
               fits(settled.diagnostics), bore_error(once));
 }
 
+namespace part_setups {
+
+std::string example11() {
+  std::ifstream in(program("11_two_setups.dmi"));
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The world's two set-ups (block_two_setups.json): the part frame of each (machine/src/world.cpp:
+// T, then Rz; the block's drawing origin is its bottom front left corner, P1's and P2's origin).
+metron::Frame setup(const Eigen::Vector3d& at, double turned_deg) {
+  metron::Frame f = metron::Frame::Identity();
+  f.translate(at);
+  f.rotate(Eigen::AngleAxisd(turned_deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()));
+  return f;
+}
+const metron::Frame first = setup({300, 200, 0}, 0);
+const metron::Frame second = setup({600.8, 449.5, 0}, 180.35);
+
+}  // namespace part_setups
+
+// Example 11: the block measured in two set-ups, the operator turning it round at the PAUSE.
+// After EQUATE/DA(P1), DA(P2), BORE2 and SPHERE1 (first set-up) are where the drawing puts them in
+// P2, the sphere where the second set-up measures it again, and BORE2 40 mm from BOSS1 (second
+// set-up) as drawn. Without EQUATE they stay where the first set-up found them.
+TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
+  const auto o = run(program("11_two_setups.dmi"), world("block_two_setups.json"), "two_setups");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("PAUSE: the virtual operator puts the part in its set-up 2"), std::string::npos)
+      << o.diagnostics;
+  const auto* bore = report(o.record, "BORE2");
+  const auto* sphere = report(o.record, "SPHERE1");
+  const auto* again = report(o.record, "SPHERE1B");
+  ASSERT_TRUE(bore && bore->actual && sphere && sphere->actual && again && again->actual);
+  EXPECT_EQ(bore->frame, "P2");
+  EXPECT_LT((bore->actual->position.head<2>() - Eigen::Vector2d(120, 30)).norm(), 2e-3);
+  EXPECT_LT((sphere->actual->position - Eigen::Vector3d(75, 75, 48)).norm(), 3e-3);
+  EXPECT_LT((sphere->actual->position - again->actual->position).norm(), 3e-3);
+  const auto* distance = tolerance(o.record, "BOSS_TO_BORE");
+  ASSERT_TRUE(distance);
+  EXPECT_NEAR(distance->actual, 40.0, 3e-3);
+
+  // The note tells the part's motion between the set-ups: its origin's, and the turn.
+  const Eigen::Vector3d shift = part_setups::second.translation() - part_setups::first.translation();
+  EXPECT_NE(o.diagnostics.find(fmt::format("5 features and 2 coordinate systems of the earlier set-up moved with the "
+                                           "part: its origin by {:.3f}",
+                                           shift.x())),
+            std::string::npos)
+      << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("turned 179.65"), std::string::npos) << o.diagnostics;
+
+  const std::string without = best_fit::replaced(part_setups::example11(), "EQUATE/DA(P1), DA(P2)\n", "");
+  const auto apart = run(best_fit::written("11_no_equate.dmi", without), world("block_two_setups.json"), "no_equate");
+  ASSERT_EQ(apart.exit, RunExit::Completed) << apart.diagnostics;
+  const auto* left_behind = report(apart.record, "BORE2");
+  ASSERT_TRUE(left_behind && left_behind->actual);
+  const Eigen::Vector3d where = part_setups::second.inverse() * part_setups::first * Eigen::Vector3d(120, 30, 30);
+  EXPECT_LT((left_behind->actual->position.head<2>() - where.head<2>()).norm(), 5e-3);
+  EXPECT_GT((where.head<2>() - Eigen::Vector2d(120, 30)).norm(), 100.0);
+}
+
+// What the second set-up measured is not moved (LEFT2, the face P2's X origin rests on, stays at
+// X 0 in P2), and EQUATE refuses what it cannot tell apart: a later system of numbers only, and
+// the set-ups written the wrong way round.
+TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
+  const std::string text = best_fit::replaced(
+      part_setups::example11(), "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n", "OUTPUT/FA(LEFT2), FA(LEFT)\n");
+  const auto o = run(best_fit::written("11_left.dmi", text), world("block_two_setups.json"), "equate_left");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const auto* left2 = report(o.record, "LEFT2");
+  const auto* left = report(o.record, "LEFT");
+  ASSERT_TRUE(left2 && left2->actual && left && left->actual);
+  EXPECT_NEAR(left2->actual->position.x(), 0.0, 2e-3);
+  EXPECT_NEAR(left->actual->position.x(), 0.0, 2e-3);
+
+  const auto numbers =
+      run(best_fit::written("11_numbers.dmi", best_fit::replaced(part_setups::example11(), "\nEQUATE/DA(P1), DA(P2)\n",
+                                                                 "\nEQUATE/DA(P1), DA(FIX2)\n")),
+          world("block_two_setups.json"), "equate_numbers");
+  EXPECT_EQ(numbers.exit, RunExit::ProgramError);
+  EXPECT_NE(numbers.diagnostics.find("DA(FIX2) rests on no measured feature"), std::string::npos)
+      << numbers.diagnostics;
+  const auto reversed =
+      run(best_fit::written("11_reversed.dmi", best_fit::replaced(part_setups::example11(), "\nEQUATE/DA(P1), DA(P2)\n",
+                                                                  "\nEQUATE/DA(P2), DA(P1)\n")),
+          world("block_two_setups.json"), "equate_reversed");
+  EXPECT_EQ(reversed.exit, RunExit::ProgramError);
+  EXPECT_NE(reversed.diagnostics.find("DA(P2) rests on features measured after DA(P1)'s first point"),
+            std::string::npos)
+      << reversed.diagnostics;
+}
+
 // WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
 TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
   const fs::path dir = out_dir("write_program");

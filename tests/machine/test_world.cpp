@@ -143,6 +143,23 @@ TEST(World, ErrorsNameTheFileAndTheJsonPath) {
       "world.json: /part/design/axis: expected a non-zero direction");
 }
 
+// part.setups: the poses the virtual operator puts the part in at the program's PAUSEs, in turn
+// (tests/e2e/test_run.cpp PartSetups.* run a program across two).
+TEST(World, PartSetupsAreReadAsPoses) {
+  auto w = load_world(worlds_dir + "/block_two_setups.json");
+  ASSERT_TRUE(w) << w.error().message;
+  ASSERT_TRUE(w->truth.part);
+  ASSERT_EQ(w->truth.part->setups.size(), 1U);
+  EXPECT_EQ(w->truth.part->setups[0].translation_mm, Vec3(600.8, 449.5, 0));
+  EXPECT_EQ(w->truth.part->setups[0].rotation_deg, Vec3(0, 0, 180.35));
+  EXPECT_EQ(w->truth.part->pose.translation_mm, Vec3(300, 200, 0));
+  EXPECT_EQ(error_of(R"({"extends": "default", "part": {"setups": {"translation_mm": [0, 0, 0]}}})"),
+            "world.json: /part/setups: expected an array of poses (translation_mm, rotation_deg)");
+  EXPECT_EQ(error_of(R"({"extends": "default", "part": {"setups": [{"translation": [0, 0, 0]}]}})"),
+            "world.json: /part/setups/0/translation: unknown key 'translation' (expected one of: rotation_deg, "
+            "translation_mm)");
+}
+
 TEST(World, UnknownKeysAreErrorsWithASuggestion) {
   EXPECT_EQ(error_of(R"({"probe": {"pre_travle": {}}})"),
             "world.json: /probe/pre_travle: unknown key 'pre_travle' (did you mean 'pre_travel'?)");

@@ -269,6 +269,25 @@ void UnitCompiler::save(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
+// A macro's parameter or an indirect name (DA(@V)) is known only at run. Read leniently, a name
+// nothing here defines may be a system kept by the CMM's software (RationalDMIS programs recall
+// D(MAC)): a warning, and the run stops at the statement.
+bool UnitCompiler::known_alignment(const grammar::Expr& label, const std::string& statement) {
+  const std::string name = upper(label.label.name);
+  if (m_symbols.alignments.count(name) || m_symbols.saved.count(name) || name == "MCS" || named_at_run(name))
+    return true;
+  const std::string written = fmt::format("{}({})", upper(label.label.prefix), label.label.name);
+  if (m_strict || m_repl) {
+    error(label.span, "sema.undefined-alignment", fmt::format("coordinate system {} is not defined", written));
+    return false;
+  }
+  warn(label.span, "sema.undefined-alignment",
+       fmt::format("coordinate system {} is not defined in this program (one the CMM's software keeps?): a run stops "
+                   "at this {} (--strict makes it an error)",
+                   written, statement));
+  return true;
+}
+
 // RECALL/DA(l) | RECALL/D(l) | RECALL/SA(l)   (SA: a qualified sensor of the probe library)
 void UnitCompiler::recall(const grammar::Statement& s) {
   if (!expect_params(s, 1, "a coordinate system D(label) or DA(label)")) return;
@@ -286,20 +305,7 @@ void UnitCompiler::recall(const grammar::Statement& s) {
     }
     return error(s.params[0].span, "sema.expected-alignment", "expected D(label) or DA(label) after RECALL/");
   }
-  const std::string name = upper(s.params[0].label.name);
-  // A macro's parameter or an indirect name (DA(@V)) is known only at run. Read leniently, a name
-  // nothing here defines may be a system kept by the CMM's software (RationalDMIS programs recall
-  // D(MAC)): a warning, and the run stops at it.
-  if (!m_symbols.alignments.count(name) && !m_symbols.saved.count(name) && name != "MCS" && !named_at_run(name)) {
-    const std::string written = fmt::format("{}({})", upper(s.params[0].label.prefix), s.params[0].label.name);
-    if (m_strict || m_repl)
-      return error(s.params[0].span, "sema.undefined-alignment",
-                   fmt::format("coordinate system {} is not defined", written));
-    warn(s.params[0].span, "sema.undefined-alignment",
-         fmt::format("coordinate system {} is not defined in this program (one the CMM's software keeps?): a run stops "
-                     "at this RECALL (--strict makes it an error)",
-                     written));
-  }
+  if (!known_alignment(s.params[0], "RECALL")) return;
   auto in = make(Op::Recall, s);
   in.operands.push_back(label_op(s.params[0]));
   emit(std::move(in));

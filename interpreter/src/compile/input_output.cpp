@@ -357,13 +357,16 @@ void UnitCompiler::mode(const grammar::Statement& s) {
   emit(std::move(in));
 }
 
-// PAUSE: the operator resumes the program; a virtual CMM has no operator to wait for.
+// PAUSE: the operator resumes the program. A virtual CMM's operator does not keep the run waiting;
+// he puts the part in its next set-up if the world has one (docs/worlds.md, part.setups).
 void UnitCompiler::pause(const grammar::Statement& s) {
   if (!m_paused) {
-    note(s.span, "sema.pause", "PAUSE does not wait on the virtual CMM: the run continues (noted once)");
+    note(s.span, "sema.pause",
+         "PAUSE does not wait on the virtual CMM: its operator goes on at once (noted once; a world's part.setups "
+         "has him move the part here)");
     m_paused = true;
   }
-  emit(make(Op::Nop, s, "PAUSE"));
+  emit(make(Op::Pause, s));
 }
 
 // TEXT/OPER|OUTFIL|MAN|DISPLY,'text'
@@ -500,8 +503,9 @@ void UnitCompiler::cad_geometry(const grammar::Statement& s) {
 
 // EQUATE/DA(l),CADCS,DID(model)[,'name']: ties an alignment to the CAD model's coordinate system, so
 // that CMM software places the model on the part. The virtual CMM reads no model and the program's
-// nominals are in the part's coordinates already: nothing to tie, a note. EQUATE/DA(a),DA(b) (two
-// part set-ups made one) is not carried out: a warning, as before.
+// nominals are in the part's coordinates already: nothing to tie, a note.
+// EQUATE/DA(a),DA(b): the part frame of an earlier set-up and of a later one made one; what the
+// earlier set-up measured is carried into the later (runtime equate, docs/alignments.md).
 void UnitCompiler::equate(const grammar::Statement& s) {
   const auto& p = s.params;
   if (p.size() >= 3 && is_label(p[0], {"DA", "D"}) && is_word(p[1], "CADCS") && is_label(p[2], {"DID"})) {
@@ -510,6 +514,15 @@ void UnitCompiler::equate(const grammar::Statement& s) {
                      "nominals are the part's; nothing to equate",
                      p[0].label.name));
     emit(make(Op::Nop, s, "EQUATE"));
+    return;
+  }
+  if (p.size() == 2 && is_label(p[0], {"DA", "D"}) && is_label(p[1], {"DA", "D"})) {
+    auto in = make(Op::Equate, s);
+    for (const auto& label : p) {
+      if (!known_alignment(label, "EQUATE")) return;
+      in.operands.push_back(label_op(label));
+    }
+    emit(std::move(in));
     return;
   }
   unknown(s);

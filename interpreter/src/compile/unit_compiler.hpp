@@ -160,6 +160,9 @@ class UnitCompiler {
   /// `F(@V)` (DMIS 5.x 5.1.2.4: the CHAR variable V holds the name). `check` cannot say whether
   /// it is defined; `run` resolves it where it is used.
   bool defines_indirectly() const;
+  /// D(x)/DA(x) names a coordinate system the program defines, MCS, or one named at run; else an
+  /// error (strict) or a warning that the run stops at `statement` (lenient: true is returned).
+  bool known_alignment(const grammar::Expr& label, const std::string& statement);
   bool named_at_run(const std::string& name) const { return macro_param(name).has_value() || name.rfind('@', 0) == 0; }
   ir::LabelOperand label_operand(const grammar::LabelRef& l) {
     ir::LabelOperand out{upper(l.prefix), upper(l.name), std::nullopt, l.span};

@@ -36,6 +36,8 @@ void Execute::add_alignment(ExecuteTable& t) {
                {Op::Iterate, &iterate},
                {Op::Save, &save},
                {Op::Recall, &recall},
+               {Op::Equate, &equate},
+               {Op::Pause, &pause},
                {Op::Construct, &construct}});
 }
 
@@ -225,6 +227,20 @@ ExecStatus Execute::save(Interpreter& vm, const ir::Instruction& in, CallFrame&)
 // Op::Recall
 ExecStatus Execute::recall(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
   if (auto r = vm.m_runtime.recall(vm.label_name(in.operands[0].label), in.span); !r) return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Equate
+ExecStatus Execute::equate(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  if (auto r = vm.m_runtime.equate(vm.label_name(in.operands[0].label), vm.label_name(in.operands[1].label), in.span);
+      !r)
+    return vm.from_runtime(r.error());
+  return ExecStatus::Running;
+}
+
+// Op::Pause
+ExecStatus Execute::pause(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  vm.m_runtime.operator_stop(in.span);
   return ExecStatus::Running;
 }
 

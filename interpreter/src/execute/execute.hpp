@@ -73,7 +73,7 @@ struct Execute {
   static ExecuteFn sensor_select, probe_set, feed, accel, go_to, meas_begin, ptmeas, meas_end;
   static ExecuteFn path_def, scan_mode, scan_set, pameas;
   static std::vector<runtime::OutputItem> output_items(Interpreter& vm, const ir::Instruction& in);
-  static ExecuteFn output, evaluate, datset, trans, rotate, locate, iterate, save, recall, construct;
+  static ExecuteFn output, evaluate, datset, trans, rotate, locate, iterate, save, recall, equate, pause, construct;
   static ExecuteFn nothing, system, end, assign, jump, jump_if_false, do_init, do_next, call_macro, return_, call_unit;
 };
 

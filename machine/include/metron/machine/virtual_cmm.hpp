@@ -42,6 +42,8 @@ class VirtualCmm final : public Machine {
   [[nodiscard]] std::vector<Command> queued() const override;
   std::optional<Response> stop_last_motion(double after_s) override;
   bool set_motion_observer(std::function<void(double time_s, const Vec3& position_mm)> observer) override;
+  /// The world's part goes to its next set-up (World part.setups), if there is one.
+  std::optional<std::string> operator_stop() override;
 
   /// The controller's clock: cycles executed times dt.
   [[nodiscard]] double simulated_time_s() const;

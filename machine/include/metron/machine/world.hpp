@@ -162,8 +162,12 @@ struct Roughness {
 
 /// The workpiece: design, placement and (hidden) deviations.
 struct PartSpec {
-  std::variant<csg::Node, CadDesign> design;         ///< part coordinates
-  Pose pose;                                         ///< part to machine
+  std::variant<csg::Node, CadDesign> design;  ///< part coordinates
+  Pose pose;                                  ///< part to machine
+  /// Where the virtual operator puts the part at each of the program's operator stops (DMIS
+  /// PAUSE), in turn: the part's later set-ups (a part turned or moved between two halves of a
+  /// program). Stops after the last leave the part where it is.
+  std::vector<Pose> setups;
   std::map<std::string, csg::Deviation> deviations;  ///< CSG: keyed by primitive name
   std::vector<Bump> bumps;                           ///< CAD: deviation field
   Roughness roughness;                               ///< hidden

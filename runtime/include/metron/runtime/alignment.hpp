@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <limits>
 #include <string>
 
 #include "metron/stdlib/geometry/vec.hpp"
@@ -10,6 +11,9 @@ namespace metron::runtime {
 struct Alignment {
   std::string label = "MCS";  ///< the D()/DA() label, "MCS" for the machine system
   Frame part_to_machine = Frame::Identity();
+  /// When the earliest probed point the frame rests on was taken (simulated s; infinity: none, as
+  /// MCS or a frame of numbers only): EQUATE tells a part's set-ups apart by it (docs/alignments.md).
+  double rests_on_s = std::numeric_limits<double>::infinity();
 
   [[nodiscard]] Vec3 to_machine_point(const Vec3& p) const { return part_to_machine * p; }
   [[nodiscard]] Vec3 to_machine_vector(const Vec3& v) const { return part_to_machine.linear() * v; }

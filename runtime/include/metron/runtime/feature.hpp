@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -101,6 +102,10 @@ struct Feature {
   ActualSource source = ActualSource::Measured;
   std::vector<MeasuredPoint> points;
   std::optional<FitFigures> fit;
+  /// When the earliest probed point its actual rests on was taken (simulated s): a constructed
+  /// feature's sources', a reported actual's statement time; infinity without an actual. EQUATE
+  /// carries the features of a part's earlier set-up into its later one by it.
+  double rests_on_s = std::numeric_limits<double>::infinity();
   Span defined_at;   ///< the FEAT statement
   Span measured_at;  ///< the MEAS or CONST statement
 };

@@ -191,6 +191,18 @@ class MeasurementRuntime {
   /// (ABSL), or how far the fit moved their nominals (`incremental`, INCR).
   Result<double> iterate(const std::string& label, const LocateRequest& request, bool incremental, Span span);
 
+  // A part's set-ups (runtime/src/setups.cpp, docs/alignments.md).
+  /// PAUSE: the program waits for its operator; what the machine says its operator did (a
+  /// virtual CMM's operator may put the part in its next set-up) is noted.
+  void operator_stop(Span span);
+  /// EQUATE/DA(earlier),DA(later): the part was moved between two set-ups, and DA(earlier) and
+  /// DA(later) are the same part frame measured in each. The transformation T = later * earlier^-1
+  /// carries what the earlier set-up measured to where it lies in the later one: every feature
+  /// and datum whose actual rests on points taken before the first point DA(later) rests on
+  /// (actual, points, nominal), and every coordinate system resting on such points (the current
+  /// one included). A note tells the motion and how many were carried.
+  Result<void> equate(const std::string& earlier, const std::string& later, Span span);
+
   // Constructions and outputs.
   /// CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: FA(x)'s position moved by an offset (current frame, mm).
   Result<void> construct_moved_point(const std::string& label, const FeatureRef& source, const Vec3& offset_current,
@@ -244,9 +256,11 @@ class MeasurementRuntime {
   void apply_fit_algorithm(Geometry& actual, const std::vector<MeasuredPoint>& points, const std::string& label,
                            Span span);
   void keep_failed_points(Feature& feature, const std::vector<MeasuredPoint>& points, Span span);
+  /// A construction's actual; `rests_on_s`: the earliest of its sources' Feature::rests_on_s.
   void store_constructed(const std::string& label, const Geometry& actual, const std::optional<FitFigures>& figures,
-                         Span span);
-  void store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction, Span span);
+                         double rests_on_s, Span span);
+  void store_constructed_point(const std::string& label, const Vec3& position, const Vec3& direction, double rests_on_s,
+                               Span span);
   Result<void> output_or_evaluate(const std::vector<OutputItem>& items, Span span, bool report_them);
   /// Tolerance `t` against `features` (one result; DISTWRT, ANGWRT and CORTOL: one per feature).
   Result<std::vector<ToleranceResult>> evaluate_tolerance(const std::string& t,
@@ -283,7 +297,11 @@ class MeasurementRuntime {
   void write_device_line(const std::string& line);
   void output_sensor(const std::string& label, bool actual, Span span);
   void output_coordinate_system(const std::string& label, bool actual, Span span);
-  void set_alignment(const std::string& label, const Frame& frame);
+  /// Makes D(label) the current alignment; `rests_on_s`: Alignment::rests_on_s.
+  void set_alignment(const std::string& label, const Frame& frame, double rests_on_s);
+  [[nodiscard]] double best_fit_rests_on_s(const LocateRequest& request) const;
+  /// Feature::rests_on_s of FA(x); infinity for a nominal F(x).
+  [[nodiscard]] double rests_on_s(const FeatureRef& ref) const;
 
   machine::Machine& m_machine;
   const SourceManager& m_sources;

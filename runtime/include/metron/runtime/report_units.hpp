@@ -31,6 +31,12 @@ inline int default_length_decimals(const ReportUnits& units, int mm_decimals) {
 /// The unit a report line names after a length: "mm", else the UNITS word (INCH, CM ...).
 inline std::string unit_word(const ReportUnits& units) { return units.length == "MM" ? "mm" : units.length; }
 
+/// A number as a note writes it, without the sign of a zero ("-0.0000" is "0.0000").
+inline std::string without_negative_zero(std::string text) {
+  if (text.starts_with('-') && text.find_first_not_of("0.", 1) == std::string::npos) text.erase(0, 1);
+  return text;
+}
+
 /// A length given in mm, written in `units` with their decimals (for the notes of a report).
 inline std::string length_text(double mm, const ReportUnits& units, int mm_decimals = 4) {
   const int decimals = units.length_decimals >= 0 ? units.length_decimals : default_length_decimals(units, mm_decimals);

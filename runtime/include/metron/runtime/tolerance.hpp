@@ -105,6 +105,7 @@ struct Datum {
   Geometry geometry;                        ///< the actual (MCS) at DATDEF time
   Geometry nominal;                         ///< the datum feature's nominal (MCS)
   Frame nominal_frame = Frame::Identity();  ///< the alignment that nominal was written in
+  double rests_on_s = 0;                    ///< the feature's Feature::rests_on_s at DATDEF time
 };
 
 /// The outcome of evaluating one tolerance on one or two features.

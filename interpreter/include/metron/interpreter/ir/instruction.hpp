@@ -57,6 +57,8 @@ enum class Op {
             ///< jump label
   Save,     ///< labels: DA(x)
   Recall,   ///< labels: D(x) / DA(x)
+  Equate,   ///< labels: DA(earlier set-up), DA(later set-up)
+  Pause,    ///< PAUSE: the operator's stop (a virtual CMM's operator may move the part)
   Construct,      ///< `name` = feature; payload: ConstructPayload; labels: sources
   Declare,        ///< words: scope, type; `names`: variables (with `count` = array size, 0 = scalar)
   Assign,         ///< `name` = variable; exprs: [indices...,] value; `count` = number of indices

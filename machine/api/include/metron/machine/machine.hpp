@@ -54,6 +54,10 @@ class Machine {
   /// nothing to stop (the last command did not move, or it was over by then), or a backend that
   /// cannot.
   virtual std::optional<Response> stop_last_motion(double /*after_s*/) { return std::nullopt; }
+  /// The program stops for its operator (DMIS PAUSE). A simulated machine's virtual operator does
+  /// what its world has him do there (puts the part in its next set-up); the answer says what
+  /// was done, for the run's record. nullopt: nothing (a real controller, or nothing to do).
+  virtual std::optional<std::string> operator_stop() { return std::nullopt; }
   /// Called with the controller clock and the ball centre (machine coordinates) every control
   /// cycle while the machine moves, for position reports along a motion (I++ DME
   /// OnMoveReportE); nullptr removes it. false: this backend cannot report its motion.

@@ -35,6 +35,8 @@ class CompensatedMachine final : public Machine {
   std::vector<Response> execute() override;
   [[nodiscard]] MachineState state() const override;
   [[nodiscard]] std::vector<Command> queued() const override;
+  /// The inner machine's operator stop (the compensation does not change where the part is).
+  std::optional<std::string> operator_stop() override { return m_inner->operator_stop(); }
 
   /// Compensates by `map` from the next command on (null: none); a DMIS program loads one with
   /// CALL/EXTERN,SYS,'COMPENSATION file' (docs/error-space.md).

@@ -1,0 +1,91 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// A part's set-ups: PAUSE (the operator may move the part) and EQUATE/DA(a),DA(b), which carries
+// what one set-up measured into the next (docs/alignments.md, "A part in two set-ups").
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <fmt/format.h>
+
+#include "metron/runtime/measurement_runtime.hpp"
+#include "metron/runtime/report_units.hpp"
+
+namespace metron::runtime {
+
+void MeasurementRuntime::operator_stop(Span span) {
+  if (const auto done = m_machine.operator_stop()) note(span, fmt::format("PAUSE: {}", *done));
+}
+
+// DMIS 5.2 (quoted by a public VisualDMIS page): EQUATE/DA(a),DA(b) "creates a transformation from
+// DA(label1) to DA(label2) and updates previously measured features and coordinate systems by the
+// transformation". Which features were measured before the part moved is not said; metron takes
+// those whose points were all taken before the first point DA(b) rests on (the later set-up's
+// first datum point), so the features DA(b) was built from are not moved themselves.
+Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::string& later, Span span) {
+  const auto find = [&](const std::string& label) -> const Alignment* {
+    if (const auto it = m_saved.find(label); it != m_saved.end()) return &it->second;
+    if (const auto it = m_alignments.find(label); it != m_alignments.end()) return &it->second;
+    return nullptr;
+  };
+  const Alignment* a = find(earlier);
+  const Alignment* b = find(later);
+  for (const auto& [label, frame] : {std::pair{earlier, a}, std::pair{later, b}})
+    if (!frame) return program_error(span, fmt::format("EQUATE: coordinate system DA({}) is not defined", label));
+  const double cut = b->rests_on_s;
+  if (std::isinf(cut))
+    return program_error(span, fmt::format("EQUATE: DA({}) rests on no measured feature (a system of numbers only), so "
+                                           "the features of the part's earlier set-up cannot be told from the later's",
+                                           later));
+  if (!(a->rests_on_s < cut))
+    return program_error(span, fmt::format("EQUATE: DA({}) rests on features measured after DA({})'s first point; "
+                                           "EQUATE/DA(earlier set-up),DA(later set-up) carries the earlier into the "
+                                           "later",
+                                           earlier, later));
+  const Frame move = b->part_to_machine * a->part_to_machine.inverse();
+  const Vec3 shift = b->part_to_machine.translation() - a->part_to_machine.translation();  // a moves below
+
+  std::size_t features = 0;
+  for (auto& [label, f] : m_features) {
+    if (!f.actual || !(f.rests_on_s < cut)) continue;
+    f.actual = to_machine(*f.actual, move);
+    f.nominal = to_machine(f.nominal, move);
+    f.nominal_frame = move * f.nominal_frame;
+    for (MeasuredPoint& p : f.points) {
+      p.centre_mm = move * p.centre_mm;
+      p.normal = move.linear() * p.normal;
+      if (p.nominal_mm) p.nominal_mm = move * *p.nominal_mm;
+      p.nominal_normal = move.linear() * p.nominal_normal;
+    }
+    ++features;
+  }
+  for (auto& [label, d] : m_datums) {
+    if (!(d.rests_on_s < cut)) continue;
+    d.geometry = to_machine(d.geometry, move);
+    d.nominal = to_machine(d.nominal, move);
+    d.nominal_frame = move * d.nominal_frame;
+  }
+  std::size_t systems = 0;
+  for (auto* store : {&m_alignments, &m_saved})
+    for (auto& [label, system] : *store)
+      if (system.rests_on_s < cut) {
+        system.part_to_machine = move * system.part_to_machine;
+        if (store == &m_alignments) ++systems;
+      }
+  if (m_alignment.rests_on_s < cut) m_alignment.part_to_machine = move * m_alignment.part_to_machine;
+
+  // Told as the part frame's motion: its origin's, and the turn about an axis (machine axes).
+  const ReportUnits& u = m_report_units;
+  const auto length = [&](double mm) { return without_negative_zero(length_text(mm, u)); };
+  const auto fixed = [](double v, int decimals) { return without_negative_zero(fmt::format("{:.{}f}", v, decimals)); };
+  const Eigen::AngleAxisd turn(move.linear());
+  note(span, fmt::format("EQUATE: DA({}) carried onto DA({}): {} features and {} coordinate systems of the earlier "
+                         "set-up moved with the part: its origin by {}, {}, {} {}, turned {} deg about ({}, {}, {}) "
+                         "(machine axes)",
+                         earlier, later, features, systems, length(shift.x()), length(shift.y()), length(shift.z()),
+                         unit_word(u), fixed(turn.angle() * 180 / std::numbers::pi, 4), fixed(turn.axis().x(), 6),
+                         fixed(turn.axis().y(), 6), fixed(turn.axis().z(), 6)));
+  return {};
+}
+
+}  // namespace metron::runtime
