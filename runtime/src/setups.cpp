@@ -79,12 +79,14 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
   const auto length = [&](double mm) { return without_negative_zero(length_text(mm, u)); };
   const auto fixed = [](double v, int decimals) { return without_negative_zero(fmt::format("{:.{}f}", v, decimals)); };
   const Eigen::AngleAxisd turn(move.linear());
-  note(span, fmt::format("EQUATE: DA({}) carried onto DA({}): {} features and {} coordinate systems of the earlier "
-                         "set-up moved with the part: its origin by {}, {}, {} {}, turned {} deg about ({}, {}, {}) "
-                         "(machine axes)",
-                         earlier, later, features, systems, length(shift.x()), length(shift.y()), length(shift.z()),
-                         unit_word(u), fixed(turn.angle() * 180 / std::numbers::pi, 4), fixed(turn.axis().x(), 6),
-                         fixed(turn.axis().y(), 6), fixed(turn.axis().z(), 6)));
+  const auto count = [](std::size_t n, const char* what) { return fmt::format("{} {}{}", n, what, n == 1 ? "" : "s"); };
+  note(span,
+       fmt::format("EQUATE: DA({}) carried onto DA({}): {} and {} of the earlier set-up moved with the part: its "
+                   "origin by {}, {}, {} {}, turned {} deg about ({}, {}, {}) "
+                   "(machine axes)",
+                   earlier, later, count(features, "feature"), count(systems, "coordinate system"), length(shift.x()),
+                   length(shift.y()), length(shift.z()), unit_word(u), fixed(turn.angle() * 180 / std::numbers::pi, 4),
+                   fixed(turn.axis().x(), 6), fixed(turn.axis().y(), 6), fixed(turn.axis().z(), 6)));
   return {};
 }
 
