@@ -513,11 +513,16 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
   ASSERT_TRUE(bore && bore->actual && sphere && sphere->actual && again && again->actual);
   EXPECT_EQ(bore->frame, "P2");
   EXPECT_LT((bore->actual->position.head<2>() - Eigen::Vector2d(120, 30)).norm(), 2e-3);
+  EXPECT_LT((bore->nominal.position.head<2>() - Eigen::Vector2d(120, 30)).norm(), 1e-9);  // carried with it
   EXPECT_LT((sphere->actual->position - Eigen::Vector3d(75, 75, 48)).norm(), 3e-3);
   EXPECT_LT((sphere->actual->position - again->actual->position).norm(), 3e-3);
   const auto* distance = tolerance(o.record, "BOSS_TO_BORE");
   ASSERT_TRUE(distance);
   EXPECT_NEAR(distance->actual, 40.0, 3e-3);
+  // The datum reference frame of the first set-up's A, B, C holds the second's boss.
+  const auto* position = tolerance(o.record, "POS_BOSS");
+  ASSERT_TRUE(position);
+  EXPECT_LT(position->value, 5e-3);
 
   // The note tells the part's motion between the set-ups: its origin's, and the turn.
   const Eigen::Vector3d shift = part_setups::second.translation() - part_setups::first.translation();
@@ -539,11 +544,13 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
 }
 
 // What the second set-up measured is not moved (LEFT2, the face P2's X origin rests on, stays at
-// X 0 in P2), and EQUATE refuses what it cannot tell apart: a later system of numbers only, and
-// the set-ups written the wrong way round.
+// X 0 in P2), P1 is carried with the first set-up (the sphere measured in the second, reported
+// in it, is where the drawing puts it), and EQUATE refuses what it cannot tell apart: a later
+// system of numbers only, and the set-ups written the wrong way round.
 TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
-  const std::string text = best_fit::replaced(
-      part_setups::example11(), "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n", "OUTPUT/FA(LEFT2), FA(LEFT)\n");
+  const std::string text =
+      best_fit::replaced(part_setups::example11(), "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n",
+                         "OUTPUT/FA(LEFT2), FA(LEFT)\nRECALL/DA(P1)\nOUTPUT/FA(SPHERE1B)\n");
   const auto o = run(best_fit::written("11_left.dmi", text), world("block_two_setups.json"), "equate_left");
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
   const auto* left2 = report(o.record, "LEFT2");
@@ -551,6 +558,10 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   ASSERT_TRUE(left2 && left2->actual && left && left->actual);
   EXPECT_NEAR(left2->actual->position.x(), 0.0, 2e-3);
   EXPECT_NEAR(left->actual->position.x(), 0.0, 2e-3);
+  const auto* sphere = report(o.record, "SPHERE1B");
+  ASSERT_TRUE(sphere && sphere->actual);
+  EXPECT_EQ(sphere->frame, "P1");
+  EXPECT_LT((sphere->actual->position - Eigen::Vector3d(75, 75, 48)).norm(), 3e-3);
 
   const auto numbers =
       run(best_fit::written("11_numbers.dmi", best_fit::replaced(part_setups::example11(), "\nEQUATE/DA(P1), DA(P2)\n",
