@@ -317,6 +317,7 @@ void MeasurementRuntime::store_constructed(const std::string& label, const Geome
     f.label = label;
     f.nominal = actual;
     f.nominal_frame = m_alignment.part_to_machine;
+    f.nominal_rests_on_s = m_alignment.rests_on_s;
     f.defined_at = span;
     m_feature_order.push_back(label);
     it = m_features.emplace(label, f).first;

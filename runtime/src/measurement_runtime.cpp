@@ -47,6 +47,7 @@ Result<void> MeasurementRuntime::define_feature(const std::string& label, const 
   f.label = label;
   f.nominal = to_machine(nominal, m_alignment.part_to_machine);
   f.nominal_frame = m_alignment.part_to_machine;
+  f.nominal_rests_on_s = m_alignment.rests_on_s;
   f.nominal.direction.normalize();
   if (f.nominal.normal2.norm() > 0) f.nominal.normal2.normalize();
   if (f.nominal.slot_axis.norm() > 0) f.nominal.slot_axis.normalize();

@@ -45,19 +45,24 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
   const Frame move = b->part_to_machine * a->part_to_machine.inverse();
   const Vec3 shift = b->part_to_machine.translation() - a->part_to_machine.translation();  // a moves below
 
+  // A feature measured in the earlier set-up moves whole; one not measured yet moves its nominal
+  // when the frame it was written in belongs to the earlier set-up (a nominal written in a frame
+  // of numbers only, a fixture's, stays where it was put).
   std::size_t features = 0;
   for (auto& [label, f] : m_features) {
-    if (!f.actual || !(f.rests_on_s < cut)) continue;
-    f.actual = to_machine(*f.actual, move);
+    const bool measured_before = f.actual && f.rests_on_s < cut;
+    if (!measured_before && (f.actual || !(f.nominal_rests_on_s < cut))) continue;
     f.nominal = to_machine(f.nominal, move);
     f.nominal_frame = move * f.nominal_frame;
+    ++features;
+    if (!measured_before) continue;
+    f.actual = to_machine(*f.actual, move);
     for (MeasuredPoint& p : f.points) {
       p.centre_mm = move * p.centre_mm;
       p.normal = move.linear() * p.normal;
       if (p.nominal_mm) p.nominal_mm = move * *p.nominal_mm;
       p.nominal_normal = move.linear() * p.nominal_normal;
     }
-    ++features;
   }
   for (auto& [label, d] : m_datums) {
     if (!(d.rests_on_s < cut)) continue;

@@ -545,12 +545,15 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
 
 // What the second set-up measured is not moved (LEFT2, the face P2's X origin rests on, stays at
 // X 0 in P2), P1 is carried with the first set-up (the sphere measured in the second, reported
-// in it, is where the drawing puts it), and EQUATE refuses what it cannot tell apart: a later
-// system of numbers only, and the set-ups written the wrong way round.
+// in it, is where the drawing puts it), a nominal written in P1 but measured only after EQUATE
+// is carried too (BORE1 is found in the second set-up), and EQUATE refuses what it cannot tell
+// apart: a later system of numbers only, and the set-ups written the wrong way round.
 TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
-  const std::string text =
-      best_fit::replaced(part_setups::example11(), "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n",
-                         "OUTPUT/FA(LEFT2), FA(LEFT)\nRECALL/DA(P1)\nOUTPUT/FA(SPHERE1B)\n");
+  const std::string written_first = best_fit::replaced(
+      part_setups::example11(), "\nPAUSE\n", "\nF(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nPAUSE\n");
+  const std::string text = best_fit::replaced(
+      written_first, "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n",
+      "MEAS/CIRCLE, F(BORE1), 6\nENDMES\nOUTPUT/FA(LEFT2), FA(LEFT), FA(BORE1)\nRECALL/DA(P1)\nOUTPUT/FA(SPHERE1B)\n");
   const auto o = run(best_fit::written("11_left.dmi", text), world("block_two_setups.json"), "equate_left");
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
   const auto* left2 = report(o.record, "LEFT2");
@@ -558,6 +561,9 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   ASSERT_TRUE(left2 && left2->actual && left && left->actual);
   EXPECT_NEAR(left2->actual->position.x(), 0.0, 2e-3);
   EXPECT_NEAR(left->actual->position.x(), 0.0, 2e-3);
+  const auto* bore = report(o.record, "BORE1");
+  ASSERT_TRUE(bore && bore->actual);
+  EXPECT_LT((bore->actual->position.head<2>() - Eigen::Vector2d(40, 50)).norm(), 2e-3);
   const auto* sphere = report(o.record, "SPHERE1B");
   ASSERT_TRUE(sphere && sphere->actual);
   EXPECT_EQ(sphere->frame, "P1");

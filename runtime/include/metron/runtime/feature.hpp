@@ -106,6 +106,9 @@ struct Feature {
   /// feature's sources', a reported actual's statement time; infinity without an actual. EQUATE
   /// carries the features of a part's earlier set-up into its later one by it.
   double rests_on_s = std::numeric_limits<double>::infinity();
+  /// Alignment::rests_on_s of the alignment the nominal was written in: EQUATE carries a nominal
+  /// not yet measured with the set-up its frame belongs to.
+  double nominal_rests_on_s = std::numeric_limits<double>::infinity();
   Span defined_at;   ///< the FEAT statement
   Span measured_at;  ///< the MEAS or CONST statement
 };
