@@ -546,14 +546,19 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
 // What the second set-up measured is not moved (LEFT2, the face P2's X origin rests on, stays at
 // X 0 in P2), P1 is carried with the first set-up (the sphere measured in the second, reported
 // in it, is where the drawing puts it), a nominal written in P1 but measured only after EQUATE
-// is carried too (BORE1 is found in the second set-up), and EQUATE refuses what it cannot tell
+// is carried too (BORE1 is found in the second set-up), a corner constructed in the first set-up
+// with its sources, and EQUATE refuses what it cannot tell
 // apart: a later system of numbers only, and the set-ups written the wrong way round.
 TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   const std::string written_first = best_fit::replaced(
-      part_setups::example11(), "\nPAUSE\n", "\nF(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nPAUSE\n");
+      part_setups::example11(), "\nPAUSE\n",
+      "\nF(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\n"
+      "F(EDGE) = FEAT/LINE, UNBND, CART, 0, 0, 40, 1, 0, 0, 0, 0, 1\nCONST/LINE, F(EDGE), INTOF, FA(TOP), FA(FRONT)\n"
+      "F(CORNER) = FEAT/POINT, CART, 0, 0, 40, -1, 0, 0\nCONST/POINT, F(CORNER), INTOF, FA(EDGE), FA(LEFT)\nPAUSE\n");
   const std::string text = best_fit::replaced(
       written_first, "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n",
-      "MEAS/CIRCLE, F(BORE1), 6\nENDMES\nOUTPUT/FA(LEFT2), FA(LEFT), FA(BORE1)\nRECALL/DA(P1)\nOUTPUT/FA(SPHERE1B)\n");
+      "MEAS/CIRCLE, F(BORE1), 6\nENDMES\nOUTPUT/FA(LEFT2), FA(LEFT), FA(BORE1), FA(CORNER)\nRECALL/DA(P1)\n"
+      "OUTPUT/FA(SPHERE1B)\n");
   const auto o = run(best_fit::written("11_left.dmi", text), world("block_two_setups.json"), "equate_left");
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
   const auto* left2 = report(o.record, "LEFT2");
@@ -564,6 +569,9 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   const auto* bore = report(o.record, "BORE1");
   ASSERT_TRUE(bore && bore->actual);
   EXPECT_LT((bore->actual->position.head<2>() - Eigen::Vector2d(40, 50)).norm(), 2e-3);
+  const auto* corner = report(o.record, "CORNER");  // constructed in the first set-up: carried with its sources
+  ASSERT_TRUE(corner && corner->actual);
+  EXPECT_LT((corner->actual->position - Eigen::Vector3d(0, 0, 40)).norm(), 3e-3);
   const auto* sphere = report(o.record, "SPHERE1B");
   ASSERT_TRUE(sphere && sphere->actual);
   EXPECT_EQ(sphere->frame, "P1");
