@@ -251,12 +251,15 @@ TEST(DatumReferenceFrame, PositionToDatumsDoesNotDependOnTheProgramsAlignment) {
 // pose puts it (computed here from the world's numbers), nearly 1.3 mm away.
 namespace best_fit {
 
-std::string example09() {
-  std::ifstream in(program("09_best_fit_locate.dmi"));
+// An example program's text, to run it changed.
+std::string example_text(const std::string& name) {
+  std::ifstream in(program(name));
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
 }
+
+std::string example09() { return example_text("09_best_fit_locate.dmi"); }
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
@@ -478,12 +481,7 @@ TEST(BestFitAlignment, IteratMeasuresAgainUntilTheAlignmentSettles) {
 
 namespace part_setups {
 
-std::string example11() {
-  std::ifstream in(program("11_two_setups.dmi"));
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string example11() { return best_fit::example_text("11_two_setups.dmi"); }
 
 // The world's two set-ups (block_two_setups.json): the part frame of each (machine/src/world.cpp:
 // T, then Rz; the block's drawing origin is its bottom front left corner, P1's and P2's origin).
