@@ -517,6 +517,17 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
   const auto* distance = tolerance(o.record, "BOSS_TO_BORE");
   ASSERT_TRUE(distance);
   EXPECT_NEAR(distance->actual, 40.0, 3e-3);
+  // The careful engineer's way without EQUATE: each set-up reported in its own part frame (BORE2
+  // in P1 before the PAUSE, the boss in P2) and the distance taken by hand. EQUATE agrees to
+  // rounding: T is the rigid motion between P1 and P2, nothing else.
+  const FeatureReport* bore_in_p1 = nullptr;
+  for (const auto& e : o.record.events)
+    if (const auto* f = std::get_if<FeatureReport>(&e); f && f->label == "BORE2" && !bore_in_p1) bore_in_p1 = f;
+  const auto* boss = report(o.record, "BOSS1");
+  ASSERT_TRUE(bore_in_p1 && bore_in_p1->actual && boss && boss->actual);
+  EXPECT_EQ(bore_in_p1->frame, "P1");
+  EXPECT_NEAR(distance->actual, boss->actual->position.y() - bore_in_p1->actual->position.y(), 1e-9);
+  EXPECT_LT((bore->actual->position - bore_in_p1->actual->position).norm(), 1e-9);
   // The datum reference frame of the first set-up's A, B, C holds the second's boss.
   const auto* position = tolerance(o.record, "POS_BOSS");
   ASSERT_TRUE(position);
