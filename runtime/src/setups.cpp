@@ -38,9 +38,9 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
                                            "the features of the part's earlier set-up cannot be told from the later's",
                                            later));
   if (!(a->rests_on_s < cut))
-    return program_error(span, fmt::format("EQUATE: DA({}) rests on features measured after DA({})'s first point; "
-                                           "EQUATE/DA(earlier set-up),DA(later set-up) carries the earlier into the "
-                                           "later",
+    return program_error(span, fmt::format("EQUATE: DA({}) rests on no feature measured before DA({})'s first point, "
+                                           "so it is not of an earlier set-up; EQUATE/DA(earlier set-up),DA(later "
+                                           "set-up) carries the earlier into the later",
                                            earlier, later));
   const Frame move = b->part_to_machine * a->part_to_machine.inverse();
   const Vec3 shift = b->part_to_machine.translation() - a->part_to_machine.translation();  // a moves below

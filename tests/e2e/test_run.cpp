@@ -598,7 +598,7 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
                                                                   "\nEQUATE/DA(P2), DA(P1)\n")),
           world("block_two_setups.json"), "equate_reversed");
   EXPECT_EQ(reversed.exit, RunExit::ProgramError);
-  EXPECT_NE(reversed.diagnostics.find("DA(P2) rests on features measured after DA(P1)'s first point"),
+  EXPECT_NE(reversed.diagnostics.find("DA(P2) rests on no feature measured before DA(P1)'s first point"),
             std::string::npos)
       << reversed.diagnostics;
 }
