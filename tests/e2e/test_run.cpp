@@ -491,7 +491,7 @@ metron::Frame setup(const Eigen::Vector3d& at, double turned_deg) {
   f.rotate(Eigen::AngleAxisd(turned_deg * std::numbers::pi / 180, Eigen::Vector3d::UnitZ()));
   return f;
 }
-const metron::Frame first = setup({300, 200, 0}, 0);
+const metron::Frame first = setup({300.4, 199.7, 0}, 0.25);
 const metron::Frame second = setup({600.8, 449.5, 0}, 180.35);
 
 }  // namespace part_setups
@@ -540,7 +540,7 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
                                            shift.x())),
             std::string::npos)
       << o.diagnostics;
-  EXPECT_NE(o.diagnostics.find("turned 179.65"), std::string::npos) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("turned 179.90"), std::string::npos) << o.diagnostics;
 
   const std::string without = best_fit::replaced(part_setups::example11(), "EQUATE/DA(P1), DA(P2)\n", "");
   const auto apart = run(best_fit::written("11_no_equate.dmi", without), world("block_two_setups.json"), "no_equate");
@@ -556,7 +556,7 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
 // X 0 in P2), P1 is carried with the first set-up (the sphere measured in the second, reported
 // in it, is where the drawing puts it), a nominal written in P1 but measured only after EQUATE
 // is carried too (BORE1 is found in the second set-up), a corner constructed in the first set-up
-// with its sources, and EQUATE refuses what it cannot tell
+// with its sources, a feature's probed points with it, and EQUATE refuses what it cannot tell
 // apart: a later system of numbers only, and the set-ups written the wrong way round.
 TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   const std::string written_first = best_fit::replaced(
@@ -566,8 +566,8 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
       "F(CORNER) = FEAT/POINT, CART, 0, 0, 40, -1, 0, 0\nCONST/POINT, F(CORNER), INTOF, FA(EDGE), FA(LEFT)\nPAUSE\n");
   const std::string text = best_fit::replaced(
       written_first, "OUTPUT/FA(BOSS1), FA(BORE2), TA(BOSS_TO_BORE)\n",
-      "MEAS/CIRCLE, F(BORE1), 6\nENDMES\nOUTPUT/FA(LEFT2), FA(LEFT), FA(BORE1), FA(CORNER)\nRECALL/DA(P1)\n"
-      "OUTPUT/FA(SPHERE1B)\n");
+      "MEAS/CIRCLE, F(BORE1), 6\nENDMES\nOUTPUT/FA(LEFT2), FA(LEFT), FA(BORE1), FA(CORNER), FA(SPHERE1)[1,9]\n"
+      "RECALL/DA(P1)\nOUTPUT/FA(SPHERE1B)\n");
   const auto o = run(best_fit::written("11_left.dmi", text), world("block_two_setups.json"), "equate_left");
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
   const auto* left2 = report(o.record, "LEFT2");
@@ -578,6 +578,10 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   const auto* bore = report(o.record, "BORE1");
   ASSERT_TRUE(bore && bore->actual);
   EXPECT_LT((bore->actual->position.head<2>() - Eigen::Vector2d(40, 50)).norm(), 2e-3);
+  // The sphere's probed points are carried with it: listed in P2, on its drawn surface.
+  const auto* carried = report(o.record, "SPHERE1");
+  ASSERT_TRUE(carried && carried->points.size() == 9U);
+  for (const auto& p : carried->points) EXPECT_NEAR((p.surface_mm - Eigen::Vector3d(75, 75, 48)).norm(), 10.0, 3e-3);
   const auto* corner = report(o.record, "CORNER");  // constructed in the first set-up: carried with its sources
   ASSERT_TRUE(corner && corner->actual);
   EXPECT_LT((corner->actual->position - Eigen::Vector3d(0, 0, 40)).norm(), 3e-3);
