@@ -32,16 +32,25 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
   const Alignment* b = find(later);
   for (const auto& [label, frame] : {std::pair{earlier, a}, std::pair{later, b}})
     if (!frame) return program_error(span, fmt::format("EQUATE: coordinate system DA({}) is not defined", label));
+  // What cannot be told apart is not carried out: read strictly an error, leniently (as shop
+  // software goes on) a warning, the results staying in the frames they were measured in.
+  const auto cannot = [&](const std::string& why) -> Result<void> {
+    if (m_strict) return program_error(span, "EQUATE: " + why);
+    warn(span, fmt::format("EQUATE: {}; nothing is carried (--strict makes this an error)", why));
+    return {};
+  };
   const double cut = b->rests_on_s;
   if (std::isinf(cut))
-    return program_error(span, fmt::format("EQUATE: DA({}) rests on no measured feature (a system of numbers only), so "
-                                           "the features of the part's earlier set-up cannot be told from the later's",
-                                           later));
+    return cannot(
+        fmt::format("DA({}) rests on no measured feature (a system of numbers only), so the features of the "
+                    "part's earlier set-up cannot be told from the later's",
+                    later));
   if (!(a->rests_on_s < cut))
-    return program_error(span, fmt::format("EQUATE: DA({}) rests on no feature measured before DA({})'s first point, "
-                                           "so it is not of an earlier set-up; EQUATE/DA(earlier set-up),DA(later "
-                                           "set-up) carries the earlier into the later",
-                                           earlier, later));
+    return cannot(
+        fmt::format("DA({}) rests on no feature measured before DA({})'s first point, so it is not of an "
+                    "earlier set-up (EQUATE/DA(earlier set-up),DA(later set-up) carries the earlier into the "
+                    "later)",
+                    earlier, later));
   const Frame move = b->part_to_machine * a->part_to_machine.inverse();
   const Vec3 shift = b->part_to_machine.translation() - a->part_to_machine.translation();  // a moves below
 

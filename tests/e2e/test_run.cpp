@@ -29,11 +29,13 @@ const fs::path source_dir = METRON_SOURCE_DIR;
 fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_e2e", name); }
 
 metron::interpreter::RunOutcome run(const fs::path& program, const std::optional<fs::path>& world,
-                                    const std::string& out, std::optional<std::uint64_t> seed = std::nullopt) {
+                                    const std::string& out, std::optional<std::uint64_t> seed = std::nullopt,
+                                    bool strict = false) {
   RunOptions o;
   o.program = program.string();
   if (world) o.world_path = world->string();
   o.seed = seed;
+  o.strict = strict;
   o.out_dir = out_dir(out).string();
   return run_program(o, metron::cli::virtual_cmm_backend);
 }
@@ -557,7 +559,8 @@ TEST(PartSetups, EquateCarriesTheFirstSetupIntoTheSecond) {
 // in it, is where the drawing puts it), a nominal written in P1 but measured only after EQUATE
 // is carried too (BORE1 is found in the second set-up), a corner constructed in the first set-up
 // with its sources, a feature's probed points with it, and EQUATE refuses what it cannot tell
-// apart: a later system of numbers only, and the set-ups written the wrong way round.
+// apart (read strictly an error, leniently a warning): a later system of numbers only, and the
+// set-ups written the wrong way round.
 TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   const std::string written_first = best_fit::replaced(
       part_setups::example11(), "\nPAUSE\n",
@@ -590,17 +593,26 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
   EXPECT_EQ(sphere->frame, "P1");
   EXPECT_LT((sphere->actual->position - Eigen::Vector3d(75, 75, 48)).norm(), 3e-3);
 
-  const auto numbers =
-      run(best_fit::written("11_numbers.dmi", best_fit::replaced(part_setups::example11(), "\nEQUATE/DA(P1), DA(P2)\n",
-                                                                 "\nEQUATE/DA(P1), DA(FIX2)\n")),
-          world("block_two_setups.json"), "equate_numbers");
+  // Read strictly, an EQUATE that cannot tell the set-ups apart is an error; leniently a warning,
+  // and nothing is carried (BORE2 stays where the first set-up measured it).
+  const fs::path numbers_program = best_fit::written(
+      "11_numbers.dmi",
+      best_fit::replaced(part_setups::example11(), "\nEQUATE/DA(P1), DA(P2)\n", "\nEQUATE/DA(P1), DA(FIX2)\n"));
+  const auto numbers = run(numbers_program, world("block_two_setups.json"), "equate_numbers", std::nullopt, true);
   EXPECT_EQ(numbers.exit, RunExit::ProgramError);
-  EXPECT_NE(numbers.diagnostics.find("DA(FIX2) rests on no measured feature"), std::string::npos)
+  EXPECT_NE(numbers.diagnostics.find("error: EQUATE: DA(FIX2) rests on no measured feature"), std::string::npos)
       << numbers.diagnostics;
+  const auto lenient = run(numbers_program, world("block_two_setups.json"), "equate_numbers_lenient");
+  EXPECT_EQ(lenient.exit, RunExit::Completed) << lenient.diagnostics;
+  EXPECT_NE(lenient.diagnostics.find("warning: EQUATE: DA(FIX2) rests on no measured feature"), std::string::npos)
+      << lenient.diagnostics;
+  const auto* left_where_measured = report(lenient.record, "BORE2");
+  ASSERT_TRUE(left_where_measured && left_where_measured->actual);
+  EXPECT_GT((left_where_measured->actual->position.head<2>() - Eigen::Vector2d(120, 30)).norm(), 100.0);
   const auto reversed =
       run(best_fit::written("11_reversed.dmi", best_fit::replaced(part_setups::example11(), "\nEQUATE/DA(P1), DA(P2)\n",
                                                                   "\nEQUATE/DA(P2), DA(P1)\n")),
-          world("block_two_setups.json"), "equate_reversed");
+          world("block_two_setups.json"), "equate_reversed", std::nullopt, true);
   EXPECT_EQ(reversed.exit, RunExit::ProgramError);
   EXPECT_NE(reversed.diagnostics.find("DA(P2) rests on no feature measured before DA(P1)'s first point"),
             std::string::npos)
