@@ -152,7 +152,7 @@ TEST(World, PartSetupsAreReadAsPoses) {
   ASSERT_EQ(w->truth.part->setups.size(), 1U);
   EXPECT_EQ(w->truth.part->setups[0].translation_mm, Vec3(600.8, 449.5, 0));
   EXPECT_EQ(w->truth.part->setups[0].rotation_deg, Vec3(0, 0, 180.35));
-  EXPECT_EQ(w->truth.part->pose.translation_mm, Vec3(300, 200, 0));
+  EXPECT_EQ(w->truth.part->pose.translation_mm, Vec3(300.4, 199.7, 0));
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"setups": {"translation_mm": [0, 0, 0]}}})"),
             "world.json: /part/setups: expected an array of poses (translation_mm, rotation_deg)");
   EXPECT_EQ(error_of(R"({"extends": "default", "part": {"setups": [{"translation": [0, 0, 0]}]}})"),
