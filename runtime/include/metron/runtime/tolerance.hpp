@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
+#include <limits>
 #include <optional>
 #include <string>
 #include <tl/expected.hpp>
@@ -102,10 +103,10 @@ struct ToleranceSpec {
 struct Datum {
   std::string label;
   std::string feature;
-  Geometry geometry;                        ///< the actual (MCS) at DATDEF time
-  Geometry nominal;                         ///< the datum feature's nominal (MCS)
-  Frame nominal_frame = Frame::Identity();  ///< the alignment that nominal was written in
-  double rests_on_s = 0;                    ///< the feature's Feature::rests_on_s at DATDEF time
+  Geometry geometry;                                            ///< the actual (MCS) at DATDEF time
+  Geometry nominal;                                             ///< the datum feature's nominal (MCS)
+  Frame nominal_frame = Frame::Identity();                      ///< the alignment that nominal was written in
+  double rests_on_s = std::numeric_limits<double>::infinity();  ///< its feature's Feature::rests_on_s at DATDEF
 };
 
 /// The outcome of evaluating one tolerance on one or two features.
