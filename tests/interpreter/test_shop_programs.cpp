@@ -964,6 +964,32 @@ TEST(ShopPrograms, APatternIsOutputAsItsFeatures) {
   EXPECT_TRUE(c.has("7:27: error: FEAT/PATERN lists the pattern's features")) << c.text;
 }
 
+// RationalDMIS's "fitting coordinate system" pages (365seal.com, laitimes.com) show the beginning
+// of the programs they export around EQUATE: a library sensor whose label has a '-', PTMEAS over
+// two lines with '$', MODE/PROG, MAN then MODE/MAN. Written out here with the page's scenario (the
+// part moved by accident: the same plane measured again, the system built again, EQUATE): it
+// checks clean and runs to its end; two systems built in the same set-up are told as such.
+TEST(ShopPrograms, RationalDmisEquateProgramChecksAndRuns) {
+  const std::string text =
+      "DMISMN/'Created by [x] on 2018', 4.0\nUNITS/MM, ANGDEC\nWKPLAN/XYPLAN\nPRCOMP/ON\nTECOMP/ON\nFLY/1.0\n"
+      "MODE/PROG, MAN\nSNSET/APPRCH, 3.000000\nSNSET/SEARCH, 10.000000\nSNSET/CLRSRF, 50.000000\nRECALL/D(MCS)\n"
+      "SNSLCT/S(20-30X2)\nGEOALG/PLANE, LSTSQR\n$$\nMODE/MAN\n"
+      "F(PLN1) = FEAT/PLANE,CART, 80.0, 50.0, 40.0, 0.000000,$\n0.000000, 1.000000\n"
+      "MEAS/PLANE, F(PLN1), 3\nPTMEAS/CART,  10.000000, 10.000000, 40.000000,  0.000000, 0.000000,$\n1.000000\n"
+      "PTMEAS/CART,  150.000000, 10.000000, 40.000000,  0.000000, 0.000000,$\n1.000000\n"
+      "PTMEAS/CART,  80.000000, 90.000000, 40.000000,  0.000000, 0.000000,$\n1.000000\nENDMES\n"
+      "D(CRD1) = DATSET/FA(PLN1), ZDIR, ZORIG\nD(CRD2) = DATSET/FA(PLN1), ZDIR, ZORIG\nEQUATE/DA(CRD1), DA(CRD2)\n"
+      "OUTPUT/FA(PLN1)\nENDFIL\n";
+  const auto c = check(text);
+  EXPECT_EQ(c.errors, 0U) << c.text;
+  EXPECT_EQ(c.warnings, 0U) << c.text;
+  const auto r = dry_run(text);
+  EXPECT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_NE(r.diagnostics.find("warning: EQUATE: DA(CRD1) rests on no feature measured before DA(CRD2)'s first point"),
+            std::string::npos)
+      << r.diagnostics;
+}
+
 // A CAMIO program (a public lab's scale-bar program) ties its alignment to the CAD model's
 // coordinate system and names the model's geometry: EQUATE/DA(x),CADCS,DID(m),'cs' and
 // G(x)=GEOM/DID(m). The virtual CMM reads no model: a note each, where both were warnings saying
