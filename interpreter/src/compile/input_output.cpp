@@ -358,7 +358,7 @@ void UnitCompiler::mode(const grammar::Statement& s) {
 }
 
 // PAUSE: the operator resumes the program. A virtual CMM's operator does not keep the run waiting;
-// he puts the part in its next set-up if the world has one (docs/worlds.md, part.setups).
+// he puts the part in its next set-up if the world has one (docs/world.md, part.setups).
 void UnitCompiler::pause(const grammar::Statement& s) {
   if (!m_paused) {
     note(s.span, "sema.pause",

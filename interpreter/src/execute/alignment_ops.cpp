@@ -37,7 +37,6 @@ void Execute::add_alignment(ExecuteTable& t) {
                {Op::Save, &save},
                {Op::Recall, &recall},
                {Op::Equate, &equate},
-               {Op::Pause, &pause},
                {Op::Construct, &construct}});
 }
 
@@ -235,12 +234,6 @@ ExecStatus Execute::equate(Interpreter& vm, const ir::Instruction& in, CallFrame
   if (auto r = vm.m_runtime.equate(vm.label_name(in.operands[0].label), vm.label_name(in.operands[1].label), in.span);
       !r)
     return vm.from_runtime(r.error());
-  return ExecStatus::Running;
-}
-
-// Op::Pause
-ExecStatus Execute::pause(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
-  vm.m_runtime.operator_stop(in.span);
   return ExecStatus::Running;
 }
 

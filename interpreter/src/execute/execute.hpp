@@ -61,7 +61,7 @@ struct Execute {
   static void add_alignment(ExecuteTable& t);     // alignment_ops.cpp
   static void add_control(ExecuteTable& t);       // control_ops.cpp
 
-  static ExecuteFn units, decimal_places, read, write, mode, text, device_def, device_open, device_close;
+  static ExecuteFn units, decimal_places, read, write, mode, text, pause, device_def, device_open, device_close;
   static ExecuteFn feature_def, tolerance_def, sensor_def, datdef, declare;
   static ExecuteFn fit_algorithm;
   static ExecuteFn work_plane;
@@ -73,7 +73,7 @@ struct Execute {
   static ExecuteFn sensor_select, probe_set, feed, accel, go_to, meas_begin, ptmeas, meas_end;
   static ExecuteFn path_def, scan_mode, scan_set, pameas;
   static std::vector<runtime::OutputItem> output_items(Interpreter& vm, const ir::Instruction& in);
-  static ExecuteFn output, evaluate, datset, trans, rotate, locate, iterate, save, recall, equate, pause, construct;
+  static ExecuteFn output, evaluate, datset, trans, rotate, locate, iterate, save, recall, equate, construct;
   static ExecuteFn nothing, system, end, assign, jump, jump_if_false, do_init, do_next, call_macro, return_, call_unit;
 };
 

@@ -21,9 +21,16 @@ void Execute::add_input_output(ExecuteTable& t) {
                {Op::Write, &write},
                {Op::Mode, &mode},
                {Op::Text, &text},
+               {Op::Pause, &pause},
                {Op::DeviceDef, &device_def},
                {Op::DeviceOpen, &device_open},
                {Op::DeviceClose, &device_close}});
+}
+
+// Op::Pause: the operator's stop (the virtual CMM's operator may put the part in its next set-up).
+ExecStatus Execute::pause(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  vm.m_runtime.operator_stop(in.span);
+  return ExecStatus::Running;
 }
 
 // Op::Units
