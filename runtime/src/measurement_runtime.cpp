@@ -810,12 +810,17 @@ Result<void> MeasurementRuntime::save(const std::string& label, Span span) {
   return {};
 }
 
+// DA(label) as RECALL and EQUATE read it: the SAVEd system, else the one defined last.
+const Alignment* MeasurementRuntime::find_alignment(const std::string& label) const {
+  if (const auto it = m_saved.find(label); it != m_saved.end()) return &it->second;
+  if (const auto it = m_alignments.find(label); it != m_alignments.end()) return &it->second;
+  return nullptr;
+}
+
 Result<void> MeasurementRuntime::recall(const std::string& label, Span span) {
-  auto it = m_saved.find(label);
-  if (it == m_saved.end()) it = m_alignments.find(label);
-  if (it == m_alignments.end() || (it == m_saved.end() && !m_alignments.count(label)))
-    return program_error(span, fmt::format("coordinate system D({}) is not defined or saved", label));
-  m_alignment = it->second;
+  const Alignment* found = find_alignment(label);
+  if (!found) return program_error(span, fmt::format("coordinate system D({}) is not defined or saved", label));
+  m_alignment = *found;
   return {};
 }
 

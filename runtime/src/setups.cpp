@@ -23,13 +23,8 @@ void MeasurementRuntime::operator_stop(Span span) {
 // those whose points were all taken before the first point DA(b) rests on (the later set-up's
 // first datum point), so the features DA(b) was built from are not moved themselves.
 Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::string& later, Span span) {
-  const auto find = [&](const std::string& label) -> const Alignment* {
-    if (const auto it = m_saved.find(label); it != m_saved.end()) return &it->second;
-    if (const auto it = m_alignments.find(label); it != m_alignments.end()) return &it->second;
-    return nullptr;
-  };
-  const Alignment* a = find(earlier);
-  const Alignment* b = find(later);
+  const Alignment* a = find_alignment(earlier);
+  const Alignment* b = find_alignment(later);
   for (const auto& [label, frame] : {std::pair{earlier, a}, std::pair{later, b}})
     if (!frame) return program_error(span, fmt::format("EQUATE: coordinate system DA({}) is not defined", label));
   // What cannot be told apart is not carried out: read strictly an error, leniently (as shop

@@ -297,6 +297,7 @@ class MeasurementRuntime {
   void write_device_line(const std::string& line);
   void output_sensor(const std::string& label, bool actual, Span span);
   void output_coordinate_system(const std::string& label, bool actual, Span span);
+  [[nodiscard]] const Alignment* find_alignment(const std::string& label) const;
   /// Makes D(label) the current alignment; `rests_on_s`: Alignment::rests_on_s.
   void set_alignment(const std::string& label, const Frame& frame, double rests_on_s);
   [[nodiscard]] double best_fit_rests_on_s(const LocateRequest& request) const;
