@@ -14,14 +14,17 @@
 namespace metron::runtime {
 
 void MeasurementRuntime::operator_stop(Span span) {
+  m_operator_stops_s.push_back(m_machine.state().time_s);
   if (const auto done = m_machine.operator_stop()) note(span, fmt::format("PAUSE: {}", *done));
 }
 
 // DMIS 5.2 (quoted by a public VisualDMIS page): EQUATE/DA(a),DA(b) "creates a transformation from
 // DA(label1) to DA(label2) and updates previously measured features and coordinate systems by the
 // transformation". Which features were measured before the part moved is not said; metron takes
-// those whose points were all taken before the first point DA(b) rests on (the later set-up's
-// first datum point), so the features DA(b) was built from are not moved themselves.
+// those whose points were all taken before the operator's last stop (PAUSE) between DA(a)'s first
+// point and DA(b)'s, the moment the part could be moved; without one, before the first point DA(b)
+// rests on (the later set-up's first datum point), so the features DA(b) was built from are not
+// moved themselves.
 Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::string& later, Span span) {
   const Alignment* a = find_alignment(earlier);
   const Alignment* b = find_alignment(later);
@@ -34,18 +37,24 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
     warn(span, fmt::format("EQUATE: {}; nothing is carried (--strict makes this an error)", why));
     return {};
   };
-  const double cut = b->rests_on_s;
-  if (std::isinf(cut))
+  if (std::isinf(b->rests_on_s))
     return cannot(
         fmt::format("DA({}) rests on no measured feature (a system of numbers only), so the features of the "
                     "part's earlier set-up cannot be told from the later's",
                     later));
-  if (!(a->rests_on_s < cut))
+  if (!(a->rests_on_s < b->rests_on_s))
     return cannot(
         fmt::format("DA({}) rests on no feature measured before DA({})'s first point, so it is not of an "
                     "earlier set-up (EQUATE/DA(earlier set-up),DA(later set-up) carries the earlier into the "
                     "later)",
                     earlier, later));
+  double cut = b->rests_on_s;
+  bool at_stop = false;
+  for (const double stop : m_operator_stops_s)
+    if (a->rests_on_s < stop && stop < b->rests_on_s) {
+      cut = stop;
+      at_stop = true;
+    }
   const Frame move = b->part_to_machine * a->part_to_machine.inverse();
   const Vec3 shift = b->part_to_machine.translation() - a->part_to_machine.translation();  // a moves below
 
@@ -89,13 +98,17 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
   const auto fixed = [](double v, int decimals) { return without_negative_zero(fmt::format("{:.{}f}", v, decimals)); };
   const Eigen::AngleAxisd turn(move.linear());
   const auto count = [](std::size_t n, const char* what) { return fmt::format("{} {}{}", n, what, n == 1 ? "" : "s"); };
-  note(span,
-       fmt::format("EQUATE: DA({}) carried onto DA({}): {} and {} of the earlier set-up moved with the part: its "
-                   "origin by {}, {}, {} {}, turned {} deg about ({}, {}, {}) "
-                   "(machine axes)",
-                   earlier, later, count(features, "feature"), count(systems, "coordinate system"), length(shift.x()),
-                   length(shift.y()), length(shift.z()), unit_word(u), fixed(turn.angle() * 180 / std::numbers::pi, 4),
-                   fixed(turn.axis().x(), 6), fixed(turn.axis().y(), 6), fixed(turn.axis().z(), 6)));
+  const std::string told = fmt::format(
+      "DA({}) carried onto DA({}): {} and {} of the earlier set-up moved with the part: its origin by {}, {}, {} {}, "
+      "turned {} deg about ({}, {}, {}) (machine axes); the earlier set-up is what was measured before {}",
+      earlier, later, count(features, "feature"), count(systems, "coordinate system"), length(shift.x()),
+      length(shift.y()), length(shift.z()), unit_word(u), fixed(turn.angle() * 180 / std::numbers::pi, 4),
+      fixed(turn.axis().x(), 6), fixed(turn.axis().y(), 6), fixed(turn.axis().z(), 6),
+      at_stop ? std::string("the PAUSE between them") : fmt::format("DA({})'s first point", later));
+  note(span, "EQUATE: " + told);
+  // DMIS passes EQUATE to the output file; as a comment, so the file read back names no
+  // coordinate system it does not define.
+  write_device_line(fmt::format("$$ EQUATE/DA({}), DA({}): {}", earlier, later, told));
   return {};
 }
 

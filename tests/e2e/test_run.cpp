@@ -619,6 +619,40 @@ TEST(PartSetups, EquateMovesOnlyTheEarlierSetup) {
       << reversed.diagnostics;
 }
 
+// A feature measured after the PAUSE but before the second set-up's datums (BOSS1, written in the
+// second fixture's frame) is of the second set-up: EQUATE cuts the set-ups at the PAUSE, the moment
+// the part could move, and leaves the boss where it was measured; cut at P2's first datum point
+// instead, the boss would be carried 300 mm away. (Its POS is not checked: its nominal is the
+// fixture frame's, not the part's.) The DMIS output file is told of the EQUATE.
+TEST(PartSetups, EquateCutsTheSetupsAtThePause) {
+  const std::string boss =
+      "F(BOSS1) = FEAT/CIRCLE, OUTER, CART, 120, 70, 50, 0, 0, 1, 24\nMEAS/CIRCLE, F(BOSS1), 6\nENDMES\n";
+  std::string text = best_fit::replaced(part_setups::example11(), boss, "");
+  text = best_fit::replaced(text, "D(FIX2) = ROTATE/ZAXIS, 180\n", "D(FIX2) = ROTATE/ZAXIS, 180\n" + boss);
+  text = best_fit::replaced(text, "UNITS/MM, ANGDEC\n",
+                            "UNITS/MM, ANGDEC\nDID(DMO) = DEVICE/STOR, 'setups.dmo'\n"
+                            "OPEN/DID(DMO), FDATA, DMIS, OUTPUT, OVERWR\n");
+  const auto o = run(best_fit::written("11_boss_first.dmi", text), world("block_two_setups.json"), "equate_pause");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  const auto* boss_actual = report(o.record, "BOSS1");
+  ASSERT_TRUE(boss_actual && boss_actual->actual);
+  EXPECT_EQ(boss_actual->frame, "P2");
+  EXPECT_LT((boss_actual->actual->position.head<2>() - Eigen::Vector2d(120, 70)).norm(), 3e-3);
+  const auto* distance = tolerance(o.record, "BOSS_TO_BORE");
+  ASSERT_TRUE(distance);
+  EXPECT_NEAR(distance->actual, 40.0, 3e-3);
+  const std::string told = "DA(P1) carried onto DA(P2): 5 features and 2 coordinate systems of the earlier set-up";
+  EXPECT_NE(o.diagnostics.find(told), std::string::npos) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("the earlier set-up is what was measured before the PAUSE between them"),
+            std::string::npos)
+      << o.diagnostics;
+  std::ifstream in(out_dir("equate_pause") / "setups.dmo");
+  std::stringstream dmo;
+  dmo << in.rdbuf();
+  EXPECT_NE(dmo.str().find("\n$$ EQUATE/DA(P1), DA(P2): " + told), std::string::npos) << dmo.str();
+  EXPECT_LT(dmo.str().find("$$ EQUATE/"), dmo.str().find("OUTPUT/FA(BORE2), FA(SPHERE1), FA(SPHERE1B)"));
+}
+
 // WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
 TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
   const fs::path dir = out_dir("write_program");

@@ -193,14 +193,17 @@ class MeasurementRuntime {
 
   // A part's set-ups (runtime/src/setups.cpp, docs/alignments.md).
   /// PAUSE: the program waits for its operator; what the machine says its operator did (a
-  /// virtual CMM's operator may put the part in its next set-up) is noted.
+  /// virtual CMM's operator may put the part in its next set-up) is noted, and the moment is
+  /// remembered: the part may have been moved then (EQUATE cuts the set-ups there).
   void operator_stop(Span span);
   /// EQUATE/DA(earlier),DA(later): the part was moved between two set-ups, and DA(earlier) and
   /// DA(later) are the same part frame measured in each. The transformation T = later * earlier^-1
   /// carries what the earlier set-up measured to where it lies in the later one: every feature
-  /// and datum whose actual rests on points taken before the first point DA(later) rests on
-  /// (actual, points, nominal), and every coordinate system resting on such points (the current
-  /// one included). A note tells the motion and how many were carried.
+  /// and datum whose actual rests on points taken before the cut (actual, points, nominal), and
+  /// every coordinate system resting on such points (the current one included). The cut is the
+  /// last PAUSE between DA(earlier)'s first point and DA(later)'s, else DA(later)'s first point.
+  /// A note tells the motion and how many were carried; a DMIS output file open gets the
+  /// statement as a comment line.
   Result<void> equate(const std::string& earlier, const std::string& later, Span span);
 
   // Constructions and outputs.
@@ -323,6 +326,7 @@ class MeasurementRuntime {
   WorkingPlane m_working_plane = WorkingPlane::XY;
   std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
   std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()
+  std::vector<double> m_operator_stops_s;         ///< machine times of the PAUSEs, in order
   Alignment m_alignment;
   std::optional<Vec3> m_program_home;  ///< FROM's home, machine coordinates; else the machine's own
   std::map<std::string, SensorDefinition> m_sensors;
