@@ -93,13 +93,14 @@ const std::vector<WordEntry<CoordinateForm>>& vocabulary() {
 template <>
 const std::vector<WordEntry<ConstructionMethod>>& vocabulary() {
   using M = ConstructionMethod;
-  static const std::vector<WordEntry<M>> rows = {{M::Bf, "BF"},         {M::Intof, "INTOF"},   {M::Midpt, "MIDPT"},
-                                                 {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"},
-                                                 {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"}, {M::Parto, "PARTO"},
-                                                 {M::Perpto, "PERPTO"}, {M::Cast, "CAST"},     {M::Midpl, "MIDPL"},
-                                                 {M::Midli, "MIDLI"},   {M::Copy, "COPY"},     {M::Vertex, "VERTEX"},
-                                                 {M::Extrem, "EXTREM"}, {M::Offset, "OFFSET"}, {M::Cone, "CONE"},
-                                                 {M::Projln, "PROJLI"}};  // PROJLI: Creo CMM's word for PROJLN
+  static const std::vector<WordEntry<M>> rows = {
+      {M::Bf, "BF"},         {M::Intof, "INTOF"},   {M::Midpt, "MIDPT"},
+      {M::Projpt, "PROJPT"}, {M::Projln, "PROJLN"}, {M::Projct, "PROJCT"},
+      {M::Pierce, "PIERCE"}, {M::Movept, "MOVEPT"}, {M::Parto, "PARTO"},
+      {M::Perpto, "PERPTO"}, {M::Cast, "CAST"},     {M::Midpl, "MIDPL"},
+      {M::Midli, "MIDLI"},   {M::Copy, "COPY"},     {M::Vertex, "VERTEX"},
+      {M::Extrem, "EXTREM"}, {M::Offset, "OFFSET"}, {M::Cone, "CONE"},
+      {M::Tanto, "TANTO"},   {M::Projln, "PROJLI"}};  // PROJLI: Creo CMM's word for PROJLN
   return rows;
 }
 

@@ -1984,6 +1984,92 @@ TEST(ShopPrograms, DirectFilesGetOnlyTheirWriteLines) {
   EXPECT_EQ(reread.errors + reread.warnings, 0u) << reread.text;
 }
 
+// CONST/...,TANTO (docs/language.md, "Tangent constructions"), each against its analytic solution:
+// the outer tangents of circles of radius 5 and 10 with centres 30 apart turn by asin(5/30) and
+// touch the first at 5 (-sin, cos); the inner ones turn by asin(15/30); from a point 20 from a
+// circle of radius 5 a tangent turns by asin(5/20); a circle of diameter 10 in a corner of two
+// perpendicular lines has its centre 5 from each; the 30-40-50 triangle's incircle has radius
+// (30 + 40 - 50) / 2 = 10 at (10, 10), its excircle across the hypotenuse the radius s = 60 at
+// (60, 60). Of each construction's solutions the one nearest its nominal is taken; without a
+// nominal, the documented one with a warning.
+TEST(ShopPrograms, TangentConstructionsTakeTheSolutionNearestTheNominal) {
+  const std::string stated =
+      "DMISMN/'t', 5.1\nFA(C1)=FEAT/CIRCLE,OUTER,CART,0,0,0,0,0,1,10\nFA(C2)=FEAT/CIRCLE,OUTER,CART,30,0,0,0,0,1,20\n"
+      "FA(Q)=FEAT/POINT,CART,-20,0,0,0,0,1\nFA(LX)=FEAT/LINE,UNBND,CART,0,0,0,1,0,0,0,0,1\n"
+      "FA(LY)=FEAT/LINE,UNBND,CART,0,0,0,0,1,0,0,0,1\nFA(LH)=FEAT/LINE,UNBND,CART,40,0,0,-0.8,0.6,0,0,0,1\n";
+  const auto r =
+      run(stated +
+          "F(UP)=FEAT/LINE,UNBND,CART,0,5,0,1,0,0,0,0,1\nCONST/LINE,F(UP),TANTO,FA(C1),FA(C2)\n"
+          "F(DOWN)=FEAT/LINE,UNBND,CART,0,-5,0,1,0,0,0,0,1\nCONST/LINE,F(DOWN),TANTO,FA(C1),FA(C2)\n"
+          "F(CROSS)=FEAT/LINE,UNBND,CART,0,-5,0,1,0.5,0,0,0,1\nCONST/LINE,F(CROSS),TANTO,FA(C1),FA(C2)\n"
+          "CONST/LINE,F(FREE),TANTO,FA(C1),FA(C2)\n"
+          "F(FROMQ)=FEAT/LINE,UNBND,CART,-20,0,0,1,-0.2,0,0,0,1\nCONST/LINE,F(FROMQ),TANTO,FA(Q),FA(C1)\n"
+          "F(K1)=FEAT/CIRCLE,OUTER,CART,4,6,0,0,0,1,10\nCONST/CIRCLE,F(K1),TANTO,FA(LX),FA(LY),10\n"
+          "F(K2)=FEAT/CIRCLE,OUTER,CART,-6,-4,0,0,0,1,10\nCONST/CIRCLE,F(K2),TANTO,FA(LX),FA(LY),10\n"
+          "F(IN)=FEAT/CIRCLE,INNER,CART,11,9,0,0,0,1,18\nCONST/CIRCLE,F(IN),TANTO,FA(LX),FA(LY),FA(LH)\n"
+          "F(EX)=FEAT/CIRCLE,INNER,CART,55,58,0,0,0,1,100\nCONST/CIRCLE,F(EX),TANTO,FA(LX),FA(LY),FA(LH)\n"
+          "CONST/CIRCLE,F(FREEC),TANTO,FA(LX),FA(LY),FA(LH)\n"
+          "OUTPUT/FA(UP),FA(DOWN),FA(CROSS),FA(FREE),FA(FROMQ),FA(K1),FA(K2),FA(IN),FA(EX),FA(FREEC)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  using metron::runtime::Geometry;
+  const auto actual = [&](const char* label) {
+    const auto* f = report(*r.session, label);
+    EXPECT_TRUE(f != nullptr && f->actual) << label;
+    return f != nullptr && f->actual ? *f->actual : Geometry{};
+  };
+  const auto distance = [](const Geometry& line, const Eigen::Vector3d& c) {
+    return (c - line.position).cross(line.direction.normalized()).norm();
+  };
+  const auto angle = [](const Geometry& line) { return std::atan2(line.direction.y(), line.direction.x()); };
+  const double outer = std::asin(5.0 / 30), inner = std::asin(15.0 / 30);
+  const Geometry up = actual("UP"), down = actual("DOWN"), cross = actual("CROSS"), free = actual("FREE");
+  for (const Geometry* l : {&up, &down, &cross, &free}) {
+    EXPECT_NEAR(distance(*l, Eigen::Vector3d(0, 0, 0)), 5, 1e-9);
+    EXPECT_NEAR(distance(*l, Eigen::Vector3d(30, 0, 0)), 10, 1e-9);
+  }
+  EXPECT_NEAR(angle(up), outer, 1e-9);
+  EXPECT_LT((up.position - Eigen::Vector3d(-5 * std::sin(outer), 5 * std::cos(outer), 0)).norm(), 1e-9);
+  EXPECT_NEAR(angle(down), -outer, 1e-9);
+  EXPECT_NEAR(angle(cross), inner, 1e-9);
+  EXPECT_LT((free.position - up.position).norm() + (free.direction - up.direction).norm(), 1e-9);
+  const Geometry from_q = actual("FROMQ");
+  EXPECT_NEAR(distance(from_q, Eigen::Vector3d(0, 0, 0)), 5, 1e-9);
+  EXPECT_LT((from_q.position - Eigen::Vector3d(-20, 0, 0)).norm(), 1e-9);
+  EXPECT_NEAR(angle(from_q), -std::asin(5.0 / 20), 1e-9);
+  const auto circle = [&](const char* label, const Eigen::Vector3d& centre, double diameter) {
+    const Geometry c = actual(label);
+    EXPECT_LT((c.position - centre).norm(), 1e-9) << label;
+    EXPECT_NEAR(c.diameter_mm, diameter, 1e-9) << label;
+  };
+  circle("K1", {5, 5, 0}, 10);
+  circle("K2", {-5, -5, 0}, 10);
+  circle("IN", {10, 10, 0}, 20);
+  circle("EX", {60, 60, 0}, 120);
+  circle("FREEC", {10, 10, 0}, 20);
+  EXPECT_NE(r.diagnostics.find("warning: CONST of F(FREE) without a FEAT nominal: of TANTO's solutions, the outer "
+                               "tangent left of the way from the first to the second"),
+            std::string::npos)
+      << r.diagnostics;
+
+  // What has no tangent: a warning at check for a type TANTO does not make here, an error at run
+  // for lines that do not cross and for a circle inside another.
+  const auto plane = check(stated + "CONST/PLANE,F(P),TANTO,FA(C1),FA(C2)\nENDFIL\n");
+  EXPECT_NE(plane.text.find("warning: TANTO constructs a LINE or a CIRCLE here; a tangent PLANE is not supported"),
+            std::string::npos)
+      << plane.text;
+  const auto parallel = run(stated +
+                            "FA(LX2)=FEAT/LINE,UNBND,CART,0,8,0,1,0,0,0,0,1\n"
+                            "CONST/CIRCLE,F(K),TANTO,FA(LX),FA(LX2),8\nENDFIL\n");
+  EXPECT_NE(parallel.diagnostics.find("cannot construct CIRCLE F(K) by TANTO: the two lines are parallel"),
+            std::string::npos)
+      << parallel.diagnostics;
+  const auto inside =
+      run(stated + "FA(C3)=FEAT/CIRCLE,OUTER,CART,31,0,0,0,0,1,4\nCONST/LINE,F(T),TANTO,FA(C2),FA(C3)\nENDFIL\n");
+  EXPECT_NE(inside.diagnostics.find("cannot construct LINE F(T) by TANTO: FA(C3) lies inside FA(C2)"),
+            std::string::npos)
+      << inside.diagnostics;
+}
+
 // Constructions vendor exports write: a countersink's gauge circle (CONST/CIRCLE,INTOF of a cone
 // and a plane) and a bore's cylinder from two measured sections (CONST/CYLNDR,BF,FA(C1),FA(C2)).
 TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {

@@ -400,6 +400,7 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     emit(std::move(in));
     return;
   }
+  if (*method == ir::ConstructionMethod::Tanto) return tangent(s, std::move(in), *const_type, label);
   if (*method == ir::ConstructionMethod::Parto || *method == ir::ConstructionMethod::Perpto) {
     // CONST/PLANE|LINE,F(l),PARTO|PERPTO,FA(ref),[THRU,]FA(point) (shop software leaves THRU out)
     if (*const_type != FeatureType::Plane && *const_type != FeatureType::Line)
@@ -433,6 +434,41 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     return error(p.back().span, "sema.construction-arity",
                  fmt::format("{} takes two source features, got {}", p[2].text, sources));
   if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {*const_type, s.span};
+  emit(std::move(in));
+}
+
+// CONST/LINE,F(l),TANTO,FA(a),FA(b): a line tangent to two circles, or to a circle through a
+// point; CONST/CIRCLE,F(l),TANTO,FA(line),FA(line),diameter | FA(line),FA(line),FA(line): a circle
+// tangent to two lines with its diameter given, or to three (docs/language.md, "Tangent
+// constructions"). Operands: the source labels, then the diameter. Another type: skipped with a
+// warning, as an unsupported method.
+void UnitCompiler::tangent(const grammar::Statement& s, ir::Instruction in, FeatureType type,
+                           const std::string& label) {
+  const auto& p = s.params;
+  if (type != FeatureType::Line && type != FeatureType::Circle) {
+    warn(p[2].span, "sema.unsupported-construction",
+         fmt::format("TANTO constructs a LINE or a CIRCLE here; a tangent {} is not supported: F({}) gets no actual",
+                     p[0].text, p[1].label.name));
+    m_symbols.unconstructed[label] = p[2].text;
+    emit(make(Op::Nop, s, "CONST"));
+    return;
+  }
+  std::size_t labels = 0;
+  while (3 + labels < p.size() && is_label(p[3 + labels], {"FA", "F"})) ++labels;
+  const bool diameter = 3 + labels + 1 == p.size();
+  const bool fits = type == FeatureType::Line ? labels == 2 && 3 + labels == p.size()
+                                              : (labels == 2 && diameter) || (labels == 3 && 3 + labels == p.size());
+  if (!fits)
+    return error(p.back().span, "sema.construction-arity",
+                 type == FeatureType::Line ? "TANTO takes two features for a LINE: TANTO,FA(circle),FA(circle or point)"
+                                           : "TANTO takes two lines and a diameter, or three lines, for a CIRCLE: "
+                                             "TANTO,FA(line),FA(line),diameter or TANTO,FA(line),FA(line),FA(line)");
+  for (std::size_t i = 3; i < 3 + labels; ++i) {
+    if (!check_feature(p[i])) return;
+    in.operands.push_back(label_op(p[i]));
+  }
+  if (diameter && !push_number(in, p.back(), "the diameter")) return;
+  if (m_symbols.features.find(label) == m_symbols.features.end()) m_symbols.features[label] = {type, s.span};
   emit(std::move(in));
 }
 

@@ -251,6 +251,7 @@ class UnitCompiler {
   std::pair<std::string, Span> jump_label_name(const grammar::Expr& param) const;
   void emit_jump(ir::Instruction in, const std::string& label, Span span);
   void extreme_point(const grammar::Statement& s, ir::Instruction in);
+  void tangent(const grammar::Statement& s, ir::Instruction in, runtime::FeatureType type, const std::string& label);
   void units(const grammar::Statement& s);
   void mode(const grammar::Statement& s);
   void pause(const grammar::Statement& s);

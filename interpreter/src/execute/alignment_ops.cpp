@@ -302,6 +302,22 @@ ExecStatus Execute::construct(Interpreter& vm, const ir::Instruction& in, CallFr
       return vm.from_runtime(r.error());
     return ExecStatus::Running;
   }
+  if (words.method == M::Tanto) {
+    std::vector<runtime::FeatureRef> sources;
+    std::optional<double> diameter_mm;
+    for (const auto& o : in.operands) {
+      if (o.kind == Operand::Kind::Label) {
+        sources.push_back(feature_ref(vm, o.label));
+        continue;
+      }
+      auto d = vm.number(o.expr);
+      if (!d) return vm.fail(in.span, d.error());
+      diameter_mm = *d * vm.m_length_mm;
+    }
+    if (auto r = vm.m_runtime.construct_tangent(vm.name_of(in), words.type, sources, diameter_mm, in.span); !r)
+      return vm.from_runtime(r.error());
+    return ExecStatus::Running;
+  }
   const auto method = words.method == M::Bf                                   ? runtime::ConstructMethod::BestFit
                       : words.method == M::Intof || words.method == M::Pierce ? runtime::ConstructMethod::Intersection
                       : words.method == M::Midpt                              ? runtime::ConstructMethod::Midpoint

@@ -226,6 +226,12 @@ class MeasurementRuntime {
   /// countersink's gauge diameter), or its circle h from the vertex along the axis.
   Result<void> construct_cone_section(const std::string& label, const FeatureRef& source, bool by_diameter,
                                       double value_mm, Span span);
+  /// CONST/LINE|CIRCLE,F(l),TANTO,...: a LINE tangent to two circles (arcs, cylinders along the
+  /// circle's axis, spheres' outlines) or to one and through a point; a CIRCLE of `diameter_mm`
+  /// tangent to two lines, or tangent to three (runtime/src/construct_tangent.cpp). Of the
+  /// solutions, the one nearest F(l)'s nominal; without one, a documented choice and a warning.
+  Result<void> construct_tangent(const std::string& label, FeatureType type, const std::vector<FeatureRef>& sources,
+                                 std::optional<double> diameter_mm, Span span);
   Result<void> construct(const std::string& label, FeatureType type, ConstructMethod method,
                          const std::vector<FeatureRef>& sources, Span span);
   /// OUTPUT: reports the features and evaluates and reports the tolerances (against the features

@@ -45,6 +45,7 @@ enum class ConstructionMethod {
   Vertex,  ///< VERTEX,FA(cone): the cone's apex
   Extrem,  ///< EXTREM,[MIN|MAX,]FA(x),direction: x's measured point furthest along it
   Offset,  ///< OFFSET,FA(plane),d: the plane moved d along its normal
+  Tanto,   ///< TANTO: a LINE tangent to two circles (or a circle and a point), a CIRCLE tangent to lines
   Cone
 };  ///< CONE,FA(cone),DIAM|DIST,v: the cone's section of diameter v, or v from its vertex
 
