@@ -15,9 +15,10 @@ namespace {
 using fitting::FrameMatch;
 
 // How far a feature's measured surface points spread about their centroid (RMS, mm): the lever
-// a direction's mismatch acts through. 0 without points (constructed or stated actuals).
+// a direction's mismatch acts through. A constructed feature without points of its own: its
+// sources' (Feature::construction_spread_mm); a stated actual: 0.
 double spread_mm(const Feature& f) {
-  if (f.points.size() < 2) return 0;
+  if (f.points.size() < 2) return f.construction_spread_mm;
   Vec3 centroid = Vec3::Zero();
   for (const auto& p : f.points) centroid += p.surface_mm();
   centroid /= static_cast<double>(f.points.size());

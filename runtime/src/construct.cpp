@@ -304,6 +304,7 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
     }
   }
   store_constructed(label, g, figures, rests_on, span);
+  set_construction_spread(label, sources);
   return {};
 }
 
@@ -327,6 +328,46 @@ void MeasurementRuntime::store_constructed(const std::string& label, const Geome
   it->second.fit = figures;
   it->second.rests_on_s = rests_on_s;
   it->second.measured_at = span;
+}
+
+// The spread of the points a construction rests on: each source a cloud of its probed surface
+// points (its centroid c_i, RMS spread s_i, n_i points), or, without points, its position with
+// its own construction spread (n_i = 1). The clouds together (the parallel-axis theorem):
+// spread^2 = sum n_i (|c_i - c|^2 + s_i^2) / sum n_i, c the weighted centroid.
+void MeasurementRuntime::set_construction_spread(const std::string& label, const std::vector<FeatureRef>& sources) {
+  struct Cloud {
+    Vec3 centroid;
+    double spread_squared;
+    double weight;
+  };
+  std::vector<Cloud> clouds;
+  for (const FeatureRef& ref : sources) {
+    const Feature* f = find_feature(ref.label);
+    if (!f || !f->actual) continue;
+    if (f->points.size() < 2) {
+      clouds.push_back({f->actual->position, f->construction_spread_mm * f->construction_spread_mm, 1.0});
+      continue;
+    }
+    Vec3 centroid = Vec3::Zero();
+    for (const auto& p : f->points) centroid += p.surface_mm();
+    centroid /= static_cast<double>(f->points.size());
+    double squares = 0;
+    for (const auto& p : f->points) squares += (p.surface_mm() - centroid).squaredNorm();
+    const auto n = static_cast<double>(f->points.size());
+    clouds.push_back({centroid, squares / n, n});
+  }
+  double weight = 0;
+  Vec3 centre = Vec3::Zero();
+  for (const Cloud& c : clouds) {
+    weight += c.weight;
+    centre += c.weight * c.centroid;
+  }
+  auto it = m_features.find(label);
+  if (it == m_features.end() || weight == 0) return;
+  centre /= weight;
+  double squares = 0;
+  for (const Cloud& c : clouds) squares += c.weight * ((c.centroid - centre).squaredNorm() + c.spread_squared);
+  it->second.construction_spread_mm = std::sqrt(squares / weight);
 }
 
 // CONST/POINT,F(l),MOVEPT,FA(x),dx,dy,dz: the point of FA(x) moved by an offset in the current
@@ -434,6 +475,7 @@ Result<void> MeasurementRuntime::construct_offset_plane(const std::string& label
   if (m_features.find(label) == m_features.end())
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
   store_constructed(label, moved, std::nullopt, rests_on_s(source), span);
+  set_construction_spread(label, {source});
   return {};
 }
 
@@ -463,6 +505,7 @@ Result<void> MeasurementRuntime::construct_cone_section(const std::string& label
   if (m_features.find(label) == m_features.end())
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));
   store_constructed(label, circle, std::nullopt, rests_on_s(source), span);
+  set_construction_spread(label, {source});
   return {};
 }
 

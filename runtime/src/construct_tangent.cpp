@@ -211,6 +211,7 @@ Result<void> MeasurementRuntime::construct_tangent(const std::string& label, Fea
     line.normal2 = plane.n;
     if (line.bounded) line.length_mm = (best->second - best->first).norm();
     store_constructed(label, line, std::nullopt, rests_on, span);
+    set_construction_spread(label, sources);
     return {};
   }
 
@@ -263,6 +264,7 @@ Result<void> MeasurementRuntime::construct_tangent(const std::string& label, Fea
   circle.direction = nominal && nominal->direction.dot(plane->n) < 0 ? Vec3(-plane->n) : plane->n;
   circle.diameter_mm = 2 * best->radius;
   store_constructed(label, circle, std::nullopt, rests_on, span);
+  set_construction_spread(label, sources);
   return {};
 }
 

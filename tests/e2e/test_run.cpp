@@ -420,6 +420,40 @@ TEST(BestFitAlignment, AConstructedCornerFixesItsWholePosition) {
   EXPECT_NE(o.diagnostics.find(said), std::string::npos) << o.diagnostics << said;
 }
 
+// A plane constructed from three probed points (CONST/PLANE,BF) has no points of its own; its
+// direction weighs in the fit by how far its sources spread (Feature::construction_spread_mm). With
+// two bores it fixes the tilt LOCATE finds: the world's pose (1.2, -0.6, 0.3 mm; 0.05, -0.03, 0.8
+// deg), BORE2 at its drawing position. Counted as a position alone, the tilt is not fixed and
+// LOCATE is an error.
+TEST(BestFitAlignment, AConstructedPlaneFixesTheTilt) {
+  const std::string example = best_fit::example09();
+  const auto top = example.find("F(TOP) = FEAT/PLANE");
+  const auto bore = example.find("F(BORE1) =");
+  ASSERT_TRUE(top != std::string::npos && bore != std::string::npos);
+  std::string text = example.substr(0, top);
+  for (const char* p : {"T1", "T2", "T3"}) {
+    const std::string at = std::string(p) == "T1" ? "10, 10" : std::string(p) == "T2" ? "150, 10" : "80, 90";
+    text += fmt::format(
+        "F({0}) = FEAT/POINT, CART, {1}, 40, 0, 0, 1\nMEAS/POINT, F({0}), 1\n"
+        "  PTMEAS/CART, {1}, 40, 0, 0, 1\nENDMES\n",
+        p, at);
+  }
+  text +=
+      "GOTO/80, 90, 80\nGOTO/40, 50, 80\nF(TOP) = FEAT/PLANE, CART, 80, 36.6667, 40, 0, 0, 1\n"
+      "CONST/PLANE, F(TOP), BF, FA(T1), FA(T2), FA(T3)\n" +
+      example.substr(bore);
+  text = best_fit::replaced(text, "LOCATE/FA(TOP), FA(BORE1), FA(BOSS1), FA(SPHERE1)",
+                            "LOCATE/FA(TOP), FA(BORE1), FA(BOSS1)");
+  const auto o = run(best_fit::written("09_constructed_top.dmi", text), world("block_turned.json"), "locate_cplane");
+  ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
+  EXPECT_NE(o.diagnostics.find("moved 1.2000, -0.6000, 0.3000 mm and turned 0.0500, -0.0300, 0.8000 deg"),
+            std::string::npos)
+      << o.diagnostics;
+  const auto* bore2 = report(o.record, "BORE2");
+  ASSERT_TRUE(bore2 && bore2->actual);
+  EXPECT_LT((bore2->actual->position - Eigen::Vector3d(120, 30, 30)).norm(), 1e-3);
+}
+
 // ITERAT against the same hidden pose (example 10): six surface points, three of them on bore walls,
 // where a point probed in the wrong place is also off along its vector, so one 3-2-1 fit leaves the
 // frame off; fitted again after each new measurement the frame settles on the world's pose and

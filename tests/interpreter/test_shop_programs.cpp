@@ -2070,6 +2070,32 @@ TEST(ShopPrograms, TangentConstructionsTakeTheSolutionNearestTheNominal) {
       << inside.diagnostics;
 }
 
+// A constructed feature keeps how far the points it rests on spread (RMS about their centroid), the
+// lever LOCATE weighs its direction by: a plane through three stated points (positions only)
+// their RMS distance from their centroid; a plane offset from it, the same (one source, its
+// spread); a line through the plane's centre and a point, the two clouds together by the
+// parallel-axis theorem.
+TEST(ShopPrograms, ConstructedFeaturesKeepTheSpreadOfTheirSources) {
+  const auto r =
+      run("DMISMN/'s', 5.1\nFA(P1)=FEAT/POINT,CART,0,0,0,0,0,1\nFA(P2)=FEAT/POINT,CART,30,0,0,0,0,1\n"
+          "FA(P3)=FEAT/POINT,CART,0,40,0,0,0,1\nF(PL)=FEAT/PLANE,CART,10,13,0,0,0,1\n"
+          "CONST/PLANE,F(PL),BF,FA(P1),FA(P2),FA(P3)\nF(OFF)=FEAT/PLANE,CART,10,13,5,0,0,1\n"
+          "CONST/PLANE,F(OFF),OFFSET,FA(PL),5\nFA(Q)=FEAT/POINT,CART,10,13.3333333333,20,0,0,1\n"
+          "F(L)=FEAT/LINE,UNBND,CART,10,13,0,0,0,1,1,0,0\nCONST/LINE,F(L),BF,FA(PL),FA(Q)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const Eigen::Vector3d p1(0, 0, 0), p2(30, 0, 0), p3(0, 40, 0), c = (p1 + p2 + p3) / 3;
+  const double plane = std::sqrt(((p1 - c).squaredNorm() + (p2 - c).squaredNorm() + (p3 - c).squaredNorm()) / 3);
+  const auto spread = [&](const char* label) {
+    const auto* f = r.session->runtime().find_feature(label);
+    EXPECT_NE(f, nullptr) << label;
+    return f ? f->construction_spread_mm : -1.0;
+  };
+  EXPECT_NEAR(spread("PL"), plane, 1e-9);
+  EXPECT_NEAR(spread("OFF"), plane, 1e-9);
+  // The plane's cloud (its centre c, spread `plane`) and Q 20 above c, weighted one each.
+  EXPECT_NEAR(spread("L"), std::sqrt((2 * 10.0 * 10.0 + plane * plane) / 2), 1e-6);
+}
+
 // Constructions vendor exports write: a countersink's gauge circle (CONST/CIRCLE,INTOF of a cone
 // and a plane) and a bore's cylinder from two measured sections (CONST/CYLNDR,BF,FA(C1),FA(C2)).
 TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {

@@ -109,6 +109,10 @@ struct Feature {
   /// Alignment::rests_on_s of the alignment the nominal was written in: EQUATE carries a nominal
   /// not yet measured with the set-up its frame belongs to.
   double nominal_rests_on_s = std::numeric_limits<double>::infinity();
+  /// A constructed feature's lever: how far the points its construction rests on (its sources'
+  /// probed points, or their positions) spread about their centroid, RMS, mm. A best fit weighs
+  /// a direction's mismatch by it, as it weighs a measured feature's by its own points' spread.
+  double construction_spread_mm = 0;
   Span defined_at;   ///< the FEAT statement
   Span measured_at;  ///< the MEAS or CONST statement
 };

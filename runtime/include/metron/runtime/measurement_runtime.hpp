@@ -312,6 +312,8 @@ class MeasurementRuntime {
   [[nodiscard]] double best_fit_rests_on_s(const LocateRequest& request) const;
   /// Feature::rests_on_s of FA(x); infinity for a nominal F(x).
   [[nodiscard]] double rests_on_s(const FeatureRef& ref) const;
+  /// Sets the constructed F(label)'s Feature::construction_spread_mm from its sources.
+  void set_construction_spread(const std::string& label, const std::vector<FeatureRef>& sources);
 
   machine::Machine& m_machine;
   const SourceManager& m_sources;
