@@ -190,6 +190,69 @@ bool has_axis(FeatureType type) {
 
 // ---------------------------------------------------------------- size
 
+// ISO 14405-1's two-point size (LP) at each measured point: its distance to the opposite point of
+// the profile on the line through the least-squares centre, in the section normal to the axis it
+// lies in. The opposite point's radius is interpolated linearly in angle between the measured
+// points on either side of it (one exactly opposite is taken as it is); a point whose opposite
+// falls in a gap wider than 120 deg has none. A cylinder's sections: its points grouped by height
+// along the axis, a new section where consecutive heights part by more than 5% of their range.
+tl::expected<std::vector<double>, std::string> two_point_sizes(const Geometry& g,
+                                                               const std::vector<MeasuredPoint>& points) {
+  const Vec3 axis = g.direction.norm() > 1e-12 ? Vec3(g.direction.normalized()) : Vec3::UnitZ();
+  const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+  struct Polar {
+    double height, angle, radius;
+  };
+  std::vector<Polar> polar;
+  for (const MeasuredPoint& p : points) {
+    const Vec3 d = p.surface_mm() - g.position;
+    const Vec3 across = d - d.dot(axis) * axis;
+    polar.push_back({d.dot(axis), std::atan2(across.dot(v), across.dot(u)), across.norm()});
+  }
+  std::sort(polar.begin(), polar.end(), [](const Polar& a, const Polar& b) { return a.height < b.height; });
+  std::vector<std::vector<Polar>> sections;
+  const double range = polar.empty() ? 0.0 : polar.back().height - polar.front().height;
+  for (std::size_t i = 0; i < polar.size(); ++i) {
+    if (i == 0 || (g.type == FeatureType::Cylinder && polar[i].height - polar[i - 1].height > 0.05 * range + 1e-9))
+      sections.emplace_back();
+    sections.back().push_back(polar[i]);
+  }
+  constexpr double two_pi = 2 * std::numbers::pi;
+  const auto wrapped = [&](double a) { return a - two_pi * std::floor(a / two_pi); };  // [0, 2 pi)
+  std::vector<double> sizes;
+  for (auto& section : sections) {
+    if (section.size() < 3) continue;
+    std::sort(section.begin(), section.end(), [](const Polar& a, const Polar& b) { return a.angle < b.angle; });
+    const std::size_t n = section.size();
+    for (const Polar& p : section) {
+      const double target = p.angle + std::numbers::pi;
+      // The measured points on either side of the opposite direction, going round: the
+      // narrowest gap between neighbours that holds it.
+      double best_gap = two_pi;
+      std::size_t lo = 0, hi = 0;
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t k = (j + 1) % n;
+        const double gap = n == 1 ? two_pi : wrapped(section[k].angle - section[j].angle);
+        const double into = wrapped(target - section[j].angle);
+        if (into <= gap + 1e-12 && gap < best_gap + 1e-15) {
+          best_gap = gap;
+          lo = j;
+          hi = k;
+        }
+      }
+      if (best_gap > two_pi / 3 + 1e-9) continue;
+      const double into = wrapped(target - section[lo].angle);
+      const double t = best_gap > 1e-12 ? std::min(1.0, into / best_gap) : 0.0;
+      sizes.push_back(p.radius + (1 - t) * section[lo].radius + t * section[hi].radius);
+    }
+  }
+  if (sizes.empty())
+    return tl::unexpected(
+        std::string("no measured point has an opposite one within 60 deg (a section needs at "
+                    "least three points around it)"));
+  return sizes;
+}
+
 Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
   static constexpr Types k_widths = {FeatureType::ParallelPlanes, FeatureType::ClosedSlot};
@@ -229,6 +292,23 @@ Outcome evaluate_size(const ToleranceSpec& spec, const Feature& feature, Toleran
              fmt::format("{}: the {} {} of the {} measured points about the fitted centre (least squares {:.4f})",
                          maximum ? "MAX" : "MIN", maximum ? "largest" : "smallest",
                          spec.kind == ToleranceKind::Rad ? "radius" : "diameter", feature.points.size(), size_of(g)));
+  }
+  if (!width && spec.two_point_size) {
+    const Geometry& g = **actual;
+    if (feature.nominal.type != FeatureType::Circle && feature.nominal.type != FeatureType::Cylinder)
+      return Error(fmt::format("{} of {} at DIAMLP: the two-point size is taken of a CIRCLE or a CYLNDR, not of a {}",
+                               dmis_word(spec.kind), feature.label, dmis_word(feature.nominal.type)));
+    const auto sizes = two_point_sizes(g, feature.points);
+    if (!sizes) return Error(fmt::format("{} of {} at DIAMLP: {}", dmis_word(spec.kind), feature.label, sizes.error()));
+    const auto [least, most] = std::minmax_element(sizes->begin(), sizes->end());
+    // Every local size must lie within the limits: the one farther beyond (or nearer to) its
+    // limit is the tolerance's actual.
+    const double over = scale * *most - result.nominal - spec.upper;
+    const double under = spec.lower - (scale * *least - result.nominal);
+    result.actual = scale * (over >= under ? *most : *least);
+    add_note(result, fmt::format("DIAMLP: the two-point sizes (ISO 14405-1 LP) at {} of the {} measured points run "
+                                 "from {:.4f} to {:.4f}; the one nearer its limit is given (least squares {:.4f})",
+                                 sizes->size(), feature.points.size(), scale * *least, scale * *most, size_of(g)));
   }
   result.value = result.actual - result.nominal;
   set_limits(result, spec.lower, spec.upper);

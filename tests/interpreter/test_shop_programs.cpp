@@ -919,13 +919,57 @@ TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
   EXPECT_FALSE(tolerance(*r.session, "MX")->in_tolerance);
   EXPECT_NEAR(tolerance(*r.session, "MN")->actual, 16.03, tol_mm);
   EXPECT_NEAR(tolerance(*r.session, "RX")->actual, 15.015, tol_mm);
-  EXPECT_NEAR(tolerance(*r.session, "LP")->actual, 23.03, tol_mm);  // DIAMLP is not applied: AVG
-  EXPECT_NE(r.diagnostics.find("TOL/DIAM takes AVG, MAX or MIN after its limits; DIAMLP is not applied"),
+  // DIAMLP, the two-point sizes: the four points lie on the ellipse's axes, each opposite another,
+  // so the sizes are its two axes, 30.03 and 16.03; the major axis is the farther beyond its limit.
+  EXPECT_NEAR(tolerance(*r.session, "LP")->actual, 30.03, tol_mm);
+  EXPECT_NE(tolerance(*r.session, "LP")
+                ->note.find("two-point sizes (ISO 14405-1 LP) at 4 of the 4 measured points "
+                            "run from 16.03"),
             std::string::npos)
-      << r.diagnostics;
+      << tolerance(*r.session, "LP")->note;
   EXPECT_NE(tolerance(*r.session, "MN")->note.find("MIN: the smallest diameter of the 4 measured points"),
             std::string::npos)
       << tolerance(*r.session, "MN")->note;
+}
+
+// DIAMLP: ISO 14405-1's two-point size, against the hidden form of scan_lobed_circle.json's boss
+// (d 50, lobes of 2.5 um amplitude at 20 deg), touched at 12 points 30 deg apart, each opposite
+// another. With 3 lobes r(t) + r(t + 180) = 2R: odd lobing cancels in every two-point size (why a
+// two-point gauge cannot see it), while the least-squares circle sees none either and MAX sees
+// the lobes. With 2 lobes (an oval) the sizes are 2R + 2a cos 2(t - 20 deg): at t = 30 k deg at
+// most 2 x 2.5 cos 20 deg = 4.70 um from 50, beyond a +-3 um tolerance the least-squares
+// diameter meets.
+TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
+  std::string text =
+      "DMISMN/'lp', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
+      "F(BOSS)=FEAT/CIRCLE,OUTER,CART,200,300,15,0,0,1,50\nMEAS/CIRCLE,F(BOSS),12\n";
+  for (int k = 0; k < 12; ++k) {
+    const double t = k * std::numbers::pi / 6, c = std::cos(t), s = std::sin(t);
+    text += fmt::format(
+        "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},15\n  PTMEAS/CART,{2:.6f},{3:.6f},15,{4:.6f},"
+        "{5:.6f},0\n  GOTO/{0:.6f},{1:.6f},60\n",
+        200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, s);
+  }
+  text +=
+      "ENDMES\nT(LP)=TOL/DIAM,-0.003,0.003,DIAMLP\nT(LS)=TOL/DIAM,-0.003,0.003\nT(MX)=TOL/DIAM,-0.003,0.003,MAX\n"
+      "OUTPUT/FA(BOSS),TA(LP),TA(LS),TA(MX)\nENDFIL\n";
+  const fs::path lobed = source_dir / "programs/worlds/scan_lobed_circle.json";
+  const auto three = run(text, lobed);
+  ASSERT_EQ(three.status, ExecStatus::Finished) << three.diagnostics;
+  EXPECT_NEAR(tolerance(*three.session, "LP")->actual, 50.0, 1e-3);
+  EXPECT_TRUE(tolerance(*three.session, "LP")->in_tolerance);
+  EXPECT_GT(tolerance(*three.session, "MX")->actual, 50.004);  // 2 x 2.5 cos 30 deg = 4.33 um and more
+  const fs::path oval = write("oval.json", "{\"extends\": \"" + lobed.string() +
+                                               "\", \"part\": {\"deviations\": {\"BOSS\": {\"form\": "
+                                               "{\"lobes\": 2, \"amplitude_mm\": 0.0025, \"phase_deg\": 20}}}}}\n");
+  const auto two = run(text, oval);
+  ASSERT_EQ(two.status, ExecStatus::Finished) << two.diagnostics;
+  const auto* lp = tolerance(*two.session, "LP");
+  EXPECT_NEAR(std::abs(lp->actual - 50.0), 2 * 0.0025 * std::cos(20 * std::numbers::pi / 180), 5e-4);
+  EXPECT_FALSE(lp->in_tolerance);
+  EXPECT_TRUE(tolerance(*two.session, "LS")->in_tolerance);
+  EXPECT_NEAR(tolerance(*two.session, "LS")->actual, 50.0, 5e-4);
 }
 
 // F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features. OUTPUT/FA(p) is the OUTPUT of its

@@ -538,12 +538,12 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       // DISTWRT and ANGWRT are taken with respect to a feature or, as written here, a datum's.
       if (kind == ToleranceKind::DistWrt || kind == ToleranceKind::AngWrt) has_reference = true;
     } else if (is_word(p[i]) && !is_variable(p[i].text)) {
-      // DIAM and RAD take one word, AVG|MAX|MIN; another (RationalDMIS writes DIAMLP and others)
-      // is not applied, and is told rather than dropped unseen.
+      // DIAM and RAD take one word, AVG|MAX|MIN, or DIAMLP (RationalDMIS: the two-point size of
+      // ISO 14405-1); another is not applied, and is told rather than dropped unseen.
       if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad) &&
-          !(is_word(p[i], "AVG") || is_word(p[i], "MAX") || is_word(p[i], "MIN"))) {
+          !(is_word(p[i], "AVG") || is_word(p[i], "MAX") || is_word(p[i], "MIN") || is_word(p[i], "DIAMLP"))) {
         warn(p[i].span, "sema.size-modifier",
-             fmt::format("TOL/{} takes AVG, MAX or MIN after its limits; {} is not applied: T({}) is the "
+             fmt::format("TOL/{} takes AVG, MAX, MIN or DIAMLP after its limits; {} is not applied: T({}) is the "
                          "least-squares size (AVG)",
                          p[0].text, p[i].text, s.target->name));
         continue;

@@ -194,6 +194,7 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
     const bool size = t.kind == runtime::ToleranceKind::Diam || t.kind == runtime::ToleranceKind::Rad;
     if (size && word == "MAX") t.extent = runtime::DistanceExtent::Maximum;
     if (size && word == "MIN") t.extent = runtime::DistanceExtent::Minimum;
+    if (size && word == "DIAMLP") t.two_point_size = true;  // RationalDMIS: ISO 14405-1's LP
   }
   bool feature_tier = false;  // COMPOS: after FEATUR, the modifier and datums are the second tier's
   for (const auto& o : in.operands) {

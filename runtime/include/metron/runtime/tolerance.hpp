@@ -85,6 +85,8 @@ struct ToleranceSpec {
   /// DISTB, DISTWRT: the LIMIT form: `lower` and `upper` bound the distance itself (no nominal).
   bool limits = false;
   DistanceExtent extent = DistanceExtent::Average;
+  /// DIAM|RAD,lo,up,DIAMLP: the two-point sizes (ISO 14405-1 LP), not the least-squares size.
+  bool two_point_size = false;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced (COMPOS: the PATERN tier's)
   /// POS: each datum's material condition (`DAT(B),MMC`), one per `datums`; empty: all RFS. A
