@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "detail/fit_actual.hpp"
+#include "detail/line_geometry.hpp"
 #include "metron/runtime/measurement_runtime.hpp"
 #include "metron/stdlib/fitting/fit.hpp"
 
@@ -54,17 +55,6 @@ tl::expected<Vec3, std::string> line_plane(const Geometry& line, const Geometry&
   if (std::abs(den) < 1e-9) return tl::unexpected(std::string("the line is parallel to the plane: no intersection"));
   const double t = (plane.position - line.position).dot(plane.direction) / den;
   return Vec3(line.position + t * line.direction);
-}
-
-// Midpoint of the common perpendicular of two lines.
-tl::expected<Vec3, std::string> line_line(const Geometry& a, const Geometry& b) {
-  const Vec3 w = a.position - b.position;
-  const double aa = a.direction.dot(a.direction), bb = b.direction.dot(b.direction), ab = a.direction.dot(b.direction);
-  const double den = aa * bb - ab * ab;
-  if (std::abs(den) < 1e-12) return tl::unexpected(std::string("the lines are parallel: no intersection"));
-  const double s = (ab * b.direction.dot(w) - bb * a.direction.dot(w)) / den;
-  const double t = (aa * b.direction.dot(w) - ab * a.direction.dot(w)) / den;
-  return Vec3(0.5 * ((a.position + s * a.direction) + (b.position + t * b.direction)));
 }
 
 // The plane a constructed LINE lies in (DMIS i2,j2,k2): its nominal's where that is normal to

@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include "detail/line_geometry.hpp"
 #include "metron/runtime/measurement_runtime.hpp"
 
 namespace metron::runtime {
@@ -229,11 +230,7 @@ Result<void> MeasurementRuntime::construct_tangent(const std::string& label, Fea
     for (std::size_t j = i + 1; j < g.size() && !plane; ++j) {
       const Vec3 n = g[i].direction.normalized().cross(g[j].direction.normalized());
       if (n.norm() < 1e-9) continue;
-      const Vec3 w = g[i].position - g[j].position;
-      const Vec3 di = g[i].direction.normalized(), dj = g[j].direction.normalized();
-      const double b = di.dot(dj), denom = 1 - b * b;
-      const double s = (b * dj.dot(w) - di.dot(w)) / denom, t = (dj.dot(w) - b * di.dot(w)) / denom;
-      plane = plane_axes(0.5 * ((g[i].position + s * di) + (g[j].position + t * dj)), n);
+      if (const auto crossing = line_line(g[i], g[j])) plane = plane_axes(*crossing, n);
     }
   if (!plane)
     return fail(diameter_mm ? "the two lines are parallel: a circle tangent to both is not fixed along them"
