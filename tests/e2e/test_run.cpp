@@ -28,6 +28,14 @@ using metron::runtime::ToleranceResult;
 const fs::path source_dir = METRON_SOURCE_DIR;
 fs::path out_dir(const std::string& name) { return metron::test_support::out_dir("metron_e2e", name); }
 
+// A file's whole text (a program, an output file); empty when it cannot be read.
+std::string file_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 metron::interpreter::RunOutcome run(const fs::path& program, const std::optional<fs::path>& world,
                                     const std::string& out, std::optional<std::uint64_t> seed = std::nullopt,
                                     bool strict = false) {
@@ -207,10 +215,7 @@ std::pair<int, std::string> shell(const std::string& command) {
 // is made 0.03 mm off along X in the part frame (block_deviations.json): the hidden truth is a
 // 2D position deviation of 0.06 mm (plus what the 0.05 deg tilt of face A adds, under 0.01 mm).
 TEST(DatumReferenceFrame, PositionToDatumsDoesNotDependOnTheProgramsAlignment) {
-  std::ifstream in(program("02_block_inspection.dmi"));
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string unaligned = text.str();
+  std::string unaligned = file_text(program("02_block_inspection.dmi"));
   // The same program without its part alignment: everything stays in the fixture's frame, where
   // the misplaced part is 0.3 mm off, and a POS without datums is added to show it.
   for (const std::string line : {"D(DATUMS) = DATSET/DAT(A), ZDIR, ZORIG, DAT(B), YMINUS, YORIG, DAT(C), XORIG\n",
@@ -254,12 +259,7 @@ TEST(DatumReferenceFrame, PositionToDatumsDoesNotDependOnTheProgramsAlignment) {
 namespace best_fit {
 
 // An example program's text, to run it changed.
-std::string example_text(const std::string& name) {
-  std::ifstream in(program(name));
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+std::string example_text(const std::string& name) { return file_text(program(name)); }
 
 std::string example09() { return example_text("09_best_fit_locate.dmi"); }
 
@@ -404,12 +404,9 @@ TEST(BestFitAlignment, LocateSpreadsAMisplacedBoreOverThePattern) {
 // block_turned.json) alone fixes LOCATE's three translations, by where the world's pose puts the
 // drawing's (0, 0, 40).
 TEST(BestFitAlignment, AConstructedCornerFixesItsWholePosition) {
-  std::ifstream in(program("02_block_inspection.dmi"));
-  std::stringstream text;
-  text << in.rdbuf();
   const auto o =
       run(best_fit::written("02_corner.dmi",
-                            best_fit::replaced(text.str(), "OUTPUT/FA(CORNER)\n",
+                            best_fit::replaced(file_text(program("02_block_inspection.dmi")), "OUTPUT/FA(CORNER)\n",
                                                "OUTPUT/FA(CORNER)\nD(BF) = LOCATE/XDIR, YDIR, ZDIR, FA(CORNER)\n")),
           world("block_turned.json"), "locate_corner");
   ASSERT_EQ(o.exit, RunExit::Completed) << o.diagnostics;
@@ -461,16 +458,13 @@ TEST(BestFitAlignment, AConstructedPlaneFixesTheTilt) {
 // BORE2 is a tenth of a millimetre and more away and a warning says the test was not met; INCR
 // (the fit's own motion as the test) settles as ABSL does.
 TEST(BestFitAlignment, IteratMeasuresAgainUntilTheAlignmentSettles) {
-  std::ifstream in(program("10_iterative_alignment.dmi"));
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = file_text(program("10_iterative_alignment.dmi"));
   const std::string iterat = "(REDO), 0.0005, 10, ABSL";
   const auto settled = run(program("10_iterative_alignment.dmi"), world("block_turned.json"), "iterat_settled");
-  const auto once = run(best_fit::written("10_once.dmi", best_fit::replaced(text.str(), iterat, "(REDO), 0.0005, 1")),
+  const auto once = run(best_fit::written("10_once.dmi", best_fit::replaced(text, iterat, "(REDO), 0.0005, 1")),
                         world("block_turned.json"), "iterat_once");
-  const auto incr =
-      run(best_fit::written("10_incr.dmi", best_fit::replaced(text.str(), iterat, "(REDO), 0.0005, 10, INCR")),
-          world("block_turned.json"), "iterat_incr");
+  const auto incr = run(best_fit::written("10_incr.dmi", best_fit::replaced(text, iterat, "(REDO), 0.0005, 10, INCR")),
+                        world("block_turned.json"), "iterat_incr");
   for (const auto* o : {&settled, &once, &incr}) ASSERT_EQ(o->exit, RunExit::Completed) << o->diagnostics;
 
   const metron::Frame pose = best_fit::world_pose();
@@ -680,11 +674,9 @@ TEST(PartSetups, EquateCutsTheSetupsAtThePause) {
   EXPECT_NE(o.diagnostics.find("the earlier set-up is what was measured before the PAUSE between them"),
             std::string::npos)
       << o.diagnostics;
-  std::ifstream in(out_dir("equate_pause") / "setups.dmo");
-  std::stringstream dmo;
-  dmo << in.rdbuf();
-  EXPECT_NE(dmo.str().find("\n$$ EQUATE/DA(P1), DA(P2): " + told), std::string::npos) << dmo.str();
-  EXPECT_LT(dmo.str().find("$$ EQUATE/"), dmo.str().find("OUTPUT/FA(BORE2), FA(SPHERE1), FA(SPHERE1B)"));
+  const std::string dmo = file_text(out_dir("equate_pause") / "setups.dmo");
+  EXPECT_NE(dmo.find("\n$$ EQUATE/DA(P1), DA(P2): " + told), std::string::npos) << dmo;
+  EXPECT_LT(dmo.find("$$ EQUATE/"), dmo.find("OUTPUT/FA(BORE2), FA(SPHERE1), FA(SPHERE1B)"));
 }
 
 // WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
@@ -700,10 +692,7 @@ TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
   EXPECT_NE(o.diagnostics.find("write.dmi:9:1: error: WRITE/DID(OUT): the device is not open for OUTPUT"),
             std::string::npos)
       << o.diagnostics;
-  std::ifstream in(out_dir("write_out") / "values.txt");
-  std::stringstream text;
-  text << in.rdbuf();
-  EXPECT_EQ(text.str(), "X=2.5\ndone\n");
+  EXPECT_EQ(file_text(out_dir("write_out") / "values.txt"), "X=2.5\ndone\n");
 }
 
 TEST(Cli, CheckPrintsPositionedDiagnosticsWithACaret) {
@@ -745,11 +734,9 @@ TEST(Cli, RunReportsAndWritesTheDmisOutputFile) {
                                  " --out " + dir.string());
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(out.find("T(D_BORE1)  DIAM  FA(BORE1)"), std::string::npos) << out;
-  std::ifstream dmo(dir / "block.dmo");
-  std::stringstream ss;
-  ss << dmo.rdbuf();
-  EXPECT_NE(ss.str().find("FA(BORE1) = FEAT/CYLNDR, INNER, CART"), std::string::npos) << ss.str();
-  EXPECT_NE(ss.str().find("TA(D_BORE1) = TOL/DIAM,"), std::string::npos) << ss.str();
+  const std::string dmo = file_text(dir / "block.dmo");
+  EXPECT_NE(dmo.find("FA(BORE1) = FEAT/CYLNDR, INNER, CART"), std::string::npos) << dmo;
+  EXPECT_NE(dmo.find("TA(D_BORE1) = TOL/DIAM,"), std::string::npos) << dmo;
 }
 
 TEST(Cli, FitReadsNistDataAndRejectsCorruptFiles) {
