@@ -970,6 +970,27 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   EXPECT_FALSE(lp->in_tolerance);
   EXPECT_TRUE(tolerance(*two.session, "LS")->in_tolerance);
   EXPECT_NEAR(tolerance(*two.session, "LS")->actual, 50.0, 5e-4);
+
+  // The oval boss as a CYLNDR touched in two sections 14 mm apart, 6 points 60 deg apart in each:
+  // each section its own two-point sizes, at most 2 x 2.5 cos(2 (120 - 20) deg) = 4.70 um off.
+  std::string cylinder =
+      "DMISMN/'lp', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
+      "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),12\n";
+  for (const double z : {8.0, 22.0})
+    for (int k = 0; k < 6; ++k) {
+      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
+      cylinder += fmt::format(
+          "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},{5}\n  PTMEAS/CART,{2:.6f},{3:.6f},{5},"
+          "{4:.6f},{6:.6f},0\n  GOTO/{0:.6f},{1:.6f},60\n",
+          200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, z, s);
+    }
+  cylinder += "ENDMES\nT(LP)=TOL/DIAM,-0.003,0.003,DIAMLP\nOUTPUT/FA(BOSS),TA(LP)\nENDFIL\n";
+  const auto sections = run(cylinder, oval);
+  ASSERT_EQ(sections.status, ExecStatus::Finished) << sections.diagnostics;
+  const auto* lp_cylinder = tolerance(*sections.session, "LP");
+  EXPECT_NEAR(std::abs(lp_cylinder->actual - 50.0), 2 * 0.0025 * std::cos(20 * std::numbers::pi / 180), 5e-4);
+  EXPECT_NE(lp_cylinder->note.find("at 12 of the 12 measured points"), std::string::npos) << lp_cylinder->note;
 }
 
 // F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features. OUTPUT/FA(p) is the OUTPUT of its
