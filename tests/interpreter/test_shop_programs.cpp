@@ -3171,7 +3171,7 @@ TEST(ShopPrograms, ReconstructedShopProgramsCheckCleanAndRunToTheEnd) {
     const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
     EXPECT_EQ(r.status, ExecStatus::Finished) << entry.path() << "\n" << r.diagnostics;
   }
-  EXPECT_EQ(seen, 7);
+  EXPECT_EQ(seen, 8);
 }
 
 TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtRun) {
