@@ -223,26 +223,18 @@ tl::expected<std::vector<double>, std::string> two_point_sizes(const Geometry& g
   for (auto& section : sections) {
     if (section.size() < 3) continue;
     std::sort(section.begin(), section.end(), [](const Polar& a, const Polar& b) { return a.angle < b.angle; });
+    std::vector<double> angles;
+    for (const Polar& p : section) angles.push_back(p.angle);
     const std::size_t n = section.size();
     for (const Polar& p : section) {
-      const double target = p.angle + std::numbers::pi;
-      // The measured points on either side of the opposite direction, going round: the
-      // narrowest gap between neighbours that holds it.
-      double best_gap = two_pi;
-      std::size_t lo = 0, hi = 0;
-      for (std::size_t j = 0; j < n; ++j) {
-        const std::size_t k = (j + 1) % n;
-        const double gap = n == 1 ? two_pi : wrapped(section[k].angle - section[j].angle);
-        const double into = wrapped(target - section[j].angle);
-        if (into <= gap + 1e-12 && gap < best_gap + 1e-15) {
-          best_gap = gap;
-          lo = j;
-          hi = k;
-        }
-      }
-      if (best_gap > two_pi / 3 + 1e-9) continue;
-      const double into = wrapped(target - section[lo].angle);
-      const double t = best_gap > 1e-12 ? std::min(1.0, into / best_gap) : 0.0;
+      // The measured points on either side of the opposite direction (angles in (-pi, pi]).
+      const double opposite = p.angle > 0 ? p.angle - std::numbers::pi : p.angle + std::numbers::pi;
+      const std::size_t hi =
+          static_cast<std::size_t>(std::upper_bound(angles.begin(), angles.end(), opposite) - angles.begin()) % n;
+      const std::size_t lo = (hi + n - 1) % n;
+      const double gap = wrapped(angles[hi] - angles[lo]);
+      if (gap < 1e-15 || gap > two_pi / 3 + 1e-9) continue;  // all at one angle, or too wide a gap
+      const double t = std::min(1.0, wrapped(opposite - angles[lo]) / gap);
       sizes.push_back(p.radius + (1 - t) * section[lo].radius + t * section[hi].radius);
     }
   }
