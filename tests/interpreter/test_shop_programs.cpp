@@ -957,6 +957,7 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   const fs::path lobed = source_dir / "programs/worlds/scan_lobed_circle.json";
   const auto three = run(text, lobed);
   ASSERT_EQ(three.status, ExecStatus::Finished) << three.diagnostics;
+  ASSERT_NE(tolerance(*three.session, "LP"), nullptr) << three.diagnostics;
   EXPECT_NEAR(tolerance(*three.session, "LP")->actual, 50.0, 1e-3);
   EXPECT_TRUE(tolerance(*three.session, "LP")->in_tolerance);
   EXPECT_GT(tolerance(*three.session, "MX")->actual, 50.004);  // 2 x 2.5 cos 30 deg = 4.33 um and more
@@ -966,6 +967,7 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   const auto two = run(text, oval);
   ASSERT_EQ(two.status, ExecStatus::Finished) << two.diagnostics;
   const auto* lp = tolerance(*two.session, "LP");
+  ASSERT_NE(lp, nullptr) << two.diagnostics;
   EXPECT_NEAR(std::abs(lp->actual - 50.0), 2 * 0.0025 * std::cos(20 * std::numbers::pi / 180), 5e-4);
   EXPECT_FALSE(lp->in_tolerance);
   EXPECT_TRUE(tolerance(*two.session, "LS")->in_tolerance);
@@ -989,8 +991,38 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   const auto sections = run(cylinder, oval);
   ASSERT_EQ(sections.status, ExecStatus::Finished) << sections.diagnostics;
   const auto* lp_cylinder = tolerance(*sections.session, "LP");
+  ASSERT_NE(lp_cylinder, nullptr) << sections.diagnostics;
   EXPECT_NEAR(std::abs(lp_cylinder->actual - 50.0), 2 * 0.0025 * std::cos(20 * std::numbers::pi / 180), 5e-4);
   EXPECT_NE(lp_cylinder->note.find("at 12 of the 12 measured points"), std::string::npos) << lp_cylinder->note;
+
+  // A cylinder's sections each give their own sizes: the default block's 90 deg countersink (apex
+  // 8 mm below the top) read as a CYLNDR touched at 4 and 6 mm above its apex by a 2 mm ball moving
+  // across the axis, 6 points 60 deg apart in each (the points of the two sections at the same
+  // angles keep the least-squares cylinder's axis on the cone's). A ball of radius b touching a 45 deg wall with
+  // its centre h above the apex is h - b sqrt(2) from the axis, its surface point h - b (sqrt(2) - 1): the sections'
+  // two-point sizes are 2 (4 - (sqrt(2) - 1)) = 7.1716 and 2 (6 - (sqrt(2) - 1)) = 11.1716 (perfect world).
+  std::string countersink =
+      "DMISMN/'csk', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,1\nSNSET/RETRCT,1\nSNSET/SEARCH,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\n"
+      "GOTO/40,20,60\nF(CSK)=FEAT/CYLNDR,INNER,CART,40,20,36,0,0,1,10,2\nMEAS/CYLNDR,F(CSK),12\n";
+  for (const double h : {4.0, 6.0}) {
+    countersink += fmt::format("  GOTO/40,20,{}\n", 32 + h);
+    for (int k = 0; k < 6; ++k) {
+      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
+      countersink += fmt::format("  PTMEAS/CART,{:.6f},{:.6f},{},{:.6f},{:.6f},0\n  GOTO/40,20,{}\n", 40 + h * c,
+                                 20 + h * s, 32 + h, -c, -s, 32 + h);
+    }
+  }
+  countersink += "  GOTO/40,20,60\nENDMES\nT(LP)=TOL/DIAM,-0.01,0.01,DIAMLP\nOUTPUT/FA(CSK),TA(LP)\nENDFIL\n";
+  const auto cone = run(countersink, source_dir / "programs/worlds/perfect.json");
+  ASSERT_EQ(cone.status, ExecStatus::Finished) << cone.diagnostics;
+  const auto* lp_sections = tolerance(*cone.session, "LP");
+  ASSERT_NE(lp_sections, nullptr) << cone.diagnostics;
+  const double lift = std::sqrt(2.0) - 1;
+  EXPECT_NEAR(lp_sections->actual, 2 * (4 - lift), 1e-4);
+  EXPECT_NE(lp_sections->note.find(fmt::format("run from {:.4f} to {:.4f}", 2 * (4 - lift), 2 * (6 - lift))),
+            std::string::npos)
+      << lp_sections->note;
 }
 
 // F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features. OUTPUT/FA(p) is the OUTPUT of its
