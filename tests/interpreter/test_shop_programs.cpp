@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -1023,6 +1024,53 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   EXPECT_NE(lp_sections->note.find(fmt::format("run from {:.4f} to {:.4f}", 2 * (4 - lift), 2 * (6 - lift))),
             std::string::npos)
       << lp_sections->note;
+}
+
+// A cylinder's two-point sizes are taken section by section: a boss tapering 0.2 deg (a cone whose
+// apex lies 7 m above, hidden truth of the world written here) touched at 5 points 72 deg apart at
+// z 8 and at z 22, the second section turned 36 deg, so a point's opposite lies in the other
+// section only. Per section (a circle: the opposite radius interpolated between equal radii) the
+// sizes are the section's diameters, 50 +- 2 x 7 tan 0.2 deg = 50 +- 0.04887; taken as one
+// section they would all be the sections' mean, 50.
+TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
+  const fs::path lobed = source_dir / "programs/worlds/scan_lobed_circle.json";
+  const double tan_taper = std::tan(0.2 * std::numbers::pi / 180);
+  const double apex_height = 15 + 25 / tan_taper;  // the diameter is 50 at z 15
+  const fs::path taper = write(
+      "taper.json", fmt::format("{{\"extends\": \"{}\", \"part\": {{\"design\": {{\"intersection\": ["
+                                "{{\"type\": \"cone\", \"name\": \"BOSS\", \"apex\": [0, 0, {:.9f}], \"axis\": [0, 0, "
+                                "-1], \"half_angle_deg\": 0.2}},"
+                                "{{\"type\": \"half_space\", \"point\": [0, 0, 30], \"normal\": [0, 0, 1]}},"
+                                "{{\"type\": \"half_space\", \"point\": [0, 0, 0], \"normal\": [0, 0, -1]}}]}},"
+                                "\"deviations\": {{\"BOSS\": {{\"form\": {{\"lobes\": 3, \"amplitude_mm\": 0, "
+                                "\"phase_deg\": 0}}}}}}}}}}\n",
+                                lobed.string(), apex_height));
+  std::string text =
+      "DMISMN/'taper', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
+      "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),10\n";
+  for (const auto& [z, turn] : {std::pair{8.0, 0.0}, std::pair{22.0, 36.0}})
+    for (int k = 0; k < 5; ++k) {
+      const double t = (72.0 * k + turn) * std::numbers::pi / 180, c = std::cos(t), s = std::sin(t);
+      text += fmt::format(
+          "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},{5}\n  PTMEAS/CART,{2:.6f},{3:.6f},{5},"
+          "{4:.6f},{6:.6f},0\n  GOTO/{0:.6f},{1:.6f},60\n",
+          200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, z, s);
+    }
+  text += "ENDMES\nT(LP)=TOL/DIAM,-0.1,0.1,DIAMLP\nOUTPUT/FA(BOSS),TA(LP)\nENDFIL\n";
+  const auto ran = run(text, taper);
+  ASSERT_EQ(ran.status, ExecStatus::Finished) << ran.diagnostics;
+  const auto* lp = tolerance(*ran.session, "LP");
+  ASSERT_NE(lp, nullptr) << ran.diagnostics;
+  // The default probe's scatter (a few tenths of a micrometre) is on every size.
+  const double bottom = 50 + 2 * 7 * tan_taper, top = 50 - 2 * 7 * tan_taper;
+  EXPECT_NEAR(lp->actual, bottom, 5e-4) << lp->note;  // 0.0511 from 50.1, nearer than the top's 0.0489 from 49.9
+  double from = 0, to = 0;
+  const auto at = lp->note.find("run from ");
+  ASSERT_NE(at, std::string::npos) << lp->note;
+  ASSERT_EQ(std::sscanf(lp->note.c_str() + at, "run from %lf to %lf", &from, &to), 2) << lp->note;
+  EXPECT_NEAR(from, top, 5e-4) << lp->note;
+  EXPECT_NEAR(to, bottom, 5e-4) << lp->note;
 }
 
 // F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features. OUTPUT/FA(p) is the OUTPUT of its
