@@ -679,6 +679,65 @@ TEST(PartSetups, EquateCutsTheSetupsAtThePause) {
   EXPECT_LT(dmo.find("$$ EQUATE/"), dmo.find("OUTPUT/FA(BORE2), FA(SPHERE1), FA(SPHERE1B)"));
 }
 
+// A part in three set-ups (the world of block_two_setups.json with a third, turned 90.3 deg, at the
+// program's second PAUSE): the datum faces measured again in each, P1, P2, P3. EQUATE/DA(P1),DA(P3)
+// then EQUATE/DA(P2),DA(P3) carries each set-up by its own motion, as the chain EQUATE/DA(P1),DA(P2)
+// then EQUATE/DA(P2),DA(P3) does: BORE2 (set-up 1), BOSS1 (set-up 2) and BORE1 (set-up 3) are where
+// the drawing puts them in P3. A set-up is what was measured between the PAUSEs around the earlier
+// system's first point: cut at the last PAUSE alone, EQUATE/DA(P1),DA(P3) would carry the boss of
+// set-up 2 by set-up 1's motion.
+TEST(PartSetups, EquateCarriesEachOfThreeSetupsByItsOwnMotion) {
+  const fs::path three = best_fit::written(
+      "block_three_setups.json",
+      "{\"extends\": \"" + world("block_two_setups.json").string() +
+          "\", \"part\": {\"setups\": [{\"translation_mm\": [600.8, 449.5, 0], \"rotation_deg\": [0, 0, 180.35]},"
+          "{\"translation_mm\": [250.3, 600.6, 0], \"rotation_deg\": [0, 0, 90.3]}]}}\n");
+  const std::string ex11 = part_setups::example11();
+  const auto begin = ex11.find("D(MACHINE) = DATSET/MCS\n");
+  const auto end = ex11.find("D(P2) = TRANS/ZORIG, -40\n");
+  ASSERT_TRUE(begin != std::string::npos && end != std::string::npos);
+  std::string third = ex11.substr(begin, end - begin) + "D(P3) = TRANS/ZORIG, -40\n";
+  third = best_fit::replaced(third, "D(FIX2) = TRANS/XORIG, 600, YORIG, 450, ZORIG, 0\nD(FIX2) = ROTATE/ZAXIS, 180\n",
+                             "D(FIX3) = TRANS/XORIG, 250, YORIG, 600, ZORIG, 0\nD(FIX3) = ROTATE/ZAXIS, 90\n");
+  for (const std::string name : {"TOP", "FRONT", "LEFT", "A", "B", "C", "S"})
+    for (std::size_t at = 0; (at = third.find("(" + name + "2)", at)) != std::string::npos;)
+      third.replace(at, name.size() + 3, "(" + name + "3)");
+  third = best_fit::replaced(third, "D(MACHINE)", "D(MACHINE3)");
+  third = "PAUSE\n" + third +
+          "%EQUATE%F(BORE1) = FEAT/CIRCLE, INNER, CART, 40, 50, 30, 0, 0, 1, 20\nMEAS/CIRCLE, F(BORE1), 6\n"
+          "ENDMES\nOUTPUT/FA(BORE2), FA(BOSS1), FA(BORE1)\nENDFIL\n";
+  const auto with = [&](const std::string& text, const std::string& equates) {
+    return best_fit::replaced(best_fit::replaced(text, "ENDFIL\n", third), "%EQUATE%", equates);
+  };
+  const std::string chained = with(ex11, "EQUATE/DA(P2), DA(P3)\n");
+  const std::string direct = with(best_fit::replaced(ex11, "\nEQUATE/DA(P1), DA(P2)\n", "\n"),
+                                  "EQUATE/DA(P1), DA(P3)\nEQUATE/DA(P2), DA(P3)\n");
+  for (const auto& [name, text] : {std::pair{"chained", chained}, std::pair{"direct", direct}}) {
+    const auto o =
+        run(best_fit::written(std::string("three_") + name + ".dmi", text), three, std::string("equate_three_") + name);
+    ASSERT_EQ(o.exit, RunExit::Completed) << name << "\n" << o.diagnostics;
+    EXPECT_NE(o.diagnostics.find("PAUSE: the virtual operator puts the part in its set-up 3"), std::string::npos)
+        << o.diagnostics;
+    for (const auto& [label, x, y] :
+         {std::tuple{"BORE2", 120.0, 30.0}, {"BOSS1", 120.0, 70.0}, {"BORE1", 40.0, 50.0}}) {
+      const auto* f = report(o.record, label);
+      ASSERT_TRUE(f && f->actual) << name << " " << label;
+      EXPECT_EQ(f->frame, "P3") << name << " " << label;
+      EXPECT_LT((f->actual->position.head<2>() - Eigen::Vector2d(x, y)).norm(), 3e-3)
+          << name << " " << label << " at " << f->actual->position.transpose();
+    }
+    if (std::string(name) == "direct") {
+      EXPECT_NE(o.diagnostics.find("DA(P2) carried onto DA(P3): 5 features and 2 coordinate systems"),
+                std::string::npos)
+          << o.diagnostics;
+      EXPECT_NE(o.diagnostics.find("the earlier set-up is what was measured after the PAUSE before DA(P2)'s first "
+                                   "point and before the PAUSE between them"),
+                std::string::npos)
+          << o.diagnostics;
+    }
+  }
+}
+
 // WRITE/DID(x) writes one line of values into an output file, kept in --out like every output.
 TEST(EndToEnd, WriteWritesLinesIntoAnOutputFile) {
   const fs::path dir = out_dir("write_program");

@@ -200,10 +200,11 @@ class MeasurementRuntime {
   /// DA(later) are the same part frame measured in each. The transformation T = later * earlier^-1
   /// carries what the earlier set-up measured to where it lies in the later one: every feature
   /// and datum whose actual rests on points taken before the cut (actual, points, nominal), and
-  /// every coordinate system resting on such points (the current one included). The cut is the
-  /// last PAUSE between DA(earlier)'s first point and DA(later)'s, else DA(later)'s first point.
-  /// A note tells the motion and how many were carried; a DMIS output file open gets the
-  /// statement as a comment line.
+  /// every coordinate system resting on such points (the current one included). With PAUSEs
+  /// between DA(earlier)'s first point and DA(later)'s, the earlier set-up is what was measured
+  /// between the PAUSEs around DA(earlier)'s first point (with what earlier EQUATEs carried into
+  /// it); without, what rests on points taken before DA(later)'s first point. A note tells the motion and how many were
+  /// carried; a DMIS output file open gets the statement as a comment line.
   Result<void> equate(const std::string& earlier, const std::string& later, Span span);
 
   // Constructions and outputs.
@@ -335,6 +336,9 @@ class MeasurementRuntime {
   std::map<std::string, Alignment> m_alignments;  ///< every D() defined, recallable
   std::map<std::string, Alignment> m_saved;       ///< SAVE/DA()
   std::vector<double> m_operator_stops_s;         ///< machine times of the PAUSEs, in order
+  /// The set-up each set-up's measurements are in now (index: the PAUSEs before them), as
+  /// EQUATE carried them; a set-up not listed is its own.
+  std::vector<std::size_t> m_setup_carried_to;
   Alignment m_alignment;
   std::optional<Vec3> m_program_home;  ///< FROM's home, machine coordinates; else the machine's own
   std::map<std::string, SensorDefinition> m_sensors;
