@@ -933,6 +933,20 @@ TEST(ShopPrograms, DiameterTolerancesAtMaxAndMin) {
       << tolerance(*r.session, "MN")->note;
 }
 
+namespace {
+
+// A touch of the boss of scan_lobed_circle.json (d 50 at machine (200, 300)) at `deg` round it and
+// height z, from 15 mm outside and over it.
+std::string boss_touch(double deg, double z) {
+  const double t = deg * std::numbers::pi / 180, c = std::cos(t), s = std::sin(t);
+  return fmt::format(
+      "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},{5}\n  PTMEAS/CART,{2:.6f},{3:.6f},{5},{4:.6f},{6:.6f},0\n"
+      "  GOTO/{0:.6f},{1:.6f},60\n",
+      200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, z, s);
+}
+
+}  // namespace
+
 // DIAMLP: ISO 14405-1's two-point size, against the hidden form of scan_lobed_circle.json's boss
 // (d 50, lobes of 2.5 um amplitude at 20 deg), touched at 12 points 30 deg apart, each opposite
 // another. With 3 lobes r(t) + r(t + 180) = 2R: odd lobing cancels in every two-point size (why a
@@ -945,13 +959,7 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
       "DMISMN/'lp', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
       "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
       "F(BOSS)=FEAT/CIRCLE,OUTER,CART,200,300,15,0,0,1,50\nMEAS/CIRCLE,F(BOSS),12\n";
-  for (int k = 0; k < 12; ++k) {
-    const double t = k * std::numbers::pi / 6, c = std::cos(t), s = std::sin(t);
-    text += fmt::format(
-        "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},15\n  PTMEAS/CART,{2:.6f},{3:.6f},15,{4:.6f},"
-        "{5:.6f},0\n  GOTO/{0:.6f},{1:.6f},60\n",
-        200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, s);
-  }
+  for (int k = 0; k < 12; ++k) text += boss_touch(30.0 * k, 15);
   text +=
       "ENDMES\nT(LP)=TOL/DIAM,-0.003,0.003,DIAMLP\nT(LS)=TOL/DIAM,-0.003,0.003\nT(MX)=TOL/DIAM,-0.003,0.003,MAX\n"
       "OUTPUT/FA(BOSS),TA(LP),TA(LS),TA(MX)\nENDFIL\n";
@@ -981,13 +989,7 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
       "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
       "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),12\n";
   for (const double z : {8.0, 22.0})
-    for (int k = 0; k < 6; ++k) {
-      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
-      cylinder += fmt::format(
-          "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},{5}\n  PTMEAS/CART,{2:.6f},{3:.6f},{5},"
-          "{4:.6f},{6:.6f},0\n  GOTO/{0:.6f},{1:.6f},60\n",
-          200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, z, s);
-    }
+    for (int k = 0; k < 6; ++k) cylinder += boss_touch(60.0 * k, z);
   cylinder += "ENDMES\nT(LP)=TOL/DIAM,-0.003,0.003,DIAMLP\nOUTPUT/FA(BOSS),TA(LP)\nENDFIL\n";
   const auto sections = run(cylinder, oval);
   ASSERT_EQ(sections.status, ExecStatus::Finished) << sections.diagnostics;
@@ -1050,13 +1052,7 @@ TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
       "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
       "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),10\n";
   for (const auto& [z, turn] : {std::pair{8.0, 0.0}, std::pair{22.0, 36.0}})
-    for (int k = 0; k < 5; ++k) {
-      const double t = (72.0 * k + turn) * std::numbers::pi / 180, c = std::cos(t), s = std::sin(t);
-      text += fmt::format(
-          "  GOTO/{0:.6f},{1:.6f},60\n  GOTO/{0:.6f},{1:.6f},{5}\n  PTMEAS/CART,{2:.6f},{3:.6f},{5},"
-          "{4:.6f},{6:.6f},0\n  GOTO/{0:.6f},{1:.6f},60\n",
-          200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, z, s);
-    }
+    for (int k = 0; k < 5; ++k) text += boss_touch(72.0 * k + turn, z);
   text += "ENDMES\nT(LP)=TOL/DIAM,-0.1,0.1,DIAMLP\nOUTPUT/FA(BOSS),TA(LP)\nENDFIL\n";
   const auto ran = run(text, taper);
   ASSERT_EQ(ran.status, ExecStatus::Finished) << ran.diagnostics;
