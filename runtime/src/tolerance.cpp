@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "detail/form_per_unit.hpp"
 #include "metron/runtime/alignment_ops.hpp"
 #include "metron/runtime/datum_frame.hpp"
 #include "metron/stdlib/fitting/minimum_zone.hpp"
@@ -586,8 +587,9 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
 
 // ---------------------------------------------------------------- form
 
-Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ReportUnits& units,
+Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                       ToleranceResult result) {
+  const ReportUnits& units = context.units;
   static constexpr Types k_flat = {FeatureType::Plane};
   static constexpr Types k_round = {FeatureType::Circle, FeatureType::Arc};
   static constexpr Types k_cylinder = {FeatureType::Cylinder};
@@ -632,6 +634,36 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const R
   }
   result.actual = result.value;
   set_limits(result, 0, spec.zone);
+  if (spec.unit_zone > 0 || spec.unit_length > 0) {
+    // Per unit area (length): a second zone every unit of the feature must meet; the result stays
+    // the whole feature's form, and is out of tolerance when either zone is exceeded.
+    const bool flat = spec.kind == ToleranceKind::Flat;
+    const Frame frame = context.alignment ? context.alignment->part_to_machine : Frame::Identity();
+    const Vec3 x = frame.linear().col(0), y = frame.linear().col(1);
+    const Vec3 normal = actual.value()->direction.normalized();
+    const Vec3 length_axis = std::abs(x.dot(normal)) < std::cos(30 * std::numbers::pi / 180) ? x : y;
+    const auto unit = flat ? flatness_per_unit_area(surface, normal, length_axis, spec.unit_length, spec.unit_width)
+                           : straightness_per_unit_length(surface, actual.value()->direction, plane, spec.unit_length);
+    const std::string area = flat ? fmt::format("per unit area {} x {}", length_text(spec.unit_length, units, 4),
+                                                length_text(spec.unit_width, units, 4))
+                                  : fmt::format("per unit length {}", length_text(spec.unit_length, units, 4));
+    if (!unit) {
+      result.in_tolerance = false;
+      add_note(result, fmt::format("{}: no unit holds {} points, so the zone per unit is not evaluated (OUT)", area,
+                                   flat ? "four" : "three"));
+    } else {
+      const bool unit_in = unit->form_mm <= spec.unit_zone + k_limit_slack;
+      const Vec3 at = frame.inverse() * unit->centre;  // in the reporting frame
+      result.in_tolerance = result.in_tolerance && unit_in;
+      add_note(result,
+               fmt::format("{}: the largest minimum zone {} (zone {}, {}), about ({}, {}, {}); {} distinct unit{}, {} "
+                           "judged by their minimum zone (the others' least-squares form is below it){}",
+                           area, length_text(unit->form_mm, units, 6), length_text(spec.unit_zone, units, 6),
+                           unit_in ? "IN" : "OUT", length_text(at.x(), units, 3), length_text(at.y(), units, 3),
+                           length_text(at.z(), units, 3), unit->units, unit->units == 1 ? "" : "s", unit->judged,
+                           unit->sampled ? "; the units' corners sampled: more points than the search takes" : ""));
+    }
+  }
   return result;
 }
 
@@ -1298,7 +1330,7 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Cirlty:
     case ToleranceKind::Cylcty:
     case ToleranceKind::Sphcty:
-    case ToleranceKind::Strght: return evaluate_form(spec, feature, context.units, std::move(result));
+    case ToleranceKind::Strght: return evaluate_form(spec, feature, context, std::move(result));
     case ToleranceKind::Perp:
     case ToleranceKind::Parlel: return evaluate_orientation(spec, feature, context, std::move(result));
     case ToleranceKind::Anglb: return evaluate_anglb(spec, features, context, std::move(result));

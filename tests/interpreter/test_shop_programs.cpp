@@ -1069,6 +1069,99 @@ TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
   EXPECT_NEAR(to, bottom, 5e-4) << lp->note;
 }
 
+// TOL/FLAT,t,tu,a[,b] and TOL/STRGHT,t,tu,l (DMIS 5.x; ASME Y14.5 form per unit area or length)
+// against the hidden waviness of a world written here: the default block's top face waved
+// a cos(2 pi x / 40) with a = 2 um (the perfect probe), touched on a 5 mm grid over x 10..90 in
+// three rows, and along one row as a LINE. Analytic truth: the whole face's minimum zone is 2a
+// (the grid holds the crests and troughs); the largest minimum zone of a cosine over a stretch
+// w <= half its wavelength is a (1 - cos(pi w / 40)), on a stretch centred on a crest (a brute-force
+// search over placements agrees): a for 20 mm, 0.2929 a for 10 mm.
+TEST(ShopPrograms, FormPerUnitAreaAndLengthAgainstAWavyFace) {
+  const fs::path wavy = write("wavy.json", "{\"extends\": \"" + (source_dir / "programs/worlds/perfect.json").string() +
+                                               "\", \"part\": {\"deviations\": {\"TOP\": {\"form\": {\"amplitude_mm\": "
+                                               "0.002, \"wavelength_mm\": 40, \"phase_deg\": 0}}}}}\n");
+  std::string text =
+      "DMISMN/'per unit', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,2\nSNSET/RETRCT,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nGOTO/10,3,60\n"
+      "F(TOP)=FEAT/PLANE,CART,80,50,40,0,0,1\nMEAS/PLANE,F(TOP),51\n";
+  for (const int y : {3, 6, 9})
+    for (int x = 10; x <= 90; x += 5) text += fmt::format("  PTMEAS/CART,{},{},40,0,0,1\n", x, y);
+  text +=
+      "ENDMES\nT(FL)=TOL/FLAT,0.005\nT(FLU)=TOL/FLAT,0.005,0.0015,20,20\nT(FLU2)=TOL/FLAT,0.005,0.0025,20,20\n"
+      "T(FLS)=TOL/FLAT,0.005,0.001,10\nT(FL25)=TOL/FLAT,0.005,0.003,25,25\nF(ROW)=FEAT/"
+      "LINE,BND,CART,10,6,40,90,6,40,0,-1,0\nMEAS/LINE,F(ROW),17\n";
+  for (int x = 10; x <= 90; x += 5) text += fmt::format("  PTMEAS/CART,{},6,40,0,0,1\n", x);
+  text +=
+      "ENDMES\nT(STU)=TOL/STRGHT,0.005,0.0015,20\nOUTPUT/FA(TOP),TA(FL),TA(FLU),TA(FLU2),TA(FLS),TA(FL25)\n"
+      "OUTPUT/FA(ROW),TA(STU)\nENDFIL\n";
+  ASSERT_EQ(check(text).errors, 0U) << check(text).text;
+  EXPECT_EQ(check(text).warnings, 0U) << check(text).text;
+  const auto ran = run(text, wavy);
+  ASSERT_EQ(ran.status, ExecStatus::Finished) << ran.diagnostics;
+  const double a = 0.002;
+  const auto per_unit = [](const metron::runtime::ToleranceResult& t) {
+    const auto at = t.note.find("the largest minimum zone ");
+    double v = -1;
+    if (at != std::string::npos) std::sscanf(t.note.c_str() + at, "the largest minimum zone %lf", &v);
+    return v;
+  };
+  for (const char* label : {"FL", "FLU", "FLU2", "FLS", "FL25", "STU"})
+    ASSERT_NE(tolerance(*ran.session, label), nullptr) << label;
+  const auto& whole = *tolerance(*ran.session, "FL");
+  EXPECT_NEAR(whole.value, 2 * a, 1e-6);
+  EXPECT_TRUE(whole.in_tolerance);
+  EXPECT_EQ(whole.note.find("per unit"), std::string::npos) << whole.note;
+  const auto& over = *tolerance(*ran.session, "FLU");
+  EXPECT_NEAR(over.value, 2 * a, 1e-6);  // the whole face's form, within its zone
+  EXPECT_NEAR(per_unit(over), a, 1e-6) << over.note;
+  EXPECT_FALSE(over.in_tolerance) << over.note;  // a unit's zone exceeded
+  const auto& within = *tolerance(*ran.session, "FLU2");
+  EXPECT_NEAR(per_unit(within), a, 1e-6) << within.note;
+  EXPECT_TRUE(within.in_tolerance) << within.note;
+  const auto& square = *tolerance(*ran.session, "FLS");  // three numbers: a square of 10
+  EXPECT_NEAR(per_unit(square), a * (1 - std::cos(std::numbers::pi / 4)), 1e-6) << square.note;
+  EXPECT_NE(square.note.find("per unit area 10.0000 x 10.0000"), std::string::npos) << square.note;
+  // 25 x 25 holds six touches of a row, never placed symmetrically about a crest: the truth is
+  // the largest Chebyshev (minimum-zone) line of the sampled profile over the windows, found here
+  // by a ternary search on the slope (the rows are alike, so the zone's plane does not tilt across
+  // them); the least-squares form of the worst window is 0.06 a more (1.34 a against 1.2828 a).
+  const auto chebyshev = [&](int x0) {
+    const auto width = [&](double slope) {
+      double lo = 1e9, hi = -1e9;
+      for (int x = x0; x <= x0 + 25; x += 5) {
+        const double r = a * std::cos(2 * std::numbers::pi * x / 40) - slope * x;
+        lo = std::min(lo, r);
+        hi = std::max(hi, r);
+      }
+      return hi - lo;
+    };
+    double lo = -1, hi = 1;
+    for (int i = 0; i < 200; ++i) {
+      const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+      if (width(m1) < width(m2))
+        hi = m2;
+      else
+        lo = m1;
+    }
+    return width((lo + hi) / 2);
+  };
+  double worst = 0;
+  for (int x0 = 10; x0 + 25 <= 90; x0 += 5) worst = std::max(worst, chebyshev(x0));
+  EXPECT_NEAR(worst, 1.2828 * a, 1e-4 * a);
+  EXPECT_NEAR(per_unit(*tolerance(*ran.session, "FL25")), worst, 1e-6) << tolerance(*ran.session, "FL25")->note;
+  const auto& row = *tolerance(*ran.session, "STU");
+  EXPECT_NEAR(row.value, 2 * a, 1e-6);
+  EXPECT_NEAR(per_unit(row), a, 1e-6) << row.note;
+  EXPECT_FALSE(row.in_tolerance) << row.note;
+
+  // The unit's sides must be positive; two numbers are not a per-unit form (the second is told unused).
+  const std::string head = "DMISMN/'u', 5.0\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\n";
+  EXPECT_TRUE(
+      check(head + "T(A)=TOL/FLAT,0.01,0.005,-10\nENDFIL\n").has("the unit area's side of TOL/FLAT must be positive"));
+  EXPECT_TRUE(check(head + "T(A)=TOL/FLAT,0.01,0.005\nENDFIL\n").has("the 1 number after it is not used"));
+  EXPECT_TRUE(check(head + "T(A)=TOL/STRGHT,0.01,-0.005,10\nENDFIL\n").has("a tolerance zone must not be negative"));
+}
+
 // F(p)=FEAT/PATERN,F(a),F(b),...: a pattern of features. OUTPUT/FA(p) is the OUTPUT of its
 // features, in order (a composite position judges them together); elsewhere it is an error.
 TEST(ShopPrograms, APatternIsOutputAsItsFeatures) {

@@ -602,7 +602,20 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
-  if (kind != ToleranceKind::Compos && numbers.size() > need.count) {
+  // TOL/FLAT,t,tu,a[,b] and TOL/STRGHT,t,tu,l: a zone per unit area (a x b; a square of a) or per
+  // unit length (DMIS 5.x; ASME Y14.5 "per unit" form).
+  const bool per_unit = (kind == ToleranceKind::Flat && (numbers.size() == 3 || numbers.size() == 4)) ||
+                        (kind == ToleranceKind::Strght && numbers.size() == 3);
+  if (per_unit) {
+    if (!std::isnan(numbers[1]) && numbers[1] < 0)
+      return error(p[2].span, "sema.negative-zone", "a tolerance zone must not be negative");
+    for (std::size_t k = 2; k < numbers.size(); ++k)
+      if (!std::isnan(numbers[k]) && !(numbers[k] > 0))
+        return error(p[k + 1].span, "sema.unit-size",
+                     fmt::format("the unit {} of TOL/{} must be positive",
+                                 kind == ToleranceKind::Flat ? "area's side" : "length", word));
+  }
+  if (kind != ToleranceKind::Compos && !per_unit && numbers.size() > need.count) {
     // TOL/FLAT,0.1,0.2 (a per-unit zone, a vendor's extra): the numbers past the form's were
     // dropped unseen.
     const std::size_t extra = numbers.size() - need.count;

@@ -272,6 +272,17 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
       t.zone = nums[0] * len;
       t.feature_zone = nums[1] * len;
       break;
+    case K::Flat:
+    case K::Strght:
+      t.zone = nums[0] * len;
+      if (nums.size() >= 3) {  // FLAT,t,tu,a[,b] and STRGHT,t,tu,l: a zone per unit area or length
+        t.unit_zone = nums[1] * len;
+        t.unit_length = nums[2] * len;
+        t.unit_width = nums.size() >= 4 ? nums[3] * len : t.unit_length;
+        if (!(t.unit_zone >= 0 && t.unit_length > 0 && t.unit_width > 0))
+          return vm.fail(in.span, "a zone per unit must not be negative, and the unit's sides must be positive");
+      }
+      break;
     default: t.zone = nums[0] * len; break;
   }
   if (auto r = vm.m_runtime.define_tolerance(t); !r) return vm.from_runtime(r.error());

@@ -87,6 +87,12 @@ struct ToleranceSpec {
   DistanceExtent extent = DistanceExtent::Average;
   /// DIAM|RAD,lo,up,DIAMLP: the two-point sizes (ISO 14405-1 LP), not the least-squares size.
   bool two_point_size = false;
+  /// FLAT,t,tu,a,b and STRGHT,t,tu,l: the form within every unit area a x b (unit length l) must
+  /// also lie within `unit_zone` (0: no per-unit zone). a runs along the reporting frame's X
+  /// projected onto the plane (its Y when X is within 30 deg of the plane's normal).
+  double unit_zone = 0;
+  double unit_length = 0;
+  double unit_width = 0;
   MaterialCondition condition = MaterialCondition::Rfs;
   std::vector<std::string> datums;  ///< DAT() labels referenced (COMPOS: the PATERN tier's)
   /// POS: each datum's material condition (`DAT(B),MMC`), one per `datums`; empty: all RFS. A
