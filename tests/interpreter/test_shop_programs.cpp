@@ -1664,8 +1664,8 @@ TEST(ShopPrograms, GenericSurfacePointsAreJudgedAlongTheirOwnNormals) {
       "F(EDGE) = FEAT/GCURVE, CART, 60, 50, 40, 0, 1, 0\nMEAS/GCURVE, F(EDGE), 3\n"
       "  PTMEAS/CART, 60, 20, 40, 0, 0, 1\n  PTMEAS/CART, 60, 50, 40, 0, 0, 1\n  PTMEAS/CART, 60, 80, 40, 0, 0, "
       "1\nENDMES\n"
-      "T(SURF) = TOL/PROFS, -0.02, 0.02\nT(LINE) = TOL/PROFL, -0.005, 0.005\n"
-      "OUTPUT/FA(SKIN), TA(SURF)\nOUTPUT/FA(EDGE), TA(LINE)\nENDFIL\n";
+      "T(SURF) = TOL/PROFS, -0.02, 0.02\nT(LINE) = TOL/PROFL, -0.005, 0.005\nT(ZONE) = TOL/PROFS, 0.04\n"
+      "OUTPUT/FA(SKIN), TA(SURF), TA(ZONE)\nOUTPUT/FA(EDGE), TA(LINE)\nENDFIL\n";
   const auto r = run(text, source_dir / "programs/worlds/block_width.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* skin = report(*r.session, "SKIN");
@@ -1678,6 +1678,17 @@ TEST(ShopPrograms, GenericSurfacePointsAreJudgedAlongTheirOwnNormals) {
   // TOP, where it was designed: its points deviate by the probe's noise only.
   EXPECT_TRUE(surf->note.find("min +0.000") != std::string::npos || surf->note.find("min -0.000") != std::string::npos)
       << surf->note;
+  // One number (a shop's short form) is a zone of that width centred on the profile, told once.
+  const auto* zone = tolerance(*r.session, "ZONE");
+  ASSERT_TRUE(zone);
+  EXPECT_DOUBLE_EQ(zone->value, surf->value);
+  EXPECT_DOUBLE_EQ(zone->lower, surf->lower);
+  EXPECT_DOUBLE_EQ(zone->upper, surf->upper);
+  EXPECT_NEAR(zone->upper, 0.02, 1e-12);
+  EXPECT_TRUE(check(text).has("the one number is read as a zone of that width centred on the nominal profile"))
+      << check(text).text;
+  EXPECT_TRUE(check("DMISMN/'p', 5.0\nF(S)=FEAT/GSURF\nT(Z)=TOL/PROFS,-0.04\nENDFIL\n")
+                  .has("a tolerance zone must not be negative"));
   const auto* line = tolerance(*r.session, "LINE");
   ASSERT_TRUE(line);
   EXPECT_NEAR(line->value, 0.0, 1e-3);

@@ -556,8 +556,20 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       in.operands.push_back(expr_operand(std::move(*e)));
     }
   }
-  const ToleranceNumbers need =
+  ToleranceNumbers need =
       limit_form ? ToleranceNumbers{2, "the lower and upper limit of the distance", false} : tolerance_numbers(kind);
+  // TOL/PROFS|PROFL|PROFP,t[,DAT...]: one number is the zone's width, centred on the nominal
+  // profile as ISO 1101 draws it (-t/2, +t/2); DMIS writes the two limits.
+  const bool profile = kind == ToleranceKind::Profs || kind == ToleranceKind::Profl || kind == ToleranceKind::Profp;
+  if (profile && numbers.size() == 1) {
+    if (!std::isnan(numbers[0]) && numbers[0] < 0)
+      return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
+    warn(p[0].span, "sema.profile-zone",
+         fmt::format("TOL/{} takes the lower and upper tolerance; the one number is read as a zone of that width "
+                     "centred on the nominal profile (-{} / 2, +{} / 2), as ISO 1101 draws it",
+                     word, numbers[0], numbers[0]));
+    need = ToleranceNumbers{1, "the tolerance zone", true};
+  }
   if (numbers.size() < need.count)
     return error(p.back().span, "sema.tolerance-arity",
                  fmt::format("TOL/{} expects {} ({} number{}), got {}", word, need.meaning, need.count,
@@ -571,7 +583,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
        kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
        kind == ToleranceKind::Width || kind == ToleranceKind::Angl) &&
-      numbers[0] > numbers[1])
+      numbers.size() > 1 && numbers[0] > numbers[1])
     return error(p[2].span, "sema.tolerance-order",
                  fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
   if (limit_form && numbers[0] > numbers[1])

@@ -226,11 +226,20 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
   }
   using K = runtime::ToleranceKind;
   switch (t.kind) {
-    case K::Diam:
-    case K::Width:
     case K::Profs:
     case K::Profl:
     case K::Profp:
+      if (nums.size() == 1) {  // one number: a zone of that width centred on the profile (the compiler warned)
+        if (nums[0] < 0) return vm.fail(in.span, "a tolerance zone must not be negative");
+        t.lower = -nums[0] / 2 * len;
+        t.upper = nums[0] / 2 * len;
+        break;
+      }
+      t.lower = nums[0] * len;
+      t.upper = nums[1] * len;
+      break;
+    case K::Diam:
+    case K::Width:
       t.lower = nums[0] * len;
       t.upper = nums[1] * len;
       break;
