@@ -998,6 +998,30 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   EXPECT_NEAR(std::abs(lp_cylinder->actual - 50.0), 2 * 0.0025 * std::cos(20 * std::numbers::pi / 180), 5e-4);
   EXPECT_NE(lp_cylinder->note.find("at 12 of the 12 measured points"), std::string::npos) << lp_cylinder->note;
 
+  // Five touches 72 deg apart have no opposite touch: each point's opposite radius is interpolated
+  // midway between the touches 36 deg either side of it. On the oval, r(t) = R + a cos 2(t - 20),
+  // the pair of neighbours averages to R + a cos 2(t + 180 - 20) cos 72 deg, so the sizes are
+  // 2R + a (1 + cos 72 deg) cos 2(t - 20): the method's own reading of five points (the true
+  // two-point sizes, 2R + 2a cos 2(t - 20), are underestimated by the factor (1 + cos 72) / 2 =
+  // 0.65; docs/tolerances.md). At t = 72 k: the largest at t = 216, the smallest at t = 288.
+  std::string five = text.substr(0, text.find("MEAS/CIRCLE")) + "MEAS/CIRCLE,F(BOSS),5\n";
+  for (int k = 0; k < 5; ++k) five += boss_touch(72.0 * k, 15);
+  five += "ENDMES\nT(LP)=TOL/DIAM,-0.01,0.01,DIAMLP\nOUTPUT/FA(BOSS),TA(LP)\nENDFIL\n";
+  const auto odd = run(five, oval);
+  ASSERT_EQ(odd.status, ExecStatus::Finished) << odd.diagnostics;
+  const auto* lp_odd = tolerance(*odd.session, "LP");
+  ASSERT_NE(lp_odd, nullptr) << odd.diagnostics;
+  const auto size_at = [](double deg) {
+    const double rad = std::numbers::pi / 180;
+    return 50 + 0.0025 * (1 + std::cos(72 * rad)) * std::cos(2 * (deg - 20) * rad);
+  };
+  double from = 0, to = 0;
+  const auto at = lp_odd->note.find("run from ");
+  ASSERT_NE(at, std::string::npos) << lp_odd->note;
+  ASSERT_EQ(std::sscanf(lp_odd->note.c_str() + at, "run from %lf to %lf", &from, &to), 2) << lp_odd->note;
+  EXPECT_NEAR(from, size_at(288), 5e-4) << lp_odd->note;
+  EXPECT_NEAR(to, size_at(216), 5e-4) << lp_odd->note;
+
   // A cylinder's sections each give their own sizes: the default block's 90 deg countersink (apex
   // 8 mm below the top) read as a CYLNDR touched at 4 and 6 mm above its apex by a 2 mm ball moving
   // across the axis, 6 points 60 deg apart in each (the points of the two sections at the same
