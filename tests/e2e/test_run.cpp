@@ -679,19 +679,15 @@ TEST(PartSetups, EquateCutsTheSetupsAtThePause) {
   EXPECT_LT(dmo.find("$$ EQUATE/"), dmo.find("OUTPUT/FA(BORE2), FA(SPHERE1), FA(SPHERE1B)"));
 }
 
-// A part in three set-ups (the world of block_two_setups.json with a third, turned 90.3 deg, at the
-// program's second PAUSE): the datum faces measured again in each, P1, P2, P3. EQUATE/DA(P1),DA(P3)
+// A part in three set-ups (block_three_setups.json: block_two_setups.json's with a third, turned
+// 90.3 deg, at the program's second PAUSE): the datum faces measured again in each, P1, P2, P3. EQUATE/DA(P1),DA(P3)
 // then EQUATE/DA(P2),DA(P3) carries each set-up by its own motion, as the chain EQUATE/DA(P1),DA(P2)
 // then EQUATE/DA(P2),DA(P3) does: BORE2 (set-up 1), BOSS1 (set-up 2) and BORE1 (set-up 3) are where
 // the drawing puts them in P3. A set-up is what was measured between the PAUSEs around the earlier
 // system's first point: cut at the last PAUSE alone, EQUATE/DA(P1),DA(P3) would carry the boss of
 // set-up 2 by set-up 1's motion.
 TEST(PartSetups, EquateCarriesEachOfThreeSetupsByItsOwnMotion) {
-  const fs::path three = best_fit::written(
-      "block_three_setups.json",
-      "{\"extends\": \"" + world("block_two_setups.json").string() +
-          "\", \"part\": {\"setups\": [{\"translation_mm\": [600.8, 449.5, 0], \"rotation_deg\": [0, 0, 180.35]},"
-          "{\"translation_mm\": [250.3, 600.6, 0], \"rotation_deg\": [0, 0, 90.3]}]}}\n");
+  const fs::path three = world("block_three_setups.json");
   const std::string ex11 = part_setups::example11();
   const auto begin = ex11.find("D(MACHINE) = DATSET/MCS\n");
   const auto end = ex11.find("D(P2) = TRANS/ZORIG, -40\n");
