@@ -648,9 +648,11 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const T
                                                 length_text(spec.unit_width, units, 4))
                                   : fmt::format("per unit length {}", length_text(spec.unit_length, units, 4));
     if (!unit) {
-      result.in_tolerance = false;
-      add_note(result, fmt::format("{}: no unit holds {} points, so the zone per unit is not evaluated (OUT)", area,
-                                   flat ? "four" : "three"));
+      // Three points always lie in a plane: the points say nothing against the zone per unit,
+      // and nothing for it either; the result is the whole feature's, and the note says why.
+      add_note(result, fmt::format("{}: not evaluated, no unit holds {} of the measured points (they lie farther "
+                                   "apart than a unit: measure them closer to judge it)",
+                                   area, flat ? "four" : "three"));
     } else {
       const bool unit_in = unit->form_mm <= spec.unit_zone + k_limit_slack;
       const Vec3 at = frame.inverse() * unit->centre;  // in the reporting frame

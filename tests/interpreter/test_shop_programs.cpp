@@ -1112,11 +1112,12 @@ TEST(ShopPrograms, FormPerUnitAreaAndLengthAgainstAWavyFace) {
     for (int x = 10; x <= 90; x += 5) text += fmt::format("  PTMEAS/CART,{},{},40,0,0,1\n", x, y);
   text +=
       "ENDMES\nT(FL)=TOL/FLAT,0.005\nT(FLU)=TOL/FLAT,0.005,0.0015,20,20\nT(FLU2)=TOL/FLAT,0.005,0.0025,20,20\n"
-      "T(FLS)=TOL/FLAT,0.005,0.001,10\nT(FL25)=TOL/FLAT,0.005,0.003,25,25\nF(ROW)=FEAT/"
+      "T(FLS)=TOL/FLAT,0.005,0.001,10\nT(FL25)=TOL/FLAT,0.005,0.003,25,25\nT(FLN)=TOL/"
+      "FLAT,0.005,0.0001,3,3\nF(ROW)=FEAT/"
       "LINE,BND,CART,10,6,40,90,6,40,0,-1,0\nMEAS/LINE,F(ROW),17\n";
   for (int x = 10; x <= 90; x += 5) text += fmt::format("  PTMEAS/CART,{},6,40,0,0,1\n", x);
   text +=
-      "ENDMES\nT(STU)=TOL/STRGHT,0.005,0.0015,20\nOUTPUT/FA(TOP),TA(FL),TA(FLU),TA(FLU2),TA(FLS),TA(FL25)\n"
+      "ENDMES\nT(STU)=TOL/STRGHT,0.005,0.0015,20\nOUTPUT/FA(TOP),TA(FL),TA(FLU),TA(FLU2),TA(FLS),TA(FL25),TA(FLN)\n"
       "OUTPUT/FA(ROW),TA(STU)\nENDFIL\n";
   ASSERT_EQ(check(text).errors, 0U) << check(text).text;
   EXPECT_EQ(check(text).warnings, 0U) << check(text).text;
@@ -1129,7 +1130,7 @@ TEST(ShopPrograms, FormPerUnitAreaAndLengthAgainstAWavyFace) {
     if (at != std::string::npos) std::sscanf(t.note.c_str() + at, "the largest minimum zone %lf", &v);
     return v;
   };
-  for (const char* label : {"FL", "FLU", "FLU2", "FLS", "FL25", "STU"})
+  for (const char* label : {"FL", "FLU", "FLU2", "FLS", "FL25", "FLN", "STU"})
     ASSERT_NE(tolerance(*ran.session, label), nullptr) << label;
   const auto& whole = *tolerance(*ran.session, "FL");
   EXPECT_NEAR(whole.value, 2 * a, 1e-6);
@@ -1173,6 +1174,12 @@ TEST(ShopPrograms, FormPerUnitAreaAndLengthAgainstAWavyFace) {
   for (int x0 = 10; x0 + 25 <= 90; x0 += 5) worst = std::max(worst, chebyshev(x0));
   EXPECT_NEAR(worst, 1.2828 * a, 1e-4 * a);
   EXPECT_NEAR(per_unit(*tolerance(*ran.session, "FL25")), worst, 1e-6) << tolerance(*ran.session, "FL25")->note;
+  // Units of 3 x 3 between touches 5 mm apart hold at most one: nothing to judge, and said so.
+  const auto& sparse = *tolerance(*ran.session, "FLN");
+  EXPECT_TRUE(sparse.in_tolerance) << sparse.note;
+  EXPECT_NE(sparse.note.find("per unit area 3.0000 x 3.0000: not evaluated, no unit holds four of the measured points"),
+            std::string::npos)
+      << sparse.note;
   const auto& row = *tolerance(*ran.session, "STU");
   EXPECT_NEAR(row.value, 2 * a, 1e-6);
   EXPECT_NEAR(per_unit(row), a, 1e-6) << row.note;
