@@ -191,6 +191,21 @@ bool has_axis(FeatureType type) {
 
 // ---------------------------------------------------------------- size
 
+// A cylinder's points in sections: sorted by their height along the axis, a new section where
+// consecutive heights part by more than 5% of their whole range (a helical scan is one section).
+std::vector<std::vector<std::size_t>> sections_by_height(const std::vector<double>& heights) {
+  std::vector<std::size_t> order(heights.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return heights[a] < heights[b]; });
+  std::vector<std::vector<std::size_t>> sections;
+  const double range = order.empty() ? 0.0 : heights[order.back()] - heights[order.front()];
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    if (k == 0 || heights[order[k]] - heights[order[k - 1]] > 0.05 * range + 1e-9) sections.emplace_back();
+    sections.back().push_back(order[k]);
+  }
+  return sections;
+}
+
 // ISO 14405-1's two-point size (LP) at each measured point: its distance to the opposite point of
 // the profile on the line through the least-squares centre, in the section normal to the axis it
 // lies in. The opposite point's radius is interpolated linearly in angle between the measured
@@ -205,18 +220,21 @@ tl::expected<std::vector<double>, std::string> two_point_sizes(const Geometry& g
     double height, angle, radius;
   };
   std::vector<Polar> polar;
+  std::vector<double> heights;
   for (const MeasuredPoint& p : points) {
     const Vec3 d = p.surface_mm() - g.position;
     const Vec3 across = d - d.dot(axis) * axis;
     polar.push_back({d.dot(axis), std::atan2(across.dot(v), across.dot(u)), across.norm()});
+    heights.push_back(d.dot(axis));
   }
-  std::sort(polar.begin(), polar.end(), [](const Polar& a, const Polar& b) { return a.height < b.height; });
   std::vector<std::vector<Polar>> sections;
-  const double range = polar.empty() ? 0.0 : polar.back().height - polar.front().height;
-  for (std::size_t i = 0; i < polar.size(); ++i) {
-    if (i == 0 || (g.type == FeatureType::Cylinder && polar[i].height - polar[i - 1].height > 0.05 * range + 1e-9))
+  if (g.type == FeatureType::Cylinder) {
+    for (const auto& indices : sections_by_height(heights)) {
       sections.emplace_back();
-    sections.back().push_back(polar[i]);
+      for (const std::size_t i : indices) sections.back().push_back(polar[i]);
+    }
+  } else if (!polar.empty()) {
+    sections.push_back(polar);
   }
   constexpr double two_pi = 2 * std::numbers::pi;
   const auto wrapped = [&](double a) { return a - two_pi * std::floor(a / two_pi); };  // [0, 2 pi)
@@ -587,6 +605,71 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
 
 // ---------------------------------------------------------------- form
 
+// STRGHT of a CYLNDR: the straightness of its derived median line (ISO 1101 and ISO 14660-2: the
+// centres of its sections' least-squares circles; ASME Y14.5-2018 5.4.1.4, the axis of a feature
+// of size): the sections as sections_by_height groups the points, each circle in the plane normal
+// to the least-squares axis, and the zone the narrowest cylinder about a line that holds every
+// centre (a zone of diameter t, as a drawing's straightness with a diameter sign gives it).
+// MMC/LMC: the zone grows by the size's departure from that condition (material_bonus).
+Outcome evaluate_axis_straightness(const ToleranceSpec& spec, const Feature& feature, const ReportUnits& units,
+                                   ToleranceResult result) {
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  if (feature.points.empty())
+    return Error(
+        fmt::format("feature {} has no measured points: the straightness of its axis needs the centres of "
+                    "its sections",
+                    feature.label));
+  const Vec3 axis = (*actual)->direction.norm() > 1e-12 ? Vec3((*actual)->direction.normalized()) : Vec3::UnitZ();
+  std::vector<Vec3> surface;
+  std::vector<double> heights;
+  for (const MeasuredPoint& p : feature.points) {
+    surface.push_back(p.surface_mm());
+    heights.push_back((surface.back() - (*actual)->position).dot(axis));
+  }
+  std::vector<Vec3> centres;
+  std::size_t skipped = 0;
+  for (const auto& section : sections_by_height(heights)) {
+    std::vector<Vec3> ring;
+    for (const std::size_t i : section) ring.push_back(surface[i]);
+    fitting::FitOptions options;
+    options.direction_hint = axis;
+    options.circle_in_plane_of_hint = true;
+    const auto circle =
+        ring.size() >= 3
+            ? fitting::fit(fitting::Shape::Circle, ring, options)
+            : tl::expected<fitting::FitResult, fitting::FitFailure>(tl::unexpected(fitting::FitFailure::TooFewPoints));
+    if (circle)
+      centres.push_back(circle->position);
+    else
+      ++skipped;
+  }
+  if (centres.size() < 2)
+    return Error(
+        fmt::format("feature {}'s points lie in {} section{} with a circle (three points or more at one "
+                    "height along the axis): the straightness of its axis needs two at least",
+                    feature.label, centres.size(), centres.size() == 1 ? "" : "s"));
+  double zone_mm = 0;
+  if (centres.size() > 2) {
+    const auto mz = fitting::minimum_zone(fitting::Shape::Line, centres);
+    const auto ls = fitting::fit(fitting::Shape::Line, centres);
+    zone_mm = mz ? mz->form_mm : ls ? ls->form_mm : 0.0;
+  }
+  result.value = zone_mm;
+  result.actual = zone_mm;
+  const auto bonus = material_bonus(spec.condition, feature.nominal, **actual, units, result);
+  if (!bonus) return Error(bonus.error());
+  add_note(result, fmt::format("the axis (derived median line): the centres of {} section{}{}, within a cylinder of "
+                               "diameter {} about a line (minimum zone, ISO 1101){}",
+                               centres.size(), centres.size() == 1 ? "" : "s",
+                               skipped > 0 ? fmt::format(" ({} with fewer than three points left out)", skipped) : "",
+                               length_text(zone_mm, units, 6),
+                               centres.size() == 2 ? ": two centres always lie on a line" : ""));
+  set_limits(result, 0, spec.zone + *bonus);
+  if (spec.unit_zone > 0) add_note(result, "the zone per unit length is not evaluated on an axis");
+  return result;
+}
+
 Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                       ToleranceResult result) {
   const ReportUnits& units = context.units;
@@ -601,7 +684,7 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const T
                       : spec.kind == ToleranceKind::Strght ? k_line
                                                            : k_flat;
   if (spec.kind == ToleranceKind::Strght && feature.nominal.type == FeatureType::Cylinder)
-    return Error("STRGHT applies to a line; the axis straightness of a CYLNDR is not available");
+    return evaluate_axis_straightness(spec, feature, context.units, std::move(result));
   if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
@@ -1278,7 +1361,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Cirlty: return in({T::Circle, T::Arc});
     case ToleranceKind::Cylcty: return in({T::Cylinder});
     case ToleranceKind::Sphcty: return in({T::Sphere});
-    case ToleranceKind::Strght: return in({T::Line});
+    case ToleranceKind::Strght: return in({T::Line, T::Cylinder});
     case ToleranceKind::Pos:
     case ToleranceKind::Compos:
       return in(

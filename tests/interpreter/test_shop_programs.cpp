@@ -1054,10 +1054,10 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
 
 // A cylinder's two-point sizes are taken section by section: a boss tapering 0.2 deg (a cone whose
 // apex lies 7 m above, hidden truth of the world written here) touched at 5 points 72 deg apart at
-// z 8 and at z 22, the second section turned 36 deg, so a point's opposite lies in the other
-// section only. Per section (a circle: the opposite radius interpolated between equal radii) the
-// sizes are the section's diameters, 50 +- 2 x 7 tan 0.2 deg = 50 +- 0.04887; taken as one
-// section they would all be the sections' mean, 50.
+// z 8, 15 and 22, turned 0, 18 and 36 deg, so a point's opposite at z 8 lies at z 22 only. Per
+// section (a circle: the opposite radius interpolated between equal radii) the sizes are the
+// section's diameters, 50 +- 2 x 7 tan 0.2 deg = 50 +- 0.04887 at the ends; taken as one section
+// those of z 8 and 22 would all be their mean, 50.
 TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
   const fs::path lobed = source_dir / "programs/worlds/scan_lobed_circle.json";
   const double tan_taper = std::tan(0.2 * std::numbers::pi / 180);
@@ -1074,10 +1074,11 @@ TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
   std::string text =
       "DMISMN/'taper', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
       "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
-      "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),10\n";
-  for (const auto& [z, turn] : {std::pair{8.0, 0.0}, std::pair{22.0, 36.0}})
+      "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),15\n";
+  for (const auto& [z, turn] : {std::pair{8.0, 0.0}, std::pair{15.0, 18.0}, std::pair{22.0, 36.0}})
     for (int k = 0; k < 5; ++k) text += boss_touch(72.0 * k + turn, z);
-  text += "ENDMES\nT(LP)=TOL/DIAM,-0.1,0.1,DIAMLP\nOUTPUT/FA(BOSS),TA(LP)\nENDFIL\n";
+  text += "ENDMES\nT(LP)=TOL/DIAM,-0.1,0.1,DIAMLP\nT(ST)=TOL/STRGHT,0.002\nOUTPUT/FA(BOSS),TA(LP),TA(ST)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0U) << check(text).text;  // STRGHT of a CYLNDR: its axis
   const auto ran = run(text, taper);
   ASSERT_EQ(ran.status, ExecStatus::Finished) << ran.diagnostics;
   const auto* lp = tolerance(*ran.session, "LP");
@@ -1091,6 +1092,13 @@ TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
   ASSERT_EQ(std::sscanf(lp->note.c_str() + at, "run from %lf to %lf", &from, &to), 2) << lp->note;
   EXPECT_NEAR(from, top, 5e-4) << lp->note;
   EXPECT_NEAR(to, bottom, 5e-4) << lp->note;
+  // The taper's axis is straight (a cone's): the three sections' centres lie on a line, but for
+  // the probe's scatter.
+  const auto* straight = tolerance(*ran.session, "ST");
+  ASSERT_NE(straight, nullptr) << ran.diagnostics;
+  EXPECT_LT(straight->value, 1e-3) << straight->note;
+  EXPECT_TRUE(straight->in_tolerance) << straight->note;
+  EXPECT_NE(straight->note.find("the centres of 3 sections"), std::string::npos) << straight->note;
 }
 
 // TOL/FLAT,t,tu,a[,b] and TOL/STRGHT,t,tu,l (DMIS 5.x; ASME Y14.5 form per unit area or length)

@@ -158,6 +158,48 @@ TEST(ToleranceForm, FormValueAgainstTheZone) {
   EXPECT_FALSE(evaluate(s, {&pl})->in_tolerance);
 }
 
+// STRGHT of a CYLNDR: its axis, the centres of its sections. A pin of diameter 10 touched at 8
+// points in each of three sections (z 0, 10, 20) whose centres are (0, 0), (d, 0), (0, 0): the
+// narrowest cylinder about a line holding the three centres is the narrowest strip of their
+// triangle in its plane, its least altitude, d (the other two are near 2d). Two sections: their
+// centres lie on a line, 0. MMC adds the pin's departure from its MMC size (the nominal 10).
+TEST(ToleranceForm, StraightnessOfACylindersAxisIsItsSectionCentres) {
+  const double d = 0.01;
+  const auto pin = [&](const std::vector<std::pair<double, Vec3>>& sections, double diameter) {
+    const Geometry nominal = round(FeatureType::Cylinder, Side::Outer, {0, 0, 10}, Vec3::UnitZ(), 10, 20);
+    Geometry actual = round(FeatureType::Cylinder, Side::Outer, {0, 0, 10}, Vec3::UnitZ(), diameter, 20);
+    Feature f = feature("PIN", nominal, actual);
+    f.fit = FitFigures{{}, 0.0, 0.0};
+    for (const auto& [z, centre] : sections)
+      for (int k = 0; k < 8; ++k) {
+        const Vec3 out(std::cos(k * k_pi / 4), std::sin(k * k_pi / 4), 0);
+        f.points.push_back(probed(centre + Vec3(0, 0, z) + diameter / 2 * out, out));
+      }
+    return f;
+  };
+  const Feature bent = pin({{0, {0, 0, 0}}, {10, {d, 0, 0}}, {20, {0, 0, 0}}}, 10);
+  ToleranceSpec s = spec(ToleranceKind::Strght);
+  s.zone = 0.012;
+  const auto r = evaluate(s, {&bent});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, d, 1e-6) << r->note;
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_NE(r->note.find("the centres of 3 sections"), std::string::npos) << r->note;
+  s.zone = 0.008;
+  EXPECT_FALSE(evaluate(s, {&bent})->in_tolerance);
+  // At MMC a pin 0.004 under its MMC size (taken as the nominal 10) gets 0.004 more.
+  const Feature thin = pin({{0, {0, 0, 0}}, {10, {d, 0, 0}}, {20, {0, 0, 0}}}, 9.996);
+  s.condition = MaterialCondition::Mmc;
+  const auto bonus = evaluate(s, {&thin});
+  ASSERT_TRUE(bonus) << bonus.error();
+  EXPECT_NEAR(bonus->upper, 0.012, 1e-9);
+  EXPECT_TRUE(bonus->in_tolerance) << bonus->note;
+  const Feature two = pin({{0, {0, 0, 0}}, {20, {d, 0, 0}}}, 10);
+  s.condition = MaterialCondition::Rfs;
+  EXPECT_NEAR(evaluate(s, {&two})->value, 0.0, 1e-12);
+  EXPECT_TRUE(tolerance_applies(ToleranceKind::Strght, FeatureType::Cylinder));
+}
+
 TEST(ToleranceForm, EachFormAppliesToItsShape) {
   const Geometry cyl = round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 20);
   Feature c = feature("CYL1", cyl, cyl);
@@ -166,7 +208,7 @@ TEST(ToleranceForm, EachFormAppliesToItsShape) {
   EXPECT_EQ(evaluate(spec(ToleranceKind::Cirlty), {&c}).error(), "CIRLTY applies to a circle or arc, not to a CYLNDR");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Sphcty), {&c}).error(), "SPHCTY applies to a sphere, not to a CYLNDR");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Strght), {&c}).error(),
-            "STRGHT applies to a line; the axis straightness of a CYLNDR is not available");
+            "feature CYL1 has no measured points: the straightness of its axis needs the centres of its sections");
   ToleranceSpec s = spec(ToleranceKind::Cylcty);
   s.zone = 0.004;
   const auto r = evaluate(s, {&c});
