@@ -670,6 +670,53 @@ Outcome evaluate_axis_straightness(const ToleranceSpec& spec, const Feature& fea
   return result;
 }
 
+// CIRLTY of a CYLNDR or CONE: ISO 1101 roundness holds in every section normal to the axis, so
+// the value is the largest of the sections' minimum-zone roundness (concentric circles in the
+// plane normal to the least-squares axis; the points grouped into sections as sections_by_height
+// groups them; a section of fewer than four points cannot show any and is left out).
+Outcome evaluate_section_roundness(const ToleranceSpec& spec, const Feature& feature, const ReportUnits& units,
+                                   ToleranceResult result) {
+  const auto actual = actual_of(feature);
+  if (!actual) return Error(actual.error());
+  const Vec3 axis = (*actual)->direction.norm() > 1e-12 ? Vec3((*actual)->direction.normalized()) : Vec3::UnitZ();
+  std::vector<Vec3> surface;
+  std::vector<double> heights;
+  for (const MeasuredPoint& p : feature.points) {
+    surface.push_back(p.surface_mm());
+    heights.push_back((surface.back() - (*actual)->position).dot(axis));
+  }
+  double worst = -1, worst_height = 0;
+  std::size_t judged = 0;
+  for (const auto& section : sections_by_height(heights)) {
+    if (section.size() < 4) continue;
+    std::vector<Vec3> ring;
+    double height = 0;
+    for (const std::size_t i : section) {
+      ring.push_back(surface[i]);
+      height += heights[i] / static_cast<double>(section.size());
+    }
+    const auto mz = fitting::minimum_zone(fitting::Shape::Circle, ring, axis);
+    if (!mz) continue;
+    ++judged;
+    if (mz->form_mm > worst) {
+      worst = mz->form_mm;
+      worst_height = height;
+    }
+  }
+  if (judged == 0)
+    return Error(
+        fmt::format("feature {} has no section of four points or more (points at one height along its "
+                    "axis): CIRLTY of a {} is the roundness of its sections",
+                    feature.label, dmis_word(feature.nominal.type)));
+  result.value = worst;
+  result.actual = worst;
+  add_note(result, fmt::format("the largest minimum-zone roundness (ISO 1101) of {} section{} normal to the axis, {} "
+                               "along it from the feature's centre",
+                               judged, judged == 1 ? "" : "s", length_text(worst_height, units, 3)));
+  set_limits(result, 0, spec.zone);
+  return result;
+}
+
 Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                       ToleranceResult result) {
   const ReportUnits& units = context.units;
@@ -685,6 +732,9 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const T
                                                            : k_flat;
   if (spec.kind == ToleranceKind::Strght && feature.nominal.type == FeatureType::Cylinder)
     return evaluate_axis_straightness(spec, feature, context.units, std::move(result));
+  if (spec.kind == ToleranceKind::Cirlty &&
+      (feature.nominal.type == FeatureType::Cylinder || feature.nominal.type == FeatureType::Cone))
+    return evaluate_section_roundness(spec, feature, context.units, std::move(result));
   if (!is_one_of(feature.nominal.type, types)) return wrong_type(spec.kind, types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
@@ -1358,7 +1408,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Diam:
     case ToleranceKind::Rad: return in({T::Circle, T::Arc, T::Sphere, T::Cylinder});
     case ToleranceKind::Flat: return in({T::Plane});
-    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc});
+    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc, T::Cylinder, T::Cone});
     case ToleranceKind::Cylcty: return in({T::Cylinder});
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line, T::Cylinder});

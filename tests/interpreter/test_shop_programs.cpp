@@ -1052,6 +1052,31 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
       << lp_sections->note;
 }
 
+// CIRLTY of a CYLNDR is the roundness of its sections (ISO 1101: every section normal to the axis):
+// scan_lobed_circle.json's boss, 3 lobes of 2.5 um at 20 deg (hidden), touched at 12 points 30 deg
+// apart at z 8 and z 22. At those angles the lobes read a cos 3(30 k - 20) = a cos(90 k - 60), from
+// -a cos 30 to +a cos 30: a minimum zone of 2a cos 30 deg = 4.330 um in each section (a centre
+// moved adds a first harmonic, which cannot narrow a third); 6 points 60 deg apart at z 15 read
+// +-a/2, 2.5 um. The worst section is the roundness. check no longer calls it wrong.
+TEST(ShopPrograms, RoundnessOfACylinderIsItsWorstSection) {
+  std::string text =
+      "DMISMN/'round', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
+      "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,14\nMEAS/CYLNDR,F(BOSS),30\n";
+  for (const double z : {8.0, 22.0})
+    for (int k = 0; k < 12; ++k) text += boss_touch(30.0 * k, z);
+  for (int k = 0; k < 6; ++k) text += boss_touch(60.0 * k, 15);
+  text += "ENDMES\nT(RND)=TOL/CIRLTY,0.004\nOUTPUT/FA(BOSS),TA(RND)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0U) << check(text).text;
+  const auto ran = run(text, source_dir / "programs/worlds/scan_lobed_circle.json");
+  ASSERT_EQ(ran.status, ExecStatus::Finished) << ran.diagnostics;
+  const auto* round = tolerance(*ran.session, "RND");
+  ASSERT_NE(round, nullptr) << ran.diagnostics;
+  EXPECT_NEAR(round->value, 2 * 0.0025 * std::cos(std::numbers::pi / 6), 5e-4) << round->note;
+  EXPECT_FALSE(round->in_tolerance) << round->note;
+  EXPECT_NE(round->note.find("of 3 sections normal to the axis"), std::string::npos) << round->note;
+}
+
 // A cylinder's two-point sizes are taken section by section: a boss tapering 0.2 deg (a cone whose
 // apex lies 7 m above, hidden truth of the world written here) touched at 5 points 72 deg apart at
 // z 8, 15 and 22, turned 0, 18 and 36 deg, so a point's opposite at z 8 lies at z 22 only. Per

@@ -205,7 +205,9 @@ TEST(ToleranceForm, EachFormAppliesToItsShape) {
   Feature c = feature("CYL1", cyl, cyl);
   c.fit = FitFigures{{}, 0.001, 0.005};
   EXPECT_EQ(evaluate(spec(ToleranceKind::Flat), {&c}).error(), "FLAT applies to a plane, not to a CYLNDR");
-  EXPECT_EQ(evaluate(spec(ToleranceKind::Cirlty), {&c}).error(), "CIRLTY applies to a circle or arc, not to a CYLNDR");
+  EXPECT_EQ(evaluate(spec(ToleranceKind::Cirlty), {&c}).error(),
+            "feature CYL1 has no section of four points or more (points at one height along its axis): CIRLTY of a "
+            "CYLNDR is the roundness of its sections");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Sphcty), {&c}).error(), "SPHCTY applies to a sphere, not to a CYLNDR");
   EXPECT_EQ(evaluate(spec(ToleranceKind::Strght), {&c}).error(),
             "feature CYL1 has no measured points: the straightness of its axis needs the centres of its sections");
