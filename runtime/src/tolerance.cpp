@@ -498,14 +498,21 @@ tl::expected<Vec3, std::string> position_point(const Geometry& nominal, const Ge
   return Vec3(actual.position + (n->dot(nominal.position - actual.position) / cos_a) * *axis);
 }
 
-/// The features of size a material condition applies to (POS's bonus, a datum's shift).
-constexpr Types k_material_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere, FeatureType::Cylinder};
+/// The features of size a material condition applies to (POS's bonus, a datum's shift): the
+/// round ones by their diameter, a PARPLN or CPARLN by its width.
+constexpr Types k_material_sized = {FeatureType::Circle,         FeatureType::Arc,
+                                    FeatureType::Sphere,         FeatureType::Cylinder,
+                                    FeatureType::ParallelPlanes, FeatureType::ClosedSlot};
+
+double size_of(const Geometry& g) {
+  return g.type == FeatureType::ParallelPlanes || g.type == FeatureType::ClosedSlot ? g.width_mm : g.diameter_mm;
+}
 
 /// How far a feature of size as made departs from its MMC (LMC) size, taken as the nominal
-/// diameter (a tolerance carries no size limits): a hole grows away from MMC, a boss shrinks; 0
-/// beyond that size.
+/// size (a tolerance carries no size limits): a hole or slot grows away from MMC, a boss or tab
+/// shrinks; 0 beyond that size.
 double departure_from(MaterialCondition condition, const Geometry& nominal, const Geometry& actual) {
-  const double growth_mm = actual.diameter_mm - nominal.diameter_mm;
+  const double growth_mm = size_of(actual) - size_of(nominal);
   const double away_from_mmc = nominal.side == Side::Inner ? growth_mm : -growth_mm;
   return std::max(0.0, condition == MaterialCondition::Mmc ? away_from_mmc : -away_from_mmc);
 }
@@ -521,10 +528,11 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
     return Error(fmt::format("{} applies to {}, not to {} {}", modifier, type_list(k_material_sized),
                              article(dmis_word(nominal.type)), dmis_word(nominal.type)));
   const double bonus_mm = departure_from(condition, nominal, actual);
-  add_note(result, fmt::format("{} bonus {}: actual diameter {} against the {} size, taken "
-                               "as the nominal diameter {} (the tolerance has no size limits)",
-                               modifier, length_text(bonus_mm, units), length_text(actual.diameter_mm, units), modifier,
-                               length_text(nominal.diameter_mm, units)));
+  const char* size = size_of(nominal) == nominal.width_mm && nominal.width_mm > 0 ? "width" : "diameter";
+  add_note(result, fmt::format("{} bonus {}: actual {} {} against the {} size, taken "
+                               "as the nominal {} {} (the tolerance has no size limits)",
+                               modifier, length_text(bonus_mm, units), size, length_text(size_of(actual), units),
+                               modifier, size, length_text(size_of(nominal), units)));
   if (nominal.side == Side::None) add_note(result, "side unknown: treated as OUTER");
   return bonus_mm;
 }
@@ -573,9 +581,10 @@ void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& contex
 
 Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                      ToleranceResult result) {
-  static constexpr Types k_types = {
-      FeatureType::Point, FeatureType::Circle, FeatureType::Arc,        FeatureType::Sphere, FeatureType::Cylinder,
-      FeatureType::Cone,  FeatureType::Line,   FeatureType::ClosedSlot, FeatureType::Torus,  FeatureType::Ellipse};
+  static constexpr Types k_types = {FeatureType::Point,   FeatureType::Circle,        FeatureType::Arc,
+                                    FeatureType::Sphere,  FeatureType::Cylinder,      FeatureType::Cone,
+                                    FeatureType::Line,    FeatureType::ClosedSlot,    FeatureType::Torus,
+                                    FeatureType::Ellipse, FeatureType::ParallelPlanes};
   const Geometry& nominal = feature.nominal;
   if (!is_one_of(nominal.type, k_types)) return wrong_type(spec.kind, k_types, nominal.type);
   const auto actual_or = actual_of(feature);
@@ -583,6 +592,24 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   const auto frame = frame_of_datums(spec, feature, context);
   if (!frame) return Error(frame.error());
   const Geometry actual = to_machine(**actual_or, frame->actual_to_nominal);
+  if (nominal.type == FeatureType::ParallelPlanes) {
+    // A width's position (ASME Y14.5-2018 7.4.3, ISO 1101): its median plane within two planes t
+    // apart about the true position, normal to the nominal normal: 2 |d| for the median plane's
+    // centre d away along it (its tilt across the faces is not added: see docs/tolerances.md).
+    const auto n = unit(nominal.direction, "the nominal of " + feature.label);
+    if (!n) return Error(n.error());
+    Vec3 deviation = (actual.position - nominal.position).dot(*n) * *n;
+    apply_datum_shift(spec, context, deviation, result);
+    result.value = 2.0 * deviation.norm();
+    result.actual = result.value;
+    result.nominal = 0;
+    const auto bonus_mm = material_bonus(spec.condition, nominal, actual, context.units, result);
+    if (!bonus_mm) return Error(bonus_mm.error());
+    set_limits(result, 0, spec.zone + *bonus_mm);
+    add_note(result, "the median plane's position along its normal (a zone of two parallel planes)");
+    add_note(result, datum_frame_note(*frame, (*actual_or)->position));
+    return result;
+  }
 
   const auto at = position_point(nominal, actual, spec.three_d, feature.label);
   if (!at) return Error(at.error());
@@ -1413,6 +1440,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line, T::Cylinder});
     case ToleranceKind::Pos:
+      return in({T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus,
+                 T::Ellipse, T::ParallelPlanes});
     case ToleranceKind::Compos:
       return in(
           {T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});

@@ -673,6 +673,24 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   EXPECT_NEAR(wy->value, 0.015, 1e-3);
   EXPECT_FALSE(wy->in_tolerance);
 
+  // POS of a width (ASME Y14.5 7.4.3): its median plane, 0.02 mm off in X (LEFT 0.01 in, RIGHT 0.03
+  // out): a zone of 0.04. At LMC the tab, 0.02 over its nominal (MMC) width, gains 0.02.
+  const std::string positions =
+      text.substr(0, text.find("OUTPUT/")) +
+      "T(PX) = TOL/POS, 2D, 0.05\nT(PXS) = TOL/POS, 2D, 0.03\nT(PXL) = TOL/POS, 2D, 0.03, LMC\n"
+      "T(PXM) = TOL/POS, 2D, 0.03, MMC\nOUTPUT/FA(XPAIR), TA(PX), TA(PXS), TA(PXL), TA(PXM)\nENDFIL\n";
+  EXPECT_EQ(check(positions).errors, 0U) << check(positions).text;
+  const auto placed = run(positions, source_dir / "programs/worlds/block_width.json");
+  ASSERT_EQ(placed.status, ExecStatus::Finished) << placed.diagnostics;
+  for (const char* label : {"PX", "PXS", "PXL", "PXM"}) ASSERT_NE(tolerance(*placed.session, label), nullptr) << label;
+  EXPECT_NEAR(tolerance(*placed.session, "PX")->value, 0.04, 2e-3);
+  EXPECT_TRUE(tolerance(*placed.session, "PX")->in_tolerance);
+  EXPECT_FALSE(tolerance(*placed.session, "PXS")->in_tolerance);
+  EXPECT_NEAR(tolerance(*placed.session, "PXL")->upper, 0.05, 2e-3);
+  EXPECT_TRUE(tolerance(*placed.session, "PXL")->in_tolerance) << tolerance(*placed.session, "PXL")->note;
+  EXPECT_NEAR(tolerance(*placed.session, "PXM")->upper, 0.03, 1e-9);  // beyond its MMC width: no bonus
+  EXPECT_FALSE(tolerance(*placed.session, "PXM")->in_tolerance);
+
   // Points on one face only, or a PARPLN where a circle is toleranced: positioned errors.
   const auto one_side =
       run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"

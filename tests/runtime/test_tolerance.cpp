@@ -311,7 +311,9 @@ TEST(TolerancePosition, MaterialConditionBonus) {
   EXPECT_NEAR(evaluate(s, {&boss})->upper, 0.07, k_tight);
 
   const Feature p = feature("P1", point({0, 0, 0}), point({0, 0, 0}));
-  EXPECT_EQ(evaluate(s, {&p}).error(), "MMC applies to a circle, arc, sphere or cylinder, not to a POINT");
+  EXPECT_EQ(evaluate(s, {&p}).error(),
+            "MMC applies to a circle, arc, sphere, cylinder, pair of parallel planes or closed slot (CPARLN), not to a "
+            "POINT");
 }
 
 // Datum shift: plane A, then hole B at MMC, 10 mm nominal, 10.04 as made (0.04 from its MMC
@@ -376,10 +378,10 @@ TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
             std::string::npos)
       << r->note;
   const Feature pl = feature("PL1", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
-  EXPECT_EQ(evaluate(s, {&pl}).error(),
-            "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN), torus or "
-            "ellipse, not to a "
-            "PLANE");
+  EXPECT_EQ(
+      evaluate(s, {&pl}).error(),
+      "POS applies to a point, circle, arc, sphere, cylinder, cone, line, closed slot (CPARLN), torus, ellipse or "
+      "pair of parallel planes, not to a PLANE");
 }
 
 // ------------------------------------------------------------------ DISTB
