@@ -551,9 +551,14 @@ void apply_datum_shift(const ToleranceSpec& spec, const ToleranceContext& contex
     if (condition == MaterialCondition::Rfs || !context.datums[i]) continue;
     const Datum& datum = *context.datums[i];
     const char* modifier = condition == MaterialCondition::Mmc ? "MMC" : "LMC";
-    if (!is_one_of(datum.nominal.type, k_material_sized)) {
-      add_note(result, fmt::format("DAT({}) at {}: a {} has no size, so no datum shift", datum.label, modifier,
-                                   dmis_word(datum.nominal.type)));
+    // A round datum feature shifts across its axis; a width's shift (across its faces only) is not
+    // taken.
+    static constexpr Types k_round_sized = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere,
+                                            FeatureType::Cylinder};
+    if (!is_one_of(datum.nominal.type, k_round_sized)) {
+      add_note(result, fmt::format("DAT({}) at {}: a {} datum does not shift here (only a round datum feature's "
+                                   "shift across its axis is taken)",
+                                   datum.label, modifier, dmis_word(datum.nominal.type)));
       continue;
     }
     if (shifted) {

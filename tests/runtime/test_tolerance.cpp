@@ -355,7 +355,7 @@ TEST(TolerancePosition, ADatumHoleAtMmcLetsTheFrameShift) {
   s.datum_conditions = {MaterialCondition::Mmc, MaterialCondition::Rfs};
   const auto plane_mmc = evaluate(s, {&c}, context);
   EXPECT_NEAR(plane_mmc->value, 0.10, k_tight);
-  EXPECT_NE(plane_mmc->note.find("DAT(A) at MMC: a PLANE has no size, so no datum shift"), std::string::npos);
+  EXPECT_NE(plane_mmc->note.find("DAT(A) at MMC: a PLANE datum does not shift here"), std::string::npos);
 }
 
 TEST(TolerancePosition, DatumsMustBeDefinedAndPlanesAreRejected) {
