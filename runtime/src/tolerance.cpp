@@ -897,7 +897,7 @@ double axis_length_mm(const Feature& feature, const Geometry& actual, const Vec3
 
 Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                              ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder,
+  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder, FeatureType::Cone,
                                     FeatureType::ClosedSlot};  // a CPARLN: its long axis
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual_or = actual_of(feature);
@@ -1451,7 +1451,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
       return in(
           {T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});
     case ToleranceKind::Perp:
-    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::ClosedSlot});
+    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::ClosedSlot});
     case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
     case ToleranceKind::Concen:
     case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});

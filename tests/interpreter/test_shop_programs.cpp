@@ -1095,6 +1095,48 @@ TEST(ShopPrograms, RoundnessOfACylinderIsItsWorstSection) {
   EXPECT_NE(round->note.find("of 3 sections normal to the axis"), std::string::npos) << round->note;
 }
 
+// PERP of a CONE: its axis. The default block's countersink CONE1 (90 deg, apex 8 mm below the
+// top) tilted 0.5 deg about X about its apex (hidden, a world written here on perfect.json),
+// touched in two rings 4 and 6 mm above the apex by a 2 mm ball: its axis leans 0.5 deg from the
+// top face's normal over the rings' extent along it, 2 mm and a little more (a ring on a tilted
+// cone is not at one height along its axis: up to 2 x 5 sin 0.5 deg more), so PERP to the top is
+// between 2 sin 0.5 and 2.09 sin 0.5 deg; untilted, 0.
+TEST(ShopPrograms, PerpendicularityOfAConesAxis) {
+  std::string text =
+      "DMISMN/'csk', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,1\nSNSET/RETRCT,1\nSNSET/SEARCH,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nGOTO/100,50,60\n"
+      "F(TOP)=FEAT/PLANE,CART,100,50,40,0,0,1\nMEAS/PLANE,F(TOP),3\n  PTMEAS/CART,100,50,40,0,0,1\n"
+      "  PTMEAS/CART,150,10,40,0,0,1\n  PTMEAS/CART,100,10,40,0,0,1\nENDMES\nDATDEF/FA(TOP),DAT(A)\n"
+      "GOTO/40,20,60\nF(CSK)=FEAT/CONE,INNER,CART,40,20,32,0,0,1,90\nMEAS/CONE,F(CSK),12\n";
+  for (const double h : {4.0, 6.0}) {
+    text += fmt::format("  GOTO/40,20,{}\n", 32 + h);
+    for (int k = 0; k < 6; ++k) {
+      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
+      text += fmt::format("  PTMEAS/CART,{:.6f},{:.6f},{},{:.6f},{:.6f},0\n  GOTO/40,20,{}\n", 40 + h * c, 20 + h * s,
+                          32 + h, -c, -s, 32 + h);
+    }
+  }
+  text += "  GOTO/40,20,60\nENDMES\nT(PP)=TOL/PERP,0.01,DAT(A)\nOUTPUT/FA(CSK),TA(PP)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0U) << check(text).text;
+  const fs::path perfect = source_dir / "programs/worlds/perfect.json";
+  const fs::path tilted = write("cone_tilted.json", "{\"extends\": \"" + perfect.string() +
+                                                        "\", \"part\": {\"deviations\": {\"CONE1\": "
+                                                        "{\"tilt_deg\": [0.5, 0]}}}}\n");
+  const double lean = std::sin(0.5 * std::numbers::pi / 180);
+  const auto leaning = run(text, tilted);
+  ASSERT_EQ(leaning.status, ExecStatus::Finished) << leaning.diagnostics;
+  const auto* perp = tolerance(*leaning.session, "PP");
+  ASSERT_NE(perp, nullptr) << leaning.diagnostics;
+  EXPECT_GE(perp->value, 2 * lean * 0.999) << perp->note;
+  EXPECT_LE(perp->value, 2.09 * lean) << perp->note;
+  EXPECT_FALSE(perp->in_tolerance) << perp->note;
+  EXPECT_NE(perp->note.find("axis of CSK at 0.5000 deg to datum A"), std::string::npos) << perp->note;
+  const auto upright = run(text, perfect);
+  ASSERT_EQ(upright.status, ExecStatus::Finished) << upright.diagnostics;
+  ASSERT_NE(tolerance(*upright.session, "PP"), nullptr);
+  EXPECT_LT(tolerance(*upright.session, "PP")->value, 1e-5) << tolerance(*upright.session, "PP")->note;
+}
+
 // A cylinder's two-point sizes are taken section by section: a boss tapering 0.2 deg (a cone whose
 // apex lies 7 m above, hidden truth of the world written here) touched at 5 points 72 deg apart at
 // z 8, 15 and 22, turned 0, 18 and 36 deg, so a point's opposite at z 8 lies at z 22 only. Per
