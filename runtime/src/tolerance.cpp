@@ -897,8 +897,9 @@ double axis_length_mm(const Feature& feature, const Geometry& actual, const Vec3
 
 Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                              ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::Plane, FeatureType::Line, FeatureType::Cylinder, FeatureType::Cone,
-                                    FeatureType::ClosedSlot};  // a CPARLN: its long axis
+  static constexpr Types k_types = {FeatureType::Plane,         FeatureType::Line,       FeatureType::Cylinder,
+                                    FeatureType::Cone,          FeatureType::ClosedSlot,  // a CPARLN: its long axis
+                                    FeatureType::ParallelPlanes};                         // a PARPLN: its median plane
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual_or = actual_of(feature);
   if (!actual_or) return Error(actual_or.error());
@@ -910,10 +911,19 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
   if (!own) return Error(own.error());
   const bool perp = spec.kind == ToleranceKind::Perp;
 
-  if (feature.nominal.type == FeatureType::Plane) {
+  if (feature.nominal.type == FeatureType::Plane || feature.nominal.type == FeatureType::ParallelPlanes) {
     if (feature.points.empty())
       return Error(
           fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind), feature.label));
+    // A PARPLN's derived median plane (ASME Y14.5-2018 5.4.2.1; ISO 14660-2): each face's points
+    // moved half the actual width toward the middle.
+    std::vector<Vec3> surface;
+    for (const MeasuredPoint& p : feature.points) {
+      Vec3 q = p.surface_mm();
+      if (feature.nominal.type == FeatureType::ParallelPlanes)
+        q -= ((q - actual.position).dot(*own) >= 0 ? 1.0 : -1.0) * (actual.width_mm / 2) * *own;
+      surface.push_back(q);
+    }
     // Zone: two planes of the tolerated orientation; their normal is the reference direction
     // itself, or the plane's normal made perpendicular to it.
     Vec3 zone_normal = d;
@@ -945,14 +955,15 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     }
     double lo = std::numeric_limits<double>::infinity();
     double hi = -lo;
-    for (const MeasuredPoint& p : feature.points) {
-      const double h = p.surface_mm().dot(zone_normal);
+    for (const Vec3& q : surface) {
+      const double h = q.dot(zone_normal);
       lo = std::min(lo, h);
       hi = std::max(hi, h);
     }
     result.value = hi - lo;
-    add_note(result, fmt::format("normal of {} at {:.4f} deg to {} ({})", feature.label, line_angle_deg(*own, d),
-                                 datum->name, datum->plane ? "normal" : "axis"));
+    add_note(result, fmt::format("normal of {}{} at {:.4f} deg to {} ({})", feature.label,
+                                 feature.nominal.type == FeatureType::ParallelPlanes ? "'s median plane" : "",
+                                 line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis"));
     if (oriented_by_secondary) {
       add_note(result, fmt::format("zone oriented by datums {}: its normal at {:.4f} deg to the plane's",
                                    join_datums(spec), line_angle_deg(*own, zone_normal)));
@@ -1451,7 +1462,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
       return in(
           {T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});
     case ToleranceKind::Perp:
-    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::ClosedSlot});
+    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::ClosedSlot, T::ParallelPlanes});
     case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
     case ToleranceKind::Concen:
     case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});

@@ -691,6 +691,33 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   EXPECT_NEAR(tolerance(*placed.session, "PXM")->upper, 0.03, 1e-9);  // beyond its MMC width: no bonus
   EXPECT_FALSE(tolerance(*placed.session, "PXM")->in_tolerance);
 
+  // PERP of a width: its derived median plane (each face's points moved half the width inward).
+  // The RIGHT face leaned 0.1 deg about Y about its middle (z 20; hidden, on probe_library.json):
+  // its touches at z 10 and 30 move -+20 tan 0.1 deg / 2 in X, LEFT's stay, so the median points
+  // spread over 20 tan 0.1 deg = 0.0349 across the top face's normal; upright, 0.
+  const std::string leaning_text =
+      text.substr(0, text.find("GOTO/175, 50, 80\n")) +
+      "GOTO/100, 50, 60\nF(TOP) = FEAT/PLANE, CART, 100, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\n"
+      "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 150, 10, 40, 0, 0, 1\n  PTMEAS/CART, 100, 10, 40, 0, 0, 1\n"
+      "ENDMES\nDATDEF/FA(TOP), DAT(A)\n" +
+      text.substr(text.find("GOTO/175, 50, 80\n"), text.find("MODE/AUTO") - text.find("GOTO/175, 50, 80\n")) +
+      "T(PP) = TOL/PERP, 0.02, DAT(A)\nOUTPUT/FA(XPAIR), TA(PP)\nENDFIL\n";
+  EXPECT_EQ(check(leaning_text).errors, 0U) << check(leaning_text).text;
+  const fs::path library = source_dir / "programs/worlds/probe_library.json";
+  const fs::path leaned = write("right_leaned.json", "{\"extends\": \"" + library.string() +
+                                                         "\", \"part\": {\"deviations\": {\"RIGHT\": "
+                                                         "{\"tilt_deg\": [0.1, 0]}}}}\n");
+  const auto leaning = run(leaning_text, leaned);
+  ASSERT_EQ(leaning.status, ExecStatus::Finished) << leaning.diagnostics;
+  const auto* perp = tolerance(*leaning.session, "PP");
+  ASSERT_NE(perp, nullptr) << leaning.diagnostics;
+  EXPECT_NEAR(perp->value, 20 * std::tan(0.1 * std::numbers::pi / 180), 1e-4) << perp->note;
+  EXPECT_FALSE(perp->in_tolerance);
+  const auto upright = run(leaning_text, library);
+  ASSERT_EQ(upright.status, ExecStatus::Finished) << upright.diagnostics;
+  ASSERT_NE(tolerance(*upright.session, "PP"), nullptr);
+  EXPECT_LT(tolerance(*upright.session, "PP")->value, 1e-5);
+
   // Points on one face only, or a PARPLN where a circle is toleranced: positioned errors.
   const auto one_side =
       run("DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"

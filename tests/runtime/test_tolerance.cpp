@@ -631,7 +631,8 @@ TEST(ToleranceOrientation, DatumErrors) {
   const Feature c = feature("C1", round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10),
                             round(FeatureType::Circle, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10));
   EXPECT_EQ(evaluate(s, {&c}, context).error(),
-            "PERP applies to a plane, line, cylinder, cone or closed slot (CPARLN), not to a CIRCLE");
+            "PERP applies to a plane, line, cylinder, cone, closed slot (CPARLN) or pair of parallel planes, not to a "
+            "CIRCLE");
 }
 
 // ------------------------------------------------------------------ ANGLB
