@@ -597,32 +597,23 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   const auto frame = frame_of_datums(spec, feature, context);
   if (!frame) return Error(frame.error());
   const Geometry actual = to_machine(**actual_or, frame->actual_to_nominal);
+  Vec3 deviation = Vec3::Zero();
+  const auto n = unit(nominal.direction, "the nominal of " + feature.label);
   if (nominal.type == FeatureType::ParallelPlanes) {
     // A width's position (ASME Y14.5-2018 7.4.3, ISO 1101): its median plane within two planes t
     // apart about the true position, normal to the nominal normal: 2 |d| for the median plane's
     // centre d away along it (its tilt across the faces is not added: see docs/tolerances.md).
-    const auto n = unit(nominal.direction, "the nominal of " + feature.label);
     if (!n) return Error(n.error());
-    Vec3 deviation = (actual.position - nominal.position).dot(*n) * *n;
-    apply_datum_shift(spec, context, deviation, result);
-    result.value = 2.0 * deviation.norm();
-    result.actual = result.value;
-    result.nominal = 0;
-    const auto bonus_mm = material_bonus(spec.condition, nominal, actual, context.units, result);
-    if (!bonus_mm) return Error(bonus_mm.error());
-    set_limits(result, 0, spec.zone + *bonus_mm);
+    deviation = (actual.position - nominal.position).dot(*n) * *n;
     add_note(result, "the median plane's position along its normal (a zone of two parallel planes)");
-    add_note(result, datum_frame_note(*frame, (*actual_or)->position));
-    return result;
-  }
-
-  const auto at = position_point(nominal, actual, spec.three_d, feature.label);
-  if (!at) return Error(at.error());
-  Vec3 deviation = *at - nominal.position;
-  if (!spec.three_d) {
-    const auto n = unit(nominal.direction, "the nominal of " + feature.label);
-    if (!n) return Error(n.error());
-    deviation -= deviation.dot(*n) * *n;
+  } else {
+    const auto at = position_point(nominal, actual, spec.three_d, feature.label);
+    if (!at) return Error(at.error());
+    deviation = *at - nominal.position;
+    if (!spec.three_d) {
+      if (!n) return Error(n.error());
+      deviation -= deviation.dot(*n) * *n;
+    }
   }
   apply_datum_shift(spec, context, deviation, result);
   result.value = 2.0 * deviation.norm();
@@ -636,6 +627,25 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
 }
 
 // ---------------------------------------------------------------- form
+
+// A round feature's measured points in sections normal to its actual axis (sections_by_height).
+struct Sections {
+  Vec3 axis = Vec3::UnitZ();
+  std::vector<Vec3> surface;                    ///< the compensated points
+  std::vector<double> heights;                  ///< along the axis, from the actual's position
+  std::vector<std::vector<std::size_t>> rings;  ///< indices into `surface`, by height
+};
+
+Sections sections_of(const Feature& feature, const Geometry& actual) {
+  Sections s;
+  if (actual.direction.norm() > 1e-12) s.axis = actual.direction.normalized();
+  for (const MeasuredPoint& p : feature.points) {
+    s.surface.push_back(p.surface_mm());
+    s.heights.push_back((s.surface.back() - actual.position).dot(s.axis));
+  }
+  s.rings = sections_by_height(s.heights);
+  return s;
+}
 
 // STRGHT of a CYLNDR: the straightness of its derived median line (ISO 1101 and ISO 14660-2: the
 // centres of its sections' least-squares circles; ASME Y14.5-2018 5.4.1.4, the axis of a feature
@@ -652,20 +662,14 @@ Outcome evaluate_axis_straightness(const ToleranceSpec& spec, const Feature& fea
         fmt::format("feature {} has no measured points: the straightness of its axis needs the centres of "
                     "its sections",
                     feature.label));
-  const Vec3 axis = (*actual)->direction.norm() > 1e-12 ? Vec3((*actual)->direction.normalized()) : Vec3::UnitZ();
-  std::vector<Vec3> surface;
-  std::vector<double> heights;
-  for (const MeasuredPoint& p : feature.points) {
-    surface.push_back(p.surface_mm());
-    heights.push_back((surface.back() - (*actual)->position).dot(axis));
-  }
+  const Sections sections = sections_of(feature, **actual);
   std::vector<Vec3> centres;
   std::size_t skipped = 0;
-  for (const auto& section : sections_by_height(heights)) {
+  for (const auto& section : sections.rings) {
     std::vector<Vec3> ring;
-    for (const std::size_t i : section) ring.push_back(surface[i]);
+    for (const std::size_t i : section) ring.push_back(sections.surface[i]);
     fitting::FitOptions options;
-    options.direction_hint = axis;
+    options.direction_hint = sections.axis;
     options.circle_in_plane_of_hint = true;
     const auto circle =
         ring.size() >= 3
@@ -710,24 +714,18 @@ Outcome evaluate_section_roundness(const ToleranceSpec& spec, const Feature& fea
                                    ToleranceResult result) {
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
-  const Vec3 axis = (*actual)->direction.norm() > 1e-12 ? Vec3((*actual)->direction.normalized()) : Vec3::UnitZ();
-  std::vector<Vec3> surface;
-  std::vector<double> heights;
-  for (const MeasuredPoint& p : feature.points) {
-    surface.push_back(p.surface_mm());
-    heights.push_back((surface.back() - (*actual)->position).dot(axis));
-  }
+  const Sections sections = sections_of(feature, **actual);
   double worst = -1, worst_height = 0;
   std::size_t judged = 0;
-  for (const auto& section : sections_by_height(heights)) {
+  for (const auto& section : sections.rings) {
     if (section.size() < 4) continue;
     std::vector<Vec3> ring;
     double height = 0;
     for (const std::size_t i : section) {
-      ring.push_back(surface[i]);
-      height += heights[i] / static_cast<double>(section.size());
+      ring.push_back(sections.surface[i]);
+      height += sections.heights[i] / static_cast<double>(section.size());
     }
-    const auto mz = fitting::minimum_zone(fitting::Shape::Circle, ring, axis);
+    const auto mz = fitting::minimum_zone(fitting::Shape::Circle, ring, sections.axis);
     if (!mz) continue;
     ++judged;
     if (mz->form_mm > worst) {
