@@ -77,6 +77,12 @@ fs::path write(const std::string& name, const std::string& text) {
 
 const fs::path source_dir = METRON_SOURCE_DIR;
 
+/// A world file `name`: `base` with the hidden deviations `deviations` (a JSON object keyed by
+/// primitive name, docs/world.md).
+fs::path deviated(const std::string& name, const fs::path& base, const std::string& deviations) {
+  return write(name, "{\"extends\": \"" + base.string() + "\", \"part\": {\"deviations\": " + deviations + "}}\n");
+}
+
 struct Ran {
   ExecStatus status = ExecStatus::Error;
   std::string diagnostics;
@@ -704,9 +710,7 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
       "T(PP) = TOL/PERP, 0.02, DAT(A)\nOUTPUT/FA(XPAIR), TA(PP)\nENDFIL\n";
   EXPECT_EQ(check(leaning_text).errors, 0U) << check(leaning_text).text;
   const fs::path library = source_dir / "programs/worlds/probe_library.json";
-  const fs::path leaned = write("right_leaned.json", "{\"extends\": \"" + library.string() +
-                                                         "\", \"part\": {\"deviations\": {\"RIGHT\": "
-                                                         "{\"tilt_deg\": [0.1, 0]}}}}\n");
+  const fs::path leaned = deviated("right_leaned.json", library, "{\"RIGHT\": {\"tilt_deg\": [0.1, 0]}}");
   const auto leaning = run(leaning_text, leaned);
   ASSERT_EQ(leaning.status, ExecStatus::Finished) << leaning.diagnostics;
   const auto* perp = tolerance(*leaning.session, "PP");
@@ -1015,9 +1019,8 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
   EXPECT_NEAR(tolerance(*three.session, "LP")->actual, 50.0, 1e-3);
   EXPECT_TRUE(tolerance(*three.session, "LP")->in_tolerance);
   EXPECT_GT(tolerance(*three.session, "MX")->actual, 50.004);  // 2 x 2.5 cos 30 deg = 4.33 um and more
-  const fs::path oval = write("oval.json", "{\"extends\": \"" + lobed.string() +
-                                               "\", \"part\": {\"deviations\": {\"BOSS\": {\"form\": "
-                                               "{\"lobes\": 2, \"amplitude_mm\": 0.0025, \"phase_deg\": 20}}}}}\n");
+  const fs::path oval = deviated("oval.json", lobed,
+                                 "{\"BOSS\": {\"form\": {\"lobes\": 2, \"amplitude_mm\": 0.0025, \"phase_deg\": 20}}}");
   const auto two = run(text, oval);
   ASSERT_EQ(two.status, ExecStatus::Finished) << two.diagnostics;
   const auto* lp = tolerance(*two.session, "LP");
@@ -1146,9 +1149,7 @@ TEST(ShopPrograms, PerpendicularityOfAConesAxis) {
   text += "  GOTO/40,20,60\nENDMES\nT(PP)=TOL/PERP,0.01,DAT(A)\nOUTPUT/FA(CSK),TA(PP)\nENDFIL\n";
   EXPECT_EQ(check(text).errors, 0U) << check(text).text;
   const fs::path perfect = source_dir / "programs/worlds/perfect.json";
-  const fs::path tilted = write("cone_tilted.json", "{\"extends\": \"" + perfect.string() +
-                                                        "\", \"part\": {\"deviations\": {\"CONE1\": "
-                                                        "{\"tilt_deg\": [0.5, 0]}}}}\n");
+  const fs::path tilted = deviated("cone_tilted.json", perfect, "{\"CONE1\": {\"tilt_deg\": [0.5, 0]}}");
   const double lean = std::sin(0.5 * std::numbers::pi / 180);
   const auto leaning = run(text, tilted);
   ASSERT_EQ(leaning.status, ExecStatus::Finished) << leaning.diagnostics;
@@ -1221,9 +1222,9 @@ TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
 // w <= half its wavelength is a (1 - cos(pi w / 40)), on a stretch centred on a crest (a brute-force
 // search over placements agrees): a for 20 mm, 0.2929 a for 10 mm.
 TEST(ShopPrograms, FormPerUnitAreaAndLengthAgainstAWavyFace) {
-  const fs::path wavy = write("wavy.json", "{\"extends\": \"" + (source_dir / "programs/worlds/perfect.json").string() +
-                                               "\", \"part\": {\"deviations\": {\"TOP\": {\"form\": {\"amplitude_mm\": "
-                                               "0.002, \"wavelength_mm\": 40, \"phase_deg\": 0}}}}}\n");
+  const fs::path wavy =
+      deviated("wavy.json", (source_dir / "programs/worlds/perfect.json"),
+               "{\"TOP\": {\"form\": {\"amplitude_mm\": 0.002, \"wavelength_mm\": 40, \"phase_deg\": 0}}}");
   std::string text =
       "DMISMN/'per unit', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
       "SNSET/APPRCH,2\nSNSET/RETRCT,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nGOTO/10,3,60\n"
