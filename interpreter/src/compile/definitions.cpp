@@ -566,8 +566,8 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
     warn(p[0].span, "sema.profile-zone",
          fmt::format("TOL/{} takes the lower and upper tolerance; the one number is read as a zone of that width "
-                     "centred on the nominal profile (-{} / 2, +{} / 2), as ISO 1101 draws it",
-                     word, numbers[0], numbers[0]));
+                     "centred on the nominal profile (-t/2 to +t/2), as ISO 1101 draws it",
+                     word));
     need = ToleranceNumbers{1, "the tolerance zone", true};
   }
   if (numbers.size() < need.count)

@@ -203,8 +203,9 @@ class MeasurementRuntime {
   /// every coordinate system resting on such points (the current one included). With PAUSEs
   /// between DA(earlier)'s first point and DA(later)'s, the earlier set-up is what was measured
   /// between the PAUSEs around DA(earlier)'s first point (with what earlier EQUATEs carried into
-  /// it); without, what rests on points taken before DA(later)'s first point. A note tells the motion and how many were
-  /// carried; a DMIS output file open gets the statement as a comment line.
+  /// it); without, what rests on points taken before DA(later)'s first point. A note tells the
+  /// motion and how many were carried; a DMIS output file open gets the statement as a comment
+  /// line.
   Result<void> equate(const std::string& earlier, const std::string& later, Span span);
 
   // Constructions and outputs.
