@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Form per unit area / length (ASME Y14.5-2018 5.4.2 and 5.4.3, "per unit" flatness and
+// Form per unit area / length (ASME Y14.5-2018's "per unit" flatness and
 // straightness; DMIS 5.x TOL/FLAT,t,tu,a,b and TOL/STRGHT,t,tu,l): every unit area (length)
 // anywhere on the feature must hold its points within tu. The rectangles that matter are those with
 // a point on their left edge and one on their lower edge: any other slides right and up, keeping its

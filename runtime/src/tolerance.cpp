@@ -600,7 +600,7 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   Vec3 deviation = Vec3::Zero();
   const auto n = unit(nominal.direction, "the nominal of " + feature.label);
   if (nominal.type == FeatureType::ParallelPlanes) {
-    // A width's position (ASME Y14.5-2018 7.4.3, ISO 1101): its median plane within two planes t
+    // A width's position (ASME Y14.5-2018, ISO 1101; clauses not checked here): its median plane within two planes t
     // apart about the true position, normal to the nominal normal: 2 |d| for the median plane's
     // centre d away along it (its tilt across the faces is not added: see docs/tolerances.md).
     if (!n) return Error(n.error());
@@ -648,7 +648,7 @@ Sections sections_of(const Feature& feature, const Geometry& actual) {
 }
 
 // STRGHT of a CYLNDR: the straightness of its derived median line (ISO 1101 and ISO 14660-2: the
-// centres of its sections' least-squares circles; ASME Y14.5-2018 5.4.1.4, the axis of a feature
+// centres of its sections' least-squares circles; ASME Y14.5-2018, the axis of a feature
 // of size): the sections as sections_by_height groups the points, each circle in the plane normal
 // to the least-squares axis, and the zone the narrowest cylinder about a line that holds every
 // centre (a zone of diameter t, as a drawing's straightness with a diameter sign gives it).
@@ -913,7 +913,7 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     if (feature.points.empty())
       return Error(
           fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind), feature.label));
-    // A PARPLN's derived median plane (ASME Y14.5-2018 5.4.2.1; ISO 14660-2): each face's points
+    // A PARPLN's derived median plane (ISO 14660-2): each face's points
     // moved half the actual width toward the middle.
     std::vector<Vec3> surface;
     for (const MeasuredPoint& p : feature.points) {

@@ -679,7 +679,7 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   EXPECT_NEAR(wy->value, 0.015, 1e-3);
   EXPECT_FALSE(wy->in_tolerance);
 
-  // POS of a width (ASME Y14.5 7.4.3): its median plane, 0.02 mm off in X (LEFT 0.01 in, RIGHT 0.03
+  // POS of a width (ASME Y14.5): its median plane, 0.02 mm off in X (LEFT 0.01 in, RIGHT 0.03
   // out): a zone of 0.04. At LMC the tab, 0.02 over its nominal (MMC) width, gains 0.02.
   const std::string positions =
       text.substr(0, text.find("OUTPUT/")) +
