@@ -68,14 +68,10 @@ Vec3 line_plane_normal(const Geometry& line) {
 
 Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType type, ConstructMethod method,
                                            const std::vector<FeatureRef>& sources, Span span) {
-  std::vector<Geometry> in;
-  double rests_on = std::numeric_limits<double>::infinity();
-  for (const auto& s : sources) {
-    auto g = resolve(s, span);
-    if (!g) return tl::unexpected(g.error());
-    in.push_back(*g);
-    rests_on = std::min(rests_on, rests_on_s(s));
-  }
+  auto resolved = resolve_sources(sources, span);
+  if (!resolved) return tl::unexpected(resolved.error());
+  const std::vector<Geometry> in = std::move(resolved->geometry);
+  const double rests_on = resolved->rests_on_s;
   auto it = m_features.find(label);
   if (it == m_features.end()) {
     warn(span, fmt::format("CONST of F({}) without a FEAT nominal; the nominal is taken from the actual", label));

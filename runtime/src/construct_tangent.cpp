@@ -139,14 +139,10 @@ Result<void> MeasurementRuntime::construct_tangent(const std::string& label, Fea
   const auto fail = [&](const std::string& why) {
     return program_error(span, fmt::format("cannot construct {} F({}) by TANTO: {}", dmis_word(type), label, why));
   };
-  std::vector<Geometry> g;
-  double rests_on = std::numeric_limits<double>::infinity();
-  for (const FeatureRef& s : sources) {
-    auto r = resolve(s, span);
-    if (!r) return tl::unexpected(r.error());
-    g.push_back(*r);
-    rests_on = std::min(rests_on, rests_on_s(s));
-  }
+  auto resolved = resolve_sources(sources, span);
+  if (!resolved) return tl::unexpected(resolved.error());
+  const std::vector<Geometry> g = std::move(resolved->geometry);
+  const double rests_on = resolved->rests_on_s;
   const auto nominal_it = m_features.find(label);
   const Geometry* nominal = nominal_it != m_features.end() ? &nominal_it->second.nominal : nullptr;
   if (!nominal)

@@ -716,6 +716,18 @@ void MeasurementRuntime::set_alignment(const std::string& label, const Frame& fr
   m_alignments[label] = m_alignment;
 }
 
+Result<MeasurementRuntime::ResolvedSources> MeasurementRuntime::resolve_sources(const std::vector<FeatureRef>& sources,
+                                                                                Span span) const {
+  ResolvedSources out;
+  for (const FeatureRef& s : sources) {
+    auto g = resolve(s, span);
+    if (!g) return tl::unexpected(g.error());
+    out.geometry.push_back(*g);
+    out.rests_on_s = std::min(out.rests_on_s, rests_on_s(s));
+  }
+  return out;
+}
+
 double MeasurementRuntime::rests_on_s(const FeatureRef& ref) const {
   const Feature* f = find_feature(ref.label);
   if (!ref.actual || !f || !f->actual) return std::numeric_limits<double>::infinity();

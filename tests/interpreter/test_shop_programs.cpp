@@ -994,6 +994,21 @@ std::string boss_touch(double deg, double z) {
       200 + 40 * c, 300 + 40 * s, 200 + 25 * c, 300 + 25 * s, c, z, s);
 }
 
+// Touches of the default block's countersink (apex at (40, 20, 32), 90 deg) in two rings 4 and 6 mm
+// above its apex, 6 points 60 deg apart in each, the ball moving across the axis.
+std::string countersink_rings() {
+  std::string out;
+  for (const double h : {4.0, 6.0}) {
+    out += fmt::format("  GOTO/40,20,{}\n", 32 + h);
+    for (int k = 0; k < 6; ++k) {
+      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
+      out += fmt::format("  PTMEAS/CART,{:.6f},{:.6f},{},{:.6f},{:.6f},0\n  GOTO/40,20,{}\n", 40 + h * c, 20 + h * s,
+                         32 + h, -c, -s, 32 + h);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 // DIAMLP: ISO 14405-1's two-point size, against the hidden form of scan_lobed_circle.json's boss
@@ -1080,14 +1095,7 @@ TEST(ShopPrograms, TwoPointSizeSeesAnOvalAndNotOddLobes) {
       "DMISMN/'csk', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2\nSNSLCT/S(P)\n"
       "SNSET/APPRCH,1\nSNSET/RETRCT,1\nSNSET/SEARCH,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\n"
       "GOTO/40,20,60\nF(CSK)=FEAT/CYLNDR,INNER,CART,40,20,36,0,0,1,10,2\nMEAS/CYLNDR,F(CSK),12\n";
-  for (const double h : {4.0, 6.0}) {
-    countersink += fmt::format("  GOTO/40,20,{}\n", 32 + h);
-    for (int k = 0; k < 6; ++k) {
-      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
-      countersink += fmt::format("  PTMEAS/CART,{:.6f},{:.6f},{},{:.6f},{:.6f},0\n  GOTO/40,20,{}\n", 40 + h * c,
-                                 20 + h * s, 32 + h, -c, -s, 32 + h);
-    }
-  }
+  countersink += countersink_rings();
   countersink += "  GOTO/40,20,60\nENDMES\nT(LP)=TOL/DIAM,-0.01,0.01,DIAMLP\nOUTPUT/FA(CSK),TA(LP)\nENDFIL\n";
   const auto cone = run(countersink, source_dir / "programs/worlds/perfect.json");
   ASSERT_EQ(cone.status, ExecStatus::Finished) << cone.diagnostics;
@@ -1138,14 +1146,7 @@ TEST(ShopPrograms, PerpendicularityOfAConesAxis) {
       "F(TOP)=FEAT/PLANE,CART,100,50,40,0,0,1\nMEAS/PLANE,F(TOP),3\n  PTMEAS/CART,100,50,40,0,0,1\n"
       "  PTMEAS/CART,150,10,40,0,0,1\n  PTMEAS/CART,100,10,40,0,0,1\nENDMES\nDATDEF/FA(TOP),DAT(A)\n"
       "GOTO/40,20,60\nF(CSK)=FEAT/CONE,INNER,CART,40,20,32,0,0,1,90\nMEAS/CONE,F(CSK),12\n";
-  for (const double h : {4.0, 6.0}) {
-    text += fmt::format("  GOTO/40,20,{}\n", 32 + h);
-    for (int k = 0; k < 6; ++k) {
-      const double t = k * std::numbers::pi / 3, c = std::cos(t), s = std::sin(t);
-      text += fmt::format("  PTMEAS/CART,{:.6f},{:.6f},{},{:.6f},{:.6f},0\n  GOTO/40,20,{}\n", 40 + h * c, 20 + h * s,
-                          32 + h, -c, -s, 32 + h);
-    }
-  }
+  text += countersink_rings();
   text += "  GOTO/40,20,60\nENDMES\nT(PP)=TOL/PERP,0.01,DAT(A)\nOUTPUT/FA(CSK),TA(PP)\nENDFIL\n";
   EXPECT_EQ(check(text).errors, 0U) << check(text).text;
   const fs::path perfect = source_dir / "programs/worlds/perfect.json";

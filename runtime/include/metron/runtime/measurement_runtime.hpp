@@ -2,6 +2,7 @@
 #pragma once
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -297,6 +298,12 @@ class MeasurementRuntime {
   std::vector<MeasuredPoint> collect_points(const BlockPlan& plan, const Execution& execution,
                                             const std::string& feature, Span block_span);
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
+  /// A construction's sources resolved (MCS), and the earliest of their Feature::rests_on_s.
+  struct ResolvedSources {
+    std::vector<Geometry> geometry;
+    double rests_on_s = std::numeric_limits<double>::infinity();
+  };
+  Result<ResolvedSources> resolve_sources(const std::vector<FeatureRef>& sources, Span span) const;
   Result<const Datum*> datum(const std::string& label, Span span) const;
   void emit(RunEvent event);
   /// The matches of LOCATE's and ITERAT's features (runtime/src/best_fit_alignment.cpp).
