@@ -33,7 +33,7 @@ const std::vector<WordEntry<runtime::ToleranceKind>>& vocabulary() {
   static const auto rows =
       from_runtime({K::Diam,   K::Rad,    K::DistB, K::Pos,   K::Flat,    K::Cirlty, K::Cylcty, K::Sphcty, K::Strght,
                     K::Perp,   K::Parlel, K::Anglb, K::Profs, K::DistWrt, K::AngWrt, K::Cortol, K::Concen, K::Coaxial,
-                    K::Crnout, K::Totrun, K::Profl, K::Profp, K::Width,   K::Symmty, K::Angl,   K::Compos});
+                    K::Crnout, K::Totrun, K::Profl, K::Profp, K::Width,   K::Symmty, K::Angl,   K::Compos, K::Anglr});
   return rows;
 }
 

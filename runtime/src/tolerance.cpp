@@ -47,6 +47,7 @@ const char* dmis_word(ToleranceKind kind) {
     case ToleranceKind::Profp: return "PROFP";
     case ToleranceKind::Width: return "WIDTH";
     case ToleranceKind::Symmty: return "SYMMTY";
+    case ToleranceKind::Anglr: return "ANGLR";
   }
   return "DIAM";
 }
@@ -65,6 +66,7 @@ constexpr double k_parallel_cos = 1e-9;
 constexpr double k_pi = 3.14159265358979323846;
 
 double to_deg(double rad) { return rad * 180.0 / k_pi; }
+double to_rad(double deg) { return deg * k_pi / 180.0; }
 
 /// Angle between two unit vectors in degrees, 0..180; atan2 keeps small angles accurate.
 double angle_deg(const Vec3& a, const Vec3& b) { return to_deg(std::atan2(a.cross(b).norm(), a.dot(b))); }
@@ -191,9 +193,45 @@ bool has_axis(FeatureType type) {
 
 // ---------------------------------------------------------------- size
 
+// A helical scan has no gap in height to cut at: taken in its order, its points turn steadily
+// about the axis. Cut into turns (each a full revolution, the last part-turn kept as its own
+// section when it spans half a turn, else joined to the turn before), each turn is a section.
+// Empty when the points are not such a scan: fewer than 16, under two turns in all, or turning
+// back and forth (|net turn| under 90% of the turning).
+std::vector<std::vector<std::size_t>> helix_turns(const std::vector<double>& angles) {
+  constexpr double two_pi = 2 * std::numbers::pi;
+  if (angles.size() < 16) return {};
+  std::vector<double> unwrapped = {0.0};
+  double travelled = 0;
+  for (std::size_t i = 1; i < angles.size(); ++i) {
+    const double step = std::remainder(angles[i] - angles[i - 1], two_pi);
+    unwrapped.push_back(unwrapped.back() + step);
+    travelled += std::abs(step);
+  }
+  const double net = std::abs(unwrapped.back());
+  if (net < 2 * two_pi || net < 0.9 * travelled) return {};
+  std::vector<std::vector<std::size_t>> turns(1);
+  double turn_start = 0;
+  for (std::size_t i = 0; i < angles.size(); ++i) {
+    if (std::abs(unwrapped[i] - turn_start) >= two_pi - 1e-12) {
+      turns.emplace_back();
+      turn_start = unwrapped[i];
+    }
+    turns.back().push_back(i);
+  }
+  if (turns.size() > 1 && std::abs(unwrapped.back() - turn_start) < std::numbers::pi) {
+    auto last = std::move(turns.back());
+    turns.pop_back();
+    turns.back().insert(turns.back().end(), last.begin(), last.end());
+  }
+  return turns;
+}
+
 // A cylinder's points in sections: sorted by their height along the axis, a new section where
-// consecutive heights part by more than 5% of their whole range (a helical scan is one section).
-std::vector<std::vector<std::size_t>> sections_by_height(const std::vector<double>& heights) {
+// consecutive heights part by more than 5% of their whole range; points of a helical scan (one
+// such section) in its turns (helix_turns). `angles` about the axis, in the order taken.
+std::vector<std::vector<std::size_t>> sections_by_height(const std::vector<double>& heights,
+                                                         const std::vector<double>& angles) {
   std::vector<std::size_t> order(heights.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return heights[a] < heights[b]; });
@@ -202,6 +240,10 @@ std::vector<std::vector<std::size_t>> sections_by_height(const std::vector<doubl
   for (std::size_t k = 0; k < order.size(); ++k) {
     if (k == 0 || heights[order[k]] - heights[order[k - 1]] > 0.05 * range + 1e-9) sections.emplace_back();
     sections.back().push_back(order[k]);
+  }
+  if (sections.size() == 1 && range > 0) {
+    auto turns = helix_turns(angles);
+    if (!turns.empty()) return turns;
   }
   return sections;
 }
@@ -229,7 +271,9 @@ tl::expected<std::vector<double>, std::string> two_point_sizes(const Geometry& g
   }
   std::vector<std::vector<Polar>> sections;
   if (g.type == FeatureType::Cylinder) {
-    for (const auto& indices : sections_by_height(heights)) {
+    std::vector<double> angles;
+    for (const Polar& p : polar) angles.push_back(p.angle);
+    for (const auto& indices : sections_by_height(heights, angles)) {
       sections.emplace_back();
       for (const std::size_t i : indices) sections.back().push_back(polar[i]);
     }
@@ -639,11 +683,15 @@ struct Sections {
 Sections sections_of(const Feature& feature, const Geometry& actual) {
   Sections s;
   if (actual.direction.norm() > 1e-12) s.axis = actual.direction.normalized();
+  const Vec3 u = s.axis.unitOrthogonal(), v = s.axis.cross(u);
+  std::vector<double> angles;
   for (const MeasuredPoint& p : feature.points) {
     s.surface.push_back(p.surface_mm());
-    s.heights.push_back((s.surface.back() - actual.position).dot(s.axis));
+    const Vec3 d = s.surface.back() - actual.position;
+    s.heights.push_back(d.dot(s.axis));
+    angles.push_back(std::atan2(d.dot(v), d.dot(u)));
   }
-  s.rings = sections_by_height(s.heights);
+  s.rings = sections_by_height(s.heights, angles);
   return s;
 }
 
@@ -893,6 +941,38 @@ double axis_length_mm(const Feature& feature, const Geometry& actual, const Vec3
   return feature.nominal.length_mm;
 }
 
+/// The angle (degrees, 0..90) the feature's direction (a plane's normal, an axis) must make
+/// with the datum's (a plane's normal, an axis). PERP and PARLEL: 90 or 0. ANGLR: the basic angle
+/// is the drawing's, between the elements themselves (ASME Y14.5 angularity: a surface, median
+/// plane or axis at the basic angle to the datum), which between a plane and an axis is the
+/// complement of the normal's; an obtuse basic angle is the same lines' acute one.
+double tolerated_direction_angle_deg(const ToleranceSpec& spec, bool feature_plane, bool datum_plane) {
+  const bool same = feature_plane == datum_plane;
+  switch (spec.kind) {
+    case ToleranceKind::Perp: return same ? 90.0 : 0.0;
+    case ToleranceKind::Parlel: return same ? 0.0 : 90.0;
+    default: {
+      double basic = std::fmod(std::abs(spec.nominal), 180.0);
+      basic = std::min(basic, 180.0 - basic);
+      return same ? basic : 90.0 - basic;
+    }
+  }
+}
+
+/// The direction at `angle_deg` from `d` in the half-plane of d and `toward` (its part across d
+/// and the sense of its part along d): the tolerated direction nearest `toward`. Empty when
+/// `toward` runs along d and the angle is not 0.
+std::optional<Vec3> tilted_toward(const Vec3& d, const Vec3& toward, double angle_deg) {
+  const double along = toward.dot(d);
+  const Vec3 across = toward - along * d;
+  const double sense = along < 0 ? -1.0 : 1.0;
+  if (angle_deg <= 0) return sense * d;
+  if (across.norm() < 1e-9) return std::nullopt;
+  if (angle_deg >= 90) return Vec3(across.normalized());
+  const double a = to_rad(angle_deg);
+  return Vec3(std::cos(a) * sense * d + std::sin(a) * across.normalized());
+}
+
 Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                              ToleranceResult result) {
   static constexpr Types k_types = {FeatureType::Plane,         FeatureType::Line,       FeatureType::Cylinder,
@@ -907,9 +987,22 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
   const Vec3& d = datum->direction;
   const auto own = unit(oriented_direction(actual), "the actual of " + feature.label);
   if (!own) return Error(own.error());
-  const bool perp = spec.kind == ToleranceKind::Perp;
+  const bool angularity = spec.kind == ToleranceKind::Anglr;
+  const bool feature_plane =
+      feature.nominal.type == FeatureType::Plane || feature.nominal.type == FeatureType::ParallelPlanes;
+  const double tolerated_deg = tolerated_direction_angle_deg(spec, feature_plane, datum->plane);
+  // The elements' angle as the drawing states it (ANGLR's note): between a plane and an axis the
+  // complement of the normal's.
+  const auto drawn_angle = [&](const Vec3& v) {
+    const double a = line_angle_deg(v, d);
+    return feature_plane == datum->plane ? a : 90.0 - a;
+  };
+  const auto basic_note = [&](const Vec3& v) {
+    return fmt::format("the {} at {:.4f} deg to {}, basic {:g} deg", feature_plane ? "plane" : "axis", drawn_angle(v),
+                       datum->name, spec.nominal);
+  };
 
-  if (feature.nominal.type == FeatureType::Plane || feature.nominal.type == FeatureType::ParallelPlanes) {
+  if (feature_plane) {
     if (feature.points.empty())
       return Error(
           fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind), feature.label));
@@ -922,39 +1015,34 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
         q -= ((q - actual.position).dot(*own) >= 0 ? 1.0 : -1.0) * (actual.width_mm / 2) * *own;
       surface.push_back(q);
     }
-    // Zone: two planes of the tolerated orientation; their normal is the reference direction
-    // itself, or the plane's normal made perpendicular to it.
-    Vec3 zone_normal = d;
+    // Zone: two planes of the tolerated orientation. Their normal is at the tolerated angle to
+    // the reference direction; the rotation about it that leaves free is the plane's own (the
+    // most favourable) unless a secondary datum fixes it.
+    std::optional<Vec3> zone_normal;
     bool oriented_by_secondary = false;
-    if (perp == datum->plane && spec.datums.size() >= 2) {
+    if (tolerated_deg > 0 && spec.datums.size() >= 2) {
       // A secondary datum fixes the rotation the primary leaves free: the zone's normal is the
-      // plane's nominal normal in the datum reference frame (ASME Y14.5 6.3), kept square to the
-      // primary datum.
+      // plane's nominal normal in the datum reference frame (ASME Y14.5 6.3), brought to the
+      // tolerated angle to the primary datum.
       const auto frame = frame_of_datums(spec, feature, context);
       if (!frame) return Error(frame.error());
       if (frame->rotations_fixed == 3) {
         const Vec3 n = frame->actual_to_nominal.linear().transpose() * feature.nominal.direction.normalized();
-        const Vec3 m = n - n.dot(d) * d;
-        if (m.norm() > 1e-9) {
-          zone_normal = m.normalized();
-          oriented_by_secondary = true;
-        }
+        zone_normal = tilted_toward(d, n, tolerated_deg);
+        oriented_by_secondary = zone_normal.has_value();
       }
     }
-    if (perp == datum->plane && !oriented_by_secondary) {
-      Vec3 m = *own - own->dot(d) * d;
-      if (m.norm() < 1e-9) m = feature.nominal.direction - feature.nominal.direction.dot(d) * d;
-      if (m.norm() < 1e-9)
-        return Error(
-            fmt::format("{} of {}: the plane is parallel to {}, so the zone orientation is "
-                        "undefined",
-                        dmis_word(spec.kind), feature.label, datum->name));
-      zone_normal = m.normalized();
-    }
+    if (!zone_normal) zone_normal = tilted_toward(d, *own, tolerated_deg);
+    if (!zone_normal) zone_normal = tilted_toward(d, feature.nominal.direction, tolerated_deg);
+    if (!zone_normal)
+      return Error(
+          fmt::format("{} of {}: the plane is parallel to {}, so the zone orientation is "
+                      "undefined",
+                      dmis_word(spec.kind), feature.label, datum->name));
     double lo = std::numeric_limits<double>::infinity();
     double hi = -lo;
     for (const Vec3& q : surface) {
-      const double h = q.dot(zone_normal);
+      const double h = q.dot(*zone_normal);
       lo = std::min(lo, h);
       hi = std::max(hi, h);
     }
@@ -962,9 +1050,10 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     add_note(result, fmt::format("normal of {}{} at {:.4f} deg to {} ({})", feature.label,
                                  feature.nominal.type == FeatureType::ParallelPlanes ? "'s median plane" : "",
                                  line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis"));
+    if (angularity) add_note(result, basic_note(*own));
     if (oriented_by_secondary) {
       add_note(result, fmt::format("zone oriented by datums {}: its normal at {:.4f} deg to the plane's",
-                                   join_datums(spec), line_angle_deg(*own, zone_normal)));
+                                   join_datums(spec), line_angle_deg(*own, *zone_normal)));
       set_limits(result, 0, spec.zone);
       result.actual = result.value;
       return result;
@@ -974,13 +1063,24 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     if (!(length_mm > 0))
       return Error(fmt::format("{} of {}: the axis has no length and no points to take it from", dmis_word(spec.kind),
                                feature.label));
-    // The axis should run along d (PERP to a plane, PARLEL to an axis): a cylindrical zone whose
-    // diameter is the axis's sideways excursion; otherwise two planes normal to d.
-    const bool along = perp == datum->plane;
-    result.value = along ? length_mm * own->cross(d).norm() : length_mm * std::abs(own->dot(d));
+    // The axis should run at the tolerated angle to d: along d (PERP to a plane, PARLEL to an
+    // axis) a cylindrical zone whose diameter is the axis's sideways excursion; otherwise two
+    // planes holding the tolerated direction, square to the plane of d and the axis. Either way
+    // the axis's excursion over its length is L sin of its angle to the tolerated direction
+    // nearest it.
+    std::optional<Vec3> tolerated = tilted_toward(d, *own, tolerated_deg);
+    if (!tolerated) tolerated = tilted_toward(d, feature.nominal.direction, tolerated_deg);
+    if (!tolerated)
+      return Error(
+          fmt::format("{} of {}: the axis runs along {} and so does its nominal: the zone orientation is "
+                      "undefined",
+                      dmis_word(spec.kind), feature.label, datum->name));
+    const bool along = tolerated_deg <= 0;
+    result.value = length_mm * own->cross(*tolerated).norm();
     add_note(result, fmt::format("axis of {} at {:.4f} deg to {} ({}), over {:.4f} mm ({} zone)", feature.label,
                                  line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
                                  along ? "diametral" : "two-plane"));
+    if (angularity) add_note(result, basic_note(*own));
   }
   result.actual = result.value;
   set_limits(result, 0, spec.zone);
@@ -1460,7 +1560,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
       return in(
           {T::Point, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::Line, T::ClosedSlot, T::Torus, T::Ellipse});
     case ToleranceKind::Perp:
-    case ToleranceKind::Parlel: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::ClosedSlot, T::ParallelPlanes});
+    case ToleranceKind::Parlel:
+    case ToleranceKind::Anglr: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::ClosedSlot, T::ParallelPlanes});
     case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
     case ToleranceKind::Concen:
     case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
@@ -1510,7 +1611,8 @@ tl::expected<ToleranceResult, std::string> evaluate_tolerance(const ToleranceSpe
     case ToleranceKind::Sphcty:
     case ToleranceKind::Strght: return evaluate_form(spec, feature, context, std::move(result));
     case ToleranceKind::Perp:
-    case ToleranceKind::Parlel: return evaluate_orientation(spec, feature, context, std::move(result));
+    case ToleranceKind::Parlel:
+    case ToleranceKind::Anglr: return evaluate_orientation(spec, feature, context, std::move(result));
     case ToleranceKind::Anglb: return evaluate_anglb(spec, features, context, std::move(result));
     case ToleranceKind::Profs: return evaluate_profs(spec, feature, context, std::move(result));
     case ToleranceKind::DistWrt: return evaluate_distb(spec, feature, *features[1], context, std::move(result));

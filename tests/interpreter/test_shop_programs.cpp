@@ -508,15 +508,15 @@ TEST(ShopPrograms, UnevaluatedToleranceTypesWarnAndTheirOutputIsLeftOut) {
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_TRUE(c.has("tolerance type PROFT is not evaluated by metron")) << c.text;
   EXPECT_TRUE(c.has("T(PT) (TOL/PROFT) is not evaluated: left out of this OUTPUT")) << c.text;
-  // A type metron does not know at all (angularity ANGLR, a vendor's) is left out alike: it
-  // stopped the whole program before. DMIS's spellings ANGLWRT and COAXL are ANGWRT and COAXIAL.
+  // A type metron does not know at all (a vendor's) is left out alike: it stopped the whole
+  // program before. DMIS's spellings ANGLWRT and COAXL are ANGWRT and COAXIAL.
   const auto unknown = check(
-      "DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(AR)=TOL/ANGLR,0.05,90,DAT(A)\n"
+      "DMISMN/'p', 5.1\nF(C1)=FEAT/CIRCLE,INNER,CART,0,0,0,0,0,1,10\nT(AR)=TOL/VENDORTOL,0.05,90,DAT(A)\n"
       "OUTPUT/FA(C1),TA(AR)\nENDFIL\n");
   EXPECT_EQ(unknown.errors, 0u) << unknown.text;
-  EXPECT_TRUE(unknown.has("tolerance type ANGLR is not one metron knows; the OUTPUT of T(AR) will be left out"))
+  EXPECT_TRUE(unknown.has("tolerance type VENDORTOL is not one metron knows; the OUTPUT of T(AR) will be left out"))
       << unknown.text;
-  EXPECT_TRUE(unknown.has("T(AR) (TOL/ANGLR) is not evaluated: left out of this OUTPUT")) << unknown.text;
+  EXPECT_TRUE(unknown.has("T(AR) (TOL/VENDORTOL) is not evaluated: left out of this OUTPUT")) << unknown.text;
   const auto spelled = check(
       "DMISMN/'p', 5.1\nF(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nF(C1)=FEAT/CYLNDR,INNER,CART,0,0,0,0,0,1,10,5\n"
       "DATDEF/FA(C1),DAT(D)\nT(AW)=TOL/ANGLWRT,90,-0.1,0.1,FA(P)\nT(CX)=TOL/COAXL,0.05,DAT(D)\n"
@@ -1166,6 +1166,82 @@ TEST(ShopPrograms, PerpendicularityOfAConesAxis) {
   EXPECT_LT(tolerance(*upright.session, "PP")->value, 1e-5) << tolerance(*upright.session, "PP")->note;
 }
 
+// TOL/ANGLR (angularity): a block whose top-right edge is chamfered at 30 deg to the top face
+// (a world written here), the chamfer turned a further 0.2 deg about Y (hidden). Its touches 6 mm
+// apart in X, 6 / cos 30 deg down its slope, spread that times sin 0.2 deg across the zone at a
+// basic 30 deg to datum A: 0.024184 (the geometry of the world, not metron's); untilted, 0.
+TEST(ShopPrograms, AngularityOfAChamferToTheTopFace) {
+  const double slope = std::tan(30 * std::numbers::pi / 180);
+  const std::string design =
+      "{\"intersection\": ["
+      "{\"type\": \"half_space\", \"name\": \"TOP\", \"point\": [80, 50, 40], \"normal\": [0, 0, 1]},"
+      "{\"type\": \"half_space\", \"name\": \"BOTTOM\", \"point\": [80, 50, 0], \"normal\": [0, 0, -1]},"
+      "{\"type\": \"half_space\", \"name\": \"FRONT\", \"point\": [80, 0, 20], \"normal\": [0, -1, 0]},"
+      "{\"type\": \"half_space\", \"name\": \"BACK\", \"point\": [80, 100, 20], \"normal\": [0, 1, 0]},"
+      "{\"type\": \"half_space\", \"name\": \"LEFT\", \"point\": [0, 50, 20], \"normal\": [-1, 0, 0]},"
+      "{\"type\": \"half_space\", \"name\": \"RIGHT\", \"point\": [160, 50, 20], \"normal\": [1, 0, 0]},"
+      "{\"type\": \"half_space\", \"name\": \"CHAMFER\", \"point\": [150, 50, 40], "
+      "\"normal\": [0.5, 0, 0.8660254037844386]}]}";
+  const fs::path perfect = source_dir / "programs/worlds/perfect.json";
+  const auto world = [&](const std::string& name, const std::string& deviations) {
+    return write(name, "{\"extends\": \"" + perfect.string() + "\", \"part\": {\"design\": " + design +
+                           ", \"deviations\": " + deviations + "}}\n");
+  };
+  std::string text =
+      "DMISMN/'chamfer', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,1\nSNSET/RETRCT,1\nSNSET/SEARCH,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nGOTO/100,50,60\n"
+      "F(TOP)=FEAT/PLANE,CART,100,50,40,0,0,1\nMEAS/PLANE,F(TOP),3\n  PTMEAS/CART,100,50,40,0,0,1\n"
+      "  PTMEAS/CART,140,10,40,0,0,1\n  PTMEAS/CART,100,10,40,0,0,1\nENDMES\nDATDEF/FA(TOP),DAT(A)\n"
+      "GOTO/175,50,60\nF(CH)=FEAT/PLANE,CART,155,50," +
+      fmt::format("{:.6f}", 40 - 5 * slope) + ",0.5,0,0.866025\nMEAS/PLANE,F(CH),4\n";
+  for (const double x : {152.0, 158.0})
+    for (const double y : {20.0, 80.0})
+      text += fmt::format("  PTMEAS/CART,{},{},{:.6f},0.5,0,0.866025\n", x, y, 40 - (x - 150) * slope);
+  text +=
+      "ENDMES\nT(AN)=TOL/ANGLR,0.02,30,DAT(A)\nT(AW)=TOL/ANGLR,30,0.03,DAT(A)\n"
+      "OUTPUT/FA(CH),TA(AN),TA(AW)\nENDFIL\n";
+  const auto checked = check(text);
+  EXPECT_EQ(checked.errors + checked.warnings, 0U) << checked.text;
+  const double truth = 6 / std::cos(30 * std::numbers::pi / 180) * std::sin(0.2 * std::numbers::pi / 180);
+  const auto turned = run(text, world("chamfer_turned.json", "{\"CHAMFER\": {\"tilt_deg\": [0, 0.2]}}"));
+  ASSERT_EQ(turned.status, ExecStatus::Finished) << turned.diagnostics;
+  const auto* an = tolerance(*turned.session, "AN");
+  const auto* aw = tolerance(*turned.session, "AW");
+  ASSERT_NE(an, nullptr) << turned.diagnostics;
+  ASSERT_NE(aw, nullptr) << turned.diagnostics;
+  EXPECT_NEAR(an->value, truth, 2e-6) << an->note;
+  EXPECT_FALSE(an->in_tolerance) << an->note;
+  EXPECT_NEAR(aw->value, truth, 2e-6) << aw->note;  // the angle first: the larger number is the angle
+  EXPECT_TRUE(aw->in_tolerance) << aw->note;
+  EXPECT_NE(an->note.find("basic 30 deg"), std::string::npos) << an->note;
+  const auto square = run(text, world("chamfer.json", "{}"));
+  ASSERT_EQ(square.status, ExecStatus::Finished) << square.diagnostics;
+  ASSERT_NE(tolerance(*square.session, "AN"), nullptr);
+  EXPECT_LT(tolerance(*square.session, "AN")->value, 1e-5) << tolerance(*square.session, "AN")->note;
+  // A datum is required, and a negative zone is refused, at check.
+  const auto no_datum = check("DMISMN/'p', 5.0\nT(A1)=TOL/ANGLR,0.02,30\nENDFIL\n");
+  EXPECT_TRUE(no_datum.has("TOL/ANGLR needs a datum DAT(x)")) << no_datum.text;
+  const auto negative = check("DMISMN/'p', 5.0\nT(A1)=TOL/ANGLR,-0.02,30,DAT(A)\nENDFIL\n");
+  EXPECT_TRUE(negative.has("a tolerance zone must not be negative")) << negative.text;
+}
+
+/// A boss tapering 0.2 deg (a cone whose apex lies 7 m above; its diameter 50 at z 15, 30 high):
+/// scan_lobed_circle.json's boss with the taper and without its lobes (hidden truth written here).
+fs::path taper_world() {
+  const fs::path lobed = source_dir / "programs/worlds/scan_lobed_circle.json";
+  const double tan_taper = std::tan(0.2 * std::numbers::pi / 180);
+  const double apex_height = 15 + 25 / tan_taper;  // the diameter is 50 at z 15
+  return write("taper.json",
+               fmt::format("{{\"extends\": \"{}\", \"part\": {{\"design\": {{\"intersection\": ["
+                           "{{\"type\": \"cone\", \"name\": \"BOSS\", \"apex\": [0, 0, {:.9f}], \"axis\": [0, 0, "
+                           "-1], \"half_angle_deg\": 0.2}},"
+                           "{{\"type\": \"half_space\", \"point\": [0, 0, 30], \"normal\": [0, 0, 1]}},"
+                           "{{\"type\": \"half_space\", \"point\": [0, 0, 0], \"normal\": [0, 0, -1]}}]}},"
+                           "\"deviations\": {{\"BOSS\": {{\"form\": {{\"lobes\": 3, \"amplitude_mm\": 0, "
+                           "\"phase_deg\": 0}}}}}}}}}}\n",
+                           lobed.string(), apex_height));
+}
+
 // A cylinder's two-point sizes are taken section by section: a boss tapering 0.2 deg (a cone whose
 // apex lies 7 m above, hidden truth of the world written here) touched at 5 points 72 deg apart at
 // z 8, 15 and 22, turned 0, 18 and 36 deg, so a point's opposite at z 8 lies at z 22 only. Per
@@ -1173,18 +1249,8 @@ TEST(ShopPrograms, PerpendicularityOfAConesAxis) {
 // section's diameters, 50 +- 2 x 7 tan 0.2 deg = 50 +- 0.04887 at the ends; taken as one section
 // those of z 8 and 22 would all be their mean, 50.
 TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
-  const fs::path lobed = source_dir / "programs/worlds/scan_lobed_circle.json";
   const double tan_taper = std::tan(0.2 * std::numbers::pi / 180);
-  const double apex_height = 15 + 25 / tan_taper;  // the diameter is 50 at z 15
-  const fs::path taper = write(
-      "taper.json", fmt::format("{{\"extends\": \"{}\", \"part\": {{\"design\": {{\"intersection\": ["
-                                "{{\"type\": \"cone\", \"name\": \"BOSS\", \"apex\": [0, 0, {:.9f}], \"axis\": [0, 0, "
-                                "-1], \"half_angle_deg\": 0.2}},"
-                                "{{\"type\": \"half_space\", \"point\": [0, 0, 30], \"normal\": [0, 0, 1]}},"
-                                "{{\"type\": \"half_space\", \"point\": [0, 0, 0], \"normal\": [0, 0, -1]}}]}},"
-                                "\"deviations\": {{\"BOSS\": {{\"form\": {{\"lobes\": 3, \"amplitude_mm\": 0, "
-                                "\"phase_deg\": 0}}}}}}}}}}\n",
-                                lobed.string(), apex_height));
+  const fs::path taper = taper_world();
   std::string text =
       "DMISMN/'taper', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
       "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\n"
@@ -1213,6 +1279,36 @@ TEST(ShopPrograms, TwoPointSizesOfATaperAreTakenPerSection) {
   EXPECT_LT(straight->value, 1e-3) << straight->note;
   EXPECT_TRUE(straight->in_tolerance) << straight->note;
   EXPECT_NE(straight->note.find("the centres of 3 sections"), std::string::npos) << straight->note;
+}
+
+// A helical scan has no sections by height: its turns are its sections. The tapered boss of
+// taper_world() scanned along four turns of pitch 4 mm from z 24 down to 8: its axis is straight
+// (the four turns' centres on a line but for the probe and the scan's own error); each turn's
+// roundness is the taper over one pitch, 4 tan 0.2 deg = 0.0140: no more (the zone about the true
+// axis holds the turn) and no less (the turn's first and last points lie at one angle, that far
+// apart radially, whatever the centre). All the points as one section would span 16 mm of taper,
+// 0.0559.
+TEST(ShopPrograms, AHelicalScanIsSectionedByItsTurns) {
+  const double tan_taper = std::tan(0.2 * std::numbers::pi / 180);
+  const std::string text =
+      "DMISMN/'helix', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,4\nSNSLCT/S(P)\n"
+      "SNSET/APPRCH,3\nSNSET/RETRCT,3\nSNSET/SEARCH,3\nGOTO/240,300,40\n"
+      "P(H)=PATH/HELICAL,CART,200,300,24,0,0,-1,25,0,1440,4,OUTER\n"
+      "F(BOSS)=FEAT/CYLNDR,OUTER,CART,200,300,8,0,0,1,50,16\nSCNMOD/ON\nMEAS/CYLNDR,F(BOSS),0\n  PAMEAS/P(H)\n"
+      "ENDMES\nSCNMOD/OFF\nT(ST)=TOL/STRGHT,0.002\nT(RN)=TOL/CIRLTY,0.02\nOUTPUT/FA(BOSS),TA(ST),TA(RN)\nENDFIL\n";
+  EXPECT_EQ(check(text).errors, 0U) << check(text).text;
+  const auto ran = run(text, taper_world());
+  ASSERT_EQ(ran.status, ExecStatus::Finished) << ran.diagnostics;
+  const auto* straight = tolerance(*ran.session, "ST");
+  ASSERT_NE(straight, nullptr) << ran.diagnostics;
+  EXPECT_LT(straight->value, 1e-3) << straight->note;
+  EXPECT_NE(straight->note.find("the centres of 4 sections"), std::string::npos) << straight->note;
+  const auto* round = tolerance(*ran.session, "RN");
+  ASSERT_NE(round, nullptr) << ran.diagnostics;
+  EXPECT_NEAR(round->value, 4 * tan_taper, 1e-3) << round->note;
+  EXPECT_NE(round->note.find("of 4 sections"), std::string::npos) << round->note;
+  std::printf("helix on a 0.2 deg taper: axis straightness %.6f, worst turn's roundness %.6f (4 tan 0.2 deg = %.6f)\n",
+              straight->value, round->value, 4 * tan_taper);
 }
 
 // TOL/FLAT,t,tu,a[,b] and TOL/STRGHT,t,tu,l (DMIS 5.x; ASME Y14.5 form per unit area or length)

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <tuple>
 
 #include "feature_geometry.hpp"
 #include "metron/runtime/tolerance.hpp"
@@ -635,6 +636,89 @@ TEST(ToleranceOrientation, DatumErrors) {
             "CIRCLE");
 }
 
+// ------------------------------------------------------------------ ANGLR
+
+/// A face through the origin whose normal is `tilt_deg` from +Z toward +X (a chamfer), touched
+/// at slant distances 2 and 8 mm down its slope and y 0 and 30.
+Feature chamfer(double tilt_deg) {
+  const double t = tilt_deg * k_pi / 180.0;
+  const Vec3 normal(std::sin(t), 0, std::cos(t));
+  const Vec3 slope(std::cos(t), 0, -std::sin(t));  // in the face, down from the origin
+  const double nominal = 30 * k_pi / 180.0;
+  Feature f =
+      feature("CHAMFER", plane({0, 0, 0}, Vec3(std::sin(nominal), 0, std::cos(nominal))), plane({0, 0, 0}, normal));
+  for (double s : {2.0, 8.0})
+    for (double y : {0.0, 30.0}) f.points.push_back(probed(s * slope + Vec3(0, y, 0), normal));
+  return f;
+}
+
+// Angularity (ASME Y14.5M-1994 6.6.2): the zone is two planes (for an axis: its excursion) at the basic
+// angle to the datum. Expected values from the geometry: a face 0.1 deg past its basic 30 deg,
+// touched 6 mm apart down its slope, spreads 6 sin(0.1 deg) across the zone; an axis 0.2 deg off
+// over 40 mm, 40 sin(0.2 deg).
+TEST(ToleranceOrientation, AngularityAtTheBasicAngle) {
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  ToleranceContext context;
+  context.datums = {&a};
+  ToleranceSpec s = spec(ToleranceKind::Anglr);
+  s.zone = 0.01;
+  s.nominal = 30;
+  s.datums = {"A"};
+  const double deg = k_pi / 180.0;
+  const Feature off = chamfer(30.1);
+  auto r = evaluate(s, {&off}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 6 * std::sin(0.1 * deg), 1e-12);
+  EXPECT_FALSE(r->in_tolerance);
+  EXPECT_NE(r->note.find("the plane at 30.1000 deg to datum A, basic 30 deg"), std::string::npos) << r->note;
+  const Feature exact = chamfer(30);
+  EXPECT_NEAR(evaluate(s, {&exact}, context)->value, 0, 1e-12);
+  // The same lines at the obtuse angle; and at 90 and 0 deg, angularity is PERP and PARLEL.
+  s.nominal = 150;
+  EXPECT_NEAR(evaluate(s, {&off}, context)->value, 6 * std::sin(0.1 * deg), 1e-12);
+  const Feature wall = leaning_wall();
+  const Feature top = rising_top();
+  for (const auto& [basic, kind, f] :
+       {std::tuple{90.0, ToleranceKind::Perp, &wall}, std::tuple{0.0, ToleranceKind::Parlel, &top}}) {
+    s.kind = ToleranceKind::Anglr;
+    s.nominal = basic;
+    const double angularity = evaluate(s, {f}, context)->value;
+    s.kind = kind;
+    EXPECT_NEAR(angularity, evaluate(s, {f}, context)->value, 1e-12) << basic;
+  }
+
+  // An axis at 45.2 deg to the datum plane (its direction 44.8 deg from the plane's normal),
+  // basic 45 deg: 40 sin(0.2 deg); the same axis against a datum axis along Z (the angle between
+  // the axes is 44.8 deg) is 0.2 deg off a basic 45 too, on the other side.
+  s.kind = ToleranceKind::Anglr;
+  s.nominal = 45;
+  const Vec3 axis(std::sin(44.8 * deg), 0, std::cos(44.8 * deg));
+  const Feature pin = feature("PIN", round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, Vec3(1, 0, 1), 10, 40),
+                              round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, axis, 10, 40));
+  r = evaluate(s, {&pin}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 40 * std::sin(0.2 * deg), 1e-12);
+  EXPECT_NE(r->note.find("the axis at 45.2000 deg to datum A, basic 45 deg"), std::string::npos) << r->note;
+  const Datum b = datum("B", round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10, 50));
+  context.datums = {&b};
+  r = evaluate(s, {&pin}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 40 * std::sin(0.2 * deg), 1e-12);
+  EXPECT_NE(r->note.find("the axis at 44.8000 deg to datum B, basic 45 deg"), std::string::npos) << r->note;
+  // A plane at a basic 20 deg to a datum axis: its normal 70 deg from the axis. The chamfer's
+  // normal is 30.1 deg from it, the plane 59.9 deg to the axis: 0.1 deg off a basic 60.
+  s.nominal = 60;
+  r = evaluate(s, {&off}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 6 * std::sin(0.1 * deg), 1e-12);
+  EXPECT_NE(r->note.find("the plane at 59.9000 deg to datum B"), std::string::npos) << r->note;
+  // An axis along the datum's normal has no rotation toward the basic angle but its nominal's.
+  context.datums = {&a};
+  const Feature upright = feature("UP", round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, Vec3(1, 0, 1), 10, 40),
+                                  round(FeatureType::Cylinder, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 10, 40));
+  EXPECT_NEAR(evaluate(s, {&upright}, context)->value, 40 * std::sin(30 * deg), 1e-12);
+}
+
 // ------------------------------------------------------------------ ANGLB
 
 TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
@@ -1111,12 +1195,13 @@ TEST(ToleranceTypes, TheTableIsTheEvaluators) {
                                FeatureType::Circle,         FeatureType::Arc,          FeatureType::Sphere,
                                FeatureType::Cylinder,       FeatureType::Cone,         FeatureType::ParallelPlanes,
                                FeatureType::GenericSurface, FeatureType::GenericCurve, FeatureType::ClosedSlot};
-  const ToleranceKind kinds[] = {
-      ToleranceKind::Diam,   ToleranceKind::Rad,    ToleranceKind::Flat,   ToleranceKind::Cirlty,
-      ToleranceKind::Cylcty, ToleranceKind::Sphcty, ToleranceKind::Strght, ToleranceKind::Pos,
-      ToleranceKind::Perp,   ToleranceKind::Parlel, ToleranceKind::Concen, ToleranceKind::Coaxial,
-      ToleranceKind::Crnout, ToleranceKind::Totrun, ToleranceKind::Profs,  ToleranceKind::Profl,
-      ToleranceKind::Width,  ToleranceKind::Symmty, ToleranceKind::Profp,  ToleranceKind::Angl};
+  const ToleranceKind kinds[] = {ToleranceKind::Diam,   ToleranceKind::Rad,    ToleranceKind::Flat,
+                                 ToleranceKind::Cirlty, ToleranceKind::Cylcty, ToleranceKind::Sphcty,
+                                 ToleranceKind::Strght, ToleranceKind::Pos,    ToleranceKind::Perp,
+                                 ToleranceKind::Parlel, ToleranceKind::Concen, ToleranceKind::Coaxial,
+                                 ToleranceKind::Crnout, ToleranceKind::Totrun, ToleranceKind::Profs,
+                                 ToleranceKind::Profl,  ToleranceKind::Width,  ToleranceKind::Symmty,
+                                 ToleranceKind::Profp,  ToleranceKind::Angl,   ToleranceKind::Anglr};
   const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitX()));
   ToleranceContext context;
   context.datums = {&a};

@@ -81,6 +81,7 @@ ToleranceNumbers tolerance_numbers(ToleranceKind kind) {
     case ToleranceKind::AngWrt: return {3, "nominal angle, lower and upper tolerance", false};
     case ToleranceKind::Cortol: return {2, "lower and upper tolerance", false};
     case ToleranceKind::Anglb: return {3, "nominal angle, lower and upper tolerance", false};
+    case ToleranceKind::Anglr: return {2, "the tolerance zone and the basic angle", false};
     default: return {1, "the tolerance zone", true};
   }
 }
@@ -589,9 +590,9 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (limit_form && numbers[0] > numbers[1])
     return error(p[3].span, "sema.tolerance-order",
                  fmt::format("the lower limit {} is above the upper limit {}", numbers[0], numbers[1]));
-  if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Concen ||
-       kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout || kind == ToleranceKind::Totrun ||
-       kind == ToleranceKind::Symmty) &&
+  if ((kind == ToleranceKind::Perp || kind == ToleranceKind::Parlel || kind == ToleranceKind::Anglr ||
+       kind == ToleranceKind::Concen || kind == ToleranceKind::Coaxial || kind == ToleranceKind::Crnout ||
+       kind == ToleranceKind::Totrun || kind == ToleranceKind::Symmty) &&
       std::none_of(in.operands.begin(), in.operands.end(),
                    [](const ir::Operand& o) { return o.kind == ir::Operand::Kind::Label; }))
     return error(p.back().span, "sema.expected-datum", fmt::format("TOL/{} needs a datum DAT(x)", word));
@@ -612,6 +613,11 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   }
   if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
+  // TOL/ANGLR,zone,angle: no public DMIS text gives the order; the basic angle is the larger
+  // number, the zone the smaller, whichever comes first (docs/tolerances.md "Angularity").
+  if (kind == ToleranceKind::Anglr && !std::isnan(numbers[0]) && !std::isnan(numbers[1]) &&
+      std::min(numbers[0], numbers[1]) < 0)
+    return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
   // TOL/FLAT,t,tu,a[,b] and TOL/STRGHT,t,tu,l: a zone per unit area (a x b; a square of a) or per

@@ -40,8 +40,9 @@ enum class ToleranceKind {
   Width,    ///< size of a PARPLN (slot or tab): its width's deviation
   Symmty,   ///< symmetry: a PARPLN's median plane about a datum plane
   Angl,     ///< a CONE's included angle: its deviation (DMIS TOL/ANGL,lo,up)
-  Compos
-};                                          ///< composite position: a pattern's PATERN tier and its FEATUR tier
+  Compos,   ///< composite position: a pattern's PATERN tier and its FEATUR tier
+  Anglr     ///< angularity: a plane, median plane or axis at a basic angle to a datum, within a zone
+};
 const char* dmis_word(ToleranceKind kind);  ///< DIAM, RAD, DISTB, POS, FLAT, ...
 /// Kinds whose value is an angle (degrees), not a length.
 inline bool is_angle_kind(ToleranceKind kind) {
@@ -74,10 +75,10 @@ enum class MaterialCondition { Rfs, Mmc, Lmc };
 struct ToleranceSpec {
   std::string label;
   ToleranceKind kind = ToleranceKind::Diam;
-  double nominal = 0;      ///< DISTB nominal distance, ANGLB nominal angle
+  double nominal = 0;      ///< DISTB nominal distance, ANGLB nominal angle, ANGLR basic angle (degrees)
   double lower = 0;        ///< lower deviation limit (DIAM, RAD, DISTB, ANGLB, PROFS)
   double upper = 0;        ///< upper deviation limit
-  double zone = 0;         ///< tolerance zone (POS, form, PERP, PARLEL)
+  double zone = 0;         ///< tolerance zone (POS, form, PERP, PARLEL, ANGLR)
   bool three_d = false;    ///< POS 3D (else 2D)
   bool long_side = false;  ///< WIDTH,...,LONG: a CPARLN's length (SHORT, the default: its width)
   DistanceAxis axis = DistanceAxis::PointToPoint;
