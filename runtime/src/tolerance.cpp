@@ -1504,7 +1504,7 @@ Outcome evaluate_runout(const ToleranceSpec& spec, const Feature& feature, const
 // one system, so the alignment does not matter).
 Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, const ToleranceContext& context,
                           ToleranceResult result) {
-  static constexpr Types k_types = {FeatureType::ParallelPlanes};
+  static constexpr Types k_types = {FeatureType::ParallelPlanes, FeatureType::ClosedSlot};
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual = actual_of(feature);
   if (!actual) return Error(actual.error());
@@ -1515,14 +1515,26 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
         fmt::format("{} is not a plane: SYMMTY needs a datum median plane (a PARPLN) or a PLANE", datum->name));
   const Geometry& datum_plane = context.datums.front()->geometry;
   const Geometry& g = **actual;
-  const auto n = unit(g.direction, "the actual of " + feature.label);
+  // A closed slot's median plane runs along its long axis, across its width: its normal is the
+  // width direction, and only the points on its two sides (probed across the width, within 30
+  // deg) have an opposite side to be the middle of; the ends' points do not.
+  const bool slot = feature.nominal.type == FeatureType::ClosedSlot;
+  const auto n = unit(slot ? Vec3(g.direction.cross(g.slot_axis)) : g.direction, "the actual of " + feature.label);
   if (!n) return Error(n.error());
   std::vector<Vec3> median;
+  std::size_t ends = 0;
   for (const MeasuredPoint& p : feature.points) {
+    if (slot && !(std::abs(p.normal.dot(*n)) >= std::cos(to_rad(30)) * p.normal.norm())) {
+      ++ends;
+      continue;
+    }
     const Vec3 s = p.surface_mm();
     const double side = (s - g.position).dot(*n) >= 0 ? 1.0 : -1.0;
     median.push_back(s - side * 0.5 * g.width_mm * *n);
   }
+  if (median.empty() && !feature.points.empty())
+    return Error(fmt::format("SYMMTY of {}: none of its {} points lies on its sides (probed across its width)",
+                             feature.label, feature.points.size()));
   if (median.empty()) median.push_back(g.position);  // a constructed or stated actual: its median plane's point
   double largest_mm = 0;
   for (const Vec3& m : median)
@@ -1530,8 +1542,9 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
   result.value = 2.0 * largest_mm;
   result.actual = result.value;
   result.nominal = 0;
-  add_note(result, fmt::format("median plane of {} from {} median points, about the median plane of {}", feature.label,
-                               median.size(), datum->name));
+  add_note(result,
+           fmt::format("median plane of {} from {} median points{}, about the median plane of {}", feature.label,
+                       median.size(), ends > 0 ? fmt::format(" (its {} end points left out)", ends) : "", datum->name));
   if (line_angle_deg(*n, datum->direction) > 45)
     add_note(result, fmt::format("{}'s median plane is {:.1f} deg from the datum plane: not a symmetry about it",
                                  feature.label, line_angle_deg(*n, datum->direction)));
@@ -1572,7 +1585,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
           {T::Plane, T::Circle, T::Arc, T::Sphere, T::Cylinder, T::Cone, T::GenericSurface, T::Torus, T::Ellipse});
     case ToleranceKind::Profl: return in({T::Line, T::Circle, T::Arc, T::GenericCurve, T::Ellipse});
     case ToleranceKind::Width: return in({T::ParallelPlanes, T::ClosedSlot});
-    case ToleranceKind::Symmty: return in({T::ParallelPlanes});
+    case ToleranceKind::Symmty: return in({T::ParallelPlanes, T::ClosedSlot});
     case ToleranceKind::Profp: return in({T::Point});
     case ToleranceKind::Angl: return in({T::Cone});
     default: return true;

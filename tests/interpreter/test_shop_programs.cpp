@@ -882,6 +882,40 @@ TEST(ShopPrograms, ClosedSlotsAgainstTheMachinedSlots) {
       << sides_only.diagnostics;
 }
 
+// SYMMTY of a closed slot: the median points of its sides (the ends' points have no opposite side)
+// about a datum plane. block_slot.json's FLAT slot (sides at x 140 and 150, each 0.01 in) moved
+// 0.02 in +X (hidden, written here): its median plane at x 145.02, so 2 x 0.02 = 0.04 about the
+// plane 15 mm inside the RIGHT face (x 145); not moved, 0.
+TEST(ShopPrograms, SymmetryOfAClosedSlotAboutADatumPlane) {
+  const std::string text =
+      "DMISMN/'shop', 5.0\nUNITS/MM, ANGDEC\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nGOTO/175, 50, 80\n"
+      "F(RIGHT) = FEAT/PLANE, CART, 160, 50, 20, 1, 0, 0\nMEAS/PLANE, F(RIGHT), 3\n  GOTO/175, 50, 20\n"
+      "  PTMEAS/CART, 160, 30, 20, 1, 0, 0\n  PTMEAS/CART, 160, 70, 20, 1, 0, 0\n  PTMEAS/CART, 160, 50, 10, 1, 0, 0\n"
+      "  GOTO/175, 50, 80\nENDMES\n"
+      "F(MID) = FEAT/PLANE, CART, 145, 50, 20, 1, 0, 0\nCONST/PLANE, F(MID), OFFSET, FA(RIGHT), -15\n"
+      "DATDEF/FA(MID), DAT(B)\nGOTO/145, 50, 80\nMODE/AUTO\n"
+      "F(SLOT2) = FEAT/CPARLN, INNER, FLAT, CART, 145, 50, 35, 0, 0, 1, 0, 1, 0, 30, 10\nMEAS/CPARLN, F(SLOT2), 8\n"
+      "ENDMES\nT(SY) = TOL/SYMMTY, 0.03, DAT(B)\nOUTPUT/FA(SLOT2), TA(SY)\nENDFIL\n";
+  const auto checked = check(text);
+  EXPECT_EQ(checked.errors, 0U) << checked.text;
+  const fs::path slots = source_dir / "programs/worlds/block_slot.json";
+  const auto moved = run(
+      text, deviated("slot_moved.json", slots, "{\"SLOT2_SIDES\": {\"size_mm\": -0.01, \"offset_mm\": [0.02, 0, 0]}}"));
+  ASSERT_EQ(moved.status, ExecStatus::Finished) << moved.diagnostics;
+  const auto* symmetry = tolerance(*moved.session, "SY");
+  ASSERT_NE(symmetry, nullptr) << moved.diagnostics;
+  // The default probe's scatter and pre-travel, doubled as SYMMTY doubles the worst point: 3 um.
+  EXPECT_NEAR(symmetry->value, 0.04, 3e-3) << symmetry->note;
+  EXPECT_FALSE(symmetry->in_tolerance) << symmetry->note;
+  EXPECT_NE(symmetry->note.find("end points left out"), std::string::npos) << symmetry->note;
+  const auto centred = run(text, slots);
+  ASSERT_EQ(centred.status, ExecStatus::Finished) << centred.diagnostics;
+  ASSERT_NE(tolerance(*centred.session, "SY"), nullptr) << centred.diagnostics;
+  EXPECT_LT(tolerance(*centred.session, "SY")->value, 3e-3) << tolerance(*centred.session, "SY")->note;
+  std::printf("slot symmetry: moved 0.02: %.5f (%s); centred: %.5f\n", symmetry->value, symmetry->note.c_str(),
+              tolerance(*centred.session, "SY")->value);
+}
+
 // A FEAT with more numbers than its form takes (a cone with two distances, a plane with a size,
 // as longer DMIS 5.3 forms and vendors write them): read leniently with the form's numbers and a
 // warning naming what is ignored; --strict: an error. Fewer numbers stay an error.
