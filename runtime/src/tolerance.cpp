@@ -191,6 +191,43 @@ bool has_axis(FeatureType type) {
   return type == FeatureType::Line || type == FeatureType::Cylinder || type == FeatureType::Cone;
 }
 
+/// The derived median surface of a pair of opposite faces (ISO 14660-2): for each surface point,
+/// the middle of it and its opposite point, which lies on the other face's least-squares plane
+/// along `normal` (the pair's actual normal; a face of fewer than three points, or one whose points
+/// fit no plane within 30 deg of it, is the plane through its centroid normal to it). A face is
+/// the points on one side of the plane through `centre` normal to `normal`. One face leaning by an
+/// angle leans the median by half that angle, as pairs of opposite points do.
+std::vector<Vec3> derived_median_points(const std::vector<Vec3>& surface, const Vec3& centre, const Vec3& normal) {
+  std::vector<Vec3> faces[2];
+  for (const Vec3& q : surface) faces[(q - centre).dot(normal) >= 0 ? 0 : 1].push_back(q);
+  struct Plane {
+    Vec3 point, normal;
+  };
+  Plane planes[2];
+  for (int f = 0; f < 2; ++f) {
+    Vec3 centroid = centre;
+    if (!faces[f].empty()) {
+      centroid = Vec3::Zero();
+      for (const Vec3& q : faces[f]) centroid += q / static_cast<double>(faces[f].size());
+    }
+    planes[f] = {centroid, normal};
+    if (faces[f].size() >= 3) {
+      const auto fitted = fitting::fit(fitting::Shape::Plane, faces[f]);
+      if (fitted && std::abs(fitted->direction.normalized().dot(normal)) >= std::cos(30 * k_pi / 180))
+        planes[f] = {fitted->position, fitted->direction.normalized()};
+    }
+  }
+  std::vector<Vec3> median;
+  for (int f = 0; f < 2; ++f) {
+    const Plane& other = planes[1 - f];
+    for (const Vec3& q : faces[f]) {
+      const double t = (other.point - q).dot(other.normal) / normal.dot(other.normal);
+      median.push_back(q + 0.5 * t * normal);
+    }
+  }
+  return median;
+}
+
 // ---------------------------------------------------------------- size
 
 // A helical scan has no gap in height to cut at: taken in its order, its points turn steadily
@@ -644,12 +681,30 @@ Outcome evaluate_pos(const ToleranceSpec& spec, const Feature& feature, const To
   Vec3 deviation = Vec3::Zero();
   const auto n = unit(nominal.direction, "the nominal of " + feature.label);
   if (nominal.type == FeatureType::ParallelPlanes) {
-    // A width's position (ASME Y14.5-2018, ISO 1101; clauses not checked here): its median plane within two planes t
-    // apart about the true position, normal to the nominal normal: 2 |d| for the median plane's
-    // centre d away along it (its tilt across the faces is not added: see docs/tolerances.md).
+    // A width's position (ASME Y14.5-2018, ISO 1101; clauses not checked here): its derived median
+    // plane within two planes t apart about the true position, normal to the nominal normal: 2 |d|
+    // for the median point farthest from it, d along the normal (tilt and form included); a width
+    // without points (constructed, stated) by its median plane's centre.
     if (!n) return Error(n.error());
     deviation = (actual.position - nominal.position).dot(*n) * *n;
-    add_note(result, "the median plane's position along its normal (a zone of two parallel planes)");
+    const auto own = unit((*actual_or)->direction, "the actual of " + feature.label);
+    if (own && !feature.points.empty()) {
+      std::vector<Vec3> surface;
+      for (const MeasuredPoint& p : feature.points) surface.push_back(p.surface_mm());
+      double worst = -1;
+      for (const Vec3& m : derived_median_points(surface, (*actual_or)->position, *own)) {
+        const double along = (frame->actual_to_nominal * m - nominal.position).dot(*n);
+        if (std::abs(along) > worst) {
+          worst = std::abs(along);
+          deviation = along * *n;
+        }
+      }
+      add_note(result, fmt::format("the derived median plane's farthest point from the true position, along its "
+                                   "normal (a zone of two parallel planes), of {} median points",
+                                   feature.points.size()));
+    } else {
+      add_note(result, "the median plane's position along its normal (a zone of two parallel planes)");
+    }
   } else {
     const auto at = position_point(nominal, actual, spec.three_d, feature.label);
     if (!at) return Error(at.error());
@@ -1006,15 +1061,11 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     if (feature.points.empty())
       return Error(
           fmt::format("{} of plane {} needs its measured points: it has none", dmis_word(spec.kind), feature.label));
-    // A PARPLN's derived median plane (ISO 14660-2): each face's points
-    // moved half the actual width toward the middle.
+    // A PARPLN's derived median plane (derived_median_points).
     std::vector<Vec3> surface;
-    for (const MeasuredPoint& p : feature.points) {
-      Vec3 q = p.surface_mm();
-      if (feature.nominal.type == FeatureType::ParallelPlanes)
-        q -= ((q - actual.position).dot(*own) >= 0 ? 1.0 : -1.0) * (actual.width_mm / 2) * *own;
-      surface.push_back(q);
-    }
+    for (const MeasuredPoint& p : feature.points) surface.push_back(p.surface_mm());
+    if (feature.nominal.type == FeatureType::ParallelPlanes)
+      surface = derived_median_points(surface, actual.position, *own);
     // Zone: two planes of the tolerated orientation. Their normal is at the tolerated angle to
     // the reference direction; the rotation about it that leaves free is the plane's own (the
     // most favourable) unless a secondary datum fixes it.
@@ -1521,17 +1572,16 @@ Outcome evaluate_symmetry(const ToleranceSpec& spec, const Feature& feature, con
   const bool slot = feature.nominal.type == FeatureType::ClosedSlot;
   const auto n = unit(slot ? Vec3(g.direction.cross(g.slot_axis)) : g.direction, "the actual of " + feature.label);
   if (!n) return Error(n.error());
-  std::vector<Vec3> median;
+  std::vector<Vec3> sides;
   std::size_t ends = 0;
   for (const MeasuredPoint& p : feature.points) {
     if (slot && !(std::abs(p.normal.dot(*n)) >= std::cos(to_rad(30)) * p.normal.norm())) {
       ++ends;
       continue;
     }
-    const Vec3 s = p.surface_mm();
-    const double side = (s - g.position).dot(*n) >= 0 ? 1.0 : -1.0;
-    median.push_back(s - side * 0.5 * g.width_mm * *n);
+    sides.push_back(p.surface_mm());
   }
+  std::vector<Vec3> median = derived_median_points(sides, g.position, *n);
   if (median.empty() && !feature.points.empty())
     return Error(fmt::format("SYMMTY of {}: none of its {} points lies on its sides (probed across its width)",
                              feature.label, feature.points.size()));

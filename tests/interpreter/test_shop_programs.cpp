@@ -697,17 +697,19 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   EXPECT_NEAR(tolerance(*placed.session, "PXM")->upper, 0.03, 1e-9);  // beyond its MMC width: no bonus
   EXPECT_FALSE(tolerance(*placed.session, "PXM")->in_tolerance);
 
-  // PERP of a width: its derived median plane (each face's points moved half the width inward).
-  // The RIGHT face leaned 0.1 deg about Y about its middle (z 20; hidden, on probe_library.json):
-  // its touches at z 10 and 30 move -+20 tan 0.1 deg / 2 in X, LEFT's stay, so the median points
-  // spread over 20 tan 0.1 deg = 0.0349 across the top face's normal; upright, 0.
+  // PERP and POS of a width: its derived median plane, the middles of opposite points (ISO
+  // 14660-2). The RIGHT face leaned 0.1 deg about Y about its middle (z 20; hidden, on
+  // probe_library.json), LEFT upright: the median plane leans half as much, so over the touches'
+  // 20 mm of height it spans 10 tan 0.1 deg = 0.01745 across the top face's normal (PERP), and its
+  // ends lie 5 tan 0.1 deg = 0.00873 either side of x 80 (POS: twice that, 0.01745); upright, 0.
+  // Each face's points moved half the width inward would lean the median the whole 0.1 deg.
   const std::string leaning_text =
       text.substr(0, text.find("GOTO/175, 50, 80\n")) +
       "GOTO/100, 50, 60\nF(TOP) = FEAT/PLANE, CART, 100, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\n"
       "  PTMEAS/CART, 100, 50, 40, 0, 0, 1\n  PTMEAS/CART, 150, 10, 40, 0, 0, 1\n  PTMEAS/CART, 100, 10, 40, 0, 0, 1\n"
       "ENDMES\nDATDEF/FA(TOP), DAT(A)\n" +
       text.substr(text.find("GOTO/175, 50, 80\n"), text.find("MODE/AUTO") - text.find("GOTO/175, 50, 80\n")) +
-      "T(PP) = TOL/PERP, 0.02, DAT(A)\nOUTPUT/FA(XPAIR), TA(PP)\nENDFIL\n";
+      "T(PP) = TOL/PERP, 0.02, DAT(A)\nT(PO) = TOL/POS, 2D, 0.01\nOUTPUT/FA(XPAIR), TA(PP), TA(PO)\nENDFIL\n";
   EXPECT_EQ(check(leaning_text).errors, 0U) << check(leaning_text).text;
   const fs::path library = source_dir / "programs/worlds/probe_library.json";
   const fs::path leaned = deviated("right_leaned.json", library, "{\"RIGHT\": {\"tilt_deg\": [0.1, 0]}}");
@@ -715,8 +717,15 @@ TEST(ShopPrograms, ParallelPlanesWidthAgainstTheMovedFaces) {
   ASSERT_EQ(leaning.status, ExecStatus::Finished) << leaning.diagnostics;
   const auto* perp = tolerance(*leaning.session, "PP");
   ASSERT_NE(perp, nullptr) << leaning.diagnostics;
-  EXPECT_NEAR(perp->value, 20 * std::tan(0.1 * std::numbers::pi / 180), 1e-4) << perp->note;
-  EXPECT_FALSE(perp->in_tolerance);
+  // To second order the pairs are joined along the pair's normal, itself leaning 0.05 deg, not
+  // along X: the far face is met 0.14 mm higher, which moves a median end by 0.1 um more.
+  const double lean = std::tan(0.1 * std::numbers::pi / 180);
+  EXPECT_NEAR(perp->value, 10 * lean, 3e-4) << perp->note;
+  EXPECT_TRUE(perp->in_tolerance);
+  const auto* pos = tolerance(*leaning.session, "PO");
+  ASSERT_NE(pos, nullptr) << leaning.diagnostics;
+  EXPECT_NEAR(pos->value, 10 * lean, 4e-4) << pos->note;
+  EXPECT_FALSE(pos->in_tolerance) << pos->note;
   const auto upright = run(leaning_text, library);
   ASSERT_EQ(upright.status, ExecStatus::Finished) << upright.diagnostics;
   ASSERT_NE(tolerance(*upright.session, "PP"), nullptr);
@@ -968,11 +977,11 @@ TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
   EXPECT_EQ(feat("INNER, FLAT, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 10, 12").errors, 0U);  // a FLAT slot may be square-ish
   const auto negative = feat("OUTER, FLAT, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, -1");
   EXPECT_TRUE(negative.has("the width of F(S) must be positive")) << negative.text;
-  // WIDTH applies to a CPARLN; SYMMTY does not.
+  // WIDTH (and SYMMTY) apply to a CPARLN; CYLCTY does not.
   const auto symmetry = check(
       "DMISMN/'p', 5.0\nF(S) = FEAT/CPARLN, INNER, ROUND, CART, 0, 0, 0, 0, 0, 1, 1, 0, 0, 30, 10\n"
       "F(P) = FEAT/PLANE, CART, 0, 0, 0, 0, 0, 1\nDATDEF/FA(P), DAT(A)\n"
-      "T(W) = TOL/WIDTH, -0.1, 0.1, LONG\nT(S) = TOL/SYMMTY, 0.1, DAT(A)\nOUTPUT/FA(S), TA(W)\n"
+      "T(W) = TOL/WIDTH, -0.1, 0.1, LONG\nT(S) = TOL/CYLCTY, 0.1\nOUTPUT/FA(S), TA(W)\n"
       "OUTPUT/FA(S), TA(S)\nENDFIL\n");
   EXPECT_EQ(symmetry.errors, 1U) << symmetry.text;
   EXPECT_TRUE(symmetry.has("shop.dmi:8:")) << symmetry.text;
