@@ -1132,6 +1132,27 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
                                  line_angle_deg(*own, d), datum->name, datum->plane ? "normal" : "axis", length_mm,
                                  along ? "diametral" : "two-plane"));
     if (angularity) add_note(result, basic_note(*own));
+    // Between 0 and 90 deg the rotation about d of the two-plane zone is free to the primary datum
+    // alone; a secondary fixes it (ASME Y14.5 angularity oriented by two datums): the zone's planes
+    // hold the nominal axis of the datum reference frame, brought to the basic angle, and the
+    // direction square to d and it; only the axis's tilt toward or away from d counts.
+    if (tolerated_deg > 0 && tolerated_deg < 90 && spec.datums.size() >= 2) {
+      const auto frame = frame_of_datums(spec, feature, context);
+      if (!frame) return Error(frame.error());
+      if (frame->rotations_fixed == 3) {
+        const Vec3 n = frame->actual_to_nominal.linear().transpose() * feature.nominal.direction.normalized();
+        const auto drawn = tilted_toward(d, n, tolerated_deg);
+        if (drawn) {
+          const Vec3 zone_normal = (d - d.dot(*drawn) * *drawn).normalized();
+          result.value = length_mm * std::abs(own->dot(zone_normal));
+          add_note(result, fmt::format("zone oriented by datums {}: the axis at {:.4f} deg to the drawn direction",
+                                       join_datums(spec), line_angle_deg(*own, *drawn)));
+          result.actual = result.value;
+          set_limits(result, 0, spec.zone);
+          return result;
+        }
+      }
+    }
   }
   result.actual = result.value;
   set_limits(result, 0, spec.zone);

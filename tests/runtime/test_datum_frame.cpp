@@ -336,6 +336,39 @@ TEST(DatumFrame, ASecondaryDatumOrientsThePerpendicularityZoneOfAPlane) {
   EXPECT_NE(r->note.find("zone oriented by datums A|B"), std::string::npos) << r->note;
 }
 
+TEST(DatumFrame, ASecondaryDatumOrientsTheAngularityZoneOfAnAxis) {
+  // A 20 mm pin drawn at 45 deg to the top (A), leaning toward +x square to the left face (B),
+  // made at the right angle but yawed 10 deg about z. To A alone the yaw is free: 0. To A|B the
+  // zone's planes hold the drawn axis and y: the yawed axis leaves them by
+  // sin 45 cos 45 (1 - cos 10 deg) over each mm of its length, 20 x 0.5 (1 - cos 10 deg) = 0.15192.
+  const double deg = 3.14159265358979323846 / 180.0;
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()), plane({0, 0, 0}, Vec3::UnitZ()));
+  const Datum b = datum("B", plane({-50, 0, -10}, -Vec3::UnitX()), plane({-50, 0, -10}, -Vec3::UnitX()));
+  const Vec3 drawn(std::sin(45 * deg), 0, std::cos(45 * deg));
+  const Vec3 yawed(std::cos(10 * deg) * std::sin(45 * deg), std::sin(10 * deg) * std::sin(45 * deg),
+                   std::cos(45 * deg));
+  const Feature pin =
+      feature(bore(FeatureType::Cylinder, {0, 20, -10}, drawn, 8), bore(FeatureType::Cylinder, {0, 20, -10}, yawed, 8));
+  ToleranceSpec s;
+  s.label = "T4";
+  s.kind = ToleranceKind::Anglr;
+  s.zone = 0.1;
+  s.nominal = 45;
+  s.datums = {"A"};
+  ToleranceContext context;
+  context.datums = {&a};
+  auto r = evaluate_tolerance(s, {&pin}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.0, k_tight);
+  s.datums = {"A", "B"};
+  context.datums = {&a, &b};
+  r = evaluate_tolerance(s, {&pin}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 20 * 0.5 * (1 - std::cos(10 * deg)), k_tight);
+  EXPECT_FALSE(r->in_tolerance);
+  EXPECT_NE(r->note.find("zone oriented by datums A|B"), std::string::npos) << r->note;
+}
+
 TEST(DatumFrame, AnUndefinedOrMismatchedDatumIsAnError) {
   const Geometry nominal = bore(FeatureType::Circle, {40, 30, -5}, Vec3::UnitZ(), 8);
   const Feature hole = feature(nominal, nominal);
