@@ -1043,6 +1043,20 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
   const auto own = unit(oriented_direction(actual), "the actual of " + feature.label);
   if (!own) return Error(own.error());
   const bool angularity = spec.kind == ToleranceKind::Anglr;
+  // MMC or LMC of a feature of size (a bore's or pin's axis, a width's median plane): the zone
+  // grows by the size's departure from that condition (ASME Y14.5 bonus tolerance, as POS's).
+  // On a feature without a size the modifier means nothing: a note, RFS.
+  double bonus_mm = 0;
+  if (spec.condition != MaterialCondition::Rfs) {
+    if (is_one_of(feature.nominal.type, k_material_sized)) {
+      const auto bonus = material_bonus(spec.condition, feature.nominal, actual, context.units, result);
+      if (!bonus) return Error(bonus.error());
+      bonus_mm = *bonus;
+    } else {
+      add_note(result, fmt::format("{} has no size: {} does not apply, the zone is RFS", feature.label,
+                                   spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC"));
+    }
+  }
   const bool feature_plane =
       feature.nominal.type == FeatureType::Plane || feature.nominal.type == FeatureType::ParallelPlanes;
   const double tolerated_deg = tolerated_direction_angle_deg(spec, feature_plane, datum->plane);
@@ -1105,7 +1119,7 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     if (oriented_by_secondary) {
       add_note(result, fmt::format("zone oriented by datums {}: its normal at {:.4f} deg to the plane's",
                                    join_datums(spec), line_angle_deg(*own, *zone_normal)));
-      set_limits(result, 0, spec.zone);
+      set_limits(result, 0, spec.zone + bonus_mm);
       result.actual = result.value;
       return result;
     }
@@ -1148,14 +1162,14 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
           add_note(result, fmt::format("zone oriented by datums {}: the axis at {:.4f} deg to the drawn direction",
                                        join_datums(spec), line_angle_deg(*own, *drawn)));
           result.actual = result.value;
-          set_limits(result, 0, spec.zone);
+          set_limits(result, 0, spec.zone + bonus_mm);
           return result;
         }
       }
     }
   }
   result.actual = result.value;
-  set_limits(result, 0, spec.zone);
+  set_limits(result, 0, spec.zone + bonus_mm);
   add_note(result, secondary_datum_note(spec));
   return result;
 }

@@ -600,6 +600,37 @@ TEST(ToleranceOrientation, AxisToDatumPlaneAndAxis) {
   EXPECT_NEAR(evaluate(s, {&l}, context)->value, 100 * 0.0004 / std::sqrt(1 + 1.6e-7), 1e-12);
 }
 
+// PERP at MMC of a bore (ASME Y14.5 bonus): a 10 mm bore made 10.03 departs 0.03 from its MMC
+// size (the nominal: the tolerance has no size limits), so a 0.03 zone grows to 0.06 and holds
+// the axis's 50 x 0.001 = 0.05 excursion that RFS rejects.
+TEST(ToleranceOrientation, MaterialConditionGrowsTheZoneOfAFeatureOfSize) {
+  const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
+  ToleranceContext context;
+  context.datums = {&a};
+  ToleranceSpec s = spec(ToleranceKind::Perp);
+  s.zone = 0.03;
+  s.datums = {"A"};
+  const Vec3 tilted = Vec3(0.001, 0, 1).normalized();
+  const Feature bore = feature("CYL1", round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 50),
+                               round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, tilted, 10.03, 50));
+  auto r = evaluate(s, {&bore}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 50 * 0.001 / std::sqrt(1 + 1e-6), 1e-12);
+  EXPECT_FALSE(r->in_tolerance);
+  s.condition = MaterialCondition::Mmc;
+  r = evaluate(s, {&bore}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->upper, 0.06, 1e-12);
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_NE(r->note.find("MMC bonus"), std::string::npos) << r->note;
+  // A plane has no size: the modifier is noted and the zone stays.
+  const Feature wall = leaning_wall();
+  r = evaluate(s, {&wall}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->upper, 0.03, 1e-12);
+  EXPECT_NE(r->note.find("WALL has no size: MMC does not apply"), std::string::npos) << r->note;
+}
+
 TEST(ToleranceOrientation, AxisLengthFromThePointsWhenUnknown) {
   const Datum a = datum("A", plane({0, 0, 0}, Vec3::UnitZ()));
   ToleranceContext context;
