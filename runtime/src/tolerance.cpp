@@ -1495,7 +1495,20 @@ Outcome evaluate_coaxiality(const ToleranceSpec& spec, const Feature& feature, c
   result.value = 2.0 * largest_mm;
   result.actual = result.value;
   result.nominal = 0;
-  set_limits(result, 0, spec.zone);
+  // Coaxiality at MMC or LMC (ISO 1101 with ISO 2692): a feature of size's zone grows by its
+  // departure from that size, as POS's; a feature without one keeps the zone, with a note.
+  double bonus_mm = 0;
+  if (spec.condition != MaterialCondition::Rfs) {
+    if (is_one_of(feature.nominal.type, k_material_sized)) {
+      const auto bonus = material_bonus(spec.condition, feature.nominal, g, context.units, result);
+      if (!bonus) return Error(bonus.error());
+      bonus_mm = *bonus;
+    } else {
+      add_note(result, fmt::format("{} has no size: {} does not apply, the zone is RFS", feature.label,
+                                   spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC"));
+    }
+  }
+  set_limits(result, 0, spec.zone + bonus_mm);
   return result;
 }
 

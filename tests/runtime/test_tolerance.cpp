@@ -887,12 +887,20 @@ TEST(ToleranceCoaxiality, CoaxialityTakesTheFartherEndOfTheAxis) {
   s.datums = {"A"};
   ToleranceContext context;
   context.datums = {&a};
-  const auto r = evaluate(s, {&cyl}, context);
+  auto r = evaluate(s, {&cyl}, context);
   ASSERT_TRUE(r) << r.error();
   // The rings are level, so their points reach 0.005 mm past the axis ends (5 mm x 0.001 slope):
   // the ends found from the points lie 5e-6 mm farther out.
   EXPECT_NEAR(r->value, 0.06, 2e-5);
   EXPECT_FALSE(r->in_tolerance);
+  // At MMC (ISO 2692) the bore made 10.02 gains its 0.02 departure from its MMC size (the
+  // nominal 10): a zone of 0.07 holds the 0.06.
+  cyl.actual->diameter_mm = 10.02;
+  s.condition = MaterialCondition::Mmc;
+  r = evaluate(s, {&cyl}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->upper, 0.07, 1e-12);
+  EXPECT_TRUE(r->in_tolerance) << r->note;
 }
 
 TEST(ToleranceCoaxiality, TwoAxisDatumsMakeACommonAxis) {
