@@ -1241,8 +1241,8 @@ TEST(ShopPrograms, AngularityOfAChamferToTheTopFace) {
     for (const double y : {20.0, 80.0})
       text += fmt::format("  PTMEAS/CART,{},{},{:.6f},0.5,0,0.866025\n", x, y, 40 - (x - 150) * slope);
   text +=
-      "ENDMES\nT(AN)=TOL/ANGLR,0.02,30,DAT(A)\nT(AW)=TOL/ANGLR,30,0.03,DAT(A)\n"
-      "OUTPUT/FA(CH),TA(AN),TA(AW)\nENDFIL\n";
+      "ENDMES\nT(AN)=TOL/ANGLR,0.02,30,DAT(A)\nT(AW)=TOL/ANGLR,30,0.03,DAT(A)\nT(AM)=TOL/ANGLR,0.03,-30,DAT(A)\n"
+      "OUTPUT/FA(CH),TA(AN),TA(AW),TA(AM)\nENDFIL\n";
   const auto checked = check(text);
   EXPECT_EQ(checked.errors + checked.warnings, 0U) << checked.text;
   const double truth = 6 / std::cos(30 * std::numbers::pi / 180) * std::sin(0.2 * std::numbers::pi / 180);
@@ -1254,7 +1254,10 @@ TEST(ShopPrograms, AngularityOfAChamferToTheTopFace) {
   ASSERT_NE(aw, nullptr) << turned.diagnostics;
   EXPECT_NEAR(an->value, truth, 2e-6) << an->note;
   EXPECT_FALSE(an->in_tolerance) << an->note;
-  EXPECT_NEAR(aw->value, truth, 2e-6) << aw->note;  // the angle first: the larger number is the angle
+  EXPECT_NEAR(aw->value, truth, 2e-6) << aw->note;    // the angle first: the larger number is the angle
+  const auto* am = tolerance(*turned.session, "AM");  // a negative angle: the same lines
+  ASSERT_NE(am, nullptr) << turned.diagnostics;
+  EXPECT_NEAR(am->value, truth, 2e-6) << am->note;
   EXPECT_TRUE(aw->in_tolerance) << aw->note;
   EXPECT_NE(an->note.find("basic 30 deg"), std::string::npos) << an->note;
   const auto square = run(text, world("chamfer.json", "{}"));

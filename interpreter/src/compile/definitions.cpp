@@ -613,10 +613,11 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   }
   if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
-  // TOL/ANGLR,zone,angle: no public DMIS text gives the order; the basic angle is the larger
-  // number, the zone the smaller, whichever comes first (docs/tolerances.md "Angularity").
+  // TOL/ANGLR,zone,angle: no public DMIS text gives the order; the basic angle is the number of
+  // the larger magnitude, the zone the other, whichever comes first (docs/tolerances.md
+  // "Angularity").
   if (kind == ToleranceKind::Anglr && !std::isnan(numbers[0]) && !std::isnan(numbers[1]) &&
-      std::min(numbers[0], numbers[1]) < 0)
+      (std::abs(numbers[0]) < std::abs(numbers[1]) ? numbers[0] : numbers[1]) < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");
   if (!std::isnan(numbers[0]) && need.zone && numbers[0] < 0)
     return error(p.back().span, "sema.negative-zone", "a tolerance zone must not be negative");

@@ -273,11 +273,14 @@ ExecStatus Execute::tolerance_def(Interpreter& vm, const ir::Instruction& in, Ca
       t.lower = nums[1] * deg;
       t.upper = nums[2] * deg;
       break;
-    case K::Anglr:  // the zone and the basic angle in either order: the angle is the larger (docs/tolerances.md)
-      if (std::min(nums[0], nums[1]) < 0) return vm.fail(in.span, "a tolerance zone must not be negative");
-      t.zone = std::min(nums[0], nums[1]) * len;
-      t.nominal = std::max(nums[0], nums[1]) * deg;
+    case K::Anglr: {  // the zone and the basic angle in either order: the angle is the larger (docs/tolerances.md)
+      const bool angle_first = std::abs(nums[0]) >= std::abs(nums[1]);
+      const double zone = angle_first ? nums[1] : nums[0];
+      if (zone < 0) return vm.fail(in.span, "a tolerance zone must not be negative");
+      t.zone = zone * len;
+      t.nominal = (angle_first ? nums[0] : nums[1]) * deg;
       break;
+    }
     case K::Angl:
       t.lower = nums[0] * deg;
       t.upper = nums[1] * deg;
