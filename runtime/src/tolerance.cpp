@@ -854,7 +854,10 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const T
                       ToleranceResult result) {
   const ReportUnits& units = context.units;
   static constexpr Types k_flat = {FeatureType::Plane};
-  static constexpr Types k_round = {FeatureType::Circle, FeatureType::Arc};
+  // A SPHERE's circularity (ASME Y14.5: the points of every plane through a common centre
+  // equidistant from it) is its minimum-zone sphericity: any two points lie in one plane through
+  // the centre, so the worst section's radial range is the whole surface's about that centre.
+  static constexpr Types k_round = {FeatureType::Circle, FeatureType::Arc, FeatureType::Sphere};
   static constexpr Types k_cylinder = {FeatureType::Cylinder};
   static constexpr Types k_sphere = {FeatureType::Sphere};
   static constexpr Types k_line = {FeatureType::Line};
@@ -895,6 +898,9 @@ Outcome evaluate_form(const ToleranceSpec& spec, const Feature& feature, const T
     result.value = mz->form_mm;
     add_note(result, fmt::format("minimum zone (ISO 1101) over {} points; least squares gives {}", surface.size(),
                                  length_text(feature.fit->form_mm, units, 6)));
+    if (spec.kind == ToleranceKind::Cirlty && shape == fitting::Shape::Sphere)
+      add_note(result,
+               "a sphere's circularity: every section through the minimum-zone centre, which is its sphericity");
   } else {
     add_note(result, "least-squares form (no minimum zone for these points)");
   }
@@ -1660,7 +1666,7 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Diam:
     case ToleranceKind::Rad: return in({T::Circle, T::Arc, T::Sphere, T::Cylinder});
     case ToleranceKind::Flat: return in({T::Plane});
-    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc, T::Cylinder, T::Cone});
+    case ToleranceKind::Cirlty: return in({T::Circle, T::Arc, T::Cylinder, T::Cone, T::Sphere});
     case ToleranceKind::Cylcty: return in({T::Cylinder});
     case ToleranceKind::Sphcty: return in({T::Sphere});
     case ToleranceKind::Strght: return in({T::Line, T::Cylinder});

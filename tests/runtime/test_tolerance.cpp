@@ -201,6 +201,28 @@ TEST(ToleranceForm, StraightnessOfACylindersAxisIsItsSectionCentres) {
   EXPECT_TRUE(tolerance_applies(ToleranceKind::Strght, FeatureType::Cylinder));
 }
 
+// CIRLTY of a SPHERE (ASME Y14.5: every section through a common centre) is its minimum-zone
+// sphericity. Six points on the axes of a 20 mm ball, the +X one 0.01 out: a centre e along X
+// puts the X radii at 10.01 - e and 10 + e, the other four at sqrt(100 + e^2) (a shift across X
+// shortens one of them), so the range is least at e = 0.005: 0.005 - (sqrt(100 + 0.005^2) - 10).
+TEST(ToleranceForm, CircularityOfASphereIsItsSphericity) {
+  Feature ball = feature("BALL", round(FeatureType::Sphere, Side::Outer, {0, 0, 0}, Vec3::UnitZ(), 20), std::nullopt);
+  for (const Vec3& u : {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(0, 0, -1)})
+    ball.points.push_back(probed((u.x() > 0 ? 10.01 : 10.0) * u, -u));
+  auto fitted = fit_actual(ball.nominal, ball.points);
+  ASSERT_TRUE(fitted) << fitted.error();
+  ball.actual = fitted->first;
+  ball.fit = fitted->second;
+  ToleranceSpec s = spec(ToleranceKind::Cirlty);
+  s.zone = 0.006;
+  const auto r = evaluate(s, {&ball});
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->value, 0.005 - (std::sqrt(100 + 0.005 * 0.005) - 10), 1e-9) << r->note;
+  EXPECT_TRUE(r->in_tolerance);
+  EXPECT_NE(r->note.find("a sphere's circularity"), std::string::npos) << r->note;
+  EXPECT_NEAR(evaluate(spec(ToleranceKind::Sphcty), {&ball})->value, r->value, 1e-12);
+}
+
 TEST(ToleranceForm, EachFormAppliesToItsShape) {
   const Geometry cyl = round(FeatureType::Cylinder, Side::Inner, {0, 0, 0}, Vec3::UnitZ(), 10, 20);
   Feature c = feature("CYL1", cyl, cyl);
