@@ -805,7 +805,21 @@ Outcome evaluate_axis_straightness(const ToleranceSpec& spec, const Feature& fea
                                length_text(zone_mm, units, 6),
                                centres.size() == 2 ? ": two centres always lie on a line" : ""));
   set_limits(result, 0, spec.zone + *bonus);
-  if (spec.unit_zone > 0) add_note(result, "the zone per unit length is not evaluated on an axis");
+  if (spec.unit_zone > 0 || spec.unit_length > 0) {
+    // Per unit length: the centres in every stretch of the unit along the axis within a cylinder
+    // of diameter tu (no material bonus is added to the unit zone).
+    const auto unit = straightness_per_unit_length(centres, sections.axis, std::nullopt, spec.unit_length);
+    if (!unit) {
+      add_note(result, fmt::format("per unit length {}: not evaluated, no stretch of it holds three section centres",
+                                   length_text(spec.unit_length, units, 4)));
+    } else {
+      const bool unit_in = unit->form_mm <= spec.unit_zone + k_limit_slack;
+      result.in_tolerance = result.in_tolerance && unit_in;
+      add_note(result, fmt::format("per unit length {}: the largest minimum zone of the centres {} (zone {}, {})",
+                                   length_text(spec.unit_length, units, 4), length_text(unit->form_mm, units, 6),
+                                   length_text(spec.unit_zone, units, 6), unit_in ? "IN" : "OUT"));
+    }
+  }
   return result;
 }
 

@@ -198,6 +198,26 @@ TEST(ToleranceForm, StraightnessOfACylindersAxisIsItsSectionCentres) {
   const Feature two = pin({{0, {0, 0, 0}}, {20, {d, 0, 0}}}, 10);
   s.condition = MaterialCondition::Rfs;
   EXPECT_NEAR(evaluate(s, {&two})->value, 0.0, 1e-12);
+  // Per unit length 20 (STRGHT,t,tu,20): an axis bowed d over 40 mm, its centres 0, d/2, d, d/2, 0
+  // at z 0..40: the whole is d, a stretch of 20 at most d/2 (z 10..30: the middle centre d/2 off
+  // the line of the other two; z 0..20 and 20..40 lie on lines).
+  const Feature bow =
+      pin({{0, {0, 0, 0}}, {10, {d / 2, 0, 0}}, {20, {d, 0, 0}}, {30, {d / 2, 0, 0}}, {40, {0, 0, 0}}}, 10);
+  s.zone = 1.2 * d;
+  s.unit_length = 20;
+  s.unit_zone = 0.6 * d;
+  auto unit = evaluate(s, {&bow});
+  ASSERT_TRUE(unit) << unit.error();
+  EXPECT_NEAR(unit->value, d, 1e-6) << unit->note;
+  EXPECT_TRUE(unit->in_tolerance) << unit->note;
+  EXPECT_NE(unit->note.find("per unit length 20.0000: the largest minimum zone of the centres 0.005000 (zone 0.006000, "
+                            "IN)"),
+            std::string::npos)
+      << unit->note;
+  s.unit_zone = 0.4 * d;
+  unit = evaluate(s, {&bow});
+  ASSERT_TRUE(unit) << unit.error();
+  EXPECT_FALSE(unit->in_tolerance) << unit->note;
   EXPECT_TRUE(tolerance_applies(ToleranceKind::Strght, FeatureType::Cylinder));
 }
 
