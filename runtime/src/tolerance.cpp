@@ -1196,9 +1196,10 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
 
 Outcome evaluate_anglb(const ToleranceSpec& spec, const std::vector<const Feature*>& features,
                        const ToleranceContext& context, ToleranceResult result) {
-  static constexpr Types k_types = {
-      FeatureType::Plane,  FeatureType::Line, FeatureType::Cylinder,  FeatureType::Cone,
-      FeatureType::Circle, FeatureType::Arc,  FeatureType::ClosedSlot};  // a CPARLN: its long axis
+  static constexpr Types k_types = {FeatureType::Plane,         FeatureType::Line,   FeatureType::Cylinder,
+                                    FeatureType::Cone,          FeatureType::Circle, FeatureType::Arc,
+                                    FeatureType::ClosedSlot,       // a CPARLN: its long axis
+                                    FeatureType::ParallelPlanes};  // a PARPLN: its median plane's normal
   const Feature& feature = *features.front();
   if (!is_one_of(feature.nominal.type, k_types)) return wrong_type(spec.kind, k_types, feature.nominal.type);
   const auto actual = actual_of(feature);
@@ -1227,9 +1228,12 @@ Outcome evaluate_anglb(const ToleranceSpec& spec, const std::vector<const Featur
   result.nominal = spec.nominal;
   result.value = angle - spec.nominal;
   set_limits(result, spec.lower, spec.upper);
-  add_note(result, fmt::format("angle between the {} of {} and the {} of {}",
-                               feature.nominal.type == FeatureType::Plane ? "normal" : "axis", feature.label,
-                               reference->plane ? "normal" : "axis", reference->name));
+  add_note(result,
+           fmt::format("angle between the {} of {} and the {} of {}",
+                       feature.nominal.type == FeatureType::Plane || feature.nominal.type == FeatureType::ParallelPlanes
+                           ? "normal"
+                           : "axis",
+                       feature.label, reference->plane ? "normal" : "axis", reference->name));
   if (features.size() == 1) add_note(result, secondary_datum_note(spec));
   return result;
 }
@@ -1693,7 +1697,8 @@ bool tolerance_applies(ToleranceKind kind, FeatureType type) {
     case ToleranceKind::Perp:
     case ToleranceKind::Parlel:
     case ToleranceKind::Anglr: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::ClosedSlot, T::ParallelPlanes});
-    case ToleranceKind::Anglb: return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot});
+    case ToleranceKind::Anglb:
+      return in({T::Plane, T::Line, T::Cylinder, T::Cone, T::Circle, T::Arc, T::ClosedSlot, T::ParallelPlanes});
     case ToleranceKind::Concen:
     case ToleranceKind::Coaxial: return in({T::Circle, T::Arc, T::Sphere, T::Point, T::Cylinder, T::Cone, T::Line});
     case ToleranceKind::Crnout:

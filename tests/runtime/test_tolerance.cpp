@@ -832,7 +832,21 @@ TEST(ToleranceAngle, AngleToADatumAndToAFeature) {
   EXPECT_EQ(r->note, "angle between the axis of L1 and the axis of L2");
   const Feature p = feature("P1", point({0, 0, 0}), point({0, 0, 0}));
   EXPECT_EQ(evaluate(s, {&p}, context).error(),
-            "ANGLB applies to a plane, line, cylinder, cone, circle, arc or closed slot (CPARLN), not to a POINT");
+            "ANGLB applies to a plane, line, cylinder, cone, circle, arc, closed slot (CPARLN) or pair of parallel "
+            "planes, not to a POINT");
+  // A width (PARPLN) by its median plane's normal, as a plane.
+  Geometry width = plane({0, 0, 0}, Vec3(std::sin(30 * k_pi / 180), 0, std::cos(30 * k_pi / 180)));
+  width.type = FeatureType::ParallelPlanes;
+  width.width_mm = 10;
+  Geometry tilted_width = width;
+  tilted_width.direction = Vec3(std::sin(rad), 0, std::cos(rad));
+  const Feature slot = feature("W1", width, tilted_width);
+  s.nominal = 30;
+  s.datums = {"A"};
+  r = evaluate(s, {&slot}, context);
+  ASSERT_TRUE(r) << r.error();
+  EXPECT_NEAR(r->actual, 30.01, 1e-9);
+  EXPECT_EQ(r->note, "angle between the normal of W1 and the normal of datum A");
 }
 
 // ------------------------------------------------------------------ PROFL, PROFP
