@@ -618,6 +618,19 @@ tl::expected<double, std::string> material_bonus(MaterialCondition condition, co
   return bonus_mm;
 }
 
+// The bonus of a tolerance's MMC or LMC where only a feature of size takes one (orientation,
+// coaxiality): material_bonus for a feature of size, else 0 with a note (the modifier means
+// nothing on a plane or a line; the zone stays RFS).
+tl::expected<double, std::string> sized_bonus(const ToleranceSpec& spec, const Feature& feature, const Geometry& actual,
+                                              const ReportUnits& units, ToleranceResult& result) {
+  if (spec.condition == MaterialCondition::Rfs) return 0.0;
+  if (is_one_of(feature.nominal.type, k_material_sized))
+    return material_bonus(spec.condition, feature.nominal, actual, units, result);
+  add_note(result, fmt::format("{} has no size: {} does not apply, the zone is RFS", feature.label,
+                               spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC"));
+  return 0.0;
+}
+
 // Datum shift (ASME Y14.5: a datum feature referenced at its maximum material boundary; ISO 2692:
 // the maximum material requirement applied to a datum feature): a datum feature of size referenced at MMC (LMC) that
 // departs from that size lets the datum reference frame move by half the departure, here a translation normal to the
@@ -1065,18 +1078,9 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
   const bool angularity = spec.kind == ToleranceKind::Anglr;
   // MMC or LMC of a feature of size (a bore's or pin's axis, a width's median plane): the zone
   // grows by the size's departure from that condition (ASME Y14.5 bonus tolerance, as POS's).
-  // On a feature without a size the modifier means nothing: a note, RFS.
-  double bonus_mm = 0;
-  if (spec.condition != MaterialCondition::Rfs) {
-    if (is_one_of(feature.nominal.type, k_material_sized)) {
-      const auto bonus = material_bonus(spec.condition, feature.nominal, actual, context.units, result);
-      if (!bonus) return Error(bonus.error());
-      bonus_mm = *bonus;
-    } else {
-      add_note(result, fmt::format("{} has no size: {} does not apply, the zone is RFS", feature.label,
-                                   spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC"));
-    }
-  }
+  const auto bonus = sized_bonus(spec, feature, actual, context.units, result);
+  if (!bonus) return Error(bonus.error());
+  const double bonus_mm = *bonus;
   const bool feature_plane =
       feature.nominal.type == FeatureType::Plane || feature.nominal.type == FeatureType::ParallelPlanes;
   const double tolerated_deg = tolerated_direction_angle_deg(spec, feature_plane, datum->plane);
@@ -1520,18 +1524,10 @@ Outcome evaluate_coaxiality(const ToleranceSpec& spec, const Feature& feature, c
   result.actual = result.value;
   result.nominal = 0;
   // Coaxiality at MMC or LMC (ISO 1101 with ISO 2692): a feature of size's zone grows by its
-  // departure from that size, as POS's; a feature without one keeps the zone, with a note.
-  double bonus_mm = 0;
-  if (spec.condition != MaterialCondition::Rfs) {
-    if (is_one_of(feature.nominal.type, k_material_sized)) {
-      const auto bonus = material_bonus(spec.condition, feature.nominal, g, context.units, result);
-      if (!bonus) return Error(bonus.error());
-      bonus_mm = *bonus;
-    } else {
-      add_note(result, fmt::format("{} has no size: {} does not apply, the zone is RFS", feature.label,
-                                   spec.condition == MaterialCondition::Mmc ? "MMC" : "LMC"));
-    }
-  }
+  // departure from that size, as POS's.
+  const auto bonus = sized_bonus(spec, feature, g, context.units, result);
+  if (!bonus) return Error(bonus.error());
+  const double bonus_mm = *bonus;
   set_limits(result, 0, spec.zone + bonus_mm);
   return result;
 }

@@ -1209,27 +1209,14 @@ TEST(ShopPrograms, PerpendicularityOfAConesAxis) {
   EXPECT_LT(tolerance(*upright.session, "PP")->value, 1e-5) << tolerance(*upright.session, "PP")->note;
 }
 
-// TOL/ANGLR (angularity): a block whose top-right edge is chamfered at 30 deg to the top face
-// (a world written here), the chamfer turned a further 0.2 deg about Y (hidden). Its touches 6 mm
+// TOL/ANGLR (angularity): programs/worlds/block_chamfer.json, a block whose top-right edge is
+// chamfered at 30 deg to the top face, the chamfer turned a further 0.2 deg about Y (hidden). Its touches 6 mm
 // apart in X, 6 / cos 30 deg down its slope, spread that times sin 0.2 deg across the zone at a
 // basic 30 deg to datum A: 0.024184 (the geometry of the world, not metron's); untilted, 0.
 TEST(ShopPrograms, AngularityOfAChamferToTheTopFace) {
   const double slope = std::tan(30 * std::numbers::pi / 180);
-  const std::string design =
-      "{\"intersection\": ["
-      "{\"type\": \"half_space\", \"name\": \"TOP\", \"point\": [80, 50, 40], \"normal\": [0, 0, 1]},"
-      "{\"type\": \"half_space\", \"name\": \"BOTTOM\", \"point\": [80, 50, 0], \"normal\": [0, 0, -1]},"
-      "{\"type\": \"half_space\", \"name\": \"FRONT\", \"point\": [80, 0, 20], \"normal\": [0, -1, 0]},"
-      "{\"type\": \"half_space\", \"name\": \"BACK\", \"point\": [80, 100, 20], \"normal\": [0, 1, 0]},"
-      "{\"type\": \"half_space\", \"name\": \"LEFT\", \"point\": [0, 50, 20], \"normal\": [-1, 0, 0]},"
-      "{\"type\": \"half_space\", \"name\": \"RIGHT\", \"point\": [160, 50, 20], \"normal\": [1, 0, 0]},"
-      "{\"type\": \"half_space\", \"name\": \"CHAMFER\", \"point\": [150, 50, 40], "
-      "\"normal\": [0.5, 0, 0.8660254037844386]}]}";
-  const fs::path perfect = source_dir / "programs/worlds/perfect.json";
-  const auto world = [&](const std::string& name, const std::string& deviations) {
-    return write(name, "{\"extends\": \"" + perfect.string() + "\", \"part\": {\"design\": " + design +
-                           ", \"deviations\": " + deviations + "}}\n");
-  };
+  const fs::path turned_world = source_dir / "programs/worlds/block_chamfer.json";
+  const fs::path square_world = deviated("chamfer_square.json", turned_world, "{\"CHAMFER\": null}");
   std::string text =
       "DMISMN/'chamfer', 5.0\nUNITS/MM, ANGDEC\nS(P)=SNSDEF/PROBE,FIXED,CART,0,0,50,0,0,-1,2\nSNSLCT/S(P)\n"
       "SNSET/APPRCH,1\nSNSET/RETRCT,1\nSNSET/SEARCH,2\nD(PART)=TRANS/XORIG,300,YORIG,200,ZORIG,0\nGOTO/100,50,60\n"
@@ -1246,7 +1233,7 @@ TEST(ShopPrograms, AngularityOfAChamferToTheTopFace) {
   const auto checked = check(text);
   EXPECT_EQ(checked.errors + checked.warnings, 0U) << checked.text;
   const double truth = 6 / std::cos(30 * std::numbers::pi / 180) * std::sin(0.2 * std::numbers::pi / 180);
-  const auto turned = run(text, world("chamfer_turned.json", "{\"CHAMFER\": {\"tilt_deg\": [0, 0.2]}}"));
+  const auto turned = run(text, turned_world);
   ASSERT_EQ(turned.status, ExecStatus::Finished) << turned.diagnostics;
   const auto* an = tolerance(*turned.session, "AN");
   const auto* aw = tolerance(*turned.session, "AW");
@@ -1260,7 +1247,7 @@ TEST(ShopPrograms, AngularityOfAChamferToTheTopFace) {
   EXPECT_NEAR(am->value, truth, 2e-6) << am->note;
   EXPECT_TRUE(aw->in_tolerance) << aw->note;
   EXPECT_NE(an->note.find("basic 30 deg"), std::string::npos) << an->note;
-  const auto square = run(text, world("chamfer.json", "{}"));
+  const auto square = run(text, square_world);
   ASSERT_EQ(square.status, ExecStatus::Finished) << square.diagnostics;
   ASSERT_NE(tolerance(*square.session, "AN"), nullptr);
   EXPECT_LT(tolerance(*square.session, "AN")->value, 1e-5) << tolerance(*square.session, "AN")->note;
