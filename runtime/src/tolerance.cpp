@@ -1090,6 +1090,12 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     const double a = line_angle_deg(v, d);
     return feature_plane == datum->plane ? a : 90.0 - a;
   };
+  // The tolerated direction nearest the feature's own, else its nominal's (an actual along d
+  // leaves the rotation about d to the drawing).
+  const auto tolerated_near_feature = [&]() {
+    const auto near_own = tilted_toward(d, *own, tolerated_deg);
+    return near_own ? near_own : tilted_toward(d, feature.nominal.direction, tolerated_deg);
+  };
   const auto basic_note = [&](const Vec3& v) {
     return fmt::format("the {} at {:.4f} deg to {}, basic {:g} deg", feature_plane ? "plane" : "axis", drawn_angle(v),
                        datum->name, spec.nominal);
@@ -1121,8 +1127,7 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
         oriented_by_secondary = zone_normal.has_value();
       }
     }
-    if (!zone_normal) zone_normal = tilted_toward(d, *own, tolerated_deg);
-    if (!zone_normal) zone_normal = tilted_toward(d, feature.nominal.direction, tolerated_deg);
+    if (!zone_normal) zone_normal = tolerated_near_feature();
     if (!zone_normal)
       return Error(
           fmt::format("{} of {}: the plane is parallel to {}, so the zone orientation is "
@@ -1157,8 +1162,7 @@ Outcome evaluate_orientation(const ToleranceSpec& spec, const Feature& feature, 
     // planes holding the tolerated direction, square to the plane of d and the axis. Either way
     // the axis's excursion over its length is L sin of its angle to the tolerated direction
     // nearest it.
-    std::optional<Vec3> tolerated = tilted_toward(d, *own, tolerated_deg);
-    if (!tolerated) tolerated = tilted_toward(d, feature.nominal.direction, tolerated_deg);
+    const std::optional<Vec3> tolerated = tolerated_near_feature();
     if (!tolerated)
       return Error(
           fmt::format("{} of {}: the axis runs along {} and so does its nominal: the zone orientation is "
