@@ -402,6 +402,8 @@ TEST(VirtualCmm, FastProbingOverTravels) {
   EXPECT_EQ(r.fault->kind, FaultKind::OverTravel);
   EXPECT_EQ(r.fault->message.rfind("probe over-travel: stopped ", 0), 0u) << r.fault->message;
   EXPECT_NE(r.fault->message.find("past contact, limit 0.200 mm"), std::string::npos) << r.fault->message;
+  // The speed at contact, which tells a user why (cruise: 100 mm/s).
+  EXPECT_NE(r.fault->message.find("touching at 100.0 mm/s"), std::string::npos) << r.fault->message;
   // Past contact: pre-travel + feed * delays (0.410 mm), up to one cycle before the interpolator
   // reacts (0.1 mm), then the jerk-limited stop from 100 mm/s: 100 * (2 * sqrt(100 / 10000)) / 2.
   const double past = r.fault->position_mm.z() - 2 - 40;  // negative: below the contact

@@ -75,8 +75,9 @@ tl::expected<Controller::Touch, Fault> Controller::touch(const Vec3& start, cons
       PositioningMove{start, u, len, profile, move_limits, braking(u, move_feed), c0, brake, now(), position});
   if (const auto past = sim.over_travel(stop_s))
     return fault(FaultKind::OverTravel,
-                 fmt::format("probe over-travel: stopped {:.3f} mm past contact, limit {:.3f} mm", *past,
-                             config.data_sheet.rated_over_travel_mm),
+                 fmt::format("probe over-travel: stopped {:.3f} mm past contact, limit {:.3f} mm, touching at "
+                             "{:.1f} mm/s: probe slower",
+                             *past, config.data_sheet.rated_over_travel_mm, profile.at(*signal).speed_mm_s),
                  position, now());
   return Touch{latched, t0_abs + latch};
 }
