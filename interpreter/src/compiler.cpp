@@ -11,6 +11,7 @@
 
 #include "compile/unit_compiler.hpp"
 #include "metron/grammar/parser.hpp"
+#include "passes/actuals_pass.hpp"
 
 namespace metron::interpreter {
 
@@ -87,6 +88,8 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   uc.set_strict(m_parse_options.strict);
   uc.set_read_policy(&m_policy);
   uc.compile(program, kind == UnitKind::ReplEntry);
+  // The main program compiles its called files as it goes: the whole program is known now.
+  if (unit == 0 && kind != UnitKind::ReplEntry) passes::warn_features_never_measured(m_module, m_sink);
   return unit;
 }
 

@@ -2934,6 +2934,48 @@ TEST(ShopPrograms, NeverDefinedFeatureIsNotDefinedNotUsedBeforeItsDefinition) {
                   .has("feature FA(LATER) is used before its definition at line 3"));
 }
 
+// A feature the program defines and reads as FA(x) but never measures, constructs or states: check
+// says so where it is read (the run has no actual there: a CONST stops it), once per feature. A
+// feature measured anywhere (in a macro, as an indexed family) is not told; when a measured name
+// is known only at run (a macro parameter), check cannot tell and says nothing.
+TEST(ShopPrograms, AFeatureNeverMeasuredIsToldWhereItIsRead) {
+  const std::string head = "DMISMN/'p', 5.1\nUNITS/MM,ANGDEC\nF(P1)=FEAT/POINT,CART,0,0,40,0,0,1\n";
+  const std::string never = head + "F(P2)=FEAT/POINT,CART,10,0,40,0,0,1\nMEAS/POINT,F(P2),1\nENDMES\n" +
+                            "CONST/LINE,F(L),BF,FA(P1),FA(P2)\nOUTPUT/FA(P1)\nENDFIL\n";
+  const auto c = check(never);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 1u) << c.text;  // once, at the first read
+  EXPECT_TRUE(c.has("7:20: warning: FA(P1) is read here, but nothing in this program measures or constructs P1"))
+      << c.text;
+  EXPECT_TRUE(check(never, true).has("warning: FA(P1) is read here")) << "strict: still valid DMIS, a warning";
+  // The run agrees: it stops at the CONST for want of P1's actual.
+  const auto r = dry_run(never);
+  EXPECT_EQ(r.status, ExecStatus::Error);
+  EXPECT_NE(r.diagnostics.find("FA(P1) has no actual"), std::string::npos) << r.diagnostics;
+
+  const std::string measured_in_a_macro =
+      head + "M(TOUCH)=MACRO\nMEAS/POINT,F(P1),1\nENDMES\nENDMAC\nCALL/M(TOUCH)\nOUTPUT/FA(P1)\nENDFIL\n";
+  const auto m = check(measured_in_a_macro);
+  EXPECT_EQ(m.errors, 0u) << m.text;
+  EXPECT_FALSE(m.has("nothing in this program measures")) << m.text;
+  const std::string indexed =
+      "DMISMN/'p', 5.1\nDECL/INTGR,I\nDO/I,1,2\nF(H[I])=FEAT/POINT,CART,I,0,40,0,0,1\n"
+      "MEAS/POINT,F(H[I]),1\nENDMES\nENDDO\nOUTPUT/FA(H[1])\nENDFIL\n";
+  const auto x = check(indexed);
+  // The same family defined and never measured is told at its read.
+  std::string unmeasured = indexed;
+  unmeasured.replace(unmeasured.find("MEAS/POINT,F(H[I]),1\nENDMES\n"), 29, "");
+  EXPECT_TRUE(check(unmeasured).has("FA(H[1]) is read here, but nothing in this program measures")) << unmeasured;
+  EXPECT_EQ(x.errors, 0u) << x.text;
+  EXPECT_FALSE(x.has("nothing in this program measures")) << x.text;
+  const std::string by_parameter = head +
+                                   "M(TOUCH)=MACRO/'X'\nMEAS/POINT,F(X),1\nENDMES\nENDMAC\nCALL/M(TOUCH),F(P1)\n"
+                                   "OUTPUT/FA(P1)\nENDFIL\n";
+  const auto b = check(by_parameter);
+  EXPECT_EQ(b.errors, 0u) << b.text;
+  EXPECT_FALSE(b.has("nothing in this program measures")) << b.text;
+}
+
 // A CAMIO program generated for a ladder of modules outputs the features of inserts it never
 // measured (OUTPUT/FA(PNTC06F1),TA(C06F1) with no F(PNTC06F1) anywhere), and ran on the machine.
 // Read leniently, such an item is left out with a warning, and a tolerance left without a
