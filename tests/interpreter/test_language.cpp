@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <fmt/format.h>
+
 #include "cli/virtual_cmm_backend.hpp"
 #include "metron/interpreter/session.hpp"
 
@@ -216,6 +218,24 @@ TEST(Language, ObtainOnABoundedLineReadsTheEndPoint) {
           "TEXT/OPER, STR(X2)\nTEXT/OPER, STR(K2)\nTEXT/OPER, STR(J)\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"11", "1", "1"}));
+  EXPECT_EQ(r.diagnostics.find("is not one of its numbers"), std::string::npos) << r.diagnostics;
+}
+
+// An OBTAIN index on a word of the output statement (CIRCLE, INNER, CART are 1 to 3) or past its
+// last number: check tells where the numbers are, and the run stops there as told.
+TEST(Language, AnObtainIndexOffTheNumbersIsToldAtCheck) {
+  for (const int k : {3, 11}) {
+    auto r = run("F(C) = FEAT/CIRCLE, INNER, CART, 1, 2, 3, 0, 0, 1, 10\nDECL/REAL, D\nD = OBTAIN/F(C), " +
+                 std::to_string(k) + "\n");
+    EXPECT_EQ(r.status, ExecStatus::Error) << r.diagnostics;
+    EXPECT_NE(r.diagnostics.find(fmt::format("prog.dmi:5:18: warning: OBTAIN index {} of F(C) is not one of its "
+                                             "numbers: its output statement has them at 4 to 10",
+                                             k)),
+              std::string::npos)
+        << r.diagnostics;
+    EXPECT_NE(r.diagnostics.find(fmt::format("error: OBTAIN index {} is not a number of F(C)", k)), std::string::npos)
+        << r.diagnostics;
+  }
 }
 
 TEST(Language, EmitIrKeepsSourcePositions) {

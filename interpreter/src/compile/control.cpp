@@ -7,6 +7,7 @@
 
 #include "compile/unit_compiler.hpp"
 #include "metron/runtime/error_space/calibrate_command.hpp"
+#include "metron/runtime/feature_parameters.hpp"
 
 namespace metron::interpreter::detail {
 
@@ -127,6 +128,7 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     if (!check_feature(s.params[0])) return;
     auto idx = numeric(s.params[1], "a parameter index");
     if (!idx) return;
+    warn_obtain_index(s.params[0], *idx);
     value.op = ir::ExprOp::Obtain;
     value.span = s.span;
     value.label = label_operand(s.params[0].label);
@@ -765,6 +767,24 @@ void UnitCompiler::call_external_macro(const grammar::Statement& s) {
                       m.params[0].label.name));
   }
   call(m);
+}
+
+// OBTAIN/FA(x),n with a constant n that falls on a word of x's output statement (FEAT/type, side,
+// CART) or past its last number: the run stops there; check tells where the numbers are.
+void UnitCompiler::warn_obtain_index(const grammar::Expr& feature, const ir::Expr& index) {
+  if (index.op != ir::ExprOp::Constant || !index.value.is_number()) return;
+  const auto type = feature_type(upper(feature.label.name));
+  if (!type) return;
+  runtime::Geometry g;
+  g.type = *type;
+  const auto words = static_cast<long>(runtime::feature_word_count(*type));
+  const auto last = words + static_cast<long>(runtime::feature_parameters(g).size());
+  const auto k = static_cast<long>(std::llround(index.value.number));
+  if (k > words && k <= last) return;
+  warn(index.span, "sema.obtain-index",
+       fmt::format("OBTAIN index {} of {}({}) is not one of its numbers: its output statement has them at {} to {} "
+                   "(the first {} are its words); the run stops here",
+                   k, feature.label.prefix, feature.label.name, words + 1, last, words));
 }
 
 }  // namespace metron::interpreter::detail

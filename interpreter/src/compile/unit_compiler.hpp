@@ -215,6 +215,7 @@ class UnitCompiler {
   // ---- name checks and the dispatcher (compile/unit_compiler.cpp) ---------------------------
   bool check_feature(const grammar::Expr& e);
   bool never_defined(const std::string& name) const;
+  void warn_obtain_index(const grammar::Expr& feature, const ir::Expr& index);
   std::optional<runtime::FeatureType> feature_type(const std::string& name) const;
   /// A feature type word parameter (MEAS/, CONST/), or nullopt.
   static std::optional<runtime::FeatureType> type_word(const grammar::Expr& e) {
