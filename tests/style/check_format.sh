@@ -9,11 +9,14 @@ cd "${1:?usage: check_format.sh SOURCE_DIR}" || exit 2
 command -v git >/dev/null && command -v clang-format >/dev/null || exit 77
 clang-format --version | grep -q ' version 14\.' || exit 77
 git rev-parse --is-inside-work-tree >/dev/null 2>&1 || exit 77
+# One clang-format process for every file (a process per file took ten times as long); the files it
+# finds unformatted are the ones its diagnostics name ("FILE:LINE:COL: error: code should be ...").
+mapfile -t sources < <(git ls-files '*.cpp' '*.hpp' '*.h' | while IFS= read -r f; do [ -f "$f" ] && echo "$f"; done)
 unformatted=()
-while IFS= read -r f; do
-  [ -f "$f" ] || continue
-  clang-format --dry-run -Werror "$f" >/dev/null 2>&1 || unformatted+=("$f")
-done < <(git ls-files '*.cpp' '*.hpp' '*.h')
+if ! diagnostics=$(clang-format --dry-run -Werror "${sources[@]}" 2>&1 >/dev/null); then
+  mapfile -t unformatted < <(printf '%s\n' "$diagnostics" | sed -n 's/^\(.*\):[0-9]*:[0-9]*: error: .*/\1/p' | sort -u)
+  [ ${#unformatted[@]} -gt 0 ] || { printf '%s\n' "$diagnostics"; exit 1; }
+fi
 if [ ${#unformatted[@]} -gt 0 ]; then
   echo "${#unformatted[@]} file(s) not formatted by .clang-format (fix: clang-format -i FILE):"
   printf '  %s\n' "${unformatted[@]}"
