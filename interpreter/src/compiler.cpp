@@ -89,7 +89,7 @@ std::size_t Compiler::compile_program(std::uint32_t file, const std::string& pat
   uc.set_read_policy(&m_policy);
   uc.compile(program, kind == UnitKind::ReplEntry);
   // The main program compiles its called files as it goes: the whole program is known now.
-  if (unit == 0 && kind != UnitKind::ReplEntry) passes::warn_features_never_measured(m_module, m_sink);
+  if (unit == 0 && kind != UnitKind::ReplEntry) passes::warn_features_never_measured(m_module, m_sources, m_sink);
   return unit;
 }
 
