@@ -2977,6 +2977,44 @@ TEST(ShopPrograms, AFeatureNeverMeasuredIsToldWhereItIsRead) {
   EXPECT_FALSE(b.has("nothing in this program measures")) << b.text;
 }
 
+// FA(x) read after its FEAT but before the MEAS further down, in a program that runs straight
+// through: told at the read with the line of the MEAS; the run stops there as told. A loop or a
+// jump back could make the order right, a macro or a called file could measure it first, and an
+// FA(x) read before its FEAT is told by the compiler already: no word from this check then.
+TEST(ShopPrograms, AFeatureReadBeforeItIsMeasuredIsTold) {
+  const std::string head = "DMISMN/'p', 5.1\nUNITS/MM,ANGDEC\nF(P1)=FEAT/POINT,CART,0,0,40,0,0,1\n";
+  const std::string measure = "MEAS/POINT,F(P1),1\nENDMES\n";
+  const std::string early = head + "DATDEF/FA(P1),DAT(A)\n" + measure + "OUTPUT/FA(P1)\nENDFIL\n";
+  const auto c = check(early);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 1u) << c.text;
+  EXPECT_TRUE(c.has("4:8: warning: FA(P1) is read here, before P1 is measured or constructed (first at line 5)"))
+      << c.text;
+  const auto r = dry_run(early);
+  EXPECT_EQ(r.status, ExecStatus::Error);
+  EXPECT_NE(r.diagnostics.find("FA(P1) has no actual"), std::string::npos) << r.diagnostics;
+
+  const std::string in_order = head + measure + "DATDEF/FA(P1),DAT(A)\nENDFIL\n";
+  EXPECT_EQ(check(in_order).warnings, 0u) << check(in_order).text;
+  // A second pass of a loop reads the actual the first pass measured.
+  const std::string looped =
+      "DMISMN/'p', 5.1\nDECL/INTGR,I\nF(P1)=FEAT/POINT,CART,0,0,40,0,0,1\nDO/I,1,2\n"
+      "IF/(I.EQ.2)\nOUTPUT/FA(P1)\nENDIF\n" +
+      measure + "ENDDO\nENDFIL\n";
+  EXPECT_FALSE(check(looped).has("before P1 is measured")) << check(looped).text;
+  const std::string jumped_back = head + "(AGAIN)\nOUTPUT/FA(P1)\n" + measure + "JUMPTO/(AGAIN)\nENDFIL\n";
+  EXPECT_FALSE(check(jumped_back).has("before P1 is measured")) << check(jumped_back).text;
+  const std::string by_macro =
+      head + "M(TOUCH)=MACRO\n" + measure + "ENDMAC\nCALL/M(TOUCH)\nOUTPUT/FA(P1)\n" + measure + "ENDFIL\n";
+  EXPECT_FALSE(check(by_macro).has("before P1 is measured")) << check(by_macro).text;
+  // Before its FEAT: the compiler's warning alone.
+  const std::string before_feat =
+      "DMISMN/'p', 5.1\nOUTPUT/FA(P1)\nF(P1)=FEAT/POINT,CART,0,0,40,0,0,1\n" + measure + "ENDFIL\n";
+  const auto f = check(before_feat);
+  EXPECT_EQ(f.warnings, 1u) << f.text;
+  EXPECT_TRUE(f.has("FA(P1) is used before its definition")) << f.text;
+}
+
 // A CAMIO program generated for a ladder of modules outputs the features of inserts it never
 // measured (OUTPUT/FA(PNTC06F1),TA(C06F1) with no F(PNTC06F1) anywhere), and ran on the machine.
 // Read leniently, such an item is left out with a warning, and a tolerance left without a
