@@ -956,6 +956,71 @@ TEST(ShopPrograms, FeaturesWithMoreNumbersThanTheirFormAreReadWithAWarning) {
   EXPECT_NEAR(cone->nominal.length_mm, 5, 1e-12);
 }
 
+// A LINE written without the normal of its plane, as a public web generator of DMIS writes
+// UNBND lines (x,y,z,i,j,k) and others BND lines (two ends): read with one warning, the normal the
+// axis the line is most perpendicular to. The generator's own PTMEAS vector for the line along X,
+// probed on its front face, is 0,-1,0: the face a line is probed on is direction x normal, so the
+// normal taken must be +Z for the touches to agree with it.
+TEST(ShopPrograms, ALineWithoutItsPlanesNormalIsReadWithOneWarning) {
+  const std::string text =
+      "DMISMN/'generated',05.2\nUNITS/MM,ANGDEC\n"
+      "F(FRONT)=FEAT/LINE,UNBND,CART,10.0000,0.0000,-5.0000,1.0000,0.0000,0.0000\n"
+      "MEAS/LINE,F(FRONT),2\n  PTMEAS/CART,10.0000,0.0000,-5.0000,0.0000,-1.0000,0.0000\n"
+      "  PTMEAS/CART,90.0000,0.0000,-5.0000,0.0000,-1.0000,0.0000\nENDMES\n"
+      "F(RISE)=FEAT/LINE,BND,CART,0,0,0,0,0,-20\n"
+      "F(SLANT)=FEAT/LINE,UNBND,CART,0,0,0,0,0.8,0.6\nENDFIL\n";
+  const auto c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_EQ(c.warnings, 1u) << c.text;
+  EXPECT_TRUE(c.has("shop.dmi:3:") && c.has("FEAT/LINE of F(FRONT) has 6 numbers, without the normal of the plane it "
+                                            "lies in (x,y,z,i,j,k,i2,j2,k2): metron takes 0,0,1"))
+      << c.text;
+  const auto strict = check(text, true);
+  EXPECT_TRUE(strict.has("shop.dmi:3:") && strict.has("FEAT/LINE expects 9 numbers (x,y,z,i,j,k,i2,j2,k2), got 6"))
+      << strict.text;
+  const auto computed =
+      check("DMISMN/'g',05.2\nDECL/DOUBLE,I\nI=ASSIGN/1\nF(L)=FEAT/LINE,UNBND,CART,0,0,0,I,0,0\nENDFIL\n");
+  EXPECT_TRUE(computed.has("shop.dmi:4:") && computed.has("can be left out only where the line's direction is written"))
+      << computed.text;
+
+  const auto r = dry_run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* front = r.session->runtime().find_feature("FRONT");
+  const auto* rise = r.session->runtime().find_feature("RISE");
+  const auto* slant = r.session->runtime().find_feature("SLANT");
+  ASSERT_TRUE(front && rise && slant);
+  const metron::Vec3 probed_face = front->nominal.direction.cross(front->nominal.normal2);
+  EXPECT_LT((probed_face - metron::Vec3(0, -1, 0)).norm(), 1e-12) << probed_face.transpose();
+  ASSERT_TRUE(front->actual);
+  EXPECT_NEAR(front->actual->position.z(), -5, 1e-9);
+  // A vertical line: Z is along it, Y (next in the order) is perpendicular.
+  EXPECT_LT((rise->nominal.normal2 - metron::Vec3::UnitY()).norm(), 1e-12) << rise->nominal.normal2.transpose();
+  // Along 0,0.8,0.6: X is the axis it is most perpendicular to, taken as it is.
+  EXPECT_LT((slant->nominal.normal2 - metron::Vec3::UnitX()).norm(), 1e-12) << slant->nominal.normal2.transpose();
+}
+
+// TOL/POS,DIAM,t (a public GD&T-to-DMIS exporter writes the drawing's diameter sign so): read
+// as 2D with one warning. A hole stated 0.03, 0.04 off its nominal, 2D and DIAM alike: 2 x 0.05.
+TEST(ShopPrograms, APositionWithADiametralZoneWordIsRead2D) {
+  const auto program = [](const std::string& form) {
+    return "DMISMN/'STEPPED_FLANGE'\nUNITS/MM,ANGDEC\nF(H)=FEAT/CIRCLE,INNER,CART,550,480,0,0,0,1,20\n"
+           "FA(H)=FEAT/CIRCLE,INNER,CART,550.03,480.04,0,0,0,1,20\nT(P)=TOL/POS," +
+           form + ",0.0680,MMC\nOUTPUT/FA(H),TA(P)\nENDFIL\n";
+  };
+  const auto c = check(program("DIAM"));
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("shop.dmi:5:14: warning: TOL/POS takes 2D or 3D; DIAM (a diametral zone) is read as 2D")) << c.text;
+  EXPECT_TRUE(check(program("DIAM"), true).has("shop.dmi:5:14: error: expected 2D or 3D after TOL/POS"));
+  for (const std::string form : {"2D", "DIAM"}) {
+    const auto r = dry_run(program(form));
+    ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+    const auto* pos = tolerance(*r.session, "P");
+    ASSERT_TRUE(pos) << form;
+    EXPECT_NEAR(pos->value, 0.1, 1e-9) << form;
+    EXPECT_FALSE(pos->in_tolerance) << form;  // 0.1 > 0.068 (the hole at its nominal size: no bonus)
+  }
+}
+
 // Bad CPARLN statements: positioned errors that say what is wrong.
 TEST(ShopPrograms, BadClosedSlotStatementsArePositionedErrors) {
   const auto feat = [](const std::string& rest) {

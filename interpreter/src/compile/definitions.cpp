@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Definitions: FEAT, SNSDEF, TOL, DATDEF, PATH, DECL.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -193,6 +194,10 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   const bool bounded = payload.bounded.value_or(false);
   const FeatureForm form = feature_form(type, bounded);
   std::size_t n = p.size() - i;
+  if (type == FeatureType::Line && n == 6 &&
+      !complete_line_normal(s, p, bounded, payload.form.value_or(ir::CoordinateForm::Cart)))
+    return;
+  n = p.size() - i;
   // More numbers than the form takes (DMIS 5.3's longer forms, vendors' extra sizes such as a
   // cone's two distances): read leniently, the form's numbers are used and the rest ignored, with
   // a warning; --strict: an error below.
@@ -253,6 +258,53 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   m_symbols.skipped.erase("F:" + label);
   in.payload = payload;
   emit(std::move(in));
+}
+
+// FEAT/LINE written with 6 numbers, without the normal of the plane the line lies in (generators
+// write UNBND,x,y,z,i,j,k and BND,x1,y1,z1,x2,y2,z2 so): the normal is the coordinate axis the line
+// is most perpendicular to (Z first, the default working plane's, then Y, then X), made exactly
+// perpendicular to it; the line is probed on the face whose normal is direction x that axis, as for
+// a line written whole. Appends the three numbers to `p`; false (an error told) where the direction
+// is not written in literal numbers or --strict asks for the standard's 9.
+bool UnitCompiler::complete_line_normal(const grammar::Statement& s, std::vector<grammar::Expr>& p, bool bounded,
+                                        ir::CoordinateForm form) {
+  const std::size_t first = p.size() - 6;
+  const char* meaning = bounded ? "x1,y1,z1,x2,y2,z2,i,j,k" : "x,y,z,i,j,k,i2,j2,k2";
+  const auto literal = [](const grammar::Expr& e) -> double {
+    if (e.kind == ExprKind::Number) return e.number;
+    if (e.kind == ExprKind::Unary && e.args.size() == 1 && e.args[0].kind == ExprKind::Number)
+      return e.text == "-" ? -e.args[0].number : e.text == "+" ? e.args[0].number : NAN;
+    return NAN;
+  };
+  std::array<double, 6> v{};
+  for (std::size_t k = 0; k < 6; ++k) v[k] = literal(p[first + k]);
+  const Vec3 direction = bounded ? Vec3(v[3] - v[0], v[4] - v[1], v[5] - v[2]) : Vec3(v[3], v[4], v[5]);
+  const bool usable = direction.allFinite() && direction.norm() > 0 && (!bounded || form == ir::CoordinateForm::Cart);
+  if (m_strict || !usable)
+    return error(p.back().span, "sema.feature-arity",
+                 fmt::format("FEAT/LINE expects 9 numbers ({}), got 6{}", meaning,
+                             m_strict ? " (without --strict the normal of its plane is taken from its direction)"
+                                      : ": the normal of its plane can be left out only where the line's direction "
+                                        "is written in numbers (and a BND line's ends in CART)")),
+           false;
+  const Vec3 d = direction.normalized();
+  Vec3 axis = Vec3::UnitZ();
+  for (const Vec3 candidate : {Vec3(Vec3::UnitY()), Vec3(Vec3::UnitX())})
+    if (std::abs(candidate.dot(d)) < std::abs(axis.dot(d)) - 1e-12) axis = candidate;
+  const Vec3 normal = (axis - axis.dot(d) * d).normalized();
+  warn_once(m_line_normals_warned, p.back().span, "sema.line-normal",
+            fmt::format("FEAT/LINE of F({}) has 6 numbers, without the normal of the plane it lies in ({}): metron "
+                        "takes {:g},{:g},{:g}, the axis it is most perpendicular to, and likewise for every such "
+                        "LINE after it (--strict makes this an error)",
+                        s.target->name, meaning, normal.x() + 0.0, normal.y() + 0.0, normal.z() + 0.0));
+  for (int k = 0; k < 3; ++k) {
+    grammar::Expr number;
+    number.kind = ExprKind::Number;
+    number.span = p.back().span;
+    number.number = normal[k];
+    p.push_back(std::move(number));
+  }
+  return true;
 }
 
 // F(p)=FEAT/PATERN,F(a),F(b)[,...]: the members must be features defined before.
@@ -507,7 +559,19 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   in.payload = ir::TolerancePayload{kind};
   std::vector<double> numbers;
   bool has_reference = false;
+  // TOL/POS,DIAM,...: a generator's way to ask for a diametral zone (the drawing's diameter sign)
+  // where DMIS writes 2D: read as 2D (a circular zone about the nominal position in the plane
+  // normal to the feature, a cylindrical one about an axis); --strict: an error below.
+  const bool diametral_position = kind == ToleranceKind::Pos && p.size() > 1 && is_word(p[1], "DIAM") && !m_strict;
+  if (diametral_position)
+    warn(p[1].span, "sema.position-diam",
+         std::string("TOL/POS takes 2D or 3D; DIAM (a diametral zone) is read as 2D, the zone of 2D being diametral "
+                     "about the nominal position (--strict makes this an error)"));
   for (std::size_t i = 1; i < p.size(); ++i) {
+    if (diametral_position && i == 1) {
+      in.operands.push_back(word_operand("2D", p[1].span));
+      continue;
+    }
     // A material modifier right after a datum is the datum's (`DAT(B),MMC`), not the feature's:
     // it is not passed on, so it cannot change the feature's condition, and it is told.
     if (i > 1 && is_label(p[i - 1], {"DAT", "DATT"}) &&
@@ -611,7 +675,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       if (!is_word(p[i]) && p[i].kind != ExprKind::Label) ++in_tier;
     }
   }
-  if (kind == ToleranceKind::Pos && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
+  if (kind == ToleranceKind::Pos && !diametral_position && !(is_word(p[1], "2D") || is_word(p[1], "3D")))
     return error(p.size() > 1 ? p[1].span : p[0].span, "sema.expected-dimension", "expected 2D or 3D after TOL/POS");
   // TOL/ANGLR,zone,angle: no public DMIS text gives the order; the basic angle is the number of
   // the larger magnitude, the zone the other, whichever comes first (docs/tolerances.md

@@ -114,6 +114,12 @@ class UnitCompiler {
     note(span, code, std::move(message));
     noted = true;
   }
+  /// One warning per unit for what `warned` stands for.
+  void warn_once(bool& warned, Span span, const char* code, std::string message) {
+    if (warned) return;
+    warn(span, code, std::move(message));
+    warned = true;
+  }
 
   /// A sensor the program does not define: taken from the machine's probe library at run
   /// (docs/language.md "Sensors from the probe library"); one note per name.
@@ -231,6 +237,8 @@ class UnitCompiler {
   bool label_indices(const grammar::Expr& e);
   void unknown(const grammar::Statement& s);
   void pattern(const grammar::Statement& s);
+  bool complete_line_normal(const grammar::Statement& s, std::vector<grammar::Expr>& p, bool bounded,
+                            ir::CoordinateForm form);
   static std::string skipped_statement_message(const std::string& major);
   bool expect_params(const grammar::Statement& s, std::size_t n, const char* what);
   bool require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example);
@@ -381,6 +389,7 @@ class UnitCompiler {
       false;  // one note per unit: OUTPUT/...,R(x)   // one note per unit: CALIB/SENS uses the world's sphere
   bool m_edge_points_noted = false;      // one note per unit for FEAT/EDGEPT
   bool m_rectangles_noted = false;       // one note per unit for FEAT/RCTNGL
+  bool m_line_normals_warned = false;    // one warning per unit for a FEAT/LINE without its plane's normal
   bool m_patterns_noted = false;         // one note per unit for FEAT/PATERN
   bool m_meas_clearance_noted = false;   // one note per unit for MEAS/...,CLRSRF (RationalDMIS)
   bool m_sensor_saves_noted = false;     // one note per unit for SAVE/SA()
