@@ -16,8 +16,4 @@ function(metron_layer name)
   target_include_directories(metron_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include
                                             PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
   target_link_libraries(metron_${name} PRIVATE metron_warnings PUBLIC ${ARGN})
-  # The grammar's sources are PEGTL's, not the numeric headers: no precompiled header for it.
-  if(NOT name STREQUAL "grammar")
-    metron_precompile(metron_${name})
-  endif()
 endfunction()
