@@ -968,7 +968,7 @@ TEST(ShopPrograms, ALineWithoutItsPlanesNormalIsReadWithOneWarning) {
       "MEAS/LINE,F(FRONT),2\n  PTMEAS/CART,10.0000,0.0000,-5.0000,0.0000,-1.0000,0.0000\n"
       "  PTMEAS/CART,90.0000,0.0000,-5.0000,0.0000,-1.0000,0.0000\nENDMES\n"
       "F(RISE)=FEAT/LINE,BND,CART,0,0,0,0,0,-20\n"
-      "F(SLANT)=FEAT/LINE,UNBND,CART,0,0,0,0,0.8,0.6\nENDFIL\n";
+      "F(SLANT)=FEAT/LINE,UNBND,CART,0,0,0,0,0.8,0.6\nF(DIAG)=FEAT/LINE,UNBND,CART,0,0,0,1,1,1\nENDFIL\n";
   const auto c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
   EXPECT_EQ(c.warnings, 1u) << c.text;
@@ -988,7 +988,8 @@ TEST(ShopPrograms, ALineWithoutItsPlanesNormalIsReadWithOneWarning) {
   const auto* front = r.session->runtime().find_feature("FRONT");
   const auto* rise = r.session->runtime().find_feature("RISE");
   const auto* slant = r.session->runtime().find_feature("SLANT");
-  ASSERT_TRUE(front && rise && slant);
+  const auto* diagonal = r.session->runtime().find_feature("DIAG");
+  ASSERT_TRUE(front && rise && slant && diagonal);
   const metron::Vec3 probed_face = front->nominal.direction.cross(front->nominal.normal2);
   EXPECT_LT((probed_face - metron::Vec3(0, -1, 0)).norm(), 1e-12) << probed_face.transpose();
   ASSERT_TRUE(front->actual);
@@ -997,14 +998,19 @@ TEST(ShopPrograms, ALineWithoutItsPlanesNormalIsReadWithOneWarning) {
   EXPECT_LT((rise->nominal.normal2 - metron::Vec3::UnitY()).norm(), 1e-12) << rise->nominal.normal2.transpose();
   // Along 0,0.8,0.6: X is the axis it is most perpendicular to, taken as it is.
   EXPECT_LT((slant->nominal.normal2 - metron::Vec3::UnitX()).norm(), 1e-12) << slant->nominal.normal2.transpose();
+  // Along 1,1,1 (equally far from every axis): Z less its part along the line, by hand
+  // (0,0,1) - (1/3)(1,1,1) = (-1,-1,2)/3, of length sqrt(6)/3.
+  EXPECT_LT((diagonal->nominal.normal2 - metron::Vec3(-1, -1, 2) / std::sqrt(6.0)).norm(), 1e-12)
+      << diagonal->nominal.normal2.transpose();
 }
 
 // TOL/POS,DIAM,t (a public GD&T-to-DMIS exporter writes the drawing's diameter sign so): read
-// as 2D with one warning. A hole stated 0.03, 0.04 off its nominal, 2D and DIAM alike: 2 x 0.05.
+// as 2D with one warning. A hole stated 0.03, 0.04 off its nominal in its plane and 0.02 along its
+// axis, 2D and DIAM alike: 2 x 0.05 (3D would count the 0.02 too: 2 x sqrt(0.0029) = 0.1077).
 TEST(ShopPrograms, APositionWithADiametralZoneWordIsRead2D) {
   const auto program = [](const std::string& form) {
     return "DMISMN/'STEPPED_FLANGE'\nUNITS/MM,ANGDEC\nF(H)=FEAT/CIRCLE,INNER,CART,550,480,0,0,0,1,20\n"
-           "FA(H)=FEAT/CIRCLE,INNER,CART,550.03,480.04,0,0,0,1,20\nT(P)=TOL/POS," +
+           "FA(H)=FEAT/CIRCLE,INNER,CART,550.03,480.04,0.02,0,0,1,20\nT(P)=TOL/POS," +
            form + ",0.0680,MMC\nOUTPUT/FA(H),TA(P)\nENDFIL\n";
   };
   const auto c = check(program("DIAM"));
