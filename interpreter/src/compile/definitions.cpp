@@ -289,7 +289,7 @@ bool UnitCompiler::complete_line_normal(const grammar::Statement& s, std::vector
            false;
   const Vec3 d = direction.normalized();
   Vec3 axis = Vec3::UnitZ();
-  for (const Vec3 candidate : {Vec3(Vec3::UnitY()), Vec3(Vec3::UnitX())})
+  for (const Vec3& candidate : {Vec3(Vec3::UnitY()), Vec3(Vec3::UnitX())})
     if (std::abs(candidate.dot(d)) < std::abs(axis.dot(d)) - 1e-12) axis = candidate;
   const Vec3 normal = (axis - axis.dot(d) * d).normalized();
   warn_once(m_line_normals_warned, p.back().span, "sema.line-normal",
