@@ -982,6 +982,21 @@ TEST(ShopPrograms, ALineWithoutItsPlanesNormalIsReadWithOneWarning) {
       check("DMISMN/'g',05.2\nDECL/DOUBLE,I\nI=ASSIGN/1\nF(L)=FEAT/LINE,UNBND,CART,0,0,0,I,0,0\nENDFIL\n");
   EXPECT_TRUE(computed.has("shop.dmi:4:") && computed.has("can be left out only where the line's direction is written"))
       << computed.text;
+  const auto degenerate = check(
+      "DMISMN/'g',05.2\nF(L)=FEAT/LINE,UNBND,CART,0,0,0,0,0,0\n"
+      "F(M)=FEAT/LINE,BND,CART,1,2,3,1,2,3\nF(N)=FEAT/LINE,BND,POL,1,2,3,4,5,6\nENDFIL\n");
+  EXPECT_TRUE(
+      degenerate.has("shop.dmi:2:37: error: FEAT/LINE expects 9 numbers (x,y,z,i,j,k,i2,j2,k2), got 6: its "
+                     "direction is the zero vector"))
+      << degenerate.text;
+  EXPECT_TRUE(
+      degenerate.has("shop.dmi:3:35: error: FEAT/LINE expects 9 numbers (x1,y1,z1,x2,y2,z2,i,j,k), got 6: its "
+                     "two ends are one point"))
+      << degenerate.text;
+  EXPECT_TRUE(
+      degenerate.has("shop.dmi:4:34: error: FEAT/LINE expects 9 numbers (x1,y1,z1,x2,y2,z2,i,j,k), got 6: the "
+                     "normal of its plane can be left out only where a BND line's ends are in CART"))
+      << degenerate.text;
 
   const auto r = dry_run(text);
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;

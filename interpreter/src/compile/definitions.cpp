@@ -279,13 +279,18 @@ bool UnitCompiler::complete_line_normal(const grammar::Statement& s, std::vector
   std::array<double, 6> v{};
   for (std::size_t k = 0; k < 6; ++k) v[k] = literal(p[first + k]);
   const Vec3 direction = bounded ? Vec3(v[3] - v[0], v[4] - v[1], v[5] - v[2]) : Vec3(v[3], v[4], v[5]);
-  const bool usable = direction.allFinite() && direction.norm() > 0 && (!bounded || form == ir::CoordinateForm::Cart);
-  if (m_strict || !usable)
+  const char* why = m_strict ? " (without --strict the normal of its plane is taken from its direction)"
+                    : bounded && form != ir::CoordinateForm::Cart
+                        ? ": the normal of its plane can be left out only where a BND line's ends are in CART"
+                    : !direction.allFinite()
+                        ? ": the normal of its plane can be left out only where the line's direction is written in "
+                          "numbers"
+                    : direction.norm() == 0 ? (bounded ? ": its two ends are one point, it has no direction"
+                                                       : ": its direction is the zero vector")
+                                            : nullptr;
+  if (why)
     return error(p.back().span, "sema.feature-arity",
-                 fmt::format("FEAT/LINE expects 9 numbers ({}), got 6{}", meaning,
-                             m_strict ? " (without --strict the normal of its plane is taken from its direction)"
-                                      : ": the normal of its plane can be left out only where the line's direction "
-                                        "is written in numbers (and a BND line's ends in CART)")),
+                 fmt::format("FEAT/LINE expects 9 numbers ({}), got 6{}", meaning, why)),
            false;
   const Vec3 d = direction.normalized();
   Vec3 axis = Vec3::UnitZ();
