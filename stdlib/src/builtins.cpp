@@ -130,6 +130,8 @@ const std::vector<Builtin>& builtins() {
       {"EOF", 1, 1, ValueType::Bool, true},
       {"EOLN", 1, 1, ValueType::Bool, true},
       {"PTDATA", 1, 1, ValueType::Integer, true},
+      // RAND([flag]): a number in [0, 1) of the run's sequence (Fortran's RAND; docs/language.md).
+      {"RAND", 0, 1, ValueType::Real, false},
       // EXIST(F(x)|FA(x)|D(x)|...): whether the label is defined (measured, saved, evaluated);
       // DMESYS('key'): what the measuring system says about `key` (docs/language.md).
       {"EXIST", 1, 1, ValueType::Bool, true},

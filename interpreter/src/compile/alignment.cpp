@@ -12,6 +12,38 @@ using ir::Op;
 using runtime::FeatureType;
 using runtime::ToleranceKind;
 
+namespace {
+
+/// A tolerance CMM software reports for a feature type metron does not evaluate it for: the
+/// orientation of a circle (from its vector), the flatness of a circle's points, the
+/// straightness of a cone's or a plane's line elements. Other mismatches (DIAM of a PLANE,
+/// CYLCTY of a slot) are mistakes no machine ran.
+bool reported_elsewhere(ToleranceKind kind, FeatureType type) {
+  using T = FeatureType;
+  switch (kind) {
+    case ToleranceKind::Perp:
+    case ToleranceKind::Parlel:
+    case ToleranceKind::Anglr: return type == T::Circle || type == T::Arc || type == T::Ellipse;
+    case ToleranceKind::Flat: return type == T::Circle;
+    case ToleranceKind::Strght: return type == T::Cone || type == T::Plane;
+    default: return false;
+  }
+}
+
+/// The feature types metron evaluates a tolerance for, as DMIS words: "PLANE, LINE or CYLNDR".
+std::string applicable_types(ToleranceKind kind) {
+  std::vector<std::string> words;
+  for (int t = 0; t <= static_cast<int>(FeatureType::Ellipse); ++t)
+    if (runtime::tolerance_applies(kind, static_cast<FeatureType>(t)))
+      words.emplace_back(ir::word_of(static_cast<FeatureType>(t)));
+  std::string text;
+  for (std::size_t i = 0; i < words.size(); ++i)
+    text += (i == 0 ? "" : i + 1 == words.size() ? " or " : ", ") + words[i];
+  return text;
+}
+
+}  // namespace
+
 void UnitCompiler::add_alignment(StatementTable& t) {
   t.insert({{"DATSET", &UnitCompiler::datset},
             {"TRANS", &UnitCompiler::trans},
@@ -561,8 +593,17 @@ void UnitCompiler::evaluate(const grammar::Statement& s) {
     any_tolerance = true;
     m_symbols.evaluated_tolerances.insert(upper(o.label.name));
   }
-  if (!any_tolerance)
+  if (!any_tolerance) {
+    // Its tolerances were all left out with a reason (read leniently): nothing to evaluate.
+    const bool named = std::any_of(s.params.begin(), s.params.end(), [](const grammar::Expr& p) {
+      return p.kind == ExprKind::Label && (p.label.prefix == "T" || p.label.prefix == "TA");
+    });
+    if (named && !m_strict) {
+      emit(make(Op::Nop, s, "EVAL"));
+      return;
+    }
     return error(s.span, "sema.eval-without-tolerance", "EVAL evaluates tolerances: EVAL/FA(x),TA(t)");
+  }
   emit(std::move(in));
 }
 
@@ -657,11 +698,24 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         if (kind == ToleranceKind::Anglb && types.size() != 2 && m_symbols.tolerance_datums.count(t) == 0)
           return fail(p.span, "sema.anglb-reference",
                       "TOL/ANGLB needs a datum DAT(x) or a second feature: OUTPUT/FA(a),FA(b),TA(t)");
-        for (const auto& type : types)
-          if (type && !runtime::tolerance_applies(kind, *type))
-            return fail(p.span, "sema.tolerance-type",
-                        fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name,
-                                    ir::word_of(*type)));
+        const auto mismatch = std::find_if(types.begin(), types.end(), [&](const std::optional<FeatureType>& type) {
+          return type && !runtime::tolerance_applies(kind, *type);
+        });
+        if (mismatch != types.end()) {
+          // PERP of a CIRCLE and the like: one section gives no axis. Read leniently, left out
+          // with the reason.
+          if (!m_strict && !m_repl && reported_elsewhere(kind, **mismatch)) {
+            warn(
+                p.span, "sema.tolerance-type-not-evaluated",
+                fmt::format("TOL/{} of T({}) is not evaluated for a {} (metron evaluates it for {}): left out of "
+                            "this {} (--strict makes it an error)",
+                            ir::word_of(kind), p.label.name, ir::word_of(**mismatch), applicable_types(kind), s.major));
+            continue;
+          }
+          return fail(p.span, "sema.tolerance-type",
+                      fmt::format("TOL/{} of T({}) does not apply to a {}", ir::word_of(kind), p.label.name,
+                                  ir::word_of(**mismatch)));
+        }
         if (types.empty())
           return fail(p.span, "sema.tolerance-without-feature",
                       fmt::format("T({}) is output without a feature to apply it to", p.label.name));

@@ -2,7 +2,7 @@
 // The intrinsics that need the run rather than their arguments: the run's date and time, the
 // simulated seconds since the start, the end of an input file, a feature's number of points,
 // vectors turned between the part and machine systems, the machine's thermometer (QTEMP) and
-// whether the last measurement failed under BADTST (BADPT, BADGT).
+// whether the last measurement failed under BADTST (BADPT, BADGT), and RAND's sequence.
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -115,6 +115,22 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
                         "reference temperature 20 C (told once)");
     }
     return shown(20.0);
+  }
+  if (name == "RAND") {
+    // RAND([flag]) read as Fortran's (g77) RAND: 0 or none, the next number of the sequence; 1,
+    // the sequence restarted; another value, a new seed (no public text of DMIS's RAND was
+    // found). Uniform in [0, 1), from the 53 high bits so that every platform draws the same.
+    if (!e.args.empty()) {
+      auto flag = evaluate(e.args.at(0));
+      if (!flag) return flag;
+      if (!flag->is_number()) return tl::unexpected(std::string("RAND takes a number"));
+      const auto seed = static_cast<std::int64_t>(flag->number);
+      if (seed == 1)
+        m_random.seed(0);
+      else if (seed != 0)
+        m_random.seed(static_cast<std::uint64_t>(seed));
+    }
+    return Value::real(static_cast<double>(m_random() >> 11) * 0x1.0p-53);
   }
   if (name == "SCSNS") return Value::string(m_runtime.active_sensor());
   if (name == "SCFEAT") return Value::string(m_current_feature);

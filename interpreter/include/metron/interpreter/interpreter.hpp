@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -170,6 +171,7 @@ class Interpreter {
   /// set (reproducible runs), else the wall clock when the run starts.
   std::int64_t m_clock_start_s = 0;
   bool m_no_thermometer_warned = false;  ///< QTEMP on a machine without one: told once
+  std::mt19937_64 m_random{0};           ///< RAND: the same sequence every run (seed 0, as Fortran's srand(0))
   RunLimits m_limits;
   bool m_signals_to_caller = false;
   Span m_executing;
