@@ -4433,3 +4433,47 @@ TEST(ShopPrograms, RandDrawsAUniformSequenceThatRepeats) {
   ASSERT_EQ(again.status, ExecStatus::Finished) << again.diagnostics;
   EXPECT_EQ(value(again, "S"), value(first, "S"));
 }
+
+// A feature type metron skips (SYMPLN, COMPOUND ...): read leniently its MEAS block is skipped
+// with it (its points, here in the air, would stop the run with a missed contact if taken), its
+// OUTPUT is left out, and another use is a warning at check where the run stops, as check says.
+// --strict: errors.
+TEST(ShopPrograms, TheMeasurementOfASkippedFeatureIsSkippedWithIt) {
+  const std::string head =
+      "DMISMN/'skip', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "SNSLCT/S(P4)\nMODE/PROG, MAN\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+      "F(SYM) = FEAT/SYMPLN, CART, 80, 50, 20, 1, 0, 0\nMEAS/SYMPLN, F(SYM), 2\n"
+      "PTMEAS/CART, -50, 50, 20, -1, 0, 0\nGOTO/-60, 50, 20\nPTMEAS/CART, 250, 50, 20, 1, 0, 0\nENDMES\n"
+      "F(TOP) = FEAT/PLANE, CART, 80, 50, 40, 0, 0, 1\nMEAS/PLANE, F(TOP), 3\nPTMEAS/CART, 10, 10, 40, 0, 0, 1\n"
+      "PTMEAS/CART, 150, 10, 40, 0, 0, 1\nPTMEAS/CART, 80, 90, 40, 0, 0, 1\nENDMES\n"
+      "T(FL) = TOL/FLAT, 0.05\nOUTPUT/FA(SYM), FA(TOP), TA(FL)\n";
+  const Checked c = check(head + "ENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(
+      c.has("8:6: warning: MEAS of F(SYM): metron skips FEAT/SYMPLN, so this block is skipped up to its "
+            "ENDMES, its points not taken"))
+      << c.text;
+  EXPECT_TRUE(
+      c.has("20:8: warning: feature FA(SYM) is defined only by a statement metron skipped: left out of this "
+            "OUTPUT"))
+      << c.text;
+  const auto r = run(head + "ENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* flat = tolerance(*r.session, "FL");
+  ASSERT_NE(flat, nullptr);  // the rest of the OUTPUT: the top face's flatness
+  EXPECT_NEAR(flat->value, 0.0, 0.005);
+  const std::string used = head + "DATDEF/FA(SYM), DAT(S)\nENDFIL\n";
+  const Checked u = check(used);
+  EXPECT_EQ(u.errors, 0u) << u.text;
+  EXPECT_TRUE(
+      u.has("21:8: warning: feature FA(SYM) is defined only by a statement metron skipped: it has no actual, "
+            "and a run stops here"))
+      << u.text;
+  const auto stopped = run(used);
+  EXPECT_EQ(stopped.status, ExecStatus::Error);
+  EXPECT_NE(stopped.diagnostics.find("21:1: error: FA(SYM) is not defined yet"), std::string::npos)
+      << stopped.diagnostics;
+  const Checked strict = check(used, true);
+  EXPECT_TRUE(strict.has("8:6: error: MEAS of F(SYM): metron skips FEAT/SYMPLN\n")) << strict.text;
+  EXPECT_TRUE(strict.has("21:8: error: feature FA(SYM) is defined only by a statement metron skipped")) << strict.text;
+}

@@ -661,6 +661,15 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         left_out = true;
         continue;
       }
+      if (const std::string name = upper(p.label.name);
+          !m_strict && !m_repl && m_symbols.unsupported_features.count(name) && !m_symbols.features.count(name)) {
+        warn(p.span, "sema.output-skipped-feature",
+             fmt::format("feature {}({}) is defined only by a statement metron skipped: left out of this {} "
+                         "(--strict makes it an error)",
+                         p.label.prefix, p.label.name, s.major));
+        left_out = true;
+        continue;
+      }
       if (!check_feature(p)) return false;
       types.push_back(feature_type(upper(p.label.name)));
     } else if (is_label(p, {"T", "TA"})) {

@@ -147,11 +147,11 @@ void UnitCompiler::feat(const grammar::Statement& s) {
   }
   const auto parsed = is_word(p[0]) ? ir::parse_word<FeatureType>(p[0].text) : std::nullopt;
   if (!parsed) {
-    if (is_word(p[0]) && (p[0].text == "COMPOUND" || p[0].text == "OBJECT" || p[0].text == "SYMPLN" ||
-                          p[0].text == "CONRADSEGMNT" || p[0].text == "REVSURF")) {
+    if (is_word(p[0]) && unsupported_feature_word(p[0].text)) {
       warn(p[0].span, "sema.unsupported-feature",
            fmt::format("feature type {} is not supported yet; F({}) is skipped", p[0].text, s.target->name));
       m_symbols.skipped["F:" + label] = s.span;
+      m_symbols.unsupported_features[label] = p[0].text;
       emit(make(Op::Nop, s, "FEAT"));
       return;
     }
@@ -520,9 +520,10 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (!parsed) {
     // DMIS 5.3 tolerance types a CMM program uses that metron does not evaluate yet: the OUTPUT
     // of one is left out with a warning instead of failing the program.
-    // A type metron does not know (a vendor's, or one of another DMIS version: ANGLR, CPROFS ...)
+    // A type metron does not know (a vendor's, or one of another DMIS version)
     // is treated alike: one program's unknown tolerance must not stop the rest of it.
-    static const std::set<std::string> standard = {"PROFT", "CPARLN", "USETOL", "COMPOS", "GAP", "PNTDEF"};
+    static const std::set<std::string> standard = {"PROFT",  "CPARLN", "USETOL", "COMPOS", "GAP",
+                                                   "PNTDEF", "CPROFS", "CPROFL", "FLUSH"};
     if (is_word(p[0])) {
       warn(p[0].span, "sema.unevaluated-tolerance",
            fmt::format("tolerance type {} {}; the OUTPUT of T({}) will be left out", p[0].text,

@@ -310,6 +310,22 @@ void UnitCompiler::meas(const grammar::Statement& s) {
   placeholder.control = true;
   m_blocks.push_back(placeholder);
   if (!expect_params(s, 3, "the feature type, F(label) and the number of points")) return;
+  // A feature of a type metron skips (SYMPLN ...): read leniently, the block is skipped up to its
+  // ENDMES, so that the program goes on.
+  const auto unsupported = is_label(s.params[1], {"F"})
+                               ? m_symbols.unsupported_features.find(upper(s.params[1].label.name))
+                               : m_symbols.unsupported_features.end();
+  if ((is_word(s.params[0]) && unsupported_feature_word(s.params[0].text)) ||
+      unsupported != m_symbols.unsupported_features.end()) {
+    const std::string what =
+        fmt::format("{} of F({}): metron skips FEAT/{}", s.major, s.params[1].label.name,
+                    unsupported != m_symbols.unsupported_features.end() ? unsupported->second : s.params[0].text);
+    if (m_strict || m_repl) return error(s.params[0].span, "sema.skipped-measurement", what);
+    warn(s.params[0].span, "sema.skipped-measurement",
+         what + ", so this block is skipped up to its ENDMES, its points not taken (--strict makes it an error)");
+    m_blocks.back().skipped = true;
+    return;
+  }
   const auto meas_type = type_word(s.params[0]);
   if (!meas_type) return error(s.params[0].span, "sema.bad-feature-type", "expected a feature type after MEAS/");
   if (!is_label(s.params[1], {"F"}))

@@ -89,6 +89,10 @@ void UnitCompiler::resolve_jumps(JumpScope& scope, std::vector<ir::Instruction>&
   scope = {};
 }
 
+bool UnitCompiler::unsupported_feature_word(std::string_view word) {
+  return word == "COMPOUND" || word == "OBJECT" || word == "SYMPLN" || word == "CONRADSEGMNT" || word == "REVSURF";
+}
+
 // A feature label must be defined before use; FA() needs it measured or constructed at run time.
 bool UnitCompiler::check_feature(const grammar::Expr& e) {
   const std::string name = upper(e.label.name);
@@ -101,16 +105,20 @@ bool UnitCompiler::check_feature(const grammar::Expr& e) {
     return false;
   }
   if (auto it = m_symbols.skipped.find("F:" + name); it != m_symbols.skipped.end()) {
+    // A feature of a type metron skips, read leniently: a warning, and the run stops where its
+    // actual is needed.
+    const bool lenient = !m_strict && !m_repl && m_symbols.unsupported_features.count(name);
     Diagnostic d{
-        Severity::Error,
+        lenient ? Severity::Warning : Severity::Error,
         "sema.skipped-definition",
         e.span,
-        fmt::format("feature {}({}) is defined only by a statement metron skipped", e.label.prefix, e.label.name),
+        fmt::format("feature {}({}) is defined only by a statement metron skipped{}", e.label.prefix, e.label.name,
+                    lenient ? ": it has no actual, and a run stops here (--strict makes it an error)" : ""),
         {}};
     const Location loc = m_sources.locate(it->second);
     d.notes.push_back(fmt::format("the unsupported statement is at {}:{}:{}", loc.path, loc.line, loc.column));
     m_sink.report(std::move(d));
-    return false;
+    return lenient;
   }
   // Shop software keeps the actuals of its last run: a program may use FA(x) that it measures
   // only further on, or never (CAMIO). Read leniently that is a warning, and the run stops at the
@@ -262,6 +270,8 @@ void UnitCompiler::statement(const grammar::Statement& given) {
     return;
   }
   const std::string& m = s.major;
+  // The body of a MEAS of a skipped feature: skipped with it (the MEAS told why).
+  if (!m_blocks.empty() && m_blocks.back().skipped && m != "ENDMES" && m != "ENDFIL") return;
   if (!m_blocks.empty() && m_blocks.back().kind == Block::Kind::Meas) {
     // What a measurement block may hold: its motions and points, the probing settings (a SNSLCT
     // switches the sensor between the block's points), and the flow of control.

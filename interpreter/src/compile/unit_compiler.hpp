@@ -81,6 +81,7 @@ class UnitCompiler {
     int ptmeas = 0;
     int declared = 0;
     bool control = false;                  // control flow inside a MEAS: counts are not static
+    bool skipped = false;                  // MEAS of a feature metron skipped: its body is skipped too
     bool scanned = false;                  // PAMEAS inside, or SCNMOD/ON: the point count is the machine's
     bool scan_pairs = false;               // SCNMOD/ON before it: its PTMEAS are the ends of scans
     Span last_ptmeas;                      // MEAS: where its last PTMEAS stands
@@ -240,6 +241,8 @@ class UnitCompiler {
   bool complete_line_normal(const grammar::Statement& s, std::vector<grammar::Expr>& p, bool bounded,
                             ir::CoordinateForm form);
   static std::string skipped_statement_message(const std::string& major);
+  /// The DMIS feature types metron reads and skips (COMPOUND, OBJECT, SYMPLN, CONRADSEGMNT, REVSURF).
+  static bool unsupported_feature_word(std::string_view word);
   bool expect_params(const grammar::Statement& s, std::size_t n, const char* what);
   bool require_target(const grammar::Statement& s, std::initializer_list<const char*> prefixes, const char* example);
 

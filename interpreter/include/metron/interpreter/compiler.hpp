@@ -60,6 +60,9 @@ struct SymbolTable {
   /// Features whose last CONST used a method metron does not evaluate (OFFSET, TANTO ...): label ->
   /// the method word. Read leniently, their OUTPUT is left out with a warning.
   std::map<std::string, std::string, LabelLess> unconstructed;
+  /// Features of a DMIS type metron skips (FEAT/SYMPLN, COMPOUND ...): label -> the type word.
+  /// Read leniently, their MEAS blocks are skipped and their OUTPUT is left out with a warning.
+  std::map<std::string, std::string, LabelLess> unsupported_features;
   /// F(p)=FEAT/PATERN,F(a),F(b),...: pattern label -> its features' labels (upper case), in order.
   std::map<std::string, std::vector<std::string>, LabelLess> patterns;
   std::set<std::string> units_in_progress;            ///< CALL/EXTERN cycle detection
