@@ -3739,6 +3739,18 @@ TEST(ShopPrograms, OneFeatureTolerancesApplyToEachOutputFeatureAndCheckAgreesWit
   EXPECT_NE(tolerance(*left_out.session, "DD"), nullptr);  // the rest of the OUTPUT is reported
   const Checked strict = check(perp_text, true);
   EXPECT_TRUE(strict.has("7:14: error: TOL/PERP of T(PR) does not apply to a CIRCLE")) << strict.text;
+  // A VALUE of it has nothing to read: check says where the run stops.
+  std::string with_value = perp_text;
+  with_value.replace(with_value.find("ENDFIL"), 6, "DECL/REAL,V1\nV1=VALUE/TA(PR),ACT\nENDFIL");
+  const Checked value = check(with_value);
+  EXPECT_TRUE(
+      value.has("10:10: warning: T(PR) was left out of its last OUTPUT or EVAL (not evaluated for a CIRCLE): "
+                "a run stops at this VALUE"))
+      << value.text;
+  const auto stopped = run(with_value);
+  EXPECT_EQ(stopped.status, ExecStatus::Error);
+  EXPECT_NE(stopped.diagnostics.find("10:1: error: VALUE/TA(PR) before T(PR) was evaluated"), std::string::npos)
+      << stopped.diagnostics;
   const Checked cone = check(
       "DMISMN/'s', 5.0\nFA(K)=FEAT/CONE,INNER,CART,0,0,0,0,0,1,90\nT(ST)=TOL/STRGHT,0.01\n"
       "T(CY)=TOL/CYLCTY,0.01\nOUTPUT/FA(K),TA(ST)\nOUTPUT/FA(K),TA(CY)\nENDFIL\n");

@@ -719,6 +719,7 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
                 fmt::format("TOL/{} of T({}) is not evaluated for a {} (metron evaluates it for {}): left out of "
                             "this {} (--strict makes it an error)",
                             ir::word_of(kind), p.label.name, ir::word_of(**mismatch), applicable_types(kind), s.major));
+            m_symbols.tolerances_left_out[t] = std::string(ir::word_of(**mismatch));
             continue;
           }
           return fail(p.span, "sema.tolerance-type",
@@ -728,6 +729,7 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
         if (types.empty())
           return fail(p.span, "sema.tolerance-without-feature",
                       fmt::format("T({}) is output without a feature to apply it to", p.label.name));
+        m_symbols.tolerances_left_out.erase(t);
       }
     } else if (is_label(p, {"R"})) {
       // A REPORT layout (R(x)=REPORT/...) for the features beside it: metron's reports are its own.

@@ -285,6 +285,11 @@ std::optional<ir::Expr> UnitCompiler::value_query(const grammar::Statement& s) {
                 : fmt::format("tolerance T({}) is not defined", target.label.name));
       return std::nullopt;
     }
+    if (auto left = m_symbols.tolerances_left_out.find(t); left != m_symbols.tolerances_left_out.end())
+      warn(target.span, "sema.value-left-out",
+           fmt::format("T({}) was left out of its last OUTPUT or EVAL (not evaluated for a {}): a run stops at this "
+                       "VALUE unless T({}) is evaluated on the way",
+                       target.label.name, left->second, target.label.name));
   } else if (!check_feature(target)) {
     return std::nullopt;
   }

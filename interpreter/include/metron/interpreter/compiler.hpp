@@ -63,6 +63,9 @@ struct SymbolTable {
   /// Features of a DMIS type metron skips (FEAT/SYMPLN, COMPOUND ...): label -> the type word.
   /// Read leniently, their MEAS blocks are skipped and their OUTPUT is left out with a warning.
   std::map<std::string, std::string, LabelLess> unsupported_features;
+  /// Tolerances the last OUTPUT or EVAL naming them left out, read leniently, for a feature type
+  /// metron does not evaluate them for (PERP of a CIRCLE): label -> that type's word.
+  std::map<std::string, std::string, LabelLess> tolerances_left_out;
   /// F(p)=FEAT/PATERN,F(a),F(b),...: pattern label -> its features' labels (upper case), in order.
   std::map<std::string, std::vector<std::string>, LabelLess> patterns;
   std::set<std::string> units_in_progress;            ///< CALL/EXTERN cycle detection
