@@ -24,6 +24,8 @@ const char* to_string(Op op) {
     case Op::Write: return "WRITE";
     case Op::FitAlgorithm: return "FIT_ALGORITHM";
     case Op::WorkPlane: return "WORK_PLANE";
+    case Op::Push: return "PUSH";
+    case Op::Pop: return "POP";
     case Op::GoHome: return "GOHOME";
     case Op::SetHome: return "FROM";
     case Op::BadTest: return "BADTST";

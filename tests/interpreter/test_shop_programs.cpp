@@ -4489,3 +4489,36 @@ TEST(ShopPrograms, TheMeasurementOfASkippedFeatureIsSkippedWithIt) {
   EXPECT_TRUE(strict.has("8:6: error: MEAS of F(SYM): metron skips FEAT/SYMPLN\n")) << strict.text;
   EXPECT_TRUE(strict.has("21:8: error: feature FA(SYM) is defined only by a statement metron skipped")) << strict.text;
 }
+
+// PUSH/POP: a macro's alignment, working plane and sensor given back. P1 is measured in D(SHIFT)
+// (10 mm along X of the part), P2 after POP/ALGN in D(PART): both touch the top face at machine
+// X 380 (the part at 300: 70 + 10, and 80); without the POP, P2 would land at 390.
+TEST(ShopPrograms, PushAndPopGiveBackTheAlignmentWorkingPlaneAndSensor) {
+  const std::string text =
+      "DMISMN/'push', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "S(P2) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 2.0\nSNSLCT/S(P4)\nMODE/PROG, MAN\n"
+      "D(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\nPUSH/ALGN, WKPLAN, SNSLCT, DMISMD\n"
+      "D(SHIFT) = TRANS/XORIG, 10\nWKPLAN/YZPLAN\nSNSLCT/S(P2)\n"
+      "F(P1) = FEAT/POINT, CART, 70, 50, 40, 0, 0, 1\nMEAS/POINT, F(P1), 1\nPTMEAS/CART, 70, 50, 40, 0, 0, 1\n"
+      "ENDMES\nPOP/ALGN, WKPLAN, SNSLCT\n"
+      "F(P2) = FEAT/POINT, CART, 80, 50, 40, 0, 0, 1\nMEAS/POINT, F(P2), 1\nPTMEAS/CART, 80, 50, 40, 0, 0, 1\n"
+      "ENDMES\n";
+  const Checked c = check(text + "ENDFIL\n");
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("8:28: warning: PUSH/DMISMD: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET and GEOALG"))
+      << c.text;
+  EXPECT_TRUE(check(text + "ENDFIL\n", true).has("8:28: error: PUSH/DMISMD")) << check(text, true).text;
+  const auto r = run(text + "ENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* p1 = r.session->runtime().find_feature("P1");
+  const auto* p2 = r.session->runtime().find_feature("P2");
+  ASSERT_TRUE(p1 && p1->actual && p2 && p2->actual);
+  EXPECT_NEAR(p1->actual->position.x(), 380.0, 1e-3);
+  EXPECT_NEAR(p2->actual->position.x(), 380.0, 1e-3);
+  EXPECT_EQ(r.session->runtime().working_plane(), metron::runtime::WorkingPlane::XY);
+  EXPECT_EQ(r.session->runtime().active_sensor(), "P4");
+  const auto unbalanced = run(text + "POP/ALGN\nENDFIL\n");
+  EXPECT_EQ(unbalanced.status, ExecStatus::Error);
+  EXPECT_NE(unbalanced.diagnostics.find("21:1: error: POP/ALGN without a PUSH/ALGN left to restore"), std::string::npos)
+      << unbalanced.diagnostics;
+}

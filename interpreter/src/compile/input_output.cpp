@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "compile/unit_compiler.hpp"
+#include "metron/runtime/measurement_runtime.hpp"
 
 namespace metron::interpreter::detail {
 
@@ -79,6 +80,8 @@ void UnitCompiler::add_input_output(StatementTable& t) {
             {"RESUME", &UnitCompiler::resume},
             {"GEOALG", &UnitCompiler::geometry_algorithm},
             {"WKPLAN", &UnitCompiler::work_plane},
+            {"PUSH", &UnitCompiler::push_pop},
+            {"POP", &UnitCompiler::push_pop},
             {"GOHOME", &UnitCompiler::go_home},
             {"FROM", &UnitCompiler::from},
             {"BADTST", &UnitCompiler::bad_test}});
@@ -124,6 +127,36 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
   }
   auto in = make(Op::WorkPlane, s);
   in.operands.push_back(word_operand(w));
+  emit(std::move(in));
+}
+
+// PUSH/word,... and POP/word,...: the state each word names saved and restored, in order (ALGN,
+// SNSLCT, WKPLAN, SNSET, GEOALG: runtime/src/pushed_state.cpp). No public text of DMIS's PUSH was
+// found: these are the words of the states metron holds; another word is read with one warning
+// and saves nothing.
+void UnitCompiler::push_pop(const grammar::Statement& s) {
+  if (!expect_params(s, 1, "what to save or restore: ALGN, SNSLCT, WKPLAN, SNSET or GEOALG")) return;
+  auto in = make(s.major == "PUSH" ? Op::Push : Op::Pop, s);
+  for (const auto& p : s.params) {
+    if (!is_word(p)) return error(p.span, "sema.push-word", fmt::format("expected a word after {}/", s.major));
+    if (runtime::MeasurementRuntime::pushable(p.text)) {
+      in.operands.push_back(word_operand(p));
+      continue;
+    }
+    if (m_strict)
+      return error(
+          p.span, "sema.push-word",
+          fmt::format("{}/{}: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET and GEOALG", s.major, p.text));
+    if (m_push_words_warned.insert(p.text).second)
+      warn(p.span, "sema.push-word",
+           fmt::format("{}/{}: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET and GEOALG; {} is neither saved "
+                       "nor restored (told once per word, --strict makes it an error)",
+                       s.major, p.text, p.text));
+  }
+  if (in.operands.empty()) {
+    emit(make(Op::Nop, s, s.major));
+    return;
+  }
   emit(std::move(in));
 }
 

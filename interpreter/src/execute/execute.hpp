@@ -65,6 +65,8 @@ struct Execute {
   static ExecuteFn feature_def, tolerance_def, sensor_def, datdef, declare;
   static ExecuteFn fit_algorithm;
   static ExecuteFn work_plane;
+  static ExecuteFn push;
+  static ExecuteFn pop;
   static ExecuteFn go_home;
   static ExecuteFn set_home;
   static ExecuteFn on_error;

@@ -17,6 +17,8 @@ void Execute::add_measurement(ExecuteTable& t) {
   add_rows(t, {{Op::SensorSelect, &sensor_select},
                {Op::FitAlgorithm, &fit_algorithm},
                {Op::WorkPlane, &work_plane},
+               {Op::Push, &push},
+               {Op::Pop, &pop},
                {Op::ProbeSet, &probe_set},
                {Op::Feed, &feed},
                {Op::Accel, &accel},
@@ -63,6 +65,19 @@ ExecStatus Execute::work_plane(Interpreter& vm, const ir::Instruction& in, CallF
   vm.m_runtime.set_working_plane(word == "YZPLAN"   ? runtime::WorkingPlane::YZ
                                  : word == "ZXPLAN" ? runtime::WorkingPlane::ZX
                                                     : runtime::WorkingPlane::XY);
+  return ExecStatus::Running;
+}
+
+// Op::Push: each word's state saved on its stack
+ExecStatus Execute::push(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  for (const auto& o : in.operands) vm.m_runtime.push_state(o.word);
+  return ExecStatus::Running;
+}
+
+// Op::Pop: each word's state restored, in order
+ExecStatus Execute::pop(Interpreter& vm, const ir::Instruction& in, CallFrame&) {
+  for (const auto& o : in.operands)
+    if (auto r = vm.m_runtime.pop_state(o.word, in.span); !r) return vm.from_runtime(r.error());
   return ExecStatus::Running;
 }
 

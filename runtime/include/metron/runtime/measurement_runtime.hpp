@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "metron/machine/machine.hpp"
@@ -152,6 +153,13 @@ class MeasurementRuntime {
   /// leniently (the default) it is left out of its OUTPUT with a warning, as shop software goes on.
   void set_strict(bool strict) { m_strict = strict; }
   [[nodiscard]] const ReportUnits& report_units() const { return m_report_units; }
+  /// PUSH/word and POP/word: the state a word names saved on its own stack, and restored from it
+  /// (runtime/src/pushed_state.cpp). Words: ALGN (the current alignment), SNSLCT (the sensor),
+  /// WKPLAN, SNSET (the probing distances), GEOALG (the fitting algorithms).
+  static bool pushable(std::string_view word);
+  void push_state(const std::string& word);
+  /// An error when no PUSH of `word` is left to restore.
+  Result<void> pop_state(const std::string& word, Span span);
   [[nodiscard]] Mode mode() const { return m_mode; }
   /// The sensor the last SNSLCT selected ('' before any).
   [[nodiscard]] const std::string& active_sensor() const { return m_active_sensor; }
@@ -363,8 +371,17 @@ class MeasurementRuntime {
   std::optional<double> m_measuring_feed_explicit;       ///< FEDRAT/MESVEL given by the program
   double m_qualification_feed_mm_s = 0;                  ///< measuring feed when the active tool was qualified
   std::map<FeatureType, FitAlgorithm> m_fit_algorithms;  ///< GEOALG: least squares where absent
-  bool m_strict = false;                                 ///< set_strict
-  bool m_feed_change_warned = false;                     ///< a probing feed other than the qualification's, told once
+  /// What PUSH saved, one stack per word (each POP restores its word's part).
+  struct PushedState {
+    Alignment alignment;
+    std::string sensor;
+    WorkingPlane working_plane = WorkingPlane::XY;
+    ProbeSettings probe;
+    std::map<FeatureType, FitAlgorithm> fit_algorithms;
+  };
+  std::map<std::string, std::vector<PushedState>> m_pushed;
+  bool m_strict = false;              ///< set_strict
+  bool m_feed_change_warned = false;  ///< a probing feed other than the qualification's, told once
   Mode m_mode = Mode::Auto;
   ReportUnits m_report_units;
   struct Device {
