@@ -135,6 +135,7 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
 // found: these are the words of the states metron holds; another word is read with one warning
 // and saves nothing.
 void UnitCompiler::push_pop(const grammar::Statement& s) {
+  static constexpr const char* words = "ALGN, SNSLCT, WKPLAN, SNSET and GEOALG";
   if (!expect_params(s, 1, "what to save or restore: ALGN, SNSLCT, WKPLAN, SNSET or GEOALG")) return;
   auto in = make(s.major == "PUSH" ? Op::Push : Op::Pop, s);
   for (const auto& p : s.params) {
@@ -144,14 +145,13 @@ void UnitCompiler::push_pop(const grammar::Statement& s) {
       continue;
     }
     if (m_strict)
-      return error(
-          p.span, "sema.push-word",
-          fmt::format("{}/{}: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET and GEOALG", s.major, p.text));
+      return error(p.span, "sema.push-word",
+                   fmt::format("{}/{}: metron saves and restores {}", s.major, p.text, words));
     if (m_push_words_warned.insert(p.text).second)
       warn(p.span, "sema.push-word",
-           fmt::format("{}/{}: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET and GEOALG; {} is neither saved "
-                       "nor restored (told once per word, --strict makes it an error)",
-                       s.major, p.text, p.text));
+           fmt::format("{}/{}: metron saves and restores {}; {} is neither saved nor restored (told once per word, "
+                       "--strict makes it an error)",
+                       s.major, p.text, words, p.text));
   }
   if (in.operands.empty()) {
     emit(make(Op::Nop, s, s.major));
