@@ -9,11 +9,15 @@
 namespace metron::runtime {
 
 bool MeasurementRuntime::pushable(std::string_view word) {
-  return word == "ALGN" || word == "SNSLCT" || word == "WKPLAN" || word == "SNSET" || word == "GEOALG";
+  return word == "ALGN" || word == "SNSLCT" || word == "WKPLAN" || word == "SNSET" || word == "GEOALG" ||
+         word == "FEDRAT";
 }
 
 void MeasurementRuntime::push_state(const std::string& word) {
-  m_pushed[word].push_back({m_alignment, m_active_sensor, m_working_plane, m_probe, m_fit_algorithms});
+  const auto machine = m_machine.state();
+  m_pushed[word].push_back({m_alignment, m_active_sensor, m_working_plane, m_probe, m_fit_algorithms,
+                            machine.positioning_feed_mm_s, machine.measuring_feed_mm_s, m_scan.feed_mm_s,
+                            m_measuring_feed_explicit});
 }
 
 Result<void> MeasurementRuntime::pop_state(const std::string& word, Span span) {
@@ -35,6 +39,16 @@ Result<void> MeasurementRuntime::pop_state(const std::string& word, Span span) {
     m_probe = saved.probe;
   } else if (word == "GEOALG") {
     m_fit_algorithms = saved.fit_algorithms;
+  } else if (word == "FEDRAT") {
+    // The feeds in force at the PUSH (a backend that does not tell its feeds keeps its own).
+    m_scan.feed_mm_s = saved.scan_feed_mm_s;
+    const auto now = m_machine.state();
+    const auto changed = [](double was, double is) { return was > 0 && was != is ? std::optional(was) : std::nullopt; };
+    const auto positioning = changed(saved.positioning_feed_mm_s, now.positioning_feed_mm_s);
+    const auto measuring = changed(saved.measuring_feed_mm_s, now.measuring_feed_mm_s);
+    if (positioning || measuring)
+      if (auto r = set_feeds(positioning, measuring, span); !r) return r;
+    m_measuring_feed_explicit = saved.measuring_feed_explicit;
   }
   return {};
 }

@@ -4493,6 +4493,20 @@ TEST(ShopPrograms, TheMeasurementOfASkippedFeatureIsSkippedWithIt) {
 // PUSH/POP: a macro's alignment, working plane and sensor given back. P1 is measured in D(SHIFT)
 // (10 mm along X of the part), P2 after POP/ALGN in D(PART): both touch the top face at machine
 // X 380 (the part at 300: 70 + 10, and 80); without the POP, P2 would land at 390.
+// PUSH/FEDRAT saves the positioning, measuring and scanning feeds; POP/FEDRAT gives them back
+// (read with VALUE/FEDRAT, mm/s), whatever FEDRAT changed between them.
+TEST(ShopPrograms, PushAndPopGiveBackTheFeeds) {
+  const auto r = run(
+      "DMISMN/'feeds', 5.0\nUNITS/MM, ANGDEC\nDECL/REAL, KM, KP, KS\n"
+      "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+      "FEDRAT/MESVEL, MMPS, 4\nFEDRAT/POSVEL, MMPS, 40\nFEDRAT/SCNVEL, MMPS, 8\nPUSH/FEDRAT\n"
+      "FEDRAT/MESVEL, MMPS, 2\nFEDRAT/POSVEL, MMPS, 20\nFEDRAT/SCNVEL, MMPS, 5\nPOP/FEDRAT\n"
+      "KM = VALUE/FEDRAT, MESVEL\nKP = VALUE/FEDRAT, POSVEL\nKS = VALUE/FEDRAT, SCNVEL\n"
+      "TEXT/OPER, CONCAT(STR(KM), ' ', STR(KP), ' ', STR(KS))\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(operator_texts(r), (std::vector<std::string>{"4 40 8"})) << r.diagnostics;
+}
+
 TEST(ShopPrograms, PushAndPopGiveBackTheAlignmentWorkingPlaneAndSensor) {
   const std::string text =
       "DMISMN/'push', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
@@ -4505,7 +4519,7 @@ TEST(ShopPrograms, PushAndPopGiveBackTheAlignmentWorkingPlaneAndSensor) {
       "ENDMES\n";
   const Checked c = check(text + "ENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("8:28: warning: PUSH/DMISMD: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET and GEOALG"))
+  EXPECT_TRUE(c.has("8:28: warning: PUSH/DMISMD: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET, GEOALG and FEDRAT"))
       << c.text;
   EXPECT_TRUE(check(text + "ENDFIL\n", true).has("8:28: error: PUSH/DMISMD")) << check(text, true).text;
   const auto r = run(text + "ENDFIL\n");
@@ -4521,4 +4535,9 @@ TEST(ShopPrograms, PushAndPopGiveBackTheAlignmentWorkingPlaneAndSensor) {
   EXPECT_EQ(unbalanced.status, ExecStatus::Error);
   EXPECT_NE(unbalanced.diagnostics.find("21:1: error: POP/ALGN without a PUSH/ALGN left to restore"), std::string::npos)
       << unbalanced.diagnostics;
+  // check tells it beforehand; the balanced POP above is not told.
+  const Checked unbalanced_check = check(text + "POP/ALGN\nENDFIL\n");
+  EXPECT_TRUE(unbalanced_check.has("21:5: warning: POP/ALGN has no PUSH/ALGN before it in this program"))
+      << unbalanced_check.text;
+  EXPECT_FALSE(c.has("has no PUSH")) << c.text;
 }

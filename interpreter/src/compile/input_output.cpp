@@ -131,17 +131,18 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
 }
 
 // PUSH/word,... and POP/word,...: the state each word names saved and restored, in order (ALGN,
-// SNSLCT, WKPLAN, SNSET, GEOALG: runtime/src/pushed_state.cpp). No public text of DMIS's PUSH was
+// SNSLCT, WKPLAN, SNSET, GEOALG, FEDRAT: runtime/src/pushed_state.cpp). No public text of DMIS's PUSH was
 // found: these are the words of the states metron holds; another word is read with one warning
 // and saves nothing.
 void UnitCompiler::push_pop(const grammar::Statement& s) {
-  static constexpr const char* words = "ALGN, SNSLCT, WKPLAN, SNSET and GEOALG";
-  if (!expect_params(s, 1, "what to save or restore: ALGN, SNSLCT, WKPLAN, SNSET or GEOALG")) return;
+  static constexpr const char* words = "ALGN, SNSLCT, WKPLAN, SNSET, GEOALG and FEDRAT";
+  if (!expect_params(s, 1, "what to save or restore: ALGN, SNSLCT, WKPLAN, SNSET, GEOALG or FEDRAT")) return;
   auto in = make(s.major == "PUSH" ? Op::Push : Op::Pop, s);
   for (const auto& p : s.params) {
     if (!is_word(p)) return error(p.span, "sema.push-word", fmt::format("expected a word after {}/", s.major));
     if (runtime::MeasurementRuntime::pushable(p.text)) {
       in.operands.push_back(word_operand(p));
+      note_push_balance(s.major == "PUSH", p);
       continue;
     }
     if (m_strict)
@@ -158,6 +159,23 @@ void UnitCompiler::push_pop(const grammar::Statement& s) {
     return;
   }
   emit(std::move(in));
+}
+
+// A POP whose word has no PUSH before it in the program's text stops the run there: check says so.
+// A macro's POP may restore what its caller pushed, so only a program's own text is counted.
+void UnitCompiler::note_push_balance(bool push, const grammar::Expr& word) {
+  if (m_macro) return;
+  int& open = m_pushes_open[word.text];
+  if (push) {
+    ++open;
+    return;
+  }
+  if (open > 0) {
+    --open;
+    return;
+  }
+  warn(word.span, "sema.pop-without-push",
+       fmt::format("POP/{} has no PUSH/{} before it in this program: the run stops here", word.text, word.text));
 }
 
 // GEOALG/type,algorithm: MAXINS, MINCIR, MINMAX and LSTSQR (DEFALT) are applied to CIRCLE, ARC,

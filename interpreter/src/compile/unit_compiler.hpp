@@ -251,6 +251,7 @@ class UnitCompiler {
   void geometry_algorithm(const grammar::Statement& s);
   void work_plane(const grammar::Statement& s);
   void push_pop(const grammar::Statement& s);
+  void note_push_balance(bool push, const grammar::Expr& word);
   void go_home(const grammar::Statement& s);
   void from(const grammar::Statement& s);
   std::optional<ir::Instruction> point_instruction(const grammar::Statement& s, ir::Op op, const char* what);
@@ -378,6 +379,7 @@ class UnitCompiler {
   bool m_scan_mode_on = false;
   std::set<std::string> m_noted_kinds;           // ERROR, GEOALG: noted once each
   std::set<std::string> m_push_words_warned;     // PUSH/POP words metron does not save: told once each
+  std::map<std::string, int> m_pushes_open;      // PUSH/word less POP/word so far in this unit's text
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.

@@ -378,6 +378,8 @@ class MeasurementRuntime {
     WorkingPlane working_plane = WorkingPlane::XY;
     ProbeSettings probe;
     std::map<FeatureType, FitAlgorithm> fit_algorithms;
+    double positioning_feed_mm_s = 0, measuring_feed_mm_s = 0;  ///< FEDRAT: the machine's feeds
+    std::optional<double> scan_feed_mm_s, measuring_feed_explicit;
   };
   std::map<std::string, std::vector<PushedState>> m_pushed;
   bool m_strict = false;              ///< set_strict

@@ -84,7 +84,7 @@ enum class Op {
   FitAlgorithm,   ///< GEOALG/type,...: words: the type (CIRCLE, SPHERE, CYLNDR, PLANE, LINE) and the algorithm (LSTSQR,
                   ///< MAXINS, MINCIR, MINMAX)
   WorkPlane,      ///< WKPLAN/XYPLAN|YZPLAN|ZXPLAN: word, the plane of polar coordinates (CORTOL, POL positions)
-  Push,           ///< PUSH/word,...: words (ALGN, SNSLCT, WKPLAN, SNSET, GEOALG), each state saved on its stack
+  Push,           ///< PUSH/word,...: words (ALGN, SNSLCT, WKPLAN, SNSET, GEOALG, FEDRAT), each state saved on its stack
   Pop,            ///< POP/word,...: words, each state restored from its stack
   GoHome,         ///< GOHOME: no operands
   SetHome,        ///< FROM/[CART|POL,]x,y,z: payload FormPayload; exprs: the point GOHOME goes to from here on
