@@ -4423,6 +4423,26 @@ TEST(ShopPrograms, IteratIsReadOrSkippedWithAReason) {
 // RAND, read as Fortran's RAND(flag) (no public text of DMIS's was found): uniform in [0, 1) by
 // its moments (mean 1/2, variance 1/12: 4000 draws put the mean within 0.018 at four sigma),
 // the same sequence every run, RAND(1) restarting it and RAND(n) seeding it.
+// SELAPSETIME(start, end, LONG|SHORT) as CAMIO programs write it: the time between two SDATETIME
+// strings, 'HH:MM:SS' or seconds (expected values by hand); SELAPSETIME() stays the run's seconds.
+TEST(ShopPrograms, ElapsedTimeBetweenTwoDateTimes) {
+  const std::string head = "DMISMN/'t', 05.2\nDECL/LOCAL, CHAR, 512, START, LAPSE, SECS\n";
+  const auto r = run(head +
+                     "LAPSE = ASSIGN/SELAPSETIME('2026/12/01 23:00:00', '2026/12/02 00:02:03', LONG)\n"
+                     "SECS = ASSIGN/SELAPSETIME('2026/12/01 23:00:00', '2026/12/02 00:02:03', SHORT)\n"
+                     "TEXT/OPER, LAPSE\nTEXT/OPER, SECS\nSTART = ASSIGN/SDATETIME( )\n"
+                     "TEXT/OPER, SELAPSETIME(START, SDATETIME( ), LONG)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(operator_texts(r), (std::vector<std::string>{"01:02:03", "3723", "00:00:00"})) << r.diagnostics;
+  const Checked wrong = check(head + "LAPSE = ASSIGN/SELAPSETIME('a', 'b', HOURS)\nENDFIL\n");
+  EXPECT_TRUE(wrong.has("3:38: error: SELAPSETIME's format is LONG ('HH:MM:SS') or SHORT (seconds)")) << wrong.text;
+  const auto bad = run(head + "LAPSE = ASSIGN/SELAPSETIME('yesterday', SDATETIME( ))\nENDFIL\n");
+  EXPECT_EQ(bad.status, ExecStatus::Error);
+  EXPECT_NE(bad.diagnostics.find("SELAPSETIME: 'yesterday' is not a date-time as SDATETIME writes it"),
+            std::string::npos)
+      << bad.diagnostics;
+}
+
 TEST(ShopPrograms, RandDrawsAUniformSequenceThatRepeats) {
   const std::string text =
       "DMISMN/'rand', 5.0\nDECL/REAL,F,S,Q,A,LO,HI,B,C,D,E\nDECL/INTGR,I\n"
@@ -4496,13 +4516,13 @@ TEST(ShopPrograms, TheMeasurementOfASkippedFeatureIsSkippedWithIt) {
 // PUSH/FEDRAT saves the positioning, measuring and scanning feeds; POP/FEDRAT gives them back
 // (read with VALUE/FEDRAT, mm/s), whatever FEDRAT changed between them.
 TEST(ShopPrograms, PushAndPopGiveBackTheFeeds) {
-  const auto r = run(
-      "DMISMN/'feeds', 5.0\nUNITS/MM, ANGDEC\nDECL/REAL, KM, KP, KS\n"
-      "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
-      "FEDRAT/MESVEL, MMPS, 4\nFEDRAT/POSVEL, MMPS, 40\nFEDRAT/SCNVEL, MMPS, 8\nPUSH/FEDRAT\n"
-      "FEDRAT/MESVEL, MMPS, 2\nFEDRAT/POSVEL, MMPS, 20\nFEDRAT/SCNVEL, MMPS, 5\nPOP/FEDRAT\n"
-      "KM = VALUE/FEDRAT, MESVEL\nKP = VALUE/FEDRAT, POSVEL\nKS = VALUE/FEDRAT, SCNVEL\n"
-      "TEXT/OPER, CONCAT(STR(KM), ' ', STR(KP), ' ', STR(KS))\nENDFIL\n");
+  const auto r =
+      run("DMISMN/'feeds', 5.0\nUNITS/MM, ANGDEC\nDECL/REAL, KM, KP, KS\n"
+          "S(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\nSNSLCT/S(P4)\n"
+          "FEDRAT/MESVEL, MMPS, 4\nFEDRAT/POSVEL, MMPS, 40\nFEDRAT/SCNVEL, MMPS, 8\nPUSH/FEDRAT\n"
+          "FEDRAT/MESVEL, MMPS, 2\nFEDRAT/POSVEL, MMPS, 20\nFEDRAT/SCNVEL, MMPS, 5\nPOP/FEDRAT\n"
+          "KM = VALUE/FEDRAT, MESVEL\nKP = VALUE/FEDRAT, POSVEL\nKS = VALUE/FEDRAT, SCNVEL\n"
+          "TEXT/OPER, CONCAT(STR(KM), ' ', STR(KP), ' ', STR(KS))\nENDFIL\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(operator_texts(r), (std::vector<std::string>{"4 40 8"})) << r.diagnostics;
 }
@@ -4519,7 +4539,8 @@ TEST(ShopPrograms, PushAndPopGiveBackTheAlignmentWorkingPlaneAndSensor) {
       "ENDMES\n";
   const Checked c = check(text + "ENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("8:28: warning: PUSH/DMISMD: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET, GEOALG and FEDRAT"))
+  EXPECT_TRUE(
+      c.has("8:28: warning: PUSH/DMISMD: metron saves and restores ALGN, SNSLCT, WKPLAN, SNSET, GEOALG and FEDRAT"))
       << c.text;
   EXPECT_TRUE(check(text + "ENDFIL\n", true).has("8:28: error: PUSH/DMISMD")) << check(text, true).text;
   const auto r = run(text + "ENDFIL\n");

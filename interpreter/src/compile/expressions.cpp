@@ -169,6 +169,7 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
     return t;
   }
   const int n = static_cast<int>(g.args.size());
+  if (g.text == "SELAPSETIME" && n > 0) return elapsed_time_expression(g);
   if (n < fn->min_args || n > fn->max_args) {
     error(g.span, "sema.arity",
           fn->min_args == fn->max_args
@@ -213,6 +214,49 @@ std::optional<UnitCompiler::Typed> UnitCompiler::call_expression(const grammar::
     }
     t.dynamic |= x->dynamic;
     t.e.args.push_back(std::move(x->e));
+  }
+  return t;
+}
+
+// SELAPSETIME(start, end[, LONG|SHORT]): the time between two SDATETIME strings, as CAMIO's
+// programs write it to a CHAR variable. No public text of its definition was found: metron's
+// reading is a string, 'HH:MM:SS' (LONG, the default) or whole seconds (SHORT); docs/language.md.
+std::optional<UnitCompiler::Typed> UnitCompiler::elapsed_time_expression(const grammar::Expr& g) {
+  if (g.args.size() < 2 || g.args.size() > 3) {
+    error(g.span, "sema.arity",
+          fmt::format("SELAPSETIME takes no argument (the seconds since the run started) or two date-times and a "
+                      "format word, got {} arguments",
+                      g.args.size()));
+    return std::nullopt;
+  }
+  Typed t;
+  t.e.span = g.span;
+  t.e.op = ir::ExprOp::Call;
+  t.e.name = g.text;
+  t.e.type = ValueType::String;
+  for (std::size_t k = 0; k < 2; ++k) {
+    auto x = expression(g.args[k]);
+    if (!x) return std::nullopt;
+    if (!x->dynamic && x->e.type != ValueType::String) {
+      error(g.args[k].span, "sema.type",
+            fmt::format("SELAPSETIME takes date-times as SDATETIME writes them, got a {}", to_string(x->e.type)));
+      return std::nullopt;
+    }
+    t.dynamic |= x->dynamic;
+    t.e.args.push_back(std::move(x->e));
+  }
+  if (g.args.size() == 3) {
+    const auto& format = g.args[2];
+    if (format.kind != ExprKind::Word || (format.text != "LONG" && format.text != "SHORT")) {
+      error(format.span, "sema.type", "SELAPSETIME's format is LONG ('HH:MM:SS') or SHORT (seconds)");
+      return std::nullopt;
+    }
+    ir::Expr word;
+    word.span = format.span;
+    word.op = ir::ExprOp::Constant;
+    word.value = Value::string(format.text);
+    word.type = ValueType::String;
+    t.e.args.push_back(std::move(word));
   }
   return t;
 }

@@ -209,6 +209,7 @@ class UnitCompiler {
   bool check_rank(const grammar::Expr& element, const SymbolTable::VariableInfo& info);
   std::optional<Typed> element_expression(const grammar::Expr& g);
   std::optional<Typed> call_expression(const grammar::Expr& g);
+  std::optional<Typed> elapsed_time_expression(const grammar::Expr& g);
   std::optional<Typed> unary_expression(const grammar::Expr& g);
   std::optional<Typed> binary_expression(const grammar::Expr& g);
   std::optional<ir::Expr> numeric(const grammar::Expr& g, const char* what);

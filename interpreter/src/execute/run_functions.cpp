@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <filesystem>
@@ -32,6 +33,42 @@ std::int64_t clock_start_s() {
   return std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
+// A date-time as SDATETIME writes it, 'YYYY/MM/DD HH:MM:SS' (or STIME's 'HH:MM:SS' alone), in
+// seconds since 1970 (UTC, as the run's clock).
+std::optional<std::int64_t> seconds_of(const std::string& text) {
+  std::tm t{};
+  int year = 1970, month = 1, day = 1, hour = 0, minute = 0, second = 0;
+  char rest = 0;
+  if (std::sscanf(text.c_str(), "%d/%d/%d %d:%d:%d %c", &year, &month, &day, &hour, &minute, &second, &rest) != 6 &&
+      std::sscanf(text.c_str(), " %d:%d:%d %c", &hour, &minute, &second, &rest) != 3)
+    return std::nullopt;
+  if (month < 1 || month > 12 || day < 1 || day > 31 || hour < 0 || hour > 23 || minute < 0 || minute > 59 ||
+      second < 0 || second > 60)
+    return std::nullopt;
+  t.tm_year = year - 1900;
+  t.tm_mon = month - 1;
+  t.tm_mday = day;
+  t.tm_hour = hour;
+  t.tm_min = minute;
+  t.tm_sec = second;
+  return static_cast<std::int64_t>(timegm(&t));
+}
+
+// SELAPSETIME(start, end, LONG|SHORT): 'HH:MM:SS' (hours past 99 written in full) or whole seconds.
+tl::expected<Value, std::string> elapsed_between(const std::string& start, const std::string& end,
+                                                 const std::string& format) {
+  const auto from = seconds_of(start), to = seconds_of(end);
+  if (!from || !to)
+    return tl::unexpected(
+        fmt::format("SELAPSETIME: '{}' is not a date-time as SDATETIME writes it "
+                    "('YYYY/MM/DD HH:MM:SS')",
+                    !from ? start : end));
+  const std::int64_t s = *to - *from;
+  if (format == "SHORT") return Value::string(std::to_string(s));
+  const std::int64_t a = s < 0 ? -s : s;
+  return Value::string(fmt::format("{}{:02d}:{:02d}:{:02d}", s < 0 ? "-" : "", a / 3600, a / 60 % 60, a % 60));
+}
+
 }  // namespace
 
 std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const ir::Expr& e) {
@@ -39,7 +76,17 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
   if (name == "SDATE" || name == "STIME" || name == "SDATETIME" || name == "SELAPSETIME") {
     if (m_clock_start_s == 0) m_clock_start_s = clock_start_s();
     const double elapsed_s = m_runtime.machine().state().time_s;
-    if (name == "SELAPSETIME") return Value::real(elapsed_s);
+    if (name == "SELAPSETIME" && e.args.empty()) return Value::real(elapsed_s);
+    if (name == "SELAPSETIME") {
+      std::vector<std::string> texts;
+      for (const auto& a : e.args) {
+        auto v = evaluate(a);
+        if (!v) return tl::unexpected(v.error());
+        if (v->type != ValueType::String) return tl::unexpected(std::string("SELAPSETIME takes date-time strings"));
+        texts.push_back(v->text);
+      }
+      return elapsed_between(texts[0], texts[1], texts.size() > 2 ? texts[2] : "LONG");
+    }
     // The run's clock: its start plus the simulated time, in UTC (a report does not depend on the
     // time zone of the computer that ran it).
     const std::time_t now = static_cast<std::time_t>(m_clock_start_s + static_cast<std::int64_t>(elapsed_s));
