@@ -242,6 +242,12 @@ TEST(ShopPrograms, QuietStatementsAreAcceptedWithoutAWarningPerLine) {
       "OUTPUT/F(P),R(R1)\nOUTPUT/F(P),R(R1)\nENDFIL\n");
   EXPECT_EQ(layout.errors + layout.warnings, 0u) << layout.text;
   EXPECT_EQ(layout.notes, 1u) << layout.text;
+  // CAMIO's header: a report of a QIS label output alone. The run reports nothing for it (it took
+  // R(ID) for a feature and stopped: "feature F(ID) is not defined").
+  const auto alone =
+      run("DMISMN/'p', 5.2\nQ(ID)=QISDEF/'Machine ID',Var_SysID\nR(ID)=REPORT/Q(ID)\nOUTPUT/R(ID)\n"
+          "F(P)=FEAT/POINT,CART,0,0,0,0,0,1\nOUTPUT/F(P),R(ID)\nENDFIL\n");
+  EXPECT_EQ(alone.status, ExecStatus::Finished) << alone.diagnostics;
 }
 
 // GOHOME moves the machine to its home (it was accepted without moving, so a program that lifts

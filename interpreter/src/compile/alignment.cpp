@@ -735,6 +735,7 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       // A REPORT layout (R(x)=REPORT/...) for the features beside it: metron's reports are its own.
       note_once(m_report_layout_noted, p.span, "sema.report-layout",
                 "R() report layouts are not applied: metron reports every output feature and tolerance its own way");
+      continue;  // not an item of the report (OUTPUT/R(ID) alone reports nothing)
     } else if (is_label(p, {"S", "SA"}) && in.op == Op::Output) {
       // A sensor: its definition (S) or its qualification (SA), as a report line. One the
       // program never defines may come from the probe library (RECALL/SA): the run tells.
