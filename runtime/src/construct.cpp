@@ -57,6 +57,27 @@ tl::expected<Vec3, std::string> line_plane(const Geometry& line, const Geometry&
   return Vec3(line.position + t * line.direction);
 }
 
+// Where a line crosses a circle (CIRCLE or ARC), the line first projected onto the circle's plane
+// (CAMIO's "Intersection: line - arc"): of the two crossings, the one nearest `near` (a tangent
+// line has one). |p + t d - c|^2 = r^2 in the plane: t^2 + 2 t d.(p - c) + |p - c|^2 - r^2 = 0.
+tl::expected<Vec3, std::string> line_circle(const Geometry& line, const Geometry& circle, const Vec3& near) {
+  const Vec3 n = circle.direction.normalized();
+  const Vec3 p = line.position - (line.position - circle.position).dot(n) * n;
+  Vec3 d = line.direction - line.direction.dot(n) * n;
+  if (d.norm() < 1e-9)
+    return tl::unexpected(std::string("the line is along the circle's axis: it does not cross the circle"));
+  d.normalize();
+  const Vec3 pc = p - circle.position;
+  const double r = circle.diameter_mm / 2, b = d.dot(pc), c = pc.squaredNorm() - r * r;
+  const double disc = b * b - c;
+  const double miss = (pc - b * d).norm() - r;  // the line's distance from the centre, less the radius
+  if (disc < 0 && miss > 1e-9)
+    return tl::unexpected(fmt::format("the line passes {:.4f} mm outside the circle: they do not cross", miss));
+  const double root = std::sqrt(std::max(0.0, disc));
+  const Vec3 first = p + (-b - root) * d, second = p + (-b + root) * d;
+  return (first - near).norm() <= (second - near).norm() ? first : second;
+}
+
 // The plane a constructed LINE lies in (DMIS i2,j2,k2): its nominal's where that is normal to
 // the line, else any normal.
 Vec3 line_plane_normal(const Geometry& line) {
@@ -135,9 +156,19 @@ Result<void> MeasurementRuntime::construct(const std::string& label, FeatureType
             it != m_features.end() && l->direction.dot(nominal.direction) < 0 ? Vec3(-l->direction) : l->direction;
         g.normal2 = a.direction;
       } else if (type == FeatureType::Point) {
-        tl::expected<Vec3, std::string> p =
-            tl::unexpected(std::string("a point is the intersection of a line and a plane, or of two lines"));
-        if (is_linear(a) && is_planar(b))
+        tl::expected<Vec3, std::string> p = tl::unexpected(
+            std::string("a point is the intersection of a line and a plane, of two lines, or of a line and a circle"));
+        const auto round = [](const Geometry& x) {
+          return x.type == FeatureType::Circle || x.type == FeatureType::Arc;
+        };
+        // Of a line and a circle's two crossings, the one nearest F()'s nominal (else the
+        // circle's point nearest the line's).
+        const Vec3 near = it != m_features.end() ? nominal.position : (is_linear(a) ? a.position : b.position);
+        if (is_linear(a) && round(b))
+          p = line_circle(a, b, near);
+        else if (round(a) && is_linear(b))
+          p = line_circle(b, a, near);
+        else if (is_linear(a) && is_planar(b))
           p = line_plane(a, b);
         else if (is_planar(a) && is_linear(b))
           p = line_plane(b, a);

@@ -2716,6 +2716,33 @@ TEST(ShopPrograms, ConstructedFeaturesKeepTheSpreadOfTheirSources) {
   EXPECT_NEAR(spread("L"), std::sqrt((2 * 10.0 * 10.0 + plane * plane) / 2), 1e-6);
 }
 
+// CONST/POINT,INTOF of a line and a circle (CAMIO's "Intersection: line - arc"): the line
+// projected onto the circle's plane, the crossing nearest F()'s nominal. By hand: a 20 mm circle
+// at the origin crossed along X at y = 0 gives x = +-10, at y = 6 x = +-sqrt(100 - 36) = +-8; at
+// y = 12 the line passes 2 mm outside.
+TEST(ShopPrograms, PointWhereALineCrossesACircle) {
+  const std::string stated =
+      "DMISMN/'x', 5.2\nFA(C)=FEAT/CIRCLE,OUTER,CART,0,0,0,0,0,1,20\n"
+      "FA(L)=FEAT/LINE,UNBND,CART,3,0,5,1,0,0,0,0,1\nFA(L6)=FEAT/LINE,UNBND,CART,3,6,0,-1,0,0,0,0,1\n"
+      "FA(L12)=FEAT/LINE,UNBND,CART,3,12,0,1,0,0,0,0,1\n";
+  const auto r = run(stated +
+                     "F(A)=FEAT/POINT,CART,10,0,0,0,0,1\nCONST/POINT,F(A),INTOF,FA(L),FA(C)\n"
+                     "F(B)=FEAT/POINT,CART,-9,1,0,0,0,1\nCONST/POINT,F(B),INTOF,FA(C),FA(L)\n"
+                     "F(E)=FEAT/POINT,CART,7,6,0,0,0,1\nCONST/POINT,F(E),INTOF,FA(L6),FA(C)\nENDFIL\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto at = [&](const char* label) {
+    const auto* f = r.session->runtime().find_feature(label);
+    return f && f->actual ? f->actual->position : Eigen::Vector3d::Constant(NAN);
+  };
+  EXPECT_NEAR((at("A") - Eigen::Vector3d(10, 0, 0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((at("B") - Eigen::Vector3d(-10, 0, 0)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((at("E") - Eigen::Vector3d(8, 6, 0)).norm(), 0.0, 1e-12);
+  const auto missed = run(stated + "F(M)=FEAT/POINT,CART,0,12,0,0,0,1\nCONST/POINT,F(M),INTOF,FA(L12),FA(C)\nENDFIL\n");
+  EXPECT_EQ(missed.status, ExecStatus::Error);
+  EXPECT_NE(missed.diagnostics.find("the line passes 2.0000 mm outside the circle"), std::string::npos)
+      << missed.diagnostics;
+}
+
 // Constructions vendor exports write: a countersink's gauge circle (CONST/CIRCLE,INTOF of a cone
 // and a plane) and a bore's cylinder from two measured sections (CONST/CYLNDR,BF,FA(C1),FA(C2)).
 TEST(ShopPrograms, CircleOfAConeAndAPlaneAndACylinderFromSections) {
