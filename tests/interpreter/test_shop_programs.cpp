@@ -2890,7 +2890,14 @@ TEST(ShopPrograms, PromptTakesScriptedAnswersThenTheDefault) {
   EXPECT_EQ(std::stod(texts[2]), 0.0);
   EXPECT_NE(r.diagnostics.find("PROMPT 'Second limit ?': no operator on the virtual CMM, answered 0"),
             std::string::npos)
-      << r.diagnostics;
+      << r.diagnostics;  // The dialog CAMIO writes: its title, text and buttons make the question (it said PROMPT '').
+  const auto dialog =
+      run("DMISMN/'p', 5.2\nDECL/COMMON,LONG,VX\nVX=PROMPT/0,0,165,100,TITLE,'Calibrare',BUTTON,14,48,51,28,'DA',1,"
+          "BUTTON,105,48,49,27,'NU',0,TEXT,24,16,133,16,'Vrei sa calibrezi ?'\nENDFIL\n");
+  ASSERT_EQ(dialog.status, ExecStatus::Finished) << dialog.diagnostics;
+  EXPECT_NE(dialog.diagnostics.find("PROMPT 'Calibrare: Vrei sa calibrezi ? [DA = 1, NU = 0]': no operator"),
+            std::string::npos)
+      << dialog.diagnostics;
 }
 
 // TEXT/QUERY,(V),len,AN|N,L|R,'question' (older and MCOSMOS-style programs ask the serial number

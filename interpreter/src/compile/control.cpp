@@ -73,6 +73,40 @@ void UnitCompiler::endfil(const grammar::Statement& s) {
   m_ended = true;
 }
 
+// V=PROMPT/x,y,w,h,TITLE,'t',BUTTON,x,y,w,h,'label',value,...,TEXT,x,y,w,h,'text' (the dialog CAMIO
+// and PC-DMIS write): its question is the title and texts, then the buttons and their values,
+// "Calibrare: Vrei sa ...? [DA = 1, NU = 0]". Positions, sizes and pictures are a screen's layout.
+ir::Expr UnitCompiler::prompt_dialog_text(const grammar::Statement& s) {
+  std::vector<std::string> texts, buttons;
+  const auto& p = s.params;
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if (!is_word(p[k]) || (p[k].text != "TITLE" && p[k].text != "TEXT" && p[k].text != "BUTTON")) continue;
+    std::size_t t = k + 1;
+    while (t < p.size() && p[t].kind != ExprKind::String && !is_word(p[t])) ++t;
+    if (t >= p.size() || p[t].kind != ExprKind::String) continue;
+    if (p[k].text != "BUTTON") {
+      texts.push_back(p[t].text);
+    } else {
+      const bool valued = t + 1 < p.size() && p[t + 1].kind == ExprKind::Number;
+      buttons.push_back(valued ? fmt::format("{} = {}", p[t].text, p[t + 1].number) : p[t].text);
+    }
+    k = t;
+  }
+  std::string question;
+  for (const auto& t : texts) question += (question.empty() ? "" : ": ") + t;
+  if (!buttons.empty()) {
+    question += question.empty() ? "[" : " [";
+    for (std::size_t b = 0; b < buttons.size(); ++b) question += (b ? ", " : "") + buttons[b];
+    question += "]";
+  }
+  ir::Expr e;
+  e.span = s.span;
+  e.op = ir::ExprOp::Constant;
+  e.value = Value::string(question);
+  e.type = ValueType::String;
+  return e;
+}
+
 // V=ASSIGN/expr | V[i]=ASSIGN/expr | V=OBTAIN/FA(x),n | V=VALUE/FA(x)|TA(t),word[,n]
 void UnitCompiler::assignment(const grammar::Statement& s) {
   const grammar::Expr& v = *s.variable;
@@ -148,7 +182,9 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     value.name = "PROMPT";
     value.span = s.span;
     value.type = info ? info->type : ValueType::Real;
-    if (!s.params.empty()) {
+    if (!s.params.empty() && s.params[0].kind != ExprKind::String && !is_word(s.params[0])) {
+      value.args.push_back(prompt_dialog_text(s));
+    } else if (!s.params.empty()) {
       auto q = expression(s.params[0]);
       if (!q) return;
       value.args.push_back(std::move(q->e));

@@ -210,6 +210,7 @@ class UnitCompiler {
   std::optional<Typed> element_expression(const grammar::Expr& g);
   std::optional<Typed> call_expression(const grammar::Expr& g);
   std::optional<Typed> elapsed_time_expression(const grammar::Expr& g);
+  ir::Expr prompt_dialog_text(const grammar::Statement& s);
   std::optional<Typed> unary_expression(const grammar::Expr& g);
   std::optional<Typed> binary_expression(const grammar::Expr& g);
   std::optional<ir::Expr> numeric(const grammar::Expr& g, const char* what);
