@@ -133,6 +133,15 @@ std::vector<std::size_t> restore_commas_between_labels(LogicalLine& line) {
   return restored;
 }
 
+// `word / CHFILE` (blanks around the slash, any case): where WinWerth's characterisation block
+// begins (BEGIN) or ends (END).
+bool block_word(const std::string& text, std::string_view word) {
+  std::string squeezed;
+  for (const char c : text)
+    if (!is_blank(c)) squeezed += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return squeezed == std::string(word) + "/CHFILE";
+}
+
 }  // namespace
 
 bool is_label_prefix(std::string_view word) {
@@ -168,8 +177,22 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
     return program;
   }
   DiagnosticSink after_endfil;  // what follows ENDFIL is reported once, by the compiler
-  bool ended = false, blank_label_told = false;
+  bool ended = false, blank_label_told = false, in_chfile = false;
   for (LogicalLine& line : join_continuations(sources.file(file).text)) {
+    // WinWerth opens its programs with a characterisation block of `KEY = value` lines
+    // (BEGIN / CHFILE ... END / CHFILE): settings of its own, not statements; one note.
+    if (!ended && !options.strict && (in_chfile || block_word(line.text, "BEGIN"))) {
+      if (!in_chfile)
+        sink.report({Severity::Note,
+                     "parse.characterisation-block",
+                     Span{file, line.physical.front(), line.physical.back() + 1},
+                     "a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped: its settings are "
+                     "the writing software's",
+                     {}});
+      in_chfile = !block_word(line.text, "END");
+      program.writer = "WinWerth";
+      continue;
+    }
     if (!ended && !options.strict && !looks_like_statement(line.text)) {
       std::size_t first = 0;
       while (first < line.text.size() && is_blank(line.text[first])) ++first;

@@ -197,7 +197,10 @@ TEST(ShopPrograms, ModeCombinationsAndSignedDirections) {
       "F(P)=FEAT/PLANE,CART,0,0,0,0,0,1\nMEAS/PLANE,F(P),3\nPTMEAS/CART,0,0,0,0,0,1\nPTMEAS/CART,10,0,0,0,0,1\n"
       "PTMEAS/CART,0,10,0,0,0,1\nENDMES\nDATDEF/FA(P),DAT(A)\nD(A1)=DATSET/DAT(A),-ZDIR,ZORIG\nENDFIL\n");
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(check("DMISMN/'p', 5.1\nMODE/PROG\nENDFIL\n").has("expected AUTO, PROG,MAN or MAN after MODE/"));
+  // MODE/PROG alone (WinWerth's): read as AUTO with a warning; --strict: not a DMIS mode.
+  const std::string prog = "DMISMN/'p', 5.1\nMODE/PROG\nENDFIL\n";
+  EXPECT_TRUE(check(prog).has("2:6: warning: MODE/PROG alone is not a DMIS mode")) << check(prog).text;
+  EXPECT_TRUE(check(prog, true).has("expected AUTO, PROG,MAN or MAN after MODE/"));
 }
 
 // ROTATE/ZAXIS,FA(l),-XDIR turns the line's direction onto the minus X axis (it was refused: only
@@ -3876,7 +3879,41 @@ TEST(ShopPrograms, ReconstructedShopProgramsCheckCleanAndRunToTheEnd) {
     const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
     EXPECT_EQ(r.status, ExecStatus::Finished) << entry.path() << "\n" << r.diagnostics;
   }
-  EXPECT_EQ(seen, 8);
+  EXPECT_EQ(seen, 9);
+}
+
+// What WinWerth writes (programs/real/winwerth_style_plate.dmi, written for metron in its manner):
+// the circle written by its radius (10) read as the 20 mm bore the world holds, the tolerance
+// written upper first (0.03, -0.01) read as -0.01 .. +0.03, a point constructed without a
+// direction between two top points (60, 35) and (60, 65): (60, 50, 40) in the part, machine
+// (360, 250, 40). --strict refuses each reading.
+TEST(ShopPrograms, WinWerthProgramsAreReadAsWinWerthMeansThem) {
+  std::ifstream in(source_dir / "programs/real/winwerth_style_plate.dmi", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("11:1: note: a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped"))
+      << c.text;
+  EXPECT_TRUE(c.has("which writes a FEAT/CIRCLE's radius where DMIS has its diameter")) << c.text;
+  const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* bore = r.session->runtime().find_feature("R_CIR_1");
+  ASSERT_TRUE(bore && bore->actual);
+  EXPECT_NEAR(bore->nominal.diameter_mm, 20.0, 1e-12);
+  EXPECT_NEAR(bore->actual->diameter_mm, 20.0, 1e-6);
+  const auto* size = tolerance(*r.session, "D_20.00");
+  ASSERT_NE(size, nullptr);
+  EXPECT_TRUE(size->in_tolerance);
+  EXPECT_DOUBLE_EQ(size->lower, -0.01);
+  EXPECT_DOUBLE_EQ(size->upper, 0.03);
+  const auto* point = r.session->runtime().find_feature("R_1");
+  ASSERT_TRUE(point && point->actual);
+  EXPECT_NEAR((point->actual->position - Eigen::Vector3d(360, 250, 40)).norm(), 0.0, 1e-6);
+  const auto strict = check(text, true);
+  for (const char* refused : {"13:13: error", "expected AUTO, PROG,MAN or MAN after MODE/",
+                              "MACRO needs a label on the left", "CZSLCT is not allowed inside a MEAS block",
+                              "the direction vector i,j,k is zero", "the lower tolerance 0.03 is above the upper"})
+    EXPECT_TRUE(strict.has(refused)) << refused << "\n" << strict.text;
 }
 
 TEST(ShopPrograms, ForeignCallPathWarnsAtCheckResolvesWithIncludeAndFailsOnlyAtRun) {

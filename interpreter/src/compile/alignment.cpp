@@ -349,6 +349,12 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   if (!expect_params(s, 4, "the type, F(label), the method and the source features")) return;
   const auto& p = s.params;
   const auto const_type = type_word(p[0]);
+  if (!const_type && is_word(p[0]) && unsupported_feature_word(p[0].text) && is_label(p[1], {"F"}) && !m_strict) {
+    warn(p[0].span, "sema.unsupported-feature",
+         fmt::format("feature type {} is not supported yet; CONST of F({}) is skipped", p[0].text, p[1].label.name));
+    emit(make(Op::Nop, s, "CONST"));
+    return;
+  }
   if (!const_type) return error(p[0].span, "sema.bad-feature-type", "expected a feature type after CONST/");
   if (!is_label(p[1], {"F"}))
     return error(p[1].span, "sema.expected-feature", "expected F(label) after the feature type");

@@ -559,6 +559,16 @@ std::pair<std::string, Span> UnitCompiler::jump_label_name(const grammar::Expr& 
 
 // M(name)=MACRO/'P1','P2' | M(name)=MACRO/P1,P2
 void UnitCompiler::macro(const grammar::Statement& s) {
+  if (!s.target && !m_strict && !m_macro) {
+    // WinWerth wraps a program's body in MACRO/name ... ENDMAC, with nothing to CALL it, and runs
+    // it: read leniently so, its statements run where they stand.
+    warn(s.span, "sema.unlabelled-macro",
+         "MACRO without M(name)= on its left: nothing can CALL it; its statements are run where they stand, up to "
+         "its ENDMAC (as WinWerth runs such a block; --strict makes it an error)");
+    ++m_unlabelled_macros;
+    emit(make(Op::Nop, s, "MACRO"));
+    return;
+  }
   if (!require_target(s, {"M"}, "M(name)=MACRO/...")) return;
   if (m_macro) return error(s.span, "sema.nested-macro", "a MACRO cannot be defined inside another MACRO");
   ir::Macro m;
@@ -579,6 +589,11 @@ void UnitCompiler::macro(const grammar::Statement& s) {
 }
 
 void UnitCompiler::endmac(const grammar::Statement& s) {
+  if ((m_blocks.empty() || m_blocks.back().kind != Block::Kind::Macro) && m_unlabelled_macros > 0) {
+    --m_unlabelled_macros;  // the end of a MACRO run in place
+    emit(make(Op::Nop, s, "ENDMAC"));
+    return;
+  }
   if (m_blocks.empty() || m_blocks.back().kind != Block::Kind::Macro)
     return error(s.major_span, "sema.unmatched", "ENDMAC without a matching MACRO");
   m_blocks.pop_back();

@@ -233,7 +233,36 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     in.operands.push_back(expr_operand(std::move(*e)));
   }
   if (!ok) return;
+  if (type == FeatureType::Circle && m_writer == "WinWerth" && !m_strict && !literal.empty()) {
+    // WinWerth writes a circle's radius where DMIS has its diameter (its PTMEAS points lie at that
+    // radius from the centre, its TOL/DIAM labels name twice it): read as the diameter it is.
+    note_once(m_circle_radius_noted, s.span, "sema.circle-radius",
+              "this file was written by WinWerth (its BEGIN/CHFILE block), which writes a FEAT/CIRCLE's radius where "
+              "DMIS has its diameter: its circles are read with twice the size written (noted once)");
+    ir::Operand& size = in.operands.back();
+    ir::Expr twice;
+    twice.span = size.expr.span;
+    twice.op = ir::ExprOp::Binary;
+    twice.name = "*";
+    twice.type = ValueType::Real;
+    ir::Expr two;
+    two.span = size.expr.span;
+    two.op = ir::ExprOp::Constant;
+    two.value = Value::real(2);
+    two.type = ValueType::Real;
+    twice.args = {std::move(two), std::move(size.expr)};
+    size = expr_operand(std::move(twice));
+    literal.back() *= 2;
+  }
   if (!check_feature_numbers(s, used, payload, literal)) return;
+  if (type == FeatureType::Point && literal.size() >= 6 && literal[3] == 0 && literal[4] == 0 && literal[5] == 0) {
+    ir::Expr up;  // the zero direction check_feature_numbers let through leniently
+    up.span = used[used.size() - literal.size() + 5].span;
+    up.op = ir::ExprOp::Constant;
+    up.value = Value::real(1);
+    up.type = ValueType::Real;
+    in.operands[in.operands.size() - literal.size() + 5] = expr_operand(std::move(up));
+  }
   if (auto it = m_symbols.features.find(label); it != m_symbols.features.end() && !m_repl && !reported_actual) {
     const Location loc = m_sources.locate(it->second.span);
     // DMIS lets a feature's nominal label be defined again (only other labels are unique): a note.
@@ -352,8 +381,16 @@ bool UnitCompiler::check_feature_numbers(const grammar::Statement& s, const std:
   };
   if ((type != FeatureType::Sphere || n == 7) && n > 0) {
     const std::size_t d = (type == FeatureType::Line && form.bounded.value_or(false)) ? 6 : 3;
-    if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0)
+    if (literal.size() >= d + 3 && literal[d] == 0 && literal[d + 1] == 0 && literal[d + 2] == 0) {
+      // WinWerth gives a point it constructs (BF of points) no direction: read leniently, the
+      // caller gives it +Z, which no construction of a point uses.
+      if (type == FeatureType::Point && !m_strict) {
+        warn(params[params.size() - n + d].span, "sema.zero-vector",
+             "the direction vector i,j,k is zero: the point is given 0,0,1 (--strict makes it an error)");
+        return true;
+      }
       return fail(d, "sema.zero-vector", "the direction vector i,j,k is zero");
+    }
   }
   if (type == FeatureType::ClosedSlot || type == FeatureType::Ellipse) {
     // x,y,z,i1,j1,k1,i2,j2,k2,...: the long (major) axis lies in the plane (normal to i1,j1,k1).
@@ -445,6 +482,20 @@ void UnitCompiler::snsdef(const grammar::Statement& s) {
   if (n < 4)
     return error(s.params.back().span, "sema.sensor-arity",
                  "SNSDEF/PROBE expects the stylus vector and the tip diameter after the words");
+  // Every number zero (WinWerth's SNSDEF of a probe its own library holds): a placeholder. Read
+  // leniently, the sensor is the machine's probe library's, as one the program never defines.
+  if (!m_strict && std::all_of(s.params.begin() + static_cast<std::ptrdiff_t>(i), s.params.end(),
+                               [](const grammar::Expr& e) { return e.kind == ExprKind::Number && e.number == 0; })) {
+    const std::string name = upper(s.target->name);
+    warn(s.span, "sema.placeholder-sensor",
+         fmt::format("S({}) has no geometry (its numbers are all zero): it is taken from the machine's probe library, "
+                     "as a sensor the program does not define (a 4 mm default tip, with a warning, when the library "
+                     "does not hold it; --strict makes it an error at run)",
+                     s.target->name));
+    m_symbols.library_sensors.insert(name);
+    emit(make(Op::Nop, s, "SNSDEF"));
+    return;
+  }
   for (; i < s.params.size(); ++i) {
     // `VEC,i,j,k` (`...,POL,0,0,VEC,0,0,1,50,4`, as DMIS 5.x programs write the stylus vector):
     // the word names the three numbers that follow.
@@ -564,6 +615,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   in.name_is_param = macro_param(upper(s.target->name)).has_value();
   in.payload = ir::TolerancePayload{kind};
   std::vector<double> numbers;
+  std::vector<std::size_t> number_operands;  // where each number stands among the operands
   bool has_reference = false;
   // TOL/POS,DIAM,...: a generator's way to ask for a diametral zone (the drawing's diameter sign)
   // where DMIS writes 2D: read as 2D (a circular zone about the nominal position in the plane
@@ -624,6 +676,7 @@ void UnitCompiler::tol(const grammar::Statement& s) {
       auto e = numeric(p[i], "a tolerance value");
       if (!e) return;
       numbers.push_back(literal_value(*e));
+      number_operands.push_back(in.operands.size());
       in.operands.push_back(expr_operand(std::move(*e)));
     }
   }
@@ -654,9 +707,19 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
        kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
        kind == ToleranceKind::Width || kind == ToleranceKind::Angl) &&
-      numbers.size() > 1 && numbers[0] > numbers[1])
-    return error(p[2].span, "sema.tolerance-order",
-                 fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
+      numbers.size() > 1 && numbers[0] > numbers[1]) {
+    if (m_strict)
+      return error(p[2].span, "sema.tolerance-order",
+                   fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
+    // WinWerth writes the upper tolerance first (TOL/DIAM,-0.03,-0.05): read leniently as the
+    // two limits of the zone they bound.
+    warn(p[2].span, "sema.tolerance-order",
+         fmt::format("the lower tolerance {} is above the upper tolerance {}: read as lower {} and upper {} (the "
+                     "upper written first; --strict makes it an error)",
+                     numbers[0], numbers[1], numbers[1], numbers[0]));
+    std::swap(numbers[0], numbers[1]);
+    std::swap(in.operands[number_operands[0]], in.operands[number_operands[1]]);
+  }
   if (limit_form && numbers[0] > numbers[1])
     return error(p[3].span, "sema.tolerance-order",
                  fmt::format("the lower limit {} is above the upper limit {}", numbers[0], numbers[1]));

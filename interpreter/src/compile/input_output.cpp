@@ -51,6 +51,7 @@ const NotedWord noted_words[] = {
     {"LITDEF", "LITDEF: the virtual CMM has no vision sensor to light"},
     {"WINDEF", "WINDEF: the virtual CMM has no vision sensor to window"},
     {"FILDEF", "FILDEF: the virtual CMM has no vision sensor to filter"},
+    {"ALGDEF", "ALGDEF: the vendor's algorithms it names (SNSET/VA) are not run; GEOALG chooses metron's fits"},
     {"CROSCL", "CROSCL: the virtual CMM has no vision sensor to scale"},
     {"BOUND", "BOUND: features are not bounded by other features; each is fitted and reported over its own points"},
     {"PSTHRU", "PSTHRU: its text is for a real controller; the virtual CMM has none to pass it to"},
@@ -120,8 +121,11 @@ void UnitCompiler::work_plane(const grammar::Statement& s) {
   const auto& w = s.params[0];
   if (s.params.size() != 1 || !(is_word(w, "XYPLAN") || is_word(w, "YZPLAN") || is_word(w, "ZXPLAN"))) {
     if (m_strict) return error(w.span, "sema.bad-setting", "expected XYPLAN, YZPLAN or ZXPLAN after WKPLAN/");
-    warn(w.span, "sema.bad-setting",
-         "WKPLAN takes XYPLAN, YZPLAN or ZXPLAN; this form is not applied: the working plane is unchanged");
+    // Told once per form: WinWerth writes WKPLAN/NONE before every construction.
+    if (m_noted_kinds.insert("WKPLAN/" + (is_word(w) ? w.text : std::string("..."))).second)
+      warn(w.span, "sema.bad-setting",
+           "WKPLAN takes XYPLAN, YZPLAN or ZXPLAN; this form is not applied: the working plane is unchanged (told "
+           "once)");
     emit(make(Op::Nop, s, "WKPLAN"));
     return;
   }
@@ -402,8 +406,15 @@ void UnitCompiler::mode(const grammar::Statement& s) {
     else
       return error(p.span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
   }
-  if (is_prog && !is_auto && !is_man)
-    return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+  if (is_prog && !is_auto && !is_man) {
+    // MODE/PROG alone (WinWerth's): the program drives the machine, read as AUTO.
+    if (m_strict) return error(s.params[0].span, "sema.bad-mode", "expected AUTO, PROG,MAN or MAN after MODE/");
+    if (m_noted_kinds.insert("MODE/PROG").second)
+      warn(s.params[0].span, "sema.bad-mode",
+           "MODE/PROG alone is not a DMIS mode (AUTO, PROG,MAN or MAN): read as MODE/AUTO, the program driving the "
+           "machine (told once; --strict makes it an error)");
+    is_auto = true;
+  }
   in.payload = ir::ModePayload{is_auto ? ir::RunMode::Auto : is_prog ? ir::RunMode::ProgMan : ir::RunMode::Man};
   emit(std::move(in));
 }

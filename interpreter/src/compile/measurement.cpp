@@ -97,6 +97,18 @@ void UnitCompiler::library_sensor(const grammar::Expr& label) {
 // clearance surface: the plane moved dist along its normal)
 void UnitCompiler::snset(const grammar::Statement& s) {
   static const std::set<std::string> words = {"APPRCH", "RETRCT", "SEARCH", "CLRSRF", "DEPTH"};
+  // SNSET/VA(algorithm), VF(filter),value, VL(light),intensity ...: a vision or scanning sensor's
+  // settings (DMIS 5.x; WinWerth writes one before each measurement). A touch probe has none: one
+  // note per unit, as FILDEF and LITDEF.
+  if (!s.params.empty() && is_label(s.params[0], {"VA", "VF", "VL", "VW"})) {
+    if (m_noted_kinds.insert("SNSET/V").second)
+      note(s.params[0].span, "sema.sensor-vision-setting",
+           fmt::format("SNSET/{}(...): the settings of a vision sensor's algorithms, filters and lights have no "
+                       "effect on the virtual CMM's probes (noted once)",
+                       s.params[0].label.prefix));
+    emit(make(Op::Nop, s, "SNSET"));
+    return;
+  }
   if (!expect_params(s, 2, "a setting (APPRCH, RETRCT, SEARCH, CLRSRF, DEPTH) and a distance")) return;
   for (std::size_t i = 0; i < s.params.size(); i += 2) {
     if (!is_word(s.params[i]) || !words.count(s.params[i].text)) {

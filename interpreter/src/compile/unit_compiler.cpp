@@ -12,6 +12,7 @@ using ir::Op;
 
 void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   m_repl = repl;
+  m_writer = program.writer;
   const auto& st = program.statements;
   // An empty file (or one of comments only) is an error, not a clean check: it is never the
   // program meant. Statements the parser could not read have their own errors.
@@ -90,7 +91,9 @@ void UnitCompiler::resolve_jumps(JumpScope& scope, std::vector<ir::Instruction>&
 }
 
 bool UnitCompiler::unsupported_feature_word(std::string_view word) {
-  return word == "COMPOUND" || word == "OBJECT" || word == "SYMPLN" || word == "CONRADSEGMNT" || word == "REVSURF";
+  // DIST and LOCTOL are WinWerth's: a distance and a location tolerance held as features.
+  return word == "COMPOUND" || word == "OBJECT" || word == "SYMPLN" || word == "CONRADSEGMNT" || word == "REVSURF" ||
+         word == "DIST" || word == "LOCTOL";
 }
 
 // A feature label must be defined before use; FA() needs it measured or constructed at run time.
@@ -282,19 +285,20 @@ void UnitCompiler::statement(const grammar::Statement& given) {
     // Settings and records shop software writes inside blocks: no motion, no definition.
     static const std::set<std::string> tolerated = {
         "FLY",    "DMESW", "DMESWI", "DMESWV", "DMEHW",  "PTBUFF", "SCNSET", "DECPL", "PAUSE",  "TECOMP", "PRCOMP",
-        "CRMODE", "DECL",  "WRITE",  "READ",   "GEOALG", "RECALL", "MODE",   "WRIST", "FINPOS", "SNSMNT"};
+        "CRMODE", "DECL",  "WRITE",  "READ",   "GEOALG", "RECALL", "MODE",   "WRIST", "FINPOS", "SNSMNT", "CZSLCT"};
     if (!allowed.count(m) && !s.variable) {
       if (m_strict || !tolerated.count(m)) {
         error(s.major_span, "sema.not-in-meas",
               fmt::format("{} is not allowed inside a MEAS block (close it with ENDMES first)", m));
         return;
       }
-      // Read leniently, they are carried out where they stand, before the points ENDMES measures.
-      warn(s.major_span, "sema.not-in-meas",
-           fmt::format(
-               "{} inside a MEAS block is not DMIS: it is carried out where it stands, before the block's points, "
-               "which are measured at ENDMES (--strict: an error)",
-               m));
+      // Read leniently, they are carried out where they stand, before the points ENDMES measures
+      // (told once per word: WinWerth writes a CZSLCT in every block).
+      if (m_noted_kinds.insert("in MEAS: " + m).second)
+        warn(s.major_span, "sema.not-in-meas",
+             fmt::format("{} inside a MEAS block is not DMIS: it is carried out where it stands, before the block's "
+                         "points, which are measured at ENDMES (told once; --strict: an error)",
+                         m));
     }
   }
   // V=ASSIGN/... and V=OBTAIN/... are a row of their own (the grammar parsed the variable).

@@ -379,8 +379,11 @@ class UnitCompiler {
   // SCNMOD/ON seen (in program order) and not turned OFF since: a block's PTMEAS then come in pairs,
   // each the ends of a scan, so its point count is the machine's (as with PAMEAS).
   bool m_scan_mode_on = false;
-  std::set<std::string> m_noted_kinds;           // ERROR, GEOALG: noted once each
-  std::set<std::string> m_push_words_warned;     // PUSH/POP words metron does not save: told once each
+  std::set<std::string> m_noted_kinds;        // ERROR, GEOALG: noted once each
+  std::set<std::string> m_push_words_warned;  // PUSH/POP words metron does not save: told once each
+  std::string m_writer;                       // grammar::Program::writer: the software that wrote the file
+  bool m_circle_radius_noted = false;
+  int m_unlabelled_macros = 0;                   // MACRO/name without M(name)=, run in place (WinWerth)
   std::map<std::string, int> m_pushes_open;      // PUSH/word less POP/word so far in this unit's text
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output

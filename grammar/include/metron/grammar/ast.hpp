@@ -68,6 +68,9 @@ struct Program {
   /// The leading word of the file's first statement line, upper case, read or not (a DMISMN the
   /// parser could not read is still the program's start).
   std::string first_word;
+  /// The software that wrote the file, where the file says so in a way metron reads ("WinWerth":
+  /// its BEGIN/CHFILE block); empty otherwise.
+  std::string writer;
 };
 
 }  // namespace metron::grammar
