@@ -193,11 +193,13 @@ TEST(Language, RunTimeErrorsArePositioned) {
 }
 
 TEST(Language, VendorStatementsAreSkippedWithAWarning) {
-  auto r = run("VNDRX/SOMETHING, 1, 2\nTEXT/OPER, 'after'\n");
+  auto r = run("VNDRX/SOMETHING, 1, 2\nTEXT/OPER, 'after'\nVNDRX/AGAIN\n");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   EXPECT_EQ(r.texts, (std::vector<std::string>{"after"}));
-  EXPECT_NE(r.diagnostics.find("prog.dmi:3:1: warning: unknown statement VNDRX is skipped"), std::string::npos)
+  EXPECT_NE(r.diagnostics.find("prog.dmi:3:1: warning: unknown statement VNDRX is skipped (told once per word)"),
+            std::string::npos)
       << r.diagnostics;
+  EXPECT_EQ(r.diagnostics.find("prog.dmi:5:1"), std::string::npos) << r.diagnostics;  // the second is not told
 }
 
 TEST(Language, ObtainReadsFeatureParameters) {

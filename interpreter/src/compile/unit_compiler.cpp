@@ -328,7 +328,11 @@ const StatementTable& UnitCompiler::statements() {
 
 // A vendor or unsupported statement: warn and skip; remember labels it would have defined.
 void UnitCompiler::unknown(const grammar::Statement& s) {
-  warn(s.major_span, "sema.unknown-statement", skipped_statement_message(s.major));
+  // Told once per word (a vendor's statement, WinWerth's PIEZOWFP, stands before every block);
+  // --strict tells each.
+  if (m_strict || m_noted_kinds.insert("unknown: " + s.major).second)
+    warn(s.major_span, "sema.unknown-statement",
+         skipped_statement_message(s.major) + (m_strict ? "" : " (told once per word)"));
   if (s.target)
     m_symbols.skipped[(s.target->prefix == "F" ? "F:" : s.target->prefix + ":") + upper(s.target->name)] = s.span;
   emit(make(Op::Nop, s, s.major));
