@@ -3892,7 +3892,7 @@ TEST(ShopPrograms, WinWerthProgramsAreReadAsWinWerthMeansThem) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const auto c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("11:1: note: a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped"))
+  EXPECT_TRUE(c.has("12:1: note: a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped"))
       << c.text;
   EXPECT_TRUE(c.has("which writes a FEAT/CIRCLE's radius where DMIS has its diameter")) << c.text;
   const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
@@ -3906,13 +3906,21 @@ TEST(ShopPrograms, WinWerthProgramsAreReadAsWinWerthMeansThem) {
   EXPECT_TRUE(size->in_tolerance);
   EXPECT_DOUBLE_EQ(size->lower, -0.01);
   EXPECT_DOUBLE_EQ(size->upper, 0.03);
+  // The distance held as a feature (CONST/DIST of the top face, z 40, and the bore's section
+  // measured at z 30): 10, its tolerance written upper first.
+  const auto* distance = tolerance(*r.session, "DIM_10.000");
+  ASSERT_NE(distance, nullptr);
+  EXPECT_NEAR(distance->actual, 10.0, 1e-6);
+  EXPECT_DOUBLE_EQ(distance->lower, -0.005);
+  EXPECT_TRUE(distance->in_tolerance);
   const auto* point = r.session->runtime().find_feature("R_1");
   ASSERT_TRUE(point && point->actual);
   EXPECT_NEAR((point->actual->position - Eigen::Vector3d(360, 250, 40)).norm(), 0.0, 1e-6);
   const auto strict = check(text, true);
-  for (const char* refused : {"13:13: error", "expected AUTO, PROG,MAN or MAN after MODE/",
+  for (const char* refused : {"14:13: error", "expected AUTO, PROG,MAN or MAN after MODE/",
                               "MACRO needs a label on the left", "CZSLCT is not allowed inside a MEAS block",
-                              "the direction vector i,j,k is zero", "the lower tolerance 0.03 is above the upper"})
+                              "the direction vector i,j,k is zero", "the lower tolerance 0.03 is above the upper",
+                              "the lower tolerance 0.005 is above the upper", "expected a feature type after CONST/"})
     EXPECT_TRUE(strict.has(refused)) << refused << "\n" << strict.text;
 }
 

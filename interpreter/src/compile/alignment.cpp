@@ -349,6 +349,19 @@ void UnitCompiler::construct(const grammar::Statement& s) {
   if (!expect_params(s, 4, "the type, F(label), the method and the source features")) return;
   const auto& p = s.params;
   const auto const_type = type_word(p[0]);
+  if (is_word(p[0], "DIST") && is_label(p[1], {"F"}) && is_word(p[2], "BF") && p.size() == 5 &&
+      is_label(p[3], {"F", "FA"}) && is_label(p[4], {"F", "FA"}) && !m_strict) {
+    // WinWerth holds a distance as a feature: CONST/DIST,F(d),BF,FA(a),FA(b), then
+    // OUTPUT/F(d),T(t) with t a TOL/DISTB. Read as the distance between a and b.
+    if (!check_feature(p[3]) || !check_feature(p[4])) return;
+    note_once(m_distance_features_noted, p[0].span, "sema.distance-feature",
+              fmt::format("CONST/DIST (WinWerth's): F({}) is the distance between {}({}) and {}({}); an OUTPUT of "
+                          "it reports its tolerance as OUTPUT of the two features does (noted once)",
+                          p[1].label.name, p[3].label.prefix, p[3].label.name, p[4].label.prefix, p[4].label.name));
+    m_symbols.distance_features[upper(p[1].label.name)] = {p[3], p[4]};
+    emit(make(Op::Nop, s, "CONST"));
+    return;
+  }
   if (!const_type && is_word(p[0]) && unsupported_feature_word(p[0].text) && is_label(p[1], {"F"}) && !m_strict) {
     warn(p[0].span, "sema.unsupported-feature",
          fmt::format("feature type {} is not supported yet; CONST of F({}) is skipped", p[0].text, p[1].label.name));
@@ -646,6 +659,15 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       }
       continue;
     }
+    if (is_label(p, {"F", "FA"}))
+      if (auto d = m_symbols.distance_features.find(upper(p.label.name)); d != m_symbols.distance_features.end()) {
+        for (const auto& f : d->second) {  // a distance feature: its two features, as written in its place
+          if (!check_feature(f)) return false;
+          types.push_back(feature_type(upper(f.label.name)));
+          in.operands.push_back(label_op(f));
+        }
+        continue;
+      }
     if (is_label(p, {"F", "FA"})) {
       // Shop software runs a program whose OUTPUT names a feature it never measured (a
       // generator's leftover): read leniently, the item is left out with a warning.

@@ -704,21 +704,27 @@ void UnitCompiler::tol(const grammar::Statement& s) {
   if (kind == ToleranceKind::Cortol && !any_word({"XAXIS", "YAXIS", "ZAXIS", "RADIUS", "ANGLE"}))
     return error(p[0].span, "sema.expected-axis",
                  "TOL/CORTOL needs the coordinate: XAXIS, YAXIS, ZAXIS, RADIUS or ANGLE");
-  if ((kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
-       kind == ToleranceKind::Profl || kind == ToleranceKind::Profp || kind == ToleranceKind::Cortol ||
-       kind == ToleranceKind::Width || kind == ToleranceKind::Angl) &&
-      numbers.size() > 1 && numbers[0] > numbers[1]) {
+  // The lower and upper tolerance: the first two numbers, after the nominal for a distance or an
+  // angle (not LIMIT's limits, below).
+  const bool two_limits = kind == ToleranceKind::Diam || kind == ToleranceKind::Rad || kind == ToleranceKind::Profs ||
+                          kind == ToleranceKind::Profl || kind == ToleranceKind::Profp ||
+                          kind == ToleranceKind::Cortol || kind == ToleranceKind::Width || kind == ToleranceKind::Angl;
+  const bool after_nominal = !limit_form && (kind == ToleranceKind::DistB || kind == ToleranceKind::DistWrt ||
+                                             kind == ToleranceKind::AngWrt || kind == ToleranceKind::Anglb);
+  const std::size_t lo = after_nominal ? 1 : 0, hi = lo + 1;
+  if ((two_limits || after_nominal) && numbers.size() > hi && numbers[lo] > numbers[hi]) {
+    const Span at = in.operands[number_operands[hi]].expr.span;
     if (m_strict)
-      return error(p[2].span, "sema.tolerance-order",
-                   fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[0], numbers[1]));
+      return error(at, "sema.tolerance-order",
+                   fmt::format("the lower tolerance {} is above the upper tolerance {}", numbers[lo], numbers[hi]));
     // WinWerth writes the upper tolerance first (TOL/DIAM,-0.03,-0.05): read leniently as the
     // two limits of the zone they bound.
-    warn(p[2].span, "sema.tolerance-order",
+    warn(at, "sema.tolerance-order",
          fmt::format("the lower tolerance {} is above the upper tolerance {}: read as lower {} and upper {} (the "
                      "upper written first; --strict makes it an error)",
-                     numbers[0], numbers[1], numbers[1], numbers[0]));
-    std::swap(numbers[0], numbers[1]);
-    std::swap(in.operands[number_operands[0]], in.operands[number_operands[1]]);
+                     numbers[lo], numbers[hi], numbers[hi], numbers[lo]));
+    std::swap(numbers[lo], numbers[hi]);
+    std::swap(in.operands[number_operands[lo]], in.operands[number_operands[hi]]);
   }
   if (limit_form && numbers[0] > numbers[1])
     return error(p[3].span, "sema.tolerance-order",

@@ -383,6 +383,7 @@ class UnitCompiler {
   std::set<std::string> m_push_words_warned;  // PUSH/POP words metron does not save: told once each
   std::string m_writer;                       // grammar::Program::writer: the software that wrote the file
   bool m_circle_radius_noted = false;
+  bool m_distance_features_noted = false;
   int m_unlabelled_macros = 0;                   // MACRO/name without M(name)=, run in place (WinWerth)
   std::map<std::string, int> m_pushes_open;      // PUSH/word less POP/word so far in this unit's text
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement

@@ -66,6 +66,9 @@ struct SymbolTable {
   /// Tolerances the last OUTPUT or EVAL naming them left out, read leniently, for a feature type
   /// metron does not evaluate them for (PERP of a CIRCLE): label -> that type's word.
   std::map<std::string, std::string, LabelLess> tolerances_left_out;
+  /// CONST/DIST,F(d),BF,FA(a),FA(b) (WinWerth's distance held as a feature): d -> the two feature
+  /// labels, which an OUTPUT of F(d) with a tolerance reports the tolerance of.
+  std::map<std::string, std::vector<grammar::Expr>, LabelLess> distance_features;
   /// F(p)=FEAT/PATERN,F(a),F(b),...: pattern label -> its features' labels (upper case), in order.
   std::map<std::string, std::vector<std::string>, LabelLess> patterns;
   std::set<std::string> units_in_progress;            ///< CALL/EXTERN cycle detection
