@@ -142,16 +142,32 @@ std::string to_utf8(std::string bytes, TextEncoding* detected) {
     return bytes;
   }
   if (detected) *detected = TextEncoding::Windows1252;
+  // Windows-1252, line by line: a line that is UTF-8 with characters beyond ASCII stays UTF-8 (a
+  // generator pasting UTF-8 names into a Windows-1252 template writes both in one file, and one
+  // label would be two otherwise).
   std::string out;
   out.reserve(bytes.size() + bytes.size() / 8);
-  for (const char ch : bytes) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c < 0x80)
-      out.push_back(ch);
-    else if (c < 0xA0 && cp1252_high[c - 0x80] != 0)
-      append_utf8(out, cp1252_high[c - 0x80]);
-    else
-      append_utf8(out, c);
+  std::size_t begin = 0;
+  while (begin < bytes.size()) {
+    const std::size_t nl = bytes.find('\n', begin);
+    const std::size_t end = nl == std::string::npos ? bytes.size() : nl + 1;
+    const std::string_view line(bytes.data() + begin, end - begin);
+    const bool beyond_ascii =
+        std::any_of(line.begin(), line.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x80; });
+    if (beyond_ascii && is_valid_utf8(line)) {
+      out.append(line);
+    } else {
+      for (const char ch : line) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (c < 0x80)
+          out.push_back(ch);
+        else if (c < 0xA0 && cp1252_high[c - 0x80] != 0)
+          append_utf8(out, cp1252_high[c - 0x80]);
+        else
+          append_utf8(out, c);
+      }
+    }
+    begin = end;
   }
   return out;
 }

@@ -2942,6 +2942,15 @@ TEST(ShopPrograms, LabelsWithAccentsPlusAndPlusMinusInEveryEncoding) {
   EXPECT_EQ(sources.file(id).text, utf8);
   // Windows-1252's own characters (0x80-0x9F): the euro sign and a curly quote.
   EXPECT_EQ(metron::to_utf8("\x80\x93"), "\xE2\x82\xAC\xE2\x80\x9C");  // U+20AC, U+201C (WHATWG table)
+  // Both in one file (a lab's generator pasted UTF-8 names into a Windows-1252 template): each line
+  // is read in its own, and the label is one (it was two, the OUTPUT's never defined).
+  const std::string mixed =
+      "DMISMN/'p', 5.1\nF(PLN_Sph\xE8res+\xB1)=FEAT/PLANE,CART,0,0,0,0,0,1\n"
+      "T(F1)=TOL/FLAT,0.1\nOUTPUT/FA(PLN_Sph\xC3\xA8res+\xC2\xB1),TA(F1)\nENDFIL\n";
+  const auto both = check(mixed);
+  EXPECT_EQ(both.errors, 0u) << both.text;
+  EXPECT_FALSE(both.has("never defined")) << both.text;
+  EXPECT_EQ(metron::to_utf8(mixed), utf8);
 }
 
 TEST(ShopPrograms, ProgramsSavedAsUtf16AreRead) {
