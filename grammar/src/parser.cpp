@@ -178,17 +178,20 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
   }
   DiagnosticSink after_endfil;  // what follows ENDFIL is reported once, by the compiler
   bool ended = false, blank_label_told = false, in_chfile = false;
+  Span chfile_begin;
   for (LogicalLine& line : join_continuations(sources.file(file).text)) {
     // WinWerth opens its programs with a characterisation block of `KEY = value` lines
     // (BEGIN / CHFILE ... END / CHFILE): settings of its own, not statements; one note.
     if (!ended && !options.strict && (in_chfile || block_word(line.text, "BEGIN"))) {
-      if (!in_chfile)
+      if (!in_chfile) {
+        chfile_begin = Span{file, line.physical.front(), line.physical.back() + 1};
         sink.report({Severity::Note,
                      "parse.characterisation-block",
-                     Span{file, line.physical.front(), line.physical.back() + 1},
+                     chfile_begin,
                      "a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped: its settings are "
                      "the writing software's",
                      {}});
+      }
       in_chfile = !block_word(line.text, "END");
       program.writer = "WinWerth";
       continue;
@@ -224,6 +227,10 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
       program.statements.push_back(std::move(stmt));
     }
   }
+  // A block never closed took the rest of the file with it: the program would measure nothing.
+  if (in_chfile)
+    sink.error("parse.unclosed-block", chfile_begin,
+               "BEGIN/CHFILE is never closed by END/CHFILE: every line after it was skipped as its settings");
   return program;
 }
 

@@ -3925,6 +3925,8 @@ TEST(ShopPrograms, WinWerthProgramsAreReadAsWinWerthMeansThem) {
   const auto* point = r.session->runtime().find_feature("R_1");
   ASSERT_TRUE(point && point->actual);
   EXPECT_NEAR((point->actual->position - Eigen::Vector3d(360, 250, 40)).norm(), 0.0, 1e-6);
+  const auto unclosed = check("BEGIN / CHFILE\n\tTYPE = MACRO\nDMISMN/'p', 5.1\nENDFIL\n");
+  EXPECT_TRUE(unclosed.has("1:1: error: BEGIN/CHFILE is never closed by END/CHFILE")) << unclosed.text;
   const auto strict = check(text, true);
   for (const char* refused : {"14:13: error", "expected AUTO, PROG,MAN or MAN after MODE/",
                               "MACRO needs a label on the left", "CZSLCT is not allowed inside a MEAS block",
