@@ -3901,9 +3901,10 @@ TEST(ShopPrograms, WinWerthProgramsAreReadAsWinWerthMeansThem) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const auto c = check(text);
   EXPECT_EQ(c.errors, 0u) << c.text;
-  EXPECT_TRUE(c.has("12:1: note: a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped"))
+  EXPECT_TRUE(c.has("1: note: a characterisation block (BEGIN/CHFILE ... END/CHFILE, WinWerth's) is skipped"))
       << c.text;
   EXPECT_TRUE(c.has("which writes a FEAT/CIRCLE's radius where DMIS has its diameter")) << c.text;
+  EXPECT_FALSE(c.has("LOCTOL is not one metron knows")) << c.text;
   const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
   ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
   const auto* bore = r.session->runtime().find_feature("R_CIR_1");
@@ -3922,16 +3923,24 @@ TEST(ShopPrograms, WinWerthProgramsAreReadAsWinWerthMeansThem) {
   EXPECT_NEAR(distance->actual, 10.0, 1e-6);
   EXPECT_DOUBLE_EQ(distance->lower, -0.005);
   EXPECT_TRUE(distance->in_tolerance);
+  // The location tolerance held as a feature: the parallelism of the second region of the top
+  // face to the first (the reference), 0 on the perfect block.
+  const auto* parallel = tolerance(*r.session, "PARALLEL_1");
+  ASSERT_NE(parallel, nullptr);
+  EXPECT_EQ(parallel->kind, metron::runtime::ToleranceKind::Parlel);
+  EXPECT_NEAR(parallel->value, 0.0, 1e-9);
+  EXPECT_TRUE(parallel->in_tolerance);
   const auto* point = r.session->runtime().find_feature("R_1");
   ASSERT_TRUE(point && point->actual);
   EXPECT_NEAR((point->actual->position - Eigen::Vector3d(360, 250, 40)).norm(), 0.0, 1e-6);
   const auto unclosed = check("BEGIN / CHFILE\n\tTYPE = MACRO\nDMISMN/'p', 5.1\nENDFIL\n");
   EXPECT_TRUE(unclosed.has("1:1: error: BEGIN/CHFILE is never closed by END/CHFILE")) << unclosed.text;
   const auto strict = check(text, true);
-  for (const char* refused : {"14:13: error", "expected AUTO, PROG,MAN or MAN after MODE/",
-                              "MACRO needs a label on the left", "CZSLCT is not allowed inside a MEAS block",
-                              "the direction vector i,j,k is zero", "the lower tolerance 0.03 is above the upper",
-                              "the lower tolerance 0.005 is above the upper", "expected a feature type after CONST/"})
+  for (const char* refused :
+       {"error: expected '/' after the major word 'L'", "expected AUTO, PROG,MAN or MAN after MODE/",
+        "MACRO needs a label on the left", "CZSLCT is not allowed inside a MEAS block",
+        "the direction vector i,j,k is zero", "the lower tolerance 0.03 is above the upper",
+        "the lower tolerance 0.005 is above the upper", "expected a feature type after CONST/"})
     EXPECT_TRUE(strict.has(refused)) << refused << "\n" << strict.text;
 }
 

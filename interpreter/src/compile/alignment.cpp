@@ -362,6 +362,33 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     emit(make(Op::Nop, s, "CONST"));
     return;
   }
+  static const std::set<std::string> location_kinds = {"PARLEL", "PERP", "CONCEN", "COAXIAL", "ANGLR"};
+  if (is_word(p[0], "LOCTOL") && is_label(p[1], {"F"}) && p.size() == 5 && is_word(p[2]) &&
+      location_kinds.count(p[2].text) && is_label(p[3], {"F", "FA"}) && is_label(p[4], {"F", "FA"}) && !m_strict) {
+    // WinWerth holds a location tolerance's result as a feature: CONST/LOCTOL,F(x),kind,FA(a),FA(b)
+    // then OUTPUT/F(x),T(t) with T(t)=TOL/LOCTOL,zone. The first feature is the reference (so
+    // its CONCEN of a line and a circle is the circle's about the line's axis): read as
+    // DATDEF/FA(a),DAT(LOCTOL_x) and, at the OUTPUT, TOL/kind,zone,DAT(LOCTOL_x) of FA(b).
+    if (!check_feature(p[3]) || !check_feature(p[4])) return;
+    note_once(m_location_noted, p[0].span, "sema.location-feature",
+              fmt::format("CONST/LOCTOL (WinWerth's): F({}) is the {} of {}({}) to {}({}), the first the reference; "
+                          "an OUTPUT of it with its TOL/LOCTOL evaluates that tolerance (noted once)",
+                          p[1].label.name, p[2].text, p[4].label.prefix, p[4].label.name, p[3].label.prefix,
+                          p[3].label.name));
+    grammar::Expr datum;
+    datum.kind = ExprKind::Label;
+    datum.span = p[1].span;
+    datum.label.prefix = "DAT";
+    datum.label.name = "LOCTOL_" + p[1].label.name;
+    datum.label.span = p[1].span;
+    grammar::Statement define = s;
+    define.major = "DATDEF";
+    define.target.reset();
+    define.params = {p[3], datum};
+    datdef(define);
+    m_location_features[upper(p[1].label.name)] = {p[2].text, p[4], datum};
+    return;
+  }
   if (!const_type && is_word(p[0]) && unsupported_feature_word(p[0].text) && is_label(p[1], {"F"}) && !m_strict) {
     warn(p[0].span, "sema.unsupported-feature",
          fmt::format("feature type {} is not supported yet; CONST of F({}) is skipped", p[0].text, p[1].label.name));
@@ -659,6 +686,23 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
       }
       continue;
     }
+    if (is_label(p, {"F", "FA"}))
+      if (auto l = m_location_features.find(upper(p.label.name)); l != m_location_features.end()) {
+        // WinWerth's location tolerance: its TOL/LOCTOL after it made the tolerance it is.
+        for (const auto& t : s.params)
+          if (auto zone = m_location_zones.find(upper(t.label.name));
+              is_label(t, {"T", "TA"}) && zone != m_location_zones.end() && zone->second.params.size() == 2) {
+            grammar::Statement tolerance = zone->second;
+            tolerance.params[0].text = l->second.kind;
+            tolerance.params.push_back(l->second.datum);
+            tol(tolerance);
+            break;
+          }
+        if (!check_feature(l->second.toleranced)) return false;
+        types.push_back(feature_type(upper(l->second.toleranced.label.name)));
+        in.operands.push_back(label_op(l->second.toleranced));
+        continue;
+      }
     if (is_label(p, {"F", "FA"}))
       if (auto d = m_symbols.distance_features.find(upper(p.label.name)); d != m_symbols.distance_features.end()) {
         for (const auto& f : d->second) {  // a distance feature: its two features, as written in its place

@@ -575,6 +575,14 @@ void UnitCompiler::tol(const grammar::Statement& s) {
     // is treated alike: one program's unknown tolerance must not stop the rest of it.
     static const std::set<std::string> standard = {"PROFT",  "CPARLN", "USETOL", "COMPOS", "GAP",
                                                    "PNTDEF", "CPROFS", "CPROFL", "FLUSH"};
+    if (is_word(p[0], "LOCTOL") && p.size() == 2 && !m_strict) {
+      // WinWerth's: the zone of the CONST/LOCTOL feature an OUTPUT names with it.
+      m_location_zones[upper(s.target->name)] = s;
+      m_symbols.unevaluated_tolerances[upper(s.target->name)] = p[0].text;
+      m_symbols.tolerances.erase(upper(s.target->name));
+      emit(make(Op::Nop, s, "TOL"));
+      return;
+    }
     if (is_word(p[0])) {
       warn(p[0].span, "sema.unevaluated-tolerance",
            fmt::format("tolerance type {} {}; the OUTPUT of T({}) will be left out", p[0].text,

@@ -384,6 +384,16 @@ class UnitCompiler {
   std::string m_writer;                       // grammar::Program::writer: the software that wrote the file
   bool m_circle_radius_noted = false;
   bool m_distance_features_noted = false;
+  // WinWerth's location tolerances: CONST/LOCTOL,F(x),kind,FA(datum),FA(toleranced) and
+  // T(t)=TOL/LOCTOL,zone, evaluated where OUTPUT/F(x),T(t) names them (compile/alignment.cpp).
+  struct LocationFeature {
+    std::string kind;          ///< PARLEL, PERP, CONCEN, ...
+    grammar::Expr toleranced;  ///< the feature the zone applies to
+    grammar::Expr datum;       ///< DAT(LOCTOL_x), defined on the reference feature
+  };
+  std::map<std::string, LocationFeature> m_location_features;
+  std::map<std::string, grammar::Statement> m_location_zones;  ///< T(t)=TOL/LOCTOL,zone by t
+  bool m_location_noted = false;
   int m_unlabelled_macros = 0;                   // MACRO/name without M(name)=, run in place (WinWerth)
   std::map<std::string, int> m_pushes_open;      // PUSH/word less POP/word so far in this unit's text
   std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
