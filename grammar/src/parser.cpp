@@ -133,6 +133,39 @@ std::vector<std::size_t> restore_commas_between_labels(LogicalLine& line) {
   return restored;
 }
 
+// A report's value as a DMIS output file writes it after OUTPUT/R(x): `DATE = 2026/01/01`,
+// `TIME = 07:05:05`, `PN(TEIL_NR)= '123456789'` (a label, '=', a string; no major word).
+bool report_value_line(const std::string& text) {
+  std::size_t i = 0;
+  const auto skip_blanks = [&] {
+    while (i < text.size() && is_blank(text[i])) ++i;
+  };
+  skip_blanks();
+  const std::size_t word_begin = i;
+  while (i < text.size() && (std::isalnum(static_cast<unsigned char>(text[i])) || text[i] == '_')) ++i;
+  if (i == word_begin || !std::isalpha(static_cast<unsigned char>(text[word_begin]))) return false;
+  std::string word = text.substr(word_begin, i - word_begin);
+  for (auto& c : word) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  const bool labelled = i < text.size() && text[i] == '(';
+  if (labelled) {
+    const std::size_t close = text.find(')', i);
+    if (close == std::string::npos) return false;
+    i = close + 1;
+  }
+  skip_blanks();
+  if (i >= text.size() || text[i] != '=') return false;
+  ++i;
+  skip_blanks();
+  std::size_t end = text.size();
+  while (end > i && is_blank(text[end - 1])) --end;
+  if (end <= i) return false;
+  const std::string value = text.substr(i, end - i);
+  if (labelled)  // a string and nothing else
+    return value.size() >= 2 && value.front() == '\'' && value.back() == '\'' &&
+           value.find('\'', 1) == value.size() - 1;
+  return (word == "DATE" || word == "TIME") && value.find_first_not_of("0123456789/:.- ") == std::string::npos;
+}
+
 // `word / CHFILE` (blanks around the slash, any case): where WinWerth's characterisation block
 // begins (BEGIN) or ends (END).
 bool block_word(const std::string& text, std::string_view word) {
@@ -179,6 +212,7 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
   DiagnosticSink after_endfil;  // what follows ENDFIL is reported once, by the compiler
   bool ended = false, blank_label_told = false, in_chfile = false;
   Span chfile_begin;
+  bool report_values_told = false;
   for (LogicalLine& line : join_continuations(sources.file(file).text)) {
     // WinWerth opens its programs with a characterisation block of `KEY = value` lines
     // (BEGIN / CHFILE ... END / CHFILE): settings of its own, not statements; one note.
@@ -194,6 +228,17 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
       }
       in_chfile = !block_word(line.text, "END");
       program.writer = "WinWerth";
+      continue;
+    }
+    if (!ended && !options.strict && report_value_line(line.text)) {
+      if (!report_values_told)
+        sink.report({Severity::Note,
+                     "parse.report-value",
+                     Span{file, line.physical.front(), line.physical.back() + 1},
+                     "a report's value, as a DMIS output file writes it after OUTPUT/R(x) (DATE = ..., PN(x) = '...'): "
+                     "kept as it is (noted once)",
+                     {}});
+      report_values_told = true;
       continue;
     }
     if (!ended && !options.strict && !looks_like_statement(line.text)) {

@@ -2452,6 +2452,30 @@ TEST(ShopPrograms, VectorVariablesAndTheirIntrinsics) {
 // A DMIS output file (NIST's, for the simple part) is DMIS too: each OUTPUT is followed by the
 // result lines it produced, FA(x)=FEAT and TA(x)=TOL. metron checks it without error, and a
 // stated actual can be judged against a tolerance again.
+// An output file as WENZEL Quartis writes it (written for metron in its manner): report values
+// after OUTPUT/R(x) (`DATE = ...`, `PN(x)= '...'`), a RECALL of a system the measuring program
+// had, and each item's nominal and actual stated after its own OUTPUT. It had 2 errors ("expected a
+// major word after '='"), and its run output F(P1) before its FEAT.
+TEST(ShopPrograms, OutputFilesWithReportValuesAndEachItemAfterItsOutput) {
+  const std::string text =
+      "FILNAM/'SAMPLE'\nOUTPUT/R(DAY)\nDATE = 2026/01/01\nOUTPUT/R(P1)\nPN(TEIL_NR)= '123'\n"
+      "RECALL/DA(FIXTURE)\nOUTPUT/F(P1),T(P1_X)\nF(P1)=FEAT/POINT,CART,10,20,30,0,0,1\n"
+      "T(P1_X)=TOL/CORTOL,XAXIS,-0.5,0.5\nOUTPUT/FA(P1),TA(P1_X)\nFA(P1)=FEAT/POINT,CART,10.006,20,30,0,0,1\n"
+      "TA(P1_X)=TOL/CORTOL,XAXIS,0.006,INTOL\nENDFIL\n";
+  const auto c = check(text);
+  EXPECT_EQ(c.errors + c.warnings, 0u) << c.text;
+  EXPECT_TRUE(c.has("3:1: note: a report's value, as a DMIS output file writes it")) << c.text;
+  const auto r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.diagnostics.find("warning"), std::string::npos) << r.diagnostics;
+  const auto* p1 = r.session->runtime().find_feature("P1");
+  ASSERT_TRUE(p1 && p1->actual);
+  EXPECT_NEAR(p1->actual->position.x(), 10.006, 1e-12);
+  EXPECT_TRUE(check(text, true).has("3:8: error: expected a major word after '='"));
+  // Not a report's value: a variable set without ASSIGN stays an error.
+  EXPECT_TRUE(check("DMISMN/'p', 5.1\nDECL/REAL,X\nX = 5\nENDFIL\n").has("expected a major word after '='"));
+}
+
 TEST(ShopPrograms, DmisOutputFilesCheckAndTheirActualsCanBeJudged) {
   const fs::path nist = source_dir.parent_path() / "shared" / "data" / "nist-simple-part" / "output.dms";
   if (fs::exists(nist)) {

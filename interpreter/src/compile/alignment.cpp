@@ -337,6 +337,17 @@ void UnitCompiler::recall(const grammar::Statement& s) {
     }
     return error(s.params[0].span, "sema.expected-alignment", "expected D(label) or DA(label) after RECALL/");
   }
+  if (m_output_file && !m_strict) {
+    const std::string name = upper(s.params[0].label.name);
+    if (!m_symbols.alignments.count(name) && !m_symbols.saved.count(name) && name != "MCS" && !named_at_run(name)) {
+      // An output file echoes the measuring program's RECALL of a system it does not state.
+      note_once(m_echo_noted, s.span, "sema.echoed-line",
+                "an echo of the measuring program's line: this output file does not state its coordinate system; kept "
+                "as it is");
+      emit(make(Op::Nop, s, "RECALL"));
+      return;
+    }
+  }
   if (!known_alignment(s.params[0], "RECALL")) return;
   auto in = make(Op::Recall, s);
   in.operands.push_back(label_op(s.params[0]));
@@ -672,6 +683,19 @@ bool UnitCompiler::output_labels(const grammar::Statement& s, ir::Instruction& i
     if ((feature_label || is_label(p, {"T", "TA"})) && m_reported_results.count(key) &&
         !(feature_label ? m_symbols.features.count(upper(p.label.name))
                         : m_symbols.tolerances.count(upper(p.label.name)))) {
+      ++echoed;
+      continue;
+    }
+    // An output file that writes each item's nominal and actual after its own OUTPUT (WENZEL
+    // Quartis: OUTPUT/F(x),T(t), F(x)=FEAT, T(t)=TOL, OUTPUT/FA(x),TA(t), FA(x)=FEAT, TA(t)=TOL):
+    // each OUTPUT echoes the lines stated below it.
+    const auto stated_below = [&](const std::map<std::string, Span>& where, const std::string& k) {
+      const auto it = where.find(k);
+      return it != where.end() && it->second.file == s.span.file && it->second.begin > s.span.begin;
+    };
+    if (m_output_file && (feature_label || is_label(p, {"T", "TA"})) &&
+        (stated_below(m_reported_results, key) ||
+         stated_below(feature_label ? m_later_features : m_later_tolerances, upper(p.label.name)))) {
       ++echoed;
       continue;
     }

@@ -28,6 +28,8 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
   for (const auto& s : st) {
     if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT")
       m_later_features.emplace(upper(s.target->name), s.span);
+    if (s.target && upper(s.target->prefix) == "T" && s.major == "TOL")
+      m_later_tolerances.emplace(upper(s.target->name), s.span);
     if (s.target && ((upper(s.target->prefix) == "FA" && s.major == "FEAT") ||
                      (upper(s.target->prefix) == "TA" && s.major == "TOL")))
       m_reported_results.emplace(upper(s.target->prefix) + ":" + upper(s.target->name), s.span);

@@ -394,9 +394,10 @@ class UnitCompiler {
   std::map<std::string, LocationFeature> m_location_features;
   std::map<std::string, grammar::Statement> m_location_zones;  ///< T(t)=TOL/LOCTOL,zone by t
   bool m_location_noted = false;
-  int m_unlabelled_macros = 0;                   // MACRO/name without M(name)=, run in place (WinWerth)
-  std::map<std::string, int> m_pushes_open;      // PUSH/word less POP/word so far in this unit's text
-  std::map<std::string, Span> m_later_features;  // F(label)=FEAT anywhere in this unit -> its statement
+  int m_unlabelled_macros = 0;                     // MACRO/name without M(name)=, run in place (WinWerth)
+  std::map<std::string, int> m_pushes_open;        // PUSH/word less POP/word so far in this unit's text
+  std::map<std::string, Span> m_later_features;    // F(label)=FEAT anywhere in this unit -> its statement
+  std::map<std::string, Span> m_later_tolerances;  // T(label)=TOL anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;
