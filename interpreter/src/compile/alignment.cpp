@@ -373,7 +373,7 @@ void UnitCompiler::construct(const grammar::Statement& s) {
     emit(make(Op::Nop, s, "CONST"));
     return;
   }
-  static const std::set<std::string> location_kinds = {"PARLEL", "PERP", "CONCEN", "COAXIAL", "ANGLR"};
+  static const std::set<std::string> location_kinds = {"PARLEL", "PERP", "CONCEN", "COAXIAL"};
   if (is_word(p[0], "LOCTOL") && is_label(p[1], {"F"}) && p.size() == 5 && is_word(p[2]) &&
       location_kinds.count(p[2].text) && is_label(p[3], {"F", "FA"}) && is_label(p[4], {"F", "FA"}) && !m_strict) {
     // WinWerth holds a location tolerance's result as a feature: CONST/LOCTOL,F(x),kind,FA(a),FA(b)
