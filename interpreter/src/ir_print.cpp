@@ -150,6 +150,7 @@ std::vector<std::string> payload_words(const Payload& payload) {
                  },
                  [&](const FormPayload& p) {
                    if (p.form) add(*p.form);
+                   if (p.reference_point) w.emplace_back("REFERENCE");
                  },
                  [&](const ConstructPayload& p) {
                    add(p.type);

@@ -395,6 +395,48 @@ void MeasurementRuntime::keep_failed_points(Feature& feature, const std::vector<
   feature.fit.reset();
 }
 
+// RPTMEAS (RationalDMIS, in an RMEAS ...,VECBLD block) give points of the surface around the
+// feature: they are probed first, and the block's points are then taken relative to that surface,
+// each moved by the mean deviation of the reference points along their normals (a hole's depth
+// below the top face is kept from the actual face, as a relative measurement means). The reference
+// points are not the feature's. A tilt of the surface is not followed: only its offset.
+Result<MeasBlock> MeasurementRuntime::relative_to_reference_surface(const MeasBlock& block, const Feature& feature) {
+  MeasBlock body = block;
+  body.steps.clear();
+  MeasBlock probe = block;
+  probe.steps.clear();
+  probe.plan_missing_points = false;
+  for (const auto& step : block.steps) {
+    if (step.kind != MeasStep::Kind::Reference) {
+      body.steps.push_back(step);
+      continue;
+    }
+    probe.steps.push_back(step);
+    probe.steps.back().kind = MeasStep::Kind::PtMeas;
+  }
+  if (probe.steps.empty()) return body;
+  auto plan = plan_block(probe, feature.nominal, plan_context());
+  if (!plan) return tl::unexpected(plan.error());
+  const auto execution = execute_commands(plan->commands, plan->spans);
+  if (execution.error) return tl::unexpected(*execution.error);
+  const auto taken = collect_points(*plan, execution, feature.label, block.span);
+  Vec3 shift = Vec3::Zero();
+  int counted = 0;
+  for (const auto& p : taken) {
+    if (!p.nominal_mm) continue;
+    shift += (p.surface_mm() - *p.nominal_mm).dot(p.nominal_normal) * p.nominal_normal;
+    ++counted;
+  }
+  if (counted > 0) shift /= counted;
+  for (auto& step : body.steps)
+    if (step.kind == MeasStep::Kind::PtMeas) step.point += shift;
+  note(block.span, fmt::format("{} reference point{} (RPTMEAS) probed around F({}): the surface lies {:+.4f} mm from "
+                               "its nominal, and the block's points are moved with it",
+                               counted, counted == 1 ? "" : "s", feature.label,
+                               counted > 0 ? shift.dot(taken.front().nominal_normal) : 0.0));
+  return body;
+}
+
 Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   auto it = m_features.find(block.feature);
   if (it == m_features.end())
@@ -424,11 +466,13 @@ Result<void> MeasurementRuntime::measure(const MeasBlock& block) {
   // A SNSLCT inside the block (a feature probed with several sensors) switches the sensor between
   // its points, a FEDRAT, ACLRAT or SNSET changes a setting between them: each run of steps is
   // planned and measured with what was selected and set before it.
+  auto relative = relative_to_reference_surface(block, feature);
+  if (!relative) return tl::unexpected(relative.error());
   MeasBlock empty_run = block;
   empty_run.steps.clear();
   std::vector<MeasBlock> runs(1, empty_run);
   std::vector<const MeasStep*> selections(1, nullptr);
-  for (const auto& step : block.steps) {
+  for (const auto& step : relative->steps) {
     if (step.kind == MeasStep::Kind::SelectSensor || step.kind == MeasStep::Kind::Setting) {
       runs.push_back(empty_run);
       selections.push_back(&step);

@@ -2843,6 +2843,73 @@ TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
   EXPECT_TRUE(check(program("", slow + "CALIB/SENS,S(P4),F(REFSPH),9\n")).has("F(REFSPH) is not measured"));
 }
 
+// RationalDMIS writes RMEAS/CIRCLE,F(x),n,VECBLD,r,m with the m points of the surface around the
+// hole as RPTMEAS before the hole's PTMEAS. The program below expects the default block's top face
+// at z = 40.5; the world's face is at 40 (the drawing). The three RPTMEAS, 3 mm from the edge of
+// BORE1 (diameter 20, centre 340,250 on the table), find the face 0.5 mm low, and the hole's points,
+// written 3 mm below the expected face (37.5), are taken 3 mm below the actual one: 37.0. Taken as
+// plain PTMEAS they would be at 37.5. The reference points are not the circle's: 4 points, no
+// count warning.
+TEST(ShopPrograms, RationalDmisReferencePointsMeasureTheHoleRelativeToTheFace) {
+  const std::string header =
+      "DMISMN/'rptmeas', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "SNSLCT/S(P4)\nF(C)=FEAT/CIRCLE,INNER,CART,340,250,40.5,0,0,1,20\n";
+  const std::string block =
+      "RMEAS/CIRCLE, F(C), 4, VECBLD, 3.0000, 3\n"
+      "RPTMEAS/CART, 353, 250, 40.5, 0, 0, 1\nRPTMEAS/CART, 333.5, 261.2583, 40.5, 0, 0, 1\n"
+      "RPTMEAS/CART, 333.5, 238.7417, 40.5, 0, 0, 1\nGOTO/CART, 340, 250, 45\n"
+      "PTMEAS/CART, 350, 250, 37.5, -1, 0, 0\nPTMEAS/CART, 340, 260, 37.5, 0, -1, 0\n"
+      "PTMEAS/CART, 330, 250, 37.5, 1, 0, 0\nPTMEAS/CART, 340, 240, 37.5, 0, 1, 0\nENDMES\n";
+  const std::string text = header + block + "OUTPUT/FA(C)\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_FALSE(c.has("PTMEAS")) << c.text;  // no count warning: the RPTMEAS are not the circle's points
+  const Ran r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const std::string told = "3 reference points (RPTMEAS) probed around F(C): the surface lies ";
+  const auto at = r.diagnostics.find(told);
+  ASSERT_NE(at, std::string::npos) << r.diagnostics;
+  EXPECT_NEAR(std::stod(r.diagnostics.substr(at + told.size())), -0.5, 0.01) << r.diagnostics;
+  const auto* hole = report(*r.session, "C");
+  ASSERT_TRUE(hole && hole->actual);
+  EXPECT_NEAR(hole->actual->position.z(), 37.0, 0.01);
+  EXPECT_NEAR(hole->actual->diameter_mm, 20.0, 0.01);
+  // RPTMEAS needs the surface's normal; outside a block it is a PTMEAS outside one.
+  EXPECT_TRUE(check(header + "RMEAS/CIRCLE,F(C),4,VECBLD,3,3\nRPTMEAS/CART,353,250,40.5\n" +
+                    "PTMEAS/CART,350,250,37.5,-1,0,0\nPTMEAS/CART,340,260,37.5,0,-1,0\n" +
+                    "PTMEAS/CART,330,250,37.5,1,0,0\nENDMES\nENDFIL\n")
+                  .has("RPTMEAS expects x,y,z,i,j,k"));
+  EXPECT_TRUE(check(header + "RPTMEAS/CART,353,250,40.5,0,0,1\nENDFIL\n").has("error: RPTMEAS outside a MEAS block"));
+}
+
+// A statement metron does not know inside a MEAS block is skipped as it is outside one (told once),
+// read leniently; a macro the program never defines (RationalDMIS's own EASI_ macros) is a call
+// skipped with a warning; one defined after its call is still an error, naming where. --strict
+// refuses both.
+TEST(ShopPrograms, VendorWordsInBlocksAndLibraryMacrosAreSkipped) {
+  const std::string text =
+      "DMISMN/'vendor', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "SNSLCT/S(P4)\nF(T)=FEAT/PLANE,CART,340,250,40,0,0,1\n"
+      "CALL/M(EASI_CLEARPLN_GOTO), 1, 64.0000, 55.0000, 35.0000\n"
+      "MEAS/PLANE,F(T),3\nSETMACREF/INIT\nPTMEAS/CART,320,230,40,0,0,1\nPTMEAS/CART,360,230,40,0,0,1\n"
+      "PTMEAS/CART,340,270,40,0,0,1\nENDMES\nOUTPUT/FA(T)\nENDFIL\n";
+  const Checked c = check(text);
+  EXPECT_EQ(c.errors, 0u) << c.text;
+  EXPECT_TRUE(c.has("8:1: warning: unknown statement SETMACREF is skipped")) << c.text;
+  EXPECT_TRUE(c.has("6:6: warning: macro M(EASI_CLEARPLN_GOTO) is not defined in this program")) << c.text;
+  const Ran r = run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* top = report(*r.session, "T");
+  ASSERT_TRUE(top && top->actual);
+  EXPECT_NEAR(top->actual->position.z(), 40.0, 0.01);
+  const Checked strict = check(text, true);
+  EXPECT_TRUE(strict.has("error: SETMACREF is not allowed inside a MEAS block")) << strict.text;
+  EXPECT_TRUE(strict.has("error: macro M(EASI_CLEARPLN_GOTO) is not defined before this call")) << strict.text;
+  // A typographic quote inside a function's arguments is named (text copied from a web page).
+  EXPECT_TRUE(check("DMISMN/'q', 5.0\nDECL/CHAR,20,S\nS = ASSIGN/CONCAT(\u2018ARC\u2019,'1')\nENDFIL\n")
+                  .has("\u2018 is a typographic quote"));
+}
+
 // RMEAS/type,F(l),n,FA(ref) ... ENDMES (the block form Modus writes): each PTMEAS of the block is
 // moved by the reference's deviation, as RMEAS/CART,...,FA(ref) is. In a dry run the touch lands
 // where it is commanded, so the point shows the shift: the stated reference lies (0.5, -0.2, 0)

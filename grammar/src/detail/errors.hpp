@@ -93,15 +93,25 @@ inline SyntaxError error_for(tag<rules::label_point_expr>, const Builder& b, con
 inline SyntaxError error_for(tag<rules::label_points_close>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-close", "expected ']' after the point range");
 }
+// A word processor's quote where a string starts (text copied from a document or a web page).
+inline std::string typographic_quote_hint(const Builder& b, const char* at) {
+  if (at_end(b, at)) return {};
+  const std::string_view rest(at, b.line->text.size() - b.offset(at));
+  for (const std::string_view q : {"\u2018", "\u2019", "\u201C", "\u201D", "\u00B4"})
+    if (rest.substr(0, q.size()) == q)
+      return ": " + std::string(q) + " is a typographic quote; a DMIS string is quoted with ' (an apostrophe)";
+  return {};
+}
 inline SyntaxError error_for(tag<rules::label_close>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-close", "expected ')' after the label name");
 }
 inline SyntaxError error_for(tag<rules::call_next_arg>, const Builder& b, const char* at) {
-  return expected(b, at, "parse.expected-argument", "expected an argument after ','");
+  return expected(b, at, "parse.expected-argument", "expected an argument after ','" + typographic_quote_hint(b, at));
 }
 inline SyntaxError error_for(tag<rules::call_close>, const Builder& b, const char* at) {
   if (!b.marks.empty() && b.marks.back() == b.stack.size())
-    return expected(b, at, "parse.expected-argument", "expected an argument or ')' after '" + last_ident(b) + "('");
+    return expected(b, at, "parse.expected-argument", "expected an argument or ')' after '" + last_ident(b) + "('" +
+                                    typographic_quote_hint(b, at));
   return expected(b, at, "parse.expected-close", "expected ')' after the arguments of '" + last_ident(b) + "'");
 }
 inline SyntaxError error_for(tag<rules::index_first>, const Builder& b, const char* at) {
@@ -120,15 +130,6 @@ template <typename Operand>
            std::is_same_v<Operand, rules::and_operand> || std::is_same_v<Operand, rules::or_operand>
 SyntaxError error_for(tag<Operand>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-expression", "expected an expression after '" + last_op(b) + "'");
-}
-// A word processor's quote where a string starts (text copied from a document or a web page).
-inline std::string typographic_quote_hint(const Builder& b, const char* at) {
-  if (at_end(b, at)) return {};
-  const std::string_view rest(at, b.line->text.size() - b.offset(at));
-  for (const std::string_view q : {"\u2018", "\u2019", "\u201C", "\u201D", "\u00B4"})
-    if (rest.substr(0, q.size()) == q)
-      return ": " + std::string(q) + " is a typographic quote; a DMIS string is quoted with ' (an apostrophe)";
-  return {};
 }
 inline SyntaxError error_for(tag<rules::first_param>, const Builder& b, const char* at) {
   return expected(b, at, "parse.expected-parameter", "expected a parameter after '/'" + typographic_quote_hint(b, at));

@@ -612,9 +612,24 @@ void UnitCompiler::call(const grammar::Statement& s) {
     return error(s.params[0].span, "sema.expected-macro", "expected M(name) or EXTERN after CALL/");
   const std::string name = upper(s.params[0].label.name);
   auto it = m_symbols.macros.find(name);
-  if (it == m_symbols.macros.end())
-    return error(s.params[0].span, "sema.undefined-macro",
-                 fmt::format("macro M({}) is not defined before this call", s.params[0].label.name));
+  if (it == m_symbols.macros.end()) {
+    if (const auto later = m_later_macros.find(name); later != m_later_macros.end())
+      return error(s.params[0].span, "sema.undefined-macro",
+                   fmt::format("macro M({}) is defined at line {}, after this call: a macro is defined before it is "
+                               "called",
+                               s.params[0].label.name, m_sources.locate(later->second).line));
+    if (m_strict || m_repl)
+      return error(s.params[0].span, "sema.undefined-macro",
+                   fmt::format("macro M({}) is not defined before this call", s.params[0].label.name));
+    // A macro of the CMM software's own library (RationalDMIS's EASI_ macros): the program does
+    // not hold it, so read leniently the call is skipped, as an unknown statement is.
+    warn(s.params[0].span, "sema.undefined-macro",
+         fmt::format("macro M({}) is not defined in this program (a macro of the CMM software's own library?): the "
+                     "call is skipped (--strict: an error)",
+                     s.params[0].label.name));
+    emit(make(Op::Nop, s, "CALL"));
+    return;
+  }
   const auto& macro = m_module.macros[static_cast<std::size_t>(it->second)];
   if (s.params.size() - 1 != macro.params.size())
     return error(s.params.back().span, "sema.arity",

@@ -243,7 +243,7 @@ void UnitCompiler::feat(const grammar::Statement& s) {
     ir::Expr twice;
     twice.span = size.expr.span;
     twice.op = ir::ExprOp::Binary;
-    twice.name = "*";
+    twice.name = std::string(1, '*');  // not = "*": GCC 12 warns falsely (-Wrestrict)
     twice.type = ValueType::Real;
     ir::Expr two;
     two.span = size.expr.span;

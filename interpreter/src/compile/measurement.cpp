@@ -27,6 +27,7 @@ void UnitCompiler::add_measurement(StatementTable& t) {
             {"ENDMES", &UnitCompiler::endmes},
             {"PTMEAS", &UnitCompiler::ptmeas},
             {"RMEAS", &UnitCompiler::ptmeas},
+            {"RPTMEAS", &UnitCompiler::ptmeas},
             {"PAMEAS", &UnitCompiler::pameas}});
 }
 
@@ -124,6 +125,7 @@ void UnitCompiler::snset(const grammar::Statement& s) {
       return error(s.params[i].span, "sema.missing-parameter",
                    fmt::format("expected a distance after {}", s.params[i].text));
     if (s.params[i].text == "CLRSRF" && is_label(s.params[i + 1], {"F", "FA"})) {
+      if (!check_feature(s.params[i + 1])) return;  // the run would stop here
       if (i + 2 >= s.params.size())
         return error(s.params[i + 1].span, "sema.missing-parameter",
                      "expected the clearance distance from the plane after its label");
@@ -414,7 +416,8 @@ void UnitCompiler::endmes(const grammar::Statement& s) {
 // RMEAS/type,F(l),n,FA(ref) ... ENDMES: a MEAS whose PTMEAS are taken relative to FA(ref), each
 // moved by how far the reference's actual lies from its nominal (as RMEAS/CART,...,FA(ref)).
 // RMEAS/type,F(l),n,VECBLD,r,m builds the approach from m points at radius r: it is measured as a
-// MEAS, with a note.
+// MEAS, with a note. RPTMEAS in it (RationalDMIS writes the m points so) probe the surface around
+// the feature first; the block's points are moved as far as that surface lies from its nominal.
 void UnitCompiler::rmeas_block(const grammar::Statement& s) {
   grammar::Statement as_meas = s;
   as_meas.major = "MEAS";
@@ -432,7 +435,7 @@ void UnitCompiler::rmeas_block(const grammar::Statement& s) {
        "this RMEAS names no reference feature (VECBLD builds the approach from probed points): measured as a MEAS");
 }
 
-// PTMEAS/CART,x,y,z[,i,j,k]  |  RMEAS/CART,x,y,z,i,j,k[,FA(ref)]
+// PTMEAS/CART,x,y,z[,i,j,k]  |  RMEAS/CART,x,y,z,i,j,k[,FA(ref)]  |  RPTMEAS/CART,x,y,z,i,j,k
 void UnitCompiler::ptmeas(const grammar::Statement& s) {
   if (s.major == "RMEAS" && s.params.size() >= 3 && is_label(s.params[1], {"F"})) return rmeas_block(s);
   if (m_blocks.empty() ||
@@ -441,8 +444,9 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
   if (!expect_params(s, 1, "CART or POL")) return;
   if (!is_word(s.params[0], "CART") && !is_word(s.params[0], "POL"))
     return error(s.params[0].span, "sema.expected-form", fmt::format("expected CART or POL after {}/", s.major));
+  const bool reference_point = s.major == "RPTMEAS";
   auto in = make(Op::PtMeas, s);
-  in.payload = ir::FormPayload{ir::parse_word<ir::CoordinateForm>(s.params[0].text)};
+  in.payload = ir::FormPayload{ir::parse_word<ir::CoordinateForm>(s.params[0].text), reference_point};
   std::size_t end = s.params.size();
   if (s.major == "RMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label) {
     if (!is_label(s.params[end - 1], {"FA", "F"}))
@@ -450,13 +454,16 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
     if (!check_feature(s.params[end - 1])) return;
     --end;
   }
-  if (s.major == "PTMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label)
+  if (s.major != "RMEAS" && end > 0 && s.params[end - 1].kind == ExprKind::Label)
     return error(s.params[end - 1].span, "sema.ptmeas-arity",
                  "a reference feature after the point belongs to RMEAS: RMEAS/CART,x,y,z,i,j,k,FA(ref)");
   const std::size_t n = end - 1;
   if (n != 3 && n != 6)
     return error(s.params.back().span, "sema.ptmeas-arity",
                  fmt::format("{} expects x,y,z and optionally i,j,k, got {} parameters", s.major, n));
+  if (reference_point && n != 6)
+    return error(s.params.back().span, "sema.ptmeas-arity",
+                 "RPTMEAS expects x,y,z,i,j,k: the surface's normal says where it lies");
   std::vector<double> v;
   for (std::size_t i = 1; i < end; ++i) {
     auto e = numeric(s.params[i], "a coordinate");
@@ -474,8 +481,9 @@ void UnitCompiler::ptmeas(const grammar::Statement& s) {
         std::find_if(m_blocks.rbegin(), m_blocks.rend(), [](const Block& b) { return b.kind == Block::Kind::Meas; });
     if (meas != m_blocks.rend() && meas->reference) in.operands.push_back(*meas->reference);
   }
+  // The reference points are not the feature's: the block's point count leaves them out.
   for (auto& b : m_blocks)
-    if (b.kind == Block::Kind::Meas) {
+    if (b.kind == Block::Kind::Meas && !reference_point) {
       ++b.ptmeas;
       b.last_ptmeas = s.span;
     }

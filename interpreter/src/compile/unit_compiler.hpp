@@ -398,6 +398,7 @@ class UnitCompiler {
   std::map<std::string, int> m_pushes_open;        // PUSH/word less POP/word so far in this unit's text
   std::map<std::string, Span> m_later_features;    // F(label)=FEAT anywhere in this unit -> its statement
   std::map<std::string, Span> m_later_tolerances;  // T(label)=TOL anywhere in this unit -> its statement
+  std::map<std::string, Span> m_later_macros;      // M(label)=MACRO anywhere in this unit -> its statement
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;

@@ -250,7 +250,9 @@ ExecStatus Execute::ptmeas(Interpreter& vm, const ir::Instruction& in, CallFrame
     if (!actual) return vm.from_runtime(actual.error());
     p += actual->position - nominal->position;
   }
-  vm.m_block->steps.push_back({runtime::MeasStep::Kind::PtMeas, p, n, in.span, {}, false, {}});
+  const auto kind = std::get<ir::FormPayload>(in.payload).reference_point ? runtime::MeasStep::Kind::Reference
+                                                                          : runtime::MeasStep::Kind::PtMeas;
+  vm.m_block->steps.push_back({kind, p, n, in.span, {}, false, {}});
   return ExecStatus::Running;
 }
 

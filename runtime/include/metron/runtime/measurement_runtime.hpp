@@ -305,6 +305,7 @@ class MeasurementRuntime {
   /// correction, scan samples in contact); scan logs go to the machine log.
   std::vector<MeasuredPoint> collect_points(const BlockPlan& plan, const Execution& execution,
                                             const std::string& feature, Span block_span);
+  Result<MeasBlock> relative_to_reference_surface(const MeasBlock& block, const Feature& feature);
   Result<Geometry> resolve(const FeatureRef& ref, Span span) const;  // MCS
   /// A construction's sources resolved (MCS), and the earliest of their Feature::rests_on_s.
   struct ResolvedSources {

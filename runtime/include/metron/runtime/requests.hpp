@@ -56,7 +56,9 @@ struct FeatureRef {
 struct MeasStep {
   /// SelectSensor: a SNSLCT inside the block; the points after it are taken with that sensor.
   /// Setting: a FEDRAT, ACLRAT or SNSET inside the block; the points after it are taken with it.
-  enum class Kind { GoTo, PtMeas, Scan, SelectSensor, Setting } kind = Kind::PtMeas;
+  /// Reference: an RPTMEAS, a point of the surface around the feature (RMEAS ...,VECBLD): the
+  /// block's reference points are probed first, and its PtMeas moved by the surface's deviation.
+  enum class Kind { GoTo, PtMeas, Scan, SelectSensor, Setting, Reference } kind = Kind::PtMeas;
   Vec3 point = Vec3::Zero();
   std::optional<Vec3> normal;  ///< PTMEAS i,j,k (approach side); nullopt = from the nominal
   Span span;

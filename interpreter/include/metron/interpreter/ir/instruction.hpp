@@ -129,6 +129,9 @@ struct FeedPayload {
 /// GOTO and PTMEAS/RMEAS: how the coordinates are given (GOTO may leave it implicit: CART).
 struct FormPayload {
   std::optional<CoordinateForm> form;
+  /// RPTMEAS (RationalDMIS, in an RMEAS ...,VECBLD block): a point of the surface around the
+  /// feature, probed before the block's points to find where that surface lies.
+  bool reference_point = false;
 };
 /// CONST: the constructed type and the method.
 struct ConstructPayload {
