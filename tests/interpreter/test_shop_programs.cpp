@@ -2905,6 +2905,10 @@ TEST(ShopPrograms, VendorWordsInBlocksAndLibraryMacrosAreSkipped) {
   const Checked strict = check(text, true);
   EXPECT_TRUE(strict.has("error: SETMACREF is not allowed inside a MEAS block")) << strict.text;
   EXPECT_TRUE(strict.has("error: macro M(EASI_CLEARPLN_GOTO) is not defined before this call")) << strict.text;
+  // A VFORM layout of an output device is CMM software's own: noted, the file is DMIS output.
+  EXPECT_TRUE(check("DMISMN/'v', 5.0\nV(F)=VFORM/ALL\nDID(X)=DEVICE/STOR,'x.xls'\n"
+                    "OPEN/DID(X),FDATA,V(F),OUTPUT,APPEND\nCLOSE/DID(X)\nENDFIL\n")
+                  .has("note: the layout V(F) (VFORM) is not applied: DID(X) gets a DMIS output file"));
   // A typographic quote inside a function's arguments is named (text copied from a web page).
   EXPECT_TRUE(check("DMISMN/'q', 5.0\nDECL/CHAR,20,S\nS = ASSIGN/CONCAT(\u2018ARC\u2019,'1')\nENDFIL\n")
                   .has("\u2018 is a typographic quote"));

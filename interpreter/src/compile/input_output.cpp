@@ -547,8 +547,19 @@ void UnitCompiler::open(const grammar::Statement& s) {
   }
   auto in = make(Op::DeviceOpen, s);
   in.operands.push_back(label_op(s.params[0]));
-  for (const auto& p : s.params)
+  bool input = false;
+  for (const auto& p : s.params) {
     if (is_word(p, "INPUT") || is_word(p, "DIRECT")) in.operands.push_back(word_operand(p));
+    input = input || is_word(p, "INPUT");
+  }
+  // A VFORM layout (V(x)=VFORM/ALL, a spreadsheet's columns) is CMM software's own: metron writes
+  // the device as a DMIS output file, and says so rather than write another layout unasked.
+  for (const auto& p : s.params)
+    if (!input && is_label(p, {"V"}))
+      note(p.span, "sema.vform",
+           fmt::format("the layout V({}) (VFORM) is not applied: DID({}) gets a DMIS output file, as "
+                       "OPEN/...,FDATA,DMIS writes it",
+                       p.label.name, s.params[0].label.name));
   emit(std::move(in));
 }
 
