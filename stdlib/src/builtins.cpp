@@ -147,6 +147,9 @@ const std::vector<Builtin>& builtins() {
       {"SMODE", 0, 0, ValueType::String, false},
       {"SCFEAT", 0, 0, ValueType::String, false},
       {"SERROR", 0, 0, ValueType::String, false},
+      // SCDAT(): the label of the current coordinate system ('MCS' before any), as RationalDMIS's
+      // macros read it to RECALL/D(@label) it again (read as SCSNS's sibling: no public text found).
+      {"SCDAT", 0, 0, ValueType::String, false},
       // QTEMP(sensor): a temperature, C (the machine's thermometer; a number or a name).
       {"QTEMP", 0, 1, ValueType::Real, true},
       // Vectors (DMIS 5.3 6.5, DECL/VECTOR): built from components (VCART x,y,z; VPOL r,a,h as

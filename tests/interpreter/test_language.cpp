@@ -270,6 +270,17 @@ TEST(Language, CurrentSensorModeAndFeatureAreStrings) {
   EXPECT_EQ(r.texts, (std::vector<std::string>{"[] [] AUTO", "PROBE4 BORE1 PROG,MAN", "MID MAN"}));
 }
 
+// SCDAT(): the current coordinate system's label, which RationalDMIS's macros keep to give the
+// system back after their own (DECL/CHAR,40,SD; SD=ASSIGN/SCDAT(); ...; RECALL/D(@SD)).
+TEST(Language, CurrentCoordinateSystemIsAStringToRecall) {
+  auto r =
+      run("DECL/CHAR, 40, SD\nTEXT/OPER, SCDAT()\nD(PART) = TRANS/XORIG, 300, YORIG, 200, ZORIG, 0\n"
+          "SD = ASSIGN/SCDAT()\nD(OTHER) = TRANS/XORIG, 10, YORIG, 0, ZORIG, 0\nTEXT/OPER, SCDAT()\n"
+          "RECALL/D(@SD)\nTEXT/OPER, SCDAT()\n");
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  EXPECT_EQ(r.texts, (std::vector<std::string>{"MCS", "OTHER", "PART"}));
+}
+
 // VALUE/SNSET,word and VALUE/FEDRAT,word answer the setting in force (a program saves it to set it
 // back), VALUE/SNSLCT the selected sensor; before, each was "not answered" and the variable kept
 // its value. SNSET distances in the program's length unit, feeds in mm/s.

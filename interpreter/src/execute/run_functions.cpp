@@ -181,6 +181,7 @@ std::optional<tl::expected<Value, std::string>> Interpreter::run_function(const 
   }
   if (name == "SCSNS") return Value::string(m_runtime.active_sensor());
   if (name == "SCFEAT") return Value::string(m_current_feature);
+  if (name == "SCDAT") return Value::string(m_runtime.alignment().label);
   if (name == "SERROR") {
     // The last machine fault the run went on after (ERROR/..., BADTST/ON), by ERROR's condition
     // words where it has one; '' before any.
