@@ -2905,6 +2905,9 @@ TEST(ShopPrograms, VendorWordsInBlocksAndLibraryMacrosAreSkipped) {
   const Checked strict = check(text, true);
   EXPECT_TRUE(strict.has("error: SETMACREF is not allowed inside a MEAS block")) << strict.text;
   EXPECT_TRUE(strict.has("error: macro M(EASI_CLEARPLN_GOTO) is not defined before this call")) << strict.text;
+  // A clearance plane the program never defines is told at check, where the run would stop.
+  EXPECT_TRUE(check("DMISMN/'c', 5.0\nSNSET/CLRSRF, FA(PLN2), 20.0000\nENDFIL\n")
+                  .has("2:15: warning: feature FA(PLN2) is not defined in this program"));
   // A VFORM layout of an output device is CMM software's own: noted, the file is DMIS output.
   EXPECT_TRUE(check("DMISMN/'v', 5.0\nV(F)=VFORM/ALL\nDID(X)=DEVICE/STOR,'x.xls'\n"
                     "OPEN/DID(X),FDATA,V(F),OUTPUT,APPEND\nCLOSE/DID(X)\nENDFIL\n")
