@@ -33,6 +33,32 @@ static_assert(std::is_sorted(label_prefixes.begin(), label_prefixes.end()));
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
+// The label a line defines (`DID(xls) = DEVICE/...` gives "DID(XLS)"), read from its text alone, for
+// a line the parser could not read; an actual's prefix is read as its nominal's (FA as F).
+std::optional<std::string> defined_label(std::string_view text) {
+  std::size_t i = 0;
+  const auto skip_blanks = [&] {
+    while (i < text.size() && is_blank(text[i])) ++i;
+  };
+  skip_blanks();
+  std::string prefix;
+  while (i < text.size() && std::isalpha(static_cast<unsigned char>(text[i])))
+    prefix += static_cast<char>(std::toupper(static_cast<unsigned char>(text[i++])));
+  skip_blanks();
+  if (prefix.empty() || i >= text.size() || text[i] != '(') return std::nullopt;
+  const std::size_t close = text.find(')', i);
+  if (close == std::string_view::npos) return std::nullopt;
+  std::string name;
+  for (std::size_t k = i + 1; k < close; ++k)
+    if (!is_blank(text[k])) name += static_cast<char>(std::toupper(static_cast<unsigned char>(text[k])));
+  i = close + 1;
+  skip_blanks();
+  if (name.empty() || i >= text.size() || text[i] != '=') return std::nullopt;
+  if (prefix.size() == 2 && prefix[1] == 'A' && std::string_view("FDTS").find(prefix[0]) != std::string_view::npos)
+    prefix.pop_back();
+  return prefix + "(" + name + ")";
+}
+
 // Parses one logical line; returns false after reporting a syntax error.
 bool parse_line(const LogicalLine& line, std::uint32_t file, DiagnosticSink& sink, Statement& out, bool lenient,
                 bool& blank_label_told) {
@@ -270,6 +296,8 @@ Program parse_program(const SourceManager& sources, std::uint32_t file, Diagnost
     if (parse_line(line, file, ended ? after_endfil : sink, stmt, !options.strict, blank_label_told)) {
       if (stmt.major == "ENDFIL") ended = true;
       program.statements.push_back(std::move(stmt));
+    } else if (auto label = defined_label(line.text)) {
+      program.unread_definitions.emplace(*label, Span{file, line.physical.front(), line.physical.back() + 1});
     }
   }
   // A block never closed took the rest of the file with it: the program would measure nothing.

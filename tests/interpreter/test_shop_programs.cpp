@@ -2912,6 +2912,16 @@ TEST(ShopPrograms, VendorWordsInBlocksAndLibraryMacrosAreSkipped) {
   EXPECT_TRUE(check("DMISMN/'v', 5.0\nV(F)=VFORM/ALL\nDID(X)=DEVICE/STOR,'x.xls'\n"
                     "OPEN/DID(X),FDATA,V(F),OUTPUT,APPEND\nCLOSE/DID(X)\nENDFIL\n")
                   .has("note: the layout V(F) (VFORM) is not applied: DID(X) gets a DMIS output file"));
+  // A definition the parser could not read is one error: the uses of its label after it are notes
+  // that point at it (before, each was an error of its own: 3 for one fault).
+  const Checked unread = check(
+      "DMISMN/'u', 5.0\nDID(xls) = DEVICE/STOR,\u2018d:\\aaa.xls\u2019\nOPEN/DID(xls),FDATA,DMIS,OUTPUT\n"
+      "CLOSE/DID(XLS)\nF(C)=FEAT/CIRCLE,INNER,CART,1,2,\nOUTPUT/FA(C)\nENDFIL\n");
+  EXPECT_EQ(unread.errors, 2u) << unread.text;
+  EXPECT_TRUE(unread.has("3:6: note: device DID(xls) is not defined: its definition at line 2 could not be read"))
+      << unread.text;
+  EXPECT_TRUE(unread.has("4:7: note: device DID(XLS) is not defined: its definition at line 2")) << unread.text;
+  EXPECT_TRUE(unread.has("its definition at line 5 could not be read")) << unread.text;
   // A typographic quote inside a function's arguments is named (text copied from a web page).
   EXPECT_TRUE(check("DMISMN/'q', 5.0\nDECL/CHAR,20,S\nS = ASSIGN/CONCAT(\u2018ARC\u2019,'1')\nENDFIL\n")
                   .has("\u2018 is a typographic quote"));
@@ -3015,7 +3025,18 @@ TEST(ShopPrograms, TextQueryReadsTheAnswerIntoItsVariable) {
   ASSERT_EQ(texts.size(), 2u);
   EXPECT_EQ(texts[0], "SN=SN123");
   EXPECT_EQ(std::stod(texts[1]), 43.0);
-  const Checked bad = check("DMISMN/'q', 5.0\nTEXT/QUERY,(NOPE),20,AN,L,'x'\nENDFIL\n");
+  // A variable never declared (a tutorial's line on its own) is declared CHAR by the query, read
+  // leniently; --strict names the DECL to add. Another first parameter is not a variable at all.
+  const std::string undeclared =
+      "DMISMN/'q', 5.0\nTEXT/QUERY,(NMVAR),20,A,L,'Write your name'\nTEXT/OPER,NMVAR\nENDFIL\n";
+  const Checked lenient = check(undeclared);
+  EXPECT_EQ(lenient.errors, 0u) << lenient.text;
+  EXPECT_TRUE(lenient.has("warning: variable NMVAR is not declared: this TEXT/QUERY declares it CHAR")) << lenient.text;
+  const auto named = run(undeclared, std::nullopt, {"Ada"});
+  ASSERT_EQ(named.status, ExecStatus::Finished) << named.diagnostics;
+  EXPECT_EQ(texts_of(*named.session), std::vector<std::string>{"Ada"});
+  EXPECT_TRUE(check(undeclared, true).has("error: variable NMVAR is not declared: add DECL/CHAR,20,NMVAR first"));
+  const Checked bad = check("DMISMN/'q', 5.0\nTEXT/QUERY,('x'),20,AN,L,'x'\nENDFIL\n");
   EXPECT_TRUE(bad.has("TEXT/QUERY takes the variable that receives the answer")) << bad.text;
 }
 

@@ -52,7 +52,9 @@ const NotedWord noted_words[] = {
     {"WINDEF", "WINDEF: the virtual CMM has no vision sensor to window"},
     {"FILDEF", "FILDEF: the virtual CMM has no vision sensor to filter"},
     {"ALGDEF", "ALGDEF: the vendor's algorithms it names (SNSET/VA) are not run; GEOALG chooses metron's fits"},
-    {"CROSCL", "CROSCL: the virtual CMM has no vision sensor to scale"},
+    // CROSCL/ON|OFF (DMIS SIR 96-5, "CrossCenterLine"): whether the sensor may pass the centre of a
+    // rotary axis on a machine of two linear axes and one rotary.
+    {"CROSCL", "CROSCL: the virtual CMM has no rotary axis whose centre line the sensor could cross"},
     {"BOUND", "BOUND: features are not bounded by other features; each is fitted and reported over its own points"},
     {"PSTHRU", "PSTHRU: its text is for a real controller; the virtual CMM has none to pass it to"},
     {"CUTCOM", "CUTCOM: a CMM has no cutter to compensate"},
@@ -476,6 +478,15 @@ void UnitCompiler::text(const grammar::Statement& s) {
 void UnitCompiler::text_query(const grammar::Statement& s) {
   const grammar::Expr* v = &s.params[1];
   if (v->kind == ExprKind::Paren && !v->args.empty()) v = &v->args[0];
+  if (v->kind == ExprKind::Word && !is_variable(v->text)) {
+    // The form is right, the variable was never declared (a tutorial's line on its own).
+    if (m_strict)
+      return error(v->span, "sema.undeclared-variable",
+                   fmt::format("variable {} is not declared: add DECL/CHAR,20,{} first", v->text, v->text));
+    warn(v->span, "sema.undeclared-variable",
+         fmt::format("variable {} is not declared: this TEXT/QUERY declares it CHAR (--strict: an error)", v->text));
+    declare_implicitly(v->text, ValueType::String, v->span, s);
+  }
   if (v->kind != ExprKind::Word || !is_variable(v->text))
     return error(s.params[1].span, "sema.text-query",
                  "TEXT/QUERY takes the variable that receives the answer: TEXT/QUERY,(V),20,AN,L,'question'");

@@ -24,6 +24,7 @@ void UnitCompiler::compile(const grammar::Program& program, bool repl) {
       warn(Span{program.file, 0, 0}, "sema.empty-program",
            "the program has no statements: it does not start with DMISMN nor end with ENDFIL, and measures nothing");
   }
+  m_unread_definitions = program.unread_definitions;
   // Features defined anywhere in this unit: a use before its FEAT says where the definition is.
   for (const auto& s : st) {
     if (s.target && upper(s.target->prefix) == "F" && s.major == "FEAT")
@@ -334,6 +335,25 @@ const StatementTable& UnitCompiler::statements() {
 }
 
 // A vendor or unsupported statement: warn and skip; remember labels it would have defined.
+std::optional<std::string> UnitCompiler::unread_definition_of(Span span, std::string_view code) const {
+  if (m_unread_definitions.empty() || code.find("undefined") == std::string_view::npos || !span.valid())
+    return std::nullopt;
+  const std::string& text = m_sources.file(span.file).text;
+  if (span.end > text.size() || span.begin >= span.end) return std::nullopt;
+  // The label as the parser keys it: upper case, no blanks, an actual's prefix as its nominal's.
+  std::string label;
+  for (std::uint32_t k = span.begin; k < span.end; ++k)
+    if (text[k] != ' ' && text[k] != '\t')
+      label += static_cast<char>(std::toupper(static_cast<unsigned char>(text[k])));
+  if (const auto open = label.find('(');
+      open == 2 && label[1] == 'A' && std::string_view("FDTS").find(label[0]) != std::string_view::npos)
+    label.erase(1, 1);
+  const auto it = m_unread_definitions.find(label);
+  if (it == m_unread_definitions.end()) return std::nullopt;
+  return fmt::format("its definition at line {} could not be read (the error there is the one to fix)",
+                     m_sources.locate(it->second).line);
+}
+
 void UnitCompiler::unknown(const grammar::Statement& s) {
   // Told once per word (a vendor's statement, WinWerth's PIEZOWFP, stands before every block);
   // --strict tells each.

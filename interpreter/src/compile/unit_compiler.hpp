@@ -105,8 +105,19 @@ class UnitCompiler {
   };
 
   // ---- diagnostics --------------------------------------------------------------------------
-  void error(Span span, const char* code, std::string message) { m_sink.error(code, span, std::move(message)); }
-  void warn(Span span, const char* code, std::string message) { m_sink.warning(code, span, std::move(message)); }
+  void error(Span span, const char* code, std::string message) {
+    if (auto unread = unread_definition_of(span, code))
+      return note(span, code, fmt::format("{}: {}", message, *unread));
+    m_sink.error(code, span, std::move(message));
+  }
+  /// For an error that a label is not defined, where a line the parser could not read defined it:
+  /// what to say instead (the error at that line is the one to fix).
+  [[nodiscard]] std::optional<std::string> unread_definition_of(Span span, std::string_view code) const;
+  void warn(Span span, const char* code, std::string message) {
+    if (auto unread = unread_definition_of(span, code))
+      return note(span, code, fmt::format("{}: {}", message, *unread));
+    m_sink.warning(code, span, std::move(message));
+  }
   void note(Span span, const char* code, std::string message) {
     m_sink.report({Severity::Note, code, span, std::move(message), {}});
   }  /// One note per unit for what `noted` stands for (the later statements of the kind are quiet).
@@ -394,11 +405,12 @@ class UnitCompiler {
   std::map<std::string, LocationFeature> m_location_features;
   std::map<std::string, grammar::Statement> m_location_zones;  ///< T(t)=TOL/LOCTOL,zone by t
   bool m_location_noted = false;
-  int m_unlabelled_macros = 0;                     // MACRO/name without M(name)=, run in place (WinWerth)
-  std::map<std::string, int> m_pushes_open;        // PUSH/word less POP/word so far in this unit's text
-  std::map<std::string, Span> m_later_features;    // F(label)=FEAT anywhere in this unit -> its statement
-  std::map<std::string, Span> m_later_tolerances;  // T(label)=TOL anywhere in this unit -> its statement
-  std::map<std::string, Span> m_later_macros;      // M(label)=MACRO anywhere in this unit -> its statement
+  int m_unlabelled_macros = 0;                       // MACRO/name without M(name)=, run in place (WinWerth)
+  std::map<std::string, int> m_pushes_open;          // PUSH/word less POP/word so far in this unit's text
+  std::map<std::string, Span> m_later_features;      // F(label)=FEAT anywhere in this unit -> its statement
+  std::map<std::string, Span> m_later_tolerances;    // T(label)=TOL anywhere in this unit -> its statement
+  std::map<std::string, Span> m_later_macros;        // M(label)=MACRO anywhere in this unit -> its statement
+  std::map<std::string, Span> m_unread_definitions;  // Program::unread_definitions
   /// FA(label)=FEAT and TA(label)=TOL anywhere in this unit (the result lines of a DMIS output
   /// file): "FA:label" / "TA:label" -> the statement. An OUTPUT before them echoes them.
   std::map<std::string, Span> m_reported_results;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -71,6 +72,10 @@ struct Program {
   /// The software that wrote the file, where the file says so in a way metron reads ("WinWerth":
   /// its BEGIN/CHFILE block); empty otherwise.
   std::string writer;
+  /// The labels that lines the parser could not read were defining (`DID(XLS)`, upper case, the
+  /// actual's prefix read as the nominal's: FA as F), each with its line: a later use of one is
+  /// told as following from that error, not as an error of its own.
+  std::map<std::string, Span> unread_definitions;
 };
 
 }  // namespace metron::grammar
