@@ -2882,11 +2882,12 @@ TEST(ShopPrograms, RationalDmisReferencePointsMeasureTheHoleRelativeToTheFace) {
   EXPECT_TRUE(check(header + "RPTMEAS/CART,353,250,40.5,0,0,1\nENDFIL\n").has("error: RPTMEAS outside a MEAS block"));
 }
 
-// A statement metron does not know inside a MEAS block is skipped as it is outside one (told once),
-// read leniently; a macro the program never defines (RationalDMIS's own EASI_ macros) is a call
-// skipped with a warning; one defined after its call is still an error, naming where. --strict
-// refuses both.
-TEST(ShopPrograms, VendorWordsInBlocksAndLibraryMacrosAreSkipped) {
+// What RationalDMIS users' programs and tutorials hold (CSDN and fangzhenxiu.com pages): a statement
+// metron does not know inside a MEAS block is skipped as it is outside one (told once), read
+// leniently; a macro the program never defines (RationalDMIS's own EASI_ macros) is a call skipped
+// with a warning, one defined after its call is still an error naming where; and the forms below.
+// --strict refuses each.
+TEST(ShopPrograms, RationalDmisShopFormsAreReadLeniently) {
   const std::string text =
       "DMISMN/'vendor', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
       "SNSLCT/S(P4)\nF(T)=FEAT/PLANE,CART,340,250,40,0,0,1\n"
@@ -2922,6 +2923,16 @@ TEST(ShopPrograms, VendorWordsInBlocksAndLibraryMacrosAreSkipped) {
       << unread.text;
   EXPECT_TRUE(unread.has("4:7: note: device DID(XLS) is not defined: its definition at line 2")) << unread.text;
   EXPECT_TRUE(unread.has("its definition at line 5 could not be read")) << unread.text;
+  // A loop counter never declared is declared by its DO; a rotary table's speed is noted.
+  const std::string loop = "DMISMN/'d', 5.0\nFEDRAT/ROTVEL,RPM,2\nDO/II,1,3\nTEXT/OPER,STR(II)\nENDDO\nENDFIL\n";
+  const Checked looped = check(loop);
+  EXPECT_EQ(looped.errors, 0u) << looped.text;
+  EXPECT_TRUE(looped.has("warning: the DO variable II is not declared: this DO declares it INTGR")) << looped.text;
+  EXPECT_TRUE(looped.has("note: FEDRAT/ROTVEL: the virtual CMM has no rotary table")) << looped.text;
+  const auto counted = run(loop);
+  ASSERT_EQ(counted.status, ExecStatus::Finished) << counted.diagnostics;
+  EXPECT_EQ(texts_of(*counted.session), (std::vector<std::string>{"1", "2", "3"}));
+  EXPECT_TRUE(check(loop, true).has("error: the DO variable II is not declared"));
   // A typographic quote inside a function's arguments is named (text copied from a web page).
   EXPECT_TRUE(check("DMISMN/'q', 5.0\nDECL/CHAR,20,S\nS = ASSIGN/CONCAT(\u2018ARC\u2019,'1')\nENDFIL\n")
                   .has("\u2018 is a typographic quote"));

@@ -487,6 +487,12 @@ void UnitCompiler::do_(const grammar::Statement& s) {
     return error(s.params.empty() ? s.major_span : s.params.back().span, "sema.do",
                  "DO expects a variable, a start, an end and optionally a step");
   const auto& v = s.params[0];
+  if (v.kind == ExprKind::Word && !is_variable(v.text) && !m_strict) {
+    // A loop counter never declared (a tutorial's DO/I,1,5): read leniently, the DO declares it.
+    warn(v.span, "sema.undeclared-variable",
+         fmt::format("the DO variable {} is not declared: this DO declares it INTGR (--strict: an error)", v.text));
+    declare_implicitly(v.text, ValueType::Integer, v.span, s);
+  }
   if (v.kind != ExprKind::Word || !is_variable(v.text))
     return error(v.span, "sema.undeclared-variable",
                  fmt::format("the DO variable {} is not declared: add DECL/INTGR,{}", v.text, v.text));

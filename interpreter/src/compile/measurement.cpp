@@ -182,6 +182,14 @@ void UnitCompiler::fedrat(const grammar::Statement& s) {
   }
   if (!expect_params(s, 3, "MESVEL|POSVEL, a unit (MPM, MMPS, IPM, IPS, PCENT) and a value")) return;
   const auto kind = is_word(s.params[0]) ? ir::parse_word<ir::FeedKind>(s.params[0].text) : std::nullopt;
+  if (is_word(s.params[0], "ROTVEL")) {
+    // FEDRAT/ROTVEL,RPM,n (DMIS SIR 97-63): a rotary table's speed.
+    if (m_noted_kinds.insert("FEDRAT/ROTVEL").second)
+      note(s.params[0].span, "sema.rotary-table",
+           "FEDRAT/ROTVEL: the virtual CMM has no rotary table to turn (noted once)");
+    emit(make(Op::Nop, s, "FEDRAT"));
+    return;
+  }
   if (is_word(s.params[0]) && !kind) {
     warn(s.params[0].span, "sema.unsupported-setting",
          fmt::format("FEDRAT/{} is not supported and is ignored", s.params[0].text));
