@@ -496,6 +496,15 @@ void UnitCompiler::do_(const grammar::Statement& s) {
   if (v.kind != ExprKind::Word || !is_variable(v.text))
     return error(v.span, "sema.undeclared-variable",
                  fmt::format("the DO variable {} is not declared: add DECL/INTGR,{}", v.text, v.text));
+  const SymbolTable::VariableInfo* info = nullptr;
+  if (auto it = m_locals.find(v.text); it != m_locals.end())
+    info = &it->second;
+  else if (auto jt = m_symbols.variables.find(v.text); jt != m_symbols.variables.end())
+    info = &jt->second;
+  if (info && info->type != ValueType::Integer && info->type != ValueType::Real)
+    return error(v.span, "sema.do",
+                 fmt::format("the DO variable {} is {}: a DO counts with a number (DECL/INTGR,{})", v.text,
+                             declared_word(info->type), v.text));
   auto in = make(Op::DoInit, s, v.text);
   for (std::size_t i = 1; i < s.params.size(); ++i) {
     auto e = numeric(s.params[i], "a loop bound");
