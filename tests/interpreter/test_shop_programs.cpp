@@ -4018,7 +4018,7 @@ TEST(ShopPrograms, ReconstructedShopProgramsCheckCleanAndRunToTheEnd) {
     const auto r = run(text, source_dir / "programs/worlds/probe_library.json");
     EXPECT_EQ(r.status, ExecStatus::Finished) << entry.path() << "\n" << r.diagnostics;
   }
-  EXPECT_EQ(seen, 9);
+  EXPECT_EQ(seen, 10);
 }
 
 // What WinWerth writes (programs/real/winwerth_style_plate.dmi, written for metron in its manner):
