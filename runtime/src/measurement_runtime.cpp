@@ -755,9 +755,42 @@ Result<void> MeasurementRuntime::define_datum(const FeatureRef& ref, const std::
   return {};
 }
 
-void MeasurementRuntime::set_alignment(const std::string& label, const Frame& frame, double rests_on_s) {
-  m_alignment = Alignment{label, frame, rests_on_s};
+void MeasurementRuntime::set_alignment(const std::string& label, const Frame& frame, double rests_on_s,
+                                       const Frame& nominal_motion) {
+  const Frame placement = nominal_motion * m_alignment.nominal_placement;
+  move_nominals(nominal_motion);
+  m_alignment = Alignment{label, frame, rests_on_s, placement};
   m_alignments[label] = m_alignment;
+}
+
+// A system built on measured features carries the nominals written before it onto the part, as
+// its nominal frame (the same statement on the features' nominals) lies to its actual frame; the
+// nominals written in it are placed through it as they are written. A feature reported in such a
+// system then shows its deviation from where the drawing puts it relative to those features, not
+// where the part happened to lie (docs/alignments.md).
+// What an earlier set-up measured (before an operator stop, not yet carried into this set-up by
+// EQUATE) keeps its nominal with its actual: the part has been moved since.
+void MeasurementRuntime::move_nominals(const Frame& motion) {
+  if (motion.isApprox(Frame::Identity(), 1e-15)) return;
+  const auto group = [&](std::size_t setup) {
+    return setup < m_setup_carried_to.size() ? m_setup_carried_to[setup] : setup;
+  };
+  const auto in_this_setup = [&](double rests_on_s) {
+    if (!std::isfinite(rests_on_s)) return true;
+    const auto taken = static_cast<std::size_t>(std::count_if(m_operator_stops_s.begin(), m_operator_stops_s.end(),
+                                                              [&](double stop) { return stop < rests_on_s; }));
+    return group(taken) == group(m_operator_stops_s.size());
+  };
+  for (auto& [label, f] : m_features) {
+    if (f.actual && !in_this_setup(f.rests_on_s)) continue;
+    f.nominal = to_machine(f.nominal, motion);
+    f.nominal_frame = motion * f.nominal_frame;
+  }
+  for (auto& [label, d] : m_datums) {
+    if (!in_this_setup(d.rests_on_s)) continue;
+    d.nominal = to_machine(d.nominal, motion);
+    d.nominal_frame = motion * d.nominal_frame;
+  }
 }
 
 Result<MeasurementRuntime::ResolvedSources> MeasurementRuntime::resolve_sources(const std::vector<FeatureRef>& sources,
@@ -781,28 +814,35 @@ double MeasurementRuntime::rests_on_s(const FeatureRef& ref) const {
 Result<void> MeasurementRuntime::datset(const std::string& label, const DatsetRequest& request, Span span) {
   double rests_on = std::numeric_limits<double>::infinity();
   if (request.mcs) {
-    set_alignment(label, Frame::Identity(), rests_on);
+    // The machine's own system: the nominals go back to where they were written.
+    set_alignment(label, Frame::Identity(), rests_on, m_alignment.nominal_placement.inverse());
     return {};
   }
   // The frame rests on the features written here (not on the alignment it replaces: a DATSET of a
-  // new set-up is made while the last set-up's alignment is current).
-  std::vector<DatsetClause> clauses;
+  // new set-up is made while the last set-up's alignment is current). The nominal frame is the
+  // same statement on their nominals.
+  std::vector<DatsetClause> clauses, nominal_clauses;
   for (const auto& c : request.clauses) {
     if (c.feature) {
       auto g = resolve(*c.feature, span);
       if (!g) return tl::unexpected(g.error());
+      auto n = resolve(FeatureRef{c.feature->label, false}, span);
+      if (!n) return tl::unexpected(n.error());
       clauses.push_back({*g, c.direction, c.minus, c.origins});
+      nominal_clauses.push_back({*n, c.direction, c.minus, c.origins});
       rests_on = std::min(rests_on, rests_on_s(*c.feature));
       continue;
     }
     auto d = datum(c.datum, span);
     if (!d) return tl::unexpected(d.error());
     clauses.push_back({(*d)->geometry, c.direction, c.minus, c.origins});
+    nominal_clauses.push_back({(*d)->nominal, c.direction, c.minus, c.origins});
     rests_on = std::min(rests_on, (*d)->rests_on_s);
   }
   auto frame = runtime::datset(m_alignment.part_to_machine, clauses);
   if (!frame) return program_error(span, frame.error());
-  set_alignment(label, *frame, rests_on);
+  const auto nominal_frame = runtime::datset(m_alignment.part_to_machine, nominal_clauses);
+  set_alignment(label, *frame, rests_on, nominal_frame ? Frame(*frame * nominal_frame->inverse()) : Frame::Identity());
   return {};
 }
 
@@ -822,21 +862,26 @@ Result<void> MeasurementRuntime::set_clearance_surface(const FeatureRef& plane, 
 }
 
 Result<void> MeasurementRuntime::trans(const std::string& label, const TransRequest& request, Span span) {
-  std::optional<double> origin[3];
+  std::optional<double> origin[3], nominal_origin[3];
   // Moved by numbers only, the frame rests on what the current one rests on; moved to features,
-  // on those.
+  // on those. The nominal frame is moved to the features' nominals.
   double rests_on = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 3; ++k) {
-    if (request.value[k]) origin[k] = request.value[k];
+    if (request.value[k]) origin[k] = nominal_origin[k] = request.value[k];
     if (request.feature[k]) {
       auto g = resolve(*request.feature[k], span);
       if (!g) return tl::unexpected(g.error());
+      auto n = resolve(FeatureRef{request.feature[k]->label, false}, span);
+      if (!n) return tl::unexpected(n.error());
       origin[k] = m_alignment.to_part_point(g->position)[k];
+      nominal_origin[k] = m_alignment.to_part_point(n->position)[k];
       rests_on = std::min(rests_on, rests_on_s(*request.feature[k]));
     }
   }
   if (std::isinf(rests_on)) rests_on = m_alignment.rests_on_s;
-  set_alignment(label, translate_origin(m_alignment.part_to_machine, origin), rests_on);
+  const Frame frame = translate_origin(m_alignment.part_to_machine, origin);
+  set_alignment(label, frame, rests_on,
+                frame * translate_origin(m_alignment.part_to_machine, nominal_origin).inverse());
   return {};
 }
 
@@ -849,12 +894,16 @@ Result<void> MeasurementRuntime::rotate(const std::string& label, const RotateRe
   if (!request.feature) return program_error(span, "ROTATE needs an angle or a feature");
   auto g = resolve(*request.feature, span);
   if (!g) return tl::unexpected(g.error());
+  auto n = resolve(FeatureRef{request.feature->label, false}, span);
+  if (!n) return tl::unexpected(n.error());
   // Turning d onto -X is turning -d onto +X.
-  const Vec3 direction = request.align_negative ? Vec3(-g->direction) : g->direction;
-  auto frame = rotate_to(m_alignment.part_to_machine, request.about, direction, request.align);
+  const double sign = request.align_negative ? -1.0 : 1.0;
+  auto frame = rotate_to(m_alignment.part_to_machine, request.about, sign * g->direction, request.align);
   if (!frame) return program_error(span, frame.error());
+  const auto nominal_frame = rotate_to(m_alignment.part_to_machine, request.about, sign * n->direction, request.align);
   const double rests_on = rests_on_s(*request.feature);
-  set_alignment(label, *frame, std::isinf(rests_on) ? m_alignment.rests_on_s : rests_on);
+  set_alignment(label, *frame, std::isinf(rests_on) ? m_alignment.rests_on_s : rests_on,
+                nominal_frame ? Frame(*frame * nominal_frame->inverse()) : Frame::Identity());
   return {};
 }
 
@@ -876,7 +925,9 @@ const Alignment* MeasurementRuntime::find_alignment(const std::string& label) co
 Result<void> MeasurementRuntime::recall(const std::string& label, Span span) {
   const Alignment* found = find_alignment(label);
   if (!found) return program_error(span, fmt::format("coordinate system D({}) is not defined or saved", label));
-  m_alignment = *found;
+  const Alignment recalled = *found;  // a copy: moving the nominals does not touch the stores
+  move_nominals(recalled.nominal_placement * m_alignment.nominal_placement.inverse());
+  m_alignment = recalled;
   return {};
 }
 

@@ -27,6 +27,7 @@ Result<void> MeasurementRuntime::pop_state(const std::string& word, Span span) {
   const PushedState saved = std::move(stack->second.back());
   stack->second.pop_back();
   if (word == "ALGN") {
+    move_nominals(saved.alignment.nominal_placement * m_alignment.nominal_placement.inverse());
     m_alignment = saved.alignment;
   } else if (word == "SNSLCT") {
     // The sensor selected at the PUSH (none: the current one stays).

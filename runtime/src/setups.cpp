@@ -99,9 +99,13 @@ Result<void> MeasurementRuntime::equate(const std::string& earlier, const std::s
     for (auto& [label, system] : *store)
       if (carried(system.rests_on_s)) {
         system.part_to_machine = move * system.part_to_machine;
+        system.nominal_placement = move * system.nominal_placement;
         if (store == &m_alignments) ++systems;
       }
-  if (carried(m_alignment.rests_on_s)) m_alignment.part_to_machine = move * m_alignment.part_to_machine;
+  if (carried(m_alignment.rests_on_s)) {
+    m_alignment.part_to_machine = move * m_alignment.part_to_machine;
+    m_alignment.nominal_placement = move * m_alignment.nominal_placement;
+  }
   const bool merged = std::count(m_setup_carried_to.begin(), m_setup_carried_to.end(), from) > 1 ||
                       m_setup_carried_to[taken_a] != taken_a;
   if (at_stop) std::replace(m_setup_carried_to.begin(), m_setup_carried_to.end(), from, to);

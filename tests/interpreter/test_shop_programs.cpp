@@ -2843,6 +2843,73 @@ TEST(ShopPrograms, ProbingAtAnotherFeedThanTheQualificationsIsToldOnce) {
   EXPECT_TRUE(check(program("", slow + "CALIB/SENS,S(P4),F(REFSPH),9\n")).has("F(REFSPH) is not measured"));
 }
 
+// A system built on measured features carries the nominals written before it onto the part: its
+// nominal frame (the same statement on the features' nominals) goes with its actual frame. With
+// the circle's origin taken from its actual, the circle's nominal is at the origin too, and each
+// CORTOL deviation is 0 (the reading TotalDMIS publishes for this example; one frame gave the
+// actual's offset, 0.03, -0.02 and 0.4, as the deviations). RECALL of the earlier system takes the
+// nominal back.
+TEST(ShopPrograms, ASystemOnMeasuredFeaturesCarriesTheEarlierNominals) {
+  const std::string text =
+      "DMISMN/'frames', 5.0\nUNITS/MM, ANGDEC\nD(C1)=ROTATE/XAXIS,45\n"
+      "F(CIR)=FEAT/CIRCLE,INNER,CART,10,20,30,0,0,1,8\nFA(CIR)=FEAT/CIRCLE,INNER,CART,10.03,19.98,30.4,0,0,1,8\n"
+      "D(C2)=TRANS/XORIG,FA(CIR),YORIG,FA(CIR),ZORIG,FA(CIR)\nT(X)=TOL/CORTOL,XAXIS,-0.1,0.1\n"
+      "T(Y)=TOL/CORTOL,YAXIS,-0.1,0.1\nT(Z)=TOL/CORTOL,ZAXIS,-0.1,0.1\nOUTPUT/FA(CIR),TA(X),TA(Y),TA(Z)\n"
+      "RECALL/D(C1)\nOUTPUT/FA(CIR),TA(Z)\nENDFIL\n";
+  const auto r = dry_run(text);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  std::vector<const metron::runtime::ToleranceResult*> z;
+  for (const auto& e : r.session->record().events)
+    if (const auto* t = std::get_if<metron::runtime::ToleranceResult>(&e)) {
+      if (t->label == "Z") z.push_back(t);
+      if (z.size() < 2 || t->label != "Z") {
+        EXPECT_NEAR(t->actual, 0.0, 1e-9) << t->label;
+        EXPECT_NEAR(t->nominal, 0.0, 1e-9) << t->label;
+      }
+    }
+  ASSERT_EQ(z.size(), 2u);
+  // Back in C1, where both were written: the nominal 30, the actual 30.4.
+  EXPECT_NEAR(z[1]->nominal, 30.0, 1e-9);
+  EXPECT_NEAR(z[1]->actual, 30.4, 1e-9);
+}
+
+// The hidden truth of the simulated world: the default block is exact, but it lies 0.3 mm along X
+// and -0.2 mm along Y from where the program expects it. The program writes its features in
+// machine coordinates first, measures them, then builds its part system on the measured left,
+// front and top faces. BORE1 lies exactly 40, 50 from those faces: reported in that system its
+// deviations are 0 (they were the misplacement, +0.3 and -0.2, with one frame).
+TEST(ShopPrograms, FeaturesWrittenBeforeTheAlignmentAreReportedRelativeToItsFaces) {
+  const fs::path world =
+      write("misplaced_block.json", "{\"extends\": \"" + (source_dir / "programs/worlds/default.json").string() +
+                                        "\", \"part\": {\"pose\": {\"translation_mm\": [300.3, "
+                                        "199.8, 0], \"rotation_deg\": [0, 0, 0]}}}\n");
+  const std::string text =
+      "DMISMN/'misplaced', 5.0\nUNITS/MM, ANGDEC\nS(P4) = SNSDEF/PROBE, FIXED, CART, 0, 0, 50, 0, 0, -1, 4.0\n"
+      "SNSLCT/S(P4)\nF(TOP)=FEAT/PLANE,CART,380,250,40,0,0,1\nF(FRONT)=FEAT/PLANE,CART,380,200,20,0,-1,0\n"
+      "F(LEFT)=FEAT/PLANE,CART,300,250,20,-1,0,0\nF(BORE1)=FEAT/CIRCLE,INNER,CART,340,250,30,0,0,1,20\n"
+      "GOTO/320,220,60\nMEAS/PLANE,F(TOP),3\nPTMEAS/CART,320,220,40,0,0,1\nPTMEAS/CART,440,220,40,0,0,1\n"
+      "GOTO/440,220,60\nGOTO/310,290,60\nPTMEAS/CART,310,290,40,0,0,1\nGOTO/310,290,60\nENDMES\nGOTO/320,180,60\nGOTO/"
+      "320,180,30\n"
+      "MEAS/PLANE,F(FRONT),3\nPTMEAS/CART,320,200,30,0,-1,0\nPTMEAS/CART,440,200,30,0,-1,0\n"
+      "PTMEAS/CART,380,200,15,0,-1,0\nGOTO/280,180,30\nENDMES\nMEAS/PLANE,F(LEFT),3\n"
+      "PTMEAS/CART,300,220,30,-1,0,0\nPTMEAS/CART,300,280,30,-1,0,0\nPTMEAS/CART,300,250,15,-1,0,0\n"
+      "GOTO/280,250,60\nENDMES\nGOTO/340,250,60\nMEAS/CIRCLE,F(BORE1),4\nGOTO/340,250,30\n"
+      "PTMEAS/CART,350,250,30,-1,0,0\nPTMEAS/CART,340,260,30,0,-1,0\nPTMEAS/CART,330,250,30,1,0,0\n"
+      "PTMEAS/CART,340,240,30,0,1,0\nGOTO/340,250,60\nENDMES\n"
+      "D(PART)=TRANS/XORIG,FA(LEFT),YORIG,FA(FRONT),ZORIG,FA(TOP)\n"
+      "T(X)=TOL/CORTOL,XAXIS,-0.01,0.01\nT(Y)=TOL/CORTOL,YAXIS,-0.01,0.01\nOUTPUT/FA(BORE1),TA(X),TA(Y)\nENDFIL\n";
+  const auto r = run(text, world);
+  ASSERT_EQ(r.status, ExecStatus::Finished) << r.diagnostics;
+  const auto* x = tolerance(*r.session, "X");
+  const auto* y = tolerance(*r.session, "Y");
+  ASSERT_TRUE(x && y);
+  EXPECT_NEAR(x->nominal, 40.0, 1e-3);
+  EXPECT_NEAR(y->nominal, 50.0, 1e-3);
+  EXPECT_NEAR(x->value, 0.0, 0.005);
+  EXPECT_NEAR(y->value, 0.0, 0.005);
+  EXPECT_TRUE(x->in_tolerance && y->in_tolerance);
+}
+
 // RationalDMIS writes RMEAS/CIRCLE,F(x),n,VECBLD,r,m with the m points of the surface around the
 // hole as RPTMEAS before the hole's PTMEAS. The program below expects the default block's top face
 // at z = 40.5; the world's face is at 40 (the drawing). The three RPTMEAS, 3 mm from the edge of

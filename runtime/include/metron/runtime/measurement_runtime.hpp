@@ -326,7 +326,12 @@ class MeasurementRuntime {
   void output_coordinate_system(const std::string& label, bool actual, Span span);
   [[nodiscard]] const Alignment* find_alignment(const std::string& label) const;
   /// Makes D(label) the current alignment; `rests_on_s`: Alignment::rests_on_s.
-  void set_alignment(const std::string& label, const Frame& frame, double rests_on_s);
+  /// `nominal_motion`: how far this system moves the nominals written so far (actual frame *
+  /// nominal frame^-1); they are moved with it.
+  void set_alignment(const std::string& label, const Frame& frame, double rests_on_s,
+                     const Frame& nominal_motion = Frame::Identity());
+  /// Moves every feature's and datum's nominal by `motion` (machine coordinates).
+  void move_nominals(const Frame& motion);
   [[nodiscard]] double best_fit_rests_on_s(const LocateRequest& request) const;
   /// Feature::rests_on_s of FA(x); infinity for a nominal F(x).
   [[nodiscard]] double rests_on_s(const FeatureRef& ref) const;
