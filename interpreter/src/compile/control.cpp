@@ -117,11 +117,7 @@ void UnitCompiler::assignment(const grammar::Statement& s) {
     emit(make(Op::Nop, s, s.major));
     return;
   }
-  const SymbolTable::VariableInfo* info = nullptr;
-  if (auto it = m_locals.find(name); it != m_locals.end())
-    info = &it->second;
-  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end())
-    info = &jt->second;
+  const SymbolTable::VariableInfo* info = variable(name);
   if (!info && !macro_param(name) && s.major == "VALUE" && !m_strict && v.kind != ExprKind::Index) {
     // RationalDMIS saves `KNPTC1 = VALUE/MODE` with no DECL of KNPTC1: read leniently, the VALUE
     // declares it with the type of what it answers.
@@ -496,11 +492,7 @@ void UnitCompiler::do_(const grammar::Statement& s) {
   if (v.kind != ExprKind::Word || !is_variable(v.text))
     return error(v.span, "sema.undeclared-variable",
                  fmt::format("the DO variable {} is not declared: add DECL/INTGR,{}", v.text, v.text));
-  const SymbolTable::VariableInfo* info = nullptr;
-  if (auto it = m_locals.find(v.text); it != m_locals.end())
-    info = &it->second;
-  else if (auto jt = m_symbols.variables.find(v.text); jt != m_symbols.variables.end())
-    info = &jt->second;
+  const SymbolTable::VariableInfo* info = variable(v.text);
   if (info && info->type != ValueType::Integer && info->type != ValueType::Real)
     return error(v.span, "sema.do",
                  fmt::format("the DO variable {} is {}: a DO counts with a number (DECL/INTGR,{})", v.text,

@@ -491,11 +491,7 @@ void UnitCompiler::text_query(const grammar::Statement& s) {
     return error(s.params[1].span, "sema.text-query",
                  "TEXT/QUERY takes the variable that receives the answer: TEXT/QUERY,(V),20,AN,L,'question'");
   const std::string name = v->text;
-  const SymbolTable::VariableInfo* info = nullptr;
-  if (auto it = m_locals.find(name); it != m_locals.end())
-    info = &it->second;
-  else if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end())
-    info = &jt->second;
+  const SymbolTable::VariableInfo* info = variable(name);
   if (info && info->size > 0)
     return error(v->span, "sema.array-without-index", fmt::format("array {} needs an index", name));
   ir::Expr value;

@@ -164,6 +164,12 @@ class UnitCompiler {
     if (e.kind != grammar::ExprKind::Label) return false;
     return std::any_of(prefixes.begin(), prefixes.end(), [&](const char* p) { return e.label.prefix == p; });
   }
+  /// A declared variable: the macro's local of that name, else the program's; null when neither.
+  const SymbolTable::VariableInfo* variable(const std::string& name) const {
+    if (auto it = m_locals.find(name); it != m_locals.end()) return &it->second;
+    if (auto jt = m_symbols.variables.find(name); jt != m_symbols.variables.end()) return &jt->second;
+    return nullptr;
+  }
   bool is_variable(const std::string& name) const {
     return m_symbols.variables.count(name) || m_locals.count(name) || macro_param(name).has_value();
   }
